@@ -1,0 +1,232 @@
+/* libtetpack: read, verify and write tetpack (.tpk) files, and march rays through their tets.
+ * C11; depends on zstd and xxHash only. No global state. Every function that can fail returns a
+ * tpk_result (0 = TPK_OK); details go to the handle's error text and the optional message callback.
+ * Functions marked "untrusted input: safe" check every offset, size and count before use. */
+#ifndef TETPACK_H
+#define TETPACK_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "tetpack_format.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define TPK_LIBRARY_VERSION "1.0.0"
+
+typedef enum tpk_result {
+    TPK_OK = 0,
+    TPK_ERR_INVALID_ARGUMENT = 1, /* a NULL or out-of-range argument from the caller */
+    TPK_ERR_IO = 2,               /* open/read/write/rename/mmap failed (errno in the message) */
+    TPK_ERR_OUT_OF_MEMORY = 3,
+    TPK_ERR_NOT_TETPACK = 4,      /* magic does not match: not a tetpack file, or text-mode damage */
+    TPK_ERR_TRUNCATED = 5,        /* shorter than the header or than header.file_size */
+    TPK_ERR_VERSION = 6,          /* a newer major version than this library reads */
+    TPK_ERR_HEADER_CHECKSUM = 7,
+    TPK_ERR_DIRECTORY_CHECKSUM = 8,
+    TPK_ERR_CHUNK_CHECKSUM = 9,   /* a chunk's decoded bytes do not match its checksum */
+    TPK_ERR_UNSUPPORTED_CHUNK = 10, /* an unknown chunk marked required, or an unknown codec */
+    TPK_ERR_OUT_OF_BOUNDS = 11,   /* an offset or size points past the end of the file */
+    TPK_ERR_OVERLAP = 12,         /* two chunks, or a chunk and the header/directory, overlap */
+    TPK_ERR_MISALIGNED = 13,      /* an offset that is not a multiple of the required alignment */
+    TPK_ERR_CORRUPT = 14,         /* any other broken rule: reserved bits set, counts disagree, ... */
+    TPK_ERR_LIMIT = 15,           /* exceeds a caller-set limit for untrusted input */
+    TPK_ERR_NOT_FOUND = 16,       /* no such chunk / field / layout */
+    TPK_ERR_DECOMPRESS = 17,      /* zstd failed or produced the wrong size */
+    TPK_ERR_BAD_STATE = 18,       /* the handle saw a corruption error earlier and refuses reads */
+    TPK_ERR_MESH = 19,            /* the marcher met inconsistent connectivity (cycle, dead end) */
+    TPK_RESULT_COUNT = 20
+} tpk_result;
+
+/* A static English name for a result code ("checksum mismatch in a chunk", ...). Never NULL. */
+const char *tpk_result_string(tpk_result result);
+
+typedef struct tpk_allocator {
+    void *(*alloc)(void *user, size_t size); /* NULL: malloc */
+    void (*free)(void *user, void *ptr);     /* NULL: free */
+    void *user;
+} tpk_allocator;
+
+/* Limits for untrusted input. 0 means the default given in brackets. */
+typedef struct tpk_limits {
+    uint64_t max_chunks;         /* [65536] */
+    uint64_t max_chunk_bytes;    /* raw size of one chunk [64 GiB] */
+    uint64_t max_total_bytes;    /* sum of raw sizes [256 GiB] */
+} tpk_limits;
+
+/* Checksums of chunk contents: by default each chunk is checked the first time it is read or viewed
+ * (header and directory checksums are always checked at open). */
+#define TPK_OPEN_VERIFY_ALL 0x1u  /* check every chunk's checksum during open */
+#define TPK_OPEN_TRUSTED 0x2u     /* never check chunk checksums (header/directory still checked) */
+
+typedef void (*tpk_message_fn)(void *user, tpk_result code, const char *text);
+
+/* Zero-initialised means defaults. `size` is sizeof(tpk_open_options) or 0. */
+typedef struct tpk_open_options {
+    size_t size;
+    uint32_t flags;
+    tpk_allocator allocator;
+    tpk_limits limits;
+    tpk_message_fn message; /* called once per error with a detailed text; may be NULL */
+    void *message_user;
+} tpk_open_options;
+
+typedef struct tpk_file tpk_file;
+
+/* Open a file by path and map it read-only. On success *out owns the mapping; tpk_close frees it.
+ * On failure *out is NULL and, if err_text/err_cap are given, a detailed message is copied there.
+ * Untrusted input: safe. Thread safety: a tpk_file may be read from several threads at once. */
+tpk_result tpk_open_path(tpk_file **out, const char *path, const tpk_open_options *options,
+                         char *err_text, size_t err_cap);
+/* Same, over bytes the caller owns and keeps alive and unchanged until tpk_close. */
+tpk_result tpk_open_memory(tpk_file **out, const void *data, size_t size,
+                           const tpk_open_options *options, char *err_text, size_t err_cap);
+void tpk_close(tpk_file *file);
+
+/* The detailed text of the last error on this handle ("" if none). Owned by the handle. */
+const char *tpk_error_text(const tpk_file *file);
+
+typedef struct tpk_file_info {
+    uint16_t version_major, version_minor;
+    uint64_t file_size;
+    uint64_t vertex_count, tet_count, shell_face_count;
+    uint64_t chunk_count;
+    double origin[3];
+    double bounds_min[3], bounds_max[3];
+} tpk_file_info;
+tpk_result tpk_get_info(const tpk_file *file, tpk_file_info *out);
+
+/* Chunk directory: a copy of entry `i` (0 <= i < chunk_count), already validated. */
+tpk_result tpk_get_chunk(const tpk_file *file, uint64_t i, tpk_dir_entry *out);
+/* Index of the first chunk with this tag, index and step; TPK_ERR_NOT_FOUND if none. */
+tpk_result tpk_find_chunk(const tpk_file *file, uint32_t tag, uint32_t index, uint32_t step,
+                          uint64_t *out_i);
+/* Zero-copy view of an uncompressed chunk (codec none); checks its checksum on first use unless
+ * opened TRUSTED. *out_data is valid until tpk_close and is aligned as the spec promises.
+ * A zstd chunk gives TPK_ERR_UNSUPPORTED_CHUNK: use tpk_read_chunk. */
+tpk_result tpk_view_chunk(tpk_file *file, uint64_t i, const void **out_data, uint64_t *out_size);
+/* Decode chunk `i` into dst (dst_size >= entry.raw_size), decompressing if needed, and check it. */
+tpk_result tpk_read_chunk(tpk_file *file, uint64_t i, void *dst, uint64_t dst_size);
+/* Check every chunk's checksum and the cross-chunk rules of the spec that need no geometry
+ * (counts agree with the header, field descriptors valid, ids in range). */
+tpk_result tpk_verify(tpk_file *file);
+
+/* Fields, from the FDSC chunk (0 fields if absent). */
+uint32_t tpk_field_count(const tpk_file *file);
+tpk_result tpk_get_field(const tpk_file *file, uint32_t i, tpk_field_desc *out);
+tpk_result tpk_find_field(const tpk_file *file, const char *name, uint32_t *out_i);
+/* Time value of a step (TIME chunk); TPK_ERR_NOT_FOUND when the file stores none. */
+tpk_result tpk_get_time(tpk_file *file, uint32_t step, double *out_time);
+
+/* ---- Arrays ready for a renderer ------------------------------------------------------------------ */
+
+typedef enum tpk_layout {
+    TPK_LAYOUT_TET32 = 32,
+    TPK_LAYOUT_TET20 = 20,
+    TPK_LAYOUT_TET16 = 16
+} tpk_layout;
+
+/* Plain arrays of one mesh, the input of the marcher. Either views into a mapped file or caller data.
+ * Exactly one of tet16/tet20/tet32 is used, chosen by `layout`. scalars may be NULL (no field). */
+typedef struct tpk_mesh_arrays {
+    uint64_t vertex_count, tet_count, shell_face_count;
+    double origin[3];
+    const float *positions;          /* 3 * vertex_count, relative to origin */
+    tpk_layout layout;
+    const tpk_tet16 *tet16;
+    const tpk_tet20 *tet20;
+    const tpk_tet32 *tet32;
+    const tpk_shell_face *shell;
+    const float *scalars;            /* per vertex; NULL for none */
+} tpk_mesh_arrays;
+
+/* Fill `out` from a file: zero-copy views where chunks are uncompressed, otherwise decoded into memory
+ * owned by the file handle (freed by tpk_close). field_name NULL: first point field, or none if the
+ * file has none. Untrusted input: safe (all chunks verified, ids checked in range). */
+tpk_result tpk_load_arrays(tpk_file *file, tpk_layout layout, const char *field_name, uint32_t step,
+                           tpk_mesh_arrays *out);
+
+/* Recover positively oriented vertex quadruples (4 per tet) from any layout: direct for Tet32, by a
+ * walk from the shell through neighbors for Tet20/Tet16. dst holds 4 * tet_count int32. */
+tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst);
+
+/* ---- Writer ------------------------------------------------------------------------------------- */
+
+typedef struct tpk_writer tpk_writer;
+
+typedef struct tpk_write_options {
+    size_t size;
+    tpk_allocator allocator;
+} tpk_write_options;
+
+/* Start a file at `path`: data goes to a temporary file in the same directory, which tpk_writer_finish
+ * renames over `path`. Nothing appears at `path` until finish succeeds. */
+tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_options *options,
+                           char *err_text, size_t err_cap);
+
+typedef struct tpk_chunk_desc {
+    uint32_t tag;
+    uint16_t flags;      /* TPK_CHUNK_REQUIRED */
+    uint8_t codec;       /* tpk_codec */
+    uint8_t elem_type;   /* tpk_elem_type */
+    uint32_t elem_size;
+    uint32_t index;
+    uint32_t step;
+    uint64_t elem_count;
+    int zstd_level;      /* for TPK_CODEC_ZSTD; 0 means zstd's default */
+} tpk_chunk_desc;
+
+/* Append one chunk (data: elem_count * elem_size bytes). Aligns it as the spec says. */
+tpk_result tpk_writer_add_chunk(tpk_writer *writer, const tpk_chunk_desc *desc, const void *data);
+
+typedef struct tpk_header_fields {
+    uint64_t vertex_count, tet_count, shell_face_count;
+    double origin[3];
+    double bounds_min[3], bounds_max[3];
+} tpk_header_fields;
+
+/* Write directory and header, flush, and rename into place. Frees the writer in every case. */
+tpk_result tpk_writer_finish(tpk_writer *writer, const tpk_header_fields *header);
+/* Drop everything written so far (removes the temporary file) and free the writer. */
+void tpk_writer_abort(tpk_writer *writer);
+/* Detailed text of the writer's last error. */
+const char *tpk_writer_error_text(const tpk_writer *writer);
+
+/* ---- Reference CPU marcher (double precision) ----------------------------------------------------- */
+
+typedef struct tpk_marcher tpk_marcher;
+
+/* Build the marcher (a BVH over shell faces). `mesh` arrays must outlive the marcher.
+ * Thread safety: tpk_march_ray may be called from many threads on one marcher. */
+tpk_result tpk_marcher_create(tpk_marcher **out, const tpk_mesh_arrays *mesh);
+void tpk_marcher_destroy(tpk_marcher *marcher);
+
+typedef struct tpk_segment {
+    int32_t tet;
+    double t_in, t_out;       /* ray parameters, clipped to [tmin, tmax] */
+    double scalar_in, scalar_out; /* interpolated at t_in/t_out (0 when the mesh has no scalars) */
+} tpk_segment;
+
+/* Return nonzero to stop the ray early (e.g. opacity reached). */
+typedef int (*tpk_segment_fn)(void *user, const tpk_segment *segment);
+
+typedef struct tpk_march_stats {
+    uint64_t tet_steps;      /* tets visited, including those before tmin */
+    uint64_t shell_entries;  /* segments of the ray inside the volume */
+} tpk_march_stats;
+
+/* March the ray org + t*dir (world coordinates; dir need not be unit) through the mesh, calling `fn`
+ * for every tet piece within [tmin, tmax], in increasing t. The ray may start inside the volume and
+ * leave and re-enter a non-convex shell. Watertight: decisions depend only on vertex ids and
+ * positions, so every ray that enters leaves and no tet repeats within one segment run.
+ * stats may be NULL. Returns TPK_ERR_MESH if the connectivity is inconsistent. */
+tpk_result tpk_march_ray(const tpk_marcher *marcher, const double org[3], const double dir[3],
+                         double tmin, double tmax, tpk_segment_fn fn, void *user,
+                         tpk_march_stats *stats);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,24 @@
+/* Importers: each reads one file format into a tpk_mesh. On error they return -1 with a message in
+ * diag naming the file, the place (line or byte offset), what was expected and what was found, and
+ * leave *out empty. Bounded memory on absurd counts: counts are checked against the file size. */
+#ifndef TPK_IMPORTERS_H
+#define TPK_IMPORTERS_H
+
+#include <stddef.h>
+
+#include "diag.h"
+#include "mesh.h"
+
+/* VTK legacy UNSTRUCTURED_GRID, ASCII or BINARY (big-endian). */
+int tpk_import_vtk_legacy(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* Same from memory (for fuzzing); `name` is used in messages. */
+int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size, tpk_mesh *out,
+                                 tpk_diag *diag);
+/* TetGen .node/.ele: path may name either file or their common stem. */
+int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag);
+
+/* Pick the importer from the extension (and the file's first bytes); format may force one
+ * ("vtk", "tetgen"). */
+int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
+
+#endif

@@ -1,0 +1,63 @@
+/* In-memory meshes of the converter: the source mesh as read (cells of any type, with fields) and the
+ * tet mesh the pipeline builds from it. Plain structs of arrays. */
+#ifndef TPK_MESH_H
+#define TPK_MESH_H
+
+#include <stdint.h>
+
+/* VTK cell type codes; the importers translate their formats' types to these. */
+enum {
+    TPK_CELL_TETRA = 10,
+    TPK_CELL_VOXEL = 11,
+    TPK_CELL_HEXAHEDRON = 12,
+    TPK_CELL_WEDGE = 13,
+    TPK_CELL_PYRAMID = 14,
+    TPK_CELL_POLYHEDRON = 42
+};
+
+#define TPK_NAME_MAX 64
+
+typedef struct tpk_src_field {
+    char name[TPK_NAME_MAX];
+    int association;     /* TPK_ASSOC_POINT or TPK_ASSOC_TET (= per source cell here) */
+    int components;      /* 1 for scalars, 3 for vectors, ... */
+    int step_count;      /* >= 1 */
+    float *values;       /* step_count * (points or cells) * components, step-major */
+} tpk_src_field;
+
+typedef struct tpk_mesh {
+    int64_t point_count;
+    double *points;         /* 3 * point_count */
+    int64_t cell_count;
+    uint8_t *cell_types;    /* TPK_CELL_* per cell */
+    int64_t *cell_offsets;  /* cell_count + 1; cell c uses cell_conn[cell_offsets[c] .. [c+1]) */
+    int32_t *cell_conn;     /* 0-based point ids, in VTK node order */
+    int field_count;
+    tpk_src_field *fields;
+    int step_count;         /* number of time steps (1 when static) */
+    double *times;          /* step_count values, or NULL */
+    char format[32];        /* "vtk-legacy-ascii", "tetgen", ... */
+} tpk_mesh;
+
+void tpk_mesh_free(tpk_mesh *mesh);
+/* Append a field; takes ownership of values. Returns 0 or -1 on allocation failure. */
+int tpk_mesh_add_field(tpk_mesh *mesh, const char *name, int association, int components,
+                       int step_count, float *values);
+
+/* The tet mesh of the pipeline. */
+typedef struct tpk_tetmesh {
+    int64_t vertex_count;
+    double *points;            /* 3 * vertex_count, absolute coordinates */
+    int32_t *vertex_source;    /* source point id per vertex */
+    int64_t tet_count;
+    int32_t *tets;             /* 4 * tet_count vertex ids; positive orientation after tpk_orient */
+    int32_t *tet_source;       /* source cell id per tet */
+    int field_count;
+    tpk_src_field *fields;     /* scalar (components 1) fields: per vertex or per tet */
+    int step_count;
+    double *times;
+} tpk_tetmesh;
+
+void tpk_tetmesh_free(tpk_tetmesh *mesh);
+
+#endif

@@ -1,0 +1,52 @@
+/* The converter pipeline stages, one job each (DESIGN.md §1):
+ * tetrahedralize -> orient (exact) -> reorder (space-filling curve) -> connect (face matching)
+ * -> layouts (Tet32/20/16) -> shell. */
+#ifndef TPK_PIPELINE_H
+#define TPK_PIPELINE_H
+
+#include <stdint.h>
+
+#include "diag.h"
+#include "mesh.h"
+#include "tetpack.h"
+
+/* Source cells -> tets. Format 1.0 converter: tetra cells pass through (other 3-D cell types are the
+ * mixed-cell work); point fields are kept, cell fields become per-tet fields via the source map.
+ * `field_names` (count n, may be NULL = all scalar point fields) selects fields. */
+int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count,
+                       tpk_tetmesh *out, tpk_diag *diag);
+
+typedef struct tpk_orient_stats {
+    int64_t inverted_fixed;   /* negative tets made positive by a swap */
+    int64_t degenerate;       /* zero-volume tets (found; dropped only with drop_degenerate) */
+    int64_t repeated_vertex;  /* tets naming a vertex twice (counted in degenerate too) */
+} tpk_orient_stats;
+
+/* Exact orientation (CGAL): swap v2,v3 of inverted tets; zero-volume tets are an error naming the first
+ * one (tet index, source cell, vertex ids, coordinates), or are removed when drop_degenerate. */
+int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate, tpk_orient_stats *stats, tpk_diag *diag);
+
+/* Exact orientation sign of four points: +1, 0, -1 for det[b-a, c-a, d-a]. (CGAL shim.) */
+int tpk_orient3d_exact(const double a[3], const double b[3], const double c[3], const double d[3]);
+
+/* Reorder vertices and tets along a Hilbert curve (vertices by position, tets by centroid); fields,
+ * vertex_source and tet_source follow. Deterministic. */
+int tpk_reorder(tpk_tetmesh *mesh, tpk_diag *diag);
+
+/* Face matching. neighbors[4*t+k] = tet across the face opposite tets[4*t+k], or -1. A face shared by
+ * more than two tets is an error naming the face's vertices and the tets. threads <= 0: all cores. */
+int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, int32_t *neighbors,
+                int threads, tpk_diag *diag);
+
+/* Layouts from positively oriented tets and their neighbors (as tpk_connect gives them). */
+void tpk_build_tet32(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet32 *dst);
+void tpk_build_tet20(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet20 *dst);
+void tpk_build_tet16(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet16 *dst);
+
+/* Number of boundary faces (neighbor -1). */
+int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count);
+/* Boundary faces as outward int4 records, in tet order then face order. dst holds the count above. */
+void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_count,
+                     tpk_shell_face *dst);
+
+#endif
