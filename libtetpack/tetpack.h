@@ -159,6 +159,9 @@ typedef struct tpk_writer tpk_writer;
 typedef struct tpk_write_options {
     size_t size;
     tpk_allocator allocator;
+    tpk_message_fn message; /* called once per error with a detailed text (the only way to see why
+                               tpk_writer_finish failed, since it frees the writer); may be NULL */
+    void *message_user;
 } tpk_write_options;
 
 /* Start a file at `path`: data goes to a temporary file in the same directory, which tpk_writer_finish

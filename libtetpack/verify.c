@@ -1,0 +1,721 @@
+/* The container rules as pure check_* functions over a header and directory (shared by the reader and
+ * the writer's self-check), and tpk_verify, which checks every chunk's contents. Rule numbers follow
+ * the reader section of the spec; each rule returns its own result code and a message naming the
+ * chunk, its tag and offset, and what was expected. */
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal_file.h"
+
+tpk_result tpk_diag_fail(tpk_diag *diag, tpk_result code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(diag->text, sizeof diag->text, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+void tpk_tag_name(uint32_t tag, char out[16])
+{
+    unsigned char c[4];
+    for (int k = 0; k < 4; k++) {
+        c[k] = (unsigned char)(tag >> (8 * k));
+        if (c[k] < 0x20 || c[k] > 0x7e) {
+            snprintf(out, 16, "0x%08" PRIx32, tag);
+            return;
+        }
+    }
+    snprintf(out, 16, "'%c%c%c%c'", c[0], c[1], c[2], c[3]);
+}
+
+void tpk_entry_name(uint64_t i, const tpk_dir_entry *e, char out[80])
+{
+    char tag[16];
+    tpk_tag_name(e->tag, tag);
+    snprintf(out, 80, "chunk %" PRIu64 " %s at offset %" PRIu64, i, tag, e->offset);
+}
+
+static void *default_alloc(void *user, size_t size)
+{
+    (void)user;
+    return malloc(size);
+}
+
+static void default_free(void *user, void *ptr)
+{
+    (void)user;
+    free(ptr);
+}
+
+void tpk_resolve_allocator(const tpk_allocator *in, tpk_allocator *out)
+{
+    *out = in ? *in : (tpk_allocator){0};
+    if (!out->alloc)
+        out->alloc = default_alloc;
+    if (!out->free)
+        out->free = default_free;
+}
+
+void tpk_resolve_limits(const tpk_limits *in, tpk_limits *out)
+{
+    *out = in ? *in : (tpk_limits){0};
+    if (!out->max_chunks)
+        out->max_chunks = TPK_DEFAULT_MAX_CHUNKS;
+    if (!out->max_chunk_bytes)
+        out->max_chunk_bytes = TPK_DEFAULT_MAX_CHUNK_BYTES;
+    if (!out->max_total_bytes)
+        out->max_total_bytes = TPK_DEFAULT_MAX_TOTAL_BYTES;
+}
+
+uint32_t tpk_elem_type_size(uint32_t elem_type)
+{
+    static const uint32_t sizes[TPK_ELEM_TYPE_COUNT] = {1, 4, 4, 8, 12, 16, 20, 32, 16, 128};
+    return elem_type < TPK_ELEM_TYPE_COUNT ? sizes[elem_type] : 0;
+}
+
+int tpk_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
+{
+    static const struct {
+        uint32_t tag, elem_type;
+        int required; /* what a writer must set (spec, writer rule 5) */
+    } known[] = {
+        {TPK_TAG_META, TPK_ELEM_BYTE, 0},       {TPK_TAG_POS3, TPK_ELEM_VEC3_F32, 1},
+        {TPK_TAG_TT16, TPK_ELEM_TET16, 1},      {TPK_TAG_TT20, TPK_ELEM_TET20, 1},
+        {TPK_TAG_TT32, TPK_ELEM_TET32, 1},      {TPK_TAG_SHEL, TPK_ELEM_SHELL_FACE, 1},
+        {TPK_TAG_FDSC, TPK_ELEM_FIELD_DESC, 1}, {TPK_TAG_FDAT, TPK_ELEM_F32, 1},
+        {TPK_TAG_TIME, TPK_ELEM_F64, 0},        {TPK_TAG_TMAP, TPK_ELEM_I32, 0},
+        {TPK_TAG_VMAP, TPK_ELEM_I32, 0},
+    };
+    for (size_t k = 0; k < sizeof known / sizeof known[0]; k++) {
+        if (known[k].tag == tag) {
+            if (out_elem_type)
+                *out_elem_type = known[k].elem_type;
+            if (out_required)
+                *out_required = known[k].required;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* ---- header ---------------------------------------------------------------------------------- */
+
+tpk_result tpk_check_header_fields(const tpk_header *h, tpk_diag *diag)
+{
+    if (h->header_size != TPK_HEADER_SIZE)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "header: header_size is %" PRIu32 ", must be %u",
+                             h->header_size, TPK_HEADER_SIZE);
+    if (h->dir_entry_size != TPK_DIR_ENTRY_SIZE)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "header: dir_entry_size is %" PRIu32 ", must be %u",
+                             h->dir_entry_size, TPK_DIR_ENTRY_SIZE);
+    if (h->flags != 0)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                             "header: flags is 0x%08" PRIx32 ", reserved bits must be 0", h->flags);
+    for (size_t k = 0; k < sizeof h->reserved; k++) {
+        if (h->reserved[k] != 0)
+            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                                 "header: reserved byte at offset %zu is 0x%02x, must be 0",
+                                 offsetof(tpk_header, reserved) + k, h->reserved[k]);
+    }
+    return TPK_OK;
+}
+
+tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpk_diag *diag)
+{
+    if (h->vertex_count > TPK_MAX_ID || h->tet_count > TPK_MAX_ID)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                             "header: vertex_count %" PRIu64 " / tet_count %" PRIu64
+                             " exceeds 2^31-1 (split larger meshes into parts)",
+                             h->vertex_count, h->tet_count);
+    if (h->shell_face_count > 4 * h->tet_count)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                             "header: shell_face_count %" PRIu64 " exceeds 4 * tet_count = %" PRIu64,
+                             h->shell_face_count, 4 * h->tet_count);
+    if (h->chunk_count > limits->max_chunks)
+        return tpk_diag_fail(diag, TPK_ERR_LIMIT,
+                             "header: chunk_count %" PRIu64 " exceeds the limit max_chunks %" PRIu64,
+                             h->chunk_count, limits->max_chunks);
+    if (h->directory_offset % TPK_CHUNK_ALIGN != 0)
+        return tpk_diag_fail(diag, TPK_ERR_MISALIGNED,
+                             "header: directory_offset %" PRIu64 " is not a multiple of %u",
+                             h->directory_offset, TPK_CHUNK_ALIGN);
+    if (h->directory_offset < TPK_HEADER_SIZE || h->directory_offset > h->file_size ||
+        h->chunk_count > (h->file_size - h->directory_offset) / TPK_DIR_ENTRY_SIZE)
+        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_BOUNDS,
+                             "header: directory at offset %" PRIu64 " with %" PRIu64
+                             " entries of 64 bytes does not fit in [192, file_size %" PRIu64 "]",
+                             h->directory_offset, h->chunk_count, h->file_size);
+    return TPK_OK;
+}
+
+/* ---- directory entries --------------------------------------------------------------------------- */
+
+/* Rule 10, first part: reserved bits, codec, element type and sizes. */
+static tpk_result check_entry_sizes(const tpk_dir_entry *e, const char *name, tpk_diag *diag)
+{
+    if (e->reserved != 0)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: reserved field is 0x%08" PRIx32 ", must be 0",
+                             name, e->reserved);
+    if (e->flags & ~TPK_CHUNK_REQUIRED)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: flags 0x%04x has reserved bits set", name,
+                             e->flags);
+    if (e->codec > TPK_CODEC_ZSTD)
+        return tpk_diag_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
+                             "%s: unknown codec %u (this reader knows 0 = none, 1 = zstd)", name, e->codec);
+    uint32_t size = tpk_elem_type_size(e->elem_type);
+    if (size == 0)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: unknown elem_type %u", name, e->elem_type);
+    if (e->elem_size != size)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_size %" PRIu32 " but elem_type %u has size %" PRIu32,
+                             name, e->elem_size, e->elem_type, size);
+    if (e->elem_count > UINT64_MAX / size || e->elem_count * size != e->raw_size)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                             "%s: raw_size %" PRIu64 " but elem_count %" PRIu64 " * elem_size %" PRIu32
+                             " differs", name, e->raw_size, e->elem_count, size);
+    if (e->codec == TPK_CODEC_NONE && e->stored_size != e->raw_size)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                             "%s: stored_size %" PRIu64 " but codec none needs raw_size %" PRIu64, name,
+                             e->stored_size, e->raw_size);
+    return TPK_OK;
+}
+
+/* Rule 10, second part: caller limits. */
+static tpk_result check_entry_limits(const tpk_dir_entry *e, const char *name, const tpk_limits *limits,
+                                     uint64_t *total_raw, tpk_diag *diag)
+{
+    if (e->raw_size > limits->max_chunk_bytes)
+        return tpk_diag_fail(diag, TPK_ERR_LIMIT,
+                             "%s: raw_size %" PRIu64 " exceeds the limit max_chunk_bytes %" PRIu64, name,
+                             e->raw_size, limits->max_chunk_bytes);
+    if (e->raw_size > limits->max_total_bytes - *total_raw)
+        return tpk_diag_fail(diag, TPK_ERR_LIMIT,
+                             "%s: raw sizes of the chunks so far exceed the limit max_total_bytes %" PRIu64,
+                             name, limits->max_total_bytes);
+    *total_raw += e->raw_size;
+    return TPK_OK;
+}
+
+tpk_result tpk_check_entry(const tpk_header *h, const tpk_limits *limits, uint64_t i,
+                           const tpk_dir_entry *e, uint64_t *total_raw, tpk_diag *diag)
+{
+    char name[80];
+    tpk_entry_name(i, e, name);
+    tpk_result r = check_entry_sizes(e, name, diag);
+    if (r == TPK_OK)
+        r = check_entry_limits(e, name, limits, total_raw, diag);
+    if (r != TPK_OK)
+        return r;
+    if (e->offset % TPK_CHUNK_ALIGN != 0)
+        return tpk_diag_fail(diag, TPK_ERR_MISALIGNED, "%s: offset is not a multiple of %u", name,
+                             TPK_CHUNK_ALIGN);
+    if (e->codec == TPK_CODEC_NONE && e->raw_size >= TPK_LARGE_CHUNK_BYTES &&
+        e->offset % TPK_LARGE_CHUNK_ALIGN != 0)
+        return tpk_diag_fail(diag, TPK_ERR_MISALIGNED,
+                             "%s: uncompressed chunk of %" PRIu64 " bytes (>= %u) must be aligned to %u",
+                             name, e->raw_size, TPK_LARGE_CHUNK_BYTES, TPK_LARGE_CHUNK_ALIGN);
+    if (e->offset > h->file_size || e->stored_size > h->file_size - e->offset)
+        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_BOUNDS,
+                             "%s: stored_size %" PRIu64 " reaches past the end of the file (%" PRIu64 " bytes)",
+                             name, e->stored_size, h->file_size);
+    return TPK_OK;
+}
+
+/* ---- overlaps (rule 12) ------------------------------------------------------------------------ */
+
+#define RANGE_HEADER UINT64_MAX
+#define RANGE_DIRECTORY (UINT64_MAX - 1)
+
+typedef struct byte_range {
+    uint64_t begin, end, owner; /* owner: chunk index, RANGE_HEADER or RANGE_DIRECTORY */
+} byte_range;
+
+static int compare_ranges(const void *pa, const void *pb)
+{
+    const byte_range *a = pa, *b = pb;
+    if (a->begin != b->begin)
+        return a->begin < b->begin ? -1 : 1;
+    return a->owner < b->owner ? -1 : a->owner > b->owner;
+}
+
+static void range_name(const tpk_dir_entry *entries, const byte_range *range, char out[80])
+{
+    if (range->owner == RANGE_HEADER)
+        snprintf(out, 80, "the header");
+    else if (range->owner == RANGE_DIRECTORY)
+        snprintf(out, 80, "the directory");
+    else
+        tpk_entry_name(range->owner, &entries[range->owner], out);
+}
+
+static size_t collect_ranges(const tpk_header *h, const tpk_dir_entry *entries, byte_range *ranges)
+{
+    size_t n = 0;
+    ranges[n++] = (byte_range){0, TPK_HEADER_SIZE, RANGE_HEADER};
+    if (h->chunk_count > 0)
+        ranges[n++] = (byte_range){h->directory_offset,
+                                   h->directory_offset + h->chunk_count * TPK_DIR_ENTRY_SIZE, RANGE_DIRECTORY};
+    for (uint64_t i = 0; i < h->chunk_count; i++) {
+        if (entries[i].stored_size > 0)
+            ranges[n++] = (byte_range){entries[i].offset, entries[i].offset + entries[i].stored_size, i};
+    }
+    return n;
+}
+
+tpk_result tpk_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
+                              const tpk_allocator *allocator, tpk_diag *diag)
+{
+    tpk_result r = TPK_OK;
+    byte_range *ranges = allocator->alloc(allocator->user, (h->chunk_count + 2) * sizeof *ranges);
+    if (!ranges)
+        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu64 " chunk ranges",
+                             h->chunk_count);
+    size_t n = collect_ranges(h, entries, ranges);
+    qsort(ranges, n, sizeof *ranges, compare_ranges);
+    size_t widest = 0; /* the range reaching furthest among those before k */
+    for (size_t k = 1; k < n; k++) {
+        if (ranges[k].begin < ranges[widest].end) {
+            char a[80], b[80];
+            range_name(entries, &ranges[widest], a);
+            range_name(entries, &ranges[k], b);
+            r = tpk_diag_fail(diag, TPK_ERR_OVERLAP,
+                              "%s (bytes %" PRIu64 "..%" PRIu64 ") overlaps %s (bytes %" PRIu64 "..%" PRIu64 ")",
+                              b, ranges[k].begin, ranges[k].end, a, ranges[widest].begin, ranges[widest].end);
+            goto fail;
+        }
+        if (ranges[k].end > ranges[widest].end)
+            widest = k;
+    }
+fail:
+    allocator->free(allocator->user, ranges);
+    return r;
+}
+
+/* ---- tags (rules 13, 14) ----------------------------------------------------------------------- */
+
+/* The elem_count a known tag must have, or UINT64_MAX when the header does not fix it. */
+static uint64_t expected_count(const tpk_header *h, uint32_t tag, const char **what)
+{
+    switch (tag) {
+    case TPK_TAG_POS3:
+    case TPK_TAG_VMAP:
+        *what = "vertex_count";
+        return h->vertex_count;
+    case TPK_TAG_TT16:
+    case TPK_TAG_TT20:
+    case TPK_TAG_TT32:
+    case TPK_TAG_TMAP:
+        *what = "tet_count";
+        return h->tet_count;
+    case TPK_TAG_SHEL:
+        *what = "shell_face_count";
+        return h->shell_face_count;
+    default:
+        return UINT64_MAX;
+    }
+}
+
+/* Rules 13 and 14 for one entry; *known is set when the tag is a TPK_TAG_*. */
+static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, int *known,
+                                  int allow_unknown_required, tpk_diag *diag)
+{
+    char name[80], tag[16];
+    tpk_entry_name(i, e, name);
+    tpk_tag_name(e->tag, tag);
+    uint32_t elem_type;
+    *known = tpk_known_tag(e->tag, &elem_type, NULL);
+    if (!*known && (e->flags & TPK_CHUNK_REQUIRED) && !allow_unknown_required)
+        return tpk_diag_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
+                             "%s: unknown chunk tag %s is marked required; this reader cannot use the file",
+                             name, tag);
+    if (!*known)
+        return TPK_OK;
+    if (e->elem_type != elem_type)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_type %u, but tag %s needs elem_type %" PRIu32,
+                             name, e->elem_type, tag, elem_type);
+    if (e->tag != TPK_TAG_FDAT && (e->index != 0 || e->step != 0))
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: index %" PRIu32 " and step %" PRIu32 " must be 0",
+                             name, e->index, e->step);
+    const char *what = NULL;
+    uint64_t count = expected_count(h, e->tag, &what);
+    if (count != UINT64_MAX && e->elem_count != count)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_count %" PRIu64 " but header %s is %" PRIu64,
+                             name, e->elem_count, what, count);
+    if (e->tag == TPK_TAG_FDSC && e->elem_count > TPK_MAX_FIELDS)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " field descriptors, at most %u allowed",
+                             name, e->elem_count, TPK_MAX_FIELDS);
+    return TPK_OK;
+}
+
+typedef struct chunk_key {
+    uint32_t tag, index, step;
+    uint64_t chunk;
+} chunk_key;
+
+static int compare_keys(const void *pa, const void *pb)
+{
+    const chunk_key *a = pa, *b = pb;
+    if (a->tag != b->tag)
+        return a->tag < b->tag ? -1 : 1;
+    if (a->index != b->index)
+        return a->index < b->index ? -1 : 1;
+    if (a->step != b->step)
+        return a->step < b->step ? -1 : 1;
+    return a->chunk < b->chunk ? -1 : a->chunk > b->chunk;
+}
+
+static tpk_result check_duplicates(chunk_key *keys, size_t n, tpk_diag *diag)
+{
+    qsort(keys, n, sizeof *keys, compare_keys);
+    for (size_t k = 1; k < n; k++) {
+        if (keys[k].tag == keys[k - 1].tag && keys[k].index == keys[k - 1].index &&
+            keys[k].step == keys[k - 1].step) {
+            char tag[16];
+            tpk_tag_name(keys[k].tag, tag);
+            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                                 "chunks %" PRIu64 " and %" PRIu64 " both have tag %s index %" PRIu32
+                                 " step %" PRIu32, keys[k - 1].chunk, keys[k].chunk, tag, keys[k].index,
+                                 keys[k].step);
+        }
+    }
+    return TPK_OK;
+}
+
+static tpk_result check_required_present(const tpk_header *h, const tpk_dir_entry *entries, tpk_diag *diag)
+{
+    int pos3 = 0, shel = 0, tets = 0;
+    for (uint64_t i = 0; i < h->chunk_count; i++) {
+        pos3 |= entries[i].tag == TPK_TAG_POS3;
+        shel |= entries[i].tag == TPK_TAG_SHEL;
+        tets |= entries[i].tag == TPK_TAG_TT16 || entries[i].tag == TPK_TAG_TT20 ||
+                entries[i].tag == TPK_TAG_TT32;
+    }
+    if (!pos3)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "no 'POS3' (positions) chunk");
+    if (!shel)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "no 'SHEL' (shell faces) chunk");
+    if (!tets)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "no tet layout chunk ('TT16', 'TT20' or 'TT32')");
+    return TPK_OK;
+}
+
+tpk_result tpk_check_tags(const tpk_header *h, const tpk_dir_entry *entries, int allow_unknown_required,
+                          const tpk_allocator *allocator, tpk_diag *diag)
+{
+    tpk_result r = TPK_OK;
+    chunk_key *keys = allocator->alloc(allocator->user, (h->chunk_count + 1) * sizeof *keys);
+    if (!keys)
+        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu64 " chunk tags",
+                             h->chunk_count);
+    size_t n = 0;
+    for (uint64_t i = 0; i < h->chunk_count; i++) {
+        int known = 0;
+        r = check_entry_tag(h, i, &entries[i], &known, allow_unknown_required, diag);
+        if (r != TPK_OK)
+            goto fail;
+        if (known)
+            keys[n++] = (chunk_key){entries[i].tag, entries[i].index, entries[i].step, i};
+    }
+    r = check_duplicates(keys, n, diag);
+    if (r == TPK_OK)
+        r = check_required_present(h, entries, diag);
+fail:
+    allocator->free(allocator->user, keys);
+    return r;
+}
+
+/* ---- fields (rule 15) -------------------------------------------------------------------------- */
+
+static tpk_result check_field_desc(uint32_t i, const tpk_field_desc *f, tpk_diag *diag)
+{
+    if (!memchr(f->name, 0, sizeof f->name))
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 ": name is not NUL-terminated within 64 bytes", i);
+    if (f->name[0] == 0)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 ": name is empty", i);
+    if (!memchr(f->units, 0, sizeof f->units))
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                             "field %" PRIu32 " '%s': units are not NUL-terminated within 32 bytes", i, f->name);
+    if (f->association > TPK_ASSOC_TET)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': association %" PRIu32
+                             ", must be 0 (point) or 1 (tet)", i, f->name, f->association);
+    if (f->components != 1)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': components %" PRIu32
+                             ", must be 1 in format 1.x", i, f->name, f->components);
+    if (f->step_count < 1)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': step_count is 0", i, f->name);
+    if (f->reserved0 != 0 || f->reserved1 != 0)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': reserved fields must be 0", i,
+                             f->name);
+    return TPK_OK;
+}
+
+static int compare_names(const void *pa, const void *pb)
+{
+    const tpk_field_desc *a = *(const tpk_field_desc *const *)pa, *b = *(const tpk_field_desc *const *)pb;
+    int c = strcmp(a->name, b->name);
+    return c != 0 ? c : (a < b ? -1 : a > b);
+}
+
+static tpk_result check_unique_names(const tpk_field_desc *fields, uint32_t count,
+                                     const tpk_allocator *allocator, tpk_diag *diag)
+{
+    tpk_result r = TPK_OK;
+    const tpk_field_desc **sorted = allocator->alloc(allocator->user, ((size_t)count + 1) * sizeof *sorted);
+    if (!sorted)
+        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu32 " field names", count);
+    for (uint32_t i = 0; i < count; i++)
+        sorted[i] = &fields[i];
+    qsort(sorted, count, sizeof *sorted, compare_names);
+    for (uint32_t k = 1; k < count; k++) {
+        if (strcmp(sorted[k]->name, sorted[k - 1]->name) == 0) {
+            r = tpk_diag_fail(diag, TPK_ERR_CORRUPT, "fields %td and %td are both named '%s'",
+                              sorted[k - 1] - fields, sorted[k] - fields, sorted[k]->name);
+            break;
+        }
+    }
+    allocator->free(allocator->user, sorted);
+    return r;
+}
+
+static tpk_result check_fdat(const tpk_header *h, uint64_t i, const tpk_dir_entry *e,
+                             const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+{
+    char name[80];
+    tpk_entry_name(i, e, name);
+    if (field_count == 0)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: field data without a 'FDSC' chunk", name);
+    if (e->index >= field_count)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: field index %" PRIu32 " but the file has %" PRIu32
+                             " fields", name, e->index, field_count);
+    const tpk_field_desc *f = &fields[e->index];
+    if (e->step >= f->step_count)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: step %" PRIu32 " but field '%s' has %" PRIu32 " steps",
+                             name, e->step, f->name, f->step_count);
+    uint64_t count = f->association == TPK_ASSOC_POINT ? h->vertex_count : h->tet_count;
+    if (e->elem_count != count)
+        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_count %" PRIu64 " but %s field '%s' needs %" PRIu64,
+                             name, e->elem_count, f->association == TPK_ASSOC_POINT ? "point" : "tet", f->name,
+                             count);
+    return TPK_OK;
+}
+
+/* Called when the number of FDAT chunks falls short: name the first field missing some. Duplicates
+ * and out-of-range FDATs were rejected already, so some field has fewer chunks than steps. */
+static tpk_result report_missing_fdat(const tpk_header *h, const tpk_dir_entry *entries,
+                                      const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+{
+    for (uint32_t f = 0; f < field_count; f++) {
+        uint64_t have = 0;
+        for (uint64_t i = 0; i < h->chunk_count; i++)
+            have += entries[i].tag == TPK_TAG_FDAT && entries[i].index == f;
+        if (have != fields[f].step_count)
+            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                                 "field %" PRIu32 " '%s' has %" PRIu32 " steps but %" PRIu64 " 'FDAT' chunks", f,
+                                 fields[f].name, fields[f].step_count, have);
+    }
+    return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "'FDAT' chunks do not match the field descriptors");
+}
+
+static tpk_result check_fdat_chunks(const tpk_header *h, const tpk_dir_entry *entries,
+                                    const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+{
+    uint64_t needed = 0, found = 0;
+    for (uint32_t f = 0; f < field_count; f++)
+        needed += fields[f].step_count;
+    for (uint64_t i = 0; i < h->chunk_count; i++) {
+        if (entries[i].tag != TPK_TAG_FDAT)
+            continue;
+        tpk_result r = check_fdat(h, i, &entries[i], fields, field_count, diag);
+        if (r != TPK_OK)
+            return r;
+        found++;
+    }
+    return found == needed ? TPK_OK : report_missing_fdat(h, entries, fields, field_count, diag);
+}
+
+static tpk_result check_time_chunk(const tpk_header *h, const tpk_dir_entry *entries,
+                                   const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+{
+    uint64_t steps = field_count == 0 ? 1 : 0; /* a file without fields has one state */
+    for (uint32_t f = 0; f < field_count; f++)
+        steps = fields[f].step_count > steps ? fields[f].step_count : steps;
+    for (uint64_t i = 0; i < h->chunk_count; i++) {
+        if (entries[i].tag == TPK_TAG_TIME && entries[i].elem_count != steps) {
+            char name[80];
+            tpk_entry_name(i, &entries[i], name);
+            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                                 "%s: %" PRIu64 " time values but the fields have %" PRIu64 " steps", name,
+                                 entries[i].elem_count, steps);
+        }
+    }
+    return TPK_OK;
+}
+
+tpk_result tpk_check_fields(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
+                            uint32_t field_count, const tpk_allocator *allocator, tpk_diag *diag)
+{
+    for (uint32_t i = 0; i < field_count; i++) {
+        tpk_result r = check_field_desc(i, &fields[i], diag);
+        if (r != TPK_OK)
+            return r;
+    }
+    tpk_result r = check_unique_names(fields, field_count, allocator, diag);
+    if (r == TPK_OK)
+        r = check_fdat_chunks(h, entries, fields, field_count, diag);
+    if (r == TPK_OK)
+        r = check_time_chunk(h, entries, fields, field_count, diag);
+    return r;
+}
+
+/* ---- chunk contents (rule 17) ------------------------------------------------------------------ */
+
+static tpk_result id_error(tpk_diag *diag, uint64_t i, const tpk_dir_entry *e, uint64_t record,
+                           const char *what, int32_t value, int64_t lo, uint64_t hi)
+{
+    char name[80];
+    tpk_entry_name(i, e, name);
+    return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+                         "%s: record %" PRIu64 " (raw byte %" PRIu64 "): %s = %" PRId32
+                         " is outside [%" PRId64 ", %" PRIu64 ")",
+                         name, record, record * e->elem_size, what, value, lo, hi);
+}
+
+static int in_range(int32_t value, int64_t lo, uint64_t hi)
+{
+    return value >= lo && (value < 0 || (uint64_t)value < hi);
+}
+
+static tpk_result check_tet32(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
+                              tpk_diag *diag)
+{
+    static const char *const vname[4] = {"v[0]", "v[1]", "v[2]", "4th vertex (vx^v0^v1^v2)"};
+    static const char *const nname[4] = {"n[0]", "n[1]", "n[2]", "n[3]"};
+    for (uint64_t t = 0; t < e->elem_count; t++) {
+        tpk_tet32 tet;
+        memcpy(&tet, raw + t * sizeof tet, sizeof tet);
+        int32_t v[4] = {tet.v[0], tet.v[1], tet.v[2], tet.vx ^ tet.v[0] ^ tet.v[1] ^ tet.v[2]};
+        for (int k = 0; k < 4; k++) {
+            if (!in_range(v[k], 0, h->vertex_count))
+                return id_error(diag, i, e, t, vname[k], v[k], 0, h->vertex_count);
+            if (!in_range(tet.n[k], -1, h->tet_count))
+                return id_error(diag, i, e, t, nname[k], tet.n[k], -1, h->tet_count);
+        }
+    }
+    return TPK_OK;
+}
+
+static tpk_result check_tet20(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
+                              tpk_diag *diag)
+{
+    static const char *const nname[4] = {"n[0]", "n[1]", "n[2]", "n[3]"};
+    for (uint64_t t = 0; t < e->elem_count; t++) {
+        tpk_tet20 tet;
+        memcpy(&tet, raw + t * sizeof tet, sizeof tet);
+        for (int k = 0; k < 4; k++) {
+            if (!in_range(tet.n[k], -1, h->tet_count))
+                return id_error(diag, i, e, t, nname[k], tet.n[k], -1, h->tet_count);
+        }
+    }
+    return TPK_OK;
+}
+
+static tpk_result check_shell(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
+                              tpk_diag *diag)
+{
+    for (uint64_t s = 0; s < e->elem_count; s++) {
+        tpk_shell_face face;
+        memcpy(&face, raw + s * sizeof face, sizeof face);
+        if (!in_range(face.a, 0, h->vertex_count))
+            return id_error(diag, i, e, s, "a", face.a, 0, h->vertex_count);
+        if (!in_range(face.b, 0, h->vertex_count))
+            return id_error(diag, i, e, s, "b", face.b, 0, h->vertex_count);
+        if (!in_range(face.c, 0, h->vertex_count))
+            return id_error(diag, i, e, s, "c", face.c, 0, h->vertex_count);
+        if (!in_range(face.t, 0, h->tet_count))
+            return id_error(diag, i, e, s, "t", face.t, 0, h->tet_count);
+    }
+    return TPK_OK;
+}
+
+static tpk_result check_tmap(uint64_t i, const tpk_dir_entry *e, const uint8_t *raw, tpk_diag *diag)
+{
+    for (uint64_t t = 0; t < e->elem_count; t++) {
+        int32_t cell;
+        memcpy(&cell, raw + t * sizeof cell, sizeof cell);
+        if (cell < 0)
+            return id_error(diag, i, e, t, "source cell", cell, 0, (uint64_t)INT32_MAX + 1);
+    }
+    return TPK_OK;
+}
+
+tpk_result tpk_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
+                             tpk_diag *diag)
+{
+    switch (e->tag) {
+    case TPK_TAG_TT32: return check_tet32(h, i, e, raw, diag);
+    case TPK_TAG_TT20: return check_tet20(h, i, e, raw, diag);
+    case TPK_TAG_SHEL: return check_shell(h, i, e, raw, diag);
+    case TPK_TAG_TMAP: return check_tmap(i, e, raw, diag);
+    default: return TPK_OK;
+    }
+}
+
+/* ---- whole layouts and files ------------------------------------------------------------------- */
+
+tpk_result tpk_check_layout(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
+                            uint32_t field_count, const tpk_allocator *allocator, tpk_diag *diag)
+{
+    /* A writer's own output is not untrusted input: no limits. */
+    const tpk_limits limits = {UINT64_MAX, UINT64_MAX, UINT64_MAX};
+    tpk_result r = tpk_check_header_fields(h, diag);
+    if (r == TPK_OK)
+        r = tpk_check_header_counts(h, &limits, diag);
+    uint64_t total = 0;
+    for (uint64_t i = 0; r == TPK_OK && i < h->chunk_count; i++)
+        r = tpk_check_entry(h, &limits, i, &entries[i], &total, diag);
+    if (r == TPK_OK)
+        r = tpk_check_overlaps(h, entries, allocator, diag);
+    if (r == TPK_OK)
+        r = tpk_check_tags(h, entries, 1, allocator, diag); /* a vendor may require its chunk */
+    if (r == TPK_OK)
+        r = tpk_check_fields(h, entries, fields, field_count, allocator, diag);
+    return r;
+}
+
+/* Checksum, decode and ids of one chunk; zstd chunks are decoded into a temporary buffer. */
+tpk_result tpk_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids)
+{
+    const tpk_dir_entry *e = &file->entries[i];
+    void *owned = NULL;
+    const void *raw = file->data + e->offset;
+    tpk_result r = TPK_OK;
+    if (e->codec != TPK_CODEC_NONE) {
+        owned = tpk_file_alloc(file, e->raw_size);
+        if (!owned)
+            return tpk_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64
+                                 " (%" PRIu64 " bytes)", i, e->raw_size);
+        raw = owned;
+        r = tpk_file_decode(file, i, owned);
+        if (r != TPK_OK)
+            goto fail;
+    }
+    if (!(atomic_load(&file->chunk_state[i]) & TPK_CHUNK_SUM_OK))
+        r = tpk_file_check_sum(file, i, raw);
+    if (r == TPK_OK && check_ids)
+        r = tpk_file_check_ids(file, i, raw);
+fail:
+    tpk_file_free(file, owned);
+    return r;
+}
+
+tpk_result tpk_verify(tpk_file *file)
+{
+    if (!file)
+        return TPK_ERR_INVALID_ARGUMENT;
+    tpk_result r = tpk_file_usable(file);
+    for (uint64_t i = 0; r == TPK_OK && i < file->header.chunk_count; i++)
+        r = tpk_file_verify_chunk(file, i, 1);
+    return r;
+}

@@ -1,0 +1,384 @@
+/* The container writer: chunks are appended (aligned, optionally zstd-compressed, checksummed) to a
+ * temporary file beside the target, then the directory and header are written and the file is renamed
+ * into place. The finished layout is checked with the reader's own rules first. Output is deterministic. */
+#include <errno.h>
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <xxhash.h>
+#include <zstd.h>
+
+#include "internal_file.h"
+
+struct tpk_writer {
+    tpk_allocator allocator;
+    tpk_message_fn message;
+    void *message_user;
+    int fd;
+    char *temp_path;   /* "<path>.tmp.XXXXXX" */
+    char *path;
+    uint64_t end;      /* bytes written so far */
+    tpk_dir_entry *entries;
+    uint64_t count, capacity;
+    tpk_field_desc *fields; /* copy of the FDSC chunk, for the final check */
+    uint32_t field_count;
+    int failed;        /* an I/O error left the temporary file in an unknown state */
+    char error_text[TPK_ERROR_TEXT_SIZE];
+};
+
+static tpk_result writer_fail(tpk_writer *w, tpk_result code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static tpk_result writer_fail(tpk_writer *w, tpk_result code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(w->error_text, sizeof w->error_text, fmt, ap);
+    va_end(ap);
+    if (w->message)
+        w->message(w->message_user, code, w->error_text);
+    return code;
+}
+
+static tpk_result io_fail(tpk_writer *w, const char *what)
+{
+    char reason[128] = "";
+    strerror_r(errno, reason, sizeof reason);
+    w->failed = 1;
+    return writer_fail(w, TPK_ERR_IO, "%s '%s': %s", what, w->temp_path ? w->temp_path : w->path, reason);
+}
+
+static void *writer_alloc(const tpk_writer *w, uint64_t size)
+{
+    return size > SIZE_MAX ? NULL : w->allocator.alloc(w->allocator.user, size ? (size_t)size : 1);
+}
+
+static void writer_free(const tpk_writer *w, void *ptr)
+{
+    if (ptr)
+        w->allocator.free(w->allocator.user, ptr);
+}
+
+/* Free everything; remove the temporary file if it is still there. */
+static void writer_destroy(tpk_writer *w)
+{
+    if (w->fd >= 0)
+        close(w->fd);
+    if (w->temp_path)
+        unlink(w->temp_path);
+    writer_free(w, w->temp_path);
+    writer_free(w, w->path);
+    writer_free(w, w->entries);
+    writer_free(w, w->fields);
+    w->allocator.free(w->allocator.user, w);
+}
+
+/* ---- low-level output --------------------------------------------------------------------------- */
+
+static tpk_result write_all(tpk_writer *w, const void *data, uint64_t size)
+{
+    const uint8_t *p = data;
+    while (size > 0) {
+        size_t n = size > (1u << 30) ? (1u << 30) : (size_t)size;
+        ssize_t done = write(w->fd, p, n);
+        if (done < 0 && errno == EINTR)
+            continue;
+        if (done <= 0)
+            return io_fail(w, "cannot write");
+        p += done;
+        size -= (uint64_t)done;
+        w->end += (uint64_t)done;
+    }
+    return TPK_OK;
+}
+
+static tpk_result pad_to(tpk_writer *w, uint64_t align)
+{
+    static const uint8_t zeros[TPK_LARGE_CHUNK_ALIGN];
+    uint64_t pad = (align - w->end % align) % align;
+    return write_all(w, zeros, pad);
+}
+
+static tpk_result pwrite_all(tpk_writer *w, const void *data, size_t size, off_t offset)
+{
+    const uint8_t *p = data;
+    while (size > 0) {
+        ssize_t done = pwrite(w->fd, p, size, offset);
+        if (done < 0 && errno == EINTR)
+            continue;
+        if (done <= 0)
+            return io_fail(w, "cannot write");
+        p += done;
+        size -= (size_t)done;
+        offset += done;
+    }
+    return TPK_OK;
+}
+
+/* ---- open --------------------------------------------------------------------------------------- */
+
+static char *copy_string(const tpk_writer *w, const char *s, const char *suffix)
+{
+    size_t a = strlen(s), b = strlen(suffix);
+    char *copy = writer_alloc(w, a + b + 1);
+    if (copy) {
+        memcpy(copy, s, a);
+        memcpy(copy + a, suffix, b + 1);
+    }
+    return copy;
+}
+
+static tpk_result create_temp(tpk_writer *w, const char *path)
+{
+    w->path = copy_string(w, path, "");
+    w->temp_path = copy_string(w, path, ".tmp.XXXXXX");
+    if (!w->path || !w->temp_path)
+        return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "out of memory for the path '%s'", path);
+    w->fd = mkstemp(w->temp_path);
+    if (w->fd < 0) {
+        writer_free(w, w->temp_path); /* nothing was created: nothing to unlink */
+        w->temp_path = NULL;
+        return io_fail(w, "cannot create a temporary file beside");
+    }
+    fchmod(w->fd, 0644); /* mkstemp's 0600 is too strict for a data file */
+    static const uint8_t header_placeholder[TPK_HEADER_SIZE];
+    return write_all(w, header_placeholder, sizeof header_placeholder);
+}
+
+tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_options *options, char *err_text,
+                           size_t err_cap)
+{
+    if (!out || !path) {
+        if (err_text && err_cap)
+            snprintf(err_text, err_cap, "tpk_writer_open: NULL argument");
+        return TPK_ERR_INVALID_ARGUMENT;
+    }
+    *out = NULL;
+    tpk_write_options opt = {0};
+    if (options)
+        memcpy(&opt, options, options->size && options->size < sizeof opt ? options->size : sizeof opt);
+    tpk_allocator allocator;
+    tpk_resolve_allocator(&opt.allocator, &allocator);
+    tpk_writer *w = allocator.alloc(allocator.user, sizeof *w);
+    if (!w) {
+        if (err_text && err_cap)
+            snprintf(err_text, err_cap, "out of memory for the writer");
+        return TPK_ERR_OUT_OF_MEMORY;
+    }
+    *w = (tpk_writer){.allocator = allocator, .message = opt.message, .message_user = opt.message_user, .fd = -1};
+    tpk_result r = create_temp(w, path);
+    if (r != TPK_OK) {
+        if (err_text && err_cap)
+            snprintf(err_text, err_cap, "%s", w->error_text);
+        writer_destroy(w);
+        return r;
+    }
+    *out = w;
+    return TPK_OK;
+}
+
+/* ---- chunks ------------------------------------------------------------------------------------- */
+
+static tpk_result check_desc(tpk_writer *w, const tpk_chunk_desc *d, const void *data)
+{
+    char tag[16];
+    tpk_tag_name(d->tag, tag);
+    uint32_t size = tpk_elem_type_size(d->elem_type), want_type = 0;
+    int required = 0;
+    if (d->codec > TPK_CODEC_ZSTD || (d->flags & ~TPK_CHUNK_REQUIRED))
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: codec %u / flags 0x%x not allowed", tag,
+                           d->codec, d->flags);
+    if (size == 0 || d->elem_size != size)
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: elem_size %" PRIu32 " does not match elem_type %u",
+                           tag, d->elem_size, d->elem_type);
+    int known = tpk_known_tag(d->tag, &want_type, &required);
+    if (known && d->elem_type != want_type)
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: elem_type %u, the tag needs %" PRIu32, tag,
+                           d->elem_type, want_type);
+    uint8_t first = (uint8_t)d->tag;
+    if (!known && !(first >= 'a' && first <= 'z'))
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT,
+                           "chunk %s: not a tag of format 1.0 nor a vendor tag (first byte a-z)", tag);
+    if (known && !(d->flags & TPK_CHUNK_REQUIRED) != !required)
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: the REQUIRED flag must be %s for this tag", tag,
+                           required ? "set" : "clear");
+    if (d->elem_count > UINT64_MAX / size || d->elem_count * size > SIZE_MAX || (!data && d->elem_count > 0))
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: %" PRIu64 " elements: no data or too large", tag,
+                           d->elem_count);
+    if (d->tag == TPK_TAG_FDSC && (w->fields || d->elem_count > TPK_MAX_FIELDS))
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: a second FDSC, or more than %u fields", tag,
+                           TPK_MAX_FIELDS);
+    return TPK_OK;
+}
+
+static tpk_result reserve_entry(tpk_writer *w)
+{
+    if (w->count < w->capacity)
+        return TPK_OK;
+    uint64_t capacity = w->capacity ? 2 * w->capacity : 16;
+    tpk_dir_entry *grown = writer_alloc(w, capacity * sizeof *grown);
+    if (!grown)
+        return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "out of memory for %" PRIu64 " directory entries", capacity);
+    if (w->count > 0)
+        memcpy(grown, w->entries, w->count * sizeof *grown);
+    writer_free(w, w->entries);
+    w->entries = grown;
+    w->capacity = capacity;
+    return TPK_OK;
+}
+
+static tpk_result keep_fields(tpk_writer *w, const tpk_chunk_desc *d, const void *data)
+{
+    if (d->tag != TPK_TAG_FDSC)
+        return TPK_OK;
+    w->fields = writer_alloc(w, d->elem_count * sizeof *w->fields);
+    if (!w->fields)
+        return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "out of memory for %" PRIu64 " field descriptors", d->elem_count);
+    if (d->elem_count > 0)
+        memcpy(w->fields, data, d->elem_count * sizeof *w->fields);
+    w->field_count = (uint32_t)d->elem_count;
+    return TPK_OK;
+}
+
+/* Compress into a new buffer (*out, *out_size); the caller frees it. */
+static tpk_result compress(tpk_writer *w, const tpk_chunk_desc *d, const void *data, size_t raw_size,
+                           void **out, size_t *out_size)
+{
+    size_t bound = ZSTD_compressBound(raw_size);
+    *out = writer_alloc(w, bound);
+    if (!*out)
+        return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "out of memory for %zu compressed bytes", bound);
+    *out_size = ZSTD_compress(*out, bound, data, raw_size, d->zstd_level ? d->zstd_level : ZSTD_CLEVEL_DEFAULT);
+    if (ZSTD_isError(*out_size))
+        return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "zstd compression of %zu bytes failed: %s", raw_size,
+                           ZSTD_getErrorName(*out_size));
+    return TPK_OK;
+}
+
+static tpk_result append_payload(tpk_writer *w, const tpk_chunk_desc *d, const void *data, size_t raw_size,
+                                 tpk_dir_entry *e)
+{
+    void *packed = NULL;
+    size_t stored = raw_size;
+    tpk_result r = TPK_OK;
+    if (d->codec == TPK_CODEC_ZSTD)
+        r = compress(w, d, data, raw_size, &packed, &stored);
+    int large = d->codec == TPK_CODEC_NONE && raw_size >= TPK_LARGE_CHUNK_BYTES;
+    if (r == TPK_OK)
+        r = pad_to(w, large ? TPK_LARGE_CHUNK_ALIGN : TPK_CHUNK_ALIGN);
+    e->offset = w->end;
+    e->stored_size = stored;
+    if (r == TPK_OK)
+        r = write_all(w, packed ? packed : data, stored);
+    writer_free(w, packed);
+    return r;
+}
+
+tpk_result tpk_writer_add_chunk(tpk_writer *writer, const tpk_chunk_desc *desc, const void *data)
+{
+    if (!writer || !desc)
+        return TPK_ERR_INVALID_ARGUMENT;
+    if (writer->failed)
+        return writer_fail(writer, TPK_ERR_BAD_STATE, "an earlier write failed: %s", "abort this writer");
+    tpk_result r = check_desc(writer, desc, data);
+    if (r == TPK_OK)
+        r = reserve_entry(writer);
+    if (r != TPK_OK)
+        return r;
+    size_t raw_size = (size_t)(desc->elem_count * desc->elem_size);
+    tpk_dir_entry e = {.tag = desc->tag, .flags = desc->flags, .codec = desc->codec, .elem_type = desc->elem_type,
+                       .elem_size = desc->elem_size, .index = desc->index, .step = desc->step,
+                       .elem_count = desc->elem_count, .raw_size = raw_size,
+                       .checksum = XXH64(data, raw_size, 0)};
+    r = append_payload(writer, desc, data, raw_size, &e);
+    if (r == TPK_OK)
+        r = keep_fields(writer, desc, data); /* on failure the payload stays as unreferenced padding */
+    if (r == TPK_OK)
+        writer->entries[writer->count++] = e;
+    return r;
+}
+
+/* ---- finish ------------------------------------------------------------------------------------- */
+
+static void build_header(const tpk_writer *w, const tpk_header_fields *fields, uint64_t directory_offset,
+                         tpk_header *h)
+{
+    memset(h, 0, sizeof *h);
+    memcpy(h->magic, TPK_MAGIC, TPK_MAGIC_SIZE);
+    h->version_major = TPK_VERSION_MAJOR;
+    h->version_minor = TPK_VERSION_MINOR;
+    h->header_size = TPK_HEADER_SIZE;
+    h->dir_entry_size = TPK_DIR_ENTRY_SIZE;
+    h->directory_offset = directory_offset;
+    h->chunk_count = w->count;
+    h->file_size = directory_offset + w->count * TPK_DIR_ENTRY_SIZE;
+    h->vertex_count = fields->vertex_count;
+    h->tet_count = fields->tet_count;
+    h->shell_face_count = fields->shell_face_count;
+    memcpy(h->origin, fields->origin, sizeof h->origin);
+    memcpy(h->bounds_min, fields->bounds_min, sizeof h->bounds_min);
+    memcpy(h->bounds_max, fields->bounds_max, sizeof h->bounds_max);
+    h->directory_checksum = XXH64(w->entries, w->count * TPK_DIR_ENTRY_SIZE, 0);
+    h->header_checksum = XXH64(h, offsetof(tpk_header, header_checksum), 0);
+}
+
+static tpk_result write_tail(tpk_writer *w, const tpk_header_fields *fields)
+{
+    tpk_header h;
+    tpk_diag diag;
+    uint64_t directory_offset = (w->end + TPK_CHUNK_ALIGN - 1) / TPK_CHUNK_ALIGN * TPK_CHUNK_ALIGN;
+    build_header(w, fields, directory_offset, &h);
+    tpk_result r = tpk_check_layout(&h, w->entries, w->fields, w->field_count, &w->allocator, &diag);
+    if (r != TPK_OK)
+        return writer_fail(w, r == TPK_ERR_OUT_OF_MEMORY ? r : TPK_ERR_INVALID_ARGUMENT,
+                           "refusing to write an invalid file '%s': %s", w->path, diag.text);
+    r = pad_to(w, TPK_CHUNK_ALIGN);
+    if (r == TPK_OK)
+        r = write_all(w, w->entries, w->count * TPK_DIR_ENTRY_SIZE);
+    if (r == TPK_OK)
+        r = pwrite_all(w, &h, sizeof h, 0);
+    if (r == TPK_OK && fsync(w->fd) != 0)
+        r = io_fail(w, "cannot flush");
+    return r;
+}
+
+tpk_result tpk_writer_finish(tpk_writer *writer, const tpk_header_fields *header)
+{
+    if (!writer)
+        return TPK_ERR_INVALID_ARGUMENT;
+    tpk_result r = TPK_OK;
+    if (!header)
+        r = writer_fail(writer, TPK_ERR_INVALID_ARGUMENT, "tpk_writer_finish: NULL header fields");
+    else if (writer->failed)
+        r = writer_fail(writer, TPK_ERR_BAD_STATE, "an earlier write to '%s' failed", writer->temp_path);
+    if (r == TPK_OK)
+        r = write_tail(writer, header);
+    if (r == TPK_OK) {
+        int closed = close(writer->fd);
+        writer->fd = -1;
+        if (closed != 0)
+            r = io_fail(writer, "cannot close");
+        else if (rename(writer->temp_path, writer->path) != 0)
+            r = io_fail(writer, "cannot rename into place");
+        else
+            writer_free(writer, writer->temp_path);
+        if (r == TPK_OK)
+            writer->temp_path = NULL; /* renamed: nothing left to unlink */
+    }
+    writer_destroy(writer);
+    return r;
+}
+
+void tpk_writer_abort(tpk_writer *writer)
+{
+    if (writer)
+        writer_destroy(writer);
+}
+
+const char *tpk_writer_error_text(const tpk_writer *writer)
+{
+    return writer ? writer->error_text : "";
+}
