@@ -1,0 +1,390 @@
+/* Generator of the format's test vectors (samples/vectors/, spec §13). The good files are built from the
+ * explicit numbers below with libtetpack's writer; Tet20, Tet16 and the shell are derived from Tet32 by
+ * the spec's formulas written out here, not by the converter's code. The must-fail files are one_tet.tpk
+ * with one rule broken by patching bytes. Compiled as part of test_vectors.c (#included there). */
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <xxhash.h>
+
+#include "tetpack.h"
+
+/* ---- the meshes, as numbers ------------------------------------------------------------------ */
+
+/* one_tet: vertex ids are listed in positive order (1, 2, 3, 0): p1 -> p2 is +x, p1 -> p3 is +y and
+ * p1 -> p0 is +z, so det[p2-p1, p3-p1, p0-p1] = det(I) = 1 > 0. */
+static const double one_tet_origin[3] = {10.0, 20.0, 30.0};
+static const float one_tet_positions[4][3] = {{0, 0, 1}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+static const int32_t one_tet_tets[1][4] = {{1, 2, 3, 0}};
+static const int32_t one_tet_neighbors[1][4] = {{-1, -1, -1, -1}};
+static const float one_tet_height[4] = {31, 30, 30, 30}; /* world z = origin z + position z */
+static const char one_tet_meta[] = "{\"converter\":{\"name\":\"tetpack make_vectors\",\"version\":\"1.0\"}}";
+
+/* two_tets_zstd: tet 0 = (3, 0, 4, 1) is the unit corner tet, tet 1 = (0, 4, 1, 2) lies across the
+ * face {0, 4, 1} (the plane x + y + z = 1) with p2 = (1, 1, 1); det for tet 1 is 2 > 0. */
+static const double two_tets_origin[3] = {1000000.0, -2.5, 0.0};
+static const float two_tets_positions[5][3] = {{1, 0, 0}, {0, 0, 1}, {1, 1, 1}, {0, 0, 0}, {0, 1, 0}};
+static const int32_t two_tets_tets[2][4] = {{3, 0, 4, 1}, {0, 4, 1, 2}};
+static const int32_t two_tets_neighbors[2][4] = {{1, -1, -1, -1}, {-1, -1, -1, 0}};
+static const float two_tets_temperature[2][5] = {{300, 301, 302, 303, 304}, {310, 311, 312, 313, 314}};
+static const float two_tets_material[2] = {1, 2};
+static const double two_tets_time[2] = {0.0, 0.5};
+static const int32_t two_tets_tmap[2] = {7, 9};
+static const int32_t two_tets_vmap[5] = {10, 11, 12, 13, 14};
+static const char two_tets_note[] = "vendor chunks without the REQUIRED bit are skipped";
+
+#define VECTOR_ZSTD_LEVEL 3
+
+/* ---- layouts by the spec's formulas (§6.3 to §6.6) --------------------------------------------- */
+
+static void spec_tet32(const int32_t v[4], const int32_t n[4], tpk_tet32 *out)
+{
+    memset(out, 0, sizeof *out);
+    for (int k = 0; k < 3; k++)
+        out->v[k] = v[k];
+    out->vx = v[0] ^ v[1] ^ v[2] ^ v[3];
+    for (int k = 0; k < 4; k++)
+        out->n[k] = n[k];
+}
+
+static int spec_rank(const int32_t v[4], int k)
+{
+    int rank = 0;
+    for (int j = 0; j < 4; j++)
+        rank += v[j] < v[k];
+    return rank;
+}
+
+static void spec_tet20(const int32_t v[4], const int32_t n[4], tpk_tet20 *out)
+{
+    memset(out, 0, sizeof *out);
+    out->vx = v[0] ^ v[1] ^ v[2] ^ v[3];
+    for (int k = 0; k < 4; k++)
+        out->n[spec_rank(v, k)] = n[k];
+}
+
+static void spec_tet16(const tpk_tet20 *in, tpk_tet16 *out)
+{
+    memset(out, 0, sizeof *out);
+    out->vx = in->vx;
+    for (int r = 0; r < 3; r++)
+        out->nx[r] = (int32_t)((uint32_t)in->n[r] ^ (uint32_t)in->n[3]);
+}
+
+/* Outward boundary faces of positively oriented tets, in tet order then face order. Face j is opposite
+ * v_j; listed so that (a, c, b, v_j) is an even permutation of (v0, v1, v2, v3). */
+static size_t spec_shell(const int32_t (*tets)[4], const int32_t (*neighbors)[4], size_t tet_count,
+                         tpk_shell_face *out)
+{
+    static const int faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    size_t count = 0;
+    for (size_t t = 0; t < tet_count; t++)
+        for (int j = 0; j < 4; j++)
+            if (neighbors[t][j] == -1)
+                out[count++] = (tpk_shell_face){tets[t][faces[j][0]], tets[t][faces[j][1]],
+                                                tets[t][faces[j][2]], (int32_t)t};
+    return count;
+}
+
+static void spec_field(tpk_field_desc *f, const char *name, const char *units, uint32_t association,
+                       uint32_t step_count, float min_value, float max_value)
+{
+    memset(f, 0, sizeof *f);
+    strncpy(f->name, name, sizeof f->name - 1);
+    strncpy(f->units, units, sizeof f->units - 1);
+    f->association = association;
+    f->step_count = step_count;
+    f->components = 1;
+    f->min_value = min_value;
+    f->max_value = max_value;
+}
+
+/* ---- writing ---------------------------------------------------------------------------------- */
+
+typedef struct vector_writer {
+    tpk_writer *writer;
+    int codec;
+    tpk_result result;
+} vector_writer;
+
+static void put(vector_writer *w, uint32_t tag, int required, tpk_elem_type type, uint32_t elem_size,
+                uint64_t count, uint32_t index, uint32_t step, const void *data)
+{
+    if (w->result != TPK_OK)
+        return;
+    tpk_chunk_desc d = {0};
+    d.tag = tag;
+    d.flags = required ? TPK_CHUNK_REQUIRED : 0;
+    d.codec = (uint8_t)w->codec;
+    d.elem_type = (uint8_t)type;
+    d.elem_size = elem_size;
+    d.index = index;
+    d.step = step;
+    d.elem_count = count;
+    d.zstd_level = VECTOR_ZSTD_LEVEL;
+    w->result = tpk_writer_add_chunk(w->writer, &d, data);
+    if (w->result != TPK_OK)
+        fprintf(stderr, "make_vectors: add_chunk: %s\n", tpk_writer_error_text(w->writer));
+}
+
+static void bounds_of(const float (*pos)[3], size_t n, const double origin[3], tpk_header_fields *h)
+{
+    for (int k = 0; k < 3; k++) {
+        h->origin[k] = origin[k];
+        h->bounds_min[k] = h->bounds_max[k] = origin[k] + (double)pos[0][k];
+    }
+    for (size_t i = 1; i < n; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = origin[k] + (double)pos[i][k];
+            h->bounds_min[k] = x < h->bounds_min[k] ? x : h->bounds_min[k];
+            h->bounds_max[k] = x > h->bounds_max[k] ? x : h->bounds_max[k];
+        }
+}
+
+static tpk_result finish(vector_writer *w, tpk_header_fields *h)
+{
+    if (w->result != TPK_OK) {
+        tpk_writer_abort(w->writer);
+        return w->result;
+    }
+    tpk_result r = tpk_writer_finish(w->writer, h);
+    if (r != TPK_OK)
+        fprintf(stderr, "make_vectors: finish: %s\n", tpk_result_string(r));
+    return r;
+}
+
+static tpk_result open_writer(vector_writer *w, const char *path, int codec)
+{
+    char err[512] = "";
+    w->codec = codec;
+    w->result = tpk_writer_open(&w->writer, path, NULL, err, sizeof err);
+    if (w->result != TPK_OK)
+        fprintf(stderr, "make_vectors: %s: %s\n", path, err);
+    return w->result;
+}
+
+/* one_tet.tpk; with `vendor` set, also an optional chunk 'vndr' (patched to REQUIRED later). */
+static tpk_result write_one_tet(const char *path, int vendor)
+{
+    vector_writer w;
+    if (open_writer(&w, path, TPK_CODEC_NONE) != TPK_OK)
+        return w.result;
+    tpk_tet32 t32;
+    tpk_tet20 t20;
+    tpk_tet16 t16;
+    tpk_shell_face shell[4];
+    tpk_field_desc field;
+    spec_tet32(one_tet_tets[0], one_tet_neighbors[0], &t32);
+    spec_tet20(one_tet_tets[0], one_tet_neighbors[0], &t20);
+    spec_tet16(&t20, &t16);
+    size_t shell_count = spec_shell(one_tet_tets, one_tet_neighbors, 1, shell);
+    spec_field(&field, "height", "m", TPK_ASSOC_POINT, 1, 30.0f, 31.0f);
+
+    put(&w, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, 4, 0, 0, one_tet_positions);
+    put(&w, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, 1, 0, 0, &t32);
+    put(&w, TPK_TAG_TT20, 1, TPK_ELEM_TET20, 20, 1, 0, 0, &t20);
+    put(&w, TPK_TAG_TT16, 1, TPK_ELEM_TET16, 16, 1, 0, 0, &t16);
+    put(&w, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, shell_count, 0, 0, shell);
+    put(&w, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, 1, 0, 0, &field);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 4, 0, 0, one_tet_height);
+    put(&w, TPK_TAG_META, 0, TPK_ELEM_BYTE, 1, strlen(one_tet_meta), 0, 0, one_tet_meta);
+    if (vendor)
+        put(&w, TPK_FOURCC('v', 'n', 'd', 'r'), 0, TPK_ELEM_BYTE, 1, 4, 0, 0, "vndr");
+
+    tpk_header_fields h = {0};
+    h.vertex_count = 4;
+    h.tet_count = 1;
+    h.shell_face_count = shell_count;
+    bounds_of(one_tet_positions, 4, one_tet_origin, &h);
+    return finish(&w, &h);
+}
+
+static tpk_result write_two_tets_zstd(const char *path)
+{
+    vector_writer w;
+    if (open_writer(&w, path, TPK_CODEC_ZSTD) != TPK_OK)
+        return w.result;
+    tpk_tet32 t32[2];
+    tpk_tet20 t20[2];
+    tpk_tet16 t16[2];
+    tpk_shell_face shell[8];
+    tpk_field_desc fields[2];
+    for (int t = 0; t < 2; t++) {
+        spec_tet32(two_tets_tets[t], two_tets_neighbors[t], &t32[t]);
+        spec_tet20(two_tets_tets[t], two_tets_neighbors[t], &t20[t]);
+        spec_tet16(&t20[t], &t16[t]);
+    }
+    size_t shell_count = spec_shell(two_tets_tets, two_tets_neighbors, 2, shell);
+    spec_field(&fields[0], "temperature", "K", TPK_ASSOC_POINT, 2, 300.0f, 314.0f);
+    spec_field(&fields[1], "material", "", TPK_ASSOC_TET, 1, 1.0f, 2.0f);
+
+    put(&w, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, 5, 0, 0, two_tets_positions);
+    put(&w, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, 2, 0, 0, t32);
+    put(&w, TPK_TAG_TT20, 1, TPK_ELEM_TET20, 20, 2, 0, 0, t20);
+    put(&w, TPK_TAG_TT16, 1, TPK_ELEM_TET16, 16, 2, 0, 0, t16);
+    put(&w, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, shell_count, 0, 0, shell);
+    put(&w, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, 2, 0, 0, fields);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 5, 0, 0, two_tets_temperature[0]);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 5, 0, 1, two_tets_temperature[1]);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 2, 1, 0, two_tets_material);
+    put(&w, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, 2, 0, 0, two_tets_time);
+    put(&w, TPK_TAG_TMAP, 0, TPK_ELEM_I32, 4, 2, 0, 0, two_tets_tmap);
+    put(&w, TPK_TAG_VMAP, 0, TPK_ELEM_I32, 4, 5, 0, 0, two_tets_vmap);
+    put(&w, TPK_FOURCC('n', 'o', 't', 'e'), 0, TPK_ELEM_BYTE, 1, strlen(two_tets_note), 0, 0, two_tets_note);
+
+    tpk_header_fields h = {0};
+    h.vertex_count = 5;
+    h.tet_count = 2;
+    h.shell_face_count = shell_count;
+    bounds_of(two_tets_positions, 5, two_tets_origin, &h);
+    return finish(&w, &h);
+}
+
+/* ---- must-fail files: patched bytes ------------------------------------------------------------ */
+
+typedef struct byte_buffer {
+    uint8_t *data;
+    size_t size;
+} byte_buffer;
+
+static int load_bytes(const char *path, byte_buffer *out)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return -1;
+    fseek(f, 0, SEEK_END);
+    long size = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    out->data = malloc(size > 0 ? (size_t)size : 1);
+    out->size = size > 0 ? (size_t)size : 0;
+    int ok = out->data && fread(out->data, 1, out->size, f) == out->size;
+    fclose(f);
+    return ok ? 0 : -1;
+}
+
+static int save_bytes(const char *path, const uint8_t *data, size_t size)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return -1;
+    int ok = fwrite(data, 1, size, f) == size;
+    return fclose(f) == 0 && ok ? 0 : -1;
+}
+
+static tpk_header *header_of(byte_buffer *b)
+{
+    return (tpk_header *)b->data; /* malloc'ed, so aligned; the host is little-endian (internal_file.h) */
+}
+
+static tpk_dir_entry *entry_of(byte_buffer *b, uint32_t tag)
+{
+    tpk_header *h = header_of(b);
+    tpk_dir_entry *e = (tpk_dir_entry *)(b->data + h->directory_offset);
+    for (uint64_t i = 0; i < h->chunk_count; i++)
+        if (e[i].tag == tag)
+            return &e[i];
+    return NULL;
+}
+
+static void reseal(byte_buffer *b)
+{
+    tpk_header *h = header_of(b);
+    h->directory_checksum = XXH64(b->data + h->directory_offset, h->chunk_count * TPK_DIR_ENTRY_SIZE, 0);
+    h->header_checksum = XXH64(b->data, offsetof(tpk_header, header_checksum), 0);
+}
+
+static int make_broken(const char *dir, const char *name, const char *one_tet_path,
+                       int (*patch)(byte_buffer *b))
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    byte_buffer b = {0};
+    int rc = load_bytes(one_tet_path, &b);
+    if (rc == 0)
+        rc = patch(&b);
+    if (rc == 0)
+        rc = save_bytes(path, b.data, b.size);
+    if (rc != 0)
+        fprintf(stderr, "make_vectors: cannot make %s\n", path);
+    free(b.data);
+    return rc;
+}
+
+/* A text-mode transfer turned the magic's CR LF into LF: one byte fewer. */
+static int patch_bad_magic(byte_buffer *b)
+{
+    memmove(b->data + 4, b->data + 5, b->size - 5);
+    b->size--;
+    return 0;
+}
+
+static int patch_truncated(byte_buffer *b)
+{
+    if (b->size <= 256)
+        return -1;
+    b->size = 256;
+    return 0;
+}
+
+static int patch_newer_major(byte_buffer *b)
+{
+    header_of(b)->version_major = 2;
+    reseal(b);
+    return 0;
+}
+
+static int patch_required(byte_buffer *b)
+{
+    tpk_dir_entry *e = entry_of(b, TPK_FOURCC('v', 'n', 'd', 'r'));
+    if (!e)
+        return -1;
+    e->flags |= TPK_CHUNK_REQUIRED;
+    reseal(b);
+    return 0;
+}
+
+/* 31.0f (00 00 F8 41) of vertex 0 becomes 31.000002f (01 00 F8 41); the stored checksum stays. */
+static int patch_chunk_checksum(byte_buffer *b)
+{
+    tpk_dir_entry *e = entry_of(b, TPK_TAG_FDAT);
+    if (!e)
+        return -1;
+    b->data[e->offset] ^= 0x01;
+    return 0;
+}
+
+static int patch_overlap(byte_buffer *b)
+{
+    tpk_dir_entry *fdat = entry_of(b, TPK_TAG_FDAT), *pos3 = entry_of(b, TPK_TAG_POS3);
+    if (!fdat || !pos3)
+        return -1;
+    fdat->offset = pos3->offset;
+    reseal(b);
+    return 0;
+}
+
+/* Write every vector into `dir`. Returns 0 on success. */
+static int tpk_make_vectors(const char *dir)
+{
+    char one_tet[1024], path[1024], vendor[1024];
+    snprintf(one_tet, sizeof one_tet, "%s/one_tet.tpk", dir);
+    if (write_one_tet(one_tet, 0) != TPK_OK)
+        return -1;
+    snprintf(path, sizeof path, "%s/two_tets_zstd.tpk", dir);
+    if (write_two_tets_zstd(path) != TPK_OK)
+        return -1;
+    int rc = make_broken(dir, "bad_magic.tpk", one_tet, patch_bad_magic);
+    rc |= make_broken(dir, "truncated.tpk", one_tet, patch_truncated);
+    rc |= make_broken(dir, "newer_major.tpk", one_tet, patch_newer_major);
+    rc |= make_broken(dir, "chunk_checksum.tpk", one_tet, patch_chunk_checksum);
+    rc |= make_broken(dir, "overlap.tpk", one_tet, patch_overlap);
+    snprintf(vendor, sizeof vendor, "%s/one_tet_vendor.tmp", dir);
+    if (write_one_tet(vendor, 1) != TPK_OK)
+        return -1;
+    rc |= make_broken(dir, "unknown_required_chunk.tpk", vendor, patch_required);
+    remove(vendor);
+    return rc;
+}

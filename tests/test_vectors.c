@@ -1,0 +1,379 @@
+/* The format's test vectors (spec §13, samples/vectors/): regenerated files equal the committed ones,
+ * good files decode to the numbers in samples/vectors/README.md, bad files give their exact result.
+ * TPK_REGENERATE_VECTORS=1 in the environment rewrites the committed files instead of comparing. */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <zstd.h>
+
+#include "harness.h"
+#include "make_vectors.c"
+#include "tetpack.h"
+
+#define VECTOR_DIR TPK_SOURCE_DIR "/samples/vectors"
+/* zstd does not promise identical output across versions: compressed vectors are compared byte for
+ * byte only with the version that made them (all other checks still run). */
+#define VECTOR_ZSTD_VERSION 10504
+
+static const char *const vector_names[] = {
+    "one_tet.tpk",     "two_tets_zstd.tpk",          "bad_magic.tpk",      "truncated.tpk",
+    "newer_major.tpk", "unknown_required_chunk.tpk", "chunk_checksum.tpk", "overlap.tpk",
+};
+
+static const char *vector_path(const char *name)
+{
+    static char buf[4][1024];
+    static int next;
+    next = (next + 1) % 4;
+    snprintf(buf[next], sizeof buf[next], "%s/%s", VECTOR_DIR, name);
+    return buf[next];
+}
+
+static int same_bytes(const char *a, const char *b)
+{
+    byte_buffer x = {0}, y = {0};
+    int same = load_bytes(a, &x) == 0 && load_bytes(b, &y) == 0 && x.size == y.size &&
+               memcmp(x.data, y.data, x.size) == 0;
+    free(x.data);
+    free(y.data);
+    return same;
+}
+
+TPK_TEST(vectors_match)
+{
+    const char *regenerate = getenv("TPK_REGENERATE_VECTORS");
+    if (regenerate && strcmp(regenerate, "1") == 0) {
+        CHECK_EQ_INT(tpk_make_vectors(VECTOR_DIR), 0);
+        fprintf(stderr, "rewrote the vectors in %s\n", VECTOR_DIR);
+        return;
+    }
+    CHECK_EQ_INT(tpk_make_vectors(tpk_temp_dir()), 0);
+    for (size_t i = 0; i < sizeof vector_names / sizeof vector_names[0]; i++) {
+        const char *name = vector_names[i];
+        if (strstr(name, "zstd") && ZSTD_versionNumber() != VECTOR_ZSTD_VERSION) {
+            fprintf(stderr, "note: zstd %u, vectors made with %u: not comparing %s byte for byte\n",
+                    ZSTD_versionNumber(), VECTOR_ZSTD_VERSION, name);
+            continue;
+        }
+        CHECK_MSG(same_bytes(tpk_temp_path(name), vector_path(name)),
+                  "%s differs from the committed vector (a format or writer change? see spec §13; "
+                  "TPK_REGENERATE_VECTORS=1 rewrites them)", name);
+    }
+}
+
+/* ---- decoding the good vectors ---------------------------------------------------------------- */
+
+static double orient(const double a[3], const double b[3], const double c[3], const double d[3])
+{
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; k++) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - a[k];
+        w[k] = d[k] - a[k];
+    }
+    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+           u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+
+/* Small integer coordinates: the determinant is exact in double. */
+static double orient_ids(const float *pos, int32_t a, int32_t b, int32_t c, int32_t d)
+{
+    double p[4][3];
+    const int32_t id[4] = {a, b, c, d};
+    for (int i = 0; i < 4; i++)
+        for (int k = 0; k < 3; k++)
+            p[i][k] = pos[3 * id[i] + k];
+    return orient(p[0], p[1], p[2], p[3]);
+}
+
+/* Read chunk (tag, index, step) into dst, which must be exactly its raw size. */
+static tpk_result read_tagged(tpk_file *file, uint32_t tag, uint32_t index, uint32_t step, void *dst,
+                              uint64_t size, tpk_dir_entry *entry)
+{
+    uint64_t i;
+    tpk_result r = tpk_find_chunk(file, tag, index, step, &i);
+    if (r == TPK_OK)
+        r = tpk_get_chunk(file, i, entry);
+    if (r == TPK_OK && entry->raw_size != size)
+        return TPK_ERR_CORRUPT;
+    return r == TPK_OK ? tpk_read_chunk(file, i, dst, size) : r;
+}
+
+typedef struct expected_mesh {
+    const double *origin, *bounds_min, *bounds_max;
+    uint64_t vertex_count, tet_count, shell_face_count, chunk_count;
+    const float *positions;
+    const int32_t *tets;  /* 4 per tet, the stored positive order */
+    const tpk_tet32 *tet32;
+    const tpk_tet20 *tet20;
+    const tpk_tet16 *tet16;
+    const tpk_shell_face *shell;
+    uint8_t codec;
+} expected_mesh;
+
+static int same_set(const int32_t *a, const int32_t *b)
+{
+    for (int i = 0; i < 4; i++) {
+        int found = 0;
+        for (int j = 0; j < 4; j++)
+            found |= a[i] == b[j];
+        if (!found)
+            return 0;
+    }
+    return 1;
+}
+
+static void check_recover(tpk_file *file, const expected_mesh *m, const float *positions)
+{
+    static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
+    for (int l = 0; l < 3; l++) {
+        tpk_mesh_arrays arrays;
+        CHECK_EQ_INT(tpk_load_arrays(file, layouts[l], NULL, 0, &arrays), TPK_OK);
+        CHECK_EQ_INT(arrays.tet_count, m->tet_count);
+        int32_t got[8];
+        CHECK(m->tet_count <= 2);
+        CHECK_EQ_INT(tpk_recover_tets(&arrays, got), TPK_OK);
+        for (uint64_t t = 0; t < m->tet_count; t++) {
+            const int32_t *g = &got[4 * t];
+            CHECK_MSG(same_set(g, &m->tets[4 * t]), "layout %d tet %d: vertices differ", layouts[l], (int)t);
+            CHECK_MSG(orient_ids(positions, g[0], g[1], g[2], g[3]) > 0, "layout %d tet %d: not positive",
+                      layouts[l], (int)t);
+        }
+    }
+}
+
+/* Header, positions, the three layouts, the shell, the geometry rules, and recovery from each layout. */
+static void check_mesh(tpk_file *file, const expected_mesh *m)
+{
+    tpk_file_info info;
+    CHECK_EQ_INT(tpk_get_info(file, &info), TPK_OK);
+    CHECK_EQ_INT(info.version_major, 1);
+    CHECK_EQ_INT(info.version_minor, 0);
+    CHECK_EQ_INT(info.vertex_count, m->vertex_count);
+    CHECK_EQ_INT(info.tet_count, m->tet_count);
+    CHECK_EQ_INT(info.shell_face_count, m->shell_face_count);
+    CHECK_EQ_INT(info.chunk_count, m->chunk_count);
+    for (int k = 0; k < 3; k++) {
+        CHECK(info.origin[k] == m->origin[k]);
+        CHECK(info.bounds_min[k] == m->bounds_min[k]);
+        CHECK(info.bounds_max[k] == m->bounds_max[k]);
+    }
+    for (uint64_t i = 0; i < info.chunk_count; i++) {
+        tpk_dir_entry e;
+        CHECK_EQ_INT(tpk_get_chunk(file, i, &e), TPK_OK);
+        CHECK_EQ_INT(e.codec, m->codec);
+        CHECK_EQ_INT(e.offset % 64, 0);
+    }
+    tpk_dir_entry e;
+    float pos[3 * 5];
+    tpk_tet32 t32[2];
+    tpk_tet20 t20[2];
+    tpk_tet16 t16[2];
+    tpk_shell_face shell[6];
+    CHECK(m->vertex_count <= 5 && m->tet_count <= 2 && m->shell_face_count <= 6);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_POS3, 0, 0, pos, 12 * m->vertex_count, &e), TPK_OK);
+    CHECK(memcmp(pos, m->positions, 12 * m->vertex_count) == 0);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_TT32, 0, 0, t32, 32 * m->tet_count, &e), TPK_OK);
+    CHECK(memcmp(t32, m->tet32, 32 * m->tet_count) == 0);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_TT20, 0, 0, t20, 20 * m->tet_count, &e), TPK_OK);
+    CHECK(memcmp(t20, m->tet20, 20 * m->tet_count) == 0);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_TT16, 0, 0, t16, 16 * m->tet_count, &e), TPK_OK);
+    CHECK(memcmp(t16, m->tet16, 16 * m->tet_count) == 0);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_SHEL, 0, 0, shell, 16 * m->shell_face_count, &e), TPK_OK);
+    CHECK(memcmp(shell, m->shell, 16 * m->shell_face_count) == 0);
+
+    for (uint64_t t = 0; t < m->tet_count; t++) {
+        const int32_t *v = &m->tets[4 * t];
+        CHECK_MSG(orient_ids(pos, v[0], v[1], v[2], v[3]) > 0, "tet %d is not positive (TPK-M02)", (int)t);
+        CHECK_EQ_INT(t32[t].vx ^ t32[t].v[0] ^ t32[t].v[1] ^ t32[t].v[2], v[3]);
+    }
+    for (uint64_t s = 0; s < m->shell_face_count; s++) {
+        const tpk_shell_face *f = &shell[s];
+        int32_t x = t32[f->t].vx ^ f->a ^ f->b ^ f->c;
+        CHECK_MSG(orient_ids(pos, f->a, f->c, f->b, x) > 0, "shell face %d is not outward (TPK-M10)", (int)s);
+    }
+    tpk_result verified = tpk_verify(file);
+    CHECK_MSG(verified == TPK_OK, "tpk_verify: %s", tpk_error_text(file));
+    check_recover(file, m, pos);
+}
+
+static void check_field(tpk_file *file, uint32_t i, const char *name, const char *units, uint32_t association,
+                        uint32_t steps, float min_value, float max_value)
+{
+    tpk_field_desc f;
+    uint32_t found;
+    CHECK_EQ_INT(tpk_get_field(file, i, &f), TPK_OK);
+    CHECK(strcmp(f.name, name) == 0);
+    CHECK(strcmp(f.units, units) == 0);
+    CHECK_EQ_INT(f.association, association);
+    CHECK_EQ_INT(f.step_count, steps);
+    CHECK_EQ_INT(f.components, 1);
+    CHECK(f.min_value == min_value && f.max_value == max_value);
+    CHECK_EQ_INT(tpk_find_field(file, name, &found), TPK_OK);
+    CHECK_EQ_INT(found, i);
+}
+
+/* Open a committed vector; the error text is printed when `expected` differs from the result. */
+static tpk_file *open_vector(const char *name, uint32_t flags, tpk_result expected, tpk_result *result)
+{
+    tpk_open_options options = {0};
+    options.size = sizeof options;
+    options.flags = flags;
+    tpk_file *file = NULL;
+    char err[512] = "";
+    *result = tpk_open_path(&file, vector_path(name), &options, err, sizeof err);
+    if (*result != expected)
+        fprintf(stderr, "%s: %s (%s)\n", name, tpk_result_string(*result), err);
+    return file;
+}
+
+/* The numbers of samples/vectors/README.md, written out again rather than taken from the generator. */
+TPK_TEST(vectors_one_tet)
+{
+    static const double origin[3] = {10, 20, 30}, lo[3] = {10, 20, 30}, hi[3] = {11, 21, 31};
+    static const float positions[12] = {0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0};
+    static const int32_t tets[4] = {1, 2, 3, 0};
+    static const tpk_tet32 tet32 = {{1, 2, 3}, 0, {-1, -1, -1, -1}};
+    static const tpk_tet20 tet20 = {0, {-1, -1, -1, -1}};
+    static const tpk_tet16 tet16 = {0, {0, 0, 0}};
+    static const tpk_shell_face shell[4] = {{2, 3, 0, 0}, {1, 0, 3, 0}, {1, 2, 0, 0}, {1, 3, 2, 0}};
+    static const float height[4] = {31, 30, 30, 30};
+    static const char meta[] = "{\"converter\":{\"name\":\"tetpack make_vectors\",\"version\":\"1.0\"}}";
+    const expected_mesh m = {origin, lo, hi, 4, 1, 4, 8, positions, tets, &tet32, &tet20, &tet16, shell,
+                             TPK_CODEC_NONE};
+
+    tpk_result r;
+    tpk_file *file = open_vector("one_tet.tpk", TPK_OPEN_VERIFY_ALL, TPK_OK, &r);
+    CHECK_EQ_INT(r, TPK_OK);
+    check_mesh(file, &m);
+    CHECK_EQ_INT(tpk_field_count(file), 1);
+    check_field(file, 0, "height", "m", TPK_ASSOC_POINT, 1, 30.0f, 31.0f);
+    float values[4];
+    char text[sizeof meta];
+    tpk_dir_entry e;
+    double time;
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_FDAT, 0, 0, values, sizeof values, &e), TPK_OK);
+    CHECK(memcmp(values, height, sizeof values) == 0);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_META, 0, 0, text, sizeof meta - 1, &e), TPK_OK);
+    CHECK(memcmp(text, meta, sizeof meta - 1) == 0);
+    CHECK_EQ_INT(tpk_get_time(file, 0, &time), TPK_ERR_NOT_FOUND);
+    /* Uncompressed chunks are zero-copy views. */
+    const void *view;
+    uint64_t size, i;
+    CHECK_EQ_INT(tpk_find_chunk(file, TPK_TAG_TT16, 0, 0, &i), TPK_OK);
+    CHECK_EQ_INT(tpk_view_chunk(file, i, &view, &size), TPK_OK);
+    CHECK(size == 16 && memcmp(view, &tet16, 16) == 0);
+    tpk_close(file);
+}
+
+TPK_TEST(vectors_two_tets_zstd)
+{
+    static const double origin[3] = {1000000, -2.5, 0}, lo[3] = {1000000, -2.5, 0}, hi[3] = {1000001, -1.5, 1};
+    static const float positions[15] = {1, 0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0, 0, 1, 0};
+    static const int32_t tets[8] = {3, 0, 4, 1, 0, 4, 1, 2};
+    static const tpk_tet32 tet32[2] = {{{3, 0, 4}, 6, {1, -1, -1, -1}}, {{0, 4, 1}, 7, {-1, -1, -1, 0}}};
+    static const tpk_tet20 tet20[2] = {{6, {-1, -1, 1, -1}}, {7, {-1, -1, 0, -1}}};
+    static const tpk_tet16 tet16[2] = {{6, {0, 0, -2}}, {7, {0, 0, -1}}};
+    static const tpk_shell_face shell[6] = {{3, 1, 4, 0}, {3, 0, 1, 0}, {3, 4, 0, 0},
+                                            {4, 1, 2, 1}, {0, 2, 1, 1}, {0, 4, 2, 1}};
+    static const float temperature[2][5] = {{300, 301, 302, 303, 304}, {310, 311, 312, 313, 314}};
+    static const float material[2] = {1, 2};
+    static const int32_t tmap[2] = {7, 9}, vmap[5] = {10, 11, 12, 13, 14};
+    const expected_mesh m = {origin, lo, hi, 5, 2, 6, 13, positions, tets, tet32, tet20, tet16, shell,
+                             TPK_CODEC_ZSTD};
+
+    tpk_result r;
+    tpk_file *file = open_vector("two_tets_zstd.tpk", 0, TPK_OK, &r);
+    CHECK_EQ_INT(r, TPK_OK);
+    check_mesh(file, &m);
+    CHECK_EQ_INT(tpk_field_count(file), 2);
+    check_field(file, 0, "temperature", "K", TPK_ASSOC_POINT, 2, 300.0f, 314.0f);
+    check_field(file, 1, "material", "", TPK_ASSOC_TET, 1, 1.0f, 2.0f);
+    float values[5];
+    int32_t ids[5];
+    tpk_dir_entry e;
+    for (uint32_t s = 0; s < 2; s++) {
+        CHECK_EQ_INT(read_tagged(file, TPK_TAG_FDAT, 0, s, values, sizeof temperature[s], &e), TPK_OK);
+        CHECK(memcmp(values, temperature[s], sizeof temperature[s]) == 0);
+    }
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_FDAT, 1, 0, values, sizeof material, &e), TPK_OK);
+    CHECK(memcmp(values, material, sizeof material) == 0);
+    double time;
+    CHECK_EQ_INT(tpk_get_time(file, 0, &time), TPK_OK);
+    CHECK(time == 0.0);
+    CHECK_EQ_INT(tpk_get_time(file, 1, &time), TPK_OK);
+    CHECK(time == 0.5);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_TMAP, 0, 0, ids, sizeof tmap, &e), TPK_OK);
+    CHECK(memcmp(ids, tmap, sizeof tmap) == 0);
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_VMAP, 0, 0, ids, sizeof vmap, &e), TPK_OK);
+    CHECK(memcmp(ids, vmap, sizeof vmap) == 0);
+    /* The unknown optional vendor chunk is listed but did not stop the open. */
+    uint64_t i;
+    CHECK_EQ_INT(tpk_find_chunk(file, TPK_FOURCC('n', 'o', 't', 'e'), 0, 0, &i), TPK_OK);
+    CHECK_EQ_INT(tpk_get_chunk(file, i, &e), TPK_OK);
+    CHECK_EQ_INT(e.flags, 0);
+    /* A compressed chunk has no zero-copy view. */
+    const void *view;
+    uint64_t size;
+    CHECK_EQ_INT(tpk_find_chunk(file, TPK_TAG_TT16, 0, 0, &i), TPK_OK);
+    CHECK_EQ_INT(tpk_view_chunk(file, i, &view, &size), TPK_ERR_UNSUPPORTED_CHUNK);
+    tpk_close(file);
+}
+
+/* ---- the files that must be refused ---------------------------------------------------------- */
+
+TPK_TEST(vectors_must_fail)
+{
+    static const struct {
+        const char *name;
+        uint32_t flags;
+        tpk_result expected;
+    } cases[] = {
+        {"bad_magic.tpk", 0, TPK_ERR_NOT_TETPACK},
+        {"truncated.tpk", 0, TPK_ERR_TRUNCATED},
+        {"newer_major.tpk", 0, TPK_ERR_VERSION},
+        {"unknown_required_chunk.tpk", 0, TPK_ERR_UNSUPPORTED_CHUNK},
+        {"chunk_checksum.tpk", TPK_OPEN_VERIFY_ALL, TPK_ERR_CHUNK_CHECKSUM},
+        {"overlap.tpk", 0, TPK_ERR_OVERLAP},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        tpk_result r;
+        tpk_file *file = open_vector(cases[k].name, cases[k].flags, cases[k].expected, &r);
+        CHECK_MSG(r == cases[k].expected, "%s: got %s, expected %s", cases[k].name, tpk_result_string(r),
+                  tpk_result_string(cases[k].expected));
+        CHECK(file == NULL);
+    }
+    /* Chunk checksums are checked lazily by default: the open succeeds, the first use fails. */
+    tpk_result r;
+    tpk_file *file = open_vector("chunk_checksum.tpk", 0, TPK_OK, &r);
+    CHECK_EQ_INT(r, TPK_OK);
+    float values[4];
+    tpk_dir_entry e;
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_FDAT, 0, 0, values, sizeof values, &e), TPK_ERR_CHUNK_CHECKSUM);
+    tpk_close(file);
+}
+
+/* The spec's worked Tet16 example (§6.5), decoded from each possible entry. */
+TPK_TEST(vectors_tet16_example)
+{
+    const int32_t v[4] = {7, 2, 9, 4}, n[4] = {12, -1, 5, 30};
+    tpk_tet20 t20;
+    tpk_tet16 t16;
+    spec_tet20(v, n, &t20);
+    spec_tet16(&t20, &t16);
+    CHECK(t20.vx == 8 && t20.n[0] == -1 && t20.n[1] == 30 && t20.n[2] == 12 && t20.n[3] == 5);
+    CHECK(t16.vx == 8 && t16.nx[0] == -6 && t16.nx[1] == 27 && t16.nx[2] == 9);
+    static const uint8_t bytes[16] = {8, 0, 0, 0, 0xFA, 0xFF, 0xFF, 0xFF, 0x1B, 0, 0, 0, 9, 0, 0, 0};
+    CHECK(memcmp(&t16, bytes, 16) == 0);
+    for (int k = 0; k < 4; k++) { /* enter through the face opposite v[k], coming from n[k] */
+        int32_t x = v[k], p = n[k];
+        int rank = spec_rank(v, k);
+        CHECK_EQ_INT(x, t16.vx ^ v[(k + 1) % 4] ^ v[(k + 2) % 4] ^ v[(k + 3) % 4]);
+        int32_t n3 = rank == 3 ? p : (int32_t)((uint32_t)t16.nx[rank] ^ (uint32_t)p);
+        CHECK_EQ_INT(n3, 5);
+        for (int r = 0; r < 3; r++)
+            CHECK_EQ_INT((int32_t)((uint32_t)t16.nx[r] ^ (uint32_t)n3), t20.n[r]);
+    }
+}
