@@ -1,0 +1,62 @@
+/* tpk_import_any: pick an importer from a forced format name, the file extension, or the file's
+ * first bytes. */
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+
+#include "importers.h"
+
+#define SUPPORTED_FORMATS "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele)"
+
+static int has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), m = strlen(ext);
+    return n > m && strcasecmp(path + n - m, ext) == 0;
+}
+
+static int starts_like_vtk(const char *path)
+{
+    char head[32] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    size_t got = fread(head, 1, sizeof head - 1, f);
+    fclose(f);
+    return got >= 14 && strncasecmp(head, "# vtk DataFile", 14) == 0;
+}
+
+int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag)
+{
+    if (!path || !out)
+        return tpk_diag_fail(diag, "tpk_import_any: no path or output mesh given");
+    if (format && *format && strcasecmp(format, "auto") != 0) {
+        if (!strcasecmp(format, "vtk") || !strcasecmp(format, "vtk-legacy"))
+            return tpk_import_vtk_legacy(path, out, diag);
+        if (!strcasecmp(format, "tetgen"))
+            return tpk_import_tetgen(path, out, diag);
+        memset(out, 0, sizeof *out);
+        return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s", path, format, SUPPORTED_FORMATS);
+    }
+    if (has_extension(path, ".vtk"))
+        return tpk_import_vtk_legacy(path, out, diag);
+    if (has_extension(path, ".node") || has_extension(path, ".ele"))
+        return tpk_import_tetgen(path, out, diag);
+    if (starts_like_vtk(path))
+        return tpk_import_vtk_legacy(path, out, diag);
+    memset(out, 0, sizeof *out);
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        /* A TetGen stem names no file itself. */
+        char node[4096];
+        snprintf(node, sizeof node, "%s.node", path);
+        FILE *g = fopen(node, "rb");
+        if (g) {
+            fclose(g);
+            return tpk_import_tetgen(path, out, diag);
+        }
+        return tpk_diag_fail(diag, "%s: cannot open the file, and no %s.node exists", path, path);
+    }
+    fclose(f);
+    return tpk_diag_fail(diag, "%s: cannot tell the input format from the extension or the first bytes; "
+                         "supported: %s (force one with a format name)", path, SUPPORTED_FORMATS);
+}
