@@ -47,7 +47,9 @@ int tpk_mesh_add_field(tpk_mesh *mesh, const char *name, int association, int co
 /* The tet mesh of the pipeline. */
 typedef struct tpk_tetmesh {
     int64_t vertex_count;
-    double *points;            /* 3 * vertex_count, absolute coordinates */
+    double *points;            /* 3 * vertex_count: absolute coordinates until the converter moves them
+                                  into the stored frame (relative to origin, float32-exact) */
+    double origin[3];          /* add to points for world coordinates (0 until then) */
     int32_t *vertex_source;    /* source point id per vertex */
     int64_t tet_count;
     int32_t *tets;             /* 4 * tet_count vertex ids; positive orientation after tpk_orient */

@@ -1,0 +1,136 @@
+/* Exact orientation (pipeline stage 2): every tet made positive, det[p1-p0, p2-p0, p3-p0] > 0, decided
+ * by the filtered exact predicate (predicates.h: a static error bound, CGAL when uncertain).
+ * Inverted tets get v2 and v3 swapped; zero-volume tets are refused or, when asked, dropped. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "parallel.h"
+#include "pipeline.h"
+#include "predicates.h"
+
+enum { TET_POSITIVE = 1, TET_INVERTED = -1, TET_FLAT = 0, TET_REPEATED = 2 };
+
+typedef struct orient_job {
+    const double *points;
+    int32_t *tets;
+    int8_t *kinds;
+    int64_t inverted[TPK_MAX_THREADS];
+    int64_t flat[TPK_MAX_THREADS];
+    int64_t repeated[TPK_MAX_THREADS];
+} orient_job;
+
+static int repeats_vertex(const int32_t *v)
+{
+    return v[0] == v[1] || v[0] == v[2] || v[0] == v[3] || v[1] == v[2] || v[1] == v[3] || v[2] == v[3];
+}
+
+static void orient_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    orient_job *job = ctx;
+    int64_t inverted = 0, flat = 0, repeated = 0;
+    tpk_orient3d_batch(job->points, job->tets + 4 * begin, end - begin, job->kinds + begin);
+    for (int64_t t = begin; t < end; t++) {
+        int32_t *v = job->tets + 4 * t;
+        if (repeats_vertex(v)) {
+            job->kinds[t] = TET_REPEATED;
+            repeated++;
+        } else if (job->kinds[t] == TET_INVERTED) {
+            int32_t swap = v[2];
+            v[2] = v[3];
+            v[3] = swap;
+            inverted++;
+        } else if (job->kinds[t] == TET_FLAT) {
+            flat++;
+        }
+    }
+    job->inverted[worker] = inverted;
+    job->flat[worker] = flat;
+    job->repeated[worker] = repeated;
+}
+
+static int refuse_degenerate(const tpk_tetmesh *mesh, const int8_t *kinds, int64_t degenerate,
+                             int64_t repeated, tpk_diag *diag)
+{
+    int64_t t = 0;
+    while (kinds[t] != TET_FLAT && kinds[t] != TET_REPEATED)
+        t++;
+    const int32_t *v = mesh->tets + 4 * t;
+    double p[4][3]; /* world coordinates: the points may be stored relative to mesh->origin */
+    for (int k = 0; k < 4; k++)
+        for (int j = 0; j < 3; j++)
+            p[k][j] = mesh->origin[j] + mesh->points[3 * (int64_t)v[k] + j];
+    return tpk_diag_fail(
+        diag,
+        "tet %lld (source cell %d) has %s: vertices %d (%.17g, %.17g, %.17g), %d (%.17g, %.17g, %.17g), "
+        "%d (%.17g, %.17g, %.17g), %d (%.17g, %.17g, %.17g); %lld degenerate tets in all (%lld with a "
+        "repeated vertex, %lld flat); pass --drop-degenerate to remove them",
+        (long long)t, mesh->tet_source ? mesh->tet_source[t] : (int32_t)t,
+        kinds[t] == TET_REPEATED ? "a repeated vertex" : "zero volume (its 4 vertices are coplanar)",
+        v[0], p[0][0], p[0][1], p[0][2], v[1], p[1][0], p[1][1], p[1][2], v[2], p[2][0], p[2][1], p[2][2],
+        v[3], p[3][0], p[3][1], p[3][2], (long long)degenerate, (long long)repeated,
+        (long long)(degenerate - repeated));
+}
+
+/* Removes the degenerate tets in place, with their tet_source entries and per-tet field values. */
+static void drop_degenerate(tpk_tetmesh *mesh, const int8_t *kinds)
+{
+    int64_t old_count = mesh->tet_count, kept = 0;
+    for (int64_t t = 0; t < old_count; t++) {
+        if (kinds[t] == TET_FLAT || kinds[t] == TET_REPEATED)
+            continue;
+        memmove(mesh->tets + 4 * kept, mesh->tets + 4 * t, 4 * sizeof *mesh->tets);
+        if (mesh->tet_source)
+            mesh->tet_source[kept] = mesh->tet_source[t];
+        kept++;
+    }
+    for (int i = 0; i < mesh->field_count; i++) {
+        tpk_src_field *f = &mesh->fields[i];
+        if (f->association != TPK_ASSOC_TET)
+            continue;
+        int64_t out = 0;
+        for (int s = 0; s < f->step_count; s++)
+            for (int64_t t = 0; t < old_count; t++)
+                if (kinds[t] != TET_FLAT && kinds[t] != TET_REPEATED)
+                    f->values[out++] = f->values[(int64_t)s * old_count + t];
+    }
+    mesh->tet_count = kept;
+}
+
+int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate_tets, tpk_orient_stats *stats, tpk_diag *diag)
+{
+    tpk_orient_stats local = {0, 0, 0};
+    if (!stats)
+        stats = &local;
+    memset(stats, 0, sizeof *stats);
+    if (!mesh || (mesh->tet_count > 0 && (!mesh->tets || !mesh->points)))
+        return tpk_diag_fail(diag, "orient: invalid tet mesh");
+    for (int64_t i = 0; i < 4 * mesh->tet_count; i++)
+        if (mesh->tets[i] < 0 || mesh->tets[i] >= mesh->vertex_count)
+            return tpk_diag_fail(diag, "orient: tet %lld names vertex %d; the mesh has %lld vertices",
+                                 (long long)(i / 4), mesh->tets[i], (long long)mesh->vertex_count);
+    orient_job *job = calloc(1, sizeof *job);
+    int8_t *kinds = malloc((size_t)(mesh->tet_count ? mesh->tet_count : 1));
+    if (!job || !kinds) {
+        free(job);
+        free(kinds);
+        return tpk_diag_fail(diag, "orient: out of memory (%lld tets)", (long long)mesh->tet_count);
+    }
+    job->points = mesh->points;
+    job->tets = mesh->tets;
+    job->kinds = kinds;
+    int threads = tpk_threads_for(mesh->tet_count, tpk_thread_count(0), 65536);
+    tpk_parallel_for(mesh->tet_count, threads, orient_range, job);
+    for (int w = 0; w < threads; w++) {
+        stats->inverted_fixed += job->inverted[w];
+        stats->degenerate += job->flat[w] + job->repeated[w];
+        stats->repeated_vertex += job->repeated[w];
+    }
+    int rc = 0;
+    if (stats->degenerate > 0 && !drop_degenerate_tets)
+        rc = refuse_degenerate(mesh, kinds, stats->degenerate, stats->repeated_vertex, diag);
+    else if (stats->degenerate > 0)
+        drop_degenerate(mesh, kinds);
+    free(kinds);
+    free(job);
+    return rc;
+}

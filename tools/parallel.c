@@ -1,0 +1,82 @@
+/* pthread parallel-for over contiguous ranges (see parallel.h). */
+#include "parallel.h"
+
+#include <pthread.h>
+#include <stdlib.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+int tpk_thread_count(int requested)
+{
+    if (requested <= 0) {
+        long online = sysconf(_SC_NPROCESSORS_ONLN);
+        requested = online > 0 ? (int)(online < TPK_MAX_THREADS ? online : TPK_MAX_THREADS) : 1;
+    }
+    return requested > TPK_MAX_THREADS ? TPK_MAX_THREADS : requested;
+}
+
+int tpk_threads_for(int64_t count, int threads, int64_t grain)
+{
+    int64_t most = grain > 0 ? count / grain : count;
+    if (most < 1)
+        most = 1;
+    return threads < most ? threads : (int)most;
+}
+
+void tpk_parallel_range(int64_t count, int threads, int w, int64_t *begin, int64_t *end)
+{
+    *begin = count / threads * w + (w < count % threads ? w : count % threads);
+    *end = *begin + count / threads + (w < count % threads ? 1 : 0);
+}
+
+typedef struct worker_job {
+    tpk_range_fn fn;
+    void *ctx;
+    int64_t begin, end;
+    int worker;
+} worker_job;
+
+static void *run_job(void *arg)
+{
+    worker_job *job = arg;
+    job->fn(job->ctx, job->begin, job->end, job->worker);
+    return NULL;
+}
+
+void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx)
+{
+    if (threads < 1)
+        threads = 1;
+    if (threads > TPK_MAX_THREADS)
+        threads = TPK_MAX_THREADS;
+    worker_job jobs[TPK_MAX_THREADS];
+    pthread_t ids[TPK_MAX_THREADS];
+    int started[TPK_MAX_THREADS] = {0};
+    for (int w = 0; w < threads; w++) {
+        jobs[w] = (worker_job){fn, ctx, 0, 0, w};
+        tpk_parallel_range(count, threads, w, &jobs[w].begin, &jobs[w].end);
+    }
+    for (int w = 1; w < threads; w++)
+        started[w] = pthread_create(&ids[w], NULL, run_job, &jobs[w]) == 0;
+    run_job(&jobs[0]);
+    for (int w = 1; w < threads; w++) {
+        if (started[w])
+            pthread_join(ids[w], NULL);
+        else
+            run_job(&jobs[w]);
+    }
+}
+
+void *tpk_alloc_large(size_t size)
+{
+    const size_t huge_page = (size_t)2 << 20;
+    if (size < huge_page)
+        return malloc(size ? size : 1);
+    void *block = NULL;
+    if (posix_memalign(&block, huge_page, size) != 0)
+        return NULL;
+#ifdef MADV_HUGEPAGE
+    madvise(block, size, MADV_HUGEPAGE); /* advice only: failure changes nothing */
+#endif
+    return block;
+}

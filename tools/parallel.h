@@ -1,0 +1,32 @@
+/* A tiny pthread parallel-for for the converter: [0, count) is cut into `threads` contiguous ranges
+ * that depend only on count and threads, so per-worker results can be merged deterministically. */
+#ifndef TPK_PARALLEL_H
+#define TPK_PARALLEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define TPK_MAX_THREADS 64
+
+/* requested <= 0: the number of online CPUs. Clamped to [1, TPK_MAX_THREADS]. */
+int tpk_thread_count(int requested);
+
+/* Fewer workers for small jobs: at most one per `grain` items (at least 1). */
+int tpk_threads_for(int64_t count, int threads, int64_t grain);
+
+/* Range of worker `w` out of `threads` over [0, count). */
+void tpk_parallel_range(int64_t count, int threads, int w, int64_t *begin, int64_t *end);
+
+typedef void (*tpk_range_fn)(void *ctx, int64_t begin, int64_t end, int worker);
+
+/* Call fn(ctx, begin, end, w) for w = 0..threads-1 on the ranges above, worker 0 on the calling
+ * thread, and wait for all. If a thread cannot be started its range runs on the calling thread, so
+ * the call always completes. */
+void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx);
+
+/* malloc for large scratch arrays: 2 MiB aligned and, where the kernel offers it, backed by huge pages
+ * (fewer page faults on first touch, which dominate a pass over a fresh 500 MB array). Release with
+ * free(). NULL when out of memory. */
+void *tpk_alloc_large(size_t size);
+
+#endif

@@ -1,0 +1,354 @@
+/* Source cells -> tets (pipeline stage 1). Each VTK cell type has one entry in `cell_kinds`; a 3-D
+ * type with a `split` function becomes tets, one without is refused by name, and lower-dimensional
+ * cells (boundary faces, edges, points) are skipped with a warning. Adding hexes, wedges and pyramids
+ * means adding their split functions (DESIGN.md §5), nothing else here changes. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pipeline.h"
+
+/* Appends the tets of one cell (vertex ids into out) and returns how many; at most max_tets. */
+typedef int (*split_fn)(const int32_t *nodes, int32_t *out);
+
+typedef struct cell_kind {
+    int type;
+    const char *name;
+    int dim;        /* 0..3 */
+    int nodes;      /* fixed node count, or 0 for variable */
+    int max_tets;   /* tets one cell can give (for sizing) */
+    split_fn split; /* NULL: not handled yet */
+} cell_kind;
+
+static int split_tetra(const int32_t *nodes, int32_t *out)
+{
+    memcpy(out, nodes, 4 * sizeof *out);
+    return 1;
+}
+
+static const cell_kind cell_kinds[] = {
+    {1, "vertex", 0, 1, 0, NULL},
+    {2, "poly-vertex", 0, 0, 0, NULL},
+    {3, "line", 1, 2, 0, NULL},
+    {4, "poly-line", 1, 0, 0, NULL},
+    {5, "triangle", 2, 3, 0, NULL},
+    {6, "triangle strip", 2, 0, 0, NULL},
+    {7, "polygon", 2, 0, 0, NULL},
+    {8, "pixel", 2, 4, 0, NULL},
+    {9, "quad", 2, 4, 0, NULL},
+    {TPK_CELL_TETRA, "tetrahedron", 3, 4, 1, split_tetra},
+    {TPK_CELL_VOXEL, "voxel", 3, 8, 0, NULL},
+    {TPK_CELL_HEXAHEDRON, "hexahedron", 3, 8, 0, NULL},
+    {TPK_CELL_WEDGE, "wedge", 3, 6, 0, NULL},
+    {TPK_CELL_PYRAMID, "pyramid", 3, 5, 0, NULL},
+    {15, "pentagonal prism", 3, 10, 0, NULL},
+    {16, "hexagonal prism", 3, 12, 0, NULL},
+    {21, "quadratic edge", 1, 3, 0, NULL},
+    {22, "quadratic triangle", 2, 6, 0, NULL},
+    {23, "quadratic quad", 2, 8, 0, NULL},
+    {24, "quadratic tetrahedron", 3, 10, 0, NULL},
+    {25, "quadratic hexahedron", 3, 20, 0, NULL},
+    {26, "quadratic wedge", 3, 15, 0, NULL},
+    {27, "quadratic pyramid", 3, 13, 0, NULL},
+    {28, "biquadratic quad", 2, 9, 0, NULL},
+    {29, "triquadratic hexahedron", 3, 27, 0, NULL},
+    {30, "quadratic linear quad", 2, 6, 0, NULL},
+    {31, "quadratic linear wedge", 3, 12, 0, NULL},
+    {32, "biquadratic quadratic wedge", 3, 18, 0, NULL},
+    {33, "biquadratic quadratic hexahedron", 3, 24, 0, NULL},
+    {34, "biquadratic triangle", 2, 7, 0, NULL},
+    {35, "cubic line", 1, 4, 0, NULL},
+    {36, "quadratic polygon", 2, 0, 0, NULL},
+    {TPK_CELL_POLYHEDRON, "polyhedron", 3, 0, 0, NULL},
+};
+
+static const cell_kind *find_kind(int type)
+{
+    for (size_t i = 0; i < sizeof cell_kinds / sizeof cell_kinds[0]; i++)
+        if (cell_kinds[i].type == type)
+            return &cell_kinds[i];
+    return NULL;
+}
+
+/* Pass 1: check every cell and count tets; refuses unsupported 3-D cells, skips lower-dim ones. */
+static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
+{
+    int64_t tets = 0, skipped = 0, first_skipped = -1;
+    for (int64_t c = 0; c < src->cell_count; c++) {
+        const cell_kind *kind = find_kind(src->cell_types[c]);
+        int64_t nodes = src->cell_offsets[c + 1] - src->cell_offsets[c];
+        if (!kind)
+            return tpk_diag_fail(diag, "cell %lld has VTK cell type %d, which this converter does not "
+                                 "know", (long long)c, src->cell_types[c]);
+        if (kind->dim < 3) {
+            if (first_skipped < 0)
+                first_skipped = c;
+            skipped++;
+            continue;
+        }
+        if (!kind->split)
+            return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter handles "
+                                 "tetrahedra only so far", (long long)c, kind->name, kind->type);
+        if (kind->nodes && nodes != kind->nodes)
+            return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d",
+                                 (long long)c, kind->name, (long long)nodes, kind->name, kind->nodes);
+        tets += kind->max_tets;
+    }
+    if (skipped)
+        tpk_diag_warn(diag, "skipped %lld cells of dimension < 3 (the first is cell %lld, a %s)",
+                      (long long)skipped, (long long)first_skipped,
+                      find_kind(src->cell_types[first_skipped])->name);
+    if (tets == 0)
+        return tpk_diag_fail(diag, "the mesh has no volume cells (%lld cells, none 3-D)",
+                             (long long)src->cell_count);
+    if (tets > INT32_MAX)
+        return tpk_diag_fail(diag, "%lld tets exceed the limit of 2^31-1 per file; split the mesh "
+                             "into parts", (long long)tets);
+    *tet_count = tets;
+    return 0;
+}
+
+static int check_connectivity(const tpk_mesh *src, tpk_diag *diag)
+{
+    if (src->point_count > INT32_MAX)
+        return tpk_diag_fail(diag, "%lld points exceed the limit of 2^31-1 per file; split the mesh "
+                             "into parts", (long long)src->point_count);
+    for (int64_t c = 0; c < src->cell_count; c++) {
+        if (src->cell_offsets[c + 1] < src->cell_offsets[c])
+            return tpk_diag_fail(diag, "cell %lld: offsets decrease", (long long)c);
+        for (int64_t i = src->cell_offsets[c]; i < src->cell_offsets[c + 1]; i++)
+            if (src->cell_conn[i] < 0 || src->cell_conn[i] >= src->point_count)
+                return tpk_diag_fail(diag, "cell %lld names point %d; the mesh has %lld points",
+                                     (long long)c, src->cell_conn[i], (long long)src->point_count);
+    }
+    return 0;
+}
+
+/* ---- fields ---------------------------------------------------------------------------------- */
+
+enum { PICK_SCALAR = -1, PICK_MAG = -2 }; /* or a component index >= 0 */
+
+typedef struct field_request {
+    const tpk_src_field *field;
+    int pick;
+    char name[TPK_NAME_MAX];
+} field_request;
+
+static void list_fields(const tpk_mesh *src, char *text, size_t cap)
+{
+    size_t used = 0;
+    text[0] = 0;
+    for (int i = 0; i < src->field_count && used < cap; i++) {
+        const tpk_src_field *f = &src->fields[i];
+        int n = snprintf(text + used, cap - used, "%s%s (%s%s)", i ? ", " : "", f->name,
+                         f->association == TPK_ASSOC_POINT ? "point" : "cell",
+                         f->components == 1 ? "" : f->components == 3 ? ", vector" : ", tuple");
+        if (n < 0)
+            break;
+        used += (size_t)n;
+    }
+    if (src->field_count == 0)
+        snprintf(text, cap, "none");
+}
+
+static const tpk_src_field *find_field(const tpk_mesh *src, const char *name, size_t len)
+{
+    for (int i = 0; i < src->field_count; i++)
+        if (strlen(src->fields[i].name) == len && !memcmp(src->fields[i].name, name, len))
+            return &src->fields[i];
+    return NULL;
+}
+
+/* "NAME", "NAME:mag", "NAME:x|y|z". An exact field name wins over a selector reading. */
+static int parse_request(const tpk_mesh *src, const char *spec, field_request *req, tpk_diag *diag)
+{
+    char available[700];
+    memset(req, 0, sizeof *req);
+    req->pick = PICK_SCALAR;
+    req->field = find_field(src, spec, strlen(spec));
+    const char *colon = strrchr(spec, ':');
+    const char *suffix = NULL;
+    if (!req->field && colon) {
+        suffix = colon + 1;
+        req->field = find_field(src, spec, (size_t)(colon - spec));
+        if (req->field) {
+            if (!strcmp(suffix, "mag"))
+                req->pick = PICK_MAG;
+            else if (!strcmp(suffix, "x") || !strcmp(suffix, "y") || !strcmp(suffix, "z"))
+                req->pick = suffix[0] - 'x';
+            else
+                return tpk_diag_fail(diag, "field '%s': unknown selector ':%s' (use :mag, :x, :y or "
+                                     ":z)", spec, suffix);
+        }
+    }
+    if (!req->field) {
+        list_fields(src, available, sizeof available);
+        return tpk_diag_fail(diag, "no field named '%s'; available fields: %s", spec, available);
+    }
+    const tpk_src_field *f = req->field;
+    if (req->pick == PICK_SCALAR && f->components != 1)
+        return tpk_diag_fail(diag, "field '%s' has %d components; pick one with '%s:mag', '%s:x', "
+                             "'%s:y' or '%s:z'", f->name, f->components, f->name, f->name, f->name,
+                             f->name);
+    if (req->pick >= 0 && req->pick >= f->components)
+        return tpk_diag_fail(diag, "field '%s' has %d components; '%s' is out of range", f->name,
+                             f->components, spec);
+    if (f->step_count < 1)
+        return tpk_diag_fail(diag, "field '%s' has %d time steps", f->name, f->step_count);
+    int n = req->pick == PICK_SCALAR ? snprintf(req->name, sizeof req->name, "%s", f->name)
+                                     : snprintf(req->name, sizeof req->name, "%s_%s", f->name, suffix);
+    if (n < 0 || (size_t)n >= sizeof req->name)
+        return tpk_diag_fail(diag, "field name '%s_%s' is longer than %d bytes", f->name,
+                             suffix ? suffix : "", TPK_NAME_MAX - 1);
+    return 0;
+}
+
+static int build_requests(const tpk_mesh *src, const char *const *names, int name_count,
+                          field_request **out, int *out_count, tpk_diag *diag)
+{
+    int cap = names ? name_count : src->field_count;
+    field_request *reqs = calloc((size_t)(cap > 0 ? cap : 1), sizeof *reqs);
+    int count = 0;
+    if (!reqs)
+        return tpk_diag_fail(diag, "out of memory");
+    if (names) {
+        for (int i = 0; i < name_count; i++) {
+            if (parse_request(src, names[i], &reqs[count], diag)) {
+                free(reqs);
+                return -1;
+            }
+            int duplicate = 0;
+            for (int j = 0; j < count; j++)
+                duplicate |= !strcmp(reqs[j].name, reqs[count].name);
+            if (duplicate)
+                tpk_diag_warn(diag, "field '%s' requested twice; kept once", reqs[count].name);
+            else
+                count++;
+        }
+    } else {
+        for (int i = 0; i < src->field_count; i++) {
+            const tpk_src_field *f = &src->fields[i];
+            if (f->association != TPK_ASSOC_POINT)
+                continue;
+            if (f->components != 1 || f->step_count < 1) {
+                tpk_diag_warn(diag, "point field '%s' has %d components and is skipped; select it as "
+                              "'%s:mag' or '%s:x' to keep it", f->name, f->components, f->name, f->name);
+                continue;
+            }
+            reqs[count].field = f;
+            reqs[count].pick = PICK_SCALAR;
+            snprintf(reqs[count].name, sizeof reqs[count].name, "%s", f->name);
+            count++;
+        }
+    }
+    *out = reqs;
+    *out_count = count;
+    return 0;
+}
+
+static float pick_value(const float *v, int components, int pick)
+{
+    if (pick == PICK_SCALAR)
+        return v[0];
+    if (pick >= 0)
+        return v[pick];
+    double sum = 0;
+    for (int c = 0; c < components; c++)
+        sum += (double)v[c] * v[c];
+    return (float)sqrt(sum);
+}
+
+/* Point fields keep their vertex order (vertex_source is the identity); cell fields go per tet. */
+static int copy_field(const tpk_mesh *src, const field_request *req, tpk_tetmesh *out)
+{
+    const tpk_src_field *f = req->field;
+    int per_point = f->association == TPK_ASSOC_POINT;
+    int64_t n = per_point ? out->vertex_count : out->tet_count;
+    int64_t src_n = per_point ? src->point_count : src->cell_count;
+    float *values = malloc(sizeof *values * (size_t)(n * f->step_count > 0 ? n * f->step_count : 1));
+    if (!values)
+        return -1;
+    for (int s = 0; s < f->step_count; s++) {
+        const float *step = f->values + (size_t)s * (size_t)src_n * (size_t)f->components;
+        for (int64_t i = 0; i < n; i++) {
+            int64_t from = per_point ? out->vertex_source[i] : out->tet_source[i];
+            values[(size_t)s * (size_t)n + (size_t)i] =
+                pick_value(step + from * f->components, f->components, req->pick);
+        }
+    }
+    tpk_src_field *dst = &out->fields[out->field_count++];
+    memset(dst, 0, sizeof *dst);
+    memcpy(dst->name, req->name, sizeof dst->name);
+    dst->association = per_point ? TPK_ASSOC_POINT : TPK_ASSOC_TET;
+    dst->components = 1;
+    dst->step_count = f->step_count;
+    dst->values = values;
+    return 0;
+}
+
+/* ---- the stage ------------------------------------------------------------------------------- */
+
+static int split_cells(const tpk_mesh *src, tpk_tetmesh *out)
+{
+    int64_t t = 0;
+    for (int64_t c = 0; c < src->cell_count; c++) {
+        const cell_kind *kind = find_kind(src->cell_types[c]);
+        if (kind->dim < 3)
+            continue;
+        int made = kind->split(src->cell_conn + src->cell_offsets[c], out->tets + 4 * t);
+        for (int i = 0; i < made; i++)
+            out->tet_source[t + i] = (int32_t)c;
+        t += made;
+    }
+    out->tet_count = t;
+    return 0;
+}
+
+int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count,
+                       tpk_tetmesh *out, tpk_diag *diag)
+{
+    field_request *reqs = NULL;
+    int req_count = 0;
+    int64_t tet_capacity = 0;
+    memset(out, 0, sizeof *out);
+    if (!src || (src->cell_count > 0 && (!src->cell_types || !src->cell_offsets || !src->cell_conn)) ||
+        (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
+        return tpk_diag_fail(diag, "tetrahedralize: invalid source mesh");
+    if (check_connectivity(src, diag) || count_tets(src, &tet_capacity, diag) ||
+        build_requests(src, field_names, field_name_count, &reqs, &req_count, diag))
+        return -1;
+
+    out->vertex_count = src->point_count;
+    out->points = malloc(sizeof *out->points * 3 * (size_t)(out->vertex_count ? out->vertex_count : 1));
+    out->vertex_source = malloc(sizeof *out->vertex_source * (size_t)(out->vertex_count ? out->vertex_count : 1));
+    out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
+    out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+    out->fields = calloc((size_t)(req_count ? req_count : 1), sizeof *out->fields);
+    if (!out->points || !out->vertex_source || !out->tets || !out->tet_source || !out->fields)
+        goto out_of_memory;
+    memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
+    for (int64_t v = 0; v < out->vertex_count; v++)
+        out->vertex_source[v] = (int32_t)v;
+    split_cells(src, out);
+
+    out->step_count = src->step_count > 0 ? src->step_count : 1;
+    if (src->times && src->step_count > 0) {
+        out->times = malloc(sizeof *out->times * (size_t)src->step_count);
+        if (!out->times)
+            goto out_of_memory;
+        memcpy(out->times, src->times, sizeof *out->times * (size_t)src->step_count);
+    }
+    for (int i = 0; i < req_count; i++)
+        if (copy_field(src, &reqs[i], out))
+            goto out_of_memory;
+    free(reqs);
+    return 0;
+
+out_of_memory:
+    free(reqs);
+    tpk_tetmesh_free(out);
+    return tpk_diag_fail(diag, "tetrahedralize: out of memory (%lld points, %lld tets)",
+                         (long long)src->point_count, (long long)tet_capacity);
+}
