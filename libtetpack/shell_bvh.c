@@ -1,0 +1,338 @@
+/* The BVH over shell faces (binned SAH) and the search for the shell faces where a ray's line enters
+ * the volume: the starting points of the marcher's inside-runs (DESIGN.md §6). */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal_march.h"
+
+#define SAH_BINS 16
+
+int tpk_shell_face_entry(const float *positions, const tpk_ray_frame *frame, const tpk_shell_face *face,
+                         tpk_face_hit *hit)
+{
+    hit->v[0] = face->a;
+    hit->v[1] = face->b;
+    hit->v[2] = face->c;
+    hit->p[0] = tpk_project(positions, frame, face->a);
+    hit->p[1] = tpk_project(positions, frame, face->b);
+    /* Outward winding: the line enters where all three edge functions are negative. */
+    if (tpk_edge_sign(face->a, &hit->p[0], face->b, &hit->p[1], &hit->e[0]) > 0)
+        return 0;
+    hit->p[2] = tpk_project(positions, frame, face->c);
+    if (tpk_edge_sign(face->b, &hit->p[1], face->c, &hit->p[2], &hit->e[1]) > 0)
+        return 0;
+    if (tpk_edge_sign(face->c, &hit->p[2], face->a, &hit->p[0], &hit->e[2]) > 0)
+        return 0;
+    double w[3];
+    tpk_face_weights(hit, w);
+    hit->t = w[0] * hit->p[0].z + w[1] * hit->p[1].z + w[2] * hit->p[2].z;
+    return 1;
+}
+
+/* ---- Build --------------------------------------------------------------------------------------- */
+
+typedef struct build_item {
+    float lo[3], hi[3];
+    float centroid[3];
+    int32_t face;
+} build_item;
+
+typedef struct build_task {
+    int32_t node, begin, end, depth;
+} build_task;
+
+static void grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
+{
+    for (int k = 0; k < 3; k++) {
+        lo[k] = plo[k] < lo[k] ? plo[k] : lo[k];
+        hi[k] = phi[k] > hi[k] ? phi[k] : hi[k];
+    }
+}
+
+static float half_area(const float lo[3], const float hi[3])
+{
+    float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    if (dx < 0)
+        return 0.0f;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+/* Bin of a centroid coordinate; NaN (hostile positions) goes to bin 0, never through an int cast. */
+static inline int bin_of(float x, float lo, float scale)
+{
+    float f = (x - lo) * scale;
+    return f >= 1.0f ? (f < (float)SAH_BINS ? (int)f : SAH_BINS - 1) : 0;
+}
+
+/* Best binned-SAH split of items [begin, end); returns the split position, or -1 when no split
+ * separates the centroids. */
+static int32_t sah_split(build_item *items, int32_t begin, int32_t end)
+{
+    float clo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, chi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+    for (int32_t i = begin; i < end; i++)
+        grow(clo, chi, items[i].centroid, items[i].centroid);
+    int best_axis = -1, best_bin = 0;
+    float best_cost = FLT_MAX;
+    for (int axis = 0; axis < 3; axis++) {
+        float extent = chi[axis] - clo[axis];
+        if (!(extent > 0))
+            continue;
+        float scale = SAH_BINS / extent;
+        int count[SAH_BINS] = {0};
+        float blo[SAH_BINS][3], bhi[SAH_BINS][3];
+        for (int b = 0; b < SAH_BINS; b++)
+            for (int k = 0; k < 3; k++) {
+                blo[b][k] = FLT_MAX;
+                bhi[b][k] = -FLT_MAX;
+            }
+        for (int32_t i = begin; i < end; i++) {
+            int b = bin_of(items[i].centroid[axis], clo[axis], scale);
+            count[b]++;
+            grow(blo[b], bhi[b], items[i].lo, items[i].hi);
+        }
+        /* Sweep from the right to get the right-hand costs, then from the left. */
+        float right_cost[SAH_BINS];
+        float rlo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, rhi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+        int rcount = 0;
+        for (int b = SAH_BINS - 1; b > 0; b--) {
+            grow(rlo, rhi, blo[b], bhi[b]);
+            rcount += count[b];
+            right_cost[b] = rcount ? half_area(rlo, rhi) * (float)rcount : 0.0f;
+        }
+        float llo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, lhi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+        int lcount = 0;
+        for (int b = 0; b < SAH_BINS - 1; b++) {
+            grow(llo, lhi, blo[b], bhi[b]);
+            lcount += count[b];
+            if (lcount == 0 || lcount == end - begin)
+                continue;
+            float cost = half_area(llo, lhi) * (float)lcount + right_cost[b + 1];
+            if (cost < best_cost) {
+                best_cost = cost;
+                best_axis = axis;
+                best_bin = b;
+            }
+        }
+    }
+    if (best_axis < 0)
+        return -1;
+    float extent = chi[best_axis] - clo[best_axis];
+    float scale = SAH_BINS / extent;
+    int32_t i = begin, j = end - 1;
+    while (i <= j) {
+        int b = bin_of(items[i].centroid[best_axis], clo[best_axis], scale);
+        if (b <= best_bin) {
+            i++;
+        } else {
+            build_item swap = items[i];
+            items[i] = items[j];
+            items[j] = swap;
+            j--;
+        }
+    }
+    return (i > begin && i < end) ? i : -1;
+}
+
+/* Bounds of a face in float, rounded outward and padded by `pad`. */
+static void face_bounds(const float *pos, const tpk_shell_face *f, double pad, build_item *it)
+{
+    const int32_t v[3] = {f->a, f->b, f->c};
+    for (int k = 0; k < 3; k++) {
+        double lo = DBL_MAX, hi = -DBL_MAX, sum = 0.0;
+        for (int i = 0; i < 3; i++) {
+            double x = pos[3 * (int64_t)v[i] + k];
+            lo = fmin(lo, x);
+            hi = fmax(hi, x);
+            sum += x;
+        }
+        it->lo[k] = nextafterf((float)(lo - pad), -FLT_MAX);
+        it->hi[k] = nextafterf((float)(hi + pad), FLT_MAX);
+        it->centroid[k] = (float)(sum / 3.0);
+    }
+}
+
+/* Box padding: the edge tests use 2-D coordinates rounded relative to the ray origin, so a crossing may be
+ * reported a few ulps of the coordinates outside the exact triangle; the boxes are padded far beyond
+ * that (1e-6 of the mesh extent plus the positions' magnitude), and never culled by the box test. */
+static double positions_extent(const float *pos, int64_t vertex_count)
+{
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX};
+    for (int64_t i = 0; i < vertex_count; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = pos[3 * i + k];
+            if (isfinite(x)) {
+                lo[k] = fmin(lo[k], x);
+                hi[k] = fmax(hi[k], x);
+            }
+        }
+    double size = 0.0;
+    for (int k = 0; k < 3; k++)
+        if (hi[k] >= lo[k])
+            size = fmax(size, fmax(hi[k] - lo[k], fmax(fabs(lo[k]), fabs(hi[k]))));
+    return size;
+}
+
+tpk_result tpk_shell_bvh_build(tpk_marcher *m)
+{
+    const tpk_mesh_arrays *mesh = &m->mesh;
+    const int32_t n = (int32_t)mesh->shell_face_count;
+    m->face_count = n;
+    if (n == 0)
+        return TPK_OK;
+    build_item *items = malloc((size_t)n * sizeof *items);
+    build_task *tasks = malloc(((size_t)TPK_BVH_STACK + 64) * sizeof *tasks);
+    m->nodes = malloc((size_t)(2 * (int64_t)n) * sizeof *m->nodes);
+    m->faces = malloc((size_t)n * sizeof *m->faces);
+    if (!items || !tasks || !m->nodes || !m->faces) {
+        free(items);
+        free(tasks);
+        return TPK_ERR_OUT_OF_MEMORY;
+    }
+    m->extent = positions_extent(mesh->positions, (int64_t)mesh->vertex_count);
+    const double pad = m->extent > 0 ? m->extent * 1e-6 : 1e-30;
+    for (int32_t i = 0; i < n; i++) {
+        face_bounds(mesh->positions, &mesh->shell[i], pad, &items[i]);
+        items[i].face = i;
+    }
+
+    /* Depth-first with an explicit stack: the second child waits on the stack while the first is
+     * built, so the stack holds at most one entry per level. */
+    int32_t task_count = 0, node_count = 1;
+    tasks[task_count++] = (build_task){0, 0, n, 0};
+    while (task_count > 0) {
+        build_task t = tasks[--task_count];
+        tpk_bvh_node *node = &m->nodes[t.node];
+        for (int k = 0; k < 3; k++) {
+            node->lo[k] = FLT_MAX;
+            node->hi[k] = -FLT_MAX;
+        }
+        for (int32_t i = t.begin; i < t.end; i++)
+            grow(node->lo, node->hi, items[i].lo, items[i].hi);
+        int32_t count = t.end - t.begin;
+        if (count <= TPK_BVH_LEAF_SIZE) {
+            node->first = t.begin;
+            node->count = count;
+            continue;
+        }
+        int32_t mid = t.depth < TPK_BVH_SAH_DEPTH ? sah_split(items, t.begin, t.end) : -1;
+        if (mid < 0)
+            mid = t.begin + count / 2; /* coincident centroids, or too deep: balanced by count */
+        node->first = node_count;
+        node->count = 0;
+        tasks[task_count++] = (build_task){node_count + 1, mid, t.end, t.depth + 1};
+        tasks[task_count++] = (build_task){node_count, t.begin, mid, t.depth + 1};
+        node_count += 2;
+    }
+    m->node_count = node_count;
+    for (int32_t i = 0; i < n; i++)
+        m->faces[i] = mesh->shell[items[i].face];
+    free(items);
+    free(tasks);
+    return TPK_OK;
+}
+
+/* ---- Query --------------------------------------------------------------------------------------- */
+
+/* Does the line org + t dir meet the box for some t in [t_low, tmax]? */
+static inline int box_hit(const tpk_bvh_node *node, const double org[3], const double dir[3],
+                          const double inv[3], double t_low, double tmax)
+{
+    double tn = -INFINITY, tf = tmax;
+    for (int k = 0; k < 3; k++) {
+        if (dir[k] == 0.0) {
+            if (org[k] < node->lo[k] || org[k] > node->hi[k])
+                return 0;
+            continue;
+        }
+        double t0 = (node->lo[k] - org[k]) * inv[k];
+        double t1 = (node->hi[k] - org[k]) * inv[k];
+        if (t0 > t1) {
+            double s = t0;
+            t0 = t1;
+            t1 = s;
+        }
+        tn = t0 > tn ? t0 : tn; /* not fmin/fmax: those are libm calls at -O2 */
+        tf = t1 < tf ? t1 : tf;
+    }
+    return tn <= tf && tf >= t_low;
+}
+
+static int entry_less(const tpk_entry *x, const tpk_entry *y)
+{
+    return x->t < y->t || (x->t == y->t && x->face < y->face);
+}
+
+static int entry_compare(const void *x, const void *y)
+{
+    return entry_less(x, y) ? -1 : entry_less(y, x) ? 1 : 0;
+}
+
+tpk_result tpk_shell_entries(const tpk_marcher *m, const tpk_ray_frame *frame, const double dir[3],
+                             double tmin, double tmax, tpk_entry *stack_buf, int64_t stack_cap,
+                             tpk_entry **out, int64_t *out_count)
+{
+    *out = stack_buf;
+    *out_count = 0;
+    if (m->face_count == 0)
+        return TPK_OK;
+    const double inv[3] = {1.0 / dir[0], 1.0 / dir[1], 1.0 / dir[2]};
+    tpk_entry *list = stack_buf;
+    int64_t count = 0, cap = stack_cap;
+    /* Runs that start before the last entry before tmin end before it, hence before tmin. */
+    double t_low = -INFINITY;
+    int32_t stack[TPK_BVH_STACK];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const tpk_bvh_node *node = &m->nodes[stack[--top]];
+        if (!box_hit(node, frame->org, dir, inv, t_low, tmax))
+            continue;
+        if (node->count == 0) {
+            stack[top++] = node->first + 1;
+            stack[top++] = node->first;
+            continue;
+        }
+        for (int32_t i = node->first; i < node->first + node->count; i++) {
+            tpk_face_hit hit;
+            if (!tpk_shell_face_entry(m->mesh.positions, frame, &m->faces[i], &hit) || hit.t > tmax)
+                continue;
+            if (hit.t < tmin && hit.t > t_low)
+                t_low = hit.t;
+            if (hit.t < t_low)
+                continue;
+            if (count == cap) {
+                tpk_entry *bigger = malloc((size_t)(2 * cap) * sizeof *bigger);
+                if (!bigger) {
+                    if (list != stack_buf)
+                        free(list);
+                    return TPK_ERR_OUT_OF_MEMORY;
+                }
+                memcpy(bigger, list, (size_t)count * sizeof *list);
+                if (list != stack_buf)
+                    free(list);
+                list = bigger;
+                cap *= 2;
+            }
+            list[count++] = (tpk_entry){hit.t, i};
+        }
+    }
+    int64_t kept = 0;
+    for (int64_t i = 0; i < count; i++)
+        if (list[i].t >= t_low)
+            list[kept++] = list[i];
+    if (kept < 32) {
+        for (int64_t i = 1; i < kept; i++)
+            for (int64_t j = i; j > 0 && entry_less(&list[j], &list[j - 1]); j--) {
+                tpk_entry s = list[j];
+                list[j] = list[j - 1];
+                list[j - 1] = s;
+            }
+    } else {
+        qsort(list, (size_t)kept, sizeof *list, entry_compare);
+    }
+    *out = list;
+    *out_count = kept;
+    return TPK_OK;
+}

@@ -1,0 +1,836 @@
+/* Tests of the reference CPU marcher: watertightness on rays through vertices and edges, identical tet
+ * sequences for Tet32/20/16, exact segments on linear fields, non-convex shells, hostile records. */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "harness.h"
+#include "internal_march.h"
+#include "march_fixtures.h"
+#include "tetpack.h"
+
+#include "importers.h"
+#include "mesh.h"
+#include "pipeline.h"
+
+/* ---- Recording the segments of one ray ---------------------------------------------------------- */
+
+#define REC_MAX 200000
+
+typedef struct recording {
+    int64_t count;
+    int overflow;
+    int32_t tet[REC_MAX];
+    double t_in[REC_MAX], t_out[REC_MAX], s_in[REC_MAX], s_out[REC_MAX];
+} recording;
+
+static int record_segment(void *user, const tpk_segment *s)
+{
+    recording *r = user;
+    if (r->count == REC_MAX) {
+        r->overflow = 1;
+        return 1;
+    }
+    r->tet[r->count] = s->tet;
+    r->t_in[r->count] = s->t_in;
+    r->t_out[r->count] = s->t_out;
+    r->s_in[r->count] = s->scalar_in;
+    r->s_out[r->count] = s->scalar_out;
+    r->count++;
+    return 0;
+}
+
+static recording *rec_new(void)
+{
+    return calloc(1, sizeof(recording));
+}
+
+static int shared_vertices(const int32_t *a, const int32_t *b)
+{
+    int n = 0;
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            n += a[i] == b[j];
+    return n;
+}
+
+static double rec_length(const recording *r)
+{
+    double sum = 0;
+    for (int64_t i = 0; i < r->count; i++)
+        sum += r->t_out[i] - r->t_in[i];
+    return sum;
+}
+
+static int are_neighbors(const fx_mesh *m, int32_t a, int32_t b)
+{
+    for (int k = 0; k < 4; k++)
+        if (m->neighbors[4 * (int64_t)a + k] == b)
+            return 1;
+    return 0;
+}
+
+/* The chain rules of one ray: t_in <= t_out, no tet twice; a piece that continues the previous one (a
+ * neighbor starting exactly where it ended) shares a face with it; otherwise a new run starts, not
+ * before the previous piece ended (up to rounding where runs meet at one point), and there are at most
+ * `runs` runs (a convex mesh: 1). Returns a message or NULL. */
+static const char *check_chain(const recording *r, const fx_mesh *m, unsigned char *seen, uint64_t runs)
+{
+    const char *err = NULL;
+    uint64_t starts = r->count > 0;
+    for (int64_t i = 0; i < r->count && !err; i++) {
+        if (!(r->t_in[i] <= r->t_out[i]))
+            err = "t_in > t_out";
+        else if (seen[r->tet[i]])
+            err = "tet visited twice";
+        seen[r->tet[i]] = 1;
+        if (i > 0 && !err) {
+            int continues = r->t_in[i] == r->t_out[i - 1] && are_neighbors(m, r->tet[i - 1], r->tet[i]);
+            if (continues && shared_vertices(&m->tets[4 * r->tet[i - 1]], &m->tets[4 * r->tet[i]]) != 3)
+                err = "consecutive tets do not share a face";
+            if (!continues) {
+                starts++;
+                if (r->t_in[i] < r->t_out[i - 1] - 1e-12 * (1 + fabs(r->t_out[i - 1])))
+                    err = "a run starts before the previous one ended";
+            }
+        }
+    }
+    if (!err && starts > runs)
+        err = "more runs in the pieces than the marcher counted";
+    for (int64_t i = 0; i < r->count; i++)
+        seen[r->tet[i]] = 0;
+    return err;
+}
+
+static tpk_marcher *make_marcher(const fx_mesh *m, tpk_layout layout)
+{
+    tpk_mesh_arrays a = fx_arrays(m, layout);
+    tpk_marcher *marcher = NULL;
+    if (tpk_marcher_create(&marcher, &a) != TPK_OK)
+        return NULL;
+    return marcher;
+}
+
+static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
+
+/* ---- Unit pieces -------------------------------------------------------------------------------- */
+
+TPK_TEST(exact_det2_sign)
+{
+    CHECK_EQ_INT(tpk_det2_sign_exact(1, 2, 3, 4), -1);
+    CHECK_EQ_INT(tpk_det2_sign_exact(3, 1, 6, 2), 0);
+    /* a*d and b*c equal in double but not exactly */
+    double a = 1.0 + ldexp(1, -52), d = 1.0 + ldexp(1, -52), b = 1.0 + ldexp(1, -51), c = 1.0;
+    CHECK_EQ_INT(tpk_det2_sign_exact(a, b, c, d), 1);
+    CHECK_EQ_INT(tpk_det2_sign_exact(b, a, d, c), -1);
+    CHECK_EQ_INT(tpk_det2_sign_exact(0.1, 0.3, 0.1, 0.3), 0);
+    CHECK_EQ_INT(tpk_det2_sign_exact(1e-200, 1e200, 1e-200, 1e-200), -1);
+}
+
+/* One tet with hand-written records: a ray through its middle, from outside and from inside. */
+TPK_TEST(single_tet)
+{
+    static const float pos[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    static const float scal[4] = {0, 1, 2, 3}; /* = x + 2y + 3z */
+    tpk_tet32 t32 = {{0, 1, 2}, 0 ^ 1 ^ 2 ^ 3, {-1, -1, -1, -1}};
+    tpk_tet20 t20 = {0 ^ 1 ^ 2 ^ 3, {-1, -1, -1, -1}};
+    tpk_tet16 t16 = {0 ^ 1 ^ 2 ^ 3, {0, 0, 0}};
+    tpk_shell_face shell[4] = {{1, 2, 3, 0}, {0, 3, 2, 0}, {0, 1, 3, 0}, {0, 2, 1, 0}};
+    for (int l = 0; l < 3; l++) {
+        tpk_mesh_arrays a = {4, 1, 4, {10, 20, 30}, pos, layouts[l], &t16, &t20, &t32, shell, scal};
+        tpk_marcher *m = NULL;
+        CHECK_EQ_INT(tpk_marcher_create(&m, &a), TPK_OK);
+        recording *r = rec_new();
+        const double org[3] = {10.1, 20.2, 29}, dir[3] = {0, 0, 2};
+        tpk_march_stats st;
+        CHECK_EQ_INT(tpk_march_ray(m, org, dir, 0, INFINITY, record_segment, r, &st), TPK_OK);
+        CHECK_EQ_INT(r->count, 1);
+        CHECK_EQ_INT(st.tet_steps, 1);
+        CHECK_EQ_INT(st.shell_entries, 1);
+        CHECK(fabs(r->t_in[0] - 0.5) < 1e-12 && fabs(r->t_out[0] - 0.5 * 1.7) < 1e-12);
+        CHECK(fabs(r->s_in[0] - 0.5) < 1e-12 && fabs(r->s_out[0] - (0.5 + 0.7 * 3)) < 1e-12);
+        /* from inside: clipped at tmin */
+        r->count = 0;
+        const double org2[3] = {10.1, 20.2, 30.2}, dir2[3] = {0, 0, 1};
+        CHECK_EQ_INT(tpk_march_ray(m, org2, dir2, 0, INFINITY, record_segment, r, NULL), TPK_OK);
+        CHECK_EQ_INT(r->count, 1);
+        CHECK(r->t_in[0] == 0 && fabs(r->t_out[0] - 0.5) < 1e-12);
+        CHECK(fabs(r->s_in[0] - (0.5 + 0.6)) < 1e-12);
+        /* pointing away, starting outside: nothing */
+        r->count = 0;
+        const double dir3[3] = {0, 0, -1};
+        CHECK_EQ_INT(tpk_march_ray(m, org, dir3, 0, INFINITY, record_segment, r, &st), TPK_OK);
+        CHECK_EQ_INT(r->count, 0);
+        CHECK_EQ_INT(st.tet_steps, 1); /* the line's run before tmin is marched, nothing reported */
+        /* bad arguments */
+        const double zero[3] = {0, 0, 0};
+        CHECK_EQ_INT(tpk_march_ray(m, org, zero, 0, 1, record_segment, r, NULL), TPK_ERR_INVALID_ARGUMENT);
+        free(r);
+        tpk_marcher_destroy(m);
+    }
+}
+
+/* ---- Watertightness on a grid ------------------------------------------------------------------- */
+
+#define GRID 8
+
+/* Chord length of the line org + t dir (t >= tmin) through [0,GRID]^3 (relative coordinates). */
+static double box_chord(const double o[3], const double d[3], double tmin)
+{
+    double tn = tmin, tf = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        if (d[k] == 0) {
+            if (o[k] < 0 || o[k] > GRID)
+                return 0;
+            continue;
+        }
+        double t0 = (0 - o[k]) / d[k], t1 = (GRID - o[k]) / d[k];
+        if (t0 > t1) {
+            double s = t0;
+            t0 = t1;
+            t1 = s;
+        }
+        tn = fmax(tn, t0);
+        tf = fmin(tf, t1);
+    }
+    return tf > tn ? tf - tn : 0;
+}
+
+/* Is the line inside a boundary plane of the box (then "inside" is the perturbation's choice)? */
+static int on_box_plane(const double o[3], const double d[3])
+{
+    for (int k = 0; k < 3; k++)
+        if (d[k] == 0 && (o[k] == 0 || o[k] == GRID))
+            return 1;
+    return 0;
+}
+
+typedef struct ray_case {
+    double org[3], dir[3], tmin;
+} ray_case;
+
+/* March one ray on all layouts; check chain, single run, length; compare layouts. */
+static const char *watertight_ray(tpk_marcher *const marchers[3], const fx_mesh *m, const ray_case *rc,
+                                  recording *recs[3], unsigned char *seen)
+{
+    double world[3];
+    for (int k = 0; k < 3; k++)
+        world[k] = rc->org[k] + m->origin[k];
+    for (int l = 0; l < 3; l++) {
+        recs[l]->count = 0;
+        tpk_march_stats st;
+        if (tpk_march_ray(marchers[l], world, rc->dir, rc->tmin, INFINITY, record_segment, recs[l], &st) !=
+            TPK_OK)
+            return "march failed";
+        if (st.shell_entries > 1)
+            return "more than one run through a convex box";
+        const char *e = check_chain(recs[l], m, seen, 1);
+        if (e)
+            return e;
+    }
+    for (int l = 1; l < 3; l++) {
+        if (recs[l]->count != recs[0]->count ||
+            memcmp(recs[l]->tet, recs[0]->tet, (size_t)recs[0]->count * sizeof(int32_t)) ||
+            memcmp(recs[l]->t_in, recs[0]->t_in, (size_t)recs[0]->count * sizeof(double)))
+            return "layouts disagree";
+    }
+    double dl = sqrt(rc->dir[0] * rc->dir[0] + rc->dir[1] * rc->dir[1] + rc->dir[2] * rc->dir[2]);
+    double len = rec_length(recs[0]) * dl;
+    double chord = box_chord(rc->org, rc->dir, rc->tmin) * dl;
+    int ok = fabs(len - chord) <= 1e-9 * GRID;
+    if (!ok && on_box_plane(rc->org, rc->dir))
+        ok = len == 0;
+    return ok ? NULL : "length inside differs from the chord";
+}
+
+static void run_watertight(const double shift[3], int relabel)
+{
+    fx_mesh m;
+    CHECK(fx_grid(&m, GRID, GRID, GRID, NULL, 1.0, shift) == 0);
+    if (relabel)
+        CHECK(fx_relabel(&m, 77) == 0);
+    CHECK(fx_build(&m) == 0);
+    tpk_marcher *marchers[3];
+    recording *recs[3];
+    for (int l = 0; l < 3; l++) {
+        marchers[l] = make_marcher(&m, layouts[l]);
+        recs[l] = rec_new();
+        CHECK(marchers[l] && recs[l]);
+    }
+    unsigned char *seen = calloc((size_t)m.tet_count, 1);
+    int64_t rays = 0, entered = 0;
+    /* Axis-aligned rays on a quarter lattice: through vertices, along edges, in face planes, through
+     * face diagonals; from outside (both directions) and from inside (on a vertex plane and between). */
+    for (int axis = 0; axis < 3; axis++)
+        for (int sgn = -1; sgn <= 1; sgn += 2)
+            for (int start = 0; start < 3; start++)
+                for (int iu = -2; iu <= 4 * GRID + 2; iu++)
+                    for (int iv = -2; iv <= 4 * GRID + 2; iv++) {
+                        ray_case rc = {{0, 0, 0}, {0, 0, 0}, 0};
+                        int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                        rc.org[u] = iu * 0.25;
+                        rc.org[v] = iv * 0.25;
+                        double along[3] = {-1.0, 3.0, 4.5};
+                        rc.org[axis] = sgn > 0 ? along[start] : GRID - along[start];
+                        rc.dir[axis] = sgn;
+                        const char *e = watertight_ray(marchers, &m, &rc, recs, seen);
+                        CHECK_MSG(!e, "%s: org (%g %g %g) dir (%g %g %g)", e, rc.org[0], rc.org[1], rc.org[2],
+                                  rc.dir[0], rc.dir[1], rc.dir[2]);
+                        rays++;
+                        entered += recs[0]->count > 0;
+                    }
+    /* Oblique rays with integer directions aimed exactly at lattice points (vertices, edge midpoints,
+     * face centres, cube centres), from outside and starting exactly at the point. */
+    static const double dirs[][3] = {{1, 1, 0}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, -1, 0},
+                                     {1, 1, -1}, {2, 1, 0}, {1, 2, 3}, {-1, -1, -1}, {0, -2, 1}};
+    for (size_t di = 0; di < sizeof dirs / sizeof dirs[0]; di++)
+        for (int i = 0; i <= 2 * GRID; i += 1)
+            for (int j = 0; j <= 2 * GRID; j += 1)
+                for (int k = 0; k <= 2 * GRID; k += 3)
+                    for (int inside = 0; inside < 2; inside++) {
+                        ray_case rc;
+                        const double point[3] = {i * 0.5, j * 0.5, k * 0.5};
+                        for (int a = 0; a < 3; a++) {
+                            rc.dir[a] = dirs[di][a];
+                            rc.org[a] = inside ? point[a] : point[a] - 20 * dirs[di][a];
+                        }
+                        rc.tmin = 0;
+                        const char *e = watertight_ray(marchers, &m, &rc, recs, seen);
+                        CHECK_MSG(!e, "%s: org (%g %g %g) dir (%g %g %g)", e, rc.org[0], rc.org[1], rc.org[2],
+                                  rc.dir[0], rc.dir[1], rc.dir[2]);
+                        rays++;
+                        entered += recs[0]->count > 0;
+                    }
+    CHECK(rays > 20000 && entered > rays / 2);
+    for (int l = 0; l < 3; l++) {
+        tpk_marcher_destroy(marchers[l]);
+        free(recs[l]);
+    }
+    free(seen);
+    fx_free(&m);
+}
+
+TPK_TEST(watertight_grid)
+{
+    run_watertight(NULL, 0);
+}
+
+TPK_TEST(watertight_grid_relabeled_far_origin)
+{
+    const double shift[3] = {6.4e6, -4.9e6, 1234.5};
+    run_watertight(shift, 1);
+}
+
+/* ---- Layout equivalence on random rays ---------------------------------------------------------- */
+
+/* Random rays: one third from outside aimed exactly at vertices/edge midpoints (integer directions),
+ * one third random lines (whole line, tmin = -inf), one third starting inside (tmin = 0). */
+static void random_ray(uint64_t *rng, const fx_mesh *m, double span, double org[3], double dir[3],
+                       double *tmin)
+{
+    int kind = (int)(fx_rand(rng) % 3);
+    if (kind == 0) {
+        for (int k = 0; k < 3; k++) {
+            double target = (double)(fx_rand(rng) % (uint64_t)(2 * span + 1)) * 0.5;
+            org[k] = (double)((int64_t)(fx_rand(rng) % (uint64_t)(span + 7)) - 3);
+            dir[k] = target - org[k];
+        }
+        if (dir[0] == 0 && dir[1] == 0 && dir[2] == 0)
+            dir[0] = 1;
+        *tmin = 0;
+    } else {
+        for (int k = 0; k < 3; k++) {
+            org[k] = kind == 1 ? fx_uniform(rng) * (span + 4) - 2 : fx_uniform(rng) * span;
+            dir[k] = fx_uniform(rng) * 2 - 1;
+        }
+        *tmin = kind == 1 ? -INFINITY : 0;
+    }
+    for (int k = 0; k < 3; k++)
+        org[k] += m->origin[k];
+}
+
+/* Print a failing ray and its pieces (with each tet's vertices and neighbors). */
+static void dump_ray(const fx_mesh *m, const recording *r, const double org[3], const double dir[3],
+                     double tmin, uint64_t runs)
+{
+    fprintf(stderr, "org %.17g %.17g %.17g dir %.17g %.17g %.17g tmin %g runs %llu\n", org[0], org[1], org[2],
+            dir[0], dir[1], dir[2], tmin, (unsigned long long)runs);
+    for (int64_t q = 0; q < r->count && q < 200; q++) {
+        const int32_t *v = &m->tets[4 * (int64_t)r->tet[q]], *n = &m->neighbors[4 * (int64_t)r->tet[q]];
+        fprintf(stderr, "  tet %d [%.17g, %.17g] v %d %d %d %d n %d %d %d %d\n", r->tet[q], r->t_in[q],
+                r->t_out[q], v[0], v[1], v[2], v[3], n[0], n[1], n[2], n[3]);
+    }
+}
+
+typedef void (*ray_generator)(uint64_t *rng, const fx_mesh *m, double org[3], double dir[3], double *tmin);
+
+static void grid_ray(uint64_t *rng, const fx_mesh *m, double org[3], double dir[3], double *tmin)
+{
+    random_ray(rng, m, GRID, org, dir, tmin);
+}
+
+static uint64_t min_multi_run = 100; /* rays with several runs a non-convex mesh must show */
+
+static void check_layouts_agree(fx_mesh *m, ray_generator gen, int64_t ray_count, uint64_t seed, int convex)
+{
+    tpk_marcher *marchers[3];
+    recording *recs[3];
+    for (int l = 0; l < 3; l++) {
+        marchers[l] = make_marcher(m, layouts[l]);
+        recs[l] = rec_new();
+        CHECK(marchers[l] && recs[l]);
+    }
+    unsigned char *seen = calloc((size_t)m->tet_count, 1);
+    uint64_t rng = seed, total_runs = 0, multi_run_rays = 0, pieces = 0;
+    for (int64_t i = 0; i < ray_count; i++) {
+        double org[3], dir[3], tmin;
+        gen(&rng, m, org, dir, &tmin);
+        for (int l = 0; l < 3; l++) {
+            recs[l]->count = 0;
+            tpk_march_stats st;
+            tpk_result r = tpk_march_ray(marchers[l], org, dir, tmin, INFINITY, record_segment, recs[l], &st);
+            CHECK_MSG(r == TPK_OK, "ray %lld layout %d: %s", (long long)i, (int)layouts[l], tpk_result_string(r));
+            const char *e = check_chain(recs[l], m, seen, convex ? 1 : st.shell_entries);
+            if (e)
+                dump_ray(m, recs[l], org, dir, tmin, st.shell_entries);
+            CHECK_MSG(!e, "ray %lld layout %d: %s", (long long)i, (int)layouts[l], e);
+            if (l == 0) {
+                total_runs += st.shell_entries;
+                multi_run_rays += st.shell_entries > 1;
+            }
+        }
+        pieces += (uint64_t)recs[0]->count;
+        for (int l = 1; l < 3; l++) {
+            CHECK_MSG(recs[l]->count == recs[0]->count &&
+                          !memcmp(recs[l]->tet, recs[0]->tet, (size_t)recs[0]->count * sizeof(int32_t)) &&
+                          !memcmp(recs[l]->t_out, recs[0]->t_out, (size_t)recs[0]->count * sizeof(double)),
+                      "ray %lld: layout %d differs from Tet32", (long long)i, (int)layouts[l]);
+        }
+    }
+    CHECK(pieces > (uint64_t)ray_count); /* the rays do go through the mesh */
+    if (!convex && min_multi_run > 0)
+        CHECK_MSG(multi_run_rays > min_multi_run, "only %llu rays with several runs", (unsigned long long)multi_run_rays);
+    (void)total_runs;
+    for (int l = 0; l < 3; l++) {
+        tpk_marcher_destroy(marchers[l]);
+        free(recs[l]);
+    }
+    free(seen);
+}
+
+TPK_TEST(layouts_agree_convex_relabeled)
+{
+    fx_mesh m;
+    const double shift[3] = {-3.25, 100, 0.5};
+    CHECK(fx_grid(&m, GRID, GRID, GRID, NULL, 1.0, shift) == 0);
+    CHECK(fx_relabel(&m, 12345) == 0);
+    CHECK(fx_build(&m) == 0);
+    check_layouts_agree(&m, grid_ray, 100000, 1, 1);
+    fx_free(&m);
+}
+
+TPK_TEST(layouts_agree_nonconvex)
+{
+    /* 30% of the cubes removed: holes, tunnels, pieces touching along edges and at corners. */
+    unsigned char keep[GRID * GRID * GRID];
+    uint64_t rng = 99;
+    for (int i = 0; i < GRID * GRID * GRID; i++)
+        keep[i] = fx_uniform(&rng) >= 0.3;
+    for (int relabel = 0; relabel < 2; relabel++) {
+        fx_mesh m;
+        CHECK(fx_grid(&m, GRID, GRID, GRID, keep, 1.0, NULL) == 0);
+        if (relabel)
+            CHECK(fx_relabel(&m, 4242) == 0);
+        CHECK(fx_build(&m) == 0);
+        check_layouts_agree(&m, grid_ray, 100000, 7 + (uint64_t)relabel, 0);
+        fx_free(&m);
+    }
+}
+
+/* A U-shaped block: a ray across both arms has two runs with exact lengths. */
+TPK_TEST(nonconvex_u_shape_runs)
+{
+    unsigned char keep[4 * 1 * 3];
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 4; i++)
+            keep[i + 4 * k] = !(k >= 1 && (i == 1 || i == 2)); /* remove the middle of the upper two rows */
+    fx_mesh m;
+    CHECK(fx_grid(&m, 4, 1, 3, keep, 1.0, NULL) == 0);
+    CHECK(fx_build(&m) == 0);
+    for (int l = 0; l < 3; l++) {
+        tpk_marcher *mr = make_marcher(&m, layouts[l]);
+        recording *r = rec_new();
+        CHECK(mr && r);
+        const double org[3] = {-1, 0.5, 2.5}, dir[3] = {1, 0, 0};
+        tpk_march_stats st;
+        CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 0, INFINITY, record_segment, r, &st), TPK_OK);
+        CHECK_EQ_INT(st.shell_entries, 2);
+        CHECK(fabs(rec_length(r) - 2.0) < 1e-12);
+        CHECK(fabs(r->t_in[0] - 1.0) < 1e-12 && fabs(r->t_out[r->count - 1] - 5.0) < 1e-12);
+        /* starting inside the second arm: one run, from tmin */
+        r->count = 0;
+        CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 4.5, INFINITY, record_segment, r, &st), TPK_OK);
+        CHECK_EQ_INT(st.shell_entries, 1);
+        CHECK(r->t_in[0] == 4.5 && fabs(rec_length(r) - 0.5) < 1e-12);
+        /* between the arms, tmax before the second: only the first arm's run is marched (it starts
+         * before tmin), nothing is reported */
+        r->count = 0;
+        CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 2.5, 3.5, record_segment, r, &st), TPK_OK);
+        CHECK_EQ_INT(r->count, 0);
+        CHECK_EQ_INT(st.shell_entries, 1);
+        /* the ray along the bottom passes through one run */
+        r->count = 0;
+        const double org2[3] = {-1, 0.5, 0.5};
+        CHECK_EQ_INT(tpk_march_ray(mr, org2, dir, 0, INFINITY, record_segment, r, &st), TPK_OK);
+        CHECK_EQ_INT(st.shell_entries, 1);
+        CHECK(fabs(rec_length(r) - 4.0) < 1e-12);
+        free(r);
+        tpk_marcher_destroy(mr);
+    }
+    fx_free(&m);
+}
+
+/* ---- Segments ------------------------------------------------------------------------------------ */
+
+TPK_TEST(segments_linear_field_exact)
+{
+    fx_mesh m;
+    const double shift[3] = {1000, -2000, 0.125};
+    CHECK(fx_grid(&m, GRID, GRID, GRID, NULL, 0.75, shift) == 0);
+    CHECK(fx_relabel(&m, 5) == 0);
+    CHECK(fx_build(&m) == 0);
+    const double coef[4] = {0.3, -0.7, 1.1, 2.0};
+    m.scalars = malloc((size_t)m.vertex_count * sizeof(float));
+    CHECK(m.scalars);
+    double scale = 0;
+    for (int64_t v = 0; v < m.vertex_count; v++) {
+        const float *p = &m.positions[3 * v];
+        /* the field at the float positions; values chosen exactly representable in float */
+        double f = coef[0] * p[0] + coef[1] * p[1] + coef[2] * p[2] + coef[3];
+        m.scalars[v] = (float)f;
+        scale = fmax(scale, fabs(f));
+    }
+    tpk_marcher *mr = make_marcher(&m, TPK_LAYOUT_TET16);
+    recording *r = rec_new();
+    CHECK(mr && r);
+    uint64_t rng = 3;
+    int64_t checked = 0;
+    for (int i = 0; i < 20000; i++) {
+        double org[3], dir[3], tmin;
+        random_ray(&rng, &m, GRID * 0.75, org, dir, &tmin);
+        if (tmin < 0)
+            tmin = -50;
+        r->count = 0;
+        double tmax = fx_uniform(&rng) < 0.5 ? INFINITY : tmin + fx_uniform(&rng) * 20;
+        CHECK_EQ_INT(tpk_march_ray(mr, org, dir, tmin, tmax, record_segment, r, NULL), TPK_OK);
+        for (int64_t s = 0; s < r->count; s++) {
+            double f[2], tt[2] = {r->t_in[s], r->t_out[s]};
+            for (int e = 0; e < 2; e++) {
+                double x[3];
+                for (int k = 0; k < 3; k++)
+                    x[k] = (org[k] - shift[k]) + tt[e] * dir[k];
+                f[e] = coef[0] * x[0] + coef[1] * x[1] + coef[2] * x[2] + coef[3];
+            }
+            /* float scalars: the field values are exact to float rounding of the vertex values */
+            CHECK_MSG(fabs(r->s_in[s] - f[0]) <= 1e-6 * scale && fabs(r->s_out[s] - f[1]) <= 1e-6 * scale,
+                      "ray %d piece %lld: %.17g vs %.17g", i, (long long)s, r->s_in[s], f[0]);
+            CHECK(r->t_in[s] >= tmin && r->t_out[s] <= tmax);
+            checked++;
+        }
+    }
+    CHECK(checked > 10000);
+    free(r);
+    tpk_marcher_destroy(mr);
+    fx_free(&m);
+}
+
+/* With exactly representable vertex values (integers on integer points) the interpolation is exact to
+ * double rounding: 1e-9 relative. */
+TPK_TEST(segments_linear_field_1e9)
+{
+    fx_mesh m;
+    CHECK(fx_grid(&m, GRID, GRID, GRID, NULL, 1.0, NULL) == 0);
+    CHECK(fx_build(&m) == 0);
+    m.scalars = malloc((size_t)m.vertex_count * sizeof(float));
+    CHECK(m.scalars);
+    for (int64_t v = 0; v < m.vertex_count; v++) {
+        const float *p = &m.positions[3 * v];
+        m.scalars[v] = 3 * p[0] - 5 * p[1] + 7 * p[2] + 11;
+    }
+    for (int l = 0; l < 3; l++) {
+        tpk_marcher *mr = make_marcher(&m, layouts[l]);
+        recording *r = rec_new();
+        CHECK(mr && r);
+        uint64_t rng = 11;
+        for (int i = 0; i < 5000; i++) {
+            double org[3], dir[3], tmin;
+            random_ray(&rng, &m, GRID, org, dir, &tmin);
+            r->count = 0;
+            CHECK_EQ_INT(tpk_march_ray(mr, org, dir, tmin, INFINITY, record_segment, r, NULL), TPK_OK);
+            for (int64_t s = 0; s < r->count; s++) {
+                double tt[2] = {r->t_in[s], r->t_out[s]}, got[2] = {r->s_in[s], r->s_out[s]};
+                for (int e = 0; e < 2; e++) {
+                    double x[3];
+                    for (int k = 0; k < 3; k++)
+                        x[k] = org[k] + tt[e] * dir[k];
+                    double f = 3 * x[0] - 5 * x[1] + 7 * x[2] + 11;
+                    CHECK_MSG(fabs(got[e] - f) <= 1e-9 * fmax(1.0, fabs(f)) + 1e-9 * 100,
+                              "%.17g vs %.17g", got[e], f);
+                }
+            }
+        }
+        free(r);
+        tpk_marcher_destroy(mr);
+    }
+    fx_free(&m);
+}
+
+static int stop_after_first(void *user, const tpk_segment *s)
+{
+    (void)s;
+    (*(int *)user)++;
+    return 1;
+}
+
+TPK_TEST(clip_and_early_stop)
+{
+    fx_mesh m;
+    CHECK(fx_grid(&m, GRID, GRID, GRID, NULL, 1.0, NULL) == 0);
+    CHECK(fx_build(&m) == 0);
+    tpk_marcher *mr = make_marcher(&m, TPK_LAYOUT_TET20);
+    recording *r = rec_new();
+    CHECK(mr && r);
+    const double org[3] = {-1, 2.3, 4.6}, dir[3] = {1, 0, 0};
+    tpk_march_stats full, clipped, stopped;
+    CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 0, INFINITY, record_segment, r, &full), TPK_OK);
+    r->count = 0;
+    CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 3.5, 5.25, record_segment, r, &clipped), TPK_OK);
+    CHECK(r->count > 0 && r->t_in[0] == 3.5 && r->t_out[r->count - 1] == 5.25);
+    CHECK(fabs(rec_length(r) - 1.75) < 1e-12);
+    CHECK(clipped.tet_steps < full.tet_steps); /* marched from the entry, stopped at tmax */
+    int calls = 0;
+    CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 0, INFINITY, stop_after_first, &calls, &stopped), TPK_OK);
+    CHECK_EQ_INT(calls, 1);
+    CHECK_EQ_INT(stopped.tet_steps, 1);
+    CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 0, INFINITY, NULL, NULL, &stopped), TPK_OK);
+    CHECK_EQ_INT(stopped.tet_steps, full.tet_steps);
+    free(r);
+    tpk_marcher_destroy(mr);
+    fx_free(&m);
+}
+
+/* ---- Hostile records ----------------------------------------------------------------------------- */
+
+TPK_TEST(hostile_tet16_garbage)
+{
+    fx_mesh m;
+    CHECK(fx_grid(&m, 4, 4, 4, NULL, 1.0, NULL) == 0);
+    CHECK(fx_build(&m) == 0);
+    const double org[3] = {-1, 1.3, 2.2}, dir[3] = {1, 0.1, 0.05};
+    /* decoded ids far out of range */
+    for (int64_t t = 0; t < m.tet_count; t++)
+        for (int r = 0; r < 3; r++)
+            m.tet16[t].nx[r] = 0x3fffffff;
+    tpk_marcher *mr = make_marcher(&m, TPK_LAYOUT_TET16);
+    CHECK(mr);
+    CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 0, INFINITY, NULL, NULL, NULL), TPK_ERR_MESH);
+    tpk_marcher_destroy(mr);
+    /* random garbage in every field of every layout: must end (OK or ERR_MESH), never crash or hang */
+    uint64_t rng = 8;
+    int64_t mesh_errors = 0;
+    for (int round = 0; round < 50; round++) {
+        for (int64_t t = 0; t < m.tet_count; t++) {
+            uint64_t x = fx_rand(&rng);
+            int32_t small = (int32_t)(x % (uint64_t)(m.tet_count + 2)) - 1;
+            int32_t junk = round % 2 ? small : (int32_t)(x >> 32);
+            m.tet16[t].nx[x % 3] = junk;
+            m.tet20[t].n[(x >> 8) % 4] = junk;
+            m.tet32[t].n[(x >> 16) % 4] = junk;
+            if (round % 5 == 4)
+                m.tet16[t].vx = m.tet20[t].vx = m.tet32[t].vx = (int32_t)(x >> 40);
+        }
+        for (int l = 0; l < 3; l++) {
+            mr = make_marcher(&m, layouts[l]);
+            CHECK(mr);
+            for (int i = 0; i < 200; i++) {
+                double o[3], d[3], tmin;
+                random_ray(&rng, &m, 4, o, d, &tmin);
+                tpk_result r = tpk_march_ray(mr, o, d, tmin, INFINITY, NULL, NULL, NULL);
+                CHECK(r == TPK_OK || r == TPK_ERR_MESH);
+                mesh_errors += r == TPK_ERR_MESH;
+            }
+            tpk_marcher_destroy(mr);
+        }
+    }
+    CHECK(mesh_errors > 100);
+    fx_free(&m);
+}
+
+TPK_TEST(hostile_positions)
+{
+    fx_mesh m;
+    CHECK(fx_grid(&m, 4, 4, 4, NULL, 1.0, NULL) == 0);
+    CHECK(fx_build(&m) == 0);
+    uint64_t rng = 31;
+    for (int i = 0; i < 40; i++) {
+        int64_t v = (int64_t)(fx_rand(&rng) % (uint64_t)m.vertex_count);
+        m.positions[3 * v + i % 3] = i % 4 == 0 ? NAN : i % 4 == 1 ? INFINITY : i % 4 == 2 ? -1e38f : 1e-40f;
+    }
+    for (int l = 0; l < 3; l++) {
+        tpk_marcher *mr = make_marcher(&m, layouts[l]);
+        CHECK(mr);
+        for (int i = 0; i < 2000; i++) {
+            double o[3], d[3], tmin;
+            random_ray(&rng, &m, 4, o, d, &tmin);
+            tpk_result r = tpk_march_ray(mr, o, d, tmin, INFINITY, NULL, NULL, NULL);
+            CHECK(r == TPK_OK || r == TPK_ERR_MESH);
+        }
+        tpk_marcher_destroy(mr);
+    }
+    fx_free(&m);
+}
+
+TPK_TEST(hostile_cycle_detected)
+{
+    /* Two tets glued on a face whose records point at each other across every face: a ray bounces
+     * between them until the step limit catches the cycle. */
+    fx_mesh m;
+    CHECK(fx_grid(&m, 1, 1, 1, NULL, 1.0, NULL) == 0);
+    CHECK(fx_build(&m) == 0);
+    for (int64_t t = 0; t < m.tet_count; t++)
+        for (int k = 0; k < 4; k++) {
+            m.tet32[t].n[k] = (int32_t)t;
+            m.tet20[t].n[k] = (int32_t)t;
+        }
+    for (int l = 0; l < 2; l++) {
+        tpk_marcher *mr = make_marcher(&m, layouts[l]);
+        CHECK(mr);
+        const double org[3] = {-1, 0.3, 0.6}, dir[3] = {1, 0.01, 0.02};
+        CHECK_EQ_INT(tpk_march_ray(mr, org, dir, 0, INFINITY, NULL, NULL, NULL), TPK_ERR_MESH);
+        tpk_marcher_destroy(mr);
+    }
+    fx_free(&m);
+}
+
+TPK_TEST(hostile_shell_records)
+{
+    fx_mesh m;
+    CHECK(fx_grid(&m, 2, 2, 2, NULL, 1.0, NULL) == 0);
+    CHECK(fx_build(&m) == 0);
+    tpk_mesh_arrays a = fx_arrays(&m, TPK_LAYOUT_TET16);
+    tpk_marcher *mr = NULL;
+    m.shell[3].t = (int32_t)m.tet_count;
+    CHECK_EQ_INT(tpk_marcher_create(&mr, &a), TPK_ERR_MESH);
+    CHECK(mr == NULL);
+    m.shell[3].t = 0;
+    m.shell[5].b = -7;
+    CHECK_EQ_INT(tpk_marcher_create(&mr, &a), TPK_ERR_MESH);
+    m.shell[5].b = m.shell[5].a;
+    CHECK_EQ_INT(tpk_marcher_create(&mr, &a), TPK_ERR_MESH);
+    a.tet16 = NULL;
+    CHECK_EQ_INT(tpk_marcher_create(&mr, &a), TPK_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(tpk_marcher_create(&mr, NULL), TPK_ERR_INVALID_ARGUMENT);
+    tpk_marcher_destroy(NULL);
+    fx_free(&m);
+}
+
+/* ---- Real meshes --------------------------------------------------------------------------------- */
+
+/* Import, tetrahedralize, orient, then layouts and shell as the converter does. */
+static int load_real(const char *relative, fx_mesh *m)
+{
+    memset(m, 0, sizeof *m);
+    tpk_mesh src;
+    tpk_tetmesh tm;
+    memset(&src, 0, sizeof src);
+    memset(&tm, 0, sizeof tm);
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    tpk_orient_stats ost;
+    if (tpk_import_any(tpk_data_path(relative), NULL, &src, &diag) != 0 ||
+        tpk_tetrahedralize(&src, NULL, 0, &tm, &diag) != 0 || tpk_orient(&tm, 0, &ost, &diag) != 0) {
+        fprintf(stderr, "%s: %s\n", relative, diag.message);
+        tpk_mesh_free(&src);
+        tpk_tetmesh_free(&tm);
+        return -1;
+    }
+    m->vertex_count = tm.vertex_count;
+    m->tet_count = tm.tet_count;
+    m->points = malloc((size_t)m->vertex_count * 3 * sizeof(double));
+    m->positions = malloc((size_t)m->vertex_count * 3 * sizeof(float));
+    m->tets = malloc((size_t)m->tet_count * 4 * sizeof(int32_t));
+    if (!m->points || !m->positions || !m->tets)
+        return -1;
+    for (int k = 0; k < 3; k++)
+        m->origin[k] = tm.vertex_count ? tm.points[k] : 0;
+    for (int64_t i = 0; i < 3 * m->vertex_count; i++) {
+        m->positions[i] = (float)(tm.points[i] - m->origin[i % 3]);
+        m->points[i] = m->origin[i % 3] + (double)m->positions[i];
+    }
+    memcpy(m->tets, tm.tets, (size_t)m->tet_count * 4 * sizeof(int32_t));
+    tpk_mesh_free(&src);
+    tpk_tetmesh_free(&tm);
+    return fx_build(m);
+}
+
+/* Rays for an arbitrary mesh: random lines through its box, rays from inside (tet centroids), rays
+ * aimed through vertices, and axis-parallel rays through vertices exactly. */
+static void real_ray(uint64_t *rng, const fx_mesh *m, double org[3], double dir[3], double *tmin)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = 0; v < m->vertex_count; v += 1 + m->vertex_count / 64)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], m->points[3 * v + k]);
+            hi[k] = fmax(hi[k], m->points[3 * v + k]);
+        }
+    int kind = (int)(fx_rand(rng) % 4);
+    const double *vp = &m->points[3 * (int64_t)(fx_rand(rng) % (uint64_t)m->vertex_count)];
+    for (int k = 0; k < 3; k++)
+        dir[k] = fx_uniform(rng) * 2 - 1;
+    *tmin = 0;
+    if (kind == 0) {
+        for (int k = 0; k < 3; k++)
+            org[k] = lo[k] + (hi[k] - lo[k]) * (fx_uniform(rng) * 1.4 - 0.2);
+        *tmin = -INFINITY;
+    } else if (kind == 1) {
+        const int32_t *t = &m->tets[4 * (int64_t)(fx_rand(rng) % (uint64_t)m->tet_count)];
+        for (int k = 0; k < 3; k++)
+            org[k] = 0.25 * (m->points[3 * t[0] + k] + m->points[3 * t[1] + k] + m->points[3 * t[2] + k] +
+                             m->points[3 * t[3] + k]);
+    } else if (kind == 2) {
+        for (int k = 0; k < 3; k++) {
+            org[k] = vp[k] - dir[k] * (hi[k] - lo[k]);
+        }
+    } else {
+        int axis = (int)(fx_rand(rng) % 3);
+        for (int k = 0; k < 3; k++) {
+            org[k] = vp[k];
+            dir[k] = k == axis ? 1.0 : 0.0;
+        }
+        org[axis] = lo[axis] - 1.0;
+    }
+}
+
+static void real_mesh_layouts(const char *relative, int64_t rays, int nonconvex)
+{
+    fx_mesh m;
+    if (load_real(relative, &m) != 0) {
+        CHECK_MSG(0, "cannot load %s", relative);
+    }
+    CHECK(m.tet_count > 1000 && m.shell_count > 100);
+    min_multi_run = nonconvex ? 100 : 0;
+    check_layouts_agree(&m, real_ray, rays, 2024, 0);
+    min_multi_run = 100;
+    fx_free(&m);
+}
+
+TPK_TEST(layouts_agree_hinge_small)
+{
+    real_mesh_layouts("tetgen/hinge_small.node", 100000, 1);
+}
+
+TPK_TEST(layouts_agree_cylinder)
+{
+    real_mesh_layouts("sfepy/cylinder.vtk", 100000, 0);
+}
