@@ -64,7 +64,7 @@ tpk_result tpk_file_check_ids(tpk_file *file, uint64_t i, const void *raw)
 {
     if (atomic_load(&file->chunk_state[i]) & TPK_CHUNK_IDS_OK)
         return TPK_OK;
-    tpk_diag diag;
+    tpki_diag diag;
     tpk_result r = tpk_check_records(&file->header, i, &file->entries[i], raw, &diag);
     if (r != TPK_OK)
         return tpk_file_report(file, r, diag.text);

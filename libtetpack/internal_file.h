@@ -29,9 +29,9 @@
 #define TPK_CHUNK_IDS_OK 0x2u /* rule 17 id ranges verified */
 
 /* A detailed error text being built by a check, before it reaches a handle or a caller buffer. */
-typedef struct tpk_diag {
+typedef struct tpki_diag {
     char text[TPK_ERROR_TEXT_SIZE];
-} tpk_diag;
+} tpki_diag;
 
 struct tpk_file {
     tpk_allocator allocator;   /* resolved: never NULL functions */
@@ -55,7 +55,7 @@ struct tpk_file {
 };
 
 /* ---- diagnostics (verify.c) ---- */
-tpk_result tpk_diag_fail(tpk_diag *diag, tpk_result code, const char *fmt, ...)
+tpk_result tpki_fail(tpki_diag *diag, tpk_result code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 /* "'TT16'" when the four bytes are printable ASCII, else "0x........". */
 void tpk_tag_name(uint32_t tag, char out[16]);
@@ -97,28 +97,28 @@ uint32_t tpk_elem_type_size(uint32_t elem_type);
  * it REQUIRED (out pointers may be NULL). */
 int tpk_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required);
 /* Rule 5: header_size, dir_entry_size, flags, reserved bytes. */
-tpk_result tpk_check_header_fields(const tpk_header *h, tpk_diag *diag);
+tpk_result tpk_check_header_fields(const tpk_header *h, tpki_diag *diag);
 /* Rules 7 and 8: counts, chunk_count limit, directory placement against h->file_size. */
-tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpk_diag *diag);
+tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpki_diag *diag);
 /* Rules 10, 11 and the bounds half of 12 for entry i; *total_raw accumulates raw sizes. */
 tpk_result tpk_check_entry(const tpk_header *h, const tpk_limits *limits, uint64_t i,
-                           const tpk_dir_entry *e, uint64_t *total_raw, tpk_diag *diag);
+                           const tpk_dir_entry *e, uint64_t *total_raw, tpki_diag *diag);
 /* The overlap half of rule 12 over all entries (scratch memory from the allocator). */
 tpk_result tpk_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
-                              const tpk_allocator *allocator, tpk_diag *diag);
+                              const tpk_allocator *allocator, tpki_diag *diag);
 /* Rules 13 and 14 over all entries. A writer allows unknown (vendor) chunks marked REQUIRED. */
 tpk_result tpk_check_tags(const tpk_header *h, const tpk_dir_entry *entries, int allow_unknown_required,
-                          const tpk_allocator *allocator, tpk_diag *diag);
+                          const tpk_allocator *allocator, tpki_diag *diag);
 /* Rule 15: field descriptors, FDAT and TIME chunks agree. fields may be NULL when count is 0. */
 tpk_result tpk_check_fields(const tpk_header *h, const tpk_dir_entry *entries,
                             const tpk_field_desc *fields, uint32_t field_count,
-                            const tpk_allocator *allocator, tpk_diag *diag);
+                            const tpk_allocator *allocator, tpki_diag *diag);
 /* Rule 17: id ranges in the raw bytes of entry i (TT32, TT20, SHEL, TMAP; others pass). */
 tpk_result tpk_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
-                             tpk_diag *diag);
+                             tpki_diag *diag);
 /* Rules 5, 7, 8 and 10 to 15 on a header and directory built in memory (the writer's self-check). */
 tpk_result tpk_check_layout(const tpk_header *h, const tpk_dir_entry *entries,
                             const tpk_field_desc *fields, uint32_t field_count,
-                            const tpk_allocator *allocator, tpk_diag *diag);
+                            const tpk_allocator *allocator, tpki_diag *diag);
 
 #endif

@@ -55,7 +55,7 @@ tpk_result tpk_file_report(tpk_file *file, tpk_result code, const char *text)
 
 tpk_result tpk_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
 {
-    tpk_diag diag;
+    tpki_diag diag;
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(diag.text, sizeof diag.text, fmt, ap);
@@ -128,47 +128,47 @@ const char *tpk_error_text(const tpk_file *file)
 
 /* ---- header (rules 1-9) ------------------------------------------------------------------------ */
 
-static tpk_result check_magic(const uint8_t *data, uint64_t size, tpk_diag *diag)
+static tpk_result check_magic(const uint8_t *data, uint64_t size, tpki_diag *diag)
 {
     size_t n = size < TPK_MAGIC_SIZE ? (size_t)size : TPK_MAGIC_SIZE;
     if (n > 0 && memcmp(data, TPK_MAGIC, n) == 0)
         return n == TPK_MAGIC_SIZE ? TPK_OK
-                                   : tpk_diag_fail(diag, TPK_ERR_TRUNCATED,
+                                   : tpki_fail(diag, TPK_ERR_TRUNCATED,
                                                    "file is %zu bytes, shorter than the 8-byte magic", n);
     if (n == 0)
-        return tpk_diag_fail(diag, TPK_ERR_TRUNCATED, "file is empty");
+        return tpki_fail(diag, TPK_ERR_TRUNCATED, "file is empty");
     if (n >= 4 && memcmp(data, TPK_MAGIC, 4) == 0)
-        return tpk_diag_fail(diag, TPK_ERR_NOT_TETPACK,
+        return tpki_fail(diag, TPK_ERR_NOT_TETPACK,
                              "magic bytes 4..7 are %02x %02x %02x %02x, expected 0d 0a 1a 0a: the file was "
                              "probably transferred in text mode (line endings converted)",
                              data[4], n > 5 ? data[5] : 0, n > 6 ? data[6] : 0, n > 7 ? data[7] : 0);
-    return tpk_diag_fail(diag, TPK_ERR_NOT_TETPACK,
+    return tpki_fail(diag, TPK_ERR_NOT_TETPACK,
                          "not a tetpack file: first byte 0x%02x, expected the magic 89 54 50 4b 0d 0a 1a 0a",
                          data[0]);
 }
 
 /* Rules 2-4: size, version (before checksums: a newer major may change the header), checksum. */
-static tpk_result check_header_start(const uint8_t *data, uint64_t size, tpk_header *h, tpk_diag *diag)
+static tpk_result check_header_start(const uint8_t *data, uint64_t size, tpk_header *h, tpki_diag *diag)
 {
     if (size < TPK_HEADER_SIZE)
-        return tpk_diag_fail(diag, TPK_ERR_TRUNCATED, "file is %" PRIu64 " bytes, shorter than the %u-byte header",
+        return tpki_fail(diag, TPK_ERR_TRUNCATED, "file is %" PRIu64 " bytes, shorter than the %u-byte header",
                              size, TPK_HEADER_SIZE);
     memcpy(h, data, sizeof *h);
     if (h->version_major > TPK_VERSION_MAJOR)
-        return tpk_diag_fail(diag, TPK_ERR_VERSION, "file is format %u.x, this reader supports %u.x",
+        return tpki_fail(diag, TPK_ERR_VERSION, "file is format %u.x, this reader supports %u.x",
                              h->version_major, TPK_VERSION_MAJOR);
     if (h->version_major == 0)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "header: version_major is 0");
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "header: version_major is 0");
     uint64_t sum = XXH64(data, offsetof(tpk_header, header_checksum), 0);
     if (sum != h->header_checksum)
-        return tpk_diag_fail(diag, TPK_ERR_HEADER_CHECKSUM,
+        return tpki_fail(diag, TPK_ERR_HEADER_CHECKSUM,
                              "header: checksum of bytes 0..184 is 0x%016" PRIx64 ", header_checksum says 0x%016" PRIx64,
                              sum, h->header_checksum);
     return TPK_OK;
 }
 
 static tpk_result check_header(const uint8_t *data, uint64_t size, const tpk_limits *limits, tpk_header *h,
-                               tpk_diag *diag)
+                               tpki_diag *diag)
 {
     tpk_result r = check_magic(data, size, diag);
     if (r == TPK_OK)
@@ -178,17 +178,17 @@ static tpk_result check_header(const uint8_t *data, uint64_t size, const tpk_lim
     if (r != TPK_OK)
         return r;
     if (h->file_size > size)
-        return tpk_diag_fail(diag, TPK_ERR_TRUNCATED, "header: file_size is %" PRIu64 " but the file has %" PRIu64
+        return tpki_fail(diag, TPK_ERR_TRUNCATED, "header: file_size is %" PRIu64 " but the file has %" PRIu64
                              " bytes", h->file_size, size);
     if (h->file_size < size)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "header: file_size is %" PRIu64 " but the file has %" PRIu64
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "header: file_size is %" PRIu64 " but the file has %" PRIu64
                              " bytes (trailing data)", h->file_size, size);
     r = tpk_check_header_counts(h, limits, diag);
     if (r != TPK_OK)
         return r;
     uint64_t sum = XXH64(data + h->directory_offset, h->chunk_count * TPK_DIR_ENTRY_SIZE, 0);
     if (sum != h->directory_checksum)
-        return tpk_diag_fail(diag, TPK_ERR_DIRECTORY_CHECKSUM,
+        return tpki_fail(diag, TPK_ERR_DIRECTORY_CHECKSUM,
                              "directory at offset %" PRIu64 ": checksum is 0x%016" PRIx64
                              ", header says 0x%016" PRIx64, h->directory_offset, sum, h->directory_checksum);
     return TPK_OK;
@@ -196,7 +196,7 @@ static tpk_result check_header(const uint8_t *data, uint64_t size, const tpk_lim
 
 /* ---- directory (rules 10-14) ------------------------------------------------------------------- */
 
-static tpk_result load_directory(tpk_file *file, tpk_diag *diag)
+static tpk_result load_directory(tpk_file *file, tpki_diag *diag)
 {
     uint64_t count = file->header.chunk_count;
     file->entries = tpk_file_alloc(file, count * sizeof *file->entries);
@@ -205,7 +205,7 @@ static tpk_result load_directory(tpk_file *file, tpk_diag *diag)
     if (file->decoded)
         memset(file->decoded, 0, count * sizeof *file->decoded);
     if (!file->entries || !file->chunk_state || !file->decoded)
-        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory for a directory of %" PRIu64 " chunks",
+        return tpki_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory for a directory of %" PRIu64 " chunks",
                              count);
     memcpy(file->entries, file->data + file->header.directory_offset, count * sizeof *file->entries);
     for (uint64_t i = 0; i < count; i++)
@@ -290,7 +290,7 @@ static tpk_result load_fields(tpk_file *file)
     if (r != TPK_OK)
         return r;
     file->field_count = (uint32_t)e->elem_count;
-    tpk_diag diag;
+    tpki_diag diag;
     r = tpk_check_fields(&file->header, file->entries, file->fields, file->field_count, &file->allocator, &diag);
     return r == TPK_OK ? r : tpk_file_report(file, r, diag.text);
 }
@@ -299,7 +299,7 @@ static tpk_result load_fields(tpk_file *file)
 
 static tpk_result validate(tpk_file *file)
 {
-    tpk_diag diag;
+    tpki_diag diag;
     if (!host_is_little_endian())
         return tpk_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "libtetpack supports little-endian hosts only");
     tpk_result r = check_header(file->data, file->size, &file->limits, &file->header, &diag);

@@ -9,7 +9,7 @@
 
 #include "internal_file.h"
 
-tpk_result tpk_diag_fail(tpk_diag *diag, tpk_result code, const char *fmt, ...)
+tpk_result tpki_fail(tpki_diag *diag, tpk_result code, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -103,48 +103,48 @@ int tpk_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
 
 /* ---- header ---------------------------------------------------------------------------------- */
 
-tpk_result tpk_check_header_fields(const tpk_header *h, tpk_diag *diag)
+tpk_result tpk_check_header_fields(const tpk_header *h, tpki_diag *diag)
 {
     if (h->header_size != TPK_HEADER_SIZE)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "header: header_size is %" PRIu32 ", must be %u",
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "header: header_size is %" PRIu32 ", must be %u",
                              h->header_size, TPK_HEADER_SIZE);
     if (h->dir_entry_size != TPK_DIR_ENTRY_SIZE)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "header: dir_entry_size is %" PRIu32 ", must be %u",
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "header: dir_entry_size is %" PRIu32 ", must be %u",
                              h->dir_entry_size, TPK_DIR_ENTRY_SIZE);
     if (h->flags != 0)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+        return tpki_fail(diag, TPK_ERR_CORRUPT,
                              "header: flags is 0x%08" PRIx32 ", reserved bits must be 0", h->flags);
     for (size_t k = 0; k < sizeof h->reserved; k++) {
         if (h->reserved[k] != 0)
-            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+            return tpki_fail(diag, TPK_ERR_CORRUPT,
                                  "header: reserved byte at offset %zu is 0x%02x, must be 0",
                                  offsetof(tpk_header, reserved) + k, h->reserved[k]);
     }
     return TPK_OK;
 }
 
-tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpk_diag *diag)
+tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpki_diag *diag)
 {
     if (h->vertex_count > TPK_MAX_ID || h->tet_count > TPK_MAX_ID)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+        return tpki_fail(diag, TPK_ERR_CORRUPT,
                              "header: vertex_count %" PRIu64 " / tet_count %" PRIu64
                              " exceeds 2^31-1 (split larger meshes into parts)",
                              h->vertex_count, h->tet_count);
     if (h->shell_face_count > 4 * h->tet_count)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+        return tpki_fail(diag, TPK_ERR_CORRUPT,
                              "header: shell_face_count %" PRIu64 " exceeds 4 * tet_count = %" PRIu64,
                              h->shell_face_count, 4 * h->tet_count);
     if (h->chunk_count > limits->max_chunks)
-        return tpk_diag_fail(diag, TPK_ERR_LIMIT,
+        return tpki_fail(diag, TPK_ERR_LIMIT,
                              "header: chunk_count %" PRIu64 " exceeds the limit max_chunks %" PRIu64,
                              h->chunk_count, limits->max_chunks);
     if (h->directory_offset % TPK_CHUNK_ALIGN != 0)
-        return tpk_diag_fail(diag, TPK_ERR_MISALIGNED,
+        return tpki_fail(diag, TPK_ERR_MISALIGNED,
                              "header: directory_offset %" PRIu64 " is not a multiple of %u",
                              h->directory_offset, TPK_CHUNK_ALIGN);
     if (h->directory_offset < TPK_HEADER_SIZE || h->directory_offset > h->file_size ||
         h->chunk_count > (h->file_size - h->directory_offset) / TPK_DIR_ENTRY_SIZE)
-        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_BOUNDS,
+        return tpki_fail(diag, TPK_ERR_OUT_OF_BOUNDS,
                              "header: directory at offset %" PRIu64 " with %" PRIu64
                              " entries of 64 bytes does not fit in [192, file_size %" PRIu64 "]",
                              h->directory_offset, h->chunk_count, h->file_size);
@@ -154,29 +154,29 @@ tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits
 /* ---- directory entries --------------------------------------------------------------------------- */
 
 /* Rule 10, first part: reserved bits, codec, element type and sizes. */
-static tpk_result check_entry_sizes(const tpk_dir_entry *e, const char *name, tpk_diag *diag)
+static tpk_result check_entry_sizes(const tpk_dir_entry *e, const char *name, tpki_diag *diag)
 {
     if (e->reserved != 0)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: reserved field is 0x%08" PRIx32 ", must be 0",
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: reserved field is 0x%08" PRIx32 ", must be 0",
                              name, e->reserved);
     if (e->flags & ~TPK_CHUNK_REQUIRED)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: flags 0x%04x has reserved bits set", name,
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: flags 0x%04x has reserved bits set", name,
                              e->flags);
     if (e->codec > TPK_CODEC_ZSTD)
-        return tpk_diag_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
+        return tpki_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
                              "%s: unknown codec %u (this reader knows 0 = none, 1 = zstd)", name, e->codec);
     uint32_t size = tpk_elem_type_size(e->elem_type);
     if (size == 0)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: unknown elem_type %u", name, e->elem_type);
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: unknown elem_type %u", name, e->elem_type);
     if (e->elem_size != size)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_size %" PRIu32 " but elem_type %u has size %" PRIu32,
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: elem_size %" PRIu32 " but elem_type %u has size %" PRIu32,
                              name, e->elem_size, e->elem_type, size);
     if (e->elem_count > UINT64_MAX / size || e->elem_count * size != e->raw_size)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+        return tpki_fail(diag, TPK_ERR_CORRUPT,
                              "%s: raw_size %" PRIu64 " but elem_count %" PRIu64 " * elem_size %" PRIu32
                              " differs", name, e->raw_size, e->elem_count, size);
     if (e->codec == TPK_CODEC_NONE && e->stored_size != e->raw_size)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+        return tpki_fail(diag, TPK_ERR_CORRUPT,
                              "%s: stored_size %" PRIu64 " but codec none needs raw_size %" PRIu64, name,
                              e->stored_size, e->raw_size);
     return TPK_OK;
@@ -184,14 +184,14 @@ static tpk_result check_entry_sizes(const tpk_dir_entry *e, const char *name, tp
 
 /* Rule 10, second part: caller limits. */
 static tpk_result check_entry_limits(const tpk_dir_entry *e, const char *name, const tpk_limits *limits,
-                                     uint64_t *total_raw, tpk_diag *diag)
+                                     uint64_t *total_raw, tpki_diag *diag)
 {
     if (e->raw_size > limits->max_chunk_bytes)
-        return tpk_diag_fail(diag, TPK_ERR_LIMIT,
+        return tpki_fail(diag, TPK_ERR_LIMIT,
                              "%s: raw_size %" PRIu64 " exceeds the limit max_chunk_bytes %" PRIu64, name,
                              e->raw_size, limits->max_chunk_bytes);
     if (e->raw_size > limits->max_total_bytes - *total_raw)
-        return tpk_diag_fail(diag, TPK_ERR_LIMIT,
+        return tpki_fail(diag, TPK_ERR_LIMIT,
                              "%s: raw sizes of the chunks so far exceed the limit max_total_bytes %" PRIu64,
                              name, limits->max_total_bytes);
     *total_raw += e->raw_size;
@@ -199,7 +199,7 @@ static tpk_result check_entry_limits(const tpk_dir_entry *e, const char *name, c
 }
 
 tpk_result tpk_check_entry(const tpk_header *h, const tpk_limits *limits, uint64_t i,
-                           const tpk_dir_entry *e, uint64_t *total_raw, tpk_diag *diag)
+                           const tpk_dir_entry *e, uint64_t *total_raw, tpki_diag *diag)
 {
     char name[80];
     tpk_entry_name(i, e, name);
@@ -209,15 +209,15 @@ tpk_result tpk_check_entry(const tpk_header *h, const tpk_limits *limits, uint64
     if (r != TPK_OK)
         return r;
     if (e->offset % TPK_CHUNK_ALIGN != 0)
-        return tpk_diag_fail(diag, TPK_ERR_MISALIGNED, "%s: offset is not a multiple of %u", name,
+        return tpki_fail(diag, TPK_ERR_MISALIGNED, "%s: offset is not a multiple of %u", name,
                              TPK_CHUNK_ALIGN);
     if (e->codec == TPK_CODEC_NONE && e->raw_size >= TPK_LARGE_CHUNK_BYTES &&
         e->offset % TPK_LARGE_CHUNK_ALIGN != 0)
-        return tpk_diag_fail(diag, TPK_ERR_MISALIGNED,
+        return tpki_fail(diag, TPK_ERR_MISALIGNED,
                              "%s: uncompressed chunk of %" PRIu64 " bytes (>= %u) must be aligned to %u",
                              name, e->raw_size, TPK_LARGE_CHUNK_BYTES, TPK_LARGE_CHUNK_ALIGN);
     if (e->offset > h->file_size || e->stored_size > h->file_size - e->offset)
-        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_BOUNDS,
+        return tpki_fail(diag, TPK_ERR_OUT_OF_BOUNDS,
                              "%s: stored_size %" PRIu64 " reaches past the end of the file (%" PRIu64 " bytes)",
                              name, e->stored_size, h->file_size);
     return TPK_OK;
@@ -265,12 +265,12 @@ static size_t collect_ranges(const tpk_header *h, const tpk_dir_entry *entries, 
 }
 
 tpk_result tpk_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
-                              const tpk_allocator *allocator, tpk_diag *diag)
+                              const tpk_allocator *allocator, tpki_diag *diag)
 {
     tpk_result r = TPK_OK;
     byte_range *ranges = allocator->alloc(allocator->user, (h->chunk_count + 2) * sizeof *ranges);
     if (!ranges)
-        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu64 " chunk ranges",
+        return tpki_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu64 " chunk ranges",
                              h->chunk_count);
     size_t n = collect_ranges(h, entries, ranges);
     qsort(ranges, n, sizeof *ranges, compare_ranges);
@@ -280,7 +280,7 @@ tpk_result tpk_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
             char a[80], b[80];
             range_name(entries, &ranges[widest], a);
             range_name(entries, &ranges[k], b);
-            r = tpk_diag_fail(diag, TPK_ERR_OVERLAP,
+            r = tpki_fail(diag, TPK_ERR_OVERLAP,
                               "%s (bytes %" PRIu64 "..%" PRIu64 ") overlaps %s (bytes %" PRIu64 "..%" PRIu64 ")",
                               b, ranges[k].begin, ranges[k].end, a, ranges[widest].begin, ranges[widest].end);
             goto fail;
@@ -319,7 +319,7 @@ static uint64_t expected_count(const tpk_header *h, uint32_t tag, const char **w
 
 /* Rules 13 and 14 for one entry; *known is set when the tag is a TPK_TAG_*. */
 static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, int *known,
-                                  int allow_unknown_required, tpk_diag *diag)
+                                  int allow_unknown_required, tpki_diag *diag)
 {
     char name[80], tag[16];
     tpk_entry_name(i, e, name);
@@ -327,24 +327,24 @@ static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir
     uint32_t elem_type;
     *known = tpk_known_tag(e->tag, &elem_type, NULL);
     if (!*known && (e->flags & TPK_CHUNK_REQUIRED) && !allow_unknown_required)
-        return tpk_diag_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
+        return tpki_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
                              "%s: unknown chunk tag %s is marked required; this reader cannot use the file",
                              name, tag);
     if (!*known)
         return TPK_OK;
     if (e->elem_type != elem_type)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_type %u, but tag %s needs elem_type %" PRIu32,
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: elem_type %u, but tag %s needs elem_type %" PRIu32,
                              name, e->elem_type, tag, elem_type);
     if (e->tag != TPK_TAG_FDAT && (e->index != 0 || e->step != 0))
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: index %" PRIu32 " and step %" PRIu32 " must be 0",
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: index %" PRIu32 " and step %" PRIu32 " must be 0",
                              name, e->index, e->step);
     const char *what = NULL;
     uint64_t count = expected_count(h, e->tag, &what);
     if (count != UINT64_MAX && e->elem_count != count)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_count %" PRIu64 " but header %s is %" PRIu64,
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: elem_count %" PRIu64 " but header %s is %" PRIu64,
                              name, e->elem_count, what, count);
     if (e->tag == TPK_TAG_FDSC && e->elem_count > TPK_MAX_FIELDS)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " field descriptors, at most %u allowed",
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " field descriptors, at most %u allowed",
                              name, e->elem_count, TPK_MAX_FIELDS);
     return TPK_OK;
 }
@@ -366,7 +366,7 @@ static int compare_keys(const void *pa, const void *pb)
     return a->chunk < b->chunk ? -1 : a->chunk > b->chunk;
 }
 
-static tpk_result check_duplicates(chunk_key *keys, size_t n, tpk_diag *diag)
+static tpk_result check_duplicates(chunk_key *keys, size_t n, tpki_diag *diag)
 {
     qsort(keys, n, sizeof *keys, compare_keys);
     for (size_t k = 1; k < n; k++) {
@@ -374,7 +374,7 @@ static tpk_result check_duplicates(chunk_key *keys, size_t n, tpk_diag *diag)
             keys[k].step == keys[k - 1].step) {
             char tag[16];
             tpk_tag_name(keys[k].tag, tag);
-            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+            return tpki_fail(diag, TPK_ERR_CORRUPT,
                                  "chunks %" PRIu64 " and %" PRIu64 " both have tag %s index %" PRIu32
                                  " step %" PRIu32, keys[k - 1].chunk, keys[k].chunk, tag, keys[k].index,
                                  keys[k].step);
@@ -383,7 +383,7 @@ static tpk_result check_duplicates(chunk_key *keys, size_t n, tpk_diag *diag)
     return TPK_OK;
 }
 
-static tpk_result check_required_present(const tpk_header *h, const tpk_dir_entry *entries, tpk_diag *diag)
+static tpk_result check_required_present(const tpk_header *h, const tpk_dir_entry *entries, tpki_diag *diag)
 {
     int pos3 = 0, shel = 0, tets = 0;
     for (uint64_t i = 0; i < h->chunk_count; i++) {
@@ -393,21 +393,21 @@ static tpk_result check_required_present(const tpk_header *h, const tpk_dir_entr
                 entries[i].tag == TPK_TAG_TT32;
     }
     if (!pos3)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "no 'POS3' (positions) chunk");
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "no 'POS3' (positions) chunk");
     if (!shel)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "no 'SHEL' (shell faces) chunk");
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "no 'SHEL' (shell faces) chunk");
     if (!tets)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "no tet layout chunk ('TT16', 'TT20' or 'TT32')");
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "no tet layout chunk ('TT16', 'TT20' or 'TT32')");
     return TPK_OK;
 }
 
 tpk_result tpk_check_tags(const tpk_header *h, const tpk_dir_entry *entries, int allow_unknown_required,
-                          const tpk_allocator *allocator, tpk_diag *diag)
+                          const tpk_allocator *allocator, tpki_diag *diag)
 {
     tpk_result r = TPK_OK;
     chunk_key *keys = allocator->alloc(allocator->user, (h->chunk_count + 1) * sizeof *keys);
     if (!keys)
-        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu64 " chunk tags",
+        return tpki_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu64 " chunk tags",
                              h->chunk_count);
     size_t n = 0;
     for (uint64_t i = 0; i < h->chunk_count; i++) {
@@ -428,25 +428,25 @@ fail:
 
 /* ---- fields (rule 15) -------------------------------------------------------------------------- */
 
-static tpk_result check_field_desc(uint32_t i, const tpk_field_desc *f, tpk_diag *diag)
+static tpk_result check_field_desc(uint32_t i, const tpk_field_desc *f, tpki_diag *diag)
 {
     if (!memchr(f->name, 0, sizeof f->name))
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 ": name is not NUL-terminated within 64 bytes", i);
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 ": name is not NUL-terminated within 64 bytes", i);
     if (f->name[0] == 0)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 ": name is empty", i);
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 ": name is empty", i);
     if (!memchr(f->units, 0, sizeof f->units))
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+        return tpki_fail(diag, TPK_ERR_CORRUPT,
                              "field %" PRIu32 " '%s': units are not NUL-terminated within 32 bytes", i, f->name);
     if (f->association > TPK_ASSOC_TET)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': association %" PRIu32
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': association %" PRIu32
                              ", must be 0 (point) or 1 (tet)", i, f->name, f->association);
     if (f->components != 1)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': components %" PRIu32
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': components %" PRIu32
                              ", must be 1 in format 1.x", i, f->name, f->components);
     if (f->step_count < 1)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': step_count is 0", i, f->name);
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': step_count is 0", i, f->name);
     if (f->reserved0 != 0 || f->reserved1 != 0)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': reserved fields must be 0", i,
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "field %" PRIu32 " '%s': reserved fields must be 0", i,
                              f->name);
     return TPK_OK;
 }
@@ -459,18 +459,18 @@ static int compare_names(const void *pa, const void *pb)
 }
 
 static tpk_result check_unique_names(const tpk_field_desc *fields, uint32_t count,
-                                     const tpk_allocator *allocator, tpk_diag *diag)
+                                     const tpk_allocator *allocator, tpki_diag *diag)
 {
     tpk_result r = TPK_OK;
     const tpk_field_desc **sorted = allocator->alloc(allocator->user, ((size_t)count + 1) * sizeof *sorted);
     if (!sorted)
-        return tpk_diag_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu32 " field names", count);
+        return tpki_fail(diag, TPK_ERR_OUT_OF_MEMORY, "out of memory checking %" PRIu32 " field names", count);
     for (uint32_t i = 0; i < count; i++)
         sorted[i] = &fields[i];
     qsort(sorted, count, sizeof *sorted, compare_names);
     for (uint32_t k = 1; k < count; k++) {
         if (strcmp(sorted[k]->name, sorted[k - 1]->name) == 0) {
-            r = tpk_diag_fail(diag, TPK_ERR_CORRUPT, "fields %td and %td are both named '%s'",
+            r = tpki_fail(diag, TPK_ERR_CORRUPT, "fields %td and %td are both named '%s'",
                               sorted[k - 1] - fields, sorted[k] - fields, sorted[k]->name);
             break;
         }
@@ -480,22 +480,22 @@ static tpk_result check_unique_names(const tpk_field_desc *fields, uint32_t coun
 }
 
 static tpk_result check_fdat(const tpk_header *h, uint64_t i, const tpk_dir_entry *e,
-                             const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+                             const tpk_field_desc *fields, uint32_t field_count, tpki_diag *diag)
 {
     char name[80];
     tpk_entry_name(i, e, name);
     if (field_count == 0)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: field data without a 'FDSC' chunk", name);
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: field data without a 'FDSC' chunk", name);
     if (e->index >= field_count)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: field index %" PRIu32 " but the file has %" PRIu32
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: field index %" PRIu32 " but the file has %" PRIu32
                              " fields", name, e->index, field_count);
     const tpk_field_desc *f = &fields[e->index];
     if (e->step >= f->step_count)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: step %" PRIu32 " but field '%s' has %" PRIu32 " steps",
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: step %" PRIu32 " but field '%s' has %" PRIu32 " steps",
                              name, e->step, f->name, f->step_count);
     uint64_t count = f->association == TPK_ASSOC_POINT ? h->vertex_count : h->tet_count;
     if (e->elem_count != count)
-        return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "%s: elem_count %" PRIu64 " but %s field '%s' needs %" PRIu64,
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: elem_count %" PRIu64 " but %s field '%s' needs %" PRIu64,
                              name, e->elem_count, f->association == TPK_ASSOC_POINT ? "point" : "tet", f->name,
                              count);
     return TPK_OK;
@@ -504,22 +504,22 @@ static tpk_result check_fdat(const tpk_header *h, uint64_t i, const tpk_dir_entr
 /* Called when the number of FDAT chunks falls short: name the first field missing some. Duplicates
  * and out-of-range FDATs were rejected already, so some field has fewer chunks than steps. */
 static tpk_result report_missing_fdat(const tpk_header *h, const tpk_dir_entry *entries,
-                                      const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+                                      const tpk_field_desc *fields, uint32_t field_count, tpki_diag *diag)
 {
     for (uint32_t f = 0; f < field_count; f++) {
         uint64_t have = 0;
         for (uint64_t i = 0; i < h->chunk_count; i++)
             have += entries[i].tag == TPK_TAG_FDAT && entries[i].index == f;
         if (have != fields[f].step_count)
-            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+            return tpki_fail(diag, TPK_ERR_CORRUPT,
                                  "field %" PRIu32 " '%s' has %" PRIu32 " steps but %" PRIu64 " 'FDAT' chunks", f,
                                  fields[f].name, fields[f].step_count, have);
     }
-    return tpk_diag_fail(diag, TPK_ERR_CORRUPT, "'FDAT' chunks do not match the field descriptors");
+    return tpki_fail(diag, TPK_ERR_CORRUPT, "'FDAT' chunks do not match the field descriptors");
 }
 
 static tpk_result check_fdat_chunks(const tpk_header *h, const tpk_dir_entry *entries,
-                                    const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+                                    const tpk_field_desc *fields, uint32_t field_count, tpki_diag *diag)
 {
     uint64_t needed = 0, found = 0;
     for (uint32_t f = 0; f < field_count; f++)
@@ -536,7 +536,7 @@ static tpk_result check_fdat_chunks(const tpk_header *h, const tpk_dir_entry *en
 }
 
 static tpk_result check_time_chunk(const tpk_header *h, const tpk_dir_entry *entries,
-                                   const tpk_field_desc *fields, uint32_t field_count, tpk_diag *diag)
+                                   const tpk_field_desc *fields, uint32_t field_count, tpki_diag *diag)
 {
     uint64_t steps = field_count == 0 ? 1 : 0; /* a file without fields has one state */
     for (uint32_t f = 0; f < field_count; f++)
@@ -545,7 +545,7 @@ static tpk_result check_time_chunk(const tpk_header *h, const tpk_dir_entry *ent
         if (entries[i].tag == TPK_TAG_TIME && entries[i].elem_count != steps) {
             char name[80];
             tpk_entry_name(i, &entries[i], name);
-            return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+            return tpki_fail(diag, TPK_ERR_CORRUPT,
                                  "%s: %" PRIu64 " time values but the fields have %" PRIu64 " steps", name,
                                  entries[i].elem_count, steps);
         }
@@ -554,7 +554,7 @@ static tpk_result check_time_chunk(const tpk_header *h, const tpk_dir_entry *ent
 }
 
 tpk_result tpk_check_fields(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
-                            uint32_t field_count, const tpk_allocator *allocator, tpk_diag *diag)
+                            uint32_t field_count, const tpk_allocator *allocator, tpki_diag *diag)
 {
     for (uint32_t i = 0; i < field_count; i++) {
         tpk_result r = check_field_desc(i, &fields[i], diag);
@@ -571,12 +571,12 @@ tpk_result tpk_check_fields(const tpk_header *h, const tpk_dir_entry *entries, c
 
 /* ---- chunk contents (rule 17) ------------------------------------------------------------------ */
 
-static tpk_result id_error(tpk_diag *diag, uint64_t i, const tpk_dir_entry *e, uint64_t record,
+static tpk_result id_error(tpki_diag *diag, uint64_t i, const tpk_dir_entry *e, uint64_t record,
                            const char *what, int32_t value, int64_t lo, uint64_t hi)
 {
     char name[80];
     tpk_entry_name(i, e, name);
-    return tpk_diag_fail(diag, TPK_ERR_CORRUPT,
+    return tpki_fail(diag, TPK_ERR_CORRUPT,
                          "%s: record %" PRIu64 " (raw byte %" PRIu64 "): %s = %" PRId32
                          " is outside [%" PRId64 ", %" PRIu64 ")",
                          name, record, record * e->elem_size, what, value, lo, hi);
@@ -588,7 +588,7 @@ static int in_range(int32_t value, int64_t lo, uint64_t hi)
 }
 
 static tpk_result check_tet32(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
-                              tpk_diag *diag)
+                              tpki_diag *diag)
 {
     static const char *const vname[4] = {"v[0]", "v[1]", "v[2]", "4th vertex (vx^v0^v1^v2)"};
     static const char *const nname[4] = {"n[0]", "n[1]", "n[2]", "n[3]"};
@@ -607,7 +607,7 @@ static tpk_result check_tet32(const tpk_header *h, uint64_t i, const tpk_dir_ent
 }
 
 static tpk_result check_tet20(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
-                              tpk_diag *diag)
+                              tpki_diag *diag)
 {
     static const char *const nname[4] = {"n[0]", "n[1]", "n[2]", "n[3]"};
     for (uint64_t t = 0; t < e->elem_count; t++) {
@@ -622,7 +622,7 @@ static tpk_result check_tet20(const tpk_header *h, uint64_t i, const tpk_dir_ent
 }
 
 static tpk_result check_shell(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
-                              tpk_diag *diag)
+                              tpki_diag *diag)
 {
     for (uint64_t s = 0; s < e->elem_count; s++) {
         tpk_shell_face face;
@@ -639,7 +639,7 @@ static tpk_result check_shell(const tpk_header *h, uint64_t i, const tpk_dir_ent
     return TPK_OK;
 }
 
-static tpk_result check_tmap(uint64_t i, const tpk_dir_entry *e, const uint8_t *raw, tpk_diag *diag)
+static tpk_result check_tmap(uint64_t i, const tpk_dir_entry *e, const uint8_t *raw, tpki_diag *diag)
 {
     for (uint64_t t = 0; t < e->elem_count; t++) {
         int32_t cell;
@@ -651,7 +651,7 @@ static tpk_result check_tmap(uint64_t i, const tpk_dir_entry *e, const uint8_t *
 }
 
 tpk_result tpk_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
-                             tpk_diag *diag)
+                             tpki_diag *diag)
 {
     switch (e->tag) {
     case TPK_TAG_TT32: return check_tet32(h, i, e, raw, diag);
@@ -665,7 +665,7 @@ tpk_result tpk_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entr
 /* ---- whole layouts and files ------------------------------------------------------------------- */
 
 tpk_result tpk_check_layout(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
-                            uint32_t field_count, const tpk_allocator *allocator, tpk_diag *diag)
+                            uint32_t field_count, const tpk_allocator *allocator, tpki_diag *diag)
 {
     /* A writer's own output is not untrusted input: no limits. */
     const tpk_limits limits = {UINT64_MAX, UINT64_MAX, UINT64_MAX};

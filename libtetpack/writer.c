@@ -328,7 +328,7 @@ static void build_header(const tpk_writer *w, const tpk_header_fields *fields, u
 static tpk_result write_tail(tpk_writer *w, const tpk_header_fields *fields)
 {
     tpk_header h;
-    tpk_diag diag;
+    tpki_diag diag;
     uint64_t directory_offset = (w->end + TPK_CHUNK_ALIGN - 1) / TPK_CHUNK_ALIGN * TPK_CHUNK_ALIGN;
     build_header(w, fields, directory_offset, &h);
     tpk_result r = tpk_check_layout(&h, w->entries, w->fields, w->field_count, &w->allocator, &diag);
