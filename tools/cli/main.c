@@ -1,11 +1,47 @@
-/* tetpack: git-style command line (convert, info, render, export). */
+/* tetpack: git-style command line. Each subcommand lives in cmd_<name>.c. */
 #include <stdio.h>
 #include <string.h>
 
+#include "cli.h"
+#include "tetpack.h"
+
+static const struct {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary;
+} commands[] = {
+    {"convert", tpk_cmd_convert, "turn a VTK/TetGen mesh into a render-ready .tpk file"},
+    {"info", tpk_cmd_info, "print a .tpk file's header, chunks, fields and checksum status"},
+    {"render", tpk_cmd_render, "render a .tpk to PNG with the CPU reference marcher"},
+    {"export", tpk_cmd_export, "write a .tpk's tets and fields as VTU, or its shell as PLY"},
+};
+
+static void usage(FILE *out)
+{
+    fprintf(out, "usage: tetpack <command> [options]   (tetpack <command> --help for details)\n\n");
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(out, "  %-8s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "\nExit codes: 0 ok, 1 problems found, 2 unusable input or usage.\n");
+}
+
 int main(int argc, char **argv)
 {
-    (void)argc;
-    (void)argv;
-    fprintf(stderr, "tetpack: under construction\n");
-    return 2;
+    if (argc < 2) {
+        usage(stderr);
+        return TPK_EXIT_USAGE;
+    }
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+        usage(stdout);
+        return TPK_EXIT_OK;
+    }
+    if (!strcmp(argv[1], "--version")) {
+        printf("tetpack %s (format %d.%d)\n", TPK_LIBRARY_VERSION, TPK_VERSION_MAJOR, TPK_VERSION_MINOR);
+        return TPK_EXIT_OK;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(argv[1], commands[i].name))
+            return commands[i].run(argc - 1, argv + 1);
+    fprintf(stderr, "tetpack: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return TPK_EXIT_USAGE;
 }

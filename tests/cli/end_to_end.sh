@@ -1,0 +1,81 @@
+# convert -> info --json -> render -> export VTU/PLY on the bundled sample and real meshes;
+# the VTU is cross-checked with meshio (an independent reader).
+source "$(dirname "$0")/common.sh"
+
+"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --layout tet16 --layout tet20 --layout tet32 --quiet
+"$TPK" info "$WORK/c.tpk" --json > "$WORK/info.json"
+"$PY" - "$WORK/info.json" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+for k in ["format_version", "vertices", "tets", "shell_faces", "layouts", "fields", "bounds", "origin", "chunks"]:
+    assert k in d, k
+assert d["format_version"] == "1.0"
+assert d["tets"] == 1348 and d["vertices"] == 354, (d["tets"], d["vertices"])
+assert sorted(d["layouts"]) == ["tet16", "tet20", "tet32"], d["layouts"]
+assert [f["name"] for f in d["fields"]] == ["temperature"], d["fields"]
+assert d["fields"][0]["association"] == "point" and d["fields"][0]["steps"] == 1
+for c in d["chunks"]:
+    assert set(["tag", "codec", "stored_bytes", "raw_bytes"]) <= set(c)
+assert d["checksums_ok"] is True
+PY
+
+"$TPK" render "$WORK/c.tpk" -o "$WORK/c.png" --size 96x64 --layout tet16 > /dev/null
+[ -s "$WORK/c.png" ] || fail "no PNG written"
+head -c 8 "$WORK/c.png" | od -An -tx1 | grep -q "89 50 4e 47" || fail "not a PNG"
+
+"$TPK" export "$WORK/c.tpk" --vtu "$WORK/c.vtu" --shell "$WORK/c.ply"
+"$PY" - "$WORK/c.vtu" "$SRC/samples/cylinder.vtk" <<'PY'
+import sys
+import meshio, numpy as np
+out = meshio.read(sys.argv[1])
+src = meshio.read(sys.argv[2])
+tets = out.cells_dict["tetra"]
+assert len(tets) == 1348
+# Same points up to the stored permutation (float32 positions relative to a float64 origin).
+perm = out.point_data["source_point"]
+assert np.allclose(out.points, src.points[perm], rtol=0, atol=1e-8), np.abs(out.points - src.points[perm]).max()
+# (meshio reads legacy VTK scalars as n x 1 arrays)
+assert np.allclose(out.point_data["temperature"], np.ravel(src.point_data["temperature"])[perm], atol=1e-4)
+# Same tets (as vertex sets in source numbering), each positively oriented.
+src_sets = sorted(tuple(sorted(t)) for t in src.cells_dict["tetra"])
+out_sets = sorted(tuple(sorted(perm[t])) for t in tets)
+assert src_sets == out_sets
+p = out.points
+d = np.einsum("ij,ij->i", np.cross(p[tets[:, 1]] - p[tets[:, 0]], p[tets[:, 2]] - p[tets[:, 0]]), p[tets[:, 3]] - p[tets[:, 0]])
+assert (d > 0).all(), (d <= 0).sum()
+# source_cell maps every tet back to a source cell with the same vertices.
+sc = out.cell_data["source_cell"][0]
+assert sorted(sc.tolist()) == list(range(1348))
+assert all(tuple(sorted(src.cells_dict["tetra"][c])) == tuple(sorted(perm[t])) for c, t in zip(sc, tets))
+PY
+# The shell PLY, parsed here with numpy (meshio 5.0 misreads per-face scalar properties of binary PLY):
+# one face per shell face, every face outward (the owning tet's 4th vertex lies behind it).
+"$PY" - "$WORK/c.ply" "$WORK/info.json" "$WORK/c.vtu" <<'PY'
+import sys, json
+import meshio, numpy as np
+data = open(sys.argv[1], "rb").read()
+end = data.index(b"end_header\n") + len(b"end_header\n")
+header = data[:end].decode().split("\n")
+nv = int([l for l in header if l.startswith("element vertex")][0].split()[2])
+nf = int([l for l in header if l.startswith("element face")][0].split()[2])
+assert "property list uchar int vertex_indices" in header and "property int tet" in header
+verts = np.frombuffer(data, dtype="<f8", count=3 * nv, offset=end).reshape(nv, 3)
+faces = np.frombuffer(data, dtype=np.dtype([("n", "u1"), ("v", "<i4", 3), ("t", "<i4")]), count=nf, offset=end + 24 * nv)
+assert len(data) == end + 24 * nv + 17 * nf
+assert (faces["n"] == 3).all()
+assert nf == json.load(open(sys.argv[2]))["shell_faces"], nf
+vol = meshio.read(sys.argv[3])
+tets = vol.cells_dict["tetra"]
+for (a, b, c), t in zip(faces["v"], faces["t"]):
+    pa, pb, pc = verts[a], verts[b], verts[c]
+    normal = np.cross(pb - pa, pc - pa)
+    centroid = vol.points[tets[t]].mean(axis=0)
+    assert np.dot(normal, centroid - pa) < 0, "face not outward"
+PY
+
+# Real meshes: legacy binary VTK (gmsh, big-endian doubles) and TetGen.
+"$TPK" convert "$DATA/gmsh/t5_small_tet_bin.vtk" "$WORK/t5.tpk" --zstd 3 --quiet
+"$TPK" info "$WORK/t5.tpk" > /dev/null
+"$TPK" convert "$DATA/tetgen/hinge_small.node" "$WORK/hinge.tpk" --layout tet20 --quiet
+"$TPK" info "$WORK/hinge.tpk" --json | "$PY" -c "import json,sys; d=json.load(sys.stdin); assert d['tets']==14487, d['tets']"
+echo "1 passed, 0 failed"

@@ -1,0 +1,34 @@
+/* Shared pieces of the tetpack subcommands. */
+#ifndef TPK_CLI_H
+#define TPK_CLI_H
+
+#include <stdio.h>
+
+#define TPK_EXIT_OK 0
+#define TPK_EXIT_PROBLEMS 1
+#define TPK_EXIT_USAGE 2 /* unusable input or usage */
+
+struct tpk_file;
+
+int tpk_cmd_convert(int argc, char **argv);
+int tpk_cmd_info(int argc, char **argv);
+int tpk_cmd_render(int argc, char **argv);
+int tpk_cmd_export(int argc, char **argv);
+
+/* Print "tetpack <cmd>: error: ..." to stderr and return TPK_EXIT_USAGE. */
+int tpk_cli_fail(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Parse exactly `count` comma-separated doubles; 0 on success. */
+int tpk_cli_parse_doubles(const char *text, double *out, int count);
+/* Parse a non-negative int in [lo, hi]; 0 on success. */
+int tpk_cli_parse_int(const char *text, int lo, int hi, int *out);
+/* Value of option argv[*i] ("--opt value" or "--opt=value"); advances *i. NULL if missing. */
+const char *tpk_cli_value(int argc, char **argv, int *i, const char *name);
+/* "tetpack" and the arguments joined by spaces, leaving out the argument `skip` (pointer identity; the
+ * output path) and --threads, so the recorded command does not depend on where the file goes or on how
+ * many threads made it. Static buffer. */
+const char *tpk_cli_joined(int argc, char **argv, const char *skip);
+
+/* Open a .tpk; on failure print "tetpack <cmd>: error: PATH: why" and return TPK_EXIT_USAGE. */
+int tpk_cli_open(const char *cmd, const char *path, struct tpk_file **out);
+
+#endif
