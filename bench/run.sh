@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Benchmarks, run on demand: ./bench/run.sh [build-dir]   (default build-release, built here)
+# Prints JSON lines and a summary; medians of several runs. Needs /usr/bin/time and Debian's python3.
+# Sizes: TPK_BENCH_SIZES="55 119" (grid edge N: 6*N^3 tets; 55 -> ~1M, 119 -> ~10M).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD=${1:-build-release}
+RUNS=${TPK_BENCH_RUNS:-3}
+SIZES=${TPK_BENCH_SIZES:-"55 119"}
+WORK=${TPK_BENCH_DIR:-/tmp/tpk_bench}
+mkdir -p "$WORK"
+cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DTETPACK_WITH_TESTS=OFF >/dev/null
+cmake --build "$BUILD" -j"$(nproc)" >/dev/null
+TPK="$BUILD/tetpack"
+
+median() { sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
+
+# convert_stats INPUT OUTPUT [options]: median over RUNS of total seconds, and peak RSS (MiB).
+convert_stats() {
+    local in=$1 out=$2
+    shift 2
+    local totals=() rss=() line
+    for _ in $(seq "$RUNS"); do
+        /usr/bin/time -f "%M" -o "$WORK/time.txt" "$TPK" convert "$in" "$out" --json "$@" > "$WORK/convert.json"
+        totals+=("$(/usr/bin/python3 -c "import json;print(json.load(open('$WORK/convert.json'))['seconds']['total'])")")
+        rss+=("$(tail -1 "$WORK/time.txt")")
+    done
+    local t m
+    t=$(printf '%s\n' "${totals[@]}" | median)
+    m=$(printf '%s\n' "${rss[@]}" | median)
+    /usr/bin/python3 - "$WORK/convert.json" "$t" "$m" "$in" "$*" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+t, rss_kib = float(sys.argv[2]), int(sys.argv[3])
+out = {"input": sys.argv[4], "options": sys.argv[5], "tets": d["tets"], "median_total_s": t,
+       "tets_per_s": d["tets"] / t, "peak_rss_mib": rss_kib / 1024, "output_mib": d["output_bytes"] / 2**20,
+       "peak_over_output": rss_kib * 1024 / d["output_bytes"], "last_run_stage_s": d["seconds"]}
+print(json.dumps(out))
+PY
+}
+
+echo "# conversion (binary VTK in, uncompressed out, tet16)"
+for n in $SIZES; do
+    [ -f "$WORK/grid$n.vtk" ] || ./bench/make_grid_vtk.py "$n" "$WORK/grid$n.vtk"
+    convert_stats "$WORK/grid$n.vtk" "$WORK/grid$n.tpk" --layout tet16
+done
+convert_stats ../shared/data/sfepy/piezo_mesh_micro.vtk "$WORK/piezo.tpk" --layout tet16
+
+echo "# file size per layout and zstd level (first size)"
+n=$(echo $SIZES | awk '{print $1}')
+for layout in tet16 tet20 tet32; do
+    for z in 0 1 3 9 19; do
+        opt=()
+        [ "$z" -gt 0 ] && opt=(--zstd "$z")
+        "$TPK" convert "$WORK/grid$n.vtk" "$WORK/size.tpk" --layout $layout "${opt[@]}" --json > "$WORK/size.json"
+        /usr/bin/python3 -c "import json;d=json.load(open('$WORK/size.json'));print(json.dumps({'layout':'$layout','zstd':$z,'bytes':d['output_bytes'],'bytes_per_tet':d['output_bytes']/d['tets'],'write_s':d['seconds']['write']}))"
+    done
+done
+
+echo "# open time (uncompressed, largest size)"
+n=$(echo $SIZES | awk '{print $NF}')
+"$BUILD/bench/bench_open" "$WORK/grid$n.tpk" 21
+
+for b in "$BUILD"/bench/bench_connect "$BUILD"/bench/bench_march; do
+    [ -x "$b" ] || continue
+    echo "# $(basename "$b")"
+    "$b" "$WORK" || true
+done
