@@ -184,6 +184,14 @@ typedef struct tpk_chunk_desc {
 /* Append one chunk (data: elem_count * elem_size bytes). Aligns it as the spec says. */
 tpk_result tpk_writer_add_chunk(tpk_writer *writer, const tpk_chunk_desc *desc, const void *data);
 
+/* The same chunk in pieces, so a large array never has to exist whole in memory: begin with the full
+ * description (elem_count announces the total), append the bytes in any number of calls, end. The
+ * appended total must be elem_count * elem_size. One streamed chunk at a time; the result is the same
+ * file tpk_writer_add_chunk would write. */
+tpk_result tpk_writer_begin_chunk(tpk_writer *writer, const tpk_chunk_desc *desc);
+tpk_result tpk_writer_append(tpk_writer *writer, const void *data, uint64_t size);
+tpk_result tpk_writer_end_chunk(tpk_writer *writer);
+
 typedef struct tpk_header_fields {
     uint64_t vertex_count, tet_count, shell_face_count;
     double origin[3];

@@ -26,6 +26,14 @@ struct tpk_writer {
     tpk_field_desc *fields; /* copy of the FDSC chunk, for the final check */
     uint32_t field_count;
     int failed;        /* an I/O error left the temporary file in an unknown state */
+    /* The chunk being streamed (tpk_writer_begin_chunk .. end_chunk); open_chunk 0 when none. */
+    int open_chunk;
+    tpk_dir_entry chunk;
+    uint64_t chunk_appended;  /* raw bytes so far */
+    int chunk_level;
+    XXH64_state_t *hash;
+    ZSTD_CCtx *zstd;
+    void *zstd_out;           /* ZSTD_CStreamOutSize() bytes */
     char error_text[TPK_ERROR_TEXT_SIZE];
 };
 
@@ -73,6 +81,9 @@ static void writer_destroy(tpk_writer *w)
     writer_free(w, w->path);
     writer_free(w, w->entries);
     writer_free(w, w->fields);
+    writer_free(w, w->zstd_out);
+    ZSTD_freeCCtx(w->zstd);
+    XXH64_freeState(w->hash);
     w->allocator.free(w->allocator.user, w);
 }
 
@@ -182,7 +193,7 @@ tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_o
 
 /* ---- chunks ------------------------------------------------------------------------------------- */
 
-static tpk_result check_desc(tpk_writer *w, const tpk_chunk_desc *d, const void *data)
+static tpk_result check_desc(tpk_writer *w, const tpk_chunk_desc *d)
 {
     char tag[16];
     tpk_tag_name(d->tag, tag);
@@ -205,8 +216,8 @@ static tpk_result check_desc(tpk_writer *w, const tpk_chunk_desc *d, const void 
     if (known && !(d->flags & TPK_CHUNK_REQUIRED) != !required)
         return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: the REQUIRED flag must be %s for this tag", tag,
                            required ? "set" : "clear");
-    if (d->elem_count > UINT64_MAX / size || d->elem_count * size > SIZE_MAX || (!data && d->elem_count > 0))
-        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: %" PRIu64 " elements: no data or too large", tag,
+    if (d->elem_count > UINT64_MAX / size || d->elem_count * size > SIZE_MAX)
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: %" PRIu64 " elements: too large", tag,
                            d->elem_count);
     if (d->tag == TPK_TAG_FDSC && (w->fields || d->elem_count > TPK_MAX_FIELDS))
         return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: a second FDSC, or more than %u fields", tag,
@@ -243,61 +254,128 @@ static tpk_result keep_fields(tpk_writer *w, const tpk_chunk_desc *d, const void
     return TPK_OK;
 }
 
-/* Compress into a new buffer (*out, *out_size); the caller frees it. */
-static tpk_result compress(tpk_writer *w, const tpk_chunk_desc *d, const void *data, size_t raw_size,
-                           void **out, size_t *out_size)
+/* A compression context (made once; zstd allocates it itself: custom allocators are in zstd's
+ * experimental API only) set up for one frame of raw_size bytes: the pledged size makes zstd record the
+ * content size in the frame header. */
+static tpk_result start_zstd(tpk_writer *w, int level, uint64_t raw_size)
 {
-    size_t bound = ZSTD_compressBound(raw_size);
-    *out = writer_alloc(w, bound);
-    if (!*out)
-        return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "out of memory for %zu compressed bytes", bound);
-    *out_size = ZSTD_compress(*out, bound, data, raw_size, d->zstd_level ? d->zstd_level : ZSTD_CLEVEL_DEFAULT);
-    if (ZSTD_isError(*out_size))
-        return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "zstd compression of %zu bytes failed: %s", raw_size,
-                           ZSTD_getErrorName(*out_size));
+    if (!w->zstd) {
+        w->zstd = ZSTD_createCCtx();
+        w->zstd_out = writer_alloc(w, ZSTD_CStreamOutSize());
+        if (!w->zstd || !w->zstd_out)
+            return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "out of memory for a zstd compression context");
+    }
+    size_t rc = ZSTD_CCtx_reset(w->zstd, ZSTD_reset_session_and_parameters);
+    if (!ZSTD_isError(rc))
+        rc = ZSTD_CCtx_setParameter(w->zstd, ZSTD_c_compressionLevel, level ? level : ZSTD_CLEVEL_DEFAULT);
+    if (!ZSTD_isError(rc))
+        rc = ZSTD_CCtx_setPledgedSrcSize(w->zstd, raw_size);
+    if (ZSTD_isError(rc))
+        return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "zstd level %d: %s", level, ZSTD_getErrorName(rc));
     return TPK_OK;
 }
 
-static tpk_result append_payload(tpk_writer *w, const tpk_chunk_desc *d, const void *data, size_t raw_size,
-                                 tpk_dir_entry *e)
+/* Feed `size` bytes (or, with mode ZSTD_e_end, finish the frame) and write what zstd produces. */
+static tpk_result pump_zstd(tpk_writer *w, const void *data, size_t size, ZSTD_EndDirective mode)
 {
-    void *packed = NULL;
-    size_t stored = raw_size;
-    tpk_result r = TPK_OK;
-    if (d->codec == TPK_CODEC_ZSTD)
-        r = compress(w, d, data, raw_size, &packed, &stored);
-    int large = d->codec == TPK_CODEC_NONE && raw_size >= TPK_LARGE_CHUNK_BYTES;
-    if (r == TPK_OK)
-        r = pad_to(w, large ? TPK_LARGE_CHUNK_ALIGN : TPK_CHUNK_ALIGN);
-    e->offset = w->end;
-    e->stored_size = stored;
-    if (r == TPK_OK)
-        r = write_all(w, packed ? packed : data, stored);
-    writer_free(w, packed);
-    return r;
+    ZSTD_inBuffer in = {data, size, 0};
+    for (;;) {
+        ZSTD_outBuffer out = {w->zstd_out, ZSTD_CStreamOutSize(), 0};
+        size_t left = ZSTD_compressStream2(w->zstd, &out, &in, mode);
+        if (ZSTD_isError(left))
+            return writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "zstd compression failed: %s", ZSTD_getErrorName(left));
+        tpk_result r = write_all(w, w->zstd_out, out.pos);
+        if (r != TPK_OK)
+            return r;
+        if (mode == ZSTD_e_end ? left == 0 : in.pos == in.size)
+            return TPK_OK;
+    }
 }
 
-tpk_result tpk_writer_add_chunk(tpk_writer *writer, const tpk_chunk_desc *desc, const void *data)
+tpk_result tpk_writer_begin_chunk(tpk_writer *writer, const tpk_chunk_desc *desc)
 {
     if (!writer || !desc)
         return TPK_ERR_INVALID_ARGUMENT;
     if (writer->failed)
         return writer_fail(writer, TPK_ERR_BAD_STATE, "an earlier write failed: %s", "abort this writer");
-    tpk_result r = check_desc(writer, desc, data);
+    if (writer->open_chunk)
+        return writer_fail(writer, TPK_ERR_BAD_STATE, "a streamed chunk is still open: end it first");
+    tpk_result r = check_desc(writer, desc);
     if (r == TPK_OK)
         r = reserve_entry(writer);
+    if (r == TPK_OK && !writer->hash && !(writer->hash = XXH64_createState()))
+        r = writer_fail(writer, TPK_ERR_OUT_OF_MEMORY, "out of memory for a checksum state");
+    uint64_t raw_size = desc->elem_count * desc->elem_size;
+    int large = desc->codec == TPK_CODEC_NONE && raw_size >= TPK_LARGE_CHUNK_BYTES;
+    if (r == TPK_OK && desc->codec == TPK_CODEC_ZSTD)
+        r = start_zstd(writer, desc->zstd_level, raw_size);
+    if (r == TPK_OK)
+        r = pad_to(writer, large ? TPK_LARGE_CHUNK_ALIGN : TPK_CHUNK_ALIGN);
     if (r != TPK_OK)
         return r;
-    size_t raw_size = (size_t)(desc->elem_count * desc->elem_size);
     tpk_dir_entry e = {.tag = desc->tag, .flags = desc->flags, .codec = desc->codec, .elem_type = desc->elem_type,
                        .elem_size = desc->elem_size, .index = desc->index, .step = desc->step,
-                       .elem_count = desc->elem_count, .raw_size = raw_size,
-                       .checksum = XXH64(data, raw_size, 0)};
-    r = append_payload(writer, desc, data, raw_size, &e);
+                       .elem_count = desc->elem_count, .offset = writer->end, .raw_size = raw_size};
+    writer->chunk = e;
+    writer->chunk_appended = 0;
+    writer->open_chunk = 1;
+    XXH64_reset(writer->hash, 0);
+    return TPK_OK;
+}
+
+tpk_result tpk_writer_append(tpk_writer *writer, const void *data, uint64_t size)
+{
+    if (!writer || (!data && size > 0))
+        return TPK_ERR_INVALID_ARGUMENT;
+    if (!writer->open_chunk)
+        return writer_fail(writer, TPK_ERR_BAD_STATE, "tpk_writer_append: no chunk begun");
+    if (size > writer->chunk.raw_size - writer->chunk_appended)
+        return writer_fail(writer, TPK_ERR_INVALID_ARGUMENT, "chunk data past the %" PRIu64 " bytes announced",
+                           writer->chunk.raw_size);
+    if (size == 0)
+        return TPK_OK;
+    XXH64_update(writer->hash, data, (size_t)size);
+    writer->chunk_appended += size;
+    if (writer->chunk.codec == TPK_CODEC_ZSTD)
+        return pump_zstd(writer, data, (size_t)size, ZSTD_e_continue);
+    return write_all(writer, data, size);
+}
+
+tpk_result tpk_writer_end_chunk(tpk_writer *writer)
+{
+    if (!writer)
+        return TPK_ERR_INVALID_ARGUMENT;
+    if (!writer->open_chunk)
+        return writer_fail(writer, TPK_ERR_BAD_STATE, "tpk_writer_end_chunk: no chunk begun");
+    writer->open_chunk = 0; /* on failure the bytes stay as unreferenced padding */
+    if (writer->chunk_appended != writer->chunk.raw_size)
+        return writer_fail(writer, TPK_ERR_INVALID_ARGUMENT, "chunk got %" PRIu64 " of the %" PRIu64 " bytes announced",
+                           writer->chunk_appended, writer->chunk.raw_size);
+    tpk_result r = TPK_OK;
+    if (writer->chunk.codec == TPK_CODEC_ZSTD)
+        r = pump_zstd(writer, NULL, 0, ZSTD_e_end);
+    if (r != TPK_OK)
+        return r;
+    writer->chunk.stored_size = writer->end - writer->chunk.offset;
+    writer->chunk.checksum = XXH64_digest(writer->hash);
+    writer->entries[writer->count++] = writer->chunk;
+    return TPK_OK;
+}
+
+tpk_result tpk_writer_add_chunk(tpk_writer *writer, const tpk_chunk_desc *desc, const void *data)
+{
+    if (!writer || !desc || (!data && desc->elem_count > 0))
+        return TPK_ERR_INVALID_ARGUMENT;
+    tpk_result r = tpk_writer_begin_chunk(writer, desc);
+    if (r != TPK_OK)
+        return r;
+    r = tpk_writer_append(writer, data, desc->elem_count * desc->elem_size);
     if (r == TPK_OK)
-        r = keep_fields(writer, desc, data); /* on failure the payload stays as unreferenced padding */
+        r = keep_fields(writer, desc, data);
     if (r == TPK_OK)
-        writer->entries[writer->count++] = e;
+        r = tpk_writer_end_chunk(writer);
+    else
+        writer->open_chunk = 0; /* abandon the chunk begun here; its bytes stay as padding */
     return r;
 }
 
@@ -354,6 +432,8 @@ tpk_result tpk_writer_finish(tpk_writer *writer, const tpk_header_fields *header
         r = writer_fail(writer, TPK_ERR_INVALID_ARGUMENT, "tpk_writer_finish: NULL header fields");
     else if (writer->failed)
         r = writer_fail(writer, TPK_ERR_BAD_STATE, "an earlier write to '%s' failed", writer->temp_path);
+    else if (writer->open_chunk)
+        r = writer_fail(writer, TPK_ERR_BAD_STATE, "a streamed chunk is still open at finish");
     if (r == TPK_OK)
         r = write_tail(writer, header);
     if (r == TPK_OK) {

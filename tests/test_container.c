@@ -1263,3 +1263,74 @@ TPK_TEST(golden_corpus)
         tpk_close(file);
     }
 }
+
+/* The sample written with every chunk streamed in pieces of `piece` bytes (pieces need not be whole
+ * elements) must be byte-identical to the one written with tpk_writer_add_chunk. */
+static tpk_result build_streamed(const char *path, size_t piece)
+{
+    static sample s;
+    make_sample(&s);
+    build_opts o = {.big = 1};
+    chunk_src chunks[32];
+    int n = sample_chunks(&s, &o, chunks);
+    tpk_writer *w;
+    char err[256];
+    tpk_result r = tpk_writer_open(&w, path, NULL, err, sizeof err);
+    for (int k = 0; r == TPK_OK && k < n; k++) {
+        const uint8_t *bytes = chunks[k].data;
+        uint64_t total = chunks[k].desc.elem_count * chunks[k].desc.elem_size;
+        r = chunks[k].desc.tag == TPK_TAG_FDSC ? tpk_writer_add_chunk(w, &chunks[k].desc, bytes)
+                                                : tpk_writer_begin_chunk(w, &chunks[k].desc);
+        for (uint64_t at = 0; r == TPK_OK && chunks[k].desc.tag != TPK_TAG_FDSC && at < total; at += piece)
+            r = tpk_writer_append(w, bytes + at, total - at < piece ? total - at : piece);
+        if (r == TPK_OK && chunks[k].desc.tag != TPK_TAG_FDSC)
+            r = tpk_writer_end_chunk(w);
+    }
+    if (r != TPK_OK) {
+        tpk_writer_abort(w);
+        return r;
+    }
+    tpk_header_fields h = sample_header();
+    return tpk_writer_finish(w, &h);
+}
+
+TPK_TEST(streamed_chunks_match_whole_chunks)
+{
+    build_opts o = {.big = 1};
+    CHECK_EQ_INT(build_file(tpk_temp_path("whole.tpk"), &o), TPK_OK);
+    size_t whole_size, streamed_size;
+    uint8_t *whole = read_all(tpk_temp_path("whole.tpk"), &whole_size);
+    CHECK(whole != NULL);
+    const size_t pieces[] = {1, 7, 4096, 1u << 20};
+    for (size_t i = 0; i < sizeof pieces / sizeof pieces[0]; i++) {
+        CHECK_EQ_INT(build_streamed(tpk_temp_path("streamed.tpk"), pieces[i]), TPK_OK);
+        uint8_t *streamed = read_all(tpk_temp_path("streamed.tpk"), &streamed_size);
+        int same = streamed && streamed_size == whole_size && !memcmp(streamed, whole, whole_size);
+        free(streamed);
+        CHECK_MSG(same, "pieces of %zu bytes give a different file", pieces[i]);
+    }
+    free(whole);
+}
+
+TPK_TEST(streamed_chunk_misuse)
+{
+    static sample s;
+    make_sample(&s);
+    chunk_src c = chunk(TPK_TAG_POS3, TPK_CODEC_ZSTD, TPK_ELEM_VEC3_F32, 12, SAMPLE_V, s.positions);
+    tpk_writer *w;
+    char err[256];
+    const char *path = tpk_temp_path("misuse.tpk");
+    CHECK_EQ_INT(tpk_writer_open(&w, path, NULL, err, sizeof err), TPK_OK);
+    CHECK_EQ_INT(tpk_writer_append(w, s.positions, 12), TPK_ERR_BAD_STATE);   /* nothing begun */
+    CHECK_EQ_INT(tpk_writer_end_chunk(w), TPK_ERR_BAD_STATE);
+    CHECK_EQ_INT(tpk_writer_begin_chunk(w, &c.desc), TPK_OK);
+    CHECK_EQ_INT(tpk_writer_begin_chunk(w, &c.desc), TPK_ERR_BAD_STATE);      /* one at a time */
+    CHECK_EQ_INT(tpk_writer_add_chunk(w, &c.desc, s.positions), TPK_ERR_BAD_STATE);
+    CHECK_EQ_INT(tpk_writer_append(w, s.positions, sizeof s.positions + 1), TPK_ERR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(tpk_writer_append(w, s.positions, 12), TPK_OK);
+    CHECK_EQ_INT(tpk_writer_end_chunk(w), TPK_ERR_INVALID_ARGUMENT);          /* 12 of 60 bytes */
+    CHECK_EQ_INT(tpk_writer_begin_chunk(w, &c.desc), TPK_OK);
+    tpk_header_fields h = sample_header();
+    CHECK_EQ_INT(tpk_writer_finish(w, &h), TPK_ERR_BAD_STATE);                /* chunk still open */
+    CHECK(access(path, F_OK) != 0);
+}
