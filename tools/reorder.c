@@ -1,7 +1,7 @@
 /* Hilbert-curve reordering (pipeline stage 3): vertices sorted by the 3-D Hilbert index of their position,
- * tets by the index of their centroid, both quantized to 21 bits per axis in the mesh's bounding box
- * (63-bit keys). A stable LSD radix sort keeps equal keys in their old order, so the result depends on
- * the input only. Fields, vertex_source and tet_source follow. */
+ * quantized to 21 bits per axis in the mesh's bounding box (63-bit keys), then tets by their smallest
+ * vertex id. Both sorts are stable (equal keys keep their old order), so the result depends on the input
+ * only. Fields, vertex_source and tet_source follow. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -164,7 +164,6 @@ static box bounding_box(const double *points, int64_t count)
 typedef struct key_job {
     const hilbert_table *table;
     const double *points;
-    const int32_t *tets; /* NULL: vertex keys */
     box bounds;
     uint64_t *keys;
     uint32_t *order;
@@ -176,20 +175,7 @@ static void key_range(void *ctx, int64_t begin, int64_t end, int worker)
     const box *b = &job->bounds;
     (void)worker;
     for (int64_t i = begin; i < end; i++) {
-        double p[3];
-        if (job->tets) {
-            if (i + 16 < end) /* the gather below misses cache when tets are not yet local */
-                for (int k = 0; k < 4; k++)
-                    __builtin_prefetch(job->points + 3 * (int64_t)job->tets[4 * (i + 16) + k]);
-            const double *p0 = job->points + 3 * (int64_t)job->tets[4 * i];
-            const double *p1 = job->points + 3 * (int64_t)job->tets[4 * i + 1];
-            const double *p2 = job->points + 3 * (int64_t)job->tets[4 * i + 2];
-            const double *p3 = job->points + 3 * (int64_t)job->tets[4 * i + 3];
-            for (int a = 0; a < 3; a++)
-                p[a] = 0.25 * (p0[a] + p1[a] + p2[a] + p3[a]);
-        } else {
-            memcpy(p, job->points + 3 * i, sizeof p);
-        }
+        const double *p = job->points + 3 * i;
         job->keys[i] = hilbert_key_with(job->table, quantize(p[0], b->lo[0], b->scale),
                                         quantize(p[1], b->lo[1], b->scale), quantize(p[2], b->lo[2], b->scale));
         job->order[i] = (uint32_t)i;
@@ -268,14 +254,14 @@ static int radix_sort(uint64_t *keys, uint32_t *vals, uint64_t *keys_tmp, uint32
 }
 
 /* order[new] = old, by Hilbert key; keys/tmp sized for count. */
-static int hilbert_order(const hilbert_table *table, const double *points, const int32_t *tets,
-                         int64_t count, box bounds, uint32_t *order, int threads)
+static int hilbert_order(const hilbert_table *table, const double *points, int64_t count, box bounds,
+                         uint32_t *order, int threads)
 {
     uint64_t *keys = tpk_alloc_large(sizeof *keys * 2 * (size_t)(count ? count : 1));
     uint32_t *vals_tmp = malloc(sizeof *vals_tmp * (size_t)(count ? count : 1));
     int rc = -1;
     if (keys && vals_tmp) {
-        key_job job = {table, points, tets, bounds, keys, order};
+        key_job job = {table, points, bounds, keys, order};
         int key_threads = tpk_threads_for(count, threads, 16384);
         tpk_parallel_for(count, key_threads, key_range, &job);
         rc = radix_sort(keys, order, keys + count, vals_tmp, count, tpk_threads_for(count, threads, 65536));
@@ -283,6 +269,31 @@ static int hilbert_order(const hilbert_table *table, const double *points, const
     free(keys);
     free(vals_tmp);
     return rc;
+}
+
+/* order[new] = old for tets: by their smallest vertex id (the vertices are in curve order by now), ties
+ * in input order. One counting sort instead of centroid keys and a 64-bit radix sort: tets that share a
+ * vertex end up together and follow the vertex curve, which is the locality marching and face matching
+ * need, at a fraction of the cost (10M tets: ~0.1 s instead of ~1 s). */
+static int32_t min_vertex(const int32_t *v)
+{
+    int32_t a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
+    return a < b ? a : b;
+}
+
+static int min_vertex_order(const int32_t *tets, int64_t nt, int64_t nv, uint32_t *order)
+{
+    uint32_t *next = calloc((size_t)nv + 1, sizeof *next);
+    if (!next)
+        return -1;
+    for (int64_t t = 0; t < nt; t++)
+        next[min_vertex(tets + 4 * t) + 1]++;
+    for (int64_t v = 0; v < nv; v++)
+        next[v + 1] += next[v];
+    for (int64_t t = 0; t < nt; t++)
+        order[next[min_vertex(tets + 4 * t)]++] = (uint32_t)t;
+    free(next);
+    return 0;
 }
 
 /* ---- applying the permutations -------------------------------------------------------------------- */
@@ -408,12 +419,11 @@ int tpk_reorder(tpk_tetmesh *mesh, tpk_diag *diag)
     hilbert_table table;
     build_hilbert_table(&table);
     box bounds = bounding_box(mesh->points, nv);
-    /* Vertices first, so the centroid pass below reads points in curve order. */
+    /* Vertices along the curve first; tets then follow their smallest vertex. */
     uint32_t *order = malloc(sizeof *order * (size_t)(nv > nt ? (nv ? nv : 1) : nt));
     int rc = -1;
-    if (order && !hilbert_order(&table, mesh->points, NULL, nv, bounds, order, threads) &&
-        !apply_vertex_order(mesh, order, threads) &&
-        !hilbert_order(&table, mesh->points, mesh->tets, nt, bounds, order, threads) &&
+    if (order && !hilbert_order(&table, mesh->points, nv, bounds, order, threads) &&
+        !apply_vertex_order(mesh, order, threads) && !min_vertex_order(mesh->tets, nt, nv, order) &&
         !apply_tet_order(mesh, order, threads))
         rc = 0;
     free(order);
