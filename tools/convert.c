@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "importers.h"
+#include "parallel.h"
 #include "pipeline.h"
 #include "strbuf.h"
 #include "tetpack.h"
@@ -32,8 +33,8 @@ typedef struct chunk_writer {
     tpk_diag *diag;
 } chunk_writer;
 
-static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type, uint32_t size,
-                     uint64_t count, uint32_t index, uint32_t step, const void *data)
+static tpk_chunk_desc chunk_desc(const chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type,
+                                  uint32_t size, uint64_t count, uint32_t index, uint32_t step)
 {
     tpk_chunk_desc desc;
     memset(&desc, 0, sizeof desc);
@@ -46,7 +47,39 @@ static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type
     desc.elem_count = count;
     desc.index = index;
     desc.step = step;
-    tpk_result r = tpk_writer_add_chunk(cw->writer, &desc, data);
+    return desc;
+}
+
+static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type, uint32_t size,
+                     uint64_t count, uint32_t index, uint32_t step, const void *data)
+{
+    tpk_chunk_desc desc = chunk_desc(cw, tag, required, type, size, count, index, step);
+    if (tpk_writer_add_chunk(cw->writer, &desc, data) != TPK_OK)
+        return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
+    return 0;
+}
+
+/* Records made block by block (fill(user, first, count, dst)) and streamed into one chunk, so a large
+ * array never exists whole next to the mesh: the converter's peak memory is the mesh plus one block. */
+#define STREAM_BLOCK ((int64_t)1 << 18)
+
+typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst);
+
+static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user)
+{
+    int64_t total = (int64_t)desc->elem_count;
+    void *block = malloc((size_t)STREAM_BLOCK * desc->elem_size);
+    if (!block)
+        return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
+    tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
+    for (int64_t first = 0; r == TPK_OK && first < total; first += STREAM_BLOCK) {
+        int64_t count = total - first < STREAM_BLOCK ? total - first : STREAM_BLOCK;
+        fill(user, first, count, block);
+        r = tpk_writer_append(cw->writer, block, (uint64_t)count * desc->elem_size);
+    }
+    if (r == TPK_OK)
+        r = tpk_writer_end_chunk(cw->writer);
+    free(block);
     if (r != TPK_OK)
         return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
     return 0;
@@ -80,40 +113,64 @@ static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
         }
 }
 
+static void fill_positions(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const double *points = user;
+    float *pos = dst;
+    for (int64_t i = 0; i < 3 * count; i++)
+        pos[i] = (float)points[3 * first + i]; /* exact: quantize_points rounded them already */
+}
+
 static int write_positions(chunk_writer *cw, const tpk_tetmesh *mesh)
 {
-    float *pos = malloc(sizeof *pos * 3 * (size_t)(mesh->vertex_count ? mesh->vertex_count : 1));
-    if (!pos)
-        return tpk_diag_fail(cw->diag, "out of memory for %lld positions", (long long)mesh->vertex_count);
-    for (int64_t i = 0; i < 3 * mesh->vertex_count; i++)
-        pos[i] = (float)mesh->points[i]; /* exact: quantize_points rounded them already */
-    int rc = put_chunk(cw, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, (uint64_t)mesh->vertex_count, 0, 0, pos);
-    free(pos);
-    return rc;
+    tpk_chunk_desc desc = chunk_desc(cw, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, (uint64_t)mesh->vertex_count, 0, 0);
+    return stream_chunk(cw, &desc, fill_positions, mesh->points);
+}
+
+typedef struct layout_source {
+    const int32_t *tets, *neighbors;
+} layout_source;
+
+static void fill_tet16(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet16(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static void fill_tet20(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet20(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static void fill_tet32(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet32(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
 }
 
 static int write_layouts(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
                          unsigned layouts)
 {
-    size_t n = (size_t)mesh->tet_count;
-    void *records = malloc((n ? n : 1) * sizeof(tpk_tet32));
-    if (!records)
-        return tpk_diag_fail(cw->diag, "out of memory for %zu tet records", n);
-    int rc = 0;
-    if (layouts & TPK_LAYOUT_BIT_TET16) {
-        tpk_build_tet16(mesh->tets, neighbors, mesh->tet_count, records);
-        rc = put_chunk(cw, TPK_TAG_TT16, 1, TPK_ELEM_TET16, 16, n, 0, 0, records);
+    static const struct {
+        unsigned bit;
+        uint32_t tag;
+        tpk_elem_type type;
+        uint32_t size;
+        fill_fn fill;
+    } kinds[] = {{TPK_LAYOUT_BIT_TET16, TPK_TAG_TT16, TPK_ELEM_TET16, 16, fill_tet16},
+                 {TPK_LAYOUT_BIT_TET20, TPK_TAG_TT20, TPK_ELEM_TET20, 20, fill_tet20},
+                 {TPK_LAYOUT_BIT_TET32, TPK_TAG_TT32, TPK_ELEM_TET32, 32, fill_tet32}};
+    layout_source src = {mesh->tets, neighbors};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        if (!(layouts & kinds[k].bit))
+            continue;
+        tpk_chunk_desc desc = chunk_desc(cw, kinds[k].tag, 1, kinds[k].type, kinds[k].size,
+                                         (uint64_t)mesh->tet_count, 0, 0);
+        if (stream_chunk(cw, &desc, kinds[k].fill, &src) != 0)
+            return -1;
     }
-    if (rc == 0 && (layouts & TPK_LAYOUT_BIT_TET20)) {
-        tpk_build_tet20(mesh->tets, neighbors, mesh->tet_count, records);
-        rc = put_chunk(cw, TPK_TAG_TT20, 1, TPK_ELEM_TET20, 20, n, 0, 0, records);
-    }
-    if (rc == 0 && (layouts & TPK_LAYOUT_BIT_TET32)) {
-        tpk_build_tet32(mesh->tets, neighbors, mesh->tet_count, records);
-        rc = put_chunk(cw, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, n, 0, 0, records);
-    }
-    free(records);
-    return rc;
+    return 0;
 }
 
 static int write_shell(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
@@ -284,7 +341,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 
     announce(stage, stage_user, "tetrahedralize");
     t = now_seconds();
-    if (tpk_tetrahedralize(&src, o->fields, o->field_count, &mesh, diag) != 0)
+    if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count, &mesh, diag) != 0)
         goto done;
     tpk_mesh_free(&src);
     quantize_points(&mesh, &header);
@@ -314,7 +371,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 
     announce(stage, stage_user, "connect");
     t = now_seconds();
-    neighbors = malloc(sizeof *neighbors * 4 * (size_t)mesh.tet_count);
+    neighbors = tpk_alloc_large(sizeof *neighbors * 4 * (size_t)mesh.tet_count);
     if (!neighbors) {
         tpk_diag_fail(diag, "out of memory for the neighbors of %lld tets", (long long)mesh.tet_count);
         goto done;

@@ -203,15 +203,15 @@ static int ends_with(const char *s, const char *suffix)
 
 static int parse_file(const char *path, tpk_mesh *mesh, int *base, int nodes, tpk_diag *diag)
 {
-    char *data;
+    const char *data;
     size_t size;
-    if (tpk_read_file(path, &data, &size, diag) != 0)
+    if (tpk_map_file(path, &data, &size, diag) != 0)
         return -1;
     tpk_scan s;
     tpk_scan_init(&s, path, data, size, diag);
     s.hash_comments = 1;
     int rc = nodes ? read_nodes(&s, mesh, base) : read_elements(&s, mesh, *base);
-    free(data);
+    tpk_unmap_file(data, size);
     return rc;
 }
 

@@ -1086,7 +1086,8 @@ static void reader_free(vtk_reader *r)
     tpk_mesh_free(&r->fields);
 }
 
-int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)
+static int import_buffer(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out,
+                         tpk_diag *diag)
 {
     if (!out)
         return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
@@ -1096,6 +1097,7 @@ int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size
     vtk_reader r;
     memset(&r, 0, sizeof r);
     tpk_scan_init(&r.s, name, data, size, diag);
+    r.s.mapped = mapped;
     r.point_count = r.cell_count = r.type_count = -1;
     r.assoc = -1;
     int rc = read_header(&r);
@@ -1107,6 +1109,7 @@ int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size
         r.kw_pos = r.s.tok_pos;
         r.kw_line = r.s.tok_line;
         rc = read_section(&r, tok, len);
+        tpk_scan_release_consumed(&r.s);
     }
     if (rc == 0)
         rc = finish_mesh(&r, out);
@@ -1116,15 +1119,20 @@ int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size
     return rc;
 }
 
+int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)
+{
+    return import_buffer(name, data, size, 0, out, diag);
+}
+
 int tpk_import_vtk_legacy(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
-    char *data;
+    const char *data;
     size_t size;
     if (out)
         memset(out, 0, sizeof *out);
-    if (tpk_read_file(path, &data, &size, diag) != 0)
+    if (tpk_map_file(path, &data, &size, diag) != 0)
         return -1;
-    int rc = tpk_import_vtk_legacy_memory(path, data, size, out, diag);
-    free(data);
+    int rc = import_buffer(path, data, size, 1, out, diag);
+    tpk_unmap_file(data, size);
     return rc;
 }

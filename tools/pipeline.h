@@ -15,6 +15,10 @@
  * `field_names` (count n, may be NULL = all scalar point fields) selects fields. */
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count,
                        tpk_tetmesh *out, tpk_diag *diag);
+/* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;
+ * src stays valid for tpk_mesh_free but must not be used otherwise. */
+int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count,
+                               tpk_tetmesh *out, tpk_diag *diag);
 
 typedef struct tpk_orient_stats {
     int64_t inverted_fixed;   /* negative tets made positive by a swap */
@@ -29,7 +33,7 @@ int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate, tpk_orient_stats *stats, 
 /* Exact orientation sign of four points: +1, 0, -1 for det[b-a, c-a, d-a]. (CGAL shim.) */
 int tpk_orient3d_exact(const double a[3], const double b[3], const double c[3], const double d[3]);
 
-/* Reorder vertices and tets along a Hilbert curve (vertices by position, tets by centroid); fields,
+/* Reorder vertices along a Hilbert curve, then tets by their smallest vertex (so they follow it); fields,
  * vertex_source and tet_source follow. Deterministic. */
 int tpk_reorder(tpk_tetmesh *mesh, tpk_diag *diag);
 

@@ -306,8 +306,52 @@ static int split_cells(const tpk_mesh *src, tpk_tetmesh *out)
     return 0;
 }
 
-int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count,
-                       tpk_tetmesh *out, tpk_diag *diag)
+/* Source tets stored as 4 consecutive ids each, in cell order: the connectivity is already the tet array. */
+static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
+{
+    if (tet_count != src->cell_count)
+        return 0;
+    for (int64_t c = 0; c < src->cell_count; c++)
+        if (src->cell_types[c] != TPK_CELL_TETRA || src->cell_offsets[c] != 4 * c)
+            return 0;
+    return 1;
+}
+
+/* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
+ * copy and the memory of a second mesh in the converter. */
+static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, tpk_tetmesh *out)
+{
+    size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
+    if (donor && all_plain_tets(src, tet_capacity)) {
+        out->tets = donor->cell_conn;
+        donor->cell_conn = NULL;
+        out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+        if (!out->tet_source)
+            return -1;
+        for (int64_t t = 0; t < tet_capacity; t++)
+            out->tet_source[t] = (int32_t)t;
+        out->tet_count = tet_capacity;
+    } else {
+        out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
+        out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+        if (!out->tets || !out->tet_source)
+            return -1;
+        split_cells(src, out);
+    }
+    if (donor && donor->points) {
+        out->points = donor->points;
+        donor->points = NULL;
+    } else {
+        out->points = malloc(sizeof *out->points * 3 * nv);
+        if (!out->points)
+            return -1;
+        memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
+    }
+    return 0;
+}
+
+static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
+                          int field_name_count, tpk_tetmesh *out, tpk_diag *diag)
 {
     field_request *reqs = NULL;
     int req_count = 0;
@@ -321,17 +365,12 @@ int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int 
         return -1;
 
     out->vertex_count = src->point_count;
-    out->points = malloc(sizeof *out->points * 3 * (size_t)(out->vertex_count ? out->vertex_count : 1));
     out->vertex_source = malloc(sizeof *out->vertex_source * (size_t)(out->vertex_count ? out->vertex_count : 1));
-    out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
-    out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
     out->fields = calloc((size_t)(req_count ? req_count : 1), sizeof *out->fields);
-    if (!out->points || !out->vertex_source || !out->tets || !out->tet_source || !out->fields)
+    if (!out->vertex_source || !out->fields)
         goto out_of_memory;
-    memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
     for (int64_t v = 0; v < out->vertex_count; v++)
         out->vertex_source[v] = (int32_t)v;
-    split_cells(src, out);
 
     out->step_count = src->step_count > 0 ? src->step_count : 1;
     if (src->times && src->step_count > 0) {
@@ -340,6 +379,9 @@ int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int 
             goto out_of_memory;
         memcpy(out->times, src->times, sizeof *out->times * (size_t)src->step_count);
     }
+    /* Geometry last: it may take src's arrays, and nothing after it reads them. */
+    if (take_geometry(src, donor, tet_capacity, out))
+        goto out_of_memory;
     for (int i = 0; i < req_count; i++)
         if (copy_field(src, &reqs[i], out))
             goto out_of_memory;
@@ -351,4 +393,16 @@ out_of_memory:
     tpk_tetmesh_free(out);
     return tpk_diag_fail(diag, "tetrahedralize: out of memory (%lld points, %lld tets)",
                          (long long)src->point_count, (long long)tet_capacity);
+}
+
+int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count,
+                       tpk_tetmesh *out, tpk_diag *diag)
+{
+    return tetrahedralize(src, NULL, field_names, field_name_count, out, diag);
+}
+
+int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count,
+                               tpk_tetmesh *out, tpk_diag *diag)
+{
+    return tetrahedralize(src, src, field_names, field_name_count, out, diag);
 }

@@ -19,6 +19,8 @@ typedef struct tpk_scan {
     size_t tok_pos;              /* start of the last token read, for messages */
     int64_t tok_line;
     tpk_diag *diag;
+    int mapped;                  /* data is a tpk_map_file mapping: consumed pages may be dropped */
+    size_t released;             /* bytes before this were dropped from the mapping */
 } tpk_scan;
 
 void tpk_scan_init(tpk_scan *s, const char *name, const void *data, size_t size, tpk_diag *diag);
@@ -61,7 +63,14 @@ int tpk_scan_line_double(tpk_scan *s, double *out, const char *what);
 /* Case-insensitive comparison of a token with a NUL-terminated word. */
 int tpk_token_is(const char *tok, size_t len, const char *word);
 
-/* Read a whole file into a malloc'ed buffer. Returns 0, or -1 with "path: cannot ...: reason". */
-int tpk_read_file(const char *path, char **data, size_t *size, tpk_diag *diag);
+/* For a mapped file: drop the pages before the current position from memory (they are re-read from
+ * the file if touched again), so a large input does not stay resident next to the arrays parsed from
+ * it. Does nothing for other buffers. */
+void tpk_scan_release_consumed(tpk_scan *s);
+
+/* Map a whole file read-only (the bytes are not NUL-terminated). Returns 0, or -1 with
+ * "path: cannot ...: reason". Release with tpk_unmap_file(data, size). */
+int tpk_map_file(const char *path, const char **data, size_t *size, tpk_diag *diag);
+void tpk_unmap_file(const char *data, size_t size);
 
 #endif
