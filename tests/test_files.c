@@ -1,0 +1,208 @@
+/* Every converted real sample, read back from its .tpk through libtetpack, meets the spec's mesh
+ * invariants (spec §11): positive tets on the stored float32 positions (exact), symmetric adjacency,
+ * vx, Tet20 neighbors ordered by opposite vertex id, Tet16 = Tet20 xor-folded, every boundary face
+ * exactly once in the shell and outward; and TMAP/VMAP lead back to the source cells. The checks here
+ * work from the definitions, not from the converter's layout code. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "convert.h"
+#include "harness.h"
+#include "importers.h"
+#include "invariants.h"
+#include "pipeline.h"
+#include "tetpack.h"
+
+typedef struct loaded {
+    tpk_file *file;
+    tpk_mesh_arrays a32, a20, a16;
+    tpk_tetmesh mesh; /* points (stored frame) and tets from Tet32 */
+    int32_t *nb;      /* Tet32 neighbors */
+} loaded;
+
+static void loaded_free(loaded *l)
+{
+    free(l->mesh.points);
+    free(l->mesh.tets);
+    free(l->nb);
+    tpk_close(l->file);
+    memset(l, 0, sizeof *l);
+}
+
+static int convert_sample(const char *input, const char *output, int drop, char *msg, size_t cap)
+{
+    tpk_convert_options o;
+    memset(&o, 0, sizeof o);
+    o.input = input;
+    o.output = output;
+    o.layouts = TPK_LAYOUT_BIT_TET16 | TPK_LAYOUT_BIT_TET20 | TPK_LAYOUT_BIT_TET32;
+    o.drop_degenerate = drop;
+    tpk_convert_report report;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_convert(&o, &report, NULL, NULL, &diag) != 0) {
+        snprintf(msg, cap, "%s", diag.message);
+        return -1;
+    }
+    return 0;
+}
+
+static int load(const char *path, loaded *l, char *msg, size_t cap)
+{
+    memset(l, 0, sizeof *l);
+    if (tpk_open_path(&l->file, path, NULL, msg, cap) != TPK_OK || tpk_verify(l->file) != TPK_OK ||
+        tpk_load_arrays(l->file, TPK_LAYOUT_TET32, NULL, 0, &l->a32) != TPK_OK ||
+        tpk_load_arrays(l->file, TPK_LAYOUT_TET20, NULL, 0, &l->a20) != TPK_OK ||
+        tpk_load_arrays(l->file, TPK_LAYOUT_TET16, NULL, 0, &l->a16) != TPK_OK) {
+        if (l->file)
+            snprintf(msg, cap, "%s", tpk_error_text(l->file));
+        return -1;
+    }
+    int64_t V = (int64_t)l->a32.vertex_count, T = (int64_t)l->a32.tet_count;
+    l->mesh.vertex_count = V;
+    l->mesh.tet_count = T;
+    l->mesh.points = malloc(sizeof(double) * 3 * (size_t)V);
+    l->mesh.tets = malloc(sizeof(int32_t) * 4 * (size_t)T);
+    l->nb = malloc(sizeof(int32_t) * 4 * (size_t)T);
+    if (!l->mesh.points || !l->mesh.tets || !l->nb)
+        return -1;
+    for (int64_t i = 0; i < 3 * V; i++)
+        l->mesh.points[i] = l->a32.positions[i];
+    for (int64_t t = 0; t < T; t++) {
+        const tpk_tet32 *r = &l->a32.tet32[t];
+        int32_t *v = l->mesh.tets + 4 * t;
+        v[0] = r->v[0];
+        v[1] = r->v[1];
+        v[2] = r->v[2];
+        v[3] = r->vx ^ r->v[0] ^ r->v[1] ^ r->v[2];
+        memcpy(l->nb + 4 * t, r->n, sizeof r->n);
+    }
+    return 0;
+}
+
+/* Tet20 and Tet16 records against their definitions, from the Tet32 vertices and neighbors. */
+static int check_sorted_layouts(const loaded *l, char *msg, size_t cap)
+{
+    for (int64_t t = 0; t < l->mesh.tet_count; t++) {
+        const int32_t *v = l->mesh.tets + 4 * t, *n = l->nb + 4 * t;
+        int32_t by_rank[4];
+        for (int k = 0; k < 4; k++)
+            by_rank[tpk_inv_rank(v, k)] = n[k];
+        const tpk_tet20 *r20 = &l->a20.tet20[t];
+        const tpk_tet16 *r16 = &l->a16.tet16[t];
+        int32_t vx = v[0] ^ v[1] ^ v[2] ^ v[3];
+        if (r20->vx != vx || r16->vx != vx)
+            return tpk_inv_fail(msg, cap, "tet %lld: vx differs between layouts", (long long)t);
+        for (int r = 0; r < 4; r++)
+            if (r20->n[r] != by_rank[r])
+                return tpk_inv_fail(msg, cap, "tet %lld: Tet20 n[%d] = %d, expected %d", (long long)t, r,
+                                    r20->n[r], by_rank[r]);
+        for (int r = 0; r < 3; r++)
+            if (r16->nx[r] != (by_rank[r] ^ by_rank[3]))
+                return tpk_inv_fail(msg, cap, "tet %lld: Tet16 nx[%d] wrong", (long long)t, r);
+    }
+    return 0;
+}
+
+/* Every (tet, face) with no neighbor appears exactly once in SHEL, as that face, outward (exact). */
+static int check_shell(const loaded *l, char *msg, size_t cap)
+{
+    int64_t T = l->mesh.tet_count, open = 0;
+    for (int64_t i = 0; i < 4 * T; i++)
+        open += l->nb[i] == -1;
+    if ((int64_t)l->a32.shell_face_count != open)
+        return tpk_inv_fail(msg, cap, "%llu shell faces for %lld open tet faces",
+                            (unsigned long long)l->a32.shell_face_count, (long long)open);
+    unsigned char *seen = calloc((size_t)(4 * T), 1);
+    if (!seen)
+        return -1;
+    int rc = 0;
+    for (uint64_t i = 0; rc == 0 && i < l->a32.shell_face_count; i++) {
+        const tpk_shell_face *s = &l->a32.shell[i];
+        const int32_t *v = l->mesh.tets + 4 * (int64_t)s->t;
+        int k = 0;
+        while (k < 4 && (v[k] == s->a || v[k] == s->b || v[k] == s->c))
+            k++;
+        int in_tet = 0;
+        for (int j = 0; j < 4; j++)
+            in_tet += v[j] == s->a || v[j] == s->b || v[j] == s->c;
+        if (k == 4 || in_tet != 3)
+            rc = tpk_inv_fail(msg, cap, "shell face %llu is not a face of tet %d", (unsigned long long)i, s->t);
+        else if (l->nb[4 * s->t + k] != -1 || seen[4 * s->t + k]++)
+            rc = tpk_inv_fail(msg, cap, "shell face %llu: face of tet %d has a neighbor or repeats",
+                              (unsigned long long)i, s->t);
+        else {
+            const double *P = l->mesh.points;
+            if (tpk_orient3d_exact(P + 3 * s->a, P + 3 * s->b, P + 3 * s->c, P + 3 * v[k]) >= 0)
+                rc = tpk_inv_fail(msg, cap, "shell face %llu is not outward", (unsigned long long)i);
+        }
+    }
+    free(seen);
+    return rc;
+}
+
+/* TMAP and VMAP lead each tet back to a source cell with the same vertices. */
+static int check_maps(const loaded *l, const char *source, char *msg, size_t cap)
+{
+    tpk_mesh src;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_import_any(source, NULL, &src, &diag) != 0)
+        return tpk_inv_fail(msg, cap, "%s", diag.message);
+    int64_t T = l->mesh.tet_count, V = l->mesh.vertex_count;
+    int32_t *tmap = malloc(sizeof *tmap * (size_t)T), *vmap = malloc(sizeof *vmap * (size_t)V);
+    uint64_t i;
+    int rc = 0;
+    if (!tmap || !vmap || tpk_find_chunk(l->file, TPK_TAG_TMAP, 0, 0, &i) != TPK_OK ||
+        tpk_read_chunk(l->file, i, tmap, sizeof *tmap * (uint64_t)T) != TPK_OK ||
+        tpk_find_chunk(l->file, TPK_TAG_VMAP, 0, 0, &i) != TPK_OK ||
+        tpk_read_chunk(l->file, i, vmap, sizeof *vmap * (uint64_t)V) != TPK_OK)
+        rc = tpk_inv_fail(msg, cap, "TMAP/VMAP missing or unreadable");
+    for (int64_t t = 0; rc == 0 && t < T; t++) {
+        int32_t c = tmap[t];
+        if (c < 0 || c >= src.cell_count || src.cell_offsets[c + 1] - src.cell_offsets[c] != 4) {
+            rc = tpk_inv_fail(msg, cap, "tet %lld maps to bad source cell %d", (long long)t, c);
+            break;
+        }
+        int32_t a[4], b[4];
+        for (int k = 0; k < 4; k++) {
+            a[k] = vmap[l->mesh.tets[4 * t + k]];
+            b[k] = src.cell_conn[src.cell_offsets[c] + k];
+        }
+        if (!tpk_inv_same_set(a, b))
+            rc = tpk_inv_fail(msg, cap, "tet %lld: vertices differ from source cell %d", (long long)t, c);
+    }
+    for (int64_t v = 0; rc == 0 && v < V; v++)
+        for (int k = 0; k < 3; k++)
+            if ((float)(src.points[3 * vmap[v] + k] - l->a32.origin[k]) != l->a32.positions[3 * v + k]) {
+                rc = tpk_inv_fail(msg, cap, "vertex %lld: position differs from source point %d",
+                                  (long long)v, vmap[v]);
+                break;
+            }
+    free(tmap);
+    free(vmap);
+    tpk_mesh_free(&src);
+    return rc;
+}
+
+static void check_sample(const char *relative, int drop)
+{
+    char msg[1024] = "";
+    const char *out = tpk_temp_path("sample.tpk");
+    loaded l;
+    CHECK_MSG(convert_sample(tpk_data_path(relative), out, drop, msg, sizeof msg) == 0, "%s: %s", relative, msg);
+    CHECK_MSG(load(out, &l, msg, sizeof msg) == 0, "%s: %s", relative, msg);
+    int ok = tpk_check_invariants(&l.mesh, l.nb, msg, sizeof msg) == 0 &&
+             check_sorted_layouts(&l, msg, sizeof msg) == 0 && check_shell(&l, msg, sizeof msg) == 0 &&
+             (drop || check_maps(&l, tpk_data_path(relative), msg, sizeof msg) == 0);
+    loaded_free(&l);
+    CHECK_MSG(ok, "%s: %s", relative, msg);
+}
+
+TPK_TEST(sfepy_cylinder) { check_sample("sfepy/cylinder.vtk", 0); }
+TPK_TEST(sfepy_piezo_mesh_micro) { check_sample("sfepy/piezo_mesh_micro.vtk", 0); }
+TPK_TEST(gmsh_t5_binary_vtk) { check_sample("gmsh/t5_small_tet_bin.vtk", 0); }
+TPK_TEST(tetgen_hinge_small) { check_sample("tetgen/hinge_small.node", 0); }
+TPK_TEST(tetgen_part1_small) { check_sample("tetgen/part1_small.node", 0); }
+TPK_TEST(hard_inverted_tets) { check_sample("hard/inverted_tets.vtk", 0); }
+TPK_TEST(hard_two_components_orphans) { check_sample("hard/two_components_orphans.node", 0); }
