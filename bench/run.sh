@@ -61,8 +61,9 @@ echo "# open time (uncompressed, largest size)"
 n=$(echo $SIZES | awk '{print $NF}')
 "$BUILD/bench/bench_open" "$WORK/grid$n.tpk" 21
 
-for b in "$BUILD"/bench/bench_connect "$BUILD"/bench/bench_march; do
-    [ -x "$b" ] || continue
-    echo "# $(basename "$b")"
-    "$b" "$WORK" || true
-done
+n_small=$(echo $SIZES | awk '{print $1}')
+n_large=$(echo $SIZES | awk '{print $NF}')
+echo "# face matching alone (and orient, reorder, layouts, shell), grid $n_large"
+"$BUILD/bench/bench_connect" "$n_large" "$RUNS"
+echo "# CPU marcher: tet steps per second per layout and thread count, grid $n_small, 512x512 rays"
+"$BUILD/bench/bench_march" "$n_small" "$RUNS" 512 1 2
