@@ -347,6 +347,15 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     quantize_points(&mesh, &header);
     rep->t_tetrahedralize = now_seconds() - t;
 
+    /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
+    t = now_seconds();
+    if (!o->no_reorder) {
+        announce(stage, stage_user, "reorder");
+        if (tpk_reorder(&mesh, diag) != 0)
+            goto done;
+    }
+    rep->t_reorder = now_seconds() - t;
+
     announce(stage, stage_user, "orient");
     t = now_seconds();
     tpk_orient_stats os;
@@ -361,13 +370,6 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
         goto done;
     }
 
-    t = now_seconds();
-    if (!o->no_reorder) {
-        announce(stage, stage_user, "reorder");
-        if (tpk_reorder(&mesh, diag) != 0)
-            goto done;
-    }
-    rep->t_reorder = now_seconds() - t;
 
     announce(stage, stage_user, "connect");
     t = now_seconds();

@@ -59,15 +59,18 @@ static int refuse_degenerate(const tpk_tetmesh *mesh, const int8_t *kinds, int64
     for (int k = 0; k < 4; k++)
         for (int j = 0; j < 3; j++)
             p[k][j] = mesh->origin[j] + mesh->points[3 * (int64_t)v[k] + j];
+    int32_t id[4]; /* source point ids: the mesh may have been renumbered */
+    for (int k = 0; k < 4; k++)
+        id[k] = mesh->vertex_source ? mesh->vertex_source[v[k]] : v[k];
     return tpk_diag_fail(
         diag,
-        "tet %lld (source cell %d) has %s: vertices %d (%.17g, %.17g, %.17g), %d (%.17g, %.17g, %.17g), "
+        "cell %d has %s: points %d (%.17g, %.17g, %.17g), %d (%.17g, %.17g, %.17g), "
         "%d (%.17g, %.17g, %.17g), %d (%.17g, %.17g, %.17g); %lld degenerate tets in all (%lld with a "
         "repeated vertex, %lld flat); pass --drop-degenerate to remove them",
-        (long long)t, mesh->tet_source ? mesh->tet_source[t] : (int32_t)t,
+        mesh->tet_source ? mesh->tet_source[t] : (int32_t)t,
         kinds[t] == TET_REPEATED ? "a repeated vertex" : "zero volume (its 4 vertices are coplanar)",
-        v[0], p[0][0], p[0][1], p[0][2], v[1], p[1][0], p[1][1], p[1][2], v[2], p[2][0], p[2][1], p[2][2],
-        v[3], p[3][0], p[3][1], p[3][2], (long long)degenerate, (long long)repeated,
+        id[0], p[0][0], p[0][1], p[0][2], id[1], p[1][0], p[1][1], p[1][2], id[2], p[2][0], p[2][1], p[2][2],
+        id[3], p[3][0], p[3][1], p[3][2], (long long)degenerate, (long long)repeated,
         (long long)(degenerate - repeated));
 }
 
