@@ -12,7 +12,9 @@ static const char render_help[] =
     "usage: tetpack render FILE.tpk -o IMAGE.png [options]\n"
     "\n"
     "Ray-marches the tets with the reference CPU marcher (shell BVH entry, watertight tet-to-tet\n"
-    "marching, exact integration of the piecewise-linear scalar) on all cores, and writes a PNG.\n"
+    "marching) on all cores and writes a PNG. Emission-absorption: within a tet the scalar is linear,\n"
+    "so each piece is split exactly where the scalar crosses a TF control point; color and extinction\n"
+    "are then linear in distance and are integrated in steps of optical depth <= 0.05.\n"
     "\n"
     "  -o, --output IMAGE.png       output image (written atomically)\n"
     "  --size WxH                   image size (default 512x512)\n"
@@ -26,7 +28,8 @@ static const char render_help[] =
     "  --range LO,HI                scalar range mapped onto the TF (default: the field's range)\n"
     "  --layout tet16|tet20|tet32   which stored layout to march (default: the first present)\n"
     "  --unit-distance D            TF opacity is per distance D (default: bounds diagonal / 100)\n"
-    "  --integration exact|sampled  exact per-segment integration (default) or adaptive sampling\n"
+    "  --integration exact|sampled  per-piece integration as above (default), or point samples\n"
+    "                               at most unit-distance/2 apart\n"
     "  --threads N                  worker threads (default: all cores)\n"
     "  --json                       print render statistics as JSON\n";
 
