@@ -9,6 +9,7 @@
 #include <zstd.h>
 
 #include "harness.h"
+#include "pipeline.h"
 #include "make_vectors.c"
 #include "tetpack.h"
 
@@ -65,19 +66,7 @@ TPK_TEST(vectors_match)
 
 /* ---- decoding the good vectors ---------------------------------------------------------------- */
 
-static double orient(const double a[3], const double b[3], const double c[3], const double d[3])
-{
-    double u[3], v[3], w[3];
-    for (int k = 0; k < 3; k++) {
-        u[k] = b[k] - a[k];
-        v[k] = c[k] - a[k];
-        w[k] = d[k] - a[k];
-    }
-    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-           u[2] * (v[0] * w[1] - v[1] * w[0]);
-}
-
-/* Small integer coordinates: the determinant is exact in double. */
+/* Sign of det[b-a, c-a, d-a] on the stored positions, exact (the converter's predicate). */
 static double orient_ids(const float *pos, int32_t a, int32_t b, int32_t c, int32_t d)
 {
     double p[4][3];
@@ -85,7 +74,7 @@ static double orient_ids(const float *pos, int32_t a, int32_t b, int32_t c, int3
     for (int i = 0; i < 4; i++)
         for (int k = 0; k < 3; k++)
             p[i][k] = pos[3 * id[i] + k];
-    return orient(p[0], p[1], p[2], p[3]);
+    return tpk_orient3d_exact(p[0], p[1], p[2], p[3]);
 }
 
 /* Read chunk (tag, index, step) into dst, which must be exactly its raw size. */
