@@ -201,18 +201,53 @@ static int ends_with(const char *s, const char *suffix)
     return n >= m && strcmp(s + n - m, suffix) == 0;
 }
 
+static int parse_buffer(const char *name, const char *data, size_t size, tpk_mesh *mesh, int *base, int nodes,
+                        tpk_diag *diag)
+{
+    tpk_scan s;
+    tpk_scan_init(&s, name, data, size, diag);
+    s.hash_comments = 1;
+    return nodes ? read_nodes(&s, mesh, base) : read_elements(&s, mesh, *base);
+}
+
 static int parse_file(const char *path, tpk_mesh *mesh, int *base, int nodes, tpk_diag *diag)
 {
     const char *data;
     size_t size;
     if (tpk_map_file(path, &data, &size, diag) != 0)
         return -1;
-    tpk_scan s;
-    tpk_scan_init(&s, path, data, size, diag);
-    s.hash_comments = 1;
-    int rc = nodes ? read_nodes(&s, mesh, base) : read_elements(&s, mesh, *base);
+    int rc = parse_buffer(path, data, size, mesh, base, nodes, diag);
     tpk_unmap_file(data, size);
     return rc;
+}
+
+static int finish_import(int rc, tpk_mesh *out)
+{
+    if (rc == 0) {
+        out->step_count = 1;
+        snprintf(out->format, sizeof out->format, "tetgen");
+    } else {
+        tpk_mesh_free(out);
+    }
+    return rc;
+}
+
+int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t node_size, const char *ele_data,
+                             size_t ele_size, tpk_mesh *out, tpk_diag *diag)
+{
+    if (!out)
+        return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
+    memset(out, 0, sizeof *out);
+    if (diag)
+        diag->message[0] = 0;
+    char node_name[256], ele_name[256];
+    snprintf(node_name, sizeof node_name, "%s.node", name ? name : "(input)");
+    snprintf(ele_name, sizeof ele_name, "%s.ele", name ? name : "(input)");
+    int base = 0;
+    int rc = parse_buffer(node_name, node_data, node_size, out, &base, 1, diag);
+    if (rc == 0)
+        rc = parse_buffer(ele_name, ele_data, ele_size, out, &base, 0, diag);
+    return finish_import(rc, out);
 }
 
 int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag)
@@ -238,14 +273,8 @@ int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag)
     rc = parse_file(node_path, out, &base, 1, diag);
     if (rc == 0)
         rc = parse_file(ele_path, out, &base, 0, diag);
-    if (rc == 0) {
-        out->step_count = 1;
-        snprintf(out->format, sizeof out->format, "tetgen");
-    }
 done:
     free(node_path);
     free(ele_path);
-    if (rc != 0)
-        tpk_mesh_free(out);
-    return rc;
+    return finish_import(rc, out);
 }

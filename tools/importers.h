@@ -16,6 +16,9 @@ int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size
                                  tpk_diag *diag);
 /* TetGen .node/.ele: path may name either file or their common stem. */
 int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* Same from memory (for fuzzing); messages name `name`.node and `name`.ele. */
+int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t node_size, const char *ele_data,
+                             size_t ele_size, tpk_mesh *out, tpk_diag *diag);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one
  * ("vtk", "tetgen"). */
