@@ -3,6 +3,8 @@
  * vx, Tet20 neighbors ordered by opposite vertex id, Tet16 = Tet20 xor-folded, every boundary face
  * exactly once in the shell and outward; and TMAP/VMAP lead back to the source cells. The checks here
  * work from the definitions, not from the converter's layout code. */
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -206,3 +208,59 @@ TPK_TEST(tetgen_hinge_small) { check_sample("tetgen/hinge_small.node", 0); }
 TPK_TEST(tetgen_part1_small) { check_sample("tetgen/part1_small.node", 0); }
 TPK_TEST(hard_inverted_tets) { check_sample("hard/inverted_tets.vtk", 0); }
 TPK_TEST(hard_two_components_orphans) { check_sample("hard/two_components_orphans.node", 0); }
+
+/* DESIGN.md §10: float32 absolute coordinates lose cells far from the origin. The cylinder (0.1 m long,
+ * 0.04 m across) moved to (6.4e6, -4.9e6, 1.2e3), as in a UTM frame: every invariant still holds, and
+ * positions read back (origin + float32) are within 1e-8 m of the source, where float32 absolute
+ * coordinates would be off by up to 0.25 m. */
+TPK_TEST(far_from_origin)
+{
+    tpk_mesh src;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    CHECK_MSG(tpk_import_any(tpk_data_path("sfepy/cylinder.vtk"), NULL, &src, &diag) == 0, "%s", diag.message);
+    const double shift[3] = {6.4e6, -4.9e6, 1.2e3};
+    const char *vtk = tpk_temp_path("far.vtk");
+    FILE *f = fopen(vtk, "w");
+    CHECK(f != NULL);
+    fprintf(f, "# vtk DataFile Version 2.0\nfar\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS %lld double\n",
+            (long long)src.point_count);
+    for (int64_t v = 0; v < src.point_count; v++)
+        fprintf(f, "%.17g %.17g %.17g\n", src.points[3 * v] + shift[0], src.points[3 * v + 1] + shift[1],
+                src.points[3 * v + 2] + shift[2]);
+    fprintf(f, "CELLS %lld %lld\n", (long long)src.cell_count, (long long)(5 * src.cell_count));
+    for (int64_t c = 0; c < src.cell_count; c++) {
+        const int32_t *n = src.cell_conn + src.cell_offsets[c];
+        fprintf(f, "4 %d %d %d %d\n", n[0], n[1], n[2], n[3]);
+    }
+    fprintf(f, "CELL_TYPES %lld\n", (long long)src.cell_count);
+    for (int64_t c = 0; c < src.cell_count; c++)
+        fprintf(f, "10\n");
+    fclose(f);
+
+    char msg[1024] = "";
+    const char *out = tpk_temp_path("far.tpk");
+    loaded l;
+    int ok = convert_sample(vtk, out, 0, msg, sizeof msg) == 0 && load(out, &l, msg, sizeof msg) == 0;
+    if (!ok)
+        tpk_mesh_free(&src);
+    CHECK_MSG(ok, "%s", msg);
+    ok = tpk_check_invariants(&l.mesh, l.nb, msg, sizeof msg) == 0 && check_shell(&l, msg, sizeof msg) == 0 &&
+         check_maps(&l, vtk, msg, sizeof msg) == 0;
+    double worst = 0;
+    uint64_t i;
+    int32_t *vmap = malloc(sizeof *vmap * (size_t)l.mesh.vertex_count);
+    if (ok && vmap && tpk_find_chunk(l.file, TPK_TAG_VMAP, 0, 0, &i) == TPK_OK &&
+        tpk_read_chunk(l.file, i, vmap, sizeof *vmap * (uint64_t)l.mesh.vertex_count) == TPK_OK)
+        for (int64_t v = 0; v < l.mesh.vertex_count; v++)
+            for (int k = 0; k < 3; k++) {
+                double world = l.a32.origin[k] + (double)l.a32.positions[3 * v + k];
+                double error = fabs(world - (src.points[3 * vmap[v] + k] + shift[k]));
+                worst = error > worst ? error : worst;
+            }
+    free(vmap);
+    loaded_free(&l);
+    tpk_mesh_free(&src);
+    CHECK_MSG(ok, "%s", msg);
+    CHECK_MSG(worst < 1e-8, "worst position error %g m", worst);
+}
