@@ -305,15 +305,37 @@ typedef struct permute_job {
     size_t elem_size;        /* 4, 8, 12, 16 or 24 bytes */
 } permute_job;
 
+/* Element types of the sizes permuted here, so each copy is a plain load and store rather than a
+ * memcpy call with a run-time size (23M calls on a 10M-tet mesh). */
+typedef struct bytes12 {
+    uint32_t w[3];
+} bytes12;
+typedef struct bytes16 {
+    uint32_t w[4];
+} bytes16;
+typedef struct bytes24 {
+    uint64_t w[3];
+} bytes24;
+
+#define GATHER(type)                                                          \
+    for (int64_t i = begin; i < end; i++)                                     \
+        ((type *)job->dst)[i] = ((const type *)job->src)[job->order[i]]
+
 static void permute_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     const permute_job *job = ctx;
-    const char *src = job->src;
-    char *dst = job->dst;
-    size_t size = job->elem_size;
     (void)worker;
-    for (int64_t i = begin; i < end; i++)
-        memcpy(dst + (size_t)i * size, src + (size_t)job->order[i] * size, size);
+    switch (job->elem_size) {
+    case 4: GATHER(uint32_t); break;
+    case 8: GATHER(uint64_t); break;
+    case 12: GATHER(bytes12); break;
+    case 16: GATHER(bytes16); break;
+    case 24: GATHER(bytes24); break;
+    default:
+        for (int64_t i = begin; i < end; i++)
+            memcpy((char *)job->dst + (size_t)i * job->elem_size,
+                   (const char *)job->src + (size_t)job->order[i] * job->elem_size, job->elem_size);
+    }
 }
 
 /* Replaces *array (count elements of elem_size) by its permutation; frees the old array. */
