@@ -16,7 +16,7 @@ static void *install_decoded(tpk_file *file, uint64_t i, void *mine)
         file->decoded[i] = kept = mine;
     pthread_mutex_unlock(&file->lock);
     if (kept != mine)
-        tpk_file_free(file, mine);
+        tpki_file_free(file, mine);
     return kept;
 }
 
@@ -30,29 +30,29 @@ static tpk_result decoded_copy(tpk_file *file, uint64_t i, const void **out)
         return TPK_OK;
     }
     const tpk_dir_entry *e = &file->entries[i];
-    void *mine = tpk_file_alloc(file, e->raw_size);
+    void *mine = tpki_file_alloc(file, e->raw_size);
     if (!mine)
-        return tpk_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64 " (%" PRIu64 " bytes)",
+        return tpki_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64 " (%" PRIu64 " bytes)",
                              i, e->raw_size);
-    tpk_result r = tpk_file_decode(file, i, mine);
-    if (r == TPK_OK && tpk_file_needs_sum(file, i))
-        r = tpk_file_check_sum(file, i, mine);
+    tpk_result r = tpki_file_decode(file, i, mine);
+    if (r == TPK_OK && tpki_file_needs_sum(file, i))
+        r = tpki_file_check_sum(file, i, mine);
     if (r != TPK_OK) {
-        tpk_file_free(file, mine);
+        tpki_file_free(file, mine);
         return r;
     }
     *out = install_decoded(file, i, mine);
     return TPK_OK;
 }
 
-tpk_result tpk_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out)
+tpk_result tpki_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out)
 {
     const tpk_dir_entry *e = &file->entries[i];
     if (e->codec != TPK_CODEC_NONE)
         return decoded_copy(file, i, out);
     const void *raw = file->data + e->offset;
-    if (tpk_file_needs_sum(file, i)) {
-        tpk_result r = tpk_file_check_sum(file, i, raw);
+    if (tpki_file_needs_sum(file, i)) {
+        tpk_result r = tpki_file_check_sum(file, i, raw);
         if (r != TPK_OK)
             return r;
     }
@@ -60,14 +60,14 @@ tpk_result tpk_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out)
     return TPK_OK;
 }
 
-tpk_result tpk_file_check_ids(tpk_file *file, uint64_t i, const void *raw)
+tpk_result tpki_file_check_ids(tpk_file *file, uint64_t i, const void *raw)
 {
     if (atomic_load(&file->chunk_state[i]) & TPK_CHUNK_IDS_OK)
         return TPK_OK;
     tpki_diag diag;
-    tpk_result r = tpk_check_records(&file->header, i, &file->entries[i], raw, &diag);
+    tpk_result r = tpki_check_records(&file->header, i, &file->entries[i], raw, &diag);
     if (r != TPK_OK)
-        return tpk_file_report(file, r, diag.text);
+        return tpki_file_report(file, r, diag.text);
     atomic_fetch_or(&file->chunk_state[i], TPK_CHUNK_IDS_OK);
     return TPK_OK;
 }
@@ -78,12 +78,12 @@ static tpk_result load_chunk(tpk_file *file, uint32_t tag, uint32_t index, uint3
     uint64_t i;
     if (tpk_find_chunk(file, tag, index, step, &i) != TPK_OK) {
         char name[16];
-        tpk_tag_name(tag, name);
-        return tpk_file_fail(file, TPK_ERR_NOT_FOUND, "no %s chunk with index %" PRIu32 " step %" PRIu32, name,
+        tpki_tag_name(tag, name);
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "no %s chunk with index %" PRIu32 " step %" PRIu32, name,
                              index, step);
     }
-    tpk_result r = tpk_file_chunk_bytes(file, i, out);
-    return r == TPK_OK ? tpk_file_check_ids(file, i, *out) : r;
+    tpk_result r = tpki_file_chunk_bytes(file, i, out);
+    return r == TPK_OK ? tpki_file_check_ids(file, i, *out) : r;
 }
 
 static uint32_t layout_tag(tpk_layout layout)
@@ -106,7 +106,7 @@ static tpk_result layout_not_found(tpk_file *file, tpk_layout layout)
             snprintf(present + strlen(present), sizeof present - strlen(present), "%sTet%d",
                      present[0] ? ", " : "", (int)all[k]);
     }
-    return tpk_file_fail(file, TPK_ERR_NOT_FOUND, "the file has no Tet%d layout; layouts present: %s", (int)layout,
+    return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "the file has no Tet%d layout; layouts present: %s", (int)layout,
                          present);
 }
 
@@ -138,10 +138,10 @@ static tpk_result pick_field(tpk_file *file, const char *field_name, uint32_t *o
         return TPK_OK;
     }
     if (tpk_find_field(file, field_name, out_i) != TPK_OK)
-        return tpk_file_fail(file, TPK_ERR_NOT_FOUND, "no field named '%s' (the file has %" PRIu32 " fields)",
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "no field named '%s' (the file has %" PRIu32 " fields)",
                              field_name, file->field_count);
     if (file->fields[*out_i].association != TPK_ASSOC_POINT)
-        return tpk_file_fail(file, TPK_ERR_NOT_FOUND,
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND,
                              "field '%s' is per-tet; tpk_load_arrays needs a per-point field (read its 'FDAT' "
                              "chunk with tpk_read_chunk)", field_name);
     return TPK_OK;
@@ -154,7 +154,7 @@ static tpk_result load_scalars(tpk_file *file, const char *field_name, uint32_t 
     if (r != TPK_OK || f == UINT32_MAX)
         return r;
     if (step >= file->fields[f].step_count)
-        return tpk_file_fail(file, TPK_ERR_NOT_FOUND, "field '%s' has %" PRIu32 " steps, step %" PRIu32 " asked",
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "field '%s' has %" PRIu32 " steps, step %" PRIu32 " asked",
                              file->fields[f].name, file->fields[f].step_count, step);
     const void *values;
     r = load_chunk(file, TPK_TAG_FDAT, f, step, &values);
@@ -170,8 +170,8 @@ tpk_result tpk_load_arrays(tpk_file *file, tpk_layout layout, const char *field_
         return TPK_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     if (!layout_tag(layout))
-        return tpk_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "layout %d is not 16, 20 or 32", (int)layout);
-    tpk_result r = tpk_file_usable(file);
+        return tpki_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "layout %d is not 16, 20 or 32", (int)layout);
+    tpk_result r = tpki_file_usable(file);
     if (r != TPK_OK)
         return r;
     tpk_mesh_arrays m = {.vertex_count = file->header.vertex_count, .tet_count = file->header.tet_count,

@@ -58,66 +58,66 @@ struct tpk_file {
 tpk_result tpki_fail(tpki_diag *diag, tpk_result code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 /* "'TT16'" when the four bytes are printable ASCII, else "0x........". */
-void tpk_tag_name(uint32_t tag, char out[16]);
+void tpki_tag_name(uint32_t tag, char out[16]);
 /* "chunk 3 'TT16' at offset 4096", the prefix of every per-chunk message. */
-void tpk_entry_name(uint64_t i, const tpk_dir_entry *e, char out[80]);
+void tpki_entry_name(uint64_t i, const tpk_dir_entry *e, char out[80]);
 
 /* ---- handle helpers (reader.c) ---- */
 /* Allocation through the handle's allocator; a size of 0 gets 1 byte, one over SIZE_MAX gets NULL. */
-void *tpk_file_alloc(const tpk_file *file, uint64_t size);
-void tpk_file_free(const tpk_file *file, void *ptr);
+void *tpki_file_alloc(const tpk_file *file, uint64_t size);
+void tpki_file_free(const tpk_file *file, void *ptr);
 /* Store the text, call the message callback, poison the handle unless the code is a caller-side or
  * resource error (INVALID_ARGUMENT, NOT_FOUND, OUT_OF_MEMORY, LIMIT). Returns code. */
-tpk_result tpk_file_report(tpk_file *file, tpk_result code, const char *text);
-tpk_result tpk_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
+tpk_result tpki_file_report(tpk_file *file, tpk_result code, const char *text);
+tpk_result tpki_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 /* TPK_ERR_BAD_STATE (reported) when the handle is poisoned, else TPK_OK. */
-tpk_result tpk_file_usable(tpk_file *file);
+tpk_result tpki_file_usable(tpk_file *file);
 /* Decode chunk i into dst (raw_size bytes) without checking its checksum. */
-tpk_result tpk_file_decode(tpk_file *file, uint64_t i, void *dst);
+tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst);
 /* Whether chunk i's checksum is still to be checked before its content is used (not TRUSTED, not done). */
-int tpk_file_needs_sum(const tpk_file *file, uint64_t i);
+int tpki_file_needs_sum(const tpk_file *file, uint64_t i);
 /* Compare raw bytes with chunk i's checksum, remember success. */
-tpk_result tpk_file_check_sum(tpk_file *file, uint64_t i, const void *raw);
+tpk_result tpki_file_check_sum(tpk_file *file, uint64_t i, const void *raw);
 /* Verified raw bytes of chunk i: a view for codec none, a handle-owned decoded copy for zstd
  * (kept until tpk_close). The checksum is checked on first use unless the file is TRUSTED. */
-tpk_result tpk_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out);
+tpk_result tpki_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out);
 /* Rule 17 on chunk i's raw bytes, remembered per chunk. */
-tpk_result tpk_file_check_ids(tpk_file *file, uint64_t i, const void *raw);
+tpk_result tpki_file_check_ids(tpk_file *file, uint64_t i, const void *raw);
 /* Checksum (decoding a zstd chunk into a temporary buffer) and, if check_ids, rule 17 (verify.c). */
-tpk_result tpk_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids);
+tpk_result tpki_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids);
 
 /* ---- pure rules (verify.c), shared by reader and writer ---- */
-void tpk_resolve_limits(const tpk_limits *in, tpk_limits *out);
+void tpki_resolve_limits(const tpk_limits *in, tpk_limits *out);
 /* Fill NULL alloc/free with malloc/free wrappers. */
-void tpk_resolve_allocator(const tpk_allocator *in, tpk_allocator *out);
+void tpki_resolve_allocator(const tpk_allocator *in, tpk_allocator *out);
 /* Size of one element of a type, 0 for an unknown type. */
-uint32_t tpk_elem_type_size(uint32_t elem_type);
+uint32_t tpki_elem_type_size(uint32_t elem_type);
 /* Whether the tag is one of TPK_TAG_*, the element type it must have, and whether a writer must mark
  * it REQUIRED (out pointers may be NULL). */
-int tpk_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required);
+int tpki_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required);
 /* Rule 5: header_size, dir_entry_size, flags, reserved bytes. */
-tpk_result tpk_check_header_fields(const tpk_header *h, tpki_diag *diag);
+tpk_result tpki_check_header_fields(const tpk_header *h, tpki_diag *diag);
 /* Rules 7 and 8: counts, chunk_count limit, directory placement against h->file_size. */
-tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpki_diag *diag);
+tpk_result tpki_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpki_diag *diag);
 /* Rules 10, 11 and the bounds half of 12 for entry i; *total_raw accumulates raw sizes. */
-tpk_result tpk_check_entry(const tpk_header *h, const tpk_limits *limits, uint64_t i,
+tpk_result tpki_check_entry(const tpk_header *h, const tpk_limits *limits, uint64_t i,
                            const tpk_dir_entry *e, uint64_t *total_raw, tpki_diag *diag);
 /* The overlap half of rule 12 over all entries (scratch memory from the allocator). */
-tpk_result tpk_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
+tpk_result tpki_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
                               const tpk_allocator *allocator, tpki_diag *diag);
 /* Rules 13 and 14 over all entries. A writer allows unknown (vendor) chunks marked REQUIRED. */
-tpk_result tpk_check_tags(const tpk_header *h, const tpk_dir_entry *entries, int allow_unknown_required,
+tpk_result tpki_check_tags(const tpk_header *h, const tpk_dir_entry *entries, int allow_unknown_required,
                           const tpk_allocator *allocator, tpki_diag *diag);
 /* Rule 15: field descriptors, FDAT and TIME chunks agree. fields may be NULL when count is 0. */
-tpk_result tpk_check_fields(const tpk_header *h, const tpk_dir_entry *entries,
+tpk_result tpki_check_fields(const tpk_header *h, const tpk_dir_entry *entries,
                             const tpk_field_desc *fields, uint32_t field_count,
                             const tpk_allocator *allocator, tpki_diag *diag);
 /* Rule 17: id ranges in the raw bytes of entry i (TT32, TT20, SHEL, TMAP; others pass). */
-tpk_result tpk_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
+tpk_result tpki_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
                              tpki_diag *diag);
 /* Rules 5, 7, 8 and 10 to 15 on a header and directory built in memory (the writer's self-check). */
-tpk_result tpk_check_layout(const tpk_header *h, const tpk_dir_entry *entries,
+tpk_result tpki_check_layout(const tpk_header *h, const tpk_dir_entry *entries,
                             const tpk_field_desc *fields, uint32_t field_count,
                             const tpk_allocator *allocator, tpki_diag *diag);
 

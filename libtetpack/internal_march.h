@@ -47,7 +47,7 @@ typedef struct tpk_proj {
 } tpk_proj;
 
 /* Set up the frame; returns 0, or -1 for a zero or non-finite direction / non-finite origin. */
-int tpk_ray_frame_init(tpk_ray_frame *frame, const double origin[3], const double org[3],
+int tpki_ray_frame_init(tpk_ray_frame *frame, const double origin[3], const double org[3],
                        const double dir[3]);
 
 /* Project vertex v (a valid id). Every decision about v uses this one function, so the same vertex
@@ -65,7 +65,7 @@ static inline tpk_proj tpk_project(const float *positions, const tpk_ray_frame *
 
 /* Exact sign (-1, 0, +1) of a*d - b*c for doubles (error-free products and sums; correct unless the
  * products underflow). The slow path of tpk_edge_sign. */
-int tpk_det2_sign_exact(double a, double b, double c, double d);
+int tpki_det2_sign_exact(double a, double b, double c, double d);
 
 /* The 2-D edge function of the directed edge i -> j: orient(P_i, P_j, o), o the ray's point (0,0)
  * symbolically perturbed to (eps, eps^2). It is evaluated in the canonical order (lower id first) and
@@ -96,7 +96,7 @@ static inline int tpk_edge_sign(int32_t i, const tpk_proj *pi, int32_t j, const 
     } else if (det < -bound) {
         sign = -1;
     } else {
-        sign = tpk_det2_sign_exact(lo->x, lo->y, hi->x, hi->y);
+        sign = tpki_det2_sign_exact(lo->x, lo->y, hi->x, hi->y);
         if (sign == 0 || (det > 0 && sign < 0) || (det < 0 && sign > 0) || det != det)
             det = 0.0; /* exactly 0 when the point is exactly on the edge's line */
         if (sign == 0) {
@@ -120,15 +120,15 @@ typedef struct tpk_face_hit {
 /* Weights for a crossing on the line of one edge of the face (edge value exactly 0): interpolated
  * along that edge from its two endpoints only, in canonical order, so every face sharing the edge
  * gives a bit-identical t (ties between shell entries at one point are then exact). */
-void tpk_edge_weights(const tpk_face_hit *h, int zero_edge, double w[3]);
+void tpki_edge_weights(const tpk_face_hit *h, int zero_edge, double w[3]);
 
 /* Barycentric weights of the crossing point: the edge values (the same weights give t and the scalar).
- * A crossing through a vertex gets weights (1,0,0) exactly; through an edge, see tpk_edge_weights. */
+ * A crossing through a vertex gets weights (1,0,0) exactly; through an edge, see tpki_edge_weights. */
 static inline void tpk_face_weights(const tpk_face_hit *h, double w[3])
 {
     int zeros = (h->e[0] == 0.0) + (h->e[1] == 0.0) + (h->e[2] == 0.0);
     if (zeros == 1) {
-        tpk_edge_weights(h, h->e[0] == 0.0 ? 0 : h->e[1] == 0.0 ? 1 : 2, w);
+        tpki_edge_weights(h, h->e[0] == 0.0 ? 0 : h->e[1] == 0.0 ? 1 : 2, w);
         return;
     }
     double sum = h->e[0] + h->e[1] + h->e[2];
@@ -144,11 +144,11 @@ static inline void tpk_face_weights(const tpk_face_hit *h, double w[3])
 
 /* Test shell face (a,b,c) (outward winding) against the line: returns 1 if the line enters the volume
  * through it (then *hit is filled with v = (a,b,c) and t), 0 otherwise. */
-int tpk_shell_face_entry(const float *positions, const tpk_ray_frame *frame, const tpk_shell_face *face,
+int tpki_shell_face_entry(const float *positions, const tpk_ray_frame *frame, const tpk_shell_face *face,
                          tpk_face_hit *hit);
 
 /* Build the BVH over mesh->shell into marcher->nodes/faces. Shell records must be validated first. */
-tpk_result tpk_shell_bvh_build(tpk_marcher *marcher);
+tpk_result tpki_shell_bvh_build(tpk_marcher *marcher);
 
 /* An entry crossing found by the BVH: its t and its index in marcher->faces. */
 typedef struct tpk_entry {
@@ -160,7 +160,7 @@ typedef struct tpk_entry {
  * every entry at or after the last entry before tmin. Returns the count (entries sorted by t, then
  * face index) in *out, which is `stack_buf` (capacity stack_cap) or a malloc'ed array the caller frees
  * when it differs from stack_buf. Returns TPK_ERR_OUT_OF_MEMORY on allocation failure. */
-tpk_result tpk_shell_entries(const tpk_marcher *marcher, const tpk_ray_frame *frame, const double dir[3],
+tpk_result tpki_shell_entries(const tpk_marcher *marcher, const tpk_ray_frame *frame, const double dir[3],
                              double tmin, double tmax, tpk_entry *stack_buf, int64_t stack_cap,
                              tpk_entry **out, int64_t *out_count);
 

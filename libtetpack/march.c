@@ -31,7 +31,7 @@ static void two_one_diff(double a1, double a0, double b, double *x2, double *x1,
     *x2 = two_sum(a1, i, x1);
 }
 
-int tpk_det2_sign_exact(double a, double b, double c, double d)
+int tpki_det2_sign_exact(double a, double b, double c, double d)
 {
     double ad_lo, bc_lo;
     double ad = two_prod(a, d, &ad_lo);
@@ -53,7 +53,7 @@ int tpk_det2_sign_exact(double a, double b, double c, double d)
 
 /* ---- Ray frame ----------------------------------------------------------------------------------- */
 
-int tpk_ray_frame_init(tpk_ray_frame *f, const double origin[3], const double org[3], const double dir[3])
+int tpki_ray_frame_init(tpk_ray_frame *f, const double origin[3], const double org[3], const double dir[3])
 {
     for (int k = 0; k < 3; k++) {
         if (!isfinite(org[k]) || !isfinite(dir[k]))
@@ -82,7 +82,7 @@ int tpk_ray_frame_init(tpk_ray_frame *f, const double origin[3], const double or
     return 0;
 }
 
-void tpk_edge_weights(const tpk_face_hit *h, int zero_edge, double w[3])
+void tpki_edge_weights(const tpk_face_hit *h, int zero_edge, double w[3])
 {
     int i = zero_edge, j = (zero_edge + 1) % 3, other = (zero_edge + 2) % 3;
     int lo = h->v[i] < h->v[j] ? i : j, hi = lo == i ? j : i;
@@ -133,7 +133,7 @@ tpk_result tpk_marcher_create(tpk_marcher **out, const tpk_mesh_arrays *mesh)
     if (!m)
         return TPK_ERR_OUT_OF_MEMORY;
     m->mesh = *mesh;
-    tpk_result r = tpk_shell_bvh_build(m);
+    tpk_result r = tpki_shell_bvh_build(m);
     if (r != TPK_OK) {
         tpk_marcher_destroy(m);
         return r;
@@ -314,7 +314,7 @@ static tpk_result run_entry(march_params *p, const tpk_entry *entry)
     const tpk_marcher *m = p->m;
     const tpk_shell_face *face = &m->faces[entry->face];
     tpk_face_hit hit;
-    if (!tpk_shell_face_entry(m->mesh.positions, p->frame, face, &hit))
+    if (!tpki_shell_face_entry(m->mesh.positions, p->frame, face, &hit))
         return TPK_ERR_MESH; /* the same test said yes a moment ago: cannot happen */
     return march_run_any(p, &hit, face->t);
 }
@@ -368,7 +368,7 @@ tpk_result tpk_march_ray(const tpk_marcher *m, const double org[3], const double
     if (!m || !org || !dir || isnan(tmin) || isnan(tmax))
         return TPK_ERR_INVALID_ARGUMENT;
     tpk_ray_frame frame;
-    if (tpk_ray_frame_init(&frame, m->mesh.origin, org, dir) != 0)
+    if (tpki_ray_frame_init(&frame, m->mesh.origin, org, dir) != 0)
         return TPK_ERR_INVALID_ARGUMENT;
     if (tmax < tmin || m->face_count == 0)
         return TPK_OK;
@@ -376,7 +376,7 @@ tpk_result tpk_march_ray(const tpk_marcher *m, const double org[3], const double
     tpk_entry stack_entries[ENTRY_STACK];
     tpk_entry *entries = NULL;
     int64_t entry_count = 0;
-    tpk_result r = tpk_shell_entries(m, &frame, dir, tmin, tmax, stack_entries, ENTRY_STACK, &entries,
+    tpk_result r = tpki_shell_entries(m, &frame, dir, tmin, tmax, stack_entries, ENTRY_STACK, &entries,
                                      &entry_count);
     if (r != TPK_OK)
         return r;

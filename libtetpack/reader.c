@@ -16,14 +16,14 @@
 
 /* ---- handle basics --------------------------------------------------------------------------------- */
 
-void *tpk_file_alloc(const tpk_file *file, uint64_t size)
+void *tpki_file_alloc(const tpk_file *file, uint64_t size)
 {
     if (size > SIZE_MAX)
         return NULL;
     return file->allocator.alloc(file->allocator.user, size ? (size_t)size : 1);
 }
 
-void tpk_file_free(const tpk_file *file, void *ptr)
+void tpki_file_free(const tpk_file *file, void *ptr)
 {
     if (ptr)
         file->allocator.free(file->allocator.user, ptr);
@@ -48,12 +48,12 @@ static tpk_result report(tpk_file *file, tpk_result code, const char *text, int 
     return code;
 }
 
-tpk_result tpk_file_report(tpk_file *file, tpk_result code, const char *text)
+tpk_result tpki_file_report(tpk_file *file, tpk_result code, const char *text)
 {
     return report(file, code, text, 1);
 }
 
-tpk_result tpk_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
+tpk_result tpki_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
 {
     tpki_diag diag;
     va_list ap;
@@ -63,7 +63,7 @@ tpk_result tpk_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
     return report(file, code, diag.text, 1);
 }
 
-tpk_result tpk_file_usable(tpk_file *file)
+tpk_result tpki_file_usable(tpk_file *file)
 {
     if (!atomic_load(&file->poisoned))
         return TPK_OK;
@@ -87,14 +87,14 @@ static tpk_file *file_create(const tpk_open_options *options)
     if (options)
         memcpy(&opt, options, options->size && options->size < sizeof opt ? options->size : sizeof opt);
     tpk_allocator allocator;
-    tpk_resolve_allocator(&opt.allocator, &allocator);
+    tpki_resolve_allocator(&opt.allocator, &allocator);
     tpk_file *file = allocator.alloc(allocator.user, sizeof *file);
     if (!file)
         return NULL;
     memset(file, 0, sizeof *file);
     file->allocator = allocator;
     file->flags = opt.flags;
-    tpk_resolve_limits(&opt.limits, &file->limits);
+    tpki_resolve_limits(&opt.limits, &file->limits);
     file->message = opt.message;
     file->message_user = opt.message_user;
     atomic_init(&file->poisoned, 0);
@@ -110,11 +110,11 @@ void tpk_close(tpk_file *file)
     if (!file)
         return;
     for (uint64_t i = 0; file->decoded && i < file->header.chunk_count; i++)
-        tpk_file_free(file, file->decoded[i]);
-    tpk_file_free(file, file->decoded);
-    tpk_file_free(file, file->entries);
-    tpk_file_free(file, (void *)file->chunk_state);
-    tpk_file_free(file, file->fields);
+        tpki_file_free(file, file->decoded[i]);
+    tpki_file_free(file, file->decoded);
+    tpki_file_free(file, file->entries);
+    tpki_file_free(file, (void *)file->chunk_state);
+    tpki_file_free(file, file->fields);
     if (file->mapping)
         munmap(file->mapping, file->mapping_size);
     pthread_mutex_destroy(&file->lock);
@@ -174,7 +174,7 @@ static tpk_result check_header(const uint8_t *data, uint64_t size, const tpk_lim
     if (r == TPK_OK)
         r = check_header_start(data, size, h, diag);
     if (r == TPK_OK)
-        r = tpk_check_header_fields(h, diag);
+        r = tpki_check_header_fields(h, diag);
     if (r != TPK_OK)
         return r;
     if (h->file_size > size)
@@ -183,7 +183,7 @@ static tpk_result check_header(const uint8_t *data, uint64_t size, const tpk_lim
     if (h->file_size < size)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "header: file_size is %" PRIu64 " but the file has %" PRIu64
                              " bytes (trailing data)", h->file_size, size);
-    r = tpk_check_header_counts(h, limits, diag);
+    r = tpki_check_header_counts(h, limits, diag);
     if (r != TPK_OK)
         return r;
     uint64_t sum = XXH64(data + h->directory_offset, h->chunk_count * TPK_DIR_ENTRY_SIZE, 0);
@@ -199,9 +199,9 @@ static tpk_result check_header(const uint8_t *data, uint64_t size, const tpk_lim
 static tpk_result load_directory(tpk_file *file, tpki_diag *diag)
 {
     uint64_t count = file->header.chunk_count;
-    file->entries = tpk_file_alloc(file, count * sizeof *file->entries);
-    file->chunk_state = tpk_file_alloc(file, count * sizeof *file->chunk_state);
-    file->decoded = tpk_file_alloc(file, count * sizeof *file->decoded);
+    file->entries = tpki_file_alloc(file, count * sizeof *file->entries);
+    file->chunk_state = tpki_file_alloc(file, count * sizeof *file->chunk_state);
+    file->decoded = tpki_file_alloc(file, count * sizeof *file->decoded);
     if (file->decoded)
         memset(file->decoded, 0, count * sizeof *file->decoded);
     if (!file->entries || !file->chunk_state || !file->decoded)
@@ -212,13 +212,13 @@ static tpk_result load_directory(tpk_file *file, tpki_diag *diag)
         atomic_init(&file->chunk_state[i], 0);
     uint64_t total = 0;
     for (uint64_t i = 0; i < count; i++) {
-        tpk_result r = tpk_check_entry(&file->header, &file->limits, i, &file->entries[i], &total, diag);
+        tpk_result r = tpki_check_entry(&file->header, &file->limits, i, &file->entries[i], &total, diag);
         if (r != TPK_OK)
             return r;
     }
-    tpk_result r = tpk_check_overlaps(&file->header, file->entries, &file->allocator, diag);
+    tpk_result r = tpki_check_overlaps(&file->header, file->entries, &file->allocator, diag);
     if (r == TPK_OK)
-        r = tpk_check_tags(&file->header, file->entries, 0, &file->allocator, diag);
+        r = tpki_check_tags(&file->header, file->entries, 0, &file->allocator, diag);
     return r;
 }
 
@@ -229,25 +229,25 @@ static tpk_result decode_zstd(tpk_file *file, uint64_t i, void *dst)
     const tpk_dir_entry *e = &file->entries[i];
     const uint8_t *src = file->data + e->offset;
     char name[80];
-    tpk_entry_name(i, &file->entries[i], name);
+    tpki_entry_name(i, &file->entries[i], name);
     unsigned long long declared = ZSTD_getFrameContentSize(src, e->stored_size);
     if (declared == ZSTD_CONTENTSIZE_ERROR)
-        return tpk_file_fail(file, TPK_ERR_DECOMPRESS, "%s: the %" PRIu64 " stored bytes are not a zstd frame",
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: the %" PRIu64 " stored bytes are not a zstd frame",
                              name, e->stored_size);
     if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared != e->raw_size)
-        return tpk_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd frame declares %llu bytes but raw_size is %" PRIu64,
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd frame declares %llu bytes but raw_size is %" PRIu64,
                              name, declared, e->raw_size);
     size_t got = ZSTD_decompress(dst, e->raw_size, src, e->stored_size);
     if (ZSTD_isError(got))
-        return tpk_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd: %s (raw_size %" PRIu64 ")", name,
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd: %s (raw_size %" PRIu64 ")", name,
                              ZSTD_getErrorName(got), e->raw_size);
     if (got != e->raw_size)
-        return tpk_file_fail(file, TPK_ERR_DECOMPRESS, "%s: decoded %zu bytes but raw_size is %" PRIu64, name, got,
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: decoded %zu bytes but raw_size is %" PRIu64, name, got,
                              e->raw_size);
     return TPK_OK;
 }
 
-tpk_result tpk_file_decode(tpk_file *file, uint64_t i, void *dst)
+tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst)
 {
     const tpk_dir_entry *e = &file->entries[i];
     if (e->codec == TPK_CODEC_ZSTD)
@@ -257,14 +257,14 @@ tpk_result tpk_file_decode(tpk_file *file, uint64_t i, void *dst)
     return TPK_OK;
 }
 
-tpk_result tpk_file_check_sum(tpk_file *file, uint64_t i, const void *raw)
+tpk_result tpki_file_check_sum(tpk_file *file, uint64_t i, const void *raw)
 {
     const tpk_dir_entry *e = &file->entries[i];
     uint64_t sum = XXH64(raw, e->raw_size, 0);
     if (sum != e->checksum) {
         char name[80];
-        tpk_entry_name(i, &file->entries[i], name);
-        return tpk_file_fail(file, TPK_ERR_CHUNK_CHECKSUM,
+        tpki_entry_name(i, &file->entries[i], name);
+        return tpki_file_fail(file, TPK_ERR_CHUNK_CHECKSUM,
                              "%s: checksum of the %" PRIu64 " raw bytes is 0x%016" PRIx64 ", directory says 0x%016" PRIx64,
                              name, e->raw_size, sum, e->checksum);
     }
@@ -280,19 +280,19 @@ static tpk_result load_fields(tpk_file *file)
     if (tpk_find_chunk(file, TPK_TAG_FDSC, 0, 0, &i) != TPK_OK)
         return TPK_OK;
     const tpk_dir_entry *e = &file->entries[i];
-    file->fields = tpk_file_alloc(file, e->raw_size);
+    file->fields = tpki_file_alloc(file, e->raw_size);
     if (!file->fields)
-        return tpk_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory for %" PRIu64 " field descriptors",
+        return tpki_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory for %" PRIu64 " field descriptors",
                              e->elem_count);
-    tpk_result r = tpk_file_decode(file, i, file->fields);
+    tpk_result r = tpki_file_decode(file, i, file->fields);
     if (r == TPK_OK && !(file->flags & TPK_OPEN_TRUSTED))
-        r = tpk_file_check_sum(file, i, file->fields);
+        r = tpki_file_check_sum(file, i, file->fields);
     if (r != TPK_OK)
         return r;
     file->field_count = (uint32_t)e->elem_count;
     tpki_diag diag;
-    r = tpk_check_fields(&file->header, file->entries, file->fields, file->field_count, &file->allocator, &diag);
-    return r == TPK_OK ? r : tpk_file_report(file, r, diag.text);
+    r = tpki_check_fields(&file->header, file->entries, file->fields, file->field_count, &file->allocator, &diag);
+    return r == TPK_OK ? r : tpki_file_report(file, r, diag.text);
 }
 
 /* ---- open ------------------------------------------------------------------------------------------- */
@@ -301,15 +301,15 @@ static tpk_result validate(tpk_file *file)
 {
     tpki_diag diag;
     if (!host_is_little_endian())
-        return tpk_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "libtetpack supports little-endian hosts only");
+        return tpki_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "libtetpack supports little-endian hosts only");
     tpk_result r = check_header(file->data, file->size, &file->limits, &file->header, &diag);
     if (r == TPK_OK)
         r = load_directory(file, &diag);
     if (r != TPK_OK)
-        return tpk_file_report(file, r, diag.text);
+        return tpki_file_report(file, r, diag.text);
     r = load_fields(file);
     for (uint64_t i = 0; r == TPK_OK && (file->flags & TPK_OPEN_VERIFY_ALL) && i < file->header.chunk_count; i++)
-        r = tpk_file_verify_chunk(file, i, 0);
+        r = tpki_file_verify_chunk(file, i, 0);
     return r;
 }
 
@@ -359,7 +359,7 @@ static tpk_result map_path(tpk_file *file, const char *path)
         goto fail;
     if (!S_ISREG(st.st_mode)) {
         close(fd);
-        return tpk_file_fail(file, TPK_ERR_IO, "'%s': not a regular file", path);
+        return tpki_file_fail(file, TPK_ERR_IO, "'%s': not a regular file", path);
     }
     if (st.st_size > 0) {
         void *map = mmap(NULL, (size_t)st.st_size, PROT_READ, MAP_PRIVATE, fd, 0);
@@ -376,7 +376,7 @@ fail:
     strerror_r(errno, reason, sizeof reason);
     if (fd >= 0)
         close(fd);
-    return tpk_file_fail(file, TPK_ERR_IO, "cannot open '%s': %s", path, reason);
+    return tpki_file_fail(file, TPK_ERR_IO, "cannot open '%s': %s", path, reason);
 }
 
 tpk_result tpk_open_path(tpk_file **out, const char *path, const tpk_open_options *options, char *err_text,
@@ -436,12 +436,12 @@ tpk_result tpk_find_chunk(const tpk_file *file, uint32_t tag, uint32_t index, ui
 static tpk_result check_chunk_arg(tpk_file *file, uint64_t i, const char *function)
 {
     if (i >= file->header.chunk_count)
-        return tpk_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "%s: chunk %" PRIu64 " of %" PRIu64, function, i,
+        return tpki_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "%s: chunk %" PRIu64 " of %" PRIu64, function, i,
                              file->header.chunk_count);
-    return tpk_file_usable(file);
+    return tpki_file_usable(file);
 }
 
-int tpk_file_needs_sum(const tpk_file *file, uint64_t i)
+int tpki_file_needs_sum(const tpk_file *file, uint64_t i)
 {
     return !(file->flags & TPK_OPEN_TRUSTED) && !(atomic_load(&file->chunk_state[i]) & TPK_CHUNK_SUM_OK);
 }
@@ -456,12 +456,12 @@ tpk_result tpk_view_chunk(tpk_file *file, uint64_t i, const void **out_data, uin
     const tpk_dir_entry *e = &file->entries[i];
     if (e->codec != TPK_CODEC_NONE) {
         char name[80], text[160];
-        tpk_entry_name(i, &file->entries[i], name);
+        tpki_entry_name(i, &file->entries[i], name);
         snprintf(text, sizeof text, "%s is zstd-compressed: use tpk_read_chunk", name);
         return report(file, TPK_ERR_UNSUPPORTED_CHUNK, text, 0); /* a caller mistake, not corruption */
     }
     const void *raw = file->data + e->offset;
-    if (tpk_file_needs_sum(file, i) && (r = tpk_file_check_sum(file, i, raw)) != TPK_OK)
+    if (tpki_file_needs_sum(file, i) && (r = tpki_file_check_sum(file, i, raw)) != TPK_OK)
         return r;
     *out_data = raw;
     *out_size = e->raw_size;
@@ -477,12 +477,12 @@ tpk_result tpk_read_chunk(tpk_file *file, uint64_t i, void *dst, uint64_t dst_si
         return r;
     const tpk_dir_entry *e = &file->entries[i];
     if (dst_size < e->raw_size || (!dst && e->raw_size > 0))
-        return tpk_file_fail(file, TPK_ERR_INVALID_ARGUMENT,
+        return tpki_file_fail(file, TPK_ERR_INVALID_ARGUMENT,
                              "tpk_read_chunk: chunk %" PRIu64 " needs %" PRIu64 " bytes, dst has %" PRIu64, i,
                              e->raw_size, dst ? dst_size : 0);
-    r = tpk_file_decode(file, i, dst);
-    if (r == TPK_OK && tpk_file_needs_sum(file, i))
-        r = tpk_file_check_sum(file, i, dst);
+    r = tpki_file_decode(file, i, dst);
+    if (r == TPK_OK && tpki_file_needs_sum(file, i))
+        r = tpki_file_check_sum(file, i, dst);
     return r;
 }
 
@@ -518,17 +518,17 @@ tpk_result tpk_get_time(tpk_file *file, uint32_t step, double *out_time)
 {
     if (!file || !out_time)
         return TPK_ERR_INVALID_ARGUMENT;
-    tpk_result r = tpk_file_usable(file);
+    tpk_result r = tpki_file_usable(file);
     uint64_t i;
     if (r != TPK_OK)
         return r;
     if (tpk_find_chunk(file, TPK_TAG_TIME, 0, 0, &i) != TPK_OK)
-        return tpk_file_fail(file, TPK_ERR_NOT_FOUND, "the file stores no 'TIME' chunk");
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "the file stores no 'TIME' chunk");
     if (step >= file->entries[i].elem_count)
-        return tpk_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "step %" PRIu32 " but the file has %" PRIu64 " time steps",
+        return tpki_file_fail(file, TPK_ERR_INVALID_ARGUMENT, "step %" PRIu32 " but the file has %" PRIu64 " time steps",
                              step, file->entries[i].elem_count);
     const void *raw;
-    r = tpk_file_chunk_bytes(file, i, &raw);
+    r = tpki_file_chunk_bytes(file, i, &raw);
     if (r == TPK_OK)
         memcpy(out_time, (const uint8_t *)raw + (size_t)step * sizeof(double), sizeof(double));
     return r;

@@ -9,7 +9,7 @@
 
 #define SAH_BINS 16
 
-int tpk_shell_face_entry(const float *positions, const tpk_ray_frame *frame, const tpk_shell_face *face,
+int tpki_shell_face_entry(const float *positions, const tpk_ray_frame *frame, const tpk_shell_face *face,
                          tpk_face_hit *hit)
 {
     hit->v[0] = face->a;
@@ -174,7 +174,7 @@ static double positions_extent(const float *pos, int64_t vertex_count)
     return size;
 }
 
-tpk_result tpk_shell_bvh_build(tpk_marcher *m)
+tpk_result tpki_shell_bvh_build(tpk_marcher *m)
 {
     const tpk_mesh_arrays *mesh = &m->mesh;
     const int32_t n = (int32_t)mesh->shell_face_count;
@@ -269,7 +269,7 @@ static int entry_compare(const void *x, const void *y)
     return entry_less(x, y) ? -1 : entry_less(y, x) ? 1 : 0;
 }
 
-tpk_result tpk_shell_entries(const tpk_marcher *m, const tpk_ray_frame *frame, const double dir[3],
+tpk_result tpki_shell_entries(const tpk_marcher *m, const tpk_ray_frame *frame, const double dir[3],
                              double tmin, double tmax, tpk_entry *stack_buf, int64_t stack_cap,
                              tpk_entry **out, int64_t *out_count)
 {
@@ -296,7 +296,7 @@ tpk_result tpk_shell_entries(const tpk_marcher *m, const tpk_ray_frame *frame, c
         }
         for (int32_t i = node->first; i < node->first + node->count; i++) {
             tpk_face_hit hit;
-            if (!tpk_shell_face_entry(m->mesh.positions, frame, &m->faces[i], &hit) || hit.t > tmax)
+            if (!tpki_shell_face_entry(m->mesh.positions, frame, &m->faces[i], &hit) || hit.t > tmax)
                 continue;
             if (hit.t < tmin && hit.t > t_low)
                 t_low = hit.t;

@@ -18,7 +18,7 @@ tpk_result tpki_fail(tpki_diag *diag, tpk_result code, const char *fmt, ...)
     return code;
 }
 
-void tpk_tag_name(uint32_t tag, char out[16])
+void tpki_tag_name(uint32_t tag, char out[16])
 {
     unsigned char c[4];
     for (int k = 0; k < 4; k++) {
@@ -31,10 +31,10 @@ void tpk_tag_name(uint32_t tag, char out[16])
     snprintf(out, 16, "'%c%c%c%c'", c[0], c[1], c[2], c[3]);
 }
 
-void tpk_entry_name(uint64_t i, const tpk_dir_entry *e, char out[80])
+void tpki_entry_name(uint64_t i, const tpk_dir_entry *e, char out[80])
 {
     char tag[16];
-    tpk_tag_name(e->tag, tag);
+    tpki_tag_name(e->tag, tag);
     snprintf(out, 80, "chunk %" PRIu64 " %s at offset %" PRIu64, i, tag, e->offset);
 }
 
@@ -50,7 +50,7 @@ static void default_free(void *user, void *ptr)
     free(ptr);
 }
 
-void tpk_resolve_allocator(const tpk_allocator *in, tpk_allocator *out)
+void tpki_resolve_allocator(const tpk_allocator *in, tpk_allocator *out)
 {
     *out = in ? *in : (tpk_allocator){0};
     if (!out->alloc)
@@ -59,7 +59,7 @@ void tpk_resolve_allocator(const tpk_allocator *in, tpk_allocator *out)
         out->free = default_free;
 }
 
-void tpk_resolve_limits(const tpk_limits *in, tpk_limits *out)
+void tpki_resolve_limits(const tpk_limits *in, tpk_limits *out)
 {
     *out = in ? *in : (tpk_limits){0};
     if (!out->max_chunks)
@@ -70,13 +70,13 @@ void tpk_resolve_limits(const tpk_limits *in, tpk_limits *out)
         out->max_total_bytes = TPK_DEFAULT_MAX_TOTAL_BYTES;
 }
 
-uint32_t tpk_elem_type_size(uint32_t elem_type)
+uint32_t tpki_elem_type_size(uint32_t elem_type)
 {
     static const uint32_t sizes[TPK_ELEM_TYPE_COUNT] = {1, 4, 4, 8, 12, 16, 20, 32, 16, 128};
     return elem_type < TPK_ELEM_TYPE_COUNT ? sizes[elem_type] : 0;
 }
 
-int tpk_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
+int tpki_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
 {
     static const struct {
         uint32_t tag, elem_type;
@@ -103,7 +103,7 @@ int tpk_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
 
 /* ---- header ---------------------------------------------------------------------------------- */
 
-tpk_result tpk_check_header_fields(const tpk_header *h, tpki_diag *diag)
+tpk_result tpki_check_header_fields(const tpk_header *h, tpki_diag *diag)
 {
     if (h->header_size != TPK_HEADER_SIZE)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "header: header_size is %" PRIu32 ", must be %u",
@@ -123,7 +123,7 @@ tpk_result tpk_check_header_fields(const tpk_header *h, tpki_diag *diag)
     return TPK_OK;
 }
 
-tpk_result tpk_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpki_diag *diag)
+tpk_result tpki_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpki_diag *diag)
 {
     if (h->vertex_count > TPK_MAX_ID || h->tet_count > TPK_MAX_ID)
         return tpki_fail(diag, TPK_ERR_CORRUPT,
@@ -165,7 +165,7 @@ static tpk_result check_entry_sizes(const tpk_dir_entry *e, const char *name, tp
     if (e->codec > TPK_CODEC_ZSTD)
         return tpki_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
                              "%s: unknown codec %u (this reader knows 0 = none, 1 = zstd)", name, e->codec);
-    uint32_t size = tpk_elem_type_size(e->elem_type);
+    uint32_t size = tpki_elem_type_size(e->elem_type);
     if (size == 0)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: unknown elem_type %u", name, e->elem_type);
     if (e->elem_size != size)
@@ -198,11 +198,11 @@ static tpk_result check_entry_limits(const tpk_dir_entry *e, const char *name, c
     return TPK_OK;
 }
 
-tpk_result tpk_check_entry(const tpk_header *h, const tpk_limits *limits, uint64_t i,
+tpk_result tpki_check_entry(const tpk_header *h, const tpk_limits *limits, uint64_t i,
                            const tpk_dir_entry *e, uint64_t *total_raw, tpki_diag *diag)
 {
     char name[80];
-    tpk_entry_name(i, e, name);
+    tpki_entry_name(i, e, name);
     tpk_result r = check_entry_sizes(e, name, diag);
     if (r == TPK_OK)
         r = check_entry_limits(e, name, limits, total_raw, diag);
@@ -247,7 +247,7 @@ static void range_name(const tpk_dir_entry *entries, const byte_range *range, ch
     else if (range->owner == RANGE_DIRECTORY)
         snprintf(out, 80, "the directory");
     else
-        tpk_entry_name(range->owner, &entries[range->owner], out);
+        tpki_entry_name(range->owner, &entries[range->owner], out);
 }
 
 static size_t collect_ranges(const tpk_header *h, const tpk_dir_entry *entries, byte_range *ranges)
@@ -264,7 +264,7 @@ static size_t collect_ranges(const tpk_header *h, const tpk_dir_entry *entries, 
     return n;
 }
 
-tpk_result tpk_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
+tpk_result tpki_check_overlaps(const tpk_header *h, const tpk_dir_entry *entries,
                               const tpk_allocator *allocator, tpki_diag *diag)
 {
     tpk_result r = TPK_OK;
@@ -322,10 +322,10 @@ static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir
                                   int allow_unknown_required, tpki_diag *diag)
 {
     char name[80], tag[16];
-    tpk_entry_name(i, e, name);
-    tpk_tag_name(e->tag, tag);
+    tpki_entry_name(i, e, name);
+    tpki_tag_name(e->tag, tag);
     uint32_t elem_type;
-    *known = tpk_known_tag(e->tag, &elem_type, NULL);
+    *known = tpki_known_tag(e->tag, &elem_type, NULL);
     if (!*known && (e->flags & TPK_CHUNK_REQUIRED) && !allow_unknown_required)
         return tpki_fail(diag, TPK_ERR_UNSUPPORTED_CHUNK,
                              "%s: unknown chunk tag %s is marked required; this reader cannot use the file",
@@ -373,7 +373,7 @@ static tpk_result check_duplicates(chunk_key *keys, size_t n, tpki_diag *diag)
         if (keys[k].tag == keys[k - 1].tag && keys[k].index == keys[k - 1].index &&
             keys[k].step == keys[k - 1].step) {
             char tag[16];
-            tpk_tag_name(keys[k].tag, tag);
+            tpki_tag_name(keys[k].tag, tag);
             return tpki_fail(diag, TPK_ERR_CORRUPT,
                                  "chunks %" PRIu64 " and %" PRIu64 " both have tag %s index %" PRIu32
                                  " step %" PRIu32, keys[k - 1].chunk, keys[k].chunk, tag, keys[k].index,
@@ -401,7 +401,7 @@ static tpk_result check_required_present(const tpk_header *h, const tpk_dir_entr
     return TPK_OK;
 }
 
-tpk_result tpk_check_tags(const tpk_header *h, const tpk_dir_entry *entries, int allow_unknown_required,
+tpk_result tpki_check_tags(const tpk_header *h, const tpk_dir_entry *entries, int allow_unknown_required,
                           const tpk_allocator *allocator, tpki_diag *diag)
 {
     tpk_result r = TPK_OK;
@@ -483,7 +483,7 @@ static tpk_result check_fdat(const tpk_header *h, uint64_t i, const tpk_dir_entr
                              const tpk_field_desc *fields, uint32_t field_count, tpki_diag *diag)
 {
     char name[80];
-    tpk_entry_name(i, e, name);
+    tpki_entry_name(i, e, name);
     if (field_count == 0)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: field data without a 'FDSC' chunk", name);
     if (e->index >= field_count)
@@ -544,7 +544,7 @@ static tpk_result check_time_chunk(const tpk_header *h, const tpk_dir_entry *ent
     for (uint64_t i = 0; i < h->chunk_count; i++) {
         if (entries[i].tag == TPK_TAG_TIME && entries[i].elem_count != steps) {
             char name[80];
-            tpk_entry_name(i, &entries[i], name);
+            tpki_entry_name(i, &entries[i], name);
             return tpki_fail(diag, TPK_ERR_CORRUPT,
                                  "%s: %" PRIu64 " time values but the fields have %" PRIu64 " steps", name,
                                  entries[i].elem_count, steps);
@@ -553,7 +553,7 @@ static tpk_result check_time_chunk(const tpk_header *h, const tpk_dir_entry *ent
     return TPK_OK;
 }
 
-tpk_result tpk_check_fields(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
+tpk_result tpki_check_fields(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
                             uint32_t field_count, const tpk_allocator *allocator, tpki_diag *diag)
 {
     for (uint32_t i = 0; i < field_count; i++) {
@@ -575,7 +575,7 @@ static tpk_result id_error(tpki_diag *diag, uint64_t i, const tpk_dir_entry *e, 
                            const char *what, int32_t value, int64_t lo, uint64_t hi)
 {
     char name[80];
-    tpk_entry_name(i, e, name);
+    tpki_entry_name(i, e, name);
     return tpki_fail(diag, TPK_ERR_CORRUPT,
                          "%s: record %" PRIu64 " (raw byte %" PRIu64 "): %s = %" PRId32
                          " is outside [%" PRId64 ", %" PRIu64 ")",
@@ -650,7 +650,7 @@ static tpk_result check_tmap(uint64_t i, const tpk_dir_entry *e, const uint8_t *
     return TPK_OK;
 }
 
-tpk_result tpk_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
+tpk_result tpki_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
                              tpki_diag *diag)
 {
     switch (e->tag) {
@@ -664,49 +664,49 @@ tpk_result tpk_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entr
 
 /* ---- whole layouts and files ------------------------------------------------------------------- */
 
-tpk_result tpk_check_layout(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
+tpk_result tpki_check_layout(const tpk_header *h, const tpk_dir_entry *entries, const tpk_field_desc *fields,
                             uint32_t field_count, const tpk_allocator *allocator, tpki_diag *diag)
 {
     /* A writer's own output is not untrusted input: no limits. */
     const tpk_limits limits = {UINT64_MAX, UINT64_MAX, UINT64_MAX};
-    tpk_result r = tpk_check_header_fields(h, diag);
+    tpk_result r = tpki_check_header_fields(h, diag);
     if (r == TPK_OK)
-        r = tpk_check_header_counts(h, &limits, diag);
+        r = tpki_check_header_counts(h, &limits, diag);
     uint64_t total = 0;
     for (uint64_t i = 0; r == TPK_OK && i < h->chunk_count; i++)
-        r = tpk_check_entry(h, &limits, i, &entries[i], &total, diag);
+        r = tpki_check_entry(h, &limits, i, &entries[i], &total, diag);
     if (r == TPK_OK)
-        r = tpk_check_overlaps(h, entries, allocator, diag);
+        r = tpki_check_overlaps(h, entries, allocator, diag);
     if (r == TPK_OK)
-        r = tpk_check_tags(h, entries, 1, allocator, diag); /* a vendor may require its chunk */
+        r = tpki_check_tags(h, entries, 1, allocator, diag); /* a vendor may require its chunk */
     if (r == TPK_OK)
-        r = tpk_check_fields(h, entries, fields, field_count, allocator, diag);
+        r = tpki_check_fields(h, entries, fields, field_count, allocator, diag);
     return r;
 }
 
 /* Checksum, decode and ids of one chunk; zstd chunks are decoded into a temporary buffer. */
-tpk_result tpk_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids)
+tpk_result tpki_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids)
 {
     const tpk_dir_entry *e = &file->entries[i];
     void *owned = NULL;
     const void *raw = file->data + e->offset;
     tpk_result r = TPK_OK;
     if (e->codec != TPK_CODEC_NONE) {
-        owned = tpk_file_alloc(file, e->raw_size);
+        owned = tpki_file_alloc(file, e->raw_size);
         if (!owned)
-            return tpk_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64
+            return tpki_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64
                                  " (%" PRIu64 " bytes)", i, e->raw_size);
         raw = owned;
-        r = tpk_file_decode(file, i, owned);
+        r = tpki_file_decode(file, i, owned);
         if (r != TPK_OK)
             goto fail;
     }
     if (!(atomic_load(&file->chunk_state[i]) & TPK_CHUNK_SUM_OK))
-        r = tpk_file_check_sum(file, i, raw);
+        r = tpki_file_check_sum(file, i, raw);
     if (r == TPK_OK && check_ids)
-        r = tpk_file_check_ids(file, i, raw);
+        r = tpki_file_check_ids(file, i, raw);
 fail:
-    tpk_file_free(file, owned);
+    tpki_file_free(file, owned);
     return r;
 }
 
@@ -714,8 +714,8 @@ tpk_result tpk_verify(tpk_file *file)
 {
     if (!file)
         return TPK_ERR_INVALID_ARGUMENT;
-    tpk_result r = tpk_file_usable(file);
+    tpk_result r = tpki_file_usable(file);
     for (uint64_t i = 0; r == TPK_OK && i < file->header.chunk_count; i++)
-        r = tpk_file_verify_chunk(file, i, 1);
+        r = tpki_file_verify_chunk(file, i, 1);
     return r;
 }

@@ -172,7 +172,7 @@ tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_o
     if (options)
         memcpy(&opt, options, options->size && options->size < sizeof opt ? options->size : sizeof opt);
     tpk_allocator allocator;
-    tpk_resolve_allocator(&opt.allocator, &allocator);
+    tpki_resolve_allocator(&opt.allocator, &allocator);
     tpk_writer *w = allocator.alloc(allocator.user, sizeof *w);
     if (!w) {
         if (err_text && err_cap)
@@ -196,8 +196,8 @@ tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_o
 static tpk_result check_desc(tpk_writer *w, const tpk_chunk_desc *d)
 {
     char tag[16];
-    tpk_tag_name(d->tag, tag);
-    uint32_t size = tpk_elem_type_size(d->elem_type), want_type = 0;
+    tpki_tag_name(d->tag, tag);
+    uint32_t size = tpki_elem_type_size(d->elem_type), want_type = 0;
     int required = 0;
     if (d->codec > TPK_CODEC_ZSTD || (d->flags & ~TPK_CHUNK_REQUIRED))
         return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: codec %u / flags 0x%x not allowed", tag,
@@ -205,7 +205,7 @@ static tpk_result check_desc(tpk_writer *w, const tpk_chunk_desc *d)
     if (size == 0 || d->elem_size != size)
         return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: elem_size %" PRIu32 " does not match elem_type %u",
                            tag, d->elem_size, d->elem_type);
-    int known = tpk_known_tag(d->tag, &want_type, &required);
+    int known = tpki_known_tag(d->tag, &want_type, &required);
     if (known && d->elem_type != want_type)
         return writer_fail(w, TPK_ERR_INVALID_ARGUMENT, "chunk %s: elem_type %u, the tag needs %" PRIu32, tag,
                            d->elem_type, want_type);
@@ -409,7 +409,7 @@ static tpk_result write_tail(tpk_writer *w, const tpk_header_fields *fields)
     tpki_diag diag;
     uint64_t directory_offset = (w->end + TPK_CHUNK_ALIGN - 1) / TPK_CHUNK_ALIGN * TPK_CHUNK_ALIGN;
     build_header(w, fields, directory_offset, &h);
-    tpk_result r = tpk_check_layout(&h, w->entries, w->fields, w->field_count, &w->allocator, &diag);
+    tpk_result r = tpki_check_layout(&h, w->entries, w->fields, w->field_count, &w->allocator, &diag);
     if (r != TPK_OK)
         return writer_fail(w, r == TPK_ERR_OUT_OF_MEMORY ? r : TPK_ERR_INVALID_ARGUMENT,
                            "refusing to write an invalid file '%s': %s", w->path, diag.text);

@@ -118,14 +118,14 @@ static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LA
 
 TPK_TEST(exact_det2_sign)
 {
-    CHECK_EQ_INT(tpk_det2_sign_exact(1, 2, 3, 4), -1);
-    CHECK_EQ_INT(tpk_det2_sign_exact(3, 1, 6, 2), 0);
+    CHECK_EQ_INT(tpki_det2_sign_exact(1, 2, 3, 4), -1);
+    CHECK_EQ_INT(tpki_det2_sign_exact(3, 1, 6, 2), 0);
     /* a*d and b*c equal in double but not exactly */
     double a = 1.0 + ldexp(1, -52), d = 1.0 + ldexp(1, -52), b = 1.0 + ldexp(1, -51), c = 1.0;
-    CHECK_EQ_INT(tpk_det2_sign_exact(a, b, c, d), 1);
-    CHECK_EQ_INT(tpk_det2_sign_exact(b, a, d, c), -1);
-    CHECK_EQ_INT(tpk_det2_sign_exact(0.1, 0.3, 0.1, 0.3), 0);
-    CHECK_EQ_INT(tpk_det2_sign_exact(1e-200, 1e200, 1e-200, 1e-200), -1);
+    CHECK_EQ_INT(tpki_det2_sign_exact(a, b, c, d), 1);
+    CHECK_EQ_INT(tpki_det2_sign_exact(b, a, d, c), -1);
+    CHECK_EQ_INT(tpki_det2_sign_exact(0.1, 0.3, 0.1, 0.3), 0);
+    CHECK_EQ_INT(tpki_det2_sign_exact(1e-200, 1e200, 1e-200, 1e-200), -1);
 }
 
 /* One tet with hand-written records: a ray through its middle, from outside and from inside. */
