@@ -36,6 +36,22 @@ head -c 100 "$WORK/c.tpk" > "$WORK/short.tpk"
 expect_exit 2 "$TPK" info "$WORK/short.tpk"
 expect_stderr "short.tpk"
 
+# Fields: unknown at convert time (the message lists what there is); render needs a point field.
+expect_exit 2 "$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/f.tpk" --field nosuch
+expect_stderr "available fields: mat_id (cell), temperature (point)"
+"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/m.tpk" --field mat_id --quiet
+expect_exit 2 "$TPK" render "$WORK/m.tpk" -o "$WORK/m.png" --field mat_id
+expect_stderr "per-tet field 'mat_id'; render needs a per-point field (this file has no point field)"
+expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --field nope
+expect_stderr "point fields: temperature"
+expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --step 3
+[ ! -e "$WORK/m.png" ] || fail "image left behind"
+# A hexahedral mesh is refused by name (mixed cells are a later step), a non-tpk file by its magic.
+expect_exit 2 "$TPK" convert "$DATA/sfepy/acoustic_wg.vtk" "$WORK/h.tpk"
+expect_stderr "cell 0 is a hexahedron (VTK type 12)"
+expect_exit 2 "$TPK" info "$DATA/sfepy/cylinder.vtk"
+expect_stderr "not a tetpack file"
+
 # Usage errors.
 expect_exit 2 "$TPK" convert
 expect_exit 2 "$TPK" convert a b --layout tet99

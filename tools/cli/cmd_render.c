@@ -143,8 +143,35 @@ static void field_range(tpk_file *file, const char *name, double range[2])
     }
 }
 
+/* The renderer interpolates per-point values linearly inside each tet; say so, and which fields fit,
+ * when the named field is per-tet or missing. */
+static int check_field(const render_args *a, tpk_file *file)
+{
+    if (!a->field)
+        return 0;
+    char points[512] = "";
+    size_t used = 0;
+    int found = -1;
+    for (uint32_t i = 0; i < tpk_field_count(file); i++) {
+        tpk_field_desc d;
+        if (tpk_get_field(file, i, &d) != TPK_OK)
+            continue;
+        if (!strcmp(d.name, a->field))
+            found = (int)d.association;
+        if (d.association == TPK_ASSOC_POINT && used + strlen(d.name) + 3 < sizeof points)
+            used += (size_t)snprintf(points + used, sizeof points - used, "%s%s", used ? ", " : "", d.name);
+    }
+    if (found == TPK_ASSOC_POINT)
+        return 0;
+    return tpk_cli_fail("render", "%s: %s '%s'; render needs a per-point field (this file has %s%s)", a->path,
+                        found < 0 ? "no field named" : "per-tet field", a->field,
+                        used ? "point fields: " : "no point field", points);
+}
+
 static int render_file(render_args *a, tpk_file *file)
 {
+    if (check_field(a, file))
+        return TPK_EXIT_USAGE;
     tpk_mesh_arrays mesh;
     tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, &mesh);
     if (r != TPK_OK)
