@@ -30,6 +30,7 @@ static void announce(tpk_stage_fn stage, void *user, const char *name)
 typedef struct chunk_writer {
     tpk_writer *writer;
     int zstd_level;
+    int threads; /* for building records */
     tpk_diag *diag;
 } chunk_writer;
 
@@ -65,21 +66,36 @@ static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type
 
 typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst);
 
+typedef struct fill_job {
+    fill_fn fill;
+    const void *user;
+    int64_t first;
+    char *block;
+    uint32_t elem_size;
+} fill_job;
+
+static void fill_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const fill_job *job = ctx;
+    (void)worker;
+    job->fill(job->user, job->first + begin, end - begin, job->block + (size_t)begin * job->elem_size);
+}
+
 static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user)
 {
     int64_t total = (int64_t)desc->elem_count;
-    void *block = malloc((size_t)STREAM_BLOCK * desc->elem_size);
-    if (!block)
+    fill_job job = {fill, user, 0, malloc((size_t)STREAM_BLOCK * desc->elem_size), desc->elem_size};
+    if (!job.block)
         return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
     tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
-    for (int64_t first = 0; r == TPK_OK && first < total; first += STREAM_BLOCK) {
-        int64_t count = total - first < STREAM_BLOCK ? total - first : STREAM_BLOCK;
-        fill(user, first, count, block);
-        r = tpk_writer_append(cw->writer, block, (uint64_t)count * desc->elem_size);
+    for (job.first = 0; r == TPK_OK && job.first < total; job.first += STREAM_BLOCK) {
+        int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
+        tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
+        r = tpk_writer_append(cw->writer, job.block, (uint64_t)count * desc->elem_size);
     }
     if (r == TPK_OK)
         r = tpk_writer_end_chunk(cw->writer);
-    free(block);
+    free(job.block);
     if (r != TPK_OK)
         return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
     return 0;
@@ -279,7 +295,7 @@ static int write_file(const tpk_convert_options *o, const tpk_tetmesh *mesh, con
                       tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
                       tpk_diag *diag)
 {
-    chunk_writer cw = {NULL, o->zstd_level, diag};
+    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
     char err[512] = "";
     tpk_write_options wopt;
     memset(&wopt, 0, sizeof wopt);
