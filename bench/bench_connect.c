@@ -96,13 +96,13 @@ int main(int argc, char **argv)
         copy_mesh(&base, &m);
         tpk_orient_stats stats;
         double start = now();
-        if (tpk_orient(&m, 0, &stats, &diag)) {
+        if (tpk_orient(&m, 0, 0, &stats, &diag)) {
             fprintf(stderr, "orient: %s\n", diag.message);
             return 1;
         }
         t_orient[r] = now() - start;
         start = now();
-        if (tpk_reorder(&m, &diag)) {
+        if (tpk_reorder(&m, 0, &diag)) {
             fprintf(stderr, "reorder: %s\n", diag.message);
             return 1;
         }

@@ -137,7 +137,7 @@ static int make_mesh(int n, fx_mesh *m)
     tm.step_count = 1;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (tpk_reorder(&tm, &diag) != 0) {
+    if (tpk_reorder(&tm, 0, &diag) != 0) {
         fprintf(stderr, "bench_march: reorder: %s\n", diag.message);
         return -1;
     }

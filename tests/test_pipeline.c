@@ -47,7 +47,7 @@ static int64_t rand_range(int64_t lo, int64_t hi)
 /* Runs orient + connect on a generated or imported mesh and returns neighbors (caller frees). */
 static int32_t *orient_connect(tpk_tetmesh *m, int threads, tpk_orient_stats *stats, tpk_diag *diag)
 {
-    if (tpk_orient(m, 0, stats, diag))
+    if (tpk_orient(m, 0, 0, stats, diag))
         return NULL;
     int32_t *nb = malloc(sizeof *nb * 4 * (size_t)(m->tet_count + 1));
     if (nb && tpk_connect(m->tets, m->tet_count, m->vertex_count, nb, threads, diag)) {
@@ -223,7 +223,7 @@ TPK_TEST(orient_fixes_inverted)
     small_mesh(&m, tets, 3);
     tpk_orient_stats stats;
     tpk_diag diag = {0};
-    CHECK(tpk_orient(&m, 0, &stats, &diag) == 0);
+    CHECK(tpk_orient(&m, 0, 0, &stats, &diag) == 0);
     CHECK_EQ_INT(stats.inverted_fixed, 2);
     CHECK_EQ_INT(stats.degenerate, 0);
     for (int t = 0; t < 3; t++)
@@ -240,7 +240,7 @@ TPK_TEST(orient_refuses_degenerate)
     small_mesh(&m, tets, 4);
     tpk_orient_stats stats;
     tpk_diag diag = {0};
-    CHECK(tpk_orient(&m, 0, &stats, &diag) != 0);
+    CHECK(tpk_orient(&m, 0, 0, &stats, &diag) != 0);
     CHECK_EQ_INT(stats.degenerate, 3);
     CHECK_EQ_INT(stats.repeated_vertex, 1);
     CHECK_MSG(strstr(diag.message, "cell 101 has zero volume") &&
@@ -251,7 +251,7 @@ TPK_TEST(orient_refuses_degenerate)
 
     int32_t repeated[] = {0, 1, 2, 3, 0, 2, 2, 3};
     small_mesh(&m, repeated, 2);
-    CHECK(tpk_orient(&m, 0, &stats, &diag) != 0);
+    CHECK(tpk_orient(&m, 0, 0, &stats, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "cell 101 has a repeated vertex"), "%s", diag.message);
     tpk_tetmesh_free(&m);
 }
@@ -273,7 +273,7 @@ TPK_TEST(orient_drops_degenerate)
     m.fields[0].values = values;
     tpk_orient_stats stats;
     tpk_diag diag = {0};
-    CHECK(tpk_orient(&m, 1, &stats, &diag) == 0);
+    CHECK(tpk_orient(&m, 1, 0, &stats, &diag) == 0);
     CHECK_EQ_INT(stats.degenerate, 3);
     CHECK_EQ_INT(stats.inverted_fixed, 1);
     CHECK_EQ_INT(m.tet_count, 2);
@@ -331,8 +331,8 @@ TPK_TEST(grid_multithreaded)
     tpk_orient_stats stats;
     char msg[512] = "";
     CHECK(tpk_gen_kuhn_grid(30, &opt, &m) == 0);
-    CHECK(tpk_orient(&m, 0, &stats, &diag) == 0);
-    CHECK(tpk_reorder(&m, &diag) == 0);
+    CHECK(tpk_orient(&m, 0, 0, &stats, &diag) == 0);
+    CHECK(tpk_reorder(&m, 0, &diag) == 0);
     size_t bytes = sizeof(int32_t) * 4 * (size_t)m.tet_count;
     int32_t *one = malloc(bytes), *other = malloc(bytes);
     CHECK(tpk_connect(m.tets, m.tet_count, m.vertex_count, one, 1, &diag) == 0);
@@ -467,8 +467,8 @@ TPK_TEST(reorder_permutes_consistently)
     CHECK(tpk_gen_kuhn_grid(9, &opt, &copy) == 0);
     add_test_fields(&m);
     add_test_fields(&copy);
-    CHECK(tpk_reorder(&m, &diag) == 0);
-    CHECK(tpk_reorder(&copy, &diag) == 0);
+    CHECK(tpk_reorder(&m, 1, &diag) == 0); /* one thread and two: the same result */
+    CHECK(tpk_reorder(&copy, 2, &diag) == 0);
     int64_t V = m.vertex_count, T = m.tet_count;
     /* Deterministic. */
     CHECK(!memcmp(m.tets, copy.tets, sizeof *m.tets * 4 * (size_t)T));
@@ -697,8 +697,8 @@ static void run_chain(const char *relative, const char *const *fields, int field
     tpk_mesh_free(&src);
     if (tets >= 0)
         CHECK_EQ_INT(out->tet_count, tets);
-    CHECK_MSG(tpk_orient(out, drop, stats, &diag) == 0, "%s", diag.message);
-    CHECK_MSG(tpk_reorder(out, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_orient(out, drop, 0, stats, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_reorder(out, 0, &diag) == 0, "%s", diag.message);
     int32_t *nb = malloc(sizeof *nb * 4 * (size_t)out->tet_count);
     CHECK_MSG(tpk_connect(out->tets, out->tet_count, out->vertex_count, nb, 0, &diag) == 0, "%s",
               diag.message);
@@ -774,7 +774,7 @@ TPK_TEST(real_degenerate_tets)
         kinds[(int)kind[t]]++;
     }
     CHECK(kinds[1] == 20 && kinds[2] == 20);
-    CHECK(tpk_orient(&m, 0, &stats, &diag) != 0);
+    CHECK(tpk_orient(&m, 0, 0, &stats, &diag) != 0);
     char expect[64];
     snprintf(expect, sizeof expect, "cell %d has a repeated vertex", first);
     CHECK_MSG(strstr(diag.message, expect) && strstr(diag.message, "20 degenerate tets in all") &&
@@ -786,7 +786,7 @@ TPK_TEST(real_degenerate_tets)
 
     CHECK_MSG(tpk_tetrahedralize(&src, fields, 1, &m, &diag) == 0, "%s", diag.message);
     tpk_mesh_free(&src);
-    CHECK(tpk_orient(&m, 1, &stats, &diag) == 0);
+    CHECK(tpk_orient(&m, 1, 0, &stats, &diag) == 0);
     CHECK_EQ_INT(stats.degenerate, 20);
     CHECK_EQ_INT(m.tet_count, 8161 - 20);
     int64_t slivers = 0;
@@ -798,7 +798,7 @@ TPK_TEST(real_degenerate_tets)
     free(kind);
     int32_t *nb = malloc(sizeof *nb * 4 * (size_t)m.tet_count);
     char msg[512] = "";
-    CHECK(tpk_reorder(&m, &diag) == 0);
+    CHECK(tpk_reorder(&m, 0, &diag) == 0);
     CHECK_MSG(tpk_connect(m.tets, m.tet_count, m.vertex_count, nb, 2, &diag) == 0, "%s", diag.message);
     /* No layout check: recovering Tet20/Tet16 orientation by walking assumes no overlaps. */
     int rc = tpk_check_invariants_flags(&m, nb, TPK_INV_ALLOW_SAME_SIDE, msg, sizeof msg);

@@ -1,5 +1,6 @@
 /* The conversion driver: runs the pipeline stages in order and writes the chunks of a .tpk. Peak
- * memory is kept low by building one layout at a time and freeing the source mesh early. */
+ * memory stays near the mesh itself: the source mesh hands its arrays over, and positions and layout
+ * records are built in blocks that are streamed to the writer. */
 #include "convert.h"
 
 #include <math.h>
@@ -367,7 +368,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     t = now_seconds();
     if (!o->no_reorder) {
         announce(stage, stage_user, "reorder");
-        if (tpk_reorder(&mesh, diag) != 0)
+        if (tpk_reorder(&mesh, o->threads, diag) != 0)
             goto done;
     }
     rep->t_reorder = now_seconds() - t;
@@ -376,7 +377,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     t = now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
-    if (tpk_orient(&mesh, o->drop_degenerate, &os, diag) != 0)
+    if (tpk_orient(&mesh, o->drop_degenerate, o->threads, &os, diag) != 0)
         goto done;
     rep->inverted_fixed = os.inverted_fixed;
     rep->degenerate_dropped = o->drop_degenerate ? os.degenerate : 0;
@@ -385,7 +386,6 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
         tpk_diag_fail(diag, "%s: no tetrahedra left to write", o->input);
         goto done;
     }
-
 
     announce(stage, stage_user, "connect");
     t = now_seconds();

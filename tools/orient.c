@@ -99,7 +99,8 @@ static void drop_degenerate(tpk_tetmesh *mesh, const int8_t *kinds)
     mesh->tet_count = kept;
 }
 
-int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate_tets, tpk_orient_stats *stats, tpk_diag *diag)
+int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate_tets, int threads_requested, tpk_orient_stats *stats,
+               tpk_diag *diag)
 {
     tpk_orient_stats local = {0, 0, 0};
     if (!stats)
@@ -121,7 +122,7 @@ int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate_tets, tpk_orient_stats *st
     job->points = mesh->points;
     job->tets = mesh->tets;
     job->kinds = kinds;
-    int threads = tpk_threads_for(mesh->tet_count, tpk_thread_count(0), 65536);
+    int threads = tpk_threads_for(mesh->tet_count, tpk_thread_count(threads_requested), 65536);
     tpk_parallel_for(mesh->tet_count, threads, orient_range, job);
     for (int w = 0; w < threads; w++) {
         stats->inverted_fixed += job->inverted[w];

@@ -27,15 +27,16 @@ typedef struct tpk_orient_stats {
 } tpk_orient_stats;
 
 /* Exact orientation (CGAL): swap v2,v3 of inverted tets; zero-volume tets are an error naming the first
- * one (tet index, source cell, vertex ids, coordinates), or are removed when drop_degenerate. */
-int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate, tpk_orient_stats *stats, tpk_diag *diag);
+ * one (source cell, source point ids, coordinates), or are removed when drop_degenerate.
+ * threads <= 0: all cores (here and in tpk_reorder); the result does not depend on it. */
+int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate, int threads, tpk_orient_stats *stats, tpk_diag *diag);
 
 /* Exact orientation sign of four points: +1, 0, -1 for det[b-a, c-a, d-a]. (CGAL shim.) */
 int tpk_orient3d_exact(const double a[3], const double b[3], const double c[3], const double d[3]);
 
 /* Reorder vertices along a Hilbert curve, then tets by their smallest vertex (so they follow it); fields,
  * vertex_source and tet_source follow. Deterministic. */
-int tpk_reorder(tpk_tetmesh *mesh, tpk_diag *diag);
+int tpk_reorder(tpk_tetmesh *mesh, int threads, tpk_diag *diag);
 
 /* Face matching. neighbors[4*t+k] = tet across the face opposite tets[4*t+k], or -1. A face shared by
  * more than two tets is an error naming the face's vertices and the tets. threads <= 0: all cores. */

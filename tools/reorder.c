@@ -427,7 +427,7 @@ static int apply_tet_order(tpk_tetmesh *mesh, const uint32_t *order, int threads
     return 0;
 }
 
-int tpk_reorder(tpk_tetmesh *mesh, tpk_diag *diag)
+int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
 {
     if (!mesh || mesh->vertex_count > INT32_MAX || mesh->tet_count > INT32_MAX ||
         (mesh->vertex_count > 0 && !mesh->points) || (mesh->tet_count > 0 && !mesh->tets))
@@ -436,7 +436,7 @@ int tpk_reorder(tpk_tetmesh *mesh, tpk_diag *diag)
         if (mesh->tets[i] < 0 || mesh->tets[i] >= mesh->vertex_count)
             return tpk_diag_fail(diag, "reorder: tet %lld names vertex %d; the mesh has %lld vertices",
                                  (long long)(i / 4), mesh->tets[i], (long long)mesh->vertex_count);
-    int threads = tpk_thread_count(0);
+    int threads = tpk_thread_count(threads_requested);
     int64_t nv = mesh->vertex_count, nt = mesh->tet_count;
     hilbert_table table;
     build_hilbert_table(&table);
