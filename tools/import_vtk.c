@@ -9,6 +9,7 @@
 
 #include "importers.h"
 #include "tetpack_format.h"
+#include "cell_types.h"
 #include "text_scan.h"
 
 typedef enum vtk_type {
@@ -782,61 +783,19 @@ typedef struct cell_rule {
     const char *name;
 } cell_rule;
 
+/* What the importer does with a cell type, from the shared table: volumes are kept, higher-order
+ * volumes reduced to their corners, everything of lower dimension dropped. (VTK's convex point set,
+ * 41, has no fixed shape to tetrahedralize: unknown.) */
 static cell_rule rule_for(int type)
 {
-    switch (type) {
-    case 10: return (cell_rule){RULE_KEEP, 4, 10, 4, "tetra"};
-    case 11: return (cell_rule){RULE_KEEP, 8, 11, 8, "voxel"};
-    case 12: return (cell_rule){RULE_KEEP, 8, 12, 8, "hexahedron"};
-    case 13: return (cell_rule){RULE_KEEP, 6, 13, 6, "wedge"};
-    case 14: return (cell_rule){RULE_KEEP, 5, 14, 5, "pyramid"};
-    case 15: return (cell_rule){RULE_KEEP, 10, 15, 10, "pentagonal prism"};
-    case 16: return (cell_rule){RULE_KEEP, 12, 16, 12, "hexagonal prism"};
-    case 42: return (cell_rule){RULE_KEEP, 0, 42, 0, "polyhedron"};
-    case 24: return (cell_rule){RULE_REDUCE, 10, 10, 4, "quadratic tetra"};
-    case 25: return (cell_rule){RULE_REDUCE, 20, 12, 8, "quadratic hexahedron"};
-    case 26: return (cell_rule){RULE_REDUCE, 15, 13, 6, "quadratic wedge"};
-    case 27: return (cell_rule){RULE_REDUCE, 13, 14, 5, "quadratic pyramid"};
-    case 29: return (cell_rule){RULE_REDUCE, 27, 12, 8, "triquadratic hexahedron"};
-    case 31: return (cell_rule){RULE_REDUCE, 12, 13, 6, "quadratic linear wedge"};
-    case 32: return (cell_rule){RULE_REDUCE, 18, 13, 6, "biquadratic quadratic wedge"};
-    case 33: return (cell_rule){RULE_REDUCE, 24, 12, 8, "biquadratic quadratic hexahedron"};
-    case 37: return (cell_rule){RULE_REDUCE, 19, 14, 5, "triquadratic pyramid"};
-    case 71: return (cell_rule){RULE_REDUCE, -4, 10, 4, "Lagrange tetra"};
-    case 72: return (cell_rule){RULE_REDUCE, -8, 12, 8, "Lagrange hexahedron"};
-    case 73: return (cell_rule){RULE_REDUCE, -6, 13, 6, "Lagrange wedge"};
-    case 74: return (cell_rule){RULE_REDUCE, -5, 14, 5, "Lagrange pyramid"};
-    case 78: return (cell_rule){RULE_REDUCE, -4, 10, 4, "Bezier tetra"};
-    case 79: return (cell_rule){RULE_REDUCE, -8, 12, 8, "Bezier hexahedron"};
-    case 80: return (cell_rule){RULE_REDUCE, -6, 13, 6, "Bezier wedge"};
-    case 81: return (cell_rule){RULE_REDUCE, -5, 14, 5, "Bezier pyramid"};
-    case 0: return (cell_rule){RULE_DROP, 0, 0, 0, "empty cell"};
-    case 1: return (cell_rule){RULE_DROP, 0, 0, 0, "vertex"};
-    case 2: return (cell_rule){RULE_DROP, 0, 0, 0, "poly vertex"};
-    case 3: return (cell_rule){RULE_DROP, 0, 0, 0, "line"};
-    case 4: return (cell_rule){RULE_DROP, 0, 0, 0, "poly line"};
-    case 5: return (cell_rule){RULE_DROP, 0, 0, 0, "triangle"};
-    case 6: return (cell_rule){RULE_DROP, 0, 0, 0, "triangle strip"};
-    case 7: return (cell_rule){RULE_DROP, 0, 0, 0, "polygon"};
-    case 8: return (cell_rule){RULE_DROP, 0, 0, 0, "pixel"};
-    case 9: return (cell_rule){RULE_DROP, 0, 0, 0, "quad"};
-    case 21: return (cell_rule){RULE_DROP, 0, 0, 0, "quadratic edge"};
-    case 22: return (cell_rule){RULE_DROP, 0, 0, 0, "quadratic triangle"};
-    case 23: return (cell_rule){RULE_DROP, 0, 0, 0, "quadratic quad"};
-    case 28: return (cell_rule){RULE_DROP, 0, 0, 0, "biquadratic quad"};
-    case 30: return (cell_rule){RULE_DROP, 0, 0, 0, "quadratic linear quad"};
-    case 34: return (cell_rule){RULE_DROP, 0, 0, 0, "biquadratic triangle"};
-    case 35: return (cell_rule){RULE_DROP, 0, 0, 0, "cubic line"};
-    case 36: return (cell_rule){RULE_DROP, 0, 0, 0, "quadratic polygon"};
-    case 68: return (cell_rule){RULE_DROP, 0, 0, 0, "Lagrange curve"};
-    case 69: return (cell_rule){RULE_DROP, 0, 0, 0, "Lagrange triangle"};
-    case 70: return (cell_rule){RULE_DROP, 0, 0, 0, "Lagrange quadrilateral"};
-    case 75: return (cell_rule){RULE_DROP, 0, 0, 0, "Bezier curve"};
-    case 76: return (cell_rule){RULE_DROP, 0, 0, 0, "Bezier triangle"};
-    case 77: return (cell_rule){RULE_DROP, 0, 0, 0, "Bezier quadrilateral"};
-    case 41: return (cell_rule){RULE_UNKNOWN, 0, 0, 0, "convex point set"};
-    default: return (cell_rule){RULE_UNKNOWN, 0, 0, 0, "unknown"};
-    }
+    const tpk_cell_type_info *t = type == 41 ? NULL : tpk_cell_type(type);
+    if (!t)
+        return (cell_rule){RULE_UNKNOWN, 0, 0, 0, type == 41 ? "convex point set" : "unknown"};
+    if (t->dim < 3)
+        return (cell_rule){RULE_DROP, 0, 0, 0, t->name};
+    if (t->linear_type != t->type)
+        return (cell_rule){RULE_REDUCE, t->nodes, (uint8_t)t->linear_type, t->corners, t->name};
+    return (cell_rule){RULE_KEEP, t->nodes, (uint8_t)t->type, t->nodes, t->name};
 }
 
 /* A polyhedron's face stream: nfaces, then per face npts and npts point ids. */

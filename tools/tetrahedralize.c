@@ -1,26 +1,18 @@
-/* Source cells -> tets (pipeline stage 1). Each VTK cell type has one entry in `cell_kinds`; a 3-D
- * type with a `split` function becomes tets, one without is refused by name, and lower-dimensional
- * cells (boundary faces, edges, points) are skipped with a warning. Adding hexes, wedges and pyramids
- * means adding their split functions (DESIGN.md §5), nothing else here changes. */
+/* Source cells -> tets (pipeline stage 1). A 3-D cell type with an entry in `splits` becomes tets, one
+ * without is refused by name (tools/cell_types.c knows every VTK type), and lower-dimensional cells
+ * (boundary faces, edges, points) are skipped with a warning. Adding hexes, wedges and pyramids means
+ * adding their split functions (DESIGN.md §5), nothing else here changes. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "cell_types.h"
 #include "pipeline.h"
 
 /* Appends the tets of one cell (vertex ids into out) and returns how many; at most max_tets. */
 typedef int (*split_fn)(const int32_t *nodes, int32_t *out);
-
-typedef struct cell_kind {
-    int type;
-    const char *name;
-    int dim;        /* 0..3 */
-    int nodes;      /* fixed node count, or 0 for variable */
-    int max_tets;   /* tets one cell can give (for sizing) */
-    split_fn split; /* NULL: not handled yet */
-} cell_kind;
 
 static int split_tetra(const int32_t *nodes, int32_t *out)
 {
@@ -28,48 +20,21 @@ static int split_tetra(const int32_t *nodes, int32_t *out)
     return 1;
 }
 
-static const cell_kind cell_kinds[] = {
-    {1, "vertex", 0, 1, 0, NULL},
-    {2, "poly-vertex", 0, 0, 0, NULL},
-    {3, "line", 1, 2, 0, NULL},
-    {4, "poly-line", 1, 0, 0, NULL},
-    {5, "triangle", 2, 3, 0, NULL},
-    {6, "triangle strip", 2, 0, 0, NULL},
-    {7, "polygon", 2, 0, 0, NULL},
-    {8, "pixel", 2, 4, 0, NULL},
-    {9, "quad", 2, 4, 0, NULL},
-    {TPK_CELL_TETRA, "tetrahedron", 3, 4, 1, split_tetra},
-    {TPK_CELL_VOXEL, "voxel", 3, 8, 0, NULL},
-    {TPK_CELL_HEXAHEDRON, "hexahedron", 3, 8, 0, NULL},
-    {TPK_CELL_WEDGE, "wedge", 3, 6, 0, NULL},
-    {TPK_CELL_PYRAMID, "pyramid", 3, 5, 0, NULL},
-    {15, "pentagonal prism", 3, 10, 0, NULL},
-    {16, "hexagonal prism", 3, 12, 0, NULL},
-    {21, "quadratic edge", 1, 3, 0, NULL},
-    {22, "quadratic triangle", 2, 6, 0, NULL},
-    {23, "quadratic quad", 2, 8, 0, NULL},
-    {24, "quadratic tetrahedron", 3, 10, 0, NULL},
-    {25, "quadratic hexahedron", 3, 20, 0, NULL},
-    {26, "quadratic wedge", 3, 15, 0, NULL},
-    {27, "quadratic pyramid", 3, 13, 0, NULL},
-    {28, "biquadratic quad", 2, 9, 0, NULL},
-    {29, "triquadratic hexahedron", 3, 27, 0, NULL},
-    {30, "quadratic linear quad", 2, 6, 0, NULL},
-    {31, "quadratic linear wedge", 3, 12, 0, NULL},
-    {32, "biquadratic quadratic wedge", 3, 18, 0, NULL},
-    {33, "biquadratic quadratic hexahedron", 3, 24, 0, NULL},
-    {34, "biquadratic triangle", 2, 7, 0, NULL},
-    {35, "cubic line", 1, 4, 0, NULL},
-    {36, "quadratic polygon", 2, 0, 0, NULL},
-    {TPK_CELL_POLYHEDRON, "polyhedron", 3, 0, 0, NULL},
+/* The 3-D cell types this converter splits into tets (the others are refused by name). */
+static const struct {
+    int type;
+    int max_tets; /* tets one cell can give (for sizing) */
+    split_fn split;
+} splits[] = {
+    {TPK_CELL_TETRA, 1, split_tetra},
 };
 
-static const cell_kind *find_kind(int type)
+static int find_split(int type)
 {
-    for (size_t i = 0; i < sizeof cell_kinds / sizeof cell_kinds[0]; i++)
-        if (cell_kinds[i].type == type)
-            return &cell_kinds[i];
-    return NULL;
+    for (int i = 0; i < (int)(sizeof splits / sizeof splits[0]); i++)
+        if (splits[i].type == type)
+            return i;
+    return -1;
 }
 
 /* Pass 1: check every cell and count tets; refuses unsupported 3-D cells, skips lower-dim ones. */
@@ -77,7 +42,7 @@ static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
 {
     int64_t tets = 0, skipped = 0, first_skipped = -1;
     for (int64_t c = 0; c < src->cell_count; c++) {
-        const cell_kind *kind = find_kind(src->cell_types[c]);
+        const tpk_cell_type_info *kind = tpk_cell_type(src->cell_types[c]);
         int64_t nodes = src->cell_offsets[c + 1] - src->cell_offsets[c];
         if (!kind)
             return tpk_diag_fail(diag, "cell %lld has VTK cell type %d, which this converter does not "
@@ -88,18 +53,19 @@ static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
             skipped++;
             continue;
         }
-        if (!kind->split)
+        int split = find_split(kind->type);
+        if (split < 0)
             return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter handles "
                                  "tetrahedra only so far", (long long)c, kind->name, kind->type);
-        if (kind->nodes && nodes != kind->nodes)
+        if (kind->nodes > 0 && nodes != kind->nodes)
             return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d",
                                  (long long)c, kind->name, (long long)nodes, kind->name, kind->nodes);
-        tets += kind->max_tets;
+        tets += splits[split].max_tets;
     }
     if (skipped)
         tpk_diag_warn(diag, "skipped %lld cells of dimension < 3 (the first is cell %lld, a %s)",
                       (long long)skipped, (long long)first_skipped,
-                      find_kind(src->cell_types[first_skipped])->name);
+                      tpk_cell_type(src->cell_types[first_skipped])->name);
     if (tets == 0)
         return tpk_diag_fail(diag, "the mesh has no volume cells (%lld cells, none 3-D)",
                              (long long)src->cell_count);
@@ -294,10 +260,10 @@ static int split_cells(const tpk_mesh *src, tpk_tetmesh *out)
 {
     int64_t t = 0;
     for (int64_t c = 0; c < src->cell_count; c++) {
-        const cell_kind *kind = find_kind(src->cell_types[c]);
-        if (kind->dim < 3)
+        int split = find_split(src->cell_types[c]);
+        if (split < 0) /* lower-dimensional: count_tets accepted only these besides splittable types */
             continue;
-        int made = kind->split(src->cell_conn + src->cell_offsets[c], out->tets + 4 * t);
+        int made = splits[split].split(src->cell_conn + src->cell_offsets[c], out->tets + 4 * t);
         for (int i = 0; i < made; i++)
             out->tet_source[t + i] = (int32_t)c;
         t += made;

@@ -1,0 +1,65 @@
+/* The VTK cell type table (VTK's vtkCellType.h codes and node orders; higher-order cells list their
+ * corner nodes first, in the order of the linear cell). */
+#include "cell_types.h"
+
+#include <stddef.h>
+
+static const tpk_cell_type_info cell_types[] = {
+    {0, "empty cell", 0, 0, 0, 0},
+    {1, "vertex", 0, 1, 1, 1},
+    {2, "poly vertex", 0, 0, 2, 0},
+    {3, "line", 1, 2, 3, 2},
+    {4, "poly line", 1, 0, 4, 0},
+    {5, "triangle", 2, 3, 5, 3},
+    {6, "triangle strip", 2, 0, 6, 0},
+    {7, "polygon", 2, 0, 7, 0},
+    {8, "pixel", 2, 4, 8, 4},
+    {9, "quad", 2, 4, 9, 4},
+    {10, "tetra", 3, 4, 10, 4},
+    {11, "voxel", 3, 8, 11, 8},
+    {12, "hexahedron", 3, 8, 12, 8},
+    {13, "wedge", 3, 6, 13, 6},
+    {14, "pyramid", 3, 5, 14, 5},
+    {15, "pentagonal prism", 3, 10, 15, 10},
+    {16, "hexagonal prism", 3, 12, 16, 12},
+    {21, "quadratic edge", 1, 3, 3, 2},
+    {22, "quadratic triangle", 2, 6, 5, 3},
+    {23, "quadratic quad", 2, 8, 9, 4},
+    {24, "quadratic tetra", 3, 10, 10, 4},
+    {25, "quadratic hexahedron", 3, 20, 12, 8},
+    {26, "quadratic wedge", 3, 15, 13, 6},
+    {27, "quadratic pyramid", 3, 13, 14, 5},
+    {28, "biquadratic quad", 2, 9, 9, 4},
+    {29, "triquadratic hexahedron", 3, 27, 12, 8},
+    {30, "quadratic linear quad", 2, 6, 9, 4},
+    {31, "quadratic linear wedge", 3, 12, 13, 6},
+    {32, "biquadratic quadratic wedge", 3, 18, 13, 6},
+    {33, "biquadratic quadratic hexahedron", 3, 24, 12, 8},
+    {34, "biquadratic triangle", 2, 7, 5, 3},
+    {35, "cubic line", 1, 4, 3, 2},
+    {36, "quadratic polygon", 2, 0, 7, 0},
+    {37, "triquadratic pyramid", 3, 19, 14, 5},
+    {42, "polyhedron", 3, 0, 42, 0},
+    {68, "Lagrange curve", 1, -2, 3, 2},
+    {69, "Lagrange triangle", 2, -3, 5, 3},
+    {70, "Lagrange quadrilateral", 2, -4, 9, 4},
+    {71, "Lagrange tetra", 3, -4, 10, 4},
+    {72, "Lagrange hexahedron", 3, -8, 12, 8},
+    {73, "Lagrange wedge", 3, -6, 13, 6},
+    {74, "Lagrange pyramid", 3, -5, 14, 5},
+    {75, "Bezier curve", 1, -2, 3, 2},
+    {76, "Bezier triangle", 2, -3, 5, 3},
+    {77, "Bezier quadrilateral", 2, -4, 9, 4},
+    {78, "Bezier tetra", 3, -4, 10, 4},
+    {79, "Bezier hexahedron", 3, -8, 12, 8},
+    {80, "Bezier wedge", 3, -6, 13, 6},
+    {81, "Bezier pyramid", 3, -5, 14, 5},
+};
+
+const tpk_cell_type_info *tpk_cell_type(int type)
+{
+    for (size_t i = 0; i < sizeof cell_types / sizeof cell_types[0]; i++)
+        if (cell_types[i].type == type)
+            return &cell_types[i];
+    return NULL;
+}

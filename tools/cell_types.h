@@ -1,0 +1,19 @@
+/* What the tools know about each VTK cell type, in one table shared by the importers (which keep,
+ * reduce or drop cells) and the tetrahedralizer (which splits them). */
+#ifndef TPK_CELL_TYPES_H
+#define TPK_CELL_TYPES_H
+
+typedef struct tpk_cell_type_info {
+    int type;          /* VTK cell type code */
+    const char *name;  /* in words, as VTK names it */
+    int dim;           /* 0..3 */
+    int nodes;         /* exact node count; 0: any (poly vertex, polygon, polyhedron); -k: at least k
+                          (arbitrary-order Lagrange and Bezier cells) */
+    int linear_type;   /* the linear cell of the same shape: the type itself for linear cells */
+    int corners;       /* node count of that linear cell: a higher-order cell's first `corners` nodes */
+} tpk_cell_type_info;
+
+/* The entry for a VTK cell type, or NULL for a type the tools do not know. */
+const tpk_cell_type_info *tpk_cell_type(int type);
+
+#endif
