@@ -44,6 +44,8 @@ for n in $SIZES; do
     [ -f "$WORK/grid$n.vtk" ] || ./bench/make_grid_vtk.py "$n" "$WORK/grid$n.vtk"
     convert_stats "$WORK/grid$n.vtk" "$WORK/grid$n.tpk" --layout tet16
 done
+# The largest real meshes the importers read: Medit ASCII (202,596 tets) and VTK legacy ASCII (42,744).
+convert_stats ../shared/data/sfepy/cube_big_tetra.mesh "$WORK/cube_big.tpk" --layout tet16
 convert_stats ../shared/data/sfepy/piezo_mesh_micro.vtk "$WORK/piezo.tpk" --layout tet16
 
 echo "# file size per layout and zstd level (first size)"

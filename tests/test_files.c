@@ -208,6 +208,9 @@ TPK_TEST(tetgen_hinge_small) { check_sample("tetgen/hinge_small.node", 0); }
 TPK_TEST(tetgen_part1_small) { check_sample("tetgen/part1_small.node", 0); }
 TPK_TEST(hard_inverted_tets) { check_sample("hard/inverted_tets.vtk", 0); }
 TPK_TEST(hard_two_components_orphans) { check_sample("hard/two_components_orphans.node", 0); }
+TPK_TEST(sfepy_cube_big_tetra_medit) { check_sample("sfepy/cube_big_tetra.mesh", 0); }
+TPK_TEST(sfepy_elbow_medit) { check_sample("sfepy/elbow.mesh", 0); }
+TPK_TEST(sfepy_cube_cylinder_medit) { check_sample("sfepy/cube_cylinder.mesh", 0); }
 
 /* DESIGN.md §10: float32 absolute coordinates lose cells far from the origin. The cylinder (0.1 m long,
  * 0.04 m across) moved to (6.4e6, -4.9e6, 1.2e3), as in a UTM frame: every invariant still holds, and

@@ -6,7 +6,7 @@
 
 #include "importers.h"
 
-#define SUPPORTED_FORMATS "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele)"
+#define SUPPORTED_FORMATS "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele), medit (.mesh, ASCII)"
 
 static int has_extension(const char *path, const char *ext)
 {
@@ -14,15 +14,19 @@ static int has_extension(const char *path, const char *ext)
     return n > m && strcasecmp(path + n - m, ext) == 0;
 }
 
-static int starts_like_vtk(const char *path)
+/* The file starts with `magic` (after leading blanks and newlines). */
+static int starts_with(const char *path, const char *magic)
 {
-    char head[32] = {0};
+    char head[64] = {0};
     FILE *f = fopen(path, "rb");
     if (!f)
         return 0;
     size_t got = fread(head, 1, sizeof head - 1, f);
     fclose(f);
-    return got >= 14 && strncasecmp(head, "# vtk DataFile", 14) == 0;
+    size_t at = 0, n = strlen(magic);
+    while (at < got && (head[at] == ' ' || head[at] == '\t' || head[at] == '\r' || head[at] == '\n'))
+        at++;
+    return got >= at + n && strncasecmp(head + at, magic, n) == 0;
 }
 
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag)
@@ -34,6 +38,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
             return tpk_import_vtk_legacy(path, out, diag);
         if (!strcasecmp(format, "tetgen"))
             return tpk_import_tetgen(path, out, diag);
+        if (!strcasecmp(format, "medit"))
+            return tpk_import_medit(path, out, diag);
         memset(out, 0, sizeof *out);
         return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s", path, format, SUPPORTED_FORMATS);
     }
@@ -41,8 +47,17 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_vtk_legacy(path, out, diag);
     if (has_extension(path, ".node") || has_extension(path, ".ele"))
         return tpk_import_tetgen(path, out, diag);
-    if (starts_like_vtk(path))
+    if (has_extension(path, ".mesh"))
+        return tpk_import_medit(path, out, diag);
+    if (has_extension(path, ".meshb")) {
+        memset(out, 0, sizeof *out);
+        return tpk_diag_fail(diag, "%s: binary Medit (.meshb) is not read yet; supported: %s", path,
+                             SUPPORTED_FORMATS);
+    }
+    if (starts_with(path, "# vtk DataFile"))
         return tpk_import_vtk_legacy(path, out, diag);
+    if (starts_with(path, "MeshVersionFormatted"))
+        return tpk_import_medit(path, out, diag);
     memset(out, 0, sizeof *out);
     FILE *f = fopen(path, "rb");
     if (!f) {

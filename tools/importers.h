@@ -20,8 +20,13 @@ int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t node_size, const char *ele_data,
                              size_t ele_size, tpk_mesh *out, tpk_diag *diag);
 
+/* Medit .mesh (ASCII): Vertices, Tetrahedra, Hexahedra (surface and line elements dropped with a
+ * warning); element references become the cell field "ref", non-zero vertex references "vertex_ref". */
+int tpk_import_medit(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_medit_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+
 /* Pick the importer from the extension (and the file's first bytes); format may force one
- * ("vtk", "tetgen"). */
+ * ("vtk", "tetgen", "medit"). */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
 
 #endif

@@ -10,9 +10,9 @@
 static const char convert_help[] =
     "usage: tetpack convert INPUT OUTPUT.tpk [options]\n"
     "\n"
-    "Reads a tetrahedral mesh (VTK legacy .vtk ASCII/binary, TetGen .node/.ele), orients every tet\n"
-    "positively with exact predicates, reorders along a Hilbert curve, builds neighbors, the chosen\n"
-    "layouts and the shell, and writes OUTPUT atomically.\n"
+    "Reads a tetrahedral mesh (VTK legacy .vtk ASCII/binary, TetGen .node/.ele, Medit .mesh ASCII),\n"
+    "orients every tet positively with exact predicates, reorders along a Hilbert curve, builds\n"
+    "neighbors, the chosen layouts and the shell, and writes OUTPUT atomically.\n"
     "\n"
     "  --layout tet16|tet20|tet32  layout to store (repeatable; default tet16)\n"
     "  --field NAME                keep this field (repeatable; NAME:mag or NAME:x|y|z for vectors;\n"
@@ -20,7 +20,7 @@ static const char convert_help[] =
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --drop-degenerate           drop zero-volume tets (counted) instead of failing\n"
-    "  --format vtk|tetgen         force the input format (default: from extension and contents)\n"
+    "  --format vtk|tetgen|medit   force the input format (default: from extension and contents)\n"
     "  --threads N                 worker threads (default: all cores)\n"
     "  --json                      print the summary as JSON\n"
     "  --quiet                     print nothing on success\n";
@@ -72,7 +72,7 @@ static int parse_args(int argc, char **argv, convert_args *a)
                 return tpk_cli_fail("convert", "--threads expects a number from 1 to 1024, found '%s'", v ? v : "");
         } else if (!strncmp(arg, "--format", 8)) {
             if (!(v = tpk_cli_value(argc, argv, &i, "--format")))
-                return tpk_cli_fail("convert", "--format expects vtk or tetgen");
+                return tpk_cli_fail("convert", "--format expects vtk, tetgen or medit");
             a->options.format = v;
         } else if (!strcmp(arg, "--no-reorder")) {
             a->options.no_reorder = 1;
