@@ -281,19 +281,55 @@ static int32_t min_vertex(const int32_t *v)
     return a < b ? a : b;
 }
 
-static int min_vertex_order(const int32_t *tets, int64_t nt, int64_t nv, uint32_t *order)
+/* Stable parallel counting sort: worker w counts its range of tets per smallest vertex, the offsets put
+ * worker 0's tets of a vertex before worker 1's, and each worker scatters its range in order, so the
+ * result is the same for any thread count. */
+typedef struct min_sort_job {
+    const int32_t *tets;
+    int64_t nv;
+    uint32_t **next; /* [worker][nv]: counts, then positions */
+    uint32_t *order;
+} min_sort_job;
+
+static void min_count(void *ctx, int64_t begin, int64_t end, int worker)
 {
-    uint32_t *next = calloc((size_t)nv + 1, sizeof *next);
-    if (!next)
-        return -1;
-    for (int64_t t = 0; t < nt; t++)
-        next[min_vertex(tets + 4 * t) + 1]++;
-    for (int64_t v = 0; v < nv; v++)
-        next[v + 1] += next[v];
-    for (int64_t t = 0; t < nt; t++)
-        order[next[min_vertex(tets + 4 * t)]++] = (uint32_t)t;
-    free(next);
-    return 0;
+    min_sort_job *job = ctx;
+    uint32_t *count = job->next[worker];
+    for (int64_t t = begin; t < end; t++)
+        count[min_vertex(job->tets + 4 * t)]++;
+}
+
+static void min_scatter(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    min_sort_job *job = ctx;
+    uint32_t *next = job->next[worker];
+    for (int64_t t = begin; t < end; t++)
+        job->order[next[min_vertex(job->tets + 4 * t)]++] = (uint32_t)t;
+}
+
+static int min_vertex_order(const int32_t *tets, int64_t nt, int64_t nv, uint32_t *order, int threads)
+{
+    threads = tpk_threads_for(nt, threads, 1 << 20);
+    uint32_t *next[TPK_MAX_THREADS] = {NULL};
+    int rc = 0;
+    for (int w = 0; w < threads && rc == 0; w++)
+        if (!(next[w] = calloc((size_t)nv + 1, sizeof *next[w])))
+            rc = -1;
+    if (rc == 0) {
+        min_sort_job job = {tets, nv, next, order};
+        tpk_parallel_for(nt, threads, min_count, &job);
+        uint32_t running = 0;
+        for (int64_t v = 0; v < nv; v++)
+            for (int w = 0; w < threads; w++) {
+                uint32_t c = next[w][v];
+                next[w][v] = running;
+                running += c;
+            }
+        tpk_parallel_for(nt, threads, min_scatter, &job);
+    }
+    for (int w = 0; w < threads; w++)
+        free(next[w]);
+    return rc;
 }
 
 /* ---- applying the permutations -------------------------------------------------------------------- */
@@ -445,7 +481,7 @@ int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
     uint32_t *order = malloc(sizeof *order * (size_t)(nv > nt ? (nv ? nv : 1) : nt));
     int rc = -1;
     if (order && !hilbert_order(&table, mesh->points, nv, bounds, order, threads) &&
-        !apply_vertex_order(mesh, order, threads) && !min_vertex_order(mesh->tets, nt, nv, order) &&
+        !apply_vertex_order(mesh, order, threads) && !min_vertex_order(mesh->tets, nt, nv, order, threads) &&
         !apply_tet_order(mesh, order, threads))
         rc = 0;
     free(order);
