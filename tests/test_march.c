@@ -749,7 +749,7 @@ static int load_real(const char *relative, fx_mesh *m)
     memset(&diag, 0, sizeof diag);
     tpk_orient_stats ost;
     if (tpk_import_any(tpk_data_path(relative), NULL, &src, &diag) != 0 ||
-        tpk_tetrahedralize(&src, NULL, 0, &tm, &diag) != 0 || tpk_orient(&tm, 0, 0, &ost, &diag) != 0) {
+        tpk_tetrahedralize(&src, NULL, 0, 0, &tm, &diag) != 0 || tpk_orient(&tm, 0, 0, &ost, &diag) != 0) {
         fprintf(stderr, "%s: %s\n", relative, diag.message);
         tpk_mesh_free(&src);
         tpk_tetmesh_free(&tm);

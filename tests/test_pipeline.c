@@ -616,7 +616,7 @@ TPK_TEST(tetrahedralize_default_fields)
     diag.warn = collect_warning;
     diag.warn_user = warnings;
     source_mesh(&src, 0, 1);
-    CHECK_MSG(tpk_tetrahedralize(&src, NULL, 0, &out, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_tetrahedralize(&src, NULL, 0, 0, &out, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(out.tet_count, 2);
     CHECK_EQ_INT(out.vertex_count, 8);
     CHECK(out.tet_source[0] == 0 && out.tet_source[1] == 2); /* the triangle (cell 1) is skipped */
@@ -638,7 +638,7 @@ TPK_TEST(tetrahedralize_selected_fields)
     tpk_diag diag = {0};
     source_mesh(&src, 0, 0);
     const char *names[] = {"velocity:mag", "velocity:y", "mat_id", "temperature"};
-    CHECK_MSG(tpk_tetrahedralize(&src, names, 4, &out, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_tetrahedralize(&src, names, 4, 0, &out, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(out.field_count, 4);
     CHECK(!strcmp(out.fields[0].name, "velocity_mag") && out.fields[0].association == TPK_ASSOC_POINT);
     CHECK(fabsf(out.fields[0].values[0] - sqrtf(14.0f)) < 1e-6f);
@@ -651,15 +651,15 @@ TPK_TEST(tetrahedralize_selected_fields)
     tpk_tetmesh_free(&out);
 
     const char *missing[] = {"pressure"};
-    CHECK(tpk_tetrahedralize(&src, missing, 1, &out, &diag) != 0);
+    CHECK(tpk_tetrahedralize(&src, missing, 1, 0, &out, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "'pressure'") && strstr(diag.message, "temperature (point)") &&
                   strstr(diag.message, "velocity (point, vector)") && strstr(diag.message, "mat_id (cell)"),
               "%s", diag.message);
     const char *vector[] = {"velocity"};
-    CHECK(tpk_tetrahedralize(&src, vector, 1, &out, &diag) != 0);
+    CHECK(tpk_tetrahedralize(&src, vector, 1, 0, &out, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "velocity:mag"), "%s", diag.message);
     const char *selector[] = {"velocity:w"};
-    CHECK(tpk_tetrahedralize(&src, selector, 1, &out, &diag) != 0);
+    CHECK(tpk_tetrahedralize(&src, selector, 1, 0, &out, &diag) != 0);
     CHECK_MSG(strstr(diag.message, ":w"), "%s", diag.message);
     tpk_mesh_free(&src);
 }
@@ -670,13 +670,15 @@ TPK_TEST(tetrahedralize_refuses_other_cells)
     tpk_tetmesh out;
     tpk_diag diag = {0};
     source_mesh(&src, 1, 0);
-    CHECK(tpk_tetrahedralize(&src, NULL, 0, &out, &diag) != 0);
-    CHECK_MSG(!strcmp(diag.message, "cell 2 is a hexahedron (VTK type 12); this converter handles "
-                                    "tetrahedra only so far"),
+    src.cell_types[2] = 15; /* the 8 corners as a pentagonal prism's first 8 of 10: refused by type */
+    CHECK(tpk_tetrahedralize(&src, NULL, 0, 0, &out, &diag) != 0);
+    CHECK_MSG(!strcmp(diag.message, "cell 2 is a pentagonal prism (VTK type 15); this converter splits tetra, "
+                                    "voxels, hexahedra, wedges and pyramids"),
               "%s", diag.message);
+    src.cell_types[2] = TPK_CELL_HEXAHEDRON;
     CHECK(out.tets == NULL && out.tet_count == 0);
     src.cell_conn[2] = 8; /* out of range */
-    CHECK(tpk_tetrahedralize(&src, NULL, 0, &out, &diag) != 0);
+    CHECK(tpk_tetrahedralize(&src, NULL, 0, 0, &out, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "cell 0 names point 8"), "%s", diag.message);
     tpk_mesh_free(&src);
 }
@@ -693,7 +695,7 @@ static void run_chain(const char *relative, const char *const *fields, int field
     char msg[512] = "";
     memset(out, 0, sizeof *out);
     CHECK_MSG(tpk_import_any(tpk_data_path(relative), NULL, &src, &diag) == 0, "%s", diag.message);
-    CHECK_MSG(tpk_tetrahedralize(&src, fields, field_count, out, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_tetrahedralize(&src, fields, field_count, 0, out, &diag) == 0, "%s", diag.message);
     tpk_mesh_free(&src);
     if (tets >= 0)
         CHECK_EQ_INT(out->tet_count, tets);
@@ -762,7 +764,7 @@ TPK_TEST(real_degenerate_tets)
     const char *fields[] = {"degenerate_kind"};
     CHECK_MSG(tpk_import_any(tpk_data_path("hard/degenerate_tets.vtk"), NULL, &src, &diag) == 0, "%s",
               diag.message);
-    CHECK_MSG(tpk_tetrahedralize(&src, fields, 1, &m, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_tetrahedralize(&src, fields, 1, 0, &m, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(m.tet_count, 8161);
     float *kind = malloc(sizeof *kind * (size_t)m.tet_count);
     memcpy(kind, m.fields[0].values, sizeof *kind * (size_t)m.tet_count);
@@ -784,7 +786,7 @@ TPK_TEST(real_degenerate_tets)
     CHECK_EQ_INT(stats.degenerate, 20);
     tpk_tetmesh_free(&m);
 
-    CHECK_MSG(tpk_tetrahedralize(&src, fields, 1, &m, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_tetrahedralize(&src, fields, 1, 0, &m, &diag) == 0, "%s", diag.message);
     tpk_mesh_free(&src);
     CHECK(tpk_orient(&m, 1, 0, &stats, &diag) == 0);
     CHECK_EQ_INT(stats.degenerate, 20);

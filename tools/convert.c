@@ -265,9 +265,11 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
     tpk_strbuf_json_string(&sb, source_format);
     tpk_strbuf_printf(&sb, ",\"cells\":%lld,\"points\":%lld}", (long long)rep->source_cells,
                       (long long)rep->source_points);
-    tpk_strbuf_printf(&sb, ",\"pipeline\":{\"reordered\":%s,\"inverted_fixed\":%lld,\"degenerate_dropped\":%lld}}",
+    tpk_strbuf_printf(&sb, ",\"pipeline\":{\"reordered\":%s,\"inverted_fixed\":%lld,\"degenerate_dropped\":%lld,"
+                           "\"mirrored_cells\":%lld,\"bad_cells_skipped\":%lld}}",
                       o->no_reorder ? "false" : "true", (long long)rep->inverted_fixed,
-                      (long long)rep->degenerate_dropped);
+                      (long long)rep->degenerate_dropped, (long long)rep->mirrored_cells,
+                      (long long)rep->bad_cells_skipped);
     int rc;
     if (sb.failed)
         rc = tpk_diag_fail(cw->diag, "out of memory for metadata");
@@ -358,9 +360,13 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 
     announce(stage, stage_user, "tetrahedralize");
     t = now_seconds();
-    if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count, &mesh, diag) != 0)
+    if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
+                                   o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0, &mesh, diag) != 0)
         goto done;
     tpk_mesh_free(&src);
+    memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);
+    rep->mirrored_cells = mesh.mirrored_cells;
+    rep->bad_cells_skipped = mesh.bad_cells_skipped;
     quantize_points(&mesh, &header);
     rep->t_tetrahedralize = now_seconds() - t;
 

@@ -21,6 +21,7 @@ typedef struct tpk_convert_options {
     int zstd_level;               /* 0: uncompressed (zero-copy); 1..22: zstd */
     int no_reorder;               /* keep source order (default: Hilbert reorder) */
     int drop_degenerate;          /* drop zero-volume tets instead of failing */
+    int skip_bad_cells;           /* leave out cells whose split would fold, instead of failing */
     int threads;                  /* <= 0: all cores */
     const char *command_line;     /* recorded in META; may be NULL */
 } tpk_convert_options;
@@ -29,6 +30,8 @@ typedef struct tpk_convert_report {
     int64_t source_points, source_cells;
     int64_t vertices, tets, shell_faces;
     int64_t inverted_fixed, degenerate_dropped;
+    int64_t cells_into[7];       /* source cells that gave k tets (1 tetra, 2 pyramid, 3 wedge, 5/6 hex) */
+    int64_t mirrored_cells, bad_cells_skipped;
     int field_count, step_count;
     uint64_t output_bytes;
     /* seconds per stage */

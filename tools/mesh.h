@@ -58,6 +58,10 @@ typedef struct tpk_tetmesh {
     tpk_src_field *fields;     /* scalar (components 1) fields: per vertex or per tet */
     int step_count;
     double *times;
+    /* What tpk_tetrahedralize did with the source cells. */
+    int64_t cells_into[7];     /* cells that gave k tets (k = 1..6: tets 1, pyramids 2, wedges 3, hexes 5 or 6) */
+    int64_t mirrored_cells;    /* cells given in mirrored node order, turned over */
+    int64_t bad_cells_skipped; /* warped, non-convex or degenerate cells left out (TPK_TETRA_SKIP_BAD_CELLS) */
 } tpk_tetmesh;
 
 void tpk_tetmesh_free(tpk_tetmesh *mesh);

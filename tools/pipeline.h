@@ -10,14 +10,18 @@
 #include "mesh.h"
 #include "tetpack.h"
 
-/* Source cells -> tets. Format 1.0 converter: tetra cells pass through (other 3-D cell types are the
- * mixed-cell work); point fields are kept, cell fields become per-tet fields via the source map.
- * `field_names` (count n, may be NULL = all scalar point fields) selects fields. */
-int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count,
+/* Source cells -> tets. Tetrahedra pass through; voxels, hexahedra, wedges and pyramids are split
+ * conformally without new points (tools/cell_split.h); a cell the split would fold (warped, non-convex,
+ * degenerate) is an error naming it, or is left out and counted with TPK_TETRA_SKIP_BAD_CELLS.
+ * Polyhedra and prisms of more sides are refused by name. Point fields are kept, cell fields become
+ * per-tet fields via the source map. `field_names` (count n, may be NULL = all scalar point fields)
+ * selects fields. */
+#define TPK_TETRA_SKIP_BAD_CELLS 0x1
+int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag);
 /* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;
  * src stays valid for tpk_mesh_free but must not be used otherwise. */
-int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count,
+int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                                tpk_tetmesh *out, tpk_diag *diag);
 
 typedef struct tpk_orient_stats {

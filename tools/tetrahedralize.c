@@ -1,40 +1,21 @@
-/* Source cells -> tets (pipeline stage 1). A 3-D cell type with an entry in `splits` becomes tets, one
- * without is refused by name (tools/cell_types.c knows every VTK type), and lower-dimensional cells
- * (boundary faces, edges, points) are skipped with a warning. Adding hexes, wedges and pyramids means
- * adding their split functions (DESIGN.md §5), nothing else here changes. */
+/* Source cells -> tets (pipeline stage 1). Tetra pass through, voxels, hexahedra, wedges and pyramids
+ * are split conformally (tools/cell_split.c), other 3-D types are refused by name (tools/cell_types.c
+ * knows every VTK type), and lower-dimensional cells (boundary faces, edges, points) are skipped with a
+ * warning. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "cell_split.h"
 #include "cell_types.h"
 #include "pipeline.h"
 
-/* Appends the tets of one cell (vertex ids into out) and returns how many; at most max_tets. */
-typedef int (*split_fn)(const int32_t *nodes, int32_t *out);
-
-static int split_tetra(const int32_t *nodes, int32_t *out)
+/* Tets one cell of this type can give (for sizing); 0 when this converter does not split the type. */
+static int max_tets(int type)
 {
-    memcpy(out, nodes, 4 * sizeof *out);
-    return 1;
-}
-
-/* The 3-D cell types this converter splits into tets (the others are refused by name). */
-static const struct {
-    int type;
-    int max_tets; /* tets one cell can give (for sizing) */
-    split_fn split;
-} splits[] = {
-    {TPK_CELL_TETRA, 1, split_tetra},
-};
-
-static int find_split(int type)
-{
-    for (int i = 0; i < (int)(sizeof splits / sizeof splits[0]); i++)
-        if (splits[i].type == type)
-            return i;
-    return -1;
+    return type == TPK_CELL_TETRA ? 1 : tpk_split_max_tets(type);
 }
 
 /* Pass 1: check every cell and count tets; refuses unsupported 3-D cells, skips lower-dim ones. */
@@ -53,14 +34,13 @@ static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
             skipped++;
             continue;
         }
-        int split = find_split(kind->type);
-        if (split < 0)
-            return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter handles "
-                                 "tetrahedra only so far", (long long)c, kind->name, kind->type);
+        if (!max_tets(kind->type))
+            return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter splits tetra, "
+                                 "voxels, hexahedra, wedges and pyramids", (long long)c, kind->name, kind->type);
         if (kind->nodes > 0 && nodes != kind->nodes)
             return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d",
                                  (long long)c, kind->name, (long long)nodes, kind->name, kind->nodes);
-        tets += splits[split].max_tets;
+        tets += max_tets(kind->type);
     }
     if (skipped)
         tpk_diag_warn(diag, "skipped %lld cells of dimension < 3 (the first is cell %lld, a %s)",
@@ -256,14 +236,33 @@ static int copy_field(const tpk_mesh *src, const field_request *req, tpk_tetmesh
 
 /* ---- the stage ------------------------------------------------------------------------------- */
 
-static int split_cells(const tpk_mesh *src, tpk_tetmesh *out)
+/* Returns 0, or -2 with a message for a cell the split would fold (unless skipped). */
+static int split_cells(const tpk_mesh *src, int flags, tpk_tetmesh *out, tpk_diag *diag)
 {
     int64_t t = 0;
     for (int64_t c = 0; c < src->cell_count; c++) {
-        int split = find_split(src->cell_types[c]);
-        if (split < 0) /* lower-dimensional: count_tets accepted only these besides splittable types */
+        int type = src->cell_types[c];
+        const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
+        if (!max_tets(type)) /* lower-dimensional: count_tets accepted only these besides split types */
             continue;
-        int made = splits[split].split(src->cell_conn + src->cell_offsets[c], out->tets + 4 * t);
+        int made = 1, mirrored = 0;
+        if (type == TPK_CELL_TETRA)
+            memcpy(out->tets + 4 * t, nodes, 4 * sizeof *nodes); /* orientation: tpk_orient */
+        else
+            made = tpk_split_cell(type, nodes, src->points, out->tets + 4 * t, &mirrored);
+        if (made < 0) {
+            if (flags & TPK_TETRA_SKIP_BAD_CELLS) {
+                out->bad_cells_skipped++;
+                continue;
+            }
+            tpk_diag_fail(diag, "cell %lld (a %s) is warped, non-convex or degenerate: cutting its faces "
+                                "along their smallest-id diagonals gives a flat or folded tet; pass "
+                                "--skip-bad-cells to leave such cells out",
+                          (long long)c, tpk_cell_type(type)->name);
+            return -2;
+        }
+        out->mirrored_cells += mirrored;
+        out->cells_into[made]++;
         for (int i = 0; i < made; i++)
             out->tet_source[t + i] = (int32_t)c;
         t += made;
@@ -285,7 +284,8 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
 
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
-static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, tpk_tetmesh *out)
+static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
+                         tpk_tetmesh *out, tpk_diag *diag)
 {
     size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
     if (donor && all_plain_tets(src, tet_capacity)) {
@@ -297,12 +297,15 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
         for (int64_t t = 0; t < tet_capacity; t++)
             out->tet_source[t] = (int32_t)t;
         out->tet_count = tet_capacity;
+        out->cells_into[1] = tet_capacity;
     } else {
         out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
         out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
         if (!out->tets || !out->tet_source)
             return -1;
-        split_cells(src, out);
+        int rc = split_cells(src, flags, out, diag);
+        if (rc)
+            return rc;
     }
     if (donor && donor->points) {
         out->points = donor->points;
@@ -317,7 +320,7 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
 }
 
 static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
-                          int field_name_count, tpk_tetmesh *out, tpk_diag *diag)
+                          int field_name_count, int flags, tpk_tetmesh *out, tpk_diag *diag)
 {
     field_request *reqs = NULL;
     int req_count = 0;
@@ -346,8 +349,19 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
         memcpy(out->times, src->times, sizeof *out->times * (size_t)src->step_count);
     }
     /* Geometry last: it may take src's arrays, and nothing after it reads them. */
-    if (take_geometry(src, donor, tet_capacity, out))
+    int geometry = take_geometry(src, donor, tet_capacity, flags, out, diag);
+    if (geometry == -2) {
+        free(reqs);
+        tpk_tetmesh_free(out);
+        return -1;
+    }
+    if (geometry)
         goto out_of_memory;
+    if (out->tet_count == 0) {
+        free(reqs);
+        tpk_tetmesh_free(out);
+        return tpk_diag_fail(diag, "all %lld volume cells were left out as bad cells", (long long)src->cell_count);
+    }
     for (int i = 0; i < req_count; i++)
         if (copy_field(src, &reqs[i], out))
             goto out_of_memory;
@@ -361,14 +375,14 @@ out_of_memory:
                          (long long)src->point_count, (long long)tet_capacity);
 }
 
-int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count,
+int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag)
 {
-    return tetrahedralize(src, NULL, field_names, field_name_count, out, diag);
+    return tetrahedralize(src, NULL, field_names, field_name_count, flags, out, diag);
 }
 
-int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count,
+int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                                tpk_tetmesh *out, tpk_diag *diag)
 {
-    return tetrahedralize(src, src, field_names, field_name_count, out, diag);
+    return tetrahedralize(src, src, field_names, field_name_count, flags, out, diag);
 }

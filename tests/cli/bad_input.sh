@@ -46,9 +46,13 @@ expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --field nope
 expect_stderr "point fields: temperature"
 expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --step 3
 [ ! -e "$WORK/m.png" ] || fail "image left behind"
-# A hexahedral mesh is refused by name (mixed cells are a later step), a non-tpk file by its magic.
-expect_exit 2 "$TPK" convert "$DATA/sfepy/acoustic_wg.vtk" "$WORK/h.tpk"
-expect_stderr "cell 0 is a hexahedron (VTK type 12)"
+# A twisted hexahedron (sfepy's cross3d.mesh, cell 2) cannot be split without new points: refused by
+# name, or left out and counted with --skip-bad-cells. A non-tpk file is refused by its magic.
+expect_exit 2 "$TPK" convert "$DATA/sfepy/cross3d.mesh" "$WORK/h.tpk"
+expect_stderr "cell 2 (a hexahedron) is warped, non-convex or degenerate"
+[ ! -e "$WORK/h.tpk" ] || fail "output left behind"
+"$TPK" convert "$DATA/sfepy/cross3d.mesh" "$WORK/h.tpk" --skip-bad-cells --json > "$WORK/h.json"
+"$PY" -c "import json; d=json.load(open('$WORK/h.json')); assert d['bad_cells_skipped']==1 and d['tets']==36, d"
 expect_exit 2 "$TPK" info "$DATA/sfepy/cylinder.vtk"
 expect_stderr "not a tetpack file"
 

@@ -20,6 +20,8 @@ static const char convert_help[] =
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --drop-degenerate           drop zero-volume tets (counted) instead of failing\n"
+    "  --skip-bad-cells            leave out hexahedra, wedges and pyramids that are too warped or\n"
+    "                              non-convex to split without new points (counted) instead of failing\n"
     "  --format vtk|tetgen|medit   force the input format (default: from extension and contents)\n"
     "  --threads N                 worker threads (default: all cores)\n"
     "  --json                      print the summary as JSON\n"
@@ -78,6 +80,8 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.no_reorder = 1;
         } else if (!strcmp(arg, "--drop-degenerate")) {
             a->options.drop_degenerate = 1;
+        } else if (!strcmp(arg, "--skip-bad-cells")) {
+            a->options.skip_bad_cells = 1;
         } else if (!strcmp(arg, "--json")) {
             a->json = 1;
         } else if (!strcmp(arg, "--quiet")) {
@@ -116,11 +120,18 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
         tpk_strbuf_printf(&sb,
                           ",\"source_points\":%lld,\"source_cells\":%lld,\"vertices\":%lld,\"tets\":%lld,"
                           "\"shell_faces\":%lld,\"inverted_fixed\":%lld,\"degenerate_dropped\":%lld,"
-                          "\"fields\":%d,\"steps\":%d,\"output_bytes\":%llu,\"seconds\":{",
+                          "\"fields\":%d,\"steps\":%d,\"output_bytes\":%llu,",
                           (long long)r->source_points, (long long)r->source_cells, (long long)r->vertices,
                           (long long)r->tets, (long long)r->shell_faces, (long long)r->inverted_fixed,
                           (long long)r->degenerate_dropped, r->field_count, r->step_count,
                           (unsigned long long)r->output_bytes);
+        tpk_strbuf_printf(&sb,
+                          "\"cells_split\":{\"tetra\":%lld,\"pyramid_into_2\":%lld,\"wedge_into_3\":%lld,"
+                          "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
+                          "\"bad_cells_skipped\":%lld,\"seconds\":{",
+                          (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
+                          (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
+                          (long long)r->bad_cells_skipped);
         tpk_strbuf_printf(&sb,
                           "\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"
                           "\"connect\":%.6f,\"write\":%.6f,\"total\":%.6f}}\n",
@@ -137,6 +148,12 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
     printf("  source: %lld cells, %lld points; inverted tets fixed: %lld; degenerate dropped: %lld\n",
            (long long)r->source_cells, (long long)r->source_points, (long long)r->inverted_fixed,
            (long long)r->degenerate_dropped);
+    if (r->cells_into[2] || r->cells_into[3] || r->cells_into[5] || r->cells_into[6] || r->bad_cells_skipped)
+        printf("  cells: %lld tetra, %lld pyramids (2 tets), %lld wedges (3), %lld hexahedra into 5 and %lld "
+               "into 6; %lld mirrored cells turned over; %lld bad cells skipped\n",
+               (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
+               (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
+               (long long)r->bad_cells_skipped);
     printf("  time: %.3f s (import %.3f, tetrahedralize %.3f, orient %.3f, reorder %.3f, connect %.3f, "
            "write %.3f)\n",
            r->t_total, r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect, r->t_write);

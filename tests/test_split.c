@@ -1,0 +1,260 @@
+/* Conformal split of hexahedra, voxels, wedges and pyramids (tools/cell_split.c, DESIGN.md §5):
+ * every labelling of a cube gives positive tets filling it exactly and cut along the smallest-id
+ * diagonals; grids of each cell type with random global ids give a conforming tet mesh; mirrored cells
+ * are turned over and warped ones refused. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "cell_split.h"
+#include "harness.h"
+#include "importers.h"
+#include "pipeline.h"
+
+static const double cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                  {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+
+/* 6 x volume of a tet: exact in double for integer and half-integer coordinates. */
+static double vol6(const double *p, const int32_t *t)
+{
+    const double *a = p + 3 * t[0], *b = p + 3 * t[1], *c = p + 3 * t[2], *d = p + 3 * t[3];
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; k++) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - a[k];
+        w[k] = d[k] - a[k];
+    }
+    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+           u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+
+/* Does some tet have both a and b as vertices (i.e. is a-b an edge of the split)? */
+static int has_edge(const int32_t *tets, int n, int32_t a, int32_t b)
+{
+    for (int i = 0; i < n; i++) {
+        int ha = 0, hb = 0;
+        for (int k = 0; k < 4; k++) {
+            ha |= tets[4 * i + k] == a;
+            hb |= tets[4 * i + k] == b;
+        }
+        if (ha && hb)
+            return 1;
+    }
+    return 0;
+}
+
+TPK_TEST(every_cube_labelling)
+{
+    static const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                    {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    int32_t label[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+    double points[8][3];
+    int fives = 0, total = 0;
+    for (;;) {
+        /* vertex label[i] sits at cube corner i */
+        for (int i = 0; i < 8; i++)
+            memcpy(points[label[i]], cube[i], sizeof cube[i]);
+        int32_t tets[6 * 4];
+        int mirrored;
+        int n = tpk_split_cell(12, label, &points[0][0], tets, &mirrored);
+        CHECK_MSG(n == 5 || n == 6, "labelling %d gave %d tets", total, n);
+        CHECK(!mirrored);
+        double sum = 0;
+        for (int i = 0; i < n; i++) {
+            double v = vol6(&points[0][0], tets + 4 * i);
+            CHECK_MSG(v > 0, "labelling %d: tet %d has 6V = %g", total, i, v);
+            sum += v;
+        }
+        CHECK_MSG(sum == 6, "labelling %d: tets fill 6V = %g of the cube's 6", total, sum);
+        for (int f = 0; f < 6; f++) { /* each face is cut along the diagonal through its smallest id */
+            int at = 0;
+            for (int i = 1; i < 4; i++)
+                if (label[faces[f][i]] < label[faces[f][at]])
+                    at = i;
+            int32_t m = label[faces[f][at]], opposite = label[faces[f][(at + 2) % 4]];
+            int32_t other_a = label[faces[f][(at + 1) % 4]], other_b = label[faces[f][(at + 3) % 4]];
+            CHECK_MSG(has_edge(tets, n, m, opposite) && !has_edge(tets, n, other_a, other_b),
+                      "labelling %d: face %d not cut along its smallest-id diagonal", total, f);
+        }
+        fives += n == 5;
+        total++;
+        /* next permutation of label[] */
+        int i = 6;
+        while (i >= 0 && label[i] > label[i + 1])
+            i--;
+        if (i < 0)
+            break;
+        int j = 7;
+        while (label[j] < label[i])
+            j--;
+        int32_t t = label[i];
+        label[i] = label[j];
+        label[j] = t;
+        for (int a = i + 1, b = 7; a < b; a++, b--) {
+            t = label[a];
+            label[a] = label[b];
+            label[b] = t;
+        }
+    }
+    CHECK_EQ_INT(total, 40320);
+    /* DESIGN.md §5: 5 tets suffice for about 21% of labellings. */
+    CHECK_MSG(fives > 40320 * 20 / 100 && fives < 40320 * 22 / 100, "%d of 40320 labellings gave 5 tets", fives);
+}
+
+/* A mesh of n^3 unit cubes, each as one hexahedron, two wedges or six pyramids around its centre, with
+ * vertex ids shuffled; returns its tet mesh after splitting, orienting and connecting. */
+static int grid_of(int type, int n, uint64_t seed, tpk_tetmesh *out, int32_t **nb, char *msg, size_t cap)
+{
+    int64_t corners = (int64_t)(n + 1) * (n + 1) * (n + 1), cells_per = type == 12 ? 1 : type == 13 ? 2 : 6;
+    int64_t points = corners + (type == 14 ? (int64_t)n * n * n : 0), cells = (int64_t)n * n * n * cells_per;
+    int per = type == 12 ? 8 : type == 13 ? 6 : 5;
+    tpk_mesh m;
+    memset(&m, 0, sizeof m);
+    m.point_count = points;
+    m.points = malloc(sizeof(double) * 3 * (size_t)points);
+    m.cell_count = cells;
+    m.cell_types = malloc((size_t)cells);
+    m.cell_offsets = malloc(sizeof(int64_t) * (size_t)(cells + 1));
+    m.cell_conn = malloc(sizeof(int32_t) * (size_t)(cells * per));
+    int32_t *label = malloc(sizeof(int32_t) * (size_t)points);
+    for (int64_t i = 0; i < points; i++)
+        label[i] = (int32_t)i;
+    for (int64_t i = points - 1; i > 0; i--) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        int64_t j = (int64_t)((seed >> 33) % (uint64_t)(i + 1));
+        int32_t t = label[i];
+        label[i] = label[j];
+        label[j] = t;
+    }
+#define CORNER(i, j, k) label[((int64_t)(k) * (n + 1) + (j)) * (n + 1) + (i)]
+    for (int k = 0; k <= n; k++)
+        for (int j = 0; j <= n; j++)
+            for (int i = 0; i <= n; i++) {
+                double *p = m.points + 3 * CORNER(i, j, k);
+                p[0] = i, p[1] = j, p[2] = k;
+            }
+    int64_t c = 0, at = 0;
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                int32_t h[8] = {CORNER(i, j, k), CORNER(i + 1, j, k), CORNER(i + 1, j + 1, k), CORNER(i, j + 1, k),
+                                CORNER(i, j, k + 1), CORNER(i + 1, j, k + 1), CORNER(i + 1, j + 1, k + 1),
+                                CORNER(i, j + 1, k + 1)};
+                int cell_list[6][8], count = 0;
+                if (type == 12) {
+                    memcpy(cell_list[count++], h, sizeof h);
+                } else if (type == 13) { /* split by the x+y diagonal plane: triangles (0,1,2) and (0,2,3) */
+                    int w0[6] = {h[0], h[1], h[2], h[4], h[5], h[6]}, w1[6] = {h[0], h[2], h[3], h[4], h[6], h[7]};
+                    memcpy(cell_list[count++], w0, sizeof w0);
+                    memcpy(cell_list[count++], w1, sizeof w1);
+                } else { /* six pyramids from the cube's faces to its centre */
+                    int32_t centre = label[corners + ((int64_t)k * n + j) * n + i];
+                    double *p = m.points + 3 * centre;
+                    p[0] = i + 0.5, p[1] = j + 0.5, p[2] = k + 0.5;
+                    static const int faces[6][4] = {{0, 1, 2, 3}, {4, 7, 6, 5}, {0, 4, 5, 1},
+                                                    {1, 5, 6, 2}, {2, 6, 7, 3}, {3, 7, 4, 0}};
+                    for (int f = 0; f < 6; f++) {
+                        int pyr[5] = {h[faces[f][0]], h[faces[f][1]], h[faces[f][2]], h[faces[f][3]], centre};
+                        memcpy(cell_list[count++], pyr, sizeof pyr);
+                    }
+                }
+                for (int q = 0; q < count; q++) {
+                    m.cell_types[c] = (uint8_t)type;
+                    m.cell_offsets[c++] = at;
+                    for (int v = 0; v < per; v++)
+                        m.cell_conn[at++] = cell_list[q][v];
+                }
+            }
+    m.cell_offsets[c] = at;
+    m.step_count = 1;
+#undef CORNER
+    free(label);
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    tpk_orient_stats os;
+    int rc = tpk_tetrahedralize(&m, NULL, 0, 0, out, &d);
+    tpk_mesh_free(&m);
+    if (rc == 0)
+        rc = tpk_orient(out, 0, 0, &os, &d);
+    if (rc == 0 && os.inverted_fixed != 0)
+        rc = tpk_diag_fail(&d, "%lld tets came out inverted", (long long)os.inverted_fixed);
+    *nb = rc == 0 ? malloc(sizeof(int32_t) * 4 * (size_t)out->tet_count) : NULL;
+    if (rc == 0)
+        rc = tpk_connect(out->tets, out->tet_count, out->vertex_count, *nb, 2, &d);
+    snprintf(msg, cap, "%.1000s", d.message);
+    return rc;
+}
+
+static void check_conforming_grid(int type)
+{
+    const int n = 4;
+    for (uint64_t seed = 1; seed <= 5; seed++) {
+        tpk_tetmesh m;
+        int32_t *nb = NULL;
+        char msg[1100] = "";
+        int rc = grid_of(type, n, seed, &m, &nb, msg, sizeof msg);
+        if (rc) {
+            free(nb);
+            tpk_tetmesh_free(&m);
+        }
+        CHECK_MSG(rc == 0, "type %d seed %llu: %s", type, (unsigned long long)seed, msg);
+        int64_t open = 0;
+        long sum = 0;
+        for (int64_t i = 0; i < 4 * m.tet_count; i++)
+            open += nb[i] < 0;
+        for (int64_t t = 0; t < m.tet_count; t++) /* volumes: points are integers or half-integers */
+            sum += (long)(8 * vol6(m.points, m.tets + 4 * t)); /* 8 x 6V: an exact integer */
+        free(nb);
+        tpk_tetmesh_free(&m);
+        /* Conforming: the only open faces are the grid's boundary, 2 triangles per boundary square. */
+        CHECK_MSG(open == 2 * 6 * n * n, "type %d seed %llu: %lld open faces, expected %d", type,
+                  (unsigned long long)seed, (long long)open, 2 * 6 * n * n);
+        CHECK_MSG(sum == 8L * 6 * n * n * n, "type %d: the tets do not fill the grid", type);
+    }
+}
+
+TPK_TEST(hexahedra_grid_conforms) { check_conforming_grid(12); }
+TPK_TEST(wedge_grid_conforms) { check_conforming_grid(13); }
+TPK_TEST(pyramid_grid_conforms) { check_conforming_grid(14); }
+
+TPK_TEST(voxel_mirrored_and_warped_cells)
+{
+    double p[8][3];
+    memcpy(p, cube, sizeof p);
+    int32_t tets[24];
+    int mirrored;
+    const int32_t voxel[8] = {0, 1, 3, 2, 4, 5, 7, 6}; /* the cube as a VTK voxel (x, y, z order) */
+    CHECK_EQ_INT(tpk_split_cell(11, voxel, &p[0][0], tets, &mirrored), 6);
+    CHECK(!mirrored && vol6(&p[0][0], tets) > 0);
+    const int32_t upside_down[8] = {4, 5, 6, 7, 0, 1, 2, 3}; /* top and bottom exchanged: mirrored */
+    int n = tpk_split_cell(12, upside_down, &p[0][0], tets, &mirrored);
+    CHECK(n == 6 && mirrored);
+    for (int i = 0; i < n; i++)
+        CHECK(vol6(&p[0][0], tets + 4 * i) > 0);
+    const int32_t twisted[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+    double q[8][3];
+    memcpy(q, cube, sizeof q);
+    /* Rotate the top face by 90 degrees about the vertical axis: sides fold. */
+    const double top[4][3] = {{1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0, 0, 1}};
+    memcpy(q[4], top, sizeof top);
+    CHECK_EQ_INT(tpk_split_cell(12, twisted, &q[0][0], tets, &mirrored), -1);
+    const int32_t repeated[8] = {0, 1, 2, 3, 4, 5, 6, 6};
+    CHECK_EQ_INT(tpk_split_cell(12, repeated, &p[0][0], tets, &mirrored), -1);
+}
+
+/* sfepy's cross3d.mesh: six hexahedra and one with its top face rotated (a twisted cell). */
+TPK_TEST(real_twisted_hexahedron)
+{
+    tpk_mesh src;
+    tpk_tetmesh m;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    CHECK_MSG(tpk_import_any(tpk_data_path("sfepy/cross3d.mesh"), NULL, &src, &d) == 0, "%s", d.message);
+    int rc = tpk_tetrahedralize(&src, NULL, 0, 0, &m, &d);
+    CHECK_MSG(rc != 0 && strstr(d.message, "cell 2 (a hexahedron) is warped, non-convex or degenerate"), "%s",
+              d.message);
+    rc = tpk_tetrahedralize(&src, NULL, 0, TPK_TETRA_SKIP_BAD_CELLS, &m, &d);
+    tpk_mesh_free(&src);
+    CHECK_MSG(rc == 0, "%s", d.message);
+    CHECK(m.tet_count == 36 && m.bad_cells_skipped == 1 && m.cells_into[6] + m.cells_into[5] == 6);
+    tpk_tetmesh_free(&m);
+}
