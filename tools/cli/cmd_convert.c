@@ -10,9 +10,10 @@
 static const char convert_help[] =
     "usage: tetpack convert INPUT OUTPUT.tpk [options]\n"
     "\n"
-    "Reads a tetrahedral mesh (VTK legacy .vtk ASCII/binary, TetGen .node/.ele, Medit .mesh ASCII),\n"
-    "orients every tet positively with exact predicates, reorders along a Hilbert curve, builds\n"
-    "neighbors, the chosen layouts and the shell, and writes OUTPUT atomically.\n"
+    "Reads a volume mesh (VTK legacy .vtk ASCII/binary, TetGen .node/.ele, Medit .mesh ASCII), splits\n"
+    "voxels, hexahedra, wedges and pyramids into tets conformally, orients every tet positively with\n"
+    "exact predicates, reorders along a Hilbert curve, builds neighbors, the chosen layouts and the\n"
+    "shell, and writes OUTPUT atomically.\n"
     "\n"
     "  --layout tet16|tet20|tet32  layout to store (repeatable; default tet16)\n"
     "  --field NAME                keep this field (repeatable; NAME:mag or NAME:x|y|z for vectors;\n"
