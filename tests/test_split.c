@@ -2,6 +2,7 @@
  * every labelling of a cube gives positive tets filling it exactly and cut along the smallest-id
  * diagonals; grids of each cell type with random global ids give a conforming tet mesh; mirrored cells
  * are turned over and warped ones refused. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -241,7 +242,8 @@ TPK_TEST(voxel_mirrored_and_warped_cells)
     CHECK_EQ_INT(tpk_split_cell(12, repeated, &p[0][0], tets, &mirrored), -1);
 }
 
-/* sfepy's cross3d.mesh: six hexahedra and one with its top face rotated (a twisted cell). */
+/* sfepy's cross3d.mesh: six hexahedra and one with its top face rotated (a twisted cell), which gets a
+ * point at its centre; a linear point field there is the mean of the cell's corners. */
 TPK_TEST(real_twisted_hexahedron)
 {
     tpk_mesh src;
@@ -249,12 +251,52 @@ TPK_TEST(real_twisted_hexahedron)
     tpk_diag d;
     memset(&d, 0, sizeof d);
     CHECK_MSG(tpk_import_any(tpk_data_path("sfepy/cross3d.mesh"), NULL, &src, &d) == 0, "%s", d.message);
+    float *linear = malloc(sizeof *linear * (size_t)src.point_count);
+    for (int64_t v = 0; v < src.point_count; v++)
+        linear[v] = (float)(src.points[3 * v] + 2 * src.points[3 * v + 1] + 4 * src.points[3 * v + 2]);
+    CHECK(tpk_mesh_add_field(&src, "linear", TPK_ASSOC_POINT, 1, 1, linear) == 0);
     int rc = tpk_tetrahedralize(&src, NULL, 0, 0, &m, &d);
-    CHECK_MSG(rc != 0 && strstr(d.message, "cell 2 (a hexahedron) is warped, non-convex or degenerate"), "%s",
-              d.message);
-    rc = tpk_tetrahedralize(&src, NULL, 0, TPK_TETRA_SKIP_BAD_CELLS, &m, &d);
     tpk_mesh_free(&src);
     CHECK_MSG(rc == 0, "%s", d.message);
-    CHECK(m.tet_count == 36 && m.bad_cells_skipped == 1 && m.cells_into[6] + m.cells_into[5] == 6);
+    int ok = m.tet_count == 48 && m.steiner_cells == 1 && m.vertex_count == 33 && m.vertex_source[32] == -1 &&
+             m.cells_into[5] + m.cells_into[6] == 6 && m.field_count == 1;
+    /* Cell 2's corners are 9..16 (1-based): the centre's value is their mean. */
+    const double *c = m.points + 3 * 32;
+    double expect = c[0] + 2 * c[1] + 4 * c[2];
+    ok = ok && fabs(m.fields[0].values[32] - expect) < 1e-5;
+    int32_t *nb = malloc(sizeof *nb * 4 * (size_t)m.tet_count);
+    tpk_orient_stats os;
+    ok = ok && tpk_orient(&m, 0, 0, &os, &d) == 0 && os.inverted_fixed == 0 &&
+         tpk_connect(m.tets, m.tet_count, m.vertex_count, nb, 2, &d) == 0;
+    int64_t open = 0;
+    for (int64_t i = 0; ok && i < 4 * m.tet_count; i++)
+        open += nb[i] < 0;
+    free(nb);
     tpk_tetmesh_free(&m);
+    CHECK_MSG(ok, "%s", d.message);
+    /* Conforming: the cross has 7*6 - 2*6 = 30 boundary squares, 2 triangles each. */
+    CHECK_EQ_INT(open, 60);
+}
+
+TPK_TEST(bow_tie_cell_cannot_be_starred)
+{
+    double p[9][3];
+    memcpy(p, cube, sizeof cube);
+    const int32_t bow[8] = {0, 1, 2, 3, 6, 7, 4, 5}; /* top face turned half a turn */
+    int32_t tets[48];
+    int mirrored;
+    CHECK_EQ_INT(tpk_split_cell(12, bow, &p[0][0], tets, &mirrored), -1);
+    const double centre[3] = {0.5, 0.5, 0.5};
+    CHECK_EQ_INT(tpk_star_cell(12, bow, &p[0][0], centre, 8, tets, &mirrored), -1);
+    const int32_t plain[8] = {0, 1, 2, 3, 4, 5, 6, 7}; /* a plain cube is starred too: 12 positive tets */
+    memcpy(p[8], centre, sizeof centre);
+    int n = tpk_star_cell(12, plain, &p[0][0], centre, 8, tets, &mirrored);
+    CHECK_EQ_INT(n, 12);
+    double sum = 0;
+    for (int i = 0; i < n; i++) {
+        double v = vol6(&p[0][0], tets + 4 * i);
+        CHECK(v > 0);
+        sum += v;
+    }
+    CHECK(sum == 6);
 }

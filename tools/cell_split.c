@@ -121,26 +121,26 @@ static int cone(const shape *s, const int32_t *nodes, int (*tets)[4])
     return n;
 }
 
+/* The cell's shape and its corners in that shape's order (voxels become hexahedra). */
+static const shape *shape_of(int type, const int32_t *cell_nodes, int32_t *nodes)
+{
+    static const int voxel_to_hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+    const shape *s = type == TPK_CELL_VOXEL || type == TPK_CELL_HEXAHEDRON ? &hexahedron
+                     : type == TPK_CELL_WEDGE                             ? &wedge
+                     : type == TPK_CELL_PYRAMID                           ? &pyramid
+                                                                          : NULL;
+    for (int i = 0; s && i < s->nodes; i++)
+        nodes[i] = cell_nodes[type == TPK_CELL_VOXEL ? voxel_to_hex[i] : i];
+    return s;
+}
+
 int tpk_split_cell(int type, const int32_t *cell_nodes, const double *points, int32_t *out, int *mirrored)
 {
     int32_t nodes[8];
-    const shape *s;
+    const shape *s = shape_of(type, cell_nodes, nodes);
     *mirrored = 0;
-    switch (type) {
-    case TPK_CELL_VOXEL: { /* VTK voxels number their corners in x, y, z order: reorder as a hexahedron */
-        static const int to_hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
-        for (int i = 0; i < 8; i++)
-            nodes[i] = cell_nodes[to_hex[i]];
-        s = &hexahedron;
-        break;
-    }
-    case TPK_CELL_HEXAHEDRON: s = &hexahedron; break;
-    case TPK_CELL_WEDGE: s = &wedge; break;
-    case TPK_CELL_PYRAMID: s = &pyramid; break;
-    default: return -1;
-    }
-    if (type != TPK_CELL_VOXEL)
-        memcpy(nodes, cell_nodes, sizeof *nodes * (size_t)s->nodes);
+    if (!s)
+        return -1;
     for (int i = 0; i < s->nodes; i++)
         for (int j = 0; j < i; j++)
             if (nodes[i] == nodes[j])
@@ -170,6 +170,64 @@ int tpk_split_cell(int type, const int32_t *cell_nodes, const double *points, in
         int order[4] = {t[0], t[1], *mirrored ? t[3] : t[2], *mirrored ? t[2] : t[3]};
         for (int k = 0; k < 4; k++)
             out[4 * i + k] = nodes[order[k]];
+    }
+    return n;
+}
+
+int tpk_star_max_tets(int type)
+{
+    switch (type) {
+    case TPK_CELL_VOXEL:
+    case TPK_CELL_HEXAHEDRON: return 12;
+    case TPK_CELL_WEDGE: return 8;
+    case TPK_CELL_PYRAMID: return 6;
+    default: return 0;
+    }
+}
+
+int tpk_star_cell(int type, const int32_t *cell_nodes, const double *points, const double centre[3],
+                  int32_t centre_id, int32_t *out, int *mirrored)
+{
+    int32_t nodes[8];
+    const shape *s = shape_of(type, cell_nodes, nodes);
+    *mirrored = 0;
+    if (!s)
+        return -1;
+    int n = 0, positive = 0, negative = 0;
+    int32_t tets[12][4];
+    for (int f = 0; f < s->face_count; f++) {
+        const int *v = s->faces[f];
+        int tri[2][3] = {{v[0], v[1], v[2]}, {0, 0, 0}}, count = 1;
+        if (s->face_size[f] == 4) { /* the same diagonal the neighbouring cell uses */
+            int m = smallest(nodes, v, 4), at = 0;
+            while (v[at] != m)
+                at++;
+            int a[3] = {m, v[(at + 1) % 4], v[(at + 2) % 4]}, b[3] = {m, v[(at + 2) % 4], v[(at + 3) % 4]};
+            memcpy(tri[0], a, sizeof a);
+            memcpy(tri[1], b, sizeof b);
+            count = 2;
+        }
+        for (int i = 0; i < count; i++) {
+            /* Outward triangle (a, b, c) and an inner point: (a, c, b, centre) is positive. */
+            const double *a = points + 3 * (int64_t)nodes[tri[i][0]], *b = points + 3 * (int64_t)nodes[tri[i][1]];
+            const double *c = points + 3 * (int64_t)nodes[tri[i][2]];
+            int sign = tpk_orient3d_exact(a, c, b, centre);
+            positive += sign > 0;
+            negative += sign < 0;
+            int32_t t[4] = {nodes[tri[i][0]], nodes[tri[i][2]], nodes[tri[i][1]], centre_id};
+            memcpy(tets[n++], t, sizeof t);
+        }
+    }
+    /* The faces above are outward on the reference cell: a valid star is all positive, a mirrored
+     * cell's all negative; anything else, and the centre does not see every face. */
+    if (positive != n && negative != n)
+        return -1;
+    *mirrored = negative == n;
+    for (int i = 0; i < n; i++) {
+        out[4 * i] = tets[i][0];
+        out[4 * i + 1] = tets[i][*mirrored ? 2 : 1];
+        out[4 * i + 2] = tets[i][*mirrored ? 1 : 2];
+        out[4 * i + 3] = tets[i][3];
     }
     return n;
 }

@@ -17,4 +17,15 @@ int tpk_split_max_tets(int type);
  * non-convex or degenerate cell). */
 int tpk_split_cell(int type, const int32_t *nodes, const double *points, int32_t *out, int *mirrored);
 
+/* Most tets tpk_star_cell makes for a cell of this VTK type (0: not handled). */
+int tpk_star_max_tets(int type);
+
+/* For a cell tpk_split_cell refuses: tets from an added point `centre` (id centre_id, coordinates given
+ * apart from `points`) to every boundary triangle, quad faces cut along the same smallest-id diagonals
+ * as the neighbours use, so the mesh stays conforming. Returns the number of tets, or -1 when the
+ * centre does not see every face from inside (exact orientation): the cell then needs more than one
+ * point, or is degenerate. *mirrored as for tpk_split_cell. */
+int tpk_star_cell(int type, const int32_t *nodes, const double *points, const double centre[3],
+                  int32_t centre_id, int32_t *out, int *mirrored);
+
 #endif

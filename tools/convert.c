@@ -266,10 +266,10 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
     tpk_strbuf_printf(&sb, ",\"cells\":%lld,\"points\":%lld}", (long long)rep->source_cells,
                       (long long)rep->source_points);
     tpk_strbuf_printf(&sb, ",\"pipeline\":{\"reordered\":%s,\"inverted_fixed\":%lld,\"degenerate_dropped\":%lld,"
-                           "\"mirrored_cells\":%lld,\"bad_cells_skipped\":%lld}}",
+                           "\"mirrored_cells\":%lld,\"steiner_cells\":%lld,\"bad_cells_skipped\":%lld}}",
                       o->no_reorder ? "false" : "true", (long long)rep->inverted_fixed,
                       (long long)rep->degenerate_dropped, (long long)rep->mirrored_cells,
-                      (long long)rep->bad_cells_skipped);
+                      (long long)rep->steiner_cells, (long long)rep->bad_cells_skipped);
     int rc;
     if (sb.failed)
         rc = tpk_diag_fail(cw->diag, "out of memory for metadata");
@@ -366,6 +366,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     tpk_mesh_free(&src);
     memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);
     rep->mirrored_cells = mesh.mirrored_cells;
+    rep->steiner_cells = mesh.steiner_cells;
     rep->bad_cells_skipped = mesh.bad_cells_skipped;
     quantize_points(&mesh, &header);
     rep->t_tetrahedralize = now_seconds() - t;

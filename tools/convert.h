@@ -31,7 +31,7 @@ typedef struct tpk_convert_report {
     int64_t vertices, tets, shell_faces;
     int64_t inverted_fixed, degenerate_dropped;
     int64_t cells_into[7];       /* source cells that gave k tets (1 tetra, 2 pyramid, 3 wedge, 5/6 hex) */
-    int64_t mirrored_cells, bad_cells_skipped;
+    int64_t mirrored_cells, steiner_cells, bad_cells_skipped;
     int field_count, step_count;
     uint64_t output_bytes;
     /* seconds per stage */

@@ -61,7 +61,8 @@ typedef struct tpk_tetmesh {
     /* What tpk_tetrahedralize did with the source cells. */
     int64_t cells_into[7];     /* cells that gave k tets (k = 1..6: tets 1, pyramids 2, wedges 3, hexes 5 or 6) */
     int64_t mirrored_cells;    /* cells given in mirrored node order, turned over */
-    int64_t bad_cells_skipped; /* warped, non-convex or degenerate cells left out (TPK_TETRA_SKIP_BAD_CELLS) */
+    int64_t steiner_cells;     /* cells split from a point added at their centre (vertex_source -1) */
+    int64_t bad_cells_skipped; /* cells not even that could split, left out (TPK_TETRA_SKIP_BAD_CELLS) */
 } tpk_tetmesh;
 
 void tpk_tetmesh_free(tpk_tetmesh *mesh);

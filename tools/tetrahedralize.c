@@ -207,7 +207,20 @@ static float pick_value(const float *v, int components, int pick)
 }
 
 /* Point fields keep their vertex order (vertex_source is the identity); cell fields go per tet. */
-static int copy_field(const tpk_mesh *src, const field_request *req, tpk_tetmesh *out)
+/* A point field's value at an added centre point: the mean over its cell's corners (exact for the
+ * trilinear interpolant at a hexahedron's centre). */
+static float centre_value(const tpk_mesh *src, const float *step, const field_request *req, int32_t cell)
+{
+    const tpk_src_field *f = req->field;
+    int64_t begin = src->cell_offsets[cell], corners = src->cell_offsets[cell + 1] - begin;
+    double sum = 0;
+    for (int64_t k = 0; k < corners; k++)
+        sum += pick_value(step + (int64_t)src->cell_conn[begin + k] * f->components, f->components, req->pick);
+    return (float)(sum / (double)corners);
+}
+
+static int copy_field(const tpk_mesh *src, const field_request *req, const int32_t *steiner_cell,
+                      tpk_tetmesh *out)
 {
     const tpk_src_field *f = req->field;
     int per_point = f->association == TPK_ASSOC_POINT;
@@ -221,7 +234,8 @@ static int copy_field(const tpk_mesh *src, const field_request *req, tpk_tetmesh
         for (int64_t i = 0; i < n; i++) {
             int64_t from = per_point ? out->vertex_source[i] : out->tet_source[i];
             values[(size_t)s * (size_t)n + (size_t)i] =
-                pick_value(step + from * f->components, f->components, req->pick);
+                from < 0 ? centre_value(src, step, req, steiner_cell[i - src->point_count])
+                         : pick_value(step + from * f->components, f->components, req->pick);
         }
     }
     tpk_src_field *dst = &out->fields[out->field_count++];
@@ -236,10 +250,77 @@ static int copy_field(const tpk_mesh *src, const field_request *req, tpk_tetmesh
 
 /* ---- the stage ------------------------------------------------------------------------------- */
 
-/* Returns 0, or -2 with a message for a cell the split would fold (unless skipped). */
-static int split_cells(const tpk_mesh *src, int flags, tpk_tetmesh *out, tpk_diag *diag)
+/* A cell the split would fold, or one its centre cannot star either: an error naming it, or (with
+ * TPK_TETRA_SKIP_BAD_CELLS) left out and counted. Returns 0, or -2 with the message. */
+static int bad_cell(const tpk_mesh *src, int64_t c, int flags, tpk_tetmesh *out, tpk_diag *diag)
 {
-    int64_t t = 0;
+    if (flags & TPK_TETRA_SKIP_BAD_CELLS) {
+        out->bad_cells_skipped++;
+        return 0;
+    }
+    tpk_diag_fail(diag, "cell %lld (a %s) is too warped, non-convex or degenerate to split: cutting its faces "
+                        "along their smallest-id diagonals folds a tet, and a point at its centre does not "
+                        "see every face; pass --skip-bad-cells to leave such cells out",
+                  (long long)c, tpk_cell_type(src->cell_types[c])->name);
+    return -2;
+}
+
+/* Cells the plain split refused: a point at the centre of each (its corners' mean, with interpolated
+ * point fields later), starred to the boundary triangles. The tet and point arrays grow to fit. */
+static int star_cells(const tpk_mesh *src, const int64_t *bad, int64_t bad_count, int flags,
+                      int32_t **steiner_cell, tpk_tetmesh *out, tpk_diag *diag)
+{
+    int64_t most_tets = out->tet_count + 12 * bad_count, most_points = out->vertex_count + bad_count;
+    int32_t *tets = realloc(out->tets, sizeof *tets * 4 * (size_t)most_tets);
+    if (tets)
+        out->tets = tets;
+    int32_t *tet_source = realloc(out->tet_source, sizeof *tet_source * (size_t)most_tets);
+    if (tet_source)
+        out->tet_source = tet_source;
+    double *points = realloc(out->points, sizeof *points * 3 * (size_t)most_points);
+    if (points)
+        out->points = points;
+    int32_t *vertex_source = realloc(out->vertex_source, sizeof *vertex_source * (size_t)most_points);
+    if (vertex_source)
+        out->vertex_source = vertex_source;
+    *steiner_cell = malloc(sizeof **steiner_cell * (size_t)bad_count);
+    if (!tets || !tet_source || !points || !vertex_source || !*steiner_cell)
+        return -1;
+    for (int64_t i = 0; i < bad_count; i++) {
+        int64_t c = bad[i], begin = src->cell_offsets[c], corners = src->cell_offsets[c + 1] - begin;
+        const int32_t *nodes = src->cell_conn + begin;
+        double centre[3] = {0, 0, 0};
+        for (int64_t k = 0; k < corners; k++)
+            for (int a = 0; a < 3; a++)
+                centre[a] += out->points[3 * (int64_t)nodes[k] + a] / (double)corners;
+        int32_t id = (int32_t)out->vertex_count;
+        int mirrored;
+        int made = tpk_star_cell(src->cell_types[c], nodes, out->points, centre, id,
+                                 out->tets + 4 * out->tet_count, &mirrored);
+        if (made < 0) {
+            int rc = bad_cell(src, c, flags, out, diag);
+            if (rc)
+                return rc;
+            continue;
+        }
+        memcpy(out->points + 3 * (int64_t)id, centre, sizeof centre);
+        out->vertex_source[id] = -1;
+        (*steiner_cell)[out->steiner_cells++] = (int32_t)c;
+        out->vertex_count++;
+        out->mirrored_cells += mirrored;
+        for (int k = 0; k < made; k++)
+            out->tet_source[out->tet_count + k] = (int32_t)c;
+        out->tet_count += made;
+    }
+    return 0;
+}
+
+/* Returns 0, -1 when out of memory, or -2 with a message for a cell that cannot be split. */
+static int split_cells(const tpk_mesh *src, int flags, int32_t **steiner_cell, tpk_tetmesh *out,
+                       tpk_diag *diag)
+{
+    int64_t t = 0, bad_count = 0, bad_capacity = 0;
+    int64_t *bad = NULL;
     for (int64_t c = 0; c < src->cell_count; c++) {
         int type = src->cell_types[c];
         const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
@@ -249,17 +330,19 @@ static int split_cells(const tpk_mesh *src, int flags, tpk_tetmesh *out, tpk_dia
         if (type == TPK_CELL_TETRA)
             memcpy(out->tets + 4 * t, nodes, 4 * sizeof *nodes); /* orientation: tpk_orient */
         else
-            made = tpk_split_cell(type, nodes, src->points, out->tets + 4 * t, &mirrored);
+            made = tpk_split_cell(type, nodes, out->points, out->tets + 4 * t, &mirrored);
         if (made < 0) {
-            if (flags & TPK_TETRA_SKIP_BAD_CELLS) {
-                out->bad_cells_skipped++;
-                continue;
+            if (bad_count == bad_capacity) {
+                bad_capacity = bad_capacity ? 2 * bad_capacity : 64;
+                int64_t *grown = realloc(bad, sizeof *bad * (size_t)bad_capacity);
+                if (!grown) {
+                    free(bad);
+                    return -1;
+                }
+                bad = grown;
             }
-            tpk_diag_fail(diag, "cell %lld (a %s) is warped, non-convex or degenerate: cutting its faces "
-                                "along their smallest-id diagonals gives a flat or folded tet; pass "
-                                "--skip-bad-cells to leave such cells out",
-                          (long long)c, tpk_cell_type(type)->name);
-            return -2;
+            bad[bad_count++] = c;
+            continue;
         }
         out->mirrored_cells += mirrored;
         out->cells_into[made]++;
@@ -268,7 +351,9 @@ static int split_cells(const tpk_mesh *src, int flags, tpk_tetmesh *out, tpk_dia
         t += made;
     }
     out->tet_count = t;
-    return 0;
+    int rc = bad_count ? star_cells(src, bad, bad_count, flags, steiner_cell, out, diag) : 0;
+    free(bad);
+    return rc;
 }
 
 /* Source tets stored as 4 consecutive ids each, in cell order: the connectivity is already the tet array. */
@@ -285,28 +370,10 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
 static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
-                         tpk_tetmesh *out, tpk_diag *diag)
+                         int32_t **steiner_cell, tpk_tetmesh *out, tpk_diag *diag)
 {
     size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
-    if (donor && all_plain_tets(src, tet_capacity)) {
-        out->tets = donor->cell_conn;
-        donor->cell_conn = NULL;
-        out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
-        if (!out->tet_source)
-            return -1;
-        for (int64_t t = 0; t < tet_capacity; t++)
-            out->tet_source[t] = (int32_t)t;
-        out->tet_count = tet_capacity;
-        out->cells_into[1] = tet_capacity;
-    } else {
-        out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
-        out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
-        if (!out->tets || !out->tet_source)
-            return -1;
-        int rc = split_cells(src, flags, out, diag);
-        if (rc)
-            return rc;
-    }
+    int plain = donor && all_plain_tets(src, tet_capacity);
     if (donor && donor->points) {
         out->points = donor->points;
         donor->points = NULL;
@@ -316,7 +383,23 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
             return -1;
         memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
     }
-    return 0;
+    if (plain) {
+        out->tets = donor->cell_conn;
+        donor->cell_conn = NULL;
+        out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+        if (!out->tet_source)
+            return -1;
+        for (int64_t t = 0; t < tet_capacity; t++)
+            out->tet_source[t] = (int32_t)t;
+        out->tet_count = tet_capacity;
+        out->cells_into[1] = tet_capacity;
+        return 0;
+    }
+    out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
+    out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+    if (!out->tets || !out->tet_source)
+        return -1;
+    return split_cells(src, flags, steiner_cell, out, diag);
 }
 
 static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
@@ -325,6 +408,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     field_request *reqs = NULL;
     int req_count = 0;
     int64_t tet_capacity = 0;
+    int32_t *steiner_cell = NULL; /* source cell of each added point */
     memset(out, 0, sizeof *out);
     if (!src || (src->cell_count > 0 && (!src->cell_types || !src->cell_offsets || !src->cell_conn)) ||
         (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
@@ -348,9 +432,11 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
             goto out_of_memory;
         memcpy(out->times, src->times, sizeof *out->times * (size_t)src->step_count);
     }
-    /* Geometry last: it may take src's arrays, and nothing after it reads them. */
-    int geometry = take_geometry(src, donor, tet_capacity, flags, out, diag);
+    /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
+     * field copy reads src, and uses the connectivity only around added points (never all-tet). */
+    int geometry = take_geometry(src, donor, tet_capacity, flags, &steiner_cell, out, diag);
     if (geometry == -2) {
+        free(steiner_cell);
         free(reqs);
         tpk_tetmesh_free(out);
         return -1;
@@ -358,17 +444,20 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     if (geometry)
         goto out_of_memory;
     if (out->tet_count == 0) {
+        free(steiner_cell);
         free(reqs);
         tpk_tetmesh_free(out);
         return tpk_diag_fail(diag, "all %lld volume cells were left out as bad cells", (long long)src->cell_count);
     }
     for (int i = 0; i < req_count; i++)
-        if (copy_field(src, &reqs[i], out))
+        if (copy_field(src, &reqs[i], steiner_cell, out))
             goto out_of_memory;
+    free(steiner_cell);
     free(reqs);
     return 0;
 
 out_of_memory:
+    free(steiner_cell);
     free(reqs);
     tpk_tetmesh_free(out);
     return tpk_diag_fail(diag, "tetrahedralize: out of memory (%lld points, %lld tets)",

@@ -129,10 +129,10 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
         tpk_strbuf_printf(&sb,
                           "\"cells_split\":{\"tetra\":%lld,\"pyramid_into_2\":%lld,\"wedge_into_3\":%lld,"
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
-                          "\"bad_cells_skipped\":%lld,\"seconds\":{",
+                          "\"steiner_cells\":%lld,\"bad_cells_skipped\":%lld,\"seconds\":{",
                           (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
                           (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
-                          (long long)r->bad_cells_skipped);
+                          (long long)r->steiner_cells, (long long)r->bad_cells_skipped);
         tpk_strbuf_printf(&sb,
                           "\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"
                           "\"connect\":%.6f,\"write\":%.6f,\"total\":%.6f}}\n",
@@ -149,12 +149,14 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
     printf("  source: %lld cells, %lld points; inverted tets fixed: %lld; degenerate dropped: %lld\n",
            (long long)r->source_cells, (long long)r->source_points, (long long)r->inverted_fixed,
            (long long)r->degenerate_dropped);
-    if (r->cells_into[2] || r->cells_into[3] || r->cells_into[5] || r->cells_into[6] || r->bad_cells_skipped)
+    if (r->cells_into[2] || r->cells_into[3] || r->cells_into[5] || r->cells_into[6] || r->steiner_cells ||
+        r->bad_cells_skipped)
         printf("  cells: %lld tetra, %lld pyramids (2 tets), %lld wedges (3), %lld hexahedra into 5 and %lld "
-               "into 6; %lld mirrored cells turned over; %lld bad cells skipped\n",
+               "into 6; %lld split from a point at their centre; %lld mirrored cells turned over; %lld bad "
+               "cells skipped\n",
                (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
-               (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
-               (long long)r->bad_cells_skipped);
+               (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->steiner_cells,
+               (long long)r->mirrored_cells, (long long)r->bad_cells_skipped);
     printf("  time: %.3f s (import %.3f, tetrahedralize %.3f, orient %.3f, reorder %.3f, connect %.3f, "
            "write %.3f)\n",
            r->t_total, r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect, r->t_write);
