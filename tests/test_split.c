@@ -300,3 +300,48 @@ TPK_TEST(bow_tie_cell_cannot_be_starred)
     }
     CHECK(sum == 6);
 }
+
+/* --cell-to-point: two unit hexahedra side by side with cell values 1 and 3 (and 10, 30 in a second
+ * step): the four shared points get the means 2 and 20, the others their one cell's value, and a point
+ * in no cell NaN. Without field names the cell field is kept (as a point field). */
+TPK_TEST(cell_to_point_means)
+{
+    tpk_mesh m;
+    memset(&m, 0, sizeof m);
+    m.point_count = 13;
+    m.points = calloc(3 * 13, sizeof(double));
+    for (int k = 0; k < 2; k++)
+        for (int j = 0; j < 2; j++)
+            for (int i = 0; i < 3; i++) {
+                double *p = m.points + 3 * (k * 6 + j * 3 + i);
+                p[0] = i, p[1] = j, p[2] = k;
+            }
+    m.points[3 * 12] = 9; /* point 12: in no cell */
+    m.cell_count = 2;
+    m.cell_types = malloc(2);
+    m.cell_types[0] = m.cell_types[1] = 12;
+    m.cell_offsets = malloc(3 * sizeof(int64_t));
+    m.cell_offsets[0] = 0, m.cell_offsets[1] = 8, m.cell_offsets[2] = 16;
+    const int32_t conn[16] = {0, 1, 4, 3, 6, 7, 10, 9, 1, 2, 5, 4, 7, 8, 11, 10};
+    m.cell_conn = malloc(sizeof conn);
+    memcpy(m.cell_conn, conn, sizeof conn);
+    m.step_count = 2;
+    float *values = malloc(4 * sizeof(float));
+    values[0] = 1, values[1] = 3, values[2] = 10, values[3] = 30;
+    CHECK(tpk_mesh_add_field(&m, "material", TPK_ASSOC_TET, 1, 2, values) == 0);
+    tpk_tetmesh out;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    int rc = tpk_tetrahedralize(&m, NULL, 0, TPK_TETRA_CELL_TO_POINT, &out, &d);
+    tpk_mesh_free(&m);
+    CHECK_MSG(rc == 0, "%s", d.message);
+    int ok = out.field_count == 1 && out.fields[0].association == TPK_ASSOC_POINT && out.fields[0].step_count == 2;
+    const float *v = out.fields[0].values;
+    const int shared[4] = {1, 4, 7, 10}, left[4] = {0, 3, 6, 9}, right[4] = {2, 5, 8, 11};
+    for (int i = 0; ok && i < 4; i++)
+        ok = v[shared[i]] == 2 && v[left[i]] == 1 && v[right[i]] == 3 && v[13 + shared[i]] == 20 &&
+             v[13 + right[i]] == 30;
+    ok = ok && isnan(v[12]) && isnan(v[13 + 12]);
+    tpk_tetmesh_free(&out);
+    CHECK(ok);
+}

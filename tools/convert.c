@@ -361,7 +361,9 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     announce(stage, stage_user, "tetrahedralize");
     t = now_seconds();
     if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
-                                   o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0, &mesh, diag) != 0)
+                                   (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
+                                       (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0),
+                                   &mesh, diag) != 0)
         goto done;
     tpk_mesh_free(&src);
     memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);

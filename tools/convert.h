@@ -22,6 +22,7 @@ typedef struct tpk_convert_options {
     int no_reorder;               /* keep source order (default: Hilbert reorder) */
     int drop_degenerate;          /* drop zero-volume tets instead of failing */
     int skip_bad_cells;           /* leave out cells whose split would fold, instead of failing */
+    int cell_to_point;            /* average cell fields to points (and keep them without --field) */
     int threads;                  /* <= 0: all cores */
     const char *command_line;     /* recorded in META; may be NULL */
 } tpk_convert_options;

@@ -17,6 +17,9 @@
  * per-tet fields via the source map. `field_names` (count n, may be NULL = all scalar point fields)
  * selects fields. */
 #define TPK_TETRA_SKIP_BAD_CELLS 0x1
+/* Cell fields become point fields: each point takes the mean over the volume cells around it (points
+ * in no cell get NaN); without field_names, scalar cell fields are then kept along with point fields. */
+#define TPK_TETRA_CELL_TO_POINT 0x2
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag);
 /* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;

@@ -151,7 +151,7 @@ static int parse_request(const tpk_mesh *src, const char *spec, field_request *r
     return 0;
 }
 
-static int build_requests(const tpk_mesh *src, const char *const *names, int name_count,
+static int build_requests(const tpk_mesh *src, const char *const *names, int name_count, int flags,
                           field_request **out, int *out_count, tpk_diag *diag)
 {
     int cap = names ? name_count : src->field_count;
@@ -176,11 +176,13 @@ static int build_requests(const tpk_mesh *src, const char *const *names, int nam
     } else {
         for (int i = 0; i < src->field_count; i++) {
             const tpk_src_field *f = &src->fields[i];
-            if (f->association != TPK_ASSOC_POINT)
+            int is_point = f->association == TPK_ASSOC_POINT;
+            if (!is_point && !(flags & TPK_TETRA_CELL_TO_POINT))
                 continue;
             if (f->components != 1 || f->step_count < 1) {
-                tpk_diag_warn(diag, "point field '%s' has %d components and is skipped; select it as "
-                              "'%s:mag' or '%s:x' to keep it", f->name, f->components, f->name, f->name);
+                tpk_diag_warn(diag, "%s field '%s' has %d components and is skipped; select it as "
+                              "'%s:mag' or '%s:x' to keep it", is_point ? "point" : "cell", f->name,
+                              f->components, f->name, f->name);
                 continue;
             }
             reqs[count].field = f;
@@ -217,6 +219,56 @@ static float centre_value(const tpk_mesh *src, const float *step, const field_re
     for (int64_t k = 0; k < corners; k++)
         sum += pick_value(step + (int64_t)src->cell_conn[begin + k] * f->components, f->components, req->pick);
     return (float)(sum / (double)corners);
+}
+
+/* A cell field averaged to the output vertices: the mean over the kept volume cells around each source
+ * point (NaN for points in none), and at an added centre point its own cell's value. */
+static int cell_to_point(const tpk_mesh *src, const field_request *req, const int32_t *steiner_cell,
+                         tpk_tetmesh *out)
+{
+    const tpk_src_field *f = req->field;
+    int64_t nv = out->vertex_count, np = src->point_count;
+    float *values = malloc(sizeof *values * (size_t)(nv * f->step_count > 0 ? nv * f->step_count : 1));
+    double *sum = malloc(sizeof *sum * (size_t)(np ? np : 1));
+    int32_t *count = malloc(sizeof *count * (size_t)(np ? np : 1));
+    uint8_t *kept = calloc((size_t)(src->cell_count ? src->cell_count : 1), 1);
+    if (!values || !sum || !count || !kept) {
+        free(values), free(sum), free(count), free(kept);
+        return -1;
+    }
+    for (int64_t t = 0; t < out->tet_count; t++)
+        kept[out->tet_source[t]] = 1;
+    for (int s = 0; s < f->step_count; s++) {
+        const float *step = f->values + (size_t)s * (size_t)src->cell_count * (size_t)f->components;
+        memset(sum, 0, sizeof *sum * (size_t)np);
+        memset(count, 0, sizeof *count * (size_t)np);
+        for (int64_t c = 0; c < src->cell_count; c++) {
+            if (!kept[c])
+                continue;
+            double value = pick_value(step + c * f->components, f->components, req->pick);
+            for (int64_t k = src->cell_offsets[c]; k < src->cell_offsets[c + 1]; k++) {
+                sum[src->cell_conn[k]] += value;
+                count[src->cell_conn[k]]++;
+            }
+        }
+        float *dst = values + (size_t)s * (size_t)nv;
+        for (int64_t i = 0; i < nv; i++) {
+            int32_t from = out->vertex_source[i];
+            if (from < 0)
+                dst[i] = pick_value(step + (int64_t)steiner_cell[i - np] * f->components, f->components, req->pick);
+            else
+                dst[i] = count[from] ? (float)(sum[from] / count[from]) : NAN;
+        }
+    }
+    free(sum), free(count), free(kept);
+    tpk_src_field *field = &out->fields[out->field_count++];
+    memset(field, 0, sizeof *field);
+    memcpy(field->name, req->name, sizeof field->name);
+    field->association = TPK_ASSOC_POINT;
+    field->components = 1;
+    field->step_count = f->step_count;
+    field->values = values;
+    return 0;
 }
 
 static int copy_field(const tpk_mesh *src, const field_request *req, const int32_t *steiner_cell,
@@ -414,7 +466,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
         (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
         return tpk_diag_fail(diag, "tetrahedralize: invalid source mesh");
     if (check_connectivity(src, diag) || count_tets(src, &tet_capacity, diag) ||
-        build_requests(src, field_names, field_name_count, &reqs, &req_count, diag))
+        build_requests(src, field_names, field_name_count, flags, &reqs, &req_count, diag))
         return -1;
 
     out->vertex_count = src->point_count;
@@ -449,9 +501,11 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
         tpk_tetmesh_free(out);
         return tpk_diag_fail(diag, "all %lld volume cells were left out as bad cells", (long long)src->cell_count);
     }
-    for (int i = 0; i < req_count; i++)
-        if (copy_field(src, &reqs[i], steiner_cell, out))
+    for (int i = 0; i < req_count; i++) {
+        int averaged = reqs[i].field->association != TPK_ASSOC_POINT && (flags & TPK_TETRA_CELL_TO_POINT);
+        if ((averaged ? cell_to_point : copy_field)(src, &reqs[i], steiner_cell, out))
             goto out_of_memory;
+    }
     free(steiner_cell);
     free(reqs);
     return 0;

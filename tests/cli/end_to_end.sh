@@ -78,4 +78,13 @@ PY
 "$TPK" info "$WORK/t5.tpk" > /dev/null
 "$TPK" convert "$DATA/tetgen/hinge_small.node" "$WORK/hinge.tpk" --layout tet20 --quiet
 "$TPK" info "$WORK/hinge.tpk" --json | "$PY" -c "import json,sys; d=json.load(sys.stdin); assert d['tets']==14487, d['tets']"
+# A hexahedral mesh with only cell data, rendered by its material averaged to points.
+"$TPK" convert "$DATA/sfepy/acoustic_wg.vtk" "$WORK/wg.tpk" --cell-to-point --quiet
+"$TPK" info "$WORK/wg.tpk" --json | "$PY" -c "
+import json, sys
+d = json.load(sys.stdin)
+f = {x['name']: x for x in d['fields']}
+assert f['mat_id']['association'] == 'point' and (f['mat_id']['min'], f['mat_id']['max']) == (1, 2), f
+assert d['tets'] == 6 * 1392, d['tets']"
+"$TPK" render "$WORK/wg.tpk" -o "$WORK/wg.png" --field mat_id --size 64x48 > /dev/null
 echo "1 passed, 0 failed"

@@ -18,6 +18,8 @@ static const char convert_help[] =
     "  --layout tet16|tet20|tet32  layout to store (repeatable; default tet16)\n"
     "  --field NAME                keep this field (repeatable; NAME:mag or NAME:x|y|z for vectors;\n"
     "                              default: every scalar point field)\n"
+    "  --cell-to-point             average cell fields to points (each point: the mean over its cells);\n"
+    "                              without --field, scalar cell fields are then kept too\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --drop-degenerate           drop zero-volume tets (counted) instead of failing\n"
@@ -83,6 +85,8 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.drop_degenerate = 1;
         } else if (!strcmp(arg, "--skip-bad-cells")) {
             a->options.skip_bad_cells = 1;
+        } else if (!strcmp(arg, "--cell-to-point")) {
+            a->options.cell_to_point = 1;
         } else if (!strcmp(arg, "--json")) {
             a->json = 1;
         } else if (!strcmp(arg, "--quiet")) {
