@@ -67,5 +67,7 @@ n_small=$(echo $SIZES | awk '{print $1}')
 n_large=$(echo $SIZES | awk '{print $NF}')
 echo "# face matching alone (and orient, reorder, layouts, shell), grid $n_large"
 "$BUILD/bench/bench_connect" "$n_large" "$RUNS"
+echo "# accuracy of splitting hexahedra: |tet - trilinear| / field range at random points"
+"$BUILD/bench/bench_accuracy" ../shared/data/sfepy/cube_medium_hexa.mesh ../shared/data/sfepy/acoustics_mesh3d.mesh
 echo "# CPU marcher: tet steps per second per layout and thread count, grid $n_small, 512x512 rays"
 "$BUILD/bench/bench_march" "$n_small" "$RUNS" 512 1 2
