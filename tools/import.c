@@ -6,7 +6,9 @@
 
 #include "importers.h"
 
-#define SUPPORTED_FORMATS "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele), medit (.mesh, ASCII)"
+#define SUPPORTED_FORMATS                                                                                    \
+    "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele), medit (.mesh, ASCII), ugrid (.ugrid, "    \
+    ".b8.ugrid, .lb8.ugrid)"
 
 static int has_extension(const char *path, const char *ext)
 {
@@ -40,6 +42,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
             return tpk_import_tetgen(path, out, diag);
         if (!strcasecmp(format, "medit"))
             return tpk_import_medit(path, out, diag);
+        if (!strcasecmp(format, "ugrid"))
+            return tpk_import_ugrid(path, out, diag);
         memset(out, 0, sizeof *out);
         return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s", path, format, SUPPORTED_FORMATS);
     }
@@ -49,6 +53,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_tetgen(path, out, diag);
     if (has_extension(path, ".mesh"))
         return tpk_import_medit(path, out, diag);
+    if (has_extension(path, ".ugrid"))
+        return tpk_import_ugrid(path, out, diag);
     if (has_extension(path, ".meshb")) {
         memset(out, 0, sizeof *out);
         return tpk_diag_fail(diag, "%s: binary Medit (.meshb) is not read yet; supported: %s", path,

@@ -25,8 +25,14 @@ int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t nod
 int tpk_import_medit(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_medit_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
+/* NASA/AFLR3 UGRID: .ugrid (ASCII), .b8.ugrid (big-endian), .lb8.ugrid (little-endian); tetrahedra
+ * (surface elements dropped; pyramids, prisms and hexahedra refused until their node order is checked).
+ * The memory form takes the kind from `name`'s extension. */
+int tpk_import_ugrid(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+
 /* Pick the importer from the extension (and the file's first bytes); format may force one
- * ("vtk", "tetgen", "medit"). */
+ * ("vtk", "tetgen", "medit", "ugrid"). */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
 
 #endif
