@@ -222,6 +222,8 @@ TPK_TEST(sfepy_acoustics_mesh3d_hexahedra) { check_sample("sfepy/acoustics_mesh3
 TPK_TEST(hard_hanging_nodes_hex) { check_sample("hard/hanging_nodes_hex.vtk", 0); }
 TPK_TEST(sfepy_cross3d_twisted_hexahedron) { check_sample("sfepy/cross3d.mesh", 0); }
 TPK_TEST(nasa_refine_cube_cylinder_ugrid) { check_sample("nasa_refine/cube_cylinder_ega.ugrid", 0); }
+TPK_TEST(nasa_refine_om6_meshb) { check_sample("nasa_refine/om6_om6-curv-no-geom.meshb", 0); }
+TPK_TEST(nasa_refine_cube_sphere_meshb) { check_sample("nasa_refine/cube-sphere_cube-sphere.meshb", 0); }
 
 /* DESIGN.md §10: float32 absolute coordinates lose cells far from the origin. The cylinder (0.1 m long,
  * 0.04 m across) moved to (6.4e6, -4.9e6, 1.2e3), as in a UTM frame: every invariant still holds, and

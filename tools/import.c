@@ -7,7 +7,7 @@
 #include "importers.h"
 
 #define SUPPORTED_FORMATS                                                                                    \
-    "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele), medit (.mesh, ASCII), ugrid (.ugrid, "    \
+    "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
     ".b8.ugrid, .lb8.ugrid)"
 
 static int has_extension(const char *path, const char *ext)
@@ -41,7 +41,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         if (!strcasecmp(format, "tetgen"))
             return tpk_import_tetgen(path, out, diag);
         if (!strcasecmp(format, "medit"))
-            return tpk_import_medit(path, out, diag);
+            return has_extension(path, ".meshb") ? tpk_import_meshb(path, out, diag)
+                                                 : tpk_import_medit(path, out, diag);
         if (!strcasecmp(format, "ugrid"))
             return tpk_import_ugrid(path, out, diag);
         memset(out, 0, sizeof *out);
@@ -55,11 +56,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_medit(path, out, diag);
     if (has_extension(path, ".ugrid"))
         return tpk_import_ugrid(path, out, diag);
-    if (has_extension(path, ".meshb")) {
-        memset(out, 0, sizeof *out);
-        return tpk_diag_fail(diag, "%s: binary Medit (.meshb) is not read yet; supported: %s", path,
-                             SUPPORTED_FORMATS);
-    }
+    if (has_extension(path, ".meshb"))
+        return tpk_import_meshb(path, out, diag);
     if (starts_with(path, "# vtk DataFile"))
         return tpk_import_vtk_legacy(path, out, diag);
     if (starts_with(path, "MeshVersionFormatted"))

@@ -24,6 +24,10 @@ int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t nod
  * warning); element references become the cell field "ref", non-zero vertex references "vertex_ref". */
 int tpk_import_medit(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_medit_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+/* Binary Medit (.meshb, libMeshb versions 1-4, either byte order): the same content as the ASCII form;
+ * unknown keywords are skipped by their offsets. */
+int tpk_import_meshb(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_meshb_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
 /* NASA/AFLR3 UGRID: .ugrid (ASCII), .b8.ugrid (big-endian), .lb8.ugrid (little-endian); tetrahedra
  * (surface elements dropped; pyramids, prisms and hexahedra refused until their node order is checked).
