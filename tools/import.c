@@ -8,7 +8,7 @@
 
 #define SUPPORTED_FORMATS                                                                                    \
     "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
-    ".b8.ugrid, .lb8.ugrid)"
+    ".b8.ugrid, .lb8.ugrid), exodus (.exo, .e, .g, .ex2)"
 
 static int has_extension(const char *path, const char *ext)
 {
@@ -45,6 +45,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
                                                  : tpk_import_medit(path, out, diag);
         if (!strcasecmp(format, "ugrid"))
             return tpk_import_ugrid(path, out, diag);
+        if (!strcasecmp(format, "exodus"))
+            return tpk_import_exodus(path, out, diag);
         memset(out, 0, sizeof *out);
         return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s", path, format, SUPPORTED_FORMATS);
     }
@@ -56,6 +58,10 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_medit(path, out, diag);
     if (has_extension(path, ".ugrid"))
         return tpk_import_ugrid(path, out, diag);
+    if (has_extension(path, ".exo") || has_extension(path, ".e") || has_extension(path, ".g") ||
+        has_extension(path, ".ex2") || starts_with(path, "CDF\x01") || starts_with(path, "CDF\x02") ||
+        starts_with(path, "\x89HDF"))
+        return tpk_import_exodus(path, out, diag);
     if (has_extension(path, ".meshb"))
         return tpk_import_meshb(path, out, diag);
     if (starts_with(path, "# vtk DataFile"))
