@@ -88,14 +88,14 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         blk->id = ids[b];
         if (ex_get_elem_block(r->exoid, ids[b], blk->type, &count, &per, &attrs) < 0) {
             free(ids);
-            return tpk_diag_fail(r->diag, "%s: cannot read element block %d", r->path, ids[b]);
+            return tpk_diag_fail(r->diag, "%s: cannot read element block %lld", r->path, (long long)blk->id);
         }
         blk->count = count, blk->nodes_per = per, blk->kind = kind_of(blk->type), blk->first_cell = -1;
         if (!blk->kind) {
             free(ids);
-            return tpk_diag_fail(r->diag, "%s: element block %d has element type '%s', which this reader does not "
+            return tpk_diag_fail(r->diag, "%s: element block %lld has element type '%s', which this reader does not "
                                           "know (tetra and hex blocks are read; shells, bars and spheres dropped)",
-                                 r->path, ids[b], blk->type);
+                                 r->path, (long long)blk->id, blk->type);
         }
         if (blk->kind->dim < 3) {
             dropped += count;
@@ -103,13 +103,14 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         }
         if (blk->kind->vtk_type != 10 && blk->kind->vtk_type != 12) {
             free(ids);
-            return tpk_diag_fail(r->diag, "%s: element block %d holds %s elements: not read yet (their Exodus node "
-                                          "order is not checked against a real file)", r->path, ids[b], blk->type);
+            return tpk_diag_fail(r->diag, "%s: element block %lld holds %s elements: not read yet (their Exodus node "
+                                          "order is not checked against a real file)", r->path, (long long)blk->id,
+                                 blk->type);
         }
         if (per < blk->kind->corners) {
             free(ids);
-            return tpk_diag_fail(r->diag, "%s: element block %d (%s) has %d nodes per element, expected at least %d",
-                                 r->path, ids[b], blk->type, per, blk->kind->corners);
+            return tpk_diag_fail(r->diag, "%s: element block %lld (%s) has %d nodes per element, expected at least %d",
+                                 r->path, (long long)blk->id, blk->type, per, blk->kind->corners);
         }
         blk->first_cell = cells;
         cells += count;
