@@ -7,7 +7,7 @@
 #include "importers.h"
 
 #define SUPPORTED_FORMATS                                                                                    \
-    "vtk (VTK legacy .vtk, ASCII or BINARY), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
+    "vtk (VTK legacy .vtk, ASCII or BINARY), vtu (VTK XML .vtu), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
     ".b8.ugrid, .lb8.ugrid), exodus (.exo, .e, .g, .ex2)"
 
 static int has_extension(const char *path, const char *ext)
@@ -38,6 +38,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
     if (format && *format && strcasecmp(format, "auto") != 0) {
         if (!strcasecmp(format, "vtk") || !strcasecmp(format, "vtk-legacy"))
             return tpk_import_vtk_legacy(path, out, diag);
+        if (!strcasecmp(format, "vtu"))
+            return tpk_import_vtu(path, out, diag);
         if (!strcasecmp(format, "tetgen"))
             return tpk_import_tetgen(path, out, diag);
         if (!strcasecmp(format, "medit"))
@@ -54,6 +56,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_vtk_legacy(path, out, diag);
     if (has_extension(path, ".node") || has_extension(path, ".ele"))
         return tpk_import_tetgen(path, out, diag);
+    if (has_extension(path, ".vtu"))
+        return tpk_import_vtu(path, out, diag);
     if (has_extension(path, ".mesh"))
         return tpk_import_medit(path, out, diag);
     if (has_extension(path, ".ugrid"))
@@ -68,6 +72,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_vtk_legacy(path, out, diag);
     if (starts_with(path, "MeshVersionFormatted"))
         return tpk_import_medit(path, out, diag);
+    if (starts_with(path, "<VTKFile") || starts_with(path, "<?xml"))
+        return tpk_import_vtu(path, out, diag);
     memset(out, 0, sizeof *out);
     FILE *f = fopen(path, "rb");
     if (!f) {

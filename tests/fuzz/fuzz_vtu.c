@@ -1,0 +1,22 @@
+/* Fuzz target for the VTK XML UnstructuredGrid (.vtu) importer. */
+#include <stdint.h>
+#include <string.h>
+
+#include "importers.h"
+
+static void ignore(void *user, const char *text)
+{
+    (void)user;
+    (void)text;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    tpk_mesh mesh;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    diag.warn = ignore;
+    if (tpk_import_vtu_memory("fuzz.vtu", (const char *)data, size, &mesh, &diag) == 0)
+        tpk_mesh_free(&mesh);
+    return 0;
+}
