@@ -44,9 +44,17 @@ for n in $SIZES; do
     [ -f "$WORK/grid$n.vtk" ] || ./bench/make_grid_vtk.py "$n" "$WORK/grid$n.vtk"
     convert_stats "$WORK/grid$n.vtk" "$WORK/grid$n.tpk" --layout tet16
 done
-# The largest real meshes the importers read: Medit ASCII (202,596 tets) and VTK legacy ASCII (42,744).
-convert_stats ../shared/data/sfepy/cube_big_tetra.mesh "$WORK/cube_big.tpk" --layout tet16
-convert_stats ../shared/data/sfepy/piezo_mesh_micro.vtk "$WORK/piezo.tpk" --layout tet16
+
+echo "# mixed cells: hexahedra as binary VTU (zlib, written by meshio), N^3 hexes (TPK_BENCH_HEX, default 216: ~10M)"
+h=${TPK_BENCH_HEX:-216}
+[ -f "$WORK/hex$h.vtu" ] || ./bench/make_hex_vtu.py "$h" "$WORK/hex$h.vtu"
+convert_stats "$WORK/hex$h.vtu" "$WORK/hex$h.tpk" --layout tet16
+echo "# the largest real file of each format in ../shared/data"
+for f in sfepy/cube_big_tetra.mesh nasa_refine/cube-sphere_cube-sphere.meshb nasa_refine/cube_cylinder_ega.ugrid \
+         seacas/exomerge_unit_test.e hard/nonmanifold_vertex_edge_tets.vtu tetgen/hinge_small.node \
+         sfepy/piezo_mesh_micro.vtk gmsh/t5_small_tet_bin.vtk; do
+    convert_stats "../shared/data/$f" "$WORK/format.tpk" --layout tet16
+done
 
 echo "# file size per layout and zstd level (first size)"
 n=$(echo $SIZES | awk '{print $1}')
