@@ -7,7 +7,7 @@
 #include "importers.h"
 
 #define SUPPORTED_FORMATS                                                                                    \
-    "vtk (VTK legacy .vtk, ASCII or BINARY), vtu (VTK XML .vtu), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
+    "vtk (VTK legacy .vtk, ASCII or BINARY), vtu (VTK XML .vtu), pvd (.pvd series of .vtu), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
     ".b8.ugrid, .lb8.ugrid), exodus (.exo, .e, .g, .ex2)"
 
 static int has_extension(const char *path, const char *ext)
@@ -40,6 +40,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
             return tpk_import_vtk_legacy(path, out, diag);
         if (!strcasecmp(format, "vtu"))
             return tpk_import_vtu(path, out, diag);
+        if (!strcasecmp(format, "pvd"))
+            return tpk_import_pvd(path, out, diag);
         if (!strcasecmp(format, "tetgen"))
             return tpk_import_tetgen(path, out, diag);
         if (!strcasecmp(format, "medit"))
@@ -58,6 +60,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_tetgen(path, out, diag);
     if (has_extension(path, ".vtu"))
         return tpk_import_vtu(path, out, diag);
+    if (has_extension(path, ".pvd"))
+        return tpk_import_pvd(path, out, diag);
     if (has_extension(path, ".mesh"))
         return tpk_import_medit(path, out, diag);
     if (has_extension(path, ".ugrid"))

@@ -33,6 +33,9 @@ int tpk_import_meshb_memory(const char *name, const char *data, size_t size, tpk
  * UInt32 or UInt64 headers (expat parses the XML). Point and cell data arrays become fields. */
 int tpk_import_vtu(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_vtu_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+/* ParaView series (.pvd): one .vtu per time step (paths relative to the .pvd), all with the same mesh;
+ * their fields become fields with one step per file, in time order, with the time values. */
+int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag);
 
 /* NASA/AFLR3 UGRID: .ugrid (ASCII), .b8.ugrid (big-endian), .lb8.ugrid (little-endian); tetrahedra
  * (surface elements dropped; pyramids, prisms and hexahedra refused until their node order is checked).
@@ -45,7 +48,7 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one
- * ("vtk", "vtu", "tetgen", "medit", "ugrid", "exodus"). */
+ * ("vtk", "vtu", "pvd", "tetgen", "medit", "ugrid", "exodus"). */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
 
 #endif
