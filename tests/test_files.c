@@ -224,6 +224,8 @@ TPK_TEST(sfepy_cross3d_twisted_hexahedron) { check_sample("sfepy/cross3d.mesh", 
 TPK_TEST(nasa_refine_cube_cylinder_ugrid) { check_sample("nasa_refine/cube_cylinder_ega.ugrid", 0); }
 TPK_TEST(hard_huge_offset_hex_vtu) { check_sample("hard/huge_offset_hex.vtu", 0); }
 TPK_TEST(hard_nonmanifold_vertex_edge_vtu) { check_sample("hard/nonmanifold_vertex_edge_tets.vtu", 0); }
+TPK_TEST(gmsh_t3_tets_and_wedges_41) { check_sample("gmsh/t3_hex_prism_ascii41.msh", 0); }
+TPK_TEST(gmsh_t5_tets_22) { check_sample("gmsh/t5_small_tet_ascii22.msh", 0); }
 TPK_TEST(seacas_exomerge_exodus) { check_sample("seacas/exomerge_unit_test.e", 0); }
 TPK_TEST(seacas_block_crush_exodus) { check_sample("seacas/block_crush_1.ex2", 0); }
 TPK_TEST(nasa_refine_om6_meshb) { check_sample("nasa_refine/om6_om6-curv-no-geom.meshb", 0); }

@@ -7,7 +7,7 @@
 #include "importers.h"
 
 #define SUPPORTED_FORMATS                                                                                    \
-    "vtk (VTK legacy .vtk, ASCII or BINARY), vtu (VTK XML .vtu), pvd (.pvd series of .vtu), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
+    "vtk (VTK legacy .vtk, ASCII or BINARY), vtu (VTK XML .vtu), pvd (.pvd series of .vtu), gmsh (.msh 2.2, 4.1), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
     ".b8.ugrid, .lb8.ugrid), exodus (.exo, .e, .g, .ex2)"
 
 static int has_extension(const char *path, const char *ext)
@@ -42,6 +42,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
             return tpk_import_vtu(path, out, diag);
         if (!strcasecmp(format, "pvd"))
             return tpk_import_pvd(path, out, diag);
+        if (!strcasecmp(format, "gmsh"))
+            return tpk_import_gmsh(path, out, diag);
         if (!strcasecmp(format, "tetgen"))
             return tpk_import_tetgen(path, out, diag);
         if (!strcasecmp(format, "medit"))
@@ -62,6 +64,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_vtu(path, out, diag);
     if (has_extension(path, ".pvd"))
         return tpk_import_pvd(path, out, diag);
+    if (has_extension(path, ".msh"))
+        return tpk_import_gmsh(path, out, diag);
     if (has_extension(path, ".mesh"))
         return tpk_import_medit(path, out, diag);
     if (has_extension(path, ".ugrid"))
@@ -76,6 +80,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_vtk_legacy(path, out, diag);
     if (starts_with(path, "MeshVersionFormatted"))
         return tpk_import_medit(path, out, diag);
+    if (starts_with(path, "$MeshFormat"))
+        return tpk_import_gmsh(path, out, diag);
     if (starts_with(path, "<VTKFile") || starts_with(path, "<?xml"))
         return tpk_import_vtu(path, out, diag);
     memset(out, 0, sizeof *out);

@@ -37,6 +37,11 @@ int tpk_import_vtu_memory(const char *name, const char *data, size_t size, tpk_m
  * their fields become fields with one step per file, in time order, with the time values. */
 int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag);
 
+/* Gmsh .msh 2.2 and 4.1, ASCII and binary: volume elements (tets, hexes, prisms, pyramids, and their
+ * higher-order kinds reduced to corners) in VTK node order, $NodeData/$ElementData as fields. */
+int tpk_import_gmsh(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_gmsh_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+
 /* NASA/AFLR3 UGRID: .ugrid (ASCII), .b8.ugrid (big-endian), .lb8.ugrid (little-endian); tetrahedra
  * (surface elements dropped; pyramids, prisms and hexahedra refused until their node order is checked).
  * The memory form takes the kind from `name`'s extension. */
@@ -48,7 +53,7 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one
- * ("vtk", "vtu", "pvd", "tetgen", "medit", "ugrid", "exodus"). */
+ * ("vtk", "vtu", "pvd", "gmsh", "tetgen", "medit", "ugrid", "exodus"). */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
 
 #endif
