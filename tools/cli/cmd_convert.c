@@ -10,9 +10,9 @@
 static const char convert_help[] =
     "usage: tetpack convert INPUT OUTPUT.tpk [options]\n"
     "\n"
-    "Reads a volume mesh (VTK legacy .vtk ASCII/binary, TetGen .node/.ele, Medit .mesh ASCII, UGRID\n"
-    ".ugrid/.b8.ugrid/.lb8.ugrid), splits\n"
-    "voxels, hexahedra, wedges and pyramids into tets conformally, orients every tet positively with\n"
+    "Reads a volume mesh (VTK .vtk/.vtu/.pvd, Gmsh .msh, Exodus II .exo/.e/.g/.ex2, Medit .mesh/.meshb,\n"
+    "UGRID .ugrid/.b8.ugrid/.lb8.ugrid, TetGen .node/.ele), splits voxels, hexahedra, wedges and\n"
+    "pyramids into tets conformally, orients every tet positively with\n"
     "exact predicates, reorders along a Hilbert curve, builds neighbors, the chosen layouts and the\n"
     "shell, and writes OUTPUT atomically.\n"
     "\n"
@@ -26,8 +26,8 @@ static const char convert_help[] =
     "  --drop-degenerate           drop zero-volume tets (counted) instead of failing\n"
     "  --skip-bad-cells            leave out hexahedra, wedges and pyramids that are too warped or\n"
     "                              non-convex to split without new points (counted) instead of failing\n"
-    "  --format NAME               force the input format: vtk, tetgen, medit or ugrid (default: from\n"
-    "                              the extension and contents)\n"
+    "  --format NAME               force the input format: vtk, vtu, pvd, gmsh, exodus, medit, ugrid or\n"
+    "                              tetgen (default: from the extension and contents)\n"
     "  --threads N                 worker threads (default: all cores)\n"
     "  --json                      print the summary as JSON\n"
     "  --quiet                     print nothing on success\n";
@@ -79,7 +79,7 @@ static int parse_args(int argc, char **argv, convert_args *a)
                 return tpk_cli_fail("convert", "--threads expects a number from 1 to 1024, found '%s'", v ? v : "");
         } else if (!strncmp(arg, "--format", 8)) {
             if (!(v = tpk_cli_value(argc, argv, &i, "--format")))
-                return tpk_cli_fail("convert", "--format expects vtk, tetgen, medit or ugrid");
+                return tpk_cli_fail("convert", "--format expects vtk, vtu, pvd, gmsh, exodus, medit, ugrid or tetgen");
             a->options.format = v;
         } else if (!strcmp(arg, "--no-reorder")) {
             a->options.no_reorder = 1;
