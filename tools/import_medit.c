@@ -316,13 +316,5 @@ int tpk_import_medit_memory(const char *name, const char *data, size_t size, tpk
 
 int tpk_import_medit(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
-    const char *data;
-    size_t size;
-    if (out)
-        memset(out, 0, sizeof *out);
-    if (tpk_map_file(path, &data, &size, diag) != 0)
-        return -1;
-    int rc = import_buffer(path, data, size, 1, out, diag);
-    tpk_unmap_file(data, size);
-    return rc;
+    return tpk_import_mapped(path, import_buffer, out, diag);
 }

@@ -200,8 +200,10 @@ static int read_keywords(meshb_reader *r, tpk_mesh *out, cells *c)
     return 0;
 }
 
-static int import_buffer(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)
+static int import_buffer(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out,
+                         tpk_diag *diag)
 {
+    (void)mapped; /* keywords are read by offset, not in one pass: no pages to drop */
     if (!out)
         return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
     memset(out, 0, sizeof *out);
@@ -252,18 +254,10 @@ static int import_buffer(const char *name, const char *data, size_t size, tpk_me
 
 int tpk_import_meshb_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)
 {
-    return import_buffer(name, data, size, out, diag);
+    return import_buffer(name, data, size, 0, out, diag);
 }
 
 int tpk_import_meshb(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
-    const char *data;
-    size_t size;
-    if (out)
-        memset(out, 0, sizeof *out);
-    if (tpk_map_file(path, &data, &size, diag) != 0)
-        return -1;
-    int rc = import_buffer(path, data, size, out, diag);
-    tpk_unmap_file(data, size);
-    return rc;
+    return tpk_import_mapped(path, import_buffer, out, diag);
 }

@@ -168,6 +168,12 @@ static int binary_kind(const char *name)
     return 0;
 }
 
+/* tpk_parse_fn: the binary kind comes from the name. */
+static int parse_ugrid(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out, tpk_diag *diag)
+{
+    return import_buffer(name, data, size, binary_kind(name ? name : ""), mapped, out, diag);
+}
+
 int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)
 {
     return import_buffer(name, data, size, binary_kind(name ? name : ""), 0, out, diag);
@@ -175,13 +181,5 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
 
 int tpk_import_ugrid(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
-    const char *data;
-    size_t size;
-    if (out)
-        memset(out, 0, sizeof *out);
-    if (tpk_map_file(path, &data, &size, diag) != 0)
-        return -1;
-    int rc = import_buffer(path, data, size, binary_kind(path), 1, out, diag);
-    tpk_unmap_file(data, size);
-    return rc;
+    return tpk_import_mapped(path, parse_ugrid, out, diag);
 }

@@ -1189,15 +1189,14 @@ int tpk_import_vtu_memory(const char *name, const char *data, size_t size, tpk_m
     return rc;
 }
 
+/* tpk_parse_fn: the VTU reader has no use for `mapped` (it reads appended blocks by offset). */
+static int parse_vtu(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out, tpk_diag *diag)
+{
+    (void)mapped;
+    return tpk_import_vtu_memory(name, data, size, out, diag);
+}
+
 int tpk_import_vtu(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
-    const char *data;
-    size_t size;
-    if (out)
-        memset(out, 0, sizeof *out);
-    if (tpk_map_file(path, &data, &size, diag) != 0)
-        return -1;
-    int rc = tpk_import_vtu_memory(path, data, size, out, diag);
-    tpk_unmap_file(data, size);
-    return rc;
+    return tpk_import_mapped(path, parse_vtu, out, diag);
 }

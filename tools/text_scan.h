@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "diag.h"
+#include "mesh.h"
 
 typedef struct tpk_scan {
     const char *name;            /* file name used in messages */
@@ -72,5 +73,12 @@ void tpk_scan_release_consumed(tpk_scan *s);
  * "path: cannot ...: reason". Release with tpk_unmap_file(data, size). */
 int tpk_map_file(const char *path, const char **data, size_t *size, tpk_diag *diag);
 void tpk_unmap_file(const char *data, size_t size);
+
+/* An importer's parser over a whole file's bytes; `mapped` says they are a tpk_map_file mapping (so
+ * consumed pages may be dropped). Names the input `name` in messages; leaves *out empty on error. */
+typedef int (*tpk_parse_fn)(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out,
+                            tpk_diag *diag);
+/* What every path importer does: empty *out, map the file, parse it, unmap. */
+int tpk_import_mapped(const char *path, tpk_parse_fn parse, tpk_mesh *out, tpk_diag *diag);
 
 #endif
