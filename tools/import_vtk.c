@@ -773,30 +773,6 @@ static int read_field(vtk_reader *r)
 
 /* ---- Cells: classify, reduce, drop -------------------------------------------------------------- */
 
-enum { RULE_UNKNOWN, RULE_DROP, RULE_KEEP, RULE_REDUCE };
-
-typedef struct cell_rule {
-    int kind;
-    int nodes;       /* exact node count when > 0; for variable-size cells the minimum is -nodes */
-    uint8_t out_type;
-    int out_nodes;
-    const char *name;
-} cell_rule;
-
-/* What the importer does with a cell type, from the shared table: volumes are kept, higher-order
- * volumes reduced to their corners, everything of lower dimension dropped. (VTK's convex point set,
- * 41, has no fixed shape to tetrahedralize: unknown.) */
-static cell_rule rule_for(int type)
-{
-    const tpk_cell_type_info *t = type == 41 ? NULL : tpk_cell_type(type);
-    if (!t)
-        return (cell_rule){RULE_UNKNOWN, 0, 0, 0, type == 41 ? "convex point set" : "unknown"};
-    if (t->dim < 3)
-        return (cell_rule){RULE_DROP, 0, 0, 0, t->name};
-    if (t->linear_type != t->type)
-        return (cell_rule){RULE_REDUCE, t->nodes, (uint8_t)t->linear_type, t->corners, t->name};
-    return (cell_rule){RULE_KEEP, t->nodes, (uint8_t)t->type, t->nodes, t->name};
-}
 
 /* A polyhedron's face stream: nfaces, then per face npts and npts point ids. */
 static int check_face_stream(vtk_reader *r, int64_t cell, const int32_t *e, int64_t n)
@@ -825,14 +801,14 @@ static int check_face_stream(vtk_reader *r, int64_t cell, const int32_t *e, int6
     return 0;
 }
 
-static int check_cell(vtk_reader *r, int64_t c, const cell_rule *rule)
+static int check_cell(vtk_reader *r, int64_t c, const tpk_cell_rule *rule)
 {
     int64_t begin = r->offsets[c], n = r->offsets[c + 1] - begin;
     const int32_t *ids = r->conn + begin;
-    if (rule->kind == RULE_UNKNOWN)
+    if (rule->kind == TPK_RULE_UNKNOWN)
         return tpk_scan_fail_at(&r->s, r->types_pos, r->types_line, "CELL_TYPES: cell %lld has unsupported cell type %d (%s)",
                                 (long long)c, r->types[c], rule->name);
-    if (rule->kind != RULE_DROP && r->types[c] == 42)
+    if (rule->kind != TPK_RULE_DROP && r->types[c] == 42)
         return check_face_stream(r, c, ids, n);
     if ((rule->nodes > 0 && n != rule->nodes) || (rule->nodes < 0 && n < -rule->nodes))
         return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
@@ -856,7 +832,7 @@ static void warn_counts(vtk_reader *r, const int64_t *by_type, int64_t total, co
         if (!by_type[t] || o + 60 > sizeof list)
             continue;
         o += (size_t)snprintf(list + o, sizeof list - o, "%s%lld %s", o ? ", " : "", (long long)by_type[t],
-                              rule_for(t).name);
+                              tpk_cell_rule_for(t).name);
     }
     tpk_diag_warn(r->s.diag, "%s: %s %lld cells (%s)", r->s.name, what, (long long)total, list);
 }
@@ -886,20 +862,20 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
     int64_t dropped[256] = {0}, reduced[256] = {0};
     int64_t drop_total = 0, reduce_total = 0, kept = 0, conn_size = 0;
     for (int64_t c = 0; c < r->cell_count; c++) {
-        cell_rule rule = rule_for(r->types[c]);
+        tpk_cell_rule rule = tpk_cell_rule_for(r->types[c]);
         if (check_cell(r, c, &rule))
             return -1;
-        if (rule.kind == RULE_DROP) {
+        if (rule.kind == TPK_RULE_DROP) {
             dropped[r->types[c]]++;
             drop_total++;
             continue;
         }
-        if (rule.kind == RULE_REDUCE) {
+        if (rule.kind == TPK_RULE_REDUCE) {
             reduced[r->types[c]]++;
             reduce_total++;
         }
         kept++;
-        conn_size += rule.kind == RULE_REDUCE ? rule.out_nodes : r->offsets[c + 1] - r->offsets[c];
+        conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : r->offsets[c + 1] - r->offsets[c];
     }
     if (drop_total)
         warn_counts(r, dropped, drop_total, "dropped cells that are not volumes:");
@@ -929,11 +905,11 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
         int64_t k = 0, o = 0;
         out->cell_offsets[0] = 0;
         for (int64_t c = 0; c < r->cell_count; c++) {
-            cell_rule rule = rule_for(r->types[c]);
-            keep[c] = rule.kind != RULE_DROP;
+            tpk_cell_rule rule = tpk_cell_rule_for(r->types[c]);
+            keep[c] = rule.kind != TPK_RULE_DROP;
             if (!keep[c])
                 continue;
-            int64_t n = rule.kind == RULE_REDUCE ? rule.out_nodes : r->offsets[c + 1] - r->offsets[c];
+            int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : r->offsets[c + 1] - r->offsets[c];
             memcpy(out->cell_conn + o, r->conn + r->offsets[c], sizeof(int32_t) * (size_t)n);
             o += n;
             out->cell_types[k] = rule.out_type;

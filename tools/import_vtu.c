@@ -906,27 +906,6 @@ static int decode_appended(vtu_reader *r)
 
 /* ---- Building the mesh --------------------------------------------------------------------------- */
 
-enum { RULE_UNKNOWN, RULE_DROP, RULE_KEEP, RULE_REDUCE };
-
-typedef struct cell_rule {
-    int kind;
-    int nodes;
-    uint8_t out_type;
-    int out_nodes;
-    const char *name;
-} cell_rule;
-
-static cell_rule rule_for(int type)
-{
-    const tpk_cell_type_info *t = type == 41 ? NULL : tpk_cell_type(type);
-    if (!t)
-        return (cell_rule){RULE_UNKNOWN, 0, 0, 0, type == 41 ? "convex point set" : "unknown"};
-    if (t->dim < 3)
-        return (cell_rule){RULE_DROP, 0, 0, 0, t->name};
-    if (t->linear_type != t->type)
-        return (cell_rule){RULE_REDUCE, t->nodes, (uint8_t)t->linear_type, t->corners, t->name};
-    return (cell_rule){RULE_KEEP, t->nodes, (uint8_t)t->type, t->nodes, t->name};
-}
 
 static vtu_array *find_role(vtu_reader *r, int role)
 {
@@ -945,7 +924,7 @@ static void warn_counts(vtu_reader *r, const int64_t *by_type, int64_t total, co
         if (!by_type[t] || o + 60 > sizeof list)
             continue;
         o += (size_t)snprintf(list + o, sizeof list - o, "%s%lld %s", o ? ", " : "", (long long)by_type[t],
-                              rule_for(t).name);
+                              tpk_cell_rule_for(t).name);
     }
     tpk_diag_warn(r->diag, "%s: %s %lld cells (%s)", r->name, what, (long long)total, list);
 }
@@ -1023,8 +1002,8 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
         int64_t begin = c ? (int64_t)offs->values[c - 1] : 0;
         span[c].v = conn->values + begin;
         span[c].n = (int64_t)offs->values[c] - begin;
-        cell_rule rule = rule_for(type);
-        if (rule.kind == RULE_UNKNOWN) {
+        tpk_cell_rule rule = tpk_cell_rule_for(type);
+        if (rule.kind == TPK_RULE_UNKNOWN) {
             rc = fail_array(r, types, "cell %lld has unsupported cell type %d (%s)", (long long)c, type, rule.name);
             break;
         }
@@ -1048,7 +1027,7 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
                 break;
             }
             rc = check_face_stream(r, faces, c, span[c].v, span[c].n);
-        } else if (rule.kind != RULE_DROP) {
+        } else if (rule.kind != TPK_RULE_DROP) {
             if ((rule.nodes > 0 && span[c].n != rule.nodes) || (rule.nodes < 0 && span[c].n < -rule.nodes)) {
                 rc = fail_array(r, conn, "cell %lld (%s, type %d) has %lld points, expected %s%d", (long long)c,
                                 rule.name, type, (long long)span[c].n, rule.nodes < 0 ? "at least " : "",
@@ -1066,17 +1045,17 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
                 }
         if (rc)
             break;
-        if (rule.kind == RULE_DROP) {
+        if (rule.kind == TPK_RULE_DROP) {
             dropped[type]++;
             drop_total++;
             continue;
         }
-        if (rule.kind == RULE_REDUCE) {
+        if (rule.kind == TPK_RULE_REDUCE) {
             reduced[type]++;
             reduce_total++;
         }
         kept++;
-        conn_size += rule.kind == RULE_REDUCE ? rule.out_nodes : span[c].n;
+        conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : span[c].n;
     }
     if (rc) {
         free(span);
@@ -1104,11 +1083,11 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
     int64_t k = 0, o = 0;
     out->cell_offsets[0] = 0;
     for (int64_t c = 0; c < nc; c++) {
-        cell_rule rule = rule_for((int)types->values[c]);
-        keep[c] = rule.kind != RULE_DROP;
+        tpk_cell_rule rule = tpk_cell_rule_for((int)types->values[c]);
+        keep[c] = rule.kind != TPK_RULE_DROP;
         if (!keep[c])
             continue;
-        int64_t n = rule.kind == RULE_REDUCE ? rule.out_nodes : span[c].n;
+        int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : span[c].n;
         for (int64_t j = 0; j < n; j++)
             out->cell_conn[o++] = (int32_t)span[c].v[j];
         out->cell_types[k] = rule.out_type;
