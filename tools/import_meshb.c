@@ -146,14 +146,14 @@ static int read_elements(meshb_reader *r, cells *c, const char *keyword, int nod
         c->types[c->count] = (uint8_t)type;
         c->offsets[c->count] = c->conn_count;
         for (int k = 0; k < nodes; k++) {
-            int64_t id;
+            int64_t id = 0;
             read_int(r, int_bytes(r), &id, "a vertex id"); /* the count check above guarantees the bytes */
             if (id < 1 || id > INT32_MAX)
                 return fail(r, r->pos - (size_t)int_bytes(r), "%s %lld: vertex id %lld, expected 1 or more",
                             keyword, (long long)e + 1, (long long)id);
             c->conn[c->conn_count++] = (int32_t)(id - 1);
         }
-        int64_t ref;
+        int64_t ref = 0;
         read_int(r, int_bytes(r), &ref, "a reference");
         c->refs[c->count++] = (float)ref;
     }
@@ -165,7 +165,7 @@ static int read_keywords(meshb_reader *r, tpk_mesh *out, cells *c)
 {
     while (r->pos < r->size) {
         size_t at = r->pos;
-        int64_t code, next, dim;
+        int64_t code = 0, next = 0, dim = 0;
         if (read_int(r, 4, &code, "a keyword code"))
             return -1;
         if (code == KW_END)

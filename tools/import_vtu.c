@@ -282,7 +282,7 @@ static unsigned char *read_binary(vtu_reader *r, const vtu_array *a, bsrc *s, ui
     unsigned tsize = type_size(a->type);
     uint64_t want = expected == UINT64_MAX ? UINT64_MAX : expected * tsize;
     if (!r->compressed) {
-        uint64_t n;
+        uint64_t n = 0;
         if (read_header_word(r, a, s, &n, "byte count"))
             return NULL;
         if (want != UINT64_MAX && n != want) {
@@ -308,7 +308,7 @@ static unsigned char *read_binary(vtu_reader *r, const vtu_array *a, bsrc *s, ui
         *nbytes = n;
         return buf;
     }
-    uint64_t blocks, block_size, last_size;
+    uint64_t blocks = 0, block_size = 0, last_size = 0;
     if (read_header_word(r, a, s, &blocks, "block count") || read_header_word(r, a, s, &block_size, "block size") ||
         read_header_word(r, a, s, &last_size, "last block size"))
         return NULL;
