@@ -3,6 +3,7 @@
 #include "cell_types.h"
 
 #include <stddef.h>
+#include <stdio.h>
 
 static const tpk_cell_type_info cell_types[] = {
     {0, "empty cell", 0, 0, 0, 0},
@@ -74,4 +75,19 @@ tpk_cell_rule tpk_cell_rule_for(int type)
     if (t->linear_type != t->type)
         return (tpk_cell_rule){TPK_RULE_REDUCE, t->nodes, (unsigned char)t->linear_type, t->corners, t->name};
     return (tpk_cell_rule){TPK_RULE_KEEP, t->nodes, (unsigned char)t->type, t->nodes, t->name};
+}
+
+void tpk_warn_cell_counts(tpk_diag *diag, const char *name, const int64_t *by_type, int64_t total,
+                          const char *what)
+{
+    char list[600];
+    size_t o = 0;
+    list[0] = 0;
+    for (int t = 0; t < 256; t++) {
+        if (!by_type[t] || o + 60 > sizeof list)
+            continue;
+        o += (size_t)snprintf(list + o, sizeof list - o, "%s%lld %s", o ? ", " : "", (long long)by_type[t],
+                              tpk_cell_rule_for(t).name);
+    }
+    tpk_diag_warn(diag, "%s: %s %lld cells (%s)", name, what, (long long)total, list);
 }

@@ -3,6 +3,10 @@
 #ifndef TPK_CELL_TYPES_H
 #define TPK_CELL_TYPES_H
 
+#include <stdint.h>
+
+#include "diag.h"
+
 typedef struct tpk_cell_type_info {
     int type;          /* VTK cell type code */
     const char *name;  /* in words, as VTK names it */
@@ -30,5 +34,9 @@ typedef struct tpk_cell_rule {
 } tpk_cell_rule;
 
 tpk_cell_rule tpk_cell_rule_for(int type);
+
+/* One warning "NAME: WHAT TOTAL cells (n1 type1, n2 type2, ...)" from per-type counts (256 entries). */
+void tpk_warn_cell_counts(tpk_diag *diag, const char *name, const int64_t *by_type, int64_t total,
+                          const char *what);
 
 #endif

@@ -823,20 +823,6 @@ static int check_cell(vtk_reader *r, int64_t c, const tpk_cell_rule *rule)
     return 0;
 }
 
-static void warn_counts(vtk_reader *r, const int64_t *by_type, int64_t total, const char *what)
-{
-    char list[600];
-    size_t o = 0;
-    list[0] = 0;
-    for (int t = 0; t < 256; t++) {
-        if (!by_type[t] || o + 60 > sizeof list)
-            continue;
-        o += (size_t)snprintf(list + o, sizeof list - o, "%s%lld %s", o ? ", " : "", (long long)by_type[t],
-                              tpk_cell_rule_for(t).name);
-    }
-    tpk_diag_warn(r->s.diag, "%s: %s %lld cells (%s)", r->s.name, what, (long long)total, list);
-}
-
 static void filter_cell_fields(vtk_reader *r, const uint8_t *keep)
 {
     for (int i = 0; i < r->fields.field_count; i++) {
@@ -878,9 +864,11 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
         conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : r->offsets[c + 1] - r->offsets[c];
     }
     if (drop_total)
-        warn_counts(r, dropped, drop_total, "dropped cells that are not volumes:");
+        tpk_warn_cell_counts(r->s.diag, r->s.name, dropped, drop_total,
+                             "dropped cells that are not volumes:");
     if (reduce_total)
-        warn_counts(r, reduced, reduce_total, "reduced higher-order cells to their corner nodes:");
+        tpk_warn_cell_counts(r->s.diag, r->s.name, reduced, reduce_total,
+                             "reduced higher-order cells to their corner nodes:");
 
     out->point_count = r->point_count;
     out->points = r->points;

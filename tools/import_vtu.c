@@ -915,20 +915,6 @@ static vtu_array *find_role(vtu_reader *r, int role)
     return NULL;
 }
 
-static void warn_counts(vtu_reader *r, const int64_t *by_type, int64_t total, const char *what)
-{
-    char list[600];
-    size_t o = 0;
-    list[0] = 0;
-    for (int t = 0; t < 256; t++) {
-        if (!by_type[t] || o + 60 > sizeof list)
-            continue;
-        o += (size_t)snprintf(list + o, sizeof list - o, "%s%lld %s", o ? ", " : "", (long long)by_type[t],
-                              tpk_cell_rule_for(t).name);
-    }
-    tpk_diag_warn(r->diag, "%s: %s %lld cells (%s)", r->name, what, (long long)total, list);
-}
-
 /* Per cell: where its nodes (or, for a polyhedron, its face stream) are. */
 typedef struct cell_span {
     const double *v;
@@ -1062,9 +1048,11 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
         return -1;
     }
     if (drop_total)
-        warn_counts(r, dropped, drop_total, "dropped cells that are not volumes:");
+        tpk_warn_cell_counts(r->diag, r->name, dropped, drop_total,
+                             "dropped cells that are not volumes:");
     if (reduce_total)
-        warn_counts(r, reduced, reduce_total, "reduced higher-order cells to their corner nodes:");
+        tpk_warn_cell_counts(r->diag, r->name, reduced, reduce_total,
+                             "reduced higher-order cells to their corner nodes:");
 
     out->point_count = r->point_count;
     out->points = malloc(sizeof(double) * 3 * (size_t)(r->point_count ? r->point_count : 1));
