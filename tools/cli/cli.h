@@ -14,6 +14,7 @@ int tpk_cmd_convert(int argc, char **argv);
 int tpk_cmd_info(int argc, char **argv);
 int tpk_cmd_render(int argc, char **argv);
 int tpk_cmd_export(int argc, char **argv);
+int tpk_cmd_check(int argc, char **argv);
 
 /* Print "tetpack <cmd>: error: ..." to stderr and return TPK_EXIT_USAGE. */
 int tpk_cli_fail(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));

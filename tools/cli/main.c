@@ -15,6 +15,7 @@ static const struct {
     {"info", tpk_cmd_info, "print a .tpk file's header, chunks, fields and checksum status"},
     {"render", tpk_cmd_render, "render a .tpk to PNG with the CPU reference marcher"},
     {"export", tpk_cmd_export, "write a .tpk's tets and fields as VTU, or its shell as PLY"},
+    {"check", tpk_cmd_check, "validate a mesh or a .tpk file: connectivity, degeneracies, spec MUSTs"},
 };
 
 static void usage(FILE *out)

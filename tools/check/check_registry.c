@@ -1,0 +1,111 @@
+/* The table of every check `tetpack check` runs. Ids and names are stable: a check may be added with a
+ * new id, never renumbered or renamed (scripts match on them; spec/tetpack-format.md §11 names the 6xx
+ * ids that verify each MUST). The ids 601..613 verify the mesh invariants TPK-M01..TPK-M13. */
+#include <string.h>
+
+#include "check.h"
+
+#define E TPK_SEV_ERROR
+#define W TPK_SEV_WARNING
+#define I TPK_SEV_INFO
+
+static const tpk_check_def registry[] = {
+    /* vertices */
+    {101, "nonfinite_vertex", E, "vertices", "a vertex coordinate is NaN or infinite"},
+    {102, "duplicate_vertex", W, "vertices", "two vertices have exactly the same coordinates"},
+    {103, "near_duplicate_vertex", W, "vertices",
+     "two vertices lie closer than --tol times the bounding-box diagonal (exact duplicates excluded)"},
+    {104, "unused_vertex", W, "vertices", "a vertex no cell uses"},
+    /* cells */
+    {201, "index_out_of_range", E, "cells", "a cell names a vertex id outside [0, vertices)"},
+    {202, "repeated_vertex", E, "cells", "a cell names the same vertex twice"},
+    {203, "zero_volume_cell", E, "cells",
+     "a tet, or a tet of a cell's conformal split, has exactly zero volume (exact predicate)"},
+    {204, "inverted_cell", E, "cells",
+     "a cell is negatively oriented (exact predicate; for hex/wedge/pyramid: every tet of its split is)"},
+    {205, "nonplanar_face", W, "cells",
+     "a quad face of a hex, wedge or pyramid is warped by more than --warp-deg (angle between the normals "
+     "of its two triangles)"},
+    {206, "nonconvex_cell", W, "cells",
+     "a hex, wedge or pyramid is not convex (a corner lies beyond the plane of a face triangle, exact)"},
+    {207, "self_intersecting_cell", E, "cells",
+     "two faces of one cell cross each other (a bow-tie or folded cell, exact)"},
+    {208, "split_inverts", W, "cells",
+     "the conformal split (smallest-id diagonals) of a hex, wedge or pyramid has an inverted or flat tet; "
+     "the converter then adds a point at its centre or needs --skip-bad-cells"},
+    {209, "sliver_tet", W, "cells", "a tet's minimum dihedral angle is below --sliver-deg"},
+    {210, "poor_radius_ratio", I, "cells", "a tet's radius ratio is below --radius-ratio"},
+    {211, "duplicate_cell", E, "cells", "two cells have the same set of vertices"},
+    {212, "unsupported_cell", E, "cells",
+     "a cell type the converter cannot tetrahedralize, or a cell with the wrong number of nodes"},
+    {213, "lower_dimensional_cell", I, "cells", "a cell of dimension < 3 (faces, edges, points), ignored"},
+    /* connectivity */
+    {301, "nonmanifold_face", E, "connectivity", "a face shared by more than two cells"},
+    {302, "inconsistent_orientation", E, "connectivity",
+     "two cells that share a face both traverse it in the same direction (one of them is turned over)"},
+    {303, "nonconforming_face", E, "connectivity",
+     "a boundary face lies inside the volume against faces of other cells (hanging node, T-junction, "
+     "mismatched quad split)"},
+    {304, "components", I, "connectivity", "number of face-connected components and their sizes in cells"},
+    {305, "folded_face", E, "connectivity",
+     "two cells that share a face lie on the same side of its plane (fold-over, exact)"},
+    /* shell */
+    {401, "nonmanifold_edge", E, "shell", "a shell edge is used by more than two shell faces"},
+    {402, "nonmanifold_vertex", E, "shell",
+     "the shell faces around a vertex form more than one fan (volumes touching at a vertex)"},
+    {403, "shell_orientation", E, "shell",
+     "two shell faces sharing an edge traverse it in the same direction"},
+    {404, "open_shell", E, "shell", "a shell edge is used by one shell face only: the boundary is not closed"},
+    {405, "euler_characteristic", I, "shell", "V - E + F of the shell per component (2 for a sphere)"},
+    {406, "shell_self_intersection", E, "shell",
+     "two shell faces that share no vertex intersect (exact; CGAL Polygon Mesh Processing)"},
+    /* fields */
+    {501, "nonfinite_field_value", W, "fields", "a field value is NaN or infinite"},
+    {502, "field_length_mismatch", E, "fields",
+     "a field's value count does not match its points or cells times components and steps"},
+    {503, "field_range", I, "fields", "minimum and maximum of each field and step"},
+    /* .tpk files */
+    {600, "file_rule", E, "file",
+     "a reader rule of the spec (§9) fails: checksum, counts, ids, descriptors (tpk_verify)"},
+    {601, "tpk_m01_tet_ids", E, "file", "TPK-M01: a tet's vertex ids are not distinct or not in [0, V)"},
+    {602, "tpk_m02_orientation", E, "file", "TPK-M02: a tet is not positively oriented on the stored positions"},
+    {603, "tpk_m03_vx", E, "file", "TPK-M03: vx differs from the xor of the tet's vertex ids"},
+    {604, "tpk_m04_adjacency", E, "file", "TPK-M04: adjacency is not symmetric"},
+    {605, "tpk_m05_face_use", E, "file",
+     "TPK-M05: a face is used by more than two tets, or a face's neighbor is -1 while another tet has it"},
+    {606, "tpk_m06_fold", E, "file", "TPK-M06: two tets sharing a face lie on the same side of it"},
+    {607, "tpk_m07_neighbor_order", E, "file",
+     "TPK-M07: a neighbor is not the tet opposite the vertex its slot names"},
+    {608, "tpk_m08_layouts", E, "file",
+     "TPK-M08: Tet16 does not decode to Tet20, or the layouts in the file disagree"},
+    {609, "tpk_m09_shell_complete", E, "file",
+     "TPK-M09: a boundary face is missing from SHEL, listed twice, or a SHEL record is not a boundary face"},
+    {610, "tpk_m10_shell_outward", E, "file", "TPK-M10: a SHEL record does not face outward"},
+    {611, "tpk_m11_positions", E, "file",
+     "TPK-M11: a position is not finite, or the header bounds are not exactly the box of the positions"},
+    {612, "tpk_m12_field_range", E, "file",
+     "TPK-M12: a field descriptor's min/max are not exactly the extremes of its values"},
+    {613, "tpk_m13_values", E, "file", "TPK-M13: a TIME value is not finite, or a TMAP/VMAP value is out of range"},
+};
+
+const tpk_check_def *tpk_check_registry(int *count)
+{
+    *count = (int)(sizeof registry / sizeof registry[0]);
+    return registry;
+}
+
+const tpk_check_def *tpk_check_by_id(int id)
+{
+    for (size_t i = 0; i < sizeof registry / sizeof registry[0]; i++)
+        if (registry[i].id == id)
+            return &registry[i];
+    return NULL;
+}
+
+const tpk_check_def *tpk_check_by_name(const char *name)
+{
+    for (size_t i = 0; i < sizeof registry / sizeof registry[0]; i++)
+        if (!strcmp(registry[i].name, name))
+            return &registry[i];
+    return NULL;
+}
