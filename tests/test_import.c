@@ -575,7 +575,7 @@ TPK_TEST(vtk_bad_ids_and_types)
 TPK_TEST(vtk_bad_fields)
 {
     EXPECT_FAIL(HDR PTS4 "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nCELL_DATA 1\nFIELD f 1\nmat 1 3 float\n1 2 3\n",
-                "bad.vtk:16:", "FIELD array 'mat' has 3 tuples, expected 1 (one per cell)");
+                "bad.vtk:16:", "array 'mat' has 3 tuples, expected 1 (one per cell)");
     EXPECT_FAIL(HDR PTS4 "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nSCALARS s float\n1\n", "bad.vtk:14:",
                 "expected POINT_DATA or CELL_DATA before SCALARS");
     EXPECT_FAIL(HDR PTS4 "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nVECTORS v float\n1.5 2.5 3.5 4.5 5.5 6.5\n",

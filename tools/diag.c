@@ -2,6 +2,7 @@
 #include "diag.h"
 
 #include <stdio.h>
+#include <string.h>
 
 int tpk_diag_fail(tpk_diag *diag, const char *fmt, ...)
 {
@@ -29,4 +30,20 @@ void tpk_diag_warn(tpk_diag *diag, const char *fmt, ...)
         }
     }
     fprintf(stderr, "warning: %s\n", text);
+}
+
+int tpk_diag_field_problem(tpk_diag *diag, const char *name, long long expected, long long found,
+                           const char *place)
+{
+    if (!diag || !diag->lenient_fields)
+        return -1;
+    if (diag->field_problem_count < TPK_DIAG_MAX_FIELD_PROBLEMS) {
+        tpk_field_problem *p = &diag->field_problems[diag->field_problem_count];
+        snprintf(p->name, sizeof p->name, "%s", name);
+        snprintf(p->place, sizeof p->place, "%s", place ? place : "");
+        p->expected = expected;
+        p->found = found;
+    }
+    diag->field_problem_count++;
+    return 0;
 }

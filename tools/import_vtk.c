@@ -50,6 +50,8 @@ typedef struct vtk_reader {
     int64_t types_line;
     int assoc;              /* -1 before POINT_DATA/CELL_DATA */
     int64_t assoc_count;
+    int64_t assoc_expected; /* points or cells the section should have: differs from assoc_count only in a
+                               section of the wrong size read leniently (its arrays are dropped) */
     tpk_mesh fields;        /* collected fields; cell fields per source cell until filtered */
 } vtk_reader;
 
@@ -583,12 +585,28 @@ static int read_data_header(vtk_reader *r, int assoc)
     int64_t expected = assoc == TPK_ASSOC_POINT ? r->point_count : r->cell_count;
     if (expected < 0)
         return fail_kw(r, "expected %s before %s", assoc == TPK_ASSOC_POINT ? "POINTS" : "CELLS", kw);
-    if (n != expected)
+    if (n != expected && !(r->s.diag && r->s.diag->lenient_fields))
         return fail_kw(r, "%s %lld: expected %lld (one per %s)", kw, (long long)n, (long long)expected,
                        assoc == TPK_ASSOC_POINT ? "point" : "cell");
     r->assoc = assoc;
     r->assoc_count = n;
+    r->assoc_expected = expected;
     return 0;
+}
+
+/* A data array of `tuples` tuples where the mesh needs r->assoc_expected: recorded (lenient, the array is
+ * dropped: returns 0 and clears *keep) or an error. */
+static int wrong_length(vtk_reader *r, const char *name, int64_t comps, int64_t tuples, int *keep)
+{
+    char place[96];
+    snprintf(place, sizeof place, "line %lld", (long long)r->kw_line);
+    if (tpk_diag_field_problem(r->s.diag, name, (long long)(r->assoc_expected * comps),
+                               (long long)(tuples * comps), place) == 0) {
+        *keep = 0;
+        return 0;
+    }
+    return fail_kw(r, "array '%s' has %lld tuples, expected %lld (one per %s)", name, (long long)tuples,
+                   (long long)r->assoc_expected, r->assoc == TPK_ASSOC_POINT ? "point" : "cell");
 }
 
 /* Read `tuples * comps` values and keep them as a field (keep = 0: parse and drop). */
@@ -600,6 +618,8 @@ static int read_field_values(vtk_reader *r, const char *name, vtk_type type, int
     if (tuples > INT64_MAX / comps)
         return fail_kw(r, "%s '%s': %lld tuples of %lld components is too many", block, name, (long long)tuples,
                        (long long)comps);
+    if (keep && tuples != r->assoc_expected && wrong_length(r, name, comps, tuples, &keep))
+        return -1;
     uint64_t count = (uint64_t)(tuples * comps);
     if (check_room(r, type, count, block))
         return -1;
@@ -762,9 +782,6 @@ static int read_field(vtk_reader *r)
             arg_type(r, name, &type) || tpk_scan_end_line(&r->s, "name components tuples type"))
             return -1;
         int keep = r->assoc >= 0;
-        if (keep && tuples != r->assoc_count)
-            return fail_kw(r, "FIELD array '%s' has %lld tuples, expected %lld (one per %s)", name, (long long)tuples,
-                           (long long)r->assoc_count, r->assoc == TPK_ASSOC_POINT ? "point" : "cell");
         if (read_field_values(r, name, type, comps, tuples, keep, "FIELD array"))
             return -1;
     }

@@ -108,7 +108,10 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
             return -1;
         }
     } else {
-        if (tpk_import_any(path, format, &mesh, diag) != 0)
+        diag->lenient_fields = 1;
+        int rc = tpk_import_any(path, format, &mesh, diag);
+        diag->lenient_fields = 0;
+        if (rc != 0)
             return -1;
         snprintf(report->format, sizeof report->format, "%s", mesh.format);
         have_mesh = 1;
@@ -119,7 +122,7 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
         report->cells = mesh.cell_count;
         for (int64_t c = 0; c < mesh.cell_count; c++)
             report->cell_type_counts[mesh.cell_types[c]]++;
-        tpk_check_input in = {&mesh, path};
+        tpk_check_input in = {&mesh, path, diag};
         if (run_group(1, tpk_check_vertices, &in, report, diag) || run_group(2, tpk_check_cells, &in, report, diag) ||
             run_group(3, tpk_check_topology, &in, report, diag) || run_group(5, tpk_check_fields, &in, report, diag))
             rc = -1;

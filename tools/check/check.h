@@ -134,6 +134,7 @@ void tpk_histogram_add(tpk_histogram *h, double value);
 typedef struct tpk_check_input {
     const tpk_mesh *mesh;
     const char *path;
+    const tpk_diag *import_diag; /* the importer's diag (field length problems), or NULL */
 } tpk_check_input;
 
 /* The groups. Each returns 0, or -1 (diag set) when it could not run at all (out of memory); problems

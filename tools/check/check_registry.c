@@ -63,7 +63,6 @@ static const tpk_check_def registry[] = {
     {501, "nonfinite_field_value", W, "fields", "a field value is NaN or infinite"},
     {502, "field_length_mismatch", E, "fields",
      "a field's value count does not match its points or cells times components and steps"},
-    {503, "field_range", I, "fields", "minimum and maximum of each field and step"},
     /* .tpk files */
     {600, "file_rule", E, "file",
      "a reader rule of the spec (§9) fails: checksum, counts, ids, descriptors (tpk_verify)"},
