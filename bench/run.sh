@@ -56,6 +56,11 @@ for f in sfepy/cube_big_tetra.mesh nasa_refine/cube-sphere_cube-sphere.meshb nas
     convert_stats "../shared/data/$f" "$WORK/format.tpk" --layout tet16
 done
 
+echo "# tets per input cell against the face-centre approach (24 tets per hexahedron)"
+[ -f "$WORK/hex_1M.msh" ] || gmsh -3 ../shared/data/gmsh/hexrecomb.geo -nt 1 -format msh41 -bin -o "$WORK/hex_1M.msh" >/dev/null 2>&1 || true
+/usr/bin/python3 bench/tets_per_cell.py "$TPK" ../shared/data/sfepy/acoustics_mesh3d.mesh ../shared/data/seacas/exomerge_unit_test.e \
+    ../shared/data/gmsh/t3_hex_prism_ascii41.msh ../shared/data/sfepy/cross3d.mesh "$WORK/hex_1M.msh"
+
 echo "# file size per layout and zstd level (first size)"
 n=$(echo $SIZES | awk '{print $1}')
 for layout in tet16 tet20 tet32; do
