@@ -64,8 +64,11 @@ typedef int (*group_fn)(const tpk_check_input *, tpk_check_report *, tpk_diag *)
 static int run_group(int index, group_fn fn, const tpk_check_input *in, tpk_check_report *report,
                      tpk_diag *diag)
 {
+    static const char *names[7] = {"", "vertices", "cells", "topology", "", "fields", "file"};
     double t0 = now_seconds();
+    tpk_check_progress(report, names[index], 0.0);
     int rc = fn(in, report, diag);
+    tpk_check_progress(report, names[index], 1.0);
     report->seconds[index] += now_seconds() - t0;
     report->ran[index] = 1;
     return rc;
