@@ -45,6 +45,29 @@ for n in $SIZES; do
     convert_stats "$WORK/grid$n.vtk" "$WORK/grid$n.tpk" --layout tet16
 done
 
+echo "# tetpack check, all groups (median of RUNS), on the grids; memory against the mesh as read"
+for n in $SIZES; do
+    totals=() rss=()
+    for _ in $(seq "$RUNS"); do
+        /usr/bin/time -f "%e %M" -o "$WORK/time.txt" "$TPK" check "$WORK/grid$n.vtk" --json --no-progress \
+            > "$WORK/check.json" || true
+        totals+=("$(tail -1 "$WORK/time.txt" | cut -d' ' -f1)")
+        rss+=("$(tail -1 "$WORK/time.txt" | cut -d' ' -f2)")
+    done
+    /usr/bin/python3 - "$WORK/check.json" "$(printf '%s\n' "${totals[@]}" | median)" \
+        "$(printf '%s\n' "${rss[@]}" | median)" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+t, rss = float(sys.argv[2]), int(sys.argv[3]) * 1024
+# The mesh as read (tpk_mesh): f64 points, int64 offsets, int32 connectivity, uint8 types.
+mesh_bytes = 24 * d["vertices"] + d["cells"] * (8 + 16 + 1)
+print(json.dumps({"check": "grid", "cells": d["cells"], "median_wall_s": t, "cells_per_s": d["cells"] / t,
+                  "peak_rss_mib": rss / 2**20, "mesh_mib": mesh_bytes / 2**20, "peak_over_mesh": rss / mesh_bytes,
+                  "groups_last_run": {g["name"]: round(g["seconds"], 3) for g in d["groups"]},
+                  "findings": {f["name"]: f["count"] for f in d["findings"]}}))
+PY
+done
+
 echo "# mixed cells: hexahedra as binary VTU (zlib, written by meshio), N^3 hexes (TPK_BENCH_HEX, default 216: ~10M)"
 h=${TPK_BENCH_HEX:-216}
 [ -f "$WORK/hex$h.vtu" ] || ./bench/make_hex_vtu.py "$h" "$WORK/hex$h.vtu"
