@@ -275,7 +275,7 @@ static void import_mesh(const char *path, tpk_mesh *m, char *message, size_t cap
 
 /* sfepy's 1000 hexahedra, all as polyhedra, in four file forms: read back exactly; converted, the same
  * volume as the hexahedra (and as the cells' own), the same boundary (no inner faces), no point added:
- * convex polyhedra become cones from their smallest vertex. */
+ * each polyhedron becomes a cone from its smallest vertex. */
 TPK_TEST(hexahedra_as_polyhedra_in_every_form)
 {
     tpk_mesh hexes, polys;
@@ -411,12 +411,14 @@ TPK_TEST(non_convex_polyhedron_seen_from_its_centre)
 }
 
 /* An L with long arms: its points' mean (5/3, 5/3) is outside the kernel (the unit corner square), so
- * it does not see the inner sides: refused by name, or left out with TPK_TETRA_SKIP_BAD_CELLS. */
+ * it does not see the inner sides, nor does its smallest point (1, 4, 0), the tip of an arm, for a cone:
+ * refused by name, or left out with TPK_TETRA_SKIP_BAD_CELLS. (Numbered from the corner (0, 0, 0), in
+ * the kernel, it would be a valid cone.) */
 TPK_TEST(non_convex_polyhedron_refused_by_name)
 {
-    const double l6[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 4}, {0, 4}};
+    const double l6[6][2] = {{1, 4}, {0, 4}, {0, 0}, {2, 0}, {2, 1}, {1, 1}};
     tpk_mesh m;
-    prism_mesh(l6, 6, 1, &m);
+    prism_mesh(l6, 6, 3, &m);
     result r;
     convert(&m, 0, &r, NULL);
     CHECK(r.rc != 0);
@@ -427,6 +429,12 @@ TPK_TEST(non_convex_polyhedron_refused_by_name)
     tpk_mesh_free(&m);
     CHECK_MSG(r.rc == 0, "%s", r.message);
     CHECK(r.bad == 1 && r.polyhedra == 0 && (r.tets == 5 || r.tets == 6) && r.volume6 == 6);
+    const double corner_first[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 4}, {0, 4}};
+    prism_mesh(corner_first, 6, 1, &m);
+    convert(&m, 0, &r, NULL);
+    tpk_mesh_free(&m);
+    CHECK_MSG(r.rc == 0, "%s", r.message);
+    CHECK(r.polyhedra == 1 && r.steiner == 0 && r.vertices == 16 && r.volume6 == 6 * (5 + 1));
 }
 
 /* 6 x the volume enclosed, each cell's faces fanned from their smallest id (as the split cuts them:
@@ -585,4 +593,47 @@ TPK_TEST(broken_face_streams_refused_with_their_place)
     CHECK(r.rc != 0);
     CHECK_MSG(strstr(r.message, "cell 0 (a polyhedron) is too warped, non-convex or degenerate to split: edge "),
               "%s", r.message);
+}
+
+/* sfepy's hexahedra with every inner point moved (up to 0.4 of a cell along each axis, seeded): as
+ * hexahedra and as polyhedra they give the same tets, points added at cell and face centres (78 and
+ * 54 here), and boundary, and keep the cube's volume (its boundary does not move). */
+TPK_TEST(warped_polyhedra_convert_like_warped_hexahedra)
+{
+    tpk_mesh m;
+    char message[1100];
+    int rc;
+    import_mesh(tpk_data_path("sfepy/cube_medium_hexa.mesh"), &m, message, sizeof message, &rc);
+    CHECK_MSG(rc == 0, "%s", message);
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+    for (int64_t v = 0; v < m.point_count; v++)
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fmin(lo[a], m.points[3 * v + a]);
+            hi[a] = fmax(hi[a], m.points[3 * v + a]);
+        }
+    double before = cells_volume6(&m);
+    uint64_t seed = 12345;
+    for (int64_t v = 0; v < m.point_count; v++) {
+        double *p = m.points + 3 * v;
+        int inner = 1;
+        for (int a = 0; a < 3; a++)
+            inner &= p[a] > lo[a] && p[a] < hi[a];
+        for (int a = 0; inner && a < 3; a++) { /* cells are (hi - lo) / 10 wide */
+            seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+            p[a] += 0.4 * (hi[a] - lo[a]) / 10 * (double)((int)((seed >> 33) % 129) - 64) / 64;
+        }
+    }
+    result h, p;
+    convert(&m, TPK_TETRA_SKIP_BAD_CELLS, &h, NULL);
+    hexes_to_polyhedra(&m, every_cell);
+    convert(&m, TPK_TETRA_SKIP_BAD_CELLS, &p, NULL);
+    tpk_mesh_free(&m);
+    CHECK_MSG(h.rc == 0 && p.rc == 0, "%s %s", h.message, p.message);
+    fprintf(stderr, "warped: %lld tets, %lld cells from a centre point, %lld face points, %lld bad cells\n",
+            (long long)p.tets, (long long)p.steiner, (long long)p.face_points, (long long)p.bad);
+    CHECK(h.steiner > 0 && h.face_points > 0 && h.bad == 0 && p.inverted == 0);
+    CHECK(p.tets == h.tets && p.vertices == h.vertices && p.steiner == h.steiner && p.face_points == h.face_points &&
+          p.open == h.open && p.bad == h.bad && p.polyhedra == 1000 - p.bad);
+    CHECK_MSG(relative_close(p.volume6, h.volume6), "%.17g vs %.17g", p.volume6, h.volume6);
+    CHECK_MSG(relative_close(h.volume6, before), "%.17g vs %.17g", h.volume6, before);
 }

@@ -71,8 +71,8 @@ typedef struct tpk_tetmesh {
     int64_t steiner_cells;     /* cells split from a point added at their centre (vertex_source -1) */
     int64_t face_steiner_points; /* points added at the centre of a (non-planar or non-convex) face with 4 or
                                   more corners, shared by the cells on both sides (vertex_source -1) */
-    int64_t polyhedra;         /* polyhedra (VTK 42) tetrahedralized: from a centre point, or (convex, all
-                                  faces triangles) as a cone from their smallest vertex */
+    int64_t polyhedra;         /* polyhedra (VTK 42) tetrahedralized: as a cone from their smallest vertex
+                                  where valid, else from a centre point (counted in steiner_cells too) */
     int64_t bad_cells_skipped; /* cells not even that could split, left out (TPK_TETRA_SKIP_BAD_CELLS) */
 } tpk_tetmesh;
 

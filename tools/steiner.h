@@ -25,8 +25,9 @@ void tpk_added_points_free(tpk_added_points *added);
 /* Tetrahedralize the `hard` cells (ascending ids: cells tpk_split_cell refused, and every polyhedron),
  * appending tets (tet_source = the cell), points (vertex_source -1) and their description to `out` and
  * `added`; out->tets and out->tet_source hold *tet_capacity tets and grow. In order of preference:
- *  - a convex polyhedron: a cone from its smallest vertex over its faces (each fanned from its smallest
- *    id; quads so cut along the smallest-id diagonal, as hexahedra are), no point added;
+ *  - a polyhedron: a cone from its smallest vertex over its faces (each fanned from its smallest id;
+ *    quads so cut along the smallest-id diagonal, as hexahedra are) when that vertex sees every face
+ *    not touching it from inside (as tpk_split_cell's cone), no point added;
  *  - a star from a point at the cell's centre (its corners' mean) to the same face triangles;
  *  - the same, with a point at the centre of each face of 4 or more corners that the centre does not see
  *    whole (non-planar or non-convex faces). Such a face point is shared: every cell on the face, also

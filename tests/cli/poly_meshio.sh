@@ -2,7 +2,7 @@
 # Polyhedra written by an independent writer: meshio 5 turns sfepy's 1000 hexahedra into polyhedra (six
 # quads each) in a zlib-compressed binary VTU; tetpack reads and converts it to the same vertices and
 # boundary as the hexahedra themselves (no inner faces: the polyhedra cut shared quads alike), 6 tets
-# per convex polyhedron (a cone from its smallest vertex), no point added.
+# per polyhedron (a cone from its smallest vertex), no point added.
 source "$(dirname "$0")/common.sh" "$@"
 "$PY" - "$DATA/sfepy/cube_medium_hexa.mesh" "$WORK/poly.vtu" <<'PYEOF'
 import sys
