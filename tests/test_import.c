@@ -452,10 +452,12 @@ TPK_TEST(vtk_ascii_binary_forms_agree)
     CHECK_EQ_INT(m->cell_count, 5);
     const uint8_t types[5] = {10, 12, 10, 13, 42};
     CHECK(!memcmp(m->cell_types, types, 5));
-    const int64_t offsets[6] = {0, 4, 12, 16, 22, 39};
+    const int64_t offsets[6] = {0, 4, 12, 16, 22, 26};
     CHECK(!memcmp(m->cell_offsets, offsets, sizeof offsets));
     CHECK(!memcmp(m->cell_conn + 12, (const int32_t[]){0, 1, 2, 4}, 16));
-    CHECK_EQ_INT(m->cell_conn[22], 4); /* the polyhedron's face stream, as stored */
+    /* The polyhedron: its distinct points in cell_conn, its face stream in faces. */
+    CHECK(!memcmp(m->cell_conn + 22, (const int32_t[]){0, 1, 2, 4}, 16));
+    CHECK(m->face_offsets && m->face_offsets[4] == 0 && m->face_offsets[5] == 17 && m->faces[0] == 4);
     CHECK(m->points[3 * 7 + 2] == 6.4e6 && m->points[3 * 0 + 1] == 1e-7 && m->points[3 * 3 + 1] == 2.0 / 3.0);
     CHECK_EQ_INT(m->field_count, 4);
     const tpk_src_field *t = find_field(m, "temperature"), *v = find_field(m, "velocity"),

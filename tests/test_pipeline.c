@@ -673,7 +673,7 @@ TPK_TEST(tetrahedralize_refuses_other_cells)
     src.cell_types[2] = 15; /* the 8 corners as a pentagonal prism's first 8 of 10: refused by type */
     CHECK(tpk_tetrahedralize(&src, NULL, 0, 0, &out, &diag) != 0);
     CHECK_MSG(!strcmp(diag.message, "cell 2 is a pentagonal prism (VTK type 15); this converter splits tetra, "
-                                    "voxels, hexahedra, wedges and pyramids"),
+                                    "voxels, hexahedra, wedges, pyramids and polyhedra"),
               "%s", diag.message);
     src.cell_types[2] = TPK_CELL_HEXAHEDRON;
     CHECK(out.tets == NULL && out.tet_count == 0);

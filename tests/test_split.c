@@ -10,6 +10,7 @@
 #include "harness.h"
 #include "importers.h"
 #include "pipeline.h"
+#include "polyhedron.h"
 
 static const double cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                                   {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
@@ -344,4 +345,127 @@ TPK_TEST(cell_to_point_means)
     ok = ok && isnan(v[12]) && isnan(v[13 + 12]);
     tpk_tetmesh_free(&out);
     CHECK(ok);
+}
+
+/* A grid of n^3 hexahedra, ids shuffled, every inner point moved by up to `jitter` along each axis:
+ * cells warp, some need a point at their centre, some a point on a face that the cell across then
+ * shares. Whatever splits must still fill the cube exactly (the boundary is not moved) and conform
+ * (its only open faces the cube's 2 x 6 n^2 triangles); what cannot is refused naming the cell. */
+static void jittered_grid(int n, double jitter, uint64_t seed, tpk_mesh *m)
+{
+    int64_t points = (int64_t)(n + 1) * (n + 1) * (n + 1), cells = (int64_t)n * n * n;
+    memset(m, 0, sizeof *m);
+    m->point_count = points;
+    m->points = malloc(sizeof(double) * 3 * (size_t)points);
+    m->cell_count = cells;
+    m->cell_types = malloc((size_t)cells);
+    m->cell_offsets = malloc(sizeof(int64_t) * (size_t)(cells + 1));
+    m->cell_conn = malloc(sizeof(int32_t) * 8 * (size_t)cells);
+    int32_t *label = malloc(sizeof(int32_t) * (size_t)points);
+    for (int64_t i = 0; i < points; i++)
+        label[i] = (int32_t)i;
+    for (int64_t i = points - 1; i > 0; i--) {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        int64_t j = (int64_t)((seed >> 33) % (uint64_t)(i + 1));
+        int32_t t = label[i];
+        label[i] = label[j];
+        label[j] = t;
+    }
+#define CORNER(i, j, k) label[((int64_t)(k) * (n + 1) + (j)) * (n + 1) + (i)]
+    for (int k = 0; k <= n; k++)
+        for (int j = 0; j <= n; j++)
+            for (int i = 0; i <= n; i++) {
+                double *p = m->points + 3 * CORNER(i, j, k);
+                int inner = i > 0 && i < n && j > 0 && j < n && k > 0 && k < n;
+                p[0] = i, p[1] = j, p[2] = k;
+                for (int a = 0; inner && a < 3; a++) { /* multiples of 1/64: coordinates stay exact */
+                    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+                    p[a] += jitter * (double)((int)((seed >> 33) % 129) - 64) / 64;
+                }
+            }
+    int64_t c = 0;
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++, c++) {
+                int32_t h[8] = {CORNER(i, j, k), CORNER(i + 1, j, k), CORNER(i + 1, j + 1, k), CORNER(i, j + 1, k),
+                                CORNER(i, j, k + 1), CORNER(i + 1, j, k + 1), CORNER(i + 1, j + 1, k + 1),
+                                CORNER(i, j + 1, k + 1)};
+                m->cell_types[c] = TPK_CELL_HEXAHEDRON;
+                m->cell_offsets[c] = 8 * c;
+                memcpy(m->cell_conn + 8 * c, h, sizeof h);
+            }
+#undef CORNER
+    m->cell_offsets[cells] = 8 * cells;
+    m->step_count = 1;
+    free(label);
+}
+
+TPK_TEST(jittered_grid_conforms_with_added_points)
+{
+    const int n = 5;
+    int64_t face_points = 0, steiner = 0, converted = 0, refused = 0;
+    for (uint64_t seed = 1; seed <= 40; seed++) {
+        tpk_mesh src;
+        tpk_tetmesh m;
+        tpk_diag d;
+        memset(&d, 0, sizeof d);
+        jittered_grid(n, 0.45, seed, &src);
+        int rc = tpk_tetrahedralize(&src, NULL, 0, 0, &m, &d);
+        tpk_mesh_free(&src);
+        if (rc) {
+            CHECK_MSG(strstr(d.message, "is too warped, non-convex or degenerate to split"), "seed %llu: %s",
+                      (unsigned long long)seed, d.message);
+            refused++;
+            continue;
+        }
+        tpk_orient_stats os;
+        int32_t *nb = malloc(sizeof *nb * 4 * (size_t)m.tet_count);
+        int ok = tpk_orient(&m, 0, 1, &os, &d) == 0 && os.inverted_fixed == 0 &&
+                 tpk_connect(m.tets, m.tet_count, m.vertex_count, nb, 1, &d) == 0;
+        int64_t open = 0;
+        double sum = 0;
+        for (int64_t i = 0; ok && i < 4 * m.tet_count; i++)
+            open += nb[i] < 0;
+        for (int64_t t = 0; ok && t < m.tet_count; t++)
+            sum += vol6(m.points, m.tets + 4 * t);
+        face_points += m.face_steiner_points;
+        steiner += m.steiner_cells;
+        converted++;
+        free(nb);
+        tpk_tetmesh_free(&m);
+        CHECK_MSG(ok, "seed %llu: %s", (unsigned long long)seed, d.message);
+        CHECK_MSG(open == 2 * 6 * n * n, "seed %llu: %lld open faces, expected %d", (unsigned long long)seed,
+                  (long long)open, 2 * 6 * n * n);
+        CHECK_MSG(fabs(sum - 6.0 * n * n * n) <= 1e-12 * 6 * n * n * n, "seed %llu: 6V %.17g", (unsigned long long)seed,
+                  sum);
+    }
+    fprintf(stderr, "jittered grids: %lld converted (%lld cells from a centre point, %lld face points), %lld "
+            "refused\n", (long long)converted, (long long)steiner, (long long)face_points, (long long)refused);
+    CHECK(converted >= 20 && steiner > 0 && face_points > 0);
+}
+
+/* tpk_cell_faces: outward faces (positive enclosed volume on the unit cube's corners) that close up,
+ * for every type the split knows; nothing for a tetrahedron. */
+TPK_TEST(cell_faces_are_outward_and_closed)
+{
+    const int32_t hex[8] = {0, 1, 2, 3, 4, 5, 6, 7}, voxel[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+    const int32_t wedge[6] = {0, 1, 3, 4, 5, 7}, pyramid[5] = {0, 1, 2, 3, 6};
+    const struct { int type; const int32_t *nodes; double volume6; } cells[4] = {
+        {TPK_CELL_HEXAHEDRON, hex, 6}, {TPK_CELL_VOXEL, voxel, 6}, {TPK_CELL_WEDGE, wedge, 3},
+        {TPK_CELL_PYRAMID, pyramid, 2}};
+    tpk_polygons p;
+    memset(&p, 0, sizeof p);
+    char why[200] = "";
+    for (int i = 0; i < 4; i++) {
+        int ok = tpk_polygons_from_cell(&p, cells[i].type, cells[i].nodes) == 0 &&
+                 tpk_polygons_orient(&p, why, sizeof why) == 0;
+        double v = ok ? tpk_polygons_volume6(&p, &cube[0][0]) : 0;
+        if (!ok || v != cells[i].volume6)
+            tpk_polygons_free(&p);
+        CHECK_MSG(ok && v == cells[i].volume6, "type %d: 6V %g, expected %g %s", cells[i].type, v, cells[i].volume6, why);
+    }
+    int32_t ids[24];
+    int starts[7];
+    CHECK_EQ_INT(tpk_cell_faces(TPK_CELL_TETRA, hex, ids, starts), 0);
+    tpk_polygons_free(&p);
 }

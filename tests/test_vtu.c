@@ -479,8 +479,8 @@ TPK_TEST(small_ascii_file)
     CHECK(ok);
 }
 
-/* A cube given as a polyhedron (its face stream kept as the cell's entries, as the legacy importer
- * does) next to a tetrahedron; arrays outside the Piece's sections are ignored. */
+/* A cube given as a polyhedron (its distinct points in cell_conn, its face stream in faces) next to a
+ * tetrahedron; arrays outside the Piece's sections are ignored. */
 TPK_TEST(polyhedron_faces)
 {
     static const char text[] =
@@ -500,8 +500,9 @@ TPK_TEST(polyhedron_faces)
     CHECK_MSG(tpk_import_vtu_memory("poly.vtu", text, sizeof text - 1, &m, &d) == 0, "%s", d.message);
     const tpk_src_field *flag = field(&m, "flag");
     int ok = m.point_count == 8 && m.cell_count == 2 && m.cell_types[0] == TPK_CELL_POLYHEDRON &&
-             m.cell_types[1] == TPK_CELL_TETRA && m.cell_offsets[1] == 31 && m.cell_offsets[2] == 35 &&
-             m.cell_conn[0] == 6 && m.cell_conn[1] == 4 && m.cell_conn[30] == 7 && m.cell_conn[31] == 0 &&
+             m.cell_types[1] == TPK_CELL_TETRA && m.cell_offsets[1] == 8 && m.cell_offsets[2] == 12 &&
+             m.cell_conn[0] == 0 && m.cell_conn[7] == 7 && m.cell_conn[8] == 0 && m.cell_conn[9] == 1 &&
+             m.face_offsets[1] == 31 && m.face_offsets[2] == 31 && m.faces[0] == 6 && m.faces[30] == 7 &&
              m.field_count == 1 && flag && flag->values[0] == -1.0f && flag->values[1] == 1.0f;
     tpk_mesh_free(&m);
     CHECK(ok);

@@ -134,6 +134,21 @@ static const shape *shape_of(int type, const int32_t *cell_nodes, int32_t *nodes
     return s;
 }
 
+int tpk_cell_faces(int type, const int32_t *cell_nodes, int32_t *ids, int *starts)
+{
+    int32_t nodes[8];
+    const shape *s = shape_of(type, cell_nodes, nodes);
+    if (!s)
+        return 0;
+    starts[0] = 0;
+    for (int f = 0; f < s->face_count; f++) {
+        for (int i = 0; i < s->face_size[f]; i++)
+            ids[starts[f] + i] = nodes[s->faces[f][i]];
+        starts[f + 1] = starts[f] + s->face_size[f];
+    }
+    return s->face_count;
+}
+
 int tpk_split_cell(int type, const int32_t *cell_nodes, const double *points, int32_t *out, int *mirrored)
 {
     int32_t nodes[8];

@@ -10,6 +10,7 @@
 #include "importers.h"
 #include "tetpack_format.h"
 #include "cell_types.h"
+#include "polyhedron.h"
 #include "text_scan.h"
 
 typedef enum vtk_type {
@@ -44,6 +45,7 @@ typedef struct vtk_reader {
     int32_t *conn;          /* ids checked to be in [0, INT32_MAX]; against point_count at the end */
     size_t cells_pos;
     int64_t cells_line;
+    int offsets_form;       /* CELLS came as OFFSETS/CONNECTIVITY (VTK 5.1) */
     int64_t type_count;     /* -1 until CELL_TYPES */
     uint8_t *types;
     size_t types_pos;
@@ -535,6 +537,7 @@ static int read_cells(vtk_reader *r)
     if (next_is(r, "OFFSETS")) {
         r->kw_pos = r->s.tok_pos;
         r->kw_line = r->s.tok_line;
+        r->offsets_form = 1;
         return read_offsets_connectivity(r, n, size);
     }
     if (n > INT32_MAX)
@@ -791,31 +794,19 @@ static int read_field(vtk_reader *r)
 /* ---- Cells: classify, reduce, drop -------------------------------------------------------------- */
 
 
-/* A polyhedron's face stream: nfaces, then per face npts and npts point ids. */
+/* A polyhedron keeps its face stream (nfaces, then per face npts and npts ids) in place of its point
+ * ids, in both CELLS forms (VTK's legacy writers put it there). Errors give the entry's place in the
+ * CELLS block (old form: counting every cell's count) or in CONNECTIVITY. */
 static int check_face_stream(vtk_reader *r, int64_t cell, const int32_t *e, int64_t n)
 {
-    if (n < 1 || e[0] < 4)
-        return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
-                                "CELLS: cell %lld (polyhedron): expected a face count >= 4, found %s", (long long)cell,
-                                n < 1 ? "no entries" : "fewer");
-    int64_t k = 1;
-    for (int64_t f = 0; f < e[0]; f++) {
-        if (k >= n || e[k] < 3 || e[k] > n - k - 1)
-            return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
-                                    "CELLS: cell %lld (polyhedron): face %lld of %d runs past the cell's %lld entries",
-                                    (long long)cell, (long long)f, e[0], (long long)n);
-        int64_t npts = e[k++];
-        for (int64_t j = 0; j < npts; j++, k++)
-            if (e[k] >= r->point_count)
-                return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
-                                        "CELLS: cell %lld uses point id %d, but there are only %lld points",
-                                        (long long)cell, e[k], (long long)r->point_count);
-    }
-    if (k != n)
-        return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
-                                "CELLS: cell %lld (polyhedron): the faces use %lld entries, the cell has %lld",
-                                (long long)cell, (long long)k, (long long)n);
-    return 0;
+    int64_t bad_at;
+    char why[200];
+    if (tpk_face_stream_check(e, n, r->point_count, &bad_at, why, sizeof why) == 0)
+        return 0;
+    int64_t at = r->offsets[cell] + bad_at + (r->offsets_form ? 0 : cell + 1);
+    return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
+                            "CELLS: cell %lld (polyhedron): %s (face stream entry %lld, %s value %lld)", (long long)cell,
+                            why, (long long)bad_at, r->offsets_form ? "CONNECTIVITY" : "CELLS", (long long)at);
 }
 
 static int check_cell(vtk_reader *r, int64_t c, const tpk_cell_rule *rule)
@@ -929,6 +920,8 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
     r->fields.field_count = 0;
     out->step_count = 1;
     snprintf(out->format, sizeof out->format, "%s", r->binary ? "vtk-legacy-binary" : "vtk-legacy-ascii");
+    if (tpk_mesh_take_face_streams(out))
+        return tpk_diag_fail(r->s.diag, "%s: out of memory", r->s.name);
     return 0;
 }
 

@@ -13,6 +13,7 @@
 
 #include "cell_types.h"
 #include "importers.h"
+#include "polyhedron.h"
 #include "tetpack_format.h"
 #include "text_scan.h"
 
@@ -921,26 +922,56 @@ typedef struct cell_span {
     int64_t n;
 } cell_span;
 
-static int check_face_stream(vtu_reader *r, const vtu_array *fa, int64_t cell, const double *e, int64_t n)
+static int compare_int32(const void *a, const void *b)
 {
-    if (n < 1 || !(e[0] >= 4 && e[0] <= (double)n))
-        return fail_array(r, fa, "cell %lld (polyhedron): expected a face count >= 4, found %s", (long long)cell,
-                          n < 1 ? "no entries" : "fewer or too many");
-    int64_t k = 1, faces = (int64_t)e[0];
-    for (int64_t f = 0; f < faces; f++) {
-        if (k >= n || !(e[k] >= 3 && e[k] <= (double)(n - k - 1)))
-            return fail_array(r, fa, "cell %lld (polyhedron): face %lld of %lld runs past the cell's %lld entries",
-                              (long long)cell, (long long)f, (long long)faces, (long long)n);
-        int64_t npts = (int64_t)e[k++];
-        for (int64_t j = 0; j < npts; j++, k++)
-            if (!(e[k] >= 0 && e[k] < (double)r->point_count))
-                return fail_array(r, fa, "cell %lld uses point id %.17g, expected 0 <= id < %lld", (long long)cell,
-                                  e[k], (long long)r->point_count);
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Every point a polyhedron's faces use must be in its connectivity (VTK's and meshio's writers list
+ * exactly those points there); `ids` is the checked stream, `scratch` room for the connectivity. */
+static int check_face_points(vtu_reader *r, const vtu_array *conn, int64_t cell, const int32_t *ids,
+                             const double *points, int64_t point_count, int32_t *scratch)
+{
+    for (int64_t j = 0; j < point_count; j++) {
+        if (!(points[j] >= 0 && points[j] < (double)r->point_count))
+            return fail_array(r, conn, "cell %lld (polyhedron) lists point id %.17g, expected 0 to %lld",
+                              (long long)cell, points[j], (long long)r->point_count - 1);
+        scratch[j] = (int32_t)points[j];
     }
-    if (k != n)
-        return fail_array(r, fa, "cell %lld (polyhedron): the faces use %lld entries, the cell has %lld",
-                          (long long)cell, (long long)k, (long long)n);
+    qsort(scratch, (size_t)point_count, sizeof *scratch, compare_int32);
+    for (int64_t f = 0, k = 1; f < ids[0]; f++)
+        for (int32_t left = ids[k++]; left > 0; left--, k++)
+            if (!bsearch(&ids[k], scratch, (size_t)point_count, sizeof *scratch, compare_int32))
+                return fail_array(r, conn, "cell %lld (polyhedron): its faces use point %d, which its "
+                                  "connectivity does not list", (long long)cell, ids[k]);
     return 0;
+}
+
+/* A polyhedron's face stream e[0 .. n), starting at value `at` of the faces array (tools/polyhedron.h
+ * checks its layout), and its connectivity points[0 .. point_count). */
+static int check_face_stream(vtu_reader *r, const vtu_array *fa, const vtu_array *conn, int64_t cell, const double *e,
+                             int64_t n, int64_t at, const double *points, int64_t point_count)
+{
+    int32_t *ids = malloc(sizeof *ids * (size_t)(n + point_count + 1));
+    if (!ids)
+        return fail_array(r, fa, "out of memory");
+    int64_t bad_at = -1;
+    char why[200];
+    for (int64_t k = 0; k < n && bad_at < 0; k++) {
+        if (e[k] >= -2147483648.0 && e[k] <= 2147483647.0 && e[k] == (double)(int64_t)e[k])
+            ids[k] = (int32_t)e[k];
+        else
+            bad_at = k, snprintf(why, sizeof why, "expected an integer, found %.17g", e[k]);
+    }
+    int rc = 0;
+    if (bad_at >= 0 || tpk_face_stream_check(ids, n, r->point_count, &bad_at, why, sizeof why))
+        rc = fail_array(r, fa, "cell %lld (polyhedron): %s (face stream entry %lld, value %lld of the array)",
+                        (long long)cell, why, (long long)bad_at, (long long)(at + bad_at));
+    else
+        rc = check_face_points(r, conn, cell, ids, points, point_count, ids + n);
+    free(ids);
+    return rc;
 }
 
 static int build_mesh(vtu_reader *r, tpk_mesh *out)
@@ -985,7 +1016,7 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
     int rc = 0;
     for (int64_t c = 0; c < nc && rc == 0; c++) {
         int type = (int)types->values[c];
-        int64_t begin = c ? (int64_t)offs->values[c - 1] : 0;
+        int64_t begin = c ? (int64_t)offs->values[c - 1] : 0, face_begin = 0;
         span[c].v = conn->values + begin;
         span[c].n = (int64_t)offs->values[c] - begin;
         tpk_cell_rule rule = tpk_cell_rule_for(type);
@@ -1001,6 +1032,7 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
                 break;
             }
             if (type == TPK_CELL_POLYHEDRON) {
+                face_begin = face_prev;
                 span[c].v = faces->values + face_prev;
                 span[c].n = (int64_t)fv - face_prev;
             }
@@ -1012,7 +1044,8 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
                                 "found none", (long long)c);
                 break;
             }
-            rc = check_face_stream(r, faces, c, span[c].v, span[c].n);
+            rc = check_face_stream(r, faces, conn, c, span[c].v, span[c].n, face_begin, conn->values + begin,
+                                   (int64_t)offs->values[c] - begin);
         } else if (rule.kind != TPK_RULE_DROP) {
             if ((rule.nodes > 0 && span[c].n != rule.nodes) || (rule.nodes < 0 && span[c].n < -rule.nodes)) {
                 rc = fail_array(r, conn, "cell %lld (%s, type %d) has %lld points, expected %s%d", (long long)c,
@@ -1115,6 +1148,8 @@ static int build_mesh(vtu_reader *r, tpk_mesh *out)
     free(keep);
     out->step_count = 1;
     snprintf(out->format, sizeof out->format, "vtu");
+    if (tpk_mesh_take_face_streams(out)) /* the streams went into cell_conn above */
+        return fail_line(r, 0, "out of memory");
     return 0;
 }
 

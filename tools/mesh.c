@@ -19,6 +19,8 @@ void tpk_mesh_free(tpk_mesh *mesh)
     free(mesh->cell_types);
     free(mesh->cell_offsets);
     free(mesh->cell_conn);
+    free(mesh->face_offsets);
+    free(mesh->faces);
     free_fields(mesh->fields, mesh->field_count);
     free(mesh->times);
     memset(mesh, 0, sizeof *mesh);

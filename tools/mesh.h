@@ -31,7 +31,14 @@ typedef struct tpk_mesh {
     int64_t cell_count;
     uint8_t *cell_types;    /* TPK_CELL_* per cell */
     int64_t *cell_offsets;  /* cell_count + 1; cell c uses cell_conn[cell_offsets[c] .. [c+1]) */
-    int32_t *cell_conn;     /* 0-based point ids, in VTK node order */
+    int32_t *cell_conn;     /* 0-based point ids, in VTK node order; a polyhedron's distinct point ids,
+                               ascending (its faces are in `faces`) */
+    /* Polyhedra (VTK type 42): NULL when no cell is one. Cell c's VTK face stream is
+     * faces[face_offsets[c] .. [c+1]) (empty for other cells): nfaces, then per face npts and npts point ids,
+     * the faces of one cell forming a closed surface (VTK asks for outward faces; the tetrahedralizer
+     * orients them itself). The importers check the stream's counts and ids (tools/polyhedron.h). */
+    int64_t *face_offsets;  /* cell_count + 1 */
+    int32_t *faces;
     int field_count;
     tpk_src_field *fields;
     int step_count;         /* number of time steps (1 when static) */
@@ -62,6 +69,10 @@ typedef struct tpk_tetmesh {
     int64_t cells_into[7];     /* cells that gave k tets (k = 1..6: tets 1, pyramids 2, wedges 3, hexes 5 or 6) */
     int64_t mirrored_cells;    /* cells given in mirrored node order, turned over */
     int64_t steiner_cells;     /* cells split from a point added at their centre (vertex_source -1) */
+    int64_t face_steiner_points; /* points added at the centre of a (non-planar or non-convex) face with 4 or
+                                  more corners, shared by the cells on both sides (vertex_source -1) */
+    int64_t polyhedra;         /* polyhedra (VTK 42) tetrahedralized: as a cone from their smallest vertex
+                                  where valid, else from a centre point (counted in steiner_cells too) */
     int64_t bad_cells_skipped; /* cells not even that could split, left out (TPK_TETRA_SKIP_BAD_CELLS) */
 } tpk_tetmesh;
 

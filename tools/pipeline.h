@@ -12,8 +12,9 @@
 
 /* Source cells -> tets. Tetrahedra pass through; voxels, hexahedra, wedges and pyramids are split
  * conformally without new points (tools/cell_split.h); a cell the split would fold (warped, non-convex,
- * degenerate) is an error naming it, or is left out and counted with TPK_TETRA_SKIP_BAD_CELLS.
- * Polyhedra and prisms of more sides are refused by name. Point fields are kept, cell fields become
+ * degenerate), and a polyhedron, gets points added at its centre and at face centres where the exact
+ * predicates find the result valid (tools/steiner.h); a cell even that cannot split is an error naming
+ * it, or is left out and counted with TPK_TETRA_SKIP_BAD_CELLS. Prisms of more sides are refused by name. Point fields are kept, cell fields become
  * per-tet fields via the source map. `field_names` (count n, may be NULL = all scalar point fields)
  * selects fields. */
 #define TPK_TETRA_SKIP_BAD_CELLS 0x1

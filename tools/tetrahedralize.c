@@ -1,7 +1,7 @@
 /* Source cells -> tets (pipeline stage 1). Tetra pass through, voxels, hexahedra, wedges and pyramids
- * are split conformally (tools/cell_split.c), other 3-D types are refused by name (tools/cell_types.c
- * knows every VTK type), and lower-dimensional cells (boundary faces, edges, points) are skipped with a
- * warning. */
+ * are split conformally (tools/cell_split.c); those that split cannot take, and polyhedra, get added
+ * points (tools/steiner.c); other 3-D types are refused by name (tools/cell_types.c knows every VTK
+ * type), and lower-dimensional cells (boundary faces, edges, points) are skipped with a warning. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -11,11 +11,20 @@
 #include "cell_split.h"
 #include "cell_types.h"
 #include "pipeline.h"
+#include "polyhedron.h"
+#include "steiner.h"
 
 /* Tets one cell of this type can give (for sizing); 0 when this converter does not split the type. */
 static int max_tets(int type)
 {
     return type == TPK_CELL_TETRA ? 1 : tpk_split_max_tets(type);
+}
+
+/* Most tets a polyhedron gives: one per face edge (a star with every face split at its centre). */
+static int64_t polyhedron_max_tets(const tpk_mesh *src, int64_t c)
+{
+    const int32_t *stream = src->faces + src->face_offsets[c];
+    return src->face_offsets[c + 1] - src->face_offsets[c] - 1 - stream[0];
 }
 
 /* Pass 1: check every cell and count tets; refuses unsupported 3-D cells, skips lower-dim ones. */
@@ -34,9 +43,14 @@ static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
             skipped++;
             continue;
         }
+        if (kind->type == TPK_CELL_POLYHEDRON) {
+            tets += polyhedron_max_tets(src, c);
+            continue;
+        }
         if (!max_tets(kind->type))
             return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter splits tetra, "
-                                 "voxels, hexahedra, wedges and pyramids", (long long)c, kind->name, kind->type);
+                                 "voxels, hexahedra, wedges, pyramids and polyhedra", (long long)c, kind->name,
+                                 kind->type);
         if (kind->nodes > 0 && nodes != kind->nodes)
             return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d",
                                  (long long)c, kind->name, (long long)nodes, kind->name, kind->nodes);
@@ -56,6 +70,22 @@ static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
     return 0;
 }
 
+/* A polyhedron's faces (tools/polyhedron.h): importers check them; meshes built in memory may not. */
+static int check_face_stream(const tpk_mesh *src, int64_t c, tpk_diag *diag)
+{
+    if (!src->face_offsets || !src->faces)
+        return tpk_diag_fail(diag, "cell %lld is a polyhedron, but the mesh has no faces for it", (long long)c);
+    int64_t begin = src->face_offsets[c], bad_at;
+    char why[200];
+    if (src->face_offsets[c + 1] < begin ||
+        tpk_face_stream_check(src->faces + begin, src->face_offsets[c + 1] - begin, src->point_count, &bad_at, why,
+                              sizeof why))
+        return tpk_diag_fail(diag, "cell %lld (a polyhedron): %s (face stream entry %lld)", (long long)c,
+                             src->face_offsets[c + 1] < begin ? "face offsets decrease" : why,
+                             (long long)(src->face_offsets[c + 1] < begin ? 0 : bad_at));
+    return 0;
+}
+
 static int check_connectivity(const tpk_mesh *src, tpk_diag *diag)
 {
     if (src->point_count > INT32_MAX)
@@ -64,6 +94,8 @@ static int check_connectivity(const tpk_mesh *src, tpk_diag *diag)
     for (int64_t c = 0; c < src->cell_count; c++) {
         if (src->cell_offsets[c + 1] < src->cell_offsets[c])
             return tpk_diag_fail(diag, "cell %lld: offsets decrease", (long long)c);
+        if (src->cell_types[c] == TPK_CELL_POLYHEDRON && check_face_stream(src, c, diag))
+            return -1;
         for (int64_t i = src->cell_offsets[c]; i < src->cell_offsets[c + 1]; i++)
             if (src->cell_conn[i] < 0 || src->cell_conn[i] >= src->point_count)
                 return tpk_diag_fail(diag, "cell %lld names point %d; the mesh has %lld points",
@@ -209,21 +241,38 @@ static float pick_value(const float *v, int components, int pick)
 }
 
 /* Point fields keep their vertex order (vertex_source is the identity); cell fields go per tet. */
-/* A point field's value at an added centre point: the mean over its cell's corners (exact for the
- * trilinear interpolant at a hexahedron's centre). */
-static float centre_value(const tpk_mesh *src, const float *step, const field_request *req, int32_t cell)
+/* A point field's value at added point i: the mean over the corners it is the mean of, its cell's or its
+ * face's (exact for a linear field, and for the trilinear interpolant at a hexahedron's centre). */
+static float added_value(const tpk_added_points *added, const float *step, const field_request *req, int64_t i)
 {
     const tpk_src_field *f = req->field;
-    int64_t begin = src->cell_offsets[cell], corners = src->cell_offsets[cell + 1] - begin;
+    int64_t begin = added->corner_start[i], corners = added->corner_start[i + 1] - begin;
     double sum = 0;
     for (int64_t k = 0; k < corners; k++)
-        sum += pick_value(step + (int64_t)src->cell_conn[begin + k] * f->components, f->components, req->pick);
+        sum += pick_value(step + (int64_t)added->corners[begin + k] * f->components, f->components, req->pick);
     return (float)(sum / (double)corners);
 }
 
+/* A cell field at added point i: its cell's value, or the mean over the cells on its face. */
+static float added_cell_value(const tpk_added_points *added, const float *step, const field_request *req, int64_t i)
+{
+    const tpk_src_field *f = req->field;
+    double sum = 0;
+    int count = 0;
+    for (int k = 0; k < 2; k++) {
+        int32_t c = added->cells[2 * i + k];
+        if (c >= 0) {
+            sum += pick_value(step + (int64_t)c * f->components, f->components, req->pick);
+            count++;
+        }
+    }
+    return (float)(sum / count); /* every added point serves at least the cell that made it */
+}
+
 /* A cell field averaged to the output vertices: the mean over the kept volume cells around each source
- * point (NaN for points in none), and at an added centre point its own cell's value. */
-static int cell_to_point(const tpk_mesh *src, const field_request *req, const int32_t *steiner_cell,
+ * point (NaN for points in none), at an added cell centre its own cell's value, at a face centre the mean
+ * over the cells on the face. */
+static int cell_to_point(const tpk_mesh *src, const field_request *req, const tpk_added_points *added,
                          tpk_tetmesh *out)
 {
     const tpk_src_field *f = req->field;
@@ -255,7 +304,7 @@ static int cell_to_point(const tpk_mesh *src, const field_request *req, const in
         for (int64_t i = 0; i < nv; i++) {
             int32_t from = out->vertex_source[i];
             if (from < 0)
-                dst[i] = pick_value(step + (int64_t)steiner_cell[i - np] * f->components, f->components, req->pick);
+                dst[i] = added_cell_value(added, step, req, i - np);
             else
                 dst[i] = count[from] ? (float)(sum[from] / count[from]) : NAN;
         }
@@ -271,7 +320,7 @@ static int cell_to_point(const tpk_mesh *src, const field_request *req, const in
     return 0;
 }
 
-static int copy_field(const tpk_mesh *src, const field_request *req, const int32_t *steiner_cell,
+static int copy_field(const tpk_mesh *src, const field_request *req, const tpk_added_points *added,
                       tpk_tetmesh *out)
 {
     const tpk_src_field *f = req->field;
@@ -286,7 +335,7 @@ static int copy_field(const tpk_mesh *src, const field_request *req, const int32
         for (int64_t i = 0; i < n; i++) {
             int64_t from = per_point ? out->vertex_source[i] : out->tet_source[i];
             values[(size_t)s * (size_t)n + (size_t)i] =
-                from < 0 ? centre_value(src, step, req, steiner_cell[i - src->point_count])
+                from < 0 ? added_value(added, step, req, i - src->point_count)
                          : pick_value(step + from * f->components, f->components, req->pick);
         }
     }
@@ -302,98 +351,38 @@ static int copy_field(const tpk_mesh *src, const field_request *req, const int32
 
 /* ---- the stage ------------------------------------------------------------------------------- */
 
-/* A cell the split would fold, or one its centre cannot star either: an error naming it, or (with
- * TPK_TETRA_SKIP_BAD_CELLS) left out and counted. Returns 0, or -2 with the message. */
-static int bad_cell(const tpk_mesh *src, int64_t c, int flags, tpk_tetmesh *out, tpk_diag *diag)
+/* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by count_tets); cells
+ * it refuses, and polyhedra, go to tools/steiner.c, which appends theirs and may take back the plain
+ * split of a cell next to a face it puts a point on. Returns 0, -1 when out of memory, or -2 with a
+ * message for a cell that cannot be split. */
+static int split_cells(const tpk_mesh *src, int flags, int64_t *tet_capacity, tpk_added_points *added,
+                       tpk_tetmesh *out, tpk_diag *diag)
 {
-    if (flags & TPK_TETRA_SKIP_BAD_CELLS) {
-        out->bad_cells_skipped++;
-        return 0;
-    }
-    tpk_diag_fail(diag, "cell %lld (a %s) is too warped, non-convex or degenerate to split: cutting its faces "
-                        "along their smallest-id diagonals folds a tet, and a point at its centre does not "
-                        "see every face; pass --skip-bad-cells to leave such cells out",
-                  (long long)c, tpk_cell_type(src->cell_types[c])->name);
-    return -2;
-}
-
-/* Cells the plain split refused: a point at the centre of each (its corners' mean, with interpolated
- * point fields later), starred to the boundary triangles. The tet and point arrays grow to fit. */
-static int star_cells(const tpk_mesh *src, const int64_t *bad, int64_t bad_count, int flags,
-                      int32_t **steiner_cell, tpk_tetmesh *out, tpk_diag *diag)
-{
-    int64_t most_tets = out->tet_count + 12 * bad_count, most_points = out->vertex_count + bad_count;
-    int32_t *tets = realloc(out->tets, sizeof *tets * 4 * (size_t)most_tets);
-    if (tets)
-        out->tets = tets;
-    int32_t *tet_source = realloc(out->tet_source, sizeof *tet_source * (size_t)most_tets);
-    if (tet_source)
-        out->tet_source = tet_source;
-    double *points = realloc(out->points, sizeof *points * 3 * (size_t)most_points);
-    if (points)
-        out->points = points;
-    int32_t *vertex_source = realloc(out->vertex_source, sizeof *vertex_source * (size_t)most_points);
-    if (vertex_source)
-        out->vertex_source = vertex_source;
-    *steiner_cell = malloc(sizeof **steiner_cell * (size_t)bad_count);
-    if (!tets || !tet_source || !points || !vertex_source || !*steiner_cell)
-        return -1;
-    for (int64_t i = 0; i < bad_count; i++) {
-        int64_t c = bad[i], begin = src->cell_offsets[c], corners = src->cell_offsets[c + 1] - begin;
-        const int32_t *nodes = src->cell_conn + begin;
-        double centre[3] = {0, 0, 0};
-        for (int64_t k = 0; k < corners; k++)
-            for (int a = 0; a < 3; a++)
-                centre[a] += out->points[3 * (int64_t)nodes[k] + a] / (double)corners;
-        int32_t id = (int32_t)out->vertex_count;
-        int mirrored;
-        int made = tpk_star_cell(src->cell_types[c], nodes, out->points, centre, id,
-                                 out->tets + 4 * out->tet_count, &mirrored);
-        if (made < 0) {
-            int rc = bad_cell(src, c, flags, out, diag);
-            if (rc)
-                return rc;
-            continue;
-        }
-        memcpy(out->points + 3 * (int64_t)id, centre, sizeof centre);
-        out->vertex_source[id] = -1;
-        (*steiner_cell)[out->steiner_cells++] = (int32_t)c;
-        out->vertex_count++;
-        out->mirrored_cells += mirrored;
-        for (int k = 0; k < made; k++)
-            out->tet_source[out->tet_count + k] = (int32_t)c;
-        out->tet_count += made;
-    }
-    return 0;
-}
-
-/* Returns 0, -1 when out of memory, or -2 with a message for a cell that cannot be split. */
-static int split_cells(const tpk_mesh *src, int flags, int32_t **steiner_cell, tpk_tetmesh *out,
-                       tpk_diag *diag)
-{
-    int64_t t = 0, bad_count = 0, bad_capacity = 0;
-    int64_t *bad = NULL;
+    int64_t t = 0, hard_count = 0, hard_capacity = 0;
+    int64_t *hard = NULL;
     for (int64_t c = 0; c < src->cell_count; c++) {
         int type = src->cell_types[c];
         const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
-        if (!max_tets(type)) /* lower-dimensional: count_tets accepted only these besides split types */
+        if (!max_tets(type) && type != TPK_CELL_POLYHEDRON) /* lower-dimensional: count_tets let only these by */
             continue;
-        int made = 1, mirrored = 0;
-        if (type == TPK_CELL_TETRA)
+        int made = -1, mirrored = 0;
+        if (type == TPK_CELL_TETRA) {
             memcpy(out->tets + 4 * t, nodes, 4 * sizeof *nodes); /* orientation: tpk_orient */
-        else
+            made = 1;
+        } else if (type != TPK_CELL_POLYHEDRON) {
             made = tpk_split_cell(type, nodes, out->points, out->tets + 4 * t, &mirrored);
+        }
         if (made < 0) {
-            if (bad_count == bad_capacity) {
-                bad_capacity = bad_capacity ? 2 * bad_capacity : 64;
-                int64_t *grown = realloc(bad, sizeof *bad * (size_t)bad_capacity);
+            if (hard_count == hard_capacity) {
+                hard_capacity = hard_capacity ? 2 * hard_capacity : 64;
+                int64_t *grown = realloc(hard, sizeof *hard * (size_t)hard_capacity);
                 if (!grown) {
-                    free(bad);
+                    free(hard);
                     return -1;
                 }
-                bad = grown;
+                hard = grown;
             }
-            bad[bad_count++] = c;
+            hard[hard_count++] = c;
             continue;
         }
         out->mirrored_cells += mirrored;
@@ -403,8 +392,8 @@ static int split_cells(const tpk_mesh *src, int flags, int32_t **steiner_cell, t
         t += made;
     }
     out->tet_count = t;
-    int rc = bad_count ? star_cells(src, bad, bad_count, flags, steiner_cell, out, diag) : 0;
-    free(bad);
+    int rc = hard_count ? tpk_steiner_stage(src, hard, hard_count, flags, tet_capacity, out, added, diag) : 0;
+    free(hard);
     return rc;
 }
 
@@ -422,7 +411,7 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
 static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
-                         int32_t **steiner_cell, tpk_tetmesh *out, tpk_diag *diag)
+                         tpk_added_points *added, tpk_tetmesh *out, tpk_diag *diag)
 {
     size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
     int plain = donor && all_plain_tets(src, tet_capacity);
@@ -451,7 +440,7 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
     out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
     if (!out->tets || !out->tet_source)
         return -1;
-    return split_cells(src, flags, steiner_cell, out, diag);
+    return split_cells(src, flags, &tet_capacity, added, out, diag);
 }
 
 static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
@@ -460,8 +449,9 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     field_request *reqs = NULL;
     int req_count = 0;
     int64_t tet_capacity = 0;
-    int32_t *steiner_cell = NULL; /* source cell of each added point */
+    tpk_added_points added; /* what each added point is the mean of */
     memset(out, 0, sizeof *out);
+    memset(&added, 0, sizeof added);
     if (!src || (src->cell_count > 0 && (!src->cell_types || !src->cell_offsets || !src->cell_conn)) ||
         (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
         return tpk_diag_fail(diag, "tetrahedralize: invalid source mesh");
@@ -486,9 +476,9 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     }
     /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
      * field copy reads src, and uses the connectivity only around added points (never all-tet). */
-    int geometry = take_geometry(src, donor, tet_capacity, flags, &steiner_cell, out, diag);
+    int geometry = take_geometry(src, donor, tet_capacity, flags, &added, out, diag);
     if (geometry == -2) {
-        free(steiner_cell);
+        tpk_added_points_free(&added);
         free(reqs);
         tpk_tetmesh_free(out);
         return -1;
@@ -496,22 +486,22 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     if (geometry)
         goto out_of_memory;
     if (out->tet_count == 0) {
-        free(steiner_cell);
+        tpk_added_points_free(&added);
         free(reqs);
         tpk_tetmesh_free(out);
         return tpk_diag_fail(diag, "all %lld volume cells were left out as bad cells", (long long)src->cell_count);
     }
     for (int i = 0; i < req_count; i++) {
         int averaged = reqs[i].field->association != TPK_ASSOC_POINT && (flags & TPK_TETRA_CELL_TO_POINT);
-        if ((averaged ? cell_to_point : copy_field)(src, &reqs[i], steiner_cell, out))
+        if ((averaged ? cell_to_point : copy_field)(src, &reqs[i], &added, out))
             goto out_of_memory;
     }
-    free(steiner_cell);
+    tpk_added_points_free(&added);
     free(reqs);
     return 0;
 
 out_of_memory:
-    free(steiner_cell);
+    tpk_added_points_free(&added);
     free(reqs);
     tpk_tetmesh_free(out);
     return tpk_diag_fail(diag, "tetrahedralize: out of memory (%lld points, %lld tets)",
