@@ -317,10 +317,47 @@ static int bad_cell(const tpk_mesh *src, int64_t c, int flags, tpk_tetmesh *out,
     return -2;
 }
 
+/* Counts a mirrored cell (already turned over by the split) and remembers the first, so that
+ * TPK_TETRA_REFUSE_MIRRORED can name it. */
+static void note_mirrored(tpk_tetmesh *out, int64_t c, int mirrored, int64_t *first_mirrored)
+{
+    if (!mirrored)
+        return;
+    out->mirrored_cells++;
+    if (*first_mirrored < 0 || c < *first_mirrored)
+        *first_mirrored = c;
+}
+
+/* Not turned over silently (without --reorient), even when every cell is mirrored: a whole file in the
+ * mirrored node order is far more often a writer's or importer's node-order bug (DESIGN.md §10) than a
+ * convention someone chose, and accepting it quietly would hide exactly that bug. The message says
+ * which case it is, so one flag fixes either knowingly. */
+static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh *out, tpk_diag *diag)
+{
+    int64_t begin = src->cell_offsets[first], nodes = src->cell_offsets[first + 1] - begin;
+    int64_t split = out->steiner_cells;
+    for (int k = 2; k <= 6; k++)
+        split += out->cells_into[k];
+    char where[700];
+    int used = snprintf(where, sizeof where, "cell %lld (a %s) is mirrored (its node order is the mirror image of "
+                        "VTK's: every tet of its split is inverted)", (long long)first,
+                        tpk_cell_type(src->cell_types[first])->name);
+    for (int64_t k = 0; k < nodes && used > 0 && (size_t)used < sizeof where; k++) {
+        const double *p = out->points + 3 * (int64_t)src->cell_conn[begin + k]; /* src's may be taken */
+        used += snprintf(where + used, sizeof where - (size_t)used, "%s %d (%.9g, %.9g, %.9g)", k ? "," : ": points",
+                         src->cell_conn[begin + k], p[0], p[1], p[2]);
+    }
+    if (out->mirrored_cells == split)
+        return tpk_diag_fail(diag, "%s; so are all %lld split cells: the file lists their nodes in the mirrored "
+                             "(left-handed) order; --reorient turns them over", where, (long long)split);
+    return tpk_diag_fail(diag, "%s; %lld of %lld split cells are mirrored; --reorient turns them over", where,
+                         (long long)out->mirrored_cells, (long long)split);
+}
+
 /* Cells the plain split refused: a point at the centre of each (its corners' mean, with interpolated
  * point fields later), starred to the boundary triangles. The tet and point arrays grow to fit. */
 static int star_cells(const tpk_mesh *src, const int64_t *bad, int64_t bad_count, int flags,
-                      int32_t **steiner_cell, tpk_tetmesh *out, tpk_diag *diag)
+                      int32_t **steiner_cell, int64_t *first_mirrored, tpk_tetmesh *out, tpk_diag *diag)
 {
     int64_t most_tets = out->tet_count + 12 * bad_count, most_points = out->vertex_count + bad_count;
     int32_t *tets = realloc(out->tets, sizeof *tets * 4 * (size_t)most_tets);
@@ -359,7 +396,7 @@ static int star_cells(const tpk_mesh *src, const int64_t *bad, int64_t bad_count
         out->vertex_source[id] = -1;
         (*steiner_cell)[out->steiner_cells++] = (int32_t)c;
         out->vertex_count++;
-        out->mirrored_cells += mirrored;
+        note_mirrored(out, c, mirrored, first_mirrored);
         for (int k = 0; k < made; k++)
             out->tet_source[out->tet_count + k] = (int32_t)c;
         out->tet_count += made;
@@ -368,8 +405,8 @@ static int star_cells(const tpk_mesh *src, const int64_t *bad, int64_t bad_count
 }
 
 /* Returns 0, -1 when out of memory, or -2 with a message for a cell that cannot be split. */
-static int split_cells(const tpk_mesh *src, int flags, int32_t **steiner_cell, tpk_tetmesh *out,
-                       tpk_diag *diag)
+static int split_cells(const tpk_mesh *src, int flags, int32_t **steiner_cell, int64_t *first_mirrored,
+                       tpk_tetmesh *out, tpk_diag *diag)
 {
     int64_t t = 0, bad_count = 0, bad_capacity = 0;
     int64_t *bad = NULL;
@@ -396,14 +433,14 @@ static int split_cells(const tpk_mesh *src, int flags, int32_t **steiner_cell, t
             bad[bad_count++] = c;
             continue;
         }
-        out->mirrored_cells += mirrored;
+        note_mirrored(out, c, mirrored, first_mirrored);
         out->cells_into[made]++;
         for (int i = 0; i < made; i++)
             out->tet_source[t + i] = (int32_t)c;
         t += made;
     }
     out->tet_count = t;
-    int rc = bad_count ? star_cells(src, bad, bad_count, flags, steiner_cell, out, diag) : 0;
+    int rc = bad_count ? star_cells(src, bad, bad_count, flags, steiner_cell, first_mirrored, out, diag) : 0;
     free(bad);
     return rc;
 }
@@ -422,7 +459,7 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
 static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
-                         int32_t **steiner_cell, tpk_tetmesh *out, tpk_diag *diag)
+                         int32_t **steiner_cell, int64_t *first_mirrored, tpk_tetmesh *out, tpk_diag *diag)
 {
     size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
     int plain = donor && all_plain_tets(src, tet_capacity);
@@ -451,7 +488,7 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
     out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
     if (!out->tets || !out->tet_source)
         return -1;
-    return split_cells(src, flags, steiner_cell, out, diag);
+    return split_cells(src, flags, steiner_cell, first_mirrored, out, diag);
 }
 
 static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
@@ -461,6 +498,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     int req_count = 0;
     int64_t tet_capacity = 0;
     int32_t *steiner_cell = NULL; /* source cell of each added point */
+    int64_t first_mirrored = -1;
     memset(out, 0, sizeof *out);
     if (!src || (src->cell_count > 0 && (!src->cell_types || !src->cell_offsets || !src->cell_conn)) ||
         (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
@@ -486,7 +524,9 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     }
     /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
      * field copy reads src, and uses the connectivity only around added points (never all-tet). */
-    int geometry = take_geometry(src, donor, tet_capacity, flags, &steiner_cell, out, diag);
+    int geometry = take_geometry(src, donor, tet_capacity, flags, &steiner_cell, &first_mirrored, out, diag);
+    if (geometry == 0 && first_mirrored >= 0 && (flags & TPK_TETRA_REFUSE_MIRRORED))
+        geometry = refuse_mirrored(src, first_mirrored, out, diag) ? -2 : 0;
     if (geometry == -2) {
         free(steiner_cell);
         free(reqs);
