@@ -61,8 +61,10 @@ expect_stderr "pass --drop-degenerate to remove them"
 
 # Usage errors.
 expect_exit 2 "$TPK" convert "$WORK/split.vtk" "$WORK/x.tpk" --merge-duplicates=abc
-expect_stderr "--merge-duplicates=TOL expects 0 < TOL <= 1"
+expect_stderr "--merge-duplicates=TOL expects 1e-15 <= TOL <= 1"
 expect_exit 2 "$TPK" convert "$WORK/split.vtk" "$WORK/x.tpk" --merge-duplicates=2
+expect_exit 2 "$TPK" convert "$WORK/split.vtk" "$WORK/x.tpk" --merge-duplicates=1e-16
+expect_exit 2 "$TPK" convert "$WORK/split.vtk" "$WORK/x.tpk" --merge-duplicates=
 expect_exit 2 "$TPK" convert "$WORK/split.vtk" "$WORK/x.tpk" --merge-duplicatesX
 "$TPK" convert --help | grep -q -- "--merge-duplicates\[=TOL\]" || fail "help lacks --merge-duplicates"
 "$TPK" convert --help | grep -q -- "--reorient" || fail "help lacks --reorient"

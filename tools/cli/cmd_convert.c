@@ -33,7 +33,7 @@ static const char convert_help[] =
     "                              (also when all of them are: a file in mirrored node order)\n"
     "  --drop-degenerate           drop zero-volume tets, and cells that --merge-duplicates collapsed\n"
     "  --merge-duplicates[=TOL]    before splitting, merge points with exactly equal coordinates, or\n"
-    "                              with TOL (0 < TOL <= 1) points within TOL times the bounding-box\n"
+    "                              with TOL (1e-15 <= TOL <= 1) points within TOL times the bounding-box\n"
     "                              diagonal; each point joins the lowest-id kept point in reach (no\n"
     "                              chains), keeps that point's field values; cells are renumbered, and\n"
     "                              one that collapses is an error (or dropped with --drop-degenerate)\n"
@@ -74,9 +74,9 @@ static int parse_tolerance(const char *text, tpk_convert_options *o)
         return 0;
     char *end = NULL;
     double tolerance = strtod(text, &end);
-    if (!*text || *end || !(tolerance > 0.0 && tolerance <= 1.0))
+    if (!*text || *end || !(tolerance >= TPK_MERGE_MIN_TOLERANCE && tolerance <= 1.0))
         return -1;
-    o->merge_tolerance = tolerance < TPK_MERGE_MIN_TOLERANCE ? TPK_MERGE_MIN_TOLERANCE : tolerance;
+    o->merge_tolerance = tolerance;
     return 0;
 }
 
@@ -118,8 +118,8 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.reorient = 1;
         } else if (!strncmp(arg, "--merge-duplicates", 18) && (!arg[18] || arg[18] == '=')) {
             if (parse_tolerance(arg[18] ? arg + 19 : NULL, &a->options))
-                return tpk_cli_fail("convert", "--merge-duplicates=TOL expects 0 < TOL <= 1 (a fraction of the "
-                                    "bounding-box diagonal), found '%s'", arg + 19);
+                return tpk_cli_fail("convert", "--merge-duplicates=TOL expects %g <= TOL <= 1 (a fraction of the "
+                                    "bounding-box diagonal), found '%s'", TPK_MERGE_MIN_TOLERANCE, arg + 19);
         } else if (!strcmp(arg, "--skip-bad-cells")) {
             a->options.skip_bad_cells = 1;
         } else if (!strcmp(arg, "--cell-to-point")) {
@@ -159,8 +159,8 @@ static void print_repairs(const tpk_convert_options *o, const tpk_convert_report
         return;
     }
     if (o->merge_duplicates && o->merge_tolerance > 0)
-        printf("  repair --merge-duplicates=%g: %lld points merged into a twin within %g of the bounding-box "
-               "diagonal\n", o->merge_tolerance, (long long)r->merged_vertices, o->merge_tolerance);
+        printf("  repair --merge-duplicates=%g: %lld points merged into a twin within %g times the "
+               "bounding-box diagonal\n", o->merge_tolerance, (long long)r->merged_vertices, o->merge_tolerance);
     else if (o->merge_duplicates)
         printf("  repair --merge-duplicates: %lld points merged into a twin with equal coordinates\n",
                (long long)r->merged_vertices);
