@@ -62,6 +62,15 @@ for ext in ["obj", "off", "stl"]:
     assert (corners.astype(np.float32) == reference.astype(np.float32)).all(), ext
     assert volume(corners) > 0, ext
     print(ext, len(corners), "faces, volume", volume(corners))
+# Binary STL also stores a normal per face: outward, as the corner order says.
+data = open(base + ".stl", "rb").read()
+rec = np.frombuffer(data[84:], np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]),
+                    int.from_bytes(data[80:84], "little"))
+v = rec["v"].astype(np.float64) - rec["v"].reshape(-1, 3).mean(axis=0)
+normal = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+length = np.linalg.norm(normal, axis=1)
+ok = length > 0  # far from the origin float32 can flatten a face; its normal then says nothing
+assert (np.einsum("ij,ij->i", rec["n"][ok], normal[ok] / length[ok, None]) > 0.99).all(), "STL normals"
 EOF
 }
 
