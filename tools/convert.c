@@ -4,12 +4,14 @@
 #include "convert.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
 
 #include "importers.h"
+#include "merge_vertices.h"
 #include "parallel.h"
 #include "pipeline.h"
 #include "strbuf.h"
@@ -265,11 +267,14 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
     tpk_strbuf_json_string(&sb, source_format);
     tpk_strbuf_printf(&sb, ",\"cells\":%lld,\"points\":%lld}", (long long)rep->source_cells,
                       (long long)rep->source_points);
-    tpk_strbuf_printf(&sb, ",\"pipeline\":{\"reordered\":%s,\"inverted_fixed\":%lld,\"degenerate_dropped\":%lld,"
-                           "\"mirrored_cells\":%lld,\"steiner_cells\":%lld,\"bad_cells_skipped\":%lld}}",
-                      o->no_reorder ? "false" : "true", (long long)rep->inverted_fixed,
-                      (long long)rep->degenerate_dropped, (long long)rep->mirrored_cells,
-                      (long long)rep->steiner_cells, (long long)rep->bad_cells_skipped);
+    tpk_strbuf_printf(&sb, ",\"pipeline\":{\"reordered\":%s,\"steiner_cells\":%lld,\"face_steiner_points\":%lld,"
+                      "\"polyhedra\":%lld,\"bad_cells_skipped\":%lld}",
+                      o->no_reorder ? "false" : "true", (long long)rep->steiner_cells,
+                      (long long)rep->face_steiner_points, (long long)rep->polyhedra,
+                      (long long)rep->bad_cells_skipped);
+    tpk_strbuf_printf(&sb, ",\"repairs\":");
+    tpk_convert_repairs_json(&sb, o, rep);
+    tpk_strbuf_printf(&sb, "}");
     int rc;
     if (sb.failed)
         rc = tpk_diag_fail(cw->diag, "out of memory for metadata");
@@ -277,6 +282,19 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
         rc = put_chunk(cw, TPK_TAG_META, 0, TPK_ELEM_BYTE, 1, sb.length, 0, 0, sb.data);
     tpk_strbuf_free(&sb);
     return rc;
+}
+
+void tpk_convert_repairs_json(tpk_strbuf *sb, const tpk_convert_options *o, const tpk_convert_report *r)
+{
+    tpk_strbuf_printf(sb, "{\"reorient\":{\"requested\":%s,\"inverted_tets\":%lld,\"mirrored_cells\":%lld},",
+                      o->reorient ? "true" : "false", (long long)r->inverted_fixed, (long long)r->mirrored_cells);
+    tpk_strbuf_printf(sb, "\"drop_degenerate\":{\"requested\":%s,\"degenerate_tets\":%lld,\"collapsed_cells\":%lld},",
+                      o->drop_degenerate ? "true" : "false", (long long)r->degenerate_dropped,
+                      (long long)r->collapsed_cells_dropped);
+    tpk_strbuf_printf(sb, "\"merge_duplicates\":{\"requested\":%s,\"tolerance\":",
+                      o->merge_duplicates ? "true" : "false");
+    tpk_strbuf_json_number(sb, o->merge_duplicates ? o->merge_tolerance : 0.0);
+    tpk_strbuf_printf(sb, ",\"merged_vertices\":%lld}}", (long long)r->merged_vertices);
 }
 
 static int write_maps(chunk_writer *cw, const tpk_tetmesh *mesh)
@@ -334,6 +352,28 @@ static int write_file(const tpk_convert_options *o, const tpk_tetmesh *mesh, con
     return 0;
 }
 
+/* After merging, vertex and tet sources name merged ids: lead them back to the source file's. */
+static void map_to_source(tpk_tetmesh *mesh, const tpk_merge_report *merged)
+{
+    if (merged->point_source)
+        for (int64_t v = 0; v < mesh->vertex_count; v++)
+            if (mesh->vertex_source[v] >= 0) /* -1: a point added at a cell's centre */
+                mesh->vertex_source[v] = merged->point_source[mesh->vertex_source[v]];
+    if (merged->cell_source)
+        for (int64_t t = 0; t < mesh->tet_count; t++)
+            mesh->tet_source[t] = merged->cell_source[mesh->tet_source[t]];
+}
+
+/* The tetrahedralizer names cells and points of the mesh it was given: say when merging renumbered them. */
+static void note_merged_ids(const tpk_merge_report *merged, tpk_diag *diag)
+{
+    if (!merged->point_source)
+        return;
+    size_t used = strlen(diag->message);
+    snprintf(diag->message + used, sizeof diag->message - used, " (ids count after --merge-duplicates removed "
+             "%lld points%s)", (long long)merged->merged_vertices, merged->cell_source ? " and collapsed cells" : "");
+}
+
 int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage_fn stage,
                 void *stage_user, tpk_diag *diag)
 {
@@ -346,6 +386,8 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     tpk_header_fields header;
     memset(&header, 0, sizeof header);
     char source_format[32] = "";
+    tpk_merge_report merged;
+    memset(&merged, 0, sizeof merged);
     int rc = -1;
     double t0 = now_seconds(), t = t0;
 
@@ -358,17 +400,30 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     source_format[sizeof source_format - 1] = 0;
     rep->t_import = now_seconds() - t;
 
+    t = now_seconds(); /* merging counts as part of tetrahedralizing */
+    if (o->merge_duplicates) {
+        announce(stage, stage_user, "merge duplicates");
+        if (tpk_merge_vertices(&src, o->merge_tolerance, o->drop_degenerate, &merged, diag) != 0)
+            goto done;
+        rep->merged_vertices = merged.merged_vertices;
+        rep->collapsed_cells_dropped = merged.collapsed_cells;
+    }
     announce(stage, stage_user, "tetrahedralize");
-    t = now_seconds();
     if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
-                                       (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0),
-                                   &mesh, diag) != 0)
+                                       (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
+                                       (o->reorient ? 0 : TPK_TETRA_REFUSE_MIRRORED),
+                                   &mesh, diag) != 0) {
+        note_merged_ids(&merged, diag);
         goto done;
+    }
     tpk_mesh_free(&src);
+    map_to_source(&mesh, &merged);
     memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);
     rep->mirrored_cells = mesh.mirrored_cells;
     rep->steiner_cells = mesh.steiner_cells;
+    rep->face_steiner_points = mesh.face_steiner_points;
+    rep->polyhedra = mesh.polyhedra;
     rep->bad_cells_skipped = mesh.bad_cells_skipped;
     quantize_points(&mesh, &header);
     rep->t_tetrahedralize = now_seconds() - t;
@@ -386,7 +441,9 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     t = now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
-    if (tpk_orient(&mesh, o->drop_degenerate, o->threads, &os, diag) != 0)
+    if (tpk_orient(&mesh, (o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
+                              (o->reorient ? 0 : TPK_ORIENT_REFUSE_INVERTED),
+                   o->threads, &os, diag) != 0)
         goto done;
     rep->inverted_fixed = os.inverted_fixed;
     rep->degenerate_dropped = o->drop_degenerate ? os.degenerate : 0;
@@ -420,6 +477,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 done:
     rep->t_total = now_seconds() - t0;
     free(neighbors);
+    tpk_merge_report_free(&merged);
     tpk_mesh_free(&src);
     tpk_tetmesh_free(&mesh);
     return rc;

@@ -68,6 +68,7 @@ typedef struct tpk_tetmesh {
     /* What tpk_tetrahedralize did with the source cells. */
     int64_t cells_into[7];     /* cells that gave k tets (k = 1..6: tets 1, pyramids 2, wedges 3, hexes 5 or 6) */
     int64_t mirrored_cells;    /* cells given in mirrored node order, turned over */
+    int64_t first_mirrored_cell; /* the lowest mirrored cell's id (meaningful when mirrored_cells > 0) */
     int64_t steiner_cells;     /* cells split from a point added at their centre (vertex_source -1) */
     int64_t face_steiner_points; /* points added at the centre of a (non-planar or non-convex) face with 4 or
                                   more corners, shared by the cells on both sides (vertex_source -1) */

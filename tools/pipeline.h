@@ -21,6 +21,10 @@
 /* Cell fields become point fields: each point takes the mean over the volume cells around it (points
  * in no cell get NaN); without field_names, scalar cell fields are then kept along with point fields. */
 #define TPK_TETRA_CELL_TO_POINT 0x2
+/* A mirrored cell (its node order is the mirror image of VTK's, so every tet of its split is inverted)
+ * is an error naming it and counting them all, instead of being turned over and counted in
+ * mirrored_cells. The converter sets this unless --reorient. */
+#define TPK_TETRA_REFUSE_MIRRORED 0x4
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag);
 /* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;
@@ -29,15 +33,20 @@ int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, in
                                tpk_tetmesh *out, tpk_diag *diag);
 
 typedef struct tpk_orient_stats {
-    int64_t inverted_fixed;   /* negative tets made positive by a swap */
+    int64_t inverted_fixed;   /* negative tets made positive by a swap (found, with REFUSE_INVERTED) */
     int64_t degenerate;       /* zero-volume tets (found; dropped only with drop_degenerate) */
     int64_t repeated_vertex;  /* tets naming a vertex twice (counted in degenerate too) */
 } tpk_orient_stats;
 
-/* Exact orientation (CGAL): swap v2,v3 of inverted tets; zero-volume tets are an error naming the first
- * one (source cell, source point ids, coordinates), or are removed when drop_degenerate.
+/* tpk_orient flags. 0 and 1 keep their old meaning (swap inverted tets; 1 = drop degenerate ones). */
+#define TPK_ORIENT_DROP_DEGENERATE 0x1
+#define TPK_ORIENT_REFUSE_INVERTED 0x2 /* inverted tets are an error (the converter without --reorient) */
+
+/* Exact orientation (CGAL): swap v2,v3 of inverted tets (or, with TPK_ORIENT_REFUSE_INVERTED, fail
+ * naming the first one and the count); zero-volume tets are an error naming the first one (source
+ * cell, source point ids, coordinates), or are removed with TPK_ORIENT_DROP_DEGENERATE.
  * threads <= 0: all cores (here and in tpk_reorder); the result does not depend on it. */
-int tpk_orient(tpk_tetmesh *mesh, int drop_degenerate, int threads, tpk_orient_stats *stats, tpk_diag *diag);
+int tpk_orient(tpk_tetmesh *mesh, int flags, int threads, tpk_orient_stats *stats, tpk_diag *diag);
 
 /* Exact orientation sign of four points: +1, 0, -1 for det[b-a, c-a, d-a]. (CGAL shim.) */
 int tpk_orient3d_exact(const double a[3], const double b[3], const double c[3], const double d[3]);

@@ -557,6 +557,8 @@ static int emit_cell(stage *st, int64_t c, int cone)
     }
     st->out->steiner_cells += !cone;
     st->out->polyhedra += src->cell_types[c] == TPK_CELL_POLYHEDRON;
+    if (w->mirrored && (st->out->mirrored_cells == 0 || c < st->out->first_mirrored_cell))
+        st->out->first_mirrored_cell = c;
     st->out->mirrored_cells += w->mirrored;
     return 0;
 }

@@ -351,6 +351,43 @@ static int copy_field(const tpk_mesh *src, const field_request *req, const tpk_a
 
 /* ---- the stage ------------------------------------------------------------------------------- */
 
+/* Counts a mirrored cell (already turned over by the split) and remembers the first, so that
+ * TPK_TETRA_REFUSE_MIRRORED can name it. */
+static void note_mirrored(tpk_tetmesh *out, int64_t c, int mirrored)
+{
+    if (!mirrored)
+        return;
+    if (out->mirrored_cells == 0 || c < out->first_mirrored_cell)
+        out->first_mirrored_cell = c;
+    out->mirrored_cells++;
+}
+
+/* Not turned over silently (without --reorient), even when every cell is mirrored: a whole file in the
+ * mirrored node order is far more often a writer's or importer's node-order bug (DESIGN.md §10) than a
+ * convention someone chose, and accepting it quietly would hide exactly that bug. The message says
+ * which case it is, so one flag fixes either knowingly. */
+static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh *out, tpk_diag *diag)
+{
+    int64_t begin = src->cell_offsets[first], nodes = src->cell_offsets[first + 1] - begin;
+    int64_t split = out->steiner_cells;
+    for (int k = 2; k <= 6; k++)
+        split += out->cells_into[k];
+    char where[700];
+    int used = snprintf(where, sizeof where, "cell %lld (a %s) is mirrored (its node order is the mirror image of "
+                        "VTK's: every tet of its split is inverted)", (long long)first,
+                        tpk_cell_type(src->cell_types[first])->name);
+    for (int64_t k = 0; k < nodes && used > 0 && (size_t)used < sizeof where; k++) {
+        const double *p = out->points + 3 * (int64_t)src->cell_conn[begin + k]; /* src's may be taken */
+        used += snprintf(where + used, sizeof where - (size_t)used, "%s %d (%.9g, %.9g, %.9g)", k ? "," : ": points",
+                         src->cell_conn[begin + k], p[0], p[1], p[2]);
+    }
+    if (out->mirrored_cells == split)
+        return tpk_diag_fail(diag, "%s; so are all %lld split cells: the file lists their nodes in the mirrored "
+                             "(left-handed) order; --reorient turns them over", where, (long long)split);
+    return tpk_diag_fail(diag, "%s; %lld of %lld split cells are mirrored; --reorient turns them over", where,
+                         (long long)out->mirrored_cells, (long long)split);
+}
+
 /* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by count_tets); cells
  * it refuses, and polyhedra, go to tools/steiner.c, which appends theirs and may take back the plain
  * split of a cell next to a face it puts a point on. Returns 0, -1 when out of memory, or -2 with a
@@ -385,7 +422,7 @@ static int split_cells(const tpk_mesh *src, int flags, int64_t *tet_capacity, tp
             hard[hard_count++] = c;
             continue;
         }
-        out->mirrored_cells += mirrored;
+        note_mirrored(out, c, mirrored);
         out->cells_into[made]++;
         for (int i = 0; i < made; i++)
             out->tet_source[t + i] = (int32_t)c;
@@ -477,6 +514,8 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
      * field copy reads src, and uses the connectivity only around added points (never all-tet). */
     int geometry = take_geometry(src, donor, tet_capacity, flags, &added, out, diag);
+    if (geometry == 0 && out->mirrored_cells > 0 && (flags & TPK_TETRA_REFUSE_MIRRORED))
+        geometry = refuse_mirrored(src, out->first_mirrored_cell, out, diag) ? -2 : 0;
     if (geometry == -2) {
         tpk_added_points_free(&added);
         free(reqs);

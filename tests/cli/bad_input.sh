@@ -17,11 +17,17 @@ expect_stderr "drop-degenerate"
 # ... and dropped (and counted) with it. MANIFEST.md says 20 tets there repeat a node and 20 are "flat",
 # but the flat ones were made by moving a node onto a plane in floating point: decided exactly, none of
 # them has zero volume (checked with rational arithmetic, in float64 and in the stored float32 frame),
-# so exactly 20 are dropped, and 7 of the slivers are negatively oriented in the stored frame.
-"$TPK" convert "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk" --drop-degenerate --json > "$WORK/d.json"
+# so exactly 20 are dropped, and 7 of the slivers are negatively oriented in the stored frame: those are
+# refused too until --reorient turns them over (nothing is fixed unasked; tests/cli/repair.sh).
+expect_exit 2 "$TPK" convert "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk" --drop-degenerate
+expect_stderr "7 of 8161 tets are inverted; --reorient turns them over"
+[ ! -e "$WORK/d.tpk" ] || fail "output left behind"
+"$TPK" convert "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk" --drop-degenerate --reorient --json > "$WORK/d.json"
 "$PY" -c "import json; d=json.load(open('$WORK/d.json')); assert d['degenerate_dropped']==20 and d['tets']==8161-20 and d['inverted_fixed']==7, d"
-# Inverted tets are fixed and counted.
-"$TPK" convert "$DATA/hard/inverted_tets.vtk" "$WORK/i.tpk" --json > "$WORK/i.json"
+# Inverted tets are refused, or turned over and counted with --reorient.
+expect_exit 2 "$TPK" convert "$DATA/hard/inverted_tets.vtk" "$WORK/i.tpk"
+expect_stderr "135 of 1348 tets are inverted; --reorient turns them over"
+"$TPK" convert "$DATA/hard/inverted_tets.vtk" "$WORK/i.tpk" --reorient --json > "$WORK/i.json"
 "$PY" -c "import json; d=json.load(open('$WORK/i.json')); assert d['inverted_fixed']==135, d"
 
 # A damaged .tpk: info and render refuse it with exit 2.

@@ -5,6 +5,7 @@
 
 #include "cli.h"
 #include "convert.h"
+#include "merge_vertices.h"
 #include "strbuf.h"
 
 static const char convert_help[] =
@@ -23,7 +24,20 @@ static const char convert_help[] =
     "                              without --field, scalar cell fields are then kept too\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
-    "  --drop-degenerate           drop zero-volume tets (counted) instead of failing\n"
+    "\n"
+    "Repairs: nothing is fixed unasked. Without these options an inverted, mirrored or degenerate cell\n"
+    "is an error naming the first one and the count, and duplicate points stay apart (tetpack check\n"
+    "reports them as duplicate_vertex); with them each is fixed, counted in the summary and recorded\n"
+    "in the file's META (\"repairs\"):\n"
+    "  --reorient                  turn inverted tets and mirrored hexahedra, wedges and pyramids over\n"
+    "                              (also when all of them are: a file in mirrored node order)\n"
+    "  --drop-degenerate           drop zero-volume tets, and cells that --merge-duplicates collapsed\n"
+    "  --merge-duplicates[=TOL]    before splitting, merge points with exactly equal coordinates, or\n"
+    "                              with TOL (1e-15 <= TOL <= 1) points within TOL times the bounding-box\n"
+    "                              diagonal; each point joins the lowest-id kept point in reach (no\n"
+    "                              chains), keeps that point's field values; cells are renumbered, and\n"
+    "                              one that collapses is an error (or dropped with --drop-degenerate)\n"
+    "\n"
     "  --skip-bad-cells            leave out hexahedra, wedges and pyramids that are too warped or\n"
     "                              non-convex to split without new points (counted) instead of failing\n"
     "  --format NAME               force the input format: vtk, vtu, pvd, gmsh, exodus, medit, ugrid or\n"
@@ -48,6 +62,21 @@ static int parse_layout(const char *text, unsigned *layouts)
         *layouts |= TPK_LAYOUT_BIT_TET32;
     else
         return -1;
+    return 0;
+}
+
+/* NULL: exactly equal points. A tolerance is a fraction of the bounding-box diagonal. */
+static int parse_tolerance(const char *text, tpk_convert_options *o)
+{
+    o->merge_duplicates = 1;
+    o->merge_tolerance = 0.0;
+    if (!text)
+        return 0;
+    char *end = NULL;
+    double tolerance = strtod(text, &end);
+    if (!*text || *end || !(tolerance >= TPK_MERGE_MIN_TOLERANCE && tolerance <= 1.0))
+        return -1;
+    o->merge_tolerance = tolerance;
     return 0;
 }
 
@@ -85,6 +114,12 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.no_reorder = 1;
         } else if (!strcmp(arg, "--drop-degenerate")) {
             a->options.drop_degenerate = 1;
+        } else if (!strcmp(arg, "--reorient")) {
+            a->options.reorient = 1;
+        } else if (!strncmp(arg, "--merge-duplicates", 18) && (!arg[18] || arg[18] == '=')) {
+            if (parse_tolerance(arg[18] ? arg + 19 : NULL, &a->options))
+                return tpk_cli_fail("convert", "--merge-duplicates=TOL expects %g <= TOL <= 1 (a fraction of the "
+                                    "bounding-box diagonal), found '%s'", TPK_MERGE_MIN_TOLERANCE, arg + 19);
         } else if (!strcmp(arg, "--skip-bad-cells")) {
             a->options.skip_bad_cells = 1;
         } else if (!strcmp(arg, "--cell-to-point")) {
@@ -116,6 +151,27 @@ static void show_stage(void *user, const char *stage)
     fflush(stderr);
 }
 
+/* One line per repair asked for, with what it did (also when it found nothing to do). */
+static void print_repairs(const tpk_convert_options *o, const tpk_convert_report *r)
+{
+    if (!o->merge_duplicates && !o->reorient && !o->drop_degenerate) {
+        printf("  repairs: none asked for\n");
+        return;
+    }
+    if (o->merge_duplicates && o->merge_tolerance > 0)
+        printf("  repair --merge-duplicates=%g: %lld points merged into a twin within %g times the "
+               "bounding-box diagonal\n", o->merge_tolerance, (long long)r->merged_vertices, o->merge_tolerance);
+    else if (o->merge_duplicates)
+        printf("  repair --merge-duplicates: %lld points merged into a twin with equal coordinates\n",
+               (long long)r->merged_vertices);
+    if (o->reorient)
+        printf("  repair --reorient: %lld inverted tets and %lld mirrored cells turned over\n",
+               (long long)r->inverted_fixed, (long long)r->mirrored_cells);
+    if (o->drop_degenerate)
+        printf("  repair --drop-degenerate: %lld zero-volume tets and %lld cells collapsed by merging dropped\n",
+               (long long)r->degenerate_dropped, (long long)r->collapsed_cells_dropped);
+}
+
 static void print_summary(const convert_args *a, const tpk_convert_report *r)
 {
     if (a->json) {
@@ -135,12 +191,16 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
         tpk_strbuf_printf(&sb,
                           "\"cells_split\":{\"tetra\":%lld,\"pyramid_into_2\":%lld,\"wedge_into_3\":%lld,"
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
-                          "\"steiner_cells\":%lld,\"bad_cells_skipped\":%lld,\"seconds\":{",
+                          "\"steiner_cells\":%lld,\"face_steiner_points\":%lld,\"polyhedra\":%lld,"
+                          "\"bad_cells_skipped\":%lld,\"merged_vertices\":%lld,"
+                          "\"collapsed_cells_dropped\":%lld,\"repairs\":",
                           (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
                           (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
-                          (long long)r->steiner_cells, (long long)r->bad_cells_skipped);
+                          (long long)r->steiner_cells, (long long)r->face_steiner_points,
+                          (long long)r->polyhedra, (long long)r->bad_cells_skipped, (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped);
+        tpk_convert_repairs_json(&sb, &a->options, r);
         tpk_strbuf_printf(&sb,
-                          "\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"
+                          ",\"seconds\":{\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"
                           "\"connect\":%.6f,\"write\":%.6f,\"total\":%.6f}}\n",
                           r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect,
                           r->t_write, r->t_total);
@@ -152,17 +212,16 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
     printf("%s: %lld tets, %lld vertices, %lld shell faces, %d field(s) x %d step(s), %.2f MiB\n",
            a->options.output, (long long)r->tets, (long long)r->vertices, (long long)r->shell_faces,
            r->field_count, r->step_count, (double)r->output_bytes / 1048576.0);
-    printf("  source: %lld cells, %lld points; inverted tets fixed: %lld; degenerate dropped: %lld\n",
-           (long long)r->source_cells, (long long)r->source_points, (long long)r->inverted_fixed,
-           (long long)r->degenerate_dropped);
+    printf("  source: %lld cells, %lld points\n", (long long)r->source_cells, (long long)r->source_points);
+    print_repairs(&a->options, r);
     if (r->cells_into[2] || r->cells_into[3] || r->cells_into[5] || r->cells_into[6] || r->steiner_cells ||
-        r->bad_cells_skipped)
+        r->bad_cells_skipped || r->polyhedra)
         printf("  cells: %lld tetra, %lld pyramids (2 tets), %lld wedges (3), %lld hexahedra into 5 and %lld "
-               "into 6; %lld split from a point at their centre; %lld mirrored cells turned over; %lld bad "
-               "cells skipped\n",
+               "into 6, %lld polyhedra; %lld split from a point at their centre, %lld points added at face "
+               "centres; %lld bad cells skipped\n",
                (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
-               (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->steiner_cells,
-               (long long)r->mirrored_cells, (long long)r->bad_cells_skipped);
+               (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->polyhedra,
+               (long long)r->steiner_cells, (long long)r->face_steiner_points, (long long)r->bad_cells_skipped);
     printf("  time: %.3f s (import %.3f, tetrahedralize %.3f, orient %.3f, reorder %.3f, connect %.3f, "
            "write %.3f)\n",
            r->t_total, r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect, r->t_write);

@@ -1,20 +1,29 @@
-/* tetpack export: a .tpk's tets and fields as VTU, its shell as PLY. */
+/* tetpack export: a .tpk's tets and fields as VTU, its shell as PLY, OBJ, OFF or STL. */
 #include <string.h>
 
 #include "cli.h"
 #include "exporters.h"
 
 static const char export_help[] =
-    "usage: tetpack export FILE.tpk [--vtu OUT.vtu] [--shell OUT.ply]\n"
+    "usage: tetpack export FILE.tpk [--vtu OUT.vtu] [--shell OUT.ply|.obj|.off|.stl]\n"
     "\n"
     "  --vtu OUT.vtu     tets (positive vertex order), points in world coordinates, every field and\n"
     "                    time step, and the tet->source-cell map; opens in ParaView and meshio\n"
-    "  --shell OUT.ply   the boundary faces, outward, as binary PLY with a per-face 'tet' property\n"
+    "  --shell OUT.EXT   the boundary faces, outward (counter-clockwise seen from outside), only the\n"
+    "                    vertices they use, in world coordinates; the format from the extension:\n"
+    "                      .ply  binary, float64 positions and a per-face 'tet' property\n"
+    "                      .obj  ASCII, float32 positions (OpenMesh's writer)\n"
+    "                      .off  ASCII, float32 positions (OpenMesh's writer)\n"
+    "                      .stl  binary, float32 positions and outward normals (OpenMesh's writer)\n"
+    "                    OpenMesh's writers round positions to float32: far from the origin that moves\n"
+    "                    vertices (a warning says by how much); .ply keeps float64.\n"
+    "                    A non-manifold shell (faces meeting at a lone vertex or edge) is written whole\n"
+    "                    to OBJ/OFF/STL, those faces on copies of their vertices, with a warning.\n"
     "Outputs are written atomically (temporary file, then rename).\n";
 
 int tpk_cmd_export(int argc, char **argv)
 {
-    const char *path = NULL, *vtu = NULL, *ply = NULL;
+    const char *path = NULL, *vtu = NULL, *shell = NULL;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
         if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
@@ -24,7 +33,7 @@ int tpk_cmd_export(int argc, char **argv)
             if (!(vtu = tpk_cli_value(argc, argv, &i, "--vtu")))
                 return tpk_cli_fail("export", "--vtu expects an output path");
         } else if (!strncmp(arg, "--shell", 7)) {
-            if (!(ply = tpk_cli_value(argc, argv, &i, "--shell")))
+            if (!(shell = tpk_cli_value(argc, argv, &i, "--shell")))
                 return tpk_cli_fail("export", "--shell expects an output path");
         } else if (arg[0] == '-' && arg[1]) {
             return tpk_cli_fail("export", "unknown option '%s' (see tetpack export --help)", arg);
@@ -34,8 +43,8 @@ int tpk_cmd_export(int argc, char **argv)
             return tpk_cli_fail("export", "expected one FILE.tpk, found a second argument '%s'", arg);
         }
     }
-    if (!path || (!vtu && !ply))
-        return tpk_cli_fail("export", "expected FILE.tpk and --vtu OUT.vtu and/or --shell OUT.ply");
+    if (!path || (!vtu && !shell))
+        return tpk_cli_fail("export", "expected FILE.tpk and --vtu OUT.vtu and/or --shell OUT.ply|.obj|.off|.stl");
     tpk_file *file = NULL;
     if (tpk_cli_open("export", path, &file))
         return TPK_EXIT_USAGE;
@@ -44,8 +53,8 @@ int tpk_cmd_export(int argc, char **argv)
     int rc = 0;
     if (vtu)
         rc = tpk_export_vtu(file, vtu, &diag);
-    if (rc == 0 && ply)
-        rc = tpk_export_shell_ply(file, ply, &diag);
+    if (rc == 0 && shell)
+        rc = tpk_export_shell(file, shell, &diag);
     tpk_close(file);
     if (rc != 0)
         return tpk_cli_fail("export", "%s", diag.message);
