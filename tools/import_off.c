@@ -37,12 +37,14 @@ static int read_off_vertices(tpk_scan *s, tpk_mesh *m, int colored)
             return -1;
         if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]))
             return tpk_scan_fail(s, "expected finite coordinates of vertex %lld", (long long)i);
-        snprintf(what, sizeof what, "the 3 coordinates of vertex %lld (more vertices than the header says?)",
-                 (long long)i);
-        if (colored)
-            tpk_scan_skip_line(s);
-        else if (tpk_scan_end_line(s, what))
-            return -1;
+        const char *tok;
+        size_t len = colored ? 0 : tpk_scan_line_token(s, &tok);
+        char q[64];
+        if (len)
+            return tpk_scan_fail(s, "expected end of line after the 3 coordinates of vertex %lld, found '%s' (is "
+                                 "the vertex count in the header too large?)", (long long)i,
+                                 tpk_scan_quote(tok, len, q, sizeof q));
+        tpk_scan_skip_line(s);
     }
     return 0;
 }

@@ -63,7 +63,8 @@ typedef struct tpk_tetgen_options {
 /* Accept only switches that keep TetGen in memory and quiet: p q a Y M T O o S z Q and their numbers.
  * Returns 0, or -1 naming the refused character and why. */
 int tpk_tetgen_check_switches(const char *switches, tpk_diag *diag);
-/* The switches used for a surface ("pzQ" + quality) and a point cloud ("zQ"), into buf (cap >= 128).
+/* The switches used for a surface ("p180zQ", i.e. input facets kept as they are, + quality or the
+ * expert switches) into buf (cap >= 128); a point cloud always gets "zQ".
  * Returns 0, or -1 when the options are invalid (message says which). */
 int tpk_tetgen_surface_switches(const tpk_tetgen_options *options, char *buf, size_t cap, tpk_diag *diag);
 

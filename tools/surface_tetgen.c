@@ -37,7 +37,7 @@ static void compact_points(tpk_mesh *m, const int32_t *map, int64_t kept)
 /* Drop vertices no face uses (TetGen would keep them as loose points). Returns how many. */
 static int64_t drop_unused_vertices(tpk_mesh *m, tpk_diag *diag)
 {
-    int32_t *map = malloc(sizeof(int32_t) * (size_t)(m->point_count ? m->point_count : 1));
+    int32_t *map = calloc((size_t)(m->point_count ? m->point_count : 1), sizeof(int32_t));
     if (!map)
         return tpk_diag_fail(diag, "out of memory for %lld vertices", (long long)m->point_count);
     for (int64_t i = 0; i < m->point_count; i++)
@@ -99,6 +99,23 @@ static int64_t merge_duplicate_points(tpk_mesh *m, tpk_diag *diag)
     free(keys);
     free(map);
     return merged;
+}
+
+/* TetGen asserts (aborting the process) when the points span no volume in some axis: refuse first. */
+static int check_extent(const char *name, const tpk_mesh *m, tpk_diag *diag)
+{
+    static const char axis[3] = {'x', 'y', 'z'};
+    for (int k = 0; k < 3; k++) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (int64_t i = 0; i < m->point_count; i++) {
+            lo = fmin(lo, m->points[3 * i + k]);
+            hi = fmax(hi, m->points[3 * i + k]);
+        }
+        if (!(hi > lo))
+            return tpk_diag_fail(diag, "%s: all %lld points have %c = %.17g: they span no volume", name,
+                                 (long long)m->point_count, axis[k], lo);
+    }
+    return 0;
 }
 
 #if TPK_WITH_TETGEN
@@ -229,7 +246,7 @@ static int tetgen_surface(const char *name, const tpk_mesh *in, const tpk_tetgen
         return -1;
     if (in->point_count > INT32_MAX || in->cell_count > INT32_MAX)
         return tpk_diag_fail(diag, "%s: too large for TetGen (more than 2^31-1 points or faces)", name);
-    if (check_self_intersections(name, in, diag))
+    if (check_extent(name, in, diag) || check_self_intersections(name, in, diag))
         return -1;
     return run_and_build(name, "surface", switches, in, out, diag);
 }
@@ -243,6 +260,8 @@ static int tetgen_point_cloud(const char *name, const tpk_mesh *in, const tpk_te
     if (in->point_count < 4 || in->point_count > INT32_MAX)
         return tpk_diag_fail(diag, "%s: %lld distinct points; a point cloud needs from 4 to 2^31-1", name,
                              (long long)in->point_count);
+    if (check_extent(name, in, diag))
+        return -1;
     return run_and_build(name, "point cloud", "zQ", in, out, diag);
 }
 #else

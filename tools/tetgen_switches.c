@@ -7,10 +7,17 @@
 
 #include "surface.h"
 
-/* Switches that take a number (digits, '.', 'e', '+', '-', '/' as TetGen reads them). */
-static const char with_number[] = "qaTOoS";
+/* Switches that take a number (digits, '.', 'e', '+', '-', '/' as TetGen reads them); p's is the
+ * facet-merging angle. */
+static const char with_number[] = "pqaTOoS";
+/* Every surface run: a PLC (p) whose facets are never merged, even when they meet at nearly 180
+ * degrees (TetGen's default merges facets within 0.1 degree of flat and re-triangulates them, which
+ * moves the boundary: 1e-9 of the volume on float STL parts); 0-based (z) and quiet (Q). Expert
+ * switches come after, so "p179.9" there restores TetGen's merging (fewer tets). */
+#define SURFACE_BASE "p180zQ"
+
 /* Switches without one. */
-static const char plain[] = "pYMzQ";
+static const char plain[] = "YMzQ";
 
 static int number_char(char c)
 {
@@ -58,7 +65,7 @@ int tpk_tetgen_surface_switches(const tpk_tetgen_options *o, char *buf, size_t c
                                  "give one or the other");
         if (tpk_tetgen_check_switches(o->switches, diag))
             return -1;
-        snprintf(buf, cap, "pzQ%s", o->switches + (o->switches[0] == '-'));
+        snprintf(buf, cap, "%s%s", SURFACE_BASE, o->switches + (o->switches[0] == '-'));
         return 0;
     }
     double ratio = o->radius_edge_ratio == 0 ? 1.414 : o->radius_edge_ratio;
@@ -70,7 +77,7 @@ int tpk_tetgen_surface_switches(const tpk_tetgen_options *o, char *buf, size_t c
                              "(TetGen may not finish above), found %g", o->min_dihedral);
     if (!(o->max_volume >= 0 && isfinite(o->max_volume)))
         return tpk_diag_fail(diag, "--tetgen-max-volume: expected a volume > 0, found %g", o->max_volume);
-    int at = snprintf(buf, cap, "pzQ");
+    int at = snprintf(buf, cap, "%s", SURFACE_BASE);
     if (ratio > 0)
         at += snprintf(buf + at, cap - (size_t)at, "q%.6g", ratio);
     if (ratio > 0 && o->min_dihedral > 0)

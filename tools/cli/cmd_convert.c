@@ -39,7 +39,7 @@ static const char convert_help[] =
     "                              dihedral angle A in degrees (0 to 30), or 'off' for no refinement\n"
     "  --tetgen-max-volume V       largest tet volume (default: none)\n"
     "  --tetgen-switches S         expert: TetGen switches instead of the two above, from p q a Y M T O\n"
-    "                              o S z Q with their numbers; pzQ is always added\n"
+    "                              o S z Q with their numbers, after p180zQ (always)\n"
     "  --json                      print the summary as JSON\n"
     "  --quiet                     print nothing on success\n";
 
