@@ -641,9 +641,9 @@ TPK_TEST(ply_cube_readers)
         CHECK_MSG(tpk_read_ply("cube_bin.ply", buf, (size_t)n, &b, &diag) == 0, "%s", diag.message);
         CHECK(!memcmp(b.points, m.points, sizeof(double) * 24) && !memcmp(b.cell_conn, m.cell_conn, 4 * 24));
         CHECK(b.fields[0].values[5] == -5.0f);
+        tpk_mesh_free(&b);
         CHECK_MSG(tpk_read_ply("cube_bin.ply", buf, (size_t)n - 3, &b, &diag) != 0 && strstr(diag.message, "byte "),
                   "%s", diag.message);
-        tpk_mesh_free(&b);
     }
     tpk_mesh_free(&m);
 }

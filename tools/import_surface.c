@@ -90,12 +90,13 @@ static int read_stl_binary(tpk_scan *s, tpk_mesh *out)
     for (uint64_t t = 0; t < n; t++)
         for (int k = 0; k < 9; k++) {
             size_t at = (size_t)(84 + 50 * t + 12 + 4 * k);
-            corners[9 * t + k] = tpk_surf_f32(d + at, 0);
-            if (!isfinite(corners[9 * t + k])) {
+            double value = tpk_surf_f32(d + at, 0);
+            if (!isfinite(value)) {
                 free(corners);
                 return tpk_scan_fail_at(s, at, 0, "expected a finite coordinate of triangle %llu, found %g",
-                                        (unsigned long long)t, corners[9 * t + k]);
+                                        (unsigned long long)t, value);
             }
+            corners[9 * t + k] = value;
         }
     int rc = tpk_surf_from_corners(out, corners, (int64_t)n);
     free(corners);
