@@ -392,7 +392,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     double t0 = now_seconds(), t = t0;
 
     announce(stage, stage_user, "import");
-    if (tpk_import_any(o->input, o->format, &src, diag) != 0)
+    if (tpk_import_any_with(o->input, o->format, o->tetgen, &src, diag) != 0)
         goto done;
     rep->source_points = src.point_count;
     rep->source_cells = src.cell_count;

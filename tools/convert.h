@@ -30,6 +30,7 @@ typedef struct tpk_convert_options {
     int cell_to_point;            /* average cell fields to points (and keep them without --field) */
     int threads;                  /* <= 0: all cores */
     const char *command_line;     /* recorded in META; may be NULL */
+    const struct tpk_tetgen_options *tetgen; /* surfaces and point clouds (surface.h); NULL: defaults */
 } tpk_convert_options;
 
 typedef struct tpk_convert_report {

@@ -5,10 +5,12 @@
 #include <strings.h>
 
 #include "importers.h"
+#include "surface.h"
 
 #define SUPPORTED_FORMATS                                                                                    \
     "vtk (VTK legacy .vtk, ASCII or BINARY), vtu (VTK XML .vtu), pvd (.pvd series of .vtu), gmsh (.msh 2.2, 4.1), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
-    ".b8.ugrid, .lb8.ugrid), exodus (.exo, .e, .g, .ex2)"
+    ".b8.ugrid, .lb8.ugrid), exodus (.exo, .e, .g, .ex2), surfaces for TetGen: stl, off, ply; point clouds: csv, ply " \
+    "(surface and points force either reading)"
 
 static int has_extension(const char *path, const char *ext)
 {
@@ -31,7 +33,30 @@ static int starts_with(const char *path, const char *magic)
     return got >= at + n && strncasecmp(head + at, magic, n) == 0;
 }
 
+/* Surfaces and point clouds (TetGen): a forced format name, or -2 when `format` names none of them. */
+static int import_surface_format(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
+                                 tpk_mesh *out, tpk_diag *diag)
+{
+    static const struct {
+        const char *name;
+        tpk_surface_kind kind;
+        tpk_surface_mode mode;
+    } table[] = {{"stl", TPK_SURFACE_STL, TPK_SURFACE_FACES},     {"off", TPK_SURFACE_OFF, TPK_SURFACE_FACES},
+                 {"ply", TPK_SURFACE_PLY, TPK_SURFACE_AUTO},      {"csv", TPK_SURFACE_CSV, TPK_SURFACE_POINTS},
+                 {"surface", TPK_SURFACE_UNKNOWN, TPK_SURFACE_FACES}, {"points", TPK_SURFACE_UNKNOWN, TPK_SURFACE_POINTS}};
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
+        if (!strcasecmp(format, table[i].name))
+            return tpk_import_surface(path, table[i].kind, table[i].mode, tetgen, out, diag);
+    return -2;
+}
+
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag)
+{
+    return tpk_import_any_with(path, format, NULL, out, diag);
+}
+
+int tpk_import_any_with(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
+                        tpk_mesh *out, tpk_diag *diag)
 {
     if (!path || !out)
         return tpk_diag_fail(diag, "tpk_import_any: no path or output mesh given");
@@ -53,6 +78,9 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
             return tpk_import_ugrid(path, out, diag);
         if (!strcasecmp(format, "exodus"))
             return tpk_import_exodus(path, out, diag);
+        int rc = import_surface_format(path, format, tetgen, out, diag);
+        if (rc != -2)
+            return rc;
         memset(out, 0, sizeof *out);
         return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s", path, format, SUPPORTED_FORMATS);
     }
@@ -76,6 +104,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_exodus(path, out, diag);
     if (has_extension(path, ".meshb"))
         return tpk_import_meshb(path, out, diag);
+    if (tpk_surface_kind_from_name(path) != TPK_SURFACE_UNKNOWN)
+        return tpk_import_surface(path, TPK_SURFACE_UNKNOWN, TPK_SURFACE_AUTO, tetgen, out, diag);
     if (starts_with(path, "# vtk DataFile"))
         return tpk_import_vtk_legacy(path, out, diag);
     if (starts_with(path, "MeshVersionFormatted"))
@@ -84,6 +114,8 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
         return tpk_import_gmsh(path, out, diag);
     if (starts_with(path, "<VTKFile") || starts_with(path, "<?xml"))
         return tpk_import_vtu(path, out, diag);
+    if (starts_with(path, "ply") || starts_with(path, "OFF") || starts_with(path, "COFF") || starts_with(path, "solid"))
+        return tpk_import_surface(path, TPK_SURFACE_UNKNOWN, TPK_SURFACE_AUTO, tetgen, out, diag);
     memset(out, 0, sizeof *out);
     FILE *f = fopen(path, "rb");
     if (!f) {

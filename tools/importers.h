@@ -53,7 +53,12 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one
- * ("vtk", "vtu", "pvd", "gmsh", "tetgen", "medit", "ugrid", "exodus"). */
+ * ("vtk", "vtu", "pvd", "gmsh", "tetgen", "medit", "ugrid", "exodus", and for surfaces and point
+ * clouds, tetrahedralized by TetGen (surface.h): "stl", "off", "ply", "csv", "surface", "points"). */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
+/* The same with TetGen's settings for surfaces (NULL: defaults). */
+struct tpk_tetgen_options;
+int tpk_import_any_with(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
+                        tpk_mesh *out, tpk_diag *diag);
 
 #endif

@@ -7,12 +7,13 @@
 #include "convert.h"
 #include "merge_vertices.h"
 #include "strbuf.h"
+#include "surface.h"
 
 static const char convert_help[] =
     "usage: tetpack convert INPUT OUTPUT.tpk [options]\n"
     "\n"
     "Reads a volume mesh (VTK .vtk/.vtu/.pvd, Gmsh .msh, Exodus II .exo/.e/.g/.ex2, Medit .mesh/.meshb,\n"
-    "UGRID .ugrid/.b8.ugrid/.lb8.ugrid, TetGen .node/.ele), splits voxels, hexahedra, wedges and\n"
+    "UGRID .ugrid/.b8.ugrid/.lb8.ugrid, TetGen .node/.ele), or a surface or point cloud (below), splits voxels, hexahedra, wedges and\n"
     "pyramids into tets conformally, orients every tet positively with exact predicates, reorders\n"
     "along a Hilbert curve, builds neighbors, the chosen layouts and the shell, and writes OUTPUT\n"
     "atomically.\n"
@@ -43,11 +44,22 @@ static const char convert_help[] =
     "  --format NAME               force the input format: vtk, vtu, pvd, gmsh, exodus, medit, ugrid or\n"
     "                              tetgen (default: from the extension and contents)\n"
     "  --threads N                 worker threads (default: all cores)\n"
+    "\n"
+    "Closed surfaces (STL ASCII/binary, OFF, PLY) are filled with tets by TetGen (refused when open,\n"
+    "not manifold or self-intersecting); point clouds (CSV with a header x,y,z,NAME..., PLY vertices)\n"
+    "become their Delaunay tetrahedralization, other columns/properties becoming point fields.\n"
+    "  --format stl|off|ply|csv|surface|points   force one of these readings\n"
+    "  --tetgen-quality R[/A]      largest radius-edge ratio R (1 to 1000; default 1.414) and smallest\n"
+    "                              dihedral angle A in degrees (0 to 30), or 'off' for no refinement\n"
+    "  --tetgen-max-volume V       largest tet volume (default: none)\n"
+    "  --tetgen-switches S         expert: TetGen switches instead of the two above, from p q a Y M T O\n"
+    "                              o S z Q with their numbers, after p180zQ (always)\n"
     "  --json                      print the summary as JSON\n"
     "  --quiet                     print nothing on success\n";
 
 typedef struct convert_args {
     tpk_convert_options options;
+    tpk_tetgen_options tetgen;
     const char *fields[256];
     int json, quiet;
 } convert_args;
@@ -80,10 +92,44 @@ static int parse_tolerance(const char *text, tpk_convert_options *o)
     return 0;
 }
 
+/* --tetgen-*: 1 when argv[*i] is one (consumed), 0 when not, or the usage exit code. */
+static int parse_tetgen_option(int argc, char **argv, int *i, convert_args *a)
+{
+    const char *arg = argv[*i], *v;
+    double two[2] = {0, 0};
+    if (!strncmp(arg, "--tetgen-quality", 16)) {
+        if (!(v = tpk_cli_value(argc, argv, i, "--tetgen-quality")))
+            return tpk_cli_fail("convert", "--tetgen-quality expects RATIO, RATIO/ANGLE or off");
+        char *end;
+        two[0] = strtod(v, &end);
+        if (*end == '/')
+            two[1] = strtod(end + 1, &end);
+        if (!strcmp(v, "off"))
+            two[0] = -1, end = (char *)"";
+        if (*end || end == v || two[0] == 0)
+            return tpk_cli_fail("convert", "--tetgen-quality expects RATIO, RATIO/ANGLE or off, found '%s'", v);
+        a->tetgen.radius_edge_ratio = two[0];
+        a->tetgen.min_dihedral = two[1];
+    } else if (!strncmp(arg, "--tetgen-max-volume", 19)) {
+        if (!(v = tpk_cli_value(argc, argv, i, "--tetgen-max-volume")) || tpk_cli_parse_doubles(v, two, 1) ||
+            !(two[0] > 0))
+            return tpk_cli_fail("convert", "--tetgen-max-volume expects a volume > 0, found '%s'", v ? v : "");
+        a->tetgen.max_volume = two[0];
+    } else if (!strncmp(arg, "--tetgen-switches", 17)) {
+        if (!(v = tpk_cli_value(argc, argv, i, "--tetgen-switches")))
+            return tpk_cli_fail("convert", "--tetgen-switches expects TetGen switches");
+        a->tetgen.switches = v;
+    } else {
+        return 0;
+    }
+    a->options.tetgen = &a->tetgen;
+    return 1;
+}
+
 static int parse_args(int argc, char **argv, convert_args *a)
 {
     const char *positional[2];
-    int npos = 0;
+    int npos = 0, rc;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i], *v;
         if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
@@ -128,6 +174,9 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->json = 1;
         } else if (!strcmp(arg, "--quiet")) {
             a->quiet = 1;
+        } else if ((rc = parse_tetgen_option(argc, argv, &i, a)) != 0) {
+            if (rc != 1)
+                return rc;
         } else if (arg[0] == '-' && arg[1]) {
             return tpk_cli_fail("convert", "unknown option '%s' (see tetpack convert --help)", arg);
         } else if (npos < 2) {
