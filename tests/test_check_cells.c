@@ -618,3 +618,21 @@ TPK_TEST(examples_do_not_depend_on_threads)
     tpk_check_report_free(&base);
     tpk_mesh_free(&m);
 }
+
+TPK_TEST(nonfinite_corners_are_not_measured)
+{
+    /* A NaN or infinite coordinate is 101's finding; no orientation or shape can be decided from it. */
+    double p[9][3];
+    memcpy(p, cube, sizeof cube);
+    p[8][0] = NAN, p[8][1] = 0, p[8][2] = INFINITY;
+    cell_spec cells[] = {{10, 4, {0, 1, 3, 8}}, {12, 8, {0, 1, 2, 3, 4, 5, 6, 8}}, {10, 4, {0, 1, 3, 4}}};
+    tpk_mesh m;
+    tpk_check_report r;
+    CHECK(build(&m, &p[0][0], 9, cells, 3) == 0);
+    CHECK(run_cells(&m, &r, NULL) == 0);
+    for (int id = 201; id <= 213; id++)
+        CHECK_MSG(count_of(&r, id) == 0, "check %d", id);
+    CHECK_EQ_INT(tpk_check_histogram(&r, "radius_ratio", 0, 1)->count, 1);
+    tpk_check_report_free(&r);
+    tpk_mesh_free(&m);
+}

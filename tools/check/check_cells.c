@@ -24,6 +24,7 @@ typedef struct cells_job {
     const tpk_mesh *mesh;
     tpk_check_report *report; /* options; progress from worker 0 */
     const tpk_cell_type_info *type_info[256]; /* tpk_cell_type per code, looked up once */
+    int nonfinite_points; /* some coordinate is NaN or infinite (101): cells using one are not measured */
     int64_t chunk_count;
     tpk_cell_hits hits[TPK_MAX_THREADS];
     tpk_histogram hist[TPK_MAX_THREADS][HIST_COUNT];
@@ -150,6 +151,15 @@ static void check_tet(cells_job *job, int64_t chunk, int worker, int64_t cell, i
     }
 }
 
+static int finite_corners(const tpk_mesh *mesh, int64_t cell)
+{
+    for (int64_t i = mesh->cell_offsets[cell]; i < mesh->cell_offsets[cell + 1]; i++)
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(mesh->points[3 * (int64_t)mesh->cell_conn[i] + k]))
+                return 0;
+    return 1;
+}
+
 /* One chunk: node lists first (gathering the usable tets for one batch of exact signs), then the
  * geometry of every usable cell, in cell order so each check's examples stay sorted. */
 static void check_chunk(cells_job *job, int64_t chunk, int worker, uint8_t *kind, int32_t *tets, int8_t *signs)
@@ -163,7 +173,8 @@ static void check_chunk(cells_job *job, int64_t chunk, int worker, uint8_t *kind
         int known = check_type(job, c, hits);
         int ids_ok = check_ids(mesh, c, hits);
         int type = mesh->cell_types[c];
-        kind[c - begin] = !known || !ids_ok ? SKIP : type == TPK_CELL_TETRA ? TET : SPLIT;
+        int finite = !job->nonfinite_points || (known && ids_ok && finite_corners(mesh, c));
+        kind[c - begin] = !known || !ids_ok || !finite ? SKIP : type == TPK_CELL_TETRA ? TET : SPLIT;
         if (kind[c - begin] == TET)
             memcpy(tets + 4 * tet_count++, mesh->cell_conn + mesh->cell_offsets[c], 4 * sizeof *tets);
     }
@@ -243,6 +254,8 @@ int tpk_check_cells(const tpk_check_input *in, tpk_check_report *report, tpk_dia
     for (int t = 0; t < 256; t++)
         job->type_info[t] = t == 41 ? NULL : tpk_cell_type(t); /* 41, convex point set: not a cell we know */
     job->chunk_count = chunk_count;
+    for (int64_t i = 0; i < 3 * mesh->point_count && !job->nonfinite_points; i++)
+        job->nonfinite_points = !isfinite(mesh->points[i]);
     int threads = tpk_threads_for(chunk_count, tpk_thread_count(report->options.threads), 1);
     tpk_parallel_for(chunk_count, threads, cells_worker, job);
     tpk_check_progress(report, "cells", 1.0);
