@@ -1,7 +1,8 @@
 /* 211 duplicate_cell: a usable volume cell (any type, lower-dimensional cells excluded) whose vertex set
  * equals that of a lower-numbered cell; the example names both. Two such cells share their smallest
- * vertex, so cells are bucketed by it (a counting sort: 8 bytes per cell, 4 per vertex) and only the
- * cells of one bucket are compared, by a hash of the sorted ids first, then by the ids themselves. */
+ * vertex, so cells are bucketed by it (a counting sort: 8 bytes per cell, 4 per vertex and counting
+ * worker) and only the cells of one bucket are compared, by a hash of the sorted ids first, then by the
+ * ids themselves. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,29 +24,34 @@ typedef struct dup_worker {
     int failed;
 } dup_worker;
 
+typedef struct dup_key {
+    uint32_t hash, cell;
+} dup_key;
+
 typedef struct dup_job {
     const tpk_mesh *mesh;
-    uint32_t *bucket_end; /* point_count + 1: counts, then (after the scatter) each bucket's end */
-    uint32_t *cells;      /* usable cells grouped by smallest vertex */
-    uint32_t *hashes;     /* beside each: a hash of its sorted ids, so buckets are compared without
-                             going back to the cells (random access on a shuffled mesh) */
+    uint32_t *cursor[TPK_MAX_THREADS]; /* per counting worker and vertex: its cells there, then its next
+                                          slot (no atomics: a shuffled mesh makes every access a miss,
+                                          and plain stores can overlap where locked ones cannot) */
+    const uint32_t *bucket_end;        /* the last worker's cursors after the scatter: each bucket's end */
+    struct dup_key *keys; /* usable cells grouped by smallest vertex, each with a hash of its sorted ids
+                             (so buckets are compared without going back to the cells) */
     uint8_t volume[256];  /* cell types of dimension 3 */
     int max_examples;
     dup_worker workers[TPK_MAX_THREADS];
 } dup_job;
 
-typedef struct dup_key {
-    uint32_t hash, cell;
-} dup_key;
 
-/* Sorted vertex ids of a usable volume cell into `out` (64 at most); 0 when the cell takes no part. */
+/* Sorted vertex ids of a usable volume cell into `out` (64 at most); 0 when the cell takes no part.
+ * Usable as tpk_check_cell_usable says (ids in range, none repeated), decided on the sorted ids: this
+ * runs twice per cell, so it avoids that call's quadratic scan. */
 static int cell_key(const dup_job *job, int64_t cell, int32_t *out)
 {
     const tpk_mesh *mesh = job->mesh;
-    if (!job->volume[mesh->cell_types[cell]] || !tpk_check_cell_usable(mesh, cell))
+    int64_t b = mesh->cell_offsets[cell], e = mesh->cell_offsets[cell + 1];
+    if (!job->volume[mesh->cell_types[cell]] || e - b < 1 || e - b > 64)
         return 0;
-    int64_t b = mesh->cell_offsets[cell];
-    int n = (int)(mesh->cell_offsets[cell + 1] - b);
+    int n = (int)(e - b);
     for (int i = 0; i < n; i++) { /* insertion sort: a handful of ids */
         int32_t id = mesh->cell_conn[b + i];
         int j = i;
@@ -53,6 +59,11 @@ static int cell_key(const dup_job *job, int64_t cell, int32_t *out)
             out[j] = out[j - 1];
         out[j] = id;
     }
+    if (out[0] < 0 || out[n - 1] >= mesh->point_count)
+        return 0;
+    for (int i = 1; i < n; i++)
+        if (out[i] == out[i - 1])
+            return 0;
     return n;
 }
 
@@ -71,23 +82,22 @@ static void count_buckets(void *ctx, int64_t begin, int64_t end, int worker)
 {
     dup_job *job = ctx;
     int32_t key[64];
-    (void)worker;
+    uint32_t *count = job->cursor[worker];
     for (int64_t c = begin; c < end; c++)
         if (cell_key(job, c, key))
-            __atomic_fetch_add(&job->bucket_end[key[0]], 1u, __ATOMIC_RELAXED);
+            count[key[0]]++;
 }
 
 static void scatter_cells(void *ctx, int64_t begin, int64_t end, int worker)
 {
     dup_job *job = ctx;
     int32_t key[64];
-    (void)worker;
+    uint32_t *next = job->cursor[worker];
     for (int64_t c = begin; c < end; c++) {
         int n = cell_key(job, c, key);
         if (n) {
-            uint32_t at = __atomic_fetch_add(&job->bucket_end[key[0]], 1u, __ATOMIC_RELAXED);
-            job->cells[at] = (uint32_t)c;
-            job->hashes[at] = (uint32_t)key_hash(key, n);
+            uint32_t at = next[key[0]]++;
+            job->keys[at] = (dup_key){(uint32_t)key_hash(key, n), (uint32_t)c};
         }
     }
 }
@@ -153,26 +163,23 @@ static void search_buckets(void *ctx, int64_t begin, int64_t end, int worker)
 {
     dup_job *job = ctx;
     dup_worker *w = &job->workers[worker];
-    dup_key *keys = NULL;
-    size_t cap = 0;
     for (int64_t v = begin; v < end; v++) {
         uint32_t first = v == 0 ? 0 : job->bucket_end[v - 1], last = job->bucket_end[v];
         size_t n = last - first;
         if (n < 2)
             continue;
-        if (n > cap) {
-            free(keys);
-            cap = n * 2;
-            if (!(keys = malloc(cap * sizeof *keys))) {
-                w->failed = 1;
-                return;
+        dup_key *keys = job->keys + first;
+        if (n > 16) {
+            qsort(keys, n, sizeof *keys, compare_keys);
+        } else { /* most buckets: a few cells */
+            for (size_t i = 1; i < n; i++) {
+                dup_key k = keys[i];
+                size_t j = i;
+                for (; j > 0 && compare_keys(&keys[j - 1], &k) > 0; j--)
+                    keys[j] = keys[j - 1];
+                keys[j] = k;
             }
         }
-        for (size_t i = 0; i < n; i++) {
-            keys[i].cell = job->cells[first + i];
-            keys[i].hash = job->hashes[first + i];
-        }
-        qsort(keys, n, sizeof *keys, compare_keys);
         for (size_t i = 0; i < n;) {
             size_t j = i + 1;
             while (j < n && keys[j].hash == keys[i].hash)
@@ -182,7 +189,6 @@ static void search_buckets(void *ctx, int64_t begin, int64_t end, int worker)
             i = j;
         }
     }
-    free(keys);
 }
 
 static int compare_pairs(const void *a, const void *b)
@@ -239,22 +245,25 @@ int tpk_check_duplicate_cells(const tpk_mesh *mesh, int threads, tpk_check_repor
         job->volume[t] = info && info->dim == 3;
     }
     job->max_examples = report->options.max_examples;
-    job->bucket_end = calloc((size_t)mesh->point_count + 1, sizeof *job->bucket_end);
-    if (!job->bucket_end)
-        goto done;
-    int cell_threads = tpk_threads_for(mesh->cell_count, threads, 65536);
+    /* Workers' cells land in cell order inside each bucket. Private counts cost 4 bytes per vertex and
+     * worker, so there are at most cells / vertices of them (about 6 for tets). */
+    int64_t most = mesh->cell_count / mesh->point_count;
+    int cell_threads = tpk_threads_for(mesh->cell_count, threads < most ? threads : (int)(most ? most : 1), 65536);
+    for (int t = 0; t < cell_threads; t++)
+        if (!(job->cursor[t] = calloc((size_t)mesh->point_count, sizeof *job->cursor[t])))
+            goto done;
     tpk_parallel_for(mesh->cell_count, cell_threads, count_buckets, job);
     uint32_t usable = 0;
-    for (int64_t v = 0; v < mesh->point_count; v++) { /* exclusive prefix sum: each bucket's start */
-        uint32_t n = job->bucket_end[v];
-        job->bucket_end[v] = usable;
-        usable += n;
-    }
-    job->cells = malloc((size_t)(usable ? usable : 1) * sizeof *job->cells);
-    job->hashes = malloc((size_t)(usable ? usable : 1) * sizeof *job->hashes);
-    if (!job->cells || !job->hashes)
+    for (int64_t v = 0; v < mesh->point_count; v++) /* exclusive prefix sum over (vertex, worker) */
+        for (int t = 0; t < cell_threads; t++) {
+            uint32_t n = job->cursor[t][v];
+            job->cursor[t][v] = usable;
+            usable += n;
+        }
+    if (!(job->keys = malloc((size_t)(usable ? usable : 1) * sizeof *job->keys)))
         goto done;
-    tpk_parallel_for(mesh->cell_count, cell_threads, scatter_cells, job); /* starts become ends */
+    tpk_parallel_for(mesh->cell_count, cell_threads, scatter_cells, job);
+    job->bucket_end = job->cursor[cell_threads - 1];
     int point_threads = tpk_threads_for(mesh->point_count, threads, 65536);
     for (int t = 0; t < point_threads; t++) {
         job->workers[t].cap = job->max_examples;
@@ -271,9 +280,9 @@ done:
     if (job) {
         for (int t = 0; t < TPK_MAX_THREADS; t++)
             free(job->workers[t].heap);
-        free(job->bucket_end);
-        free(job->cells);
-        free(job->hashes);
+        for (int t = 0; t < TPK_MAX_THREADS; t++)
+            free(job->cursor[t]);
+        free(job->keys);
     }
     free(job);
     if (rc)
