@@ -22,6 +22,7 @@
 #include "cell_split.h"
 #include "check_cells_internal.h"
 #include "pipeline.h"
+#include "predicates.h"
 
 typedef struct cell_shape {
     int nodes, face_count;
@@ -59,9 +60,11 @@ typedef struct cell_view {
     int orientation; /* +1 valid split, -1 mirrored, 0 neither */
 } cell_view;
 
+/* Exact sign of det[b-a, c-a, d-a]: the inline filter decides almost every call, CGAL the rest. */
 static int orient(const cell_view *v, int a, int b, int c, int d)
 {
-    return tpk_orient3d_exact(v->p[a], v->p[b], v->p[c], v->p[d]);
+    int s = tpk_orient3d_filter(v->p[a], v->p[b], v->p[c], v->p[d]);
+    return s ? s : tpk_orient3d_exact(v->p[a], v->p[b], v->p[c], v->p[d]);
 }
 
 static void cell_point(const tpk_mesh *mesh, const cell_view *v, tpk_example *ex)
@@ -130,8 +133,9 @@ static void check_split(const tpk_mesh *mesh, cell_view *v, tpk_cell_hits *hits)
     explain_split(mesh, v, hits);
 }
 
-/* Angle in degrees between the normals of triangles (a, b, c) and (a, c, d); 0 when one is degenerate. */
-static double fold_deg(const double *a, const double *b, const double *c, const double *d)
+/* Cosine of the angle between the normals of triangles (a, b, c) and (a, c, d); 1 when one is
+ * degenerate. (Cosines are compared; acos only for a reported face.) */
+static double fold_cos(const double *a, const double *b, const double *c, const double *d)
 {
     double u[3], w[3], x[3], n1[3], n2[3];
     for (int k = 0; k < 3; k++) {
@@ -144,16 +148,16 @@ static double fold_deg(const double *a, const double *b, const double *c, const 
     double l1 = sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]);
     double l2 = sqrt(n2[0] * n2[0] + n2[1] * n2[1] + n2[2] * n2[2]);
     if (!(l1 > 0) || !(l2 > 0))
-        return 0;
+        return 1;
     double c12 = (n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2]) / (l1 * l2);
-    c12 = c12 > 1 ? 1 : c12 < -1 ? -1 : c12;
-    return acos(c12) * (180.0 / M_PI);
+    return c12 > 1 ? 1 : c12 < -1 ? -1 : c12;
 }
 
 /* 205: the warp of a quad is the larger fold over its two diagonals (as Verdict's warpage); an exactly
  * planar quad (exact orientation 0) has none, whatever rounding the normals would show. */
 static void check_warp(const tpk_mesh *mesh, const cell_view *v, double limit, tpk_cell_hits *hits)
 {
+    double limit_cos = cos(limit * (M_PI / 180.0));
     for (int f = 0; f < v->s->face_count; f++) {
         if (v->s->face_size[f] != 4)
             continue;
@@ -161,8 +165,11 @@ static void check_warp(const tpk_mesh *mesh, const cell_view *v, double limit, t
         if (orient(v, q[0], q[1], q[2], q[3]) == 0)
             continue;
         const double *a = v->p[q[0]], *b = v->p[q[1]], *c = v->p[q[2]], *d = v->p[q[3]];
-        double w1 = fold_deg(a, b, c, d), w2 = fold_deg(b, c, d, a), warp = w1 > w2 ? w1 : w2;
-        if (!(warp > limit))
+        double c1 = fold_cos(a, b, c, d), c2 = fold_cos(b, c, d, a), warp_cos = c1 < c2 ? c1 : c2;
+        if (!(warp_cos < limit_cos))
+            continue;
+        double warp = acos(warp_cos) * (180.0 / M_PI);
+        if (!(warp > limit)) /* the rounding of cos near the limit: the angle decides */
             continue;
         tpk_example *ex = tpk_cell_hit(hits, 205, v->cell);
         if (!ex)
@@ -186,6 +193,42 @@ static int on_face(const cell_shape *s, int f, int corner)
     return 0;
 }
 
+/* One face triangle's plane for the convexity test, which signs every corner against it: the filter of
+ * tpk_orient3d_filter (same expression, same bound: det = w . (u x v) with u, v the triangle's edges
+ * and w = x - a) with u x v and its absolute counterpart computed once per triangle. */
+typedef struct tri_plane {
+    const double *a, *b, *c;
+    double n[3], n_abs[3];
+} tri_plane;
+
+static void plane_of(const double *a, const double *b, const double *c, tri_plane *pl)
+{
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    pl->a = a, pl->b = b, pl->c = c;
+    pl->n[0] = u[1] * v[2] - u[2] * v[1];
+    pl->n[1] = u[2] * v[0] - u[0] * v[2];
+    pl->n[2] = u[0] * v[1] - u[1] * v[0];
+    pl->n_abs[0] = fabs(u[1] * v[2]) + fabs(u[2] * v[1]);
+    pl->n_abs[1] = fabs(u[2] * v[0]) + fabs(u[0] * v[2]);
+    pl->n_abs[2] = fabs(u[0] * v[1]) + fabs(u[1] * v[0]);
+}
+
+static int plane_side(const tri_plane *pl, const double *x)
+{
+    const double eps = 1.1102230246251565e-16, bound_factor = (7.0 + 56.0 * eps) * eps;
+    double w[3] = {x[0] - pl->a[0], x[1] - pl->a[1], x[2] - pl->a[2]};
+    double det = w[0] * pl->n[0] + w[1] * pl->n[1] + w[2] * pl->n[2];
+    double permanent = fabs(w[0]) * pl->n_abs[0] + fabs(w[1]) * pl->n_abs[1] + fabs(w[2]) * pl->n_abs[2];
+    if (permanent > 1e-280 && permanent < 1e300) {
+        double bound = bound_factor * permanent;
+        if (det > bound)
+            return 1;
+        if (-det > bound)
+            return -1;
+    }
+    return tpk_orient3d_exact(pl->a, pl->b, pl->c, x);
+}
+
 /* 206. Returns 1 when the cell is strictly convex (see the top of the file). */
 static int check_convex(const tpk_mesh *mesh, const cell_view *v, tpk_cell_hits *hits)
 {
@@ -196,10 +239,12 @@ static int check_convex(const tpk_mesh *mesh, const cell_view *v, tpk_cell_hits 
         int tri_count = v->s->face_size[f] == 4 ? 4 : 1;
         for (int t = 0; t < tri_count; t++) {
             const int *tri = quad_tris[t];
+            tri_plane pl;
+            plane_of(v->p[q[tri[0]]], v->p[q[tri[1]]], v->p[q[tri[2]]], &pl);
             for (int x = 0; x < v->s->nodes; x++) {
                 if (on_face(v->s, f, x))
                     continue;
-                int side = sign * orient(v, q[tri[0]], q[tri[1]], q[tri[2]], x);
+                int side = sign * plane_side(&pl, v->p[x]);
                 strict &= side < 0;
                 if (side <= 0 || reported)
                     continue;
