@@ -109,7 +109,7 @@ int main(int argc, char **argv)
     memset(&diag, 0, sizeof diag);
     if (tpk_check_report_init(&report, &opt))
         return 1;
-    tpk_check_input in = {&mesh, "generated"};
+    tpk_check_input in = {.mesh = &mesh, .path = "generated"};
     double t0 = now(), c0 = cpu_now();
     int rc = tpk_check_cells(&in, &report, &diag);
     double t1 = now(), c1 = cpu_now();

@@ -52,7 +52,7 @@ static int run_cells(const tpk_mesh *m, tpk_check_report *r, void (*tweak)(tpk_c
     memset(&diag, 0, sizeof diag);
     if (tpk_check_report_init(r, &opt))
         return -1;
-    tpk_check_input in = {m, "test"};
+    tpk_check_input in = {.mesh = m, .path = "test"};
     return tpk_check_cells(&in, r, &diag);
 }
 
@@ -313,7 +313,7 @@ TPK_TEST(thin_sliver_is_not_flat)
     tpk_check_options_default(&opt);
     opt.sliver_deg = 1e-5;
     tpk_diag diag = {0};
-    tpk_check_input in = {&m, "test"};
+    tpk_check_input in = {.mesh = &m, .path = "test"};
     CHECK(tpk_check_report_init(&r, &opt) == 0);
     CHECK(tpk_check_cells(&in, &r, &diag) == 0);
     CHECK_EQ_INT(count_of(&r, 209), 0);
