@@ -21,7 +21,6 @@ typedef struct dup_worker {
     int64_t count;
     dup_pair *heap; /* the lowest `cap` pairs by cell: a max-heap */
     int size, cap;
-    int failed;
 } dup_worker;
 
 typedef struct dup_key {
@@ -271,9 +270,6 @@ int tpk_check_duplicate_cells(const tpk_mesh *mesh, int threads, tpk_check_repor
             goto done;
     }
     tpk_parallel_for(mesh->point_count, point_threads, search_buckets, job);
-    for (int t = 0; t < point_threads; t++)
-        if (job->workers[t].failed)
-            goto done;
     report_pairs(job, point_threads, report);
     rc = 0;
 done:
