@@ -70,9 +70,9 @@ typedef struct tpk_histogram {
 typedef struct tpk_check_options {
     double tol;               /* near-duplicate tolerance relative to the bounding-box diagonal; 0: off,
                                  default 1e-9 */
-    double sliver_deg;        /* tets with minimum dihedral angle below this are slivers (default 5) */
+    double sliver_deg;        /* tets with minimum dihedral angle below this are slivers (default 0.1) */
     double warp_deg;          /* quad faces whose two triangles' normals differ by more than this are
-                                 non-planar (default 10) */
+                                 non-planar (default 20) */
     double radius_ratio_min;  /* tets with radius ratio (3 r_in / r_circ, 1 for regular) below this are
                                  counted as poorly shaped (default 0.1) */
     int max_examples;         /* examples kept per finding (default 5) */

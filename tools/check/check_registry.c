@@ -20,25 +20,32 @@ static const tpk_check_def registry[] = {
     {201, "index_out_of_range", E, "cells", "a cell names a vertex id outside [0, vertices)"},
     {202, "repeated_vertex", E, "cells", "a cell names the same vertex twice"},
     {203, "zero_volume_cell", E, "cells",
-     "a tet, or a tet of a cell's conformal split, has exactly zero volume (exact predicate)"},
+     "a tet has exactly zero volume; for a voxel, hexahedron, wedge or pyramid: a tet of its conformal split "
+     "(the one convert makes, quads cut through their smallest id) does (exact predicate)"},
     {204, "inverted_cell", E, "cells",
-     "a cell is negatively oriented (exact predicate; for hex/wedge/pyramid: every tet of its split is)"},
+     "a tet is negatively oriented; for a voxel, hexahedron, wedge or pyramid: every tet of its conformal split "
+     "is (mirrored node order; exact predicate)"},
     {205, "nonplanar_face", W, "cells",
-     "a quad face of a hex, wedge or pyramid is warped by more than --warp-deg (angle between the normals "
-     "of its two triangles)"},
+     "a quad face of a hex, wedge or pyramid is warped by more than --warp-deg: the larger angle between the "
+     "normals of its two triangles over both diagonals (exactly planar faces never count); one per face and cell"},
     {206, "nonconvex_cell", W, "cells",
-     "a hex, wedge or pyramid is not convex (a corner lies beyond the plane of a face triangle, exact)"},
+     "a hex, wedge or pyramid is not convex: a corner lies strictly beyond the plane of a triangle of a face it "
+     "is not on (both diagonals of quads; exact)"},
     {207, "self_intersecting_cell", E, "cells",
-     "two faces of one cell cross each other (a bow-tie or folded cell, exact)"},
+     "two boundary triangles of one cell (quads cut as convert cuts them) share a point besides their common "
+     "corners and edge: a bow-tie or folded cell (exact)"},
     {208, "split_inverts", W, "cells",
-     "the conformal split (smallest-id diagonals) of a hex, wedge or pyramid has an inverted or flat tet; "
-     "the converter then adds a point at its centre or needs --skip-bad-cells"},
-    {209, "sliver_tet", W, "cells", "a tet's minimum dihedral angle is below --sliver-deg"},
-    {210, "poor_radius_ratio", I, "cells", "a tet's radius ratio is below --radius-ratio"},
-    {211, "duplicate_cell", E, "cells", "two cells have the same set of vertices"},
+     "the conformal split (smallest-id diagonals) of a hex, wedge or pyramid has tets of both signs or a flat "
+     "one; the converter then adds a point at its centre or needs --skip-bad-cells"},
+    {209, "sliver_tet", W, "cells", "a tet's minimum dihedral angle is below --sliver-deg (zero-volume tets excluded)"},
+    {210, "poor_radius_ratio", I, "cells",
+     "a tet's radius ratio (3 r_in / r_circ, 1 for the regular tet) is below --radius-ratio"},
+    {211, "duplicate_cell", E, "cells",
+     "a volume cell has the same set of vertices as a lower-numbered one, whatever the types"},
     {212, "unsupported_cell", E, "cells",
-     "a cell type the converter cannot tetrahedralize, or a cell with the wrong number of nodes"},
-    {213, "lower_dimensional_cell", I, "cells", "a cell of dimension < 3 (faces, edges, points), ignored"},
+     "a cell type the converter cannot tetrahedralize (unknown, or 3-D but not a linear tetra, voxel, hexahedron, "
+     "wedge, pyramid or polyhedron), or a cell with the wrong number of nodes"},
+    {213, "lower_dimensional_cell", I, "cells", "a cell of dimension < 3 (vertices, lines, faces), ignored"},
     /* connectivity */
     {301, "nonmanifold_face", E, "connectivity", "a face shared by more than two cells"},
     {302, "inconsistent_orientation", E, "connectivity",
