@@ -1,0 +1,172 @@
+/* Face use (TPK-M05, 605): a triple of vertex ids is a face of at most two tets, and a face has neighbor
+ * -1 exactly when no other tet has it. Faces are bucketed by their smallest id (a counting sort) and
+ * compared within buckets. A mutual neighbor pair is one entry of weight 2, so interior faces cost one
+ * key, not two; the buckets are filled a vertex window at a time so the keys never exceed a fixed
+ * budget, whatever the mesh size. */
+#include <inttypes.h>
+#include <stdlib.h>
+
+#include "check_tpk_internal.h"
+
+#define KEY_BUDGET ((int64_t)1 << 23) /* keys per window: 64 MiB */
+#define KEY_BOUNDARY 1u
+#define KEY_PAIR 2u
+
+static void sorted_face(const int32_t q[4], int k, int32_t f[3])
+{
+    const int *p = tpkc_outward[k];
+    int32_t a = q[p[0]], b = q[p[1]], d = q[p[2]], s;
+    if (a > b) { s = a; a = b; b = s; }
+    if (b > d) { s = b; b = d; d = s; }
+    if (a > b) { s = a; a = b; b = s; }
+    f[0] = a;
+    f[1] = b;
+    f[2] = d;
+}
+
+static int face_class(const tpkc *c, int64_t t, int k)
+{
+    return (c->face_class[t] >> (2 * k)) & 3;
+}
+
+/* Pass 1: start[v + 1] = number of keys whose smallest id is v, then prefix sums. */
+static void count_keys(const tpkc *c, int64_t *start)
+{
+    for (int64_t t = 0; t < c->T; t++) {
+        int32_t q[4], f[3];
+        if (!c->face_class[t] || !tpkc_tet(c, t, q))
+            continue;
+        for (int k = 0; k < 4; k++) {
+            if (face_class(c, t, k) == TPKC_FACE_SKIP)
+                continue;
+            sorted_face(q, k, f);
+            start[f[0] + 1]++;
+        }
+    }
+    for (int64_t v = 0; v < c->V; v++)
+        start[v + 1] += start[v];
+}
+
+/* Keys of the faces whose smallest id is in [lo, hi); start[v] advances to the end of bucket v. */
+static void fill_window(const tpkc *c, int64_t lo, int64_t hi, int64_t *start, int64_t base, uint64_t *keys)
+{
+    for (int64_t t = 0; t < c->T; t++) {
+        int32_t q[4], f[3];
+        if (!c->face_class[t] || !tpkc_tet(c, t, q))
+            continue;
+        for (int k = 0; k < 4; k++) {
+            int cls = face_class(c, t, k);
+            if (cls == TPKC_FACE_SKIP)
+                continue;
+            sorted_face(q, k, f);
+            if (f[0] < lo || f[0] >= hi)
+                continue;
+            uint64_t flags = cls == TPKC_FACE_BOUNDARY ? KEY_BOUNDARY : cls == TPKC_FACE_PAIR ? KEY_PAIR : 0;
+            keys[start[f[0]]++ - base] = ((uint64_t)f[1] << 33) | ((uint64_t)f[2] << 2) | flags;
+        }
+    }
+}
+
+static int compare_keys(const void *pa, const void *pb)
+{
+    uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
+    return a < b ? -1 : a > b;
+}
+
+static void sort_bucket(uint64_t *keys, int64_t n)
+{
+    if (n > 24) {
+        qsort(keys, (size_t)n, sizeof *keys, compare_keys);
+        return;
+    }
+    for (int64_t i = 1; i < n; i++) {
+        uint64_t key = keys[i];
+        int64_t j = i;
+        for (; j > 0 && keys[j - 1] > key; j--)
+            keys[j] = keys[j - 1];
+        keys[j] = key;
+    }
+}
+
+static void check_bucket(tpkc_sink *sink, int64_t v, uint64_t *keys, int64_t n)
+{
+    sort_bucket(keys, n);
+    for (int64_t i = 0; i < n;) {
+        int64_t tets = 0, j = i;
+        int boundary = 0;
+        for (; j < n && keys[j] >> 2 == keys[i] >> 2; j++) {
+            tets += (keys[j] & KEY_PAIR) ? 2 : 1;
+            boundary |= (keys[j] & KEY_BOUNDARY) != 0;
+        }
+        if (tets >= 3 || (tets == 2 && boundary)) {
+            tpk_example *ex = tpkc_hit(sink, 605, "face");
+            tpk_example_ids(ex, 3, (const int64_t[]){v, (int64_t)(keys[i] >> 33), (int64_t)((keys[i] >> 2) & 0x7fffffff)});
+            if (tets >= 3)
+                tpk_example_note(ex, "a face of %" PRId64 " tets (their ids follow the 3 vertex ids)", tets);
+            else
+                tpk_example_note(ex, "a face of 2 tets, but one records neighbor -1 across it (tet ids follow)");
+        }
+        i = j;
+    }
+}
+
+static int compare_example_faces(const void *pa, const void *pb)
+{
+    const tpk_example *a = pa, *b = pb;
+    for (int k = 0; k < 3; k++)
+        if (a->ids[k] != b->ids[k])
+            return a->ids[k] < b->ids[k] ? -1 : 1;
+    return 0;
+}
+
+/* Name the tets of each example face (lowest tet ids first, as many as fit). */
+static void add_example_tets(const tpkc *c, tpkc_list *list)
+{
+    if (!list->kept)
+        return;
+    qsort(list->examples, (size_t)list->kept, sizeof *list->examples, compare_example_faces);
+    for (int64_t t = 0; t < c->T; t++) {
+        int32_t q[4], f[3];
+        if (!tpkc_usable(c, t, q))
+            continue;
+        for (int k = 0; k < 4; k++) {
+            sorted_face(q, k, f);
+            tpk_example key = {.ids = {f[0], f[1], f[2]}};
+            tpk_example *ex = bsearch(&key, list->examples, (size_t)list->kept, sizeof key, compare_example_faces);
+            if (ex && ex->id_count < TPK_CHECK_MAX_IDS)
+                ex->ids[ex->id_count++] = t;
+        }
+    }
+}
+
+int tpkc_check_faces(tpkc *c, tpk_diag *diag)
+{
+    int64_t *start = calloc((size_t)c->V + 2, sizeof *start);
+    if (!start)
+        return tpk_diag_fail(diag, "out of memory for face buckets (%" PRId64 " vertices)", c->V);
+    count_keys(c, start);
+    int64_t largest = 0;
+    for (int64_t v = 0; v < c->V; v++)
+        largest = start[v + 1] - start[v] > largest ? start[v + 1] - start[v] : largest;
+    int64_t capacity = start[c->V] < KEY_BUDGET ? start[c->V] : KEY_BUDGET;
+    capacity = capacity > largest ? capacity : largest;
+    uint64_t *keys = malloc(sizeof *keys * (size_t)(capacity + 1));
+    if (!keys) {
+        free(start);
+        return tpk_diag_fail(diag, "out of memory for %" PRId64 " face keys", capacity);
+    }
+    tpkc_sink sink = {.max_examples = c->report->options.max_examples};
+    for (int64_t lo = 0, hi; lo < c->V; lo = hi) {
+        int64_t base = start[lo];
+        for (hi = lo + 1; hi < c->V && start[hi + 1] - base <= capacity; hi++)
+            ;
+        fill_window(c, lo, hi, start, base, keys);
+        for (int64_t v = lo, begin = base; v < hi; begin = start[v], v++)
+            check_bucket(&sink, v, keys + (begin - base), start[v] - begin);
+    }
+    free(keys);
+    free(start);
+    add_example_tets(c, &sink.lists[605 - TPKC_FIRST_ID]);
+    tpkc_merge(c->report, &sink, 1);
+    return 0;
+}

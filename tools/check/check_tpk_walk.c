@@ -1,0 +1,141 @@
+/* Reference ids for a file without Tet32: the walk of spec §6.6 from the shell through neighbors, as a
+ * reader of a Tet20- or Tet16-only file does it. Unlike tpk_recover_tets it does not stop at the first
+ * inconsistency: an entry that does not fit (a fourth id out of range or repeated, a Tet20 tet that does
+ * not name the tet it was entered from, a Tet16 decoding outside [-1, T)) is refused and the tet waits
+ * for another entry. Tets no entry fits are reported with the first reason found, and the later checks
+ * skip them. Deterministic: shell order, then first in, first out. */
+#include <inttypes.h>
+#include <stdlib.h>
+
+#include "check_tpk_internal.h"
+
+typedef struct walker {
+    tpkc *c;
+    int32_t *queue;
+    int64_t tail;
+} walker;
+
+static int32_t vx_of(const tpkc *c, int64_t t)
+{
+    return c->ref == TPK_LAYOUT_TET20 ? c->tet20[t].vx : c->tet16[t].vx;
+}
+
+/* 0 when tet u with ids q (apex q[3] opposite `from`) fits its record, else a TPKC_WALK_* reason. */
+static int entry_fits(const tpkc *c, int32_t u, const int32_t q[4], int32_t from)
+{
+    if (q[3] < 0 || q[3] >= c->V || !tpkc_distinct(q))
+        return TPKC_WALK_BAD_APEX;
+    int entry = tpkc_rank(q, 3);
+    if (c->ref == TPK_LAYOUT_TET20)
+        return c->tet20[u].n[entry] == from ? 0 : TPKC_WALK_NO_BACKLINK;
+    const int32_t *nx = c->tet16[u].nx;
+    int32_t n3 = entry == 3 ? from : nx[entry] ^ from;
+    for (int r = 0; r < 4; r++) {
+        int32_t n = r == 3 ? n3 : nx[r] ^ n3;
+        if (n < -1 || n >= c->T)
+            return TPKC_WALK_BAD_DECODE;
+    }
+    return 0;
+}
+
+static void enter(walker *w, int32_t u, const int32_t face[3], int32_t from)
+{
+    tpkc *c = w->c;
+    int32_t q[4] = {face[0], face[1], face[2], vx_of(c, u) ^ face[0] ^ face[1] ^ face[2]};
+    int why = entry_fits(c, u, q, from);
+    if (why) {
+        if (!c->walk_cause[u]) {
+            c->walk_cause[u] = (uint8_t)why;
+            c->entered[u] = from;
+        }
+        return;
+    }
+    memcpy(c->tets + 4 * (int64_t)u, q, sizeof q);
+    c->entered[u] = from;
+    w->queue[w->tail++] = u;
+}
+
+static void drain(walker *w, int64_t head)
+{
+    tpkc *c = w->c;
+    while (head < w->tail) {
+        int32_t t = w->queue[head++], q[4], n[4];
+        memcpy(q, c->tets + 4 * (int64_t)t, sizeof q);
+        tpkc_neighbors(c, t, q, n);
+        for (int k = 0; k < 4; k++) {
+            int32_t u = n[k];
+            if (u < 0 || c->tets[4 * (int64_t)u] >= 0)
+                continue;
+            int32_t face[3] = {q[tpkc_outward[k][0]], q[tpkc_outward[k][1]], q[tpkc_outward[k][2]]};
+            enter(w, u, face, t);
+        }
+    }
+}
+
+static void report_unrecovered(tpkc *c)
+{
+    static const int ids[4] = {609, 601, 604, 608};
+    tpkc_sink sink = {.max_examples = c->report->options.max_examples};
+    const char *layout = tpkc_layout_name(c->ref);
+    for (int64_t t = 0; t < c->T; t++) {
+        if (c->tets[4 * t] >= 0)
+            continue;
+        int why = c->walk_cause[t];
+        tpk_example *ex = tpkc_hit(&sink, ids[why], "tet");
+        int32_t from = c->entered[t];
+        tpk_example_ids(ex, why ? 2 : 1, (const int64_t[]){t, from});
+        if (why == TPKC_WALK_UNREACHED)
+            tpk_example_note(ex, "no walk from a SHEL record through %s neighbors reaches it: its boundary "
+                             "faces are missing from SHEL", layout);
+        else if (why == TPKC_WALK_BAD_APEX && from < 0)
+            tpk_example_note(ex, "entered through a SHEL record, vx ^ the face's ids is out of range or "
+                             "repeats an id");
+        else if (why == TPKC_WALK_BAD_APEX)
+            tpk_example_note(ex, "entered from tet %d, vx ^ the face's ids is out of range or repeats an id",
+                             from);
+        else if (why == TPKC_WALK_NO_BACKLINK)
+            tpk_example_note(ex, "entered from tet %d, it does not name that tet opposite its fourth vertex",
+                             from);
+        else
+            tpk_example_note(ex, "Tet16 decoded from entry tet %d gives a neighbor outside [-1, %" PRId64 ")",
+                             from, c->T);
+        c->unrecovered++;
+    }
+    for (int k = 0; k < 4; k++) {
+        if (!sink.lists[ids[k] - TPKC_FIRST_ID].count)
+            continue;
+        tpk_finding *f = tpk_check_finding(c->report, ids[k]);
+        snprintf(f->summary, sizeof f->summary,
+                 "%" PRId64 " tets not recoverable from %s (%" PRId64 " for this reason); checks 602, 604-607, "
+                 "609, 610 skip them", c->unrecovered, layout, sink.lists[ids[k] - TPKC_FIRST_ID].count);
+    }
+    tpkc_merge(c->report, &sink, 1);
+}
+
+int tpkc_walk(tpkc *c, tpk_diag *diag)
+{
+    size_t n = (size_t)c->T + 1;
+    c->tets = malloc(4 * sizeof *c->tets * n);
+    c->entered = malloc(sizeof *c->entered * n);
+    c->walk_cause = calloc(n, 1);
+    walker w = {c, malloc(sizeof *w.queue * n), 0};
+    if (!c->tets || !c->entered || !c->walk_cause || !w.queue) {
+        free(w.queue);
+        return tpk_diag_fail(diag, "out of memory recovering %" PRId64 " tets from %s", c->T,
+                             tpkc_layout_name(c->ref));
+    }
+    for (int64_t i = 0; i < 4 * c->T; i++)
+        c->tets[i] = -1;
+    for (int64_t s = 0; s < c->S; s++) {
+        const tpk_shell_face *sf = &c->shell[s];
+        if (c->tets[4 * (int64_t)sf->t] >= 0)
+            continue;
+        int32_t inward[3] = {sf->a, sf->c, sf->b};
+        int64_t head = w.tail;
+        enter(&w, sf->t, inward, -1);
+        drain(&w, head);
+    }
+    free(w.queue);
+    report_unrecovered(c);
+    return 0;
+}
