@@ -122,19 +122,12 @@ static int load_arrays(tpkc *c, tpk_diag *diag)
     }
     if (!c->ref)
         return tpk_diag_fail(diag, "a verified file without a tet layout"); /* rule 14 forbids it */
-    c->points = malloc(sizeof *c->points * (size_t)(3 * c->V + 1));
-    if (!c->points)
-        return tpk_diag_fail(diag, "out of memory for %" PRId64 " positions", c->V);
-    for (int64_t i = 0; i < 3 * c->V; i++)
-        c->points[i] = (double)c->pos[i];
     return 0;
 }
 
 static void free_context(tpkc *c)
 {
-    free(c->points);
-    free(c->tets);
-    free(c->entered);
+    free(c->walked);
     free(c->walk_cause);
     free(c->face_class);
     free(c->covered);

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
+#include "parallel.h"
 
 #define KEY_BUDGET ((int64_t)1 << 23) /* keys per window: 64 MiB */
 #define KEY_BOUNDARY 1u
@@ -29,19 +30,26 @@ static int face_class(const tpkc *c, int64_t t, int k)
     return (c->face_class[t] >> (2 * k)) & 3;
 }
 
+/* The two smallest ids of q: the smallest id of face k is lo[0], or lo[1] when q[k] is lo[0]. */
+static void two_smallest(const int32_t q[4], int32_t lo[2])
+{
+    int32_t a = q[0] < q[1] ? q[0] : q[1], b = q[0] < q[1] ? q[1] : q[0];
+    int32_t d = q[2] < q[3] ? q[2] : q[3], e = q[2] < q[3] ? q[3] : q[2];
+    lo[0] = a < d ? a : d;
+    lo[1] = a < d ? (b < d ? b : d) : (e < a ? e : a);
+}
+
 /* Pass 1: start[v + 1] = number of keys whose smallest id is v, then prefix sums. */
 static void count_keys(const tpkc *c, int64_t *start)
 {
     for (int64_t t = 0; t < c->T; t++) {
-        int32_t q[4], f[3];
+        int32_t q[4], lo[2];
         if (!c->face_class[t] || !tpkc_tet(c, t, q))
             continue;
-        for (int k = 0; k < 4; k++) {
-            if (face_class(c, t, k) == TPKC_FACE_SKIP)
-                continue;
-            sorted_face(q, k, f);
-            start[f[0] + 1]++;
-        }
+        two_smallest(q, lo);
+        for (int k = 0; k < 4; k++)
+            if (face_class(c, t, k) != TPKC_FACE_SKIP)
+                start[(q[k] == lo[0] ? lo[1] : lo[0]) + 1]++;
     }
     for (int64_t v = 0; v < c->V; v++)
         start[v + 1] += start[v];
@@ -51,9 +59,12 @@ static void count_keys(const tpkc *c, int64_t *start)
 static void fill_window(const tpkc *c, int64_t lo, int64_t hi, int64_t *start, int64_t base, uint64_t *keys)
 {
     for (int64_t t = 0; t < c->T; t++) {
-        int32_t q[4], f[3];
+        int32_t q[4], f[3], low[2];
         if (!c->face_class[t] || !tpkc_tet(c, t, q))
             continue;
+        two_smallest(q, low);
+        if ((low[0] < lo || low[0] >= hi) && (low[1] < lo || low[1] >= hi))
+            continue; /* no face of t starts in this window: the common case */
         for (int k = 0; k < 4; k++) {
             int cls = face_class(c, t, k);
             if (cls == TPKC_FACE_SKIP)
@@ -120,11 +131,13 @@ static int compare_example_faces(const void *pa, const void *pb)
 }
 
 /* Name the tets of each example face (lowest tet ids first, as many as fit). */
-static void add_example_tets(const tpkc *c, tpkc_list *list)
+static void add_example_tets(const tpkc *c, tpk_finding *finding)
 {
-    if (!list->kept)
+    if (!finding->example_count)
         return;
-    qsort(list->examples, (size_t)list->kept, sizeof *list->examples, compare_example_faces);
+    tpk_example *examples = finding->examples;
+    size_t count = (size_t)finding->example_count;
+    qsort(examples, count, sizeof *examples, compare_example_faces);
     for (int64_t t = 0; t < c->T; t++) {
         int32_t q[4], f[3];
         if (!tpkc_usable(c, t, q))
@@ -132,11 +145,52 @@ static void add_example_tets(const tpkc *c, tpkc_list *list)
         for (int k = 0; k < 4; k++) {
             sorted_face(q, k, f);
             tpk_example key = {.ids = {f[0], f[1], f[2]}};
-            tpk_example *ex = bsearch(&key, list->examples, (size_t)list->kept, sizeof key, compare_example_faces);
+            tpk_example *ex = bsearch(&key, examples, count, sizeof key, compare_example_faces);
             if (ex && ex->id_count < TPK_CHECK_MAX_IDS)
                 ex->ids[ex->id_count++] = t;
         }
     }
+}
+
+typedef struct window {
+    int64_t lo, hi, base;
+} window;
+
+typedef struct face_pass {
+    const tpkc *c;
+    int64_t *start;
+    const window *windows;
+    uint64_t **keys;   /* one buffer per worker */
+    tpkc_sink *sinks;  /* one per window, merged in window order */
+} face_pass;
+
+static void window_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    face_pass *p = ctx;
+    for (int64_t i = begin; i < end; i++) {
+        const window *w = &p->windows[i];
+        fill_window(p->c, w->lo, w->hi, p->start, w->base, p->keys[worker]);
+        for (int64_t v = w->lo, first = w->base; v < w->hi; first = p->start[v], v++)
+            check_bucket(&p->sinks[i], v, p->keys[worker] + (first - w->base), p->start[v] - first);
+    }
+}
+
+/* Vertex windows whose keys fit `capacity` (a window of one vertex may need more: capacity grows). */
+static window *plan_windows(const int64_t *start, int64_t V, int64_t *capacity, int64_t *count)
+{
+    window *windows = malloc(sizeof *windows * (size_t)(V + 1));
+    if (!windows)
+        return NULL;
+    int64_t n = 0, need = 0;
+    for (int64_t lo = 0, hi; lo < V; lo = hi) {
+        for (hi = lo + 1; hi < V && start[hi + 1] - start[lo] <= *capacity; hi++)
+            ;
+        windows[n++] = (window){lo, hi, start[lo]};
+        need = start[hi] - start[lo] > need ? start[hi] - start[lo] : need;
+    }
+    *capacity = need;
+    *count = n;
+    return windows;
 }
 
 int tpkc_check_faces(tpkc *c, tpk_diag *diag)
@@ -145,28 +199,26 @@ int tpkc_check_faces(tpkc *c, tpk_diag *diag)
     if (!start)
         return tpk_diag_fail(diag, "out of memory for face buckets (%" PRId64 " vertices)", c->V);
     count_keys(c, start);
-    int64_t largest = 0;
-    for (int64_t v = 0; v < c->V; v++)
-        largest = start[v + 1] - start[v] > largest ? start[v + 1] - start[v] : largest;
-    int64_t capacity = start[c->V] < KEY_BUDGET ? start[c->V] : KEY_BUDGET;
-    capacity = capacity > largest ? capacity : largest;
-    uint64_t *keys = malloc(sizeof *keys * (size_t)(capacity + 1));
-    if (!keys) {
-        free(start);
-        return tpk_diag_fail(diag, "out of memory for %" PRId64 " face keys", capacity);
+    int threads = tpk_threads_for(start[c->V], c->threads, 1 << 20);
+    int64_t capacity = KEY_BUDGET / threads, window_count = 0;
+    window *windows = plan_windows(start, c->V, &capacity, &window_count);
+    uint64_t *keys[TPK_MAX_THREADS] = {NULL};
+    tpkc_sink *sinks = calloc((size_t)window_count + 1, sizeof *sinks);
+    int ok = windows && sinks;
+    for (int w = 0; ok && w < threads; w++)
+        ok = (keys[w] = malloc(sizeof *keys[w] * (size_t)(capacity + 1))) != NULL;
+    if (ok) {
+        for (int64_t i = 0; i < window_count; i++)
+            sinks[i].max_examples = c->report->options.max_examples;
+        face_pass pass = {c, start, windows, keys, sinks};
+        tpk_parallel_for(window_count, threads < window_count ? threads : (int)window_count, window_range, &pass);
+        tpkc_merge(c->report, sinks, (int)window_count);
+        add_example_tets(c, tpk_check_finding(c->report, 605));
     }
-    tpkc_sink sink = {.max_examples = c->report->options.max_examples};
-    for (int64_t lo = 0, hi; lo < c->V; lo = hi) {
-        int64_t base = start[lo];
-        for (hi = lo + 1; hi < c->V && start[hi + 1] - base <= capacity; hi++)
-            ;
-        fill_window(c, lo, hi, start, base, keys);
-        for (int64_t v = lo, begin = base; v < hi; begin = start[v], v++)
-            check_bucket(&sink, v, keys + (begin - base), start[v] - begin);
-    }
-    free(keys);
+    for (int w = 0; w < threads; w++)
+        free(keys[w]);
+    free(sinks);
+    free(windows);
     free(start);
-    add_example_tets(c, &sink.lists[605 - TPKC_FIRST_ID]);
-    tpkc_merge(c->report, &sink, 1);
-    return 0;
+    return ok ? 0 : tpk_diag_fail(diag, "out of memory for the face keys of %" PRId64 " tets", c->T);
 }

@@ -9,6 +9,7 @@
 #ifndef TPK_CHECK_TPK_INTERNAL_H
 #define TPK_CHECK_TPK_INTERNAL_H
 
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -52,17 +53,18 @@ typedef struct tpkc {
     int64_t V, T, S;
     double origin[3];
     const float *pos;            /* 3V, relative to origin */
-    double *points;              /* 3V: the stored positions as doubles (exact), relative to origin */
     const tpk_tet32 *tet32;      /* NULL when the file has no such layout */
     const tpk_tet20 *tet20;
     const tpk_tet16 *tet16;
     const tpk_shell_face *shell;
     tpk_layout ref;              /* the reference layout */
-    int32_t *tets;               /* walk reference: 4 ids per tet, tets[4t] = -1 when not recovered */
-    int32_t *entered;            /* walk reference: the tet each was entered from (-1: the shell) */
+    int32_t *walked;             /* walk reference, 5 per tet (one cache line for both): the 4 ids, then the
+                                    tet it was entered from (-1: the shell); walked[5t] = -1 when not
+                                    recovered */
     uint8_t *walk_cause;         /* walk reference: TPKC_WALK_* of tets not recovered */
     uint8_t *face_class;         /* per tet: class of face k in bits 2k, 2k+1 */
-    uint8_t *covered;            /* per tet: bit k set when face k has a SHEL record */
+    uint8_t *covered;            /* per tet: bit k set when face k has a SHEL record; bit 4 + k when the
+                                    lower tet across face k found the pair consistent */
     int64_t unrecovered;         /* tets the walk could not give ids */
 } tpkc;
 
@@ -90,7 +92,7 @@ static inline int tpkc_tet(const tpkc *c, int64_t t, int32_t q[4])
         q[3] = r->vx ^ r->v[0] ^ r->v[1] ^ r->v[2];
         return 1;
     }
-    const int32_t *p = c->tets + 4 * t;
+    const int32_t *p = c->walked + 5 * t;
     if (p[0] < 0)
         return 0;
     memcpy(q, p, 4 * sizeof *q);
@@ -118,7 +120,7 @@ static inline void tpkc_neighbors(const tpkc *c, int64_t t, const int32_t q[4], 
     } else {
         const int32_t *nx = c->tet16[t].nx;
         int entry = tpkc_rank(q, 3);
-        int32_t from = c->entered[t];
+        int32_t from = c->walked[5 * t + 4];
         by_rank[3] = entry == 3 ? from : nx[entry] ^ from;
         for (int r = 0; r < 3; r++)
             by_rank[r] = nx[r] ^ by_rank[3];
@@ -130,10 +132,20 @@ static inline void tpkc_neighbors(const tpkc *c, int64_t t, const int32_t q[4], 
 /* Exact sign of det[b-a, c-a, d-a] over the stored positions. */
 static inline int tpkc_orient(const tpkc *c, int32_t v0, int32_t v1, int32_t v2, int32_t v3)
 {
-    const double *pa = c->points + 3 * (int64_t)v0, *pb = c->points + 3 * (int64_t)v1;
-    const double *pc = c->points + 3 * (int64_t)v2, *pd = c->points + 3 * (int64_t)v3;
+    double pa[3], pb[3], pc[3], pd[3]; /* float -> double is exact: the predicate sees the stored values */
+    for (int k = 0; k < 3; k++) {
+        pa[k] = c->pos[3 * (int64_t)v0 + k];
+        pb[k] = c->pos[3 * (int64_t)v1 + k];
+        pc[k] = c->pos[3 * (int64_t)v2 + k];
+        pd[k] = c->pos[3 * (int64_t)v3 + k];
+    }
     int s = tpk_orient3d_filter(pa, pb, pc, pd);
-    return s != 0 ? s : tpk_orient3d_cgal(pa, pb, pc, pd);
+    if (s != 0)
+        return s;
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(pa[k]) || !isfinite(pb[k]) || !isfinite(pc[k]) || !isfinite(pd[k]))
+            return 1; /* undecidable; 611 reports the position, the other checks pass over it */
+    return tpk_orient3d_cgal(pa, pb, pc, pd);
 }
 
 static inline const char *tpkc_layout_name(tpk_layout layout)

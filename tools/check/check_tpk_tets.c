@@ -18,7 +18,7 @@ static void centroid_world(const tpkc *c, const int32_t q[4], double out[3])
     for (int a = 0; a < 3; a++) {
         double sum = 0;
         for (int k = 0; k < 4; k++)
-            sum += c->points[3 * (int64_t)q[k] + a];
+            sum += c->pos[3 * (int64_t)q[k] + a];
         out[a] = c->origin[a] + 0.25 * sum;
     }
 }
@@ -38,8 +38,8 @@ static void report_orientation(const tpkc *c, tpkc_sink *sink, int64_t t, const 
 
 /* Slot k of tet t names u. Returns the face class for 605 and reports 604/606/607 problems;
  * *wrong_slot gets the position whose face u really shares when it is not k. */
-static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q[4], int k, int32_t u,
-                      int *wrong_slot)
+static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q[4], int t_sign, int k,
+                      int32_t u, int *wrong_slot)
 {
     int32_t w[4], nu[4];
     if (u < 0 || u >= c->T || u == t) {
@@ -71,6 +71,9 @@ static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q
         return TPKC_FACE_ONE;
     }
     tpkc_neighbors(c, u, w, nu);
+    int names_t = nu[0] == t || nu[1] == t || nu[2] == t || nu[3] == t;
+    if (nu[apex] != t && names_t)
+        return TPKC_FACE_ONE; /* u names t in another slot: 607, reported with u */
     if (nu[apex] != t) {
         tpk_example *ex = tpkc_hit(sink, 604, "tet");
         tpk_example_ids(ex, 3, (const int64_t[]){t, u, nu[apex]});
@@ -80,8 +83,13 @@ static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q
     }
     if (u < t)
         return TPKC_FACE_SKIP; /* the pair counts once, from its lower tet */
+    /* Tell u that this slot is verified, sparing it the same random loads; if u is checked first (in
+     * another worker's range) it repeats the check and gets the same result. */
+    __atomic_fetch_or(&c->covered[u], (uint8_t)(16u << apex), __ATOMIC_RELAXED);
     const int *f = tpkc_outward[k];
     int sign = tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], w[apex]);
+    if (t_sign <= 0) /* t itself is flat or inverted (602): compare the two sides directly */
+        sign = sign * -tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], q[k]);
     if (sign <= 0) {
         tpk_example *ex = tpkc_hit(sink, 606, "tet");
         tpk_example_ids(ex, 2, (const int64_t[]){t, u});
@@ -129,11 +137,14 @@ static void check_tet(tpkc *c, tpkc_sink *sink, int64_t t)
     int classes = 0, wrong_slot = -1;
     for (int k = 0; k < 4; k++) {
         int cls = TPKC_FACE_BOUNDARY;
+        uint8_t covered = __atomic_load_n(&c->covered[t], __ATOMIC_RELAXED);
         if (n[k] == -1) {
-            if (!(c->covered[t] & (1u << k)))
+            if (!(covered & (1u << k)))
                 report_missing_shell(sink, t, q, k);
+        } else if (covered & (16u << k)) {
+            cls = TPKC_FACE_SKIP; /* a mutual pair, checked from the lower tet */
         } else {
-            cls = check_slot(c, sink, t, q, k, n[k], &wrong_slot);
+            cls = check_slot(c, sink, t, q, sign, k, n[k], &wrong_slot);
         }
         classes |= cls << (2 * k);
     }
@@ -142,10 +153,37 @@ static void check_tet(tpkc *c, tpkc_sink *sink, int64_t t)
     c->face_class[t] = (uint8_t)classes;
 }
 
+/* Start loading what checking tet t will touch at random: its neighbors' records and its positions.
+ * Checking is bound by those cache misses, and a few tets ahead they overlap. */
+static void prefetch_tet(const tpkc *c, int64_t t)
+{
+    int32_t q[4], n[4];
+    if (!tpkc_usable(c, t, q))
+        return;
+    tpkc_neighbors(c, t, q, n);
+    for (int k = 0; k < 4; k++) {
+        __builtin_prefetch(c->pos + 3 * (int64_t)q[k]);
+        if (n[k] < 0 || n[k] >= c->T)
+            continue;
+        if (c->ref == TPK_LAYOUT_TET32)
+            __builtin_prefetch(c->tet32 + n[k]);
+        else
+            __builtin_prefetch(c->walked + 5 * (int64_t)n[k]);
+        if (c->ref == TPK_LAYOUT_TET16)
+            __builtin_prefetch(c->tet16 + n[k]);
+        else if (c->ref == TPK_LAYOUT_TET20)
+            __builtin_prefetch(c->tet20 + n[k]);
+    }
+}
+
+#define PREFETCH_AHEAD 12
+
 static void tet_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     tet_pass *pass = ctx;
     for (int64_t t = begin; t < end; t++) {
+        if (t + PREFETCH_AHEAD < end)
+            prefetch_tet(pass->c, t + PREFETCH_AHEAD);
         check_tet(pass->c, &pass->sinks[worker], t);
         if (worker == 0 && (t & 0xffff) == 0)
             tpk_check_progress(pass->c->report, "tpk tets", 0.3 + 0.3 * (double)(t - begin) / (double)(end - begin));

@@ -3,7 +3,7 @@
  * inconsistency: an entry that does not fit (a fourth id out of range or repeated, a Tet20 tet that does
  * not name the tet it was entered from, a Tet16 decoding outside [-1, T)) is refused and the tet waits
  * for another entry. Tets no entry fits are reported with the first reason found, and the later checks
- * skip them. Deterministic: shell order, then first in, first out. */
+ * skip them. Deterministic: shell order, then depth first. */
 #include <inttypes.h>
 #include <stdlib.h>
 
@@ -11,8 +11,9 @@
 
 typedef struct walker {
     tpkc *c;
-    int32_t *queue;
-    int64_t tail;
+    int32_t *stack;   /* tets assigned whose neighbors are still to enter */
+    int64_t top;
+    uint64_t *done;   /* bit per tet: assigned (a bitmap stays in cache where tets[] would not) */
 } walker;
 
 static int32_t vx_of(const tpkc *c, int64_t t)
@@ -46,25 +47,37 @@ static void enter(walker *w, int32_t u, const int32_t face[3], int32_t from)
     if (why) {
         if (!c->walk_cause[u]) {
             c->walk_cause[u] = (uint8_t)why;
-            c->entered[u] = from;
+            c->walked[5 * (int64_t)u + 4] = from;
         }
         return;
     }
-    memcpy(c->tets + 4 * (int64_t)u, q, sizeof q);
-    c->entered[u] = from;
-    w->queue[w->tail++] = u;
+    memcpy(c->walked + 5 * (int64_t)u, q, sizeof q);
+    c->walked[5 * (int64_t)u + 4] = from;
+    w->done[u >> 6] |= 1ull << (u & 63);
+    w->stack[w->top++] = u;
 }
 
-static void drain(walker *w, int64_t head)
+static int is_done(const walker *w, int32_t u)
+{
+    return (w->done[u >> 6] >> (u & 63)) & 1;
+}
+
+/* Depth first: the next tet is a neighbor of the last, so a space-filling-curve ordered file is walked
+ * through memory that is still in cache (a breadth-first front spans the whole mesh). */
+static void drain(walker *w)
 {
     tpkc *c = w->c;
-    while (head < w->tail) {
-        int32_t t = w->queue[head++], q[4], n[4];
-        memcpy(q, c->tets + 4 * (int64_t)t, sizeof q);
+    while (w->top > 0) {
+        int32_t t = w->stack[--w->top], q[4], n[4];
+        memcpy(q, c->walked + 5 * (int64_t)t, sizeof q);
         tpkc_neighbors(c, t, q, n);
+        for (int k = 0; k < 4; k++) /* overlap the neighbors' cache misses */
+            if (n[k] >= 0 && n[k] < c->T)
+                __builtin_prefetch(c->ref == TPK_LAYOUT_TET20 ? (const void *)(c->tet20 + n[k])
+                                                              : (const void *)(c->tet16 + n[k]));
         for (int k = 0; k < 4; k++) {
             int32_t u = n[k];
-            if (u < 0 || c->tets[4 * (int64_t)u] >= 0)
+            if (u < 0 || is_done(w, u))
                 continue;
             int32_t face[3] = {q[tpkc_outward[k][0]], q[tpkc_outward[k][1]], q[tpkc_outward[k][2]]};
             enter(w, u, face, t);
@@ -78,11 +91,11 @@ static void report_unrecovered(tpkc *c)
     tpkc_sink sink = {.max_examples = c->report->options.max_examples};
     const char *layout = tpkc_layout_name(c->ref);
     for (int64_t t = 0; t < c->T; t++) {
-        if (c->tets[4 * t] >= 0)
+        if (c->walked[5 * t] >= 0)
             continue;
         int why = c->walk_cause[t];
         tpk_example *ex = tpkc_hit(&sink, ids[why], "tet");
-        int32_t from = c->entered[t];
+        int32_t from = c->walked[5 * t + 4];
         tpk_example_ids(ex, why ? 2 : 1, (const int64_t[]){t, from});
         if (why == TPKC_WALK_UNREACHED)
             tpk_example_note(ex, "no walk from a SHEL record through %s neighbors reaches it: its boundary "
@@ -115,27 +128,27 @@ static void report_unrecovered(tpkc *c)
 int tpkc_walk(tpkc *c, tpk_diag *diag)
 {
     size_t n = (size_t)c->T + 1;
-    c->tets = malloc(4 * sizeof *c->tets * n);
-    c->entered = malloc(sizeof *c->entered * n);
+    c->walked = malloc(5 * sizeof *c->walked * n);
     c->walk_cause = calloc(n, 1);
-    walker w = {c, malloc(sizeof *w.queue * n), 0};
-    if (!c->tets || !c->entered || !c->walk_cause || !w.queue) {
-        free(w.queue);
+    walker w = {c, malloc(sizeof *w.stack * n), 0, calloc(n / 64 + 1, sizeof *w.done)};
+    if (!c->walked || !c->walk_cause || !w.stack || !w.done) {
+        free(w.stack);
+        free(w.done);
         return tpk_diag_fail(diag, "out of memory recovering %" PRId64 " tets from %s", c->T,
                              tpkc_layout_name(c->ref));
     }
-    for (int64_t i = 0; i < 4 * c->T; i++)
-        c->tets[i] = -1;
+    for (int64_t i = 0; i < 5 * c->T; i++)
+        c->walked[i] = -1;
     for (int64_t s = 0; s < c->S; s++) {
         const tpk_shell_face *sf = &c->shell[s];
-        if (c->tets[4 * (int64_t)sf->t] >= 0)
+        if (is_done(&w, sf->t))
             continue;
         int32_t inward[3] = {sf->a, sf->c, sf->b};
-        int64_t head = w.tail;
         enter(&w, sf->t, inward, -1);
-        drain(&w, head);
+        drain(&w);
     }
-    free(w.queue);
+    free(w.stack);
+    free(w.done);
     report_unrecovered(c);
     return 0;
 }
