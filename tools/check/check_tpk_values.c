@@ -3,6 +3,8 @@
  * fields NUL-padded and valid UTF-8, spec §7.1), reported with the reader rules under 600. */
 #include <inttypes.h>
 #include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
@@ -107,6 +109,22 @@ static int check_field_range(tpkc *c, tpkc_sink *sink, uint32_t f, chunk_buffer 
     return 0;
 }
 
+static void value_hit(tpkc_sink *sink, const char *kind, uint64_t id, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+/* One 613 item: `id` is the step, tet or vertex. */
+static void value_hit(tpkc_sink *sink, const char *kind, uint64_t id, const char *fmt, ...)
+{
+    tpk_example *ex = tpkc_hit(sink, 613, kind);
+    if (!ex)
+        return;
+    tpk_example_ids(ex, 1, (const int64_t[]){(int64_t)id});
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(ex->note, sizeof ex->note, fmt, ap);
+    va_end(ap);
+}
+
 static int check_maps(tpkc *c, tpkc_sink *sink, chunk_buffer *buf, tpk_diag *diag)
 {
     const void *data;
@@ -114,20 +132,17 @@ static int check_maps(tpkc *c, tpkc_sink *sink, chunk_buffer *buf, tpk_diag *dia
     int found = read_chunk(c, TPK_TAG_TIME, 0, 0, buf, &data, &count, diag);
     for (uint64_t s = 0; found > 0 && s < count; s++)
         if (!isfinite(((const double *)data)[s]))
-            tpk_example_note(tpkc_hit(sink, 613, "step"), "TIME[%" PRIu64 "] = %g, must be finite", s,
-                             ((const double *)data)[s]);
+            value_hit(sink, "step", s, "TIME[%" PRIu64 "] = %g, must be finite", s, ((const double *)data)[s]);
     if (found >= 0)
         found = read_chunk(c, TPK_TAG_TMAP, 0, 0, buf, &data, &count, diag);
     for (uint64_t t = 0; found > 0 && t < count; t++)
         if (((const int32_t *)data)[t] < 0)
-            tpk_example_note(tpkc_hit(sink, 613, "tet"), "TMAP[%" PRIu64 "] = %d, must be >= 0", t,
-                             ((const int32_t *)data)[t]);
+            value_hit(sink, "tet", t, "TMAP[%" PRIu64 "] = %d, must be >= 0", t, ((const int32_t *)data)[t]);
     if (found >= 0)
         found = read_chunk(c, TPK_TAG_VMAP, 0, 0, buf, &data, &count, diag);
     for (uint64_t v = 0; found > 0 && v < count; v++)
         if (((const int32_t *)data)[v] < -1)
-            tpk_example_note(tpkc_hit(sink, 613, "vertex"), "VMAP[%" PRIu64 "] = %d, must be >= -1", v,
-                             ((const int32_t *)data)[v]);
+            value_hit(sink, "vertex", v, "VMAP[%" PRIu64 "] = %d, must be >= -1", v, ((const int32_t *)data)[v]);
     return found < 0 ? -1 : 0;
 }
 
