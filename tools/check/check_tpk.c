@@ -128,7 +128,6 @@ static int load_arrays(tpkc *c, tpk_diag *diag)
 static void free_context(tpkc *c)
 {
     free(c->walked);
-    free(c->walk_cause);
     free(c->face_class);
     free(c->covered);
 }

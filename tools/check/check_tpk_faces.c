@@ -9,7 +9,7 @@
 #include "check_tpk_internal.h"
 #include "parallel.h"
 
-#define KEY_BUDGET ((int64_t)1 << 23) /* keys per window: 64 MiB */
+#define KEY_BUDGET ((int64_t)1 << 22) /* keys in memory at once, over all workers: 32 MiB */
 #define KEY_BOUNDARY 1u
 #define KEY_PAIR 2u
 
@@ -39,26 +39,38 @@ static void two_smallest(const int32_t q[4], int32_t lo[2])
     lo[1] = a < d ? (b < d ? b : d) : (e < a ? e : a);
 }
 
-/* Pass 1: start[v + 1] = number of keys whose smallest id is v, then prefix sums. */
-static void count_keys(const tpkc *c, int64_t *start)
+/* Pass 1: start[v + 1] = number of keys whose smallest id is v, then prefix sums; span[2v], span[2v+1]
+ * = the first and last tet with such a face, so a window scans only the tets that can feed it (few, in
+ * a file whose tets follow their smallest vertex, as the converter writes them). */
+static void count_keys(const tpkc *c, int64_t *start, int32_t *span)
 {
+    for (int64_t v = 0; v < c->V; v++) {
+        span[2 * v] = INT32_MAX;
+        span[2 * v + 1] = -1;
+    }
     for (int64_t t = 0; t < c->T; t++) {
         int32_t q[4], lo[2];
         if (!c->face_class[t] || !tpkc_tet(c, t, q))
             continue;
         two_smallest(q, lo);
-        for (int k = 0; k < 4; k++)
-            if (face_class(c, t, k) != TPKC_FACE_SKIP)
-                start[(q[k] == lo[0] ? lo[1] : lo[0]) + 1]++;
+        for (int k = 0; k < 4; k++) {
+            if (face_class(c, t, k) == TPKC_FACE_SKIP)
+                continue;
+            int32_t v = q[k] == lo[0] ? lo[1] : lo[0];
+            start[v + 1]++;
+            span[2 * v] = span[2 * v] < t ? span[2 * v] : (int32_t)t;
+            span[2 * v + 1] = (int32_t)t;
+        }
     }
     for (int64_t v = 0; v < c->V; v++)
         start[v + 1] += start[v];
 }
 
 /* Keys of the faces whose smallest id is in [lo, hi); start[v] advances to the end of bucket v. */
-static void fill_window(const tpkc *c, int64_t lo, int64_t hi, int64_t *start, int64_t base, uint64_t *keys)
+static void fill_window(const tpkc *c, int64_t lo, int64_t hi, int64_t first_tet, int64_t end_tet, int64_t *start,
+                        int64_t base, uint64_t *keys)
 {
-    for (int64_t t = 0; t < c->T; t++) {
+    for (int64_t t = first_tet; t < end_tet; t++) {
         int32_t q[4], f[3], low[2];
         if (!c->face_class[t] || !tpkc_tet(c, t, q))
             continue;
@@ -153,7 +165,8 @@ static void add_example_tets(const tpkc *c, tpk_finding *finding)
 }
 
 typedef struct window {
-    int64_t lo, hi, base;
+    int64_t lo, hi, base;      /* vertices [lo, hi), their keys from start[lo] */
+    int64_t first_tet, end_tet; /* the tets with a face starting in the window lie in [first_tet, end_tet) */
 } window;
 
 typedef struct face_pass {
@@ -169,14 +182,15 @@ static void window_range(void *ctx, int64_t begin, int64_t end, int worker)
     face_pass *p = ctx;
     for (int64_t i = begin; i < end; i++) {
         const window *w = &p->windows[i];
-        fill_window(p->c, w->lo, w->hi, p->start, w->base, p->keys[worker]);
+        fill_window(p->c, w->lo, w->hi, w->first_tet, w->end_tet, p->start, w->base, p->keys[worker]);
         for (int64_t v = w->lo, first = w->base; v < w->hi; first = p->start[v], v++)
             check_bucket(&p->sinks[i], v, p->keys[worker] + (first - w->base), p->start[v] - first);
     }
 }
 
 /* Vertex windows whose keys fit `capacity` (a window of one vertex may need more: capacity grows). */
-static window *plan_windows(const int64_t *start, int64_t V, int64_t *capacity, int64_t *count)
+static window *plan_windows(const int64_t *start, const int32_t *span, int64_t V, int64_t *capacity,
+                            int64_t *count)
 {
     window *windows = malloc(sizeof *windows * (size_t)(V + 1));
     if (!windows)
@@ -185,7 +199,12 @@ static window *plan_windows(const int64_t *start, int64_t V, int64_t *capacity, 
     for (int64_t lo = 0, hi; lo < V; lo = hi) {
         for (hi = lo + 1; hi < V && start[hi + 1] - start[lo] <= *capacity; hi++)
             ;
-        windows[n++] = (window){lo, hi, start[lo]};
+        window w = {lo, hi, start[lo], INT32_MAX, 0};
+        for (int64_t v = lo; v < hi; v++) {
+            w.first_tet = span[2 * v] < w.first_tet ? span[2 * v] : w.first_tet;
+            w.end_tet = span[2 * v + 1] + 1 > w.end_tet ? span[2 * v + 1] + 1 : w.end_tet;
+        }
+        windows[n++] = w;
         need = start[hi] - start[lo] > need ? start[hi] - start[lo] : need;
     }
     *capacity = need;
@@ -196,12 +215,17 @@ static window *plan_windows(const int64_t *start, int64_t V, int64_t *capacity, 
 int tpkc_check_faces(tpkc *c, tpk_diag *diag)
 {
     int64_t *start = calloc((size_t)c->V + 2, sizeof *start);
-    if (!start)
+    int32_t *span = malloc(sizeof *span * (size_t)(2 * c->V + 1));
+    if (!start || !span) {
+        free(start);
+        free(span);
         return tpk_diag_fail(diag, "out of memory for face buckets (%" PRId64 " vertices)", c->V);
-    count_keys(c, start);
+    }
+    count_keys(c, start, span);
     int threads = tpk_threads_for(start[c->V], c->threads, 1 << 20);
     int64_t capacity = KEY_BUDGET / threads, window_count = 0;
-    window *windows = plan_windows(start, c->V, &capacity, &window_count);
+    window *windows = plan_windows(start, span, c->V, &capacity, &window_count);
+    free(span);
     uint64_t *keys[TPK_MAX_THREADS] = {NULL};
     tpkc_sink *sinks = calloc((size_t)window_count + 1, sizeof *sinks);
     int ok = windows && sinks;

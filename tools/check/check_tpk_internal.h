@@ -61,7 +61,6 @@ typedef struct tpkc {
     int32_t *walked;             /* walk reference, 5 per tet (one cache line for both): the 4 ids, then the
                                     tet it was entered from (-1: the shell); walked[5t] = -1 when not
                                     recovered */
-    uint8_t *walk_cause;         /* walk reference: TPKC_WALK_* of tets not recovered */
     uint8_t *face_class;         /* per tet: class of face k in bits 2k, 2k+1 */
     uint8_t *covered;            /* per tet: bit k set when face k has a SHEL record; bit 4 + k when the
                                     lower tet across face k found the pair consistent */

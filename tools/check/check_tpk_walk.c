@@ -11,9 +11,11 @@
 
 typedef struct walker {
     tpkc *c;
-    int32_t *stack;   /* tets assigned whose neighbors are still to enter */
-    int64_t top;
+    uint8_t *cause;   /* TPKC_WALK_* per tet not (yet) assigned: c->face_class, unused until later */
+    int32_t *stack;   /* tets assigned whose neighbors are still to enter; grows as needed */
+    int64_t top, capacity;
     uint64_t *done;   /* bit per tet: assigned (a bitmap stays in cache where tets[] would not) */
+    int failed;       /* out of memory */
 } walker;
 
 static int32_t vx_of(const tpkc *c, int64_t t)
@@ -45,11 +47,21 @@ static void enter(walker *w, int32_t u, const int32_t face[3], int32_t from)
     int32_t q[4] = {face[0], face[1], face[2], vx_of(c, u) ^ face[0] ^ face[1] ^ face[2]};
     int why = entry_fits(c, u, q, from);
     if (why) {
-        if (!c->walk_cause[u]) {
-            c->walk_cause[u] = (uint8_t)why;
+        if (!w->cause[u]) {
+            w->cause[u] = (uint8_t)why;
             c->walked[5 * (int64_t)u + 4] = from;
         }
         return;
+    }
+    if (w->top == w->capacity) {
+        int64_t grown = w->capacity * 2 < c->T ? w->capacity * 2 : c->T;
+        int32_t *stack = realloc(w->stack, sizeof *stack * (size_t)grown);
+        if (!stack) {
+            w->failed = 1;
+            return;
+        }
+        w->stack = stack;
+        w->capacity = grown;
     }
     memcpy(c->walked + 5 * (int64_t)u, q, sizeof q);
     c->walked[5 * (int64_t)u + 4] = from;
@@ -72,9 +84,11 @@ static void drain(walker *w)
         memcpy(q, c->walked + 5 * (int64_t)t, sizeof q);
         tpkc_neighbors(c, t, q, n);
         for (int k = 0; k < 4; k++) /* overlap the neighbors' cache misses */
-            if (n[k] >= 0 && n[k] < c->T)
+            if (n[k] >= 0 && n[k] < c->T) {
                 __builtin_prefetch(c->ref == TPK_LAYOUT_TET20 ? (const void *)(c->tet20 + n[k])
                                                               : (const void *)(c->tet16 + n[k]));
+                __builtin_prefetch(c->walked + 5 * (int64_t)n[k], 1);
+            }
         for (int k = 0; k < 4; k++) {
             int32_t u = n[k];
             if (u < 0 || is_done(w, u))
@@ -85,7 +99,7 @@ static void drain(walker *w)
     }
 }
 
-static void report_unrecovered(tpkc *c)
+static void report_unrecovered(tpkc *c, const uint8_t *cause)
 {
     static const int ids[4] = {609, 601, 604, 608};
     tpkc_sink sink = {.max_examples = c->report->options.max_examples};
@@ -93,7 +107,7 @@ static void report_unrecovered(tpkc *c)
     for (int64_t t = 0; t < c->T; t++) {
         if (c->walked[5 * t] >= 0)
             continue;
-        int why = c->walk_cause[t];
+        int why = cause[t];
         tpk_example *ex = tpkc_hit(&sink, ids[why], "tet");
         int32_t from = c->walked[5 * t + 4];
         tpk_example_ids(ex, why ? 2 : 1, (const int64_t[]){t, from});
@@ -129,26 +143,27 @@ int tpkc_walk(tpkc *c, tpk_diag *diag)
 {
     size_t n = (size_t)c->T + 1;
     c->walked = malloc(5 * sizeof *c->walked * n);
-    c->walk_cause = calloc(n, 1);
-    walker w = {c, malloc(sizeof *w.stack * n), 0, calloc(n / 64 + 1, sizeof *w.done)};
-    if (!c->walked || !c->walk_cause || !w.stack || !w.done) {
-        free(w.stack);
-        free(w.done);
-        return tpk_diag_fail(diag, "out of memory recovering %" PRId64 " tets from %s", c->T,
-                             tpkc_layout_name(c->ref));
+    walker w = {c, c->face_class, malloc(sizeof *w.stack * 4096), 0, c->T < 4096 ? c->T : 4096,
+                calloc(n / 64 + 1, sizeof *w.done), 0};
+    if (c->walked && w.stack && w.done) {
+        for (int64_t i = 0; i < 5 * c->T; i++)
+            c->walked[i] = -1;
+        for (int64_t s = 0; s < c->S && !w.failed; s++) {
+            const tpk_shell_face *sf = &c->shell[s];
+            if (is_done(&w, sf->t))
+                continue;
+            int32_t inward[3] = {sf->a, sf->c, sf->b};
+            enter(&w, sf->t, inward, -1);
+            drain(&w);
+        }
     }
-    for (int64_t i = 0; i < 5 * c->T; i++)
-        c->walked[i] = -1;
-    for (int64_t s = 0; s < c->S; s++) {
-        const tpk_shell_face *sf = &c->shell[s];
-        if (is_done(&w, sf->t))
-            continue;
-        int32_t inward[3] = {sf->a, sf->c, sf->b};
-        enter(&w, sf->t, inward, -1);
-        drain(&w);
-    }
+    int ok = c->walked && w.stack && w.done && !w.failed;
     free(w.stack);
     free(w.done);
-    report_unrecovered(c);
+    if (!ok)
+        return tpk_diag_fail(diag, "out of memory recovering %" PRId64 " tets from %s", c->T,
+                             tpkc_layout_name(c->ref));
+    report_unrecovered(c, w.cause);
+    memset(c->face_class, 0, (size_t)c->T); /* back to its own use */
     return 0;
 }
