@@ -123,7 +123,8 @@ static void check_bucket(tpkc_sink *sink, int64_t v, uint64_t *keys, int64_t n)
         }
         if (tets >= 3 || (tets == 2 && boundary)) {
             tpk_example *ex = tpkc_hit(sink, 605, "face");
-            tpk_example_ids(ex, 3, (const int64_t[]){v, (int64_t)(keys[i] >> 33), (int64_t)((keys[i] >> 2) & 0x7fffffff)});
+            int64_t mid = (int64_t)(keys[i] >> 33), max = (int64_t)((keys[i] >> 2) & 0x7fffffff);
+            tpk_example_ids(ex, 3, (const int64_t[]){v, mid, max});
             if (tets >= 3)
                 tpk_example_note(ex, "a face of %" PRId64 " tets (their ids follow the 3 vertex ids)", tets);
             else

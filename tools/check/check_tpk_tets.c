@@ -36,6 +36,38 @@ static void report_orientation(const tpkc *c, tpkc_sink *sink, int64_t t, const 
                      sign < 0 ? "negative" : "zero");
 }
 
+/* How many ids tets q and w share; *missing: the position in q of an id w lacks, *apex: the position in
+ * w of an id q lacks (meaningful when they share 3). */
+static int shared_face(const int32_t q[4], const int32_t w[4], int *missing, int *apex)
+{
+    int shared = 0;
+    *missing = *apex = -1;
+    for (int j = 0; j < 4; j++) {
+        int in_w = q[j] == w[0] || q[j] == w[1] || q[j] == w[2] || q[j] == w[3];
+        shared += in_w;
+        *missing = in_w ? *missing : j;
+        int in_q = w[j] == q[0] || w[j] == q[1] || w[j] == q[2] || w[j] == q[3];
+        *apex = in_q ? *apex : j;
+    }
+    return shared;
+}
+
+/* 606: the fourth vertex y of neighbor u must lie across face k of t from t's own fourth vertex. */
+static void check_fold(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q[4], int t_sign, int k, int32_t u,
+                       int32_t y)
+{
+    const int *f = tpkc_outward[k];
+    int sign = tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], y);
+    if (t_sign <= 0) /* t itself is flat or inverted (602): compare the two sides directly */
+        sign = sign * -tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], q[k]);
+    if (sign > 0)
+        return;
+    tpk_example *ex = tpkc_hit(sink, 606, "tet");
+    tpk_example_ids(ex, 2, (const int64_t[]){t, u});
+    tpk_example_note(ex, "vertex %d of tet %d lies %s the face (%d %d %d) as tet %" PRId64 " (exact)", y, u,
+                     sign < 0 ? "on the same side of" : "in the plane of", q[f[0]], q[f[1]], q[f[2]], t);
+}
+
 /* Slot k of tet t names u. Returns the face class for 605 and reports 604/606/607 problems;
  * *wrong_slot gets the position whose face u really shares when it is not k. */
 static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q[4], int t_sign, int k,
@@ -51,14 +83,7 @@ static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q
     }
     if (!tpkc_usable(c, u, w))
         return TPKC_FACE_ONE; /* reported where u's ids are */
-    int shared = 0, missing = -1, apex = -1;
-    for (int j = 0; j < 4; j++) {
-        int in_u = q[j] == w[0] || q[j] == w[1] || q[j] == w[2] || q[j] == w[3];
-        shared += in_u;
-        missing = in_u ? missing : j;
-        int in_t = w[j] == q[0] || w[j] == q[1] || w[j] == q[2] || w[j] == q[3];
-        apex = in_t ? apex : j;
-    }
+    int missing, apex, shared = shared_face(q, w, &missing, &apex);
     if (shared != 3) {
         tpk_example *ex = tpkc_hit(sink, 604, "tet");
         tpk_example_ids(ex, 2, (const int64_t[]){t, u});
@@ -86,16 +111,7 @@ static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q
     /* Tell u that this slot is verified, sparing it the same random loads; if u is checked first (in
      * another worker's range) it repeats the check and gets the same result. */
     __atomic_fetch_or(&c->covered[u], (uint8_t)(16u << apex), __ATOMIC_RELAXED);
-    const int *f = tpkc_outward[k];
-    int sign = tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], w[apex]);
-    if (t_sign <= 0) /* t itself is flat or inverted (602): compare the two sides directly */
-        sign = sign * -tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], q[k]);
-    if (sign <= 0) {
-        tpk_example *ex = tpkc_hit(sink, 606, "tet");
-        tpk_example_ids(ex, 2, (const int64_t[]){t, u});
-        tpk_example_note(ex, "vertex %d of tet %d lies %s the face (%d %d %d) as tet %" PRId64 " (exact)", w[apex],
-                         u, sign < 0 ? "on the same side of" : "in the plane of", q[f[0]], q[f[1]], q[f[2]], t);
-    }
+    check_fold(c, sink, t, q, t_sign, k, u, w[apex]);
     return TPKC_FACE_PAIR;
 }
 

@@ -103,8 +103,8 @@ static int check_field_range(tpkc *c, tpkc_sink *sink, uint32_t f, chunk_buffer 
     if (!same_float(d.min_value, lo) || !same_float(d.max_value, hi)) {
         tpk_example *ex = tpkc_hit(sink, 612, "field");
         tpk_example_ids(ex, 1, (const int64_t[]){f});
-        tpk_example_note(ex, "'%s': min_value %.9g, max_value %.9g; its values (all steps, NaN ignored) give %.9g, %.9g",
-                         d.name, d.min_value, d.max_value, lo, hi);
+        tpk_example_note(ex, "'%s': min_value %.9g, max_value %.9g; its values (all steps, NaN ignored) give "
+                         "%.9g, %.9g", d.name, d.min_value, d.max_value, lo, hi);
     }
     return 0;
 }
