@@ -43,6 +43,23 @@ static int64_t found(tpk_check_report *r, int id)
     return tpk_check_finding(r, id)->count;
 }
 
+/* The same with a given thread count and example limit. */
+static int run_6xx_with(const char *path, int threads, int max_examples, tpk_check_report *report)
+{
+    tpk_check_options o;
+    tpk_check_options_default(&o);
+    o.threads = threads;
+    o.max_examples = max_examples;
+    tpk_file *file = NULL;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_check_report_init(report, &o) || tpk_open_path(&file, path, NULL, NULL, 0) != TPK_OK)
+        return -1;
+    int rc = tpk_check_tpk_file(path, file, report, &diag);
+    tpk_close(file);
+    return rc;
+}
+
 /* Sum over 600..613; prints what was found, so a failing test shows it. */
 static int64_t total_6xx(tpk_check_report *r, const char *label)
 {
@@ -808,4 +825,52 @@ TPK_TEST(mesh_of_tet16_file)
     tpk_mesh_free(&m32);
     tpk_mesh_free(&m16);
     CHECK(same);
+}
+
+/* Many broken tets spread over the file: the counts and the examples (lowest ids first) are the same
+ * whatever the number of threads, and with no examples kept the counts still are. */
+TPK_TEST(examples_do_not_depend_on_threads)
+{
+    parts ps;
+    const char *base = tpk_temp_path("cube_all.tpk"); /* 202596 tets: several workers' ranges */
+    CHECK(convert("sfepy/cube_big_tetra.mesh", base, ALL_LAYOUTS, 0) == 0);
+    CHECK(parts_from(base, ALL_LAYOUTS, &ps) == 0);
+    int64_t tets = (int64_t)ps.header.tet_count;
+    tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    tpk_tet20 *t20 = parts_data(&ps, TPK_TAG_TT20);
+    for (int64_t t = 3; t + 1 < tets; t += 97) {
+        int32_t v = t32[t].v[0], n = t32[t].n[0];
+        t32[t].v[0] = t32[t].v[1];
+        t32[t].v[1] = v;
+        t32[t].n[0] = t32[t].n[1];
+        t32[t].n[1] = n;
+        t20[t + 1].vx ^= 8;
+    }
+    const char *path = tpk_temp_path("threads.tpk");
+    CHECK(parts_write(&ps, path) == 0);
+    parts_free(&ps);
+    tpk_check_report one, many, none;
+    CHECK_EQ_INT(run_6xx_with(path, 1, 5, &one), 0);
+    int same = 1;
+    for (int threads = 2; threads <= 7 && same; threads += 5) {
+        CHECK_EQ_INT(run_6xx_with(path, threads, 5, &many), 0);
+        for (int id = 600; id <= 613; id++) {
+            tpk_finding *a = tpk_check_finding(&one, id), *b = tpk_check_finding(&many, id);
+            same &= a->count == b->count && a->example_count == b->example_count;
+            for (int e = 0; same && e < a->example_count; e++)
+                same &= !memcmp(a->examples[e].ids, b->examples[e].ids, sizeof a->examples[e].ids) &&
+                        !strcmp(a->examples[e].note, b->examples[e].note);
+        }
+        tpk_check_report_free(&many);
+    }
+    CHECK_EQ_INT(run_6xx_with(path, 2, 0, &none), 0);
+    int64_t flipped = (tets - 1 - 3 + 96) / 97;
+    int ok = same && found(&one, 602) == flipped && found(&one, 603) == flipped &&
+             tpk_check_finding(&one, 602)->examples[0].ids[0] == 3 &&
+             tpk_check_finding(&one, 602)->examples[4].ids[0] == 3 + 4 * 97 && found(&none, 602) == flipped &&
+             tpk_check_finding(&none, 602)->example_count == 0;
+    total_6xx(&one, "threads");
+    tpk_check_report_free(&one);
+    tpk_check_report_free(&none);
+    CHECK(ok);
 }
