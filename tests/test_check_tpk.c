@@ -874,3 +874,65 @@ TPK_TEST(examples_do_not_depend_on_threads)
     tpk_check_report_free(&none);
     CHECK(ok);
 }
+
+/* Findings of two runs: the same counts, examples and summaries. */
+static int same_findings(tpk_check_report *a, tpk_check_report *b)
+{
+    for (int id = 600; id <= 613; id++) {
+        tpk_finding *x = tpk_check_finding(a, id), *y = tpk_check_finding(b, id);
+        if (x->count != y->count || x->example_count != y->example_count || strcmp(x->summary, y->summary))
+            return 0;
+        for (int e = 0; e < x->example_count; e++)
+            if (memcmp(x->examples[e].ids, y->examples[e].ids, sizeof x->examples[e].ids) ||
+                strcmp(x->examples[e].note, y->examples[e].note))
+                return 0;
+    }
+    return 1;
+}
+
+/* A Tet16-only file large enough for the walk to run in parallel: clean, it reports nothing; broken,
+ * the findings are those of the serial walk (one thread), whatever the thread count. */
+TPK_TEST(parallel_walk)
+{
+    parts ps;
+    const char *base = tpk_temp_path("cube16.tpk"); /* 202596 tets, 12168 shell faces */
+    CHECK(convert("sfepy/cube_big_tetra.mesh", base, ALL_LAYOUTS, 0) == 0);
+    CHECK(parts_from(base, ALL_LAYOUTS, &ps) == 0);
+    parts_remove(&ps, TPK_TAG_TT32);
+    parts_remove(&ps, TPK_TAG_TT20);
+    const char *clean = tpk_temp_path("cube16_clean.tpk");
+    CHECK(parts_write(&ps, clean) == 0);
+    /* b: no entry is refused, so the parallel walk is kept, and the checks on it find problems */
+    tpk_shell_face *shell = parts_data(&ps, TPK_TAG_SHEL);
+    shell[5000] = (tpk_shell_face){shell[5000].a, shell[5000].c, shell[5000].b, shell[5000].t};
+    drop_last_shell_face(&ps);
+    const char *broken_b = tpk_temp_path("cube16_broken_b.tpk");
+    CHECK(parts_write(&ps, broken_b) == 0);
+    /* a: records no entry can decode, so the parallel attempt gives way to the serial walk at once */
+    tpk_tet16 *t16 = parts_data(&ps, TPK_TAG_TT16);
+    for (int64_t t = 1000; t < 200000; t += 20011)
+        t16[t].nx[2] ^= 0x20000000;
+    const char *broken = tpk_temp_path("cube16_broken.tpk");
+    CHECK(parts_write(&ps, broken) == 0);
+    parts_free(&ps);
+    tpk_check_report serial, parallel;
+    for (int threads = 2; threads <= 4; threads += 2) {
+        CHECK_EQ_INT(run_6xx_with(clean, threads, 5, &parallel), 0);
+        int64_t total = total_6xx(&parallel, "cube16 clean");
+        tpk_check_report_free(&parallel);
+        CHECK_EQ_INT(total, 0);
+    }
+    const char *files[2] = {broken, broken_b};
+    for (int f = 0; f < 2; f++) {
+        CHECK_EQ_INT(run_6xx_with(files[f], 1, 5, &serial), 0);
+        int ok = f == 0 ? found(&serial, 608) == 10 : found(&serial, 610) >= 1 && found(&serial, 609) >= 1;
+        for (int threads = 2; threads <= 4 && ok; threads += 2) {
+            CHECK_EQ_INT(run_6xx_with(files[f], threads, 5, &parallel), 0);
+            ok = same_findings(&serial, &parallel);
+            tpk_check_report_free(&parallel);
+        }
+        total_6xx(&serial, files[f]);
+        tpk_check_report_free(&serial);
+        CHECK_MSG(ok, "%s", files[f]);
+    }
+}

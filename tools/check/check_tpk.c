@@ -132,6 +132,50 @@ static void free_context(tpkc *c)
     free(c->covered);
 }
 
+/* Everything that depends on the reference ids: the walk (if any), then the passes over them. */
+static int check_reference(tpkc *c, tpk_diag *diag)
+{
+    if (c->ref != TPK_LAYOUT_TET32 && tpkc_walk(c, diag))
+        return -1;
+    tpk_check_progress(c->report, "tpk", 0.3);
+    if (tpkc_check_shell(c, diag) || tpkc_check_tets(c, diag))
+        return -1;
+    tpk_check_progress(c->report, "tpk", 0.6);
+    if (tpkc_check_faces(c, diag) || tpkc_check_layouts(c, diag))
+        return -1;
+    tpk_check_progress(c->report, "tpk", 0.8);
+    return 0;
+}
+
+/* A parallel walk is kept only for files without problems (check_tpk_walk.c): when the checks on it
+ * found any, forget them and check again on the serial walk, whose findings do not depend on timing. */
+static int found_reference_problems(const tpkc *c)
+{
+    for (int id = 601; id <= 610; id++)
+        if (tpk_check_finding(c->report, id)->count)
+            return 1;
+    return 0;
+}
+
+static int recheck_serially(tpkc *c, tpk_diag *diag)
+{
+    for (int id = 601; id <= 610; id++) {
+        tpk_finding *f = tpk_check_finding(c->report, id);
+        free(f->examples);
+        f->examples = NULL;
+        f->count = 0;
+        f->example_count = 0;
+        f->summary[0] = 0;
+    }
+    memset(c->face_class, 0, (size_t)c->T);
+    memset(c->covered, 0, (size_t)c->T);
+    free(c->walked);
+    c->walked = NULL;
+    c->walked_in_parallel = 0;
+    c->serial_walk = 1;
+    return check_reference(c, diag);
+}
+
 static int run_invariants(tpkc *c, tpk_diag *diag)
 {
     if (load_arrays(c, diag))
@@ -140,16 +184,11 @@ static int run_invariants(tpkc *c, tpk_diag *diag)
     c->covered = calloc((size_t)c->T + 1, 1);
     if (!c->face_class || !c->covered)
         return tpk_diag_fail(diag, "out of memory for per-tet flags (%" PRId64 " tets)", c->T);
-    if (c->ref != TPK_LAYOUT_TET32 && tpkc_walk(c, diag))
+    if (check_reference(c, diag))
         return -1;
-    tpk_check_progress(c->report, "tpk", 0.3);
-    if (tpkc_check_shell(c, diag) || tpkc_check_tets(c, diag))
+    if (c->walked_in_parallel && found_reference_problems(c) && recheck_serially(c, diag))
         return -1;
-    tpk_check_progress(c->report, "tpk", 0.6);
-    if (tpkc_check_faces(c, diag))
-        return -1;
-    tpk_check_progress(c->report, "tpk", 0.8);
-    if (tpkc_check_layouts(c, diag) || tpkc_check_values(c, diag))
+    if (tpkc_check_values(c, diag))
         return -1;
     tpk_check_progress(c->report, "tpk", 1.0);
     return 0;

@@ -65,6 +65,8 @@ typedef struct tpkc {
     uint8_t *covered;            /* per tet: bit k set when face k has a SHEL record; bit 4 + k when the
                                     lower tet across face k found the pair consistent */
     int64_t unrecovered;         /* tets the walk could not give ids */
+    int serial_walk;             /* walk on one thread (the deterministic walk) */
+    int walked_in_parallel;      /* the reference came from the parallel walk (see check_tpk_walk.c) */
 } tpkc;
 
 /* Outward faces of a positive tet (q0..q3): face k (opposite q_k) as positions, in outward order. */
