@@ -49,6 +49,9 @@ int tpk_check_cell_usable(const tpk_mesh *mesh, int64_t cell)
 
 static int is_tpk(const char *path)
 {
+    size_t len = strlen(path);
+    if (len >= 4 && !strcasecmp(path + len - 4, ".tpk"))
+        return 1; /* so a damaged magic is reported by the .tpk reader, not as an unknown format */
     static const unsigned char magic[8] = {0x89, 'T', 'P', 'K', 0x0D, 0x0A, 0x1A, 0x0A};
     unsigned char head[8] = {0};
     FILE *f = fopen(path, "rb");

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# tetpack check on .tpk files: exit 0 for a clean file, 1 for a file that opens but breaks a rule of the
+# spec (with the finding in --json), 2 for a file no reader can open (with a message naming it).
+source "$(dirname "$0")/common.sh"
+
+"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --layout tet16 --layout tet32 --quiet
+expect_exit 0 "$TPK" check "$WORK/c.tpk"
+grep -q "no problems found" "$WORK/out" || fail "clean file: $(cat "$WORK/out")"
+expect_exit 0 "$TPK" check "$WORK/c.tpk" --json
+$PY - "$WORK/out" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["format"] == "tpk" and d["tets"] == 1348 and d["problems"] is False, d
+assert "file" in [g["name"] for g in d["groups"]], d["groups"]
+assert not [f for f in d["findings"] if f["id"] >= 600], d["findings"]
+PY
+
+# One byte of the TT16 chunk changed: the file opens, its checksum fails (rule 16): 600, exit 1.
+offset=$("$TPK" info "$WORK/c.tpk" | awk '$2 == "TT16" {print $7}')
+[ -n "$offset" ] || fail "no TT16 offset in tetpack info"
+cp "$WORK/c.tpk" "$WORK/flip.tpk"
+printf '\x55' | dd of="$WORK/flip.tpk" bs=1 seek=$((offset + 20)) conv=notrunc status=none
+expect_exit 1 "$TPK" check "$WORK/flip.tpk"
+grep -q "600 error   file_rule" "$WORK/out" || fail "no 600 line: $(cat "$WORK/out")"
+expect_exit 1 "$TPK" check "$WORK/flip.tpk" --json
+$PY - "$WORK/out" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+f = {x["id"]: x for x in d["findings"]}
+assert d["problems"] is True and list(f) == [600] and f[600]["count"] == 1, d["findings"]
+assert "TPK-R16" in f[600]["examples"][0]["note"] and "'TT16'" in f[600]["examples"][0]["note"], f[600]
+assert "not run" in f[600]["summary"], f[600]
+PY
+expect_exit 1 "$TPK" check "$SRC/samples/vectors/chunk_checksum.tpk"
+
+# Files no reader can open: exit 2, the file named on stderr, nothing on stdout.
+head -c 100 "$WORK/c.tpk" > "$WORK/short.tpk"
+for bad in "$WORK/short.tpk" "$SRC/samples/vectors/bad_magic.tpk" "$SRC/samples/vectors/newer_major.tpk" \
+           "$SRC/samples/vectors/overlap.tpk" "$WORK/missing.tpk"; do
+    expect_exit 2 "$TPK" check "$bad" --json
+    expect_stderr "$(basename "$bad")"
+    [ ! -s "$WORK/out" ] || fail "output for an unreadable file: $(cat "$WORK/out")"
+done

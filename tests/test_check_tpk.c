@@ -1,0 +1,938 @@
+/* tetpack check 6xx on .tpk files: converted real meshes (every layout) report nothing; for each check a
+ * file that breaks exactly that rule, crafted with libtetpack's writer so every checksum is right and the
+ * reader accepts it, gives the exact count (and near misses give none); the spec's test vectors behave
+ * as spec §13 says; and the file's mesh for the mesh-level groups is the file's content. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "convert.h"
+#include "harness.h"
+#include "pipeline.h"
+#include "tetpack.h"
+
+#define ALL_LAYOUTS (TPK_LAYOUT_BIT_TET16 | TPK_LAYOUT_BIT_TET20 | TPK_LAYOUT_BIT_TET32)
+
+/* ---- running the checks ------------------------------------------------------------------------- */
+
+/* 6xx on `path` into *report (caller frees). 0 when the checks ran, 1 when the file does not open,
+ * -1 when the checks could not run. */
+static int run_6xx(const char *path, tpk_check_report *report)
+{
+    tpk_check_options o;
+    tpk_check_options_default(&o);
+    o.threads = 2;
+    if (tpk_check_report_init(report, &o))
+        return -1;
+    tpk_file *file = NULL;
+    if (tpk_open_path(&file, path, NULL, NULL, 0) != TPK_OK)
+        return 1;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    int rc = tpk_check_tpk_file(path, file, report, &diag);
+    tpk_close(file);
+    if (rc)
+        fprintf(stderr, "%s: %s\n", path, diag.message);
+    return rc;
+}
+
+static int64_t found(tpk_check_report *r, int id)
+{
+    return tpk_check_finding(r, id)->count;
+}
+
+/* The same with a given thread count and example limit. */
+static int run_6xx_with(const char *path, int threads, int max_examples, tpk_check_report *report)
+{
+    tpk_check_options o;
+    tpk_check_options_default(&o);
+    o.threads = threads;
+    o.max_examples = max_examples;
+    tpk_file *file = NULL;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_check_report_init(report, &o) || tpk_open_path(&file, path, NULL, NULL, 0) != TPK_OK)
+        return -1;
+    int rc = tpk_check_tpk_file(path, file, report, &diag);
+    tpk_close(file);
+    return rc;
+}
+
+/* Sum over 600..613; prints what was found, so a failing test shows it. */
+static int64_t total_6xx(tpk_check_report *r, const char *label)
+{
+    int64_t sum = 0;
+    for (int id = 600; id <= 613; id++) {
+        tpk_finding *f = tpk_check_finding(r, id);
+        sum += f->count;
+        if (f->count)
+            fprintf(stderr, "  [%s] %d %s: %lld%s%s%s%s\n", label, id, f->check->name, (long long)f->count,
+                    f->summary[0] ? " | " : "", f->summary, f->example_count ? " | " : "",
+                    f->example_count ? f->examples[0].note : "");
+    }
+    return sum;
+}
+
+/* ---- files -------------------------------------------------------------------------------------- */
+
+static int convert(const char *data, const char *out, unsigned layouts, int zstd)
+{
+    tpk_convert_options o;
+    memset(&o, 0, sizeof o);
+    o.input = tpk_data_path(data);
+    o.output = out;
+    o.layouts = layouts;
+    o.zstd_level = zstd;
+    o.threads = 2;
+    tpk_convert_report report;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_convert(&o, &report, NULL, NULL, &diag) != 0) {
+        fprintf(stderr, "convert %s: %s\n", data, diag.message);
+        return -1;
+    }
+    return 0;
+}
+
+/* A file as a list of chunks in memory, to change and write back with the library's writer (which
+ * computes every checksum, so only the content is wrong). */
+#define MAX_PARTS 64
+typedef struct part {
+    tpk_chunk_desc desc;
+    void *data;
+} part;
+
+typedef struct parts {
+    tpk_header_fields header;
+    int count;
+    part p[MAX_PARTS];
+} parts;
+
+static void parts_free(parts *ps)
+{
+    for (int i = 0; i < ps->count; i++)
+        free(ps->p[i].data);
+    ps->count = 0;
+}
+
+static int parts_read(const char *path, parts *ps)
+{
+    memset(ps, 0, sizeof *ps);
+    tpk_file *file;
+    tpk_file_info info;
+    if (tpk_open_path(&file, path, NULL, NULL, 0) != TPK_OK)
+        return -1;
+    tpk_get_info(file, &info);
+    ps->header = (tpk_header_fields){info.vertex_count, info.tet_count, info.shell_face_count,
+                                     {info.origin[0], info.origin[1], info.origin[2]},
+                                     {info.bounds_min[0], info.bounds_min[1], info.bounds_min[2]},
+                                     {info.bounds_max[0], info.bounds_max[1], info.bounds_max[2]}};
+    int rc = info.chunk_count <= MAX_PARTS ? 0 : -1;
+    for (uint64_t i = 0; !rc && i < info.chunk_count; i++) {
+        tpk_dir_entry e;
+        tpk_get_chunk(file, i, &e);
+        part *p = &ps->p[ps->count++];
+        p->desc = (tpk_chunk_desc){e.tag, e.flags, TPK_CODEC_NONE, e.elem_type, e.elem_size, e.index, e.step,
+                                   e.elem_count, 0};
+        p->data = malloc(e.raw_size + 1);
+        rc = !p->data || tpk_read_chunk(file, i, p->data, e.raw_size) != TPK_OK;
+    }
+    tpk_close(file);
+    if (rc)
+        parts_free(ps);
+    return rc ? -1 : 0;
+}
+
+static part *parts_get(parts *ps, uint32_t tag, uint32_t index, uint32_t step)
+{
+    for (int i = 0; i < ps->count; i++)
+        if (ps->p[i].desc.tag == tag && ps->p[i].desc.index == index && ps->p[i].desc.step == step)
+            return &ps->p[i];
+    return NULL;
+}
+
+static void *parts_data(parts *ps, uint32_t tag)
+{
+    part *p = parts_get(ps, tag, 0, 0);
+    return p ? p->data : NULL;
+}
+
+static void parts_remove(parts *ps, uint32_t tag)
+{
+    for (int i = 0; i < ps->count; i++)
+        if (ps->p[i].desc.tag == tag) {
+            free(ps->p[i].data);
+            ps->p[i--] = ps->p[--ps->count];
+        }
+}
+
+static int parts_write(const parts *ps, const char *path)
+{
+    tpk_writer *w;
+    if (tpk_writer_open(&w, path, NULL, NULL, 0) != TPK_OK)
+        return -1;
+    for (int i = 0; i < ps->count; i++)
+        if (tpk_writer_add_chunk(w, &ps->p[i].desc, ps->p[i].data) != TPK_OK) {
+            fprintf(stderr, "add chunk %d: %s\n", i, tpk_writer_error_text(w));
+            tpk_writer_abort(w);
+            return -1;
+        }
+    return tpk_writer_finish(w, &ps->header) == TPK_OK ? 0 : -1;
+}
+
+/* Base files, converted once per test process. */
+static const char *cylinder_all(void)
+{
+    static char path[512];
+    if (!path[0]) {
+        snprintf(path, sizeof path, "%s", tpk_temp_path("cylinder_all.tpk"));
+        if (convert("sfepy/cylinder.vtk", path, ALL_LAYOUTS, 0))
+            path[0] = 0;
+    }
+    return path;
+}
+
+static const char *exomerge_all(void) /* point fields over 5 steps, TIME, hexahedra split */
+{
+    static char path[512];
+    if (!path[0]) {
+        snprintf(path, sizeof path, "%s", tpk_temp_path("exomerge_all.tpk"));
+        if (convert("seacas/exomerge_unit_test.e", path, ALL_LAYOUTS, 0))
+            path[0] = 0;
+    }
+    return path;
+}
+
+/* Read `base`, keep only the layouts in `keep` (TPK_LAYOUT_BIT_*), and hand the parts to the caller. */
+static int parts_from(const char *base, unsigned keep, parts *ps)
+{
+    if (!base[0] || parts_read(base, ps))
+        return -1;
+    if (!(keep & TPK_LAYOUT_BIT_TET32))
+        parts_remove(ps, TPK_TAG_TT32);
+    if (!(keep & TPK_LAYOUT_BIT_TET20))
+        parts_remove(ps, TPK_TAG_TT20);
+    if (!(keep & TPK_LAYOUT_BIT_TET16))
+        parts_remove(ps, TPK_TAG_TT16);
+    return 0;
+}
+
+/* Write the parts, check them, free them; the report is the caller's to free. */
+static int check_parts(parts *ps, const char *name, tpk_check_report *report)
+{
+    const char *path = tpk_temp_path(name);
+    int rc = parts_write(ps, path);
+    parts_free(ps);
+    return rc ? -1 : run_6xx(path, report);
+}
+
+/* An interior tet of a Tet32 file with all four neighbors: the first such tet. */
+static int64_t interior_tet(const tpk_tet32 *tets, int64_t count)
+{
+    for (int64_t t = 0; t < count; t++)
+        if (tets[t].n[0] >= 0 && tets[t].n[1] >= 0 && tets[t].n[2] >= 0 && tets[t].n[3] >= 0)
+            return t;
+    return -1;
+}
+
+/* A small mesh written directly: positions, positive tets and their neighbors as given (so non-manifold
+ * or folded configurations can be written), all three layouts and the shell of the -1 faces. */
+static int write_small(const char *path, const float (*pos)[3], int64_t V, const int32_t (*tets)[4],
+                       const int32_t (*nb)[4], int64_t T)
+{
+    tpk_tet32 t32[8];
+    tpk_tet20 t20[8];
+    tpk_tet16 t16[8];
+    tpk_shell_face shell[32];
+    tpk_build_tet32(&tets[0][0], &nb[0][0], T, t32);
+    tpk_build_tet20(&tets[0][0], &nb[0][0], T, t20);
+    tpk_build_tet16(&tets[0][0], &nb[0][0], T, t16);
+    int64_t S = tpk_count_shell_faces(&nb[0][0], T);
+    tpk_build_shell(&tets[0][0], &nb[0][0], T, shell);
+    tpk_header_fields h = {(uint64_t)V, (uint64_t)T, (uint64_t)S, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    for (int a = 0; a < 3; a++) {
+        h.bounds_min[a] = h.bounds_max[a] = pos[0][a];
+        for (int64_t i = 1; i < V; i++) {
+            h.bounds_min[a] = fmin(h.bounds_min[a], pos[i][a]);
+            h.bounds_max[a] = fmax(h.bounds_max[a], pos[i][a]);
+        }
+    }
+    tpk_writer *w;
+    if (tpk_writer_open(&w, path, NULL, NULL, 0) != TPK_OK)
+        return -1;
+    const tpk_chunk_desc d[5] = {
+        {TPK_TAG_POS3, TPK_CHUNK_REQUIRED, 0, TPK_ELEM_VEC3_F32, 12, 0, 0, (uint64_t)V, 0},
+        {TPK_TAG_TT32, TPK_CHUNK_REQUIRED, 0, TPK_ELEM_TET32, 32, 0, 0, (uint64_t)T, 0},
+        {TPK_TAG_TT20, TPK_CHUNK_REQUIRED, 0, TPK_ELEM_TET20, 20, 0, 0, (uint64_t)T, 0},
+        {TPK_TAG_TT16, TPK_CHUNK_REQUIRED, 0, TPK_ELEM_TET16, 16, 0, 0, (uint64_t)T, 0},
+        {TPK_TAG_SHEL, TPK_CHUNK_REQUIRED, 0, TPK_ELEM_SHELL_FACE, 16, 0, 0, (uint64_t)S, 0}};
+    const void *data[5] = {pos, t32, t20, t16, shell};
+    for (int k = 0; k < 5; k++)
+        if (tpk_writer_add_chunk(w, &d[k], data[k]) != TPK_OK) {
+            tpk_writer_abort(w);
+            return -1;
+        }
+    return tpk_writer_finish(w, &h) == TPK_OK ? 0 : -1;
+}
+
+/* Unit triangle 0, 1, 2 in z = 0; apexes 3 above it, 4 and 5 placed by the tests. */
+static float small_pos[6][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.25f, 0.25f, 1}, {0, 0, 0}, {0.2f, 0.2f, 2}};
+
+static int check_small(const char *name, const int32_t (*tets)[4], const int32_t (*nb)[4], int64_t T,
+                       tpk_check_report *report)
+{
+    const char *path = tpk_temp_path(name);
+    if (write_small(path, (const float (*)[3])small_pos, 6, tets, nb, T))
+        return -1;
+    return run_6xx(path, report);
+}
+
+/* ---- clean files -------------------------------------------------------------------------------- */
+
+/* Converted real meshes, in every layout alone and all three together (compressed), report nothing. */
+TPK_TEST(clean_converted_files)
+{
+    static const char *const meshes[] = {"sfepy/cylinder.vtk", "seacas/exomerge_unit_test.e",
+                                         "gmsh/t3_hex_prism_ascii41.msh", "hard/huge_offset_hex.vtu",
+                                         "tetgen/hinge_small.node", "nasa_refine/om6_om6-curv-no-geom.meshb"};
+    static const unsigned layouts[4] = {TPK_LAYOUT_BIT_TET16, TPK_LAYOUT_BIT_TET20, TPK_LAYOUT_BIT_TET32,
+                                        ALL_LAYOUTS};
+    for (size_t m = 0; m < sizeof meshes / sizeof meshes[0]; m++) {
+        for (int l = 0; l < 4; l++) {
+            const char *path = tpk_temp_path("clean.tpk");
+            CHECK(convert(meshes[m], path, layouts[l], l == 3 ? 3 : 0) == 0);
+            tpk_check_report report;
+            int rc = run_6xx(path, &report);
+            int64_t total = total_6xx(&report, meshes[m]);
+            tpk_check_report_free(&report);
+            CHECK_EQ_INT(rc, 0);
+            CHECK_MSG(total == 0, "%s, layouts %u: %lld findings", meshes[m], layouts[l], (long long)total);
+        }
+    }
+}
+
+/* spec §13: the files a reader must read are clean; of those it must refuse, the one that opens (a bad
+ * chunk checksum is found when the chunk is read) is check 600, the others do not open. */
+TPK_TEST(test_vectors)
+{
+    static const char *const good[] = {"one_tet.tpk", "two_tets_zstd.tpk"};
+    static const char *const refused[] = {"bad_magic.tpk", "truncated.tpk", "newer_major.tpk",
+                                          "unknown_required_chunk.tpk", "overlap.tpk"};
+    char path[1024];
+    tpk_check_report report;
+    for (int i = 0; i < 2; i++) {
+        snprintf(path, sizeof path, "%s/samples/vectors/%s", TPK_SOURCE_DIR, good[i]);
+        CHECK_EQ_INT(run_6xx(path, &report), 0);
+        int64_t total = total_6xx(&report, good[i]);
+        tpk_check_report_free(&report);
+        CHECK_EQ_INT(total, 0);
+    }
+    for (int i = 0; i < 5; i++) {
+        snprintf(path, sizeof path, "%s/samples/vectors/%s", TPK_SOURCE_DIR, refused[i]);
+        CHECK_EQ_INT(run_6xx(path, &report), 1);
+        tpk_check_report_free(&report);
+        tpk_diag diag;
+        memset(&diag, 0, sizeof diag);
+        CHECK(tpk_check_report_init(&report, &(tpk_check_options){.max_examples = 5}) == 0);
+        CHECK_EQ_INT(tpk_check_path(path, NULL, &report, &diag), -1); /* `tetpack check` exits 2 */
+        tpk_check_report_free(&report);
+        CHECK_MSG(strstr(diag.message, refused[i]) != NULL, "%s", diag.message);
+    }
+    snprintf(path, sizeof path, "%s/samples/vectors/chunk_checksum.tpk", TPK_SOURCE_DIR);
+    CHECK_EQ_INT(run_6xx(path, &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 600);
+    int ok = f->count == 1 && total_6xx(&report, "chunk_checksum") == 1 && f->example_count == 1 &&
+             strstr(f->examples[0].note, "TPK-R16") && strstr(f->examples[0].note, "'FDAT'") &&
+             f->examples[0].ids[0] == 6 && strstr(f->summary, "not run");
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* ---- 600: reader rules -------------------------------------------------------------------------- */
+
+TPK_TEST(file_rule_checksum_and_ids)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    t32[7].n[2] = (int32_t)ps.header.tet_count; /* one past the last tet: rule 17 */
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "ids.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 600);
+    int ok = f->count == 1 && total_6xx(&report, "ids") == 1 && strstr(f->examples[0].note, "TPK-R17") &&
+             strstr(f->examples[0].note, "record 7");
+    tpk_check_report_free(&report);
+    CHECK(ok);
+
+    /* One byte of a chunk changed after writing: the checksum (rule 16). */
+    const char *path = tpk_temp_path("flip.tpk");
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0 && parts_write(&ps, path) == 0);
+    parts_free(&ps);
+    tpk_file *tf;
+    uint64_t i;
+    tpk_dir_entry e;
+    CHECK(tpk_open_path(&tf, path, NULL, NULL, 0) == TPK_OK);
+    CHECK(tpk_find_chunk(tf, TPK_TAG_TT16, 0, 0, &i) == TPK_OK && tpk_get_chunk(tf, i, &e) == TPK_OK);
+    tpk_close(tf);
+    FILE *file = fopen(path, "r+b");
+    CHECK(file != NULL);
+    fseek(file, (long)e.offset + 100, SEEK_SET);
+    int byte = fgetc(file);
+    fseek(file, (long)e.offset + 100, SEEK_SET);
+    fputc(byte ^ 0x10, file);
+    fclose(file);
+    CHECK_EQ_INT(run_6xx(path, &report), 0);
+    ok = found(&report, 600) == 1 && total_6xx(&report, "flip") == 1 &&
+         strstr(tpk_check_finding(&report, 600)->examples[0].note, "TPK-R16");
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* The writer half of rule 15 (spec §7.1): a field name must be NUL-padded and valid UTF-8. */
+TPK_TEST(file_rule_field_text)
+{
+    parts ps;
+    CHECK(parts_from(exomerge_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_field_desc *d = parts_data(&ps, TPK_TAG_FDSC);
+    CHECK(d != NULL);
+    d[1].name[62] = 'x'; /* after the terminating NUL */
+    d[2].units[0] = (char)0xC3; /* a lead byte without its continuation */
+    d[2].units[1] = 0;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "text.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 600);
+    int ok = f->count == 2 && total_6xx(&report, "text") == 2 && f->examples[0].ids[0] == 1 &&
+             strstr(f->examples[0].note, "after its terminating NUL") && strstr(f->examples[1].note, "UTF-8");
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* ---- 601..610: tets, adjacency, shell ----------------------------------------------------------- */
+
+TPK_TEST(m01_repeated_id)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    int64_t t = interior_tet(t32, (int64_t)ps.header.tet_count);
+    int32_t v3 = t32[t].vx ^ t32[t].v[0] ^ t32[t].v[1] ^ t32[t].v[2];
+    t32[t].v[1] = t32[t].v[0]; /* keep the fourth id: vx follows */
+    t32[t].vx = t32[t].v[0] ^ t32[t].v[1] ^ t32[t].v[2] ^ v3;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "m01.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 601);
+    int ok = f->count == 1 && f->examples[0].ids[0] == t && total_6xx(&report, "m01") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* Tet20 alone: a vx that gives no valid fourth id from any face leaves the tet without ids. */
+TPK_TEST(m01_walk_bad_apex)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    int64_t t = interior_tet(parts_data(&ps, TPK_TAG_TT32), (int64_t)ps.header.tet_count);
+    parts_remove(&ps, TPK_TAG_TT32);
+    parts_remove(&ps, TPK_TAG_TT16);
+    tpk_tet20 *t20 = parts_data(&ps, TPK_TAG_TT20);
+    t20[t].vx ^= 0x40000000;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "m01w.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 601);
+    int ok = f->count == 1 && f->examples[0].ids[0] == t && strstr(f->summary, "not recoverable") &&
+             total_6xx(&report, "m01w") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* A tet turned over (two ids and their neighbors swapped) is negative on the stored positions; its
+ * neighbors still lie across its faces (no 606), and the other layouts still agree (no 608). */
+TPK_TEST(m02_flipped_tet)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    int64_t t = interior_tet(t32, (int64_t)ps.header.tet_count);
+    int32_t v = t32[t].v[0], n = t32[t].n[0];
+    t32[t].v[0] = t32[t].v[1];
+    t32[t].v[1] = v;
+    t32[t].n[0] = t32[t].n[1];
+    t32[t].n[1] = n;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "m02.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 602);
+    int ok = f->count == 1 && f->examples[0].ids[0] == t && f->examples[0].has_point &&
+             strstr(f->examples[0].note, "negative") && total_6xx(&report, "m02") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* Exact decisions: an apex 2^-30 below the unit triangle is a valid tet (no float epsilon calls it
+ * flat) on the far side of its neighbor; in the plane it is flat (602). */
+TPK_TEST(m02_m06_near_misses)
+{
+    static const int32_t tets[2][4] = {{0, 1, 2, 3}, {0, 2, 1, 4}};
+    static const int32_t nb[2][4] = {{-1, -1, -1, 1}, {-1, -1, -1, 0}};
+    tpk_check_report report;
+    small_pos[4][0] = small_pos[4][1] = 0.25f;
+    small_pos[4][2] = -ldexpf(1, -30);
+    CHECK_EQ_INT(check_small("thin.tpk", tets, nb, 2, &report), 0);
+    int64_t total = total_6xx(&report, "thin");
+    tpk_check_report_free(&report);
+    CHECK_EQ_INT(total, 0);
+    small_pos[4][2] = 0;
+    CHECK_EQ_INT(check_small("flat.tpk", tets, nb, 2, &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 602);
+    int ok = f->count == 1 && f->examples[0].ids[0] == 1 && strstr(f->examples[0].note, "zero");
+    total_6xx(&report, "flat");
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+TPK_TEST(m03_vx)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_tet20 *t20 = parts_data(&ps, TPK_TAG_TT20);
+    tpk_tet16 *t16 = parts_data(&ps, TPK_TAG_TT16);
+    t20[5].vx ^= 1;
+    t16[9].vx ^= 2;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "m03.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 603);
+    int ok = f->count == 2 && f->examples[0].ids[0] == 5 && strstr(f->examples[0].note, "Tet20") &&
+             f->examples[1].ids[0] == 9 && strstr(f->examples[1].note, "Tet16") && total_6xx(&report, "m03") == 2;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* t names u, u names -1 across the same face: one asymmetric slot (604); the face then is a boundary
+ * face of u while t has it (605) and has no SHEL record (609). */
+TPK_TEST(m04_one_sided_neighbor)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), TPK_LAYOUT_BIT_TET32, &ps) == 0);
+    tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    int64_t t = interior_tet(t32, (int64_t)ps.header.tet_count);
+    int32_t u = t32[t].n[2];
+    t32[t].n[2] = -1;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "m04.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 604);
+    int ok = f->count == 1 && f->examples[0].ids[0] == u && f->examples[0].ids[1] == t &&
+             found(&report, 605) == 1 && found(&report, 609) == 1 && total_6xx(&report, "m04") == 3;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* Three tets on one face (a pair and a third with -1 there); two tets with the same face, both -1. */
+TPK_TEST(m05_face_use)
+{
+    static const int32_t three[3][4] = {{0, 1, 2, 3}, {0, 2, 1, 4}, {0, 1, 2, 5}};
+    static const int32_t three_nb[3][4] = {{-1, -1, -1, 1}, {-1, -1, -1, 0}, {-1, -1, -1, -1}};
+    static const int32_t two_nb[2][4] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}};
+    small_pos[4][0] = small_pos[4][1] = 0.25f;
+    small_pos[4][2] = -1;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_small("m05a.tpk", three, three_nb, 3, &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 605);
+    int ok = f->count == 1 && f->examples[0].id_count == 6 && f->examples[0].ids[0] == 0 &&
+             f->examples[0].ids[1] == 1 && f->examples[0].ids[2] == 2 && f->examples[0].ids[5] == 2 &&
+             total_6xx(&report, "m05a") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+    CHECK_EQ_INT(check_small("m05b.tpk", three, two_nb, 2, &report), 0);
+    f = tpk_check_finding(&report, 605);
+    ok = f->count == 1 && strstr(f->examples[0].note, "-1") && total_6xx(&report, "m05b") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+    /* Near miss: the same two tets as neighbors. */
+    CHECK_EQ_INT(check_small("m05c.tpk", three, three_nb, 2, &report), 0);
+    int64_t total = total_6xx(&report, "m05c");
+    tpk_check_report_free(&report);
+    CHECK_EQ_INT(total, 0);
+}
+
+/* Two positive tets on the same side of their shared face. */
+TPK_TEST(m06_fold)
+{
+    static const int32_t tets[2][4] = {{0, 1, 2, 3}, {0, 1, 2, 5}};
+    static const int32_t nb[2][4] = {{-1, -1, -1, 1}, {-1, -1, -1, 0}};
+    small_pos[4][0] = small_pos[4][1] = 0.25f;
+    small_pos[4][2] = -1;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_small("m06.tpk", tets, nb, 2, &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 606);
+    int ok = f->count == 1 && f->examples[0].ids[0] == 0 && f->examples[0].ids[1] == 1 &&
+             total_6xx(&report, "m06") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* Two neighbors swapped between their slots, in Tet32 alone and in Tet20 alone. */
+TPK_TEST(m07_neighbor_order)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), TPK_LAYOUT_BIT_TET32, &ps) == 0);
+    tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    int64_t t = interior_tet(t32, (int64_t)ps.header.tet_count);
+    int32_t n = t32[t].n[1];
+    t32[t].n[1] = t32[t].n[3];
+    t32[t].n[3] = n;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "m07a.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 607);
+    int ok = f->count == 1 && f->examples[0].ids[0] == t && total_6xx(&report, "m07a") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+
+    CHECK(parts_from(cylinder_all(), TPK_LAYOUT_BIT_TET20, &ps) == 0);
+    tpk_tet20 *t20 = parts_data(&ps, TPK_TAG_TT20);
+    n = t20[t].n[0];
+    t20[t].n[0] = t20[t].n[2];
+    t20[t].n[2] = n;
+    CHECK_EQ_INT(check_parts(&ps, "m07b.tpk", &report), 0);
+    f = tpk_check_finding(&report, 607);
+    ok = f->count == 1 && f->examples[0].ids[0] == t && strstr(f->examples[0].note, "Tet20") &&
+         total_6xx(&report, "m07b") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* Tet16 that does not decode to the other layouts' neighbors; Tet20 naming another neighbor than
+ * Tet32; and a Tet16-only file whose record cannot be decoded from any entry. */
+TPK_TEST(m08_layouts)
+{
+    parts ps;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_tet16 *t16 = parts_data(&ps, TPK_TAG_TT16);
+    tpk_tet20 *t20 = parts_data(&ps, TPK_TAG_TT20);
+    t16[11].nx[0] ^= 4;
+    t20[12].n[0] = t20[12].n[0] == 0 ? 1 : 0;
+    tpk_check_report report;
+    CHECK_EQ_INT(check_parts(&ps, "m08a.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 608);
+    int ok = f->count == 2 && f->examples[0].ids[0] == 11 && strstr(f->examples[0].note, "Tet16") &&
+             f->examples[1].ids[0] == 12 && strstr(f->examples[1].note, "Tet20") && total_6xx(&report, "m08a") == 2;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    int64_t t = interior_tet(parts_data(&ps, TPK_TAG_TT32), (int64_t)ps.header.tet_count);
+    parts_remove(&ps, TPK_TAG_TT32);
+    parts_remove(&ps, TPK_TAG_TT20);
+    t16 = parts_data(&ps, TPK_TAG_TT16);
+    t16[t].nx[1] ^= 0x40000000; /* every decoding of it gives an id far out of range */
+    CHECK_EQ_INT(check_parts(&ps, "m08b.tpk", &report), 0);
+    f = tpk_check_finding(&report, 608);
+    ok = f->count == 1 && f->examples[0].ids[0] == t && strstr(f->summary, "not recoverable from Tet16") &&
+         total_6xx(&report, "m08b") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+static void drop_last_shell_face(parts *ps)
+{
+    ps->header.shell_face_count--;
+    parts_get(ps, TPK_TAG_SHEL, 0, 0)->desc.elem_count--;
+}
+
+/* A boundary face missing from SHEL (in Tet32 and in a Tet16-only file), and a record listed twice. */
+TPK_TEST(m09_shell_complete)
+{
+    parts ps;
+    tpk_check_report report;
+    for (int layout = 0; layout < 2; layout++) {
+        CHECK(parts_from(cylinder_all(), layout ? TPK_LAYOUT_BIT_TET16 : TPK_LAYOUT_BIT_TET32, &ps) == 0);
+        tpk_shell_face last = ((tpk_shell_face *)parts_data(&ps, TPK_TAG_SHEL))[ps.header.shell_face_count - 1];
+        drop_last_shell_face(&ps);
+        CHECK_EQ_INT(check_parts(&ps, "m09a.tpk", &report), 0);
+        tpk_finding *f = tpk_check_finding(&report, 609);
+        int ok = f->count == 1 && f->examples[0].ids[0] == last.t && total_6xx(&report, "m09a") == 1;
+        tpk_check_report_free(&report);
+        CHECK_MSG(ok, "layout %d", layout);
+    }
+    CHECK(parts_from(cylinder_all(), TPK_LAYOUT_BIT_TET32, &ps) == 0);
+    tpk_shell_face *shell = parts_data(&ps, TPK_TAG_SHEL);
+    shell[1] = shell[0]; /* record 0 twice, record 1's face missing */
+    CHECK_EQ_INT(check_parts(&ps, "m09b.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 609);
+    int ok = f->count == 2 && f->examples[0].ids[0] == 1 && strstr(f->examples[0].note, "twice") &&
+             total_6xx(&report, "m09b") == 2;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* A SHEL record turned over faces inward; rotated it is the same face (near miss). */
+TPK_TEST(m10_shell_outward)
+{
+    parts ps;
+    tpk_check_report report;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_shell_face *shell = parts_data(&ps, TPK_TAG_SHEL);
+    int32_t b = shell[3].b;
+    shell[3].b = shell[3].c;
+    shell[3].c = b;
+    shell[4] = (tpk_shell_face){shell[4].b, shell[4].c, shell[4].a, shell[4].t};
+    CHECK_EQ_INT(check_parts(&ps, "m10.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 610);
+    int ok = f->count == 1 && f->examples[0].ids[0] == 3 && strstr(f->examples[0].note, "inward") &&
+             total_6xx(&report, "m10") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* ---- 611..613: values --------------------------------------------------------------------------- */
+
+/* Bounds one ulp off; a non-finite position inside the box (bounds unchanged). */
+TPK_TEST(m11_positions)
+{
+    parts ps;
+    tpk_check_report report;
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    ps.header.bounds_max[1] = nextafter(ps.header.bounds_max[1], INFINITY);
+    CHECK_EQ_INT(check_parts(&ps, "m11a.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 611);
+    int ok = f->count == 1 && strstr(f->examples[0].note, "bounds_max y") && total_6xx(&report, "m11a") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+
+    CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+    float *pos = parts_data(&ps, TPK_TAG_POS3);
+    int64_t inside = -1;
+    for (int64_t i = 0; i < (int64_t)ps.header.vertex_count && inside < 0; i++) {
+        int in = 1;
+        for (int a = 0; a < 3; a++)
+            in &= ps.header.origin[a] + pos[3 * i + a] > ps.header.bounds_min[a] &&
+                  ps.header.origin[a] + pos[3 * i + a] < ps.header.bounds_max[a];
+        inside = in ? i : -1;
+    }
+    CHECK(inside >= 0);
+    pos[3 * inside + 2] = NAN;
+    CHECK_EQ_INT(check_parts(&ps, "m11b.tpk", &report), 0);
+    f = tpk_check_finding(&report, 611);
+    ok = f->count == 1 && f->examples[0].ids[0] == inside && total_6xx(&report, "m11b") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* A field's min_value one ulp low; a NaN among the values, which the range ignores (near miss). */
+TPK_TEST(m12_field_range)
+{
+    parts ps;
+    tpk_check_report report;
+    CHECK(parts_from(exomerge_all(), ALL_LAYOUTS, &ps) == 0);
+    tpk_field_desc *d = parts_data(&ps, TPK_TAG_FDSC);
+    CHECK(d != NULL && d[0].step_count == 5);
+    d[0].min_value = nextafterf(d[0].min_value, -INFINITY);
+    float *values = parts_get(&ps, TPK_TAG_FDAT, 1, 2)->data; /* field 1, step 2 */
+    int64_t pick = -1;
+    for (int64_t i = 0; i < (int64_t)ps.header.vertex_count && pick < 0; i++)
+        pick = values[i] > d[1].min_value && values[i] < d[1].max_value ? i : -1;
+    CHECK(pick >= 0);
+    values[pick] = NAN;
+    CHECK_EQ_INT(check_parts(&ps, "m12.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 612);
+    int ok = f->count == 1 && f->examples[0].ids[0] == 0 && total_6xx(&report, "m12") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* An infinite time value; VMAP -2 (out of range) and -1 (an added point: near miss). */
+TPK_TEST(m13_values)
+{
+    parts ps;
+    tpk_check_report report;
+    CHECK(parts_from(exomerge_all(), ALL_LAYOUTS, &ps) == 0);
+    double *time = parts_data(&ps, TPK_TAG_TIME);
+    int32_t *vmap = parts_data(&ps, TPK_TAG_VMAP);
+    CHECK(time != NULL && vmap != NULL);
+    time[3] = INFINITY;
+    vmap[10] = -2;
+    vmap[11] = -1;
+    CHECK_EQ_INT(check_parts(&ps, "m13.tpk", &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 613);
+    int ok = f->count == 2 && strstr(f->examples[0].note, "TIME[3]") && f->examples[1].ids[0] == 10 &&
+             total_6xx(&report, "m13") == 2;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+    /* A negative TMAP value breaks rule 17 already: 600. */
+    CHECK(parts_from(exomerge_all(), ALL_LAYOUTS, &ps) == 0);
+    ((int32_t *)parts_data(&ps, TPK_TAG_TMAP))[5] = -1;
+    CHECK_EQ_INT(check_parts(&ps, "tmap.tpk", &report), 0);
+    ok = found(&report, 600) == 1 && total_6xx(&report, "tmap") == 1;
+    tpk_check_report_free(&report);
+    CHECK(ok);
+}
+
+/* ---- the file's mesh ---------------------------------------------------------------------------- */
+
+TPK_TEST(mesh_of_file)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/samples/vectors/two_tets_zstd.tpk", TPK_SOURCE_DIR);
+    tpk_file *file;
+    CHECK(tpk_open_path(&file, path, NULL, NULL, 0) == TPK_OK);
+    tpk_mesh mesh;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    int rc = tpk_check_tpk_mesh(file, &mesh, &diag);
+    tpk_close(file);
+    CHECK_MSG(rc == 0, "%s", diag.message);
+    static const int32_t conn[8] = {3, 0, 4, 1, 0, 4, 1, 2};
+    int ok = mesh.point_count == 5 && mesh.cell_count == 2 && mesh.cell_types[1] == TPK_CELL_TETRA &&
+             mesh.cell_offsets[2] == 8 && !memcmp(mesh.cell_conn, conn, sizeof conn) &&
+             mesh.points[0] == 1000001.0 && mesh.points[1] == -2.5 && mesh.points[3 * 2 + 2] == 1.0 &&
+             !strcmp(mesh.format, "tpk") && mesh.field_count == 2 && mesh.step_count == 2 && mesh.times &&
+             mesh.times[1] == 0.5 && mesh.fields[0].step_count == 2 && mesh.fields[0].values[5] == 310 &&
+             mesh.fields[1].association == TPK_ASSOC_TET && mesh.fields[1].values[1] == 2;
+    tpk_mesh_free(&mesh);
+    CHECK(ok);
+}
+
+/* Tet16 alone gives the same tets (as vertex sets) as Tet32. */
+TPK_TEST(mesh_of_tet16_file)
+{
+    parts ps;
+    tpk_mesh m32, m16;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    const char *p16 = tpk_temp_path("mesh16.tpk");
+    CHECK(parts_from(cylinder_all(), TPK_LAYOUT_BIT_TET16, &ps) == 0 && parts_write(&ps, p16) == 0);
+    parts_free(&ps);
+    tpk_file *f32, *f16;
+    CHECK(tpk_open_path(&f32, cylinder_all(), NULL, NULL, 0) == TPK_OK);
+    CHECK(tpk_open_path(&f16, p16, NULL, NULL, 0) == TPK_OK);
+    int rc = tpk_check_tpk_mesh(f32, &m32, &diag) | tpk_check_tpk_mesh(f16, &m16, &diag);
+    tpk_close(f32);
+    tpk_close(f16);
+    CHECK_MSG(rc == 0, "%s", diag.message);
+    int same = m32.cell_count == m16.cell_count && m32.cell_count == 1348;
+    for (int64_t c = 0; same && c < m32.cell_count; c++) {
+        int64_t s32 = 0, s16 = 0;
+        for (int k = 0; k < 4; k++) {
+            s32 += (int64_t)1 << (m32.cell_conn[4 * c + k] % 60);
+            s16 += (int64_t)1 << (m16.cell_conn[4 * c + k] % 60);
+            same &= m16.cell_conn[4 * c + k] == m32.cell_conn[4 * c + 0] ||
+                    m16.cell_conn[4 * c + k] == m32.cell_conn[4 * c + 1] ||
+                    m16.cell_conn[4 * c + k] == m32.cell_conn[4 * c + 2] ||
+                    m16.cell_conn[4 * c + k] == m32.cell_conn[4 * c + 3];
+        }
+        same &= s32 == s16;
+    }
+    tpk_mesh_free(&m32);
+    tpk_mesh_free(&m16);
+    CHECK(same);
+}
+
+/* Many broken tets spread over the file: the counts and the examples (lowest ids first) are the same
+ * whatever the number of threads, and with no examples kept the counts still are. */
+TPK_TEST(examples_do_not_depend_on_threads)
+{
+    parts ps;
+    const char *base = tpk_temp_path("cube_all.tpk"); /* 202596 tets: several workers' ranges */
+    CHECK(convert("sfepy/cube_big_tetra.mesh", base, ALL_LAYOUTS, 0) == 0);
+    CHECK(parts_from(base, ALL_LAYOUTS, &ps) == 0);
+    int64_t tets = (int64_t)ps.header.tet_count;
+    tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    tpk_tet20 *t20 = parts_data(&ps, TPK_TAG_TT20);
+    for (int64_t t = 3; t + 1 < tets; t += 97) {
+        int32_t v = t32[t].v[0], n = t32[t].n[0];
+        t32[t].v[0] = t32[t].v[1];
+        t32[t].v[1] = v;
+        t32[t].n[0] = t32[t].n[1];
+        t32[t].n[1] = n;
+        t20[t + 1].vx ^= 8;
+    }
+    const char *path = tpk_temp_path("threads.tpk");
+    CHECK(parts_write(&ps, path) == 0);
+    parts_free(&ps);
+    tpk_check_report one, many, none;
+    CHECK_EQ_INT(run_6xx_with(path, 1, 5, &one), 0);
+    int same = 1;
+    for (int threads = 2; threads <= 7 && same; threads += 5) {
+        CHECK_EQ_INT(run_6xx_with(path, threads, 5, &many), 0);
+        for (int id = 600; id <= 613; id++) {
+            tpk_finding *a = tpk_check_finding(&one, id), *b = tpk_check_finding(&many, id);
+            same &= a->count == b->count && a->example_count == b->example_count;
+            for (int e = 0; same && e < a->example_count; e++)
+                same &= !memcmp(a->examples[e].ids, b->examples[e].ids, sizeof a->examples[e].ids) &&
+                        !strcmp(a->examples[e].note, b->examples[e].note);
+        }
+        tpk_check_report_free(&many);
+    }
+    CHECK_EQ_INT(run_6xx_with(path, 2, 0, &none), 0);
+    int64_t flipped = (tets - 1 - 3 + 96) / 97;
+    int ok = same && found(&one, 602) == flipped && found(&one, 603) == flipped &&
+             tpk_check_finding(&one, 602)->examples[0].ids[0] == 3 &&
+             tpk_check_finding(&one, 602)->examples[4].ids[0] == 3 + 4 * 97 && found(&none, 602) == flipped &&
+             tpk_check_finding(&none, 602)->example_count == 0;
+    total_6xx(&one, "threads");
+    tpk_check_report_free(&one);
+    tpk_check_report_free(&none);
+    CHECK(ok);
+}
+
+/* Findings of two runs: the same counts, examples and summaries. */
+static int same_findings(tpk_check_report *a, tpk_check_report *b)
+{
+    for (int id = 600; id <= 613; id++) {
+        tpk_finding *x = tpk_check_finding(a, id), *y = tpk_check_finding(b, id);
+        if (x->count != y->count || x->example_count != y->example_count || strcmp(x->summary, y->summary))
+            return 0;
+        for (int e = 0; e < x->example_count; e++)
+            if (memcmp(x->examples[e].ids, y->examples[e].ids, sizeof x->examples[e].ids) ||
+                strcmp(x->examples[e].note, y->examples[e].note))
+                return 0;
+    }
+    return 1;
+}
+
+/* A Tet16-only file large enough for the walk to run in parallel: clean, it reports nothing; broken,
+ * the findings are those of the serial walk (one thread), whatever the thread count. */
+TPK_TEST(parallel_walk)
+{
+    parts ps;
+    const char *base = tpk_temp_path("cube16.tpk"); /* 202596 tets, 12168 shell faces */
+    CHECK(convert("sfepy/cube_big_tetra.mesh", base, ALL_LAYOUTS, 0) == 0);
+    CHECK(parts_from(base, ALL_LAYOUTS, &ps) == 0);
+    parts_remove(&ps, TPK_TAG_TT32);
+    parts_remove(&ps, TPK_TAG_TT20);
+    const char *clean = tpk_temp_path("cube16_clean.tpk");
+    CHECK(parts_write(&ps, clean) == 0);
+    /* b: no entry is refused, so the parallel walk is kept, and the checks on it find problems */
+    tpk_shell_face *shell = parts_data(&ps, TPK_TAG_SHEL);
+    shell[5000] = (tpk_shell_face){shell[5000].a, shell[5000].c, shell[5000].b, shell[5000].t};
+    drop_last_shell_face(&ps);
+    const char *broken_b = tpk_temp_path("cube16_broken_b.tpk");
+    CHECK(parts_write(&ps, broken_b) == 0);
+    /* a: records no entry can decode, so the parallel attempt gives way to the serial walk at once */
+    tpk_tet16 *t16 = parts_data(&ps, TPK_TAG_TT16);
+    for (int64_t t = 1000; t < 200000; t += 20011)
+        t16[t].nx[2] ^= 0x20000000;
+    const char *broken = tpk_temp_path("cube16_broken.tpk");
+    CHECK(parts_write(&ps, broken) == 0);
+    parts_free(&ps);
+    tpk_check_report serial, parallel;
+    for (int threads = 2; threads <= 4; threads += 2) {
+        CHECK_EQ_INT(run_6xx_with(clean, threads, 5, &parallel), 0);
+        int64_t total = total_6xx(&parallel, "cube16 clean");
+        tpk_check_report_free(&parallel);
+        CHECK_EQ_INT(total, 0);
+    }
+    const char *files[2] = {broken, broken_b};
+    for (int f = 0; f < 2; f++) {
+        CHECK_EQ_INT(run_6xx_with(files[f], 1, 5, &serial), 0);
+        int ok = f == 0 ? found(&serial, 608) == 10 : found(&serial, 610) >= 1 && found(&serial, 609) >= 1;
+        for (int threads = 2; threads <= 4 && ok; threads += 2) {
+            CHECK_EQ_INT(run_6xx_with(files[f], threads, 5, &parallel), 0);
+            ok = same_findings(&serial, &parallel);
+            tpk_check_report_free(&parallel);
+        }
+        total_6xx(&serial, files[f]);
+        tpk_check_report_free(&serial);
+        CHECK_MSG(ok, "%s", files[f]);
+    }
+}
