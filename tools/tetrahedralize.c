@@ -287,6 +287,9 @@ static int cell_to_point(const tpk_mesh *src, const field_request *req, const tp
     }
     for (int64_t t = 0; t < out->tet_count; t++)
         kept[out->tet_source[t]] = 1;
+    /* All-tet input through tpk_tetrahedralize_consume: the connectivity was taken over as the tet array,
+     * unchanged so far (cell c is tet c, 4 ids each, before orientation). */
+    const int32_t *conn = src->cell_conn ? src->cell_conn : out->tets;
     for (int s = 0; s < f->step_count; s++) {
         const float *step = f->values + (size_t)s * (size_t)src->cell_count * (size_t)f->components;
         memset(sum, 0, sizeof *sum * (size_t)np);
@@ -296,8 +299,8 @@ static int cell_to_point(const tpk_mesh *src, const field_request *req, const tp
                 continue;
             double value = pick_value(step + c * f->components, f->components, req->pick);
             for (int64_t k = src->cell_offsets[c]; k < src->cell_offsets[c + 1]; k++) {
-                sum[src->cell_conn[k]] += value;
-                count[src->cell_conn[k]]++;
+                sum[conn[k]] += value;
+                count[conn[k]]++;
             }
         }
         float *dst = values + (size_t)s * (size_t)nv;
@@ -512,7 +515,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
         memcpy(out->times, src->times, sizeof *out->times * (size_t)src->step_count);
     }
     /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
-     * field copy reads src, and uses the connectivity only around added points (never all-tet). */
+     * field copy reads src (cell_to_point uses the taken-over connectivity as out->tets). */
     int geometry = take_geometry(src, donor, tet_capacity, flags, &added, out, diag);
     if (geometry == 0 && out->mirrored_cells > 0 && (flags & TPK_TETRA_REFUSE_MIRRORED))
         geometry = refuse_mirrored(src, out->first_mirrored_cell, out, diag) ? -2 : 0;
