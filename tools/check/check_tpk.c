@@ -216,3 +216,18 @@ int tpk_check_tpk_file(const char *path, tpk_file *file, tpk_check_report *repor
     free_context(&c);
     return rc;
 }
+
+int tpkc_run_tet_pass(tpkc *c, void (*fn)(void *ctx, int64_t begin, int64_t end, int worker), tpk_diag *diag)
+{
+    int threads = tpk_threads_for(c->T, c->threads, 1 << 14);
+    tpkc_sink *sinks = calloc((size_t)threads, sizeof *sinks);
+    if (!sinks)
+        return tpk_diag_fail(diag, "out of memory");
+    for (int w = 0; w < threads; w++)
+        sinks[w].max_examples = c->report->options.max_examples;
+    tpkc_pass pass = {c, sinks};
+    tpk_parallel_for(c->T, threads, fn, &pass);
+    tpkc_merge(c->report, sinks, threads);
+    free(sinks);
+    return 0;
+}

@@ -37,6 +37,14 @@ tpk_example *tpkc_hit(tpkc_sink *sink, int id, const char *kind);
 /* Move the sinks' findings into the report in sink order (so the lowest ids come first when sink w
  * covered the w-th range), then free them. */
 void tpkc_merge(tpk_check_report *report, tpkc_sink *sinks, int count);
+/* A pass over the tets on worker threads: worker w reports into sinks[w]. */
+typedef struct tpkc_pass {
+    struct tpkc *c;
+    tpkc_sink *sinks;
+} tpkc_pass;
+/* Run fn (its ctx is a tpkc_pass) over [0, c->T) with one sink per worker, then merge them in order. */
+int tpkc_run_tet_pass(struct tpkc *c, void (*fn)(void *ctx, int64_t begin, int64_t end, int worker),
+                      tpk_diag *diag);
 /* Fill an example's ids from int32 values. */
 void tpkc_example_ids32(tpk_example *ex, int count, const int32_t *ids);
 

@@ -8,11 +8,6 @@
 #include "check_tpk_internal.h"
 #include "parallel.h"
 
-typedef struct layout_pass {
-    tpkc *c;
-    tpkc_sink *sinks;
-} layout_pass;
-
 static void check_vx(tpkc_sink *sink, int64_t t, tpk_layout layout, int32_t stored, int32_t expected)
 {
     if (stored == expected)
@@ -87,7 +82,7 @@ static void check_record(const tpkc *c, tpkc_sink *sink, int64_t t)
 
 static void layout_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
-    layout_pass *pass = ctx;
+    tpkc_pass *pass = ctx;
     for (int64_t t = begin; t < end; t++)
         check_record(pass->c, &pass->sinks[worker], t);
 }
@@ -97,15 +92,5 @@ int tpkc_check_layouts(tpkc *c, tpk_diag *diag)
     int others = (c->tet20 && c->ref != TPK_LAYOUT_TET20) + (c->tet16 && c->ref != TPK_LAYOUT_TET16);
     if (!others)
         return 0;
-    int threads = tpk_threads_for(c->T, c->threads, 1 << 14);
-    tpkc_sink *sinks = calloc((size_t)threads, sizeof *sinks);
-    if (!sinks)
-        return tpk_diag_fail(diag, "out of memory");
-    for (int w = 0; w < threads; w++)
-        sinks[w].max_examples = c->report->options.max_examples;
-    layout_pass pass = {c, sinks};
-    tpk_parallel_for(c->T, threads, layout_range, &pass);
-    tpkc_merge(c->report, sinks, threads);
-    free(sinks);
-    return 0;
+    return tpkc_run_tet_pass(c, layout_range, diag);
 }

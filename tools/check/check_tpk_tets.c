@@ -8,11 +8,6 @@
 #include "check_tpk_internal.h"
 #include "parallel.h"
 
-typedef struct tet_pass {
-    tpkc *c;
-    tpkc_sink *sinks;
-} tet_pass;
-
 static void centroid_world(const tpkc *c, const int32_t q[4], double out[3])
 {
     for (int a = 0; a < 3; a++) {
@@ -196,7 +191,7 @@ static void prefetch_tet(const tpkc *c, int64_t t)
 
 static void tet_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
-    tet_pass *pass = ctx;
+    tpkc_pass *pass = ctx;
     for (int64_t t = begin; t < end; t++) {
         if (t + PREFETCH_AHEAD < end)
             prefetch_tet(pass->c, t + PREFETCH_AHEAD);
@@ -208,15 +203,5 @@ static void tet_range(void *ctx, int64_t begin, int64_t end, int worker)
 
 int tpkc_check_tets(tpkc *c, tpk_diag *diag)
 {
-    int threads = tpk_threads_for(c->T, c->threads, 1 << 14);
-    tpkc_sink *sinks = calloc((size_t)threads, sizeof *sinks);
-    if (!sinks)
-        return tpk_diag_fail(diag, "out of memory");
-    for (int w = 0; w < threads; w++)
-        sinks[w].max_examples = c->report->options.max_examples;
-    tet_pass pass = {c, sinks};
-    tpk_parallel_for(c->T, threads, tet_range, &pass);
-    tpkc_merge(c->report, sinks, threads);
-    free(sinks);
-    return 0;
+    return tpkc_run_tet_pass(c, tet_range, diag);
 }
