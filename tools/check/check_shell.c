@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "check_topo.h"
+#include "parallel.h"
 
 static void shell_face_as_topo(const tpk_bface *s, tpk_topo_face *f)
 {
@@ -91,8 +92,9 @@ int tpk_check_shell(const tpk_mesh *mesh, tpk_topo_match *m, tpk_check_report *r
     tpk_shell_pair *pairs = NULL;
     int64_t pair_count = 0;
     int64_t *partner = malloc(sizeof *partner * (size_t)(m->shell_count ? m->shell_count : 1));
+    int threads = tpk_thread_count(report->options.threads);
     if (!partner || tpk_shell_face_pairs(mesh->points, m->shell, m->shell_count,
-                                         !report->options.skip_shell_intersections, &pairs, &pair_count)) {
+                                         !report->options.skip_shell_intersections, threads, &pairs, &pair_count)) {
         free(partner);
         return tpk_diag_fail(diag, "check: out of memory (shell intersections, %lld faces)",
                              (long long)m->shell_count);

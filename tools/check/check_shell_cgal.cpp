@@ -1,16 +1,19 @@
-// Shell face pairs for `tetpack check` (303 nonconforming_face, 406 shell_self_intersection): the shell's
-// triangles go through CGAL's box_self_intersection_d; each candidate pair is then decided with exact
-// Epick predicates (orientation, do_intersect), so no tolerance is involved.
+// Shell face pairs for `tetpack check` (303 nonconforming_face, 406 shell_self_intersection). Candidate
+// pairs are triangles whose bounding boxes overlap, found with a uniform grid (boxes sorted into the
+// cells they cover; a pair is examined only in the cell of the lower corner of its boxes' overlap, so
+// once) in parallel over runs of cells; CGAL's box_self_intersection_d was 5 to 10 times slower on
+// surfaces of 10^5 to 10^6 triangles. Each candidate is decided with exact Epick predicates
+// (orientation, do_intersect), so no tolerance is involved and the result does not depend on the grid.
 #include "check_shell_cgal.h"
 #include "predicates.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/box_intersection_d.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <new>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -18,7 +21,6 @@ namespace {
 typedef CGAL::Exact_predicates_inexact_constructions_kernel K;
 typedef K::Point_3 Point3;
 typedef K::Point_2 Point2;
-typedef CGAL::Box_intersection_d::Box_with_info_d<double, 3, uint32_t, CGAL::Box_intersection_d::ID_EXPLICIT> Box;
 
 struct Tri {
     int32_t v[3];
@@ -30,7 +32,6 @@ struct Context {
     const tpk_bface *faces;
     const std::vector<Tri> *tris;
     int test_intersections;
-    std::vector<tpk_shell_pair> *pairs;
 };
 
 Point3 point(const double *points, int32_t id)
@@ -163,30 +164,152 @@ int classify(const Context &ctx, const Tri &s, const Tri &t)
                : 0;
 }
 
-void on_boxes(const Context &ctx, const Box &x, const Box &y)
+void examine(const Context &ctx, uint32_t x, uint32_t y, std::vector<tpk_shell_pair> &out)
 {
-    const Tri &s = (*ctx.tris)[x.info()], &t = (*ctx.tris)[y.info()];
+    const Tri &s = (*ctx.tris)[x], &t = (*ctx.tris)[y];
     if (s.face == t.face || ctx.faces[s.face].cell == ctx.faces[t.face].cell)
         return;
     int kind = classify(ctx, s, t);
-    if (kind) {
-        uint32_t a = std::min(s.face, t.face), b = std::max(s.face, t.face);
-        ctx.pairs->push_back(tpk_shell_pair{a, b, kind});
+    if (kind)
+        out.push_back(tpk_shell_pair{std::min(s.face, t.face), std::max(s.face, t.face), kind});
+}
+
+struct Bounds {
+    double lo[3], hi[3];
+};
+
+Bounds triangle_bounds(const double *points, const Tri &t)
+{
+    Bounds b;
+    for (int c = 0; c < 3; c++) {
+        b.lo[c] = b.hi[c] = points[3 * (int64_t)t.v[0] + c];
+        for (int k = 1; k < 3; k++) {
+            double x = points[3 * (int64_t)t.v[k] + c];
+            b.lo[c] = std::min(b.lo[c], x);
+            b.hi[c] = std::max(b.hi[c], x);
+        }
+    }
+    return b;
+}
+
+// A uniform grid over the boxes: cell index along each axis is monotonic in the coordinate, so a box
+// covers a contiguous range and the lower corner of two boxes' overlap lies in a cell both cover.
+struct Grid {
+    double origin[3], size;
+    int64_t n[3];
+
+    int64_t index(double x, int axis) const
+    {
+        double f = std::floor((x - origin[axis]) / size);
+        return f < 0 ? 0 : f >= (double)n[axis] ? n[axis] - 1 : (int64_t)f;
+    }
+    uint64_t key(int64_t i, int64_t j, int64_t k) const
+    {
+        return ((uint64_t)i * (uint64_t)n[1] + (uint64_t)j) * (uint64_t)n[2] + (uint64_t)k;
+    }
+};
+
+struct Entry {
+    uint64_t cell;
+    uint32_t box;
+    bool operator<(const Entry &o) const { return cell != o.cell ? cell < o.cell : box < o.box; }
+};
+
+// Cell size: the mean largest extent of the boxes, doubled until the boxes cover at most 16 cells
+// each on average (a few huge faces among small ones must not flood the grid).
+bool make_entries(const std::vector<Bounds> &boxes, Grid &grid, std::vector<Entry> &entries)
+{
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, mean = 0;
+    for (const Bounds &b : boxes) {
+        double extent = 0;
+        for (int c = 0; c < 3; c++) {
+            lo[c] = std::min(lo[c], b.lo[c]);
+            hi[c] = std::max(hi[c], b.hi[c]);
+            extent = std::max(extent, b.hi[c] - b.lo[c]);
+        }
+        mean += extent / (double)boxes.size();
+    }
+    double span = std::max(hi[0] - lo[0], std::max(hi[1] - lo[1], hi[2] - lo[2]));
+    grid.size = mean > 0 ? mean : span > 0 ? span : 1.0;
+    grid.size = std::max(grid.size, span / 1e6); // at most ~10^6 cells per axis
+    for (;;) {
+        for (int c = 0; c < 3; c++) {
+            grid.origin[c] = lo[c];
+            grid.n[c] = (int64_t)std::floor((hi[c] - lo[c]) / grid.size) + 1;
+        }
+        uint64_t total = 0;
+        for (const Bounds &b : boxes) {
+            uint64_t cells = 1;
+            for (int c = 0; c < 3; c++)
+                cells *= (uint64_t)(grid.index(b.hi[c], c) - grid.index(b.lo[c], c) + 1);
+            total += cells;
+        }
+        if (total <= 16 * (uint64_t)boxes.size() + 64)
+            break;
+        grid.size *= 2;
+    }
+    entries.clear();
+    for (size_t i = 0; i < boxes.size(); i++) {
+        const Bounds &b = boxes[i];
+        for (int64_t x = grid.index(b.lo[0], 0); x <= grid.index(b.hi[0], 0); x++)
+            for (int64_t y = grid.index(b.lo[1], 1); y <= grid.index(b.hi[1], 1); y++)
+                for (int64_t z = grid.index(b.lo[2], 2); z <= grid.index(b.hi[2], 2); z++)
+                    entries.push_back(Entry{grid.key(x, y, z), (uint32_t)i});
+    }
+    std::sort(entries.begin(), entries.end());
+    return true;
+}
+
+bool boxes_overlap(const Bounds &a, const Bounds &b)
+{
+    for (int c = 0; c < 3; c++)
+        if (a.hi[c] < b.lo[c] || b.hi[c] < a.lo[c])
+            return false;
+    return true;
+}
+
+// Pairs of boxes in the entries [begin, end) (whole cell runs), each reported in one cell only.
+void scan_cells(const Context &ctx, const Grid &grid, const std::vector<Bounds> &boxes,
+                const std::vector<Entry> &entries, size_t begin, size_t end, std::vector<tpk_shell_pair> &out)
+{
+    for (size_t i = begin, j; i < end; i = j) {
+        for (j = i + 1; j < end && entries[j].cell == entries[i].cell; j++)
+            ;
+        for (size_t a = i; a < j; a++)
+            for (size_t b = a + 1; b < j; b++) {
+                const Bounds &x = boxes[entries[a].box], &y = boxes[entries[b].box];
+                if (!boxes_overlap(x, y))
+                    continue;
+                uint64_t home = grid.key(grid.index(std::max(x.lo[0], y.lo[0]), 0),
+                                         grid.index(std::max(x.lo[1], y.lo[1]), 1),
+                                         grid.index(std::max(x.lo[2], y.lo[2]), 2));
+                if (home == entries[i].cell)
+                    examine(ctx, entries[a].box, entries[b].box, out);
+            }
     }
 }
 
-Box triangle_box(const double *points, const Tri &t, uint32_t index)
+// Splits the entries into `threads` ranges at cell boundaries and scans them in parallel.
+void scan_parallel(const Context &ctx, const Grid &grid, const std::vector<Bounds> &boxes,
+                   const std::vector<Entry> &entries, int threads, std::vector<tpk_shell_pair> &found)
 {
-    double lo[3], hi[3];
-    for (int c = 0; c < 3; c++) {
-        lo[c] = hi[c] = points[3 * (int64_t)t.v[0] + c];
-        for (int k = 1; k < 3; k++) {
-            double x = points[3 * (int64_t)t.v[k] + c];
-            lo[c] = std::min(lo[c], x);
-            hi[c] = std::max(hi[c], x);
-        }
+    std::vector<size_t> cut(threads + 1, entries.size());
+    cut[0] = 0;
+    for (int w = 1; w < threads; w++) {
+        size_t at = std::max(cut[w - 1], entries.size() / threads * w);
+        while (at < entries.size() && at > 0 && entries[at].cell == entries[at - 1].cell)
+            at++;
+        cut[w] = at;
     }
-    return Box(lo, hi, index);
+    std::vector<std::vector<tpk_shell_pair>> parts(threads);
+    std::vector<std::thread> workers;
+    for (int w = 1; w < threads; w++)
+        workers.emplace_back([&, w] { scan_cells(ctx, grid, boxes, entries, cut[w], cut[w + 1], parts[w]); });
+    scan_cells(ctx, grid, boxes, entries, cut[0], cut[1], parts[0]);
+    for (std::thread &t : workers)
+        t.join();
+    for (const std::vector<tpk_shell_pair> &p : parts)
+        found.insert(found.end(), p.begin(), p.end());
 }
 
 bool pair_less(const tpk_shell_pair &x, const tpk_shell_pair &y)
@@ -206,7 +329,8 @@ bool pair_equal(const tpk_shell_pair &x, const tpk_shell_pair &y)
 } // namespace
 
 extern "C" int tpk_shell_face_pairs(const double *points, const tpk_bface *faces, int64_t face_count,
-                                    int test_intersections, tpk_shell_pair **pairs, int64_t *pair_count)
+                                    int test_intersections, int threads, tpk_shell_pair **pairs,
+                                    int64_t *pair_count)
 {
     *pairs = nullptr;
     *pair_count = 0;
@@ -219,14 +343,19 @@ extern "C" int tpk_shell_face_pairs(const double *points, const tpk_bface *faces
                 if (usable_triangle(points, tri))
                     tris.push_back(tri);
             }
-        std::vector<Box> boxes;
+        std::vector<Bounds> boxes;
         boxes.reserve(tris.size());
-        for (size_t i = 0; i < tris.size(); i++)
-            boxes.push_back(triangle_box(points, tris[i], (uint32_t)i));
+        for (const Tri &t : tris)
+            boxes.push_back(triangle_bounds(points, t));
         std::vector<tpk_shell_pair> found;
-        Context ctx = {points, faces, &tris, test_intersections, &found};
-        CGAL::box_self_intersection_d(boxes.begin(), boxes.end(),
-                                      [&ctx](const Box &x, const Box &y) { on_boxes(ctx, x, y); });
+        if (!boxes.empty()) {
+            Grid grid;
+            std::vector<Entry> entries;
+            make_entries(boxes, grid, entries);
+            Context ctx = {points, faces, &tris, test_intersections};
+            int workers = (int)std::max<int64_t>(1, std::min<int64_t>(threads, (int64_t)entries.size() / 20000));
+            scan_parallel(ctx, grid, boxes, entries, workers, found);
+        }
         std::sort(found.begin(), found.end(), pair_less);
         found.erase(std::unique(found.begin(), found.end(), pair_equal), found.end());
         *pairs = static_cast<tpk_shell_pair *>(malloc(sizeof(tpk_shell_pair) * (found.empty() ? 1 : found.size())));

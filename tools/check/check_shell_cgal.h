@@ -1,5 +1,5 @@
 /* The one CGAL unit of the shell checks: which shell faces overlap or intersect (303 and 406), decided
- * exactly on CGAL's Epick kernel after a box_self_intersection_d pass over the faces' triangles. */
+ * exactly on CGAL's Epick kernel for the triangle pairs whose bounding boxes overlap. */
 #ifndef TPK_CHECK_SHELL_CGAL_H
 #define TPK_CHECK_SHELL_CGAL_H
 
@@ -30,10 +30,10 @@ typedef struct tpk_shell_pair {
  *    each intersects the other (CGAL::do_intersect), or they are coplanar, face the same way and overlap.
  * Faces that only touch along an edge or at a point, or share a vertex and are not coplanar, are no
  * pair. Triangles with a non-finite or collinear corner are skipped (the vertex and cell checks report
- * them). *pairs (malloc'd, sorted by a, b, kind, no repeats) and *pair_count are set. Returns 0, or -1
- * when out of memory. */
+ * them). *pairs (malloc'd, sorted by a, b, kind, no repeats) and *pair_count are set; the result does
+ * not depend on `threads` (>= 1). Returns 0, or -1 when out of memory. */
 int tpk_shell_face_pairs(const double *points, const tpk_bface *faces, int64_t face_count,
-                         int test_intersections, tpk_shell_pair **pairs, int64_t *pair_count);
+                         int test_intersections, int threads, tpk_shell_pair **pairs, int64_t *pair_count);
 
 #ifdef __cplusplus
 }
