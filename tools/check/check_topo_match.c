@@ -559,6 +559,8 @@ static int merge_shell(match_job *job, tpk_topo_match *out)
     if (!out->shell)
         return -1;
     for (int w = 0; w < job->threads; w++) {
+        if (job->out[w].shell_count == 0) /* its list may never have been allocated */
+            continue;
         memcpy(out->shell + out->shell_count, job->out[w].shell, sizeof *out->shell * (size_t)job->out[w].shell_count);
         out->shell_count += job->out[w].shell_count;
     }
