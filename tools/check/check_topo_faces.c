@@ -109,6 +109,9 @@ uint32_t tpk_uf_find(uint32_t *parent, uint32_t x)
 
 void tpk_uf_union(uint32_t *parent, uint32_t a, uint32_t b)
 {
+    /* Most unions of a connected mesh find both cells already under one parent: no walk needed. */
+    if (__atomic_load_n(&parent[a], __ATOMIC_RELAXED) == __atomic_load_n(&parent[b], __ATOMIC_RELAXED))
+        return;
     for (;;) {
         a = tpk_uf_find(parent, a);
         b = tpk_uf_find(parent, b);

@@ -19,8 +19,14 @@ static const int HIT_IDS[HIT_KINDS] = {301, 302, 305};
  * (UINT32_MAX for a triangle); its vertices in order are looked up again only for shared faces. */
 typedef struct face_rec {
     uint64_t key;
-    uint32_t key3, cell, local;
+    uint32_t key3, cell;
+    uint16_t local;
+    int8_t sign; /* tets_only: the tet's orientation, carried in its bucket entry */
 } face_rec;
+
+/* tets_only entries: the cell id, and its orientation + 1 in the top two bits (cells < 2^30). */
+#define ENTRY_CELL 0x3fffffffu
+#define ENTRY_SIGN_SHIFT 30
 
 typedef struct worker_out {
     int64_t counts[HIT_KINDS];
@@ -37,7 +43,8 @@ typedef struct match_job {
     const tpk_mesh *mesh;
     int threads, max_examples;
     int tets_only;                    /* every cell a tet at offset 4 c: the fast paths below */
-    int8_t *signs;                    /* tets_only: orientation of each tet (exact), for 305 */
+    int8_t *signs;                    /* tets_only: orientation of each tet (exact), for 305, until the
+                                         entries carry it */
     int64_t *starts[TPK_MAX_THREADS]; /* per worker, per vertex: count, then next slot */
     int64_t *bucket_start;            /* point_count + 1 */
     uint32_t *entries;
@@ -153,8 +160,11 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
             continue;
         if (!job->tets_only)
             nm = cell_buckets(job, c, mins);
+        uint32_t entry = (uint32_t)c;
+        if (job->tets_only)
+            entry |= (uint32_t)(job->signs[c] + 1) << ENTRY_SIGN_SHIFT;
         for (int i = 0; i < nm; i++)
-            job->entries[next[mins[i]]++] = (uint32_t)c;
+            job->entries[next[mins[i]]++] = entry;
     }
 }
 
@@ -235,7 +245,8 @@ static void make_rec(face_rec *r, const tpk_topo_face *f, uint32_t cell, uint32_
     r->key = (uint64_t)(uint32_t)s[1] << 32 | (uint32_t)s[2];
     r->key3 = f->n == 4 ? (uint32_t)s[3] : UINT32_MAX;
     r->cell = cell;
-    r->local = local;
+    r->local = (uint16_t)local;
+    r->sign = 0;
 }
 
 /* The face `local` of a cell in outward order. */
@@ -252,18 +263,20 @@ static void face_of(const match_job *job, uint32_t cell, uint32_t local, tpk_top
 }
 
 /* A tet's faces whose smallest id is v (its smallest or second smallest id); face k is opposite k. */
-static int tet_recs(const int32_t *conn, uint32_t c, int32_t v, face_rec *r)
+static int tet_recs(const int32_t *conn, uint32_t entry, int32_t v, face_rec *r)
 {
+    uint32_t c = entry & ENTRY_CELL;
+    int8_t sign = (int8_t)((int)(entry >> ENTRY_SIGN_SHIFT) - 1);
     int32_t id[4];
     int local[4];
     sort_tet(conn + 4 * (int64_t)c, id, local);
     if (id[0] != v) {
-        r[0] = (face_rec){(uint64_t)(uint32_t)id[2] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint32_t)local[0]};
+        r[0] = (face_rec){(uint64_t)(uint32_t)id[2] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint16_t)local[0], sign};
         return 1;
     }
-    r[0] = (face_rec){(uint64_t)(uint32_t)id[1] << 32 | (uint32_t)id[2], UINT32_MAX, c, (uint32_t)local[3]};
-    r[1] = (face_rec){(uint64_t)(uint32_t)id[1] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint32_t)local[2]};
-    r[2] = (face_rec){(uint64_t)(uint32_t)id[2] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint32_t)local[1]};
+    r[0] = (face_rec){(uint64_t)(uint32_t)id[1] << 32 | (uint32_t)id[2], UINT32_MAX, c, (uint16_t)local[3], sign};
+    r[1] = (face_rec){(uint64_t)(uint32_t)id[1] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint16_t)local[2], sign};
+    r[2] = (face_rec){(uint64_t)(uint32_t)id[2] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint16_t)local[1], sign};
     return 3;
 }
 
@@ -292,24 +305,25 @@ static int grow_recs(worker_out *o, int64_t need)
 
 /* Reads ahead of entry i (up to `limit`, the end of the worker's entries, so across buckets): the
  * cells of a bucket lie anywhere in memory on a mesh in random order. 32 entries ahead the nodes (for
- * other cells first their offset), 16 ahead the union-find entry and the tet's orientation. */
+ * other cells first their offset), 16 ahead the union-find entry, 8 ahead the entry's parent. */
 static inline void read_ahead(const match_job *job, int64_t i, int64_t limit)
 {
     const tpk_mesh *mesh = job->mesh;
     if (job->tets_only) {
         if (i + 32 < limit)
-            __builtin_prefetch(mesh->cell_conn + 4 * (int64_t)job->entries[i + 32]);
+            __builtin_prefetch(mesh->cell_conn + 4 * (int64_t)(job->entries[i + 32] & ENTRY_CELL));
     } else {
         if (i + 48 < limit)
             __builtin_prefetch(mesh->cell_offsets + job->entries[i + 48]);
         if (i + 32 < limit)
             __builtin_prefetch(mesh->cell_conn + mesh->cell_offsets[job->entries[i + 32]]);
     }
-    if (i + 16 < limit) {
-        uint32_t c = job->entries[i + 16];
-        __builtin_prefetch(job->parent + c, 1);
-        if (job->signs)
-            __builtin_prefetch(job->signs + c);
+    uint32_t mask = job->tets_only ? ENTRY_CELL : UINT32_MAX;
+    if (i + 16 < limit)
+        __builtin_prefetch(job->parent + (job->entries[i + 16] & mask), 1);
+    if (i + 8 < limit) { /* the union will walk up: its parent has arrived by now, ask for the next */
+        uint32_t up = __atomic_load_n(job->parent + (job->entries[i + 8] & mask), __ATOMIC_RELAXED);
+        __builtin_prefetch(job->parent + up, 1);
     }
 }
 
@@ -366,9 +380,9 @@ static int consistent(const tpk_topo_face *a, const tpk_topo_face *b);
 /* 305 for two tets from their exact orientations: a positive tet lies on the negative side of its own
  * outward face order, so a sits on side -sign(a) of its order of the face, and b on side sign(b) when
  * it traverses the face the other way (consistent), else -sign(b). */
-static int tets_folded(const int8_t *signs, uint32_t a, uint32_t b, int consistent_order)
+static int tets_folded(const face_rec *a, const face_rec *b, int consistent_order)
 {
-    int side_a = -signs[a], side_b = consistent_order ? signs[b] : -signs[b];
+    int side_a = -a->sign, side_b = consistent_order ? b->sign : -b->sign;
     return side_a != 0 && side_a == side_b;
 }
 
@@ -442,7 +456,7 @@ static void shared_face(match_job *job, worker_out *o, const face_rec *r)
                              "turned over", r[0].cell, r[1].cell);
         }
     }
-    if (job->tets_only ? tets_folded(job->signs, r[0].cell, r[1].cell, consistent(&fa, &fb))
+    if (job->tets_only ? tets_folded(&r[0], &r[1], consistent(&fa, &fb))
                        : folded(job->mesh, r[0].cell, &fa, r[1].cell)) {
         tpk_example *ex = worker_hit(job, o, HIT_FOLDED);
         if (ex) {
@@ -628,6 +642,7 @@ int tpk_topo_match_faces(const tpk_mesh *mesh, tpk_check_report *report, tpk_top
     for (int64_t c = 0; c < mesh->cell_count && job->tets_only; c++)
         job->tets_only = mesh->cell_types[c] == TPK_CELL_TETRA && mesh->cell_offsets[c] == 4 * c;
     job->tets_only &= mesh->cell_offsets[mesh->cell_count] == 4 * mesh->cell_count;
+    job->tets_only &= mesh->cell_count <= (int64_t)ENTRY_CELL; /* the entries' top bits hold the sign */
     int rc = alloc_job(job, mesh->point_count);
     if (rc == 0) {
         tpk_parallel_for(mesh->cell_count, job->threads, count_entries, job);
@@ -639,6 +654,8 @@ int tpk_topo_match_faces(const tpk_mesh *mesh, tpk_check_report *report, tpk_top
     }
     if (rc == 0) {
         tpk_parallel_for(mesh->cell_count, job->threads, scatter_entries, job);
+        free(job->signs); /* the entries carry them now */
+        job->signs = NULL;
         split_buckets(job);
         tpk_check_progress(report, "faces", 0.4);
         tpk_parallel_for(job->threads, job->threads, match_buckets, job);
