@@ -305,7 +305,8 @@ static int grow_recs(worker_out *o, int64_t need)
 
 /* Reads ahead of entry i (up to `limit`, the end of the worker's entries, so across buckets): the
  * cells of a bucket lie anywhere in memory on a mesh in random order. 32 entries ahead the nodes (for
- * other cells first their offset), 16 ahead the union-find entry, 8 ahead the entry's parent. */
+ * other cells first their offset), 16 ahead the union-find entry (and the points of cells other than
+ * tets, which test fold-over on them), 8 ahead the entry's parent. */
 static inline void read_ahead(const match_job *job, int64_t i, int64_t limit)
 {
     const tpk_mesh *mesh = job->mesh;
@@ -321,6 +322,11 @@ static inline void read_ahead(const match_job *job, int64_t i, int64_t limit)
     uint32_t mask = job->tets_only ? ENTRY_CELL : UINT32_MAX;
     if (i + 16 < limit)
         __builtin_prefetch(job->parent + (job->entries[i + 16] & mask), 1);
+    if (!job->tets_only && i + 16 < limit) { /* other cells test fold-over on their points */
+        uint32_t c = job->entries[i + 16];
+        for (int64_t k = mesh->cell_offsets[c]; k < mesh->cell_offsets[c + 1]; k++)
+            __builtin_prefetch(mesh->points + 3 * (int64_t)mesh->cell_conn[k]);
+    }
     if (i + 8 < limit) { /* the union will walk up: its parent has arrived by now, ask for the next */
         uint32_t up = __atomic_load_n(job->parent + (job->entries[i + 8] & mask), __ATOMIC_RELAXED);
         __builtin_prefetch(job->parent + up, 1);
@@ -344,8 +350,10 @@ static int64_t expand_bucket(match_job *job, worker_out *o, int64_t v, int64_t l
 }
 
 /* Side of triangle `tri` that cell `cell` lies on: the sign every vertex of the cell off the face
- * shares, or 0 when they do not agree (a cell that is itself warped or flat: the cell checks say so). */
-static int cell_side(const tpk_mesh *mesh, uint32_t cell, const tpk_topo_face *face, const int32_t tri[3])
+ * shares, or 0 when they do not agree (a cell that is itself warped or flat: the cell checks say so).
+ * With `first_only`, the sign of the first vertex off the face. */
+static int cell_side(const tpk_mesh *mesh, uint32_t cell, const tpk_topo_face *face, const int32_t tri[3],
+                     int first_only)
 {
     int pos = 0, neg = 0;
     for (int64_t i = mesh->cell_offsets[cell]; i < mesh->cell_offsets[cell + 1]; i++) {
@@ -355,21 +363,26 @@ static int cell_side(const tpk_mesh *mesh, uint32_t cell, const tpk_topo_face *f
         if (on_face)
             continue;
         int s = tpk_topo_orient(mesh->points, tri[0], tri[1], tri[2], p);
+        if (first_only)
+            return s;
         pos |= s > 0;
         neg |= s < 0;
     }
     return pos && !neg ? 1 : neg && !pos ? -1 : 0;
 }
 
-/* 305: both cells on the same side of a triangle of the face (quads: the smallest-id diagonal split). */
+/* 305: both cells on the same side of a triangle of the face (quads: the smallest-id diagonal split).
+ * One vertex of each strictly on opposite sides already rules it out: the usual case, two tests. */
 static int folded(const tpk_mesh *mesh, uint32_t cell_a, const tpk_topo_face *fa, uint32_t cell_b)
 {
     int triangles = fa->n == 4 ? 2 : 1;
     for (int t = 0; t < triangles; t++) {
         int32_t tri[3];
         tpk_topo_face_triangle(fa, t, tri);
-        int sa = cell_side(mesh, cell_a, fa, tri);
-        if (sa != 0 && sa == cell_side(mesh, cell_b, fa, tri))
+        if (cell_side(mesh, cell_a, fa, tri, 1) * cell_side(mesh, cell_b, fa, tri, 1) < 0)
+            continue;
+        int sa = cell_side(mesh, cell_a, fa, tri, 0);
+        if (sa != 0 && sa == cell_side(mesh, cell_b, fa, tri, 0))
             return 1;
     }
     return 0;
