@@ -8,8 +8,11 @@
 #include "check.h"
 #include "check_shell_cgal.h"
 
-/* Triangles and quads. A polyhedron (type 42) with larger faces raises this and adds its case to
- * tpk_topo_cell_faces; the matching keys every face by its sorted ids, so nothing else changes. */
+/* Triangles and quads. Polyhedra (type 42) add their explicit faces in check_topo_faces.c (the three
+ * functions tpk_topo_face_count, tpk_topo_cell_faces, tpk_topo_cell_face); the matching keys every face
+ * by its sorted ids and the shell keeps the face's own order, so triangles and quads need nothing else.
+ * Faces of more than 4 vertices also need this raised, a longer key in face_rec (check_topo_match.c)
+ * and room in tpk_bface. */
 #define TPK_TOPO_MAX_FACE_VERTS 4
 #define TPK_TOPO_MAX_CELL_FACES 32 /* the local face index is stored in a byte; polyhedra need room */
 
