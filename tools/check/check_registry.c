@@ -47,25 +47,34 @@ static const tpk_check_def registry[] = {
      "wedge, pyramid or polyhedron), or a cell with the wrong number of nodes"},
     {213, "lower_dimensional_cell", I, "cells", "a cell of dimension < 3 (vertices, lines, faces), ignored"},
     /* connectivity */
-    {301, "nonmanifold_face", E, "connectivity", "a face shared by more than two cells"},
+    {301, "nonmanifold_face", E, "connectivity", "a face (same sorted vertex ids) shared by more than two cells"},
     {302, "inconsistent_orientation", E, "connectivity",
      "two cells that share a face both traverse it in the same direction (one of them is turned over)"},
     {303, "nonconforming_face", E, "connectivity",
      "a boundary face lies inside the volume against faces of other cells (hanging node, T-junction, "
-     "mismatched quad split)"},
-    {304, "components", I, "connectivity", "number of face-connected components and their sizes in cells"},
+     "mismatched quad split): coplanar, facing each other, overlapping with positive area (exact); "
+     "counts faces"},
+    {304, "components", I, "connectivity",
+     "number of face-connected components (nonconforming faces join too) and their sizes in cells; "
+     "reported only when there is more than one"},
     {305, "folded_face", E, "connectivity",
-     "two cells that share a face lie on the same side of its plane (fold-over, exact)"},
+     "two cells that share a face lie on the same side of its plane (fold-over, exact; quads: each "
+     "triangle of the smallest-id diagonal split)"},
     /* shell */
-    {401, "nonmanifold_edge", E, "shell", "a shell edge is used by more than two shell faces"},
+    {401, "nonmanifold_edge", E, "shell",
+     "a shell edge is used by more than two shell faces (the shell: faces of one cell, quads as quads)"},
     {402, "nonmanifold_vertex", E, "shell",
-     "the shell faces around a vertex form more than one fan (volumes touching at a vertex)"},
+     "the shell faces around a vertex form more than one fan (volumes touching at a vertex; fans joined "
+     "through any shared edge, so the ends of a non-manifold edge count as 401 only)"},
     {403, "shell_orientation", E, "shell",
      "two shell faces sharing an edge traverse it in the same direction"},
     {404, "open_shell", E, "shell", "a shell edge is used by one shell face only: the boundary is not closed"},
-    {405, "euler_characteristic", I, "shell", "V - E + F of the shell per component (2 for a sphere)"},
+    {405, "euler_characteristic", I, "shell",
+     "V - E + F of the shell per component (faces joined through edges of two faces); only components "
+     "whose value is not 2 (a sphere) are reported, e.g. 0 for a torus"},
     {406, "shell_self_intersection", E, "shell",
-     "two shell faces that share no vertex intersect (exact; CGAL Polygon Mesh Processing)"},
+     "two shell faces that share no vertex intersect or touch, or coplanar ones facing the same way "
+     "overlap (exact CGAL predicates on the smallest-id triangle split); counts face pairs"},
     /* fields */
     {501, "nonfinite_field_value", W, "fields", "a field value is NaN or infinite"},
     {502, "field_length_mismatch", E, "fields",

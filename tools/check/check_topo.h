@@ -1,0 +1,92 @@
+/* Internal to the connectivity (3xx) and shell (4xx) checks: the faces of volume cells, the face
+ * matching, the shell (faces of exactly one cell) and the shared union-find. */
+#ifndef TPK_CHECK_TOPO_H
+#define TPK_CHECK_TOPO_H
+
+#include <stdint.h>
+
+#include "check.h"
+#include "check_shell_cgal.h"
+
+/* Triangles and quads. Polyhedra (type 42) add their explicit faces in check_topo_faces.c (the three
+ * functions tpk_topo_face_count, tpk_topo_cell_faces, tpk_topo_cell_face); the matching keys every face
+ * by its sorted ids and the shell keeps the face's own order, so triangles and quads need nothing else.
+ * Faces of more than 4 vertices also need this raised, a longer key in face_rec (check_topo_match.c)
+ * and room in tpk_bface. */
+#define TPK_TOPO_MAX_FACE_VERTS 4
+#define TPK_TOPO_MAX_CELL_FACES 32 /* the local face index is stored in a byte; polyhedra need room */
+
+typedef struct tpk_topo_face {
+    int n;                                /* 3 or 4 */
+    int32_t v[TPK_TOPO_MAX_FACE_VERTS];   /* outward order (VTK cell faces, right-hand rule) */
+} tpk_topo_face;
+
+/* The faces of cell `cell` in outward order (outward for a positively oriented cell, the convention
+ * of cell_split.c), or 0 when the cell is not a volume cell the checks handle. Ids are not checked:
+ * callers use cells for which tpk_check_cell_usable() holds. */
+int tpk_topo_cell_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces);
+
+/* A tet's faces in outward order: face k is opposite corner k. */
+extern const int tpk_topo_tet_faces[4][3];
+
+/* Face `local` of a volume cell (local < tpk_topo_face_count), as tpk_topo_cell_faces gives it. */
+void tpk_topo_cell_face(const tpk_mesh *mesh, int64_t cell, int local, tpk_topo_face *face);
+
+/* The number of faces tpk_topo_cell_faces gives, without building them. */
+int tpk_topo_face_count(const tpk_mesh *mesh, int64_t cell);
+
+/* Smallest id of a face, and the index of it in v[]. */
+static inline int tpk_topo_min_index(const tpk_topo_face *f)
+{
+    int best = 0;
+    for (int i = 1; i < f->n; i++)
+        if (f->v[i] < f->v[best])
+            best = i;
+    return best;
+}
+
+/* Triangle t (0, or 1 for quads) of the split along the diagonal through the smallest id, the split
+ * the converter uses, in the face's own (outward) order. */
+void tpk_topo_face_triangle(const tpk_topo_face *f, int t, int32_t tri[3]);
+
+/* Centre (vertex average) of a face, for example locations. */
+void tpk_topo_face_centre(const tpk_mesh *mesh, const tpk_topo_face *f, double out[3]);
+
+/* Union-find over uint32 ids, safe to call concurrently (links the larger root to the smaller with a
+ * compare-and-swap, so the partition and each set's smallest-id root do not depend on timing). */
+uint32_t tpk_uf_find(uint32_t *parent, uint32_t x);
+void tpk_uf_union(uint32_t *parent, uint32_t a, uint32_t b);
+#define TPK_UF_NONE UINT32_MAX /* marks an element outside every set */
+
+static inline int tpk_bface_n(const tpk_bface *f)
+{
+    return f->v[3] < 0 ? 3 : 4;
+}
+
+/* The result of face matching (check_topo_match.c). */
+typedef struct tpk_topo_match {
+    uint32_t *parent;        /* union-find over cells: TPK_UF_NONE for cells the checks skip */
+    tpk_bface *shell;   /* boundary faces, in the order of their sorted vertex ids */
+    int64_t shell_count;
+} tpk_topo_match;
+
+/* Matches the faces of all usable volume cells (sort-based, multithreaded, deterministic), reports
+ * 301 nonmanifold_face, 302 inconsistent_orientation and 305 folded_face, unions the cells of every
+ * shared face and collects the shell. Returns 0, or -1 (diag set) when out of memory or past the
+ * 2^31 - 1 cell limit. */
+int tpk_topo_match_faces(const tpk_mesh *mesh, tpk_check_report *report, tpk_topo_match *out,
+                         tpk_diag *diag);
+void tpk_topo_match_free(tpk_topo_match *m);
+
+/* 303 nonconforming_face (unions the cells of every nonconforming pair) and 401..406 on the shell. */
+int tpk_check_shell(const tpk_mesh *mesh, tpk_topo_match *m, tpk_check_report *report, tpk_diag *diag);
+
+/* 401, 402, 403, 404 and 405 on the shell's polygons (quads as quads: the combinatorial checks do not
+ * depend on how a quad would be cut). */
+int tpk_check_shell_edges(const tpk_mesh *mesh, const tpk_topo_match *m, tpk_check_report *report,
+                          tpk_diag *diag);
+
+/* Sign of orient3d (exact: the static filter, then CGAL). */
+int tpk_topo_orient(const double *points, int32_t a, int32_t b, int32_t c, int32_t d);
+
+#endif

@@ -1,0 +1,129 @@
+/* Faces of the volume cells for the connectivity and shell checks, in outward order. The tables are
+ * those of cell_split.c (outward on VTK's parametric corners, so a positive cell's faces point out) and
+ * shell.c for tets; tests/test_check_topology.c checks each face against its cell's centre exactly. */
+#include "check_topo.h"
+#include "pipeline.h"
+#include "predicates.h"
+
+typedef struct face_table {
+    int count;
+    int size[6];
+    int local[6][4];
+} face_table;
+
+static const face_table TET = {4, {3, 3, 3, 3}, {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
+const int tpk_topo_tet_faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+static const face_table HEX = {
+    6, {4, 4, 4, 4, 4, 4},
+    {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}}};
+/* A voxel is a hexahedron with corners 2,3 and 6,7 swapped (x fastest, then y, then z). */
+static const face_table VOXEL = {
+    6, {4, 4, 4, 4, 4, 4},
+    {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {1, 3, 7, 5}, {3, 2, 6, 7}, {2, 0, 4, 6}}};
+static const face_table WEDGE = {5, {3, 3, 4, 4, 4}, {{0, 2, 1}, {3, 4, 5}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}};
+static const face_table PYRAMID = {5, {4, 3, 3, 3, 3}, {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}}};
+
+static const face_table *table_for(int type, int64_t nodes)
+{
+    switch (type) {
+    case TPK_CELL_TETRA: return nodes == 4 ? &TET : NULL;
+    case TPK_CELL_VOXEL: return nodes == 8 ? &VOXEL : NULL;
+    case TPK_CELL_HEXAHEDRON: return nodes == 8 ? &HEX : NULL;
+    case TPK_CELL_WEDGE: return nodes == 6 ? &WEDGE : NULL;
+    case TPK_CELL_PYRAMID: return nodes == 5 ? &PYRAMID : NULL;
+    /* TPK_CELL_POLYHEDRON: its explicit faces go here (up to TPK_TOPO_MAX_CELL_FACES). */
+    default: return NULL;
+    }
+}
+
+int tpk_topo_face_count(const tpk_mesh *mesh, int64_t cell)
+{
+    int64_t begin = mesh->cell_offsets[cell];
+    const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
+    return t ? t->count : 0;
+}
+
+int tpk_topo_cell_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces)
+{
+    int64_t begin = mesh->cell_offsets[cell];
+    const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
+    if (!t)
+        return 0;
+    const int32_t *nodes = mesh->cell_conn + begin;
+    for (int f = 0; f < t->count; f++) {
+        faces[f].n = t->size[f];
+        for (int i = 0; i < t->size[f]; i++)
+            faces[f].v[i] = nodes[t->local[f][i]];
+    }
+    return t->count;
+}
+
+void tpk_topo_cell_face(const tpk_mesh *mesh, int64_t cell, int local, tpk_topo_face *face)
+{
+    int64_t begin = mesh->cell_offsets[cell];
+    const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
+    const int32_t *nodes = mesh->cell_conn + begin;
+    face->n = t->size[local];
+    for (int i = 0; i < t->size[local]; i++)
+        face->v[i] = nodes[t->local[local][i]];
+}
+
+void tpk_topo_face_triangle(const tpk_topo_face *f, int t, int32_t tri[3])
+{
+    int m = tpk_topo_min_index(f), n = f->n;
+    tri[0] = f->v[m];
+    tri[1] = f->v[(m + 1 + t) % n];
+    tri[2] = f->v[(m + 2 + t) % n];
+}
+
+void tpk_topo_face_centre(const tpk_mesh *mesh, const tpk_topo_face *f, double out[3])
+{
+    for (int k = 0; k < 3; k++) {
+        double sum = 0;
+        for (int i = 0; i < f->n; i++)
+            sum += mesh->points[3 * (int64_t)f->v[i] + k];
+        out[k] = sum / f->n;
+    }
+}
+
+int tpk_topo_orient(const double *points, int32_t a, int32_t b, int32_t c, int32_t d)
+{
+    const double *pa = points + 3 * (int64_t)a, *pb = points + 3 * (int64_t)b;
+    const double *pc = points + 3 * (int64_t)c, *pd = points + 3 * (int64_t)d;
+    int s = tpk_orient3d_filter(pa, pb, pc, pd);
+    return s ? s : tpk_orient3d_exact(pa, pb, pc, pd);
+}
+
+uint32_t tpk_uf_find(uint32_t *parent, uint32_t x)
+{
+    for (;;) {
+        uint32_t p = __atomic_load_n(&parent[x], __ATOMIC_RELAXED);
+        if (p == x)
+            return x;
+        uint32_t g = __atomic_load_n(&parent[p], __ATOMIC_RELAXED);
+        if (g != p) /* path halving; a lost race only leaves a longer path */
+            __atomic_compare_exchange_n(&parent[x], &p, g, 0, __ATOMIC_RELAXED, __ATOMIC_RELAXED);
+        x = g;
+    }
+}
+
+void tpk_uf_union(uint32_t *parent, uint32_t a, uint32_t b)
+{
+    /* Most unions of a connected mesh find both cells already under one parent: no walk needed. */
+    if (__atomic_load_n(&parent[a], __ATOMIC_RELAXED) == __atomic_load_n(&parent[b], __ATOMIC_RELAXED))
+        return;
+    for (;;) {
+        a = tpk_uf_find(parent, a);
+        b = tpk_uf_find(parent, b);
+        if (a == b)
+            return;
+        if (a < b) {
+            uint32_t t = a;
+            a = b;
+            b = t;
+        }
+        uint32_t expected = a; /* a is still a root: link it under the smaller root b */
+        if (__atomic_compare_exchange_n(&parent[a], &expected, b, 0, __ATOMIC_RELAXED, __ATOMIC_RELAXED))
+            return;
+    }
+}
