@@ -130,7 +130,7 @@ int main(int argc, char **argv)
         tpk_check_report_init(&report, &options);
         tpk_diag diag;
         memset(&diag, 0, sizeof diag);
-        tpk_check_input in = {&mesh, "grid"};
+        tpk_check_input in = {&mesh, "grid", NULL};
         double t0 = now(), c0 = cpu();
         int rc = tpk_check_topology(&in, &report, &diag);
         double wall = now() - t0, used = cpu() - c0;

@@ -49,7 +49,7 @@ static int run_topology(tpk_mesh *m, int threads, tpk_check_report *r)
         return -1;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
-    tpk_check_input in = {m, "memory"};
+    tpk_check_input in = {m, "memory", NULL};
     return tpk_check_topology(&in, r, &diag);
 }
 

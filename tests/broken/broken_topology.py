@@ -49,7 +49,7 @@ def clean_cases():
     out.append({"name": "topo_clean_wedges", "text": vtk_legacy(CUBE, wedges), "expect": {},
                 "absent": TOPO_ERRORS + ["components", "euler_characteristic"]})
     faces = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)]
-    pyramids = [(14, list(f) + [8]) for f in faces]
+    pyramids = [(14, list(reversed(f)) + [8]) for f in faces]  # VTK: the base turns towards the apex
     out.append({"name": "topo_clean_pyramids", "text": vtk_legacy(CUBE + [(0.5, 0.5, 0.5)], pyramids),
                 "expect": {}, "absent": TOPO_ERRORS + ["components", "euler_characteristic"]})
     # Two voxels side by side (x fastest, then y, then z).
@@ -164,7 +164,7 @@ def shell_cases():
     # A tet poking through the face (1, 2, 3) of another, sharing no vertex: its apex is inside, its
     # base outside, so its three side faces each cross that face: 3 intersecting pairs.
     pts = TET + [(0.3, 0.3, 0.3), (0.9, 0.2, 0.2), (0.2, 0.9, 0.2), (0.2, 0.2, 0.9)]
-    poke = [(0, 1, 2, 3), (4, 5, 7, 6)]
+    poke = [(0, 1, 2, 3), (4, 5, 6, 7)]  # both positively oriented
     out.append({"name": "topo_self_intersection", "text": vtk_legacy(pts, tets(poke)),
                 "expect": {"shell_self_intersection": 3, "components": 2},
                 "absent": ["nonconforming_face", "nonmanifold_vertex", "nonmanifold_edge"]})

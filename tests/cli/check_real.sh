@@ -48,21 +48,30 @@ sys.exit(0 if ok else 1)
 PY
 }
 
-# exomerge's unit-test file: its blocks do not share nodes (43 exact duplicates, 101 more within 1e-16 of
-# another node) and its element variables are NaN on the blocks where they are undefined.
-findings 0 seacas/exomerge_unit_test.e duplicate_vertex=43 near_duplicate_vertex=101 nonfinite_field_value=133000
-expect_exit 1 "$TPK" check "$DATA/seacas/exomerge_unit_test.e" --warnings-as-errors --no-progress
+# exomerge's unit-test file: five blocks of different resolution that share no nodes (43 exact duplicates,
+# 101 more within 1e-16 of another node), touching along faces that do not match (105 boundary faces
+# against other cells' faces, 1667 crossing shell face pairs); its element variables are NaN on the
+# blocks where they are undefined.
+findings 1 seacas/exomerge_unit_test.e duplicate_vertex=43 near_duplicate_vertex=101 nonfinite_field_value=133000 \
+    nonconforming_face=105 shell_self_intersection=1667
 # With --tol 0 only the exact duplicates remain.
-expect_exit 0 "$TPK" check "$DATA/seacas/exomerge_unit_test.e" --tol 0 --json --no-progress
+expect_exit 1 "$TPK" check "$DATA/seacas/exomerge_unit_test.e" --tol 0 --json --no-progress
 grep -q '"near_duplicate_vertex"' "$WORK/out" && fail "--tol 0 still reports near duplicates"
-
+# Two blocks in contact with unmerged nodes.
+findings 1 seacas/block_crush_1.ex2 nonconforming_face=33 shell_self_intersection=64
 # sfepy's fibre slab: 97 of its hexahedra list their nodes in the mirrored order (all 8 corner Jacobians
-# negative, checked apart with numpy).
-findings 1 sfepy/matrix_fiber_rand.vtk inverted_cell=97
+# negative, checked apart with numpy), which also shows as faces traversed the same way by two cells.
+findings 1 sfepy/matrix_fiber_rand.vtk inverted_cell=97 inconsistent_orientation=32 shell_orientation=68
 # The derived broken files (MANIFEST.md): 135 inverted tets; 20 tets with a repeated node and 20 "flat"
-# ones that are not exactly flat (9 of them land just below their plane, inverted).
+# ones that are not exactly flat (9 of them land just below their plane, inverted); 250 hexahedra split
+# 1 -> 8 (100 coarse faces against 400 fine ones; their 121 shared corners are non-manifold on the shell);
+# three cubes, one touching at a vertex, one along an edge (6 mesh edges); two copies of a genus-5 part
+# and 5 unused nodes.
 findings 1 hard/inverted_tets.vtk inverted_cell=135 zero_volume_cell=0
 findings 1 hard/degenerate_tets.vtk repeated_vertex=20 zero_volume_cell=0 inverted_cell=9 sliver_tet=20
+findings 1 hard/hanging_nodes_hex.vtk nonconforming_face=500 nonmanifold_vertex=121 components=0
+findings 1 hard/nonmanifold_vertex_edge_tets.vtu nonmanifold_edge=6 nonmanifold_vertex=1 components=3
+findings 0 hard/two_components_orphans.node components=2 unused_vertex=5
 
 # The CLI contract.
 expect_exit 0 "$TPK" check --list

@@ -6,7 +6,7 @@
  *
  * Groups, each in its own file:
  *   1xx vertices      check_vertices.c      2xx cells         check_cells.c
- *   3xx connectivity  check_topology.c      4xx shell         check_shell.cpp / check_topology.c
+ *   3xx connectivity  check_topo_*.c        4xx shell         check_shell.c, check_shell_cgal.cpp
  *   5xx fields        check_fields.c        6xx .tpk files    check_tpk.c
  */
 #ifndef TPK_CHECK_H
