@@ -31,16 +31,42 @@ static const face_table *table_for(int type, int64_t nodes)
     case TPK_CELL_HEXAHEDRON: return nodes == 8 ? &HEX : NULL;
     case TPK_CELL_WEDGE: return nodes == 6 ? &WEDGE : NULL;
     case TPK_CELL_PYRAMID: return nodes == 5 ? &PYRAMID : NULL;
-    /* TPK_CELL_POLYHEDRON: its explicit faces go here (up to TPK_TOPO_MAX_CELL_FACES). */
-    default: return NULL;
+    default: return NULL; /* polyhedra: poly_faces */
     }
+}
+
+/* A polyhedron's explicit faces (its VTK face stream, which VTK asks to be outward), when it has at most
+ * TPK_TOPO_MAX_CELL_FACES faces of 3 or 4 points each; otherwise 0 and the checks leave the cell out
+ * (the rest of the mesh is still checked: its boundary against the cell stays closed). The importers
+ * checked the stream's structure and ids. */
+static int poly_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces)
+{
+    if (mesh->cell_types[cell] != TPK_CELL_POLYHEDRON || !mesh->faces || !mesh->face_offsets)
+        return 0;
+    const int32_t *stream = mesh->faces + mesh->face_offsets[cell];
+    int64_t length = mesh->face_offsets[cell + 1] - mesh->face_offsets[cell];
+    if (length < 1 || stream[0] < 4 || stream[0] > TPK_TOPO_MAX_CELL_FACES)
+        return 0;
+    int count = stream[0];
+    int64_t at = 1;
+    for (int f = 0; f < count; f++) {
+        if (at >= length || stream[at] < 3 || stream[at] > TPK_TOPO_MAX_FACE_VERTS || at + stream[at] >= length)
+            return 0;
+        if (faces) {
+            faces[f].n = stream[at];
+            for (int i = 0; i < stream[at]; i++)
+                faces[f].v[i] = stream[at + 1 + i];
+        }
+        at += 1 + stream[at];
+    }
+    return count;
 }
 
 int tpk_topo_face_count(const tpk_mesh *mesh, int64_t cell)
 {
     int64_t begin = mesh->cell_offsets[cell];
     const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
-    return t ? t->count : 0;
+    return t ? t->count : poly_faces(mesh, cell, NULL);
 }
 
 int tpk_topo_cell_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces)
@@ -48,7 +74,7 @@ int tpk_topo_cell_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces
     int64_t begin = mesh->cell_offsets[cell];
     const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
     if (!t)
-        return 0;
+        return poly_faces(mesh, cell, faces);
     const int32_t *nodes = mesh->cell_conn + begin;
     for (int f = 0; f < t->count; f++) {
         faces[f].n = t->size[f];
@@ -62,6 +88,12 @@ void tpk_topo_cell_face(const tpk_mesh *mesh, int64_t cell, int local, tpk_topo_
 {
     int64_t begin = mesh->cell_offsets[cell];
     const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
+    if (!t) {
+        tpk_topo_face all[TPK_TOPO_MAX_CELL_FACES];
+        poly_faces(mesh, cell, all);
+        *face = all[local];
+        return;
+    }
     const int32_t *nodes = mesh->cell_conn + begin;
     face->n = t->size[local];
     for (int i = 0; i < t->size[local]; i++)
