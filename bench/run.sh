@@ -42,14 +42,15 @@ PY
 echo "# conversion (binary VTK in, uncompressed out, tet16)"
 for n in $SIZES; do
     [ -f "$WORK/grid$n.vtk" ] || ./bench/make_grid_vtk.py "$n" "$WORK/grid$n.vtk"
-    convert_stats "$WORK/grid$n.vtk" "$WORK/grid$n.tpk" --layout tet16
+    convert_stats "$WORK/grid$n.vtk" "$WORK/grid$n.tpk" --layout tet16 --reorient
 done
 
-echo "# tetpack check, all groups (median of RUNS), on the grids; memory against the mesh as read"
-for n in $SIZES; do
+echo "# tetpack check, all groups (median of RUNS), on the grids as VTK (half their tets are given"
+echo "# inverted: a stress case) and as the converted .tpk (clean, 6xx too); memory against the mesh as read"
+for input in $(for n in $SIZES; do echo "$WORK/grid$n.vtk" "$WORK/grid$n.tpk"; done); do
     totals=() rss=()
     for _ in $(seq "$RUNS"); do
-        /usr/bin/time -f "%e %M" -o "$WORK/time.txt" "$TPK" check "$WORK/grid$n.vtk" --json --no-progress \
+        /usr/bin/time -f "%e %M" -o "$WORK/time.txt" "$TPK" check "$input" --json --no-progress \
             > "$WORK/check.json" || true
         totals+=("$(tail -1 "$WORK/time.txt" | cut -d' ' -f1)")
         rss+=("$(tail -1 "$WORK/time.txt" | cut -d' ' -f2)")
@@ -61,7 +62,7 @@ d = json.load(open(sys.argv[1]))
 t, rss = float(sys.argv[2]), int(sys.argv[3]) * 1024
 # The mesh as read (tpk_mesh): f64 points, int64 offsets, int32 connectivity, uint8 types.
 mesh_bytes = 24 * d["vertices"] + d["cells"] * (8 + 16 + 1)
-print(json.dumps({"check": "grid", "cells": d["cells"], "median_wall_s": t, "cells_per_s": d["cells"] / t,
+print(json.dumps({"check": d["input"].rsplit("/", 1)[-1], "cells": d["cells"], "median_wall_s": t, "cells_per_s": d["cells"] / t,
                   "peak_rss_mib": rss / 2**20, "mesh_mib": mesh_bytes / 2**20, "peak_over_mesh": rss / mesh_bytes,
                   "groups_last_run": {g["name"]: round(g["seconds"], 3) for g in d["groups"]},
                   "findings": {f["name"]: f["count"] for f in d["findings"]}}))
@@ -90,7 +91,7 @@ for layout in tet16 tet20 tet32; do
     for z in 0 1 3 9 19; do
         opt=()
         [ "$z" -gt 0 ] && opt=(--zstd "$z")
-        "$TPK" convert "$WORK/grid$n.vtk" "$WORK/size.tpk" --layout $layout "${opt[@]}" --json > "$WORK/size.json"
+        "$TPK" convert "$WORK/grid$n.vtk" "$WORK/size.tpk" --layout $layout --reorient "${opt[@]}" --json > "$WORK/size.json"
         /usr/bin/python3 -c "import json;d=json.load(open('$WORK/size.json'));print(json.dumps({'layout':'$layout','zstd':$z,'bytes':d['output_bytes'],'bytes_per_tet':d['output_bytes']/d['tets'],'write_s':d['seconds']['write']}))"
     done
 done
