@@ -1,10 +1,11 @@
 /* Vertex checks (1xx): non-finite coordinates, exact and near duplicates, unused vertices.
  *
- * Duplicates are found with a uniform grid of cell size h = tol * (bounding-box diagonal): two points
- * within h of each other lie in the same or adjacent grid cells, so each point is compared with the
- * points of the 27 cells around it (a hash table over the occupied cells). Every pair is reported once,
- * from its higher id: vertex j duplicates the lowest-id vertex i < j at distance 0 (exact, 102) or
- * within h (near, 103). With --tol 0 only exact duplicates are searched, by sorting the coordinates. */
+ * Duplicates are found on a uniform grid (a hash table over the occupied cells) whose cells are at least
+ * h = tol * (bounding-box diagonal) wide and hold about one point on average: a point is compared with
+ * the points of its own cell, and of a neighbouring cell only when it lies within h of that side, so most
+ * points look at one cell. Every pair is reported once, from its higher id: vertex j duplicates the
+ * lowest-id vertex i < j with the same coordinates (exact, 102), else the lowest within h (near, 103).
+ * With --tol 0, h = 0 and only exact duplicates are found (they always share a cell). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -48,43 +49,6 @@ static void check_unused(const tpk_mesh *m, tpk_check_report *report, uint8_t *u
         if (point_finite(m->points + 3 * v))
             tpk_example_point(ex, m->points + 3 * v);
     }
-}
-
-/* ---- exact duplicates by sorting (tol 0) ---------------------------------------------------------- */
-
-static const double *sort_points;
-
-static int cmp_point_ids(const void *a, const void *b)
-{
-    int32_t i = *(const int32_t *)a, j = *(const int32_t *)b;
-    const double *p = sort_points + 3 * (int64_t)i, *q = sort_points + 3 * (int64_t)j;
-    for (int k = 0; k < 3; k++)
-        if (p[k] != q[k])
-            return p[k] < q[k] ? -1 : 1;
-    return (i > j) - (i < j);
-}
-
-/* match[j] = lowest i < j with the same coordinates, or -1. */
-static int exact_matches(const tpk_mesh *m, int32_t *match)
-{
-    int64_t n = 0;
-    int32_t *order = malloc(sizeof *order * (size_t)(m->point_count ? m->point_count : 1));
-    if (!order)
-        return -1;
-    for (int64_t v = 0; v < m->point_count; v++) {
-        match[v] = -1;
-        if (point_finite(m->points + 3 * v))
-            order[n++] = (int32_t)v;
-    }
-    sort_points = m->points;
-    qsort(order, (size_t)n, sizeof *order, cmp_point_ids);
-    for (int64_t k = 1; k < n; k++) {
-        const double *p = m->points + 3 * (int64_t)order[k], *q = m->points + 3 * (int64_t)order[k - 1];
-        if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2])
-            match[order[k]] = match[order[k - 1]] >= 0 ? match[order[k - 1]] : order[k - 1];
-    }
-    free(order);
-    return 0;
 }
 
 /* ---- near duplicates on a grid -------------------------------------------------------------------- */
@@ -179,44 +143,62 @@ static void grid_free(grid *g)
 typedef struct near_job {
     const tpk_mesh *mesh;
     const grid *g;
-    int32_t *match;      /* lowest i < j within h, or -1 */
+    int32_t *exact;      /* lowest i < j with the same coordinates, or -1 */
+    int32_t *match;      /* lowest i < j within tol, or -1 */
     double *distance;    /* its distance */
     double tol;          /* absolute tolerance (<= the grid's cell size) */
 } near_job;
+
+/* The neighbouring cells along one axis a point within `tol` of a cell side must also look at. */
+static void axis_range(const grid *g, const double *p, const int64_t c[3], int k, double tol, int *lo, int *hi)
+{
+    double offset = p[k] - (g->lo[k] + (double)c[k] * g->h);
+    *lo = offset <= tol ? -1 : 0;
+    *hi = g->h - offset <= tol ? 1 : 0;
+}
 
 static void near_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     near_job *job = ctx;
     const grid *g = job->g;
-    const double h2 = job->tol * job->tol;
+    const double tol2 = job->tol * job->tol;
     (void)worker;
     for (int64_t j = begin; j < end; j++) {
         const double *p = job->mesh->points + 3 * j;
-        job->match[j] = -1;
+        job->exact[j] = job->match[j] = -1;
         if (!point_finite(p))
             continue;
-        int64_t c[3], best = -1;
+        int64_t c[3], best = -1, same = -1;
+        int lo[3], hi[3];
         double best_d2 = 0;
         cell_of(g, p, c);
-        for (int dx = -1; dx <= 1; dx++)
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dz = -1; dz <= 1; dz++) {
+        for (int k = 0; k < 3; k++)
+            axis_range(g, p, c, k, job->tol, &lo[k], &hi[k]);
+        for (int dx = lo[0]; dx <= hi[0]; dx++)
+            for (int dy = lo[1]; dy <= hi[1]; dy++)
+                for (int dz = lo[2]; dz <= hi[2]; dz++) {
                     int64_t s = find_slot(g, cell_key(c[0] + dx, c[1] + dy, c[2] + dz));
                     if (!g->keys[s])
                         continue;
                     for (int64_t k = g->first[s]; k < g->first[s] + g->count[s]; k++) {
                         int64_t i = g->ids[k];
-                        if (i >= j || (best >= 0 && i > best))
-                            continue;
+                        if (i >= j)
+                            break; /* ids ascend within a cell */
                         const double *q = job->mesh->points + 3 * i;
+                        if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2]) {
+                            if (same < 0 || i < same)
+                                same = i;
+                            continue;
+                        }
                         double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
                                     (p[2] - q[2]) * (p[2] - q[2]);
-                        if (d2 <= h2) {
+                        if (d2 <= tol2 && (best < 0 || i < best)) {
                             best = i;
                             best_d2 = d2;
                         }
                     }
                 }
+        job->exact[j] = (int32_t)same;
         job->match[j] = (int32_t)best;
         job->distance[j] = sqrt(best_d2);
     }
@@ -252,43 +234,35 @@ static void report_pair(tpk_check_report *report, const tpk_mesh *m, int id, int
 static int check_duplicates(const tpk_mesh *m, tpk_check_report *report, tpk_diag *diag)
 {
     size_t n = (size_t)(m->point_count ? m->point_count : 1);
-    int32_t *exact = malloc(sizeof *exact * n);
-    if (!exact || exact_matches(m, exact)) {
-        free(exact);
-        return tpk_diag_fail(diag, "check: out of memory for the duplicate-vertex search");
-    }
     double diagonal = bbox_diagonal(m);
     double h = report->options.tol * diagonal;
-    int32_t *near = NULL;
-    double *distance = NULL;
-    if (h > 0 && isfinite(h)) {
-        grid g;
-        memset(&g, 0, sizeof g);
-        near = malloc(sizeof *near * n);
-        distance = malloc(sizeof *distance * n);
-        /* Grid cells no smaller than 2^-40 of the diagonal keep cell coordinates far from overflow; a
-         * cell larger than the tolerance only costs comparisons. */
-        if (!near || !distance || grid_build(&g, m, fmax(h, diagonal * 0x1p-40))) {
-            free(exact);
-            free(near);
-            free(distance);
-            grid_free(&g);
-            return tpk_diag_fail(diag, "check: out of memory for the near-duplicate vertex search");
-        }
-        near_job job = {m, &g, near, distance, h};
-        tpk_parallel_for(m->point_count, tpk_threads_for(m->point_count, report->options.threads, 1 << 16),
-                         near_range, &job);
+    if (!isfinite(h))
+        h = 0;
+    /* Cells about one point wide on average, never narrower than the tolerance nor than 2^-40 of the
+     * diagonal (cell coordinates stay far from overflow). */
+    double cell = fmax(fmax(h, diagonal * 0x1p-40), diagonal / (2.0 * cbrt((double)n)));
+    if (!(cell > 0))
+        cell = 1; /* all points equal (or none finite): any width puts equal points in one cell */
+    grid g;
+    memset(&g, 0, sizeof g);
+    int32_t *exact = malloc(sizeof *exact * n), *near = malloc(sizeof *near * n);
+    double *distance = malloc(sizeof *distance * n);
+    if (!exact || !near || !distance || grid_build(&g, m, cell)) {
+        free(exact), free(near), free(distance);
         grid_free(&g);
+        return tpk_diag_fail(diag, "check: out of memory for the duplicate-vertex search");
     }
+    near_job job = {m, &g, exact, near, distance, h};
+    tpk_parallel_for(m->point_count, tpk_threads_for(m->point_count, report->options.threads, 1 << 16),
+                     near_range, &job);
+    grid_free(&g);
     for (int64_t j = 0; j < m->point_count; j++) {
         if (exact[j] >= 0)
             report_pair(report, m, 102, j, exact[j], 0);
-        else if (near && near[j] >= 0)
+        else if (near[j] >= 0)
             report_pair(report, m, 103, j, near[j], distance[j]);
     }
-    free(exact);
-    free(near);
-    free(distance);
+    free(exact), free(near), free(distance);
     return 0;
 }
 
