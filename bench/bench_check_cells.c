@@ -7,23 +7,9 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_clock.h"
 #include "../tests/meshgen.h"
 #include "check.h"
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* CPU time of the whole process (all threads): on a loaded machine wall time says little. */
-static double cpu_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void jitter(double *points, int64_t count, double amount, uint64_t seed)
 {

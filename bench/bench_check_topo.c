@@ -8,6 +8,7 @@
 #include <sys/resource.h>
 #include <time.h>
 
+#include "bench_clock.h"
 #include "check.h"
 #include "pipeline.h"
 #include "predicates.h"
@@ -19,21 +20,6 @@ static uint64_t next_random(void)
     rng_state ^= rng_state >> 7;
     rng_state ^= rng_state << 17;
     return rng_state;
-}
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static double cpu(void)
-{
-    struct rusage u;
-    getrusage(RUSAGE_SELF, &u);
-    return (double)u.ru_utime.tv_sec + 1e-6 * (double)u.ru_utime.tv_usec + (double)u.ru_stime.tv_sec +
-           1e-6 * (double)u.ru_stime.tv_usec;
 }
 
 static void shuffle_ids(int64_t *perm, int64_t n)
@@ -131,9 +117,9 @@ int main(int argc, char **argv)
         tpk_diag diag;
         memset(&diag, 0, sizeof diag);
         tpk_check_input in = {&mesh, "grid", NULL};
-        double t0 = now(), c0 = cpu();
+        double t0 = now(), c0 = cpu_now();
         int rc = tpk_check_topology(&in, &report, &diag);
-        double wall = now() - t0, used = cpu() - c0;
+        double wall = now() - t0, used = cpu_now() - c0;
         int64_t problems = 0;
         for (int i = 0; i < report.finding_count; i++)
             problems += report.findings[i].check->severity == TPK_SEV_ERROR ? report.findings[i].count : 0;

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_clock.h"
 #include "../tests/march_fixtures.h"
 #include "mesh.h"
 #include "pipeline.h"
@@ -57,18 +58,6 @@ static void *bench_worker(void *arg)
     return NULL;
 }
 
-static double clock_seconds(clockid_t id)
-{
-    struct timespec ts;
-    clock_gettime(id, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static double now(void)
-{
-    return clock_seconds(CLOCK_MONOTONIC);
-}
-
 static void cross3(const double a[3], const double b[3], double out[3])
 {
     out[0] = a[1] * b[2] - a[2] * b[1];
@@ -103,14 +92,14 @@ static double run_once(const tpk_marcher *marcher, const tpk_camera *cam, int si
     atomic_init(&job.steps, 0);
     atomic_init(&job.errors, 0);
     pthread_t tids[64];
-    double t0 = now(), c0 = clock_seconds(CLOCK_PROCESS_CPUTIME_ID);
+    double t0 = now(), c0 = cpu_now();
     for (int i = 0; i < threads - 1; i++)
         pthread_create(&tids[i], NULL, bench_worker, &job);
     bench_worker(&job);
     for (int i = 0; i < threads - 1; i++)
         pthread_join(tids[i], NULL);
     double t = now() - t0;
-    *cpu = clock_seconds(CLOCK_PROCESS_CPUTIME_ID) - c0;
+    *cpu = cpu_now() - c0;
     if (atomic_load(&job.errors))
         fprintf(stderr, "bench_march: %d rays failed\n", atomic_load(&job.errors));
     *steps = atomic_load(&job.steps);
