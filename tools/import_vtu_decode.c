@@ -310,9 +310,12 @@ static double value_at(const unsigned char *p, vtu_type t, int big)
     return 0;
 }
 
-/* The number of values expected in an array of this role, or UINT64_MAX when not known yet. */
+/* The number of values expected in an array of this role, or UINT64_MAX when not known yet. Read
+ * leniently (tetpack check), field arrays take any length; vtu_build_mesh records a wrong one. */
 static uint64_t expected_count(const vtu_reader *r, const vtu_array *a)
 {
+    if (r->diag && r->diag->lenient_fields && (a->role == ROLE_POINT_FIELD || a->role == ROLE_CELL_FIELD))
+        return UINT64_MAX;
     switch (a->role) {
     case ROLE_POINTS: return 3 * (uint64_t)r->point_count;
     case ROLE_OFFSETS:

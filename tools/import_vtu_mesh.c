@@ -222,6 +222,16 @@ int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
         vtu_array *a = &r->arrays[i];
         if (a->role != ROLE_POINT_FIELD && a->role != ROLE_CELL_FIELD)
             continue;
+        uint64_t want = (uint64_t)(a->role == ROLE_POINT_FIELD ? r->point_count : nc) * (uint64_t)a->components;
+        if (a->count != want) { /* only when read leniently: decoding refuses it otherwise */
+            char place[96];
+            snprintf(place, sizeof place, "line %ld", a->line);
+            if (tpk_diag_field_problem(r->diag, a->name, (long long)want, (long long)a->count, place) == 0)
+                continue;
+            free(keep);
+            return vtu_fail_array(r, a, "expected %llu values, found %llu", (unsigned long long)want,
+                                  (unsigned long long)a->count);
+        }
         int64_t tuples = a->role == ROLE_POINT_FIELD ? r->point_count : kept;
         float *v = malloc(sizeof(float) * (size_t)(tuples ? tuples : 1) * (size_t)a->components);
         if (!v) {
