@@ -96,7 +96,8 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
         }
         snprintf(report->format, sizeof report->format, "tpk");
         double t0 = now_seconds();
-        int rc = tpk_check_tpk_file(path, file, report, diag);
+        int32_t *tets = NULL; /* recovered by the 6xx walk, handed to the mesh build */
+        int rc = tpk_check_tpk_file_tets(path, file, report, &tets, diag);
         report->seconds[6] = now_seconds() - t0;
         report->ran[6] = 1;
         tpk_file_info info;
@@ -104,7 +105,7 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
             report->tets = (int64_t)info.tet_count;
         if (rc == 0) {
             tpk_diag sub = *diag;
-            if (tpk_check_tpk_mesh(file, &mesh, &sub) == 0)
+            if (tpk_check_tpk_mesh_tets(file, tets, &mesh, &sub) == 0)
                 have_mesh = 1;
             /* else: the 6xx findings say why the tets could not be recovered */
         }

@@ -152,6 +152,12 @@ int tpk_check_tpk_file(const char *path, struct tpk_file *file, tpk_check_report
  * recovered from Tet20/Tet16), world coordinates (origin + stored positions) and every field with all
  * steps. Returns -1 (diag set) when the tets cannot be recovered; the 6xx findings say why. */
 int tpk_check_tpk_mesh(struct tpk_file *file, tpk_mesh *out, tpk_diag *diag);
+/* The same pair for the driver, sparing a second walk: when the file has no Tet32 and the 6xx checks
+ * found nothing, *tets_out receives the tets they recovered (4 positively oriented ids each, malloc'd,
+ * else NULL), and tpk_check_tpk_mesh_tets takes them over (NULL: recover them itself). */
+int tpk_check_tpk_file_tets(const char *path, struct tpk_file *file, tpk_check_report *report, int32_t **tets_out,
+                            tpk_diag *diag);
+int tpk_check_tpk_mesh_tets(struct tpk_file *file, int32_t *tets, tpk_mesh *out, tpk_diag *diag);
 
 /* Cells usable by geometric/topological checks: every id in range and no id repeated. */
 int tpk_check_cell_usable(const tpk_mesh *mesh, int64_t cell);

@@ -13,8 +13,9 @@ static int fail_file(tpk_file *file, tpk_diag *diag, const char *what)
     return tpk_diag_fail(diag, "%s: %s", what, tpk_error_text(file));
 }
 
-static int load_cells(tpk_file *file, tpk_mesh *out, tpk_diag *diag)
+static int load_cells(tpk_file *file, int32_t *tets, tpk_mesh *out, tpk_diag *diag)
 {
+    out->cell_conn = tets; /* owned by out from here: tpk_mesh_free frees it on every path */
     static const struct {
         uint32_t tag;
         tpk_layout layout;
@@ -32,7 +33,8 @@ static int load_cells(tpk_file *file, tpk_mesh *out, tpk_diag *diag)
     out->points = malloc(sizeof *out->points * (size_t)(3 * V + 1));
     out->cell_types = malloc((size_t)T + 1);
     out->cell_offsets = malloc(sizeof *out->cell_offsets * (size_t)(T + 1));
-    out->cell_conn = malloc(sizeof *out->cell_conn * (size_t)(4 * T + 1));
+    if (!out->cell_conn)
+        out->cell_conn = malloc(sizeof *out->cell_conn * (size_t)(4 * T + 1));
     if (!out->points || !out->cell_types || !out->cell_offsets || !out->cell_conn)
         return tpk_diag_fail(diag, "out of memory for a mesh of %" PRId64 " tets", T);
     for (int64_t p = 0; p < 3 * V; p++)
@@ -40,6 +42,8 @@ static int load_cells(tpk_file *file, tpk_mesh *out, tpk_diag *diag)
     memset(out->cell_types, TPK_CELL_TETRA, (size_t)T);
     for (int64_t c = 0; c <= T; c++)
         out->cell_offsets[c] = 4 * c;
+    if (tets)
+        return 0;
     tpk_result r = tpk_recover_tets(&m, out->cell_conn);
     if (r != TPK_OK)
         return tpk_diag_fail(diag, "the tets cannot be recovered from the Tet%d layout (%s); the 6xx findings "
@@ -88,10 +92,15 @@ static int load_times(tpk_file *file, tpk_mesh *out, tpk_diag *diag)
 
 int tpk_check_tpk_mesh(tpk_file *file, tpk_mesh *out, tpk_diag *diag)
 {
+    return tpk_check_tpk_mesh_tets(file, NULL, out, diag);
+}
+
+int tpk_check_tpk_mesh_tets(tpk_file *file, int32_t *tets, tpk_mesh *out, tpk_diag *diag)
+{
     memset(out, 0, sizeof *out);
     snprintf(out->format, sizeof out->format, "tpk");
     out->step_count = 1;
-    int rc = load_cells(file, out, diag);
+    int rc = load_cells(file, tets, out, diag);
     for (uint32_t f = 0; !rc && f < tpk_field_count(file); f++)
         rc = load_field(file, f, out, diag);
     if (!rc)
