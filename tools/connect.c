@@ -210,12 +210,6 @@ static void split_buckets(connect_job *job)
     job->bucket_begin[job->threads] = job->vertex_count;
 }
 
-static int cmp_int32(const void *a, const void *b)
-{
-    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-    return (x > y) - (x < y);
-}
-
 static int report_shared_face(const connect_job *job, int w, tpk_diag *diag)
 {
     const bucket_scratch *scratch = &job->scratch[w];
@@ -227,7 +221,7 @@ static int report_shared_face(const connect_job *job, int w, tpk_diag *diag)
         if (scratch->faces[i] == face && run++ < MAX_LISTED_TETS)
             listed[run - 1] = (int32_t)(scratch->slots[i] >> 2);
     int shown = run < MAX_LISTED_TETS ? (int)run : MAX_LISTED_TETS;
-    qsort(listed, (size_t)shown, sizeof *listed, cmp_int32);
+    qsort(listed, (size_t)shown, sizeof *listed, tpk_compare_int32);
     char list[256] = "";
     size_t used = 0;
     for (int i = 0; i < shown && used < sizeof list; i++) {

@@ -25,12 +25,6 @@ typedef struct cell_span {
     int64_t n;
 } cell_span;
 
-static int compare_int32(const void *a, const void *b)
-{
-    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-    return (x > y) - (x < y);
-}
-
 /* Every point a polyhedron's faces use must be in its connectivity (VTK's and meshio's writers list
  * exactly those points there); `ids` is the checked stream, `scratch` room for the connectivity. */
 static int check_face_points(vtu_reader *r, const vtu_array *conn, int64_t cell, const int32_t *ids,
@@ -42,10 +36,10 @@ static int check_face_points(vtu_reader *r, const vtu_array *conn, int64_t cell,
                                   (long long)cell, points[j], (long long)r->point_count - 1);
         scratch[j] = (int32_t)points[j];
     }
-    qsort(scratch, (size_t)point_count, sizeof *scratch, compare_int32);
+    qsort(scratch, (size_t)point_count, sizeof *scratch, tpk_compare_int32);
     for (int64_t f = 0, k = 1; f < ids[0]; f++)
         for (int32_t left = ids[k++]; left > 0; left--, k++)
-            if (!bsearch(&ids[k], scratch, (size_t)point_count, sizeof *scratch, compare_int32))
+            if (!bsearch(&ids[k], scratch, (size_t)point_count, sizeof *scratch, tpk_compare_int32))
                 return vtu_fail_array(r, conn, "cell %lld (polyhedron): its faces use point %d, which its "
                                       "connectivity does not list", (long long)cell, ids[k]);
     return 0;

@@ -55,3 +55,9 @@ void tpk_tetmesh_free(tpk_tetmesh *mesh)
     free(mesh->times);
     memset(mesh, 0, sizeof *mesh);
 }
+
+int tpk_compare_int32(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}

@@ -47,6 +47,8 @@ typedef struct tpk_mesh {
 } tpk_mesh;
 
 void tpk_mesh_free(tpk_mesh *mesh);
+/* qsort/bsearch order of int32 ids (vertex or cell ids), ascending. */
+int tpk_compare_int32(const void *a, const void *b);
 /* Append a field; takes ownership of values. Returns 0 or -1 on allocation failure. */
 int tpk_mesh_add_field(tpk_mesh *mesh, const char *name, int association, int components,
                        int step_count, float *values);

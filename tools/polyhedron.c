@@ -58,12 +58,6 @@ int tpk_face_stream_check(const int32_t *stream, int64_t n, int64_t point_count,
     return 0;
 }
 
-static int compare_ids(const void *a, const void *b)
-{
-    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-    return (x > y) - (x < y);
-}
-
 /* Distinct point ids of a checked face stream, ascending, into ids (room for n); returns their count. */
 static int64_t stream_points(const int32_t *stream, int64_t n, int32_t *ids)
 {
@@ -74,7 +68,7 @@ static int64_t stream_points(const int32_t *stream, int64_t n, int32_t *ids)
             ids[count++] = stream[k++];
     }
     (void)n;
-    qsort(ids, (size_t)count, sizeof *ids, compare_ids);
+    qsort(ids, (size_t)count, sizeof *ids, tpk_compare_int32);
     int64_t distinct = 0;
     for (int64_t i = 0; i < count; i++)
         if (distinct == 0 || ids[i] != ids[distinct - 1])
