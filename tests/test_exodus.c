@@ -1,7 +1,9 @@
 /* Exodus II importer on SEACAS's test files: blocks, dropped non-volume elements, nodal and element
  * variables over every time step, time values, hexahedra in VTK order, and the errors. */
+#include <exodusII.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "harness.h"
@@ -120,4 +122,116 @@ TPK_TEST(truncated_files_are_refused)
                       "%s cut to %zu bytes: '%s'", files[f], cuts[c], d.message);
         }
     }
+}
+
+/* Writes `m`'s tets, wedges and pyramids as one Exodus block per type (1-based ids) with the Exodus
+ * library itself, the writer every Exodus producer uses. */
+static void write_exodus(const char *path, const tpk_mesh *m)
+{
+    static const struct {
+        int vtk_type, nodes;
+        const char *name;
+    } kinds[] = {{10, 4, "TETRA"}, {13, 6, "WEDGE"}, {14, 5, "PYRAMID"}};
+    int cpu_ws = 8, io_ws = 8, blocks = 0;
+    int exoid = ex_create(path, EX_CLOBBER, &cpu_ws, &io_ws);
+    CHECK(exoid >= 0);
+    for (int k = 0; k < 3; k++)
+        for (int64_t c = 0; c < m->cell_count; c++)
+            if (m->cell_types[c] == kinds[k].vtk_type) {
+                blocks++;
+                break;
+            }
+    CHECK(ex_put_init(exoid, "tetpack test", 3, m->point_count, m->cell_count, blocks, 0, 0) == 0);
+    double *xyz = malloc(sizeof *xyz * 3 * (size_t)m->point_count);
+    for (int64_t p = 0; p < m->point_count; p++)
+        for (int a = 0; a < 3; a++)
+            xyz[a * m->point_count + p] = m->points[3 * p + a];
+    CHECK(ex_put_coord(exoid, xyz, xyz + m->point_count, xyz + 2 * m->point_count) == 0);
+    free(xyz);
+    int *conn = malloc(sizeof *conn * (size_t)(m->cell_offsets[m->cell_count] + 1));
+    for (int k = 0, id = 1; k < 3; k++) {
+        int64_t count = 0, n = 0;
+        for (int64_t c = 0; c < m->cell_count; c++)
+            if (m->cell_types[c] == kinds[k].vtk_type) {
+                for (int64_t i = m->cell_offsets[c]; i < m->cell_offsets[c + 1]; i++)
+                    conn[n++] = m->cell_conn[i] + 1;
+                count++;
+            }
+        if (!count)
+            continue;
+        CHECK(ex_put_elem_block(exoid, id, kinds[k].name, count, kinds[k].nodes, 0) == 0);
+        CHECK(ex_put_elem_conn(exoid, id, conn) == 0);
+        id++;
+    }
+    free(conn);
+    CHECK(ex_close(exoid) == 0);
+}
+
+/* Reads `path` back and checks: cells of each type in the written order, then a split in which no cell
+ * is mirrored or folds (the converter refuses mirrored cells with this flag). */
+static void check_read_back(const char *path, const tpk_mesh *src, int64_t wedges, int64_t pyramids)
+{
+    tpk_mesh back;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    CHECK_MSG(tpk_import_any(path, NULL, &back, &d) == 0, "%s", d.message);
+    CHECK(back.point_count == src->point_count && back.cell_count == src->cell_count);
+    int64_t c = 0;
+    for (int type = 10; type <= 14; type++)
+        for (int64_t s = 0; s < src->cell_count; s++) {
+            if (src->cell_types[s] != type)
+                continue;
+            CHECK(back.cell_types[c] == type);
+            int64_t n = src->cell_offsets[s + 1] - src->cell_offsets[s];
+            CHECK(back.cell_offsets[c + 1] - back.cell_offsets[c] == n);
+            CHECK(!memcmp(back.cell_conn + back.cell_offsets[c], src->cell_conn + src->cell_offsets[s],
+                          sizeof *src->cell_conn * (size_t)n));
+            c++;
+        }
+    tpk_tetmesh tets;
+    CHECK_MSG(tpk_tetrahedralize(&back, NULL, 0, TPK_TETRA_REFUSE_MIRRORED, &tets, &d) == 0, "%s", d.message);
+    CHECK(tets.mirrored_cells == 0 && tets.steiner_cells == 0);
+    CHECK(tets.cells_into[3] == wedges && tets.cells_into[2] == pyramids);
+    tpk_tetmesh_free(&tets);
+    tpk_mesh_free(&back);
+}
+
+/* Wedge and pyramid blocks. Exodus numbers WEDGE6 and PYRAMID5 nodes as VTK does: its side tables
+ * (SEACAS exodus-element-types.md) give the outward faces wedge (1,3,2), (4,5,6), (1,2,5,4), (2,3,6,5),
+ * (1,4,6,3) and pyramid (1,2,5) ... (4,1,5), (1,4,3,2), exactly VTK's. Written with the Exodus library:
+ * gmsh tutorial t3's 12,308 prisms and 21,720 tets (real data; Gmsh prisms are in VTK order, checked in
+ * test_gmsh), and six pyramids filling a cube from its centre. */
+TPK_TEST(wedge_and_pyramid_blocks)
+{
+    tpk_mesh t3;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    CHECK_MSG(tpk_import_any(tpk_data_path("gmsh/t3_hex_prism_ascii41.msh"), NULL, &t3, &d) == 0, "%s", d.message);
+    const char *path = tpk_temp_path("t3_wedges.e");
+    write_exodus(path, &t3);
+    check_read_back(path, &t3, 12308, 0);
+    tpk_mesh_free(&t3);
+
+    /* Pyramids: VTK and Exodus turn the base towards the apex, so the base is an outward cube face
+     * reversed. */
+    static double points[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
+                                  {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 0.5}};
+    static const int outward[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                      {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    uint8_t types[6];
+    int64_t offsets[7];
+    int32_t conn[30];
+    for (int f = 0; f < 6; f++) {
+        types[f] = 14;
+        offsets[f] = 5 * f;
+        for (int k = 0; k < 4; k++)
+            conn[5 * f + k] = outward[f][3 - k];
+        conn[5 * f + 4] = 8;
+    }
+    offsets[6] = 30;
+    tpk_mesh cube = {.point_count = 9, .points = &points[0][0], .cell_count = 6, .cell_types = types,
+                     .cell_offsets = offsets, .cell_conn = conn};
+    path = tpk_temp_path("cube_pyramids.e");
+    write_exodus(path, &cube);
+    check_read_back(path, &cube, 0, 6);
 }

@@ -1,9 +1,10 @@
 /* Exodus II importer (.exo, .e, .g, .ex2), through the Exodus library (netCDF classic or netCDF-4):
- * element blocks of tetrahedra and hexahedra (higher-order kinds reduced to their corners) become
- * cells in VTK node order, which Exodus shares for these two; blocks of lower dimension (shells, bars,
- * spheres) are dropped with a count; wedge and pyramid blocks are refused until their node order is
- * checked against a real file. Nodal and element variables become point and cell fields with every
- * time step, and the time values are kept. */
+ * element blocks of tetrahedra, hexahedra, wedges and pyramids (higher-order kinds reduced to their
+ * corners) become cells in VTK node order, which Exodus shares for all four: its side tables (SEACAS
+ * exodus-element-types.md) list the same outward faces as VTK's cells (hexahedra also checked on
+ * SEACAS's files). Blocks of lower dimension (shells, bars, spheres) are dropped with a count. Nodal
+ * and element variables become point and cell fields with every time step, and the time values are
+ * kept. */
 #include <exodusII.h>
 #include <math.h>
 #include <stdio.h>
@@ -94,18 +95,13 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         if (!blk->kind) {
             free(ids);
             return tpk_diag_fail(r->diag, "%s: element block %lld has element type '%s', which this reader does not "
-                                          "know (tetra and hex blocks are read; shells, bars and spheres dropped)",
+                                          "know (tetra, hex, wedge and pyramid blocks are read; shells, bars and "
+                                          "spheres dropped)",
                                  r->path, (long long)blk->id, blk->type);
         }
         if (blk->kind->dim < 3) {
             dropped += count;
             continue;
-        }
-        if (blk->kind->vtk_type != 10 && blk->kind->vtk_type != 12) {
-            free(ids);
-            return tpk_diag_fail(r->diag, "%s: element block %lld holds %s elements: not read yet (their Exodus node "
-                                          "order is not checked against a real file)", r->path, (long long)blk->id,
-                                 blk->type);
         }
         if (per < blk->kind->corners) {
             free(ids);
@@ -121,7 +117,8 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not volumes (shells, bars, spheres)", r->path,
                       (long long)dropped);
     if (cells == 0)
-        return tpk_diag_fail(r->diag, "%s: no volume cells (%lld elements in %lld blocks, none tetra or hex)",
+        return tpk_diag_fail(r->diag, "%s: no volume cells (%lld elements in %lld blocks, none tetra, hex, wedge or "
+                             "pyramid)",
                              r->path, (long long)r->elems, (long long)r->block_count);
     out->cell_count = cells;
     out->cell_types = malloc((size_t)cells);

@@ -48,8 +48,9 @@ int tpk_import_gmsh_memory(const char *name, const char *data, size_t size, tpk_
 int tpk_import_ugrid(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
-/* Exodus II (.exo, .e, .g, .ex2; netCDF classic or netCDF-4) through the Exodus library: tetra and hex
- * blocks (higher-order reduced to corners), nodal and element variables with every time step. */
+/* Exodus II (.exo, .e, .g, .ex2; netCDF classic or netCDF-4) through the Exodus library: tetra, hex,
+ * wedge and pyramid blocks (higher-order reduced to corners), nodal and element variables with every
+ * time step. */
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one
