@@ -130,8 +130,9 @@ TPK_TEST(bad_input)
     expect_failure("a.ugrid", "4 0 0 1 0 0", "expected the number of hexahedra, found end of file");
     expect_failure("a.ugrid", "4 0 0 -1 0 0 0\n", "expected 0 to 2^31-1 tetrahedra, found -1");
     expect_failure("a.ugrid", "99999999 0 0 1 0 0 0\n0 0 0\n", "wrong counts or truncated file");
-    expect_failure("a.ugrid", "5 0 0 0 1 0 0\n0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\n1 2 3 4 5\n",
-                   "1 pyramids: not read yet");
+    expect_failure("a.ugrid", "5 0 0 0 1 0 0\n0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\n1 2 3 4 6\n",
+                   "pyramid 1: node id 6, expected 1 to 5");
+    expect_failure("a.ugrid", "4 0 0 0 0 0 0\n0 0 0 1 0 0 0 1 0 0 0 1\n", "no volume cells");
     expect_failure("a.ugrid", "4 0 0 1 0 0 0\n0 0 0 1 0 0 0 1 0 0 0 1\n1 2 3 5\n",
                    "tetrahedron 1: node id 5, expected 1 to 4");
     expect_failure("a.ugrid", "4 0 0 1 0 0 0\n0 0 0 1 0 x 0 1 0 0 0 1\n1 2 3 4\n", "a.ugrid:2:");
@@ -154,4 +155,104 @@ TPK_TEST(every_truncation)
             tpk_mesh_free(&m);
         CHECK_MSG(rc == 0 || strstr(d.message, "cut.ugrid"), "prefix %zu: '%s'", n, d.message);
     }
+}
+
+/* Writes `m` (VTK node order; tets, pyramids, wedges, hexahedra) as ASCII UGRID in refine's node order
+ * (UGRID node map[k] = VTK node k, the inverse of the importer's map). */
+static void write_ugrid(const char *path, const tpk_mesh *m)
+{
+    static const struct {
+        int vtk_type, nodes, map[8];
+    } kinds[4] = {{10, 4, {0, 1, 2, 3}}, {14, 5, {1, 0, 3, 4, 2}}, {13, 6, {1, 0, 2, 4, 3, 5}},
+                  {12, 8, {0, 1, 2, 3, 4, 5, 6, 7}}};
+    int64_t counts[4] = {0, 0, 0, 0};
+    for (int64_t c = 0; c < m->cell_count; c++)
+        for (int k = 0; k < 4; k++)
+            counts[k] += m->cell_types[c] == kinds[k].vtk_type;
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL);
+    fprintf(f, "%lld 0 0 %lld %lld %lld %lld\n", (long long)m->point_count, (long long)counts[0],
+            (long long)counts[1], (long long)counts[2], (long long)counts[3]);
+    for (int64_t p = 0; p < m->point_count; p++)
+        fprintf(f, "%.17g %.17g %.17g\n", m->points[3 * p], m->points[3 * p + 1], m->points[3 * p + 2]);
+    for (int k = 0; k < 4; k++)
+        for (int64_t c = 0; c < m->cell_count; c++) {
+            if (m->cell_types[c] != kinds[k].vtk_type)
+                continue;
+            int32_t ugrid[8];
+            for (int j = 0; j < kinds[k].nodes; j++)
+                ugrid[kinds[k].map[j]] = m->cell_conn[m->cell_offsets[c] + j];
+            for (int j = 0; j < kinds[k].nodes; j++)
+                fprintf(f, "%d%c", ugrid[j] + 1, j + 1 < kinds[k].nodes ? ' ' : '\n');
+        }
+    fclose(f);
+}
+
+/* Reads `path` back: the cells of `src` grouped by type in file order (tets, pyramids, prisms,
+ * hexahedra), and a split in which no cell is mirrored or needs a centre point. */
+static void check_ugrid_read_back(const char *path, const tpk_mesh *src, int64_t pyramids, int64_t wedges,
+                                  int64_t hexes)
+{
+    static const int order[4] = {10, 14, 13, 12};
+    tpk_mesh back;
+    tpk_diag d;
+    quiet(&d);
+    CHECK_MSG(tpk_import_any(path, NULL, &back, &d) == 0, "%s", d.message);
+    CHECK(back.point_count == src->point_count && back.cell_count == src->cell_count);
+    int64_t c = 0;
+    for (int k = 0; k < 4; k++)
+        for (int64_t s = 0; s < src->cell_count; s++) {
+            if (src->cell_types[s] != order[k])
+                continue;
+            int64_t n = src->cell_offsets[s + 1] - src->cell_offsets[s];
+            CHECK(back.cell_types[c] == order[k] && back.cell_offsets[c + 1] - back.cell_offsets[c] == n);
+            CHECK(!memcmp(back.cell_conn + back.cell_offsets[c], src->cell_conn + src->cell_offsets[s],
+                          sizeof *src->cell_conn * (size_t)n));
+            c++;
+        }
+    tpk_tetmesh tets;
+    CHECK_MSG(tpk_tetrahedralize(&back, NULL, 0, TPK_TETRA_REFUSE_MIRRORED, &tets, &d) == 0, "%s", d.message);
+    CHECK(tets.mirrored_cells == 0 && tets.steiner_cells == 0);
+    CHECK(tets.cells_into[2] == pyramids && tets.cells_into[3] == wedges &&
+          tets.cells_into[5] + tets.cells_into[6] == hexes);
+    tpk_tetmesh_free(&tets);
+    tpk_mesh_free(&back);
+}
+
+/* Pyramids, prisms and hexahedra: gmsh tutorial t3's 12,308 prisms and 21,720 tets (real data; prisms in
+ * VTK order, checked in test_gmsh), sfepy's 1,000 hexahedra, and six pyramids filling a cube, written as
+ * UGRID in refine's node order, read back in VTK order with no cell mirrored. */
+TPK_TEST(pyramids_prisms_hexahedra)
+{
+    static const char *sources[2] = {"gmsh/t3_hex_prism_ascii41.msh", "sfepy/cube_medium_hexa.mesh"};
+    for (int i = 0; i < 2; i++) {
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_any(tpk_data_path(sources[i]), NULL, &m, &d) == 0, "%s", d.message);
+        const char *path = tpk_temp_path(i ? "hexa.ugrid" : "t3.ugrid");
+        write_ugrid(path, &m);
+        check_ugrid_read_back(path, &m, 0, i ? 0 : 12308, i ? 1000 : 0);
+        tpk_mesh_free(&m);
+    }
+    static double points[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
+                                  {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 0.5}};
+    static const int outward[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                      {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    uint8_t types[6];
+    int64_t offsets[7];
+    int32_t conn[30];
+    for (int f = 0; f < 6; f++) { /* VTK turns a pyramid's base towards its apex */
+        types[f] = 14;
+        offsets[f] = 5 * f;
+        for (int k = 0; k < 4; k++)
+            conn[5 * f + k] = outward[f][3 - k];
+        conn[5 * f + 4] = 8;
+    }
+    offsets[6] = 30;
+    tpk_mesh cube = {.point_count = 9, .points = &points[0][0], .cell_count = 6, .cell_types = types,
+                     .cell_offsets = offsets, .cell_conn = conn};
+    const char *path = tpk_temp_path("pyramids.ugrid");
+    write_ugrid(path, &cube);
+    check_ugrid_read_back(path, &cube, 6, 0, 0);
 }

@@ -2,9 +2,14 @@
  * (little-endian binary), the format large CFD meshes travel in. Layout: the counts
  * nnode ntri nquad ntet npyr nprism nhex, the coordinates, surface triangles and quads, their surface
  * ids, then the volume elements, all ids 1-based; binary files hold 4-byte ints and 8-byte reals in the
- * same order. Surface elements are dropped (counted), their ids kept as nothing; tetrahedra become
- * cells. Pyramids, prisms and hexahedra are refused until their UGRID node order is checked against a
- * real file (DESIGN.md §10: UGRID orders pyramids differently from VTK). */
+ * same order. Surface elements are dropped (counted), their ids kept as nothing; tetrahedra, pyramids,
+ * prisms and hexahedra become cells in VTK node order. UGRID orders pyramids and prisms differently
+ * from VTK (DESIGN.md §10): the maps below are those of NASA refine (src/ref_import.c, the UGRID tool
+ * behind the acceptance meshes in ../shared/data/nasa_refine), whose diagrams put UGRID's pyramid base
+ * 0 1 4 3 with apex 2 and its prism as VTK's with the first two corners of each triangle swapped;
+ * tetrahedra (checked on refine's files) and hexahedra are as in VTK. meshio 5 agrees on pyramids but
+ * reads prisms unchanged; we follow refine, which writes the meshes. A prism map that were wrong would
+ * show as mirrored prisms, which the converter refuses by name (--reorient turns them over). */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -74,13 +79,8 @@ static int read_counts(ugrid_reader *r)
         return tpk_scan_fail(&r->s, "the counts need at least %llu more bytes, the file has %zu left "
                                     "(wrong counts or truncated file)",
                              (unsigned long long)needed, left);
-    for (int i = 4; i < 7; i++)
-        if (r->count[i] > 0)
-            return tpk_scan_fail(&r->s, "%lld %s: not read yet (their UGRID node order is not checked against "
-                                        "a real file); convert the mesh to VTK or Gmsh meanwhile",
-                                 (long long)r->count[i], count_names[i]);
-    if (r->count[3] == 0)
-        return tpk_scan_fail(&r->s, "the file has no tetrahedra (no volume cells)");
+    if (r->count[3] + r->count[4] + r->count[5] + r->count[6] == 0)
+        return tpk_scan_fail(&r->s, "the file has no volume cells (no tetrahedra, pyramids, prisms or hexahedra)");
     return 0;
 }
 
@@ -94,37 +94,65 @@ static int skip_ints(ugrid_reader *r, int64_t n, const char *what)
     return 0;
 }
 
+/* Volume kinds in file order: nodes per element, VTK type, and VTK node k = UGRID node map[k]. */
+static const struct {
+    const char *name;
+    int nodes, vtk_type;
+    int map[8];
+} volume_kinds[4] = {
+    {"tetrahedron", 4, 10, {0, 1, 2, 3}},
+    {"pyramid", 5, 14, {1, 0, 3, 4, 2}},
+    {"prism", 6, 13, {1, 0, 2, 4, 3, 5}},
+    {"hexahedron", 8, 12, {0, 1, 2, 3, 4, 5, 6, 7}},
+};
+
 static int read_mesh(ugrid_reader *r, tpk_mesh *out)
 {
-    int64_t nv = r->count[0], nt = r->count[3];
+    int64_t nv = r->count[0], nc = 0, nconn = 0;
+    for (int k = 0; k < 4; k++) {
+        nc += r->count[3 + k];
+        nconn += r->count[3 + k] * volume_kinds[k].nodes;
+    }
     out->point_count = nv;
     out->points = malloc(sizeof *out->points * 3 * (size_t)(nv ? nv : 1));
-    out->cell_count = nt;
-    out->cell_types = malloc((size_t)nt);
-    out->cell_offsets = malloc(sizeof *out->cell_offsets * (size_t)(nt + 1));
-    out->cell_conn = malloc(sizeof *out->cell_conn * 4 * (size_t)nt);
+    out->cell_count = nc;
+    out->cell_types = malloc((size_t)nc);
+    out->cell_offsets = malloc(sizeof *out->cell_offsets * (size_t)(nc + 1));
+    out->cell_conn = malloc(sizeof *out->cell_conn * (size_t)nconn);
     if (!out->points || !out->cell_types || !out->cell_offsets || !out->cell_conn)
-        return tpk_scan_fail(&r->s, "out of memory for %lld nodes and %lld tetrahedra", (long long)nv, (long long)nt);
+        return tpk_scan_fail(&r->s, "out of memory for %lld nodes and %lld volume elements", (long long)nv,
+                             (long long)nc);
     for (int64_t i = 0; i < 3 * nv; i++)
         if (read_real(r, &out->points[i], "a node coordinate"))
             return -1;
     /* Surface triangles and quadrilaterals, then their surface ids: not volume cells. */
     if (skip_ints(r, 3 * r->count[1] + 4 * r->count[2] + r->count[1] + r->count[2], "a surface element id"))
         return -1;
-    for (int64_t t = 0; t < nt; t++) {
-        out->cell_types[t] = 10;
-        out->cell_offsets[t] = 4 * t;
-        for (int k = 0; k < 4; k++) {
-            int64_t id;
-            if (read_int(r, &id, "a tetrahedron's node id"))
-                return -1;
-            if (id < 1 || id > nv)
-                return tpk_scan_fail(&r->s, "tetrahedron %lld: node id %lld, expected 1 to %lld", (long long)t + 1,
-                                     (long long)id, (long long)nv);
-            out->cell_conn[4 * t + k] = (int32_t)(id - 1);
+    int64_t c = 0, at = 0;
+    for (int k = 0; k < 4; k++) {
+        const char *name = volume_kinds[k].name;
+        int n = volume_kinds[k].nodes;
+        for (int64_t e = 0; e < r->count[3 + k]; e++, c++) {
+            int32_t ids[8];
+            for (int j = 0; j < n; j++) {
+                int64_t id;
+                char what[64];
+                snprintf(what, sizeof what, "a %s's node id", name);
+                if (read_int(r, &id, what))
+                    return -1;
+                if (id < 1 || id > nv)
+                    return tpk_scan_fail(&r->s, "%s %lld: node id %lld, expected 1 to %lld", name, (long long)e + 1,
+                                         (long long)id, (long long)nv);
+                ids[j] = (int32_t)(id - 1);
+            }
+            out->cell_types[c] = (uint8_t)volume_kinds[k].vtk_type;
+            out->cell_offsets[c] = at;
+            for (int j = 0; j < n; j++)
+                out->cell_conn[at + j] = ids[volume_kinds[k].map[j]];
+            at += n;
         }
     }
-    out->cell_offsets[nt] = 4 * nt;
+    out->cell_offsets[nc] = at;
     return 0;
 }
 
