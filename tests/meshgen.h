@@ -118,4 +118,35 @@ static inline int tpk_gen_kuhn_grid(int n, const tpk_gen_options *opt, tpk_tetme
     return 0;
 }
 
+/* Six pyramids filling the unit cube from its centre (point 8), in VTK node order: a pyramid's base is
+ * an outward cube face reversed (VTK turns the base towards the apex). The mesh points at static
+ * arrays: do not free it. */
+static inline tpk_mesh tpk_gen_cube_pyramids(void)
+{
+    static double points[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
+                                  {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 0.5}};
+    static const int outward[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                      {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    static uint8_t types[6];
+    static int64_t offsets[7];
+    static int32_t conn[30];
+    for (int f = 0; f < 6; f++) {
+        types[f] = TPK_CELL_PYRAMID;
+        offsets[f] = 5 * f;
+        for (int k = 0; k < 4; k++)
+            conn[5 * f + k] = outward[f][3 - k];
+        conn[5 * f + 4] = 8;
+    }
+    offsets[6] = 30;
+    tpk_mesh cube;
+    memset(&cube, 0, sizeof cube);
+    cube.point_count = 9;
+    cube.points = &points[0][0];
+    cube.cell_count = 6;
+    cube.cell_types = types;
+    cube.cell_offsets = offsets;
+    cube.cell_conn = conn;
+    return cube;
+}
+
 #endif

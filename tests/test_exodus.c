@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "harness.h"
+#include "meshgen.h"
 #include "importers.h"
 #include "netcdf_size.h"
 #include "pipeline.h"
@@ -212,25 +213,7 @@ TPK_TEST(wedge_and_pyramid_blocks)
     check_read_back(path, &t3, 12308, 0);
     tpk_mesh_free(&t3);
 
-    /* Pyramids: VTK and Exodus turn the base towards the apex, so the base is an outward cube face
-     * reversed. */
-    static double points[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
-                                  {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 0.5}};
-    static const int outward[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                      {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-    uint8_t types[6];
-    int64_t offsets[7];
-    int32_t conn[30];
-    for (int f = 0; f < 6; f++) {
-        types[f] = 14;
-        offsets[f] = 5 * f;
-        for (int k = 0; k < 4; k++)
-            conn[5 * f + k] = outward[f][3 - k];
-        conn[5 * f + 4] = 8;
-    }
-    offsets[6] = 30;
-    tpk_mesh cube = {.point_count = 9, .points = &points[0][0], .cell_count = 6, .cell_types = types,
-                     .cell_offsets = offsets, .cell_conn = conn};
+    tpk_mesh cube = tpk_gen_cube_pyramids(); /* VTK and Exodus turn a pyramid's base towards its apex */
     path = tpk_temp_path("cube_pyramids.e");
     write_exodus(path, &cube);
     check_read_back(path, &cube, 0, 6);

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "harness.h"
+#include "meshgen.h"
 #include "importers.h"
 #include "pipeline.h"
 
@@ -235,23 +236,7 @@ TPK_TEST(pyramids_prisms_hexahedra)
         check_ugrid_read_back(path, &m, 0, i ? 0 : 12308, i ? 1000 : 0);
         tpk_mesh_free(&m);
     }
-    static double points[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
-                                  {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 0.5}};
-    static const int outward[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                      {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
-    uint8_t types[6];
-    int64_t offsets[7];
-    int32_t conn[30];
-    for (int f = 0; f < 6; f++) { /* VTK turns a pyramid's base towards its apex */
-        types[f] = 14;
-        offsets[f] = 5 * f;
-        for (int k = 0; k < 4; k++)
-            conn[5 * f + k] = outward[f][3 - k];
-        conn[5 * f + 4] = 8;
-    }
-    offsets[6] = 30;
-    tpk_mesh cube = {.point_count = 9, .points = &points[0][0], .cell_count = 6, .cell_types = types,
-                     .cell_offsets = offsets, .cell_conn = conn};
+    tpk_mesh cube = tpk_gen_cube_pyramids();
     const char *path = tpk_temp_path("pyramids.ugrid");
     write_ugrid(path, &cube);
     check_ugrid_read_back(path, &cube, 6, 0, 0);
