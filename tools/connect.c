@@ -191,25 +191,6 @@ static void match_faces(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
-/* Splits buckets among workers so each gets about the same number of entries. */
-static void split_buckets(connect_job *job)
-{
-    int64_t entries = 2 * job->tet_count;
-    job->bucket_begin[0] = 0;
-    for (int w = 1; w < job->threads; w++) {
-        int64_t target = entries / job->threads * w, lo = job->bucket_begin[w - 1], hi = job->vertex_count;
-        while (lo < hi) { /* first bucket starting at or after target */
-            int64_t mid = lo + (hi - lo) / 2;
-            if (job->bucket_start[mid] < target)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        job->bucket_begin[w] = lo;
-    }
-    job->bucket_begin[job->threads] = job->vertex_count;
-}
-
 static int report_shared_face(const connect_job *job, int w, tpk_diag *diag)
 {
     const bucket_scratch *scratch = &job->scratch[w];
@@ -337,7 +318,8 @@ int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, in
         return tpk_diag_fail(diag, "connect: out of memory (a vertex is the smallest id of %lld tets)", largest);
     }
     tpk_parallel_for(tet_count, job->threads, scatter_entries, job);
-    split_buckets(job);
+    /* Workers get about the same number of entries (2 per tet). */
+    tpk_split_prefix(job->bucket_start, job->vertex_count, 2 * job->tet_count, job->threads, job->bucket_begin);
     tpk_parallel_for(job->threads, job->threads, match_faces, job);
     int rc = 0;
     for (int w = 0; w < job->threads && !rc; w++)

@@ -80,3 +80,20 @@ void *tpk_alloc_large(size_t size)
 #endif
     return block;
 }
+
+void tpk_split_prefix(const int64_t *starts, int64_t n, int64_t entries, int parts, int64_t *begin)
+{
+    begin[0] = 0;
+    for (int w = 1; w < parts; w++) {
+        int64_t target = entries / parts * w, lo = begin[w - 1], hi = n;
+        while (lo < hi) { /* first bucket starting at or after target */
+            int64_t mid = lo + (hi - lo) / 2;
+            if (starts[mid] < target)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        begin[w] = lo;
+    }
+    begin[parts] = n;
+}

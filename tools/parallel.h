@@ -17,6 +17,11 @@ int tpk_threads_for(int64_t count, int threads, int64_t grain);
 /* Range of worker `w` out of `threads` over [0, count). */
 void tpk_parallel_range(int64_t count, int threads, int w, int64_t *begin, int64_t *end);
 
+/* Cut n buckets, whose entries start at the prefix sums starts[0..n], into `parts` contiguous ranges of
+ * about entries / parts entries each: begin[w] is the first bucket starting at or after w * entries /
+ * parts (begin[0] = 0, begin[parts] = n). begin holds parts + 1 values. */
+void tpk_split_prefix(const int64_t *starts, int64_t n, int64_t entries, int parts, int64_t *begin);
+
 typedef void (*tpk_range_fn)(void *ctx, int64_t begin, int64_t end, int worker);
 
 /* Call fn(ctx, begin, end, w) for w = 0..threads-1 on the ranges above, worker 0 on the calling

@@ -120,6 +120,10 @@ tpk_finding *tpk_check_finding(tpk_check_report *report, int id);
  * fewer than max_examples, else NULL. Callers must report items in a deterministic order (lowest id
  * first) so the examples do not depend on thread count. Not thread-safe. */
 tpk_example *tpk_check_hit(tpk_check_report *report, int id, const char *kind);
+/* The next of at most `max` example slots of a list (*examples allocated on first use, *kept counted),
+ * cleared and of `kind`; NULL when the list is full or out of memory (examples are best effort, counts
+ * are kept by the caller). Shared by the report and the per-worker lists of the groups. */
+tpk_example *tpk_example_slot(tpk_example **examples, int *kept, int max, const char *kind);
 /* Add `n` items to the count without examples. */
 void tpk_check_count(tpk_check_report *report, int id, int64_t n);
 /* Helpers to fill an example. */

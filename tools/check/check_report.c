@@ -57,14 +57,19 @@ tpk_example *tpk_check_hit(tpk_check_report *report, int id, const char *kind)
 {
     tpk_finding *f = tpk_check_finding(report, id);
     f->count++;
-    if (f->example_count >= report->options.max_examples)
+    return tpk_example_slot(&f->examples, &f->example_count, report->options.max_examples, kind);
+}
+
+tpk_example *tpk_example_slot(tpk_example **examples, int *kept, int max, const char *kind)
+{
+    if (*kept >= max)
         return NULL;
-    if (!f->examples) {
-        f->examples = calloc((size_t)report->options.max_examples, sizeof *f->examples);
-        if (!f->examples)
-            return NULL; /* examples are best effort; the count stays right */
+    if (!*examples) {
+        *examples = calloc((size_t)max, sizeof **examples);
+        if (!*examples)
+            return NULL;
     }
-    tpk_example *ex = &f->examples[f->example_count++];
+    tpk_example *ex = &(*examples)[(*kept)++];
     memset(ex, 0, sizeof *ex);
     ex->kind = kind;
     return ex;

@@ -542,25 +542,6 @@ static void prefix_counts(match_job *job)
     job->bucket_start[vertices] = running;
 }
 
-/* Splits buckets among workers so each gets about the same number of entries. */
-static void split_buckets(match_job *job)
-{
-    int64_t vertices = job->mesh->point_count, entries = job->bucket_start[vertices];
-    job->bucket_begin[0] = 0;
-    for (int w = 1; w < job->threads; w++) {
-        int64_t target = entries / job->threads * w, lo = job->bucket_begin[w - 1], hi = vertices;
-        while (lo < hi) {
-            int64_t mid = lo + (hi - lo) / 2;
-            if (job->bucket_start[mid] < target)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        job->bucket_begin[w] = lo;
-    }
-    job->bucket_begin[job->threads] = vertices;
-}
-
 /* Worker results in worker order = bucket order: the first examples overall, exact totals. */
 static void merge_hits(match_job *job, tpk_check_report *report)
 {
@@ -669,7 +650,9 @@ int tpk_topo_match_faces(const tpk_mesh *mesh, tpk_check_report *report, tpk_top
         tpk_parallel_for(mesh->cell_count, job->threads, scatter_entries, job);
         free(job->signs); /* the entries carry them now */
         job->signs = NULL;
-        split_buckets(job);
+        /* Workers get about the same number of entries. */
+        tpk_split_prefix(job->bucket_start, job->mesh->point_count, job->bucket_start[job->mesh->point_count],
+                         job->threads, job->bucket_begin);
         tpk_check_progress(report, "faces", 0.4);
         tpk_parallel_for(job->threads, job->threads, match_buckets, job);
         for (int w = 0; w < job->threads; w++)

@@ -16,17 +16,7 @@ tpk_example *tpkc_hit(tpkc_sink *sink, int id, const char *kind)
 {
     tpkc_list *list = &sink->lists[id - TPKC_FIRST_ID];
     list->count++;
-    if (list->kept >= sink->max_examples)
-        return NULL;
-    if (!list->examples) {
-        list->examples = calloc((size_t)sink->max_examples, sizeof *list->examples);
-        if (!list->examples)
-            return NULL; /* examples are best effort; the count stays right */
-    }
-    tpk_example *ex = &list->examples[list->kept++];
-    memset(ex, 0, sizeof *ex);
-    ex->kind = kind;
-    return ex;
+    return tpk_example_slot(&list->examples, &list->kept, sink->max_examples, kind);
 }
 
 void tpkc_merge(tpk_check_report *report, tpkc_sink *sinks, int count)
