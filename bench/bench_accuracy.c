@@ -10,8 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cell_split.h"
-#include "importers.h"
+#include "convert/cell_split.h"
+#include "import/importers.h"
 
 #define SAMPLES_PER_CELL 64
 

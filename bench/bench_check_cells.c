@@ -9,7 +9,7 @@
 
 #include "bench_clock.h"
 #include "../tests/meshgen.h"
-#include "check.h"
+#include "check/check.h"
 
 static void jitter(double *points, int64_t count, double amount, uint64_t seed)
 {

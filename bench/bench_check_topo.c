@@ -9,9 +9,9 @@
 #include <time.h>
 
 #include "bench_clock.h"
-#include "check.h"
-#include "pipeline.h"
-#include "predicates.h"
+#include "check/check.h"
+#include "convert/pipeline.h"
+#include "base/predicates.h"
 
 static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
 static uint64_t next_random(void)

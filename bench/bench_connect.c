@@ -9,7 +9,7 @@
 
 #include "bench_clock.h"
 #include "../tests/meshgen.h"
-#include "pipeline.h"
+#include "convert/pipeline.h"
 
 static int cmp_double(const void *a, const void *b)
 {

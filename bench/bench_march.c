@@ -13,9 +13,9 @@
 
 #include "bench_clock.h"
 #include "../tests/march_fixtures.h"
-#include "mesh.h"
-#include "pipeline.h"
-#include "render.h"
+#include "mesh/mesh.h"
+#include "convert/pipeline.h"
+#include "render/render.h"
 
 typedef struct bench_job {
     const tpk_marcher *marcher;

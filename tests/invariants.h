@@ -11,8 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh.h"
-#include "pipeline.h"
+#include "mesh/mesh.h"
+#include "convert/pipeline.h"
 #include "tetpack.h"
 
 static const int tpk_inv_outward[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};

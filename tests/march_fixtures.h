@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "tetpack.h"
-#include "pipeline.h"
+#include "convert/pipeline.h"
 
 typedef struct fx_mesh {
     int64_t vertex_count, tet_count, shell_count;

@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "mesh.h"
+#include "mesh/mesh.h"
 
 typedef struct tpk_gen_options {
     double spacing;      /* cube edge (0: 1.0) */

@@ -4,9 +4,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "check.h"
+#include "check/check.h"
 #include "harness.h"
-#include "importers.h"
+#include "import/importers.h"
 
 /* ---- helpers ---------------------------------------------------------------------------------- */
 

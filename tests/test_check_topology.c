@@ -5,10 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "check.h"
-#include "check_topo.h"
+#include "check/check.h"
+#include "check/check_topo.h"
 #include "harness.h"
-#include "pipeline.h"
+#include "convert/pipeline.h"
 
 static const int TOPO_IDS[] = {301, 302, 303, 304, 305, 401, 402, 403, 404, 405, 406};
 #define TOPO_ID_COUNT ((int)(sizeof TOPO_IDS / sizeof TOPO_IDS[0]))

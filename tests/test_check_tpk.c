@@ -7,10 +7,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "check.h"
-#include "convert.h"
+#include "check/check.h"
+#include "convert/convert.h"
 #include "harness.h"
-#include "pipeline.h"
+#include "convert/pipeline.h"
 #include "tetpack.h"
 
 #define ALL_LAYOUTS (TPK_LAYOUT_BIT_TET16 | TPK_LAYOUT_BIT_TET20 | TPK_LAYOUT_BIT_TET32)

@@ -8,9 +8,9 @@
 
 #include "harness.h"
 #include "meshgen.h"
-#include "importers.h"
-#include "netcdf_size.h"
-#include "pipeline.h"
+#include "import/importers.h"
+#include "import/exodus/netcdf_size.h"
+#include "convert/pipeline.h"
 
 static int count_fields(const tpk_mesh *m, int association)
 {

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "exporters.h"
+#include "export/exporters.h"
 #include "harness.h"
 #include "tetpack.h"
 

@@ -8,11 +8,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "convert.h"
+#include "convert/convert.h"
 #include "harness.h"
-#include "importers.h"
+#include "import/importers.h"
 #include "invariants.h"
-#include "pipeline.h"
+#include "convert/pipeline.h"
 #include "tetpack.h"
 
 typedef struct loaded {

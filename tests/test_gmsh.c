@@ -7,8 +7,8 @@
 #include <string.h>
 
 #include "harness.h"
-#include "importers.h"
-#include "pipeline.h"
+#include "import/importers.h"
+#include "convert/pipeline.h"
 
 static void quiet_warn(void *user, const char *text)
 {

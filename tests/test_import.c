@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "harness.h"
-#include "importers.h"
+#include "import/importers.h"
 #include "tetpack_format.h"
 
 /* ---- helpers ------------------------------------------------------------------------------------ */

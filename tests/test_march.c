@@ -10,9 +10,9 @@
 #include "march_fixtures.h"
 #include "tetpack.h"
 
-#include "importers.h"
-#include "mesh.h"
-#include "pipeline.h"
+#include "import/importers.h"
+#include "mesh/mesh.h"
+#include "convert/pipeline.h"
 
 /* ---- Recording the segments of one ray ---------------------------------------------------------- */
 

@@ -4,8 +4,8 @@
 #include <string.h>
 
 #include "harness.h"
-#include "importers.h"
-#include "pipeline.h"
+#include "import/importers.h"
+#include "convert/pipeline.h"
 
 static int quiet(tpk_diag *d)
 {

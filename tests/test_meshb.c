@@ -5,8 +5,8 @@
 #include <string.h>
 
 #include "harness.h"
-#include "importers.h"
-#include "pipeline.h"
+#include "import/importers.h"
+#include "convert/pipeline.h"
 
 TPK_TEST(real_files)
 {

@@ -6,11 +6,11 @@
 #include <string.h>
 
 #include "harness.h"
-#include "importers.h"
+#include "import/importers.h"
 #include "invariants.h"
 #include "meshgen.h"
-#include "pipeline.h"
-#include "predicates.h"
+#include "convert/pipeline.h"
+#include "base/predicates.h"
 
 /* ---- helpers -------------------------------------------------------------------------------------- */
 

@@ -8,11 +8,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cell_split.h"
+#include "convert/cell_split.h"
 #include "harness.h"
-#include "importers.h"
-#include "pipeline.h"
-#include "polyhedron.h"
+#include "import/importers.h"
+#include "convert/pipeline.h"
+#include "mesh/polyhedron.h"
 
 /* ---- building and writing meshes ------------------------------------------------------------------ */
 

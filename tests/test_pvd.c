@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "harness.h"
-#include "importers.h"
+#include "import/importers.h"
 
 /* Steps at t = 0.5, 0.0, 1.5 (in that order in the .pvd) of a 2-tet mesh with point field p = 10*t + id
  * and cell field c = t. `moved` moves a point in the last file. */

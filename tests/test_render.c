@@ -11,8 +11,8 @@
 
 #include "harness.h"
 #include "march_fixtures.h"
-#include "render.h"
-#include "transfer_function.h"
+#include "render/render.h"
+#include "render/transfer_function.h"
 
 /* An 8^3 grid with scalar = x (0..8). */
 static int make_grid(fx_mesh *m, int with_scalars)

@@ -8,10 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "convert.h"
+#include "convert/convert.h"
 #include "harness.h"
-#include "importers.h"
-#include "merge_vertices.h"
+#include "import/importers.h"
+#include "convert/merge_vertices.h"
 #include "tetpack.h"
 
 enum { REORIENT = 1, DROP = 2, MERGE = 4 };

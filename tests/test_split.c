@@ -6,11 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cell_split.h"
+#include "convert/cell_split.h"
 #include "harness.h"
-#include "importers.h"
-#include "pipeline.h"
-#include "polyhedron.h"
+#include "import/importers.h"
+#include "convert/pipeline.h"
+#include "mesh/polyhedron.h"
 
 static const double cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                                   {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};

@@ -8,10 +8,10 @@
 #include <string.h>
 
 #include "harness.h"
-#include "importers.h"
+#include "import/importers.h"
 #include "invariants.h"
-#include "pipeline.h"
-#include "surface.h"
+#include "convert/pipeline.h"
+#include "import/surface/surface.h"
 
 /* A triangle surface as the tests build it: points and 0-based triangles. */
 typedef struct test_surface {

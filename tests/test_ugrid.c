@@ -6,8 +6,8 @@
 
 #include "harness.h"
 #include "meshgen.h"
-#include "importers.h"
-#include "pipeline.h"
+#include "import/importers.h"
+#include "convert/pipeline.h"
 
 static void quiet(tpk_diag *d)
 {

@@ -9,7 +9,7 @@
 #include <zstd.h>
 
 #include "harness.h"
-#include "pipeline.h"
+#include "convert/pipeline.h"
 #include "make_vectors.c"
 #include "tetpack.h"
 

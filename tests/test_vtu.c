@@ -8,8 +8,8 @@
 #include <zlib.h>
 
 #include "harness.h"
-#include "importers.h"
-#include "pipeline.h"
+#include "import/importers.h"
+#include "convert/pipeline.h"
 #include "tetpack_format.h"
 
 static void ignore_warning(void *user, const char *text)

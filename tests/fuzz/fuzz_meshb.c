@@ -2,7 +2,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "importers.h"
+#include "import/importers.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

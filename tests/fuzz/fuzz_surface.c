@@ -4,7 +4,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "surface.h"
+#include "import/surface/surface.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "importers.h"
+#include "import/importers.h"
 
 static void ignore_warning(void *user, const char *text)
 {

@@ -3,7 +3,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "importers.h"
+#include "import/importers.h"
 
 static void ignore(void *user, const char *text)
 {

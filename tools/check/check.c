@@ -6,7 +6,7 @@
 #include <time.h>
 
 #include "check.h"
-#include "importers.h"
+#include "import/importers.h"
 #include "tetpack.h"
 
 static double now_seconds(void)

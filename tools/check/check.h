@@ -15,9 +15,9 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "diag.h"
-#include "mesh.h"
-#include "strbuf.h"
+#include "base/diag.h"
+#include "mesh/mesh.h"
+#include "base/strbuf.h"
 
 typedef enum tpk_severity { TPK_SEV_INFO = 0, TPK_SEV_WARNING = 1, TPK_SEV_ERROR = 2 } tpk_severity;
 

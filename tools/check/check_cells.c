@@ -10,10 +10,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cell_types.h"
+#include "mesh/cell_types.h"
 #include "check_cells_internal.h"
-#include "parallel.h"
-#include "predicates.h"
+#include "base/parallel.h"
+#include "base/predicates.h"
 
 #define CHUNK_CELLS 2048
 #define HIST_COUNT 4

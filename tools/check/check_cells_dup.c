@@ -7,9 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cell_types.h"
+#include "mesh/cell_types.h"
 #include "check_cells_internal.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 #define NO_BUCKET UINT32_MAX
 

@@ -19,10 +19,10 @@
 #include <math.h>
 #include <string.h>
 
-#include "cell_split.h"
+#include "convert/cell_split.h"
 #include "check_cells_internal.h"
-#include "pipeline.h"
-#include "predicates.h"
+#include "convert/pipeline.h"
+#include "base/predicates.h"
 
 typedef struct cell_shape {
     int nodes, face_count;

@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "check_topo.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 static void shell_face_as_topo(const tpk_bface *s, tpk_topo_face *f)
 {

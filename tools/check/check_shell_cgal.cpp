@@ -5,7 +5,7 @@
 // surfaces of 10^5 to 10^6 triangles. Each candidate is decided with exact Epick predicates
 // (orientation, do_intersect), so no tolerance is involved and the result does not depend on the grid.
 #include "check_shell_cgal.h"
-#include "predicates.h"
+#include "base/predicates.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 

@@ -2,8 +2,8 @@
  * those of cell_split.c (outward on VTK's parametric corners, so a positive cell's faces point out) and
  * shell.c for tets; tests/test_check_topology.c checks each face against its cell's centre exactly. */
 #include "check_topo.h"
-#include "pipeline.h"
-#include "predicates.h"
+#include "convert/pipeline.h"
+#include "base/predicates.h"
 
 typedef struct face_table {
     int count;

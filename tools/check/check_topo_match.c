@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "check_topo.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 enum { HIT_NONMANIFOLD, HIT_ORIENTATION, HIT_FOLDED, HIT_KINDS };
 static const int HIT_IDS[HIT_KINDS] = {301, 302, 305};

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "check_tpk_internal.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 const int tpkc_outward[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 

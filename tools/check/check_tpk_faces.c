@@ -7,7 +7,7 @@
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 #define KEY_BUDGET ((int64_t)1 << 22) /* keys in memory at once, over all workers: 32 MiB */
 #define KEY_BOUNDARY 1u

@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "predicates.h"
+#include "base/predicates.h"
 #include "tetpack.h"
 
 #define TPKC_FIRST_ID 600

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 static void check_vx(tpkc_sink *sink, int64_t t, tpk_layout layout, int32_t stored, int32_t expected)
 {

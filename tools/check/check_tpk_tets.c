@@ -6,7 +6,7 @@
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 static void centroid_world(const tpkc *c, const int32_t q[4], double out[3])
 {

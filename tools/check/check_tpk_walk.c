@@ -14,7 +14,7 @@
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 typedef struct walker {
     tpkc *c;

@@ -11,7 +11,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "parallel.h"
+#include "base/parallel.h"
 
 static int point_finite(const double *p)
 {

@@ -3,9 +3,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "check.h"
+#include "check/check.h"
 #include "cli.h"
-#include "strbuf.h"
+#include "base/strbuf.h"
 
 static const char check_help[] =
     "usage: tetpack check INPUT [options]\n"

@@ -4,10 +4,10 @@
 #include <unistd.h>
 
 #include "cli.h"
-#include "convert.h"
-#include "merge_vertices.h"
-#include "strbuf.h"
-#include "surface.h"
+#include "convert/convert.h"
+#include "convert/merge_vertices.h"
+#include "base/strbuf.h"
+#include "import/surface/surface.h"
 
 static const char convert_help[] =
     "usage: tetpack convert INPUT OUTPUT.tpk [options]\n"

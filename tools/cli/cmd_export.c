@@ -2,7 +2,7 @@
 #include <string.h>
 
 #include "cli.h"
-#include "exporters.h"
+#include "export/exporters.h"
 
 static const char export_help[] =
     "usage: tetpack export FILE.tpk [--vtu OUT.vtu] [--shell OUT.ply|.obj|.off|.stl]\n"

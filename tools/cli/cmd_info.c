@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "cli.h"
-#include "strbuf.h"
+#include "base/strbuf.h"
 #include "tetpack.h"
 
 static const char info_help[] =

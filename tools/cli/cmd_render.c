@@ -4,9 +4,9 @@
 #include <string.h>
 
 #include "cli.h"
-#include "render.h"
+#include "render/render.h"
 #include "tetpack.h"
-#include "transfer_function.h"
+#include "render/transfer_function.h"
 
 static const char render_help[] =
     "usage: tetpack render FILE.tpk -o IMAGE.png [options]\n"

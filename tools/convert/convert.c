@@ -1,0 +1,484 @@
+/* The conversion driver: runs the pipeline stages in order and writes the chunks of a .tpk. Peak
+ * memory stays near the mesh itself: the source mesh hands its arrays over, and positions and layout
+ * records are built in blocks that are streamed to the writer. */
+#include "convert.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "import/importers.h"
+#include "merge_vertices.h"
+#include "base/parallel.h"
+#include "pipeline.h"
+#include "base/strbuf.h"
+#include "tetpack.h"
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void announce(tpk_stage_fn stage, void *user, const char *name)
+{
+    if (stage)
+        stage(user, name);
+}
+
+typedef struct chunk_writer {
+    tpk_writer *writer;
+    int zstd_level;
+    int threads; /* for building records */
+    tpk_diag *diag;
+} chunk_writer;
+
+static tpk_chunk_desc chunk_desc(const chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type,
+                                  uint32_t size, uint64_t count, uint32_t index, uint32_t step)
+{
+    tpk_chunk_desc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.tag = tag;
+    desc.flags = required ? TPK_CHUNK_REQUIRED : 0;
+    desc.codec = cw->zstd_level > 0 ? TPK_CODEC_ZSTD : TPK_CODEC_NONE;
+    desc.zstd_level = cw->zstd_level;
+    desc.elem_type = (uint8_t)type;
+    desc.elem_size = size;
+    desc.elem_count = count;
+    desc.index = index;
+    desc.step = step;
+    return desc;
+}
+
+static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type, uint32_t size,
+                     uint64_t count, uint32_t index, uint32_t step, const void *data)
+{
+    tpk_chunk_desc desc = chunk_desc(cw, tag, required, type, size, count, index, step);
+    if (tpk_writer_add_chunk(cw->writer, &desc, data) != TPK_OK)
+        return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
+    return 0;
+}
+
+/* Records made block by block (fill(user, first, count, dst)) and streamed into one chunk, so a large
+ * array never exists whole next to the mesh: the converter's peak memory is the mesh plus one block. */
+#define STREAM_BLOCK ((int64_t)1 << 18)
+
+typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst);
+
+typedef struct fill_job {
+    fill_fn fill;
+    const void *user;
+    int64_t first;
+    char *block;
+    uint32_t elem_size;
+} fill_job;
+
+static void fill_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const fill_job *job = ctx;
+    (void)worker;
+    job->fill(job->user, job->first + begin, end - begin, job->block + (size_t)begin * job->elem_size);
+}
+
+static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user)
+{
+    int64_t total = (int64_t)desc->elem_count;
+    fill_job job = {fill, user, 0, malloc((size_t)STREAM_BLOCK * desc->elem_size), desc->elem_size};
+    if (!job.block)
+        return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
+    tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
+    for (job.first = 0; r == TPK_OK && job.first < total; job.first += STREAM_BLOCK) {
+        int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
+        tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
+        r = tpk_writer_append(cw->writer, job.block, (uint64_t)count * desc->elem_size);
+    }
+    if (r == TPK_OK)
+        r = tpk_writer_end_chunk(cw->writer);
+    free(job.block);
+    if (r != TPK_OK)
+        return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
+    return 0;
+}
+
+/* Move the points into the frame the file stores: relative to the bounding-box centre (so meshes far
+ * from the origin keep float32 precision) and rounded to float32. Everything after this (exact
+ * orientation included) then decides on exactly the coordinates a reader of the file sees. */
+static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < mesh->vertex_count; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = mesh->points[3 * i + k];
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
+        }
+    for (int k = 0; k < 3; k++) {
+        hdr->origin[k] = mesh->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
+        hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
+        hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
+    }
+    memcpy(mesh->origin, hdr->origin, sizeof mesh->origin);
+    for (int64_t i = 0; i < mesh->vertex_count; i++)
+        for (int k = 0; k < 3; k++) {
+            double rel = (double)(float)(mesh->points[3 * i + k] - hdr->origin[k]);
+            double world = hdr->origin[k] + rel;
+            mesh->points[3 * i + k] = rel;
+            hdr->bounds_min[k] = world < hdr->bounds_min[k] ? world : hdr->bounds_min[k];
+            hdr->bounds_max[k] = world > hdr->bounds_max[k] ? world : hdr->bounds_max[k];
+        }
+}
+
+static void fill_positions(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const double *points = user;
+    float *pos = dst;
+    for (int64_t i = 0; i < 3 * count; i++)
+        pos[i] = (float)points[3 * first + i]; /* exact: quantize_points rounded them already */
+}
+
+static int write_positions(chunk_writer *cw, const tpk_tetmesh *mesh)
+{
+    tpk_chunk_desc desc = chunk_desc(cw, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, (uint64_t)mesh->vertex_count, 0, 0);
+    return stream_chunk(cw, &desc, fill_positions, mesh->points);
+}
+
+typedef struct layout_source {
+    const int32_t *tets, *neighbors;
+} layout_source;
+
+static void fill_tet16(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet16(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static void fill_tet20(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet20(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static void fill_tet32(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet32(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static int write_layouts(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                         unsigned layouts)
+{
+    static const struct {
+        unsigned bit;
+        uint32_t tag;
+        tpk_elem_type type;
+        uint32_t size;
+        fill_fn fill;
+    } kinds[] = {{TPK_LAYOUT_BIT_TET16, TPK_TAG_TT16, TPK_ELEM_TET16, 16, fill_tet16},
+                 {TPK_LAYOUT_BIT_TET20, TPK_TAG_TT20, TPK_ELEM_TET20, 20, fill_tet20},
+                 {TPK_LAYOUT_BIT_TET32, TPK_TAG_TT32, TPK_ELEM_TET32, 32, fill_tet32}};
+    layout_source src = {mesh->tets, neighbors};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        if (!(layouts & kinds[k].bit))
+            continue;
+        tpk_chunk_desc desc = chunk_desc(cw, kinds[k].tag, 1, kinds[k].type, kinds[k].size,
+                                         (uint64_t)mesh->tet_count, 0, 0);
+        if (stream_chunk(cw, &desc, kinds[k].fill, &src) != 0)
+            return -1;
+    }
+    return 0;
+}
+
+static int write_shell(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                       uint64_t *shell_count)
+{
+    int64_t count = tpk_count_shell_faces(neighbors, mesh->tet_count);
+    tpk_shell_face *shell = malloc(sizeof *shell * (size_t)(count ? count : 1));
+    if (!shell)
+        return tpk_diag_fail(cw->diag, "out of memory for %lld shell faces", (long long)count);
+    tpk_build_shell(mesh->tets, neighbors, mesh->tet_count, shell);
+    *shell_count = (uint64_t)count;
+    int rc = put_chunk(cw, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, (uint64_t)count, 0, 0, shell);
+    free(shell);
+    return rc;
+}
+
+static void field_range(const tpk_src_field *f, size_t values, float *lo, float *hi)
+{
+    float mn = INFINITY, mx = -INFINITY;
+    for (size_t i = 0; i < values; i++) {
+        float v = f->values[i];
+        if (v == v) {
+            mn = v < mn ? v : mn;
+            mx = v > mx ? v : mx;
+        }
+    }
+    if (mn > mx)
+        mn = mx = NAN;
+    *lo = mn;
+    *hi = mx;
+}
+
+static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
+{
+    if (mesh->field_count == 0)
+        return 0;
+    tpk_field_desc *desc = calloc((size_t)mesh->field_count, sizeof *desc);
+    if (!desc)
+        return tpk_diag_fail(cw->diag, "out of memory for field descriptors");
+    int max_steps = 1;
+    for (int i = 0; i < mesh->field_count; i++) {
+        const tpk_src_field *f = &mesh->fields[i];
+        size_t per_step = (size_t)(f->association == TPK_ASSOC_POINT ? mesh->vertex_count : mesh->tet_count);
+        memcpy(desc[i].name, f->name, strnlen(f->name, sizeof desc[i].name - 1)); /* NUL-padded by calloc */
+        desc[i].association = (uint32_t)f->association;
+        desc[i].step_count = (uint32_t)f->step_count;
+        desc[i].components = 1;
+        field_range(f, per_step * (size_t)f->step_count, &desc[i].min_value, &desc[i].max_value);
+        max_steps = f->step_count > max_steps ? f->step_count : max_steps;
+    }
+    int rc = put_chunk(cw, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, (uint64_t)mesh->field_count, 0, 0, desc);
+    free(desc);
+    for (int i = 0; rc == 0 && i < mesh->field_count; i++) {
+        const tpk_src_field *f = &mesh->fields[i];
+        size_t per_step = (size_t)(f->association == TPK_ASSOC_POINT ? mesh->vertex_count : mesh->tet_count);
+        for (int s = 0; rc == 0 && s < f->step_count; s++)
+            rc = put_chunk(cw, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, per_step, (uint32_t)i, (uint32_t)s,
+                           f->values + per_step * (size_t)s);
+    }
+    if (rc == 0 && mesh->times && mesh->step_count == max_steps && max_steps > 0)
+        rc = put_chunk(cw, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, (uint64_t)max_steps, 0, 0, mesh->times);
+    return rc;
+}
+
+static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_convert_report *rep,
+                      const char *source_format)
+{
+    tpk_strbuf sb = {0};
+    tpk_strbuf_printf(&sb, "{\"converter\":{\"name\":\"tetpack\",\"version\":\"%s\"},\"command_line\":",
+                      TPK_LIBRARY_VERSION);
+    tpk_strbuf_json_string(&sb, o->command_line ? o->command_line : "");
+    tpk_strbuf_printf(&sb, ",\"source\":{\"path\":");
+    tpk_strbuf_json_string(&sb, o->input);
+    tpk_strbuf_printf(&sb, ",\"format\":");
+    tpk_strbuf_json_string(&sb, source_format);
+    tpk_strbuf_printf(&sb, ",\"cells\":%lld,\"points\":%lld}", (long long)rep->source_cells,
+                      (long long)rep->source_points);
+    tpk_strbuf_printf(&sb, ",\"pipeline\":{\"reordered\":%s,\"steiner_cells\":%lld,\"face_steiner_points\":%lld,"
+                      "\"polyhedra\":%lld,\"bad_cells_skipped\":%lld}",
+                      o->no_reorder ? "false" : "true", (long long)rep->steiner_cells,
+                      (long long)rep->face_steiner_points, (long long)rep->polyhedra,
+                      (long long)rep->bad_cells_skipped);
+    tpk_strbuf_printf(&sb, ",\"repairs\":");
+    tpk_convert_repairs_json(&sb, o, rep);
+    tpk_strbuf_printf(&sb, "}");
+    int rc;
+    if (sb.failed)
+        rc = tpk_diag_fail(cw->diag, "out of memory for metadata");
+    else
+        rc = put_chunk(cw, TPK_TAG_META, 0, TPK_ELEM_BYTE, 1, sb.length, 0, 0, sb.data);
+    tpk_strbuf_free(&sb);
+    return rc;
+}
+
+void tpk_convert_repairs_json(tpk_strbuf *sb, const tpk_convert_options *o, const tpk_convert_report *r)
+{
+    tpk_strbuf_printf(sb, "{\"reorient\":{\"requested\":%s,\"inverted_tets\":%lld,\"mirrored_cells\":%lld},",
+                      o->reorient ? "true" : "false", (long long)r->inverted_fixed, (long long)r->mirrored_cells);
+    tpk_strbuf_printf(sb, "\"drop_degenerate\":{\"requested\":%s,\"degenerate_tets\":%lld,\"collapsed_cells\":%lld},",
+                      o->drop_degenerate ? "true" : "false", (long long)r->degenerate_dropped,
+                      (long long)r->collapsed_cells_dropped);
+    tpk_strbuf_printf(sb, "\"merge_duplicates\":{\"requested\":%s,\"tolerance\":",
+                      o->merge_duplicates ? "true" : "false");
+    tpk_strbuf_json_number(sb, o->merge_duplicates ? o->merge_tolerance : 0.0);
+    tpk_strbuf_printf(sb, ",\"merged_vertices\":%lld}}", (long long)r->merged_vertices);
+}
+
+static int write_maps(chunk_writer *cw, const tpk_tetmesh *mesh)
+{
+    int rc = put_chunk(cw, TPK_TAG_TMAP, 0, TPK_ELEM_I32, 4, (uint64_t)mesh->tet_count, 0, 0, mesh->tet_source);
+    if (rc == 0)
+        rc = put_chunk(cw, TPK_TAG_VMAP, 0, TPK_ELEM_I32, 4, (uint64_t)mesh->vertex_count, 0, 0,
+                       mesh->vertex_source);
+    return rc;
+}
+
+static void writer_message(void *user, tpk_result code, const char *text)
+{
+    (void)code;
+    tpk_diag_fail(user, "%s", text);
+}
+
+static int write_file(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                      tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
+                      tpk_diag *diag)
+{
+    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
+    char err[512] = "";
+    tpk_write_options wopt;
+    memset(&wopt, 0, sizeof wopt);
+    wopt.size = sizeof wopt;
+    wopt.message = writer_message;
+    wopt.message_user = diag;
+    if (tpk_writer_open(&cw.writer, o->output, &wopt, err, sizeof err) != TPK_OK)
+        return tpk_diag_fail(diag, "%s", err);
+    hdr->vertex_count = (uint64_t)mesh->vertex_count;
+    hdr->tet_count = (uint64_t)mesh->tet_count;
+    unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
+    int rc = write_positions(&cw, mesh);
+    if (rc == 0)
+        rc = write_layouts(&cw, mesh, neighbors, layouts);
+    if (rc == 0)
+        rc = write_shell(&cw, mesh, neighbors, &hdr->shell_face_count);
+    if (rc == 0)
+        rc = write_fields(&cw, mesh);
+    if (rc == 0)
+        rc = write_maps(&cw, mesh);
+    if (rc == 0)
+        rc = write_meta(&cw, o, rep, source_format);
+    if (rc != 0) {
+        tpk_writer_abort(cw.writer);
+        return rc;
+    }
+    rep->shell_faces = (int64_t)hdr->shell_face_count;
+    if (tpk_writer_finish(cw.writer, hdr) != TPK_OK)
+        return diag->message[0] ? -1 : tpk_diag_fail(diag, "%s: could not finish the file", o->output);
+    struct stat st;
+    if (stat(o->output, &st) == 0)
+        rep->output_bytes = (uint64_t)st.st_size;
+    return 0;
+}
+
+/* After merging, vertex and tet sources name merged ids: lead them back to the source file's. */
+static void map_to_source(tpk_tetmesh *mesh, const tpk_merge_report *merged)
+{
+    if (merged->point_source)
+        for (int64_t v = 0; v < mesh->vertex_count; v++)
+            if (mesh->vertex_source[v] >= 0) /* -1: a point added at a cell's centre */
+                mesh->vertex_source[v] = merged->point_source[mesh->vertex_source[v]];
+    if (merged->cell_source)
+        for (int64_t t = 0; t < mesh->tet_count; t++)
+            mesh->tet_source[t] = merged->cell_source[mesh->tet_source[t]];
+}
+
+/* The tetrahedralizer names cells and points of the mesh it was given: say when merging renumbered them. */
+static void note_merged_ids(const tpk_merge_report *merged, tpk_diag *diag)
+{
+    if (!merged->point_source)
+        return;
+    size_t used = strlen(diag->message);
+    snprintf(diag->message + used, sizeof diag->message - used, " (ids count after --merge-duplicates removed "
+             "%lld points%s)", (long long)merged->merged_vertices, merged->cell_source ? " and collapsed cells" : "");
+}
+
+int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage_fn stage,
+                void *stage_user, tpk_diag *diag)
+{
+    tpk_mesh src;
+    tpk_tetmesh mesh;
+    memset(&src, 0, sizeof src);
+    memset(&mesh, 0, sizeof mesh);
+    memset(rep, 0, sizeof *rep);
+    int32_t *neighbors = NULL;
+    tpk_header_fields header;
+    memset(&header, 0, sizeof header);
+    char source_format[32] = "";
+    tpk_merge_report merged;
+    memset(&merged, 0, sizeof merged);
+    int rc = -1;
+    double t0 = now_seconds(), t = t0;
+
+    announce(stage, stage_user, "import");
+    if (tpk_import_any_with(o->input, o->format, o->tetgen, &src, diag) != 0)
+        goto done;
+    rep->source_points = src.point_count;
+    rep->source_cells = src.cell_count;
+    memcpy(source_format, src.format, sizeof source_format);
+    source_format[sizeof source_format - 1] = 0;
+    rep->t_import = now_seconds() - t;
+
+    t = now_seconds(); /* merging counts as part of tetrahedralizing */
+    if (o->merge_duplicates) {
+        announce(stage, stage_user, "merge duplicates");
+        if (tpk_merge_vertices(&src, o->merge_tolerance, o->drop_degenerate, &merged, diag) != 0)
+            goto done;
+        rep->merged_vertices = merged.merged_vertices;
+        rep->collapsed_cells_dropped = merged.collapsed_cells;
+    }
+    announce(stage, stage_user, "tetrahedralize");
+    if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
+                                   (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
+                                       (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
+                                       (o->reorient ? 0 : TPK_TETRA_REFUSE_MIRRORED),
+                                   &mesh, diag) != 0) {
+        note_merged_ids(&merged, diag);
+        goto done;
+    }
+    tpk_mesh_free(&src);
+    map_to_source(&mesh, &merged);
+    memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);
+    rep->mirrored_cells = mesh.mirrored_cells;
+    rep->steiner_cells = mesh.steiner_cells;
+    rep->face_steiner_points = mesh.face_steiner_points;
+    rep->polyhedra = mesh.polyhedra;
+    rep->bad_cells_skipped = mesh.bad_cells_skipped;
+    quantize_points(&mesh, &header);
+    rep->t_tetrahedralize = now_seconds() - t;
+
+    /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
+    t = now_seconds();
+    if (!o->no_reorder) {
+        announce(stage, stage_user, "reorder");
+        if (tpk_reorder(&mesh, o->threads, diag) != 0)
+            goto done;
+    }
+    rep->t_reorder = now_seconds() - t;
+
+    announce(stage, stage_user, "orient");
+    t = now_seconds();
+    tpk_orient_stats os;
+    memset(&os, 0, sizeof os);
+    if (tpk_orient(&mesh, (o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
+                              (o->reorient ? 0 : TPK_ORIENT_REFUSE_INVERTED),
+                   o->threads, &os, diag) != 0)
+        goto done;
+    rep->inverted_fixed = os.inverted_fixed;
+    rep->degenerate_dropped = o->drop_degenerate ? os.degenerate : 0;
+    rep->t_orient = now_seconds() - t;
+    if (mesh.tet_count == 0) {
+        tpk_diag_fail(diag, "%s: no tetrahedra left to write", o->input);
+        goto done;
+    }
+
+    announce(stage, stage_user, "connect");
+    t = now_seconds();
+    neighbors = tpk_alloc_large(sizeof *neighbors * 4 * (size_t)mesh.tet_count);
+    if (!neighbors) {
+        tpk_diag_fail(diag, "out of memory for the neighbors of %lld tets", (long long)mesh.tet_count);
+        goto done;
+    }
+    if (tpk_connect(mesh.tets, mesh.tet_count, mesh.vertex_count, neighbors, o->threads, diag) != 0)
+        goto done;
+    rep->t_connect = now_seconds() - t;
+
+    announce(stage, stage_user, "write");
+    t = now_seconds();
+    rep->vertices = mesh.vertex_count;
+    rep->tets = mesh.tet_count;
+    rep->field_count = mesh.field_count;
+    rep->step_count = mesh.step_count > 0 ? mesh.step_count : 1;
+    if (write_file(o, &mesh, neighbors, &header, rep, source_format, diag) != 0)
+        goto done;
+    rep->t_write = now_seconds() - t;
+    rc = 0;
+done:
+    rep->t_total = now_seconds() - t0;
+    free(neighbors);
+    tpk_merge_report_free(&merged);
+    tpk_mesh_free(&src);
+    tpk_tetmesh_free(&mesh);
+    return rc;
+}

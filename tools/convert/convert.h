@@ -1,0 +1,65 @@
+/* The whole conversion: import -> tetrahedralize -> orient -> reorder -> connect -> layouts -> shell
+ * -> write a .tpk atomically. Used by `tetpack convert` and by tests and benchmarks. */
+#ifndef TPK_CONVERT_H
+#define TPK_CONVERT_H
+
+#include <stdint.h>
+
+#include "base/diag.h"
+
+#define TPK_LAYOUT_BIT_TET16 1u
+#define TPK_LAYOUT_BIT_TET20 2u
+#define TPK_LAYOUT_BIT_TET32 4u
+
+typedef struct tpk_convert_options {
+    const char *input;            /* source mesh path */
+    const char *output;           /* .tpk path, written atomically */
+    const char *format;           /* NULL/"auto" or a forced importer name */
+    unsigned layouts;             /* TPK_LAYOUT_BIT_*; 0 means Tet16 */
+    const char *const *fields;    /* NULL: all scalar point fields */
+    int field_count;
+    int zstd_level;               /* 0: uncompressed (zero-copy); 1..22: zstd */
+    int no_reorder;               /* keep source order (default: Hilbert reorder) */
+    /* Repairs: never silent. Without them the problem is an error naming the first case and the count;
+     * with them it is fixed and counted in the report, the summary and META's "repairs" object. */
+    int reorient;                 /* turn inverted tets and mirrored cells over instead of failing */
+    int drop_degenerate;          /* drop zero-volume tets and cells collapsed by merging, instead of failing */
+    int merge_duplicates;         /* merge duplicate points before tetrahedralizing */
+    double merge_tolerance;       /* 0: exactly equal coordinates; > 0: within this times the bbox diagonal */
+    int skip_bad_cells;           /* leave out cells whose split would fold, instead of failing */
+    int cell_to_point;            /* average cell fields to points (and keep them without --field) */
+    int threads;                  /* <= 0: all cores */
+    const char *command_line;     /* recorded in META; may be NULL */
+    const struct tpk_tetgen_options *tetgen; /* surfaces and point clouds (surface.h); NULL: defaults */
+} tpk_convert_options;
+
+typedef struct tpk_convert_report {
+    int64_t source_points, source_cells;
+    int64_t vertices, tets, shell_faces;
+    int64_t inverted_fixed, degenerate_dropped; /* inverted tets turned over (--reorient); tets dropped */
+    int64_t merged_vertices, collapsed_cells_dropped; /* --merge-duplicates; cells it collapsed, dropped */
+    int64_t cells_into[7];       /* source cells that gave k tets (1 tetra, 2 pyramid, 3 wedge, 5/6 hex) */
+    int64_t face_steiner_points, polyhedra; /* points added at face centres; polyhedra split */
+    int64_t mirrored_cells, steiner_cells, bad_cells_skipped; /* mirrored: turned over (--reorient) */
+    int field_count, step_count;
+    uint64_t output_bytes;
+    /* seconds per stage */
+    double t_import, t_tetrahedralize, t_orient, t_reorder, t_connect, t_write, t_total; /* layouts and shell are built while writing */
+} tpk_convert_report;
+
+/* Progress callback: stage name when a stage starts. May be NULL. */
+typedef void (*tpk_stage_fn)(void *user, const char *stage);
+
+struct tpk_strbuf;
+/* Appends the "repairs" JSON object (what was asked for and what was done), as META records it:
+ * {"reorient":{"requested":B,"inverted_tets":N,"mirrored_cells":N},
+ *  "drop_degenerate":{"requested":B,"degenerate_tets":N,"collapsed_cells":N},
+ *  "merge_duplicates":{"requested":B,"tolerance":X,"merged_vertices":N}}
+ * tolerance: 0 for exactly equal coordinates, else relative to the bounding-box diagonal. */
+void tpk_convert_repairs_json(struct tpk_strbuf *sb, const tpk_convert_options *options,
+                              const tpk_convert_report *report);
+
+int tpk_convert(const tpk_convert_options *options, tpk_convert_report *report, tpk_stage_fn stage,
+                void *stage_user, tpk_diag *diag);
+
+#endif

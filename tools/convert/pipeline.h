@@ -1,0 +1,74 @@
+/* The converter pipeline stages, one job each (DESIGN.md §1):
+ * tetrahedralize -> orient (exact) -> reorder (space-filling curve) -> connect (face matching)
+ * -> layouts (Tet32/20/16) -> shell. */
+#ifndef TPK_PIPELINE_H
+#define TPK_PIPELINE_H
+
+#include <stdint.h>
+
+#include "base/diag.h"
+#include "mesh/mesh.h"
+#include "tetpack.h"
+
+/* Source cells -> tets. Tetrahedra pass through; voxels, hexahedra, wedges and pyramids are split
+ * conformally without new points (tools/cell_split.h); a cell the split would fold (warped, non-convex,
+ * degenerate), and a polyhedron, gets points added at its centre and at face centres where the exact
+ * predicates find the result valid (tools/steiner.h); a cell even that cannot split is an error naming
+ * it, or is left out and counted with TPK_TETRA_SKIP_BAD_CELLS. Prisms of more sides are refused by name. Point fields are kept, cell fields become
+ * per-tet fields via the source map. `field_names` (count n, may be NULL = all scalar point fields)
+ * selects fields. */
+#define TPK_TETRA_SKIP_BAD_CELLS 0x1
+/* Cell fields become point fields: each point takes the mean over the volume cells around it (points
+ * in no cell get NaN); without field_names, scalar cell fields are then kept along with point fields. */
+#define TPK_TETRA_CELL_TO_POINT 0x2
+/* A mirrored cell (its node order is the mirror image of VTK's, so every tet of its split is inverted)
+ * is an error naming it and counting them all, instead of being turned over and counted in
+ * mirrored_cells. The converter sets this unless --reorient. */
+#define TPK_TETRA_REFUSE_MIRRORED 0x4
+int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
+                       tpk_tetmesh *out, tpk_diag *diag);
+/* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;
+ * src stays valid for tpk_mesh_free but must not be used otherwise. */
+int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
+                               tpk_tetmesh *out, tpk_diag *diag);
+
+typedef struct tpk_orient_stats {
+    int64_t inverted_fixed;   /* negative tets made positive by a swap (found, with REFUSE_INVERTED) */
+    int64_t degenerate;       /* zero-volume tets (found; dropped only with drop_degenerate) */
+    int64_t repeated_vertex;  /* tets naming a vertex twice (counted in degenerate too) */
+} tpk_orient_stats;
+
+/* tpk_orient flags. 0 and 1 keep their old meaning (swap inverted tets; 1 = drop degenerate ones). */
+#define TPK_ORIENT_DROP_DEGENERATE 0x1
+#define TPK_ORIENT_REFUSE_INVERTED 0x2 /* inverted tets are an error (the converter without --reorient) */
+
+/* Exact orientation (CGAL): swap v2,v3 of inverted tets (or, with TPK_ORIENT_REFUSE_INVERTED, fail
+ * naming the first one and the count); zero-volume tets are an error naming the first one (source
+ * cell, source point ids, coordinates), or are removed with TPK_ORIENT_DROP_DEGENERATE.
+ * threads <= 0: all cores (here and in tpk_reorder); the result does not depend on it. */
+int tpk_orient(tpk_tetmesh *mesh, int flags, int threads, tpk_orient_stats *stats, tpk_diag *diag);
+
+/* Exact orientation sign of four points: +1, 0, -1 for det[b-a, c-a, d-a]. (CGAL shim.) */
+int tpk_orient3d_exact(const double a[3], const double b[3], const double c[3], const double d[3]);
+
+/* Reorder vertices along a Hilbert curve, then tets by their smallest vertex (so they follow it); fields,
+ * vertex_source and tet_source follow. Deterministic. */
+int tpk_reorder(tpk_tetmesh *mesh, int threads, tpk_diag *diag);
+
+/* Face matching. neighbors[4*t+k] = tet across the face opposite tets[4*t+k], or -1. A face shared by
+ * more than two tets is an error naming the face's vertices and the tets. threads <= 0: all cores. */
+int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, int32_t *neighbors,
+                int threads, tpk_diag *diag);
+
+/* Layouts from positively oriented tets and their neighbors (as tpk_connect gives them). */
+void tpk_build_tet32(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet32 *dst);
+void tpk_build_tet20(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet20 *dst);
+void tpk_build_tet16(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet16 *dst);
+
+/* Number of boundary faces (neighbor -1). */
+int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count);
+/* Boundary faces as outward int4 records, in tet order then face order. dst holds the count above. */
+void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_count,
+                     tpk_shell_face *dst);
+
+#endif

@@ -1,0 +1,563 @@
+/* Source cells -> tets (pipeline stage 1). Tetra pass through, voxels, hexahedra, wedges and pyramids
+ * are split conformally (tools/cell_split.c); those that split cannot take, and polyhedra, get added
+ * points (tools/steiner.c); other 3-D types are refused by name (tools/cell_types.c knows every VTK
+ * type), and lower-dimensional cells (boundary faces, edges, points) are skipped with a warning. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cell_split.h"
+#include "mesh/cell_types.h"
+#include "pipeline.h"
+#include "mesh/polyhedron.h"
+#include "steiner.h"
+
+/* Tets one cell of this type can give (for sizing); 0 when this converter does not split the type. */
+static int max_tets(int type)
+{
+    return type == TPK_CELL_TETRA ? 1 : tpk_split_max_tets(type);
+}
+
+/* Most tets a polyhedron gives: one per face edge (a star with every face split at its centre). */
+static int64_t polyhedron_max_tets(const tpk_mesh *src, int64_t c)
+{
+    const int32_t *stream = src->faces + src->face_offsets[c];
+    return src->face_offsets[c + 1] - src->face_offsets[c] - 1 - stream[0];
+}
+
+/* Pass 1: check every cell and count tets; refuses unsupported 3-D cells, skips lower-dim ones. */
+static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
+{
+    int64_t tets = 0, skipped = 0, first_skipped = -1;
+    for (int64_t c = 0; c < src->cell_count; c++) {
+        const tpk_cell_type_info *kind = tpk_cell_type(src->cell_types[c]);
+        int64_t nodes = src->cell_offsets[c + 1] - src->cell_offsets[c];
+        if (!kind)
+            return tpk_diag_fail(diag, "cell %lld has VTK cell type %d, which this converter does not "
+                                 "know", (long long)c, src->cell_types[c]);
+        if (kind->dim < 3) {
+            if (first_skipped < 0)
+                first_skipped = c;
+            skipped++;
+            continue;
+        }
+        if (kind->type == TPK_CELL_POLYHEDRON) {
+            tets += polyhedron_max_tets(src, c);
+            continue;
+        }
+        if (!max_tets(kind->type))
+            return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter splits tetra, "
+                                 "voxels, hexahedra, wedges, pyramids and polyhedra", (long long)c, kind->name,
+                                 kind->type);
+        if (kind->nodes > 0 && nodes != kind->nodes)
+            return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d",
+                                 (long long)c, kind->name, (long long)nodes, kind->name, kind->nodes);
+        tets += max_tets(kind->type);
+    }
+    if (skipped)
+        tpk_diag_warn(diag, "skipped %lld cells of dimension < 3 (the first is cell %lld, a %s)",
+                      (long long)skipped, (long long)first_skipped,
+                      tpk_cell_type(src->cell_types[first_skipped])->name);
+    if (tets == 0)
+        return tpk_diag_fail(diag, "the mesh has no volume cells (%lld cells, none 3-D)",
+                             (long long)src->cell_count);
+    if (tets > INT32_MAX)
+        return tpk_diag_fail(diag, "%lld tets exceed the limit of 2^31-1 per file; split the mesh "
+                             "into parts", (long long)tets);
+    *tet_count = tets;
+    return 0;
+}
+
+/* A polyhedron's faces (tools/polyhedron.h): importers check them; meshes built in memory may not. */
+static int check_face_stream(const tpk_mesh *src, int64_t c, tpk_diag *diag)
+{
+    if (!src->face_offsets || !src->faces)
+        return tpk_diag_fail(diag, "cell %lld is a polyhedron, but the mesh has no faces for it", (long long)c);
+    int64_t begin = src->face_offsets[c], bad_at;
+    char why[200];
+    if (src->face_offsets[c + 1] < begin ||
+        tpk_face_stream_check(src->faces + begin, src->face_offsets[c + 1] - begin, src->point_count, &bad_at, why,
+                              sizeof why))
+        return tpk_diag_fail(diag, "cell %lld (a polyhedron): %s (face stream entry %lld)", (long long)c,
+                             src->face_offsets[c + 1] < begin ? "face offsets decrease" : why,
+                             (long long)(src->face_offsets[c + 1] < begin ? 0 : bad_at));
+    return 0;
+}
+
+static int check_connectivity(const tpk_mesh *src, tpk_diag *diag)
+{
+    if (src->point_count > INT32_MAX)
+        return tpk_diag_fail(diag, "%lld points exceed the limit of 2^31-1 per file; split the mesh "
+                             "into parts", (long long)src->point_count);
+    for (int64_t c = 0; c < src->cell_count; c++) {
+        if (src->cell_offsets[c + 1] < src->cell_offsets[c])
+            return tpk_diag_fail(diag, "cell %lld: offsets decrease", (long long)c);
+        if (src->cell_types[c] == TPK_CELL_POLYHEDRON && check_face_stream(src, c, diag))
+            return -1;
+        for (int64_t i = src->cell_offsets[c]; i < src->cell_offsets[c + 1]; i++)
+            if (src->cell_conn[i] < 0 || src->cell_conn[i] >= src->point_count)
+                return tpk_diag_fail(diag, "cell %lld names point %d; the mesh has %lld points",
+                                     (long long)c, src->cell_conn[i], (long long)src->point_count);
+    }
+    return 0;
+}
+
+/* ---- fields ---------------------------------------------------------------------------------- */
+
+enum { PICK_SCALAR = -1, PICK_MAG = -2 }; /* or a component index >= 0 */
+
+typedef struct field_request {
+    const tpk_src_field *field;
+    int pick;
+    char name[TPK_NAME_MAX];
+} field_request;
+
+static void list_fields(const tpk_mesh *src, char *text, size_t cap)
+{
+    size_t used = 0;
+    text[0] = 0;
+    for (int i = 0; i < src->field_count && used < cap; i++) {
+        const tpk_src_field *f = &src->fields[i];
+        int n = snprintf(text + used, cap - used, "%s%s (%s%s)", i ? ", " : "", f->name,
+                         f->association == TPK_ASSOC_POINT ? "point" : "cell",
+                         f->components == 1 ? "" : f->components == 3 ? ", vector" : ", tuple");
+        if (n < 0)
+            break;
+        used += (size_t)n;
+    }
+    if (src->field_count == 0)
+        snprintf(text, cap, "none");
+}
+
+static const tpk_src_field *find_field(const tpk_mesh *src, const char *name, size_t len)
+{
+    for (int i = 0; i < src->field_count; i++)
+        if (strlen(src->fields[i].name) == len && !memcmp(src->fields[i].name, name, len))
+            return &src->fields[i];
+    return NULL;
+}
+
+/* "NAME", "NAME:mag", "NAME:x|y|z". An exact field name wins over a selector reading. */
+static int parse_request(const tpk_mesh *src, const char *spec, field_request *req, tpk_diag *diag)
+{
+    char available[700];
+    memset(req, 0, sizeof *req);
+    req->pick = PICK_SCALAR;
+    req->field = find_field(src, spec, strlen(spec));
+    const char *colon = strrchr(spec, ':');
+    const char *suffix = NULL;
+    if (!req->field && colon) {
+        suffix = colon + 1;
+        req->field = find_field(src, spec, (size_t)(colon - spec));
+        if (req->field) {
+            if (!strcmp(suffix, "mag"))
+                req->pick = PICK_MAG;
+            else if (!strcmp(suffix, "x") || !strcmp(suffix, "y") || !strcmp(suffix, "z"))
+                req->pick = suffix[0] - 'x';
+            else
+                return tpk_diag_fail(diag, "field '%s': unknown selector ':%s' (use :mag, :x, :y or "
+                                     ":z)", spec, suffix);
+        }
+    }
+    if (!req->field) {
+        list_fields(src, available, sizeof available);
+        return tpk_diag_fail(diag, "no field named '%s'; available fields: %s", spec, available);
+    }
+    const tpk_src_field *f = req->field;
+    if (req->pick == PICK_SCALAR && f->components != 1)
+        return tpk_diag_fail(diag, "field '%s' has %d components; pick one with '%s:mag', '%s:x', "
+                             "'%s:y' or '%s:z'", f->name, f->components, f->name, f->name, f->name,
+                             f->name);
+    if (req->pick >= 0 && req->pick >= f->components)
+        return tpk_diag_fail(diag, "field '%s' has %d components; '%s' is out of range", f->name,
+                             f->components, spec);
+    if (f->step_count < 1)
+        return tpk_diag_fail(diag, "field '%s' has %d time steps", f->name, f->step_count);
+    int n = req->pick == PICK_SCALAR ? snprintf(req->name, sizeof req->name, "%s", f->name)
+                                     : snprintf(req->name, sizeof req->name, "%s_%s", f->name, suffix);
+    if (n < 0 || (size_t)n >= sizeof req->name)
+        return tpk_diag_fail(diag, "field name '%s_%s' is longer than %d bytes", f->name,
+                             suffix ? suffix : "", TPK_NAME_MAX - 1);
+    return 0;
+}
+
+static int build_requests(const tpk_mesh *src, const char *const *names, int name_count, int flags,
+                          field_request **out, int *out_count, tpk_diag *diag)
+{
+    int cap = names ? name_count : src->field_count;
+    field_request *reqs = calloc((size_t)(cap > 0 ? cap : 1), sizeof *reqs);
+    int count = 0;
+    if (!reqs)
+        return tpk_diag_fail(diag, "out of memory");
+    if (names) {
+        for (int i = 0; i < name_count; i++) {
+            if (parse_request(src, names[i], &reqs[count], diag)) {
+                free(reqs);
+                return -1;
+            }
+            int duplicate = 0;
+            for (int j = 0; j < count; j++)
+                duplicate |= !strcmp(reqs[j].name, reqs[count].name);
+            if (duplicate)
+                tpk_diag_warn(diag, "field '%s' requested twice; kept once", reqs[count].name);
+            else
+                count++;
+        }
+    } else {
+        for (int i = 0; i < src->field_count; i++) {
+            const tpk_src_field *f = &src->fields[i];
+            int is_point = f->association == TPK_ASSOC_POINT;
+            if (!is_point && !(flags & TPK_TETRA_CELL_TO_POINT))
+                continue;
+            if (f->components != 1 || f->step_count < 1) {
+                tpk_diag_warn(diag, "%s field '%s' has %d components and is skipped; select it as "
+                              "'%s:mag' or '%s:x' to keep it", is_point ? "point" : "cell", f->name,
+                              f->components, f->name, f->name);
+                continue;
+            }
+            reqs[count].field = f;
+            reqs[count].pick = PICK_SCALAR;
+            snprintf(reqs[count].name, sizeof reqs[count].name, "%s", f->name);
+            count++;
+        }
+    }
+    *out = reqs;
+    *out_count = count;
+    return 0;
+}
+
+static float pick_value(const float *v, int components, int pick)
+{
+    if (pick == PICK_SCALAR)
+        return v[0];
+    if (pick >= 0)
+        return v[pick];
+    double sum = 0;
+    for (int c = 0; c < components; c++)
+        sum += (double)v[c] * v[c];
+    return (float)sqrt(sum);
+}
+
+/* Point fields keep their vertex order (vertex_source is the identity); cell fields go per tet. */
+/* A point field's value at added point i: the mean over the corners it is the mean of, its cell's or its
+ * face's (exact for a linear field, and for the trilinear interpolant at a hexahedron's centre). */
+static float added_value(const tpk_added_points *added, const float *step, const field_request *req, int64_t i)
+{
+    const tpk_src_field *f = req->field;
+    int64_t begin = added->corner_start[i], corners = added->corner_start[i + 1] - begin;
+    double sum = 0;
+    for (int64_t k = 0; k < corners; k++)
+        sum += pick_value(step + (int64_t)added->corners[begin + k] * f->components, f->components, req->pick);
+    return (float)(sum / (double)corners);
+}
+
+/* A cell field at added point i: its cell's value, or the mean over the cells on its face. */
+static float added_cell_value(const tpk_added_points *added, const float *step, const field_request *req, int64_t i)
+{
+    const tpk_src_field *f = req->field;
+    double sum = 0;
+    int count = 0;
+    for (int k = 0; k < 2; k++) {
+        int32_t c = added->cells[2 * i + k];
+        if (c >= 0) {
+            sum += pick_value(step + (int64_t)c * f->components, f->components, req->pick);
+            count++;
+        }
+    }
+    return (float)(sum / count); /* every added point serves at least the cell that made it */
+}
+
+/* A cell field averaged to the output vertices: the mean over the kept volume cells around each source
+ * point (NaN for points in none), at an added cell centre its own cell's value, at a face centre the mean
+ * over the cells on the face. */
+static int cell_to_point(const tpk_mesh *src, const field_request *req, const tpk_added_points *added,
+                         tpk_tetmesh *out)
+{
+    const tpk_src_field *f = req->field;
+    int64_t nv = out->vertex_count, np = src->point_count;
+    float *values = malloc(sizeof *values * (size_t)(nv * f->step_count > 0 ? nv * f->step_count : 1));
+    double *sum = malloc(sizeof *sum * (size_t)(np ? np : 1));
+    int32_t *count = malloc(sizeof *count * (size_t)(np ? np : 1));
+    uint8_t *kept = calloc((size_t)(src->cell_count ? src->cell_count : 1), 1);
+    if (!values || !sum || !count || !kept) {
+        free(values), free(sum), free(count), free(kept);
+        return -1;
+    }
+    for (int64_t t = 0; t < out->tet_count; t++)
+        kept[out->tet_source[t]] = 1;
+    /* All-tet input through tpk_tetrahedralize_consume: the connectivity was taken over as the tet array,
+     * unchanged so far (cell c is tet c, 4 ids each, before orientation). */
+    const int32_t *conn = src->cell_conn ? src->cell_conn : out->tets;
+    for (int s = 0; s < f->step_count; s++) {
+        const float *step = f->values + (size_t)s * (size_t)src->cell_count * (size_t)f->components;
+        memset(sum, 0, sizeof *sum * (size_t)np);
+        memset(count, 0, sizeof *count * (size_t)np);
+        for (int64_t c = 0; c < src->cell_count; c++) {
+            if (!kept[c])
+                continue;
+            double value = pick_value(step + c * f->components, f->components, req->pick);
+            for (int64_t k = src->cell_offsets[c]; k < src->cell_offsets[c + 1]; k++) {
+                sum[conn[k]] += value;
+                count[conn[k]]++;
+            }
+        }
+        float *dst = values + (size_t)s * (size_t)nv;
+        for (int64_t i = 0; i < nv; i++) {
+            int32_t from = out->vertex_source[i];
+            if (from < 0)
+                dst[i] = added_cell_value(added, step, req, i - np);
+            else
+                dst[i] = count[from] ? (float)(sum[from] / count[from]) : NAN;
+        }
+    }
+    free(sum), free(count), free(kept);
+    tpk_src_field *field = &out->fields[out->field_count++];
+    memset(field, 0, sizeof *field);
+    memcpy(field->name, req->name, sizeof field->name);
+    field->association = TPK_ASSOC_POINT;
+    field->components = 1;
+    field->step_count = f->step_count;
+    field->values = values;
+    return 0;
+}
+
+static int copy_field(const tpk_mesh *src, const field_request *req, const tpk_added_points *added,
+                      tpk_tetmesh *out)
+{
+    const tpk_src_field *f = req->field;
+    int per_point = f->association == TPK_ASSOC_POINT;
+    int64_t n = per_point ? out->vertex_count : out->tet_count;
+    int64_t src_n = per_point ? src->point_count : src->cell_count;
+    float *values = malloc(sizeof *values * (size_t)(n * f->step_count > 0 ? n * f->step_count : 1));
+    if (!values)
+        return -1;
+    for (int s = 0; s < f->step_count; s++) {
+        const float *step = f->values + (size_t)s * (size_t)src_n * (size_t)f->components;
+        for (int64_t i = 0; i < n; i++) {
+            int64_t from = per_point ? out->vertex_source[i] : out->tet_source[i];
+            values[(size_t)s * (size_t)n + (size_t)i] =
+                from < 0 ? added_value(added, step, req, i - src->point_count)
+                         : pick_value(step + from * f->components, f->components, req->pick);
+        }
+    }
+    tpk_src_field *dst = &out->fields[out->field_count++];
+    memset(dst, 0, sizeof *dst);
+    memcpy(dst->name, req->name, sizeof dst->name);
+    dst->association = per_point ? TPK_ASSOC_POINT : TPK_ASSOC_TET;
+    dst->components = 1;
+    dst->step_count = f->step_count;
+    dst->values = values;
+    return 0;
+}
+
+/* ---- the stage ------------------------------------------------------------------------------- */
+
+/* Counts a mirrored cell (already turned over by the split) and remembers the first, so that
+ * TPK_TETRA_REFUSE_MIRRORED can name it. */
+static void note_mirrored(tpk_tetmesh *out, int64_t c, int mirrored)
+{
+    if (!mirrored)
+        return;
+    if (out->mirrored_cells == 0 || c < out->first_mirrored_cell)
+        out->first_mirrored_cell = c;
+    out->mirrored_cells++;
+}
+
+/* Not turned over silently (without --reorient), even when every cell is mirrored: a whole file in the
+ * mirrored node order is far more often a writer's or importer's node-order bug (DESIGN.md §10) than a
+ * convention someone chose, and accepting it quietly would hide exactly that bug. The message says
+ * which case it is, so one flag fixes either knowingly. */
+static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh *out, tpk_diag *diag)
+{
+    int64_t begin = src->cell_offsets[first], nodes = src->cell_offsets[first + 1] - begin;
+    int64_t split = out->steiner_cells;
+    for (int k = 2; k <= 6; k++)
+        split += out->cells_into[k];
+    char where[700];
+    int used = snprintf(where, sizeof where, "cell %lld (a %s) is mirrored (its node order is the mirror image of "
+                        "VTK's: every tet of its split is inverted)", (long long)first,
+                        tpk_cell_type(src->cell_types[first])->name);
+    for (int64_t k = 0; k < nodes && used > 0 && (size_t)used < sizeof where; k++) {
+        const double *p = out->points + 3 * (int64_t)src->cell_conn[begin + k]; /* src's may be taken */
+        used += snprintf(where + used, sizeof where - (size_t)used, "%s %d (%.9g, %.9g, %.9g)", k ? "," : ": points",
+                         src->cell_conn[begin + k], p[0], p[1], p[2]);
+    }
+    if (out->mirrored_cells == split)
+        return tpk_diag_fail(diag, "%s; so are all %lld split cells: the file lists their nodes in the mirrored "
+                             "(left-handed) order; --reorient turns them over", where, (long long)split);
+    return tpk_diag_fail(diag, "%s; %lld of %lld split cells are mirrored; --reorient turns them over", where,
+                         (long long)out->mirrored_cells, (long long)split);
+}
+
+/* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by count_tets); cells
+ * it refuses, and polyhedra, go to tools/steiner.c, which appends theirs and may take back the plain
+ * split of a cell next to a face it puts a point on. Returns 0, -1 when out of memory, or -2 with a
+ * message for a cell that cannot be split. */
+static int split_cells(const tpk_mesh *src, int flags, int64_t *tet_capacity, tpk_added_points *added,
+                       tpk_tetmesh *out, tpk_diag *diag)
+{
+    int64_t t = 0, hard_count = 0, hard_capacity = 0;
+    int64_t *hard = NULL;
+    for (int64_t c = 0; c < src->cell_count; c++) {
+        int type = src->cell_types[c];
+        const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
+        if (!max_tets(type) && type != TPK_CELL_POLYHEDRON) /* lower-dimensional: count_tets let only these by */
+            continue;
+        int made = -1, mirrored = 0;
+        if (type == TPK_CELL_TETRA) {
+            memcpy(out->tets + 4 * t, nodes, 4 * sizeof *nodes); /* orientation: tpk_orient */
+            made = 1;
+        } else if (type != TPK_CELL_POLYHEDRON) {
+            made = tpk_split_cell(type, nodes, out->points, out->tets + 4 * t, &mirrored);
+        }
+        if (made < 0) {
+            if (hard_count == hard_capacity) {
+                hard_capacity = hard_capacity ? 2 * hard_capacity : 64;
+                int64_t *grown = realloc(hard, sizeof *hard * (size_t)hard_capacity);
+                if (!grown) {
+                    free(hard);
+                    return -1;
+                }
+                hard = grown;
+            }
+            hard[hard_count++] = c;
+            continue;
+        }
+        note_mirrored(out, c, mirrored);
+        out->cells_into[made]++;
+        for (int i = 0; i < made; i++)
+            out->tet_source[t + i] = (int32_t)c;
+        t += made;
+    }
+    out->tet_count = t;
+    int rc = hard_count ? tpk_steiner_stage(src, hard, hard_count, flags, tet_capacity, out, added, diag) : 0;
+    free(hard);
+    return rc;
+}
+
+/* Source tets stored as 4 consecutive ids each, in cell order: the connectivity is already the tet array. */
+static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
+{
+    if (tet_count != src->cell_count)
+        return 0;
+    for (int64_t c = 0; c < src->cell_count; c++)
+        if (src->cell_types[c] != TPK_CELL_TETRA || src->cell_offsets[c] != 4 * c)
+            return 0;
+    return 1;
+}
+
+/* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
+ * copy and the memory of a second mesh in the converter. */
+static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
+                         tpk_added_points *added, tpk_tetmesh *out, tpk_diag *diag)
+{
+    size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
+    int plain = donor && all_plain_tets(src, tet_capacity);
+    if (donor && donor->points) {
+        out->points = donor->points;
+        donor->points = NULL;
+    } else {
+        out->points = malloc(sizeof *out->points * 3 * nv);
+        if (!out->points)
+            return -1;
+        memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
+    }
+    if (plain) {
+        out->tets = donor->cell_conn;
+        donor->cell_conn = NULL;
+        out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+        if (!out->tet_source)
+            return -1;
+        for (int64_t t = 0; t < tet_capacity; t++)
+            out->tet_source[t] = (int32_t)t;
+        out->tet_count = tet_capacity;
+        out->cells_into[1] = tet_capacity;
+        return 0;
+    }
+    out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
+    out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+    if (!out->tets || !out->tet_source)
+        return -1;
+    return split_cells(src, flags, &tet_capacity, added, out, diag);
+}
+
+static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
+                          int field_name_count, int flags, tpk_tetmesh *out, tpk_diag *diag)
+{
+    field_request *reqs = NULL;
+    int req_count = 0;
+    int64_t tet_capacity = 0;
+    tpk_added_points added; /* what each added point is the mean of */
+    memset(out, 0, sizeof *out);
+    memset(&added, 0, sizeof added);
+    if (!src || (src->cell_count > 0 && (!src->cell_types || !src->cell_offsets || !src->cell_conn)) ||
+        (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
+        return tpk_diag_fail(diag, "tetrahedralize: invalid source mesh");
+    if (check_connectivity(src, diag) || count_tets(src, &tet_capacity, diag) ||
+        build_requests(src, field_names, field_name_count, flags, &reqs, &req_count, diag))
+        return -1;
+
+    out->vertex_count = src->point_count;
+    out->vertex_source = malloc(sizeof *out->vertex_source * (size_t)(out->vertex_count ? out->vertex_count : 1));
+    out->fields = calloc((size_t)(req_count ? req_count : 1), sizeof *out->fields);
+    if (!out->vertex_source || !out->fields)
+        goto out_of_memory;
+    for (int64_t v = 0; v < out->vertex_count; v++)
+        out->vertex_source[v] = (int32_t)v;
+
+    out->step_count = src->step_count > 0 ? src->step_count : 1;
+    if (src->times && src->step_count > 0) {
+        out->times = malloc(sizeof *out->times * (size_t)src->step_count);
+        if (!out->times)
+            goto out_of_memory;
+        memcpy(out->times, src->times, sizeof *out->times * (size_t)src->step_count);
+    }
+    /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
+     * field copy reads src (cell_to_point uses the taken-over connectivity as out->tets). */
+    int geometry = take_geometry(src, donor, tet_capacity, flags, &added, out, diag);
+    if (geometry == 0 && out->mirrored_cells > 0 && (flags & TPK_TETRA_REFUSE_MIRRORED))
+        geometry = refuse_mirrored(src, out->first_mirrored_cell, out, diag) ? -2 : 0;
+    if (geometry == -2) {
+        tpk_added_points_free(&added);
+        free(reqs);
+        tpk_tetmesh_free(out);
+        return -1;
+    }
+    if (geometry)
+        goto out_of_memory;
+    if (out->tet_count == 0) {
+        tpk_added_points_free(&added);
+        free(reqs);
+        tpk_tetmesh_free(out);
+        return tpk_diag_fail(diag, "all %lld volume cells were left out as bad cells", (long long)src->cell_count);
+    }
+    for (int i = 0; i < req_count; i++) {
+        int averaged = reqs[i].field->association != TPK_ASSOC_POINT && (flags & TPK_TETRA_CELL_TO_POINT);
+        if ((averaged ? cell_to_point : copy_field)(src, &reqs[i], &added, out))
+            goto out_of_memory;
+    }
+    tpk_added_points_free(&added);
+    free(reqs);
+    return 0;
+
+out_of_memory:
+    tpk_added_points_free(&added);
+    free(reqs);
+    tpk_tetmesh_free(out);
+    return tpk_diag_fail(diag, "tetrahedralize: out of memory (%lld points, %lld tets)",
+                         (long long)src->point_count, (long long)tet_capacity);
+}
+
+int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
+                       tpk_tetmesh *out, tpk_diag *diag)
+{
+    return tetrahedralize(src, NULL, field_names, field_name_count, flags, out, diag);
+}
+
+int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
+                               tpk_tetmesh *out, tpk_diag *diag)
+{
+    return tetrahedralize(src, src, field_names, field_name_count, flags, out, diag);
+}

@@ -1,0 +1,273 @@
+/* Exodus II importer (.exo, .e, .g, .ex2), through the Exodus library (netCDF classic or netCDF-4):
+ * element blocks of tetrahedra, hexahedra, wedges and pyramids (higher-order kinds reduced to their
+ * corners) become cells in VTK node order, which Exodus shares for all four: its side tables (SEACAS
+ * exodus-element-types.md) list the same outward faces as VTK's cells (hexahedra also checked on
+ * SEACAS's files). Blocks of lower dimension (shells, bars, spheres) are dropped with a count. Nodal
+ * and element variables become point and cell fields with every time step, and the time values are
+ * kept. */
+#include <exodusII.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "import/importers.h"
+#include "netcdf_size.h"
+#include "tetpack_format.h"
+#include "base/text_scan.h"
+
+typedef struct block_kind {
+    const char *prefix; /* element type names start with it (case-insensitive) */
+    int dim, vtk_type, corners;
+} block_kind;
+
+/* Exodus element type names (as written by Cubit, SEACAS and exodus.py): TETRA, TETRA4, TETRA10, TET4,
+ * HEX, HEX8, HEX20, HEX27, ... The first match wins, so longer prefixes come first. */
+static const block_kind kinds[] = {
+    {"TETRA", 3, 10, 4}, {"TET", 3, 10, 4},    {"HEX", 3, 12, 8},     {"WEDGE", 3, 13, 6},  {"PYRAMID", 3, 14, 5},
+    {"PYRA", 3, 14, 5},  {"SHELL", 2, 0, 0},   {"QUAD", 2, 0, 0},     {"TRI", 2, 0, 0},     {"BEAM", 1, 0, 0},
+    {"BAR", 1, 0, 0},    {"TRUSS", 1, 0, 0},   {"SPHERE", 0, 0, 0},   {"CIRCLE", 0, 0, 0},  {"NULL", 0, 0, 0},
+};
+
+static const block_kind *kind_of(const char *type)
+{
+    for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++)
+        if (!strncasecmp(type, kinds[i].prefix, strlen(kinds[i].prefix)))
+            return &kinds[i];
+    return NULL;
+}
+
+typedef struct exo_block {
+    int64_t id, count, nodes_per;
+    const block_kind *kind;
+    char type[MAX_STR_LENGTH + 1];
+    int64_t first_cell; /* index of its first kept cell, or -1 when dropped */
+} exo_block;
+
+typedef struct exo_reader {
+    const char *path;
+    int exoid;
+    int64_t nodes, elems, block_count, steps;
+    exo_block *blocks;
+    tpk_diag *diag;
+} exo_reader;
+
+static int read_points(exo_reader *r, tpk_mesh *out, int dim)
+{
+    double *xyz[3];
+    out->points = malloc(sizeof *out->points * 3 * (size_t)(r->nodes ? r->nodes : 1));
+    for (int k = 0; k < 3; k++)
+        xyz[k] = calloc((size_t)(r->nodes ? r->nodes : 1), sizeof(double));
+    int rc = !out->points || !xyz[0] || !xyz[1] || !xyz[2]
+                 ? tpk_diag_fail(r->diag, "%s: out of memory for %lld nodes", r->path, (long long)r->nodes)
+             : ex_get_coord(r->exoid, xyz[0], xyz[1], dim == 3 ? xyz[2] : NULL) < 0
+                 ? tpk_diag_fail(r->diag, "%s: cannot read the node coordinates", r->path)
+                 : 0;
+    for (int64_t v = 0; rc == 0 && v < r->nodes; v++)
+        for (int k = 0; k < 3; k++)
+            out->points[3 * v + k] = xyz[k][v];
+    for (int k = 0; k < 3; k++)
+        free(xyz[k]);
+    out->point_count = r->nodes;
+    return rc;
+}
+
+/* Block ids, kinds and counts; the kept cells' connectivity into out (1-based ids checked). */
+static int read_blocks(exo_reader *r, tpk_mesh *out)
+{
+    int *ids = calloc((size_t)(r->block_count ? r->block_count : 1), sizeof *ids);
+    r->blocks = calloc((size_t)(r->block_count ? r->block_count : 1), sizeof *r->blocks);
+    if (!ids || !r->blocks || (r->block_count && ex_get_elem_blk_ids(r->exoid, ids) < 0)) {
+        free(ids);
+        return tpk_diag_fail(r->diag, "%s: cannot read the element block ids", r->path);
+    }
+    int64_t cells = 0, conn = 0, dropped = 0;
+    for (int64_t b = 0; b < r->block_count; b++) {
+        exo_block *blk = &r->blocks[b];
+        int count = 0, per = 0, attrs = 0;
+        blk->id = ids[b];
+        if (ex_get_elem_block(r->exoid, ids[b], blk->type, &count, &per, &attrs) < 0) {
+            free(ids);
+            return tpk_diag_fail(r->diag, "%s: cannot read element block %lld", r->path, (long long)blk->id);
+        }
+        blk->count = count, blk->nodes_per = per, blk->kind = kind_of(blk->type), blk->first_cell = -1;
+        if (!blk->kind) {
+            free(ids);
+            return tpk_diag_fail(r->diag, "%s: element block %lld has element type '%s', which this reader does not "
+                                          "know (tetra, hex, wedge and pyramid blocks are read; shells, bars and "
+                                          "spheres dropped)",
+                                 r->path, (long long)blk->id, blk->type);
+        }
+        if (blk->kind->dim < 3) {
+            dropped += count;
+            continue;
+        }
+        if (per < blk->kind->corners) {
+            free(ids);
+            return tpk_diag_fail(r->diag, "%s: element block %lld (%s) has %d nodes per element, expected at least %d",
+                                 r->path, (long long)blk->id, blk->type, per, blk->kind->corners);
+        }
+        blk->first_cell = cells;
+        cells += count;
+        conn += (int64_t)count * blk->kind->corners;
+    }
+    free(ids);
+    if (dropped)
+        tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not volumes (shells, bars, spheres)", r->path,
+                      (long long)dropped);
+    if (cells == 0)
+        return tpk_diag_fail(r->diag, "%s: no volume cells (%lld elements in %lld blocks, none tetra, hex, wedge or "
+                             "pyramid)",
+                             r->path, (long long)r->elems, (long long)r->block_count);
+    out->cell_count = cells;
+    out->cell_types = malloc((size_t)cells);
+    out->cell_offsets = malloc(sizeof *out->cell_offsets * (size_t)(cells + 1));
+    out->cell_conn = malloc(sizeof *out->cell_conn * (size_t)conn);
+    if (!out->cell_types || !out->cell_offsets || !out->cell_conn)
+        return tpk_diag_fail(r->diag, "%s: out of memory for %lld cells", r->path, (long long)cells);
+    int64_t c = 0, at = 0;
+    for (int64_t b = 0; b < r->block_count; b++) {
+        exo_block *blk = &r->blocks[b];
+        if (blk->first_cell < 0)
+            continue;
+        int *ids_in = malloc(sizeof *ids_in * (size_t)(blk->count * blk->nodes_per + 1));
+        if (!ids_in || ex_get_elem_conn(r->exoid, blk->id, ids_in) < 0) {
+            free(ids_in);
+            return tpk_diag_fail(r->diag, "%s: cannot read the connectivity of block %lld", r->path, (long long)blk->id);
+        }
+        for (int64_t e = 0; e < blk->count; e++, c++) {
+            out->cell_types[c] = (uint8_t)blk->kind->vtk_type;
+            out->cell_offsets[c] = at;
+            for (int k = 0; k < blk->kind->corners; k++) {
+                int id = ids_in[e * blk->nodes_per + k];
+                if (id < 1 || id > r->nodes) {
+                    free(ids_in);
+                    return tpk_diag_fail(r->diag, "%s: block %lld element %lld uses node %d, expected 1 to %lld",
+                                         r->path, (long long)blk->id, (long long)e + 1, id, (long long)r->nodes);
+                }
+                out->cell_conn[at++] = id - 1;
+            }
+        }
+        free(ids_in);
+    }
+    out->cell_offsets[c] = at;
+    return 0;
+}
+
+/* Nodal (point) and element (cell) variables, every step; element variables missing on a block (its
+ * truth table) are NaN there. */
+static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
+{
+    int count = 0;
+    if (ex_get_variable_param(r->exoid, type, &count) < 0 || count <= 0 || r->steps <= 0)
+        return 0;
+    int64_t per_step = type == EX_NODAL ? r->nodes : out->cell_count;
+    double *buf = malloc(sizeof *buf * (size_t)(r->nodes > r->elems ? r->nodes + 1 : r->elems + 1));
+    int *truth = calloc((size_t)count, sizeof *truth);
+    char name[MAX_STR_LENGTH + 1];
+    int rc = buf && truth ? 0 : tpk_diag_fail(r->diag, "%s: out of memory", r->path);
+    for (int v = 1; rc == 0 && v <= count; v++) {
+        if (ex_get_variable_name(r->exoid, type, v, name) < 0)
+            snprintf(name, sizeof name, "%s_%d", type == EX_NODAL ? "nodal" : "element", v);
+        float *values = malloc(sizeof *values * (size_t)(per_step * r->steps));
+        if (!values) {
+            rc = tpk_diag_fail(r->diag, "%s: out of memory for variable '%s'", r->path, name);
+            break;
+        }
+        for (int64_t s = 0; rc == 0 && s < r->steps; s++) {
+            float *dst = values + s * per_step;
+            if (type == EX_NODAL) {
+                if (ex_get_var(r->exoid, (int)s + 1, EX_NODAL, v, 1, r->nodes, buf) < 0)
+                    rc = tpk_diag_fail(r->diag, "%s: cannot read nodal variable '%s' at step %lld", r->path, name,
+                                       (long long)s + 1);
+                for (int64_t i = 0; rc == 0 && i < r->nodes; i++)
+                    dst[i] = (float)buf[i];
+                continue;
+            }
+            for (int64_t b = 0; rc == 0 && b < r->block_count; b++) {
+                exo_block *blk = &r->blocks[b];
+                if (blk->first_cell < 0)
+                    continue;
+                int present = ex_get_object_truth_vector(r->exoid, EX_ELEM_BLOCK, blk->id, count, truth) < 0 ||
+                              truth[v - 1];
+                if (present && ex_get_var(r->exoid, (int)s + 1, EX_ELEM_BLOCK, v, blk->id, blk->count, buf) < 0)
+                    present = 0;
+                for (int64_t e = 0; e < blk->count; e++)
+                    dst[blk->first_cell + e] = present ? (float)buf[e] : NAN;
+            }
+        }
+        if (rc == 0 && tpk_mesh_add_field(out, name, type == EX_NODAL ? TPK_ASSOC_POINT : TPK_ASSOC_TET, 1,
+                                          (int)r->steps, values))
+            rc = tpk_diag_fail(r->diag, "%s: out of memory", r->path);
+        if (rc)
+            free(values);
+    }
+    free(buf);
+    free(truth);
+    return rc;
+}
+
+static int read_times(exo_reader *r, tpk_mesh *out)
+{
+    out->step_count = r->steps > 0 ? (int)r->steps : 1;
+    if (r->steps <= 0)
+        return 0;
+    out->times = malloc(sizeof *out->times * (size_t)r->steps);
+    if (!out->times || ex_get_all_times(r->exoid, out->times) < 0)
+        return tpk_diag_fail(r->diag, "%s: cannot read the %lld time values", r->path, (long long)r->steps);
+    return 0;
+}
+
+int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag)
+{
+    if (!out || !path)
+        return tpk_diag_fail(diag, "%s: no path or output mesh given", path ? path : "(null)");
+    memset(out, 0, sizeof *out);
+    if (diag)
+        diag->message[0] = 0;
+    /* A classic netCDF file cut short would read as zeros where the data is missing: check its size. */
+    const char *bytes;
+    size_t size;
+    if (tpk_map_file(path, &bytes, &size, diag) != 0)
+        return -1;
+    uint64_t expected = 0;
+    int classic = tpk_netcdf_classic_size((const unsigned char *)bytes, size, &expected);
+    tpk_unmap_file(bytes, size);
+    if (classic < 0)
+        return tpk_diag_fail(diag, "%s: the netCDF header is malformed or cut short", path);
+    if (classic == 0 && size < expected)
+        return tpk_diag_fail(diag, "%s: truncated: its netCDF header describes %llu bytes of data, the file has %zu",
+                             path, (unsigned long long)expected, size);
+    int cpu_ws = sizeof(double), io_ws = 0;
+    float version = 0;
+    ex_opts(0); /* errors come back as codes; no messages on stderr, no abort */
+    exo_reader r = {path, ex_open(path, EX_READ, &cpu_ws, &io_ws, &version), 0, 0, 0, 0, NULL, diag};
+    if (r.exoid < 0)
+        return tpk_diag_fail(diag, "%s: cannot open it as an Exodus II file (netCDF classic or netCDF-4)", path);
+    char title[MAX_LINE_LENGTH + 1];
+    int dim = 0, nodes = 0, elems = 0, blocks = 0, node_sets = 0, side_sets = 0;
+    int rc = ex_get_init(r.exoid, title, &dim, &nodes, &elems, &blocks, &node_sets, &side_sets) < 0
+                 ? tpk_diag_fail(diag, "%s: cannot read the Exodus header", path)
+             : dim != 3 ? tpk_diag_fail(diag, "%s: expected a 3-D mesh, found %d dimensions", path, dim)
+                        : 0;
+    r.nodes = nodes, r.elems = elems, r.block_count = blocks;
+    r.steps = rc == 0 ? ex_inquire_int(r.exoid, EX_INQ_TIME) : 0;
+    if (rc == 0)
+        rc = read_points(&r, out, dim);
+    if (rc == 0)
+        rc = read_blocks(&r, out);
+    if (rc == 0)
+        rc = read_times(&r, out);
+    if (rc == 0)
+        rc = read_variables(&r, out, EX_NODAL);
+    if (rc == 0)
+        rc = read_variables(&r, out, EX_ELEM_BLOCK);
+    ex_close(r.exoid);
+    free(r.blocks);
+    if (rc == 0)
+        snprintf(out->format, sizeof out->format, "exodus-ii");
+    else
+        tpk_mesh_free(out);
+    return rc ? -1 : 0;
+}

@@ -1,0 +1,94 @@
+/* Private to the Gmsh importer (import_gmsh*.c): the reader state and the functions the pieces share.
+ * import_gmsh.c: numbers, $MeshFormat, the section loop, the final mesh; import_gmsh_mesh.c: $Nodes,
+ * $Elements, $Entities; import_gmsh_data.c: $NodeData/$ElementData and the fields. Not installed.
+ * Every function returning int that can fail returns 0, or -1 with the message in r->s. */
+#ifndef TPK_IMPORT_GMSH_INTERNAL_H
+#define TPK_IMPORT_GMSH_INTERNAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "import/importers.h"
+#include "tetpack_format.h"
+#include "base/text_scan.h"
+
+typedef struct tag_index {
+    int64_t tag;
+    int32_t index; /* node index, or cell index (-1: a dropped element) */
+} tag_index;
+
+/* One $NodeData/$ElementData block. */
+typedef struct data_block {
+    char name[TPK_NAME_MAX];
+    int association;
+    int components;
+    double time;
+    float *values; /* (points or cells) * components, NaN where not given */
+} data_block;
+
+typedef struct entity_phys {
+    int64_t tag, physical;
+} entity_phys;
+
+typedef struct gmsh_reader {
+    tpk_scan s;
+    int version; /* 22 or 41; 0 before $MeshFormat */
+    int binary;  /* file type 1: little-endian binary data blocks between ASCII lines */
+    int64_t point_count; /* -1 until $Nodes */
+    double *points;
+    tag_index *node_tags; /* sorted by tag */
+    int node_dense;       /* tags are 1..point_count in order */
+    int have_elements;
+    int64_t cell_count, conn_count, cell_cap, conn_cap;
+    uint8_t *types;
+    int64_t *offsets;
+    int32_t *conn;
+    float *physical, *entity;
+    tag_index *elem_tags; /* every element (dropped ones too), sorted once needed */
+    int64_t elem_count, elem_cap;
+    int elem_sorted;
+    int64_t dropped, reduced;
+    entity_phys *volumes; /* 4.1 $Entities: volume tag -> first physical tag */
+    int64_t volume_count;
+    data_block *blocks;
+    int block_count;
+    uint64_t block_values; /* sum of items * components over the blocks */
+} gmsh_reader;
+
+/* ---- Numbers, counts, section ends (import_gmsh.c) ---------------------------------------------- */
+
+size_t gmsh_bytes_left(const gmsh_reader *r);
+/* An integer: ASCII, or in binary files (width 4: int, 8: size_t) a binary one; width 0: ASCII always. */
+int gmsh_num(gmsh_reader *r, int64_t *v, const char *what, int width);
+/* A double: ASCII, or 8 binary bytes in binary files. */
+int gmsh_real(gmsh_reader *r, double *v, const char *what);
+/* Binary data starts after the end of the current line. */
+int gmsh_bin_start(gmsh_reader *r, const char *after);
+/* A count of rows of at least `values` numbers each, checked against the bytes left. */
+int gmsh_read_count(gmsh_reader *r, const char *what, int values, int64_t *n, int width);
+/* The closing `$EndName` of a section. */
+int gmsh_expect_end(gmsh_reader *r, const char *end);
+/* Skip a section up to the line starting with `$End` + name (name: the section token without '$'). */
+int gmsh_skip_section(gmsh_reader *r, const char *tok, size_t len);
+
+/* ---- Nodes, elements, entities (import_gmsh_mesh.c) --------------------------------------------- */
+
+/* Sort tags (unless already increasing) and refuse duplicates. */
+int gmsh_sort_tags(gmsh_reader *r, tag_index *t, int64_t n, const char *what);
+/* The index of `tag` in t[0 .. n) sorted by tag; *found says whether it is there (-1 when not). */
+int32_t gmsh_lookup(const tag_index *t, int64_t n, int64_t tag, int *found);
+/* Node index of a tag, or -1 with the message. */
+int32_t gmsh_node_index(gmsh_reader *r, int64_t tag, const char *user);
+int gmsh_read_nodes(gmsh_reader *r);
+int gmsh_read_elements(gmsh_reader *r);
+/* 4.1 $Entities: keep the first physical tag of each volume (2.2: skipped). */
+int gmsh_read_entities(gmsh_reader *r);
+
+/* ---- Data blocks and fields (import_gmsh_data.c) ------------------------------------------------ */
+
+/* One $NodeData (TPK_ASSOC_POINT) or $ElementData (TPK_ASSOC_TET) block into r->blocks. */
+int gmsh_read_data(gmsh_reader *r, int association);
+/* Blocks of the same name and association become one field of `out`, their times the steps. */
+int gmsh_build_fields(gmsh_reader *r, tpk_mesh *out);
+
+#endif

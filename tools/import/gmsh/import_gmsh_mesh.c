@@ -1,0 +1,458 @@
+/* Gmsh importer: $Nodes (tags mapped to 0-based indices), $Elements (volume elements kept in VTK node
+ * order, higher-order ones reduced to their corners, points, lines and surfaces dropped with a count)
+ * and 4.1 $Entities (the physical group of each volume entity), for formats 2.2 and 4.1. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "import_gmsh_internal.h"
+#include "base/text_scan.h"
+
+/* Gmsh element types. vtk 0: dropped (points, lines, surfaces). Higher-order kinds list their corner
+ * nodes first, in the order of the linear kind. Node order: Gmsh and VTK agree on tetrahedra,
+ * hexahedra and pyramids; for prisms, Gmsh's reference prism has nodes (0,0,-1),(1,0,-1),(0,1,-1),
+ * (0,0,1),(1,0,1),(0,1,1): the same corners, in the same order, as VTK's wedge parametric corners, so
+ * the mapping is the identity. Checked on t3_hex_prism_ascii41.msh (12,308 prisms): every wedge is
+ * positive in VTK order (tpk_tetrahedralize reports no mirrored cells; tests/test_gmsh.c). */
+typedef struct gmsh_type {
+    int type, nodes, vtk, corners;
+    const char *name;
+} gmsh_type;
+
+static const gmsh_type gmsh_types[] = {
+    {1, 2, 0, 0, "line"},           {2, 3, 0, 0, "triangle"},          {3, 4, 0, 0, "quadrangle"},
+    {4, 4, 10, 4, "tetrahedron"},   {5, 8, 12, 8, "hexahedron"},       {6, 6, 13, 6, "prism"},
+    {7, 5, 14, 5, "pyramid"},       {8, 3, 0, 0, "line3"},             {9, 6, 0, 0, "triangle6"},
+    {10, 9, 0, 0, "quadrangle9"},   {11, 10, 10, 4, "tetrahedron10"},  {12, 27, 12, 8, "hexahedron27"},
+    {13, 18, 13, 6, "prism18"},     {14, 14, 14, 5, "pyramid14"},      {15, 1, 0, 0, "point"},
+    {16, 8, 0, 0, "quadrangle8"},   {17, 20, 12, 8, "hexahedron20"},   {18, 15, 13, 6, "prism15"},
+    {19, 13, 14, 5, "pyramid13"},   {20, 9, 0, 0, "triangle9"},        {21, 10, 0, 0, "triangle10"},
+    {22, 12, 0, 0, "triangle12"},   {23, 15, 0, 0, "triangle15"},      {24, 15, 0, 0, "triangle15i"},
+    {25, 21, 0, 0, "triangle21"},   {26, 4, 0, 0, "line4"},            {27, 5, 0, 0, "line5"},
+    {28, 6, 0, 0, "line6"},
+};
+
+static const gmsh_type *find_type(int64_t type)
+{
+    for (size_t i = 0; i < sizeof gmsh_types / sizeof gmsh_types[0]; i++)
+        if (gmsh_types[i].type == type)
+            return &gmsh_types[i];
+    return NULL;
+}
+
+/* ---- Tags --------------------------------------------------------------------------------------- */
+
+static int cmp_tag(const void *a, const void *b)
+{
+    int64_t x = ((const tag_index *)a)->tag, y = ((const tag_index *)b)->tag;
+    return (x > y) - (x < y);
+}
+
+/* Sort tags (unless already increasing) and refuse duplicates. */
+int gmsh_sort_tags(gmsh_reader *r, tag_index *t, int64_t n, const char *what)
+{
+    int sorted = 1;
+    for (int64_t i = 1; i < n && sorted; i++)
+        sorted = t[i - 1].tag < t[i].tag;
+    if (sorted)
+        return 0;
+    qsort(t, (size_t)n, sizeof *t, cmp_tag);
+    for (int64_t i = 1; i < n; i++)
+        if (t[i - 1].tag == t[i].tag)
+            return tpk_scan_fail(&r->s, "%s tag %lld is defined twice", what, (long long)t[i].tag);
+    return 0;
+}
+
+int32_t gmsh_lookup(const tag_index *t, int64_t n, int64_t tag, int *found)
+{
+    int64_t lo = 0, hi = n;
+    while (lo < hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (t[mid].tag < tag)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    *found = lo < n && t[lo].tag == tag;
+    return *found ? t[lo].index : -1;
+}
+
+/* Node index of a tag, or -1 with the message. */
+int32_t gmsh_node_index(gmsh_reader *r, int64_t tag, const char *user)
+{
+    if (r->node_dense && tag >= 1 && tag <= r->point_count)
+        return (int32_t)(tag - 1);
+    int found;
+    int32_t i = gmsh_lookup(r->node_tags, r->point_count, tag, &found);
+    if (!found)
+        tpk_scan_fail(&r->s, "%s uses node tag %lld, which $Nodes does not define", user, (long long)tag);
+    return i;
+}
+
+/* ---- $Nodes ------------------------------------------------------------------------------------- */
+
+static int read_node_coords(gmsh_reader *r, int64_t at, int extra)
+{
+    double *p = &r->points[3 * at], skip;
+    for (int k = 0; k < 3; k++)
+        if (gmsh_real(r, &p[k], "a node coordinate"))
+            return -1;
+    for (int k = 0; k < extra; k++)
+        if (gmsh_real(r, &skip, "a parametric node coordinate"))
+            return -1;
+    return 0;
+}
+
+static int check_tag(gmsh_reader *r, int64_t tag, const char *what)
+{
+    if (tag < 1)
+        return tpk_scan_fail(&r->s, "expected a %s tag of 1 or more, found %lld", what, (long long)tag);
+    return 0;
+}
+
+int gmsh_read_nodes(gmsh_reader *r)
+{
+    int64_t n, blocks = 0, tmp;
+    if (r->point_count >= 0)
+        return tpk_scan_fail(&r->s, "expected one $Nodes section, found a second");
+    if (r->version == 41 && (gmsh_bin_start(r, "$Nodes") || gmsh_read_count(r, "node entity blocks", 4, &blocks, 8)))
+        return -1;
+    if (gmsh_read_count(r, "nodes", 4, &n, r->version == 41 ? 8 : 0))
+        return -1;
+    if (r->version == 41 &&
+        (gmsh_num(r, &tmp, "the smallest node tag", 8) || gmsh_num(r, &tmp, "the largest node tag", 8)))
+        return -1;
+    if (r->version == 22 && gmsh_bin_start(r, "the number of nodes"))
+        return -1;
+    r->points = malloc(sizeof *r->points * 3 * (size_t)(n ? n : 1));
+    r->node_tags = malloc(sizeof *r->node_tags * (size_t)(n ? n : 1));
+    if (!r->points || !r->node_tags)
+        return tpk_scan_fail(&r->s, "%lld nodes: out of memory", (long long)n);
+    int64_t done = 0;
+    if (r->version == 22) {
+        for (; done < n; done++) {
+            if (gmsh_num(r, &r->node_tags[done].tag, "a node tag", 4) ||
+                check_tag(r, r->node_tags[done].tag, "node") || read_node_coords(r, done, 0))
+                return -1;
+            r->node_tags[done].index = (int32_t)done;
+        }
+    } else {
+        for (int64_t b = 0; b < blocks; b++) {
+            int64_t dim, etag, param, count;
+            if (gmsh_num(r, &dim, "the entity dimension of a node block", 4) ||
+                gmsh_num(r, &etag, "the entity tag of a node block", 4) ||
+                gmsh_num(r, &param, "the parametric flag of a node block", 4) ||
+                gmsh_read_count(r, "nodes in the block", 4, &count, 8))
+                return -1;
+            if (dim < 0 || dim > 3)
+                return tpk_scan_fail(&r->s, "expected an entity dimension 0 to 3, found %lld", (long long)dim);
+            if (param != 0 && param != 1)
+                return tpk_scan_fail(&r->s, "expected a parametric flag 0 or 1, found %lld", (long long)param);
+            if (count > n - done)
+                return tpk_scan_fail(&r->s, "node block %lld holds %lld nodes, more than the %lld left of the "
+                                            "%lld announced", (long long)b + 1, (long long)count,
+                                     (long long)(n - done), (long long)n);
+            for (int64_t i = 0; i < count; i++) {
+                if (gmsh_num(r, &r->node_tags[done + i].tag, "a node tag", 8) ||
+                    check_tag(r, r->node_tags[done + i].tag, "node"))
+                    return -1;
+                r->node_tags[done + i].index = (int32_t)(done + i);
+            }
+            for (int64_t i = 0; i < count; i++)
+                if (read_node_coords(r, done + i, param ? (int)dim : 0))
+                    return -1;
+            done += count;
+            tpk_scan_release_consumed(&r->s);
+        }
+        if (done != n)
+            return tpk_scan_fail(&r->s, "expected %lld nodes in the node blocks, found %lld", (long long)n,
+                                 (long long)done);
+    }
+    if (gmsh_expect_end(r, "$EndNodes"))
+        return -1;
+    r->point_count = n;
+    r->node_dense = 1;
+    for (int64_t i = 0; i < n && r->node_dense; i++)
+        r->node_dense = r->node_tags[i].tag == i + 1;
+    return r->node_dense ? 0 : gmsh_sort_tags(r, r->node_tags, n, "node");
+}
+
+/* ---- $Elements, $Entities ----------------------------------------------------------------------- */
+
+static int add_elem_tag(gmsh_reader *r, int64_t tag, int32_t cell)
+{
+    if (r->elem_count == r->elem_cap) {
+        int64_t cap = r->elem_cap ? 2 * r->elem_cap : 1024;
+        tag_index *t = realloc(r->elem_tags, sizeof *t * (size_t)cap);
+        if (!t)
+            return tpk_scan_fail(&r->s, "out of memory");
+        r->elem_tags = t;
+        r->elem_cap = cap;
+    }
+    r->elem_tags[r->elem_count].tag = tag;
+    r->elem_tags[r->elem_count++].index = cell;
+    return 0;
+}
+
+/* Room for one more cell of `nodes` corners. */
+static int reserve_cell(gmsh_reader *r, int nodes)
+{
+    if (r->cell_count + 1 > r->cell_cap) {
+        int64_t cap = r->cell_cap ? 2 * r->cell_cap : 1024;
+        if (cap > (int64_t)INT32_MAX)
+            return tpk_scan_fail(&r->s, "more than 2^31-1 volume elements");
+        uint8_t *t = realloc(r->types, (size_t)cap);
+        if (t)
+            r->types = t;
+        int64_t *o = realloc(r->offsets, sizeof *o * (size_t)(cap + 1));
+        if (o)
+            r->offsets = o;
+        float *ph = realloc(r->physical, sizeof *ph * (size_t)cap);
+        if (ph)
+            r->physical = ph;
+        float *en = realloc(r->entity, sizeof *en * (size_t)cap);
+        if (en)
+            r->entity = en;
+        if (!t || !o || !ph || !en)
+            return tpk_scan_fail(&r->s, "out of memory for %lld elements", (long long)cap);
+        r->cell_cap = cap;
+    }
+    if (r->conn_count + nodes > r->conn_cap) {
+        int64_t cap = r->conn_cap ? 2 * r->conn_cap : 4096;
+        int32_t *c = realloc(r->conn, sizeof *c * (size_t)cap);
+        if (!c)
+            return tpk_scan_fail(&r->s, "out of memory for %lld element nodes", (long long)cap);
+        r->conn = c;
+        r->conn_cap = cap;
+    }
+    return 0;
+}
+
+static int64_t volume_physical(const gmsh_reader *r, int64_t entity)
+{
+    for (int64_t i = 0; i < r->volume_count; i++)
+        if (r->volumes[i].tag == entity)
+            return r->volumes[i].physical;
+    return 0;
+}
+
+/* One element's nodes (after its tag, type and tags are read). */
+static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t physical,
+                              int64_t entity)
+{
+    char user[96];
+    int width = r->version == 41 ? 8 : 4;
+    snprintf(user, sizeof user, "element %lld (%s)", (long long)tag, t->name);
+    if (!t->vtk) {
+        for (int k = 0; k < t->nodes; k++) {
+            int64_t id;
+            if (gmsh_num(r, &id, "an element node tag", width) || gmsh_node_index(r, id, user) < 0)
+                return -1;
+        }
+        r->dropped++;
+        return add_elem_tag(r, tag, -1);
+    }
+    if (reserve_cell(r, t->corners))
+        return -1;
+    for (int k = 0; k < t->nodes; k++) {
+        int64_t id;
+        if (gmsh_num(r, &id, "an element node tag", width))
+            return -1;
+        int32_t i = gmsh_node_index(r, id, user);
+        if (i < 0)
+            return -1;
+        if (k < t->corners)
+            r->conn[r->conn_count + k] = i; /* identity mapping for all four kinds (see gmsh_types) */
+    }
+    if (t->corners != t->nodes)
+        r->reduced++;
+    int64_t c = r->cell_count;
+    if (add_elem_tag(r, tag, (int32_t)c))
+        return -1;
+    r->types[c] = (uint8_t)t->vtk;
+    r->offsets[c] = r->conn_count;
+    r->physical[c] = (float)physical;
+    r->entity[c] = (float)entity;
+    r->conn_count += t->corners;
+    r->cell_count++;
+    r->offsets[r->cell_count] = r->conn_count;
+    return 0;
+}
+
+/* `which` names the element (2.2) or the element block (4.1) in the message. */
+static const gmsh_type *element_type(gmsh_reader *r, int64_t type, const char *which)
+{
+    const gmsh_type *t = find_type(type);
+    if (!t)
+        tpk_scan_fail(&r->s, "%s has element type %lld, which this reader does not know (it reads Gmsh types "
+                             "1 to 28: points, lines, surfaces, and tetrahedra, hexahedra, prisms and pyramids "
+                             "up to second order)", which, (long long)type);
+    return t;
+}
+
+int gmsh_read_elements(gmsh_reader *r)
+{
+    int64_t n, blocks = 0, tmp;
+    if (r->point_count < 0)
+        return tpk_scan_fail(&r->s, "expected $Nodes before $Elements");
+    if (r->have_elements)
+        return tpk_scan_fail(&r->s, "expected one $Elements section, found a second");
+    r->have_elements = 1;
+    if (r->version == 41 &&
+        (gmsh_bin_start(r, "$Elements") || gmsh_read_count(r, "element entity blocks", 4, &blocks, 8)))
+        return -1;
+    if (gmsh_read_count(r, "elements", 2, &n, r->version == 41 ? 8 : 0))
+        return -1;
+    if (r->version == 41 &&
+        (gmsh_num(r, &tmp, "the smallest element tag", 8) || gmsh_num(r, &tmp, "the largest element tag", 8)))
+        return -1;
+    if (r->version == 22 && r->binary) {
+        /* groups: type, count, number of tags; then per element its tag, tags and nodes (all int) */
+        if (gmsh_bin_start(r, "the number of elements"))
+            return -1;
+        for (int64_t e = 0; e < n;) {
+            int64_t type, follow, ntags, tag, v;
+            if (gmsh_num(r, &type, "an element type", 4) ||
+                gmsh_num(r, &follow, "the number of elements of a group", 4) ||
+                gmsh_num(r, &ntags, "the number of element tags", 4))
+                return -1;
+            char which[64];
+            snprintf(which, sizeof which, "element group at element %lld", (long long)e + 1);
+            const gmsh_type *t = element_type(r, type, which);
+            if (!t)
+                return -1;
+            if (follow < 1 || follow > n - e)
+                return tpk_scan_fail(&r->s, "expected 1 to %lld elements in a group, found %lld", (long long)(n - e),
+                                     (long long)follow);
+            if (ntags < 0 || (uint64_t)ntags > gmsh_bytes_left(r) / 4)
+                return tpk_scan_fail(&r->s, "expected a number of element tags that fits the %zu bytes left, "
+                                            "found %lld", gmsh_bytes_left(r), (long long)ntags);
+            if ((uint64_t)follow > gmsh_bytes_left(r) / (4 * (uint64_t)(1 + ntags + t->nodes)))
+                return tpk_scan_fail(&r->s, "%lld elements of %lld numbers cannot fit in the %zu bytes left "
+                                            "(wrong count or truncated file)", (long long)follow,
+                                     (long long)(1 + ntags + t->nodes), gmsh_bytes_left(r));
+            for (int64_t i = 0; i < follow; i++, e++) {
+                int64_t physical = 0, entity = 0;
+                if (gmsh_num(r, &tag, "an element tag", 4) || check_tag(r, tag, "element"))
+                    return -1;
+                for (int64_t k = 0; k < ntags; k++) {
+                    if (gmsh_num(r, &v, "an element tag (physical, elementary, partitions)", 4))
+                        return -1;
+                    if (k == 0)
+                        physical = v;
+                    else if (k == 1)
+                        entity = v;
+                }
+                if (read_element_nodes(r, tag, t, physical, entity))
+                    return -1;
+            }
+            tpk_scan_release_consumed(&r->s);
+        }
+    } else if (r->version == 22) {
+        for (int64_t e = 0; e < n; e++) {
+            int64_t tag, type, ntags, physical = 0, entity = 0, v;
+            if (tpk_scan_int64(&r->s, &tag, "an element tag") || check_tag(r, tag, "element") ||
+                tpk_scan_int64(&r->s, &type, "an element type"))
+                return -1;
+            char which[48];
+            snprintf(which, sizeof which, "element %lld", (long long)tag);
+            const gmsh_type *t = element_type(r, type, which);
+            if (!t || gmsh_read_count(r, "element tags", 1, &ntags, 0))
+                return -1;
+            for (int64_t k = 0; k < ntags; k++) {
+                if (tpk_scan_int64(&r->s, &v, "an element tag (physical, elementary, partitions)"))
+                    return -1;
+                if (k == 0)
+                    physical = v;
+                else if (k == 1)
+                    entity = v;
+            }
+            if (read_element_nodes(r, tag, t, physical, entity))
+                return -1;
+            if ((e & 0xffff) == 0)
+                tpk_scan_release_consumed(&r->s);
+        }
+    } else {
+        int64_t done = 0;
+        for (int64_t b = 0; b < blocks; b++) {
+            int64_t dim, etag, type, count;
+            if (gmsh_num(r, &dim, "the entity dimension of an element block", 4) ||
+                gmsh_num(r, &etag, "the entity tag of an element block", 4) ||
+                gmsh_num(r, &type, "the element type of an element block", 4))
+                return -1;
+            char which[96];
+            snprintf(which, sizeof which, "element block %lld (entity %lld, dimension %lld)", (long long)b + 1,
+                     (long long)etag, (long long)dim);
+            const gmsh_type *t = element_type(r, type, which);
+            if (!t || gmsh_read_count(r, "elements in the block", 1 + t->nodes, &count, 8))
+                return -1;
+            if (count > n - done)
+                return tpk_scan_fail(&r->s, "element block %lld holds %lld elements, more than the %lld left "
+                                            "of the %lld announced", (long long)b + 1, (long long)count,
+                                     (long long)(n - done), (long long)n);
+            int64_t physical = dim == 3 ? volume_physical(r, etag) : 0;
+            for (int64_t e = 0; e < count; e++) {
+                int64_t tag;
+                if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "element") ||
+                    read_element_nodes(r, tag, t, physical, etag))
+                    return -1;
+            }
+            done += count;
+            tpk_scan_release_consumed(&r->s);
+        }
+        if (done != n)
+            return tpk_scan_fail(&r->s, "expected %lld elements in the element blocks, found %lld", (long long)n,
+                                 (long long)done);
+    }
+    return gmsh_expect_end(r, "$EndElements");
+}
+
+/* 4.1 $Entities: keep the first physical tag of each volume. */
+int gmsh_read_entities(gmsh_reader *r)
+{
+    int64_t counts[4];
+    static const char *const kinds[4] = {"points", "curves", "surfaces", "volumes"};
+    if (r->version != 41)
+        return gmsh_skip_section(r, "$Entities", 9);
+    if (r->volumes)
+        return tpk_scan_fail(&r->s, "expected one $Entities section, found a second");
+    if (gmsh_bin_start(r, "$Entities"))
+        return -1;
+    for (int d = 0; d < 4; d++)
+        if (gmsh_read_count(r, kinds[d], 4, &counts[d], 8))
+            return -1;
+    r->volumes = malloc(sizeof *r->volumes * (size_t)(counts[3] ? counts[3] : 1));
+    if (!r->volumes)
+        return tpk_scan_fail(&r->s, "out of memory");
+    for (int d = 0; d < 4; d++)
+        for (int64_t i = 0; i < counts[d]; i++) {
+            int64_t tag, np, nb, v, physical = 0;
+            double x;
+            if (gmsh_num(r, &tag, "an entity tag", 4))
+                return -1;
+            for (int k = 0; k < (d ? 6 : 3); k++)
+                if (gmsh_real(r, &x, "an entity coordinate"))
+                    return -1;
+            if (gmsh_read_count(r, "physical tags", 1, &np, 8))
+                return -1;
+            for (int64_t k = 0; k < np; k++) {
+                if (gmsh_num(r, &v, "a physical tag", 4))
+                    return -1;
+                if (k == 0)
+                    physical = v;
+            }
+            if (d) {
+                if (gmsh_read_count(r, "bounding entities", 1, &nb, 8))
+                    return -1;
+                for (int64_t k = 0; k < nb; k++)
+                    if (gmsh_num(r, &v, "a bounding entity tag", 4))
+                        return -1;
+            }
+            if (d == 3) {
+                r->volumes[r->volume_count].tag = tag;
+                r->volumes[r->volume_count++].physical = physical;
+            }
+        }
+    return gmsh_expect_end(r, "$EndEntities");
+}

@@ -1,0 +1,259 @@
+/* VTK legacy importer: the POINTS, CELLS (old lists or 5.1 OFFSETS/CONNECTIVITY) and CELL_TYPES
+ * sections. Point ids are checked to fit an int32 here, against the point count when the mesh is built. */
+#include <stdint.h>
+#include <stdlib.h>
+
+#include "import_vtk_internal.h"
+#include "base/text_scan.h"
+
+/* Cell index holding connectivity entry k (offsets known and monotone up to there). */
+static int64_t cell_of_entry(const int64_t *offsets, int64_t cells, int64_t k)
+{
+    int64_t lo = 0, hi = cells;
+    while (hi - lo > 1) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (offsets[mid] <= k)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* ---- POINTS, CELLS, CELL_TYPES ------------------------------------------------------------------ */
+
+int vtk_read_points(vtk_reader *r)
+{
+    int64_t n;
+    vtk_type type;
+    if (r->point_count >= 0)
+        return vtk_fail_kw(r, "expected one POINTS section, found a second");
+    if (vtk_arg_count(r, "POINTS", "a point count", &n) || vtk_arg_type(r, "POINTS", &type) ||
+        tpk_scan_end_line(&r->s, "POINTS n type"))
+        return -1;
+    if ((uint64_t)n > UINT64_MAX / 3)
+        return vtk_fail_kw(r, "POINTS %lld: too many points for any file", (long long)n);
+    if (vtk_check_room(r, type, 3 * (uint64_t)n, "POINTS"))
+        return -1;
+    if (n > INT32_MAX)
+        return vtk_fail_kw(r, "POINTS %lld: more than 2^31-1 points (the format's limit; split the mesh)",
+                           (long long)n);
+    r->points = malloc(sizeof(double) * 3 * (size_t)(n ? n : 1));
+    if (!r->points)
+        return vtk_fail_kw(r, "POINTS %lld: out of memory", (long long)n);
+    r->point_count = n;
+    return vtk_read_reals(r, type, 3 * (uint64_t)n, r->points, NULL, "POINTS");
+}
+
+static int id_range_error(vtk_reader *r, int64_t cell, int64_t id)
+{
+    return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
+                            "CELLS: cell %lld uses point id %lld, expected 0 <= id < 2^31-1", (long long)cell,
+                            (long long)id);
+}
+
+/* Old form: per cell a count then that many ids; `size` numbers in all. */
+static int read_cell_lists(vtk_reader *r, int64_t n, int64_t size)
+{
+    if (size < n)
+        return vtk_fail_kw(r, "CELLS %lld %lld: the size must count every cell's point count too (at least %lld)",
+                           (long long)n, (long long)size, (long long)n);
+    if (vtk_check_room(r, VT_I32, (uint64_t)size, "CELLS"))
+        return -1;
+    r->offsets = malloc(sizeof(int64_t) * (size_t)(n + 1));
+    r->conn = malloc(sizeof(int32_t) * (size_t)(size - n > 0 ? size - n : 1));
+    if (!r->offsets || !r->conn)
+        return vtk_fail_kw(r, "CELLS %lld %lld: out of memory", (long long)n, (long long)size);
+    r->cell_count = n;
+    int64_t used = 0, k = 0;
+    r->offsets[0] = 0;
+    if (r->binary) {
+        const unsigned char *p = r->s.data + r->s.pos;
+        for (int64_t c = 0; c < n; c++) {
+            if (used >= size)
+                return vtk_fail_kw(r, "CELLS %lld %lld: the size is used up after %lld of %lld cells", (long long)n,
+                                   (long long)size, (long long)c, (long long)n);
+            int64_t count = (int32_t)be32(p + 4 * used);
+            if (count < 0 || count > size - used - 1 - (n - c - 1))
+                return tpk_scan_fail_at(&r->s, r->s.pos + 4 * (size_t)used, 0,
+                                        "CELLS: cell %lld has point count %lld, but the CELLS size %lld "
+                                        "leaves room for at most %lld", (long long)c, (long long)count,
+                                        (long long)size, (long long)(size - used - 1 - (n - c - 1)));
+            used++;
+            for (int64_t j = 0; j < count; j++, used++) {
+                int32_t id = (int32_t)be32(p + 4 * used);
+                if (id < 0)
+                    return id_range_error(r, c, id);
+                r->conn[k++] = id;
+            }
+            r->offsets[c + 1] = k;
+        }
+        r->s.pos += 4 * (size_t)size;
+    } else {
+        for (int64_t c = 0; c < n; c++) {
+            int64_t count;
+            if (used >= size)
+                return vtk_fail_kw(r, "CELLS %lld %lld: the size is used up after %lld of %lld cells", (long long)n,
+                                   (long long)size, (long long)c, (long long)n);
+            if (tpk_scan_int64(&r->s, &count, "a cell's point count"))
+                return -1;
+            if (count < 0 || count > size - used - 1 - (n - c - 1))
+                return tpk_scan_fail(&r->s, "CELLS: cell %lld has point count %lld, but the CELLS size %lld "
+                                     "leaves room for at most %lld", (long long)c, (long long)count,
+                                     (long long)size, (long long)(size - used - 1 - (n - c - 1)));
+            used++;
+            for (int64_t j = 0; j < count; j++, used++) {
+                int64_t id;
+                if (tpk_scan_int64(&r->s, &id, "a point id"))
+                    return -1;
+                if (id < 0 || id > INT32_MAX)
+                    return tpk_scan_fail(&r->s, "CELLS: cell %lld uses point id %lld, expected 0 <= id < 2^31-1",
+                                         (long long)c, (long long)id);
+                r->conn[k++] = (int32_t)id;
+            }
+            r->offsets[c + 1] = k;
+        }
+    }
+    if (used != size)
+        return vtk_fail_kw(r, "CELLS %lld %lld: the %lld cells hold %lld numbers, expected %lld", (long long)n,
+                           (long long)size, (long long)n, (long long)used, (long long)size);
+    return 0;
+}
+
+/* VTK 5.1 form: CELLS n+1 m, then OFFSETS type (n+1 values) and CONNECTIVITY type (m values). */
+static int read_offsets_connectivity(vtk_reader *r, int64_t n_offsets, int64_t m)
+{
+    vtk_type type;
+    if (n_offsets < 1)
+        return vtk_fail_kw(r, "CELLS %lld %lld: expected at least one offset", (long long)n_offsets, (long long)m);
+    if (vtk_arg_type(r, "OFFSETS", &type) || tpk_scan_end_line(&r->s, "OFFSETS type") ||
+        vtk_check_room(r, type, (uint64_t)n_offsets, "OFFSETS"))
+        return -1;
+    int64_t n = n_offsets - 1;
+    if (n > INT32_MAX)
+        return vtk_fail_kw(r, "CELLS: %lld cells, more than 2^31-1", (long long)n);
+    r->offsets = malloc(sizeof(int64_t) * (size_t)n_offsets);
+    if (!r->offsets)
+        return vtk_fail_kw(r, "OFFSETS: out of memory");
+    r->cell_count = n;
+    size_t offsets_pos = r->s.pos;
+    int64_t offsets_line = r->s.line;
+    if (vtk_read_ints(r, type, (uint64_t)n_offsets, r->offsets, "OFFSETS"))
+        return -1;
+    if (r->offsets[0] != 0)
+        return tpk_scan_fail_at(&r->s, offsets_pos, offsets_line, "OFFSETS: expected the first offset 0, found %lld",
+                                (long long)r->offsets[0]);
+    for (int64_t c = 0; c < n; c++)
+        if (r->offsets[c + 1] < r->offsets[c] || r->offsets[c + 1] > m)
+            return tpk_scan_fail_at(&r->s, offsets_pos, offsets_line,
+                                    "OFFSETS: cell %lld ends at %lld, expected a value between %lld and %lld",
+                                    (long long)c, (long long)r->offsets[c + 1], (long long)r->offsets[c], (long long)m);
+    if (r->offsets[n] != m)
+        return tpk_scan_fail_at(&r->s, offsets_pos, offsets_line,
+                                "OFFSETS: expected the last offset to equal the CELLS size %lld, found %lld",
+                                (long long)m, (long long)r->offsets[n]);
+    const char *tok;
+    size_t len = tpk_scan_token(&r->s, &tok);
+    r->kw_pos = r->s.tok_pos;
+    r->kw_line = r->s.tok_line;
+    if (!tpk_token_is(tok, len, "CONNECTIVITY")) {
+        char q[64];
+        return tpk_scan_fail(&r->s, "expected 'CONNECTIVITY type' after the OFFSETS block, found '%s'",
+                             len ? vtk_quote(tok, len, q, sizeof q) : "end of file");
+    }
+    if (vtk_arg_type(r, "CONNECTIVITY", &type) || tpk_scan_end_line(&r->s, "CONNECTIVITY type"))
+        return -1;
+    if (!vtk_is_integer_type(type))
+        return vtk_fail_kw(r, "CONNECTIVITY: expected an integer data type, found a floating-point one");
+    if (vtk_check_room(r, type, (uint64_t)m, "CONNECTIVITY"))
+        return -1;
+    r->conn = malloc(sizeof(int32_t) * (size_t)(m ? m : 1));
+    if (!r->conn)
+        return vtk_fail_kw(r, "CONNECTIVITY: out of memory");
+    if (r->binary) {
+        const unsigned char *p = r->s.data + r->s.pos;
+        for (int64_t k = 0; k < m; k++) {
+            int64_t id = type == VT_I64 ? (int64_t)be64(p + 8 * k)
+                         : type == VT_I32 ? (int32_t)be32(p + 4 * k)
+                                          : (int64_t)be_real(p, type, (uint64_t)k);
+            if (id < 0 || id > INT32_MAX)
+                return id_range_error(r, cell_of_entry(r->offsets, n, k), id);
+            r->conn[k] = (int32_t)id;
+        }
+        r->s.pos += vtk_bytes_for(type, (uint64_t)m);
+        return 0;
+    }
+    for (int64_t k = 0; k < m; k++) {
+        int64_t id;
+        const char *t;
+        size_t tl = tpk_scan_token(&r->s, &t);
+        if (!tl || tpk_parse_int64(t, tl, &id) != 0) {
+            char q[64];
+            if (!tl)
+                return vtk_ascii_value_error(r, t, tl, "CONNECTIVITY", (uint64_t)k, (uint64_t)m);
+            return tpk_scan_fail(&r->s, "CONNECTIVITY: expected a point id (value %lld of %lld), found '%s'",
+                                 (long long)k + 1, (long long)m, vtk_quote(t, tl, q, sizeof q));
+        }
+        if (id < 0 || id > INT32_MAX)
+            return tpk_scan_fail(&r->s, "CONNECTIVITY: cell %lld uses point id %lld, expected 0 <= id < 2^31-1",
+                                 (long long)cell_of_entry(r->offsets, n, k), (long long)id);
+        r->conn[k] = (int32_t)id;
+    }
+    return 0;
+}
+
+int vtk_read_cells(vtk_reader *r)
+{
+    int64_t n, size;
+    if (r->cell_count >= 0)
+        return vtk_fail_kw(r, "expected one CELLS section, found a second");
+    r->cells_pos = r->kw_pos;
+    r->cells_line = r->kw_line;
+    if (vtk_arg_count(r, "CELLS", "a cell count", &n) || vtk_arg_count(r, "CELLS", "the CELLS size", &size) ||
+        tpk_scan_end_line(&r->s, "CELLS n size"))
+        return -1;
+    if (vtk_next_is(r, "OFFSETS")) {
+        r->kw_pos = r->s.tok_pos;
+        r->kw_line = r->s.tok_line;
+        r->offsets_form = 1;
+        return read_offsets_connectivity(r, n, size);
+    }
+    if (n > INT32_MAX)
+        return vtk_fail_kw(r, "CELLS %lld: more than 2^31-1 cells", (long long)n);
+    return read_cell_lists(r, n, size);
+}
+
+int vtk_read_cell_types(vtk_reader *r)
+{
+    int64_t n;
+    if (r->type_count >= 0)
+        return vtk_fail_kw(r, "expected one CELL_TYPES section, found a second");
+    r->types_pos = r->kw_pos;
+    r->types_line = r->kw_line;
+    if (vtk_arg_count(r, "CELL_TYPES", "a cell count", &n) || tpk_scan_end_line(&r->s, "CELL_TYPES n"))
+        return -1;
+    if (r->cell_count < 0)
+        return vtk_fail_kw(r, "expected CELLS before CELL_TYPES");
+    if (n != r->cell_count)
+        return vtk_fail_kw(r, "CELL_TYPES %lld: expected one type per cell (CELLS has %lld cells)", (long long)n,
+                           (long long)r->cell_count);
+    if (vtk_check_room(r, VT_I32, (uint64_t)n, "CELL_TYPES"))
+        return -1;
+    int64_t *values = malloc(sizeof(int64_t) * (size_t)(n ? n : 1));
+    r->types = malloc((size_t)(n ? n : 1));
+    if (!values || !r->types) {
+        free(values);
+        return vtk_fail_kw(r, "CELL_TYPES: out of memory");
+    }
+    r->type_count = n;
+    int rc = vtk_read_ints(r, VT_I32, (uint64_t)n, values, "CELL_TYPES");
+    for (int64_t c = 0; rc == 0 && c < n; c++) {
+        if (values[c] < 0 || values[c] > 255)
+            rc = vtk_fail_kw(r, "CELL_TYPES: cell %lld has unsupported cell type %lld", (long long)c,
+                             (long long)values[c]);
+        else
+            r->types[c] = (uint8_t)values[c];
+    }
+    free(values);
+    return rc;
+}

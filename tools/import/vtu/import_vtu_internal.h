@@ -1,0 +1,107 @@
+/* Private to the VTU importer (import_vtu*.c): the reader state shared by the XML handlers
+ * (import_vtu_xml.c), the DataArray decoding (import_vtu_decode.c) and the mesh building
+ * (import_vtu_mesh.c). Not installed. */
+#ifndef TPK_IMPORT_VTU_INTERNAL_H
+#define TPK_IMPORT_VTU_INTERNAL_H
+
+#include <expat.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "import/importers.h"
+#include "tetpack_format.h"
+
+/* zlib's deflate never packs more than this many bytes into one compressed byte (plus a small constant). */
+#define ZLIB_MAX_RATIO 1032u
+
+typedef enum vtu_type { T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_I64, T_U64, T_F32, T_F64, T_NONE } vtu_type;
+
+enum { SEC_NONE, SEC_POINTS, SEC_CELLS, SEC_POINT_DATA, SEC_CELL_DATA, SEC_OTHER };
+enum { ROLE_POINTS, ROLE_CONN, ROLE_OFFSETS, ROLE_TYPES, ROLE_FACES, ROLE_FACEOFFSETS, ROLE_POINT_FIELD,
+       ROLE_CELL_FIELD, ROLE_COUNT };
+
+typedef struct vtu_array {
+    int role;
+    char name[TPK_NAME_MAX];
+    vtu_type type;
+    int components;
+    int format;            /* 0 ascii, 1 binary, 2 appended */
+    uint64_t offset;       /* appended */
+    long line;
+    double *values;        /* decoded */
+    uint64_t count;
+} vtu_array;
+
+typedef struct vtu_reader {
+    const char *name;
+    const unsigned char *data;
+    size_t size;
+    tpk_diag *diag;
+    XML_Parser parser;
+    int failed;
+    int depth;
+    int root_seen;
+    int grid_depth, piece_depth, section_depth;
+    int section;
+    int piece_seen;
+    int big_endian;
+    unsigned header_size;  /* 4 or 8 */
+    int compressed;
+    int64_t point_count, cell_count;
+    /* The DataArray being read. */
+    int in_array, array_depth, collect;
+    vtu_array cur;
+    char *text;
+    size_t text_len, text_cap;
+    /* Every DataArray kept, in file order. */
+    vtu_array *arrays;
+    int array_count, array_cap;
+    /* Appended data. */
+    int appended_seen;     /* the AppendedData start tag was parsed */
+    int appended_base64;
+    size_t app_start, app_end;
+} vtu_reader;
+
+/* Byte sources: raw bytes, or base64 text decoded as it is read. */
+typedef struct bsrc {
+    const unsigned char *p;
+    size_t len, pos;
+    int b64;
+    unsigned char pend[3];
+    int npend, ipend;
+    int in_file;           /* p points into the file at `base` (appended data): places are file offsets */
+    size_t base;
+    const char *error;     /* why a read failed, with the place */
+    char error_buf[160];
+} bsrc;
+
+/* ---- Messages (import_vtu.c) ---------------------------------------------------------------------
+ * Both set the diag message once (the first failure wins), stop the XML parser when it runs, and
+ * return -1. line <= 0: no line in the message. */
+int vtu_fail_line(vtu_reader *r, long line, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+int vtu_fail_array(vtu_reader *r, const vtu_array *a, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+/* ---- XML (import_vtu_xml.c) ----------------------------------------------------------------------
+ * Parse the XML part of the file (all of it, or up to the AppendedData start tag), keeping every
+ * DataArray of the Piece in r->arrays; ascii and binary arrays are decoded as they end. 0 or -1. */
+int vtu_parse_xml(vtu_reader *r);
+
+/* ---- DataArray contents (import_vtu_decode.c) ---------------------------------------------------- */
+/* The type named by a DataArray's type attribute (Int8 .. Float64, Char, UChar), or T_NONE. */
+vtu_type vtu_type_from_name(const char *name);
+const char *vtu_type_name(vtu_type t);
+int vtu_is_int_type(vtu_type t);
+int vtu_is_space(unsigned char c);
+/* Decode a's values (header, then plain or zlib-compressed data) from s into a->values. 0 or -1. */
+int vtu_decode_binary(vtu_reader *r, vtu_array *a, bsrc *s);
+/* Decode a's whitespace-separated ascii values from text[0 .. len) into a->values. 0 or -1. */
+int vtu_decode_ascii(vtu_reader *r, vtu_array *a, const char *text, size_t len);
+/* Decode every format="appended" array from the appended data, by its offset. 0 or -1. */
+int vtu_decode_appended(vtu_reader *r);
+
+/* ---- The mesh (import_vtu_mesh.c) ----------------------------------------------------------------
+ * Check the decoded arrays against each other and fill `out` (cells kept, reduced or dropped by
+ * cell_types.h, polyhedra by their face streams, point and cell fields). 0 or -1. */
+int vtu_build_mesh(vtu_reader *r, tpk_mesh *out);
+
+#endif
