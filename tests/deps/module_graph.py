@@ -7,8 +7,6 @@
    file on top, calling down.
 2. No .c/.cpp file directly in tools/: every source lives in the room of its stage.
 3. A private header (*internal*.h) is included only by files in its own folder.
-4. A folder's files reach another room only through that room's public headers (any header there
-   that is not private), so each room has a front door.
 
 usage: module_graph.py SOURCE_DIR BUILD_DIR [--dot]    exit 0 when every rule holds, 1 otherwise
 """
