@@ -1,6 +1,6 @@
 /* Exact geometric predicates for the converter and validator: a double-precision filter with a static
  * error bound (inline, below) in front of CGAL's exact orientation (predicates.cpp, the one CGAL unit).
- * The pipeline's public entry point, tpk_orient3d_exact, is declared in pipeline.h. */
+ * tpk_orient3d_exact is the entry point for everything else (converter, mesher, validator). */
 #ifndef TPK_PREDICATES_H
 #define TPK_PREDICATES_H
 
@@ -9,6 +9,9 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/* Exact orientation sign of four points: +1, 0, -1 for det[b-a, c-a, d-a] (filter, then CGAL). */
+int tpk_orient3d_exact(const double a[3], const double b[3], const double c[3], const double d[3]);
 
 /* Sign (+1, 0, -1) of det[b-a, c-a, d-a] decided by CGAL (Epick), no filter of ours in front. */
 int tpk_orient3d_cgal(const double a[3], const double b[3], const double c[3], const double d[3]);

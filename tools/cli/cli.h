@@ -15,6 +15,10 @@ int tpk_cmd_info(int argc, char **argv);
 int tpk_cmd_render(int argc, char **argv);
 int tpk_cmd_export(int argc, char **argv);
 int tpk_cmd_check(int argc, char **argv);
+int tpk_cmd_formats(int argc, char **argv);
+
+/* The input formats, one line each (name, extensions, title), for the --help of convert and check. */
+void tpk_cli_print_formats(FILE *out);
 
 /* Print "tetpack <cmd>: error: ..." to stderr and return TPK_EXIT_USAGE. */
 int tpk_cli_fail(const char *cmd, const char *fmt, ...) __attribute__((format(printf, 2, 3)));

@@ -29,7 +29,9 @@ static const char check_help[] =
     "  --no-self-intersections skip the shell self-intersection test (the slowest check)\n"
     "  --warnings-as-errors    exit 1 on warnings too\n"
     "  --threads N             worker threads (default: all cores)\n"
-    "  --progress / --no-progress  progress bar on stderr (default: when stderr is a terminal)\n";
+    "  --progress / --no-progress  progress bar on stderr (default: when stderr is a terminal)\n"
+    "\n"
+    "Input formats (--format NAME, or tpk; tetpack formats says what each carries):\n";
 
 static int parse_double(const char *cmd, const char *opt, const char *text, double lo, double hi, double *out)
 {
@@ -52,6 +54,7 @@ int tpk_cmd_check(int argc, char **argv)
         const char *a = argv[i], *v;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             fputs(check_help, stdout);
+            tpk_cli_print_formats(stdout);
             return TPK_EXIT_OK;
         } else if (!strcmp(a, "--list")) {
             tpk_check_print_list(stdout);

@@ -12,11 +12,10 @@
 static const char convert_help[] =
     "usage: tetpack convert INPUT OUTPUT.tpk [options]\n"
     "\n"
-    "Reads a volume mesh (VTK .vtk/.vtu/.pvd, Gmsh .msh, Exodus II .exo/.e/.g/.ex2, Medit .mesh/.meshb,\n"
-    "UGRID .ugrid/.b8.ugrid/.lb8.ugrid, TetGen .node/.ele), or a surface or point cloud (below), splits voxels, hexahedra, wedges and\n"
-    "pyramids into tets conformally, orients every tet positively with exact predicates, reorders\n"
-    "along a Hilbert curve, builds neighbors, the chosen layouts and the shell, and writes OUTPUT\n"
-    "atomically.\n"
+    "Reads a volume mesh, or a surface or point cloud (below), in any format listed at the end, splits\n"
+    "voxels, hexahedra, wedges and pyramids into tets conformally, orients every tet positively with\n"
+    "exact predicates, reorders along a Hilbert curve, builds neighbors, the chosen layouts and the\n"
+    "shell, and writes OUTPUT atomically.\n"
     "\n"
     "  --layout tet16|tet20|tet32  layout to store (repeatable; default tet16)\n"
     "  --field NAME                keep this field (repeatable; NAME:mag or NAME:x|y|z for vectors;\n"
@@ -41,21 +40,22 @@ static const char convert_help[] =
     "\n"
     "  --skip-bad-cells            leave out hexahedra, wedges and pyramids that are too warped or\n"
     "                              non-convex to split without new points (counted) instead of failing\n"
-    "  --format NAME               force the input format: vtk, vtu, pvd, gmsh, exodus, medit, ugrid or\n"
-    "                              tetgen (default: from the extension and contents)\n"
+    "  --format NAME               force the input format, by a name listed below (default: from the\n"
+    "                              extension, else the first bytes)\n"
     "  --threads N                 worker threads (default: all cores)\n"
     "\n"
     "Closed surfaces (STL ASCII/binary, OFF, PLY) are filled with tets by TetGen (refused when open,\n"
     "not manifold or self-intersecting); point clouds (CSV with a header x,y,z,NAME..., PLY vertices)\n"
     "become their Delaunay tetrahedralization, other columns/properties becoming point fields.\n"
-    "  --format stl|off|ply|csv|surface|points   force one of these readings\n"
     "  --tetgen-quality R[/A]      largest radius-edge ratio R (1 to 1000; default 1.414) and smallest\n"
     "                              dihedral angle A in degrees (0 to 30), or 'off' for no refinement\n"
     "  --tetgen-max-volume V       largest tet volume (default: none)\n"
     "  --tetgen-switches S         expert: TetGen switches instead of the two above, from p q a Y M T O\n"
     "                              o S z Q with their numbers, after p180zQ (always)\n"
     "  --json                      print the summary as JSON\n"
-    "  --quiet                     print nothing on success\n";
+    "  --quiet                     print nothing on success\n"
+    "\n"
+    "Input formats (--format NAME; tetpack formats says what each carries):\n";
 
 typedef struct convert_args {
     tpk_convert_options options;
@@ -134,6 +134,7 @@ static int parse_args(int argc, char **argv, convert_args *a)
         const char *arg = argv[i], *v;
         if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
             fputs(convert_help, stdout);
+            tpk_cli_print_formats(stdout);
             exit(TPK_EXIT_OK);
         } else if (!strncmp(arg, "--layout", 8)) {
             if (!(v = tpk_cli_value(argc, argv, &i, "--layout")) || parse_layout(v, &a->options.layouts))
@@ -154,7 +155,7 @@ static int parse_args(int argc, char **argv, convert_args *a)
                 return tpk_cli_fail("convert", "--threads expects a number from 1 to 1024, found '%s'", v ? v : "");
         } else if (!strncmp(arg, "--format", 8)) {
             if (!(v = tpk_cli_value(argc, argv, &i, "--format")))
-                return tpk_cli_fail("convert", "--format expects vtk, vtu, pvd, gmsh, exodus, medit, ugrid or tetgen");
+                return tpk_cli_fail("convert", "--format expects a format name (tetpack formats lists them)");
             a->options.format = v;
         } else if (!strcmp(arg, "--no-reorder")) {
             a->options.no_reorder = 1;

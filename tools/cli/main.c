@@ -11,11 +11,12 @@ static const struct {
     int (*run)(int argc, char **argv);
     const char *summary;
 } commands[] = {
-    {"convert", tpk_cmd_convert, "turn a VTK/TetGen mesh into a render-ready .tpk file"},
+    {"convert", tpk_cmd_convert, "turn a simulation mesh (tetpack formats lists them) into a render-ready .tpk"},
     {"info", tpk_cmd_info, "print a .tpk file's header, chunks, fields and checksum status"},
     {"render", tpk_cmd_render, "render a .tpk to PNG with the CPU reference marcher"},
     {"export", tpk_cmd_export, "write a .tpk's tets and fields as VTU, or its shell as PLY"},
     {"check", tpk_cmd_check, "validate a mesh or a .tpk file: connectivity, degeneracies, spec MUSTs"},
+    {"formats", tpk_cmd_formats, "list the input formats convert and check read (--json for tools)"},
 };
 
 static void usage(FILE *out)

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "base/diag.h"
+#include "base/predicates.h" /* tpk_orient3d_exact, for the stages' users */
 #include "mesh/mesh.h"
 #include "tetpack.h"
 
@@ -47,9 +48,6 @@ typedef struct tpk_orient_stats {
  * cell, source point ids, coordinates), or are removed with TPK_ORIENT_DROP_DEGENERATE.
  * threads <= 0: all cores (here and in tpk_reorder); the result does not depend on it. */
 int tpk_orient(tpk_tetmesh *mesh, int flags, int threads, tpk_orient_stats *stats, tpk_diag *diag);
-
-/* Exact orientation sign of four points: +1, 0, -1 for det[b-a, c-a, d-a]. (CGAL shim.) */
-int tpk_orient3d_exact(const double a[3], const double b[3], const double c[3], const double d[3]);
 
 /* Reorder vertices along a Hilbert curve, then tets by their smallest vertex (so they follow it); fields,
  * vertex_source and tet_source follow. Deterministic. */

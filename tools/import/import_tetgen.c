@@ -250,6 +250,24 @@ int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t nod
     return finish_import(rc, out);
 }
 
+int tpk_import_tetgen_bundle_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)
+{
+    static const char marker[] = "\n@@ele\n";
+    size_t node_size = size, ele_at = size;
+    for (size_t i = 0; data && i + sizeof marker - 1 <= size; i++)
+        if (!memcmp(data + i, marker, sizeof marker - 1)) {
+            node_size = i + 1;
+            ele_at = i + sizeof marker - 1;
+            break;
+        }
+    char stem[256];
+    snprintf(stem, sizeof stem, "%s", name ? name : "(input)");
+    size_t len = strlen(stem);
+    if (ends_with(stem, ".node") || ends_with(stem, ".ele"))
+        stem[len - (ends_with(stem, ".ele") ? 4 : 5)] = 0;
+    return tpk_import_tetgen_memory(stem, data, node_size, data ? data + ele_at : NULL, size - ele_at, out, diag);
+}
+
 int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
     if (!out || !path)

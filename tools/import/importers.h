@@ -1,6 +1,11 @@
 /* Importers: each reads one file format into a tpk_mesh. On error they return -1 with a message in
  * diag naming the file, the place (line or byte offset), what was expected and what was found, and
- * leave *out empty. Bounded memory on absurd counts: counts are checked against the file size. */
+ * leave *out empty. Bounded memory on absurd counts: counts are checked against the file size.
+ *
+ * The registry (registry.c) holds one row per format: its name, extensions, a content sniffer, its
+ * readers and what it carries. `--format`, detection, the `--help` lists, `tetpack formats` and the
+ * fuzz targets (tests/fuzz/CMakeLists.txt reads the rows) all come from it: adding a format is one
+ * reader file plus one row. */
 #ifndef TPK_IMPORTERS_H
 #define TPK_IMPORTERS_H
 
@@ -19,6 +24,10 @@ int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag);
 /* Same from memory (for fuzzing); messages name `name`.node and `name`.ele. */
 int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t node_size, const char *ele_data,
                              size_t ele_size, tpk_mesh *out, tpk_diag *diag);
+/* Both files in one buffer (the registry's memory form): the .node text, a line "@@ele", then the .ele
+ * text; without that line all of it is the .node file. A ".node" or ".ele" ending of `name` is dropped. */
+int tpk_import_tetgen_bundle_memory(const char *name, const char *data, size_t size, tpk_mesh *out,
+                                    tpk_diag *diag);
 
 /* Medit .mesh (ASCII): Vertices, Tetrahedra, Hexahedra (surface and line elements dropped with a
  * warning); element references become the cell field "ref", non-zero vertex references "vertex_ref". */
@@ -53,9 +62,55 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
  * time step. */
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
-/* Pick the importer from the extension (and the file's first bytes); format may force one
- * ("vtk", "vtu", "pvd", "gmsh", "tetgen", "medit", "ugrid", "exodus", and for surfaces and point
- * clouds, tetrahedralized by TetGen (surface.h): "stl", "off", "ply", "csv", "surface", "points"). */
+/* What a format carries into the converter (tetpack formats prints these). */
+enum {
+    TPK_FORMAT_TETS = 1u << 0,
+    TPK_FORMAT_HEXAHEDRA = 1u << 1,
+    TPK_FORMAT_WEDGES = 1u << 2,
+    TPK_FORMAT_PYRAMIDS = 1u << 3,
+    TPK_FORMAT_VOXELS = 1u << 4,
+    TPK_FORMAT_POLYHEDRA = 1u << 5,
+    TPK_FORMAT_SURFACE = 1u << 6,      /* a closed surface, filled with tets by TetGen */
+    TPK_FORMAT_POINT_CLOUD = 1u << 7,  /* points, tetrahedralized (Delaunay) by TetGen */
+    TPK_FORMAT_POINT_FIELDS = 1u << 8,
+    TPK_FORMAT_CELL_FIELDS = 1u << 9,
+    TPK_FORMAT_TIME_STEPS = 1u << 10
+};
+
+/* One row of the registry. */
+typedef struct tpk_import_format {
+    const char *name;       /* what --format takes */
+    const char *aliases;    /* other names --format takes, space-separated; NULL: none */
+    const char *title;      /* one line for the help and `tetpack formats` */
+    const char *extensions; /* space-separated, compared case-insensitively ("" : only by name) */
+    const char *magic;      /* sniffer: the file starts (after blanks) with one of these, '|'-separated;
+                               NULL: not recognised by content */
+    /* The file reader; NULL for TetGen readings, which go through tpk_import_surface. */
+    int (*read)(const char *path, tpk_mesh *out, tpk_diag *diag);
+    /* Parses a whole file held in memory, nothing else (no TetGen); NULL: none. Each format that has one
+     * gets a fuzz target fuzz_<name> over tests/fuzz/corpus/fuzz_<name>. */
+    int (*read_memory)(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+    int surface_kind;       /* TetGen readings: tpk_surface_kind and tpk_surface_mode (surface.h) */
+    int surface_mode;
+    unsigned supports;      /* TPK_FORMAT_* */
+} tpk_import_format;
+
+/* The registry's rows, in detection order; *count gets their number. */
+const tpk_import_format *tpk_import_formats(size_t *count);
+/* The row `--format name` selects (name or alias, any case); where several rows take the name, the
+ * one whose extension `path` has (may be NULL). NULL when no row takes it. */
+const tpk_import_format *tpk_import_format_named(const char *name, const char *path);
+/* The row for a file: the first whose extension `path` has, else the first whose magic starts the
+ * file. NULL when neither tells (or the file cannot be read). */
+const tpk_import_format *tpk_import_format_detect(const char *path);
+/* The format names (and aliases) as "vtk, vtu, ..." into buf; returns buf. */
+const char *tpk_import_format_names(char *buf, size_t cap);
+/* The supported-bits as words ("tets hexahedra ... time-steps") into buf; returns buf. */
+const char *tpk_import_format_supports(unsigned supports, char *buf, size_t cap);
+
+/* Pick the importer from the extension (and the file's first bytes); format may force one by a
+ * registry name (tpk_import_format_named). A TetGen stem (no file, but STEM.node exists) reads as
+ * TetGen. */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
 /* The same with TetGen's settings for surfaces (NULL: defaults). */
 struct tpk_tetgen_options;

@@ -1,53 +1,192 @@
-/* tpk_import_any: pick an importer from a forced format name, the file extension, or the file's
- * first bytes. */
+/* The importer registry: one row per input format (importers.h), and tpk_import_any, which picks a row
+ * from a forced format name, the file extension, or the file's first bytes.
+ *
+ * Rows are written one field per designated initializer, starting `{.name = "..."`, with no braces
+ * inside a row: tests/fuzz/CMakeLists.txt reads the rows that have a .read_memory to make the fuzz
+ * targets. */
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
 
 #include "importers.h"
-#include "import/surface/surface.h"
+#include "surface/surface.h"
 
-#define SUPPORTED_FORMATS                                                                                    \
-    "vtk (VTK legacy .vtk, ASCII or BINARY), vtu (VTK XML .vtu), pvd (.pvd series of .vtu), gmsh (.msh 2.2, 4.1), tetgen (.node/.ele), medit (.mesh, .meshb), ugrid (.ugrid, "    \
-    ".b8.ugrid, .lb8.ugrid), exodus (.exo, .e, .g, .ex2), surfaces for TetGen: stl, off, ply; point clouds: csv, ply " \
-    "(surface and points force either reading)"
+#define VOLUME_CELLS (TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_PYRAMIDS)
+#define FIELDS (TPK_FORMAT_POINT_FIELDS | TPK_FORMAT_CELL_FIELDS)
 
-static int has_extension(const char *path, const char *ext)
+/* Detection takes the first row whose extension matches, then the first whose magic matches: the order
+ * below is the detection order. */
+static const tpk_import_format formats[] = {
+    {.name = "vtk", .aliases = "vtk-legacy", .title = "VTK legacy UNSTRUCTURED_GRID, ASCII or BINARY",
+     .extensions = ".vtk", .magic = "# vtk DataFile", .read = tpk_import_vtk_legacy,
+     .read_memory = tpk_import_vtk_legacy_memory,
+     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS},
+    {.name = "tetgen", .title = "TetGen .node/.ele (a path may name either file or their stem)",
+     .extensions = ".node .ele", .read = tpk_import_tetgen, .read_memory = tpk_import_tetgen_bundle_memory,
+     .supports = TPK_FORMAT_TETS | FIELDS},
+    {.name = "vtu", .title = "VTK XML UnstructuredGrid: ascii, base64, appended raw, zlib",
+     .extensions = ".vtu", .magic = "<VTKFile|<?xml", .read = tpk_import_vtu, .read_memory = tpk_import_vtu_memory,
+     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS},
+    {.name = "pvd", .title = "ParaView series: one .vtu per time step", .extensions = ".pvd",
+     .read = tpk_import_pvd,
+     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
+    {.name = "gmsh", .title = "Gmsh .msh 2.2 and 4.1, ASCII and binary", .extensions = ".msh",
+     .magic = "$MeshFormat", .read = tpk_import_gmsh, .read_memory = tpk_import_gmsh_memory,
+     .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+    {.name = "medit", .title = "Medit .mesh (ASCII; INRIA, MMG, TetWild, refine, sfepy)", .extensions = ".mesh",
+     .magic = "MeshVersionFormatted", .read = tpk_import_medit, .read_memory = tpk_import_medit_memory,
+     .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS},
+    {.name = "ugrid", .title = "NASA/AFLR3 UGRID: ASCII, big- and little-endian binary",
+     .extensions = ".ugrid .b8.ugrid .lb8.ugrid", .read = tpk_import_ugrid, .read_memory = tpk_import_ugrid_memory,
+     .supports = VOLUME_CELLS},
+    {.name = "exodus", .title = "Exodus II (netCDF classic or netCDF-4), every time step",
+     .extensions = ".exo .e .g .ex2", .magic = "CDF\x01|CDF\x02|\x89HDF", .read = tpk_import_exodus,
+     .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+    {.name = "meshb", .aliases = "medit", .title = "Medit binary .meshb (libMeshb 1-4, either byte order)",
+     .extensions = ".meshb", .read = tpk_import_meshb, .read_memory = tpk_import_meshb_memory,
+     .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS},
+    {.name = "stl", .title = "STL closed surface, ASCII or binary (TetGen fills it)", .extensions = ".stl",
+     .magic = "solid", .read_memory = tpk_read_stl, .surface_kind = TPK_SURFACE_STL,
+     .surface_mode = TPK_SURFACE_FACES, .supports = TPK_FORMAT_SURFACE},
+    {.name = "off", .title = "OFF closed surface (TetGen fills it)", .extensions = ".off", .magic = "OFF|COFF",
+     .read_memory = tpk_read_off, .surface_kind = TPK_SURFACE_OFF, .surface_mode = TPK_SURFACE_FACES,
+     .supports = TPK_FORMAT_SURFACE},
+    {.name = "ply", .title = "PLY closed surface, or vertices alone as a point cloud (TetGen)",
+     .extensions = ".ply", .magic = "ply", .read_memory = tpk_read_ply, .surface_kind = TPK_SURFACE_PLY,
+     .surface_mode = TPK_SURFACE_AUTO, .supports = TPK_FORMAT_SURFACE | TPK_FORMAT_POINT_CLOUD | TPK_FORMAT_POINT_FIELDS},
+    {.name = "csv", .title = "CSV point cloud x,y,z,NAME... (TetGen: Delaunay)", .extensions = ".csv",
+     .read_memory = tpk_read_csv_points, .surface_kind = TPK_SURFACE_CSV, .surface_mode = TPK_SURFACE_POINTS,
+     .supports = TPK_FORMAT_POINT_CLOUD | TPK_FORMAT_POINT_FIELDS},
+    {.name = "surface", .title = "any STL, OFF or PLY file read as a closed surface", .extensions = "",
+     .surface_kind = TPK_SURFACE_UNKNOWN, .surface_mode = TPK_SURFACE_FACES, .supports = TPK_FORMAT_SURFACE},
+    {.name = "points", .title = "any STL, OFF, PLY or CSV file read as a point cloud (faces ignored)",
+     .extensions = "", .surface_kind = TPK_SURFACE_UNKNOWN, .surface_mode = TPK_SURFACE_POINTS,
+     .supports = TPK_FORMAT_POINT_CLOUD | TPK_FORMAT_POINT_FIELDS},
+};
+
+#define FORMAT_COUNT (sizeof formats / sizeof formats[0])
+
+const tpk_import_format *tpk_import_formats(size_t *count)
 {
-    size_t n = strlen(path), m = strlen(ext);
-    return n > m && strcasecmp(path + n - m, ext) == 0;
+    if (count)
+        *count = FORMAT_COUNT;
+    return formats;
 }
 
-/* The file starts with `magic` (after leading blanks and newlines). */
-static int starts_with(const char *path, const char *magic)
+/* `word` is one of the space-separated words of `list` (any case). */
+static int word_in(const char *list, const char *word)
 {
+    size_t n = strlen(word);
+    for (const char *at = list; at && *at;) {
+        while (*at == ' ')
+            at++;
+        size_t len = strcspn(at, " ");
+        if (len == n && n && strncasecmp(at, word, n) == 0)
+            return 1;
+        at += len;
+    }
+    return 0;
+}
+
+/* `path` ends with one of the space-separated extensions (the path must be longer than the extension). */
+static int has_any_extension(const char *path, const char *extensions)
+{
+    size_t n = strlen(path);
+    for (const char *at = extensions; at && *at;) {
+        while (*at == ' ')
+            at++;
+        size_t len = strcspn(at, " ");
+        if (len && n > len && strncasecmp(path + n - len, at, len) == 0)
+            return 1;
+        at += len;
+    }
+    return 0;
+}
+
+/* One of the '|'-separated prefixes starts `head` after leading blanks and newlines. */
+static int magic_matches(const char *magic, const char *head, size_t got)
+{
+    size_t at = 0;
+    while (at < got && (head[at] == ' ' || head[at] == '\t' || head[at] == '\r' || head[at] == '\n'))
+        at++;
+    for (const char *m = magic; m && *m;) {
+        size_t len = strcspn(m, "|");
+        if (len && got >= at + len && strncasecmp(head + at, m, len) == 0)
+            return 1;
+        m += len + (m[len] == '|');
+    }
+    return 0;
+}
+
+const tpk_import_format *tpk_import_format_named(const char *name, const char *path)
+{
+    const tpk_import_format *first = NULL;
+    for (size_t i = 0; name && i < FORMAT_COUNT; i++) {
+        if (strcasecmp(formats[i].name, name) != 0 && !word_in(formats[i].aliases, name))
+            continue;
+        if (path && has_any_extension(path, formats[i].extensions))
+            return &formats[i];
+        if (!first)
+            first = &formats[i];
+    }
+    return first;
+}
+
+const tpk_import_format *tpk_import_format_detect(const char *path)
+{
+    for (size_t i = 0; i < FORMAT_COUNT; i++)
+        if (has_any_extension(path, formats[i].extensions))
+            return &formats[i];
     char head[64] = {0};
     FILE *f = fopen(path, "rb");
     if (!f)
-        return 0;
+        return NULL;
     size_t got = fread(head, 1, sizeof head - 1, f);
     fclose(f);
-    size_t at = 0, n = strlen(magic);
-    while (at < got && (head[at] == ' ' || head[at] == '\t' || head[at] == '\r' || head[at] == '\n'))
-        at++;
-    return got >= at + n && strncasecmp(head + at, magic, n) == 0;
+    for (size_t i = 0; i < FORMAT_COUNT; i++)
+        if (magic_matches(formats[i].magic, head, got))
+            return &formats[i];
+    return NULL;
 }
 
-/* Surfaces and point clouds (TetGen): a forced format name, or -2 when `format` names none of them. */
-static int import_surface_format(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
-                                 tpk_mesh *out, tpk_diag *diag)
+const char *tpk_import_format_names(char *buf, size_t cap)
 {
-    static const struct {
-        const char *name;
-        tpk_surface_kind kind;
-        tpk_surface_mode mode;
-    } table[] = {{"stl", TPK_SURFACE_STL, TPK_SURFACE_FACES},     {"off", TPK_SURFACE_OFF, TPK_SURFACE_FACES},
-                 {"ply", TPK_SURFACE_PLY, TPK_SURFACE_AUTO},      {"csv", TPK_SURFACE_CSV, TPK_SURFACE_POINTS},
-                 {"surface", TPK_SURFACE_UNKNOWN, TPK_SURFACE_FACES}, {"points", TPK_SURFACE_UNKNOWN, TPK_SURFACE_POINTS}};
-    for (size_t i = 0; i < sizeof table / sizeof table[0]; i++)
-        if (!strcasecmp(format, table[i].name))
-            return tpk_import_surface(path, table[i].kind, table[i].mode, tetgen, out, diag);
-    return -2;
+    size_t used = 0;
+    buf[0] = 0;
+    for (size_t i = 0; i < FORMAT_COUNT && used < cap; i++) {
+        int n = snprintf(buf + used, cap - used, "%s%s", i ? ", " : "", formats[i].name);
+        used += n > 0 ? (size_t)n : 0;
+    }
+    return buf;
+}
+
+const char *tpk_import_format_supports(unsigned supports, char *buf, size_t cap)
+{
+    static const char *const words[] = {"tets", "hexahedra", "wedges", "pyramids", "voxels", "polyhedra",
+                                        "surface", "point-cloud", "point-fields", "cell-fields", "time-steps"};
+    size_t used = 0;
+    buf[0] = 0;
+    for (size_t b = 0; b < sizeof words / sizeof words[0] && used < cap; b++) {
+        if (!(supports & (1u << b)))
+            continue;
+        int n = snprintf(buf + used, cap - used, "%s%s", used ? " " : "", words[b]);
+        used += n > 0 ? (size_t)n : 0;
+    }
+    return buf;
+}
+
+/* Read with a row. `forced`: chosen by name, so a TetGen reading takes the row's kind and mode;
+ * detected surfaces let the surface reader look again (extension, then content) and take faces when
+ * there are any. */
+static int import_with(const tpk_import_format *row, int forced, const char *path,
+                       const struct tpk_tetgen_options *tetgen, tpk_mesh *out, tpk_diag *diag)
+{
+    if (row->read)
+        return row->read(path, out, diag);
+    if (forced)
+        return tpk_import_surface(path, (tpk_surface_kind)row->surface_kind, (tpk_surface_mode)row->surface_mode,
+                                  tetgen, out, diag);
+    return tpk_import_surface(path, TPK_SURFACE_UNKNOWN, TPK_SURFACE_AUTO, tetgen, out, diag);
 }
 
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag)
@@ -60,62 +199,18 @@ int tpk_import_any_with(const char *path, const char *format, const struct tpk_t
 {
     if (!path || !out)
         return tpk_diag_fail(diag, "tpk_import_any: no path or output mesh given");
+    char names[512];
     if (format && *format && strcasecmp(format, "auto") != 0) {
-        if (!strcasecmp(format, "vtk") || !strcasecmp(format, "vtk-legacy"))
-            return tpk_import_vtk_legacy(path, out, diag);
-        if (!strcasecmp(format, "vtu"))
-            return tpk_import_vtu(path, out, diag);
-        if (!strcasecmp(format, "pvd"))
-            return tpk_import_pvd(path, out, diag);
-        if (!strcasecmp(format, "gmsh"))
-            return tpk_import_gmsh(path, out, diag);
-        if (!strcasecmp(format, "tetgen"))
-            return tpk_import_tetgen(path, out, diag);
-        if (!strcasecmp(format, "medit"))
-            return has_extension(path, ".meshb") ? tpk_import_meshb(path, out, diag)
-                                                 : tpk_import_medit(path, out, diag);
-        if (!strcasecmp(format, "ugrid"))
-            return tpk_import_ugrid(path, out, diag);
-        if (!strcasecmp(format, "exodus"))
-            return tpk_import_exodus(path, out, diag);
-        int rc = import_surface_format(path, format, tetgen, out, diag);
-        if (rc != -2)
-            return rc;
+        const tpk_import_format *row = tpk_import_format_named(format, path);
+        if (row)
+            return import_with(row, 1, path, tetgen, out, diag);
         memset(out, 0, sizeof *out);
-        return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s", path, format, SUPPORTED_FORMATS);
+        return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s (tetpack formats lists them)",
+                             path, format, tpk_import_format_names(names, sizeof names));
     }
-    if (has_extension(path, ".vtk"))
-        return tpk_import_vtk_legacy(path, out, diag);
-    if (has_extension(path, ".node") || has_extension(path, ".ele"))
-        return tpk_import_tetgen(path, out, diag);
-    if (has_extension(path, ".vtu"))
-        return tpk_import_vtu(path, out, diag);
-    if (has_extension(path, ".pvd"))
-        return tpk_import_pvd(path, out, diag);
-    if (has_extension(path, ".msh"))
-        return tpk_import_gmsh(path, out, diag);
-    if (has_extension(path, ".mesh"))
-        return tpk_import_medit(path, out, diag);
-    if (has_extension(path, ".ugrid"))
-        return tpk_import_ugrid(path, out, diag);
-    if (has_extension(path, ".exo") || has_extension(path, ".e") || has_extension(path, ".g") ||
-        has_extension(path, ".ex2") || starts_with(path, "CDF\x01") || starts_with(path, "CDF\x02") ||
-        starts_with(path, "\x89HDF"))
-        return tpk_import_exodus(path, out, diag);
-    if (has_extension(path, ".meshb"))
-        return tpk_import_meshb(path, out, diag);
-    if (tpk_surface_kind_from_name(path) != TPK_SURFACE_UNKNOWN)
-        return tpk_import_surface(path, TPK_SURFACE_UNKNOWN, TPK_SURFACE_AUTO, tetgen, out, diag);
-    if (starts_with(path, "# vtk DataFile"))
-        return tpk_import_vtk_legacy(path, out, diag);
-    if (starts_with(path, "MeshVersionFormatted"))
-        return tpk_import_medit(path, out, diag);
-    if (starts_with(path, "$MeshFormat"))
-        return tpk_import_gmsh(path, out, diag);
-    if (starts_with(path, "<VTKFile") || starts_with(path, "<?xml"))
-        return tpk_import_vtu(path, out, diag);
-    if (starts_with(path, "ply") || starts_with(path, "OFF") || starts_with(path, "COFF") || starts_with(path, "solid"))
-        return tpk_import_surface(path, TPK_SURFACE_UNKNOWN, TPK_SURFACE_AUTO, tetgen, out, diag);
+    const tpk_import_format *row = tpk_import_format_detect(path);
+    if (row)
+        return import_with(row, 0, path, tetgen, out, diag);
     memset(out, 0, sizeof *out);
     FILE *f = fopen(path, "rb");
     if (!f) {
@@ -131,5 +226,6 @@ int tpk_import_any_with(const char *path, const char *format, const struct tpk_t
     }
     fclose(f);
     return tpk_diag_fail(diag, "%s: cannot tell the input format from the extension or the first bytes; "
-                         "supported: %s (force one with a format name)", path, SUPPORTED_FORMATS);
+                         "supported: %s (force one with --format; tetpack formats lists them)", path,
+                         tpk_import_format_names(names, sizeof names));
 }

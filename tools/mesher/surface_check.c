@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "import/surface/surface.h"
+#include "mesher.h"
 
 typedef struct edge_use {
     int32_t lo, hi;  /* vertex ids, lo < hi */

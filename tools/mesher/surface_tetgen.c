@@ -1,12 +1,12 @@
-/* Surfaces and point clouds -> tets with TetGen: the closed-surface check, the self-intersection
+/* Surfaces and point clouds -> tets with TetGen (mesher.h): the self-intersection
  * check (TetGen -d), the meshing run, and the hand-over to a tpk_mesh of tets with point fields. */
 #include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "convert/pipeline.h"
-#include "import/surface/surface.h"
+#include "base/predicates.h"
+#include "mesher.h"
 #include "tetpack_format.h"
 #include "tetgen_shim.h"
 
@@ -14,8 +14,10 @@
 #define TPK_WITH_TETGEN 0
 #endif
 
-static int without_tetgen(const char *name, tpk_diag *diag)
+int tpk_tetgen_available(const char *name, tpk_diag *diag)
 {
+    if (TPK_WITH_TETGEN)
+        return 0;
     return tpk_diag_fail(diag, "%s: tetpack was built without TetGen (TETPACK_WITH_TETGEN=OFF), so it cannot "
                          "tetrahedralize surfaces (STL, OFF, PLY) or point clouds (CSV, PLY)", name);
 }
@@ -295,7 +297,7 @@ static int tetgen_surface(const char *name, const tpk_mesh *in, const tpk_tetgen
                           tpk_diag *diag)
 {
     (void)in, (void)options, (void)out;
-    return without_tetgen(name, diag);
+    return tpk_tetgen_available(name, diag);
 }
 
 static int tetgen_point_cloud(const char *name, const tpk_mesh *in, const tpk_tetgen_options *options,
@@ -311,7 +313,7 @@ int tpk_surface_tetrahedralize(const char *name, tpk_mesh *in, const tpk_tetgen_
     memset(out, 0, sizeof *out);
     int rc;
     if (!TPK_WITH_TETGEN) {
-        rc = without_tetgen(name, diag);
+        rc = tpk_tetgen_available(name, diag);
     } else if (in->cell_count == 0) {
         int64_t merged = merge_duplicate_points(in, diag);
         if (merged > 0)
@@ -329,26 +331,4 @@ int tpk_surface_tetrahedralize(const char *name, tpk_mesh *in, const tpk_tetgen_
     if (rc)
         tpk_mesh_free(out);
     return rc;
-}
-
-int tpk_import_surface(const char *path, tpk_surface_kind kind, tpk_surface_mode mode,
-                       const tpk_tetgen_options *options, tpk_mesh *out, tpk_diag *diag)
-{
-    memset(out, 0, sizeof *out);
-    if (!TPK_WITH_TETGEN)
-        return without_tetgen(path, diag);
-    tpk_mesh surface;
-    if (tpk_read_surface(path, kind, &surface, diag) != 0)
-        return -1;
-    if (mode == TPK_SURFACE_FACES && surface.cell_count == 0) {
-        tpk_mesh_free(&surface);
-        return tpk_diag_fail(diag, "%s: the file has no faces, so it is no surface (a point cloud? use --format "
-                             "points)", path);
-    }
-    if (mode == TPK_SURFACE_POINTS) { /* the vertices alone */
-        free(surface.cell_types), free(surface.cell_offsets), free(surface.cell_conn);
-        surface.cell_types = NULL, surface.cell_offsets = NULL, surface.cell_conn = NULL;
-        surface.cell_count = 0;
-    }
-    return tpk_surface_tetrahedralize(path, &surface, options, out, diag);
 }

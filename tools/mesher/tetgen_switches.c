@@ -5,7 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "import/surface/surface.h"
+#include "mesher.h"
 
 /* Switches that take a number (digits, '.', 'e', '+', '-', '/' as TetGen reads them); p's is the
  * facet-merging angle. */

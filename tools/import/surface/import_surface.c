@@ -1,6 +1,6 @@
-/* Surface and point-cloud input: the kind from the name or first bytes, dispatch to the readers, and
- * the STL reader (ASCII and binary). OFF, PLY and CSV live in import_off.c, import_ply.c,
- * import_csv.c. */
+/* Surface and point-cloud input: the kind from the name or first bytes, dispatch to the readers, the
+ * STL reader (ASCII and binary), and tpk_import_surface (read, then fill with tets: mesher/mesher.h).
+ * OFF, PLY and CSV live in import_off.c, import_ply.c, import_csv.c. */
 #include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
@@ -251,4 +251,26 @@ int tpk_read_surface(const char *path, tpk_surface_kind kind, tpk_mesh *out, tpk
     int rc = tpk_read_surface_memory(path, data, size, kind, out, diag);
     tpk_unmap_file(data, size);
     return rc;
+}
+
+int tpk_import_surface(const char *path, tpk_surface_kind kind, tpk_surface_mode mode,
+                       const tpk_tetgen_options *options, tpk_mesh *out, tpk_diag *diag)
+{
+    memset(out, 0, sizeof *out);
+    if (tpk_tetgen_available(path, diag) != 0)
+        return -1;
+    tpk_mesh surface;
+    if (tpk_read_surface(path, kind, &surface, diag) != 0)
+        return -1;
+    if (mode == TPK_SURFACE_FACES && surface.cell_count == 0) {
+        tpk_mesh_free(&surface);
+        return tpk_diag_fail(diag, "%s: the file has no faces, so it is no surface (a point cloud? use --format "
+                             "points)", path);
+    }
+    if (mode == TPK_SURFACE_POINTS) { /* the vertices alone */
+        free(surface.cell_types), free(surface.cell_offsets), free(surface.cell_conn);
+        surface.cell_types = NULL, surface.cell_offsets = NULL, surface.cell_conn = NULL;
+        surface.cell_count = 0;
+    }
+    return tpk_surface_tetrahedralize(path, &surface, options, out, diag);
 }

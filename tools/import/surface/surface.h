@@ -1,5 +1,5 @@
 /* Closed surfaces (STL, OFF, PLY) and point clouds with values (CSV, PLY) as converter input: readers,
- * the closed-and-manifold check, and their tetrahedralization with TetGen (tools/tetgen_shim.h).
+ * and tpk_import_surface, which reads one and fills it with tets (mesher/mesher.h: TetGen).
  *
  * A surface is held in a tpk_mesh whose cells are polygons (TPK_CELL_SURF_TRIANGLE or
  * TPK_CELL_SURF_POLYGON, corners in file order); a point cloud is a tpk_mesh with points, point fields
@@ -11,6 +11,7 @@
 
 #include "base/diag.h"
 #include "mesh/mesh.h"
+#include "mesher/mesher.h"
 
 /* VTK codes of the surface cells the readers produce (never seen by the tet pipeline). */
 enum { TPK_CELL_SURF_TRIANGLE = 5, TPK_CELL_SURF_POLYGON = 7 };
@@ -45,29 +46,6 @@ int tpk_read_off(const char *name, const char *data, size_t size, tpk_mesh *out,
 int tpk_read_ply(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 int tpk_read_csv_points(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
-/* A surface TetGen can fill: at least 4 faces, no face with fewer than 3 or repeated corners, every
- * edge in exactly two faces which use it in opposite directions (closed, manifold, consistently
- * oriented). Returns 0, or -1 naming the first bad edge or face with its vertex ids (0-based, in file
- * order) and coordinates. */
-int tpk_surface_check_closed(const char *name, const tpk_mesh *surface, tpk_diag *diag);
-
-/* TetGen settings; zero-initialised means the defaults. */
-typedef struct tpk_tetgen_options {
-    double radius_edge_ratio; /* q: largest radius-edge ratio; 0: 1.414; < 0: no quality refinement */
-    double min_dihedral;      /* q's second value, smallest dihedral angle in degrees; 0: TetGen's */
-    double max_volume;        /* a: largest tet volume; 0: no limit */
-    const char *switches;     /* expert: TetGen switches replacing the three above (checked by
-                                 tpk_tetgen_check_switches); NULL: none */
-} tpk_tetgen_options;
-
-/* Accept only switches that keep TetGen in memory and quiet: p q a Y M T O o S z Q and their numbers.
- * Returns 0, or -1 naming the refused character and why. */
-int tpk_tetgen_check_switches(const char *switches, tpk_diag *diag);
-/* The switches used for a surface ("p180zQ", i.e. input facets kept as they are, + quality or the
- * expert switches) into buf (cap >= 128); a point cloud always gets "zQ".
- * Returns 0, or -1 when the options are invalid (message says which). */
-int tpk_tetgen_surface_switches(const tpk_tetgen_options *options, char *buf, size_t cap, tpk_diag *diag);
-
 /* Read a surface or point cloud and tetrahedralize it: a surface after tpk_surface_check_closed and a
  * self-intersection check (TetGen -d, refused naming the faces), with the quality switches; a point
  * cloud by Delaunay tetrahedralization of its distinct points (exact duplicates merged, the first
@@ -81,8 +59,4 @@ typedef enum tpk_surface_mode {
 } tpk_surface_mode;
 int tpk_import_surface(const char *path, tpk_surface_kind kind, tpk_surface_mode mode,
                        const tpk_tetgen_options *options, tpk_mesh *out, tpk_diag *diag);
-/* The same for a surface or point cloud already read (consumed: *in is freed). `name` for messages. */
-int tpk_surface_tetrahedralize(const char *name, tpk_mesh *in, const tpk_tetgen_options *options,
-                               tpk_mesh *out, tpk_diag *diag);
-
 #endif

@@ -1,0 +1,60 @@
+/* One fuzz target per importer of the registry (tools/import/registry.c): CMake builds this file once
+ * for each row that has a memory reader, as fuzz_<name>, with TPK_FUZZ_FORMAT naming the row. The first
+ * input byte picks one of the row's extensions for the name the reader sees (UGRID takes its encoding
+ * from it); the rest is the file. Each input is read strictly (convert) and leniently (tetpack check:
+ * wrong-length field arrays recorded and dropped). A failure must leave the mesh empty and say why;
+ * a crash, a sanitizer report or a leak is a bug. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "import/importers.h"
+
+#ifndef TPK_FUZZ_FORMAT
+#error "TPK_FUZZ_FORMAT names the registry row to fuzz"
+#endif
+
+static void ignore_warning(void *user, const char *text)
+{
+    (void)user;
+    (void)text;
+}
+
+/* "fuzz" + the pick-th (modulo their count) of the row's space-separated extensions. */
+static void file_name(const char *extensions, unsigned pick, char *name, size_t cap)
+{
+    unsigned count = 0;
+    for (const char *at = extensions; *at; at += strspn(at, " "))
+        if (*at != ' ')
+            count++, at += strcspn(at, " ");
+    const char *at = extensions + strspn(extensions, " ");
+    for (unsigned k = count ? pick % count : 0; k > 0; k--) {
+        at += strcspn(at, " ");
+        at += strspn(at, " ");
+    }
+    snprintf(name, cap, "fuzz%.*s", (int)strcspn(at, " "), at);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    static const tpk_import_format *row;
+    if (!row && !(row = tpk_import_format_named(TPK_FUZZ_FORMAT, NULL)))
+        abort();
+    if (size == 0 || !row->read_memory)
+        return 0;
+    char name[64];
+    file_name(row->extensions, data[0], name, sizeof name);
+    for (int lenient = 0; lenient < 2; lenient++) {
+        tpk_mesh mesh;
+        tpk_diag diag;
+        memset(&diag, 0, sizeof diag);
+        diag.warn = ignore_warning;
+        diag.lenient_fields = lenient;
+        if (row->read_memory(name, (const char *)data + 1, size - 1, &mesh, &diag) == 0)
+            tpk_mesh_free(&mesh);
+        else if (mesh.points || mesh.cell_conn || mesh.fields || mesh.cell_count || !diag.message[0])
+            abort(); /* a failure must leave the mesh empty and say why */
+    }
+    return 0;
+}
