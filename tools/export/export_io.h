@@ -1,6 +1,8 @@
 /* Shared by the exporters: an output file written to a temporary name in the target directory and
  * renamed into place on success (never a half-written file at `path`), little-endian array writers,
- * and chunk loading from an open .tpk with size checks. */
+ * and chunk loading from an open .tpk with size checks. All defined in export_io.c, which calls no
+ * other exporter file. (The shell loader the shell writers share, tpk_shell_load/tpk_shell_free, is
+ * declared in exporters.h and defined in export_shell_load.c.) */
 #ifndef TPK_EXPORT_IO_H
 #define TPK_EXPORT_IO_H
 

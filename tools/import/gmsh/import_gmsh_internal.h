@@ -1,7 +1,12 @@
 /* Private to the Gmsh importer (import_gmsh*.c): the reader state and the functions the pieces share.
- * import_gmsh.c: numbers, $MeshFormat, the section loop, the final mesh; import_gmsh_mesh.c: $Nodes,
- * $Elements, $Entities; import_gmsh_data.c: $NodeData/$ElementData and the fields. Not installed.
- * Every function returning int that can fail returns 0, or -1 with the message in r->s. */
+ * Who owns what, top to bottom (a file calls only the files below it, never back up):
+ *   import_gmsh.c       tpk_import_gmsh*, $MeshFormat, the section loop, the final mesh (static)
+ *   import_gmsh_data.c  gmsh_read_data, gmsh_build_fields ($NodeData/$ElementData, the fields)
+ *   import_gmsh_mesh.c  gmsh_read_nodes, gmsh_read_elements, gmsh_read_entities, gmsh_sort_tags,
+ *                       gmsh_lookup, gmsh_node_index
+ *   import_gmsh_scan.c  gmsh_bytes_left, gmsh_bin_bytes, gmsh_num, gmsh_real, gmsh_bin_start,
+ *                       gmsh_read_count, gmsh_expect_end, gmsh_skip_section
+ * Not installed. Every function returning int that can fail returns 0, or -1 with the message in r->s. */
 #ifndef TPK_IMPORT_GMSH_INTERNAL_H
 #define TPK_IMPORT_GMSH_INTERNAL_H
 
@@ -55,9 +60,11 @@ typedef struct gmsh_reader {
     uint64_t block_values; /* sum of items * components over the blocks */
 } gmsh_reader;
 
-/* ---- Numbers, counts, section ends (import_gmsh.c) ---------------------------------------------- */
+/* ---- Numbers, counts, section ends (import_gmsh_scan.c) ----------------------------------------- */
 
 size_t gmsh_bytes_left(const gmsh_reader *r);
+/* Binary data: `n` bytes at the current position into dst, or the message "expected <what>". */
+int gmsh_bin_bytes(gmsh_reader *r, void *dst, size_t n, const char *what);
 /* An integer: ASCII, or in binary files (width 4: int, 8: size_t) a binary one; width 0: ASCII always. */
 int gmsh_num(gmsh_reader *r, int64_t *v, const char *what, int width);
 /* A double: ASCII, or 8 binary bytes in binary files. */

@@ -3,52 +3,14 @@
  * header, optionally as zlib-compressed blocks. Raw appended data is not XML, so the buffer is split at
  * the '_' that starts it: expat sees only the XML before, the blocks are read by their offsets.
  * Every size read from the file is checked against the bytes that can hold it before allocating.
- * This file: the entry points and the messages; import_vtu_xml.c walks the XML and collects the
- * DataArrays, import_vtu_decode.c decodes their contents, import_vtu_mesh.c builds the tpk_mesh. */
-#include <stdarg.h>
-#include <stdio.h>
+ * This file sits on top and calls down: the entry points; import_vtu_xml.c walks the XML and collects
+ * the DataArrays, import_vtu_decode.c decodes their contents, import_vtu_mesh.c builds the tpk_mesh,
+ * import_vtu_fail.c words the failures for all of them. */
 #include <stdlib.h>
 #include <string.h>
 
 #include "import_vtu_internal.h"
 #include "base/text_scan.h"
-
-/* ---- Messages ----------------------------------------------------------------------------------- */
-
-int vtu_fail_line(vtu_reader *r, long line, const char *fmt, ...)
-{
-    char text[800];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
-    if (!r->failed) {
-        r->failed = 1;
-        if (line > 0)
-            tpk_diag_fail(r->diag, "%s: line %ld: %s", r->name, line, text);
-        else
-            tpk_diag_fail(r->diag, "%s: %s", r->name, text);
-    }
-    if (r->parser)
-        XML_StopParser(r->parser, XML_FALSE);
-    return -1;
-}
-
-int vtu_fail_array(vtu_reader *r, const vtu_array *a, const char *fmt, ...)
-{
-    char text[700];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
-    if (!r->failed) {
-        r->failed = 1;
-        tpk_diag_fail(r->diag, "%s: DataArray '%s' (line %ld): %s", r->name, a->name, a->line, text);
-    }
-    if (r->parser)
-        XML_StopParser(r->parser, XML_FALSE);
-    return -1;
-}
 
 /* ---- Entry points ------------------------------------------------------------------------------- */
 

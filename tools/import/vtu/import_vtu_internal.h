@@ -1,6 +1,13 @@
 /* Private to the VTU importer (import_vtu*.c): the reader state shared by the XML handlers
  * (import_vtu_xml.c), the DataArray decoding (import_vtu_decode.c) and the mesh building
- * (import_vtu_mesh.c). Not installed. */
+ * (import_vtu_mesh.c). Who owns what, top to bottom (a file calls only files below it, never back up):
+ *   import_vtu.c         tpk_import_vtu, tpk_import_vtu_memory (calls xml, decode, mesh in turn)
+ *   import_vtu_xml.c     vtu_parse_xml
+ *   import_vtu_mesh.c    vtu_build_mesh
+ *   import_vtu_decode.c  vtu_type_from_name, vtu_type_name, vtu_is_int_type, vtu_is_space,
+ *                        vtu_decode_binary, vtu_decode_ascii, vtu_decode_appended
+ *   import_vtu_fail.c    vtu_fail_line, vtu_fail_array
+ * Not installed. */
 #ifndef TPK_IMPORT_VTU_INTERNAL_H
 #define TPK_IMPORT_VTU_INTERNAL_H
 
@@ -75,7 +82,7 @@ typedef struct bsrc {
     char error_buf[160];
 } bsrc;
 
-/* ---- Messages (import_vtu.c) ---------------------------------------------------------------------
+/* ---- Messages (import_vtu_fail.c) ----------------------------------------------------------------
  * Both set the diag message once (the first failure wins), stop the XML parser when it runs, and
  * return -1. line <= 0: no line in the message. */
 int vtu_fail_line(vtu_reader *r, long line, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
