@@ -1,6 +1,16 @@
-/* libtetpack private declarations for the container: the open-file handle, error reporting, and the
- * pure check_* rules shared by the reader (reader.c, verify.c, arrays.c) and the writer (writer.c).
- * Not installed. The rule numbers in comments are those of spec/tetpack-format.md, section "reader". */
+/* libtetpack private declarations for the container: the open-file handle, error reporting, chunk
+ * access, and the pure check_* rules shared by the reader and the writer. Not installed. The rule
+ * numbers in comments are those of spec/tetpack-format.md, section "reader".
+ * Owners, top to bottom (a file calls only files below it, never back up):
+ *   arrays.c   tpk_load_arrays (public), on top of reader.c's tpk_find_chunk and tpk_find_field
+ *   reader.c   tpk_open_*, tpk_close, the directory, chunk, field and time queries, tpk_verify (public)
+ *   writer.c   tpk_writer_* (public); uses rules.c only
+ *   chunks.c   tpki_file_decode, tpki_file_needs_sum, tpki_file_check_sum, tpki_file_chunk_bytes,
+ *              tpki_file_check_ids, tpki_file_verify_chunk
+ *   handle.c   tpki_file_alloc, tpki_file_free, tpki_file_report, tpki_file_refuse, tpki_file_fail,
+ *              tpki_file_usable
+ *   rules.c    tpki_fail, tpki_tag_name, tpki_entry_name and every pure rule below (tpki_resolve_*,
+ *              tpki_elem_type_size, tpki_known_tag, tpki_check_*) */
 #ifndef TPK_INTERNAL_FILE_H
 #define TPK_INTERNAL_FILE_H
 
@@ -54,7 +64,7 @@ struct tpk_file {
     char error_text[TPK_ERROR_TEXT_SIZE];
 };
 
-/* ---- diagnostics (verify.c) ---- */
+/* ---- diagnostics (rules.c) ---- */
 tpk_result tpki_fail(tpki_diag *diag, tpk_result code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 /* "'TT16'" when the four bytes are printable ASCII, else "0x........". */
@@ -62,32 +72,7 @@ void tpki_tag_name(uint32_t tag, char out[16]);
 /* "chunk 3 'TT16' at offset 4096", the prefix of every per-chunk message. */
 void tpki_entry_name(uint64_t i, const tpk_dir_entry *e, char out[80]);
 
-/* ---- handle helpers (reader.c) ---- */
-/* Allocation through the handle's allocator; a size of 0 gets 1 byte, one over SIZE_MAX gets NULL. */
-void *tpki_file_alloc(const tpk_file *file, uint64_t size);
-void tpki_file_free(const tpk_file *file, void *ptr);
-/* Store the text, call the message callback, poison the handle unless the code is a caller-side or
- * resource error (INVALID_ARGUMENT, NOT_FOUND, OUT_OF_MEMORY, LIMIT). Returns code. */
-tpk_result tpki_file_report(tpk_file *file, tpk_result code, const char *text);
-tpk_result tpki_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-/* TPK_ERR_BAD_STATE (reported) when the handle is poisoned, else TPK_OK. */
-tpk_result tpki_file_usable(tpk_file *file);
-/* Decode chunk i into dst (raw_size bytes) without checking its checksum. */
-tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst);
-/* Whether chunk i's checksum is still to be checked before its content is used (not TRUSTED, not done). */
-int tpki_file_needs_sum(const tpk_file *file, uint64_t i);
-/* Compare raw bytes with chunk i's checksum, remember success. */
-tpk_result tpki_file_check_sum(tpk_file *file, uint64_t i, const void *raw);
-/* Verified raw bytes of chunk i: a view for codec none, a handle-owned decoded copy for zstd
- * (kept until tpk_close). The checksum is checked on first use unless the file is TRUSTED. */
-tpk_result tpki_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out);
-/* Rule 17 on chunk i's raw bytes, remembered per chunk. */
-tpk_result tpki_file_check_ids(tpk_file *file, uint64_t i, const void *raw);
-/* Checksum (decoding a zstd chunk into a temporary buffer) and, if check_ids, rule 17 (verify.c). */
-tpk_result tpki_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids);
-
-/* ---- pure rules (verify.c), shared by reader and writer ---- */
+/* ---- pure rules (rules.c), shared by reader and writer ---- */
 void tpki_resolve_limits(const tpk_limits *in, tpk_limits *out);
 /* Fill NULL alloc/free with malloc/free wrappers. */
 void tpki_resolve_allocator(const tpk_allocator *in, tpk_allocator *out);
@@ -120,5 +105,35 @@ tpk_result tpki_check_records(const tpk_header *h, uint64_t i, const tpk_dir_ent
 tpk_result tpki_check_layout(const tpk_header *h, const tpk_dir_entry *entries,
                             const tpk_field_desc *fields, uint32_t field_count,
                             const tpk_allocator *allocator, tpki_diag *diag);
+
+/* ---- handle state (handle.c) ---- */
+/* Allocation through the handle's allocator; a size of 0 gets 1 byte, one over SIZE_MAX gets NULL. */
+void *tpki_file_alloc(const tpk_file *file, uint64_t size);
+void tpki_file_free(const tpk_file *file, void *ptr);
+/* Store the text, call the message callback, poison the handle unless the code is a caller-side or
+ * resource error (INVALID_ARGUMENT, NOT_FOUND, OUT_OF_MEMORY, LIMIT). Returns code. */
+tpk_result tpki_file_report(tpk_file *file, tpk_result code, const char *text);
+/* Store the text and call the message callback, never poisoning: a caller mistake whose code would
+ * otherwise poison (tpk_view_chunk asked for a zstd chunk). Returns code. */
+tpk_result tpki_file_refuse(tpk_file *file, tpk_result code, const char *text);
+tpk_result tpki_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+/* TPK_ERR_BAD_STATE (reported) when the handle is poisoned, else TPK_OK. */
+tpk_result tpki_file_usable(tpk_file *file);
+
+/* ---- chunk bytes (chunks.c) ---- */
+/* Decode chunk i into dst (raw_size bytes) without checking its checksum. */
+tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst);
+/* Whether chunk i's checksum is still to be checked before its content is used (not TRUSTED, not done). */
+int tpki_file_needs_sum(const tpk_file *file, uint64_t i);
+/* Compare raw bytes with chunk i's checksum, remember success. */
+tpk_result tpki_file_check_sum(tpk_file *file, uint64_t i, const void *raw);
+/* Verified raw bytes of chunk i: a view for codec none, a handle-owned decoded copy for zstd
+ * (kept until tpk_close). The checksum is checked on first use unless the file is TRUSTED. */
+tpk_result tpki_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out);
+/* Rule 17 on chunk i's raw bytes, remembered per chunk. */
+tpk_result tpki_file_check_ids(tpk_file *file, uint64_t i, const void *raw);
+/* Checksum (decoding a zstd chunk into a temporary buffer) and, if check_ids, rule 17. */
+tpk_result tpki_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids);
 
 #endif

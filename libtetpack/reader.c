@@ -1,6 +1,7 @@
 /* Opening a tetpack file (mmap or caller memory): header and directory validation (rules 1-15), and
  * access to chunks, fields and time values. Opening reads only the header, the directory and the small
- * FDSC chunk; chunk data is checked when first used (or all at once with TPK_OPEN_VERIFY_ALL). */
+ * FDSC chunk; chunk data is checked when first used (chunks.c), or all at once with
+ * TPK_OPEN_VERIFY_ALL or tpk_verify. */
 #include <errno.h>
 #include <fcntl.h>
 #include <inttypes.h>
@@ -10,68 +11,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 #include <xxhash.h>
-#include <zstd.h>
 
 #include "internal_file.h"
-
-/* ---- handle basics --------------------------------------------------------------------------------- */
-
-void *tpki_file_alloc(const tpk_file *file, uint64_t size)
-{
-    if (size > SIZE_MAX)
-        return NULL;
-    return file->allocator.alloc(file->allocator.user, size ? (size_t)size : 1);
-}
-
-void tpki_file_free(const tpk_file *file, void *ptr)
-{
-    if (ptr)
-        file->allocator.free(file->allocator.user, ptr);
-}
-
-static int poisons(tpk_result code)
-{
-    return code != TPK_OK && code != TPK_ERR_INVALID_ARGUMENT && code != TPK_ERR_NOT_FOUND &&
-           code != TPK_ERR_OUT_OF_MEMORY && code != TPK_ERR_LIMIT;
-}
-
-/* Store and announce an error; poison only when asked and the code calls for it. */
-static tpk_result report(tpk_file *file, tpk_result code, const char *text, int may_poison)
-{
-    pthread_mutex_lock(&file->lock);
-    snprintf(file->error_text, sizeof file->error_text, "%s", text);
-    pthread_mutex_unlock(&file->lock);
-    if (may_poison && poisons(code))
-        atomic_store(&file->poisoned, 1);
-    if (file->message)
-        file->message(file->message_user, code, text);
-    return code;
-}
-
-tpk_result tpki_file_report(tpk_file *file, tpk_result code, const char *text)
-{
-    return report(file, code, text, 1);
-}
-
-tpk_result tpki_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
-{
-    tpki_diag diag;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(diag.text, sizeof diag.text, fmt, ap);
-    va_end(ap);
-    return report(file, code, diag.text, 1);
-}
-
-tpk_result tpki_file_usable(tpk_file *file)
-{
-    if (!atomic_load(&file->poisoned))
-        return TPK_OK;
-    /* Keep the text of the error that poisoned the handle; only announce the refusal. */
-    if (file->message)
-        file->message(file->message_user, TPK_ERR_BAD_STATE, "handle refused: an earlier corruption error");
-    return TPK_ERR_BAD_STATE;
-}
 
 static int host_is_little_endian(void)
 {
@@ -220,56 +161,6 @@ static tpk_result load_directory(tpk_file *file, tpki_diag *diag)
     if (r == TPK_OK)
         r = tpki_check_tags(&file->header, file->entries, 0, &file->allocator, diag);
     return r;
-}
-
-/* ---- chunk decoding and checksums ------------------------------------------------------------------ */
-
-static tpk_result decode_zstd(tpk_file *file, uint64_t i, void *dst)
-{
-    const tpk_dir_entry *e = &file->entries[i];
-    const uint8_t *src = file->data + e->offset;
-    char name[80];
-    tpki_entry_name(i, &file->entries[i], name);
-    unsigned long long declared = ZSTD_getFrameContentSize(src, e->stored_size);
-    if (declared == ZSTD_CONTENTSIZE_ERROR)
-        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: the %" PRIu64 " stored bytes are not a zstd frame",
-                             name, e->stored_size);
-    if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared != e->raw_size)
-        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd frame declares %llu bytes but raw_size is %" PRIu64,
-                             name, declared, e->raw_size);
-    size_t got = ZSTD_decompress(dst, e->raw_size, src, e->stored_size);
-    if (ZSTD_isError(got))
-        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd: %s (raw_size %" PRIu64 ")", name,
-                             ZSTD_getErrorName(got), e->raw_size);
-    if (got != e->raw_size)
-        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: decoded %zu bytes but raw_size is %" PRIu64, name, got,
-                             e->raw_size);
-    return TPK_OK;
-}
-
-tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst)
-{
-    const tpk_dir_entry *e = &file->entries[i];
-    if (e->codec == TPK_CODEC_ZSTD)
-        return decode_zstd(file, i, dst);
-    if (e->raw_size > 0)
-        memcpy(dst, file->data + e->offset, e->raw_size);
-    return TPK_OK;
-}
-
-tpk_result tpki_file_check_sum(tpk_file *file, uint64_t i, const void *raw)
-{
-    const tpk_dir_entry *e = &file->entries[i];
-    uint64_t sum = XXH64(raw, e->raw_size, 0);
-    if (sum != e->checksum) {
-        char name[80];
-        tpki_entry_name(i, &file->entries[i], name);
-        return tpki_file_fail(file, TPK_ERR_CHUNK_CHECKSUM,
-                             "%s: checksum of the %" PRIu64 " raw bytes is 0x%016" PRIx64 ", directory says 0x%016" PRIx64,
-                             name, e->raw_size, sum, e->checksum);
-    }
-    atomic_fetch_or(&file->chunk_state[i], TPK_CHUNK_SUM_OK);
-    return TPK_OK;
 }
 
 /* ---- fields (rule 15) ---------------------------------------------------------------------------- */
@@ -441,11 +332,6 @@ static tpk_result check_chunk_arg(tpk_file *file, uint64_t i, const char *functi
     return tpki_file_usable(file);
 }
 
-int tpki_file_needs_sum(const tpk_file *file, uint64_t i)
-{
-    return !(file->flags & TPK_OPEN_TRUSTED) && !(atomic_load(&file->chunk_state[i]) & TPK_CHUNK_SUM_OK);
-}
-
 tpk_result tpk_view_chunk(tpk_file *file, uint64_t i, const void **out_data, uint64_t *out_size)
 {
     if (!file || !out_data || !out_size)
@@ -458,7 +344,7 @@ tpk_result tpk_view_chunk(tpk_file *file, uint64_t i, const void **out_data, uin
         char name[80], text[160];
         tpki_entry_name(i, &file->entries[i], name);
         snprintf(text, sizeof text, "%s is zstd-compressed: use tpk_read_chunk", name);
-        return report(file, TPK_ERR_UNSUPPORTED_CHUNK, text, 0); /* a caller mistake, not corruption */
+        return tpki_file_refuse(file, TPK_ERR_UNSUPPORTED_CHUNK, text); /* a caller mistake, not corruption */
     }
     const void *raw = file->data + e->offset;
     if (tpki_file_needs_sum(file, i) && (r = tpki_file_check_sum(file, i, raw)) != TPK_OK)
@@ -531,5 +417,17 @@ tpk_result tpk_get_time(tpk_file *file, uint32_t step, double *out_time)
     r = tpki_file_chunk_bytes(file, i, &raw);
     if (r == TPK_OK)
         memcpy(out_time, (const uint8_t *)raw + (size_t)step * sizeof(double), sizeof(double));
+    return r;
+}
+
+/* ---- whole-file check ------------------------------------------------------------------------------ */
+
+tpk_result tpk_verify(tpk_file *file)
+{
+    if (!file)
+        return TPK_ERR_INVALID_ARGUMENT;
+    tpk_result r = tpki_file_usable(file);
+    for (uint64_t i = 0; r == TPK_OK && i < file->header.chunk_count; i++)
+        r = tpki_file_verify_chunk(file, i, 1);
     return r;
 }

@@ -1,5 +1,5 @@
 /* The BVH over shell faces (binned SAH) and the search for the shell faces where a ray's line enters
- * the volume: the starting points of the marcher's inside-runs (DESIGN.md §6). */
+ * the volume: the starting points of the marcher's inside-runs (docs/ARCHITECTURE.md §6). */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>

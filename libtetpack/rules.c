@@ -1,7 +1,7 @@
-/* The container rules as pure check_* functions over a header and directory (shared by the reader and
- * the writer's self-check), and tpk_verify, which checks every chunk's contents. Rule numbers follow
- * the reader section of the spec; each rule returns its own result code and a message naming the
- * chunk, its tag and offset, and what was expected. */
+/* The container rules as pure check_* functions over a header, a directory and raw chunk bytes,
+ * shared by the reader and the writer's self-check, so the rules live once. Rule numbers follow the
+ * reader section of the spec; each rule returns its own result code and a message naming the chunk,
+ * its tag and offset, and what was expected. Pure: no handle, and calls nothing else in libtetpack. */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -681,41 +681,5 @@ tpk_result tpki_check_layout(const tpk_header *h, const tpk_dir_entry *entries, 
         r = tpki_check_tags(h, entries, 1, allocator, diag); /* a vendor may require its chunk */
     if (r == TPK_OK)
         r = tpki_check_fields(h, entries, fields, field_count, allocator, diag);
-    return r;
-}
-
-/* Checksum, decode and ids of one chunk; zstd chunks are decoded into a temporary buffer. */
-tpk_result tpki_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids)
-{
-    const tpk_dir_entry *e = &file->entries[i];
-    void *owned = NULL;
-    const void *raw = file->data + e->offset;
-    tpk_result r = TPK_OK;
-    if (e->codec != TPK_CODEC_NONE) {
-        owned = tpki_file_alloc(file, e->raw_size);
-        if (!owned)
-            return tpki_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64
-                                 " (%" PRIu64 " bytes)", i, e->raw_size);
-        raw = owned;
-        r = tpki_file_decode(file, i, owned);
-        if (r != TPK_OK)
-            goto fail;
-    }
-    if (!(atomic_load(&file->chunk_state[i]) & TPK_CHUNK_SUM_OK))
-        r = tpki_file_check_sum(file, i, raw);
-    if (r == TPK_OK && check_ids)
-        r = tpki_file_check_ids(file, i, raw);
-fail:
-    tpki_file_free(file, owned);
-    return r;
-}
-
-tpk_result tpk_verify(tpk_file *file)
-{
-    if (!file)
-        return TPK_ERR_INVALID_ARGUMENT;
-    tpk_result r = tpki_file_usable(file);
-    for (uint64_t i = 0; r == TPK_OK && i < file->header.chunk_count; i++)
-        r = tpki_file_verify_chunk(file, i, 1);
     return r;
 }
