@@ -16,37 +16,6 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-void tpk_check_progress(tpk_check_report *report, const char *stage, double fraction)
-{
-    if (!report->options.progress)
-        return;
-    int width = 30, filled = (int)(fraction * width + 0.5);
-    filled = filled < 0 ? 0 : filled > width ? width : filled;
-    char bar[32];
-    for (int i = 0; i < width; i++)
-        bar[i] = i < filled ? '#' : '.';
-    bar[width] = 0;
-    fprintf(stderr, "\rcheck: %-14s [%s] %3d%%", stage, bar, (int)(fraction * 100 + 0.5));
-    if (fraction >= 1.0)
-        fprintf(stderr, "\r%*s\r", 60, "");
-    fflush(stderr);
-}
-
-int tpk_check_cell_usable(const tpk_mesh *mesh, int64_t cell)
-{
-    int64_t b = mesh->cell_offsets[cell], e = mesh->cell_offsets[cell + 1];
-    if (e < b || e - b > 64)
-        return 0;
-    for (int64_t i = b; i < e; i++) {
-        if (mesh->cell_conn[i] < 0 || mesh->cell_conn[i] >= mesh->point_count)
-            return 0;
-        for (int64_t j = b; j < i; j++)
-            if (mesh->cell_conn[j] == mesh->cell_conn[i])
-                return 0;
-    }
-    return 1;
-}
-
 static int is_tpk(const char *path)
 {
     size_t len = strlen(path);

@@ -7,7 +7,9 @@
  * Groups, each in its own file:
  *   1xx vertices      check_vertices.c      2xx cells         check_cells.c
  *   3xx connectivity  check_topo_*.c        4xx shell         check_shell.c, check_shell_cgal.cpp
- *   5xx fields        check_fields.c        6xx .tpk files    check_tpk.c
+ *   5xx fields        check_fields.c        6xx .tpk files    check_tpk.c, check_tpk_mesh.c
+ * The driver check.c (tpk_check_path) calls the groups; below them all, check_report.c (the report and
+ * its output), check_registry.c and check_progress.c (tpk_check_progress), which call no group.
  */
 #ifndef TPK_CHECK_H
 #define TPK_CHECK_H

@@ -1,5 +1,11 @@
 /* Internal to the cells group (2xx): what one worker found over its range of cells, and the per-shape
- * checks that feed it. Not installed; only check_cells*.c and check_quality.c include it. */
+ * checks that feed it. Not installed; only check_cells*.c and check_quality.c include it.
+ *
+ * Who defines what. check_cells.c, the entry (tpk_check_cells, check.h), sits on top and calls down:
+ * check_cells_hits.c (tpk_cell_hit, tpk_cell_hits_append, tpk_cell_hits_report, tpk_cell_hits_free,
+ * tpk_cell_example_vertices, tpk_cell_centre), check_cells_shape.c (tpk_check_split_cell),
+ * check_cells_exact.cpp (tpk_exact_*), check_quality.c (tpk_tet_quality_of), check_cells_dup.c
+ * (tpk_check_duplicate_cells). None of these calls back into check_cells.c. */
 #ifndef TPK_CHECK_CELLS_INTERNAL_H
 #define TPK_CHECK_CELLS_INTERNAL_H
 

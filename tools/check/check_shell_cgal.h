@@ -1,5 +1,6 @@
 /* The one CGAL unit of the shell checks: which shell faces overlap or intersect (303 and 406), decided
- * exactly on CGAL's Epick kernel for the triangle pairs whose bounding boxes overlap. */
+ * exactly on CGAL's Epick kernel for the triangle pairs whose bounding boxes overlap.
+ * check_shell_cgal.cpp defines tpk_shell_face_pairs; check_shell.c is its caller. */
 #ifndef TPK_CHECK_SHELL_CGAL_H
 #define TPK_CHECK_SHELL_CGAL_H
 

@@ -1,5 +1,12 @@
 /* Internal to the connectivity (3xx) and shell (4xx) checks: the faces of volume cells, the face
- * matching, the shell (faces of exactly one cell) and the shared union-find. */
+ * matching, the shell (faces of exactly one cell) and the shared union-find.
+ *
+ * Who defines what. check_topology.c, the entry (tpk_check_topology, check.h), sits on top and calls
+ * check_topo_match.c (tpk_topo_match_faces, tpk_topo_match_free) and check_shell.c (tpk_check_shell),
+ * which calls check_topo_shell_edges.c (tpk_check_shell_edges) and check_shell_cgal.cpp. At the bottom
+ * check_topo_faces.c holds what they share: tpk_topo_cell_faces, tpk_topo_cell_face,
+ * tpk_topo_face_count, tpk_topo_tet_faces, tpk_topo_face_triangle, tpk_topo_face_centre,
+ * tpk_topo_orient, tpk_uf_find, tpk_uf_union, and tpk_check_cell_usable (declared in check.h). */
 #ifndef TPK_CHECK_TOPO_H
 #define TPK_CHECK_TOPO_H
 

@@ -1,6 +1,7 @@
-/* Faces of the volume cells for the connectivity and shell checks, in outward order. The tables are
- * those of cell_split.c (outward on VTK's parametric corners, so a positive cell's faces point out) and
- * shell.c for tets; tests/test_check_topology.c checks each face against its cell's centre exactly. */
+/* Faces of the volume cells for the connectivity and shell checks, in outward order, and which cells
+ * take part (tpk_check_cell_usable). The tables are those of cell_split.c (outward on VTK's parametric
+ * corners, so a positive cell's faces point out) and shell.c for tets; tests/test_check_topology.c
+ * checks each face against its cell's centre exactly. */
 #include "check_topo.h"
 #include "convert/pipeline.h"
 #include "base/predicates.h"
@@ -60,6 +61,23 @@ static int poly_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces)
         at += 1 + stream[at];
     }
     return count;
+}
+
+/* Declared in check.h; it lives here, beside the faces it guards and below the face matching that calls
+ * it, so the connectivity checks never call back up into the driver (check.c). */
+int tpk_check_cell_usable(const tpk_mesh *mesh, int64_t cell)
+{
+    int64_t b = mesh->cell_offsets[cell], e = mesh->cell_offsets[cell + 1];
+    if (e < b || e - b > 64)
+        return 0;
+    for (int64_t i = b; i < e; i++) {
+        if (mesh->cell_conn[i] < 0 || mesh->cell_conn[i] >= mesh->point_count)
+            return 0;
+        for (int64_t j = b; j < i; j++)
+            if (mesh->cell_conn[j] == mesh->cell_conn[i])
+                return 0;
+    }
+    return 1;
 }
 
 int tpk_topo_face_count(const tpk_mesh *mesh, int64_t cell)

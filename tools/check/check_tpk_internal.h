@@ -5,7 +5,15 @@
  * recovered by a walk from the shell, spec §6.6). The mesh invariants that concern one layout (M01, M02,
  * M04 to M07, M09, M10) are checked on the reference; every other layout present is compared with it
  * record by record (M03 vx, M07 neighbor order, M08 same neighbors / Tet16 decoding), so each layout is
- * held to every MUST of §11. */
+ * held to every MUST of §11.
+ *
+ * Who defines what. check_tpk.c, the entry (tpk_check_tpk_file*, check.h), sits on top and runs the
+ * passes; each pass has its file: tpkc_walk (check_tpk_walk.c), tpkc_check_shell (check_tpk_shell.c),
+ * tpkc_check_tets (check_tpk_tets.c), tpkc_check_faces (check_tpk_faces.c), tpkc_check_layouts
+ * (check_tpk_layouts.c), tpkc_check_values (check_tpk_values.c). Below them check_tpk_context.c holds
+ * what they share: tpkc_outward, tpkc_hit, tpkc_merge, tpkc_run_tet_pass, tpkc_example_ids32. The
+ * inline accessors (tpkc_tet, tpkc_neighbors, tpkc_orient, ...) live here. A pass calls down (the
+ * context, check_report.c, check_progress.c), never back into check_tpk.c. */
 #ifndef TPK_CHECK_TPK_INTERNAL_H
 #define TPK_CHECK_TPK_INTERNAL_H
 
