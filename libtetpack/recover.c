@@ -1,4 +1,4 @@
-/* tpk_recover_tets: positively oriented vertex quadruples from any tet layout (DESIGN.md §3).
+/* tpk_recover_tets: positively oriented vertex quadruples from any tet layout (spec/tetpack-format.md §6).
  * Tet32 stores three vertices, so the fourth is vx ^ v0 ^ v1 ^ v2. Tet20 and Tet16 store only vx and
  * neighbors, so the order is found by a breadth-first walk from the shell:
  *   - a shell face (a,b,c) of t faces out of t, so t = (a,c,b,x) is positive, x = vx ^ a ^ b ^ c;

@@ -1,6 +1,6 @@
 /* Test meshes for the marcher and the CPU renderer: hex grids (optionally with cubes removed, for
  * non-convex shells) split into 6 tets per cube (Kuhn split, conforming), random vertex relabeling, and
- * the Tet32/20/16 layouts and shell from the converter pipeline (tools/pipeline.h). Header-only; used
+ * the Tet32/20/16 layouts and shell from the converter pipeline (tools/convert/pipeline.h). Header-only; used
  * by tests/test_march.c, tests/test_render.c and bench/bench_march.c. */
 #ifndef TPK_MARCH_FIXTURES_H
 #define TPK_MARCH_FIXTURES_H

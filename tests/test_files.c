@@ -235,7 +235,7 @@ TPK_TEST(seacas_block_crush_exodus) { check_sample("seacas/block_crush_1.ex2", 0
 TPK_TEST(nasa_refine_om6_meshb) { check_sample("nasa_refine/om6_om6-curv-no-geom.meshb", 0); }
 TPK_TEST(nasa_refine_cube_sphere_meshb) { check_sample("nasa_refine/cube-sphere_cube-sphere.meshb", 0); }
 
-/* DESIGN.md §10: float32 absolute coordinates lose cells far from the origin. The cylinder (0.1 m long,
+/* docs/ARCHITECTURE.md §7: float32 absolute coordinates lose cells far from the origin. The cylinder (0.1 m long,
  * 0.04 m across) moved to (6.4e6, -4.9e6, 1.2e3), as in a UTM frame: every invariant still holds, and
  * positions read back (origin + float32) are within 1e-8 m of the source, where float32 absolute
  * coordinates would be off by up to 0.25 m. */

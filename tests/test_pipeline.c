@@ -1,4 +1,4 @@
-/* Tests of the converter pipeline stages (tools/pipeline.h) and tpk_recover_tets: exact predicates on
+/* Tests of the converter pipeline stages (tools/convert/pipeline.h) and tpk_recover_tets: exact predicates on
  * constructed degenerate cases, orientation, face matching, layouts, shell and reordering on generated
  * Kuhn grids, and the whole chain on real meshes from ../shared/data. */
 #include <math.h>
@@ -513,7 +513,7 @@ TPK_TEST(reorder_permutes_consistently)
     tpk_tetmesh_free(&before);
 }
 
-/* Defined in tools/reorder.c for tests: the Hilbert index of one cell of the 2^21 grid. */
+/* Defined in tools/convert/reorder.c for tests: the Hilbert index of one cell of the 2^21 grid. */
 uint64_t tpk_hilbert_key(uint32_t x, uint32_t y, uint32_t z);
 
 /* On a 2^k grid at the origin the keys are exactly 0..8^k-1 and consecutive keys are face neighbors. */

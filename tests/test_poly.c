@@ -1,4 +1,4 @@
-/* Polyhedra (VTK type 42) and added points (tools/polyhedron.c, tools/steiner.c): sfepy's hexahedra
+/* Polyhedra (VTK type 42) and added points (tools/mesh/polyhedron.c, tools/convert/steiner.c): sfepy's hexahedra
  * rewritten as polyhedra in VTK legacy (old and 5.1 forms, ASCII and binary) and VTU read back and
  * convert to the same volume with no inner boundary; mixed meshes stay conforming; a non-convex
  * polyhedron converts when its centre sees every face and is refused by name when not; a warped

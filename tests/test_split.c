@@ -1,4 +1,4 @@
-/* Conformal split of hexahedra, voxels, wedges and pyramids (tools/cell_split.c, DESIGN.md §5):
+/* Conformal split of hexahedra, voxels, wedges and pyramids (tools/convert/cell_split.c, docs/ARCHITECTURE.md §5):
  * every labelling of a cube gives positive tets filling it exactly and cut along the smallest-id
  * diagonals; grids of each cell type with random global ids give a conforming tet mesh; mirrored cells
  * are turned over and warped ones refused. */
@@ -98,7 +98,7 @@ TPK_TEST(every_cube_labelling)
         }
     }
     CHECK_EQ_INT(total, 40320);
-    /* DESIGN.md §5: 5 tets suffice for about 21% of labellings. */
+    /* docs/ARCHITECTURE.md §5: 5 tets suffice for about 21% of labellings. */
     CHECK_MSG(fives > 40320 * 20 / 100 && fives < 40320 * 22 / 100, "%d of 40320 labellings gave 5 tets", fives);
 }
 

@@ -1,4 +1,4 @@
-/* Surfaces and point clouds through TetGen (tools/surface.h): closed surfaces of real parts (the
+/* Surfaces and point clouds through TetGen (tools/import/surface/surface.h): closed surfaces of real parts (the
  * boundary triangles of tetgen/hinge_small and part1_small, written here as STL, OFF and PLY) become
  * positive tets that fill exactly the enclosed volume and keep every surface vertex; open and
  * self-intersecting surfaces are refused by name; a point cloud gives its Delaunay tetrahedralization

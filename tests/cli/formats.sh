@@ -27,6 +27,14 @@ for r in rows:
                                   "point-cloud", "point-fields", "cell-fields", "time-steps"}, r
 PYEOF
 
+# The README's list of inputs names every extension of the registry (the list is prose, kept by hand).
+"$PY" - "$WORK/formats.json" "$SRC/README.md" <<'PYEOF'
+import json, sys
+readme = open(sys.argv[2]).read().lower()
+missing = [e for r in json.load(open(sys.argv[1]))["formats"] for e in r["extensions"] if e.lower() not in readme]
+assert not missing, "README.md does not name " + ", ".join(missing)
+PYEOF
+
 # The help of convert and check lists the same rows.
 for cmd in convert check; do
     "$TPK" $cmd --help > "$WORK/help"

@@ -1,5 +1,5 @@
 /* Face matching for `tetpack check` (301, 302, 305, components, the shell), sort-based like
- * tools/connect.c but for any volume cell: a counting sort puts every cell into the bucket of each
+ * tools/convert/connect.c but for any volume cell: a counting sort puts every cell into the bucket of each
  * distinct smallest id of its faces (4 bytes per entry: the cell id), so bucket v holds exactly the
  * faces whose smallest id is v. A worker expands its buckets into faces keyed by their other sorted ids,
  * sorts each bucket (a few dozen faces) and walks runs of equal keys: one face is shell, two are

@@ -1,4 +1,4 @@
-/* Conformal split of voxels, hexahedra, wedges and pyramids into tets (DESIGN.md §5). Each shape is
+/* Conformal split of voxels, hexahedra, wedges and pyramids into tets (docs/ARCHITECTURE.md §5). Each shape is
  * described by its VTK parametric corner coordinates and its faces, oriented outward there; tets are
  * first ordered so they are positive on that reference cell, then checked on the real coordinates with
  * the exact predicate. */

@@ -1,4 +1,4 @@
-/* Conformal split of linear volume cells into tets without new points (DESIGN.md §5). */
+/* Conformal split of linear volume cells into tets without new points (docs/ARCHITECTURE.md §5). */
 #ifndef TPK_CELL_SPLIT_H
 #define TPK_CELL_SPLIT_H
 

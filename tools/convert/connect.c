@@ -1,4 +1,4 @@
-/* Face matching (pipeline stage 4), sort-based and multithreaded (DESIGN.md §8).
+/* Face matching (pipeline stage 4), sort-based and multithreaded (docs/ARCHITECTURE.md §4).
  * A counting sort puts every tet into two buckets: with its ids sorted s0 < s1 < s2 < s3, tet t goes
  * to bucket s0 for its three faces that contain s0, and to bucket s1 for its face opposite s0 (which
  * has s1 as its smallest id). So bucket v holds exactly the faces whose smallest id is v, with only 4

@@ -1,4 +1,4 @@
-/* Faces by sorted point ids in an open-addressing hash table (tools/face_table.h). */
+/* Faces by sorted point ids in an open-addressing hash table (tools/convert/face_table.h). */
 #include "face_table.h"
 
 #include <stdlib.h>

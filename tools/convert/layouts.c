@@ -1,4 +1,4 @@
-/* Tet record layouts (pipeline stage 5), exactly as DESIGN.md §3 defines them:
+/* Tet record layouts (pipeline stage 5), exactly as spec/tetpack-format.md §6 defines them:
  * Tet32 keeps three vertices and neighbors by stored vertex; Tet20 orders neighbors by the rank of the
  * opposite vertex's id; Tet16 stores n[r] ^ n[3] so a marcher knowing where it came from recovers all. */
 #include "pipeline.h"

@@ -1,4 +1,4 @@
-/* The converter pipeline stages, one job each (DESIGN.md §1):
+/* The converter pipeline stages, one job each (docs/ARCHITECTURE.md §1, §4):
  * tetrahedralize -> orient (exact) -> reorder (space-filling curve) -> connect (face matching)
  * -> layouts (Tet32/20/16) -> shell. */
 #ifndef TPK_PIPELINE_H
@@ -12,9 +12,9 @@
 #include "tetpack.h"
 
 /* Source cells -> tets. Tetrahedra pass through; voxels, hexahedra, wedges and pyramids are split
- * conformally without new points (tools/cell_split.h); a cell the split would fold (warped, non-convex,
+ * conformally without new points (tools/convert/cell_split.h); a cell the split would fold (warped, non-convex,
  * degenerate), and a polyhedron, gets points added at its centre and at face centres where the exact
- * predicates find the result valid (tools/steiner.h); a cell even that cannot split is an error naming
+ * predicates find the result valid (tools/convert/steiner.h); a cell even that cannot split is an error naming
  * it, or is left out and counted with TPK_TETRA_SKIP_BAD_CELLS. Prisms of more sides are refused by name. Point fields are kept, cell fields become
  * per-tet fields via the source map. `field_names` (count n, may be NULL = all scalar point fields)
  * selects fields. */

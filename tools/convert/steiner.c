@@ -1,4 +1,4 @@
-/* Warped cells and polyhedra into tets from added points (tools/steiner.h): per cell a cone or a star,
+/* Warped cells and polyhedra into tets from added points (tools/convert/steiner.h): per cell a cone or a star,
  * checked with the exact predicate; face points shared through a face table, in rounds until no cell
  * asks for another. */
 #include "steiner.h"

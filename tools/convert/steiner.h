@@ -1,5 +1,5 @@
 /* Cells the plain split cannot take (warped or non-convex hexahedra, wedges and pyramids; polyhedra),
- * tetrahedralized with added points where the exact predicates say the result is valid (DESIGN.md §5). */
+ * tetrahedralized with added points where the exact predicates say the result is valid (docs/ARCHITECTURE.md §5). */
 #ifndef TPK_STEINER_H
 #define TPK_STEINER_H
 

@@ -1,6 +1,6 @@
 /* Source cells -> tets (pipeline stage 1). Tetra pass through, voxels, hexahedra, wedges and pyramids
- * are split conformally (tools/cell_split.c); those that split cannot take, and polyhedra, get added
- * points (tools/steiner.c); other 3-D types are refused by name (tools/cell_types.c knows every VTK
+ * are split conformally (tools/convert/cell_split.c); those that split cannot take, and polyhedra, get added
+ * points (tools/convert/steiner.c); other 3-D types are refused by name (tools/mesh/cell_types.c knows every VTK
  * type), and lower-dimensional cells (boundary faces, edges, points) are skipped with a warning. */
 #include <math.h>
 #include <stdint.h>
@@ -70,7 +70,7 @@ static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
     return 0;
 }
 
-/* A polyhedron's faces (tools/polyhedron.h): importers check them; meshes built in memory may not. */
+/* A polyhedron's faces (tools/mesh/polyhedron.h): importers check them; meshes built in memory may not. */
 static int check_face_stream(const tpk_mesh *src, int64_t c, tpk_diag *diag)
 {
     if (!src->face_offsets || !src->faces)
@@ -366,7 +366,7 @@ static void note_mirrored(tpk_tetmesh *out, int64_t c, int mirrored)
 }
 
 /* Not turned over silently (without --reorient), even when every cell is mirrored: a whole file in the
- * mirrored node order is far more often a writer's or importer's node-order bug (DESIGN.md §10) than a
+ * mirrored node order is far more often a writer's or importer's node-order bug (docs/ARCHITECTURE.md §7) than a
  * convention someone chose, and accepting it quietly would hide exactly that bug. The message says
  * which case it is, so one flag fixes either knowingly. */
 static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh *out, tpk_diag *diag)
@@ -392,7 +392,7 @@ static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh
 }
 
 /* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by count_tets); cells
- * it refuses, and polyhedra, go to tools/steiner.c, which appends theirs and may take back the plain
+ * it refuses, and polyhedra, go to tools/convert/steiner.c, which appends theirs and may take back the plain
  * split of a cell next to a face it puts a point on. Returns 0, -1 when out of memory, or -2 with a
  * message for a cell that cannot be split. */
 static int split_cells(const tpk_mesh *src, int flags, int64_t *tet_capacity, tpk_added_points *added,

@@ -54,7 +54,7 @@ static const struct {
 };
 
 /* Volume element keywords whose node order has not been checked against a real file yet: refused
- * rather than risking inverted cells (DESIGN.md §10). */
+ * rather than risking inverted cells (docs/ARCHITECTURE.md §7). */
 static const char *const unverified_sections[] = {"Prisms", "Pyramids"};
 
 /* Count of rows after a keyword, checked against the bytes left: each row holds `values` numbers of at

@@ -4,7 +4,7 @@
  * ids, then the volume elements, all ids 1-based; binary files hold 4-byte ints and 8-byte reals in the
  * same order. Surface elements are dropped (counted), their ids kept as nothing; tetrahedra, pyramids,
  * prisms and hexahedra become cells in VTK node order. UGRID orders pyramids and prisms differently
- * from VTK (DESIGN.md §10): the maps below are those of NASA refine (src/ref_import.c, the UGRID tool
+ * from VTK (docs/ARCHITECTURE.md §7): the maps below are those of NASA refine (src/ref_import.c, the UGRID tool
  * behind the acceptance meshes in ../shared/data/nasa_refine), whose diagrams put UGRID's pyramid base
  * 0 1 4 3 with apex 2 and its prism as VTK's with the first two corners of each triangle swapped;
  * tetrahedra (checked on refine's files) and hexahedra are as in VTK. meshio 5 agrees on pyramids but

@@ -36,7 +36,7 @@ typedef struct tpk_mesh {
     /* Polyhedra (VTK type 42): NULL when no cell is one. Cell c's VTK face stream is
      * faces[face_offsets[c] .. [c+1]) (empty for other cells): nfaces, then per face npts and npts point ids,
      * the faces of one cell forming a closed surface (VTK asks for outward faces; the tetrahedralizer
-     * orients them itself). The importers check the stream's counts and ids (tools/polyhedron.h). */
+     * orients them itself). The importers check the stream's counts and ids (tools/mesh/polyhedron.h). */
     int64_t *face_offsets;  /* cell_count + 1 */
     int32_t *faces;
     int field_count;

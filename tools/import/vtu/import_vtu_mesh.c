@@ -45,7 +45,7 @@ static int check_face_points(vtu_reader *r, const vtu_array *conn, int64_t cell,
     return 0;
 }
 
-/* A polyhedron's face stream e[0 .. n), starting at value `at` of the faces array (tools/polyhedron.h
+/* A polyhedron's face stream e[0 .. n), starting at value `at` of the faces array (tools/mesh/polyhedron.h
  * checks its layout), and its connectivity points[0 .. point_count). */
 static int check_face_stream(vtu_reader *r, const vtu_array *fa, const vtu_array *conn, int64_t cell, const double *e,
                              int64_t n, int64_t at, const double *points, int64_t point_count)
