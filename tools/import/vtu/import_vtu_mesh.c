@@ -71,137 +71,135 @@ static int check_face_stream(vtu_reader *r, const vtu_array *fa, const vtu_array
     return rc;
 }
 
-int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
+/* The arrays of the Cells element and the face arrays of polyhedra. */
+typedef struct cell_arrays {
+    vtu_array *conn, *offs, *types, *faces, *foffs;
+} cell_arrays;
+
+/* What the per-cell pass found: kept and dropped cells, the output connectivity size. */
+typedef struct cell_tally {
+    int64_t dropped[256], reduced[256];
+    int64_t drop_total, reduce_total, kept, conn_size;
+} cell_tally;
+
+/* Offsets increasing and ending at the connectivity's size; types in 0..255. */
+static int check_offsets_and_types(vtu_reader *r, const cell_arrays *a)
 {
-    if (!r->root_seen)
-        return vtu_fail_line(r, 0, "expected a <VTKFile> element, found none");
-    if (!r->piece_seen)
-        return vtu_fail_line(r, 0, "expected an UnstructuredGrid with a Piece, found none");
-    vtu_array *pts = find_role(r, ROLE_POINTS), *conn = find_role(r, ROLE_CONN), *offs = find_role(r, ROLE_OFFSETS),
-              *types = find_role(r, ROLE_TYPES), *faces = find_role(r, ROLE_FACES),
-              *foffs = find_role(r, ROLE_FACEOFFSETS);
-    if (!pts && r->point_count > 0)
-        return vtu_fail_line(r, 0, "expected a Points DataArray, found none");
-    if (r->cell_count > 0 && (!conn || !offs || !types))
-        return vtu_fail_line(r, 0, "Cells: expected DataArrays connectivity, offsets and types, found %s missing",
-                             !conn ? "connectivity" : !offs ? "offsets" : "types");
-    int64_t nc = r->cell_count;
-    /* Offsets: increasing, ending at the connectivity's size. */
-    int64_t prev = 0;
+    int64_t nc = r->cell_count, prev = 0;
     for (int64_t c = 0; c < nc; c++) {
-        double v = offs->values[c];
-        if (!(v >= (double)prev && v <= (double)conn->count))
-            return vtu_fail_array(r, offs, "cell %lld: expected an offset from %lld to %llu (not decreasing, within "
-                                  "the connectivity), found %.17g", (long long)c, (long long)prev,
-                                  (unsigned long long)conn->count, v);
+        double v = a->offs->values[c];
+        if (!(v >= (double)prev && v <= (double)a->conn->count))
+            return vtu_fail_array(r, a->offs, "cell %lld: expected an offset from %lld to %llu (not decreasing, "
+                                  "within the connectivity), found %.17g", (long long)c, (long long)prev,
+                                  (unsigned long long)a->conn->count, v);
         prev = (int64_t)v;
     }
-    if (nc > 0 && (uint64_t)prev != conn->count)
-        return vtu_fail_array(r, offs, "expected the last offset to be the connectivity size %llu, found %lld",
-                              (unsigned long long)conn->count, (long long)prev);
+    if (nc > 0 && (uint64_t)prev != a->conn->count)
+        return vtu_fail_array(r, a->offs, "expected the last offset to be the connectivity size %llu, found %lld",
+                              (unsigned long long)a->conn->count, (long long)prev);
     for (int64_t c = 0; c < nc; c++)
-        if (!(types->values[c] >= 0 && types->values[c] <= 255))
-            return vtu_fail_array(r, types, "cell %lld: expected a VTK cell type 0..255, found %.17g", (long long)c,
-                                  types->values[c]);
-    if (foffs && !faces)
-        return vtu_fail_array(r, foffs, "expected a faces DataArray with faceoffsets, found none");
-    cell_span *span = malloc(sizeof *span * (size_t)(nc ? nc : 1));
-    if (!span)
-        return vtu_fail_line(r, 0, "out of memory");
-    int64_t dropped[256] = {0}, reduced[256] = {0};
-    int64_t drop_total = 0, reduce_total = 0, kept = 0, conn_size = 0, face_prev = 0;
-    int rc = 0;
-    for (int64_t c = 0; c < nc && rc == 0; c++) {
-        int type = (int)types->values[c];
-        int64_t begin = c ? (int64_t)offs->values[c - 1] : 0, face_begin = 0;
-        span[c].v = conn->values + begin;
-        span[c].n = (int64_t)offs->values[c] - begin;
+        if (!(a->types->values[c] >= 0 && a->types->values[c] <= 255))
+            return vtu_fail_array(r, a->types, "cell %lld: expected a VTK cell type 0..255, found %.17g", (long long)c,
+                                  a->types->values[c]);
+    if (a->foffs && !a->faces)
+        return vtu_fail_array(r, a->foffs, "expected a faces DataArray with faceoffsets, found none");
+    return 0;
+}
+
+/* Cell c's face offset (advancing *face_prev), and for a polyhedron its span in the faces array;
+ * *face_begin gets where that span starts. */
+static int locate_faces(vtu_reader *r, const cell_arrays *a, int64_t c, int type, int64_t *face_prev,
+                        int64_t *face_begin, cell_span *span)
+{
+    if (!a->foffs || !(a->foffs->values[c] >= 0))
+        return 0;
+    double fv = a->foffs->values[c];
+    if (!(fv >= (double)*face_prev && fv <= (double)a->faces->count))
+        return vtu_fail_array(r, a->foffs, "cell %lld: expected a face offset from %lld to %llu, found %.17g",
+                              (long long)c, (long long)*face_prev, (unsigned long long)a->faces->count, fv);
+    if (type == TPK_CELL_POLYHEDRON) {
+        *face_begin = *face_prev;
+        span->v = a->faces->values + *face_prev;
+        span->n = (int64_t)fv - *face_prev;
+    }
+    *face_prev = (int64_t)fv;
+    return 0;
+}
+
+/* Cell c's node count (or face stream) and point ids. */
+static int check_cell_nodes(vtu_reader *r, const cell_arrays *a, int64_t c, int type, tpk_cell_rule rule,
+                            const cell_span *span, int64_t face_begin)
+{
+    int64_t begin = c ? (int64_t)a->offs->values[c - 1] : 0;
+    if (type == TPK_CELL_POLYHEDRON) {
+        if (!a->foffs || !(a->foffs->values[c] >= 0))
+            return vtu_fail_array(r, a->types, "cell %lld is a polyhedron: expected its faces in faces/faceoffsets, "
+                                  "found none", (long long)c);
+        return check_face_stream(r, a->faces, a->conn, c, span->v, span->n, face_begin, a->conn->values + begin,
+                                 (int64_t)a->offs->values[c] - begin);
+    }
+    if (rule.kind != TPK_RULE_DROP &&
+        ((rule.nodes > 0 && span->n != rule.nodes) || (rule.nodes < 0 && span->n < -rule.nodes)))
+        return vtu_fail_array(r, a->conn, "cell %lld (%s, type %d) has %lld points, expected %s%d", (long long)c,
+                              rule.name, type, (long long)span->n, rule.nodes < 0 ? "at least " : "",
+                              rule.nodes < 0 ? -rule.nodes : rule.nodes);
+    for (int64_t j = 0; j < span->n; j++)
+        if (!(span->v[j] >= 0 && span->v[j] < (double)r->point_count))
+            return vtu_fail_array(r, a->conn, "cell %lld uses point id %.17g, but there are only %lld points "
+                                  "(0 to %lld)", (long long)c, span->v[j], (long long)r->point_count,
+                                  (long long)r->point_count - 1);
+    return 0;
+}
+
+/* Checks every cell, finds its span, and counts what is kept, reduced and dropped. */
+static int scan_cells(vtu_reader *r, const cell_arrays *a, cell_span *span, cell_tally *t)
+{
+    int64_t face_prev = 0;
+    for (int64_t c = 0; c < r->cell_count; c++) {
+        int type = (int)a->types->values[c];
+        int64_t begin = c ? (int64_t)a->offs->values[c - 1] : 0, face_begin = 0;
+        span[c].v = a->conn->values + begin;
+        span[c].n = (int64_t)a->offs->values[c] - begin;
         tpk_cell_rule rule = tpk_cell_rule_for(type);
-        if (rule.kind == TPK_RULE_UNKNOWN) {
-            rc = vtu_fail_array(r, types, "cell %lld has unsupported cell type %d (%s)", (long long)c, type, rule.name);
-            break;
-        }
-        if (foffs && foffs->values[c] >= 0) {
-            double fv = foffs->values[c];
-            if (!(fv >= (double)face_prev && fv <= (double)faces->count)) {
-                rc = vtu_fail_array(r, foffs, "cell %lld: expected a face offset from %lld to %llu, found %.17g",
-                                    (long long)c, (long long)face_prev, (unsigned long long)faces->count, fv);
-                break;
-            }
-            if (type == TPK_CELL_POLYHEDRON) {
-                face_begin = face_prev;
-                span[c].v = faces->values + face_prev;
-                span[c].n = (int64_t)fv - face_prev;
-            }
-            face_prev = (int64_t)fv;
-        }
-        if (type == TPK_CELL_POLYHEDRON) {
-            if (!foffs || !(foffs->values[c] >= 0)) {
-                rc = vtu_fail_array(r, types, "cell %lld is a polyhedron: expected its faces in faces/faceoffsets, "
-                                    "found none", (long long)c);
-                break;
-            }
-            rc = check_face_stream(r, faces, conn, c, span[c].v, span[c].n, face_begin, conn->values + begin,
-                                   (int64_t)offs->values[c] - begin);
-        } else if (rule.kind != TPK_RULE_DROP) {
-            if ((rule.nodes > 0 && span[c].n != rule.nodes) || (rule.nodes < 0 && span[c].n < -rule.nodes)) {
-                rc = vtu_fail_array(r, conn, "cell %lld (%s, type %d) has %lld points, expected %s%d", (long long)c,
-                                    rule.name, type, (long long)span[c].n, rule.nodes < 0 ? "at least " : "",
-                                    rule.nodes < 0 ? -rule.nodes : rule.nodes);
-                break;
-            }
-        }
-        if (type != TPK_CELL_POLYHEDRON)
-            for (int64_t j = 0; j < span[c].n; j++)
-                if (!(span[c].v[j] >= 0 && span[c].v[j] < (double)r->point_count)) {
-                    rc = vtu_fail_array(r, conn, "cell %lld uses point id %.17g, but there are only %lld points "
-                                        "(0 to %lld)", (long long)c, span[c].v[j], (long long)r->point_count,
-                                        (long long)r->point_count - 1);
-                    break;
-                }
-        if (rc)
-            break;
+        if (rule.kind == TPK_RULE_UNKNOWN)
+            return vtu_fail_array(r, a->types, "cell %lld has unsupported cell type %d (%s)", (long long)c, type,
+                                  rule.name);
+        if (locate_faces(r, a, c, type, &face_prev, &face_begin, &span[c]) ||
+            check_cell_nodes(r, a, c, type, rule, &span[c], face_begin))
+            return -1;
         if (rule.kind == TPK_RULE_DROP) {
-            dropped[type]++;
-            drop_total++;
+            t->dropped[type]++;
+            t->drop_total++;
             continue;
         }
         if (rule.kind == TPK_RULE_REDUCE) {
-            reduced[type]++;
-            reduce_total++;
+            t->reduced[type]++;
+            t->reduce_total++;
         }
-        kept++;
-        conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : span[c].n;
+        t->kept++;
+        t->conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : span[c].n;
     }
-    if (rc) {
-        free(span);
-        return -1;
-    }
-    if (drop_total)
-        tpk_warn_cell_counts(r->diag, r->name, dropped, drop_total,
-                             "dropped cells that are not volumes:");
-    if (reduce_total)
-        tpk_warn_cell_counts(r->diag, r->name, reduced, reduce_total,
-                             "reduced higher-order cells to their corner nodes:");
+    return 0;
+}
 
+/* Points and the kept cells into `out`; keep[c] says whether source cell c was kept. */
+static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a, const cell_span *span,
+                      const cell_tally *t, uint8_t *keep, tpk_mesh *out)
+{
     out->point_count = r->point_count;
     out->points = malloc(sizeof(double) * 3 * (size_t)(r->point_count ? r->point_count : 1));
-    out->cell_count = kept;
-    out->cell_types = malloc((size_t)(kept ? kept : 1));
-    out->cell_offsets = malloc(sizeof(int64_t) * (size_t)(kept + 1));
-    out->cell_conn = malloc(sizeof(int32_t) * (size_t)(conn_size ? conn_size : 1));
-    uint8_t *keep = malloc((size_t)(nc ? nc : 1));
-    if (!out->points || !out->cell_types || !out->cell_offsets || !out->cell_conn || !keep) {
-        free(keep);
-        free(span);
+    out->cell_count = t->kept;
+    out->cell_types = malloc((size_t)(t->kept ? t->kept : 1));
+    out->cell_offsets = malloc(sizeof(int64_t) * (size_t)(t->kept + 1));
+    out->cell_conn = malloc(sizeof(int32_t) * (size_t)(t->conn_size ? t->conn_size : 1));
+    if (!out->points || !out->cell_types || !out->cell_offsets || !out->cell_conn)
         return vtu_fail_line(r, 0, "out of memory");
-    }
     if (r->point_count)
         memcpy(out->points, pts->values, sizeof(double) * 3 * (size_t)r->point_count);
     int64_t k = 0, o = 0;
     out->cell_offsets[0] = 0;
-    for (int64_t c = 0; c < nc; c++) {
-        tpk_cell_rule rule = tpk_cell_rule_for((int)types->values[c]);
+    for (int64_t c = 0; c < r->cell_count; c++) {
+        tpk_cell_rule rule = tpk_cell_rule_for((int)a->types->values[c]);
         keep[c] = rule.kind != TPK_RULE_DROP;
         if (!keep[c])
             continue;
@@ -211,48 +209,83 @@ int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
         out->cell_types[k] = rule.out_type;
         out->cell_offsets[++k] = o;
     }
-    free(span);
-    for (int i = 0; i < r->array_count; i++) {
-        vtu_array *a = &r->arrays[i];
-        if (a->role != ROLE_POINT_FIELD && a->role != ROLE_CELL_FIELD)
-            continue;
-        uint64_t want = (uint64_t)(a->role == ROLE_POINT_FIELD ? r->point_count : nc) * (uint64_t)a->components;
-        if (a->count != want) { /* only when read leniently: decoding refuses it otherwise */
-            char place[96];
-            snprintf(place, sizeof place, "line %ld", a->line);
-            if (tpk_diag_field_problem(r->diag, a->name, (long long)want, (long long)a->count, place) == 0)
+    return 0;
+}
+
+/* One point or cell DataArray as a field of `out` (cell values of kept cells only). */
+static int add_field(vtu_reader *r, vtu_array *a, const uint8_t *keep, int64_t kept, tpk_mesh *out)
+{
+    int64_t nc = r->cell_count;
+    uint64_t want = (uint64_t)(a->role == ROLE_POINT_FIELD ? r->point_count : nc) * (uint64_t)a->components;
+    if (a->count != want) { /* only when read leniently: decoding refuses it otherwise */
+        char place[96];
+        snprintf(place, sizeof place, "line %ld", a->line);
+        if (tpk_diag_field_problem(r->diag, a->name, (long long)want, (long long)a->count, place) == 0)
+            return 0;
+        return vtu_fail_array(r, a, "expected %llu values, found %llu", (unsigned long long)want,
+                              (unsigned long long)a->count);
+    }
+    int64_t tuples = a->role == ROLE_POINT_FIELD ? r->point_count : kept;
+    float *v = malloc(sizeof(float) * (size_t)(tuples ? tuples : 1) * (size_t)a->components);
+    if (!v)
+        return vtu_fail_array(r, a, "out of memory");
+    if (a->role == ROLE_POINT_FIELD) {
+        for (uint64_t j = 0; j < a->count; j++)
+            v[j] = (float)a->values[j];
+    } else {
+        int64_t t = 0;
+        for (int64_t c = 0; c < nc; c++) {
+            if (!keep[c])
                 continue;
-            free(keep);
-            return vtu_fail_array(r, a, "expected %llu values, found %llu", (unsigned long long)want,
-                                  (unsigned long long)a->count);
-        }
-        int64_t tuples = a->role == ROLE_POINT_FIELD ? r->point_count : kept;
-        float *v = malloc(sizeof(float) * (size_t)(tuples ? tuples : 1) * (size_t)a->components);
-        if (!v) {
-            free(keep);
-            return vtu_fail_array(r, a, "out of memory");
-        }
-        if (a->role == ROLE_POINT_FIELD) {
-            for (uint64_t j = 0; j < a->count; j++)
-                v[j] = (float)a->values[j];
-        } else {
-            int64_t t = 0;
-            for (int64_t c = 0; c < nc; c++) {
-                if (!keep[c])
-                    continue;
-                for (int j = 0; j < a->components; j++)
-                    v[t * a->components + j] = (float)a->values[c * a->components + j];
-                t++;
-            }
-        }
-        if (tpk_mesh_add_field(out, a->name, a->role == ROLE_POINT_FIELD ? TPK_ASSOC_POINT : TPK_ASSOC_TET,
-                               a->components, 1, v)) {
-            free(v);
-            free(keep);
-            return vtu_fail_array(r, a, "out of memory");
+            for (int j = 0; j < a->components; j++)
+                v[t * a->components + j] = (float)a->values[c * a->components + j];
+            t++;
         }
     }
+    if (tpk_mesh_add_field(out, a->name, a->role == ROLE_POINT_FIELD ? TPK_ASSOC_POINT : TPK_ASSOC_TET,
+                           a->components, 1, v)) {
+        free(v);
+        return vtu_fail_array(r, a, "out of memory");
+    }
+    return 0;
+}
+
+int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
+{
+    if (!r->root_seen)
+        return vtu_fail_line(r, 0, "expected a <VTKFile> element, found none");
+    if (!r->piece_seen)
+        return vtu_fail_line(r, 0, "expected an UnstructuredGrid with a Piece, found none");
+    vtu_array *pts = find_role(r, ROLE_POINTS);
+    cell_arrays a = {find_role(r, ROLE_CONN), find_role(r, ROLE_OFFSETS), find_role(r, ROLE_TYPES),
+                     find_role(r, ROLE_FACES), find_role(r, ROLE_FACEOFFSETS)};
+    if (!pts && r->point_count > 0)
+        return vtu_fail_line(r, 0, "expected a Points DataArray, found none");
+    if (r->cell_count > 0 && (!a.conn || !a.offs || !a.types))
+        return vtu_fail_line(r, 0, "Cells: expected DataArrays connectivity, offsets and types, found %s missing",
+                             !a.conn ? "connectivity" : !a.offs ? "offsets" : "types");
+    if (check_offsets_and_types(r, &a))
+        return -1;
+    int64_t nc = r->cell_count;
+    cell_span *span = malloc(sizeof *span * (size_t)(nc ? nc : 1));
+    uint8_t *keep = malloc((size_t)(nc ? nc : 1));
+    cell_tally t;
+    memset(&t, 0, sizeof t);
+    int rc = !span || !keep ? vtu_fail_line(r, 0, "out of memory") : scan_cells(r, &a, span, &t);
+    if (rc == 0 && t.drop_total)
+        tpk_warn_cell_counts(r->diag, r->name, t.dropped, t.drop_total, "dropped cells that are not volumes:");
+    if (rc == 0 && t.reduce_total)
+        tpk_warn_cell_counts(r->diag, r->name, t.reduced, t.reduce_total,
+                             "reduced higher-order cells to their corner nodes:");
+    if (rc == 0)
+        rc = copy_cells(r, pts, &a, span, &t, keep, out);
+    free(span);
+    for (int i = 0; rc == 0 && i < r->array_count; i++)
+        if (r->arrays[i].role == ROLE_POINT_FIELD || r->arrays[i].role == ROLE_CELL_FIELD)
+            rc = add_field(r, &r->arrays[i], keep, t.kept, out);
     free(keep);
+    if (rc)
+        return -1;
     out->step_count = 1;
     snprintf(out->format, sizeof out->format, "vtu");
     if (tpk_mesh_take_face_streams(out)) /* the streams went into cell_conn above */
