@@ -147,138 +147,152 @@ static int read_header_word(vtu_reader *r, const vtu_array *a, bsrc *s, uint64_t
     return 0;
 }
 
+/* Uncompressed data: a byte count, then the bytes. */
+static unsigned char *read_plain(vtu_reader *r, const vtu_array *a, bsrc *s, uint64_t expected, uint64_t want,
+                                 uint64_t *nbytes)
+{
+    uint64_t n = 0;
+    if (read_header_word(r, a, s, &n, "byte count"))
+        return NULL;
+    if (want != UINT64_MAX && n != want) {
+        vtu_fail_array(r, a, "expected %llu bytes (%llu %s values), found a header saying %llu", (unsigned long long)want,
+                       (unsigned long long)expected, vtu_type_name(a->type), (unsigned long long)n);
+        return NULL;
+    }
+    if (n > src_left(s)) {
+        vtu_fail_array(r, a, "data truncated: the header says %llu bytes, at most %llu are left",
+                       (unsigned long long)n, (unsigned long long)src_left(s));
+        return NULL;
+    }
+    unsigned char *buf = malloc(n ? (size_t)n : 1);
+    if (!buf) {
+        vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)n);
+        return NULL;
+    }
+    if (src_read(s, buf, (size_t)n)) {
+        free(buf);
+        vtu_fail_array(r, a, "expected %llu data bytes, %s", (unsigned long long)n, s->error);
+        return NULL;
+    }
+    *nbytes = n;
+    return buf;
+}
+
+/* The zlib header of compressed data: block count, block size, last block size, then each block's
+ * compressed size. */
+typedef struct zlib_blocks {
+    uint64_t count, size, last, total; /* last: the last block's size (never 0); total: all bytes */
+    uint64_t *csizes, cmax;            /* compressed sizes, and the largest */
+} zlib_blocks;
+
+static int read_block_counts(vtu_reader *r, const vtu_array *a, bsrc *s, uint64_t expected, uint64_t want,
+                             zlib_blocks *z)
+{
+    uint64_t last_size = 0;
+    if (read_header_word(r, a, s, &z->count, "block count") || read_header_word(r, a, s, &z->size, "block size") ||
+        read_header_word(r, a, s, &last_size, "last block size"))
+        return -1;
+    if (z->count > src_left(s) / r->header_size)
+        return vtu_fail_array(r, a, "expected at most %llu compressed blocks in the data left, found a header "
+                              "saying %llu", (unsigned long long)(src_left(s) / r->header_size),
+                              (unsigned long long)z->count);
+    if (last_size > z->size)
+        return vtu_fail_array(r, a, "expected the last block size (%llu) <= the block size (%llu)",
+                              (unsigned long long)last_size, (unsigned long long)z->size);
+    z->last = last_size ? last_size : z->size;
+    z->total = 0;
+    if (z->count) {
+        if (z->size && z->count - 1 > (UINT64_MAX - z->last) / z->size)
+            return vtu_fail_array(r, a, "%llu blocks of %llu bytes: too large for any file",
+                                  (unsigned long long)z->count, (unsigned long long)z->size);
+        z->total = (z->count - 1) * z->size + z->last;
+    }
+    if (want != UINT64_MAX && z->total != want)
+        return vtu_fail_array(r, a, "expected %llu bytes (%llu %s values), found a compression header saying %llu",
+                              (unsigned long long)want, (unsigned long long)expected, vtu_type_name(a->type),
+                              (unsigned long long)z->total);
+    return 0;
+}
+
+static int read_block_sizes(vtu_reader *r, const vtu_array *a, bsrc *s, zlib_blocks *z)
+{
+    z->csizes = malloc(sizeof(uint64_t) * (size_t)(z->count ? z->count : 1));
+    if (!z->csizes)
+        return vtu_fail_array(r, a, "out of memory");
+    uint64_t csum = 0;
+    z->cmax = 0;
+    for (uint64_t b = 0; b < z->count; b++) {
+        if (read_header_word(r, a, s, &z->csizes[b], "compressed block size"))
+            return -1;
+        uint64_t usize = b + 1 == z->count ? z->last : z->size;
+        if (z->csizes[b] > src_left(s) || (usize > 64 && (usize - 64) / ZLIB_MAX_RATIO > z->csizes[b]))
+            return vtu_fail_array(r, a, "zlib block %llu of %llu: expected a compressed size that can hold %llu "
+                                  "bytes within the data left (%llu), found %llu", (unsigned long long)b + 1,
+                                  (unsigned long long)z->count, (unsigned long long)usize,
+                                  (unsigned long long)src_left(s), (unsigned long long)z->csizes[b]);
+        csum += z->csizes[b];
+        if (z->csizes[b] > z->cmax)
+            z->cmax = z->csizes[b];
+    }
+    if (csum > src_left(s))
+        return vtu_fail_array(r, a, "data truncated: the compressed blocks take %llu bytes, at most %llu are left",
+                              (unsigned long long)csum, (unsigned long long)src_left(s));
+    return 0;
+}
+
+/* Inflates every block into out (z->total bytes); tmp holds z->cmax bytes. */
+static int inflate_blocks(vtu_reader *r, const vtu_array *a, bsrc *s, const zlib_blocks *z, unsigned char *out,
+                          unsigned char *tmp)
+{
+    uint64_t o = 0;
+    for (uint64_t b = 0; b < z->count; b++) {
+        uint64_t usize = b + 1 == z->count ? z->last : z->size;
+        if (src_read(s, tmp, (size_t)z->csizes[b]))
+            return vtu_fail_array(r, a, "zlib block %llu of %llu: expected %llu compressed bytes, %s",
+                                  (unsigned long long)b + 1, (unsigned long long)z->count,
+                                  (unsigned long long)z->csizes[b], s->error);
+        uLongf dlen = (uLongf)usize;
+        int zrc = uncompress(out + o, &dlen, tmp, (uLong)z->csizes[b]);
+        if (zrc != Z_OK)
+            return vtu_fail_array(r, a, "zlib block %llu of %llu does not decompress: %s", (unsigned long long)b + 1,
+                                  (unsigned long long)z->count,
+                                  zrc == Z_BUF_ERROR ? "it is incomplete or holds more than the header's size"
+                                                     : zError(zrc));
+        if (dlen != usize)
+            return vtu_fail_array(r, a, "zlib block %llu of %llu: expected %llu bytes, found %llu",
+                                  (unsigned long long)b + 1, (unsigned long long)z->count, (unsigned long long)usize,
+                                  (unsigned long long)dlen);
+        o += usize;
+    }
+    return 0;
+}
+
 /* The array's bytes (header and data, compressed or not); `expected` values when known (else
  * UINT64_MAX). Returns a malloc'ed buffer of *nbytes bytes (at least 1 allocated) or NULL. */
 static unsigned char *read_binary(vtu_reader *r, const vtu_array *a, bsrc *s, uint64_t expected, uint64_t *nbytes)
 {
-    unsigned tsize = type_size(a->type);
-    uint64_t want = expected == UINT64_MAX ? UINT64_MAX : expected * tsize;
-    if (!r->compressed) {
-        uint64_t n = 0;
-        if (read_header_word(r, a, s, &n, "byte count"))
-            return NULL;
-        if (want != UINT64_MAX && n != want) {
-            vtu_fail_array(r, a, "expected %llu bytes (%llu %s values), found a header saying %llu", (unsigned long long)want,
-                           (unsigned long long)expected, vtu_type_name(a->type), (unsigned long long)n);
-            return NULL;
-        }
-        if (n > src_left(s)) {
-            vtu_fail_array(r, a, "data truncated: the header says %llu bytes, at most %llu are left",
-                           (unsigned long long)n, (unsigned long long)src_left(s));
-            return NULL;
-        }
-        unsigned char *buf = malloc(n ? (size_t)n : 1);
-        if (!buf) {
-            vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)n);
-            return NULL;
-        }
-        if (src_read(s, buf, (size_t)n)) {
-            free(buf);
-            vtu_fail_array(r, a, "expected %llu data bytes, %s", (unsigned long long)n, s->error);
-            return NULL;
-        }
-        *nbytes = n;
-        return buf;
+    uint64_t want = expected == UINT64_MAX ? UINT64_MAX : expected * type_size(a->type);
+    if (!r->compressed)
+        return read_plain(r, a, s, expected, want, nbytes);
+    zlib_blocks z = {0};
+    unsigned char *out = NULL, *tmp = NULL;
+    int rc = read_block_counts(r, a, s, expected, want, &z);
+    if (rc == 0)
+        rc = read_block_sizes(r, a, s, &z);
+    if (rc == 0) {
+        out = malloc(z.total ? (size_t)z.total : 1);
+        tmp = malloc(z.cmax ? (size_t)z.cmax : 1);
+        rc = out && tmp ? inflate_blocks(r, a, s, &z, out, tmp)
+                        : vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)z.total);
     }
-    uint64_t blocks = 0, block_size = 0, last_size = 0;
-    if (read_header_word(r, a, s, &blocks, "block count") || read_header_word(r, a, s, &block_size, "block size") ||
-        read_header_word(r, a, s, &last_size, "last block size"))
-        return NULL;
-    if (blocks > src_left(s) / r->header_size) {
-        vtu_fail_array(r, a, "expected at most %llu compressed blocks in the data left, found a header saying %llu",
-                       (unsigned long long)(src_left(s) / r->header_size), (unsigned long long)blocks);
-        return NULL;
-    }
-    if (last_size > block_size) {
-        vtu_fail_array(r, a, "expected the last block size (%llu) <= the block size (%llu)",
-                       (unsigned long long)last_size, (unsigned long long)block_size);
-        return NULL;
-    }
-    uint64_t last = last_size ? last_size : block_size;
-    uint64_t total = 0;
-    if (blocks) {
-        if (block_size && blocks - 1 > (UINT64_MAX - last) / block_size) {
-            vtu_fail_array(r, a, "%llu blocks of %llu bytes: too large for any file", (unsigned long long)blocks,
-                           (unsigned long long)block_size);
-            return NULL;
-        }
-        total = (blocks - 1) * block_size + last;
-    }
-    if (want != UINT64_MAX && total != want) {
-        vtu_fail_array(r, a, "expected %llu bytes (%llu %s values), found a compression header saying %llu",
-                       (unsigned long long)want, (unsigned long long)expected, vtu_type_name(a->type), (unsigned long long)total);
-        return NULL;
-    }
-    uint64_t *csizes = malloc(sizeof(uint64_t) * (size_t)(blocks ? blocks : 1));
-    if (!csizes) {
-        vtu_fail_array(r, a, "out of memory");
-        return NULL;
-    }
-    uint64_t csum = 0, cmax = 0;
-    for (uint64_t b = 0; b < blocks; b++) {
-        if (read_header_word(r, a, s, &csizes[b], "compressed block size")) {
-            free(csizes);
-            return NULL;
-        }
-        uint64_t usize = b + 1 == blocks ? last : block_size;
-        if (csizes[b] > src_left(s) || (usize > 64 && (usize - 64) / ZLIB_MAX_RATIO > csizes[b])) {
-            vtu_fail_array(r, a, "zlib block %llu of %llu: expected a compressed size that can hold %llu bytes within "
-                           "the data left (%llu), found %llu", (unsigned long long)b + 1, (unsigned long long)blocks,
-                           (unsigned long long)usize, (unsigned long long)src_left(s), (unsigned long long)csizes[b]);
-            free(csizes);
-            return NULL;
-        }
-        csum += csizes[b];
-        if (csizes[b] > cmax)
-            cmax = csizes[b];
-    }
-    if (csum > src_left(s)) {
-        vtu_fail_array(r, a, "data truncated: the compressed blocks take %llu bytes, at most %llu are left",
-                       (unsigned long long)csum, (unsigned long long)src_left(s));
-        free(csizes);
-        return NULL;
-    }
-    unsigned char *out = malloc(total ? (size_t)total : 1);
-    unsigned char *tmp = malloc(cmax ? (size_t)cmax : 1);
-    if (!out || !tmp) {
+    free(tmp);
+    free(z.csizes);
+    if (rc) {
         free(out);
-        free(tmp);
-        free(csizes);
-        vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)total);
         return NULL;
     }
-    uint64_t o = 0;
-    for (uint64_t b = 0; b < blocks; b++) {
-        uint64_t usize = b + 1 == blocks ? last : block_size;
-        if (src_read(s, tmp, (size_t)csizes[b])) {
-            vtu_fail_array(r, a, "zlib block %llu of %llu: expected %llu compressed bytes, %s",
-                           (unsigned long long)b + 1, (unsigned long long)blocks, (unsigned long long)csizes[b],
-                           s->error);
-            goto fail;
-        }
-        uLongf dlen = (uLongf)usize;
-        int zrc = uncompress(out + o, &dlen, tmp, (uLong)csizes[b]);
-        if (zrc != Z_OK) {
-            vtu_fail_array(r, a, "zlib block %llu of %llu does not decompress: %s", (unsigned long long)b + 1,
-                           (unsigned long long)blocks, zrc == Z_BUF_ERROR ? "it is incomplete or holds more than the header's size" : zError(zrc));
-            goto fail;
-        }
-        if (dlen != usize) {
-            vtu_fail_array(r, a, "zlib block %llu of %llu: expected %llu bytes, found %llu", (unsigned long long)b + 1,
-                           (unsigned long long)blocks, (unsigned long long)usize, (unsigned long long)dlen);
-            goto fail;
-        }
-        o += usize;
-    }
-    free(tmp);
-    free(csizes);
-    *nbytes = total;
+    *nbytes = z.total;
     return out;
-fail:
-    free(tmp);
-    free(csizes);
-    free(out);
-    return NULL;
 }
 
 static double value_at(const unsigned char *p, vtu_type t, int big)
