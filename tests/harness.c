@@ -15,7 +15,20 @@ static struct {
 } tests[MAX_TESTS];
 static int test_count;
 int tpk_test_failures;
+static int test_skips;
 static char temp_dir[256];
+
+void tpk_test_skip(const char *why)
+{
+    const char *require = getenv("TETPACK_REQUIRE_ALL");
+    if (require && !strcmp(require, "1")) {
+        fprintf(stderr, "FAIL (TETPACK_REQUIRE_ALL=1 forbids skips): %s\n", why);
+        tpk_test_failures++;
+        return;
+    }
+    printf("SKIP: %s\n", why);
+    test_skips++;
+}
 
 void tpk_test_register(const char *name, tpk_test_fn fn)
 {
@@ -96,22 +109,24 @@ int main(int argc, char **argv)
             printf("%s\n", tests[i].name);
         return 0;
     }
-    int ran = 0, failed = 0;
+    int ran = 0, failed = 0, skipped = 0;
     for (int i = 0; i < test_count; i++) {
         if (argc > 1 && strcmp(argv[1], tests[i].name) != 0)
             continue;
-        int before = tpk_test_failures;
+        int before = tpk_test_failures, skips_before = test_skips;
         tests[i].fn();
         ran++;
         if (tpk_test_failures != before) {
             failed++;
             fprintf(stderr, "FAIL %s\n", tests[i].name);
+        } else if (test_skips != skips_before) {
+            skipped++;
         }
     }
     if (ran == 0) {
         fprintf(stderr, "no test named %s\n", argc > 1 ? argv[1] : "(any)");
         return 2;
     }
-    printf("%d passed, %d failed\n", ran - failed, failed);
-    return failed ? 1 : 0;
+    printf("%d passed, %d failed, %d skipped\n", ran - failed - skipped, failed, skipped);
+    return failed ? 1 : skipped ? TPK_TEST_SKIPPED : 0;
 }
