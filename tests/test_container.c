@@ -1197,41 +1197,77 @@ TPK_TEST(writer_allocation_failures)
 
 /* ---- fuzz corpus generator ---------------------------------------------------------------------------- */
 
-static void write_bytes(const char *dir, const char *name, const uint8_t *bytes, size_t size)
+static int write_bytes(const char *dir, const char *name, const uint8_t *bytes, size_t size)
 {
     char path[1024];
     snprintf(path, sizeof path, "%s/%s", dir, name);
     FILE *f = fopen(path, "wb");
-    if (f) {
-        fwrite(bytes, 1, size, f);
-        fclose(f);
-    }
+    if (!f)
+        return -1;
+    int ok = fwrite(bytes, 1, size, f) == size;
+    return fclose(f) == 0 && ok ? 0 : -1;
 }
 
-/* Writes good seeds and every must-fail case into $TPK_WRITE_CORPUS (a no-op without it). */
-TPK_TEST(write_fuzz_corpus)
+/* Writes good seeds and every must-fail case into `dir`; returns the number of files written. */
+static int write_corpus(const char *dir)
 {
-    const char *dir = getenv("TPK_WRITE_CORPUS");
-    if (!dir)
-        return;
     size_t size;
     uint8_t *good = good_bytes(&size, NULL);
-    CHECK(good != NULL);
-    write_bytes(dir, "good_sample.tpk", good, size);
+    if (!good || write_bytes(dir, "good_sample.tpk", good, size))
+        return free(good), -1;
     build_opts o = {.extra_tag = TPK_FOURCC('x', 't', 'r', 'a')};
     size_t extra_size;
     uint8_t *extra = good_bytes(&extra_size, &o);
-    write_bytes(dir, "good_unknown_optional.tpk", extra, extra_size);
+    int failed = !extra || write_bytes(dir, "good_unknown_optional.tpk", extra, extra_size);
     free(extra);
-    for (size_t k = 0; k < FAIL_CASE_COUNT; k++) {
+    for (size_t k = 0; k < FAIL_CASE_COUNT && !failed; k++) {
         size_t n;
         uint8_t *bytes = mutated(good, size, &fail_cases[k], &n);
         char name[128];
         snprintf(name, sizeof name, "fail_%s.tpk", fail_cases[k].name);
-        write_bytes(dir, name, bytes, n);
+        failed = !bytes || write_bytes(dir, name, bytes, n);
         free(bytes);
     }
     free(good);
+    return failed ? -1 : 2 + (int)FAIL_CASE_COUNT;
+}
+
+/* With TPK_WRITE_CORPUS=<dir>, writes the fuzz seeds and must-fail files there. Without it, writes them to
+ * a temporary folder and checks that the committed corpus (tests/fuzz/corpus/fuzz_reader/) holds exactly
+ * these bytes: a change to the writer or to a fail case that is not regenerated fails here. */
+TPK_TEST(write_fuzz_corpus)
+{
+    const char *target = getenv("TPK_WRITE_CORPUS");
+    const char *dir = target ? target : tpk_temp_path("corpus");
+    if (!target)
+        CHECK(mkdir(dir, 0755) == 0);
+    int written = write_corpus(dir);
+    CHECK_MSG(written > 2, "cannot write the corpus into %s", dir);
+    if (target)
+        return;
+    DIR *d = opendir(dir);
+    CHECK(d);
+    struct dirent *e;
+    int compared = 0, stale = 0;
+    while ((e = readdir(d)) != NULL) {
+        if (e->d_name[0] == '.')
+            continue;
+        char made[1024], committed[1024];
+        snprintf(made, sizeof made, "%s/%s", dir, e->d_name);
+        snprintf(committed, sizeof committed, "%s/tests/fuzz/corpus/fuzz_reader/%s", TPK_SOURCE_DIR, e->d_name);
+        size_t a_size, b_size;
+        uint8_t *a = read_all(made, &a_size), *b = read_all(committed, &b_size);
+        if (!a || !b || a_size != b_size || memcmp(a, b, a_size)) {
+            fprintf(stderr, "%s differs from what the test writes\n", committed);
+            stale++;
+        }
+        compared++;
+        free(a);
+        free(b);
+    }
+    closedir(d);
+    CHECK_EQ_INT(compared, written);
+    CHECK_MSG(stale == 0, "%d stale corpus files: regenerate with TPK_WRITE_CORPUS=tests/fuzz/corpus/fuzz_reader", stale);
 }
 
 /* The committed must-fail files (tests/fuzz/corpus/fuzz_reader/fail_*.tpk) still fail as their case says. */
