@@ -33,6 +33,9 @@ const char *tpk_cli_value(int argc, char **argv, int *i, const char *name);
  * many threads made it. Static buffer. */
 const char *tpk_cli_joined(int argc, char **argv, const char *skip);
 
+/* Print "tetpack <cmd>: error: PATH: why" (just "why" when it already names PATH) and return
+ * TPK_EXIT_USAGE: every refusal of an input names the file. */
+int tpk_cli_fail_file(const char *cmd, const char *path, const char *why);
 /* Open a .tpk; on failure print "tetpack <cmd>: error: PATH: why" and return TPK_EXIT_USAGE. */
 int tpk_cli_open(const char *cmd, const char *path, struct tpk_file **out);
 

@@ -48,6 +48,13 @@ int tpk_cmd_export(int argc, char **argv)
     tpk_file *file = NULL;
     if (tpk_cli_open("export", path, &file))
         return TPK_EXIT_USAGE;
+    /* A damaged file is refused by its own name before any output is begun (the exporters' messages
+     * name the output they were writing). */
+    if (tpk_verify(file) != TPK_OK) {
+        tpk_cli_fail_file("export", path, tpk_error_text(file));
+        tpk_close(file);
+        return TPK_EXIT_USAGE;
+    }
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     int rc = 0;

@@ -175,7 +175,7 @@ static int render_file(render_args *a, tpk_file *file)
     tpk_mesh_arrays mesh;
     tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, &mesh);
     if (r != TPK_OK)
-        return tpk_cli_fail("render", "%s: %s", a->path, tpk_error_text(file));
+        return tpk_cli_fail_file("render", a->path, tpk_error_text(file));
     tpk_transfer_function tf;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
@@ -214,8 +214,11 @@ static int render_file(render_args *a, tpk_file *file)
     tpk_render_stats stats;
     memset(&stats, 0, sizeof stats);
     int rc = tpk_render_cpu(&mesh, &opt, rgba, &stats, &diag);
-    if (rc == 0)
-        rc = tpk_write_png(a->output, a->width, a->height, rgba, &diag);
+    if (rc != 0) {
+        free(rgba);
+        return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
+    }
+    rc = tpk_write_png(a->output, a->width, a->height, rgba, &diag);
     free(rgba);
     if (rc != 0)
         return tpk_cli_fail("render", "%s", diag.message);

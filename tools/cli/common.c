@@ -90,7 +90,11 @@ int tpk_cli_open(const char *cmd, const char *path, tpk_file **out)
     tpk_result r = tpk_open_path(out, path, NULL, err, sizeof err);
     if (r == TPK_OK)
         return 0;
-    const char *why = err[0] ? err : tpk_result_string(r);
+    return tpk_cli_fail_file(cmd, path, err[0] ? err : tpk_result_string(r));
+}
+
+int tpk_cli_fail_file(const char *cmd, const char *path, const char *why)
+{
     if (strstr(why, path))
         return tpk_cli_fail(cmd, "%s", why);
     return tpk_cli_fail(cmd, "%s: %s", path, why);
