@@ -393,6 +393,16 @@ void tpk_unmap_file(const char *data, size_t size)
         munmap((void *)data, size);
 }
 
+int tpk_import_begin(const char *name, tpk_mesh *out, tpk_diag *diag)
+{
+    if (!out)
+        return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
+    memset(out, 0, sizeof *out);
+    if (diag)
+        diag->message[0] = 0;
+    return 0;
+}
+
 int tpk_import_mapped(const char *path, tpk_parse_fn parse, tpk_mesh *out, tpk_diag *diag)
 {
     const char *data;

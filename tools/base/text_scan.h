@@ -78,6 +78,9 @@ void tpk_unmap_file(const char *data, size_t size);
  * consumed pages may be dropped). Names the input `name` in messages; leaves *out empty on error. */
 typedef int (*tpk_parse_fn)(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out,
                             tpk_diag *diag);
+/* What every importer does first: 0 with *out emptied and diag's message cleared, or -1 when no output
+ * mesh is given (the message names `name`). */
+int tpk_import_begin(const char *name, tpk_mesh *out, tpk_diag *diag);
 /* What every path importer does: empty *out, map the file, parse it, unmap. */
 int tpk_import_mapped(const char *path, tpk_parse_fn parse, tpk_mesh *out, tpk_diag *diag);
 

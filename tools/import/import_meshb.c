@@ -204,11 +204,8 @@ static int import_buffer(const char *name, const char *data, size_t size, int ma
                          tpk_diag *diag)
 {
     (void)mapped; /* keywords are read by offset, not in one pass: no pages to drop */
-    if (!out)
-        return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
-    memset(out, 0, sizeof *out);
-    if (diag)
-        diag->message[0] = 0;
+    if (tpk_import_begin(name, out, diag) != 0)
+        return -1;
     meshb_reader r = {name ? name : "(input)", (const unsigned char *)data, size, 0, 0, 0, diag};
     cells c;
     memset(&c, 0, sizeof c);

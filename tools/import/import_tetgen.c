@@ -235,11 +235,8 @@ static int finish_import(int rc, tpk_mesh *out)
 int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t node_size, const char *ele_data,
                              size_t ele_size, tpk_mesh *out, tpk_diag *diag)
 {
-    if (!out)
-        return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
-    memset(out, 0, sizeof *out);
-    if (diag)
-        diag->message[0] = 0;
+    if (tpk_import_begin(name, out, diag) != 0)
+        return -1;
     char node_name[256], ele_name[256];
     snprintf(node_name, sizeof node_name, "%s.node", name ? name : "(input)");
     snprintf(ele_name, sizeof ele_name, "%s.ele", name ? name : "(input)");

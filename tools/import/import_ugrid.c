@@ -159,11 +159,8 @@ static int read_mesh(ugrid_reader *r, tpk_mesh *out)
 static int import_buffer(const char *name, const char *data, size_t size, int binary, int mapped, tpk_mesh *out,
                          tpk_diag *diag)
 {
-    if (!out)
-        return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
-    memset(out, 0, sizeof *out);
-    if (diag)
-        diag->message[0] = 0;
+    if (tpk_import_begin(name, out, diag) != 0)
+        return -1;
     ugrid_reader r;
     memset(&r, 0, sizeof r);
     tpk_scan_init(&r.s, name, data, size, diag);

@@ -149,11 +149,8 @@ static void reader_free(gmsh_reader *r)
 static int import_buffer(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out,
                          tpk_diag *diag)
 {
-    if (!out)
-        return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
-    memset(out, 0, sizeof *out);
-    if (diag)
-        diag->message[0] = 0;
+    if (tpk_import_begin(name, out, diag) != 0)
+        return -1;
     gmsh_reader r;
     memset(&r, 0, sizeof r);
     tpk_scan_init(&r.s, name, data, size, diag);
