@@ -137,10 +137,27 @@ TPK_TEST(bad_input)
     expect_failure(VERTS "Vertices 0\n", "bad.mesh:9:", "expected one Vertices section, found a second");
 }
 
-/* Cut a valid file at every byte: every prefix either parses or fails with a placed message. */
+/* A prefix of `text` that is a whole Medit file: one cut where a section after Vertices ends (before or
+ * after that line's newline), or in the last newline. End is optional (the reader stops at the end of the
+ * file, as libMeshb does) and so are the sections after Vertices. Every number in the text is one digit,
+ * so no cut shortens a number into another valid one. */
+static int whole_medit_prefix(const char *text, size_t n)
+{
+    static const char *const next_sections[] = {"\nTriangles", "\nTetrahedra", "\nEnd"};
+    for (size_t k = 0; k < sizeof next_sections / sizeof *next_sections; k++) {
+        size_t at = (size_t)(strstr(text, next_sections[k]) - text);
+        if (n == at || n == at + 1)
+            return 1;
+    }
+    return n == strlen(text) - 1;
+}
+
+/* Cut a valid file at every byte: every prefix is refused with a placed message, except the whole files
+ * above, which import with the cells they hold. */
 TPK_TEST(every_truncation)
 {
     static const char text[] = VERTS "Triangles 1\n1 2 3 0\nTetrahedra\n1\n1 2 3 4 5\nEnd\n";
+    int whole_count = 0;
     for (size_t n = 0; n < sizeof text - 1; n++) {
         char *copy = malloc(n ? n : 1); /* exact size: an overread is caught by ASan */
         memcpy(copy, text, n);
@@ -149,8 +166,15 @@ TPK_TEST(every_truncation)
         quiet(&d);
         int rc = tpk_import_medit_memory("cut.mesh", copy, n, &m, &d);
         free(copy);
+        int64_t cells = rc == 0 ? m.cell_count : -1;
         if (rc == 0)
             tpk_mesh_free(&m);
-        CHECK_MSG(rc == 0 || strstr(d.message, "cut.mesh:"), "prefix %zu: '%s'", n, d.message);
+        int whole = whole_medit_prefix(text, n);
+        whole_count += whole;
+        CHECK_MSG(whole ? rc == 0 : rc != 0 && strstr(d.message, "cut.mesh:"), "prefix %zu (%s): '%s'", n,
+                  whole ? "a whole file" : "cut", d.message);
+        int64_t tets = n >= (size_t)(strstr(text, "\nEnd") - text); /* the triangle is dropped */
+        CHECK_MSG(!whole || cells == tets, "prefix %zu: %lld cells", n, (long long)cells);
     }
+    CHECK_EQ_INT(whole_count, 7);
 }

@@ -595,7 +595,8 @@ TPK_TEST(bad_zlib_blocks)
 }
 
 /* Cut valid files at every byte (hand-built appended ones) or at many offsets (meshio ones): every
- * prefix either parses or fails naming the file, with the mesh left empty. */
+ * prefix fails naming the file, with the mesh left empty, except a cut in the whitespace after
+ * '</VTKFile>', which leaves a whole file. */
 static int cut_everywhere(const char *text, size_t size, size_t step)
 {
     for (size_t n = 0; n < size; n += step) {
@@ -606,10 +607,18 @@ static int cut_everywhere(const char *text, size_t size, size_t step)
         quiet(&d);
         int rc = tpk_import_vtu_memory("cut.vtu", copy, n, &m, &d);
         free(copy);
-        if (rc == 0) {
+        size_t rest = n;
+        while (rest < size && strchr(" \t\r\n", text[rest]))
+            rest++;
+        int whole = rest == size && n >= strlen("</VTKFile>") && !memcmp(text + n - 10, "</VTKFile>", 10);
+        if (rc == 0)
             tpk_mesh_free(&m);
-            continue;
+        if (whole != (rc == 0)) {
+            fprintf(stderr, "prefix %zu of %zu (%s): '%s'\n", n, size, whole ? "a whole file" : "cut", d.message);
+            return -1;
         }
+        if (rc == 0)
+            continue;
         if (!strstr(d.message, "cut.vtu") || !mesh_is_empty(&m)) {
             fprintf(stderr, "prefix %zu of %zu: '%s'\n", n, size, d.message);
             return -1;

@@ -304,8 +304,39 @@ static const unsigned char *find(const unsigned char *p, size_t n, const char *w
     return NULL;
 }
 
+static const unsigned char *trim_space_back(const unsigned char *start, const unsigned char *end)
+{
+    while (end > start && vtu_is_space(end[-1]))
+        end--;
+    return end;
+}
+
+static int ends_with(const unsigned char *start, const unsigned char *end, const char *text)
+{
+    size_t n = strlen(text);
+    return (size_t)(end - start) >= n && !memcmp(end - n, text, n);
+}
+
+/* Where the appended data ends: the file must end with "</AppendedData>" then "</VTKFile>" (whitespace
+ * between and after them). Expat never sees this tail, so without the check a file cut anywhere after
+ * the data it needs would be read as whole. */
+static int appended_end(vtu_reader *r, const unsigned char *data_start)
+{
+    const unsigned char *end = trim_space_back(data_start, r->data + r->size);
+    int whole = ends_with(data_start, end, "</VTKFile>");
+    if (whole) {
+        end = trim_space_back(data_start, end - strlen("</VTKFile>"));
+        whole = ends_with(data_start, end, "</AppendedData>");
+    }
+    if (!whole)
+        return vtu_fail_line(r, 0, "byte %zu: expected '</AppendedData>' and '</VTKFile>' ending the file after the "
+                             "appended data, found end of file (truncated file?)", r->size);
+    r->app_end = (size_t)(end - strlen("</AppendedData>") - r->data);
+    return 0;
+}
+
 /* Length of the XML part to give expat: everything, or up to and including the AppendedData start tag
- * when there is one (then app_start is the byte after its '_'). */
+ * when there is one (then app_start is the byte after its '_' and app_end where its closing tag is). */
 static int split_appended(vtu_reader *r, size_t *xml_len)
 {
     *xml_len = r->size;
@@ -335,8 +366,7 @@ static int split_appended(vtu_reader *r, size_t *xml_len)
                                      "'%c'", (size_t)(c - r->data), *c >= 32 && *c < 127 ? *c : '?');
         *xml_len = (size_t)(gt + 1 - r->data);
         r->app_start = (size_t)(u + 1 - r->data);
-        r->app_end = r->size;
-        return 0;
+        return appended_end(r, u + 1);
     }
 }
 
