@@ -17,17 +17,6 @@
 
 #include "tetgen_guard.h"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define TPK_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define TPK_ASAN 1
-#endif
-#endif
-#ifndef TPK_ASAN
-#define TPK_ASAN 0
-#endif
-
 enum { CHILD_MAGIC = 0x54475431, CHILD_WRITE_FAILED = 3 };
 
 /* What the child writes first; the arrays follow in the order of tpk_tetgen_output. */

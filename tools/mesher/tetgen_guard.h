@@ -11,6 +11,18 @@
 
 #include "tetgen_shim.h"
 
+/* 1 in an AddressSanitizer build, where memory_limit is not applied. */
+#if defined(__SANITIZE_ADDRESS__)
+#define TPK_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define TPK_ASAN 1
+#endif
+#endif
+#ifndef TPK_ASAN
+#define TPK_ASAN 0
+#endif
+
 typedef struct tpk_tetgen_guard {
     const char *what;     /* for messages and progress: "tetrahedralizing the surface" */
     double time_limit;    /* seconds of wall-clock time before the child is killed; <= 0: none */

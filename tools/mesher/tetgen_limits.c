@@ -54,7 +54,7 @@ static int check_magnitudes(const char *name, const double *p, int64_t count, tp
         }
         longest = fmax(longest, hi - lo);
     }
-    if (count > 0 && longest < 1.0 / TPK_TETGEN_MAX_COORDINATE)
+    if (longest > 0 && longest < 1.0 / TPK_TETGEN_MAX_COORDINATE) /* 0: the degenerate cases below */
         return tpk_diag_fail(diag, "%s: the points span at most %g in any axis, below what TetGen's double "
                              "arithmetic holds (%g; products of five differences would underflow); scale the "
                              "input", name, longest, 1.0 / TPK_TETGEN_MAX_COORDINATE);
