@@ -56,12 +56,13 @@ static const char convert_help[] =
     "                              estimated to make more than N tets: enclosed volume / bound x 2\n"
     "                              (default 10000000: a few GiB and minutes)\n"
     "  --tetgen-time-limit S       stop TetGen after S seconds (default 3600; 0: no limit)\n"
+    "  --json                      print the summary as JSON\n"
+    "  --quiet                     print nothing on success\n"
+    "\n"
     "TetGen runs in a child process: a crash inside it, a time-out, or its memory running out (it may use\n"
     "the machine's memory) is an error naming the input; points that span no volume (all on one plane,\n"
     "decided exactly) or coordinates beyond 1e50 in magnitude (or spanning less than 1e-50) are refused\n"
     "before it starts. On a terminal a progress line shows each TetGen stage and its seconds.\n"
-    "  --json                      print the summary as JSON\n"
-    "  --quiet                     print nothing on success\n"
     "\n"
     "Input formats (--format NAME; tetpack formats says what each carries):\n";
 

@@ -1,6 +1,6 @@
 /* Tets from a closed surface or a point cloud, by TetGen 1.5 (optional, AGPL-3: TETPACK_WITH_TETGEN):
- * the closed-surface check, TetGen's switches, and the meshing run (mesher/tetgen_shim.h is the only
- * C++ unit). The input is a tpk_mesh of polygons (corners in order) or of points alone, as the surface
+ * the closed-surface check, TetGen's switches, the limits on its input (tetgen_limits.c), and the
+ * meshing run in a child process (tetgen_guard.h; mesher/tetgen_shim.h is the only C++ unit). The input is a tpk_mesh of polygons (corners in order) or of points alone, as the surface
  * readers (import/surface/surface.h) produce it; the output is a tpk_mesh of positively oriented tets. */
 #ifndef TPK_MESHER_H
 #define TPK_MESHER_H
