@@ -14,6 +14,9 @@
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
 
 #include "tetgen_guard.h"
 
@@ -57,6 +60,9 @@ static void limit_memory(int64_t bytes)
 static void run_child(const char *switches, const tpk_tetgen_input *in, const tpk_tetgen_guard *guard,
                       int result_fd, int printed_fd)
 {
+#ifdef __linux__
+    prctl(PR_SET_PDEATHSIG, SIGKILL); /* a killed tetpack leaves no TetGen running on */
+#endif
     /* Unbuffered, appended: what TetGen printed before a crash is in the file, in order. */
     setvbuf(stdout, NULL, _IONBF, 0);
     fcntl(printed_fd, F_SETFL, fcntl(printed_fd, F_GETFL) | O_APPEND);
