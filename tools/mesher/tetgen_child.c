@@ -75,8 +75,8 @@ static void run_child(const char *switches, const tpk_tetgen_input *in, const tp
     h.code = tpk_tetgen_run_printing_to(printed_fd, switches, in, &out, h.message, sizeof h.message);
     if (h.code == TPK_TETGEN_OUT_OF_MEMORY && !TPK_ASAN && guard->memory_limit > 0) {
         size_t at = strlen(h.message);
-        snprintf(h.message + at, sizeof h.message - at, " (its process may use at most %.3g GiB of address "
-                 "space)", (double)guard->memory_limit / (1024.0 * 1024.0 * 1024.0));
+        snprintf(h.message + at, sizeof h.message - at, "; TetGen's process may use at most %.3g GiB of "
+                 "address space", (double)guard->memory_limit / (1024.0 * 1024.0 * 1024.0));
     }
     h.point_count = out.point_count, h.tet_count = out.tet_count, h.triangle_count = out.triangle_count;
     int failed = write_all(result_fd, &h, sizeof h) ||
