@@ -77,6 +77,12 @@ expect_exit 2 timeout 120 "$TPK" convert "$WORK/cube.stl" "$WORK/out.tpk" --tetg
 expect_stderr "cube.stl: TetGen ran past the time limit of 0.5 s while tetrahedralizing the surface"
 expect_stderr "(--tetgen-time-limit raises it)"
 [ ! -e "$WORK/out.tpk" ] || fail "output left behind"
+# Progress: a line per TetGen stage on stderr (check --progress forces it without a terminal).
+"$TPK" check --progress "$WORK/cube.stl" > /dev/null 2> "$WORK/err"
+expect_stderr "TetGen: checking the surface for self-intersections (switches dzQ)... 0 s"
+expect_stderr "TetGen: tetrahedralizing the surface (switches p180zQq1.414)... 0 s (of at most 3600)"
+"$TPK" check "$WORK/cube.stl" > /dev/null 2> "$WORK/err"
+[ ! -s "$WORK/err" ] || fail "progress printed without --progress"
 expect_exit 2 "$TPK" convert "$WORK/cube.stl" "$WORK/out.tpk" --max-tets 0
 expect_stderr "--max-tets expects a tet count >= 1"
 echo "TetGen guard CLI tests passed"
