@@ -7,6 +7,7 @@
 
 #include "check.h"
 #include "import/importers.h"
+#include "mesher/mesher.h"
 #include "tetpack.h"
 
 static double now_seconds(void)
@@ -85,7 +86,10 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
         }
     } else {
         diag->lenient_fields = 1;
-        int rc = tpk_import_any(path, format, &mesh, diag);
+        /* A surface or point cloud goes through TetGen with its defaults and a progress line per stage. */
+        tpk_tetgen_options tetgen = {0};
+        tetgen.progress = report->options.progress;
+        int rc = tpk_import_any_with(path, format, &tetgen, &mesh, diag);
         diag->lenient_fields = 0;
         if (rc != 0)
             return -1;

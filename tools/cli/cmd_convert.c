@@ -52,8 +52,17 @@ static const char convert_help[] =
     "  --tetgen-max-volume V       largest tet volume (default: none)\n"
     "  --tetgen-switches S         expert: TetGen switches instead of the two above, from p q a Y M T O\n"
     "                              o S z Q with their numbers, after p180zQ (always)\n"
+    "  --max-tets N                refuse a volume bound (--tetgen-max-volume, or a in the switches)\n"
+    "                              estimated to make more than N tets: enclosed volume / bound x 2\n"
+    "                              (default 10000000: a few GiB and minutes)\n"
+    "  --tetgen-time-limit S       stop TetGen after S seconds (default 3600; 0: no limit)\n"
     "  --json                      print the summary as JSON\n"
     "  --quiet                     print nothing on success\n"
+    "\n"
+    "TetGen runs in a child process: a crash inside it, a time-out, or its memory running out (it may use\n"
+    "the machine's memory) is an error naming the input; points that span no volume (all on one plane,\n"
+    "decided exactly) or coordinates beyond 1e50 in magnitude (or spanning less than 1e-50) are refused\n"
+    "before it starts. On a terminal a progress line shows each TetGen stage and its seconds.\n"
     "\n"
     "Input formats (--format NAME; tetpack formats says what each carries):\n";
 
@@ -115,6 +124,18 @@ static int parse_tetgen_option(int argc, char **argv, int *i, convert_args *a)
             !(two[0] > 0))
             return tpk_cli_fail("convert", "--tetgen-max-volume expects a volume > 0, found '%s'", v ? v : "");
         a->tetgen.max_volume = two[0];
+    } else if (!strncmp(arg, "--tetgen-time-limit", 19)) {
+        if (!(v = tpk_cli_value(argc, argv, i, "--tetgen-time-limit")) || tpk_cli_parse_doubles(v, two, 1) ||
+            !(two[0] >= 0))
+            return tpk_cli_fail("convert", "--tetgen-time-limit expects seconds >= 0 (0: no limit), found '%s'",
+                                v ? v : "");
+        a->tetgen.time_limit = two[0] > 0 ? two[0] : -1;
+    } else if (!strncmp(arg, "--max-tets", 10)) {
+        char *end = NULL;
+        long long n = (v = tpk_cli_value(argc, argv, i, "--max-tets")) ? strtoll(v, &end, 10) : 0;
+        if (!v || !*v || *end || n < 1)
+            return tpk_cli_fail("convert", "--max-tets expects a tet count >= 1, found '%s'", v ? v : "");
+        a->tetgen.max_tets = n;
     } else if (!strncmp(arg, "--tetgen-switches", 17)) {
         if (!(v = tpk_cli_value(argc, argv, i, "--tetgen-switches")))
             return tpk_cli_fail("convert", "--tetgen-switches expects TetGen switches");
@@ -122,7 +143,6 @@ static int parse_tetgen_option(int argc, char **argv, int *i, convert_args *a)
     } else {
         return 0;
     }
-    a->options.tetgen = &a->tetgen;
     return 1;
 }
 
@@ -289,6 +309,8 @@ int tpk_cmd_convert(int argc, char **argv)
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     int progress = !a.quiet && isatty(2);
+    a.tetgen.progress = progress;
+    a.options.tetgen = &a.tetgen;
     rc = tpk_convert(&a.options, &report, progress ? show_stage : NULL, NULL, &diag);
     if (progress)
         fprintf(stderr, "\r\033[K");

@@ -4,11 +4,12 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "base/predicates.h"
 #include "mesher.h"
 #include "tetpack_format.h"
-#include "tetgen_shim.h"
+#include "tetgen_guard.h"
 
 #ifndef TPK_WITH_TETGEN
 #define TPK_WITH_TETGEN 0
@@ -104,28 +105,38 @@ static int64_t merge_duplicate_points(tpk_mesh *m, tpk_diag *diag)
     return merged;
 }
 
-/* TetGen asserts (aborting the process) when the points span no volume in some axis: refuse first. */
-static int check_extent(const char *name, const tpk_mesh *m, tpk_diag *diag)
-{
-    static const char axis[3] = {'x', 'y', 'z'};
-    for (int k = 0; k < 3; k++) {
-        double lo = INFINITY, hi = -INFINITY;
-        for (int64_t i = 0; i < m->point_count; i++) {
-            lo = fmin(lo, m->points[3 * i + k]);
-            hi = fmax(hi, m->points[3 * i + k]);
-        }
-        if (!(hi > lo))
-            return tpk_diag_fail(diag, "%s: all %lld points have %c = %.17g: they span no volume", name,
-                                 (long long)m->point_count, axis[k], lo);
-    }
-    return 0;
-}
-
 #if TPK_WITH_TETGEN
 static tpk_tetgen_input tetgen_input(const tpk_mesh *m)
 {
     return (tpk_tetgen_input){(int32_t)m->point_count, m->points, (int32_t)m->cell_count, m->cell_offsets,
                               m->cell_conn};
+}
+
+/* The options' limits for one TetGen run (defaults: mesher.h). */
+static tpk_tetgen_guard tetgen_guard(const tpk_tetgen_options *o, const char *what)
+{
+    static const tpk_tetgen_options defaults;
+    if (!o)
+        o = &defaults;
+    tpk_tetgen_guard g = {what, o->time_limit ? o->time_limit : TPK_TETGEN_DEFAULT_TIME_LIMIT, o->memory_limit,
+                          o->progress};
+    long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
+    if (g.memory_limit == 0 && pages > 0 && page_size > 0)
+        g.memory_limit = (int64_t)pages * page_size;
+    return g;
+}
+
+/* A failed run as a message naming the file: TetGen's own errors with the switches; a crash with what
+ * usually causes one. */
+static int tetgen_failed(const char *name, const char *switches, const char *what, int code, const char *message,
+                         tpk_diag *diag)
+{
+    if (code == TPK_TETGEN_CRASHED)
+        return tpk_diag_fail(diag, "%s: %s; TetGen fails like this on input that is flat within its tolerance "
+                             "(1e-8 of the bounding box) or spans very different scales", name, message);
+    if (code >= TPK_TETGEN_CRASHED)
+        return tpk_diag_fail(diag, "%s: %s", name, message);
+    return tpk_diag_fail(diag, "%s: TetGen (switches %s) could not %s: %s", name, switches, what, message);
 }
 
 static int face_has(const tpk_mesh *m, int64_t f, int32_t v)
@@ -173,14 +184,16 @@ static int report_intersections(const char *name, const tpk_mesh *m, const tpk_t
                          "triangles, among them %s", name, d->triangle_count, named ? text : "(faces not found)");
 }
 
-static int check_self_intersections(const char *name, const tpk_mesh *m, tpk_diag *diag)
+static int check_self_intersections(const char *name, const tpk_mesh *m, const tpk_tetgen_options *options,
+                                    tpk_diag *diag)
 {
     tpk_tetgen_input in = tetgen_input(m);
     tpk_tetgen_output d;
-    char message[512];
-    int code = tpk_tetgen_run("dzQ", &in, &d, message, sizeof message);
+    char message[1024];
+    tpk_tetgen_guard guard = tetgen_guard(options, "checking the surface for self-intersections (switches dzQ)");
+    int code = tpk_tetgen_run_guarded("dzQ", &in, &guard, &d, message, sizeof message);
     if (code)
-        return tpk_diag_fail(diag, "%s: checking the surface for self-intersections: %s", name, message);
+        return tetgen_failed(name, "dzQ", "check the surface for self-intersections", code, message, diag);
     int rc = d.triangle_count > 0 ? report_intersections(name, m, &d, diag) : 0;
     tpk_tetgen_output_free(&d);
     return rc;
@@ -250,15 +263,17 @@ static int mesh_from_tetgen(const char *name, const tpk_mesh *in, tpk_tetgen_out
 }
 
 static int run_and_build(const char *name, const char *what, const char *switches, const tpk_mesh *in,
-                         tpk_mesh *out, tpk_diag *diag)
+                         const tpk_tetgen_options *options, tpk_mesh *out, tpk_diag *diag)
 {
     tpk_tetgen_input input = tetgen_input(in);
     tpk_tetgen_output t;
-    char message[512];
-    int code = tpk_tetgen_run(switches, &input, &t, message, sizeof message);
+    char message[1024], doing[256], task[64];
+    snprintf(doing, sizeof doing, "tetrahedralizing the %s (switches %s)", what, switches);
+    snprintf(task, sizeof task, "tetrahedralize the %s", what);
+    tpk_tetgen_guard guard = tetgen_guard(options, doing);
+    int code = tpk_tetgen_run_guarded(switches, &input, &guard, &t, message, sizeof message);
     if (code)
-        return tpk_diag_fail(diag, "%s: TetGen (switches %s) could not tetrahedralize the %s: %s", name, switches,
-                             what, message);
+        return tetgen_failed(name, switches, task, code, message, diag);
     int rc = mesh_from_tetgen(name, in, &t, out, diag);
     tpk_tetgen_output_free(&t);
     if (rc == 0)
@@ -274,9 +289,11 @@ static int tetgen_surface(const char *name, const tpk_mesh *in, const tpk_tetgen
         return -1;
     if (in->point_count > INT32_MAX || in->cell_count > INT32_MAX)
         return tpk_diag_fail(diag, "%s: too large for TetGen (more than 2^31-1 points or faces)", name);
-    if (check_extent(name, in, diag) || check_self_intersections(name, in, diag))
+    if (tpk_tetgen_check_points(name, in->points, in->point_count, diag) ||
+        tpk_tetgen_check_tet_estimate(name, in, switches, options ? options->max_tets : 0, diag) ||
+        check_self_intersections(name, in, options, diag))
         return -1;
-    return run_and_build(name, "surface", switches, in, out, diag);
+    return run_and_build(name, "surface", switches, in, options, out, diag);
 }
 
 static int tetgen_point_cloud(const char *name, const tpk_mesh *in, const tpk_tetgen_options *options,
@@ -288,9 +305,9 @@ static int tetgen_point_cloud(const char *name, const tpk_mesh *in, const tpk_te
     if (in->point_count < 4 || in->point_count > INT32_MAX)
         return tpk_diag_fail(diag, "%s: %lld distinct points; a point cloud needs from 4 to 2^31-1", name,
                              (long long)in->point_count);
-    if (check_extent(name, in, diag))
+    if (tpk_tetgen_check_points(name, in->points, in->point_count, diag))
         return -1;
-    return run_and_build(name, "point cloud", "zQ", in, out, diag);
+    return run_and_build(name, "point cloud", "zQ", in, options, out, diag);
 }
 #else
 static int tetgen_surface(const char *name, const tpk_mesh *in, const tpk_tetgen_options *options, tpk_mesh *out,

@@ -17,13 +17,14 @@
 
 namespace {
 
-// Send file descriptor 1 to a temporary file while alive; text() returns what was printed.
+// Send file descriptor 1 to a temporary file (or to a copy of print_fd) while alive; text() returns
+// what was printed.
 class StdoutCapture {
 public:
-    StdoutCapture()
+    explicit StdoutCapture(int print_fd)
     {
         std::fflush(stdout);
-        file_ = std::tmpfile();
+        file_ = print_fd < 0 ? std::tmpfile() : fdopen(dup(print_fd), "w+");
         saved_ = file_ ? dup(1) : -1;
         if (saved_ >= 0 && dup2(fileno(file_), 1) < 0) {
             close(saved_);
@@ -146,8 +147,21 @@ void take_output(const tetgenio &io, tpk_tetgen_output *out)
 
 } // namespace
 
+extern "C" void tpk_tetgen_last_words(const char *printed, size_t size, char *buf, size_t cap)
+{
+    std::string said = last_lines(std::string(printed, size));
+    if (cap)
+        std::snprintf(buf, cap, "%s", said.c_str());
+}
+
 extern "C" int tpk_tetgen_run(const char *switches, const tpk_tetgen_input *in, tpk_tetgen_output *out,
                               char *message, size_t cap)
+{
+    return tpk_tetgen_run_printing_to(-1, switches, in, out, message, cap);
+}
+
+extern "C" int tpk_tetgen_run_printing_to(int print_fd, const char *switches, const tpk_tetgen_input *in,
+                                          tpk_tetgen_output *out, char *message, size_t cap)
 {
     std::memset(out, 0, sizeof *out);
     if (message && cap)
@@ -156,7 +170,7 @@ extern "C" int tpk_tetgen_run(const char *switches, const tpk_tetgen_input *in, 
     int code = 0;
     std::string printed;
     {
-        StdoutCapture capture;
+        StdoutCapture capture(print_fd);
         try {
             tetgenio input, output;
             fill_input(in, input);

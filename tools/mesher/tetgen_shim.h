@@ -18,6 +18,7 @@ typedef struct tpk_tetgen_input {
     const int32_t *face_conn;    /* polygon corners, 0-based */
 } tpk_tetgen_input;
 
+/* A field added here must also cross from TetGen's child process to its parent: tetgen_child.c. */
 typedef struct tpk_tetgen_output {
     int32_t point_count;
     double *points;              /* 3 * point_count; the input points first, in input order */
@@ -35,7 +36,12 @@ enum {
     TPK_TETGEN_SMALL_FEATURE = 4,
     TPK_TETGEN_CLOSE_FACETS = 5,
     TPK_TETGEN_INPUT_ERROR = 10,
-    TPK_TETGEN_OTHER_ERROR = 99
+    TPK_TETGEN_OTHER_ERROR = 99,
+    /* tpk_tetgen_run_guarded (tetgen_guard.h): TetGen's process died of a signal (an assert, a bad
+     * access), ran past its time limit, or could not be started. */
+    TPK_TETGEN_CRASHED = 100,
+    TPK_TETGEN_TIMED_OUT = 101,
+    TPK_TETGEN_NOT_STARTED = 102
 };
 
 /* Run TetGen with `switches` (the caller adds Q and checks them: this passes them through). Returns 0
@@ -45,6 +51,14 @@ enum {
 int tpk_tetgen_run(const char *switches, const tpk_tetgen_input *in, tpk_tetgen_output *out, char *message,
                    size_t cap);
 void tpk_tetgen_output_free(tpk_tetgen_output *out);
+
+/* tpk_tetgen_run with TetGen's printing appended to print_fd (a readable, writable file) instead of a
+ * temporary file, so that a parent process can still read it when TetGen crashes (tetgen_child.c);
+ * print_fd < 0: as tpk_tetgen_run. */
+int tpk_tetgen_run_printing_to(int print_fd, const char *switches, const tpk_tetgen_input *in,
+                               tpk_tetgen_output *out, char *message, size_t cap);
+/* The last few non-empty lines of what TetGen printed (size bytes), joined by "; ", into buf. */
+void tpk_tetgen_last_words(const char *printed, size_t size, char *buf, size_t cap);
 
 #ifdef __cplusplus
 }

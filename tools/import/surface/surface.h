@@ -51,7 +51,8 @@ int tpk_read_csv_points(const char *name, const char *data, size_t size, tpk_mes
  * cloud by Delaunay tetrahedralization of its distinct points (exact duplicates merged, the first
  * one's values kept, a warning counts them). Vertex fields of a surface are kept on its vertices; the
  * Steiner points TetGen adds get NaN. Output: tets (type 10), positively oriented, point fields.
- * Built without TetGen: refused with a message saying so. */
+ * TetGen runs in a child process with time and memory limits (mesher/tetgen_guard.h): its crashes are
+ * errors naming the file. Built without TetGen: refused with a message saying so. */
 typedef enum tpk_surface_mode {
     TPK_SURFACE_AUTO = 0,  /* faces: a surface; none: a point cloud */
     TPK_SURFACE_FACES,     /* must be a surface (a file without faces is refused) */
