@@ -8,6 +8,7 @@ usage: faults.py TETPACK DATA_DIR SOURCE_DIR CATEGORY    (CATEGORY: import, tpk 
 Fixed seeds; TPK_FAULTS_SEEDS=N (default 1) multiplies the random cases for a longer run (./dev faults).
 Exit 0 when every case holds, 1 when one does not, 77 (ctest's skip) when a case could not run here
 (for example the full filesystem needs root), unless TETPACK_REQUIRE_ALL=1 makes a skip a failure."""
+import json
 import os
 import random
 import re
@@ -39,6 +40,8 @@ class Tally:
         self.failures = []
         self.skips = []
         self.lock = threading.Lock()  # cases run on worker threads
+        self.expected = set()
+        self.real_failures = 0
 
     def add(self, category, what, n=1):
         with self.lock:
@@ -48,7 +51,15 @@ class Tally:
 
     def fail(self, category, what, case, detail):
         self.add(category, what)
-        self.failures.append("%s/%s: %s: %s" % (category, case, what, detail.strip()[-600:]))
+        line = "%s/%s: %s: %s" % (category, case, what, detail.strip()[-600:])
+        expected = [x for x in EXPECTED_FAILURES if re.match(x[0], "%s/%s" % (category, case))]
+        with self.lock:
+            if expected:
+                self.expected.add(expected[0])
+                self.failures.append("XFAIL (%s): %s" % (expected[0][1], line))
+            else:
+                self.failures.append("FAIL: " + line)
+                self.real_failures += 1
 
     def report(self):
         names = ("cases", "refused", "accepted", "crashes", "hangs", "lost", "other")
@@ -58,9 +69,18 @@ class Tally:
         for s in self.skips:
             print("SKIPPED: " + s)
         for f in self.failures:
-            print("FAIL: " + f)
+            print(f)
+        for pattern, why in self.unmatched_expected():
+            print("XPASS: %s no longer fails (%s): remove it from EXPECTED_FAILURES" % (pattern, why))
+
+    def unmatched_expected(self):
+        category = sys.argv[4] if len(sys.argv) > 4 else ""
+        return [x for x in EXPECTED_FAILURES if x not in self.expected and x[0].startswith(category)]
 
 
+# Cases that fail because their fix lives on a branch not merged yet: (regex on "category/case", why).
+# They are reported as XFAIL and do not fail the run; one that passes is reported as XPASS.
+EXPECTED_FAILURES = []
 TALLY = Tally()
 
 
@@ -280,22 +300,45 @@ REAL_INPUTS = {
 }
 
 
+def write_binary_ugrid(ascii_path, folder):
+    """The ASCII UGRID file as little-endian binary (.lb8.ugrid: int32 and float64): 7 counts, the node
+    coordinates, then every other number an integer."""
+    numbers = open(ascii_path).read().split()
+    nodes = int(numbers[0])
+    path = os.path.join(folder, "cube_polar1.lb8.ugrid")
+    with open(path, "wb") as f:
+        f.write(struct.pack("<7i", *map(int, numbers[:7])))
+        f.write(struct.pack("<%dd" % (3 * nodes), *map(float, numbers[7:7 + 3 * nodes])))
+        rest = numbers[7 + 3 * nodes:]
+        f.write(struct.pack("<%di" % len(rest), *map(int, rest)))
+    return path
+
+
 def importer_sources(tetpack, data, folder):
-    """[(format, [files: the first is what convert is given; any of them may be the one damaged])]."""
+    """[(format, [files: the first is what convert is given; any of them may be the one damaged], options)]:
+    every format `tetpack formats` lists, from real files where ../shared/data has them."""
     sources = []
     for fmt, paths in REAL_INPUTS.items():
         for p in paths:
             files = [os.path.join(data, p)]
             if fmt == "tetgen":
                 files.append(files[0][:-len(".node")] + ".ele")
-            sources.append((fmt, files))
-    sources.append(("pvd", write_pvd(tetpack, data, folder)))
-    for fmt, paths in write_surfaces(folder).items():
-        sources += [(fmt, [p]) for p in paths]
+            sources.append((fmt, files, []))
+    sources.append(("ugrid", [write_binary_ugrid(os.path.join(data, REAL_INPUTS["ugrid"][0]), folder)], []))
+    sources.append(("pvd", write_pvd(tetpack, data, folder), []))
+    surfaces = write_surfaces(folder)
+    for fmt, paths in surfaces.items():
+        sources += [(fmt, [p], []) for p in paths]
+    sources.append(("surface", [surfaces["stl"][1]], ["--format", "surface"]))
+    sources.append(("points", [surfaces["ply"][0]], ["--format", "points"]))
+    listed = json.loads(subprocess.run([tetpack, "formats", "--json"], check=True, capture_output=True).stdout)
+    for fmt in listed["formats"]:
+        if fmt["name"] not in {s[0] for s in sources}:
+            TALLY.fail("import:" + fmt["name"], "other", "-", "tetpack formats lists it, the fault suite has no input")
     return sources
 
 
-def import_case(tetpack, work, fmt, files, damaged, name, payload, old):
+def import_case(tetpack, work, fmt, files, options, damaged, name, payload, old):
     """Convert a copy of `files` with `damaged` (an index into it) replaced by `payload`."""
     case = "%s/%s/%s" % (fmt, os.path.basename(files[damaged]), name)
     folder = tempfile.mkdtemp(dir=work)
@@ -314,7 +357,7 @@ def import_case(tetpack, work, fmt, files, damaged, name, payload, old):
     with open(out, "wb") as f:
         f.write(old)
     first = os.path.join(inputs, os.path.basename(files[0]))
-    result = run([tetpack, "convert", first, out, "--quiet"])
+    result = run([tetpack, "convert", first, out, "--quiet"] + options)
     rc = judge("import:" + fmt, case, result, [files[damaged], files[0]])
     if rc is not None:
         check_output("import:" + fmt, case, tetpack, out, old, rc, [])
@@ -325,9 +368,9 @@ def run_import(tetpack, data, work):
     sources = importer_sources(tetpack, data, work)
     old = make_tpk(tetpack, os.path.join(data, "sfepy/cross3d.mesh"), work, "old.tpk")
     jobs = []
-    for fmt, files in sources:
+    for fmt, files, options in sources:
         # The untouched input converts: the cases below start from a file the converter accepts.
-        ok = run([tetpack, "convert", files[0], os.path.join(work, "clean.tpk"), "--quiet"])
+        ok = run([tetpack, "convert", files[0], os.path.join(work, "clean.tpk"), "--quiet"] + options)
         if ok[0] != 0 and "without TetGen" in ok[1]:
             TALLY.skips.append("import:%s: built without TetGen" % fmt)
             continue
@@ -338,7 +381,7 @@ def run_import(tetpack, data, work):
             for damaged, f in enumerate(files):
                 data_bytes = open(f, "rb").read()
                 for name, payload in mutations(data_bytes, hash_seed(f, seed)):
-                    jobs.append((fmt, files, damaged, "%s_s%d" % (name, seed), payload))
+                    jobs.append((fmt, files, options, damaged, "%s_s%d" % (name, seed), payload))
     with ThreadPoolExecutor(max_workers=workers()) as pool:
         list(pool.map(lambda j: import_case(tetpack, work, *j, old), jobs))
 
@@ -620,11 +663,12 @@ def kill_faults(tetpack, data, work, old):
     folder = os.path.join(work, "kill")
     os.mkdir(folder)
     out = os.path.join(folder, "out.tpk")
-    argv = [tetpack, "convert", source, out, "--quiet", "--zstd", "1", "--threads", "1"]
+    argv = [tetpack, "convert", source, out, "--quiet", "--layout", "tet16", "--layout", "tet20", "--layout",
+            "tet32", "--threads", "1"]
     start = time.monotonic()
     subprocess.run(argv, check=True)
     duration = time.monotonic() - start
-    moments = [duration * k / (6 * SEEDS + 1) for k in range(1, 6 * SEEDS + 1)]
+    moments = [duration * k / (12 * SEEDS + 1) for k in range(1, 12 * SEEDS + 1)]
     for sig in (signal.SIGKILL, signal.SIGTERM, signal.SIGINT):
         for at in moments if sig == signal.SIGKILL else moments[::3]:
             with open(out, "wb") as f:
@@ -707,7 +751,7 @@ def main():
         shutil.rmtree(work, ignore_errors=True)
     TALLY.report()
     print("%s: %.1f s, %d seed(s)" % (category, time.monotonic() - started, SEEDS))
-    if TALLY.failures:
+    if TALLY.real_failures:
         return 1
     if TALLY.skips:
         return 1 if os.environ.get("TETPACK_REQUIRE_ALL") == "1" else 77
