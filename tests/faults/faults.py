@@ -187,9 +187,10 @@ BINARY_BOMBS = [struct.pack(f, v) for f in ("<I", ">I") for v in (0x7FFFFFFF, 0x
 BINARY_NAN = [struct.pack(f, v) for f in ("<d", ">d", "<f", ">f") for v in (float("nan"), float("inf"))]
 
 
-def mutations(data, seed):
-    """[(name, bytes)]: seeded byte flips and truncations, absurd counts near the start (memory bombs),
-    ids out of range further on, and non-finite numbers, as text tokens or binary words."""
+def mutations(data, seed, first):
+    """[(name, bytes)]: seeded byte flips and truncations (the `first` seed also cuts at 0, 1, half and
+    all but the last byte), absurd counts near the start (memory bombs), ids out of range further on, and
+    non-finite numbers, as text tokens or binary words."""
     rng = random.Random(seed)
     n = len(data)
     head = min(n, max(512, n // 20))
@@ -201,7 +202,7 @@ def mutations(data, seed):
         for _ in range(1 + k % 3):
             flipped[rng.randrange(n)] ^= rng.randrange(1, 256)
         out.append(("flip%d" % k, bytes(flipped)))
-    for k, cut in enumerate([0, 1, n // 2, n - 1] + [rng.randrange(n) for _ in range(2)]):
+    for k, cut in enumerate(([0, 1, n // 2, n - 1] if first else []) + [rng.randrange(n) for _ in range(2)]):
         out.append(("cut%d_at_%d" % (k, cut), data[:cut]))
     for k in range(3):
         bomb = replace_token(data, rng, INT_TOKEN, 0, text_head, ABSURD_INTS)
@@ -392,7 +393,7 @@ def run_import(tetpack, data, work):
         for seed in range(SEEDS):
             for damaged, f in enumerate(files):
                 data_bytes = open(f, "rb").read()
-                for name, payload in mutations(data_bytes, hash_seed(f, seed)):
+                for name, payload in mutations(data_bytes, hash_seed(f, seed), seed == 0):
                     jobs.append((fmt, files, options, damaged, "%s_s%d" % (name, seed), payload))
     with ThreadPoolExecutor(max_workers=workers()) as pool:
         list(pool.map(lambda j: import_case(tetpack, work, *j, old), jobs))
