@@ -85,7 +85,9 @@ tpk_result tpk_open_memory(tpk_file **out, const void *data, size_t size,
                            const tpk_open_options *options, char *err_text, size_t err_cap);
 void tpk_close(tpk_file *file);
 
-/* The detailed text of the last error on this handle ("" if none). Owned by the handle. */
+/* The detailed text of the last error on this handle ("" if none). Thread safety: safe while other
+ * threads use the handle; the text is a copy taken under the handle's lock into storage owned by the
+ * calling thread, valid until that thread's next tpk_error_text call (on any handle). */
 const char *tpk_error_text(const tpk_file *file);
 
 typedef struct tpk_file_info {
