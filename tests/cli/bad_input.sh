@@ -82,3 +82,14 @@ expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/x.png" --size 0x5
 expect_exit 2 "$TPK" nosuchcommand
 expect_exit 0 "$TPK" convert --help
 echo "1 passed, 0 failed"
+# What convert refuses as unusable, check does not call clean (issue 10): no cells at all, only a cell of
+# VTK type 0, a polyhedron whose points coincide. Exit 1 and the check id on stdout.
+printf '# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 0 double\nCELLS 0 0\nCELL_TYPES 0\n' > "$WORK/empty.vtk"
+printf '# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 1\n0\nCELL_TYPES 1\n0\n' > "$WORK/type0.vtk"
+printf '# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n1 1 1\n1 1 1\n1 1 1\n1 1 1\nCELLS 1 18\n17 4 3 0 1 2 3 0 1 3 3 0 2 3 3 1 2 3\nCELL_TYPES 1\n42\n' > "$WORK/flatpoly.vtk"
+for unusable in empty:214 type0:214 flatpoly:215; do
+    name=${unusable%%:*} id=${unusable##*:}
+    expect_exit 2 "$TPK" convert "$WORK/$name.vtk" "$WORK/$name.tpk"
+    expect_exit 1 "$TPK" check "$WORK/$name.vtk"
+    grep -q "^  $id error" "$WORK/out" || fail "check $name.vtk: no $id: $(cat "$WORK/out")"
+done
