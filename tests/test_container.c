@@ -1293,6 +1293,60 @@ static tpk_result open_and_load(const uint8_t *bytes, size_t size, failing_alloc
     return r;
 }
 
+/* An allocator that refuses every request of `refuse_from` bytes or more, and remembers the largest. */
+typedef struct capped_allocator {
+    size_t refuse_from, largest;
+} capped_allocator;
+
+static void *capped_alloc(void *user, size_t size)
+{
+    capped_allocator *a = user;
+    a->largest = size > a->largest ? size : a->largest;
+    return size >= a->refuse_from ? NULL : malloc(size);
+}
+
+static void capped_free(void *user, void *ptr)
+{
+    (void)user;
+    free(ptr);
+}
+
+/* Issue 10: a header claiming 2^31-1 vertices made `info` try to allocate 25769803764 bytes and report
+ * "out of memory". A zstd chunk whose claim the frame contradicts (its Frame_Content_Size says the real
+ * size) is refused as DECOMPRESS before anything of the claimed size is requested, and the message says
+ * what the frame declares; a claim beyond what zstd can expand to is refused at open (rule 10). */
+TPK_TEST(implausible_sizes_refused_before_allocating)
+{
+    size_t size;
+    uint8_t *bytes = good_bytes(&size, NULL);
+    CHECK(bytes != NULL);
+    uint64_t i = entry_of(bytes, TPK_TAG_META, 0, 0);
+    tpk_dir_entry *e = entry(bytes, i);
+    CHECK(e->codec == TPK_CODEC_ZSTD);
+    uint64_t real = e->raw_size;
+    e->elem_count = e->raw_size = e->stored_size * 32768; /* the most a frame of this size can decode to */
+    fix_directory(bytes);
+    capped_allocator a = {(size_t)e->raw_size, 0};
+    tpk_open_options o = {.size = sizeof o, .allocator = {capped_alloc, capped_free, &a}};
+    tpk_file *file;
+    CHECK_EQ_INT(tpk_open_memory(&file, bytes, size, &o, NULL, 0), TPK_OK);
+    tpk_result r = tpk_verify(file);
+    char text[512], declared[64];
+    snprintf(text, sizeof text, "%s", tpk_error_text(file));
+    snprintf(declared, sizeof declared, "declares %llu bytes", (unsigned long long)real);
+    tpk_close(file);
+    CHECK_MSG(r == TPK_ERR_DECOMPRESS && strstr(text, "'META'") && strstr(text, declared), "%s: %s",
+              tpk_result_string(r), text);
+    CHECK_MSG(a.largest < e->raw_size, "asked for %zu bytes of a claimed %llu", a.largest,
+              (unsigned long long)e->raw_size);
+    e->elem_count = e->raw_size = e->raw_size + 1; /* one byte more than zstd can produce */
+    fix_directory(bytes);
+    char err[512] = "";
+    CHECK_EQ_INT(tpk_open_memory(&file, bytes, size, NULL, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "implausible raw_size") && strstr(err, "'META'"), "%s", err);
+    free(bytes);
+}
+
 TPK_TEST(allocation_failures)
 {
     size_t size;

@@ -37,6 +37,9 @@ size=$(stat -c %s "$WORK/flip.tpk")
 printf '\xff' | dd of="$WORK/flip.tpk" bs=1 seek=$((size / 2)) conv=notrunc status=none
 expect_exit 2 "$TPK" info "$WORK/flip.tpk"
 expect_stderr "error: $WORK/flip.tpk: chunk "
+# A zstd error names the file too (issue 10).
+expect_exit 2 "$TPK" info "$SRC/samples/vectors/zstd_skippable_frame.tpk"
+expect_stderr "zstd_skippable_frame.tpk: chunk 0 'POS3' at offset 192: a zstd frame of"
 # export names the damaged input, not the output it was asked to write (issue 10), and writes nothing.
 expect_exit 2 "$TPK" export "$WORK/flip.tpk" --vtu "$WORK/flip.vtu"
 expect_stderr "error: $WORK/flip.tpk: chunk "
