@@ -49,7 +49,11 @@ typedef struct tpk_allocator {
     void *user;
 } tpk_allocator;
 
-/* Limits for untrusted input. 0 means the default given in brackets. */
+/* Limits for untrusted input (spec §9.1): a file within them that breaks no rule is read, one beyond
+ * them gets TPK_ERR_LIMIT. 0 means the default given in brackets, the largest a valid file needs.
+ * Whatever the limits, a chunk never costs more memory than its stored bytes can decode to: an
+ * uncompressed chunk is its stored bytes, a zstd chunk's claim is checked against its stored size and
+ * frame header before anything is allocated (TPK_ERR_CORRUPT / TPK_ERR_DECOMPRESS). */
 typedef struct tpk_limits {
     uint64_t max_chunks;         /* [65536] */
     uint64_t max_chunk_bytes;    /* raw size of one chunk [64 GiB] */
