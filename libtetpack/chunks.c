@@ -44,7 +44,8 @@ static tpk_result check_zstd_frame(tpk_file *file, uint64_t i)
                              "allows no dictionary", name, dictionary);
     unsigned long long declared = ZSTD_getFrameContentSize(src, e->stored_size);
     if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared != e->raw_size)
-        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd frame declares %llu bytes but raw_size is %" PRIu64,
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd frame declares %llu bytes but raw_size is %" PRIu64
+                             ": the directory's size claim is damaged",
                              name, declared, e->raw_size);
     return TPK_OK;
 }
