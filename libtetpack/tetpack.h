@@ -49,7 +49,11 @@ typedef struct tpk_allocator {
     void *user;
 } tpk_allocator;
 
-/* Limits for untrusted input. 0 means the default given in brackets. */
+/* Limits for untrusted input (spec §9.1): a file within them that breaks no rule is read, one beyond
+ * them gets TPK_ERR_LIMIT. 0 means the default given in brackets, the largest a valid file needs.
+ * Whatever the limits, a chunk never costs more memory than its stored bytes can decode to: an
+ * uncompressed chunk is its stored bytes, a zstd chunk's claim is checked against its stored size and
+ * frame header before anything is allocated (TPK_ERR_CORRUPT / TPK_ERR_DECOMPRESS). */
 typedef struct tpk_limits {
     uint64_t max_chunks;         /* [65536] */
     uint64_t max_chunk_bytes;    /* raw size of one chunk [64 GiB] */
@@ -85,7 +89,9 @@ tpk_result tpk_open_memory(tpk_file **out, const void *data, size_t size,
                            const tpk_open_options *options, char *err_text, size_t err_cap);
 void tpk_close(tpk_file *file);
 
-/* The detailed text of the last error on this handle ("" if none). Owned by the handle. */
+/* The detailed text of the last error on this handle ("" if none). Thread safety: safe while other
+ * threads use the handle; the text is a copy taken under the handle's lock into storage owned by the
+ * calling thread, valid until that thread's next tpk_error_text call (on any handle). */
 const char *tpk_error_text(const tpk_file *file);
 
 typedef struct tpk_file_info {

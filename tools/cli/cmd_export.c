@@ -48,6 +48,13 @@ int tpk_cmd_export(int argc, char **argv)
     tpk_file *file = NULL;
     if (tpk_cli_open("export", path, &file))
         return TPK_EXIT_USAGE;
+    /* Issue 10: a damaged chunk met while writing was reported under the output's name. Every chunk
+     * is checked first, so damage is reported against the input, before any output is started. */
+    if (tpk_verify(file) != TPK_OK) {
+        tpk_cli_fail("export", "%s: %s", path, tpk_error_text(file));
+        tpk_close(file);
+        return TPK_EXIT_USAGE;
+    }
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     int rc = 0;

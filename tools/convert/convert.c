@@ -104,9 +104,31 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     return 0;
 }
 
-/* Move the points into the frame the file stores: relative to the bounding-box centre (so meshes far
- * from the origin keep float32 precision) and rounded to float32. Everything after this (exact
- * orientation included) then decides on exactly the coordinates a reader of the file sees. */
+/* The origin of one axis (spec §6.8): the number in [lo, hi] with the fewest significant bits, that is
+ * 0 when the box straddles 0, else the one multiple of the largest power of two q that has a multiple
+ * in [lo, hi] (two would make one of them a multiple of 2q). Every stored |x - origin| is at most
+ * hi - lo, so float32 keeps all but at most one bit of the precision a centred origin gives, and a
+ * coordinate that is a float32 multiple of q's granularity (0 and 1 of a unit cube, 10 and 11 of a
+ * cube at 10) is stored exactly, where the centre 0.5 * (lo + hi) may not even be exact itself. */
+static double axis_origin(double lo, double hi)
+{
+    if (!(lo <= hi) || !isfinite(lo) || !isfinite(hi) || (lo <= 0.0 && hi >= 0.0))
+        return 0.0;
+    int e;
+    frexp(fmax(fabs(lo), fabs(hi)), &e);
+    /* q = 2^e exceeds both bounds; halving it ends at the lowest set bit of lo at the latest, whose
+     * multiples include lo itself (ldexp and the division by a power of two are exact). */
+    for (double q = ldexp(1.0, e); q > 0.0; q *= 0.5) {
+        double candidate = ceil(lo / q) * q;
+        if (candidate <= hi)
+            return candidate;
+    }
+    return lo;
+}
+
+/* Move the points into the frame the file stores: relative to the origin of axis_origin (so meshes
+ * far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
+ * included) then decides on exactly the coordinates a reader of the file sees. */
 static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -117,7 +139,7 @@ static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
             hi[k] = x > hi[k] ? x : hi[k];
         }
     for (int k = 0; k < 3; k++) {
-        hdr->origin[k] = mesh->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
+        hdr->origin[k] = mesh->vertex_count ? axis_origin(lo[k], hi[k]) : 0.0;
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }

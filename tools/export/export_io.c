@@ -160,8 +160,8 @@ int tpk_export_load_chunk(tpk_file *file, uint32_t tag, uint32_t index, uint32_t
     if (r == TPK_OK)
         r = tpk_get_chunk(file, i, &e);
     if (r != TPK_OK)
-        return tpk_diag_fail(diag, "%s: chunk %s (index %u, step %u): %s", path, name, index, step,
-                             tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
+        return tpk_diag_fail(diag, "%s: cannot export: the input's chunk %s (index %u, step %u): %s", path, name,
+                             index, step, tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
     if (e.elem_size != elem_size || e.elem_count != expected_count)
         return tpk_diag_fail(diag, "%s: chunk %s (index %u, step %u) has %llu elements of %u bytes, expected %llu of %u",
                              path, name, index, step, (unsigned long long)e.elem_count, e.elem_size,
@@ -181,8 +181,8 @@ int tpk_export_load_chunk(tpk_file *file, uint32_t tag, uint32_t index, uint32_t
         free(*owned);
         *owned = NULL;
         *data = NULL;
-        return tpk_diag_fail(diag, "%s: chunk %s (index %u, step %u): %s", path, name, index, step,
-                             tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
+        return tpk_diag_fail(diag, "%s: cannot export: the input's chunk %s (index %u, step %u): %s", path, name,
+                             index, step, tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
     }
     return 1;
 }
