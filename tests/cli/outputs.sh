@@ -102,30 +102,43 @@ else
     echo "SKIP: SIGKILL cases ($OUT has no O_TMPFILE: a killed process can leave a named temporary file there)"
 fi
 
-# held MODE SIGNAL TARGET cmd...: run cmd until its output TARGET is complete but not in place, check
-# what the output directory shows then (MODE unnamed: nothing new; named: one TARGET.tmp.* file), kill
-# it with SIGNAL; afterwards the directory lists what it did before and TARGET (if any) kept its bytes.
+# start_held MODE cmd...: start cmd in the background ($pid) with the output hook on (MODE named: the
+# fallback without O_TMPFILE) and wait until it holds there, its output complete but not in place, or
+# ends. Succeeds when it holds. It waits for the hook, not for a time: the bound turns a hang into a failure.
+start_held() {
+    local named=0
+    [ "$1" = named ] && named=1
+    shift
+    rm -f "$WORK/hold"
+    TPK_TEST_OUTPUT_NAMED=$named TPK_TEST_OUTPUT_HOLD="$WORK/hold" "$@" >"$WORK/out" 2>"$WORK/err" &
+    pid=$!
+    for _ in $(seq 1200); do
+        [ ! -e "$WORK/hold" ] && kill -0 "$pid" 2>/dev/null || break
+        sleep 0.05
+    done
+    [ -e "$WORK/hold" ]
+}
+
+# end_held [SIGNAL]: kill the held process with SIGNAL, or without one let it go on; its status in $rc.
+end_held() {
+    if [ $# = 1 ]; then kill -"$1" "$pid"; else rm -f "$WORK/hold"; fi
+    set +e
+    { wait "$pid"; } 2>/dev/null # bash would report a death by signal on stderr
+    rc=$?
+    set -e
+    rm -f "$WORK/hold"
+}
+
+# held MODE SIGNAL TARGET cmd...: kill cmd with SIGNAL while it holds its output TARGET, after checking
+# what the output directory shows then (unnamed: nothing new; named: one TARGET.tmp.* file); afterwards
+# the directory lists what it did before and TARGET (if there was one) kept its bytes.
 held() {
     local mode=$1 sig=$2 target=$3
     shift 3
-    local before sum="none" pid rc
+    local before during sum="none"
     before=$(ls -A "$OUT")
     [ ! -e "$target" ] || sum=$(sha1sum < "$target")
-    rm -f "$WORK/hold"
-    if [ "$mode" = named ]; then
-        TPK_TEST_OUTPUT_NAMED=1 TPK_TEST_OUTPUT_HOLD="$WORK/hold" "$@" >"$WORK/out" 2>"$WORK/err" &
-    else
-        TPK_TEST_OUTPUT_HOLD="$WORK/hold" "$@" >"$WORK/out" 2>"$WORK/err" &
-    fi
-    pid=$!
-    # Waits for the hook, not for a time: the bound only turns a hang into a failure.
-    for _ in $(seq 1200); do
-        [ -e "$WORK/hold" ] && break
-        kill -0 "$pid" 2>/dev/null || { cat "$WORK/err" >&2; fail "finished without waiting at the output hook: $*"; }
-        sleep 0.05
-    done
-    [ -e "$WORK/hold" ] || { kill -KILL "$pid"; fail "never reached the output hook: $*"; }
-    local during
+    start_held "$mode" "$@" || { kill -KILL "$pid" 2>/dev/null || true; cat "$WORK/err" >&2; fail "never held its output: $*"; }
     during=$(ls -A "$OUT")
     if [ "$mode" = named ]; then
         [ "$(echo "$during" | grep -c "^$(basename "$target")\.tmp\.")" = 1 ] ||
@@ -133,13 +146,8 @@ held() {
     else
         [ "$during" = "$before" ] || fail "a file is visible before the output is in place: $during"
     fi
-    kill -"$sig" "$pid"
-    set +e
-    { wait "$pid"; } 2>/dev/null # bash would report the death on stderr
-    rc=$?
-    set -e
+    end_held "$sig"
     [ "$rc" -ge 128 ] || fail "expected death by SIG$sig, got exit $rc: $*"
-    rm -f "$WORK/hold"
     [ "$(ls -A "$OUT")" = "$before" ] || fail "left behind by SIG$sig: $(ls -A "$OUT")"
     if [ "$sum" = none ]; then
         [ ! -e "$target" ] || fail "an output appeared"
@@ -148,23 +156,13 @@ held() {
     fi
 }
 
-# released MODE TARGET cmd...: run cmd through the hook and let it go on: TARGET is then in place whole.
+# released MODE cmd...: run cmd through the hook and let it go on: it succeeds and leaves no temporary file.
 released() {
-    local mode=$1 target=$2
-    shift 2
-    rm -f "$WORK/hold"
-    if [ "$mode" = named ]; then
-        TPK_TEST_OUTPUT_NAMED=1 TPK_TEST_OUTPUT_HOLD="$WORK/hold" "$@" >"$WORK/out" 2>"$WORK/err" &
-    else
-        TPK_TEST_OUTPUT_HOLD="$WORK/hold" "$@" >"$WORK/out" 2>"$WORK/err" &
-    fi
-    local pid=$!
-    for _ in $(seq 1200); do
-        [ ! -e "$WORK/hold" ] && kill -0 "$pid" 2>/dev/null || break
-        sleep 0.05
-    done
-    rm -f "$WORK/hold"
-    wait "$pid" || { cat "$WORK/err" >&2; fail "failed after the hook: $*"; }
+    local mode=$1
+    shift
+    start_held "$mode" "$@" || fail "never held its output: $*"
+    end_held
+    [ "$rc" = 0 ] || { cat "$WORK/err" >&2; fail "failed after the hook: $*"; }
     [ -z "$(ls -A "$OUT" | grep '\.tmp\.')" ] || fail "temporary file left after success: $(ls -A "$OUT")"
 }
 
@@ -186,14 +184,22 @@ for mode in $modes; do
         held "$mode" "$sig" "$OUT/old.png" "$TPK" render "$WORK/good.tpk" -o "$OUT/old.png" --size 16x16
     done
     # Let go, the outputs replace the old ones (or appear) whole: the same bytes as a plain run.
-    released "$mode" "$OUT/old.tpk" "$TPK" convert "$WORK/small.vtk" "$OUT/old.tpk" --quiet
-    released "$mode" "$OUT/new.tpk" "$TPK" convert "$WORK/small.vtk" "$OUT/new.tpk" --quiet
+    released "$mode" "$TPK" convert "$WORK/small.vtk" "$OUT/old.tpk" --quiet
+    released "$mode" "$TPK" convert "$WORK/small.vtk" "$OUT/new.tpk" --quiet
     cmp "$OUT/old.tpk" "$WORK/good.tpk" || fail "$mode: the replaced output differs from a plain conversion"
     cmp "$OUT/new.tpk" "$WORK/good.tpk" || fail "$mode: the new output differs from a plain conversion"
-    released "$mode" "$OUT/old.vtu" "$TPK" export "$WORK/good.tpk" --vtu "$OUT/old.vtu"
+    released "$mode" "$TPK" export "$WORK/good.tpk" --vtu "$OUT/old.vtu"
     cmp "$OUT/old.vtu" "$WORK/p0.vtu" || fail "$mode: the replaced VTU differs from a plain export"
     [ "$(stat -c %a "$OUT/new.tpk")" = 644 ] || fail "$mode: output mode $(stat -c %a "$OUT/new.tpk"), expected 644"
     rm "$OUT/new.tpk"
     "$TPK" convert "$WORK/small.vtk" "$OUT/old.tpk" --zstd 3 --quiet
 done
+# Checked up front and again when put in place: a FIFO made at the path meanwhile is not replaced.
+start_held unnamed "$TPK" convert "$WORK/small.vtk" "$OUT/race.tpk" --quiet || fail "never held its output"
+mkfifo "$OUT/race.tpk"
+end_held
+[ "$rc" = 2 ] || fail "expected exit 2 when a FIFO appeared at the output, got $rc"
+expect_stderr "$OUT/race.tpk is now a FIFO; tetpack replaces only regular files"
+[ -p "$OUT/race.tpk" ] || fail "the FIFO that appeared was replaced"
+[ -z "$(ls -A "$OUT" | grep '\.tmp\.')" ] || fail "temporary file left: $(ls -A "$OUT")"
 echo "outputs: ok"
