@@ -165,7 +165,9 @@ typedef struct tpk_write_options {
 } tpk_write_options;
 
 /* Start a file at `path`: data goes to a temporary file in the same directory, which tpk_writer_finish
- * renames over `path`. Nothing appears at `path` until finish succeeds. */
+ * renames over `path`. Nothing appears at `path` until finish succeeds; a process killed before that
+ * leaves the temporary file (the library installs no signal handlers): callers that must leave nothing
+ * write into an unnamed file with tpk_writer_open_fd instead. */
 tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_options *options,
                            char *err_text, size_t err_cap);
 /* Write into `fd`, a file the caller created (empty, writable and seekable, at offset 0), for callers

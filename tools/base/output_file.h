@@ -7,7 +7,10 @@
  *   - the data goes to an unnamed temporary file in the target directory (O_TMPFILE), linked into
  *     place only when complete, so a killed process leaves nothing behind; where the filesystem cannot
  *     make one, a named temporary "<path>.tmp.XXXXXX" that SIGINT, SIGTERM and SIGHUP remove.
- * Not thread safe: one thread opens and commits outputs (the signal table is global). */
+ * Not thread safe: one thread opens and commits outputs (the signal table is global, with room for 4
+ * named temporary files at once). Test hooks, read from the environment (output_file.c):
+ * TPK_TEST_OUTPUT_HOLD=FLAG waits before putting a complete output in place, TPK_TEST_OUTPUT_NAMED=1
+ * takes the named fallback. */
 #ifndef TPK_OUTPUT_FILE_H
 #define TPK_OUTPUT_FILE_H
 
