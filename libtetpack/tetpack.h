@@ -171,9 +171,17 @@ typedef struct tpk_write_options {
 } tpk_write_options;
 
 /* Start a file at `path`: data goes to a temporary file in the same directory, which tpk_writer_finish
- * renames over `path`. Nothing appears at `path` until finish succeeds. */
+ * renames over `path`. Nothing appears at `path` until finish succeeds; a process killed before that
+ * leaves the temporary file (the library installs no signal handlers): callers that must leave nothing
+ * write into an unnamed file with tpk_writer_open_fd instead. */
 tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_options *options,
                            char *err_text, size_t err_cap);
+/* Write into `fd`, a file the caller created (empty, writable and seekable, at offset 0), for callers
+ * that make and place the file themselves (an unnamed O_TMPFILE linked in at the end, a file that must
+ * not be left behind by a killed process). `name` appears in messages. The fd stays the caller's:
+ * tpk_writer_finish flushes it to disk (fsync) and tpk_writer_abort leaves its bytes; neither closes it. */
+tpk_result tpk_writer_open_fd(tpk_writer **out, int fd, const char *name, const tpk_write_options *options,
+                              char *err_text, size_t err_cap);
 
 typedef struct tpk_chunk_desc {
     uint32_t tag;
@@ -204,7 +212,8 @@ typedef struct tpk_header_fields {
     double bounds_min[3], bounds_max[3];
 } tpk_header_fields;
 
-/* Write directory and header, flush, and rename into place. Frees the writer in every case. */
+/* Write directory and header, flush, and rename into place (with tpk_writer_open_fd: flush only).
+ * Frees the writer in every case. */
 tpk_result tpk_writer_finish(tpk_writer *writer, const tpk_header_fields *header);
 /* Drop everything written so far (removes the temporary file) and free the writer. */
 void tpk_writer_abort(tpk_writer *writer);

@@ -12,6 +12,7 @@
 
 #include "import/importers.h"
 #include "merge_vertices.h"
+#include "base/output_file.h"
 #include "base/parallel.h"
 #include "pipeline.h"
 #include "base/strbuf.h"
@@ -345,8 +346,14 @@ static int write_file(const tpk_convert_options *o, const tpk_tetmesh *mesh, con
     wopt.size = sizeof wopt;
     wopt.message = writer_message;
     wopt.message_user = diag;
-    if (tpk_writer_open(&cw.writer, o->output, &wopt, err, sizeof err) != TPK_OK)
+    /* The file has no name until it is complete (base/output_file.h): a killed conversion leaves nothing. */
+    tpk_output out;
+    if (tpk_output_open(&out, o->output, diag) != 0)
+        return -1;
+    if (tpk_writer_open_fd(&cw.writer, out.fd, o->output, &wopt, err, sizeof err) != TPK_OK) {
+        tpk_output_abort(&out);
         return tpk_diag_fail(diag, "%s", err);
+    }
     hdr->vertex_count = (uint64_t)mesh->vertex_count;
     hdr->tet_count = (uint64_t)mesh->tet_count;
     unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
@@ -363,11 +370,16 @@ static int write_file(const tpk_convert_options *o, const tpk_tetmesh *mesh, con
         rc = write_meta(&cw, o, rep, source_format);
     if (rc != 0) {
         tpk_writer_abort(cw.writer);
+        tpk_output_abort(&out);
         return rc;
     }
     rep->shell_faces = (int64_t)hdr->shell_face_count;
-    if (tpk_writer_finish(cw.writer, hdr) != TPK_OK)
+    if (tpk_writer_finish(cw.writer, hdr) != TPK_OK) {
+        tpk_output_abort(&out);
         return diag->message[0] ? -1 : tpk_diag_fail(diag, "%s: could not finish the file", o->output);
+    }
+    if (tpk_output_commit(&out, diag) != 0)
+        return -1;
     struct stat st;
     if (stat(o->output, &st) == 0)
         rep->output_bytes = (uint64_t)st.st_size;
