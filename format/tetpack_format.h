@@ -17,7 +17,7 @@ extern "C" {
 #define TPK_MAGIC_SIZE 8
 
 #define TPK_VERSION_MAJOR 1
-#define TPK_VERSION_MINOR 0
+#define TPK_VERSION_MINOR 1
 
 #define TPK_HEADER_SIZE 192u
 #define TPK_DIR_ENTRY_SIZE 64u

@@ -10,20 +10,55 @@
 
 /* ---- decoding and checksums --------------------------------------------------------------------- */
 
-static tpk_result decode_zstd(tpk_file *file, uint64_t i, void *dst)
+/* Rule 16's frame part (spec §4.2), before anything is allocated for the chunk: the stored bytes are
+ * exactly one Zstandard frame (not a skippable frame, nothing after it), needing no dictionary, whose
+ * declared content size, when present, is raw_size. A frame that would decode to a size the file does
+ * not claim is refused here instead of costing a raw_size allocation first. */
+static tpk_result check_zstd_frame(tpk_file *file, uint64_t i)
 {
     const tpk_dir_entry *e = &file->entries[i];
     const uint8_t *src = file->data + e->offset;
     char name[80];
-    tpki_entry_name(i, &file->entries[i], name);
+    tpki_entry_name(i, e, name);
+    uint32_t magic = 0;
+    if (e->stored_size >= 4)
+        memcpy(&magic, src, 4);
+    if ((magic & ZSTD_MAGIC_SKIPPABLE_MASK) == ZSTD_MAGIC_SKIPPABLE_START)
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: starts with a skippable frame (magic 0x%08" PRIx32
+                             "), codec zstd needs one Zstandard frame (magic 0xFD2FB528)", name, magic);
+    if (magic != ZSTD_MAGICNUMBER)
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: the %" PRIu64 " stored bytes do not start with a "
+                             "Zstandard frame (magic 0x%08" PRIx32 ", expected 0xFD2FB528)", name, e->stored_size, magic);
+    size_t frame = ZSTD_findFrameCompressedSize(src, e->stored_size);
+    if (ZSTD_isError(frame))
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: the %" PRIu64 " stored bytes are not a complete "
+                             "zstd frame: %s", name, e->stored_size, ZSTD_getErrorName(frame));
+    if (frame != e->stored_size)
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: a zstd frame of %zu bytes is followed by %" PRIu64
+                             " more stored bytes at file offset %" PRIu64 " (a second or skippable frame, or "
+                             "trailing data); codec zstd allows exactly one frame", name, frame,
+                             e->stored_size - frame, e->offset + frame);
+    unsigned dictionary = ZSTD_getDictID_fromFrame(src, e->stored_size);
+    if (dictionary != 0)
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: the zstd frame needs dictionary %u; codec zstd "
+                             "allows no dictionary", name, dictionary);
     unsigned long long declared = ZSTD_getFrameContentSize(src, e->stored_size);
-    if (declared == ZSTD_CONTENTSIZE_ERROR)
-        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: the %" PRIu64 " stored bytes are not a zstd frame",
-                             name, e->stored_size);
     if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared != e->raw_size)
-        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd frame declares %llu bytes but raw_size is %" PRIu64,
+        return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd frame declares %llu bytes but raw_size is %" PRIu64
+                             ": the directory's size claim is damaged",
                              name, declared, e->raw_size);
-    size_t got = ZSTD_decompress(dst, e->raw_size, src, e->stored_size);
+    return TPK_OK;
+}
+
+static tpk_result decode_zstd(tpk_file *file, uint64_t i, void *dst)
+{
+    const tpk_dir_entry *e = &file->entries[i];
+    tpk_result r = check_zstd_frame(file, i);
+    if (r != TPK_OK)
+        return r;
+    char name[80];
+    tpki_entry_name(i, e, name);
+    size_t got = ZSTD_decompress(dst, e->raw_size, file->data + e->offset, e->stored_size);
     if (ZSTD_isError(got))
         return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: zstd: %s (raw_size %" PRIu64 ")", name,
                              ZSTD_getErrorName(got), e->raw_size);
@@ -31,6 +66,26 @@ static tpk_result decode_zstd(tpk_file *file, uint64_t i, void *dst)
         return tpki_file_fail(file, TPK_ERR_DECOMPRESS, "%s: decoded %zu bytes but raw_size is %" PRIu64, name, got,
                              e->raw_size);
     return TPK_OK;
+}
+
+/* Memory for the decoded bytes of zstd chunk i, after its frame passed check_zstd_frame: a claim the
+ * frame contradicts never reaches the allocator, and a failure names the chunk and what the file
+ * claims, since a huge raw_size in a small file is far more often damage than a real need. */
+static tpk_result alloc_decoded(tpk_file *file, uint64_t i, void **out)
+{
+    const tpk_dir_entry *e = &file->entries[i];
+    tpk_result r = check_zstd_frame(file, i);
+    if (r != TPK_OK)
+        return r;
+    *out = tpki_file_alloc(file, e->raw_size);
+    if (*out)
+        return TPK_OK;
+    char name[80];
+    tpki_entry_name(i, e, name);
+    return tpki_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "%s: out of memory for the %" PRIu64 " bytes the file "
+                         "claims the chunk decodes to (%" PRIu64 " bytes stored, header: %" PRIu64 " vertices, %"
+                         PRIu64 " tets)", name, e->raw_size, e->stored_size, file->header.vertex_count,
+                         file->header.tet_count);
 }
 
 tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst)
@@ -87,12 +142,11 @@ static tpk_result decoded_copy(tpk_file *file, uint64_t i, const void **out)
         *out = existing;
         return TPK_OK;
     }
-    const tpk_dir_entry *e = &file->entries[i];
-    void *mine = tpki_file_alloc(file, e->raw_size);
-    if (!mine)
-        return tpki_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64 " (%" PRIu64 " bytes)",
-                             i, e->raw_size);
-    tpk_result r = tpki_file_decode(file, i, mine);
+    void *mine;
+    tpk_result r = alloc_decoded(file, i, &mine);
+    if (r != TPK_OK)
+        return r;
+    r = tpki_file_decode(file, i, mine);
     if (r == TPK_OK && tpki_file_needs_sum(file, i))
         r = tpki_file_check_sum(file, i, mine);
     if (r != TPK_OK) {
@@ -138,10 +192,9 @@ tpk_result tpki_file_verify_chunk(tpk_file *file, uint64_t i, int check_ids)
     const void *raw = file->data + e->offset;
     tpk_result r = TPK_OK;
     if (e->codec != TPK_CODEC_NONE) {
-        owned = tpki_file_alloc(file, e->raw_size);
-        if (!owned)
-            return tpki_file_fail(file, TPK_ERR_OUT_OF_MEMORY, "out of memory decoding chunk %" PRIu64
-                                 " (%" PRIu64 " bytes)", i, e->raw_size);
+        r = alloc_decoded(file, i, &owned);
+        if (r != TPK_OK)
+            return r;
         raw = owned;
         r = tpki_file_decode(file, i, owned);
         if (r != TPK_OK)

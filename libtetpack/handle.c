@@ -1,6 +1,7 @@
 /* The open-file handle's allocator and error state: every handle-level error goes through here, so
  * its text, the message callback and the poisoning rule live once. Calls nothing else in libtetpack. */
 #include <stdio.h>
+#include <string.h>
 
 #include "internal_file.h"
 
@@ -64,4 +65,20 @@ tpk_result tpki_file_usable(tpk_file *file)
     if (file->message)
         file->message(file->message_user, TPK_ERR_BAD_STATE, "handle refused: an earlier corruption error");
     return TPK_ERR_BAD_STATE;
+}
+
+/* Issue 10: the text was read without the lock report() holds while writing it, so a thread reading it
+ * while another failed could see half of each message. The copy is taken under that lock into storage
+ * of the calling thread, which no other thread writes. The lock is not part of the handle's value, so
+ * taking it through a const handle is sound (every handle is allocated non-const by file_create). */
+const char *tpk_error_text(const tpk_file *file)
+{
+    static _Thread_local char copy[TPK_ERROR_TEXT_SIZE];
+    if (!file)
+        return "";
+    tpk_file *locked = (tpk_file *)file;
+    pthread_mutex_lock(&locked->lock);
+    memcpy(copy, file->error_text, sizeof copy);
+    pthread_mutex_unlock(&locked->lock);
+    return copy;
 }

@@ -8,7 +8,7 @@
  *   chunks.c   tpki_file_decode, tpki_file_needs_sum, tpki_file_check_sum, tpki_file_chunk_bytes,
  *              tpki_file_check_ids, tpki_file_verify_chunk
  *   handle.c   tpki_file_alloc, tpki_file_free, tpki_file_report, tpki_file_refuse, tpki_file_fail,
- *              tpki_file_usable
+ *              tpki_file_usable, tpk_error_text (public: the message is the handle's, under its lock)
  *   rules.c    tpki_fail, tpki_tag_name, tpki_entry_name and every pure rule below (tpki_resolve_*,
  *              tpki_elem_type_size, tpki_known_tag, tpki_check_*) */
 #ifndef TPK_INTERNAL_FILE_H
@@ -28,6 +28,9 @@
 #define TPK_ERROR_TEXT_SIZE 512
 #define TPK_MAX_FIELDS 4096u
 #define TPK_MAX_ID 0x7fffffffu
+/* The most a Zstandard frame can expand: a block decodes to at most 128 KiB (RFC 8878
+ * Block_Maximum_Size) and an RLE block, the densest, takes 4 bytes. */
+#define TPK_ZSTD_MAX_EXPANSION 32768u
 
 /* Defaults of tpk_limits (0 in the options means these). */
 #define TPK_DEFAULT_MAX_CHUNKS 65536u
@@ -98,7 +101,7 @@ tpk_result tpki_check_tags(const tpk_header *h, const tpk_dir_entry *entries, in
 tpk_result tpki_check_fields(const tpk_header *h, const tpk_dir_entry *entries,
                             const tpk_field_desc *fields, uint32_t field_count,
                             const tpk_allocator *allocator, tpki_diag *diag);
-/* Rule 17: id ranges in the raw bytes of entry i (TT32, TT20, SHEL, TMAP; others pass). */
+/* Rule 17: id ranges in the raw bytes of entry i (TT32, TT20, TT16, SHEL, TMAP; others pass). */
 tpk_result tpki_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
                              tpki_diag *diag);
 /* Rules 5, 7, 8 and 10 to 15 on a header and directory built in memory (the writer's self-check). */

@@ -62,11 +62,6 @@ void tpk_close(tpk_file *file)
     file->allocator.free(file->allocator.user, file);
 }
 
-const char *tpk_error_text(const tpk_file *file)
-{
-    return file ? file->error_text : "";
-}
-
 /* ---- header (rules 1-9) ------------------------------------------------------------------------ */
 
 static tpk_result check_magic(const uint8_t *data, uint64_t size, tpki_diag *diag)

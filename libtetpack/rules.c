@@ -3,6 +3,7 @@
  * reader section of the spec; each rule returns its own result code and a message naming the chunk,
  * its tag and offset, and what was expected. Pure: no handle, and calls nothing else in libtetpack. */
 #include <inttypes.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -103,6 +104,22 @@ int tpki_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
 
 /* ---- header ---------------------------------------------------------------------------------- */
 
+/* Rule 5 (format 1.1): origin and bounds finite, since every position a reader computes adds the
+ * origin, and a renderer frames its camera on the bounds. */
+static tpk_result check_header_frame(const tpk_header *h, tpki_diag *diag)
+{
+    static const char *const names[3] = {"origin", "bounds_min", "bounds_max"};
+    const double *values[3] = {h->origin, h->bounds_min, h->bounds_max};
+    const size_t offsets[3] = {offsetof(tpk_header, origin), offsetof(tpk_header, bounds_min),
+                               offsetof(tpk_header, bounds_max)};
+    for (int f = 0; f < 3; f++)
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(values[f][k]))
+                return tpki_fail(diag, TPK_ERR_CORRUPT, "header: %s[%d] (byte offset %zu) is %g, must be finite",
+                                 names[f], k, offsets[f] + 8 * (size_t)k, values[f][k]);
+    return TPK_OK;
+}
+
 tpk_result tpki_check_header_fields(const tpk_header *h, tpki_diag *diag)
 {
     if (h->header_size != TPK_HEADER_SIZE)
@@ -120,7 +137,7 @@ tpk_result tpki_check_header_fields(const tpk_header *h, tpki_diag *diag)
                                  "header: reserved byte at offset %zu is 0x%02x, must be 0",
                                  offsetof(tpk_header, reserved) + k, h->reserved[k]);
     }
-    return TPK_OK;
+    return check_header_frame(h, diag);
 }
 
 tpk_result tpki_check_header_counts(const tpk_header *h, const tpk_limits *limits, tpki_diag *diag)
@@ -179,6 +196,13 @@ static tpk_result check_entry_sizes(const tpk_dir_entry *e, const char *name, tp
         return tpki_fail(diag, TPK_ERR_CORRUPT,
                              "%s: stored_size %" PRIu64 " but codec none needs raw_size %" PRIu64, name,
                              e->stored_size, e->raw_size);
+    /* Format 1.1: no Zstandard frame expands further (each block decodes to at most 128 KiB and takes
+     * at least 4 bytes), so a larger claim is damage, refused before anything is allocated for it. */
+    if (e->codec == TPK_CODEC_ZSTD && e->stored_size < e->raw_size / TPK_ZSTD_MAX_EXPANSION +
+                                                           (e->raw_size % TPK_ZSTD_MAX_EXPANSION != 0))
+        return tpki_fail(diag, TPK_ERR_CORRUPT,
+                             "%s: implausible raw_size %" PRIu64 " from %" PRIu64 " stored bytes: a zstd frame "
+                             "expands at most %u times", name, e->raw_size, e->stored_size, TPK_ZSTD_MAX_EXPANSION);
     return TPK_OK;
 }
 
@@ -346,6 +370,9 @@ static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir
     if (e->tag == TPK_TAG_FDSC && e->elem_count > TPK_MAX_FIELDS)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " field descriptors, at most %u allowed",
                              name, e->elem_count, TPK_MAX_FIELDS);
+    if (e->tag == TPK_TAG_FDSC && e->elem_count == 0)
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: no field descriptors; a file without fields has no 'FDSC' "
+                             "chunk (format 1.1)", name);
     return TPK_OK;
 }
 
@@ -606,6 +633,37 @@ static tpk_result check_tet32(const tpk_header *h, uint64_t i, const tpk_dir_ent
     return TPK_OK;
 }
 
+/* The bound on vx in a layout that stores no vertex ids (format 1.1): the xor of ids in [0, V) is below
+ * the smallest power of two >= V, and no id exists when V = 0. The ids derived from vx still need
+ * their own check against [0, V) where a reader derives them (spec §6.6). */
+static uint64_t vx_limit(uint64_t vertex_count)
+{
+    uint64_t limit = vertex_count ? 1 : 0;
+    while (limit < vertex_count)
+        limit <<= 1;
+    return limit;
+}
+
+static tpk_result check_vx(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, uint64_t t, int32_t vx,
+                           tpki_diag *diag)
+{
+    uint64_t limit = vx_limit(h->vertex_count);
+    return in_range(vx, 0, limit) ? TPK_OK : id_error(diag, i, e, t, "vx", vx, 0, limit);
+}
+
+static tpk_result check_tet16(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
+                              tpki_diag *diag)
+{
+    for (uint64_t t = 0; t < e->elem_count; t++) {
+        tpk_tet16 tet;
+        memcpy(&tet, raw + t * sizeof tet, sizeof tet);
+        tpk_result r = check_vx(h, i, e, t, tet.vx, diag);
+        if (r != TPK_OK)
+            return r;
+    }
+    return TPK_OK;
+}
+
 static tpk_result check_tet20(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
                               tpki_diag *diag)
 {
@@ -613,6 +671,9 @@ static tpk_result check_tet20(const tpk_header *h, uint64_t i, const tpk_dir_ent
     for (uint64_t t = 0; t < e->elem_count; t++) {
         tpk_tet20 tet;
         memcpy(&tet, raw + t * sizeof tet, sizeof tet);
+        tpk_result r = check_vx(h, i, e, t, tet.vx, diag);
+        if (r != TPK_OK)
+            return r;
         for (int k = 0; k < 4; k++) {
             if (!in_range(tet.n[k], -1, h->tet_count))
                 return id_error(diag, i, e, t, nname[k], tet.n[k], -1, h->tet_count);
@@ -656,6 +717,7 @@ tpk_result tpki_check_records(const tpk_header *h, uint64_t i, const tpk_dir_ent
     switch (e->tag) {
     case TPK_TAG_TT32: return check_tet32(h, i, e, raw, diag);
     case TPK_TAG_TT20: return check_tet20(h, i, e, raw, diag);
+    case TPK_TAG_TT16: return check_tet16(h, i, e, raw, diag);
     case TPK_TAG_SHEL: return check_shell(h, i, e, raw, diag);
     case TPK_TAG_TMAP: return check_tmap(i, e, raw, diag);
     default: return TPK_OK;

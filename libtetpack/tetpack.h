@@ -49,7 +49,11 @@ typedef struct tpk_allocator {
     void *user;
 } tpk_allocator;
 
-/* Limits for untrusted input. 0 means the default given in brackets. */
+/* Limits for untrusted input (spec §9.1): a file within them that breaks no rule is read, one beyond
+ * them gets TPK_ERR_LIMIT. 0 means the default given in brackets, the largest a valid file needs.
+ * Whatever the limits, a chunk never costs more memory than its stored bytes can decode to: an
+ * uncompressed chunk is its stored bytes, a zstd chunk's claim is checked against its stored size and
+ * frame header before anything is allocated (TPK_ERR_CORRUPT / TPK_ERR_DECOMPRESS). */
 typedef struct tpk_limits {
     uint64_t max_chunks;         /* [65536] */
     uint64_t max_chunk_bytes;    /* raw size of one chunk [64 GiB] */
@@ -85,7 +89,9 @@ tpk_result tpk_open_memory(tpk_file **out, const void *data, size_t size,
                            const tpk_open_options *options, char *err_text, size_t err_cap);
 void tpk_close(tpk_file *file);
 
-/* The detailed text of the last error on this handle ("" if none). Owned by the handle. */
+/* The detailed text of the last error on this handle ("" if none). Thread safety: safe while other
+ * threads use the handle; the text is a copy taken under the handle's lock into storage owned by the
+ * calling thread, valid until that thread's next tpk_error_text call (on any handle). */
 const char *tpk_error_text(const tpk_file *file);
 
 typedef struct tpk_file_info {
@@ -165,9 +171,17 @@ typedef struct tpk_write_options {
 } tpk_write_options;
 
 /* Start a file at `path`: data goes to a temporary file in the same directory, which tpk_writer_finish
- * renames over `path`. Nothing appears at `path` until finish succeeds. */
+ * renames over `path`. Nothing appears at `path` until finish succeeds; a process killed before that
+ * leaves the temporary file (the library installs no signal handlers): callers that must leave nothing
+ * write into an unnamed file with tpk_writer_open_fd instead. */
 tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_options *options,
                            char *err_text, size_t err_cap);
+/* Write into `fd`, a file the caller created (empty, writable and seekable, at offset 0), for callers
+ * that make and place the file themselves (an unnamed O_TMPFILE linked in at the end, a file that must
+ * not be left behind by a killed process). `name` appears in messages. The fd stays the caller's:
+ * tpk_writer_finish flushes it to disk (fsync) and tpk_writer_abort leaves its bytes; neither closes it. */
+tpk_result tpk_writer_open_fd(tpk_writer **out, int fd, const char *name, const tpk_write_options *options,
+                              char *err_text, size_t err_cap);
 
 typedef struct tpk_chunk_desc {
     uint32_t tag;
@@ -198,7 +212,8 @@ typedef struct tpk_header_fields {
     double bounds_min[3], bounds_max[3];
 } tpk_header_fields;
 
-/* Write directory and header, flush, and rename into place. Frees the writer in every case. */
+/* Write directory and header, flush, and rename into place (with tpk_writer_open_fd: flush only).
+ * Frees the writer in every case. */
 tpk_result tpk_writer_finish(tpk_writer *writer, const tpk_header_fields *header);
 /* Drop everything written so far (removes the temporary file) and free the writer. */
 void tpk_writer_abort(tpk_writer *writer);

@@ -1,6 +1,7 @@
 /* The container writer: chunks are appended (aligned, optionally zstd-compressed, checksummed) to a
  * temporary file beside the target, then the directory and header are written and the file is renamed
- * into place. The finished layout is checked with the reader's own rules first. Output is deterministic. */
+ * into place; or, with tpk_writer_open_fd, to a file the caller made and puts in place itself. The
+ * finished layout is checked with the reader's own rules first. Output is deterministic. */
 #include <errno.h>
 #include <inttypes.h>
 #include <stdio.h>
@@ -18,8 +19,9 @@ struct tpk_writer {
     tpk_message_fn message;
     void *message_user;
     int fd;
+    int owns_fd;       /* 0: the caller's (tpk_writer_open_fd): never closed, renamed or removed here */
     char *temp_path;   /* "<path>.tmp.XXXXXX" */
-    char *path;
+    char *path;        /* the target, or the caller's name for its fd (messages only) */
     uint64_t end;      /* bytes written so far */
     tpk_dir_entry *entries;
     uint64_t count, capacity;
@@ -73,7 +75,7 @@ static void writer_free(const tpk_writer *w, void *ptr)
 /* Free everything; remove the temporary file if it is still there. */
 static void writer_destroy(tpk_writer *w)
 {
-    if (w->fd >= 0)
+    if (w->fd >= 0 && w->owns_fd)
         close(w->fd);
     if (w->temp_path)
         unlink(w->temp_path);
@@ -154,9 +156,49 @@ static tpk_result create_temp(tpk_writer *w, const char *path)
         w->temp_path = NULL;
         return io_fail(w, "cannot create a temporary file beside");
     }
+    w->owns_fd = 1;
     fchmod(w->fd, 0644); /* mkstemp's 0600 is too strict for a data file */
+    return TPK_OK;
+}
+
+/* The header is written last (it holds the directory's offset and checksum): hold its place. */
+static tpk_result write_header_placeholder(tpk_writer *w)
+{
     static const uint8_t header_placeholder[TPK_HEADER_SIZE];
     return write_all(w, header_placeholder, sizeof header_placeholder);
+}
+
+/* A writer with the options resolved; NULL, with the reason in err_text, when out of memory. */
+static tpk_writer *writer_new(const tpk_write_options *options, char *err_text, size_t err_cap)
+{
+    tpk_write_options opt = {0};
+    if (options)
+        memcpy(&opt, options, options->size && options->size < sizeof opt ? options->size : sizeof opt);
+    tpk_allocator allocator;
+    tpki_resolve_allocator(&opt.allocator, &allocator);
+    tpk_writer *w = allocator.alloc(allocator.user, sizeof *w);
+    if (!w) {
+        if (err_text && err_cap)
+            snprintf(err_text, err_cap, "out of memory for the writer");
+        return NULL;
+    }
+    *w = (tpk_writer){.allocator = allocator, .message = opt.message, .message_user = opt.message_user, .fd = -1};
+    return w;
+}
+
+/* Finish opening: on failure pass the reason on and free the writer. */
+static tpk_result writer_started(tpk_writer **out, tpk_writer *w, tpk_result r, char *err_text, size_t err_cap)
+{
+    if (r == TPK_OK)
+        r = write_header_placeholder(w);
+    if (r != TPK_OK) {
+        if (err_text && err_cap)
+            snprintf(err_text, err_cap, "%s", w->error_text);
+        writer_destroy(w);
+        return r;
+    }
+    *out = w;
+    return TPK_OK;
 }
 
 tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_options *options, char *err_text,
@@ -168,27 +210,30 @@ tpk_result tpk_writer_open(tpk_writer **out, const char *path, const tpk_write_o
         return TPK_ERR_INVALID_ARGUMENT;
     }
     *out = NULL;
-    tpk_write_options opt = {0};
-    if (options)
-        memcpy(&opt, options, options->size && options->size < sizeof opt ? options->size : sizeof opt);
-    tpk_allocator allocator;
-    tpki_resolve_allocator(&opt.allocator, &allocator);
-    tpk_writer *w = allocator.alloc(allocator.user, sizeof *w);
-    if (!w) {
-        if (err_text && err_cap)
-            snprintf(err_text, err_cap, "out of memory for the writer");
+    tpk_writer *w = writer_new(options, err_text, err_cap);
+    if (!w)
         return TPK_ERR_OUT_OF_MEMORY;
-    }
-    *w = (tpk_writer){.allocator = allocator, .message = opt.message, .message_user = opt.message_user, .fd = -1};
-    tpk_result r = create_temp(w, path);
-    if (r != TPK_OK) {
+    return writer_started(out, w, create_temp(w, path), err_text, err_cap);
+}
+
+tpk_result tpk_writer_open_fd(tpk_writer **out, int fd, const char *name, const tpk_write_options *options,
+                              char *err_text, size_t err_cap)
+{
+    if (!out || fd < 0 || !name) {
         if (err_text && err_cap)
-            snprintf(err_text, err_cap, "%s", w->error_text);
-        writer_destroy(w);
-        return r;
+            snprintf(err_text, err_cap, "tpk_writer_open_fd: NULL argument or negative fd");
+        return TPK_ERR_INVALID_ARGUMENT;
     }
-    *out = w;
-    return TPK_OK;
+    *out = NULL;
+    tpk_writer *w = writer_new(options, err_text, err_cap);
+    if (!w)
+        return TPK_ERR_OUT_OF_MEMORY;
+    w->fd = fd;
+    w->path = copy_string(w, name, "");
+    tpk_result r = TPK_OK;
+    if (!w->path)
+        r = writer_fail(w, TPK_ERR_OUT_OF_MEMORY, "out of memory for the name '%s'", name);
+    return writer_started(out, w, r, err_text, err_cap);
 }
 
 /* ---- chunks ------------------------------------------------------------------------------------- */
@@ -431,12 +476,13 @@ tpk_result tpk_writer_finish(tpk_writer *writer, const tpk_header_fields *header
     if (!header)
         r = writer_fail(writer, TPK_ERR_INVALID_ARGUMENT, "tpk_writer_finish: NULL header fields");
     else if (writer->failed)
-        r = writer_fail(writer, TPK_ERR_BAD_STATE, "an earlier write to '%s' failed", writer->temp_path);
+        r = writer_fail(writer, TPK_ERR_BAD_STATE, "an earlier write to '%s' failed",
+                       writer->temp_path ? writer->temp_path : writer->path);
     else if (writer->open_chunk)
         r = writer_fail(writer, TPK_ERR_BAD_STATE, "a streamed chunk is still open at finish");
     if (r == TPK_OK)
         r = write_tail(writer, header);
-    if (r == TPK_OK) {
+    if (r == TPK_OK && writer->owns_fd) { /* else flushed (write_tail): the caller puts its file in place */
         int closed = close(writer->fd);
         writer->fd = -1;
         if (closed != 0)

@@ -1,7 +1,8 @@
 /* Generator of the format's test vectors (samples/vectors/, spec §13). The good files are built from the
  * explicit numbers below with libtetpack's writer; Tet20, Tet16 and the shell are derived from Tet32 by
  * the spec's formulas written out here, not by the converter's code. The must-fail files are one_tet.tpk
- * with one rule broken by patching bytes. Compiled as part of test_vectors.c (#included there). */
+ * or two_tets_zstd.tpk with one rule broken by patching bytes. Compiled as part of test_vectors.c (#included there). */
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -366,6 +367,85 @@ static int patch_overlap(byte_buffer *b)
     return 0;
 }
 
+/* Rule 16 (spec §4.2): POS3's one zstd frame followed by an empty skippable frame (magic 0x184D2A50,
+ * size 0) in the padding after it. zstd's decoder skips it; a compliant reader refuses the chunk. */
+static int patch_zstd_skippable(byte_buffer *b)
+{
+    static const uint8_t skippable[8] = {0x50, 0x2A, 0x4D, 0x18, 0, 0, 0, 0};
+    tpk_header *h = header_of(b);
+    tpk_dir_entry *e = (tpk_dir_entry *)(b->data + h->directory_offset);
+    /* The writer stores chunks in entry order, so entry 1 starts where entry 0's padding ends. */
+    if (e[0].tag != TPK_TAG_POS3 || e[1].offset < e[0].offset + e[0].stored_size + sizeof skippable)
+        return -1;
+    memcpy(b->data + e[0].offset + e[0].stored_size, skippable, sizeof skippable);
+    e[0].stored_size += sizeof skippable;
+    reseal(b);
+    return 0;
+}
+
+/* Rule 16 through the decoded bytes of a zstd chunk: POS3's checksum no longer matches them. */
+static int patch_zstd_checksum(byte_buffer *b)
+{
+    tpk_dir_entry *e = entry_of(b, TPK_TAG_POS3);
+    if (!e)
+        return -1;
+    e->checksum ^= 1;
+    reseal(b);
+    return 0;
+}
+
+/* Rule 10 (format 1.1): the vendor chunk 'note' claims more bytes than any zstd frame of its stored
+ * size can decode to (32768 per stored byte). */
+static int patch_implausible_size(byte_buffer *b)
+{
+    tpk_dir_entry *e = entry_of(b, TPK_FOURCC('n', 'o', 't', 'e'));
+    if (!e)
+        return -1;
+    e->elem_count = e->raw_size = e->stored_size * 32768 + 1;
+    reseal(b);
+    return 0;
+}
+
+/* Rule 5 (format 1.1): origin[0] = +infinity. */
+static int patch_nonfinite_origin(byte_buffer *b)
+{
+    header_of(b)->origin[0] = INFINITY;
+    reseal(b);
+    return 0;
+}
+
+/* Rule 14 (format 1.1): an FDSC of no fields. The FDAT chunk becomes an unknown optional chunk 'xdat',
+ * so no other rule is broken. */
+static int patch_empty_fdsc(byte_buffer *b)
+{
+    tpk_dir_entry *fdsc = entry_of(b, TPK_TAG_FDSC), *fdat = entry_of(b, TPK_TAG_FDAT);
+    if (!fdsc || !fdat)
+        return -1;
+    memset(b->data + fdsc->offset, 0, fdsc->stored_size); /* now padding */
+    fdsc->elem_count = fdsc->raw_size = fdsc->stored_size = 0;
+    fdsc->checksum = XXH64(NULL, 0, 0);
+    fdat->tag = TPK_FOURCC('x', 'd', 'a', 't');
+    fdat->flags = 0;
+    reseal(b);
+    return 0;
+}
+
+/* Rule 17 (format 1.1): Tet16's vx = 4 with 4 vertices; ids in [0, 4) xor to at most 3. The chunk's
+ * checksum is recomputed, so only the id rule catches it. */
+static int patch_tet16_vx(byte_buffer *b)
+{
+    tpk_dir_entry *e = entry_of(b, TPK_TAG_TT16);
+    if (!e || e->codec != TPK_CODEC_NONE)
+        return -1;
+    tpk_tet16 tet;
+    memcpy(&tet, b->data + e->offset, sizeof tet);
+    tet.vx = 4;
+    memcpy(b->data + e->offset, &tet, sizeof tet);
+    e->checksum = XXH64(b->data + e->offset, e->raw_size, 0);
+    reseal(b);
+    return 0;
+}
+
 /* Write every vector into `dir`. Returns 0 on success. */
 static int tpk_make_vectors(const char *dir)
 {
@@ -376,11 +456,19 @@ static int tpk_make_vectors(const char *dir)
     snprintf(path, sizeof path, "%s/two_tets_zstd.tpk", dir);
     if (write_two_tets_zstd(path) != TPK_OK)
         return -1;
+    char two_tets[1024];
+    snprintf(two_tets, sizeof two_tets, "%s", path);
     int rc = make_broken(dir, "bad_magic.tpk", one_tet, patch_bad_magic);
     rc |= make_broken(dir, "truncated.tpk", one_tet, patch_truncated);
     rc |= make_broken(dir, "newer_major.tpk", one_tet, patch_newer_major);
     rc |= make_broken(dir, "chunk_checksum.tpk", one_tet, patch_chunk_checksum);
     rc |= make_broken(dir, "overlap.tpk", one_tet, patch_overlap);
+    rc |= make_broken(dir, "nonfinite_origin.tpk", one_tet, patch_nonfinite_origin);
+    rc |= make_broken(dir, "empty_fdsc.tpk", one_tet, patch_empty_fdsc);
+    rc |= make_broken(dir, "tet16_vx.tpk", one_tet, patch_tet16_vx);
+    rc |= make_broken(dir, "zstd_skippable_frame.tpk", two_tets, patch_zstd_skippable);
+    rc |= make_broken(dir, "zstd_chunk_checksum.tpk", two_tets, patch_zstd_checksum);
+    rc |= make_broken(dir, "implausible_zstd_size.tpk", two_tets, patch_implausible_size);
     snprintf(vendor, sizeof vendor, "%s/one_tet_vendor.tmp", dir);
     if (write_one_tet(vendor, 1) != TPK_OK)
         return -1;

@@ -636,3 +636,65 @@ TPK_TEST(nonfinite_corners_are_not_measured)
     tpk_check_report_free(&r);
     tpk_mesh_free(&m);
 }
+
+/* ---- input convert calls unusable (issue 10 item 6) ------------------------------------------- */
+
+/* 214: no points and no cells, points without cells, and (through the VTK reader, which drops it with a
+ * warning) one cell of VTK type 0 are each one 214 error; one tet is not. */
+TPK_TEST(no_volume_cells)
+{
+    static const cell_spec tet = {10, 4, {0, 1, 2, 4}};
+    static const int64_t counts[3][2] = {{0, 0}, {8, 0}, {8, 1}};
+    for (int k = 0; k < 3; k++) {
+        tpk_mesh m;
+        tpk_check_report r;
+        CHECK(build(&m, &cube[0][0], counts[k][0], &tet, counts[k][1]) == 0);
+        CHECK(run_cells(&m, &r, NULL) == 0);
+        int64_t found = count_of(&r, 214);
+        tpk_check_report_free(&r);
+        tpk_mesh_free(&m);
+        CHECK_MSG(found == (counts[k][1] ? 0 : 1), "%lld points, %lld cells: 214 x%lld", (long long)counts[k][0],
+                  (long long)counts[k][1], (long long)found);
+    }
+    const char *path = tpk_temp_path("type0.vtk");
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL);
+    fprintf(f, "# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n"
+               "0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 1\n0\nCELL_TYPES 1\n0\n");
+    fclose(f);
+    tpk_check_report r;
+    tpk_check_options opt;
+    tpk_check_options_default(&opt);
+    CHECK(tpk_check_report_init(&r, &opt) == 0);
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    CHECK_MSG(tpk_check_path(path, NULL, &r, &diag) == 0, "%s", diag.message);
+    const tpk_finding *found = tpk_check_finding(&r, 214);
+    int ok = found->count == 1 && found->example_count == 1 && strstr(found->examples[0].note, "none of them 3-D");
+    tpk_check_report_free(&r);
+    CHECK(ok);
+}
+
+/* 215: polyhedra whose points coincide or lie on one line or plane, decided exactly, whatever the order
+ * of the points (a repeated position before the one that leaves the line); one with a point off the
+ * plane, found last, is not flat. */
+TPK_TEST(flat_polyhedron)
+{
+    static const double points[6][3] = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {0, 1, 0}, {0, 0, 1e-300}};
+    static const cell_spec cells[4] = {
+        {42, 4, {0, 1, 2, 3}},       /* coincident and collinear */
+        {42, 4, {0, 1, 2, 4}},       /* coplanar, after a repeated position */
+        {42, 6, {0, 1, 2, 3, 4, 5}}, /* 1e-300 off the plane: a volume, exactly */
+        {10, 4, {0, 2, 4, 5}},       /* a tet, not a polyhedron: 215 never looks at it */
+    };
+    tpk_mesh m;
+    tpk_check_report r;
+    CHECK(build(&m, &points[0][0], 6, cells, 4) == 0);
+    CHECK(run_cells(&m, &r, NULL) == 0);
+    const tpk_finding *f = tpk_check_finding(&r, 215);
+    int ok = f->count == 2 && f->example_count == 2 && f->examples[0].ids[0] == 0 && f->examples[1].ids[0] == 1 &&
+             strstr(f->examples[0].note, "one plane") && count_of(&r, 214) == 0;
+    tpk_check_report_free(&r);
+    tpk_mesh_free(&m);
+    CHECK(ok);
+}

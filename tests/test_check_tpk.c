@@ -318,8 +318,19 @@ TPK_TEST(clean_converted_files)
 TPK_TEST(test_vectors)
 {
     static const char *const good[] = {"one_tet.tpk", "two_tets_zstd.tpk"};
-    static const char *const refused[] = {"bad_magic.tpk", "truncated.tpk", "newer_major.tpk",
-                                          "unknown_required_chunk.tpk", "overlap.tpk"};
+    static const char *const refused[] = {"bad_magic.tpk",        "truncated.tpk",  "newer_major.tpk",
+                                          "unknown_required_chunk.tpk", "overlap.tpk",  "nonfinite_origin.tpk",
+                                          "empty_fdsc.tpk",       "implausible_zstd_size.tpk"};
+    /* Those that open and break rule 16 or 17 in one chunk: check 600 names the rule and the chunk. */
+    static const struct {
+        const char *name, *rule, *tag;
+        int64_t chunk;
+    } opened[] = {
+        {"chunk_checksum.tpk", "TPK-R16", "'FDAT'", 6},
+        {"zstd_skippable_frame.tpk", "TPK-R16", "'POS3'", 0},
+        {"zstd_chunk_checksum.tpk", "TPK-R16", "'POS3'", 0},
+        {"tet16_vx.tpk", "TPK-R17", "'TT16'", 3},
+    };
     char path[1024];
     tpk_check_report report;
     for (int i = 0; i < 2; i++) {
@@ -329,7 +340,7 @@ TPK_TEST(test_vectors)
         tpk_check_report_free(&report);
         CHECK_EQ_INT(total, 0);
     }
-    for (int i = 0; i < 5; i++) {
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; i++) {
         snprintf(path, sizeof path, "%s/samples/vectors/%s", TPK_SOURCE_DIR, refused[i]);
         CHECK_EQ_INT(run_6xx(path, &report), 1);
         tpk_check_report_free(&report);
@@ -340,14 +351,16 @@ TPK_TEST(test_vectors)
         tpk_check_report_free(&report);
         CHECK_MSG(strstr(diag.message, refused[i]) != NULL, "%s", diag.message);
     }
-    snprintf(path, sizeof path, "%s/samples/vectors/chunk_checksum.tpk", TPK_SOURCE_DIR);
-    CHECK_EQ_INT(run_6xx(path, &report), 0);
-    tpk_finding *f = tpk_check_finding(&report, 600);
-    int ok = f->count == 1 && total_6xx(&report, "chunk_checksum") == 1 && f->example_count == 1 &&
-             strstr(f->examples[0].note, "TPK-R16") && strstr(f->examples[0].note, "'FDAT'") &&
-             f->examples[0].ids[0] == 6 && strstr(f->summary, "not run");
-    tpk_check_report_free(&report);
-    CHECK(ok);
+    for (size_t i = 0; i < sizeof opened / sizeof opened[0]; i++) {
+        snprintf(path, sizeof path, "%s/samples/vectors/%s", TPK_SOURCE_DIR, opened[i].name);
+        CHECK_EQ_INT(run_6xx(path, &report), 0);
+        tpk_finding *f = tpk_check_finding(&report, 600);
+        int ok = f->count == 1 && total_6xx(&report, opened[i].name) == 1 && f->example_count == 1 &&
+                 strstr(f->examples[0].note, opened[i].rule) && strstr(f->examples[0].note, opened[i].tag) &&
+                 f->examples[0].ids[0] == opened[i].chunk && strstr(f->summary, "not run");
+        tpk_check_report_free(&report);
+        CHECK_MSG(ok, "%s", opened[i].name);
+    }
 }
 
 /* ---- 600: reader rules -------------------------------------------------------------------------- */
@@ -390,6 +403,30 @@ TPK_TEST(file_rule_checksum_and_ids)
     CHECK(ok);
 }
 
+/* Rule 17 (format 1.1): in a layout without vertex ids, vx is below the smallest power of two >= V,
+ * since it is the xor of ids in [0, V). One vx beyond it in Tet16 (which rule 17 did not read before)
+ * and one in Tet20 are check 600, naming the rule, the chunk and the record. */
+TPK_TEST(file_rule_vx_bound)
+{
+    static const uint32_t tags[2] = {TPK_TAG_TT16, TPK_TAG_TT20};
+    for (int l = 0; l < 2; l++) {
+        parts ps;
+        CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
+        parts_remove(&ps, TPK_TAG_TT32);
+        parts_remove(&ps, tags[1 - l]);
+        int32_t *vx = parts_data(&ps, tags[l]); /* vx is the first i32 of both records */
+        size_t stride = tags[l] == TPK_TAG_TT16 ? 4 : 5;
+        vx[stride * 9] ^= 0x40000000;
+        tpk_check_report report;
+        CHECK_EQ_INT(check_parts(&ps, "vx.tpk", &report), 0);
+        tpk_finding *f = tpk_check_finding(&report, 600);
+        int ok = f->count == 1 && total_6xx(&report, "vx") == 1 && strstr(f->examples[0].note, "TPK-R17") &&
+                 strstr(f->examples[0].note, "record 9") && strstr(f->examples[0].note, "vx =");
+        tpk_check_report_free(&report);
+        CHECK_MSG(ok, "layout %s", l ? "TT20" : "TT16");
+    }
+}
+
 /* The writer half of rule 15 (spec §7.1): a field name must be NUL-padded and valid UTF-8. */
 TPK_TEST(file_rule_field_text)
 {
@@ -428,16 +465,37 @@ TPK_TEST(m01_repeated_id)
     CHECK(ok);
 }
 
+/* The xor that moves all four ids of a tet into [V, 2^k), 2^k the smallest power of two >= V: ids no
+ * vertex has, from a vx that rule 17's bound still admits. 0 when there is none. */
+static int32_t delta_out_of_range(const tpk_tet32 *tet, uint64_t vertex_count)
+{
+    uint64_t limit = 1;
+    while (limit < vertex_count)
+        limit <<= 1;
+    int32_t v[4] = {tet->v[0], tet->v[1], tet->v[2], tet->vx ^ tet->v[0] ^ tet->v[1] ^ tet->v[2]};
+    for (int32_t delta = 1; (uint64_t)delta < limit; delta++) {
+        int all = 1;
+        for (int k = 0; k < 4; k++)
+            all &= (uint64_t)(v[k] ^ delta) >= vertex_count && (uint64_t)(v[k] ^ delta) < limit;
+        if (all)
+            return delta;
+    }
+    return 0;
+}
+
 /* Tet20 alone: a vx that gives no valid fourth id from any face leaves the tet without ids. */
 TPK_TEST(m01_walk_bad_apex)
 {
     parts ps;
     CHECK(parts_from(cylinder_all(), ALL_LAYOUTS, &ps) == 0);
-    int64_t t = interior_tet(parts_data(&ps, TPK_TAG_TT32), (int64_t)ps.header.tet_count);
+    const tpk_tet32 *t32 = parts_data(&ps, TPK_TAG_TT32);
+    int64_t t = interior_tet(t32, (int64_t)ps.header.tet_count);
+    int32_t delta = delta_out_of_range(&t32[t], ps.header.vertex_count);
+    CHECK(delta != 0);
     parts_remove(&ps, TPK_TAG_TT32);
     parts_remove(&ps, TPK_TAG_TT16);
     tpk_tet20 *t20 = parts_data(&ps, TPK_TAG_TT20);
-    t20[t].vx ^= 0x40000000;
+    t20[t].vx ^= delta;
     tpk_check_report report;
     CHECK_EQ_INT(check_parts(&ps, "m01w.tpk", &report), 0);
     tpk_finding *f = tpk_check_finding(&report, 601);

@@ -2,7 +2,9 @@
  * with its exact result code), the writer's atomicity, and allocation-failure injection.
  * With TPK_WRITE_CORPUS=<dir>, the write_fuzz_corpus test writes the fuzz seeds and must-fail files. */
 #include <dirent.h>
+#include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -559,6 +561,90 @@ static size_t tmap_negative(uint8_t *b, size_t n)
     return n;
 }
 
+/* Bytes of padding after chunk i, before the next chunk or the directory: room to grow it in place. */
+static uint64_t room_after(uint8_t *b, uint64_t i)
+{
+    const tpk_header *h = hdr(b);
+    uint64_t end = entry(b, i)->offset + entry(b, i)->stored_size, next = h->directory_offset;
+    for (uint64_t j = 0; j < h->chunk_count; j++)
+        if (entry(b, j)->offset >= end && entry(b, j)->offset < next)
+            next = entry(b, j)->offset;
+    return next - end;
+}
+
+/* Append `extra` to the first zstd chunk with room for it, making it more than the one frame spec §4.2
+ * allows; zstd's own decoder accepts both tails, so only the reader's single-frame rule refuses them. */
+static size_t zstd_append(uint8_t *b, size_t n, const uint8_t *extra, size_t extra_size)
+{
+    for (uint64_t i = 0; i < hdr(b)->chunk_count; i++) {
+        tpk_dir_entry *e = entry(b, i);
+        if (e->codec == TPK_CODEC_ZSTD && room_after(b, i) >= extra_size) {
+            memcpy(b + e->offset + e->stored_size, extra, extra_size);
+            e->stored_size += extra_size;
+            fix_directory(b);
+            return n;
+        }
+    }
+    return n; /* no room: the case then opens clean and its test fails */
+}
+
+static size_t zstd_skippable_after(uint8_t *b, size_t n)
+{
+    static const uint8_t skippable[8] = {0x50, 0x2A, 0x4D, 0x18, 0, 0, 0, 0}; /* magic 0x184D2A50, size 0 */
+    return zstd_append(b, n, skippable, sizeof skippable);
+}
+
+static size_t zstd_second_frame(uint8_t *b, size_t n)
+{
+    /* A frame of no content: single segment, content size 0, one empty last raw block. */
+    static const uint8_t empty[9] = {0x28, 0xB5, 0x2F, 0xFD, 0x20, 0x00, 0x01, 0x00, 0x00};
+    return zstd_append(b, n, empty, sizeof empty);
+}
+
+/* A zstd chunk claiming more than any frame of its stored size decodes to (format 1.1, rule 10). */
+static size_t zstd_implausible_size(uint8_t *b, size_t n)
+{
+    tpk_dir_entry *e = entry(b, entry_of(b, TPK_TAG_META, 0, 0));
+    e->elem_count = e->raw_size = e->stored_size * 32768 + 1;
+    fix_directory(b);
+    return n;
+}
+
+static size_t origin_nan(uint8_t *b, size_t n)
+{
+    hdr(b)->origin[1] = NAN;
+    fix_header(b);
+    return n;
+}
+
+/* An FDSC of no fields, its FDAT and TIME chunks hidden: the only rule broken is "FDSC iff fields". */
+static size_t fdsc_empty(uint8_t *b, size_t n)
+{
+    static const uint32_t hidden[5] = {TPK_FOURCC('a', 'd', 'a', 't'), TPK_FOURCC('b', 'd', 'a', 't'),
+                                       TPK_FOURCC('c', 'd', 'a', 't'), TPK_FOURCC('d', 'd', 'a', 't'),
+                                       TPK_FOURCC('t', 'i', 'm', 'e')};
+    int k = 0;
+    for (uint64_t i = 0; i < hdr(b)->chunk_count; i++)
+        if (entry(b, i)->tag == TPK_TAG_FDAT || entry(b, i)->tag == TPK_TAG_TIME)
+            hide_chunk(b, i, hidden[k++ % 5]);
+    tpk_dir_entry *e = entry(b, entry_of(b, TPK_TAG_FDSC, 0, 0));
+    e->elem_count = e->raw_size = e->stored_size = 0;
+    e->codec = TPK_CODEC_NONE;
+    e->checksum = XXH64(NULL, 0, 0);
+    fix_directory(b);
+    return n;
+}
+
+/* A Tet16 vx of 8 with 5 vertices: no xor of ids in [0, 5) reaches 8 (format 1.1, rule 17). */
+static size_t tet16_vx(uint8_t *b, size_t n)
+{
+    uint64_t i = entry_of(b, TPK_TAG_TT16, 0, 0);
+    tpk_tet16 *t = (tpk_tet16 *)(b + entry(b, i)->offset);
+    t[1].vx = 8;
+    fix_chunk(b, i);
+    return n;
+}
+
 static const fail_case fail_cases[] = {
     {"truncated_0", cut_0, TPK_ERR_TRUNCATED, TPK_OK},
     {"truncated_5", cut_5, TPK_ERR_TRUNCATED, TPK_OK},
@@ -609,6 +695,12 @@ static const fail_case fail_cases[] = {
     {"tet32_vertex", tet32_vertex, TPK_OK, TPK_ERR_CORRUPT},
     {"tet32_neighbor", tet32_neighbor, TPK_OK, TPK_ERR_CORRUPT},
     {"tmap_negative", tmap_negative, TPK_OK, TPK_ERR_CORRUPT},
+    {"zstd_skippable_after", zstd_skippable_after, TPK_OK, TPK_ERR_DECOMPRESS},
+    {"zstd_second_frame", zstd_second_frame, TPK_OK, TPK_ERR_DECOMPRESS},
+    {"zstd_implausible_size", zstd_implausible_size, TPK_ERR_CORRUPT, TPK_OK},
+    {"origin_nan", origin_nan, TPK_ERR_CORRUPT, TPK_OK},
+    {"fdsc_empty", fdsc_empty, TPK_ERR_CORRUPT, TPK_OK},
+    {"tet16_vx", tet16_vx, TPK_OK, TPK_ERR_CORRUPT},
 };
 #define FAIL_CASE_COUNT (sizeof fail_cases / sizeof fail_cases[0])
 
@@ -967,6 +1059,65 @@ TPK_TEST(threads_share_a_handle)
     free(bytes);
 }
 
+/* Issue 10: tpk_error_text read the handle's message without the lock its writer holds. One thread keeps
+ * failing with two messages of different lengths (a missing field is NOT_FOUND, which does not poison
+ * the handle) while another reads the text: every text read must be one whole message, never the start
+ * of one and the rest of the other. */
+#define TORN_ROUNDS 300000
+static const char *const torn_fields[2] = {"a", "a_much_longer_field_name_that_fills_the_message_buffer_further"};
+
+typedef struct torn_job {
+    tpk_file *file;
+    atomic_int done;
+    char expected[2][512];
+    long torn;
+    char example[512];
+} torn_job;
+
+static void *fail_in_thread(void *arg)
+{
+    torn_job *job = arg;
+    tpk_mesh_arrays m;
+    for (int k = 0; k < TORN_ROUNDS; k++)
+        tpk_load_arrays(job->file, TPK_LAYOUT_TET32, torn_fields[k % 2], 0, &m);
+    atomic_store(&job->done, 1);
+    return NULL;
+}
+
+static void *read_in_thread(void *arg)
+{
+    torn_job *job = arg;
+    while (!atomic_load(&job->done)) {
+        const char *text = tpk_error_text(job->file);
+        if (strcmp(text, job->expected[0]) != 0 && strcmp(text, job->expected[1]) != 0 && job->torn++ == 0)
+            snprintf(job->example, sizeof job->example, "%s", text);
+    }
+    return NULL;
+}
+
+TPK_TEST(error_text_is_never_torn)
+{
+    size_t size;
+    uint8_t *bytes = good_bytes(&size, NULL);
+    torn_job job = {.torn = 0};
+    atomic_init(&job.done, 0);
+    CHECK_EQ_INT(tpk_open_memory(&job.file, bytes, size, NULL, NULL, 0), TPK_OK);
+    tpk_mesh_arrays m;
+    for (int k = 0; k < 2; k++) { /* the two messages, as one thread sees them */
+        CHECK_EQ_INT(tpk_load_arrays(job.file, TPK_LAYOUT_TET32, torn_fields[k], 0, &m), TPK_ERR_NOT_FOUND);
+        snprintf(job.expected[k], sizeof job.expected[k], "%s", tpk_error_text(job.file));
+        CHECK(strstr(job.expected[k], torn_fields[k]) != NULL);
+    }
+    pthread_t failer, reader;
+    pthread_create(&failer, NULL, fail_in_thread, &job);
+    pthread_create(&reader, NULL, read_in_thread, &job);
+    pthread_join(failer, NULL);
+    pthread_join(reader, NULL);
+    tpk_close(job.file);
+    free(bytes);
+    CHECK_MSG(job.torn == 0, "%ld torn texts, e.g. '%s'", job.torn, job.example);
+}
+
 /* ---- unknown chunks ----------------------------------------------------------------------------------- */
 
 TPK_TEST(unknown_chunks)
@@ -1140,6 +1291,60 @@ static tpk_result open_and_load(const uint8_t *bytes, size_t size, failing_alloc
         r = tpk_get_time(file, 1, &(double){0});
     tpk_close(file);
     return r;
+}
+
+/* An allocator that refuses every request of `refuse_from` bytes or more, and remembers the largest. */
+typedef struct capped_allocator {
+    size_t refuse_from, largest;
+} capped_allocator;
+
+static void *capped_alloc(void *user, size_t size)
+{
+    capped_allocator *a = user;
+    a->largest = size > a->largest ? size : a->largest;
+    return size >= a->refuse_from ? NULL : malloc(size);
+}
+
+static void capped_free(void *user, void *ptr)
+{
+    (void)user;
+    free(ptr);
+}
+
+/* Issue 10: a header claiming 2^31-1 vertices made `info` try to allocate 25769803764 bytes and report
+ * "out of memory". A zstd chunk whose claim the frame contradicts (its Frame_Content_Size says the real
+ * size) is refused as DECOMPRESS before anything of the claimed size is requested, and the message says
+ * what the frame declares; a claim beyond what zstd can expand to is refused at open (rule 10). */
+TPK_TEST(implausible_sizes_refused_before_allocating)
+{
+    size_t size;
+    uint8_t *bytes = good_bytes(&size, NULL);
+    CHECK(bytes != NULL);
+    uint64_t i = entry_of(bytes, TPK_TAG_META, 0, 0);
+    tpk_dir_entry *e = entry(bytes, i);
+    CHECK(e->codec == TPK_CODEC_ZSTD);
+    uint64_t real = e->raw_size;
+    e->elem_count = e->raw_size = e->stored_size * 32768; /* the most a frame of this size can decode to */
+    fix_directory(bytes);
+    capped_allocator a = {(size_t)e->raw_size, 0};
+    tpk_open_options o = {.size = sizeof o, .allocator = {capped_alloc, capped_free, &a}};
+    tpk_file *file;
+    CHECK_EQ_INT(tpk_open_memory(&file, bytes, size, &o, NULL, 0), TPK_OK);
+    tpk_result r = tpk_verify(file);
+    char text[512], declared[64];
+    snprintf(text, sizeof text, "%s", tpk_error_text(file));
+    snprintf(declared, sizeof declared, "declares %llu bytes", (unsigned long long)real);
+    tpk_close(file);
+    CHECK_MSG(r == TPK_ERR_DECOMPRESS && strstr(text, "'META'") && strstr(text, declared), "%s: %s",
+              tpk_result_string(r), text);
+    CHECK_MSG(a.largest < e->raw_size, "asked for %zu bytes of a claimed %llu", a.largest,
+              (unsigned long long)e->raw_size);
+    e->elem_count = e->raw_size = e->raw_size + 1; /* one byte more than zstd can produce */
+    fix_directory(bytes);
+    char err[512] = "";
+    CHECK_EQ_INT(tpk_open_memory(&file, bytes, size, NULL, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "implausible raw_size") && strstr(err, "'META'"), "%s", err);
+    free(bytes);
 }
 
 TPK_TEST(allocation_failures)

@@ -290,3 +290,48 @@ TPK_TEST(far_from_origin)
     CHECK_MSG(ok, "%s", msg);
     CHECK_MSG(worst < 1e-8, "worst position error %g m", worst);
 }
+
+/* Write a unit cube (one VTK hexahedron) with its low corner at `corner`, convert it and read back the
+ * origin and the stored float32 positions. */
+static int convert_cube(const double corner[3], const char *name, loaded *l, char *msg, size_t cap)
+{
+    static const int unit[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                   {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    const char *vtk = tpk_temp_path(name);
+    FILE *f = fopen(vtk, "w");
+    if (!f)
+        return tpk_inv_fail(msg, cap, "cannot write %s", vtk);
+    fprintf(f, "# vtk DataFile Version 2.0\ncube\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 8 double\n");
+    for (int v = 0; v < 8; v++)
+        fprintf(f, "%.17g %.17g %.17g\n", corner[0] + unit[v][0], corner[1] + unit[v][1], corner[2] + unit[v][2]);
+    fprintf(f, "CELLS 1 9\n8 0 1 2 3 4 5 6 7\nCELL_TYPES 1\n12\n");
+    fclose(f);
+    const char *out = tpk_temp_path("cube.tpk");
+    return convert_sample(vtk, out, 0, msg, cap) == 0 && load(out, l, msg, cap) == 0 ? 0 : -1;
+}
+
+/* Issue 9: the origin was the box centre 0.5000000000000001 for a unit cube, so a source 0 was stored
+ * as 1.1e-16. The origin rule of spec §6.8 keeps exactly representable coordinates exact: a cube at 0
+ * gets origin 0 and stores 0 and 1; a cube at (10, -3, 1e6) gets an integer origin in the box, and
+ * every stored position is an integer and origin + position exactly its source coordinate. */
+TPK_TEST(origin_keeps_exact_coordinates)
+{
+    static const double corners[2][3] = {{0, 0, 0}, {10, -3, 1e6}};
+    for (int c = 0; c < 2; c++) {
+        loaded l;
+        char msg[1024] = "";
+        CHECK_MSG(convert_cube(corners[c], "cube.vtk", &l, msg, sizeof msg) == 0, "%s", msg);
+        int exact = 1;
+        for (int k = 0; k < 3; k++) {
+            exact &= c > 0 || l.a32.origin[k] == 0.0;
+            for (uint64_t v = 0; v < l.a32.vertex_count; v++) {
+                double rel = l.a32.positions[3 * v + k], world = l.a32.origin[k] + rel;
+                exact &= rel == floor(rel) && (world == corners[c][k] || world == corners[c][k] + 1.0);
+            }
+        }
+        double origin[3] = {l.a32.origin[0], l.a32.origin[1], l.a32.origin[2]};
+        loaded_free(&l);
+        CHECK_MSG(exact, "cube at (%g, %g, %g): origin (%.17g, %.17g, %.17g), stored positions not exactly the source",
+                  corners[c][0], corners[c][1], corners[c][2], origin[0], origin[1], origin[2]);
+    }
+}

@@ -21,6 +21,8 @@
 static const char *const vector_names[] = {
     "one_tet.tpk",     "two_tets_zstd.tpk",          "bad_magic.tpk",      "truncated.tpk",
     "newer_major.tpk", "unknown_required_chunk.tpk", "chunk_checksum.tpk", "overlap.tpk",
+    "nonfinite_origin.tpk", "empty_fdsc.tpk", "tet16_vx.tpk", "zstd_skippable_frame.tpk",
+    "zstd_chunk_checksum.tpk", "implausible_zstd_size.tpk",
 };
 
 static const char *vector_path(const char *name)
@@ -139,7 +141,7 @@ static void check_mesh(tpk_file *file, const expected_mesh *m)
     tpk_file_info info;
     CHECK_EQ_INT(tpk_get_info(file, &info), TPK_OK);
     CHECK_EQ_INT(info.version_major, 1);
-    CHECK_EQ_INT(info.version_minor, 0);
+    CHECK_EQ_INT(info.version_minor, 1);
     CHECK_EQ_INT(info.vertex_count, m->vertex_count);
     CHECK_EQ_INT(info.tet_count, m->tet_count);
     CHECK_EQ_INT(info.shell_face_count, m->shell_face_count);
@@ -326,6 +328,11 @@ TPK_TEST(vectors_must_fail)
         {"unknown_required_chunk.tpk", 0, TPK_ERR_UNSUPPORTED_CHUNK},
         {"chunk_checksum.tpk", TPK_OPEN_VERIFY_ALL, TPK_ERR_CHUNK_CHECKSUM},
         {"overlap.tpk", 0, TPK_ERR_OVERLAP},
+        {"nonfinite_origin.tpk", 0, TPK_ERR_CORRUPT},
+        {"empty_fdsc.tpk", 0, TPK_ERR_CORRUPT},
+        {"implausible_zstd_size.tpk", 0, TPK_ERR_CORRUPT},
+        {"zstd_skippable_frame.tpk", TPK_OPEN_VERIFY_ALL, TPK_ERR_DECOMPRESS},
+        {"zstd_chunk_checksum.tpk", TPK_OPEN_VERIFY_ALL, TPK_ERR_CHUNK_CHECKSUM},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         tpk_result r;
@@ -342,6 +349,33 @@ TPK_TEST(vectors_must_fail)
     tpk_dir_entry e;
     CHECK_EQ_INT(read_tagged(file, TPK_TAG_FDAT, 0, 0, values, sizeof values, &e), TPK_ERR_CHUNK_CHECKSUM);
     tpk_close(file);
+    /* The rest open, and fail where a renderer meets them: in tpk_load_arrays (the path that decodes
+     * zstd chunks into handle-owned copies, whose checksum check issue 10 found untested), and in
+     * tpk_verify. */
+    static const struct {
+        const char *name;
+        tpk_layout layout;
+        tpk_result expected;
+        const char *where; /* the message names the chunk */
+    } lazy[] = {
+        {"zstd_chunk_checksum.tpk", TPK_LAYOUT_TET32, TPK_ERR_CHUNK_CHECKSUM, "chunk 0 'POS3' at offset 192"},
+        {"zstd_skippable_frame.tpk", TPK_LAYOUT_TET32, TPK_ERR_DECOMPRESS, "chunk 0 'POS3' at offset 192"},
+        {"tet16_vx.tpk", TPK_LAYOUT_TET16, TPK_ERR_CORRUPT, "'TT16'"},
+    };
+    for (size_t k = 0; k < sizeof lazy / sizeof lazy[0]; k++) {
+        for (int verify = 0; verify < 2; verify++) {
+            file = open_vector(lazy[k].name, 0, TPK_OK, &r);
+            CHECK_MSG(r == TPK_OK, "%s: open gave %s", lazy[k].name, tpk_result_string(r));
+            tpk_mesh_arrays arrays;
+            r = verify ? tpk_verify(file) : tpk_load_arrays(file, lazy[k].layout, NULL, 0, &arrays);
+            char text[512];
+            snprintf(text, sizeof text, "%s", tpk_error_text(file));
+            tpk_close(file);
+            CHECK_MSG(r == lazy[k].expected && strstr(text, lazy[k].where),
+                      "%s: %s gave %s (%s), expected %s", lazy[k].name, verify ? "tpk_verify" : "tpk_load_arrays",
+                      tpk_result_string(r), text, tpk_result_string(lazy[k].expected));
+        }
+    }
 }
 
 /* The spec's worked Tet16 example (§6.5), decoded from each possible entry. */

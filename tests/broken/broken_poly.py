@@ -39,4 +39,13 @@ def cases():
             pid(1, 0, 1), pid(2, 0, 1), pid(2, 1, 1), pid(1, 1, 1)]
     out.append({"name": "poly_next_to_hexahedron", "text": vtk_legacy(PTS, [(42, stream(a)), (12, hexa)]),
                 "expect": {}, "absent": ["nonconforming_face", "components", "inconsistent_orientation"]})
+    # A polyhedron with the four faces of a tet on the corners of the first cube's bottom square: every
+    # point in the plane z = 0, no volume; convert refuses it (issue 10), so check must not call it clean.
+    q0, q1, q2, q3 = pid(0, 0, 0), pid(1, 0, 0), pid(1, 1, 0), pid(0, 1, 0)
+    flat = [[q0, q1, q2], [q0, q2, q3], [q0, q3, q1], [q1, q3, q2]]
+    out.append({"name": "poly_flat", "text": vtk_legacy(PTS, [(42, stream(flat))]),
+                "expect": {"flat_polyhedron": 1}, "absent": ["no_volume_cells"]})
+    # Points and no cell at all: nothing to convert.
+    out.append({"name": "no_volume_cells", "text": vtk_legacy(PTS, []), "expect": {"no_volume_cells": 1},
+                "absent": ["flat_polyhedron"]})
     return out

@@ -31,12 +31,16 @@ assert d["problems"] is True and list(f) == [600] and f[600]["count"] == 1, d["f
 assert "TPK-R16" in f[600]["examples"][0]["note"] and "'TT16'" in f[600]["examples"][0]["note"], f[600]
 assert "not run" in f[600]["summary"], f[600]
 PY
-expect_exit 1 "$TPK" check "$SRC/samples/vectors/chunk_checksum.tpk"
+for opened in chunk_checksum zstd_skippable_frame zstd_chunk_checksum tet16_vx; do
+    expect_exit 1 "$TPK" check "$SRC/samples/vectors/$opened.tpk"
+    grep -q "^  600 " "$WORK/out" || fail "$opened.tpk: no check 600: $(cat "$WORK/out")"
+done
 
 # Files no reader can open: exit 2, the file named on stderr, nothing on stdout.
 head -c 100 "$WORK/c.tpk" > "$WORK/short.tpk"
 for bad in "$WORK/short.tpk" "$SRC/samples/vectors/bad_magic.tpk" "$SRC/samples/vectors/newer_major.tpk" \
-           "$SRC/samples/vectors/overlap.tpk" "$WORK/missing.tpk"; do
+           "$SRC/samples/vectors/overlap.tpk" "$SRC/samples/vectors/nonfinite_origin.tpk" \
+           "$SRC/samples/vectors/empty_fdsc.tpk" "$SRC/samples/vectors/implausible_zstd_size.tpk" "$WORK/missing.tpk"; do
     expect_exit 2 "$TPK" check "$bad" --json
     expect_stderr "$(basename "$bad")"
     [ ! -s "$WORK/out" ] || fail "output for an unreadable file: $(cat "$WORK/out")"

@@ -9,7 +9,7 @@ import json, sys
 d = json.load(open(sys.argv[1]))
 for k in ["format_version", "vertices", "tets", "shell_faces", "layouts", "fields", "bounds", "origin", "chunks"]:
     assert k in d, k
-assert d["format_version"] == "1.0"
+assert d["format_version"] == "1.1"
 assert d["tets"] == 1348 and d["vertices"] == 354, (d["tets"], d["vertices"])
 assert sorted(d["layouts"]) == ["tet16", "tet20", "tet32"], d["layouts"]
 assert [f["name"] for f in d["fields"]] == ["temperature"], d["fields"]

@@ -1,5 +1,5 @@
-/* The cells group (2xx): node lists (201, 202, 212, 213), orientation of tets by their exact sign (203,
- * 204), the shape checks of split cells (check_cells_shape.c), tet quality (209, 210 and histograms)
+/* The cells group (2xx): node lists (201, 202, 212, 213), a mesh without volume cells (214), flat
+ * polyhedra (215), orientation of tets by their exact sign (203, 204), the shape checks of split cells (check_cells_shape.c), tet quality (209, 210 and histograms)
  * and duplicate cells (211, check_cells_dup.c).
  *
  * Cells are cut into fixed chunks; each worker takes a contiguous run of chunks and reports in cell
@@ -44,6 +44,44 @@ static int repeated_at(const int32_t *ids, int64_t n)
     return -1;
 }
 
+/* Whether b differs from a, and c does not lie on the line through a and b, decided exactly: each
+ * component of (b - a) x (c - a) is, up to a nonzero factor, det[b - a, c - a, d - a] for a point d that
+ * differs from a in one coordinate only (by a_k itself, or by 1 when a_k = 0: exact, never rounded). */
+static int spans_plane(const double a[3], const double b[3], const double c[3])
+{
+    for (int k = 0; k < 3; k++) {
+        double d[3] = {a[0], a[1], a[2]};
+        d[k] = a[k] == 0.0 ? 1.0 : 2.0 * a[k];
+        if (isfinite(d[k]) && tpk_orient3d_exact(a, b, c, d) != 0)
+            return 1;
+    }
+    return 0;
+}
+
+/* 215: all points of a polyhedron in one plane (coincident or collinear included), exactly: b is the
+ * first point other than a, c the first off the line ab, and no point leaves the plane abc. Returns 1
+ * when the polyhedron is flat. */
+static int polyhedron_is_flat(const tpk_mesh *mesh, int64_t cell)
+{
+    const int32_t *ids = mesh->cell_conn + mesh->cell_offsets[cell];
+    int64_t n = mesh->cell_offsets[cell + 1] - mesh->cell_offsets[cell];
+    for (int64_t i = 0; i < n; i++)
+        if (ids[i] < 0 || ids[i] >= mesh->point_count)
+            return 0; /* 201 reports it */
+    const double *a = mesh->points + 3 * (int64_t)ids[0], *b = NULL, *c = NULL;
+    for (int64_t i = 1; i < n && !c; i++) {
+        const double *p = mesh->points + 3 * (int64_t)ids[i];
+        if (!b && (p[0] != a[0] || p[1] != a[1] || p[2] != a[2]))
+            b = p;
+        else if (b && spans_plane(a, b, p))
+            c = p;
+    }
+    for (int64_t i = 1; c && i < n; i++)
+        if (tpk_orient3d_exact(a, b, c, mesh->points + 3 * (int64_t)ids[i]) != 0)
+            return 0;
+    return 1;
+}
+
 /* 212 or 213; returns 1 when the type and node count are ones the geometric checks handle. */
 static int check_type(const cells_job *job, int64_t cell, tpk_cell_hits *hits)
 {
@@ -59,10 +97,13 @@ static int check_type(const cells_job *job, int64_t cell, tpk_cell_hits *hits)
         ex = tpk_cell_hit(hits, 213, cell);
         tpk_example_note(ex, "%s (type %d, dimension %d)", info->name, type, info->dim);
     } else if (type == TPK_CELL_POLYHEDRON) {
-        if (n >= 4)
+        if (n >= 4 && !polyhedron_is_flat(mesh, cell))
             return 0; /* handled by the converter's polyhedron path, not checked here */
-        ex = tpk_cell_hit(hits, 212, cell);
-        tpk_example_note(ex, "polyhedron with %lld nodes, expected at least 4", (long long)n);
+        ex = tpk_cell_hit(hits, n >= 4 ? 215 : 212, cell);
+        if (n >= 4)
+            tpk_example_note(ex, "all %lld points lie in one plane (exact): the faces enclose no volume", (long long)n);
+        else
+            tpk_example_note(ex, "polyhedron with %lld nodes, expected at least 4", (long long)n);
     } else if (type < TPK_CELL_TETRA || type > TPK_CELL_PYRAMID) {
         ex = tpk_cell_hit(hits, 212, cell);
         tpk_example_note(ex, "%s (type %d) is not converted: only linear tetra, voxel, hexahedron, wedge, "
@@ -240,6 +281,21 @@ static void merge_histograms(cells_job *job, int threads)
     }
 }
 
+/* 214: convert has nothing to convert without a 3-D cell (importers already drop empty and
+ * lower-dimensional cells with a warning), so check must not call such a mesh clean. */
+static void check_has_volume(const cells_job *job, tpk_check_report *report)
+{
+    const tpk_mesh *mesh = job->mesh;
+    for (int64_t c = 0; c < mesh->cell_count; c++) {
+        const tpk_cell_type_info *info = job->type_info[mesh->cell_types[c]];
+        if (info && info->dim == 3)
+            return;
+    }
+    tpk_example *ex = tpk_check_hit(report, 214, "file");
+    tpk_example_note(ex, "%lld cells, none of them 3-D, over %lld points: nothing to tetrahedralize",
+                     (long long)mesh->cell_count, (long long)mesh->point_count);
+}
+
 int tpk_check_cells(const tpk_check_input *in, tpk_check_report *report, tpk_diag *diag)
 {
     const tpk_mesh *mesh = in->mesh;
@@ -265,6 +321,7 @@ int tpk_check_cells(const tpk_check_input *in, tpk_check_report *report, tpk_dia
     for (int w = 1; w < threads; w++)
         tpk_cell_hits_append(&job->hits[0], &job->hits[w]);
     if (!failed) {
+        check_has_volume(job, report);
         tpk_cell_hits_report(&job->hits[0], report);
         merge_histograms(job, threads);
     }

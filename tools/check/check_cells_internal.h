@@ -14,7 +14,7 @@
 #include "check.h"
 
 #define TPK_CELLS_FIRST_ID 201
-#define TPK_CELLS_ID_COUNT 13 /* 201..213 */
+#define TPK_CELLS_ID_COUNT 15 /* 201..215 */
 
 /* Counts and the first examples per check, for one worker's contiguous range of cells. Workers report
  * in increasing cell order, so merging them in worker order keeps the lowest ids first whatever the

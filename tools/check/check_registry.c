@@ -46,6 +46,12 @@ static const tpk_check_def registry[] = {
      "a cell type the converter cannot tetrahedralize (unknown, or 3-D but not a linear tetra, voxel, hexahedron, "
      "wedge, pyramid or polyhedron), or a cell with the wrong number of nodes"},
     {213, "lower_dimensional_cell", I, "cells", "a cell of dimension < 3 (vertices, lines, faces), ignored"},
+    {214, "no_volume_cells", E, "cells",
+     "the mesh has no 3-D cell (no cells at all, or only empty or lower-dimensional ones the importer drops): "
+     "there is nothing to convert, and convert refuses it"},
+    {215, "flat_polyhedron", E, "cells",
+     "a polyhedron whose points all lie in one plane or coincide (exact): its faces enclose no volume, and "
+     "convert refuses it"},
     /* connectivity */
     {301, "nonmanifold_face", E, "connectivity", "a face (same sorted vertex ids) shared by more than two cells"},
     {302, "inconsistent_orientation", E, "connectivity",

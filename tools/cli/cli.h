@@ -36,6 +36,14 @@ const char *tpk_cli_joined(int argc, char **argv, const char *skip);
 /* Print "tetpack <cmd>: error: PATH: why" (just "why" when it already names PATH) and return
  * TPK_EXIT_USAGE: every refusal of an input names the file. */
 int tpk_cli_fail_file(const char *cmd, const char *path, const char *why);
+struct tpk_output_input;
+/* Check output `path`, given as `arg`, against the files the command reads (`inputs`) before any work
+ * (tpk_output_check): 0, or print "tetpack <cmd>: error: ..." and return TPK_EXIT_USAGE. */
+int tpk_cli_check_output(const char *cmd, const char *arg, const char *path, const struct tpk_output_input *inputs,
+                         size_t count);
+/* The same for convert's OUTPUT against every file INPUT consists of (TetGen siblings, .pvd pieces). */
+int tpk_cli_check_convert_output(const char *input, const char *format, const char *output);
+
 /* Open a .tpk; on failure print "tetpack <cmd>: error: PATH: why" and return TPK_EXIT_USAGE. */
 int tpk_cli_open(const char *cmd, const char *path, struct tpk_file **out);
 

@@ -302,6 +302,8 @@ int tpk_cmd_convert(int argc, char **argv)
     static convert_args a;
     memset(&a, 0, sizeof a);
     int rc = parse_args(argc, argv, &a);
+    if (rc == 0)
+        rc = tpk_cli_check_convert_output(a.options.input, a.options.format, a.options.output);
     if (rc)
         return rc;
     a.options.command_line = tpk_cli_joined(argc, argv, a.options.output);

@@ -221,7 +221,7 @@ int tpk_cmd_info(int argc, char **argv)
     else
         print_text(path, file, &info, verified);
     if (verified != TPK_OK)
-        tpk_cli_fail_file("info", path, tpk_error_text(file));
+        fprintf(stderr, "tetpack info: error: %s: %s\n", path, tpk_error_text(file));
     tpk_close(file);
     return verified == TPK_OK ? TPK_EXIT_OK : TPK_EXIT_USAGE;
 }

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/output_file.h"
 #include "cli.h"
 #include "render/render.h"
 #include "tetpack.h"
@@ -248,6 +249,10 @@ int tpk_cmd_render(int argc, char **argv)
     }
     if (!a.path || !a.output)
         return tpk_cli_fail("render", "expected FILE.tpk and -o IMAGE.png (see tetpack render --help)");
+    /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
+    tpk_output_input inputs[2] = {{.arg = "FILE.tpk", .given = a.path}, {.arg = "--tf", .given = a.tf}};
+    if (tpk_cli_check_output("render", "-o", a.output, inputs, a.tf ? 2 : 1))
+        return TPK_EXIT_USAGE;
     tpk_file *file = NULL;
     if (tpk_cli_open("render", a.path, &file))
         return TPK_EXIT_USAGE;

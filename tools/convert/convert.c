@@ -12,6 +12,7 @@
 
 #include "import/importers.h"
 #include "merge_vertices.h"
+#include "base/output_file.h"
 #include "base/parallel.h"
 #include "pipeline.h"
 #include "base/strbuf.h"
@@ -104,9 +105,31 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     return 0;
 }
 
-/* Move the points into the frame the file stores: relative to the bounding-box centre (so meshes far
- * from the origin keep float32 precision) and rounded to float32. Everything after this (exact
- * orientation included) then decides on exactly the coordinates a reader of the file sees. */
+/* The origin of one axis (spec §6.8): the number in [lo, hi] with the fewest significant bits, that is
+ * 0 when the box straddles 0, else the one multiple of the largest power of two q that has a multiple
+ * in [lo, hi] (two would make one of them a multiple of 2q). Every stored |x - origin| is at most
+ * hi - lo, so float32 keeps all but at most one bit of the precision a centred origin gives, and a
+ * coordinate that is a float32 multiple of q's granularity (0 and 1 of a unit cube, 10 and 11 of a
+ * cube at 10) is stored exactly, where the centre 0.5 * (lo + hi) may not even be exact itself. */
+static double axis_origin(double lo, double hi)
+{
+    if (!(lo <= hi) || !isfinite(lo) || !isfinite(hi) || (lo <= 0.0 && hi >= 0.0))
+        return 0.0;
+    int e;
+    frexp(fmax(fabs(lo), fabs(hi)), &e);
+    /* q = 2^e exceeds both bounds; halving it ends at the lowest set bit of lo at the latest, whose
+     * multiples include lo itself (ldexp and the division by a power of two are exact). */
+    for (double q = ldexp(1.0, e); q > 0.0; q *= 0.5) {
+        double candidate = ceil(lo / q) * q;
+        if (candidate <= hi)
+            return candidate;
+    }
+    return lo;
+}
+
+/* Move the points into the frame the file stores: relative to the origin of axis_origin (so meshes
+ * far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
+ * included) then decides on exactly the coordinates a reader of the file sees. */
 static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -117,7 +140,7 @@ static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
             hi[k] = x > hi[k] ? x : hi[k];
         }
     for (int k = 0; k < 3; k++) {
-        hdr->origin[k] = mesh->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
+        hdr->origin[k] = mesh->vertex_count ? axis_origin(lo[k], hi[k]) : 0.0;
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }
@@ -323,8 +346,14 @@ static int write_file(const tpk_convert_options *o, const tpk_tetmesh *mesh, con
     wopt.size = sizeof wopt;
     wopt.message = writer_message;
     wopt.message_user = diag;
-    if (tpk_writer_open(&cw.writer, o->output, &wopt, err, sizeof err) != TPK_OK)
+    /* The file has no name until it is complete (base/output_file.h): a killed conversion leaves nothing. */
+    tpk_output out;
+    if (tpk_output_open(&out, o->output, diag) != 0)
+        return -1;
+    if (tpk_writer_open_fd(&cw.writer, out.fd, o->output, &wopt, err, sizeof err) != TPK_OK) {
+        tpk_output_abort(&out);
         return tpk_diag_fail(diag, "%s", err);
+    }
     hdr->vertex_count = (uint64_t)mesh->vertex_count;
     hdr->tet_count = (uint64_t)mesh->tet_count;
     unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
@@ -341,11 +370,16 @@ static int write_file(const tpk_convert_options *o, const tpk_tetmesh *mesh, con
         rc = write_meta(&cw, o, rep, source_format);
     if (rc != 0) {
         tpk_writer_abort(cw.writer);
+        tpk_output_abort(&out);
         return rc;
     }
     rep->shell_faces = (int64_t)hdr->shell_face_count;
-    if (tpk_writer_finish(cw.writer, hdr) != TPK_OK)
+    if (tpk_writer_finish(cw.writer, hdr) != TPK_OK) {
+        tpk_output_abort(&out);
         return diag->message[0] ? -1 : tpk_diag_fail(diag, "%s: could not finish the file", o->output);
+    }
+    if (tpk_output_commit(&out, diag) != 0)
+        return -1;
     struct stat st;
     if (stat(o->output, &st) == 0)
         rep->output_bytes = (uint64_t)st.st_size;

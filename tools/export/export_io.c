@@ -5,26 +5,18 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 int tpk_out_open(tpk_out *o, const char *path, tpk_diag *diag)
 {
     memset(o, 0, sizeof *o);
     o->path = path;
-    if (snprintf(o->tmp, sizeof o->tmp, "%s.tmp-XXXXXX", path) >= (int)sizeof o->tmp)
-        return tpk_diag_fail(diag, "%s: path too long", path);
-    int fd = mkstemp(o->tmp);
-    if (fd < 0)
-        return tpk_diag_fail(diag, "%s: cannot create a temporary file beside it: %s", path, strerror(errno));
-    fchmod(fd, 0644);
-    o->f = fdopen(fd, "wb");
+    if (tpk_output_open(&o->file, path, diag) != 0)
+        return -1;
+    o->f = tpk_output_stream(&o->file, diag);
     if (!o->f) {
-        close(fd);
-        unlink(o->tmp);
-        return tpk_diag_fail(diag, "%s: cannot open the temporary file: %s", path, strerror(errno));
+        tpk_output_abort(&o->file);
+        return -1;
     }
-    setvbuf(o->f, NULL, _IOFBF, 1 << 20);
     return 0;
 }
 
@@ -110,29 +102,18 @@ void tpk_out_i64le(tpk_out *o, const int64_t *v, size_t count)
 int tpk_out_commit(tpk_out *o, tpk_diag *diag)
 {
     int err = o->failed;
-    if (fflush(o->f) != 0 && !err)
-        err = errno ? errno : EIO;
-    if (!err && fsync(fileno(o->f)) != 0 && errno != EINVAL)
-        err = errno;
-    if (fclose(o->f) != 0 && !err)
-        err = errno ? errno : EIO;
     o->f = NULL;
-    if (!err && rename(o->tmp, o->path) != 0)
-        err = errno;
     if (err) {
-        unlink(o->tmp);
+        tpk_output_abort(&o->file);
         return tpk_diag_fail(diag, "%s: write failed: %s (nothing was written)", o->path, strerror(err));
     }
-    return 0;
+    return tpk_output_commit(&o->file, diag);
 }
 
 void tpk_out_abort(tpk_out *o)
 {
-    if (o->f) {
-        fclose(o->f);
-        o->f = NULL;
-        unlink(o->tmp);
-    }
+    o->f = NULL;
+    tpk_output_abort(&o->file);
 }
 
 static void tag_text(uint32_t tag, char out[5])
@@ -160,8 +141,8 @@ int tpk_export_load_chunk(tpk_file *file, uint32_t tag, uint32_t index, uint32_t
     if (r == TPK_OK)
         r = tpk_get_chunk(file, i, &e);
     if (r != TPK_OK)
-        return tpk_diag_fail(diag, "%s: chunk %s (index %u, step %u): %s", path, name, index, step,
-                             tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
+        return tpk_diag_fail(diag, "%s: cannot export: the input's chunk %s (index %u, step %u): %s", path, name,
+                             index, step, tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
     if (e.elem_size != elem_size || e.elem_count != expected_count)
         return tpk_diag_fail(diag, "%s: chunk %s (index %u, step %u) has %llu elements of %u bytes, expected %llu of %u",
                              path, name, index, step, (unsigned long long)e.elem_count, e.elem_size,
@@ -181,8 +162,8 @@ int tpk_export_load_chunk(tpk_file *file, uint32_t tag, uint32_t index, uint32_t
         free(*owned);
         *owned = NULL;
         *data = NULL;
-        return tpk_diag_fail(diag, "%s: chunk %s (index %u, step %u): %s", path, name, index, step,
-                             tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
+        return tpk_diag_fail(diag, "%s: cannot export: the input's chunk %s (index %u, step %u): %s", path, name,
+                             index, step, tpk_error_text(file)[0] ? tpk_error_text(file) : tpk_result_string(r));
     }
     return 1;
 }

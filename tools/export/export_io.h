@@ -1,5 +1,5 @@
-/* Shared by the exporters: an output file written to a temporary name in the target directory and
- * renamed into place on success (never a half-written file at `path`), little-endian array writers,
+/* Shared by the exporters: an output file (base/output_file.h) put in place whole on success (never a
+ * half-written file at `path`, nothing left behind a killed process), little-endian array writers,
  * and chunk loading from an open .tpk with size checks. All defined in export_io.c, which calls no
  * other exporter file. (The shell loader the shell writers share, tpk_shell_load/tpk_shell_free, is
  * declared in exporters.h and defined in export_shell_load.c.) */
@@ -11,12 +11,13 @@
 #include <stdio.h>
 
 #include "base/diag.h"
+#include "base/output_file.h"
 #include "tetpack.h"
 
 typedef struct tpk_out {
+    tpk_output file; /* base/output_file.h: unnamed until commit */
     FILE *f;
     const char *path;
-    char tmp[4096];
     int failed;     /* a write failed; commit reports it */
 } tpk_out;
 
@@ -29,7 +30,7 @@ void tpk_out_i32le(tpk_out *o, const int32_t *v, size_t count);
 void tpk_out_f32le(tpk_out *o, const float *v, size_t count);
 void tpk_out_f64le(tpk_out *o, const double *v, size_t count);
 void tpk_out_i64le(tpk_out *o, const int64_t *v, size_t count);
-/* Flush, sync, close and rename into place; on any failure remove the temporary file. 0 or -1. */
+/* Flush, sync and put in place; on any failure nothing is left but what was at the path. 0 or -1. */
 int tpk_out_commit(tpk_out *o, tpk_diag *diag);
 void tpk_out_abort(tpk_out *o);
 

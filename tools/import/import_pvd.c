@@ -143,6 +143,39 @@ static int read_series(const char *path, pvd_parse *p, tpk_diag *diag)
     return rc;
 }
 
+/* A DataSet's file: relative to the .pvd's directory unless absolute. */
+static void piece_path(const char *pvd, const char *piece, char *file, size_t cap)
+{
+    const char *slash = strrchr(pvd, '/');
+    size_t dir = slash ? (size_t)(slash - pvd) + 1 : 0;
+    if (piece[0] == '/')
+        snprintf(file, cap, "%s", piece);
+    else
+        snprintf(file, cap, "%.*s%s", (int)dir, pvd, piece);
+}
+
+static void free_series(pvd_parse *p)
+{
+    for (int s = 0; s < p->count; s++)
+        free(p->sets[s].file);
+    free(p->sets);
+}
+
+void tpk_import_pvd_files(const char *path, tpk_import_file_fn each, void *user)
+{
+    pvd_parse p;
+    memset(&p, 0, sizeof p);
+    tpk_diag quiet;
+    memset(&quiet, 0, sizeof quiet);
+    if (read_series(path, &p, &quiet) == 0)
+        for (int s = 0; s < p.count; s++) {
+            char file[4096];
+            piece_path(path, p.sets[s].file, file, sizeof file);
+            each(user, file);
+        }
+    free_series(&p);
+}
+
 int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
     if (!out || !path)
@@ -153,14 +186,9 @@ int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag)
     int rc = read_series(path, &p, diag);
     if (rc == 0)
         qsort(p.sets, (size_t)p.count, sizeof *p.sets, by_time);
-    const char *slash = strrchr(path, '/');
-    size_t dir = slash ? (size_t)(slash - path) + 1 : 0;
     for (int s = 0; rc == 0 && s < p.count; s++) {
         char file[4096];
-        if (p.sets[s].file[0] == '/')
-            snprintf(file, sizeof file, "%s", p.sets[s].file);
-        else
-            snprintf(file, sizeof file, "%.*s%s", (int)dir, path, p.sets[s].file);
+        piece_path(path, p.sets[s].file, file, sizeof file);
         tpk_mesh step;
         if (tpk_import_vtu(file, s == 0 ? out : &step, diag) != 0) {
             rc = -1;
@@ -184,9 +212,7 @@ int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag)
             out->times[s] = p.sets[s].time;
         snprintf(out->format, sizeof out->format, "pvd");
     }
-    for (int s = 0; s < p.count; s++)
-        free(p.sets[s].file);
-    free(p.sets);
+    free_series(&p);
     if (rc)
         tpk_mesh_free(out);
     return rc ? -1 : 0;

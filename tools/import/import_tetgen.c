@@ -265,6 +265,37 @@ int tpk_import_tetgen_bundle_memory(const char *name, const char *data, size_t s
     return tpk_import_tetgen_memory(stem, data, node_size, data ? data + ele_at : NULL, size - ele_at, out, diag);
 }
 
+/* STEM.node and STEM.ele for a path naming either file or their stem (malloc'd; both NULL or both set). */
+static int sibling_paths(const char *path, char **node_path, char **ele_path)
+{
+    size_t len = strlen(path);
+    size_t stem = ends_with(path, ".node") ? len - 5 : ends_with(path, ".ele") ? len - 4 : len;
+    *node_path = malloc(stem + 6);
+    *ele_path = malloc(stem + 5);
+    if (!*node_path || !*ele_path) {
+        free(*node_path);
+        free(*ele_path);
+        *node_path = *ele_path = NULL;
+        return -1;
+    }
+    memcpy(*node_path, path, stem);
+    memcpy(*node_path + stem, ".node", 6);
+    memcpy(*ele_path, path, stem);
+    memcpy(*ele_path + stem, ".ele", 5);
+    return 0;
+}
+
+void tpk_import_tetgen_files(const char *path, tpk_import_file_fn each, void *user)
+{
+    char *node_path, *ele_path;
+    if (sibling_paths(path, &node_path, &ele_path) != 0)
+        return;
+    each(user, node_path);
+    each(user, ele_path);
+    free(node_path);
+    free(ele_path);
+}
+
 int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
     if (!out || !path)
@@ -272,18 +303,12 @@ int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag)
     memset(out, 0, sizeof *out);
     if (diag)
         diag->message[0] = 0;
-    size_t len = strlen(path);
-    size_t stem = ends_with(path, ".node") ? len - 5 : ends_with(path, ".ele") ? len - 4 : len;
-    char *node_path = malloc(stem + 6), *ele_path = malloc(stem + 5);
+    char *node_path, *ele_path;
     int rc = -1;
-    if (!node_path || !ele_path) {
+    if (sibling_paths(path, &node_path, &ele_path) != 0) {
         tpk_diag_fail(diag, "%s: out of memory", path);
         goto done;
     }
-    memcpy(node_path, path, stem);
-    memcpy(node_path + stem, ".node", 6);
-    memcpy(ele_path, path, stem);
-    memcpy(ele_path + stem, ".ele", 5);
     int base = 0;
     rc = parse_file(node_path, out, &base, 1, diag);
     if (rc == 0)

@@ -19,8 +19,13 @@ int tpk_import_vtk_legacy(const char *path, tpk_mesh *out, tpk_diag *diag);
 /* Same from memory (for fuzzing); `name` is used in messages. */
 int tpk_import_vtk_legacy_memory(const char *name, const char *data, size_t size, tpk_mesh *out,
                                  tpk_diag *diag);
+/* Called once per file an input consists of (tpk_import_input_files). */
+typedef void (*tpk_import_file_fn)(void *user, const char *file);
+
 /* TetGen .node/.ele: path may name either file or their common stem. */
 int tpk_import_tetgen(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* Its two files, STEM.node then STEM.ele, whether or not they exist. */
+void tpk_import_tetgen_files(const char *path, tpk_import_file_fn each, void *user);
 /* Same from memory (for fuzzing); messages name `name`.node and `name`.ele. */
 int tpk_import_tetgen_memory(const char *name, const char *node_data, size_t node_size, const char *ele_data,
                              size_t ele_size, tpk_mesh *out, tpk_diag *diag);
@@ -45,6 +50,9 @@ int tpk_import_vtu_memory(const char *name, const char *data, size_t size, tpk_m
 /* ParaView series (.pvd): one .vtu per time step (paths relative to the .pvd), all with the same mesh;
  * their fields become fields with one step per file, in time order, with the time values. */
 int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* The series' .vtu files, as tpk_import_pvd reads them; none when the .pvd does not parse (the import
+ * then says why). */
+void tpk_import_pvd_files(const char *path, tpk_import_file_fn each, void *user);
 
 /* Gmsh .msh 2.2 and 4.1, ASCII and binary: volume elements (tets, hexes, prisms, pyramids, and their
  * higher-order kinds reduced to corners) in VTK node order, $NodeData/$ElementData as fields. */
@@ -107,6 +115,12 @@ const tpk_import_format *tpk_import_format_detect(const char *path);
 const char *tpk_import_format_names(char *buf, size_t cap);
 /* The supported-bits as words ("tets hexahedra ... time-steps") into buf; returns buf. */
 const char *tpk_import_format_supports(unsigned supports, char *buf, size_t cap);
+
+/* Every file that reading `path` (as tpk_import_any_with would, `format` forcing a row or NULL) opens,
+ * each passed to `each`: `path` itself first, then TetGen's .node and .ele (from either file or their
+ * stem), a .pvd's pieces; other formats are one file. Files need not exist. For refusing an output that
+ * would replace an input (base/output_file.h). */
+void tpk_import_input_files(const char *path, const char *format, tpk_import_file_fn each, void *user);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one by a
  * registry name (tpk_import_format_named). A TetGen stem (no file, but STEM.node exists) reads as

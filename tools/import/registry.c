@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "importers.h"
 #include "surface/surface.h"
@@ -228,4 +229,17 @@ int tpk_import_any_with(const char *path, const char *format, const struct tpk_t
     return tpk_diag_fail(diag, "%s: cannot tell the input format from the extension or the first bytes; "
                          "supported: %s (force one with --format; tetpack formats lists them)", path,
                          tpk_import_format_names(names, sizeof names));
+}
+
+void tpk_import_input_files(const char *path, const char *format, tpk_import_file_fn each, void *user)
+{
+    each(user, path);
+    const tpk_import_format *row = format && *format && strcasecmp(format, "auto") != 0
+                                       ? tpk_import_format_named(format, path)
+                                       : tpk_import_format_detect(path);
+    struct stat st;
+    if ((row && row->read == tpk_import_tetgen) || (!row && stat(path, &st) != 0)) /* a TetGen stem */
+        tpk_import_tetgen_files(path, each, user);
+    else if (row && row->read == tpk_import_pvd)
+        tpk_import_pvd_files(path, each, user);
 }

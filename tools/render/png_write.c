@@ -1,14 +1,13 @@
-/* PNG output (libpng), written atomically: a temporary file next to the target, renamed into place. */
+/* PNG output (libpng), written atomically: an output file (base/output_file.h), put in place whole. */
 #include "render.h"
 
-#include <errno.h>
 #include <png.h>
 #include <setjmp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
+
+#include "base/output_file.h"
 
 typedef struct png_error_state {
     char message[256];
@@ -58,47 +57,14 @@ int tpk_write_png(const char *path, int width, int height, const uint8_t *rgba, 
 {
     if (!path || !rgba || width < 1 || height < 1 || width > 1000000 || height > 1000000)
         return tpk_diag_fail(diag, "%s: cannot write a %dx%d PNG", path ? path : "(null)", width, height);
-    size_t len = strlen(path);
-    char *temp = malloc(len + 16);
-    if (!temp)
-        return tpk_diag_fail(diag, "%s: out of memory", path);
-    snprintf(temp, len + 16, "%s.tmp.XXXXXX", path);
-    int fd = mkstemp(temp);
-    if (fd < 0) {
-        int e = errno;
-        free(temp);
-        return tpk_diag_fail(diag, "%s: cannot create a temporary file next to it: %s", path, strerror(e));
-    }
-    (void)fchmod(fd, 0644); /* mkstemp makes 0600; an image is for sharing (cosmetic if it fails) */
-    FILE *file = fdopen(fd, "wb");
-    if (!file) {
-        int e = errno;
-        close(fd);
-        unlink(temp);
-        free(temp);
-        return tpk_diag_fail(diag, "%s: %s", path, strerror(e));
-    }
+    tpk_output out;
+    if (tpk_output_open(&out, path, diag) != 0)
+        return -1;
+    FILE *file = tpk_output_stream(&out, diag);
     png_error_state state = {""};
-    int rc = encode(file, width, height, rgba, &state);
-    if (rc != 0) {
-        fclose(file);
-        unlink(temp);
-        free(temp);
-        return tpk_diag_fail(diag, "%s: PNG encoding failed: %s", path, state.message);
+    if (!file || encode(file, width, height, rgba, &state) != 0) {
+        tpk_output_abort(&out);
+        return file ? tpk_diag_fail(diag, "%s: PNG encoding failed: %s", path, state.message) : -1;
     }
-    int write_error = fflush(file) != 0 || ferror(file) || fsync(fileno(file)) != 0;
-    int e = errno;
-    if (fclose(file) != 0 && !write_error) {
-        write_error = 1;
-        e = errno;
-    }
-    if (write_error || rename(temp, path) != 0) {
-        if (!write_error)
-            e = errno;
-        unlink(temp);
-        free(temp);
-        return tpk_diag_fail(diag, "%s: write failed: %s", path, strerror(e));
-    }
-    free(temp);
-    return 0;
+    return tpk_output_commit(&out, diag);
 }
