@@ -10,6 +10,22 @@ expect_exit 2 "$TPK" convert "$WORK/trunc.vtk" "$WORK/o.tpk"
 expect_stderr "trunc.vtk"
 [ -z "$(ls "$WORK" | grep -v -e '^trunc.vtk$' -e '^missing' -e '^out$' -e '^err$')" ] || { ls "$WORK"; fail "stray files"; }
 
+# Positions are stored as finite float32 offsets from one origin (spec TPK-M11): a coordinate that is not
+# finite, or points spanning more than float32 can hold, are refused by name (the fault suite found both
+# written into files that break M11).
+for bad in "nan 0 0" "1e300 0 0"; do
+    printf '# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n%s\n0 1 0\n-1e300 0 1\n' \
+        "$bad" > "$WORK/nonfinite.vtk"
+    printf 'CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n' >> "$WORK/nonfinite.vtk"
+    expect_exit 2 "$TPK" convert "$WORK/nonfinite.vtk" "$WORK/n.tpk"
+    expect_stderr "nonfinite.vtk: "
+    case $bad in
+        nan*) expect_stderr "point 1 is (nan, 0, 0): coordinates must be finite numbers" ;;
+        *) expect_stderr "more than float32 positions around one origin can hold" ;;
+    esac
+    [ ! -e "$WORK/n.tpk" ] || fail "output left behind"
+done
+
 # Degenerate tets are refused with a message naming one and pointing at --drop-degenerate ...
 expect_exit 2 "$TPK" convert "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk"
 expect_stderr "drop-degenerate"

@@ -129,7 +129,16 @@ def judge(category, case, result, names, allowed=(0, 2)):
 
 
 def tpk_is_valid(tetpack, path):
-    return run([tetpack, "info", path])[0] == 0
+    """A complete valid .tpk: info opens it and verifies every chunk, and check finds no error among the
+    format's MUSTs and mesh invariants (ids 6xx)."""
+    if run([tetpack, "info", path])[0] != 0:
+        return False
+    p = subprocess.run([tetpack, "check", path, "--json", "--no-self-intersections", "--threads", "1"],
+                       capture_output=True, timeout=TIMEOUT_S)
+    if p.returncode not in (0, 1):
+        return False
+    findings = json.loads(p.stdout)["findings"]
+    return not any(600 <= f["id"] < 700 and f["severity"] == "error" and f["count"] > 0 for f in findings)
 
 
 def check_output(category, case, tetpack, out, old, rc, keep):

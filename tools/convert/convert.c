@@ -130,7 +130,22 @@ static double axis_origin(double lo, double hi)
 /* Move the points into the frame the file stores: relative to the origin of axis_origin (so meshes
  * far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
  * included) then decides on exactly the coordinates a reader of the file sees. */
-static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
+/* Stored positions must be finite (spec TPK-M11): a source point with a coordinate that is not a finite
+ * number (a damaged file, or NaN written by a solver) is refused by its number before any work. */
+static int check_finite_points(const tpk_mesh *src, const char *input, tpk_diag *diag)
+{
+    for (int64_t p = 0; p < src->point_count; p++) {
+        const double *x = src->points + 3 * p;
+        if (!isfinite(x[0]) || !isfinite(x[1]) || !isfinite(x[2]))
+            return tpk_diag_fail(diag, "%s: point %lld is (%g, %g, %g): coordinates must be finite numbers", input,
+                                 (long long)p, x[0], x[1], x[2]);
+    }
+    return 0;
+}
+
+/* Returns -1 (with a message) when an offset from the origin overflows float32: the points span more
+ * than a .tpk can store. */
+static int quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, const char *input, tpk_diag *diag)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < mesh->vertex_count; i++)
@@ -149,10 +164,14 @@ static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
         for (int k = 0; k < 3; k++) {
             double rel = (double)(float)(mesh->points[3 * i + k] - hdr->origin[k]);
             double world = hdr->origin[k] + rel;
+            if (!isfinite(rel) || !isfinite(world))
+                return tpk_diag_fail(diag, "%s: the points span %g to %g along axis %c, more than float32 positions "
+                                     "around one origin can hold", input, lo[k], hi[k], "xyz"[k]);
             mesh->points[3 * i + k] = rel;
             hdr->bounds_min[k] = world < hdr->bounds_min[k] ? world : hdr->bounds_min[k];
             hdr->bounds_max[k] = world > hdr->bounds_max[k] ? world : hdr->bounds_max[k];
         }
+    return 0;
 }
 
 static void fill_positions(const void *user, int64_t first, int64_t count, void *dst)
@@ -426,7 +445,8 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     double t0 = now_seconds(), t = t0;
 
     announce(stage, stage_user, "import");
-    if (tpk_import_any_with(o->input, o->format, o->tetgen, &src, diag) != 0)
+    if (tpk_import_any_with(o->input, o->format, o->tetgen, &src, diag) != 0 ||
+        check_finite_points(&src, o->input, diag) != 0)
         goto done;
     rep->source_points = src.point_count;
     rep->source_cells = src.cell_count;
@@ -459,7 +479,8 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     rep->face_steiner_points = mesh.face_steiner_points;
     rep->polyhedra = mesh.polyhedra;
     rep->bad_cells_skipped = mesh.bad_cells_skipped;
-    quantize_points(&mesh, &header);
+    if (quantize_points(&mesh, &header, o->input, diag) != 0)
+        goto done;
     rep->t_tetrahedralize = now_seconds() - t;
 
     /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
