@@ -5,7 +5,9 @@ signal, no sanitizer report), no hang, no lost or half-written output (the old b
 file, and no temporary file left beside it), and exit 2 with a message naming the file for every refusal.
 
 usage: faults.py TETPACK DATA_DIR SOURCE_DIR CATEGORY    (CATEGORY: import, tpk or output)
-Fixed seeds; TPK_FAULTS_SEEDS=N (default 1) multiplies the random cases for a longer run (./dev faults).
+Fixed seeds; TPK_FAULTS_SEEDS=N (default 1) multiplies the random cases for a longer run (./dev faults);
+TPK_FAULTS_TIMEOUT (default 60) is the seconds one run of tetpack may take before it counts as a hang;
+TPK_FAULTS_VERBOSE=1 lists the accepted cases.
 Exit 0 when every case holds, 1 when one does not, 77 (ctest's skip) when a case could not run here
 (for example the full filesystem needs root), unless TETPACK_REQUIRE_ALL=1 makes a skip a failure."""
 import json
@@ -640,10 +642,22 @@ def refused_intact(category, case, tetpack, result, out, old):
         check_output(category, case, tetpack, out, old, rc, ["out.tpk", "out.vtu", "out.ply", "out.png"])
 
 
+def can_mount(work):
+    """Root with mount namespaces (a container may lack CAP_SYS_ADMIN): a tmpfs can be mounted privately."""
+    if os.getuid() != 0 or shutil.which("unshare") is None:
+        return False
+    probe = tempfile.mkdtemp(dir=work)
+    return run(["unshare", "-m", "--propagation", "private", "sh", "-c", 'mount -t tmpfs -o size=64k tpkprobe "$0"',
+                probe])[0] == 0
+
+
 def read_only_faults(tetpack, inputs, work, old):
     folder = seeded_folder(work, "read_only", old)
     if os.getuid() == 0:
         # root writes through file modes: a read-only bind mount in a private mount namespace.
+        if not can_mount(work):
+            TALLY.skips.append("output:read_only: root without mount namespaces cannot make a folder read-only")
+            return
         for name, argv, out in output_commands(tetpack, inputs, folder):
             script = 'mount --bind "$0" "$0" && mount -o remount,bind,ro "$0" && exec "$@"'
             result = run(["unshare", "-m", "--propagation", "private", "sh", "-c", script, folder] + argv)
@@ -660,8 +674,8 @@ def read_only_faults(tetpack, inputs, work, old):
 def full_fs_faults(tetpack, inputs, work, old):
     """A 64 KiB tmpfs holding the old outputs, then filled up (root only, in a private mount namespace;
     its files are copied out for the checks before it goes away)."""
-    if os.getuid() != 0 or shutil.which("unshare") is None:
-        TALLY.skips.append("output:full_fs: mounting a small tmpfs needs root and unshare")
+    if not can_mount(work):
+        TALLY.skips.append("output:full_fs: mounting a small tmpfs needs root, unshare and mount namespaces")
         return
     mount_point = os.path.join(work, "full")
     os.mkdir(mount_point)
@@ -680,7 +694,8 @@ def full_fs_faults(tetpack, inputs, work, old):
 
 def kill_faults(tetpack, data, work, old):
     """SIGKILL (and SIGTERM, SIGINT) at spread moments of a convert that replaces an older output: the
-    output is then the old bytes or a complete valid file, and no temporary file is left."""
+    output is then the old bytes or a complete valid file, and no temporary file is left. In the counts,
+    refused means killed before it finished, accepted that it finished first."""
     source = os.path.join(data, "sfepy/cube_big_tetra.mesh")
     folder = os.path.join(work, "kill")
     os.mkdir(folder)
@@ -690,7 +705,8 @@ def kill_faults(tetpack, data, work, old):
     start = time.monotonic()
     subprocess.run(argv, check=True)
     duration = time.monotonic() - start
-    moments = [duration * k / (12 * SEEDS + 1) for k in range(1, 12 * SEEDS + 1)]
+    # Spread over the run, and one after it (that run completes: its output must be the new file).
+    moments = [duration * k / (12 * SEEDS + 1) for k in range(1, 12 * SEEDS + 1)] + [duration * 2]
     for sig in (signal.SIGKILL, signal.SIGTERM, signal.SIGINT):
         for at in moments if sig == signal.SIGKILL else moments[::3]:
             with open(out, "wb") as f:
