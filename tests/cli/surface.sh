@@ -38,12 +38,12 @@ fi
 
 # Each form converts; --json stdout is JSON alone (TetGen's printing is kept off stdout); the .tpk checks.
 for f in part.stl part_bin.stl part.off; do
-    "$TPK" convert "$WORK/$f" "$WORK/$f.tpk" --json > "$WORK/$f.json"
+    convert_checked "$WORK/$f" "$WORK/$f.tpk" --json > "$WORK/$f.json"
     "$PY" -c "import json; d=json.load(open('$WORK/$f.json')); assert d['tets'] > 5000 and d['inverted_fixed'] == 0 and d['degenerate_dropped'] == 0, d"
     "$TPK" check "$WORK/$f.tpk" > /dev/null || fail "tetpack check failed on $f.tpk"
 done
 # The options reach TetGen: a volume bound gives more tets; unsafe switches are refused.
-"$TPK" convert "$WORK/part.off" "$WORK/fine.tpk" --tetgen-max-volume 0.01 --tetgen-quality 1.2/10 --json > "$WORK/fine.json"
+convert_checked "$WORK/part.off" "$WORK/fine.tpk" --tetgen-max-volume 0.01 --tetgen-quality 1.2/10 --json > "$WORK/fine.json"
 "$PY" -c "import json; a=json.load(open('$WORK/part.off.json')); b=json.load(open('$WORK/fine.json')); assert b['tets'] > 2 * a['tets'], (a['tets'], b['tets'])"
 expect_exit 2 "$TPK" convert "$WORK/part.off" "$WORK/x.tpk" --tetgen-switches pqr
 expect_stderr "'r' at position 3 is not allowed"
@@ -62,7 +62,7 @@ PYEOF
 # flat once stored in float32 (the pipeline's frame), so they are refused unless dropped.
 expect_exit 2 "$TPK" convert "$WORK/cyl.csv" "$WORK/cyl.tpk"
 expect_stderr "drop-degenerate"
-"$TPK" convert "$WORK/cyl.csv" "$WORK/cyl.tpk" --drop-degenerate --json > "$WORK/cyl.json"
+convert_checked "$WORK/cyl.csv" "$WORK/cyl.tpk" --drop-degenerate --json > "$WORK/cyl.json"
 "$PY" -c "import json; d=json.load(open('$WORK/cyl.json')); assert d['vertices'] == 354 and d['fields'] == 1 and 0 < d['degenerate_dropped'] < 100, d"
 "$TPK" info "$WORK/cyl.tpk" | grep -q height || fail "field 'height' missing"
 

@@ -287,14 +287,17 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
 void tpk_convert_repairs_json(tpk_strbuf *sb, const tpk_convert_options *o, const tpk_convert_report *r)
 {
     tpk_strbuf_printf(sb, "{\"reorient\":{\"requested\":%s,\"inverted_tets\":%lld,\"mirrored_cells\":%lld},",
-                      o->reorient ? "true" : "false", (long long)r->inverted_fixed, (long long)r->mirrored_cells);
+                      o->strict_orientation ? "false" : "true", (long long)r->inverted_fixed,
+                      (long long)r->mirrored_cells);
     tpk_strbuf_printf(sb, "\"drop_degenerate\":{\"requested\":%s,\"degenerate_tets\":%lld,\"collapsed_cells\":%lld},",
                       o->drop_degenerate ? "true" : "false", (long long)r->degenerate_dropped,
                       (long long)r->collapsed_cells_dropped);
     tpk_strbuf_printf(sb, "\"merge_duplicates\":{\"requested\":%s,\"tolerance\":",
                       o->merge_duplicates ? "true" : "false");
     tpk_strbuf_json_number(sb, o->merge_duplicates ? o->merge_tolerance : 0.0);
-    tpk_strbuf_printf(sb, ",\"merged_vertices\":%lld}}", (long long)r->merged_vertices);
+    tpk_strbuf_printf(sb, ",\"merged_vertices\":%lld},", (long long)r->merged_vertices);
+    tpk_strbuf_printf(sb, "\"cut_folds\":{\"requested\":%s,\"folded_faces\":%lld}}", o->cut_folds ? "true" : "false",
+                      (long long)r->folds_cut);
 }
 
 static int write_maps(chunk_writer *cw, const tpk_tetmesh *mesh)
@@ -374,6 +377,106 @@ static void note_merged_ids(const tpk_merge_report *merged, tpk_diag *diag)
              "%lld points%s)", (long long)merged->merged_vertices, merged->cell_source ? " and collapsed cells" : "");
 }
 
+/* A tet that orient turned over and that lies on the same side of a face as its neighbour: turned over,
+ * it folds against that neighbour; left as it was, it is inverted. Either way its geometry overlaps the
+ * mesh (a sliver pushed through its own face, or one inverted by rounding to float32), so it is a bad
+ * cell, not a labeling (docs/ARCHITECTURE.md §4). Marks them in `bad` and returns how many. */
+static int64_t mark_folding_turned(const int32_t *neighbors, const uint8_t *turned_over, const int64_t *folds,
+                                   int64_t fold_count, uint8_t *bad)
+{
+    int64_t count = 0;
+    for (int64_t i = 0; i < fold_count; i++) {
+        int64_t t = folds[i] / 4, u = neighbors[folds[i]];
+        if (turned_over[t] && !bad[t])
+            bad[t] = 1, count++;
+        if (turned_over[u] && !bad[u])
+            bad[u] = 1, count++;
+    }
+    return count;
+}
+
+static int refuse_folding_turned(const tpk_tetmesh *mesh, const int32_t *neighbors, const uint8_t *turned_over,
+                                 const int64_t *folds, int64_t fold_count, int64_t bad_count, tpk_diag *diag)
+{
+    int64_t first = 0;
+    while (first + 1 < fold_count && !turned_over[folds[first] / 4] && !turned_over[neighbors[folds[first]]])
+        first++; /* stops at one: bad_count > 0 */
+    int64_t t = turned_over[folds[first] / 4] ? folds[first] / 4 : neighbors[folds[first]];
+    char fold[1200];
+    tpk_describe_fold(mesh, neighbors, folds[first], fold, sizeof fold);
+    return tpk_diag_fail(diag, "cell %d is inverted, and turning it over would fold it against its neighbour: %s; "
+                         "%lld inverted tets are such bad cells (not a node-order question: their geometry "
+                         "overlaps the mesh); --skip-bad-cells leaves them out",
+                         mesh->tet_source ? mesh->tet_source[t] : (int32_t)t, fold, (long long)bad_count);
+}
+
+static int refuse_folds(const tpk_tetmesh *mesh, const int32_t *neighbors, const int64_t *folds, int64_t fold_count,
+                        tpk_diag *diag)
+{
+    char fold[1200];
+    tpk_describe_fold(mesh, neighbors, folds[0], fold, sizeof fold);
+    return tpk_diag_fail(diag, "%lld folded faces (tets on the same side of a face they share: overlapping cells, "
+                         "which a file must not link as neighbours, spec TPK-M06); the first: %s; --cut-folds "
+                         "cuts the adjacency there (both faces become shell faces, both cells are kept)",
+                         (long long)fold_count, fold);
+}
+
+/* connect, then the writer's promise for TPK-M06 (one exact orientation test per interior face): tets
+ * turned over into a fold are bad cells (an error, or left out and the rest connected again), and folds
+ * in the source are an error or, with cut_folds, cut. What is written then has no fold. */
+static int connect_unfolded(const tpk_convert_options *o, tpk_tetmesh *mesh, uint8_t *turned_over,
+                            int32_t *neighbors, tpk_convert_report *rep, tpk_diag *diag)
+{
+    int64_t *folds = NULL, fold_count = 0;
+    int rc = -1;
+    if (tpk_connect(mesh->tets, mesh->tet_count, mesh->vertex_count, neighbors, o->threads, diag) != 0 ||
+        tpk_find_folds(mesh->tets, neighbors, mesh->tet_count, mesh->points, o->threads, &folds, &fold_count, diag))
+        goto done;
+    if (fold_count > 0) {
+        uint8_t *bad = calloc((size_t)mesh->tet_count, 1);
+        if (!bad) {
+            tpk_diag_fail(diag, "out of memory for %lld tets", (long long)mesh->tet_count);
+            goto done;
+        }
+        int64_t bad_count = mark_folding_turned(neighbors, turned_over, folds, fold_count, bad);
+        if (bad_count > 0 && !o->skip_bad_cells) {
+            refuse_folding_turned(mesh, neighbors, turned_over, folds, fold_count, bad_count, diag);
+            free(bad);
+            goto done;
+        }
+        if (bad_count > 0) {
+            tpk_drop_tets(mesh, bad);
+            rep->inverted_fixed -= bad_count; /* left out, not turned over */
+            rep->bad_cells_skipped += bad_count;
+            free(folds);
+            folds = NULL;
+            if (mesh->tet_count == 0) {
+                tpk_diag_fail(diag, "%s: no tetrahedra left to write (all %lld were inverted tets that would fold)",
+                              o->input, (long long)bad_count);
+                free(bad);
+                goto done;
+            }
+            if (tpk_connect(mesh->tets, mesh->tet_count, mesh->vertex_count, neighbors, o->threads, diag) != 0 ||
+                tpk_find_folds(mesh->tets, neighbors, mesh->tet_count, mesh->points, o->threads, &folds,
+                               &fold_count, diag)) {
+                free(bad);
+                goto done;
+            }
+        }
+        free(bad);
+    }
+    if (fold_count > 0 && !o->cut_folds) {
+        refuse_folds(mesh, neighbors, folds, fold_count, diag);
+        goto done;
+    }
+    tpk_cut_folds(mesh->tets, neighbors, folds, fold_count);
+    rep->folds_cut = fold_count;
+    rc = 0;
+done:
+    free(folds);
+    return rc;
+}
+
 int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage_fn stage,
                 void *stage_user, tpk_diag *diag)
 {
@@ -383,6 +486,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     memset(&mesh, 0, sizeof mesh);
     memset(rep, 0, sizeof *rep);
     int32_t *neighbors = NULL;
+    uint8_t *turned_over = NULL;
     tpk_header_fields header;
     memset(&header, 0, sizeof header);
     char source_format[32] = "";
@@ -412,7 +516,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
-                                       (o->reorient ? 0 : TPK_TETRA_REFUSE_MIRRORED),
+                                       (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0),
                                    &mesh, diag) != 0) {
         note_merged_ids(&merged, diag);
         goto done;
@@ -441,9 +545,14 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     t = now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
-    if (tpk_orient(&mesh, (o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
-                              (o->reorient ? 0 : TPK_ORIENT_REFUSE_INVERTED),
-                   o->threads, &os, diag) != 0)
+    turned_over = malloc((size_t)(mesh.tet_count ? mesh.tet_count : 1));
+    if (!turned_over) {
+        tpk_diag_fail(diag, "out of memory for the orientation of %lld tets", (long long)mesh.tet_count);
+        goto done;
+    }
+    if (tpk_orient_marked(&mesh, (o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
+                                     (o->strict_orientation ? TPK_ORIENT_REFUSE_INVERTED : 0),
+                          o->threads, &os, turned_over, diag) != 0)
         goto done;
     rep->inverted_fixed = os.inverted_fixed;
     rep->degenerate_dropped = o->drop_degenerate ? os.degenerate : 0;
@@ -455,12 +564,12 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 
     announce(stage, stage_user, "connect");
     t = now_seconds();
-    neighbors = tpk_alloc_large(sizeof *neighbors * 4 * (size_t)mesh.tet_count);
+    neighbors = tpk_alloc_large(sizeof *neighbors * 4 * (size_t)(mesh.tet_count ? mesh.tet_count : 1));
     if (!neighbors) {
         tpk_diag_fail(diag, "out of memory for the neighbors of %lld tets", (long long)mesh.tet_count);
         goto done;
     }
-    if (tpk_connect(mesh.tets, mesh.tet_count, mesh.vertex_count, neighbors, o->threads, diag) != 0)
+    if (connect_unfolded(o, &mesh, turned_over, neighbors, rep, diag) != 0)
         goto done;
     rep->t_connect = now_seconds() - t;
 
@@ -477,6 +586,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 done:
     rep->t_total = now_seconds() - t0;
     free(neighbors);
+    free(turned_over);
     tpk_merge_report_free(&merged);
     tpk_mesh_free(&src);
     tpk_tetmesh_free(&mesh);
