@@ -17,7 +17,7 @@
 #include "tetpack.h"
 #include "tpk_assert.h"
 
-enum { STRICT = 1, DROP = 2, MERGE = 4, SKIP_BAD = 8 };
+enum { STRICT = 1, DROP = 2, MERGE = 4, SKIP_BAD = 8, CUT_FOLDS = 16 };
 
 static int convert(const char *input, const char *output, unsigned repairs, double tolerance,
                    tpk_convert_report *report, tpk_diag *diag)
@@ -28,6 +28,7 @@ static int convert(const char *input, const char *output, unsigned repairs, doub
     o.output = output;
     o.strict_orientation = (repairs & STRICT) != 0;
     o.skip_bad_cells = (repairs & SKIP_BAD) != 0;
+    o.cut_folds = (repairs & CUT_FOLDS) != 0;
     o.drop_degenerate = (repairs & DROP) != 0;
     o.merge_duplicates = (repairs & MERGE) != 0;
     o.merge_tolerance = tolerance;
@@ -283,6 +284,114 @@ TPK_TEST(degenerate_tets_dropped_and_counted)
              strstr(meta, "\"bad_cells_skipped\":7");
     CHECK_MSG(ok, "META: %s", meta);
     free(meta);
+}
+
+/* ---- folds --------------------------------------------------------------------------------------- */
+
+/* sfepy's cylinder plus one tet that overlaps a boundary tet, as gmsh's boundary layers do: it stands on
+ * a shell face of that tet (found through the converted file's SHEL, VMAP and TMAP) with its apex at the
+ * tet's centroid, listed positively, so both lie on the same side of the face they share. *cell is the
+ * overlapped source cell, *shell the cylinder's shell face count. */
+static int write_overlapping_cylinder(const char *path, int64_t *cell, int64_t *shell)
+{
+    tpk_mesh src;
+    tpk_diag diag;
+    tpk_convert_report report;
+    uint64_t size = 0;
+    const char *tpk = tpk_temp_path("cyl_plain.tpk");
+    if (convert(tpk_data_path("sfepy/cylinder.vtk"), tpk, 0, 0, &report, &diag) != 0 ||
+        tpk_import_any(tpk_data_path("sfepy/cylinder.vtk"), NULL, &src, &diag) != 0)
+        return -1;
+    *shell = report.shell_faces;
+    tpk_shell_face *faces = (tpk_shell_face *)read_chunk(tpk, TPK_TAG_SHEL, 0, &size);
+    int32_t *vmap = (int32_t *)read_chunk(tpk, TPK_TAG_VMAP, 0, &size);
+    int32_t *tmap = (int32_t *)read_chunk(tpk, TPK_TAG_TMAP, 0, &size);
+    int64_t n = src.point_count, cells = src.cell_count;
+    double *points = malloc(sizeof *points * 3 * (size_t)(n + 1));
+    int32_t *conn = malloc(sizeof *conn * 4 * (size_t)(cells + 1));
+    int rc = -1;
+    if (faces && vmap && tmap && points && conn) {
+        *cell = tmap[faces[0].t];
+        memcpy(points, src.points, sizeof *points * 3 * (size_t)n);
+        memcpy(conn, src.cell_conn, sizeof *conn * 4 * (size_t)cells);
+        for (int a = 0; a < 3; a++) {
+            double sum = 0;
+            for (int k = 0; k < 4; k++)
+                sum += src.points[3 * (int64_t)src.cell_conn[4 * *cell + k] + a];
+            points[3 * n + a] = sum / 4;
+        }
+        /* (a, b, c) faces out of the overlapped tet, so (a, c, b, centroid) is positive. */
+        int32_t *added = conn + 4 * cells;
+        added[0] = vmap[faces[0].a];
+        added[1] = vmap[faces[0].c];
+        added[2] = vmap[faces[0].b];
+        added[3] = (int32_t)n;
+        rc = write_vtk(path, points, n + 1, conn, cells + 1, 4, NULL, NULL);
+    }
+    free(faces), free(vmap), free(tmap), free(points), free(conn);
+    tpk_mesh_free(&src);
+    return rc;
+}
+
+TPK_TEST(folds_refused_by_name_then_cut)
+{
+    const char *in = tpk_temp_path("fold.vtk"), *out = tpk_temp_path("fold.tpk");
+    int64_t cell = -1, shell = 0;
+    CHECK(write_overlapping_cylinder(in, &cell, &shell) == 0);
+    tpk_convert_report r;
+    tpk_diag diag;
+    char named[64];
+    snprintf(named, sizeof named, "is shared by cell %lld (tet ", (long long)cell);
+    CHECK(convert(in, out, 0, 0, &r, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "1 folded faces (tets on the same side of a face they share") &&
+                  strstr(diag.message, "the first: the face of points ") && strstr(diag.message, named) &&
+                  strstr(diag.message, ") and cell 1348 (tet ") && strstr(diag.message, "--cut-folds cuts"),
+              "%s", diag.message);
+    FILE *f = fopen(out, "rb");
+    CHECK(f == NULL); /* nothing written */
+    /* Strictness about orientation changes nothing here: both tets are listed positively. */
+    CHECK(convert(in, out, STRICT, 0, &r, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "1 folded faces"), "%s", diag.message);
+    CHECK_MSG(convert(in, out, CUT_FOLDS, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_EQ_INT(r.folds_cut, 1);
+    CHECK_EQ_INT(r.tets, 1349);
+    CHECK_EQ_INT(r.shell_faces, shell + 4); /* the cut face stays a shell face of the cylinder, plus 4 of the new tet */
+    CHECK_EQ_INT(r.inverted_fixed, 0);
+    uint64_t size = 0;
+    char *meta = read_chunk(out, TPK_TAG_META, 0, &size);
+    CHECK(meta != NULL);
+    int ok = strstr(meta, "\"cut_folds\":{\"requested\":true,\"folded_faces\":1}") != NULL;
+    CHECK_MSG(ok, "META: %s", meta);
+    free(meta);
+}
+
+/* The overlapping tet listed in the mirrored order: turned over, it would fold, so it is a bad cell (not
+ * a fold, and not silently flipped). */
+TPK_TEST(inverted_overlap_is_a_bad_cell)
+{
+    const char *in = tpk_temp_path("fold_inv.vtk"), *out = tpk_temp_path("fold_inv.tpk");
+    int64_t cell = -1, shell = 0;
+    CHECK(write_overlapping_cylinder(in, &cell, &shell) == 0);
+    tpk_mesh src;
+    tpk_diag diag;
+    CHECK(tpk_import_any(in, NULL, &src, &diag) == 0);
+    int32_t *added = src.cell_conn + 4 * (src.cell_count - 1), swap = added[1];
+    added[1] = added[2];
+    added[2] = swap;
+    int written = write_vtk(in, src.points, src.point_count, src.cell_conn, src.cell_count, 4, NULL, NULL);
+    tpk_mesh_free(&src);
+    CHECK(written == 0);
+    tpk_convert_report r;
+    CHECK(convert(in, out, CUT_FOLDS, 0, &r, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "cell 1348 is inverted, and turning it over would fold it against its neighbour") &&
+                  strstr(diag.message, "1 inverted tets are such bad cells"),
+              "%s", diag.message);
+    CHECK_MSG(convert(in, out, SKIP_BAD, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_EQ_INT(r.bad_cells_skipped, 1);
+    CHECK_EQ_INT(r.tets, 1348);
+    CHECK_EQ_INT(r.shell_faces, shell);
+    CHECK_EQ_INT(r.inverted_fixed, 0);
+    CHECK_EQ_INT(r.folds_cut, 0);
 }
 
 /* ---- duplicate points ---------------------------------------------------------------------------- */
