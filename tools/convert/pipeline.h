@@ -1,6 +1,6 @@
 /* The converter pipeline stages, one job each (docs/ARCHITECTURE.md §1, §4):
  * tetrahedralize -> orient (exact) -> reorder (space-filling curve) -> connect (face matching)
- * -> layouts (Tet32/20/16) -> shell. */
+ * -> folds (exact, TPK-M06) -> layouts (Tet32/20/16) -> shell. */
 #ifndef TPK_PIPELINE_H
 #define TPK_PIPELINE_H
 
