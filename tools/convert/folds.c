@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "base/parallel.h"
+#include "base/strbuf.h"
 #include "pipeline.h"
 
 typedef struct fold_job {
@@ -108,12 +109,12 @@ void tpk_cut_folds(const int32_t *tets, int32_t *neighbors, const int64_t *slots
     }
 }
 
-/* "x (p0, p1, p2)": vertex v in source terms (its source id, -1 for an added point; world coordinates). */
-static int describe_vertex(const tpk_tetmesh *mesh, int32_t v, char *text, size_t cap)
+/* "S (x, y, z)": vertex v by its source id (-1 for an added point) and world coordinates. */
+static void describe_vertex(tpk_strbuf *sb, const tpk_tetmesh *mesh, int32_t v)
 {
     const double *p = mesh->points + 3 * (int64_t)v;
-    return snprintf(text, cap, "%d (%.17g, %.17g, %.17g)", mesh->vertex_source ? mesh->vertex_source[v] : v,
-                    mesh->origin[0] + p[0], mesh->origin[1] + p[1], mesh->origin[2] + p[2]);
+    tpk_strbuf_printf(sb, "%d (%.17g, %.17g, %.17g)", mesh->vertex_source ? mesh->vertex_source[v] : v,
+                      mesh->origin[0] + p[0], mesh->origin[1] + p[1], mesh->origin[2] + p[2]);
 }
 
 void tpk_describe_fold(const tpk_tetmesh *mesh, const int32_t *neighbors, int64_t slot, char *text, size_t cap)
@@ -121,22 +122,19 @@ void tpk_describe_fold(const tpk_tetmesh *mesh, const int32_t *neighbors, int64_
     int64_t t = slot / 4, u = neighbors[slot];
     int k = (int)(slot % 4), j = tpk_face_across(mesh->tets, t, k, u);
     const int32_t *v = mesh->tets + 4 * t;
-    int used = snprintf(text, cap, "the face of points ");
-    for (int i = 0; i < 3 && used > 0 && (size_t)used < cap; i++) {
-        used += snprintf(text + used, cap - (size_t)used, "%s", i ? ", " : "");
-        if ((size_t)used < cap)
-            used += describe_vertex(mesh, v[tpk_outward_face[k][i]], text + used, cap - (size_t)used);
+    tpk_strbuf sb = {0};
+    tpk_strbuf_printf(&sb, "the face of points ");
+    for (int i = 0; i < 3; i++) {
+        tpk_strbuf_printf(&sb, "%s", i ? ", " : "");
+        describe_vertex(&sb, mesh, v[tpk_outward_face[k][i]]);
     }
-    if (used > 0 && (size_t)used < cap)
-        used += snprintf(text + used, cap - (size_t)used, " is shared by cell %d (tet %lld, fourth point ",
-                         mesh->tet_source ? mesh->tet_source[t] : (int32_t)t, (long long)t);
-    if (used > 0 && (size_t)used < cap)
-        used += describe_vertex(mesh, v[k], text + used, cap - (size_t)used);
-    if (used > 0 && (size_t)used < cap)
-        used += snprintf(text + used, cap - (size_t)used, ") and cell %d (tet %lld, fourth point ",
-                         mesh->tet_source ? mesh->tet_source[u] : (int32_t)u, (long long)u);
-    if (used > 0 && (size_t)used < cap)
-        used += describe_vertex(mesh, mesh->tets[4 * u + j], text + used, cap - (size_t)used);
-    if (used > 0 && (size_t)used < cap)
-        snprintf(text + used, cap - (size_t)used, "), both fourth points on the same side of it");
+    tpk_strbuf_printf(&sb, " is shared by cell %d (tet %lld, fourth point ",
+                      mesh->tet_source ? mesh->tet_source[t] : (int32_t)t, (long long)t);
+    describe_vertex(&sb, mesh, v[k]);
+    tpk_strbuf_printf(&sb, ") and cell %d (tet %lld, fourth point ", mesh->tet_source ? mesh->tet_source[u] : (int32_t)u,
+                      (long long)u);
+    describe_vertex(&sb, mesh, mesh->tets[4 * u + j]);
+    tpk_strbuf_printf(&sb, "), both fourth points on the same side of it");
+    snprintf(text, cap, "%s", sb.failed || !sb.data ? "a folded face (out of memory to describe it)" : sb.data);
+    tpk_strbuf_free(&sb);
 }
