@@ -398,10 +398,13 @@ static int64_t mark_folding_turned(const int32_t *neighbors, const uint8_t *turn
 static int refuse_folding_turned(const tpk_tetmesh *mesh, const int32_t *neighbors, const uint8_t *turned_over,
                                  const int64_t *folds, int64_t fold_count, int64_t bad_count, tpk_diag *diag)
 {
-    int64_t first = 0;
-    while (first + 1 < fold_count && !turned_over[folds[first] / 4] && !turned_over[neighbors[folds[first]]])
-        first++; /* stops at one: bad_count > 0 */
-    int64_t t = turned_over[folds[first] / 4] ? folds[first] / 4 : neighbors[folds[first]];
+    int64_t first = -1, t = -1; /* the bad tet of the lowest source cell, as first_fold does */
+    for (int64_t i = 0; i < fold_count; i++)
+        for (int side = 0; side < 2; side++) {
+            int64_t x = side ? neighbors[folds[i]] : folds[i] / 4;
+            if (turned_over[x] && (t < 0 || (mesh->tet_source && mesh->tet_source[x] < mesh->tet_source[t])))
+                first = i, t = x;
+        }
     char fold[1200];
     tpk_describe_fold(mesh, neighbors, folds[first], fold, sizeof fold);
     return tpk_diag_fail(diag, "cell %d is inverted, and turning it over would fold it against its neighbour: %s; "
@@ -410,11 +413,25 @@ static int refuse_folding_turned(const tpk_tetmesh *mesh, const int32_t *neighbo
                          mesh->tet_source ? mesh->tet_source[t] : (int32_t)t, fold, (long long)bad_count);
 }
 
+/* The fold between the lowest source cells (tets may have been reordered), so that the message names
+ * the same face whatever the order. */
+static int64_t first_fold(const tpk_tetmesh *mesh, const int32_t *neighbors, const int64_t *folds, int64_t fold_count)
+{
+    int64_t first = 0, best_lo = INT64_MAX, best_hi = INT64_MAX;
+    for (int64_t i = 0; mesh->tet_source && i < fold_count; i++) {
+        int64_t a = mesh->tet_source[folds[i] / 4], b = mesh->tet_source[neighbors[folds[i]]];
+        int64_t lo = a < b ? a : b, hi = a < b ? b : a;
+        if (lo < best_lo || (lo == best_lo && hi < best_hi))
+            first = i, best_lo = lo, best_hi = hi;
+    }
+    return folds[first];
+}
+
 static int refuse_folds(const tpk_tetmesh *mesh, const int32_t *neighbors, const int64_t *folds, int64_t fold_count,
                         tpk_diag *diag)
 {
     char fold[1200];
-    tpk_describe_fold(mesh, neighbors, folds[0], fold, sizeof fold);
+    tpk_describe_fold(mesh, neighbors, first_fold(mesh, neighbors, folds, fold_count), fold, sizeof fold);
     return tpk_diag_fail(diag, "%lld folded faces (tets on the same side of a face they share: overlapping cells, "
                          "which a file must not link as neighbours, spec TPK-M06); the first: %s; --cut-folds "
                          "cuts the adjacency there (both faces become shell faces, both cells are kept)",
