@@ -69,6 +69,19 @@ convert_checked "$WORK/bow.vtk" "$WORK/h.tpk" --skip-bad-cells --json > "$WORK/h
 expect_exit 2 "$TPK" info "$DATA/sfepy/cylinder.vtk"
 expect_stderr "not a tetpack file"
 
+# Positions the format cannot store (TPK-M11: finite float32 relative to the box centre), also on a point
+# no cell uses: refused naming the point, never written.
+one_tet_and() { # one_tet_and FILE "X Y Z": a unit tet and a fifth point, in no cell
+    printf '# vtk DataFile Version 2.0\nbad point\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n%s\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n' "$2" > "$1"
+}
+one_tet_and "$WORK/nan.vtk" "nan 0 0"
+expect_exit 2 "$TPK" convert "$WORK/nan.vtk" "$WORK/nan.tpk"
+expect_stderr "nan.vtk: point 4 is at (nan, 0, 0): a coordinate is not a finite number"
+one_tet_and "$WORK/far.vtk" "1e39 0 0"
+expect_exit 2 "$TPK" convert "$WORK/far.vtk" "$WORK/far.tpk"
+expect_stderr "far.vtk: point 0 is at (0, 0, 0): too far from the mesh's centre for float32 positions"
+[ ! -e "$WORK/nan.tpk" ] && [ ! -e "$WORK/far.tpk" ] || fail "output left behind"
+
 # Usage errors.
 expect_exit 2 "$TPK" convert
 expect_exit 2 "$TPK" convert a b --layout tet99

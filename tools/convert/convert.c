@@ -107,7 +107,27 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
 /* Move the points into the frame the file stores: relative to the bounding-box centre (so meshes far
  * from the origin keep float32 precision) and rounded to float32. Everything after this (exact
  * orientation included) then decides on exactly the coordinates a reader of the file sees. */
-static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
+/* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the centre of the
+ * box overflows float32, is an error naming it (also when no cell uses it: the file stores every point). */
+static int check_storable(const tpk_tetmesh *mesh, const double *origin, tpk_diag *diag)
+{
+    for (int pass = 0; pass < 2; pass++) /* non-finite points first: they would make every offset overflow */
+        for (int64_t i = 0; i < mesh->vertex_count; i++) {
+            const double *p = mesh->points + 3 * i;
+            int bad = 0;
+            for (int k = 0; k < 3; k++)
+                bad |= pass == 0 ? !isfinite(p[k]) : !isfinite((float)(p[k] - origin[k]));
+            if (bad)
+                return tpk_diag_fail(diag, "point %d is at (%.17g, %.17g, %.17g): %s",
+                                     mesh->vertex_source ? mesh->vertex_source[i] : (int32_t)i, p[0], p[1], p[2],
+                                     pass == 0 ? "a coordinate is not a finite number"
+                                               : "too far from the mesh's centre for float32 positions (the "
+                                                 "format stores them relative to it)");
+        }
+    return 0;
+}
+
+static int quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *diag)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < mesh->vertex_count; i++)
@@ -121,6 +141,8 @@ static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }
+    if (check_storable(mesh, hdr->origin, diag) != 0)
+        return -1;
     memcpy(mesh->origin, hdr->origin, sizeof mesh->origin);
     for (int64_t i = 0; i < mesh->vertex_count; i++)
         for (int k = 0; k < 3; k++) {
@@ -130,6 +152,7 @@ static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
             hdr->bounds_min[k] = world < hdr->bounds_min[k] ? world : hdr->bounds_min[k];
             hdr->bounds_max[k] = world > hdr->bounds_max[k] ? world : hdr->bounds_max[k];
         }
+    return 0;
 }
 
 static void fill_positions(const void *user, int64_t first, int64_t count, void *dst)
@@ -546,7 +569,8 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     rep->face_steiner_points = mesh.face_steiner_points;
     rep->polyhedra = mesh.polyhedra;
     rep->bad_cells_skipped = mesh.bad_cells_skipped;
-    quantize_points(&mesh, &header);
+    if (quantize_points(&mesh, &header, diag) != 0)
+        goto done;
     rep->t_tetrahedralize = now_seconds() - t;
 
     /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
