@@ -82,6 +82,13 @@ expect_exit 2 "$TPK" convert "$WORK/far.vtk" "$WORK/far.tpk"
 expect_stderr "far.vtk: point 0 is at (0, 0, 0): too far from the mesh's centre for float32 positions"
 [ ! -e "$WORK/nan.tpk" ] && [ ! -e "$WORK/far.tpk" ] || fail "output left behind"
 
+# A time the format cannot store (TPK-M13: finite): a .pvd series whose second step is at "nan".
+"$TPK" export "$WORK/c.tpk" --vtu "$WORK/c.vtu" > /dev/null
+printf '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n<DataSet timestep="0" file="c.vtu"/>\n<DataSet timestep="nan" file="c.vtu"/>\n</Collection></VTKFile>\n' > "$WORK/t.pvd"
+expect_exit 2 "$TPK" convert "$WORK/t.pvd" "$WORK/t.tpk"
+expect_stderr "t.pvd: time step 1 has the time nan; the format stores only finite times"
+[ ! -e "$WORK/t.tpk" ] || fail "output left behind"
+
 # Usage errors.
 expect_exit 2 "$TPK" convert
 expect_exit 2 "$TPK" convert a b --layout tet99

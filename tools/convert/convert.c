@@ -272,6 +272,10 @@ static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
             rc = put_chunk(cw, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, per_step, (uint32_t)i, (uint32_t)s,
                            f->values + per_step * (size_t)s);
     }
+    for (int s = 0; rc == 0 && mesh->times && s < mesh->step_count; s++)
+        if (!isfinite(mesh->times[s])) /* TPK-M13 */
+            rc = tpk_diag_fail(cw->diag, "time step %d has the time %g; the format stores only finite times", s,
+                               mesh->times[s]);
     if (rc == 0 && mesh->times && mesh->step_count == max_steps && max_steps > 0)
         rc = put_chunk(cw, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, (uint64_t)max_steps, 0, 0, mesh->times);
     return rc;
