@@ -82,6 +82,13 @@ expect_exit 2 "$TPK" convert "$WORK/far.vtk" "$WORK/far.tpk"
 expect_stderr "far.vtk: point 0 is at (0, 0, 0): too far from the mesh's centre for float32 positions"
 [ ! -e "$WORK/nan.tpk" ] && [ ! -e "$WORK/far.tpk" ] || fail "output left behind"
 
+# A field name the format cannot store (spec §7.1: UTF-8): a Latin-1 name is refused naming the field.
+printf '# vtk DataFile Version 2.0\nlatin1\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS temp\351rature double 1\nLOOKUP_TABLE default\n1 2 3 4\n' > "$WORK/latin1.vtk"
+expect_exit 2 "$TPK" convert "$WORK/latin1.vtk" "$WORK/latin1.tpk"
+expect_stderr "latin1.vtk: field 'temp"
+expect_stderr "(kept field 1): its name is not valid UTF-8"
+[ ! -e "$WORK/latin1.tpk" ] || fail "output left behind"
+
 # A time the format cannot store (TPK-M13: finite): a .pvd series whose second step is at "nan".
 "$TPK" export "$WORK/c.tpk" --vtu "$WORK/c.vtu" > /dev/null
 printf '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n<DataSet timestep="0" file="c.vtu"/>\n<DataSet timestep="nan" file="c.vtu"/>\n</Collection></VTKFile>\n' > "$WORK/t.pvd"

@@ -255,8 +255,16 @@ static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
     int max_steps = 1;
     for (int i = 0; i < mesh->field_count; i++) {
         const tpk_src_field *f = &mesh->fields[i];
+        size_t length = strnlen(f->name, sizeof desc[i].name - 1);
+        if (!tpk_utf8_valid(f->name, length)) { /* spec §7.1: names are UTF-8 */
+            free(desc);
+            return tpk_diag_fail(cw->diag, "field '%.*s' (kept field %d): its name is not valid UTF-8 (a name in "
+                                 "another encoding, or cut inside a character at %d bytes); the format stores "
+                                 "UTF-8 names: rename it in the source, or leave it out with --field",
+                                 (int)length, f->name, i + 1, TPK_NAME_MAX - 1);
+        }
         size_t per_step = (size_t)(f->association == TPK_ASSOC_POINT ? mesh->vertex_count : mesh->tet_count);
-        memcpy(desc[i].name, f->name, strnlen(f->name, sizeof desc[i].name - 1)); /* NUL-padded by calloc */
+        memcpy(desc[i].name, f->name, length); /* NUL-padded by calloc */
         desc[i].association = (uint32_t)f->association;
         desc[i].step_count = (uint32_t)f->step_count;
         desc[i].components = 1;
