@@ -412,123 +412,6 @@ static void note_merged_ids(const tpk_merge_report *merged, tpk_diag *diag)
              "%lld points%s)", (long long)merged->merged_vertices, merged->cell_source ? " and collapsed cells" : "");
 }
 
-/* A tet that orient turned over and that lies on the same side of a face as its neighbour: turned over,
- * it folds against that neighbour; left as it was, it is inverted. Either way its geometry overlaps the
- * mesh (a sliver pushed through its own face, or one inverted by rounding to float32), so it is a bad
- * cell, not a labeling (docs/ARCHITECTURE.md §4). Marks them in `bad` and returns how many. */
-static int64_t mark_folding_turned(const int32_t *neighbors, const uint8_t *turned_over, const int64_t *folds,
-                                   int64_t fold_count, uint8_t *bad)
-{
-    int64_t count = 0;
-    for (int64_t i = 0; i < fold_count; i++) {
-        int64_t t = folds[i] / 4, u = neighbors[folds[i]];
-        if (turned_over[t] && !bad[t])
-            bad[t] = 1, count++;
-        if (turned_over[u] && !bad[u])
-            bad[u] = 1, count++;
-    }
-    return count;
-}
-
-static int refuse_folding_turned(const tpk_tetmesh *mesh, const int32_t *neighbors, const uint8_t *turned_over,
-                                 const int64_t *folds, int64_t fold_count, int64_t bad_count, tpk_diag *diag)
-{
-    int64_t first = -1, t = -1; /* the bad tet of the lowest source cell, as first_fold does */
-    for (int64_t i = 0; i < fold_count; i++)
-        for (int side = 0; side < 2; side++) {
-            int64_t x = side ? neighbors[folds[i]] : folds[i] / 4;
-            if (turned_over[x] && (t < 0 || (mesh->tet_source && mesh->tet_source[x] < mesh->tet_source[t])))
-                first = i, t = x;
-        }
-    char fold[1200];
-    tpk_describe_fold(mesh, neighbors, folds[first], fold, sizeof fold);
-    return tpk_diag_fail(diag, "cell %d is inverted, and turning it over would fold it against its neighbour: %s; "
-                         "%lld inverted tets are such bad cells (not a node-order question: their geometry "
-                         "overlaps the mesh); --skip-bad-cells leaves them out",
-                         mesh->tet_source ? mesh->tet_source[t] : (int32_t)t, fold, (long long)bad_count);
-}
-
-/* The fold between the lowest source cells (tets may have been reordered), so that the message names
- * the same face whatever the order. */
-static int64_t first_fold(const tpk_tetmesh *mesh, const int32_t *neighbors, const int64_t *folds, int64_t fold_count)
-{
-    int64_t first = 0, best_lo = INT64_MAX, best_hi = INT64_MAX;
-    for (int64_t i = 0; mesh->tet_source && i < fold_count; i++) {
-        int64_t a = mesh->tet_source[folds[i] / 4], b = mesh->tet_source[neighbors[folds[i]]];
-        int64_t lo = a < b ? a : b, hi = a < b ? b : a;
-        if (lo < best_lo || (lo == best_lo && hi < best_hi))
-            first = i, best_lo = lo, best_hi = hi;
-    }
-    return folds[first];
-}
-
-static int refuse_folds(const tpk_tetmesh *mesh, const int32_t *neighbors, const int64_t *folds, int64_t fold_count,
-                        tpk_diag *diag)
-{
-    char fold[1200];
-    tpk_describe_fold(mesh, neighbors, first_fold(mesh, neighbors, folds, fold_count), fold, sizeof fold);
-    return tpk_diag_fail(diag, "%lld folded faces (tets on the same side of a face they share: overlapping cells, "
-                         "which a file must not link as neighbours, spec TPK-M06); the first: %s; --cut-folds "
-                         "cuts the adjacency there (both faces become shell faces, both cells are kept)",
-                         (long long)fold_count, fold);
-}
-
-/* connect, then the writer's promise for TPK-M06 (one exact orientation test per interior face): tets
- * turned over into a fold are bad cells (an error, or left out and the rest connected again), and folds
- * in the source are an error or, with cut_folds, cut. What is written then has no fold. */
-static int connect_unfolded(const tpk_convert_options *o, tpk_tetmesh *mesh, uint8_t *turned_over,
-                            int32_t *neighbors, tpk_convert_report *rep, tpk_diag *diag)
-{
-    int64_t *folds = NULL, fold_count = 0;
-    int rc = -1;
-    if (tpk_connect(mesh->tets, mesh->tet_count, mesh->vertex_count, neighbors, o->threads, diag) != 0 ||
-        tpk_find_folds(mesh->tets, neighbors, mesh->tet_count, mesh->points, o->threads, &folds, &fold_count, diag))
-        goto done;
-    if (fold_count > 0) {
-        uint8_t *bad = calloc((size_t)mesh->tet_count, 1);
-        if (!bad) {
-            tpk_diag_fail(diag, "out of memory for %lld tets", (long long)mesh->tet_count);
-            goto done;
-        }
-        int64_t bad_count = mark_folding_turned(neighbors, turned_over, folds, fold_count, bad);
-        if (bad_count > 0 && !o->skip_bad_cells) {
-            refuse_folding_turned(mesh, neighbors, turned_over, folds, fold_count, bad_count, diag);
-            free(bad);
-            goto done;
-        }
-        if (bad_count > 0) {
-            tpk_drop_tets(mesh, bad);
-            rep->inverted_fixed -= bad_count; /* left out, not turned over */
-            rep->bad_cells_skipped += bad_count;
-            free(folds);
-            folds = NULL;
-            if (mesh->tet_count == 0) {
-                tpk_diag_fail(diag, "%s: no tetrahedra left to write (all %lld were inverted tets that would fold)",
-                              o->input, (long long)bad_count);
-                free(bad);
-                goto done;
-            }
-            if (tpk_connect(mesh->tets, mesh->tet_count, mesh->vertex_count, neighbors, o->threads, diag) != 0 ||
-                tpk_find_folds(mesh->tets, neighbors, mesh->tet_count, mesh->points, o->threads, &folds,
-                               &fold_count, diag)) {
-                free(bad);
-                goto done;
-            }
-        }
-        free(bad);
-    }
-    if (fold_count > 0 && !o->cut_folds) {
-        refuse_folds(mesh, neighbors, folds, fold_count, diag);
-        goto done;
-    }
-    tpk_cut_folds(mesh->tets, neighbors, folds, fold_count);
-    rep->folds_cut = fold_count;
-    rc = 0;
-done:
-    free(folds);
-    return rc;
-}
-
 int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage_fn stage,
                 void *stage_user, tpk_diag *diag)
 {
@@ -622,8 +505,14 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
         tpk_diag_fail(diag, "out of memory for the neighbors of %lld tets", (long long)mesh.tet_count);
         goto done;
     }
-    if (connect_unfolded(o, &mesh, turned_over, neighbors, rep, diag) != 0)
+    tpk_unfold_stats unfold;
+    if (tpk_connect_unfolded(&mesh, turned_over, (o->skip_bad_cells ? TPK_UNFOLD_SKIP_BAD_TETS : 0) |
+                                                     (o->cut_folds ? TPK_UNFOLD_CUT_FOLDS : 0),
+                             o->threads, neighbors, &unfold, diag) != 0)
         goto done;
+    rep->inverted_fixed -= unfold.bad_tets; /* left out, not turned over */
+    rep->bad_cells_skipped += unfold.bad_tets;
+    rep->folds_cut = unfold.folds_cut;
     rep->t_connect = now_seconds() - t;
 
     announce(stage, stage_user, "write");

@@ -1,6 +1,6 @@
 /* The converter pipeline stages, one job each (docs/ARCHITECTURE.md §1, §4):
  * tetrahedralize -> orient (exact) -> reorder (space-filling curve) -> connect (face matching)
- * -> folds (exact, TPK-M06) -> layouts (Tet32/20/16) -> shell. */
+ * -> folds (exact, TPK-M06; unfold.c applies the policy) -> layouts (Tet32/20/16) -> shell. */
 #ifndef TPK_PIPELINE_H
 #define TPK_PIPELINE_H
 
@@ -85,6 +85,20 @@ int tpk_face_across(const int32_t *tets, int64_t t, int k, int64_t u);
 /* "the face of points P, Q, R is shared by cell C (tet t, fourth point X) and cell D (...), both fourth
  * points on the same side of it", in source point ids and world coordinates, for the fold at `slot`. */
 void tpk_describe_fold(const tpk_tetmesh *mesh, const int32_t *neighbors, int64_t slot, char *text, size_t cap);
+
+/* tpk_connect_unfolded flags */
+#define TPK_UNFOLD_SKIP_BAD_TETS 0x1 /* leave out tets turned over into a fold, instead of failing */
+#define TPK_UNFOLD_CUT_FOLDS 0x2     /* cut the source's folds (tpk_cut_folds), instead of failing */
+typedef struct tpk_unfold_stats {
+    int64_t bad_tets;  /* tets turned over into a fold, left out (SKIP_BAD_TETS) */
+    int64_t folds_cut; /* folded faces cut (CUT_FOLDS) */
+} tpk_unfold_stats;
+/* tpk_connect, then no fold left (TPK-M06): a tet with turned_over[t] (tpk_orient_marked; NULL: none) that
+ * folds against a neighbour is a bad cell: an error naming it, or left out (mesh compacted, connected
+ * again); the other folds are an error naming the count and the first face (its cells and points), or
+ * are cut. `neighbors` holds 4 * tet_count. */
+int tpk_connect_unfolded(tpk_tetmesh *mesh, const uint8_t *turned_over, int flags, int threads, int32_t *neighbors,
+                         tpk_unfold_stats *stats, tpk_diag *diag);
 
 /* tpk_outward_face[k]: the local vertices of the face opposite vertex k of a positive tet, in outward order
  * (their normal points away from vertex k). */
