@@ -32,13 +32,11 @@ int tpk_face_across(const int32_t *tets, int64_t t, int k, int64_t u)
  * other side" (and orient lets no flat tet through). */
 static int is_folded(const fold_job *job, int64_t t, int k, int64_t u)
 {
-    const int32_t *v = job->tets + 4 * t;
-    int j = tpk_face_across(job->tets, t, k, u);
-    const double *a = job->points + 3 * (int64_t)v[tpk_outward_face[k][0]];
-    const double *b = job->points + 3 * (int64_t)v[tpk_outward_face[k][1]];
-    const double *c = job->points + 3 * (int64_t)v[tpk_outward_face[k][2]];
-    const double *y = job->points + 3 * (int64_t)job->tets[4 * u + j];
-    return tpk_orient3d_exact(a, b, c, y) <= 0;
+    const int32_t *v = job->tets + 4 * t, *w = job->tets + 4 * u;
+    int32_t ia = v[tpk_outward_face[k][0]], ib = v[tpk_outward_face[k][1]], ic = v[tpk_outward_face[k][2]];
+    int32_t iy = w[0] ^ w[1] ^ w[2] ^ w[3] ^ ia ^ ib ^ ic; /* u's fourth vertex (spec §6.2, vx) */
+    const double *p = job->points;
+    return tpk_orient3d_exact(p + 3 * (int64_t)ia, p + 3 * (int64_t)ib, p + 3 * (int64_t)ic, p + 3 * (int64_t)iy) <= 0;
 }
 
 static void fold_range(void *ctx, int64_t begin, int64_t end, int worker)
