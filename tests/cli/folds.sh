@@ -38,6 +38,13 @@ grep -q "repair --cut-folds: $source_folds folded faces cut" "$WORK/out" || { ca
 # Both overlapping cells are rendered: the marcher leaves through a cut face and enters again.
 "$TPK" render "$WORK/bl.tpk" -o "$WORK/bl.png" --size 64x64 > /dev/null || fail "render of a file with cut folds"
 
+# A finer mesh (170k tets: the fold search runs on two workers): the same file whatever the thread count.
+gmsh -3 -nt 1 -clscale 0.45 "$SRC/tests/cli/sphere_bl.geo" -format vtk -o "$WORK/fine.vtk" > "$WORK/gmsh.log" 2>&1 ||
+    { tail "$WORK/gmsh.log"; fail "gmsh failed (fine mesh)"; }
+convert_checked "$WORK/fine.vtk" "$WORK/f1.tpk" --cut-folds --threads 1 --quiet
+convert_checked "$WORK/fine.vtk" "$WORK/f2.tpk" --cut-folds --threads 2 --quiet
+cmp "$WORK/f1.tpk" "$WORK/f2.tpk" || fail "cut folds depend on the thread count"
+
 # --strict-orientation refuses the mirrored prisms before any fold is looked at.
 expect_exit 2 "$TPK" convert "$WORK/bl.vtk" "$WORK/bl.tpk" --cut-folds --strict-orientation
 expect_stderr "(a wedge) is mirrored"
