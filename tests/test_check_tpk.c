@@ -12,6 +12,7 @@
 #include "harness.h"
 #include "convert/pipeline.h"
 #include "tetpack.h"
+#include "tpk_assert.h"
 
 #define ALL_LAYOUTS (TPK_LAYOUT_BIT_TET16 | TPK_LAYOUT_BIT_TET20 | TPK_LAYOUT_BIT_TET32)
 
@@ -89,7 +90,7 @@ static int convert(const char *data, const char *out, unsigned layouts, int zstd
     tpk_convert_report report;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (tpk_convert(&o, &report, NULL, NULL, &diag) != 0) {
+    if (tpk_convert_checked(&o, &report, &diag) != 0) {
         fprintf(stderr, "convert %s: %s\n", data, diag.message);
         return -1;
     }
@@ -613,7 +614,7 @@ TPK_TEST(m05_face_use)
     CHECK_EQ_INT(total, 0);
 }
 
-/* Two positive tets on the same side of their shared face. */
+/* Two positive tets on the same side of their shared face, linked as neighbors (606), and cut (valid). */
 TPK_TEST(m06_fold)
 {
     static const int32_t tets[2][4] = {{0, 1, 2, 3}, {0, 1, 2, 5}};
@@ -627,6 +628,13 @@ TPK_TEST(m06_fold)
              total_6xx(&report, "m06") == 1;
     tpk_check_report_free(&report);
     CHECK(ok);
+    /* The same fold with its adjacency cut (spec §6.7): both faces are shell faces, and the file is valid;
+     * m05_face_use has the same cut between tets on opposite sides, which stays 605. */
+    static const int32_t cut[2][4] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}};
+    CHECK_EQ_INT(check_small("m06cut.tpk", tets, cut, 2, &report), 0);
+    int64_t total = total_6xx(&report, "m06cut");
+    tpk_check_report_free(&report);
+    CHECK_EQ_INT(total, 0);
 }
 
 /* Two neighbors swapped between their slots, in Tet32 alone and in Tet20 alone. */

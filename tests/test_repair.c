@@ -1,6 +1,8 @@
-/* The converter's repairs (issue 4): nothing fixed unasked. Inverted tets, mirrored cells, degenerate
- * tets and duplicate points are errors naming the first case, and with --reorient, --drop-degenerate and
- * --merge-duplicates[=TOL] they are fixed, counted in the report and recorded in META's "repairs".
+/* The converter's repairs (issues 4 and 9): orientation is a labeling, so inverted tets and mirrored
+ * cells are turned over by default and counted (refused with --strict-orientation); an inverted tet that
+ * would fold once turned over is a bad cell. Degenerate tets and duplicate points are errors naming the
+ * first case, and with --drop-degenerate and --merge-duplicates[=TOL] they are fixed, counted in the
+ * report and recorded in META's "repairs". Every file written is held to the 6xx checks (tpk_assert.h).
  * Real meshes from ../shared/data; meshes with duplicated points are generated here from sfepy's
  * cylinder (each tet given its own 4 points). */
 #include <math.h>
@@ -13,8 +15,9 @@
 #include "import/importers.h"
 #include "convert/merge_vertices.h"
 #include "tetpack.h"
+#include "tpk_assert.h"
 
-enum { REORIENT = 1, DROP = 2, MERGE = 4 };
+enum { STRICT = 1, DROP = 2, MERGE = 4, SKIP_BAD = 8, CUT_FOLDS = 16 };
 
 static int convert(const char *input, const char *output, unsigned repairs, double tolerance,
                    tpk_convert_report *report, tpk_diag *diag)
@@ -23,13 +26,15 @@ static int convert(const char *input, const char *output, unsigned repairs, doub
     memset(&o, 0, sizeof o);
     o.input = input;
     o.output = output;
-    o.reorient = (repairs & REORIENT) != 0;
+    o.strict_orientation = (repairs & STRICT) != 0;
+    o.skip_bad_cells = (repairs & SKIP_BAD) != 0;
+    o.cut_folds = (repairs & CUT_FOLDS) != 0;
     o.drop_degenerate = (repairs & DROP) != 0;
     o.merge_duplicates = (repairs & MERGE) != 0;
     o.merge_tolerance = tolerance;
     o.threads = 2;
     memset(diag, 0, sizeof *diag);
-    return tpk_convert(&o, report, NULL, NULL, diag);
+    return tpk_convert_checked(&o, report, diag);
 }
 
 /* A chunk of `path` read whole into a new NUL-terminated buffer (NULL when absent). */
@@ -126,37 +131,41 @@ static int write_split_cylinder(const char *path, double jitter, int64_t *tets, 
 
 /* ---- inverted tets ------------------------------------------------------------------------------- */
 
-TPK_TEST(inverted_tets_refused_without_reorient)
+TPK_TEST(inverted_tets_refused_with_strict_orientation)
 {
     tpk_convert_report r;
     tpk_diag diag;
     const char *out = tpk_temp_path("inv.tpk");
-    CHECK(convert(tpk_data_path("hard/inverted_tets.vtk"), out, 0, 0, &r, &diag) != 0);
+    CHECK(convert(tpk_data_path("hard/inverted_tets.vtk"), out, STRICT, 0, &r, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "cell 0 is inverted (negative volume): points ") != NULL, "%s", diag.message);
-    CHECK_MSG(strstr(diag.message, "135 of 1348 tets are inverted; --reorient turns them over"), "%s", diag.message);
+    CHECK_MSG(strstr(diag.message, "135 of 1348 tets are inverted; without --strict-orientation they are turned over"),
+              "%s", diag.message);
     FILE *f = fopen(out, "rb");
     CHECK(f == NULL); /* nothing written */
 }
 
-TPK_TEST(inverted_tets_turned_over_with_reorient)
+TPK_TEST(inverted_tets_turned_over_by_default)
 {
     tpk_convert_report r;
     tpk_diag diag;
     const char *out = tpk_temp_path("inv.tpk");
-    CHECK_MSG(convert(tpk_data_path("hard/inverted_tets.vtk"), out, REORIENT, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(convert(tpk_data_path("hard/inverted_tets.vtk"), out, 0, 0, &r, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(r.inverted_fixed, 135);
     CHECK_EQ_INT(r.tets, 1348);
+    CHECK_EQ_INT(r.bad_cells_skipped, 0);
     uint64_t size = 0;
     char *meta = read_chunk(out, TPK_TAG_META, 0, &size);
     CHECK(meta != NULL);
     int ok = strstr(meta, "\"repairs\":{\"reorient\":{\"requested\":true,\"inverted_tets\":135,\"mirrored_cells\":0}") &&
              strstr(meta, "\"drop_degenerate\":{\"requested\":false,\"degenerate_tets\":0,\"collapsed_cells\":0}") &&
-             strstr(meta, "\"merge_duplicates\":{\"requested\":false,\"tolerance\":0,\"merged_vertices\":0}}");
+             strstr(meta, "\"merge_duplicates\":{\"requested\":false,\"tolerance\":0,\"merged_vertices\":0}") &&
+             strstr(meta, "\"cut_folds\":{\"requested\":false,\"folded_faces\":0}}");
     CHECK_MSG(ok, "META: %s", meta);
     free(meta);
 }
 
-/* A whole file in the mirrored (left-handed) tet order needs --reorient too, and the message says so. */
+/* A whole file in the mirrored (left-handed) tet order is turned over; --strict-orientation refuses it
+ * and the message says what it looks like. */
 TPK_TEST(all_tets_inverted_named_as_a_convention)
 {
     tpk_mesh src;
@@ -174,11 +183,12 @@ TPK_TEST(all_tets_inverted_named_as_a_convention)
     tpk_mesh_free(&src);
     CHECK(written == 0);
     tpk_convert_report r;
-    CHECK(convert(in, tpk_temp_path("left.tpk"), 0, 0, &r, &diag) != 0);
+    CHECK(convert(in, tpk_temp_path("left.tpk"), STRICT, 0, &r, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "and so are all 1348 tets: the file lists tet nodes in the mirrored (left-handed) "
-                                   "order; --reorient turns them over"), "%s", diag.message);
-    CHECK_MSG(convert(in, tpk_temp_path("left.tpk"), REORIENT, 0, &r, &diag) == 0, "%s", diag.message);
+                                   "order; without --strict-orientation they are turned over"), "%s", diag.message);
+    CHECK_MSG(convert(in, tpk_temp_path("left.tpk"), 0, 0, &r, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(r.inverted_fixed, cells);
+    CHECK_EQ_INT(r.folds_cut, 0);
 }
 
 /* ---- mirrored hexahedra -------------------------------------------------------------------------- */
@@ -211,25 +221,26 @@ static int write_hex_block(const char *path, const int *mirror, int mirror_count
     return write_vtk(path, points, 24, conn, 6, 8, NULL, NULL);
 }
 
-TPK_TEST(mirrored_cells_refused_then_turned_over)
+TPK_TEST(mirrored_cells_turned_over_unless_strict)
 {
     const int some[] = {4, 2}, all[] = {0, 1, 2, 3, 4, 5};
     const char *in = tpk_temp_path("hex.vtk"), *out = tpk_temp_path("hex.tpk");
     tpk_convert_report r;
     tpk_diag diag;
     CHECK(write_hex_block(in, some, 2) == 0);
-    CHECK(convert(in, out, 0, 0, &r, &diag) != 0);
+    CHECK(convert(in, out, STRICT, 0, &r, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "cell 2 (a hexahedron) is mirrored") != NULL, "%s", diag.message);
     CHECK_MSG(strstr(diag.message, "points 14 (2, 0, 1)") != NULL, "%s", diag.message);
-    CHECK_MSG(strstr(diag.message, "2 of 6 split cells are mirrored; --reorient turns them over"), "%s", diag.message);
-    CHECK_MSG(convert(in, out, REORIENT, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(strstr(diag.message, "2 of 6 split cells are mirrored; without --strict-orientation they are turned over"),
+              "%s", diag.message);
+    CHECK_MSG(convert(in, out, 0, 0, &r, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(r.mirrored_cells, 2);
     CHECK_EQ_INT(r.inverted_fixed, 0);
     CHECK(write_hex_block(in, all, 6) == 0);
-    CHECK(convert(in, out, 0, 0, &r, &diag) != 0);
+    CHECK(convert(in, out, STRICT, 0, &r, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "so are all 6 split cells: the file lists their nodes in the mirrored"), "%s",
               diag.message);
-    CHECK_MSG(convert(in, out, REORIENT, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(convert(in, out, 0, 0, &r, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(r.mirrored_cells, 6);
     uint64_t size = 0;
     char *meta = read_chunk(out, TPK_TAG_META, 0, &size);
@@ -242,7 +253,8 @@ TPK_TEST(mirrored_cells_refused_then_turned_over)
 /* ---- degenerate tets ----------------------------------------------------------------------------- */
 
 /* 20 tets repeat a node (MANIFEST.md); the "flat" ones are not flat when decided exactly, and 10 slivers
- * are inverted in the stored float32 frame of origin 0 (tests/cli/bad_input.sh). */
+ * are inverted in the stored float32 frame. Turned over, each would fold against a neighbour (issue 9:
+ * --reorient used to write folds): they are bad cells, left out with --skip-bad-cells. */
 TPK_TEST(degenerate_tets_dropped_and_counted)
 {
     const char *in = tpk_data_path("hard/degenerate_tets.vtk"), *out = tpk_temp_path("deg.tpk");
@@ -252,17 +264,134 @@ TPK_TEST(degenerate_tets_dropped_and_counted)
     CHECK_MSG(strstr(diag.message, "has a repeated vertex: points ") && strstr(diag.message, "pass --drop-degenerate"),
               "%s", diag.message);
     CHECK(convert(in, out, DROP, 0, &r, &diag) != 0);
-    CHECK_MSG(strstr(diag.message, "10 of 8161 tets are inverted; --reorient turns them over"), "%s", diag.message);
-    CHECK_MSG(convert(in, out, DROP | REORIENT, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(strstr(diag.message, "is inverted, and turning it over would fold it against its neighbour: the face of "
+                                   "points ") &&
+                  strstr(diag.message, "10 inverted tets are such bad cells") &&
+                  strstr(diag.message, "--skip-bad-cells leaves them out"),
+              "%s", diag.message);
+    CHECK(convert(in, out, DROP | STRICT, 0, &r, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "10 of 8161 tets are inverted; without --strict-orientation"), "%s", diag.message);
+    CHECK_MSG(convert(in, out, DROP | SKIP_BAD, 0, &r, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(r.degenerate_dropped, 20);
-    CHECK_EQ_INT(r.tets, 8161 - 20);
-    CHECK_EQ_INT(r.inverted_fixed, 10);
+    CHECK_EQ_INT(r.bad_cells_skipped, 10);
+    CHECK_EQ_INT(r.tets, 8161 - 20 - 10);
+    CHECK_EQ_INT(r.inverted_fixed, 0);
+    CHECK_EQ_INT(r.folds_cut, 0);
     uint64_t size = 0;
     char *meta = read_chunk(out, TPK_TAG_META, 0, &size);
     CHECK(meta != NULL);
-    int ok = strstr(meta, "\"drop_degenerate\":{\"requested\":true,\"degenerate_tets\":20,\"collapsed_cells\":0}") != NULL;
+    int ok = strstr(meta, "\"drop_degenerate\":{\"requested\":true,\"degenerate_tets\":20,\"collapsed_cells\":0}") &&
+             strstr(meta, "\"bad_cells_skipped\":10");
     CHECK_MSG(ok, "META: %s", meta);
     free(meta);
+}
+
+/* ---- folds --------------------------------------------------------------------------------------- */
+
+/* sfepy's cylinder plus one tet that overlaps a boundary tet, as gmsh's boundary layers do: it stands on
+ * a shell face of that tet (found through the converted file's SHEL, VMAP and TMAP) with its apex at the
+ * tet's centroid, listed positively, so both lie on the same side of the face they share. *cell is the
+ * overlapped source cell, *shell the cylinder's shell face count. */
+static int write_overlapping_cylinder(const char *path, int64_t *cell, int64_t *shell)
+{
+    tpk_mesh src;
+    tpk_diag diag;
+    tpk_convert_report report;
+    uint64_t size = 0;
+    const char *tpk = tpk_temp_path("cyl_plain.tpk");
+    if (convert(tpk_data_path("sfepy/cylinder.vtk"), tpk, 0, 0, &report, &diag) != 0 ||
+        tpk_import_any(tpk_data_path("sfepy/cylinder.vtk"), NULL, &src, &diag) != 0)
+        return -1;
+    *shell = report.shell_faces;
+    tpk_shell_face *faces = (tpk_shell_face *)read_chunk(tpk, TPK_TAG_SHEL, 0, &size);
+    int32_t *vmap = (int32_t *)read_chunk(tpk, TPK_TAG_VMAP, 0, &size);
+    int32_t *tmap = (int32_t *)read_chunk(tpk, TPK_TAG_TMAP, 0, &size);
+    int64_t n = src.point_count, cells = src.cell_count;
+    double *points = malloc(sizeof *points * 3 * (size_t)(n + 1));
+    int32_t *conn = malloc(sizeof *conn * 4 * (size_t)(cells + 1));
+    int rc = -1;
+    if (faces && vmap && tmap && points && conn) {
+        *cell = tmap[faces[0].t];
+        memcpy(points, src.points, sizeof *points * 3 * (size_t)n);
+        memcpy(conn, src.cell_conn, sizeof *conn * 4 * (size_t)cells);
+        for (int a = 0; a < 3; a++) {
+            double sum = 0;
+            for (int k = 0; k < 4; k++)
+                sum += src.points[3 * (int64_t)src.cell_conn[4 * *cell + k] + a];
+            points[3 * n + a] = sum / 4;
+        }
+        /* (a, b, c) faces out of the overlapped tet, so (a, c, b, centroid) is positive. */
+        int32_t *added = conn + 4 * cells;
+        added[0] = vmap[faces[0].a];
+        added[1] = vmap[faces[0].c];
+        added[2] = vmap[faces[0].b];
+        added[3] = (int32_t)n;
+        rc = write_vtk(path, points, n + 1, conn, cells + 1, 4, NULL, NULL);
+    }
+    free(faces), free(vmap), free(tmap), free(points), free(conn);
+    tpk_mesh_free(&src);
+    return rc;
+}
+
+TPK_TEST(folds_refused_by_name_then_cut)
+{
+    const char *in = tpk_temp_path("fold.vtk"), *out = tpk_temp_path("fold.tpk");
+    int64_t cell = -1, shell = 0;
+    CHECK(write_overlapping_cylinder(in, &cell, &shell) == 0);
+    tpk_convert_report r;
+    tpk_diag diag;
+    char named[64];
+    snprintf(named, sizeof named, "is shared by cell %lld (tet ", (long long)cell);
+    CHECK(convert(in, out, 0, 0, &r, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "1 folded faces (tets on the same side of a face they share") &&
+                  strstr(diag.message, "the first: the face of points ") && strstr(diag.message, named) &&
+                  strstr(diag.message, ") and cell 1348 (tet ") && strstr(diag.message, "--cut-folds cuts"),
+              "%s", diag.message);
+    FILE *f = fopen(out, "rb");
+    CHECK(f == NULL); /* nothing written */
+    /* Strictness about orientation changes nothing here: both tets are listed positively. */
+    CHECK(convert(in, out, STRICT, 0, &r, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "1 folded faces"), "%s", diag.message);
+    CHECK_MSG(convert(in, out, CUT_FOLDS, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_EQ_INT(r.folds_cut, 1);
+    CHECK_EQ_INT(r.tets, 1349);
+    CHECK_EQ_INT(r.shell_faces, shell + 4); /* the cut face stays a shell face of the cylinder, plus 4 of the new tet */
+    CHECK_EQ_INT(r.inverted_fixed, 0);
+    uint64_t size = 0;
+    char *meta = read_chunk(out, TPK_TAG_META, 0, &size);
+    CHECK(meta != NULL);
+    int ok = strstr(meta, "\"cut_folds\":{\"requested\":true,\"folded_faces\":1}") != NULL;
+    CHECK_MSG(ok, "META: %s", meta);
+    free(meta);
+}
+
+/* The overlapping tet listed in the mirrored order: turned over, it would fold, so it is a bad cell (not
+ * a fold, and not silently flipped). */
+TPK_TEST(inverted_overlap_is_a_bad_cell)
+{
+    const char *in = tpk_temp_path("fold_inv.vtk"), *out = tpk_temp_path("fold_inv.tpk");
+    int64_t cell = -1, shell = 0;
+    CHECK(write_overlapping_cylinder(in, &cell, &shell) == 0);
+    tpk_mesh src;
+    tpk_diag diag;
+    CHECK(tpk_import_any(in, NULL, &src, &diag) == 0);
+    int32_t *added = src.cell_conn + 4 * (src.cell_count - 1), swap = added[1];
+    added[1] = added[2];
+    added[2] = swap;
+    int written = write_vtk(in, src.points, src.point_count, src.cell_conn, src.cell_count, 4, NULL, NULL);
+    tpk_mesh_free(&src);
+    CHECK(written == 0);
+    tpk_convert_report r;
+    CHECK(convert(in, out, CUT_FOLDS, 0, &r, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "cell 1348 is inverted, and turning it over would fold it against its neighbour") &&
+                  strstr(diag.message, "1 inverted tets are such bad cells"),
+              "%s", diag.message);
+    CHECK_MSG(convert(in, out, SKIP_BAD, 0, &r, &diag) == 0, "%s", diag.message);
+    CHECK_EQ_INT(r.bad_cells_skipped, 1);
+    CHECK_EQ_INT(r.tets, 1348);
+    CHECK_EQ_INT(r.shell_faces, shell);
+    CHECK_EQ_INT(r.inverted_fixed, 0);
+    CHECK_EQ_INT(r.folds_cut, 0);
 }
 
 /* ---- duplicate points ---------------------------------------------------------------------------- */
@@ -365,7 +494,7 @@ TPK_TEST(merge_collapsing_a_cell_needs_drop_degenerate)
     o.merge_tolerance = 1e-6;
     o.drop_degenerate = 1;
     o.no_reorder = 1;
-    CHECK_MSG(tpk_convert(&o, &r, NULL, NULL, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_convert_checked(&o, &r, &diag) == 0, "%s", diag.message);
     CHECK_EQ_INT(r.collapsed_cells_dropped, 1);
     CHECK_EQ_INT(r.merged_vertices, 1);
     CHECK_EQ_INT(r.tets, 2);

@@ -10,22 +10,6 @@ expect_exit 2 "$TPK" convert "$WORK/trunc.vtk" "$WORK/o.tpk"
 expect_stderr "trunc.vtk"
 [ -z "$(ls "$WORK" | grep -v -e '^trunc.vtk$' -e '^missing' -e '^out$' -e '^err$')" ] || { ls "$WORK"; fail "stray files"; }
 
-# Positions are stored as finite float32 offsets from one origin (spec TPK-M11): a coordinate that is not
-# finite, or points spanning more than float32 can hold, are refused by name (the fault suite found both
-# written into files that break M11).
-for bad in "nan 0 0" "1e300 0 0"; do
-    printf '# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n%s\n0 1 0\n-1e300 0 1\n' \
-        "$bad" > "$WORK/nonfinite.vtk"
-    printf 'CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n' >> "$WORK/nonfinite.vtk"
-    expect_exit 2 "$TPK" convert "$WORK/nonfinite.vtk" "$WORK/n.tpk"
-    expect_stderr "nonfinite.vtk: "
-    case $bad in
-        nan*) expect_stderr "point 1 is (nan, 0, 0): coordinates must be finite numbers" ;;
-        *) expect_stderr "more than float32 positions around one origin can hold" ;;
-    esac
-    [ ! -e "$WORK/n.tpk" ] || fail "output left behind"
-done
-
 # Degenerate tets are refused with a message naming one and pointing at --drop-degenerate ...
 expect_exit 2 "$TPK" convert "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk"
 expect_stderr "drop-degenerate"
@@ -33,21 +17,21 @@ expect_stderr "drop-degenerate"
 # ... and dropped (and counted) with it. MANIFEST.md says 20 tets there repeat a node and 20 are "flat",
 # but the flat ones were made by moving a node onto a plane in floating point: decided exactly, none of
 # them has zero volume (checked with rational arithmetic, in float64 and in the stored float32 frame),
-# so exactly 20 are dropped, and 10 of the slivers are negatively oriented in the stored frame: those are
-# refused too until --reorient turns them over (nothing is fixed unasked; tests/cli/repair.sh).
+# so exactly 20 are dropped, and 10 of the slivers (origin 0, spec §6.8) are negatively oriented in the stored frame: turned
+# over, each would fold against a neighbour, so they are bad cells (tests/cli/repair.sh).
 expect_exit 2 "$TPK" convert "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk" --drop-degenerate
-expect_stderr "10 of 8161 tets are inverted; --reorient turns them over"
+expect_stderr "10 inverted tets are such bad cells"
 [ ! -e "$WORK/d.tpk" ] || fail "output left behind"
-"$TPK" convert "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk" --drop-degenerate --reorient --json > "$WORK/d.json"
-"$PY" -c "import json; d=json.load(open('$WORK/d.json')); assert d['degenerate_dropped']==20 and d['tets']==8161-20 and d['inverted_fixed']==10, d"
-# Inverted tets are refused, or turned over and counted with --reorient.
-expect_exit 2 "$TPK" convert "$DATA/hard/inverted_tets.vtk" "$WORK/i.tpk"
-expect_stderr "135 of 1348 tets are inverted; --reorient turns them over"
-"$TPK" convert "$DATA/hard/inverted_tets.vtk" "$WORK/i.tpk" --reorient --json > "$WORK/i.json"
+convert_checked "$DATA/hard/degenerate_tets.vtk" "$WORK/d.tpk" --drop-degenerate --skip-bad-cells --json > "$WORK/d.json"
+"$PY" -c "import json; d=json.load(open('$WORK/d.json')); assert d['degenerate_dropped']==20 and d['tets']==8161-30 and d['bad_cells_skipped']==10 and d['inverted_fixed']==0, d"
+# Inverted tets are turned over and counted, or refused with --strict-orientation.
+expect_exit 2 "$TPK" convert "$DATA/hard/inverted_tets.vtk" "$WORK/i.tpk" --strict-orientation
+expect_stderr "135 of 1348 tets are inverted; without --strict-orientation they are turned over"
+convert_checked "$DATA/hard/inverted_tets.vtk" "$WORK/i.tpk" --json > "$WORK/i.json"
 "$PY" -c "import json; d=json.load(open('$WORK/i.json')); assert d['inverted_fixed']==135, d"
 
 # A damaged .tpk: info and render refuse it with exit 2.
-"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --quiet
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --quiet
 cp "$WORK/c.tpk" "$WORK/flip.tpk"
 size=$(stat -c %s "$WORK/flip.tpk")
 printf '\xff' | dd of="$WORK/flip.tpk" bs=1 seek=$((size / 2)) conv=notrunc status=none
@@ -70,7 +54,7 @@ expect_stderr "short.tpk"
 # Fields: unknown at convert time (the message lists what there is); render needs a point field.
 expect_exit 2 "$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/f.tpk" --field nosuch
 expect_stderr "available fields: mat_id (cell), temperature (point)"
-"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/m.tpk" --field mat_id --quiet
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/m.tpk" --field mat_id --quiet
 expect_exit 2 "$TPK" render "$WORK/m.tpk" -o "$WORK/m.png" --field mat_id
 expect_stderr "per-tet field 'mat_id'; render needs a per-point field (this file has no point field)"
 expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --field nope
@@ -80,7 +64,7 @@ expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --step 3
 # A twisted hexahedron (sfepy's cross3d.mesh, cell 2) cannot be split without a new point: it gets one at
 # its centre. A bow-tie hexahedron (top face turned half a turn) cannot be split even so: refused by
 # name, or left out and counted with --skip-bad-cells. A non-tpk file is refused by its magic.
-"$TPK" convert "$DATA/sfepy/cross3d.mesh" "$WORK/x.tpk" --json > "$WORK/x.json"
+convert_checked "$DATA/sfepy/cross3d.mesh" "$WORK/x.tpk" --json > "$WORK/x.json"
 "$PY" -c "import json; d=json.load(open('$WORK/x.json')); assert d['steiner_cells']==1 and d['tets']==48 and d['vertices']==33, d"
 printf '# vtk DataFile Version 2.0\nbow-tie\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 16 double\n' > "$WORK/bow.vtk"
 printf '0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n' >> "$WORK/bow.vtk"
@@ -89,10 +73,37 @@ printf 'CELLS 2 18\n8 0 1 2 3 4 5 6 7\n8 8 9 10 11 14 15 12 13\nCELL_TYPES 2\n12
 expect_exit 2 "$TPK" convert "$WORK/bow.vtk" "$WORK/h.tpk"
 expect_stderr "cell 1 (a hexahedron) is too warped, non-convex or degenerate to split"
 [ ! -e "$WORK/h.tpk" ] || fail "output left behind"
-"$TPK" convert "$WORK/bow.vtk" "$WORK/h.tpk" --skip-bad-cells --json > "$WORK/h.json"
+convert_checked "$WORK/bow.vtk" "$WORK/h.tpk" --skip-bad-cells --json > "$WORK/h.json"
 "$PY" -c "import json; d=json.load(open('$WORK/h.json')); assert d['bad_cells_skipped']==1 and d['tets'] in (5, 6), d"
 expect_exit 2 "$TPK" info "$DATA/sfepy/cylinder.vtk"
 expect_stderr "not a tetpack file"
+
+# Positions the format cannot store (TPK-M11: finite float32 relative to the box centre), also on a point
+# no cell uses: refused naming the point, never written.
+one_tet_and() { # one_tet_and FILE "X Y Z": a unit tet and a fifth point, in no cell
+    printf '# vtk DataFile Version 2.0\nbad point\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n%s\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n' "$2" > "$1"
+}
+one_tet_and "$WORK/nan.vtk" "nan 0 0"
+expect_exit 2 "$TPK" convert "$WORK/nan.vtk" "$WORK/nan.tpk"
+expect_stderr "nan.vtk: point 4 is at (nan, 0, 0): a coordinate is not a finite number"
+one_tet_and "$WORK/far.vtk" "1e39 0 0"
+expect_exit 2 "$TPK" convert "$WORK/far.vtk" "$WORK/far.tpk"
+expect_stderr "far.vtk: point 4 is at (9.9999999999999994e+38, 0, 0): too far from the origin for float32 positions"
+[ ! -e "$WORK/nan.tpk" ] && [ ! -e "$WORK/far.tpk" ] || fail "output left behind"
+
+# A field name the format cannot store (spec §7.1: UTF-8): a Latin-1 name is refused naming the field.
+printf '# vtk DataFile Version 2.0\nlatin1\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS temp\351rature double 1\nLOOKUP_TABLE default\n1 2 3 4\n' > "$WORK/latin1.vtk"
+expect_exit 2 "$TPK" convert "$WORK/latin1.vtk" "$WORK/latin1.tpk"
+expect_stderr "latin1.vtk: field 'temp"
+expect_stderr "(kept field 1): its name is not valid UTF-8"
+[ ! -e "$WORK/latin1.tpk" ] || fail "output left behind"
+
+# A time the format cannot store (TPK-M13: finite): a .pvd series whose second step is at "nan".
+"$TPK" export "$WORK/c.tpk" --vtu "$WORK/c.vtu" > /dev/null
+printf '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1"><Collection>\n<DataSet timestep="0" file="c.vtu"/>\n<DataSet timestep="nan" file="c.vtu"/>\n</Collection></VTKFile>\n' > "$WORK/t.pvd"
+expect_exit 2 "$TPK" convert "$WORK/t.pvd" "$WORK/t.tpk"
+expect_stderr "t.pvd: time step 1 has the time nan; the format stores only finite times"
+[ ! -e "$WORK/t.tpk" ] || fail "output left behind"
 
 # Usage errors.
 expect_exit 2 "$TPK" convert

@@ -3,7 +3,7 @@
 # output point carries the mean of the cell values around its source point, checked with meshio.
 source "$(dirname "$0")/common.sh"
 src=$DATA/sfepy/piezo_mesh_micro.vtk
-"$TPK" convert "$src" "$WORK/p.tpk" --cell-to-point --quiet || fail "convert --cell-to-point failed"
+convert_checked "$src" "$WORK/p.tpk" --cell-to-point --quiet || fail "convert --cell-to-point failed"
 "$TPK" export "$WORK/p.tpk" --vtu "$WORK/p.vtu" || fail "export failed"
 $PY - "$src" "$WORK/p.vtu" <<'PY' || fail "cell-to-point values differ from the mean of the cells around each point"
 import sys

@@ -3,7 +3,7 @@
 # spec (with the finding in --json), 2 for a file no reader can open (with a message naming it).
 source "$(dirname "$0")/common.sh"
 
-"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --layout tet16 --layout tet32 --quiet
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --layout tet16 --layout tet32 --quiet
 expect_exit 0 "$TPK" check "$WORK/c.tpk"
 grep -q "no problems found" "$WORK/out" || fail "clean file: $(cat "$WORK/out")"
 expect_exit 0 "$TPK" check "$WORK/c.tpk" --json

@@ -2,7 +2,7 @@
 # the VTU is cross-checked with meshio (an independent reader).
 source "$(dirname "$0")/common.sh"
 
-"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --layout tet16 --layout tet20 --layout tet32 --quiet
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/c.tpk" --layout tet16 --layout tet20 --layout tet32 --quiet
 "$TPK" info "$WORK/c.tpk" --json > "$WORK/info.json"
 "$PY" - "$WORK/info.json" <<'PY'
 import json, sys
@@ -122,12 +122,12 @@ for (a, b, c), t in zip(faces["v"], faces["t"]):
 PY
 
 # Real meshes: legacy binary VTK (gmsh, big-endian doubles) and TetGen.
-"$TPK" convert "$DATA/gmsh/t5_small_tet_bin.vtk" "$WORK/t5.tpk" --zstd 3 --quiet
+convert_checked "$DATA/gmsh/t5_small_tet_bin.vtk" "$WORK/t5.tpk" --zstd 3 --quiet
 "$TPK" info "$WORK/t5.tpk" > /dev/null
-"$TPK" convert "$DATA/tetgen/hinge_small.node" "$WORK/hinge.tpk" --layout tet20 --quiet
+convert_checked "$DATA/tetgen/hinge_small.node" "$WORK/hinge.tpk" --layout tet20 --quiet
 "$TPK" info "$WORK/hinge.tpk" --json | "$PY" -c "import json,sys; d=json.load(sys.stdin); assert d['tets']==14487, d['tets']"
 # A hexahedral mesh with only cell data, rendered by its material averaged to points.
-"$TPK" convert "$DATA/sfepy/acoustic_wg.vtk" "$WORK/wg.tpk" --cell-to-point --quiet
+convert_checked "$DATA/sfepy/acoustic_wg.vtk" "$WORK/wg.tpk" --cell-to-point --quiet
 "$TPK" info "$WORK/wg.tpk" --json | "$PY" -c "
 import json, sys
 d = json.load(sys.stdin)

@@ -76,11 +76,11 @@ EOF
 
 # Tets (sfepy's cylinder), hexahedra split into tets, and hexahedra 6.5e6 m from the origin (PLY keeps
 # every digit of origin + float32 position; OBJ/OFF/STL get float32 world positions, with a warning).
-"$TPK" convert "$DATA/sfepy/cylinder.vtk" "$WORK/cyl.tpk" --quiet
+convert_checked "$DATA/sfepy/cylinder.vtk" "$WORK/cyl.tpk" --quiet
 check_shells cyl
-"$TPK" convert "$DATA/sfepy/cube_medium_hexa.mesh" "$WORK/hex.tpk" --quiet
+convert_checked "$DATA/sfepy/cube_medium_hexa.mesh" "$WORK/hex.tpk" --quiet
 check_shells hex
-"$TPK" convert "$DATA/hard/huge_offset_hex.vtu" "$WORK/far.tpk" --quiet
+convert_checked "$DATA/hard/huge_offset_hex.vtu" "$WORK/far.tpk" --quiet
 check_shells far
 "$TPK" export "$WORK/far.tpk" --shell "$WORK/far2.off" 2> "$WORK/err"
 expect_stderr "OpenMesh's off writer stores float32 positions: vertices move by up to"
@@ -89,7 +89,7 @@ expect_stderr "OpenMesh's off writer stores float32 positions: vertices move by 
 
 # Three cubes, one touching at a vertex, one along an edge: OpenMesh's halfedge mesh cannot share such a
 # vertex or edge; every face is still written (on copies of its vertices), and the warning says so.
-"$TPK" convert "$DATA/hard/nonmanifold_vertex_edge_tets.vtu" "$WORK/nm.tpk" --quiet
+convert_checked "$DATA/hard/nonmanifold_vertex_edge_tets.vtu" "$WORK/nm.tpk" --quiet
 "$TPK" export "$WORK/nm.tpk" --shell "$WORK/nm.obj" 2> "$WORK/err"
 grep -q "the shell is not manifold: [0-9]* faces" "$WORK/err" || { cat "$WORK/err"; fail "no non-manifold warning"; }
 faces=$("$TPK" info "$WORK/nm.tpk" --json | "$PY" -c "import json,sys; print(json.load(sys.stdin)['shell_faces'])")

@@ -49,19 +49,19 @@ same() { # same A.tpk B.tpk what
     cmp -s "$1.vtu" "$2.vtu" || fail "$3"
 }
 cp "$DATA/sfepy/cylinder.vtk" "$WORK/cylinder.dat"
-"$TPK" convert "$WORK/cylinder.dat" "$WORK/a.tpk" --format vtk --quiet
-"$TPK" convert "$WORK/cylinder.dat" "$WORK/b.tpk" --format vtk-legacy --quiet
+convert_checked "$WORK/cylinder.dat" "$WORK/a.tpk" --format vtk --quiet
+convert_checked "$WORK/cylinder.dat" "$WORK/b.tpk" --format vtk-legacy --quiet
 same "$WORK/a.tpk" "$WORK/b.tpk" "--format vtk-legacy differs from --format vtk"
-"$TPK" convert "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/m.tpk" --format medit --quiet
-"$TPK" convert "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/n.tpk" --format meshb --quiet
+convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/m.tpk" --format medit --quiet
+convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/n.tpk" --format meshb --quiet
 same "$WORK/m.tpk" "$WORK/n.tpk" "--format medit on a .meshb differs from --format meshb"
 expect_exit 2 "$TPK" convert "$WORK/cylinder.dat" "$WORK/c.tpk" --format obj
 expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, vtu, pvd, gmsh, medit, ugrid, exodus, meshb"
 # Detection by content when the extension says nothing: VTK legacy and Gmsh by their first bytes.
-"$TPK" convert "$WORK/cylinder.dat" "$WORK/d.tpk" --quiet
+convert_checked "$WORK/cylinder.dat" "$WORK/d.tpk" --quiet
 same "$WORK/a.tpk" "$WORK/d.tpk" "content detection of VTK legacy"
 cp "$DATA/gmsh/t5_small_tet_ascii22.msh" "$WORK/t5.txt"
-"$TPK" convert "$WORK/t5.txt" "$WORK/g.tpk" --json > "$WORK/g.json"
+convert_checked "$WORK/t5.txt" "$WORK/g.tpk" --json > "$WORK/g.json"
 "$PY" -c "import json; d=json.load(open('$WORK/g.json')); assert d['tets']==13391, d"
 expect_exit 2 "$TPK" formats --bogus
 expect_stderr "unknown option '--bogus'"

@@ -12,7 +12,7 @@ for f in sfepy/cube_medium_hexa.mesh sfepy/acoustics_mesh3d.mesh sfepy/acoustic_
     # 97 of its 603 cells are stored mirrored (convert refuses it so); turned over, they keep
     # their faces, so the comparison holds the same.
     [ "$f" = sfepy/matrix_fiber_rand.vtk ] && options=(--reorient)
-    "$TPK" convert "$DATA/$f" "$WORK/h.tpk" --quiet "${options[@]}"
+    convert_checked "$DATA/$f" "$WORK/h.tpk" --quiet "${options[@]}"
     "$TPK" export "$WORK/h.tpk" --vtu "$WORK/h.vtu" --shell "$WORK/h.ply"
     "$PY" - "$DATA/$f" "$WORK/h.vtu" "$WORK/h.ply" <<'PY' || fail "$f: the shell does not match the source boundary"
 import itertools, sys

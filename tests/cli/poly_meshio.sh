@@ -13,8 +13,8 @@ quads = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (
 cells = [[h[list(q)] for q in quads] for h in hexes]
 meshio.Mesh(src.points, [("polyhedron8", cells)]).write(sys.argv[2])
 PYEOF
-"$TPK" convert "$DATA/sfepy/cube_medium_hexa.mesh" "$WORK/h.tpk" --json > "$WORK/h.json"
-"$TPK" convert "$WORK/poly.vtu" "$WORK/p.tpk" --json > "$WORK/p.json"
+convert_checked "$DATA/sfepy/cube_medium_hexa.mesh" "$WORK/h.tpk" --json > "$WORK/h.json"
+convert_checked "$WORK/poly.vtu" "$WORK/p.tpk" --json > "$WORK/p.json"
 "$PY" - "$WORK/h.json" "$WORK/p.json" <<'PYEOF'
 import json, sys
 h, p = (json.load(open(f)) for f in sys.argv[1:3])

@@ -37,12 +37,12 @@ fi
 
 # Each form converts; --json stdout is JSON alone (TetGen's printing is kept off stdout); the .tpk checks.
 for f in part.stl part_bin.stl part.off; do
-    "$TPK" convert "$WORK/$f" "$WORK/$f.tpk" --json > "$WORK/$f.json"
+    convert_checked "$WORK/$f" "$WORK/$f.tpk" --json > "$WORK/$f.json"
     "$PY" -c "import json; d=json.load(open('$WORK/$f.json')); assert d['tets'] > 5000 and d['inverted_fixed'] == 0 and d['degenerate_dropped'] == 0, d"
     "$TPK" check "$WORK/$f.tpk" > /dev/null || fail "tetpack check failed on $f.tpk"
 done
 # The options reach TetGen: a volume bound gives more tets; unsafe switches are refused.
-"$TPK" convert "$WORK/part.off" "$WORK/fine.tpk" --tetgen-max-volume 0.01 --tetgen-quality 1.2/10 --json > "$WORK/fine.json"
+convert_checked "$WORK/part.off" "$WORK/fine.tpk" --tetgen-max-volume 0.01 --tetgen-quality 1.2/10 --json > "$WORK/fine.json"
 "$PY" -c "import json; a=json.load(open('$WORK/part.off.json')); b=json.load(open('$WORK/fine.json')); assert b['tets'] > 2 * a['tets'], (a['tets'], b['tets'])"
 expect_exit 2 "$TPK" convert "$WORK/part.off" "$WORK/x.tpk" --tetgen-switches pqr
 expect_stderr "'r' at position 3 is not allowed"
@@ -61,7 +61,7 @@ PYEOF
 # straddles x = 0, so the stored frame has origin 0 on x (spec §6.8) and float32 keeps those tiny
 # coordinates: the slivers stay positive and nothing is dropped. (With the box centre as origin they
 # were rounded flat and refused.)
-"$TPK" convert "$WORK/cyl.csv" "$WORK/cyl.tpk" --json > "$WORK/cyl.json"
+convert_checked "$WORK/cyl.csv" "$WORK/cyl.tpk" --json > "$WORK/cyl.json"
 "$PY" -c "import json; d=json.load(open('$WORK/cyl.json')); assert d['vertices'] == 354 and d['fields'] == 1 and d['tets'] == 2193 and d['degenerate_dropped'] == 0, d"
 "$TPK" info "$WORK/cyl.tpk" | grep -q height || fail "field 'height' missing"
 

@@ -78,8 +78,8 @@ expect_stderr "(--tetgen-time-limit raises it)"
 [ ! -e "$WORK/out.tpk" ] || fail "output left behind"
 # Progress: a line per TetGen stage on stderr (check --progress forces it without a terminal).
 "$TPK" check --progress "$WORK/cube.stl" > /dev/null 2> "$WORK/err"
-expect_stderr "TetGen: checking the surface for self-intersections (switches dzQ)... 0 s"
-expect_stderr "TetGen: tetrahedralizing the surface (switches p180zQq1.414)... 0 s (of at most 3600)"
+expect_stderr "TetGen: checking the surface for self-intersections (switches dzQ)... [0-9][0-9]* s"
+expect_stderr "TetGen: tetrahedralizing the surface (switches p180zQq1.414)... [0-9][0-9]* s (of at most 3600)"
 "$TPK" check "$WORK/cube.stl" > /dev/null 2> "$WORK/err"
 [ ! -s "$WORK/err" ] || fail "progress printed without --progress"
 expect_exit 2 "$TPK" convert "$WORK/cube.stl" "$WORK/out.tpk" --max-tets 0

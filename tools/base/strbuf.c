@@ -76,3 +76,29 @@ void tpk_strbuf_free(tpk_strbuf *sb)
     free(sb->data);
     memset(sb, 0, sizeof *sb);
 }
+
+int tpk_utf8_sequence(const unsigned char *s, size_t n)
+{
+    int len = s[0] < 0x80 ? 1 : s[0] >= 0xC2 && s[0] <= 0xDF ? 2 : s[0] >= 0xE0 && s[0] <= 0xEF ? 3
+                              : s[0] >= 0xF0 && s[0] <= 0xF4 ? 4 : 0;
+    if (!len || (size_t)len > n)
+        return 0;
+    for (int k = 1; k < len; k++)
+        if ((s[k] & 0xC0) != 0x80)
+            return 0;
+    if ((s[0] == 0xE0 && s[1] < 0xA0) || (s[0] == 0xED && s[1] > 0x9F) || (s[0] == 0xF0 && s[1] < 0x90) ||
+        (s[0] == 0xF4 && s[1] > 0x8F))
+        return 0; /* overlong, surrogate, above U+10FFFF */
+    return len;
+}
+
+int tpk_utf8_valid(const char *s, size_t n)
+{
+    for (size_t i = 0; i < n;) {
+        int len = tpk_utf8_sequence((const unsigned char *)s + i, n - i);
+        if (!len)
+            return 0;
+        i += (size_t)len;
+    }
+    return 1;
+}

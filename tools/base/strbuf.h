@@ -18,4 +18,11 @@ void tpk_strbuf_json_string(tpk_strbuf *sb, const char *text);
 void tpk_strbuf_json_number(tpk_strbuf *sb, double value);
 void tpk_strbuf_free(tpk_strbuf *sb);
 
+/* Length of the valid UTF-8 sequence at s (at most n bytes, n >= 1), 0 when invalid (RFC 3629: no
+ * overlong forms, surrogates or code points above U+10FFFF). The one rule for the writer's and the
+ * validator's text fields (spec §7.1). */
+int tpk_utf8_sequence(const unsigned char *s, size_t n);
+/* 1 when the n bytes at s are valid UTF-8. */
+int tpk_utf8_valid(const char *s, size_t n);
+
 #endif

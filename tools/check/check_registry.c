@@ -93,8 +93,9 @@ static const tpk_check_def registry[] = {
     {603, "tpk_m03_vx", E, "file", "TPK-M03: vx differs from the xor of the tet's vertex ids"},
     {604, "tpk_m04_adjacency", E, "file", "TPK-M04: adjacency is not symmetric"},
     {605, "tpk_m05_face_use", E, "file",
-     "TPK-M05: a face is used by more than two tets, or a face's neighbor is -1 while another tet has it"},
-    {606, "tpk_m06_fold", E, "file", "TPK-M06: two tets sharing a face lie on the same side of it"},
+     "TPK-M05: a face is used by more than two tets, or a face's neighbor is -1 while another tet has it "
+     "(allowed only at a cut fold: both tets on the same side, both -1)"},
+    {606, "tpk_m06_fold", E, "file", "TPK-M06: two tets stored as neighbors lie on the same side of their face"},
     {607, "tpk_m07_neighbor_order", E, "file",
      "TPK-M07: a neighbor is not the tet opposite the vertex its slot names"},
     {608, "tpk_m08_layouts", E, "file",

@@ -1,5 +1,6 @@
 /* Face use (TPK-M05, 605): a triple of vertex ids is a face of at most two tets, and a face has neighbor
- * -1 exactly when no other tet has it. Faces are bucketed by their smallest id (a counting sort) and
+ * -1 exactly when no other tet has it, or when its two tets lie on the same side of it (a fold whose
+ * adjacency the writer cut, spec §6.7; decided exactly, after the pass, for the few such faces). Faces are bucketed by their smallest id (a counting sort) and
  * compared within buckets. A mutual neighbor pair is one entry of weight 2, so interior faces cost one
  * key, not two; the buckets are filled a vertex window at a time so the keys never exceed a fixed
  * budget, whatever the mesh size. */
@@ -111,17 +112,52 @@ static void sort_bucket(uint64_t *keys, int64_t n)
     }
 }
 
-static void check_bucket(tpkc_sink *sink, int64_t v, uint64_t *keys, int64_t n)
+/* A face of two tets that both record neighbor -1 across it: allowed when they lie on the same side. */
+typedef struct cut_face {
+    int32_t ids[3];  /* ascending */
+    int32_t apex[2]; /* the fourth vertex of each of its tets */
+    int found;
+} cut_face;
+
+typedef struct cut_list {
+    cut_face *faces;
+    int64_t count, cap;
+    int failed;
+} cut_list;
+
+static void add_cut(cut_list *cuts, int64_t v, uint64_t key)
+{
+    if (cuts->count == cuts->cap) {
+        int64_t cap = cuts->cap ? 2 * cuts->cap : 16;
+        cut_face *grown = realloc(cuts->faces, sizeof *grown * (size_t)cap);
+        if (!grown) {
+            cuts->failed = 1;
+            return;
+        }
+        cuts->faces = grown;
+        cuts->cap = cap;
+    }
+    cut_face *f = &cuts->faces[cuts->count++];
+    memset(f, 0, sizeof *f);
+    f->ids[0] = (int32_t)v;
+    f->ids[1] = (int32_t)(key >> 33);
+    f->ids[2] = (int32_t)((key >> 2) & 0x7fffffff);
+}
+
+static void check_bucket(tpkc_sink *sink, cut_list *cuts, int64_t v, uint64_t *keys, int64_t n)
 {
     sort_bucket(keys, n);
     for (int64_t i = 0; i < n;) {
-        int64_t tets = 0, j = i;
+        int64_t tets = 0, j = i, boundaries = 0;
         int boundary = 0;
         for (; j < n && keys[j] >> 2 == keys[i] >> 2; j++) {
             tets += (keys[j] & KEY_PAIR) ? 2 : 1;
             boundary |= (keys[j] & KEY_BOUNDARY) != 0;
+            boundaries += (keys[j] & KEY_BOUNDARY) != 0;
         }
-        if (tets >= 3 || (tets == 2 && boundary)) {
+        if (tets == 2 && boundaries == 2) {
+            add_cut(cuts, v, keys[i]); /* decided by resolve_cuts */
+        } else if (tets >= 3 || (tets == 2 && boundary)) {
             tpk_example *ex = tpkc_hit(sink, 605, "face");
             int64_t mid = (int64_t)(keys[i] >> 33), max = (int64_t)((keys[i] >> 2) & 0x7fffffff);
             tpk_example_ids(ex, 3, (const int64_t[]){v, mid, max});
@@ -165,6 +201,45 @@ static void add_example_tets(const tpkc *c, tpk_finding *finding)
     }
 }
 
+static int compare_cut_ids(const void *pa, const void *pb)
+{
+    const cut_face *a = pa, *b = pb;
+    for (int k = 0; k < 3; k++)
+        if (a->ids[k] != b->ids[k])
+            return a->ids[k] < b->ids[k] ? -1 : 1;
+    return 0;
+}
+
+/* The cut faces (ascending, from the windows in order) get their two tets' fourth vertices from one scan
+ * over the tets; those whose tets lie on opposite sides are 605 (a cut only a fold allows). */
+static void resolve_cuts(const tpkc *c, cut_face *cuts, int64_t count, tpkc_sink *sink)
+{
+    for (int64_t t = 0; count > 0 && t < c->T; t++) {
+        int32_t q[4], f[3];
+        if (!tpkc_usable(c, t, q))
+            continue;
+        for (int k = 0; k < 4; k++) {
+            if (face_class(c, t, k) != TPKC_FACE_BOUNDARY)
+                continue;
+            sorted_face(q, k, f);
+            cut_face key = {.ids = {f[0], f[1], f[2]}};
+            cut_face *hit = bsearch(&key, cuts, (size_t)count, sizeof key, compare_cut_ids);
+            if (hit && hit->found < 2)
+                hit->apex[hit->found++] = q[k];
+        }
+    }
+    for (int64_t i = 0; i < count; i++) {
+        const cut_face *f = &cuts[i];
+        int same_side = f->found == 2 && tpkc_orient(c, f->ids[0], f->ids[1], f->ids[2], f->apex[0]) ==
+                                             tpkc_orient(c, f->ids[0], f->ids[1], f->ids[2], f->apex[1]);
+        if (same_side)
+            continue;
+        tpk_example *ex = tpkc_hit(sink, 605, "face");
+        tpk_example_ids(ex, 3, (const int64_t[]){f->ids[0], f->ids[1], f->ids[2]});
+        tpk_example_note(ex, "a face of 2 tets on opposite sides, both record neighbor -1 across it (tet ids follow)");
+    }
+}
+
 typedef struct window {
     int64_t lo, hi, base;      /* vertices [lo, hi), their keys from start[lo] */
     int64_t first_tet, end_tet; /* the tets with a face starting in the window lie in [first_tet, end_tet) */
@@ -176,6 +251,7 @@ typedef struct face_pass {
     const window *windows;
     uint64_t **keys;   /* one buffer per worker */
     tpkc_sink *sinks;  /* one per window, merged in window order */
+    cut_list *cuts;    /* one per window: faces whose two tets both record -1 */
 } face_pass;
 
 static void window_range(void *ctx, int64_t begin, int64_t end, int worker)
@@ -185,7 +261,7 @@ static void window_range(void *ctx, int64_t begin, int64_t end, int worker)
         const window *w = &p->windows[i];
         fill_window(p->c, w->lo, w->hi, w->first_tet, w->end_tet, p->start, w->base, p->keys[worker]);
         for (int64_t v = w->lo, first = w->base; v < w->hi; first = p->start[v], v++)
-            check_bucket(&p->sinks[i], v, p->keys[worker] + (first - w->base), p->start[v] - first);
+            check_bucket(&p->sinks[i], &p->cuts[i], v, p->keys[worker] + (first - w->base), p->start[v] - first);
     }
 }
 
@@ -228,18 +304,35 @@ int tpkc_check_faces(tpkc *c, tpk_diag *diag)
     window *windows = plan_windows(start, span, c->V, &capacity, &window_count);
     free(span);
     uint64_t *keys[TPK_MAX_THREADS] = {NULL};
-    tpkc_sink *sinks = calloc((size_t)window_count + 1, sizeof *sinks);
-    int ok = windows && sinks;
+    tpkc_sink *sinks = calloc((size_t)window_count + 1, sizeof *sinks); /* the last: the cut faces */
+    cut_list *cuts = calloc((size_t)window_count + 1, sizeof *cuts);
+    cut_list all = {0};
+    int ok = windows && sinks && cuts;
     for (int w = 0; ok && w < threads; w++)
         ok = (keys[w] = malloc(sizeof *keys[w] * (size_t)(capacity + 1))) != NULL;
     if (ok) {
-        for (int64_t i = 0; i < window_count; i++)
+        for (int64_t i = 0; i <= window_count; i++)
             sinks[i].max_examples = c->report->options.max_examples;
-        face_pass pass = {c, start, windows, keys, sinks};
+        face_pass pass = {c, start, windows, keys, sinks, cuts};
         tpk_parallel_for(window_count, threads < window_count ? threads : (int)window_count, window_range, &pass);
-        tpkc_merge(c->report, sinks, (int)window_count);
+        for (int64_t i = 0; i < window_count && ok; i++) {
+            for (int64_t k = 0; k < cuts[i].count && !all.failed; k++) {
+                add_cut(&all, 0, 0);
+                if (!all.failed)
+                    all.faces[all.count - 1] = cuts[i].faces[k];
+            }
+            ok = !cuts[i].failed && !all.failed;
+        }
+    }
+    if (ok) {
+        resolve_cuts(c, all.faces, all.count, &sinks[window_count]);
+        tpkc_merge(c->report, sinks, (int)window_count + 1);
         add_example_tets(c, tpk_check_finding(c->report, 605));
     }
+    for (int64_t i = 0; cuts && i <= window_count; i++)
+        free(cuts[i].faces);
+    free(cuts);
+    free(all.faces);
     for (int w = 0; w < threads; w++)
         free(keys[w]);
     free(sinks);

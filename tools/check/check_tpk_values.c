@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
+#include "base/strbuf.h"
 
 typedef struct chunk_buffer {
     void *data;
@@ -146,22 +147,6 @@ static int check_maps(tpkc *c, tpkc_sink *sink, chunk_buffer *buf, tpk_diag *dia
     return found < 0 ? -1 : 0;
 }
 
-/* Length of the valid UTF-8 sequence at s (at most n bytes), 0 when invalid (RFC 3629). */
-static int utf8_sequence(const unsigned char *s, size_t n)
-{
-    int len = s[0] < 0x80 ? 1 : s[0] >= 0xC2 && s[0] <= 0xDF ? 2 : s[0] >= 0xE0 && s[0] <= 0xEF ? 3
-                              : s[0] >= 0xF0 && s[0] <= 0xF4 ? 4 : 0;
-    if (!len || (size_t)len > n)
-        return 0;
-    for (int k = 1; k < len; k++)
-        if ((s[k] & 0xC0) != 0x80)
-            return 0;
-    if ((s[0] == 0xE0 && s[1] < 0xA0) || (s[0] == 0xED && s[1] > 0x9F) || (s[0] == 0xF0 && s[1] < 0x90) ||
-        (s[0] == 0xF4 && s[1] > 0x8F))
-        return 0; /* overlong, surrogate, above U+10FFFF */
-    return len;
-}
-
 /* "" when the text field is valid UTF-8 followed by NUL bytes only, else what is wrong. */
 static const char *text_problem(const char *field, size_t size)
 {
@@ -170,13 +155,7 @@ static const char *text_problem(const char *field, size_t size)
     for (size_t i = len; i < size; i++)
         if (s[i])
             return "has a non-zero byte after its terminating NUL";
-    for (size_t i = 0; i < len;) {
-        int n = utf8_sequence(s + i, len - i);
-        if (!n)
-            return "is not valid UTF-8";
-        i += (size_t)n;
-    }
-    return "";
+    return tpk_utf8_valid(field, len) ? "" : "is not valid UTF-8";
 }
 
 static void check_field_text(tpkc *c, tpkc_sink *sink, uint32_t f)

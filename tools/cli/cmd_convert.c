@@ -25,12 +25,22 @@ static const char convert_help[] =
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "\n"
-    "Repairs: nothing is fixed unasked. Without these options an inverted, mirrored or degenerate cell\n"
-    "is an error naming the first one and the count, and duplicate points stay apart (tetpack check\n"
-    "reports them as duplicate_vertex); with them each is fixed, counted in the summary and recorded\n"
-    "in the file's META (\"repairs\"):\n"
-    "  --reorient                  turn inverted tets and mirrored hexahedra, wedges and pyramids over\n"
-    "                              (also when all of them are: a file in mirrored node order)\n"
+    "Orientation: a tet's node order is a labeling. Inverted tets, polyhedra given inside out, and\n"
+    "cells whose every tet is negative (a file or block written in the mirrored node order) are turned\n"
+    "over and counted; a cell partly inverted (a folded hexahedron) is split from an added point or is a\n"
+    "bad cell. An inverted tet that would fold against a neighbour once turned over is a bad cell.\n"
+    "  --strict-orientation        refuse inverted tets and mirrored cells instead, naming the first one\n"
+    "  --reorient                  accepted for old command lines: turning over is now the default\n"
+    "\n"
+    "Folds: tets on the same side of a face they share (overlapping cells, e.g. in boundary layers) are\n"
+    "an error naming the first face, its cells and points; a written file never links them.\n"
+    "  --cut-folds                 cut the adjacency at each folded face instead: both faces become\n"
+    "                              shell faces, both cells are kept (counted)\n"
+    "\n"
+    "Repairs: nothing else is fixed unasked. Without these options a degenerate cell is an error naming\n"
+    "the first one and the count, and duplicate points stay apart (tetpack check reports them as\n"
+    "duplicate_vertex); with them each is fixed, counted in the summary and recorded in the file's META\n"
+    "(\"repairs\", with the orientation and fold counts):\n"
     "  --drop-degenerate           drop zero-volume tets, and cells that --merge-duplicates collapsed\n"
     "  --merge-duplicates[=TOL]    before splitting, merge points with exactly equal coordinates, or\n"
     "                              with TOL (1e-15 <= TOL <= 1) points within TOL times the bounding-box\n"
@@ -38,8 +48,9 @@ static const char convert_help[] =
     "                              chains), keeps that point's field values; cells are renumbered, and\n"
     "                              one that collapses is an error (or dropped with --drop-degenerate)\n"
     "\n"
-    "  --skip-bad-cells            leave out hexahedra, wedges and pyramids that are too warped or\n"
-    "                              non-convex to split without new points (counted) instead of failing\n"
+    "  --skip-bad-cells            leave out bad cells (counted) instead of failing: cells too warped or\n"
+    "                              non-convex to split even with added points, and inverted tets that\n"
+    "                              would fold if turned over\n"
     "  --format NAME               force the input format, by a name listed below (default: from the\n"
     "                              extension, else the first bytes)\n"
     "  --threads N                 worker threads (default: all cores)\n"
@@ -182,7 +193,11 @@ static int parse_args(int argc, char **argv, convert_args *a)
         } else if (!strcmp(arg, "--drop-degenerate")) {
             a->options.drop_degenerate = 1;
         } else if (!strcmp(arg, "--reorient")) {
-            a->options.reorient = 1;
+            /* the default now; old command lines keep working */
+        } else if (!strcmp(arg, "--strict-orientation")) {
+            a->options.strict_orientation = 1;
+        } else if (!strcmp(arg, "--cut-folds")) {
+            a->options.cut_folds = 1;
         } else if (!strncmp(arg, "--merge-duplicates", 18) && (!arg[18] || arg[18] == '=')) {
             if (parse_tolerance(arg[18] ? arg + 19 : NULL, &a->options))
                 return tpk_cli_fail("convert", "--merge-duplicates=TOL expects %g <= TOL <= 1 (a fraction of the "
@@ -221,11 +236,18 @@ static void show_stage(void *user, const char *stage)
     fflush(stderr);
 }
 
-/* One line per repair asked for, with what it did (also when it found nothing to do). */
+/* One line per repair asked for, with what it did (also when it found nothing to do); orientation and
+ * folds only when there was something to turn over or cut. */
 static void print_repairs(const tpk_convert_options *o, const tpk_convert_report *r)
 {
-    if (!o->merge_duplicates && !o->reorient && !o->drop_degenerate) {
-        printf("  repairs: none asked for\n");
+    if (r->inverted_fixed || r->mirrored_cells)
+        printf("  orientation: %lld inverted tets and %lld mirrored cells turned over (node order; "
+               "--strict-orientation refuses them)\n", (long long)r->inverted_fixed, (long long)r->mirrored_cells);
+    if (o->cut_folds)
+        printf("  repair --cut-folds: %lld folded faces cut (both sides now shell faces)\n", (long long)r->folds_cut);
+    if (!o->merge_duplicates && !o->drop_degenerate) {
+        if (!o->cut_folds)
+            printf("  repairs: none asked for\n");
         return;
     }
     if (o->merge_duplicates && o->merge_tolerance > 0)
@@ -234,9 +256,6 @@ static void print_repairs(const tpk_convert_options *o, const tpk_convert_report
     else if (o->merge_duplicates)
         printf("  repair --merge-duplicates: %lld points merged into a twin with equal coordinates\n",
                (long long)r->merged_vertices);
-    if (o->reorient)
-        printf("  repair --reorient: %lld inverted tets and %lld mirrored cells turned over\n",
-               (long long)r->inverted_fixed, (long long)r->mirrored_cells);
     if (o->drop_degenerate)
         printf("  repair --drop-degenerate: %lld zero-volume tets and %lld cells collapsed by merging dropped\n",
                (long long)r->degenerate_dropped, (long long)r->collapsed_cells_dropped);
@@ -263,11 +282,12 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
                           "\"steiner_cells\":%lld,\"face_steiner_points\":%lld,\"polyhedra\":%lld,"
                           "\"bad_cells_skipped\":%lld,\"merged_vertices\":%lld,"
-                          "\"collapsed_cells_dropped\":%lld,\"repairs\":",
+                          "\"collapsed_cells_dropped\":%lld,\"folds_cut\":%lld,\"repairs\":",
                           (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
                           (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
                           (long long)r->steiner_cells, (long long)r->face_steiner_points,
-                          (long long)r->polyhedra, (long long)r->bad_cells_skipped, (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped);
+                          (long long)r->polyhedra, (long long)r->bad_cells_skipped, (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped,
+                          (long long)r->folds_cut);
         tpk_convert_repairs_json(&sb, &a->options, r);
         tpk_strbuf_printf(&sb,
                           ",\"seconds\":{\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"

@@ -127,25 +127,30 @@ static double axis_origin(double lo, double hi)
     return lo;
 }
 
-/* Move the points into the frame the file stores: relative to the origin of axis_origin (so meshes
- * far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
- * included) then decides on exactly the coordinates a reader of the file sees. */
-/* Stored positions must be finite (spec TPK-M11): a source point with a coordinate that is not a finite
- * number (a damaged file, or NaN written by a solver) is refused by its number before any work. */
-static int check_finite_points(const tpk_mesh *src, const char *input, tpk_diag *diag)
+/* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the origin
+ * overflows float32, is an error naming it (also when no cell uses it: the file stores every point). */
+static int check_storable(const tpk_tetmesh *mesh, const double *origin, tpk_diag *diag)
 {
-    for (int64_t p = 0; p < src->point_count; p++) {
-        const double *x = src->points + 3 * p;
-        if (!isfinite(x[0]) || !isfinite(x[1]) || !isfinite(x[2]))
-            return tpk_diag_fail(diag, "%s: point %lld is (%g, %g, %g): coordinates must be finite numbers", input,
-                                 (long long)p, x[0], x[1], x[2]);
-    }
+    for (int pass = 0; pass < 2; pass++) /* non-finite points first: they would make every offset overflow */
+        for (int64_t i = 0; i < mesh->vertex_count; i++) {
+            const double *p = mesh->points + 3 * i;
+            int bad = 0;
+            for (int k = 0; k < 3; k++)
+                bad |= pass == 0 ? !isfinite(p[k]) : !isfinite((float)(p[k] - origin[k]));
+            if (bad)
+                return tpk_diag_fail(diag, "point %d is at (%.17g, %.17g, %.17g): %s",
+                                     mesh->vertex_source ? mesh->vertex_source[i] : (int32_t)i, p[0], p[1], p[2],
+                                     pass == 0 ? "a coordinate is not a finite number"
+                                               : "too far from the origin for float32 positions (the "
+                                                 "format stores them relative to it)");
+        }
     return 0;
 }
 
-/* Returns -1 (with a message) when an offset from the origin overflows float32: the points span more
- * than a .tpk can store. */
-static int quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, const char *input, tpk_diag *diag)
+/* Move the points into the frame the file stores: relative to the origin of axis_origin (so meshes
+ * far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
+ * included) then decides on exactly the coordinates a reader of the file sees. */
+static int quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *diag)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < mesh->vertex_count; i++)
@@ -159,14 +164,13 @@ static int quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, const char
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }
+    if (check_storable(mesh, hdr->origin, diag) != 0)
+        return -1;
     memcpy(mesh->origin, hdr->origin, sizeof mesh->origin);
     for (int64_t i = 0; i < mesh->vertex_count; i++)
         for (int k = 0; k < 3; k++) {
             double rel = (double)(float)(mesh->points[3 * i + k] - hdr->origin[k]);
             double world = hdr->origin[k] + rel;
-            if (!isfinite(rel) || !isfinite(world))
-                return tpk_diag_fail(diag, "%s: the points span %g to %g along axis %c, more than float32 positions "
-                                     "around one origin can hold", input, lo[k], hi[k], "xyz"[k]);
             mesh->points[3 * i + k] = rel;
             hdr->bounds_min[k] = world < hdr->bounds_min[k] ? world : hdr->bounds_min[k];
             hdr->bounds_max[k] = world > hdr->bounds_max[k] ? world : hdr->bounds_max[k];
@@ -274,8 +278,16 @@ static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
     int max_steps = 1;
     for (int i = 0; i < mesh->field_count; i++) {
         const tpk_src_field *f = &mesh->fields[i];
+        size_t length = strnlen(f->name, sizeof desc[i].name - 1);
+        if (!tpk_utf8_valid(f->name, length)) { /* spec §7.1: names are UTF-8 */
+            free(desc);
+            return tpk_diag_fail(cw->diag, "field '%.*s' (kept field %d): its name is not valid UTF-8 (a name in "
+                                 "another encoding, or cut inside a character at %d bytes); the format stores "
+                                 "UTF-8 names: rename it in the source, or leave it out with --field",
+                                 (int)length, f->name, i + 1, TPK_NAME_MAX - 1);
+        }
         size_t per_step = (size_t)(f->association == TPK_ASSOC_POINT ? mesh->vertex_count : mesh->tet_count);
-        memcpy(desc[i].name, f->name, strnlen(f->name, sizeof desc[i].name - 1)); /* NUL-padded by calloc */
+        memcpy(desc[i].name, f->name, length); /* NUL-padded by calloc */
         desc[i].association = (uint32_t)f->association;
         desc[i].step_count = (uint32_t)f->step_count;
         desc[i].components = 1;
@@ -291,6 +303,10 @@ static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
             rc = put_chunk(cw, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, per_step, (uint32_t)i, (uint32_t)s,
                            f->values + per_step * (size_t)s);
     }
+    for (int s = 0; rc == 0 && mesh->times && s < mesh->step_count; s++)
+        if (!isfinite(mesh->times[s])) /* TPK-M13 */
+            rc = tpk_diag_fail(cw->diag, "time step %d has the time %g; the format stores only finite times", s,
+                               mesh->times[s]);
     if (rc == 0 && mesh->times && mesh->step_count == max_steps && max_steps > 0)
         rc = put_chunk(cw, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, (uint64_t)max_steps, 0, 0, mesh->times);
     return rc;
@@ -329,14 +345,17 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
 void tpk_convert_repairs_json(tpk_strbuf *sb, const tpk_convert_options *o, const tpk_convert_report *r)
 {
     tpk_strbuf_printf(sb, "{\"reorient\":{\"requested\":%s,\"inverted_tets\":%lld,\"mirrored_cells\":%lld},",
-                      o->reorient ? "true" : "false", (long long)r->inverted_fixed, (long long)r->mirrored_cells);
+                      o->strict_orientation ? "false" : "true", (long long)r->inverted_fixed,
+                      (long long)r->mirrored_cells);
     tpk_strbuf_printf(sb, "\"drop_degenerate\":{\"requested\":%s,\"degenerate_tets\":%lld,\"collapsed_cells\":%lld},",
                       o->drop_degenerate ? "true" : "false", (long long)r->degenerate_dropped,
                       (long long)r->collapsed_cells_dropped);
     tpk_strbuf_printf(sb, "\"merge_duplicates\":{\"requested\":%s,\"tolerance\":",
                       o->merge_duplicates ? "true" : "false");
     tpk_strbuf_json_number(sb, o->merge_duplicates ? o->merge_tolerance : 0.0);
-    tpk_strbuf_printf(sb, ",\"merged_vertices\":%lld}}", (long long)r->merged_vertices);
+    tpk_strbuf_printf(sb, ",\"merged_vertices\":%lld},", (long long)r->merged_vertices);
+    tpk_strbuf_printf(sb, "\"cut_folds\":{\"requested\":%s,\"folded_faces\":%lld}}", o->cut_folds ? "true" : "false",
+                      (long long)r->folds_cut);
 }
 
 static int write_maps(chunk_writer *cw, const tpk_tetmesh *mesh)
@@ -436,6 +455,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     memset(&mesh, 0, sizeof mesh);
     memset(rep, 0, sizeof *rep);
     int32_t *neighbors = NULL;
+    uint8_t *turned_over = NULL;
     tpk_header_fields header;
     memset(&header, 0, sizeof header);
     char source_format[32] = "";
@@ -445,8 +465,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     double t0 = now_seconds(), t = t0;
 
     announce(stage, stage_user, "import");
-    if (tpk_import_any_with(o->input, o->format, o->tetgen, &src, diag) != 0 ||
-        check_finite_points(&src, o->input, diag) != 0)
+    if (tpk_import_any_with(o->input, o->format, o->tetgen, &src, diag) != 0)
         goto done;
     rep->source_points = src.point_count;
     rep->source_cells = src.cell_count;
@@ -466,7 +485,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
-                                       (o->reorient ? 0 : TPK_TETRA_REFUSE_MIRRORED),
+                                       (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0),
                                    &mesh, diag) != 0) {
         note_merged_ids(&merged, diag);
         goto done;
@@ -479,7 +498,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     rep->face_steiner_points = mesh.face_steiner_points;
     rep->polyhedra = mesh.polyhedra;
     rep->bad_cells_skipped = mesh.bad_cells_skipped;
-    if (quantize_points(&mesh, &header, o->input, diag) != 0)
+    if (quantize_points(&mesh, &header, diag) != 0)
         goto done;
     rep->t_tetrahedralize = now_seconds() - t;
 
@@ -496,9 +515,14 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     t = now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
-    if (tpk_orient(&mesh, (o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
-                              (o->reorient ? 0 : TPK_ORIENT_REFUSE_INVERTED),
-                   o->threads, &os, diag) != 0)
+    turned_over = malloc((size_t)(mesh.tet_count ? mesh.tet_count : 1));
+    if (!turned_over) {
+        tpk_diag_fail(diag, "out of memory for the orientation of %lld tets", (long long)mesh.tet_count);
+        goto done;
+    }
+    if (tpk_orient_marked(&mesh, (o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
+                                     (o->strict_orientation ? TPK_ORIENT_REFUSE_INVERTED : 0),
+                          o->threads, &os, turned_over, diag) != 0)
         goto done;
     rep->inverted_fixed = os.inverted_fixed;
     rep->degenerate_dropped = o->drop_degenerate ? os.degenerate : 0;
@@ -510,13 +534,19 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 
     announce(stage, stage_user, "connect");
     t = now_seconds();
-    neighbors = tpk_alloc_large(sizeof *neighbors * 4 * (size_t)mesh.tet_count);
+    neighbors = tpk_alloc_large(sizeof *neighbors * 4 * (size_t)(mesh.tet_count ? mesh.tet_count : 1));
     if (!neighbors) {
         tpk_diag_fail(diag, "out of memory for the neighbors of %lld tets", (long long)mesh.tet_count);
         goto done;
     }
-    if (tpk_connect(mesh.tets, mesh.tet_count, mesh.vertex_count, neighbors, o->threads, diag) != 0)
+    tpk_unfold_stats unfold;
+    if (tpk_connect_unfolded(&mesh, turned_over, (o->skip_bad_cells ? TPK_UNFOLD_SKIP_BAD_TETS : 0) |
+                                                     (o->cut_folds ? TPK_UNFOLD_CUT_FOLDS : 0),
+                             o->threads, neighbors, &unfold, diag) != 0)
         goto done;
+    rep->inverted_fixed -= unfold.bad_tets; /* left out, not turned over */
+    rep->bad_cells_skipped += unfold.bad_tets;
+    rep->folds_cut = unfold.folds_cut;
     rep->t_connect = now_seconds() - t;
 
     announce(stage, stage_user, "write");
@@ -532,6 +562,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
 done:
     rep->t_total = now_seconds() - t0;
     free(neighbors);
+    free(turned_over);
     tpk_merge_report_free(&merged);
     tpk_mesh_free(&src);
     tpk_tetmesh_free(&mesh);

@@ -21,12 +21,17 @@ typedef struct tpk_convert_options {
     int zstd_level;               /* 0: uncompressed (zero-copy); 1..22: zstd */
     int no_reorder;               /* keep source order (default: Hilbert reorder) */
     /* Repairs: never silent. Without them the problem is an error naming the first case and the count;
-     * with them it is fixed and counted in the report, the summary and META's "repairs" object. */
-    int reorient;                 /* turn inverted tets and mirrored cells over instead of failing */
+     * with them it is fixed and counted in the report, the summary and META's "repairs" object.
+     * Orientation is the exception: a tet's or a mirrored cell's node order is a labeling, so inverted
+     * tets and cells whose every tet is negative are turned over (and counted) unless strict_orientation.
+     * A tet that, turned over, would fold against a neighbour is a bad cell instead (skip_bad_cells). */
+    int strict_orientation;       /* inverted tets and mirrored cells are an error instead of turned over */
+    int cut_folds;                /* cut the adjacency at folded faces (two shell faces) instead of failing */
     int drop_degenerate;          /* drop zero-volume tets and cells collapsed by merging, instead of failing */
     int merge_duplicates;         /* merge duplicate points before tetrahedralizing */
     double merge_tolerance;       /* 0: exactly equal coordinates; > 0: within this times the bbox diagonal */
-    int skip_bad_cells;           /* leave out cells whose split would fold, instead of failing */
+    int skip_bad_cells;           /* leave out cells whose split would fold, and inverted tets that would fold
+                                     if turned over, instead of failing */
     int cell_to_point;            /* average cell fields to points (and keep them without --field) */
     int threads;                  /* <= 0: all cores */
     const char *command_line;     /* recorded in META; may be NULL */
@@ -36,11 +41,13 @@ typedef struct tpk_convert_options {
 typedef struct tpk_convert_report {
     int64_t source_points, source_cells;
     int64_t vertices, tets, shell_faces;
-    int64_t inverted_fixed, degenerate_dropped; /* inverted tets turned over (--reorient); tets dropped */
+    int64_t inverted_fixed, degenerate_dropped; /* inverted tets turned over; zero-volume tets dropped */
     int64_t merged_vertices, collapsed_cells_dropped; /* --merge-duplicates; cells it collapsed, dropped */
     int64_t cells_into[7];       /* source cells that gave k tets (1 tetra, 2 pyramid, 3 wedge, 5/6 hex) */
     int64_t face_steiner_points, polyhedra; /* points added at face centres; polyhedra split */
-    int64_t mirrored_cells, steiner_cells, bad_cells_skipped; /* mirrored: turned over (--reorient) */
+    int64_t mirrored_cells, steiner_cells, bad_cells_skipped; /* mirrored: turned over; bad: left out (cells,
+                                                                 and inverted tets that would fold) */
+    int64_t folds_cut;            /* folded faces whose adjacency was cut (cut_folds) */
     int field_count, step_count;
     uint64_t output_bytes;
     /* seconds per stage */
@@ -54,7 +61,9 @@ struct tpk_strbuf;
 /* Appends the "repairs" JSON object (what was asked for and what was done), as META records it:
  * {"reorient":{"requested":B,"inverted_tets":N,"mirrored_cells":N},
  *  "drop_degenerate":{"requested":B,"degenerate_tets":N,"collapsed_cells":N},
- *  "merge_duplicates":{"requested":B,"tolerance":X,"merged_vertices":N}}
+ *  "merge_duplicates":{"requested":B,"tolerance":X,"merged_vertices":N},
+ *  "cut_folds":{"requested":B,"folded_faces":N}}
+ * reorient.requested is true unless strict_orientation (turning over is the default).
  * tolerance: 0 for exactly equal coordinates, else relative to the bounding-box diagonal. */
 void tpk_convert_repairs_json(struct tpk_strbuf *sb, const tpk_convert_options *options,
                               const tpk_convert_report *report);

@@ -92,9 +92,9 @@ static int refuse_degenerate(const tpk_tetmesh *mesh, const int8_t *kinds, const
                          (long long)(stats->degenerate - stats->repeated_vertex));
 }
 
-/* Never turned over silently: an inverted tet is more often a node-order bug in the writer or in an
- * importer than a wish. Also when ALL tets are inverted (a left-handed convention): flipping a whole
- * file is the same one flag, and the message says what it looks like, so the user decides. */
+/* Only with TPK_ORIENT_REFUSE_INVERTED (--strict-orientation): a tet's node order is a labeling, so
+ * turning it over changes no geometry and is the default; who wants to catch a node-order bug in a
+ * writer or an importer asks for the refusal, and the message says what it looks like. */
 static int refuse_inverted(const tpk_tetmesh *mesh, const int8_t *kinds, const tpk_orient_stats *stats,
                            tpk_diag *diag)
 {
@@ -103,19 +103,18 @@ static int refuse_inverted(const tpk_tetmesh *mesh, const int8_t *kinds, const t
     describe_tet(mesh, t, "is inverted (negative volume)", tet, sizeof tet);
     if (stats->inverted_fixed == mesh->tet_count)
         return tpk_diag_fail(diag, "%s, and so are all %lld tets: the file lists tet nodes in the mirrored "
-                                   "(left-handed) order; --reorient turns them over",
+                                   "(left-handed) order; without --strict-orientation they are turned over",
                              tet, (long long)stats->inverted_fixed);
-    return tpk_diag_fail(diag, "%s; %lld of %lld tets are inverted; --reorient "
-                               "turns them over",
+    return tpk_diag_fail(diag, "%s; %lld of %lld tets are inverted; without --strict-orientation they are "
+                               "turned over",
                          tet, (long long)stats->inverted_fixed, (long long)mesh->tet_count);
 }
 
-/* Removes the degenerate tets in place, with their tet_source entries and per-tet field values. */
-static void drop_degenerate(tpk_tetmesh *mesh, const int8_t *kinds)
+int64_t tpk_drop_tets(tpk_tetmesh *mesh, const uint8_t *drop)
 {
     int64_t old_count = mesh->tet_count, kept = 0;
     for (int64_t t = 0; t < old_count; t++) {
-        if (kinds[t] == TET_FLAT || kinds[t] == TET_REPEATED)
+        if (drop[t])
             continue;
         memmove(mesh->tets + 4 * kept, mesh->tets + 4 * t, 4 * sizeof *mesh->tets);
         if (mesh->tet_source)
@@ -129,14 +128,34 @@ static void drop_degenerate(tpk_tetmesh *mesh, const int8_t *kinds)
         int64_t out = 0;
         for (int s = 0; s < f->step_count; s++)
             for (int64_t t = 0; t < old_count; t++)
-                if (kinds[t] != TET_FLAT && kinds[t] != TET_REPEATED)
+                if (!drop[t])
                     f->values[out++] = f->values[(int64_t)s * old_count + t];
     }
     mesh->tet_count = kept;
+    return old_count - kept;
 }
 
-int tpk_orient(tpk_tetmesh *mesh, int flags, int threads_requested, tpk_orient_stats *stats,
-               tpk_diag *diag)
+/* kinds[] becomes the drop mask of tpk_drop_tets (1 for the degenerate tets), and turned_over the marks
+ * of the tets kept. */
+static void drop_degenerate(tpk_tetmesh *mesh, int8_t *kinds, uint8_t *turned_over)
+{
+    int64_t kept = 0;
+    for (int64_t t = 0; t < mesh->tet_count; t++) {
+        int inverted = kinds[t] == TET_INVERTED;
+        kinds[t] = kinds[t] == TET_FLAT || kinds[t] == TET_REPEATED;
+        if (turned_over && !kinds[t])
+            turned_over[kept++] = (uint8_t)inverted;
+    }
+    tpk_drop_tets(mesh, (const uint8_t *)kinds);
+}
+
+int tpk_orient(tpk_tetmesh *mesh, int flags, int threads, tpk_orient_stats *stats, tpk_diag *diag)
+{
+    return tpk_orient_marked(mesh, flags, threads, stats, NULL, diag);
+}
+
+int tpk_orient_marked(tpk_tetmesh *mesh, int flags, int threads_requested, tpk_orient_stats *stats,
+                      uint8_t *turned_over, tpk_diag *diag)
 {
     tpk_orient_stats local = {0, 0, 0};
     if (!stats)
@@ -172,7 +191,10 @@ int tpk_orient(tpk_tetmesh *mesh, int flags, int threads_requested, tpk_orient_s
     else if (stats->inverted_fixed > 0 && (flags & TPK_ORIENT_REFUSE_INVERTED))
         rc = refuse_inverted(mesh, kinds, stats, diag);
     else if (stats->degenerate > 0)
-        drop_degenerate(mesh, kinds);
+        drop_degenerate(mesh, kinds, turned_over);
+    else if (turned_over)
+        for (int64_t t = 0; t < mesh->tet_count; t++)
+            turned_over[t] = kinds[t] == TET_INVERTED;
     free(kinds);
     free(job);
     return rc;

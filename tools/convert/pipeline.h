@@ -1,6 +1,6 @@
 /* The converter pipeline stages, one job each (docs/ARCHITECTURE.md §1, §4):
  * tetrahedralize -> orient (exact) -> reorder (space-filling curve) -> connect (face matching)
- * -> layouts (Tet32/20/16) -> shell. */
+ * -> folds (exact, TPK-M06; unfold.c applies the policy) -> layouts (Tet32/20/16) -> shell. */
 #ifndef TPK_PIPELINE_H
 #define TPK_PIPELINE_H
 
@@ -24,7 +24,7 @@
 #define TPK_TETRA_CELL_TO_POINT 0x2
 /* A mirrored cell (its node order is the mirror image of VTK's, so every tet of its split is inverted)
  * is an error naming it and counting them all, instead of being turned over and counted in
- * mirrored_cells. The converter sets this unless --reorient. */
+ * mirrored_cells. The converter sets this with --strict-orientation. */
 #define TPK_TETRA_REFUSE_MIRRORED 0x4
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag);
@@ -41,13 +41,20 @@ typedef struct tpk_orient_stats {
 
 /* tpk_orient flags. 0 and 1 keep their old meaning (swap inverted tets; 1 = drop degenerate ones). */
 #define TPK_ORIENT_DROP_DEGENERATE 0x1
-#define TPK_ORIENT_REFUSE_INVERTED 0x2 /* inverted tets are an error (the converter without --reorient) */
+#define TPK_ORIENT_REFUSE_INVERTED 0x2 /* inverted tets are an error (the converter with --strict-orientation) */
 
 /* Exact orientation (CGAL): swap v2,v3 of inverted tets (or, with TPK_ORIENT_REFUSE_INVERTED, fail
  * naming the first one and the count); zero-volume tets are an error naming the first one (source
  * cell, source point ids, coordinates), or are removed with TPK_ORIENT_DROP_DEGENERATE.
  * threads <= 0: all cores (here and in tpk_reorder); the result does not depend on it. */
 int tpk_orient(tpk_tetmesh *mesh, int flags, int threads, tpk_orient_stats *stats, tpk_diag *diag);
+/* The same, and turned_over[t] (tet_count bytes, given by the caller; may be NULL) set to 1 for each tet it
+ * turned over, 0 for the others, indexed as the tets are after it (degenerate ones dropped). */
+int tpk_orient_marked(tpk_tetmesh *mesh, int flags, int threads, tpk_orient_stats *stats, uint8_t *turned_over,
+                      tpk_diag *diag);
+/* Removes the tets with drop[t] != 0 in place, with their tet_source entries and per-tet field values;
+ * the order of the others is kept. Returns how many were removed. */
+int64_t tpk_drop_tets(tpk_tetmesh *mesh, const uint8_t *drop);
 
 /* Reorder vertices along a Hilbert curve, then tets by their smallest vertex (so they follow it); fields,
  * vertex_source and tet_source follow. Deterministic. */
@@ -62,6 +69,40 @@ int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, in
 void tpk_build_tet32(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet32 *dst);
 void tpk_build_tet20(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet20 *dst);
 void tpk_build_tet16(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet16 *dst);
+
+/* Folds (TPK-M06): interior faces whose two tets lie on the same side of the face's plane (overlapping
+ * cells). One exact orientation test per interior face, on `points` (the stored frame in the converter).
+ * On success *slots (malloc'd, the caller frees; NULL when none) lists each folded face once, as 4*t+k
+ * with t the lower of its two tets, ascending, and *count says how many. threads <= 0: all cores; the
+ * result does not depend on it. */
+int tpk_find_folds(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, const double *points,
+                   int threads, int64_t **slots, int64_t *count, tpk_diag *diag);
+/* Cuts the adjacency at the listed faces: both tets get neighbor -1 there, so both faces become shell
+ * faces (spec §6.7 allows this only at a fold). */
+void tpk_cut_folds(const int32_t *tets, int32_t *neighbors, const int64_t *slots, int64_t count);
+/* Face j of neighbour u that is face k of tet t (the position in u of the vertex not on that face). */
+int tpk_face_across(const int32_t *tets, int64_t t, int k, int64_t u);
+/* "the face of points P, Q, R is shared by cell C (tet t, fourth point X) and cell D (...), both fourth
+ * points on the same side of it", in source point ids and world coordinates, for the fold at `slot`. */
+void tpk_describe_fold(const tpk_tetmesh *mesh, const int32_t *neighbors, int64_t slot, char *text, size_t cap);
+
+/* tpk_connect_unfolded flags */
+#define TPK_UNFOLD_SKIP_BAD_TETS 0x1 /* leave out tets turned over into a fold, instead of failing */
+#define TPK_UNFOLD_CUT_FOLDS 0x2     /* cut the source's folds (tpk_cut_folds), instead of failing */
+typedef struct tpk_unfold_stats {
+    int64_t bad_tets;  /* tets turned over into a fold, left out (SKIP_BAD_TETS) */
+    int64_t folds_cut; /* folded faces cut (CUT_FOLDS) */
+} tpk_unfold_stats;
+/* tpk_connect, then no fold left (TPK-M06): a tet with turned_over[t] (tpk_orient_marked; NULL: none) that
+ * folds against a neighbour is a bad cell: an error naming it, or left out (mesh compacted, connected
+ * again); the other folds are an error naming the count and the first face (its cells and points), or
+ * are cut. `neighbors` holds 4 * tet_count. */
+int tpk_connect_unfolded(tpk_tetmesh *mesh, const uint8_t *turned_over, int flags, int threads, int32_t *neighbors,
+                         tpk_unfold_stats *stats, tpk_diag *diag);
+
+/* tpk_outward_face[k]: the local vertices of the face opposite vertex k of a positive tet, in outward order
+ * (their normal points away from vertex k). */
+extern const int tpk_outward_face[4][3];
 
 /* Number of boundary faces (neighbor -1). */
 int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count);

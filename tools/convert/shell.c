@@ -5,8 +5,7 @@
  * so (p0,p3,p2) faces out; (p0,p1,p3,p2) is odd, so (p0,p1,p3) faces out. Tests check it exactly. */
 #include "pipeline.h"
 
-/* OUTWARD_FACE[k] = local vertices of the face opposite k, in outward order. */
-static const int OUTWARD_FACE[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+const int tpk_outward_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count)
 {
@@ -26,9 +25,9 @@ void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_
             if (neighbors[4 * t + k] >= 0)
                 continue;
             tpk_shell_face *f = &dst[out++];
-            f->a = v[OUTWARD_FACE[k][0]];
-            f->b = v[OUTWARD_FACE[k][1]];
-            f->c = v[OUTWARD_FACE[k][2]];
+            f->a = v[tpk_outward_face[k][0]];
+            f->b = v[tpk_outward_face[k][1]];
+            f->c = v[tpk_outward_face[k][2]];
             f->t = (int32_t)t;
         }
     }

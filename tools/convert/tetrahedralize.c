@@ -365,10 +365,10 @@ static void note_mirrored(tpk_tetmesh *out, int64_t c, int mirrored)
     out->mirrored_cells++;
 }
 
-/* Not turned over silently (without --reorient), even when every cell is mirrored: a whole file in the
- * mirrored node order is far more often a writer's or importer's node-order bug (docs/ARCHITECTURE.md §7) than a
- * convention someone chose, and accepting it quietly would hide exactly that bug. The message says
- * which case it is, so one flag fixes either knowingly. */
+/* Only with TPK_TETRA_REFUSE_MIRRORED (--strict-orientation): a cell whose every tet is negative is
+ * listed in the mirrored node order, a labeling that turning over fixes without changing the geometry,
+ * so that is the default. The refusal is for who wants to catch a writer's or importer's node-order bug
+ * (docs/ARCHITECTURE.md §7); the message says whether the whole file or a few cells are mirrored. */
 static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh *out, tpk_diag *diag)
 {
     int64_t begin = src->cell_offsets[first], nodes = src->cell_offsets[first + 1] - begin;
@@ -386,8 +386,9 @@ static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh
     }
     if (out->mirrored_cells == split)
         return tpk_diag_fail(diag, "%s; so are all %lld split cells: the file lists their nodes in the mirrored "
-                             "(left-handed) order; --reorient turns them over", where, (long long)split);
-    return tpk_diag_fail(diag, "%s; %lld of %lld split cells are mirrored; --reorient turns them over", where,
+                             "(left-handed) order; without --strict-orientation they are turned over", where, (long long)split);
+    return tpk_diag_fail(diag, "%s; %lld of %lld split cells are mirrored; without --strict-orientation they "
+                         "are turned over", where,
                          (long long)out->mirrored_cells, (long long)split);
 }
 
