@@ -12,12 +12,10 @@ Exit 0 when every case holds, 1 when one does not, 77 (ctest's skip) when a case
 (for example the full filesystem needs root), unless TETPACK_REQUIRE_ALL=1 makes a skip a failure."""
 import json
 import os
-import random
 import re
 import shutil
 import signal
 import stat
-import struct
 import subprocess
 import sys
 import tempfile
@@ -27,7 +25,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import tpk_bytes  # noqa: E402
+import mutations  # noqa: E402
+import tpk_mutations  # noqa: E402
 
 TIMEOUT_S = float(os.environ.get("TPK_FAULTS_TIMEOUT", "60"))
 SEEDS = int(os.environ.get("TPK_FAULTS_SEEDS", "1"))
@@ -160,158 +159,10 @@ def check_output(category, case, tetpack, out, old, rc, keep):
         TALLY.fail(category, "lost", case, "exit 0, yet %s is missing or not a valid file" % out)
 
 
-# ---- mutations of importer inputs (every one seeded) -------------------------------------------------
+# ---- importers: every format's inputs, damaged ------------------------------------------------------
 
-INT_TOKEN = re.compile(rb"(?<![\w.+\-])[0-9]+(?![\w.])")
-FLOAT_TOKEN = re.compile(rb"(?<![\w.])-?[0-9]*\.[0-9]+(?:[eE][-+]?[0-9]+)?")
-ABSURD_INTS = (b"2147483647", b"4294967295", b"9223372036854775807", b"99999999999999999999", b"-1",
-               b"-2147483648", b"0")
-NON_FINITE = (b"nan", b"inf", b"-inf", b"1e999", b"NaN", b"-1e400")
-
-
-def text_length(data, limit=65536):
-    """How many bytes the file starts with that are text: the header of a binary VTK or VTU file, say."""
-    for at, b in enumerate(data[:limit]):
-        if b < 9 or 13 < b < 32 or b > 126:
-            return at
-    return min(len(data), limit)
-
-
-def replace_token(data, rng, pattern, lo, hi, values):
-    spans = [m.span() for m in pattern.finditer(data, lo, hi)]
-    if not spans:
-        return None
-    a, b = rng.choice(spans)
-    return data[:a] + rng.choice(values) + data[b:]
-
-
-def overwrite_word(data, rng, lo, hi, values):
-    if hi - lo < 8:
-        return None
-    at = lo + rng.randrange((hi - lo - 8) // 4) * 4
-    word = rng.choice(values)
-    return data[:at] + word + data[at + len(word):]
-
-
-BINARY_BOMBS = [struct.pack(f, v) for f in ("<I", ">I") for v in (0x7FFFFFFF, 0xFFFFFFFF, 0x40000000)] + \
-               [struct.pack(f, v) for f in ("<Q", ">Q") for v in (1 << 62, (1 << 64) - 1)]
-BINARY_NAN = [struct.pack(f, v) for f in ("<d", ">d", "<f", ">f") for v in (float("nan"), float("inf"))]
-
-
-def mutations(data, seed, first):
-    """[(name, bytes)]: seeded byte flips and truncations (the `first` seed also cuts at 0, 1, half and
-    all but the last byte), absurd counts near the start (memory bombs), ids out of range further on, and
-    non-finite numbers, as text tokens or binary words."""
-    rng = random.Random(seed)
-    n = len(data)
-    head = min(n, max(512, n // 20))
-    text_head = min(head, text_length(data))  # where counts are text tokens
-    text = text_length(data) == min(n, 65536)
-    out = []
-    for k in range(6):
-        flipped = bytearray(data)
-        for _ in range(1 + k % 3):
-            flipped[rng.randrange(n)] ^= rng.randrange(1, 256)
-        out.append(("flip%d" % k, bytes(flipped)))
-    for k, cut in enumerate(([0, 1, n // 2, n - 1] if first else []) + [rng.randrange(n) for _ in range(2)]):
-        out.append(("cut%d_at_%d" % (k, cut), data[:cut]))
-    for k in range(3):
-        bomb = replace_token(data, rng, INT_TOKEN, 0, text_head, ABSURD_INTS)
-        out.append(("count%d" % k, bomb or overwrite_word(data, rng, 0, head, BINARY_BOMBS)))
-        ids = replace_token(data, rng, INT_TOKEN, n // 2, n, ABSURD_INTS) if text else None
-        out.append(("id%d" % k, ids or overwrite_word(data, rng, n // 2, n, BINARY_BOMBS)))
-    for k in range(2):
-        bad = replace_token(data, rng, FLOAT_TOKEN, head, n, NON_FINITE) if text else None
-        out.append(("nonfinite%d" % k, bad or overwrite_word(data, rng, n // 2, n, BINARY_NAN)))
-    return [(name, b) for name, b in out if b is not None and b != data]
-
-
-# ---- the importer inputs: a real file per format where ../shared/data has one, else a generated one ----
-
-def closed_surface(size=3):
-    """A cube's surface cut into size x size squares per side, two outward triangles each."""
-    points, index, tris = [], {}, []
-
-    def pid(p):
-        if p not in index:
-            index[p] = len(points)
-            points.append(p)
-        return index[p]
-    for axis in range(3):
-        for side in (0, size):
-            for i in range(size):
-                for j in range(size):
-                    quad = []
-                    for di, dj in ((0, 0), (1, 0), (1, 1), (0, 1)):
-                        p = [0, 0, 0]
-                        p[axis], p[(axis + 1) % 3], p[(axis + 2) % 3] = side, i + di, j + dj
-                        quad.append(pid(tuple(p)))
-                    if side == 0:
-                        quad.reverse()
-                    tris += [(quad[0], quad[1], quad[2]), (quad[0], quad[2], quad[3])]
-    return points, tris
-
-
-def write_surfaces(folder):
-    points, tris = closed_surface()
-    files = {}
-    path = os.path.join(folder, "cube.stl")
-    with open(path, "w") as f:
-        f.write("solid cube\n")
-        for t in tris:
-            f.write(" facet normal 0 0 0\n  outer loop\n")
-            for v in t:
-                f.write("   vertex %g %g %g\n" % points[v])
-            f.write("  endloop\n endfacet\n")
-        f.write("endsolid cube\n")
-    files["stl"] = [path]
-    path = os.path.join(folder, "cube_bin.stl")
-    with open(path, "wb") as f:
-        f.write(b"binary cube".ljust(80, b" ") + struct.pack("<I", len(tris)))
-        for t in tris:
-            f.write(struct.pack("<12fH", 0, 0, 0, *[c for v in t for c in points[v]], 0))
-    files["stl"].append(path)
-    path = os.path.join(folder, "cube.off")
-    with open(path, "w") as f:
-        f.write("OFF\n%d %d 0\n" % (len(points), len(tris)))
-        f.writelines("%g %g %g\n" % p for p in points)
-        f.writelines("3 %d %d %d\n" % t for t in tris)
-    files["off"] = [path]
-    path = os.path.join(folder, "cube.ply")
-    with open(path, "wb") as f:
-        f.write(("ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\n"
-                 "property float y\nproperty float z\nelement face %d\nproperty list uchar int "
-                 "vertex_indices\nend_header\n" % (len(points), len(tris))).encode())
-        for p in points:
-            f.write(struct.pack("<3f", *p))
-        for t in tris:
-            f.write(struct.pack("<B3i", 3, *t))
-    files["ply"] = [path]
-    rng = random.Random(7)
-    path = os.path.join(folder, "cloud.csv")
-    with open(path, "w") as f:
-        f.write("x,y,z,temperature\n")
-        for _ in range(60):
-            f.write("%.6f,%.6f,%.6f,%.3f\n" % (rng.random(), rng.random(), rng.random(), rng.random()))
-    files["csv"] = [path]
-    return files
-
-
-def write_pvd(tetpack, data, folder):
-    """A two-step ParaView series of VTU files written by `tetpack export` from a real mesh."""
-    tpk = os.path.join(folder, "cross3d.tpk")
-    subprocess.run([tetpack, "convert", os.path.join(data, "sfepy/cross3d.mesh"), tpk, "--quiet"], check=True)
-    for step in range(2):
-        subprocess.run([tetpack, "export", tpk, "--vtu", os.path.join(folder, "step%d.vtu" % step)],
-                       check=True)
-    path = os.path.join(folder, "series.pvd")
-    with open(path, "w") as f:
-        f.write('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n<Collection>\n'
-                '<DataSet timestep="0" file="step0.vtu"/>\n<DataSet timestep="0.5" file="step1.vtu"/>\n'
-                '</Collection>\n</VTKFile>\n')
-    return [path, os.path.join(folder, "step0.vtu"), os.path.join(folder, "step1.vtu")]
-
-
+# Real files per format from ../shared/data, small ones (every case converts one); the formats it has no
+# file of are generated by mutations.py.
 REAL_INPUTS = {
     "vtk": ["sfepy/cylinder.vtk", "gmsh/t5_small_tet_bin.vtk"],
     "vtu": ["hard/huge_offset_hex.vtu", "hard/nonmanifold_vertex_edge_tets.vtu"],
@@ -324,20 +175,6 @@ REAL_INPUTS = {
 }
 
 
-def write_binary_ugrid(ascii_path, folder):
-    """The ASCII UGRID file as little-endian binary (.lb8.ugrid: int32 and float64): 7 counts, the node
-    coordinates, then every other number an integer."""
-    numbers = open(ascii_path).read().split()
-    nodes = int(numbers[0])
-    path = os.path.join(folder, "cube_polar1.lb8.ugrid")
-    with open(path, "wb") as f:
-        f.write(struct.pack("<7i", *map(int, numbers[:7])))
-        f.write(struct.pack("<%dd" % (3 * nodes), *map(float, numbers[7:7 + 3 * nodes])))
-        rest = numbers[7 + 3 * nodes:]
-        f.write(struct.pack("<%di" % len(rest), *map(int, rest)))
-    return path
-
-
 def importer_sources(tetpack, data, folder):
     """[(format, [files: the first is what convert is given; any of them may be the one damaged], options)]:
     every format `tetpack formats` lists, from real files where ../shared/data has them."""
@@ -348,9 +185,9 @@ def importer_sources(tetpack, data, folder):
             if fmt == "tetgen":
                 files.append(files[0][:-len(".node")] + ".ele")
             sources.append((fmt, files, []))
-    sources.append(("ugrid", [write_binary_ugrid(os.path.join(data, REAL_INPUTS["ugrid"][0]), folder)], []))
-    sources.append(("pvd", write_pvd(tetpack, data, folder), []))
-    surfaces = write_surfaces(folder)
+    sources.append(("ugrid", [mutations.write_binary_ugrid(os.path.join(data, REAL_INPUTS["ugrid"][0]), folder)], []))
+    sources.append(("pvd", mutations.write_pvd(tetpack, data, folder), []))
+    surfaces = mutations.write_surfaces(folder)
     for fmt, paths in surfaces.items():
         sources += [(fmt, [p], []) for p in paths]
     sources.append(("surface", [surfaces["stl"][1]], ["--format", "surface"]))
@@ -404,7 +241,7 @@ def run_import(tetpack, data, work):
         for seed in range(SEEDS):
             for damaged, f in enumerate(files):
                 data_bytes = open(f, "rb").read()
-                for name, payload in mutations(data_bytes, hash_seed(f, seed), seed == 0):
+                for name, payload in mutations.mutations(data_bytes, hash_seed(f, seed), seed == 0):
                     jobs.append((fmt, files, options, damaged, "%s_s%d" % (name, seed), payload))
     with ThreadPoolExecutor(max_workers=workers()) as pool:
         list(pool.map(lambda j: import_case(tetpack, work, *j, old), jobs))
@@ -426,138 +263,6 @@ def make_tpk(tetpack, source, folder, name, *options):
 
 
 # ---- .tpk corruption behind valid checksums -----------------------------------------------------------
-
-ABSURD_U64 = (0, 1, 63, 65, 0xFFFFFFFF, 0x7FFFFFFF, 1 << 40, 1 << 63, (1 << 64) - 1)
-
-
-def tpk_mutations(original, seed):
-    """[(name, bytes, must_refuse)]: chunk bytes flipped (plain: in place; zstd: in the frame, or in the
-    decoded bytes and compressed again) and header or directory fields set to absurd values, every
-    checksum recomputed; bad offsets, memory and zstd bombs, extra zstd frames; plain flips and cuts."""
-    rng = random.Random(seed)
-    out = []
-    base = tpk_bytes.Tpk(original)
-    size = len(original)
-
-    def fresh():
-        return tpk_bytes.Tpk(original)
-    for k in range(6):
-        t = fresh()
-        e = rng.choice(t.entries)
-        for _ in range(1 + k % 3):
-            t.data[e["offset"] + rng.randrange(max(1, e["stored_size"]))] ^= rng.randrange(1, 256)
-        out.append(("chunk_flip%d_%s" % (k, tag_name(e)), t.seal(), False))
-    zstd_entries = [i for i, e in enumerate(base.entries) if e["codec"] == tpk_bytes.CODEC_ZSTD]
-    for k in range(4 if zstd_entries else 0):
-        t = fresh()
-        e = t.entries[rng.choice(zstd_entries)]
-        raw = bytearray(t.decoded(e))
-        for _ in range(1 + k % 3):
-            raw[rng.randrange(len(raw))] ^= rng.randrange(1, 256)
-        frame = tpk_bytes.zstd_compress(raw, 3)
-        if len(frame) <= e["stored_size"]:
-            set_stored(t, e, frame)
-            out.append(("zstd_raw_flip%d_%s" % (k, tag_name(e)), t.seal(), False))
-    for k in range(8):
-        t = fresh()
-        field = rng.choice(("vertex_count", "tet_count", "shell_face_count", "chunk_count",
-                            "directory_offset", "file_size", "ox", "maxz", "flags", "version_minor"))
-        value = rng.choice(ABSURD_U64) if field not in ("ox", "maxz") else rng.choice(
-            (float("nan"), float("inf"), -1e308))
-        if field == "flags":
-            value &= 0xFFFFFFFF
-        if field == "version_minor":
-            value &= 0xFFFF
-        t.header[field] = value
-        out.append(("header_%s_%s" % (field, value), t.seal(), False))
-    for k in range(12):
-        t = fresh()
-        e = rng.choice(t.entries)
-        field = rng.choice(("elem_count", "offset", "stored_size", "raw_size", "elem_size", "elem_type",
-                            "codec", "index", "step", "tag"))
-        value = rng.choice(ABSURD_U64)
-        e[field] = value & {"elem_type": 0xFF, "codec": 0xFF, "elem_size": 0xFFFFFFFF, "index": 0xFFFFFFFF,
-                            "step": 0xFFFFFFFF, "tag": 0xFFFFFFFF}.get(field, (1 << 64) - 1)
-        out.append(("entry_%s_%s_%d" % (tag_name(e), field, value), t.seal(), False))
-    out += offset_faults(fresh, rng)
-    out += bomb_faults(fresh, base, zstd_entries)
-    for k in range(3):
-        flipped = bytearray(original)
-        flipped[rng.randrange(size)] ^= rng.randrange(1, 256)
-        out.append(("plain_flip%d" % k, bytes(flipped), False))
-    for cut in (0, 100, 191, 192, size // 2, size - 1):
-        out.append(("cut_%d" % cut, original[:cut], True))
-    return out
-
-
-def tag_name(e):
-    return e["tag"].to_bytes(4, "little").decode("latin-1").strip("\0") or "0"
-
-
-def set_stored(t, e, stored):
-    """Replace an entry's stored bytes in place (they must fit in the old space; the rest is zeroed)."""
-    at, room = e["offset"], e["stored_size"]
-    t.data[at:at + room] = stored + bytes(room - len(stored))
-    e["stored_size"] = len(stored)
-
-
-def offset_faults(fresh, rng):
-    """Offsets a compliant reader must refuse (spec §4): misaligned, past the end, onto another chunk,
-    onto the directory, and sizes that run past the end; every checksum recomputed."""
-    out = []
-    cases = (("misaligned", lambda t, e: e["offset"] + 8), ("past_end", lambda t, e: len(t.data) + 64),
-             ("huge", lambda t, e: (1 << 63) - 64), ("onto_other", lambda t, e: t.entries[0]["offset"]
-                                                      if e is not t.entries[0] else t.entries[1]["offset"]),
-             ("onto_directory", lambda t, e: t.header["directory_offset"]), ("into_header", lambda t, e: 64))
-    for name, where in cases:
-        t = fresh()
-        e = rng.choice(t.entries)
-        e["offset"] = where(t, e)
-        out.append(("offset_%s_%s" % (name, tag_name(e)), t.seal(), True))
-    t = fresh()
-    e = t.entries[-1]
-    e["stored_size"] = len(t.data)
-    out.append(("stored_past_end_%s" % tag_name(e), t.seal(chunk_checksums=False), True))
-    return out
-
-
-def bomb_faults(fresh, base, zstd_entries):
-    """Counts that claim gigabytes (consistent with each other, so only a limit or the file size stops
-    them) and zstd frames that decode to far more than the entry says, or carry a second frame."""
-    out = []
-    for i, e in enumerate(base.entries[:4]):
-        t = fresh()
-        e = t.entries[i]
-        e["elem_count"] = (1 << 40) // max(1, e["elem_size"])
-        e["raw_size"] = e["elem_count"] * e["elem_size"]
-        if e["codec"] == tpk_bytes.CODEC_NONE:
-            e["stored_size"] = e["raw_size"]
-        out.append(("memory_bomb_%s" % tag_name(e), t.seal(chunk_checksums=False), True))
-    t = fresh()
-    t.header["vertex_count"] = t.header["tet_count"] = 0x7FFFFFFF
-    out.append(("memory_bomb_header_counts", t.seal(), True))
-    for i in zstd_entries[:3]:
-        e = base.entries[i]
-        blocks = (e["stored_size"] - 14) // 4  # magic, header with a content size, 4 bytes a block
-        if blocks < 2:
-            continue
-        for claim in (None, e["raw_size"], 1 << 60):
-            t = fresh()
-            set_stored(t, t.entries[i], tpk_bytes.rle_bomb(blocks, claim))
-            out.append(("zstd_bomb_%s_claims_%s" % (tag_name(e), claim), t.seal(), True))
-        raw = base.decoded(e)
-        frame = tpk_bytes.zstd_compress(raw, 19)
-        extras = (("skippable_after", frame + tpk_bytes.skippable_frame()),
-                  ("skippable_before", tpk_bytes.skippable_frame() + frame),
-                  ("two_frames", tpk_bytes.zstd_compress(raw[:len(raw) // 2], 19) +
-                   tpk_bytes.zstd_compress(raw[len(raw) // 2:], 19)))
-        for name, stored in extras:
-            if len(stored) <= e["stored_size"]:
-                t = fresh()
-                set_stored(t, t.entries[i], stored)
-                out.append(("zstd_%s_%s" % (name, tag_name(e)), t.seal(), True))
-    return out
-
 
 # (name, argv, output suffix, allowed exit codes, reads every chunk). render reads only the layout and
 # field it draws, so a damaged chunk it does not read need not stop it.
@@ -607,7 +312,7 @@ def run_tpk(tetpack, data, work, source_dir):
                 TALLY.fail("tpk:" + command, "other", kind, "the undamaged file is refused")
         for seed in range(SEEDS):
             jobs += [(kind, name, payload, refuse)
-                     for name, payload, refuse in tpk_mutations(original, 1000 * seed + len(kind))]
+                     for name, payload, refuse in tpk_mutations.tpk_mutations(original, 1000 * seed + len(kind))]
     with ThreadPoolExecutor(max_workers=workers()) as pool:
         list(pool.map(lambda j: tpk_case(tetpack, work, *j), jobs))
 
