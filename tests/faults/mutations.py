@@ -1,5 +1,6 @@
 """Damaged importer inputs for the fault suite (faults.py): seeded mutations of a file's bytes, and the
 inputs generated where ../shared/data has no real file of a format."""
+import contextlib
 import os
 import random
 import re
@@ -168,3 +169,20 @@ def write_binary_ugrid(ascii_path, folder):
         rest = numbers[7 + 3 * nodes:]
         f.write(struct.pack("<%di" % len(rest), *map(int, rest)))
     return path
+
+
+def write_meshio_files(source, folder):
+    """Binary Gmsh 4.1 and 2.2 and a zlib-compressed VTU of `source`, written by meshio (an independent
+    writer; zlib blocks are where inflate bombs hide): {format: [paths]}, or None without meshio."""
+    try:
+        import meshio
+    except ImportError:
+        return None
+    mesh = meshio.read(source)
+    paths = {"gmsh": [os.path.join(folder, "bin41.msh"), os.path.join(folder, "bin22.msh")],
+             "vtu": [os.path.join(folder, "zlib.vtu")]}
+    with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(quiet):
+        meshio.write(paths["gmsh"][0], mesh, file_format="gmsh", binary=True)
+        meshio.write(paths["gmsh"][1], mesh, file_format="gmsh22", binary=True)
+        meshio.write(paths["vtu"][0], mesh, binary=True, compression="zlib")
+    return paths
