@@ -204,8 +204,9 @@ def importer_sources(tetpack, data, source_dir, folder):
     return sources
 
 
-def import_case(tetpack, work, fmt, files, options, damaged, name, payload, old):
-    """Convert a copy of `files` with `damaged` (an index into it) replaced by `payload`."""
+def import_case(tetpack, work, fmt, files, options, damaged, name, payload, allowed, old):
+    """Convert a copy of `files` with `damaged` (an index into it) replaced by `payload`; `allowed` is
+    (2,) for an input that must be refused, else (0, 2)."""
     case = "%s/%s/%s" % (fmt, os.path.basename(files[damaged]), name)
     folder = tempfile.mkdtemp(dir=work)
     inputs = os.path.join(folder, "in")
@@ -224,7 +225,7 @@ def import_case(tetpack, work, fmt, files, options, damaged, name, payload, old)
         f.write(old)
     first = os.path.join(inputs, os.path.basename(files[0]))
     result = run([tetpack, "convert", first, out, "--quiet"] + options)
-    rc = judge("import:" + fmt, case, result, [files[damaged], files[0]])
+    rc = judge("import:" + fmt, case, result, [files[damaged], files[0]], allowed)
     if rc is not None:
         check_output("import:" + fmt, case, tetpack, out, old, rc, [])
     shutil.rmtree(folder)
@@ -247,7 +248,11 @@ def run_import(tetpack, data, work, source_dir):
             for damaged, f in enumerate(files):
                 data_bytes = open(f, "rb").read()
                 for name, payload in mutations.mutations(data_bytes, hash_seed(f, seed), seed == 0):
-                    jobs.append((fmt, files, options, damaged, "%s_s%d" % (name, seed), payload))
+                    jobs.append((fmt, files, options, damaged, "%s_s%d" % (name, seed), payload, (0, 2)))
+    for name, path in mutations.write_vtu_zlib_bombs(work):
+        # Decompression bombs; the clean one first, so that the others are refused for their bomb alone.
+        payload = open(path, "rb").read()
+        jobs.append(("vtu", [path], [], 0, "zlib_" + name, payload, (0,) if name == "clean" else (2,)))
     with ThreadPoolExecutor(max_workers=workers()) as pool:
         list(pool.map(lambda j: import_case(tetpack, work, *j, old), jobs))
 

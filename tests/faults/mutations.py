@@ -6,6 +6,7 @@ import random
 import re
 import struct
 import subprocess
+import zlib
 
 INT_TOKEN = re.compile(rb"(?<![\w.+\-])[0-9]+(?![\w.])")
 FLOAT_TOKEN = re.compile(rb"(?<![\w.])-?[0-9]*\.[0-9]+(?:[eE][-+]?[0-9]+)?")
@@ -186,3 +187,38 @@ def write_meshio_files(source, folder):
         meshio.write(paths["gmsh"][1], mesh, file_format="gmsh22", binary=True)
         meshio.write(paths["vtu"][0], mesh, binary=True, compression="zlib")
     return paths
+
+
+def _zlib_array(raw, claimed_block=None, claimed_blocks=1, inflated=None):
+    """An appended zlib DataArray (UInt64 header: blocks, block size, last block size, compressed sizes):
+    `raw` compressed, or `inflated` bytes compressed while the header claims `raw`'s size."""
+    stream = zlib.compress(inflated if inflated is not None else raw, 9)
+    block = len(raw) if claimed_block is None else claimed_block
+    return struct.pack("<4Q", claimed_blocks, block, 0, len(stream)) + stream
+
+
+def write_vtu_zlib_bombs(folder):
+    """[(name, path)]: a one-tet zlib VTU whose points block inflates to 64 MiB while its header says 96
+    bytes, or whose header claims a 2^40-byte block or 2^40 blocks; and the clean file first ("clean")."""
+    points = struct.pack("<12d", 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1)
+    arrays = [struct.pack("<4q", 0, 1, 2, 3), struct.pack("<q", 4), bytes([10])]
+    variants = (("clean", {}), ("inflates_to_64MiB", {"inflated": bytes(64 << 20)}),
+                ("claims_2^40_byte_block", {"claimed_block": 1 << 40}),
+                ("claims_2^40_blocks", {"claimed_blocks": 1 << 40}))
+    out = []
+    for name, bomb in variants:
+        blobs = [_zlib_array(points, **bomb)] + [_zlib_array(a) for a in arrays]
+        offsets = [sum(len(b) for b in blobs[:k]) for k in range(4)]
+        xml = ('<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
+               'header_type="UInt64" compressor="vtkZLibDataCompressor">\n<UnstructuredGrid>\n'
+               '<Piece NumberOfPoints="4" NumberOfCells="1">\n<Points>\n<DataArray type="Float64" '
+               'NumberOfComponents="3" format="appended" offset="%d"/>\n</Points>\n<Cells>\n'
+               '<DataArray type="Int64" Name="connectivity" format="appended" offset="%d"/>\n'
+               '<DataArray type="Int64" Name="offsets" format="appended" offset="%d"/>\n'
+               '<DataArray type="UInt8" Name="types" format="appended" offset="%d"/>\n</Cells>\n</Piece>\n'
+               '</UnstructuredGrid>\n<AppendedData encoding="raw">\n_' % tuple(offsets))
+        path = os.path.join(folder, "zlib_%s.vtu" % name)
+        with open(path, "wb") as f:
+            f.write(xml.encode() + b"".join(blobs) + b"\n</AppendedData>\n</VTKFile>\n")
+        out.append((name, path))
+    return out
