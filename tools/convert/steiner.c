@@ -10,11 +10,12 @@
 
 #include "mesh/cell_types.h"
 #include "face_table.h"
+#include "fixed_boundary.h"
 #include "pipeline.h"
 #include "mesh/polyhedron.h"
 
 /* Per-cell state: a mode, and flags. */
-enum { S_NONE, S_PENDING, S_STAR, S_CONE, S_BAD, S_MODE = 7, S_FORCED = 8, S_MIRRORED = 16 };
+enum { S_NONE, S_PENDING, S_STAR, S_CONE, S_BAD, S_FIXED, S_MODE = 7, S_FORCED = 8, S_MIRRORED = 16 };
 enum { NEEDS_CENTRE = -2 }; /* cell_work.entry: a face this cell wants split at its centre */
 
 typedef struct cell_work {
@@ -23,6 +24,8 @@ typedef struct cell_work {
     int64_t entry_cap;
     int32_t *key;         /* one face's ids, ascending */
     int64_t key_cap;
+    int32_t *ring;        /* one face's ids in the order both its cells share (canonical_ring) */
+    int64_t ring_cap;
     int mirrored;
     double centre[3];
     char why[320];
@@ -124,16 +127,81 @@ static uint64_t face_key(cell_work *w, const int32_t *ids, int64_t n)
     return tpk_face_hash(k, (int32_t)n);
 }
 
-/* The centre of a face from its sorted ids: the same bits whichever cell computes it. */
-static void key_centre(const stage *st, const int32_t *sorted, int64_t n, double q[3])
+/* Face f's corners in an order both cells on it share, into w->ring: from its smallest id, towards the
+ * smaller of that corner's two neighbours. */
+static const int32_t *canonical_ring(cell_work *w, int64_t f)
 {
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    int64_t n = face_size(w, f), m = smallest_at(w, f);
+    int64_t step = v[(m + 1) % n] < v[(m + n - 1) % n] ? 1 : n - 1;
+    for (int64_t i = 0; i < n; i++)
+        w->ring[i] = v[(m + i * step) % n];
+    return w->ring;
+}
+
+/* Does the fan from q over the ring fold: a triangle (r_i, r_i+1, q) facing against the ring's (Newell)
+ * normal, or flat? q may be one of the corners' own point. */
+static int fan_folds(const stage *st, const int32_t *ring, int64_t n, const double q[3])
+{
+    double normal[3] = {0, 0, 0}, (*t)[3] = malloc(sizeof *t * (size_t)n);
+    if (!t)
+        return 1; /* only costs the better place */
+    for (int64_t i = 0; i < n; i++) {
+        const double *a = point_at(st, ring[i]), *b = point_at(st, ring[(i + 1) % n]);
+        double u[3] = {a[0] - q[0], a[1] - q[1], a[2] - q[2]}, v[3] = {b[0] - q[0], b[1] - q[1], b[2] - q[2]};
+        t[i][0] = u[1] * v[2] - u[2] * v[1];
+        t[i][1] = u[2] * v[0] - u[0] * v[2];
+        t[i][2] = u[0] * v[1] - u[1] * v[0];
+        for (int k = 0; k < 3; k++)
+            normal[k] += t[i][k];
+    }
+    int folds = 0;
+    for (int64_t i = 0; i < n; i++) /* from a corner (q is then that point), its own two are empty */
+        folds |= point_at(st, ring[i]) != q && point_at(st, ring[(i + 1) % n]) != q &&
+                 t[i][0] * normal[0] + t[i][1] * normal[1] + t[i][2] * normal[2] <= 0;
+    free(t);
+    return folds;
+}
+
+/* Does face f's fan from its smallest id fold: a triangle facing against the face's (Newell) normal? */
+static int corner_fan_folds(stage *st, int64_t f)
+{
+    cell_work *w = &st->w;
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    return fan_folds(st, v, face_size(w, f), point_at(st, v[smallest_at(w, f)]));
+}
+
+/* Where face f's point goes, the same from both cells (it is computed from the canonical ring, in the
+ * same order, so in floating point too): at the mean of its corners, OpenFOAM's face centre, unless the
+ * fan from there folds (a non-convex face whose mean lies outside its kernel, the part of it that sees
+ * every corner); then at the midpoint of the first diagonal, in ring order, whose fan does not (for a
+ * quad, the diagonal through its reflex corner). pair: that diagonal's ends, or -1 for the mean (also
+ * when no diagonal helps: tools/convert/fixed_boundary.c then finds the fold). */
+static void place_face_point(stage *st, int64_t f, double q[3], int32_t pair[2])
+{
+    cell_work *w = &st->w;
+    const int32_t *ring = canonical_ring(w, f);
+    int64_t n = face_size(w, f);
+    pair[0] = pair[1] = -1;
     q[0] = q[1] = q[2] = 0;
     for (int64_t i = 0; i < n; i++)
         for (int a = 0; a < 3; a++)
-            q[a] += point_at(st, sorted[i])[a];
-    for (int a = 0; a < 3; a++)
-        q[a] /= (double)n;
+            q[a] += point_at(st, ring[i])[a] / (double)n;
+    if (!fan_folds(st, ring, n, q))
+        return;
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t j = i + 2; j < n && j - i < n - 1; j++) {
+            const double *a = point_at(st, ring[i]), *b = point_at(st, ring[j]);
+            double mid[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+            if (!fan_folds(st, ring, n, mid)) {
+                memcpy(q, mid, sizeof mid);
+                pair[0] = ring[i], pair[1] = ring[j];
+                return;
+            }
+        }
 }
+
+static int32_t face_point(stage *st, int64_t at, int64_t c);
 
 /* ---- One cell ------------------------------------------------------------------------------------ */
 
@@ -181,7 +249,8 @@ static int load_cell(stage *st, int64_t c)
     for (int64_t f = 0; f < w->faces.face_count; f++)
         longest = face_size(w, f) > longest ? face_size(w, f) : longest;
     if (grow((void **)&w->entry, &w->entry_cap, w->faces.face_count, sizeof *w->entry) ||
-        grow((void **)&w->key, &w->key_cap, longest, sizeof *w->key))
+        grow((void **)&w->key, &w->key_cap, longest, sizeof *w->key) ||
+        grow((void **)&w->ring, &w->ring_cap, longest, sizeof *w->ring))
         return -1;
     return 0;
 }
@@ -201,6 +270,50 @@ static int64_t lookup_faces(stage *st)
         }
     }
     return found;
+}
+
+/* Do corners a and b both lie on a face of the cell other than f? */
+static int share_another_face(const cell_work *w, int64_t f, int32_t a, int32_t b)
+{
+    for (int64_t g = 0; g < w->faces.face_count; g++) {
+        int hits = 0;
+        for (int64_t i = 0; g != f && i < face_size(w, g); i++)
+            hits += w->faces.ids[w->faces.starts[g] + i] == a || w->faces.ids[w->faces.starts[g] + i] == b;
+        if (hits == 2)
+            return 1;
+    }
+    return 0;
+}
+
+/* Does face f need a point at its centre, whatever sees it? Its fan from the smallest id triangulates it
+ * only when no fan diagonal joins two corners that another face of the cell also holds: such a diagonal
+ * runs along an edge that carries points (a refined neighbour's, as on OpenFOAM's split faces), and the
+ * fan would lay flat or doubled triangles along it, leaving those points out and the two cells on the
+ * face disagreeing about it. */
+static int face_needs_point(const cell_work *w, int64_t f)
+{
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    int64_t n = face_size(w, f), m = smallest_at(w, f);
+    for (int64_t k = 2; k <= n - 2; k++)
+        if (share_another_face(w, f, v[m], v[(m + k) % n]))
+            return 1;
+    return 0;
+}
+
+/* Face f's entry in the face table, added (tagged `round`, counted in *added_faces) when it is not there
+ * yet. Returns its index, or -1 when out of memory. */
+static int64_t add_face_point(stage *st, int64_t f, int32_t round, int64_t *added_faces)
+{
+    cell_work *w = &st->w;
+    int64_t n = face_size(w, f);
+    uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], n);
+    int64_t at = tpk_face_table_find(&st->table, w->key, (int32_t)n, hash);
+    if (at >= 0)
+        return at;
+    *added_faces += 1;
+    if ((at = tpk_face_table_add(&st->table, w->key, (int32_t)n, hash, round)) >= 0)
+        place_face_point(st, f, st->table.entries[at].at, st->table.entries[at].pair);
+    return at;
 }
 
 /* Every tet of the cone from the smallest corner to the face triangles not touching it positive: then
@@ -265,14 +378,13 @@ static int star_is_valid(stage *st, int may_add)
     for (int64_t f = 0; f < w->faces.face_count; f++) {
         int64_t n = face_size(w, f);
         double q[3];
+        int32_t pair[2];
         if (w->entry[f] >= 0) {
-            const tpk_face_entry *e = &st->table.entries[w->entry[f]];
-            key_centre(st, st->table.keys + e->key_at, e->size, q);
+            memcpy(q, st->table.entries[w->entry[f]].at, sizeof q);
         } else if (fan_seen(st, f)) {
             continue;
         } else if (n >= 4 && may_add) {
-            face_key(w, w->faces.ids + w->faces.starts[f], n);
-            key_centre(st, w->key, n, q);
+            place_face_point(st, f, q, pair);
             w->entry[f] = NEEDS_CENTRE;
         } else {
             snprintf(w->why, sizeof w->why, "a point at its centre does not see face %lld (%s) from inside",
@@ -288,8 +400,111 @@ static int star_is_valid(stage *st, int may_add)
     return 0;
 }
 
+/* A cell's boundary triangles in the cell's own numbering, for tools/convert/fixed_boundary.h: ids[k] is
+ * local point k's vertex id, or -2 - e for the not yet numbered point of face-table entry e. */
+typedef struct local_boundary {
+    int32_t *triangles; /* 3 local ids each, outward */
+    int64_t triangle_count;
+    int32_t *ids;
+    int64_t id_count;
+    double *points;     /* 3 * id_count */
+} local_boundary;
+
+static void local_boundary_free(local_boundary *b)
+{
+    free(b->triangles), free(b->ids), free(b->points);
+    memset(b, 0, sizeof *b);
+}
+
+static int compare_ids(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Cell c's (loaded, looked up) boundary triangles: faces with a face point split at it, the others fanned
+ * from their smallest id, exactly as the cells on their other side cut them. With `number`, face points
+ * get their vertex ids (face_point). Returns 0 or -1 (out of memory). */
+static int local_boundary_build(stage *st, int64_t c, int number, local_boundary *b)
+{
+    cell_work *w = &st->w;
+    int64_t count = 0, slots = 3 * (w->faces.starts[w->faces.face_count] + 1);
+    memset(b, 0, sizeof *b);
+    b->triangles = malloc(sizeof *b->triangles * (size_t)slots);
+    b->ids = malloc(sizeof *b->ids * (size_t)slots);
+    if (!b->triangles || !b->ids)
+        return -1;
+    for (int64_t f = 0; f < w->faces.face_count; f++) {
+        const int32_t *v = w->faces.ids + w->faces.starts[f];
+        int64_t n = face_size(w, f), m = smallest_at(w, f), e = w->entry[f];
+        int32_t q = e < 0 ? 0 : number ? face_point(st, e, c) : (int32_t)(-2 - e);
+        if (number && q < 0)
+            return -1;
+        for (int64_t i = 0; i < (e >= 0 ? n : n - 2); i++, count++) {
+            int32_t *t = b->triangles + 3 * count;
+            if (e >= 0)
+                t[0] = v[i], t[1] = v[(i + 1) % n], t[2] = q;
+            else
+                fan_triangle(w, f, m, i, t);
+        }
+    }
+    b->triangle_count = count;
+    memcpy(b->ids, b->triangles, sizeof *b->ids * 3 * (size_t)count);
+    qsort(b->ids, (size_t)(3 * count), sizeof *b->ids, compare_ids);
+    for (int64_t i = 0; i < 3 * count; i++)
+        if (i == 0 || b->ids[i] != b->ids[b->id_count - 1])
+            b->ids[b->id_count++] = b->ids[i];
+    if (!(b->points = malloc(sizeof *b->points * 3 * (size_t)b->id_count)))
+        return -1;
+    for (int64_t k = 0; k < b->id_count; k++) {
+        const tpk_face_entry *e = b->ids[k] < 0 ? &st->table.entries[-2 - b->ids[k]] : NULL;
+        if (e)
+            memcpy(b->points + 3 * k, e->at, sizeof e->at);
+        else
+            memcpy(b->points + 3 * k, point_at(st, b->ids[k]), sizeof *b->points * 3);
+    }
+    for (int64_t i = 0; i < 3 * count; i++)
+        b->triangles[i] = (int32_t)((int32_t *)bsearch(&b->triangles[i], b->ids, (size_t)b->id_count, sizeof *b->ids,
+                                                        compare_ids) - b->ids);
+    return 0;
+}
+
+/* A cell no star fits is tetrahedralized inside its boundary (S_FIXED) when its boundary triangles do not
+ * cross. When they do, the fans of its warped or non-convex faces are what cross: those faces whose fan
+ * from the smallest id folds get a face point (registered as decide does), or if none does, every face of
+ * 4 corners or more; the cell is decided again with them in the next round. When all have one already,
+ * it is bad. Returns the mode, or -1 when out of memory. */
+static int fixed_or_bad(stage *st, int64_t c, int32_t round, int may_add, int64_t *added_faces)
+{
+    cell_work *w = &st->w;
+    size_t used = strlen(w->why);
+    if (!tpk_fixed_boundary_available()) {
+        snprintf(w->why + used, sizeof w->why - used, "; this build has no TetGen (TETPACK_WITH_TETGEN=OFF) to "
+                 "tetrahedralize it inside its boundary");
+        return S_BAD;
+    }
+    lookup_faces(st); /* drop star_is_valid's NEEDS_CENTRE marks */
+    local_boundary b;
+    int rc = local_boundary_build(st, c, 0, &b);
+    if (rc == 0)
+        rc = tpk_fixed_boundary_crossing(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count,
+                                         w->why, sizeof w->why);
+    local_boundary_free(&b);
+    if (rc <= 0)
+        return rc < 0 ? -1 : S_FIXED;
+    int64_t added = 0;
+    for (int pass = 0; pass < 2 && added == 0; pass++) /* the faces whose own fan folds first, then all */
+        for (int64_t f = 0; may_add && f < w->faces.face_count; f++)
+            if (w->entry[f] < 0 && face_size(w, f) >= 4 && (pass || corner_fan_folds(st, f)) &&
+                add_face_point(st, f, round, &added) < 0)
+                return -1;
+    *added_faces += added;
+    return added ? S_FIXED : S_BAD;
+}
+
 /* Decide cell c's split against the face table; with may_add, register the face points it needs
- * (counted in *added_faces, tagged with `round`). Returns 0 or -1 (out of memory). */
+ * (counted in *added_faces, tagged with `round`). A cell that no star fits is tetrahedralized inside its
+ * boundary (S_FIXED) when the build can, else it is bad. Returns 0 or -1 (out of memory). */
 static int decide(stage *st, int64_t c, int32_t round, int may_add, int64_t *added_faces)
 {
     cell_work *w = &st->w;
@@ -303,24 +518,27 @@ static int decide(stage *st, int64_t c, int32_t round, int may_add, int64_t *add
     }
     keep |= w->mirrored ? S_MIRRORED : 0;
     int64_t centred = lookup_faces(st);
+    for (int64_t f = 0; may_add && f < w->faces.face_count; f++) {
+        if (w->entry[f] >= 0 || !face_needs_point(w, f))
+            continue;
+        if ((w->entry[f] = add_face_point(st, f, round, added_faces)) < 0)
+            return -1;
+        centred++;
+    }
     if (st->src->cell_types[c] == TPK_CELL_POLYHEDRON && centred == 0 && cone_is_valid(st, c)) {
         st->state[c] = keep | S_CONE;
         return 0;
     }
     if (star_is_valid(st, may_add)) {
-        st->state[c] = keep | S_BAD;
+        int mode = fixed_or_bad(st, c, round, may_add, added_faces);
+        if (mode < 0)
+            return -1;
+        st->state[c] = keep | (uint8_t)mode;
         return 0;
     }
-    for (int64_t f = 0; f < w->faces.face_count; f++) {
-        if (w->entry[f] != NEEDS_CENTRE)
-            continue;
-        int64_t n = face_size(w, f);
-        uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], n);
-        int64_t at = tpk_face_table_find(&st->table, w->key, (int32_t)n, hash);
-        if (at < 0 && tpk_face_table_add(&st->table, w->key, (int32_t)n, hash, round) < 0)
+    for (int64_t f = 0; f < w->faces.face_count; f++)
+        if (w->entry[f] == NEEDS_CENTRE && add_face_point(st, f, round, added_faces) < 0)
             return -1;
-        *added_faces += at < 0;
-    }
     st->state[c] = keep | S_STAR;
     return 0;
 }
@@ -507,8 +725,10 @@ static int32_t face_point(stage *st, int64_t at, int64_t c)
         return e->point;
     }
     double q[3];
-    key_centre(st, st->table.keys + e->key_at, e->size, q);
-    int32_t id = push_point(st, q, st->table.keys + e->key_at, e->size, c);
+    memcpy(q, e->at, sizeof q);
+    int32_t pair[2] = {e->pair[0], e->pair[1]};
+    int32_t id = pair[0] >= 0 ? push_point(st, q, pair, 2, c)
+                              : push_point(st, q, st->table.keys + e->key_at, e->size, c);
     e = &st->table.entries[at];
     if (id >= 0) {
         e->point = id;
@@ -516,6 +736,16 @@ static int32_t face_point(stage *st, int64_t at, int64_t c)
         st->out->face_steiner_points++;
     }
     return id;
+}
+
+/* Counts a split cell (a polyhedron, a mirrored one: the first is remembered for the refusal). */
+static void count_split(stage *st, int64_t c)
+{
+    tpk_tetmesh *out = st->out;
+    out->polyhedra += st->src->cell_types[c] == TPK_CELL_POLYHEDRON;
+    if (st->w.mirrored && (out->mirrored_cells == 0 || c < out->first_mirrored_cell))
+        out->first_mirrored_cell = c;
+    out->mirrored_cells += st->w.mirrored;
 }
 
 /* Tets of a decided cell: its cone, or its star (adding its centre and any new face points). */
@@ -556,11 +786,56 @@ static int emit_cell(stage *st, int64_t c, int cone)
         }
     }
     st->out->steiner_cells += !cone;
-    st->out->polyhedra += src->cell_types[c] == TPK_CELL_POLYHEDRON;
-    if (w->mirrored && (st->out->mirrored_cells == 0 || c < st->out->first_mirrored_cell))
-        st->out->first_mirrored_cell = c;
-    st->out->mirrored_cells += w->mirrored;
+    count_split(st, c);
     return 0;
+}
+
+/* Tets of a cell no star fits: tetrahedralized inside its boundary triangles (tools/convert/fixed_boundary.h),
+ * interior points added as its centre would be (the mean of its corners for fields). Returns 0 (also
+ * for a cell left out under TPK_TETRA_SKIP_BAD_CELLS), -1 when out of memory, -2 with a message. */
+static int emit_fixed(stage *st, int64_t c, tpk_diag *diag)
+{
+    const tpk_mesh *src = st->src;
+    const int32_t *corners = src->cell_conn + src->cell_offsets[c];
+    int64_t corner_count = src->cell_offsets[c + 1] - src->cell_offsets[c];
+    local_boundary b;
+    tpk_fixed_tets fixed = {0};
+    char why[600];
+    if (load_cell(st, c))
+        return -1; /* it loaded when decided: only memory can fail now */
+    lookup_faces(st);
+    int rc = local_boundary_build(st, c, 1, &b);
+    if (rc == 0)
+        rc = tpk_fixed_boundary_tets(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count, &fixed,
+                                     why, sizeof why);
+    if (rc == 1 && (st->flags & TPK_TETRA_SKIP_BAD_CELLS)) {
+        st->out->bad_cells_skipped++;
+        rc = 0;
+    } else if (rc == 1) {
+        tpk_diag_fail(diag, "cell %lld (a %s) is too warped or non-convex for a point at its centre or its face "
+                      "centres to split it, and %s; pass --skip-bad-cells to leave such cells out", (long long)c,
+                      tpk_cell_type(src->cell_types[c])->name, why);
+        rc = -2;
+    } else if (rc == 0) {
+        int32_t *vertex = malloc(sizeof *vertex * (size_t)(fixed.point_count ? fixed.point_count : 1));
+        rc = vertex ? 0 : -1;
+        for (int32_t k = 0; rc == 0 && k < fixed.point_count; k++)
+            if ((vertex[k] = k < b.id_count ? b.ids[k] : push_point(st, fixed.points + 3 * (int64_t)k, corners,
+                                                                    corner_count, c)) < 0)
+                rc = -1;
+        for (int64_t t = 0; rc == 0 && t < fixed.tet_count; t++) {
+            const int32_t *v = fixed.tets + 4 * t;
+            rc = push_tet(st, vertex[v[0]], vertex[v[1]], vertex[v[2]], vertex[v[3]], c);
+        }
+        free(vertex);
+        if (rc == 0) {
+            st->out->fixed_boundary_cells++;
+            count_split(st, c);
+        }
+    }
+    tpk_fixed_tets_free(&fixed);
+    local_boundary_free(&b);
+    return rc;
 }
 
 int tpk_steiner_stage(const tpk_mesh *src, const int64_t *hard, int64_t hard_count, int flags,
@@ -585,6 +860,8 @@ int tpk_steiner_stage(const tpk_mesh *src, const int64_t *hard, int64_t hard_cou
         int mode = st.state[c] & S_MODE;
         if (mode == S_STAR || mode == S_CONE)
             rc = emit_cell(&st, c, mode == S_CONE);
+        else if (mode == S_FIXED)
+            rc = emit_fixed(&st, c, diag);
     }
     if (rc == -1 && out->vertex_count >= INT32_MAX) {
         tpk_diag_fail(diag, "the points added to split cells pass the limit of 2^31-1 vertices per file; split "
@@ -596,5 +873,6 @@ int tpk_steiner_stage(const tpk_mesh *src, const int64_t *hard, int64_t hard_cou
     tpk_polygons_free(&st.w.faces);
     free(st.w.entry);
     free(st.w.key);
+    free(st.w.ring);
     return rc;
 }

@@ -76,6 +76,8 @@ typedef struct tpk_tetmesh {
                                   more corners, shared by the cells on both sides (vertex_source -1) */
     int64_t polyhedra;         /* polyhedra (VTK 42) tetrahedralized: as a cone from their smallest vertex
                                   where valid, else from a centre point (counted in steiner_cells too) */
+    int64_t fixed_boundary_cells; /* cells no centre or face points fit, tetrahedralized inside their boundary
+                                     triangles by TetGen (interior points vertex_source -1) */
     int64_t bad_cells_skipped; /* cells not even that could split, left out (TPK_TETRA_SKIP_BAD_CELLS) */
 } tpk_tetmesh;
 
