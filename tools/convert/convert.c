@@ -422,6 +422,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);
     rep->mirrored_cells = mesh.mirrored_cells;
     rep->steiner_cells = mesh.steiner_cells;
+    rep->fixed_boundary_cells = mesh.fixed_boundary_cells;
     rep->face_steiner_points = mesh.face_steiner_points;
     rep->polyhedra = mesh.polyhedra;
     rep->bad_cells_skipped = mesh.bad_cells_skipped;

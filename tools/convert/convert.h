@@ -41,6 +41,7 @@ typedef struct tpk_convert_report {
     int64_t cells_into[7];       /* source cells that gave k tets (1 tetra, 2 pyramid, 3 wedge, 5/6 hex) */
     int64_t face_steiner_points, polyhedra; /* points added at face centres; polyhedra split */
     int64_t mirrored_cells, steiner_cells, bad_cells_skipped; /* mirrored: turned over (--reorient) */
+    int64_t fixed_boundary_cells; /* tetrahedralized inside their boundary triangles (TetGen) */
     int field_count, step_count;
     uint64_t output_bytes;
     /* seconds per stage */
