@@ -117,7 +117,8 @@ static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
             hi[k] = x > hi[k] ? x : hi[k];
         }
     for (int k = 0; k < 3; k++) {
-        hdr->origin[k] = mesh->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
+        /* On the grid tetrahedralize decided on (TPK_TETRA_FILE_GRID), the same origin keeps it exact. */
+        hdr->origin[k] = mesh->on_grid ? mesh->grid_origin[k] : mesh->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }
@@ -412,7 +413,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
-                                       (o->reorient ? 0 : TPK_TETRA_REFUSE_MIRRORED),
+                                       (o->reorient ? 0 : TPK_TETRA_REFUSE_MIRRORED) | TPK_TETRA_FILE_GRID,
                                    &mesh, diag) != 0) {
         note_merged_ids(&merged, diag);
         goto done;

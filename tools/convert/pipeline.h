@@ -26,6 +26,10 @@
  * is an error naming it and counting them all, instead of being turned over and counted in
  * mirrored_cells. The converter sets this unless --reorient. */
 #define TPK_TETRA_REFUSE_MIRRORED 0x4
+/* Decide on the coordinates the file stores: the points are first moved onto the float32 grid relative to
+ * the centre of their bounding box (out->grid_origin), and every added point is put on it as it is made, so
+ * that a tet found positive (exactly) stays positive in the file. The converter sets this. */
+#define TPK_TETRA_FILE_GRID 0x8
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag);
 /* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;

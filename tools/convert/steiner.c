@@ -56,6 +56,15 @@ static const double *point_at(const stage *st, int32_t id)
     return st->out->points + 3 * (int64_t)id;
 }
 
+/* q moved onto the grid the file stores (TPK_TETRA_FILE_GRID: float32 relative to grid_origin, as
+ * tools/convert/convert.c's quantize_points stores it) before anything is decided on it, so that tets
+ * found positive here stay positive in the file. */
+static void to_file_grid(const stage *st, double q[3])
+{
+    for (int a = 0; st->out->on_grid && a < 3; a++)
+        q[a] = st->out->grid_origin[a] + (double)(float)(q[a] - st->out->grid_origin[a]);
+}
+
 /* Is the outward triangle (a, b, c) seen from inside by `apex`: det[a, c, b, apex] > 0, exactly. */
 static int sees(const stage *st, int32_t a, int32_t b, int32_t c, const double *apex)
 {
@@ -187,12 +196,14 @@ static void place_face_point(stage *st, int64_t f, double q[3], int32_t pair[2])
     for (int64_t i = 0; i < n; i++)
         for (int a = 0; a < 3; a++)
             q[a] += point_at(st, ring[i])[a] / (double)n;
+    to_file_grid(st, q);
     if (!fan_folds(st, ring, n, q))
         return;
     for (int64_t i = 0; i < n; i++)
         for (int64_t j = i + 2; j < n && j - i < n - 1; j++) {
             const double *a = point_at(st, ring[i]), *b = point_at(st, ring[j]);
             double mid[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+            to_file_grid(st, mid);
             if (!fan_folds(st, ring, n, mid)) {
                 memcpy(q, mid, sizeof mid);
                 pair[0] = ring[i], pair[1] = ring[j];
@@ -245,6 +256,7 @@ static int load_cell(stage *st, int64_t c)
     for (int64_t k = 0; k < corners; k++)
         for (int a = 0; a < 3; a++)
             w->centre[a] += point_at(st, src->cell_conn[begin + k])[a] / (double)corners;
+    to_file_grid(st, w->centre);
     int64_t longest = 0;
     for (int64_t f = 0; f < w->faces.face_count; f++)
         longest = face_size(w, f) > longest ? face_size(w, f) : longest;
@@ -819,6 +831,18 @@ static int emit_fixed(stage *st, int64_t c, tpk_diag *diag)
     } else if (rc == 0) {
         int32_t *vertex = malloc(sizeof *vertex * (size_t)(fixed.point_count ? fixed.point_count : 1));
         rc = vertex ? 0 : -1;
+        for (int32_t k = (int32_t)b.id_count; k < fixed.point_count; k++)
+            to_file_grid(st, fixed.points + 3 * (int64_t)k);
+        for (int64_t t = 0; rc == 0 && t < fixed.tet_count; t++) {
+            const int32_t *v = fixed.tets + 4 * t;
+            const double *p = fixed.points;
+            if (tpk_orient3d_exact(p + 3 * v[0], p + 3 * v[1], p + 3 * v[2], p + 3 * v[3]) <= 0) {
+                tpk_diag_fail(diag, "cell %lld (a %s): a tet TetGen made inside its boundary is flat or inverted once "
+                              "its points are rounded to the file's float32 grid", (long long)c,
+                              tpk_cell_type(src->cell_types[c])->name);
+                rc = -2;
+            }
+        }
         for (int32_t k = 0; rc == 0 && k < fixed.point_count; k++)
             if ((vertex[k] = k < b.id_count ? b.ids[k] : push_point(st, fixed.points + 3 * (int64_t)k, corners,
                                                                     corner_count, c)) < 0)

@@ -448,6 +448,25 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
     return 1;
 }
 
+/* TPK_TETRA_FILE_GRID: every point moved onto the float32 grid relative to the centre of their bounding
+ * box, as the file will store it; in world coordinates still (grid_origin + a float32 value, exact in
+ * double). */
+static void snap_to_file_grid(tpk_tetmesh *out)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < out->vertex_count; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = out->points[3 * i + k];
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
+        }
+    for (int k = 0; k < 3; k++)
+        out->grid_origin[k] = out->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
+    for (int64_t i = 0; i < 3 * out->vertex_count; i++)
+        out->points[i] = out->grid_origin[i % 3] + (double)(float)(out->points[i] - out->grid_origin[i % 3]);
+    out->on_grid = 1;
+}
+
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
 static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
@@ -464,6 +483,8 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
             return -1;
         memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
     }
+    if (flags & TPK_TETRA_FILE_GRID)
+        snap_to_file_grid(out);
     if (plain) {
         out->tets = donor->cell_conn;
         donor->cell_conn = NULL;

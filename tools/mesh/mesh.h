@@ -59,6 +59,8 @@ typedef struct tpk_tetmesh {
     double *points;            /* 3 * vertex_count: absolute coordinates until the converter moves them
                                   into the stored frame (relative to origin, float32-exact) */
     double origin[3];          /* add to points for world coordinates (0 until then) */
+    int on_grid;               /* TPK_TETRA_FILE_GRID: points lie on the float32 grid relative to grid_origin */
+    double grid_origin[3];     /* (world coordinates still; tools/convert/convert.c's quantize_points uses it) */
     int32_t *vertex_source;    /* source point id per vertex */
     int64_t tet_count;
     int32_t *tets;             /* 4 * tet_count vertex ids; positive orientation after tpk_orient */
