@@ -14,7 +14,8 @@
 /* Source cells -> tets. Tetrahedra pass through; voxels, hexahedra, wedges and pyramids are split
  * conformally without new points (tools/convert/cell_split.h); a cell the split would fold (warped, non-convex,
  * degenerate), and a polyhedron, gets points added at its centre and at face centres where the exact
- * predicates find the result valid (tools/convert/steiner.h); a cell even that cannot split is an error naming
+ * predicates find the result valid, else (with TetGen) is tetrahedralized inside its fixed boundary
+ * (tools/convert/steiner.h); a cell even that cannot split is an error naming
  * it, or is left out and counted with TPK_TETRA_SKIP_BAD_CELLS. Prisms of more sides are refused by name. Point fields are kept, cell fields become
  * per-tet fields via the source map. `field_names` (count n, may be NULL = all scalar point fields)
  * selects fields. */

@@ -1,6 +1,6 @@
-/* Warped cells and polyhedra into tets from added points (tools/convert/steiner.h): per cell a cone or a star,
- * checked with the exact predicate; face points shared through a face table, in rounds until no cell
- * asks for another. */
+/* Warped cells and polyhedra into tets (tools/convert/steiner.h): per cell a cone, a star from added points, or
+ * TetGen inside its fixed boundary, checked with the exact predicate; how faces are cut (face points,
+ * recut diagonals) is shared through a face table, in rounds until no cell asks for a change. */
 #include "steiner.h"
 
 #include <math.h>
@@ -367,10 +367,27 @@ static int centre_split_seen(stage *st, int64_t f, const double q[3])
     return 1;
 }
 
+/* Does face-table entry e (or -1) give its face a point? (A diagonal entry cuts a quad without one.) */
+static int has_point(const stage *st, int64_t e)
+{
+    return e >= 0 && !st->table.entries[e].diagonal;
+}
+
+/* Where face f's fan starts: at the smallest id, or at the first end of its entry's diagonal. */
+static int64_t fan_start(const stage *st, int64_t f)
+{
+    const cell_work *w = &st->w;
+    int64_t e = w->entry[f];
+    for (int64_t i = 0; e >= 0 && st->table.entries[e].diagonal && i < face_size(w, f); i++)
+        if (w->faces.ids[w->faces.starts[f] + i] == st->table.entries[e].pair[0])
+            return i;
+    return smallest_at(w, f);
+}
+
 static int fan_seen(stage *st, int64_t f)
 {
     cell_work *w = &st->w;
-    int64_t m = smallest_at(w, f);
+    int64_t m = fan_start(st, f);
     for (int64_t i = 0; i + 2 < face_size(w, f); i++) {
         int32_t t[3];
         fan_triangle(w, f, m, i, t);
@@ -391,11 +408,11 @@ static int star_is_valid(stage *st, int may_add)
         int64_t n = face_size(w, f);
         double q[3];
         int32_t pair[2];
-        if (w->entry[f] >= 0) {
+        if (has_point(st, w->entry[f])) {
             memcpy(q, st->table.entries[w->entry[f]].at, sizeof q);
         } else if (fan_seen(st, f)) {
             continue;
-        } else if (n >= 4 && may_add) {
+        } else if (n >= 4 && may_add && w->entry[f] < 0) {
             place_face_point(st, f, q, pair);
             w->entry[f] = NEEDS_CENTRE;
         } else {
@@ -448,13 +465,14 @@ static int local_boundary_build(stage *st, int64_t c, int number, local_boundary
         return -1;
     for (int64_t f = 0; f < w->faces.face_count; f++) {
         const int32_t *v = w->faces.ids + w->faces.starts[f];
-        int64_t n = face_size(w, f), m = smallest_at(w, f), e = w->entry[f];
-        int32_t q = e < 0 ? 0 : number ? face_point(st, e, c) : (int32_t)(-2 - e);
+        int64_t n = face_size(w, f), m = fan_start(st, f), e = w->entry[f];
+        int point = has_point(st, e);
+        int32_t q = !point ? 0 : number ? face_point(st, e, c) : (int32_t)(-2 - e);
         if (number && q < 0)
             return -1;
-        for (int64_t i = 0; i < (e >= 0 ? n : n - 2); i++, count++) {
+        for (int64_t i = 0; i < (point ? n : n - 2); i++, count++) {
             int32_t *t = b->triangles + 3 * count;
-            if (e >= 0)
+            if (point)
                 t[0] = v[i], t[1] = v[(i + 1) % n], t[2] = q;
             else
                 fan_triangle(w, f, m, i, t);
@@ -481,6 +499,65 @@ static int local_boundary_build(stage *st, int64_t c, int number, local_boundary
     return 0;
 }
 
+/* Do cell c's (loaded, looked up) boundary triangles cross? 0, 1 with w->why, -1 when out of memory. */
+static int boundary_crosses(stage *st, int64_t c)
+{
+    cell_work *w = &st->w;
+    local_boundary b;
+    int rc = local_boundary_build(st, c, 0, &b);
+    if (rc == 0)
+        rc = tpk_fixed_boundary_crossing(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count,
+                                         w->why, sizeof w->why);
+    local_boundary_free(&b);
+    return rc;
+}
+
+/* Cell c's boundary triangles cross (a snapped cell folded along an edge): try cutting one quad face
+ * otherwise: along either diagonal, or at a point, each choice checked with TetGen -d. A face is recut at
+ * most once, so the rounds end; its entry is tagged with `round`, so every cell on it is decided again
+ * with the new cut (a plain cut becomes an entry cutting along the smallest-id diagonal, the same cut).
+ * Returns 1 when a recut uncrosses them, 0 when none does, -1 when out of memory. */
+static int recut_one_face(stage *st, int64_t c, int32_t round, int64_t *added_faces)
+{
+    cell_work *w = &st->w;
+    for (int64_t f = 0; f < w->faces.face_count; f++) {
+        int64_t e = w->entry[f], none = 0;
+        if (face_size(w, f) != 4 || face_needs_point(w, f) || (e >= 0 && st->table.entries[e].changed))
+            continue;
+        const int32_t *v = w->faces.ids + w->faces.starts[f];
+        int64_t m = smallest_at(w, f);
+        if (e < 0) {
+            if ((e = add_face_point(st, f, round, &none)) < 0)
+                return -1;
+            st->table.entries[e].diagonal = 1;
+            st->table.entries[e].pair[0] = v[m], st->table.entries[e].pair[1] = v[(m + 2) % 4];
+            w->entry[f] = e;
+        }
+        tpk_face_entry saved = st->table.entries[e];
+        for (int option = 0; option < 3; option++) {
+            tpk_face_entry *x = &st->table.entries[e];
+            x->diagonal = option < 2;
+            if (option < 2)
+                x->pair[0] = v[(m + option) % 4], x->pair[1] = v[(m + option + 2) % 4];
+            else
+                place_face_point(st, f, x->at, x->pair);
+            if (x->diagonal == saved.diagonal && (x->diagonal ? x->pair[0] == saved.pair[0] : 1))
+                continue; /* the cut it has */
+            int crossing = boundary_crosses(st, c);
+            if (crossing < 0)
+                return -1;
+            if (crossing == 0) {
+                x->changed = 1;
+                x->round = round;
+                *added_faces += 1;
+                return 1;
+            }
+        }
+        st->table.entries[e] = saved;
+    }
+    return 0;
+}
+
 /* A cell no star fits is tetrahedralized inside its boundary (S_FIXED) when its boundary triangles do not
  * cross. When they do, the fans of its warped or non-convex faces are what cross: those faces whose fan
  * from the smallest id folds get a face point (registered as decide does), or if none does, every face of
@@ -496,12 +573,9 @@ static int fixed_or_bad(stage *st, int64_t c, int32_t round, int may_add, int64_
         return S_BAD;
     }
     lookup_faces(st); /* drop star_is_valid's NEEDS_CENTRE marks */
-    local_boundary b;
-    int rc = local_boundary_build(st, c, 0, &b);
-    if (rc == 0)
-        rc = tpk_fixed_boundary_crossing(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count,
-                                         w->why, sizeof w->why);
-    local_boundary_free(&b);
+    int rc = boundary_crosses(st, c);
+    if (rc == 1 && may_add)
+        rc = recut_one_face(st, c, round, added_faces) ? 0 : 1; /* -1 stays -1 */
     if (rc <= 0)
         return rc < 0 ? -1 : S_FIXED;
     int64_t added = 0;
@@ -777,8 +851,8 @@ static int emit_cell(stage *st, int64_t c, int cone)
         return -1;
     for (int64_t f = 0; f < w->faces.face_count; f++) {
         const int32_t *v = w->faces.ids + w->faces.starts[f];
-        int64_t n = face_size(w, f), m = smallest_at(w, f), touches = 0;
-        if (w->entry[f] >= 0) {
+        int64_t n = face_size(w, f), m = fan_start(st, f), touches = 0;
+        if (has_point(st, w->entry[f])) {
             int32_t q = face_point(st, w->entry[f], c);
             if (q < 0)
                 return -1;
