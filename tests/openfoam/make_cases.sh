@@ -56,7 +56,7 @@ for c in "$@"; do
         copy_case incompressible/simpleFoam/windAroundBuildings "$c"
         if [ "$c" = wind ]; then
             sed -i -e 's/level (3 3)/level (2 2)/' -e 's/levels ((1E15 2))/levels ((1E15 1))/' system/snappyHexMeshDict
-            sed -i -e 's/xCells  *25;/xCells 16;/' -e 's/yCells  *20;/yCells 12;/' -e 's/zCells  *10;/zCells 6;/' \
+            sed -i -e 's/xCells  *25;/xCells 12;/' -e 's/yCells  *20;/yCells 10;/' -e 's/zCells  *10;/zCells 5;/' \
                 system/blockMeshDict
         fi
         log surfaceFeatureExtract

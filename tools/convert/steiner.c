@@ -268,6 +268,13 @@ static int load_cell(stage *st, int64_t c)
 }
 
 /* w->entry per face from the face table; returns how many faces carry a centre point. */
+/* An entry recut_faces made for a plain face and left as it was (along the smallest-id diagonal): the
+ * same as no entry. */
+static int is_void(const tpk_face_entry *x)
+{
+    return x->diagonal && !x->changed;
+}
+
 static int64_t lookup_faces(stage *st)
 {
     cell_work *w = &st->w;
@@ -278,6 +285,8 @@ static int64_t lookup_faces(stage *st)
         if (n >= 4 && st->table.count) {
             uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], n);
             w->entry[f] = tpk_face_table_find(&st->table, w->key, (int32_t)n, hash);
+            if (w->entry[f] >= 0 && is_void(&st->table.entries[w->entry[f]]))
+                w->entry[f] = -1;
             found += w->entry[f] >= 0;
         }
     }
@@ -312,19 +321,23 @@ static int face_needs_point(const cell_work *w, int64_t f)
     return 0;
 }
 
-/* Face f's entry in the face table, added (tagged `round`, counted in *added_faces) when it is not there
- * yet. Returns its index, or -1 when out of memory. */
+/* Face f's entry in the face table, with a point: added (tagged `round`, counted in *added_faces) when it
+ * is not there yet or is void. Returns its index, or -1 when out of memory. */
 static int64_t add_face_point(stage *st, int64_t f, int32_t round, int64_t *added_faces)
 {
     cell_work *w = &st->w;
     int64_t n = face_size(w, f);
     uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], n);
     int64_t at = tpk_face_table_find(&st->table, w->key, (int32_t)n, hash);
-    if (at >= 0)
+    if (at >= 0 && !is_void(&st->table.entries[at]))
         return at;
     *added_faces += 1;
-    if ((at = tpk_face_table_add(&st->table, w->key, (int32_t)n, hash, round)) >= 0)
-        place_face_point(st, f, st->table.entries[at].at, st->table.entries[at].pair);
+    if (at < 0 && (at = tpk_face_table_add(&st->table, w->key, (int32_t)n, hash, round)) < 0)
+        return -1;
+    tpk_face_entry *x = &st->table.entries[at];
+    x->diagonal = 0;
+    x->round = round;
+    place_face_point(st, f, x->at, x->pair);
     return at;
 }
 
@@ -512,49 +525,82 @@ static int boundary_crosses(stage *st, int64_t c)
     return rc;
 }
 
-/* Cell c's boundary triangles cross (a snapped cell folded along an edge): try cutting one quad face
- * otherwise: along either diagonal, or at a point, each choice checked with TetGen -d. A face is recut at
- * most once, so the rounds end; its entry is tagged with `round`, so every cell on it is decided again
- * with the new cut (a plain cut becomes an entry cutting along the smallest-id diagonal, the same cut).
- * Returns 1 when a recut uncrosses them, 0 when none does, -1 when out of memory. */
-static int recut_one_face(stage *st, int64_t c, int32_t round, int64_t *added_faces)
+enum { RECUT_MAX = 6 }; /* quad faces searched together: 3^6 cuts at most, for a rare cell */
+
+/* Cut o of quad face f on its entry x: 0 along the smallest-id diagonal, 1 along the other, 2 at a point. */
+static void set_cut(stage *st, int64_t f, tpk_face_entry *x, int o)
+{
+    const cell_work *w = &st->w;
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    int64_t m = smallest_at(w, f);
+    x->diagonal = o < 2;
+    if (o < 2)
+        x->pair[0] = v[(m + o) % 4], x->pair[1] = v[(m + o + 2) % 4];
+    else
+        place_face_point(st, f, x->at, x->pair);
+}
+
+static int cut_of(const stage *st, int64_t f, const tpk_face_entry *x)
+{
+    const cell_work *w = &st->w;
+    return !x->diagonal ? 2 : x->pair[0] == w->faces.ids[w->faces.starts[f] + smallest_at(w, f)] ? 0 : 1;
+}
+
+/* Cell c's boundary triangles cross (a snapped cell folded along an edge): cut its quad faces otherwise
+ * (along either diagonal, or at a point), fewest changes first, each choice checked with TetGen -d. A
+ * face is recut at most once, so the rounds end; its entry is tagged with `round`, so every cell on it is
+ * decided again with the new cut (a plain cut becomes an entry cutting along the smallest-id diagonal,
+ * the same cut). Returns 1 when a recut uncrosses them, 0 when none does, -1 when out of memory. */
+static int recut_faces(stage *st, int64_t c, int32_t round, int64_t *added_faces)
 {
     cell_work *w = &st->w;
-    for (int64_t f = 0; f < w->faces.face_count; f++) {
-        int64_t e = w->entry[f], none = 0;
+    int64_t face[RECUT_MAX], entry[RECUT_MAX];
+    tpk_face_entry saved[RECUT_MAX];
+    int now[RECUT_MAX], cut[RECUT_MAX], k = 0, combos = 1;
+    for (int64_t f = 0; f < w->faces.face_count && k < RECUT_MAX; f++) {
+        int64_t e = w->entry[f];
         if (face_size(w, f) != 4 || face_needs_point(w, f) || (e >= 0 && st->table.entries[e].changed))
             continue;
-        const int32_t *v = w->faces.ids + w->faces.starts[f];
-        int64_t m = smallest_at(w, f);
-        if (e < 0) {
-            if ((e = add_face_point(st, f, round, &none)) < 0)
+        if (e < 0) { /* a plain face: a void entry to try cuts on */
+            uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], 4);
+            if ((e = tpk_face_table_find(&st->table, w->key, 4, hash)) < 0 &&
+                (e = tpk_face_table_add(&st->table, w->key, 4, hash, round)) < 0)
                 return -1;
-            st->table.entries[e].diagonal = 1;
-            st->table.entries[e].pair[0] = v[m], st->table.entries[e].pair[1] = v[(m + 2) % 4];
+            set_cut(st, f, &st->table.entries[e], 0);
             w->entry[f] = e;
         }
-        tpk_face_entry saved = st->table.entries[e];
-        for (int option = 0; option < 3; option++) {
-            tpk_face_entry *x = &st->table.entries[e];
-            x->diagonal = option < 2;
-            if (option < 2)
-                x->pair[0] = v[(m + option) % 4], x->pair[1] = v[(m + option + 2) % 4];
-            else
-                place_face_point(st, f, x->at, x->pair);
-            if (x->diagonal == saved.diagonal && (x->diagonal ? x->pair[0] == saved.pair[0] : 1))
-                continue; /* the cut it has */
+        face[k] = f, entry[k] = e, saved[k] = st->table.entries[e];
+        now[k] = cut_of(st, f, &saved[k]);
+        k++, combos *= 3;
+    }
+    for (int changes = 1; changes <= k; changes++)
+        for (int code = 0; code < combos; code++) {
+            int differ = 0;
+            for (int i = 0, rest = code; i < k; i++, rest /= 3)
+                differ += (cut[i] = rest % 3) != now[i];
+            if (differ != changes)
+                continue;
+            for (int i = 0; i < k; i++)
+                set_cut(st, face[i], &st->table.entries[entry[i]], cut[i]);
             int crossing = boundary_crosses(st, c);
             if (crossing < 0)
                 return -1;
-            if (crossing == 0) {
+            if (crossing)
+                continue;
+            for (int i = 0; i < k; i++) {
+                tpk_face_entry *x = &st->table.entries[entry[i]];
+                if (cut[i] == now[i]) {
+                    *x = saved[i];
+                    continue;
+                }
                 x->changed = 1;
                 x->round = round;
                 *added_faces += 1;
-                return 1;
             }
+            return 1;
         }
-        st->table.entries[e] = saved;
-    }
+    for (int i = 0; i < k; i++)
+        st->table.entries[entry[i]] = saved[i];
     return 0;
 }
 
@@ -574,8 +620,10 @@ static int fixed_or_bad(stage *st, int64_t c, int32_t round, int may_add, int64_
     }
     lookup_faces(st); /* drop star_is_valid's NEEDS_CENTRE marks */
     int rc = boundary_crosses(st, c);
-    if (rc == 1 && may_add)
-        rc = recut_one_face(st, c, round, added_faces) ? 0 : 1; /* -1 stays -1 */
+    if (rc == 1 && may_add) {
+        int recut = recut_faces(st, c, round, added_faces);
+        rc = recut < 0 ? -1 : !recut;
+    }
     if (rc <= 0)
         return rc < 0 ? -1 : S_FIXED;
     int64_t added = 0;

@@ -37,8 +37,9 @@ void tpk_added_points_free(tpk_added_points *added);
  *    is shared: every cell on the face, also one whose plain split was valid, is then decided again with
  *    it, until no cell asks for another, so the mesh stays conforming;
  *  - with TetGen (tools/convert/fixed_boundary.h): a tetrahedralization inside its boundary triangles,
- *    which must not cross (when they do, one quad face is recut, or points go on the faces whose fan
- *    folds, then on all, each decided again in the next round).
+ *    which must not cross (when they do, its quad faces are cut otherwise, fewest changes first, each face
+ *    at most once; or points go on the faces whose fan folds, then on all; cells on a changed face are
+ *    decided again in the next round).
  * Every tet is checked with the exact predicate (on the file's float32 grid with TPK_TETRA_FILE_GRID); a
  * cell none of this makes valid is an error naming it (returns -2), or with TPK_TETRA_SKIP_BAD_CELLS is
  * left out and counted. Counts go to out (steiner_cells, face_steiner_points, fixed_boundary_cells,
