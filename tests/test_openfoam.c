@@ -303,7 +303,16 @@ static void run_case(const char *name)
 
     tpk_tetmesh t;
     tpk_orient_stats os;
-    CHECK_MSG(tpk_tetrahedralize(&m, NULL, 0, 0, &t, &d) == 0, "%s: %s", name, d.message);
+    int split = tpk_tetrahedralize(&m, NULL, 0, 0, &t, &d);
+#ifndef TPK_WITH_TETGEN
+    /* Some of these cells only TetGen can tetrahedralize inside their boundary: refused by name. */
+    if (split != 0) {
+        tpk_mesh_free(&m);
+        CHECK_MSG(strstr(d.message, "too warped") && strstr(d.message, "no TetGen"), "%s: %s", name, d.message);
+        return;
+    }
+#endif
+    CHECK_MSG(split == 0, "%s: %s", name, d.message);
     int rc = tpk_orient(&t, TPK_ORIENT_REFUSE_INVERTED, 1, &os, &d);
     int32_t *nb = rc == 0 ? malloc(sizeof *nb * 4 * (size_t)t.tet_count) : NULL;
     if (rc == 0)

@@ -9,7 +9,16 @@ for name in wind igloo flange; do
     src=$CASES/$name.vtk
     # --reorient: foamToVTK writes every prism in VTK's documented face order, which tetpack reads as the
     # mirror image of VTK's parametric wedge (tests/test_openfoam.c counts them); nothing else is turned.
-    expect_exit 0 "$TPK" convert "$src" "$WORK/$name.tpk" --reorient --json
+    set +e
+    "$TPK" convert "$src" "$WORK/$name.tpk" --reorient --json > "$WORK/out" 2> "$WORK/err"
+    rc=$?
+    set -e
+    # Built without TetGen, the cells only TetGen can split are refused by name (tests/test_openfoam.c).
+    if [ $rc -ne 0 ] && grep -q "too warped.*no TetGen" "$WORK/err"; then
+        echo "$name: refused without TetGen: $(cat "$WORK/err")"
+        continue
+    fi
+    [ $rc -eq 0 ] || { cat "$WORK/err" >&2; fail "$name: convert exited $rc"; }
     $PY - "$WORK/out" "$name" <<'PY' || fail "$name: convert left cells out or turned tets over"
 import json, sys
 r = json.load(open(sys.argv[1]))
