@@ -109,16 +109,12 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
  * orientation included) then decides on exactly the coordinates a reader of the file sees. */
 static void quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr)
 {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t i = 0; i < mesh->vertex_count; i++)
-        for (int k = 0; k < 3; k++) {
-            double x = mesh->points[3 * i + k];
-            lo[k] = x < lo[k] ? x : lo[k];
-            hi[k] = x > hi[k] ? x : hi[k];
-        }
+    /* On the grid tetrahedralize decided on (TPK_TETRA_FILE_GRID), the same origin keeps it exact. */
+    if (mesh->on_grid)
+        memcpy(hdr->origin, mesh->grid_origin, sizeof hdr->origin);
+    else
+        tpk_points_box_centre(mesh->points, mesh->vertex_count, hdr->origin);
     for (int k = 0; k < 3; k++) {
-        /* On the grid tetrahedralize decided on (TPK_TETRA_FILE_GRID), the same origin keeps it exact. */
-        hdr->origin[k] = mesh->on_grid ? mesh->grid_origin[k] : mesh->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }

@@ -453,15 +453,7 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
  * double). */
 static void snap_to_file_grid(tpk_tetmesh *out)
 {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t i = 0; i < out->vertex_count; i++)
-        for (int k = 0; k < 3; k++) {
-            double x = out->points[3 * i + k];
-            lo[k] = x < lo[k] ? x : lo[k];
-            hi[k] = x > hi[k] ? x : hi[k];
-        }
-    for (int k = 0; k < 3; k++)
-        out->grid_origin[k] = out->vertex_count ? 0.5 * (lo[k] + hi[k]) : 0.0;
+    tpk_points_box_centre(out->points, out->vertex_count, out->grid_origin);
     for (int64_t i = 0; i < 3 * out->vertex_count; i++)
         out->points[i] = out->grid_origin[i % 3] + (double)(float)(out->points[i] - out->grid_origin[i % 3]);
     out->on_grid = 1;

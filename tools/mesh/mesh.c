@@ -1,6 +1,7 @@
 /* Ownership helpers for the converter's in-memory meshes. */
 #include "mesh.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -60,4 +61,17 @@ int tpk_compare_int32(const void *a, const void *b)
 {
     int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
     return (x > y) - (x < y);
+}
+
+void tpk_points_box_centre(const double *points, int64_t count, double centre[3])
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < count; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = points[3 * i + k];
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
+        }
+    for (int k = 0; k < 3; k++)
+        centre[k] = count ? 0.5 * (lo[k] + hi[k]) : 0.0;
 }

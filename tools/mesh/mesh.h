@@ -85,4 +85,7 @@ typedef struct tpk_tetmesh {
 
 void tpk_tetmesh_free(tpk_tetmesh *mesh);
 
+/* The centre of the bounding box of points[0 .. 3 count): the file's origin (0 for no points). */
+void tpk_points_box_centre(const double *points, int64_t count, double centre[3]);
+
 #endif
