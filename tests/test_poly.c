@@ -411,8 +411,11 @@ TPK_TEST(non_convex_polyhedron_seen_from_its_centre)
 }
 
 /* An L with long arms: its points' mean (5/3, 5/3) is outside the kernel (the unit corner square), so
- * it does not see the inner sides, nor does its smallest point (1, 4, 0), the tip of an arm, for a cone:
- * refused by name, or left out with TPK_TETRA_SKIP_BAD_CELLS. (Numbered from the corner (0, 0, 0), in
+ * it does not see the inner sides, nor does its smallest point (1, 4, 0), the tip of an arm, for a cone.
+ * With TetGen it is tetrahedralized inside its fixed boundary once faces whose fans cross take a point
+ * (the hexagons' at the midpoint of a diagonal through the reflex corner: their mean lies on an inner
+ * side), keeping its volume; without TetGen it is refused by name. Either way, with
+ * TPK_TETRA_SKIP_BAD_CELLS only a refused cell is left out. (Numbered from the corner (0, 0, 0), in
  * the kernel, it would be a valid cone.) */
 TPK_TEST(non_convex_polyhedron_refused_by_name)
 {
@@ -421,14 +424,22 @@ TPK_TEST(non_convex_polyhedron_refused_by_name)
     prism_mesh(l6, 6, 3, &m);
     result r;
     convert(&m, 0, &r, NULL);
+#ifdef TPK_WITH_TETGEN
+    tpk_mesh_free(&m);
+    CHECK_MSG(r.rc == 0, "%s", r.message);
+    /* The L (5) and the hexahedron (1), no cell left out, whichever faces took a point to uncross. */
+    CHECK_MSG(fabs(r.volume6 - 6 * (5 + 1)) < 1e-12, "6V = %.17g", r.volume6);
+    CHECK(r.polyhedra == 1 && r.face_points >= 1 && r.bad == 0 && r.inverted == 0);
+#else
     CHECK(r.rc != 0);
     CHECK_MSG(strstr(r.message, "cell 0 (a polyhedron) is too warped, non-convex or degenerate to split: a point "
-                                "at its centre does not see face") && strstr(r.message, "--skip-bad-cells"),
-              "%s", r.message);
+                                "at its centre does not see face") && strstr(r.message, "no TetGen") &&
+              strstr(r.message, "--skip-bad-cells"), "%s", r.message);
     convert(&m, TPK_TETRA_SKIP_BAD_CELLS, &r, NULL);
     tpk_mesh_free(&m);
     CHECK_MSG(r.rc == 0, "%s", r.message);
     CHECK(r.bad == 1 && r.polyhedra == 0 && (r.tets == 5 || r.tets == 6) && r.volume6 == 6);
+#endif
     const double corner_first[6][2] = {{0, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 4}, {0, 4}};
     prism_mesh(corner_first, 6, 1, &m);
     convert(&m, 0, &r, NULL);
@@ -636,4 +647,60 @@ TPK_TEST(warped_polyhedra_convert_like_warped_hexahedra)
           p.open == h.open && p.bad == h.bad && p.polyhedra == 1000 - p.bad);
     CHECK_MSG(relative_close(p.volume6, h.volume6), "%.17g vs %.17g", p.volume6, h.volume6);
     CHECK_MSG(relative_close(h.volume6, before), "%.17g vs %.17g", h.volume6, before);
+}
+
+/* The issue's cell (OpenFOAM, 6 points, 4 faces): a tet A B C D with a point on edge AB and one on AC,
+ * both pushed out of their faces' planes, as a refined neighbour's snapped points are. A cone from A
+ * would skip every face touching A and give the single tet ABCD, leaving both points out (and the
+ * volume they bulge). Each fan diagonal along those edges gets a face point instead: all 6 points are
+ * used, and the volume is that of the faces fanned from their mean (the converter's face points). */
+TPK_TEST(edge_points_of_a_tet_kept_with_their_volume)
+{
+    const double p[6][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0.5, -0.1, -0.1}, {-0.1, 0.5, -0.1}};
+    const int32_t stream[] = {4, 4, 0, 3, 1, 4, 4, 0, 5, 2, 3, 5, 0, 4, 1, 2, 5, 3, 1, 3, 2};
+    tpk_mesh m;
+    memset(&m, 0, sizeof m);
+    m.point_count = 6, m.cell_count = 1;
+    m.points = malloc(sizeof p), m.cell_types = malloc(1), m.cell_offsets = malloc(2 * sizeof(int64_t));
+    m.cell_conn = malloc(6 * sizeof(int32_t)), m.face_offsets = malloc(2 * sizeof(int64_t));
+    m.faces = malloc(sizeof stream);
+    memcpy(m.points, p, sizeof p), memcpy(m.faces, stream, sizeof stream);
+    m.cell_types[0] = TPK_CELL_POLYHEDRON;
+    m.cell_offsets[0] = m.face_offsets[0] = 0, m.cell_offsets[1] = 6, m.face_offsets[1] = sizeof stream / sizeof *stream;
+    for (int i = 0; i < 6; i++)
+        m.cell_conn[i] = i;
+    m.step_count = 1;
+    /* 6V of the faces fanned from their mean (BCD, a triangle, as it is), relative to A (the origin). */
+    double want6 = 0;
+    const int32_t *f = stream + 1;
+    for (int face = 0; face < 4; face++, f += 1 + f[0]) {
+        int n = f[0];
+        double q[3] = {0, 0, 0};
+        for (int i = 0; i < n; i++)
+            for (int k = 0; k < 3; k++)
+                q[k] += p[f[1 + i]][k] / n;
+        for (int i = 0; n > 3 && i < n; i++) {
+            const double *a = p[f[1 + i]], *b = p[f[1 + (i + 1) % n]];
+            want6 += a[0] * (b[1] * q[2] - b[2] * q[1]) - a[1] * (b[0] * q[2] - b[2] * q[0]) + a[2] * (b[0] * q[1] - b[1] * q[0]);
+        }
+        if (n == 3) {
+            const double *a = p[f[1]], *b = p[f[2]], *c = p[f[3]];
+            want6 += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+        }
+    }
+    tpk_tetmesh out;
+    result r;
+    convert(&m, 0, &r, &out);
+    tpk_mesh_free(&m);
+    CHECK_MSG(r.rc == 0, "%s", r.message);
+    int used[6] = {0};
+    for (int64_t i = 0; i < 4 * out.tet_count; i++)
+        if (out.tets[i] < 6)
+            used[out.tets[i]] = 1;
+    tpk_tetmesh_free(&out);
+    for (int i = 0; i < 6; i++)
+        CHECK_MSG(used[i], "point %d is left out", i);
+    CHECK(r.face_points == 3 && r.steiner == 1 && r.inverted == 0);
+    CHECK_MSG(fabs(fabs(want6) - r.volume6) < 1e-12 && r.volume6 > 1.0 + 1e-3, "6V = %.17g, faces enclose %.17g",
+              r.volume6, want6);
 }

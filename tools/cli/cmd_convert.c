@@ -281,13 +281,13 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                           "\"cells_split\":{\"tetra\":%lld,\"pyramid_into_2\":%lld,\"wedge_into_3\":%lld,"
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
                           "\"steiner_cells\":%lld,\"face_steiner_points\":%lld,\"polyhedra\":%lld,"
-                          "\"bad_cells_skipped\":%lld,\"merged_vertices\":%lld,"
+                          "\"fixed_boundary_cells\":%lld,\"bad_cells_skipped\":%lld,\"merged_vertices\":%lld,"
                           "\"collapsed_cells_dropped\":%lld,\"folds_cut\":%lld,\"repairs\":",
                           (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
                           (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
                           (long long)r->steiner_cells, (long long)r->face_steiner_points,
-                          (long long)r->polyhedra, (long long)r->bad_cells_skipped, (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped,
-                          (long long)r->folds_cut);
+                          (long long)r->polyhedra, (long long)r->fixed_boundary_cells, (long long)r->bad_cells_skipped,
+                          (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped, (long long)r->folds_cut);
         tpk_convert_repairs_json(&sb, &a->options, r);
         tpk_strbuf_printf(&sb,
                           ",\"seconds\":{\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"
@@ -308,10 +308,11 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
         r->bad_cells_skipped || r->polyhedra)
         printf("  cells: %lld tetra, %lld pyramids (2 tets), %lld wedges (3), %lld hexahedra into 5 and %lld "
                "into 6, %lld polyhedra; %lld split from a point at their centre, %lld points added at face "
-               "centres; %lld bad cells skipped\n",
+               "centres, %lld tetrahedralized inside their boundary (TetGen); %lld bad cells skipped\n",
                (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
                (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->polyhedra,
-               (long long)r->steiner_cells, (long long)r->face_steiner_points, (long long)r->bad_cells_skipped);
+               (long long)r->steiner_cells, (long long)r->face_steiner_points, (long long)r->fixed_boundary_cells,
+               (long long)r->bad_cells_skipped);
     printf("  time: %.3f s (import %.3f, tetrahedralize %.3f, orient %.3f, reorder %.3f, connect %.3f, "
            "write %.3f)\n",
            r->t_total, r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect, r->t_write);

@@ -105,28 +105,6 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     return 0;
 }
 
-/* The origin of one axis (spec §6.8): the number in [lo, hi] with the fewest significant bits, that is
- * 0 when the box straddles 0, else the one multiple of the largest power of two q that has a multiple
- * in [lo, hi] (two would make one of them a multiple of 2q). Every stored |x - origin| is at most
- * hi - lo, so float32 keeps all but at most one bit of the precision a centred origin gives, and a
- * coordinate that is a float32 multiple of q's granularity (0 and 1 of a unit cube, 10 and 11 of a
- * cube at 10) is stored exactly, where the centre 0.5 * (lo + hi) may not even be exact itself. */
-static double axis_origin(double lo, double hi)
-{
-    if (!(lo <= hi) || !isfinite(lo) || !isfinite(hi) || (lo <= 0.0 && hi >= 0.0))
-        return 0.0;
-    int e;
-    frexp(fmax(fabs(lo), fabs(hi)), &e);
-    /* q = 2^e exceeds both bounds; halving it ends at the lowest set bit of lo at the latest, whose
-     * multiples include lo itself (ldexp and the division by a power of two are exact). */
-    for (double q = ldexp(1.0, e); q > 0.0; q *= 0.5) {
-        double candidate = ceil(lo / q) * q;
-        if (candidate <= hi)
-            return candidate;
-    }
-    return lo;
-}
-
 /* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the origin
  * overflows float32, is an error naming it (also when no cell uses it: the file stores every point). */
 static int check_storable(const tpk_tetmesh *mesh, const double *origin, tpk_diag *diag)
@@ -147,20 +125,17 @@ static int check_storable(const tpk_tetmesh *mesh, const double *origin, tpk_dia
     return 0;
 }
 
-/* Move the points into the frame the file stores: relative to the origin of axis_origin (so meshes
- * far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
+/* Move the points into the frame the file stores: relative to the origin of tpk_points_origin (so
+ * meshes far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
  * included) then decides on exactly the coordinates a reader of the file sees. */
 static int quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *diag)
 {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t i = 0; i < mesh->vertex_count; i++)
-        for (int k = 0; k < 3; k++) {
-            double x = mesh->points[3 * i + k];
-            lo[k] = x < lo[k] ? x : lo[k];
-            hi[k] = x > hi[k] ? x : hi[k];
-        }
+    /* On the grid tetrahedralize decided on (TPK_TETRA_FILE_GRID), the same origin keeps it exact. */
+    if (mesh->on_grid)
+        memcpy(hdr->origin, mesh->grid_origin, sizeof hdr->origin);
+    else
+        tpk_points_origin(mesh->points, mesh->vertex_count, hdr->origin);
     for (int k = 0; k < 3; k++) {
-        hdr->origin[k] = mesh->vertex_count ? axis_origin(lo[k], hi[k]) : 0.0;
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }
@@ -485,7 +460,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
-                                       (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0),
+                                       (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0) | TPK_TETRA_FILE_GRID,
                                    &mesh, diag) != 0) {
         note_merged_ids(&merged, diag);
         goto done;
@@ -495,6 +470,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);
     rep->mirrored_cells = mesh.mirrored_cells;
     rep->steiner_cells = mesh.steiner_cells;
+    rep->fixed_boundary_cells = mesh.fixed_boundary_cells;
     rep->face_steiner_points = mesh.face_steiner_points;
     rep->polyhedra = mesh.polyhedra;
     rep->bad_cells_skipped = mesh.bad_cells_skipped;

@@ -48,6 +48,7 @@ typedef struct tpk_convert_report {
     int64_t mirrored_cells, steiner_cells, bad_cells_skipped; /* mirrored: turned over; bad: left out (cells,
                                                                  and inverted tets that would fold) */
     int64_t folds_cut;            /* folded faces whose adjacency was cut (cut_folds) */
+    int64_t fixed_boundary_cells; /* tetrahedralized inside their boundary triangles (TetGen) */
     int field_count, step_count;
     uint64_t output_bytes;
     /* seconds per stage */

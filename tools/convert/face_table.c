@@ -79,7 +79,7 @@ int64_t tpk_face_table_add(tpk_face_table *table, const int32_t *sorted, int32_t
     }
     memcpy(table->keys + table->key_count, sorted, sizeof *sorted * (size_t)size);
     tpk_face_entry *e = &table->entries[table->count];
-    *e = (tpk_face_entry){hash, table->key_count, size, round, -1, {-1, -1}};
+    *e = (tpk_face_entry){hash, table->key_count, size, round, -1, {-1, -1}, {0, 0, 0}, {-1, -1}, 0, 0};
     table->key_count += size;
     place(table, table->count);
     return table->count++;

@@ -12,6 +12,10 @@ typedef struct tpk_face_entry {
     int32_t round;    /* when it was added (tpk_steiner_stage's rounds) */
     int32_t point;    /* its vertex id once numbered, else -1 */
     int32_t cells[2]; /* the cells that used the point, -1 for none yet */
+    double at[3];     /* where the point goes, and */
+    int32_t pair[2];  /* the two corners it is the midpoint of, or -1: the mean of all (set by the caller) */
+    int32_t diagonal; /* 1: no point; the quad is cut along pair instead (set by the caller) */
+    int32_t changed;  /* the caller changed how it is cut once (it may not again) */
 } tpk_face_entry;
 
 /* Zero-initialise; free with tpk_face_table_free. */

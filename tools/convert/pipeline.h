@@ -14,7 +14,8 @@
 /* Source cells -> tets. Tetrahedra pass through; voxels, hexahedra, wedges and pyramids are split
  * conformally without new points (tools/convert/cell_split.h); a cell the split would fold (warped, non-convex,
  * degenerate), and a polyhedron, gets points added at its centre and at face centres where the exact
- * predicates find the result valid (tools/convert/steiner.h); a cell even that cannot split is an error naming
+ * predicates find the result valid, else (with TetGen) is tetrahedralized inside its fixed boundary
+ * (tools/convert/steiner.h); a cell even that cannot split is an error naming
  * it, or is left out and counted with TPK_TETRA_SKIP_BAD_CELLS. Prisms of more sides are refused by name. Point fields are kept, cell fields become
  * per-tet fields via the source map. `field_names` (count n, may be NULL = all scalar point fields)
  * selects fields. */
@@ -26,6 +27,10 @@
  * is an error naming it and counting them all, instead of being turned over and counted in
  * mirrored_cells. The converter sets this with --strict-orientation. */
 #define TPK_TETRA_REFUSE_MIRRORED 0x4
+/* Decide on the coordinates the file stores: the points are first moved onto the float32 grid relative to
+ * the centre of their bounding box (out->grid_origin), and every added point is put on it as it is made, so
+ * that a tet found positive (exactly) stays positive in the file. The converter sets this. */
+#define TPK_TETRA_FILE_GRID 0x8
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag);
 /* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;

@@ -1,6 +1,6 @@
-/* Warped cells and polyhedra into tets from added points (tools/convert/steiner.h): per cell a cone or a star,
- * checked with the exact predicate; face points shared through a face table, in rounds until no cell
- * asks for another. */
+/* Warped cells and polyhedra into tets (tools/convert/steiner.h): per cell a cone, a star from added points, or
+ * TetGen inside its fixed boundary, checked with the exact predicate; how faces are cut (face points,
+ * recut diagonals) is shared through a face table, in rounds until no cell asks for a change. */
 #include "steiner.h"
 
 #include <math.h>
@@ -10,11 +10,12 @@
 
 #include "mesh/cell_types.h"
 #include "face_table.h"
+#include "fixed_boundary.h"
 #include "pipeline.h"
 #include "mesh/polyhedron.h"
 
 /* Per-cell state: a mode, and flags. */
-enum { S_NONE, S_PENDING, S_STAR, S_CONE, S_BAD, S_MODE = 7, S_FORCED = 8, S_MIRRORED = 16 };
+enum { S_NONE, S_PENDING, S_STAR, S_CONE, S_BAD, S_FIXED, S_MODE = 7, S_FORCED = 8, S_MIRRORED = 16 };
 enum { NEEDS_CENTRE = -2 }; /* cell_work.entry: a face this cell wants split at its centre */
 
 typedef struct cell_work {
@@ -23,6 +24,8 @@ typedef struct cell_work {
     int64_t entry_cap;
     int32_t *key;         /* one face's ids, ascending */
     int64_t key_cap;
+    int32_t *ring;        /* one face's ids in the order both its cells share (canonical_ring) */
+    int64_t ring_cap;
     int mirrored;
     double centre[3];
     char why[320];
@@ -51,6 +54,15 @@ void tpk_added_points_free(tpk_added_points *added)
 static const double *point_at(const stage *st, int32_t id)
 {
     return st->out->points + 3 * (int64_t)id;
+}
+
+/* q moved onto the grid the file stores (TPK_TETRA_FILE_GRID: float32 relative to grid_origin, as
+ * tools/convert/convert.c's quantize_points stores it) before anything is decided on it, so that tets
+ * found positive here stay positive in the file. */
+static void to_file_grid(const stage *st, double q[3])
+{
+    for (int a = 0; st->out->on_grid && a < 3; a++)
+        q[a] = st->out->grid_origin[a] + (double)(float)(q[a] - st->out->grid_origin[a]);
 }
 
 /* Is the outward triangle (a, b, c) seen from inside by `apex`: det[a, c, b, apex] > 0, exactly. */
@@ -124,16 +136,83 @@ static uint64_t face_key(cell_work *w, const int32_t *ids, int64_t n)
     return tpk_face_hash(k, (int32_t)n);
 }
 
-/* The centre of a face from its sorted ids: the same bits whichever cell computes it. */
-static void key_centre(const stage *st, const int32_t *sorted, int64_t n, double q[3])
+/* Face f's corners in an order both cells on it share, into w->ring: from its smallest id, towards the
+ * smaller of that corner's two neighbours. */
+static const int32_t *canonical_ring(cell_work *w, int64_t f)
 {
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    int64_t n = face_size(w, f), m = smallest_at(w, f);
+    int64_t step = v[(m + 1) % n] < v[(m + n - 1) % n] ? 1 : n - 1;
+    for (int64_t i = 0; i < n; i++)
+        w->ring[i] = v[(m + i * step) % n];
+    return w->ring;
+}
+
+/* Does the fan from q over the ring fold: a triangle (r_i, r_i+1, q) facing against the ring's (Newell)
+ * normal, or flat? q may be one of the corners' own point. */
+static int fan_folds(const stage *st, const int32_t *ring, int64_t n, const double q[3])
+{
+    double normal[3] = {0, 0, 0}, (*t)[3] = malloc(sizeof *t * (size_t)n);
+    if (!t)
+        return 1; /* only costs the better place */
+    for (int64_t i = 0; i < n; i++) {
+        const double *a = point_at(st, ring[i]), *b = point_at(st, ring[(i + 1) % n]);
+        double u[3] = {a[0] - q[0], a[1] - q[1], a[2] - q[2]}, v[3] = {b[0] - q[0], b[1] - q[1], b[2] - q[2]};
+        t[i][0] = u[1] * v[2] - u[2] * v[1];
+        t[i][1] = u[2] * v[0] - u[0] * v[2];
+        t[i][2] = u[0] * v[1] - u[1] * v[0];
+        for (int k = 0; k < 3; k++)
+            normal[k] += t[i][k];
+    }
+    int folds = 0;
+    for (int64_t i = 0; i < n; i++) /* from a corner (q is then that point), its own two are empty */
+        folds |= point_at(st, ring[i]) != q && point_at(st, ring[(i + 1) % n]) != q &&
+                 t[i][0] * normal[0] + t[i][1] * normal[1] + t[i][2] * normal[2] <= 0;
+    free(t);
+    return folds;
+}
+
+/* Does face f's fan from its smallest id fold: a triangle facing against the face's (Newell) normal? */
+static int corner_fan_folds(stage *st, int64_t f)
+{
+    cell_work *w = &st->w;
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    return fan_folds(st, v, face_size(w, f), point_at(st, v[smallest_at(w, f)]));
+}
+
+/* Where face f's point goes, the same from both cells (it is computed from the canonical ring, in the
+ * same order, so in floating point too): at the mean of its corners, OpenFOAM's face centre, unless the
+ * fan from there folds (a non-convex face whose mean lies outside its kernel, the part of it that sees
+ * every corner); then at the midpoint of the first diagonal, in ring order, whose fan does not (for a
+ * quad, the diagonal through its reflex corner). pair: that diagonal's ends, or -1 for the mean (also
+ * when no diagonal helps: tools/convert/fixed_boundary.c then finds the fold). */
+static void place_face_point(stage *st, int64_t f, double q[3], int32_t pair[2])
+{
+    cell_work *w = &st->w;
+    const int32_t *ring = canonical_ring(w, f);
+    int64_t n = face_size(w, f);
+    pair[0] = pair[1] = -1;
     q[0] = q[1] = q[2] = 0;
     for (int64_t i = 0; i < n; i++)
         for (int a = 0; a < 3; a++)
-            q[a] += point_at(st, sorted[i])[a];
-    for (int a = 0; a < 3; a++)
-        q[a] /= (double)n;
+            q[a] += point_at(st, ring[i])[a] / (double)n;
+    to_file_grid(st, q);
+    if (!fan_folds(st, ring, n, q))
+        return;
+    for (int64_t i = 0; i < n; i++)
+        for (int64_t j = i + 2; j < n && j - i < n - 1; j++) {
+            const double *a = point_at(st, ring[i]), *b = point_at(st, ring[j]);
+            double mid[3] = {(a[0] + b[0]) / 2, (a[1] + b[1]) / 2, (a[2] + b[2]) / 2};
+            to_file_grid(st, mid);
+            if (!fan_folds(st, ring, n, mid)) {
+                memcpy(q, mid, sizeof mid);
+                pair[0] = ring[i], pair[1] = ring[j];
+                return;
+            }
+        }
 }
+
+static int32_t face_point(stage *st, int64_t at, int64_t c);
 
 /* ---- One cell ------------------------------------------------------------------------------------ */
 
@@ -177,16 +256,25 @@ static int load_cell(stage *st, int64_t c)
     for (int64_t k = 0; k < corners; k++)
         for (int a = 0; a < 3; a++)
             w->centre[a] += point_at(st, src->cell_conn[begin + k])[a] / (double)corners;
+    to_file_grid(st, w->centre);
     int64_t longest = 0;
     for (int64_t f = 0; f < w->faces.face_count; f++)
         longest = face_size(w, f) > longest ? face_size(w, f) : longest;
     if (grow((void **)&w->entry, &w->entry_cap, w->faces.face_count, sizeof *w->entry) ||
-        grow((void **)&w->key, &w->key_cap, longest, sizeof *w->key))
+        grow((void **)&w->key, &w->key_cap, longest, sizeof *w->key) ||
+        grow((void **)&w->ring, &w->ring_cap, longest, sizeof *w->ring))
         return -1;
     return 0;
 }
 
 /* w->entry per face from the face table; returns how many faces carry a centre point. */
+/* An entry recut_faces made for a plain face and left as it was (along the smallest-id diagonal): the
+ * same as no entry. */
+static int is_void(const tpk_face_entry *x)
+{
+    return x->diagonal && !x->changed;
+}
+
 static int64_t lookup_faces(stage *st)
 {
     cell_work *w = &st->w;
@@ -197,10 +285,60 @@ static int64_t lookup_faces(stage *st)
         if (n >= 4 && st->table.count) {
             uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], n);
             w->entry[f] = tpk_face_table_find(&st->table, w->key, (int32_t)n, hash);
+            if (w->entry[f] >= 0 && is_void(&st->table.entries[w->entry[f]]))
+                w->entry[f] = -1;
             found += w->entry[f] >= 0;
         }
     }
     return found;
+}
+
+/* Do corners a and b both lie on a face of the cell other than f? */
+static int share_another_face(const cell_work *w, int64_t f, int32_t a, int32_t b)
+{
+    for (int64_t g = 0; g < w->faces.face_count; g++) {
+        int hits = 0;
+        for (int64_t i = 0; g != f && i < face_size(w, g); i++)
+            hits += w->faces.ids[w->faces.starts[g] + i] == a || w->faces.ids[w->faces.starts[g] + i] == b;
+        if (hits == 2)
+            return 1;
+    }
+    return 0;
+}
+
+/* Does face f need a point at its centre, whatever sees it? Its fan from the smallest id triangulates it
+ * only when no fan diagonal joins two corners that another face of the cell also holds: such a diagonal
+ * runs along an edge that carries points (a refined neighbour's, as on OpenFOAM's split faces), and the
+ * fan would lay flat or doubled triangles along it, leaving those points out and the two cells on the
+ * face disagreeing about it. */
+static int face_needs_point(const cell_work *w, int64_t f)
+{
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    int64_t n = face_size(w, f), m = smallest_at(w, f);
+    for (int64_t k = 2; k <= n - 2; k++)
+        if (share_another_face(w, f, v[m], v[(m + k) % n]))
+            return 1;
+    return 0;
+}
+
+/* Face f's entry in the face table, with a point: added (tagged `round`, counted in *added_faces) when it
+ * is not there yet or is void. Returns its index, or -1 when out of memory. */
+static int64_t add_face_point(stage *st, int64_t f, int32_t round, int64_t *added_faces)
+{
+    cell_work *w = &st->w;
+    int64_t n = face_size(w, f);
+    uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], n);
+    int64_t at = tpk_face_table_find(&st->table, w->key, (int32_t)n, hash);
+    if (at >= 0 && !is_void(&st->table.entries[at]))
+        return at;
+    *added_faces += 1;
+    if (at < 0 && (at = tpk_face_table_add(&st->table, w->key, (int32_t)n, hash, round)) < 0)
+        return -1;
+    tpk_face_entry *x = &st->table.entries[at];
+    x->diagonal = 0;
+    x->round = round;
+    place_face_point(st, f, x->at, x->pair);
+    return at;
 }
 
 /* Every tet of the cone from the smallest corner to the face triangles not touching it positive: then
@@ -242,10 +380,27 @@ static int centre_split_seen(stage *st, int64_t f, const double q[3])
     return 1;
 }
 
+/* Does face-table entry e (or -1) give its face a point? (A diagonal entry cuts a quad without one.) */
+static int has_point(const stage *st, int64_t e)
+{
+    return e >= 0 && !st->table.entries[e].diagonal;
+}
+
+/* Where face f's fan starts: at the smallest id, or at the first end of its entry's diagonal. */
+static int64_t fan_start(const stage *st, int64_t f)
+{
+    const cell_work *w = &st->w;
+    int64_t e = w->entry[f];
+    for (int64_t i = 0; e >= 0 && st->table.entries[e].diagonal && i < face_size(w, f); i++)
+        if (w->faces.ids[w->faces.starts[f] + i] == st->table.entries[e].pair[0])
+            return i;
+    return smallest_at(w, f);
+}
+
 static int fan_seen(stage *st, int64_t f)
 {
     cell_work *w = &st->w;
-    int64_t m = smallest_at(w, f);
+    int64_t m = fan_start(st, f);
     for (int64_t i = 0; i + 2 < face_size(w, f); i++) {
         int32_t t[3];
         fan_triangle(w, f, m, i, t);
@@ -265,14 +420,13 @@ static int star_is_valid(stage *st, int may_add)
     for (int64_t f = 0; f < w->faces.face_count; f++) {
         int64_t n = face_size(w, f);
         double q[3];
-        if (w->entry[f] >= 0) {
-            const tpk_face_entry *e = &st->table.entries[w->entry[f]];
-            key_centre(st, st->table.keys + e->key_at, e->size, q);
+        int32_t pair[2];
+        if (has_point(st, w->entry[f])) {
+            memcpy(q, st->table.entries[w->entry[f]].at, sizeof q);
         } else if (fan_seen(st, f)) {
             continue;
-        } else if (n >= 4 && may_add) {
-            face_key(w, w->faces.ids + w->faces.starts[f], n);
-            key_centre(st, w->key, n, q);
+        } else if (n >= 4 && may_add && w->entry[f] < 0) {
+            place_face_point(st, f, q, pair);
             w->entry[f] = NEEDS_CENTRE;
         } else {
             snprintf(w->why, sizeof w->why, "a point at its centre does not see face %lld (%s) from inside",
@@ -288,8 +442,203 @@ static int star_is_valid(stage *st, int may_add)
     return 0;
 }
 
+/* A cell's boundary triangles in the cell's own numbering, for tools/convert/fixed_boundary.h: ids[k] is
+ * local point k's vertex id, or -2 - e for the not yet numbered point of face-table entry e. */
+typedef struct local_boundary {
+    int32_t *triangles; /* 3 local ids each, outward */
+    int64_t triangle_count;
+    int32_t *ids;
+    int64_t id_count;
+    double *points;     /* 3 * id_count */
+} local_boundary;
+
+static void local_boundary_free(local_boundary *b)
+{
+    free(b->triangles), free(b->ids), free(b->points);
+    memset(b, 0, sizeof *b);
+}
+
+static int compare_ids(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Cell c's (loaded, looked up) boundary triangles: faces with a face point split at it, the others fanned
+ * from their smallest id, exactly as the cells on their other side cut them. With `number`, face points
+ * get their vertex ids (face_point). Returns 0 or -1 (out of memory). */
+static int local_boundary_build(stage *st, int64_t c, int number, local_boundary *b)
+{
+    cell_work *w = &st->w;
+    int64_t count = 0, slots = 3 * (w->faces.starts[w->faces.face_count] + 1);
+    memset(b, 0, sizeof *b);
+    b->triangles = malloc(sizeof *b->triangles * (size_t)slots);
+    b->ids = malloc(sizeof *b->ids * (size_t)slots);
+    if (!b->triangles || !b->ids)
+        return -1;
+    for (int64_t f = 0; f < w->faces.face_count; f++) {
+        const int32_t *v = w->faces.ids + w->faces.starts[f];
+        int64_t n = face_size(w, f), m = fan_start(st, f), e = w->entry[f];
+        int point = has_point(st, e);
+        int32_t q = !point ? 0 : number ? face_point(st, e, c) : (int32_t)(-2 - e);
+        if (number && q < 0)
+            return -1;
+        for (int64_t i = 0; i < (point ? n : n - 2); i++, count++) {
+            int32_t *t = b->triangles + 3 * count;
+            if (point)
+                t[0] = v[i], t[1] = v[(i + 1) % n], t[2] = q;
+            else
+                fan_triangle(w, f, m, i, t);
+        }
+    }
+    b->triangle_count = count;
+    memcpy(b->ids, b->triangles, sizeof *b->ids * 3 * (size_t)count);
+    qsort(b->ids, (size_t)(3 * count), sizeof *b->ids, compare_ids);
+    for (int64_t i = 0; i < 3 * count; i++)
+        if (i == 0 || b->ids[i] != b->ids[b->id_count - 1])
+            b->ids[b->id_count++] = b->ids[i];
+    if (!(b->points = malloc(sizeof *b->points * 3 * (size_t)b->id_count)))
+        return -1;
+    for (int64_t k = 0; k < b->id_count; k++) {
+        const tpk_face_entry *e = b->ids[k] < 0 ? &st->table.entries[-2 - b->ids[k]] : NULL;
+        if (e)
+            memcpy(b->points + 3 * k, e->at, sizeof e->at);
+        else
+            memcpy(b->points + 3 * k, point_at(st, b->ids[k]), sizeof *b->points * 3);
+    }
+    for (int64_t i = 0; i < 3 * count; i++)
+        b->triangles[i] = (int32_t)((int32_t *)bsearch(&b->triangles[i], b->ids, (size_t)b->id_count, sizeof *b->ids,
+                                                        compare_ids) - b->ids);
+    return 0;
+}
+
+/* Do cell c's (loaded, looked up) boundary triangles cross? 0, 1 with w->why, -1 when out of memory. */
+static int boundary_crosses(stage *st, int64_t c)
+{
+    cell_work *w = &st->w;
+    local_boundary b;
+    int rc = local_boundary_build(st, c, 0, &b);
+    if (rc == 0)
+        rc = tpk_fixed_boundary_crossing(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count,
+                                         w->why, sizeof w->why);
+    local_boundary_free(&b);
+    return rc;
+}
+
+enum { RECUT_MAX = 6 }; /* quad faces searched together: 3^6 cuts at most, for a rare cell */
+
+/* Cut o of quad face f on its entry x: 0 along the smallest-id diagonal, 1 along the other, 2 at a point. */
+static void set_cut(stage *st, int64_t f, tpk_face_entry *x, int o)
+{
+    const cell_work *w = &st->w;
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    int64_t m = smallest_at(w, f);
+    x->diagonal = o < 2;
+    if (o < 2)
+        x->pair[0] = v[(m + o) % 4], x->pair[1] = v[(m + o + 2) % 4];
+    else
+        place_face_point(st, f, x->at, x->pair);
+}
+
+static int cut_of(const stage *st, int64_t f, const tpk_face_entry *x)
+{
+    const cell_work *w = &st->w;
+    return !x->diagonal ? 2 : x->pair[0] == w->faces.ids[w->faces.starts[f] + smallest_at(w, f)] ? 0 : 1;
+}
+
+/* Cell c's boundary triangles cross (a snapped cell folded along an edge): cut its quad faces otherwise
+ * (along either diagonal, or at a point), fewest changes first, each choice checked with TetGen -d. A
+ * face is recut at most once, so the rounds end; its entry is tagged with `round`, so every cell on it is
+ * decided again with the new cut (a plain cut becomes an entry cutting along the smallest-id diagonal,
+ * the same cut). Returns 1 when a recut uncrosses them, 0 when none does, -1 when out of memory. */
+static int recut_faces(stage *st, int64_t c, int32_t round, int64_t *added_faces)
+{
+    cell_work *w = &st->w;
+    int64_t face[RECUT_MAX], entry[RECUT_MAX];
+    tpk_face_entry saved[RECUT_MAX];
+    int now[RECUT_MAX], cut[RECUT_MAX], k = 0, combos = 1;
+    for (int64_t f = 0; f < w->faces.face_count && k < RECUT_MAX; f++) {
+        int64_t e = w->entry[f];
+        if (face_size(w, f) != 4 || face_needs_point(w, f) || (e >= 0 && st->table.entries[e].changed))
+            continue;
+        if (e < 0) { /* a plain face: a void entry to try cuts on */
+            uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], 4);
+            if ((e = tpk_face_table_find(&st->table, w->key, 4, hash)) < 0 &&
+                (e = tpk_face_table_add(&st->table, w->key, 4, hash, round)) < 0)
+                return -1;
+            set_cut(st, f, &st->table.entries[e], 0);
+            w->entry[f] = e;
+        }
+        face[k] = f, entry[k] = e, saved[k] = st->table.entries[e];
+        now[k] = cut_of(st, f, &saved[k]);
+        k++, combos *= 3;
+    }
+    for (int changes = 1; changes <= k; changes++)
+        for (int code = 0; code < combos; code++) {
+            int differ = 0;
+            for (int i = 0, rest = code; i < k; i++, rest /= 3)
+                differ += (cut[i] = rest % 3) != now[i];
+            if (differ != changes)
+                continue;
+            for (int i = 0; i < k; i++)
+                set_cut(st, face[i], &st->table.entries[entry[i]], cut[i]);
+            int crossing = boundary_crosses(st, c);
+            if (crossing < 0)
+                return -1;
+            if (crossing)
+                continue;
+            for (int i = 0; i < k; i++) {
+                tpk_face_entry *x = &st->table.entries[entry[i]];
+                if (cut[i] == now[i]) {
+                    *x = saved[i];
+                    continue;
+                }
+                x->changed = 1;
+                x->round = round;
+                *added_faces += 1;
+            }
+            return 1;
+        }
+    for (int i = 0; i < k; i++)
+        st->table.entries[entry[i]] = saved[i];
+    return 0;
+}
+
+/* A cell no star fits is tetrahedralized inside its boundary (S_FIXED) when its boundary triangles do not
+ * cross. When they do, the fans of its warped or non-convex faces are what cross: those faces whose fan
+ * from the smallest id folds get a face point (registered as decide does), or if none does, every face of
+ * 4 corners or more; the cell is decided again with them in the next round. When all have one already,
+ * it is bad. Returns the mode, or -1 when out of memory. */
+static int fixed_or_bad(stage *st, int64_t c, int32_t round, int may_add, int64_t *added_faces)
+{
+    cell_work *w = &st->w;
+    size_t used = strlen(w->why);
+    if (!tpk_fixed_boundary_available()) {
+        snprintf(w->why + used, sizeof w->why - used, "; this build has no TetGen (TETPACK_WITH_TETGEN=OFF) to "
+                 "tetrahedralize it inside its boundary");
+        return S_BAD;
+    }
+    lookup_faces(st); /* drop star_is_valid's NEEDS_CENTRE marks */
+    int rc = boundary_crosses(st, c);
+    if (rc == 1 && may_add) {
+        int recut = recut_faces(st, c, round, added_faces);
+        rc = recut < 0 ? -1 : !recut;
+    }
+    if (rc <= 0)
+        return rc < 0 ? -1 : S_FIXED;
+    int64_t added = 0;
+    for (int pass = 0; pass < 2 && added == 0; pass++) /* the faces whose own fan folds first, then all */
+        for (int64_t f = 0; may_add && f < w->faces.face_count; f++)
+            if (w->entry[f] < 0 && face_size(w, f) >= 4 && (pass || corner_fan_folds(st, f)) &&
+                add_face_point(st, f, round, &added) < 0)
+                return -1;
+    *added_faces += added;
+    return added ? S_FIXED : S_BAD;
+}
+
 /* Decide cell c's split against the face table; with may_add, register the face points it needs
- * (counted in *added_faces, tagged with `round`). Returns 0 or -1 (out of memory). */
+ * (counted in *added_faces, tagged with `round`). A cell that no star fits is tetrahedralized inside its
+ * boundary (S_FIXED) when the build can, else it is bad. Returns 0 or -1 (out of memory). */
 static int decide(stage *st, int64_t c, int32_t round, int may_add, int64_t *added_faces)
 {
     cell_work *w = &st->w;
@@ -303,24 +652,27 @@ static int decide(stage *st, int64_t c, int32_t round, int may_add, int64_t *add
     }
     keep |= w->mirrored ? S_MIRRORED : 0;
     int64_t centred = lookup_faces(st);
+    for (int64_t f = 0; may_add && f < w->faces.face_count; f++) {
+        if (w->entry[f] >= 0 || !face_needs_point(w, f))
+            continue;
+        if ((w->entry[f] = add_face_point(st, f, round, added_faces)) < 0)
+            return -1;
+        centred++;
+    }
     if (st->src->cell_types[c] == TPK_CELL_POLYHEDRON && centred == 0 && cone_is_valid(st, c)) {
         st->state[c] = keep | S_CONE;
         return 0;
     }
     if (star_is_valid(st, may_add)) {
-        st->state[c] = keep | S_BAD;
+        int mode = fixed_or_bad(st, c, round, may_add, added_faces);
+        if (mode < 0)
+            return -1;
+        st->state[c] = keep | (uint8_t)mode;
         return 0;
     }
-    for (int64_t f = 0; f < w->faces.face_count; f++) {
-        if (w->entry[f] != NEEDS_CENTRE)
-            continue;
-        int64_t n = face_size(w, f);
-        uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], n);
-        int64_t at = tpk_face_table_find(&st->table, w->key, (int32_t)n, hash);
-        if (at < 0 && tpk_face_table_add(&st->table, w->key, (int32_t)n, hash, round) < 0)
+    for (int64_t f = 0; f < w->faces.face_count; f++)
+        if (w->entry[f] == NEEDS_CENTRE && add_face_point(st, f, round, added_faces) < 0)
             return -1;
-        *added_faces += at < 0;
-    }
     st->state[c] = keep | S_STAR;
     return 0;
 }
@@ -507,8 +859,10 @@ static int32_t face_point(stage *st, int64_t at, int64_t c)
         return e->point;
     }
     double q[3];
-    key_centre(st, st->table.keys + e->key_at, e->size, q);
-    int32_t id = push_point(st, q, st->table.keys + e->key_at, e->size, c);
+    memcpy(q, e->at, sizeof q);
+    int32_t pair[2] = {e->pair[0], e->pair[1]};
+    int32_t id = pair[0] >= 0 ? push_point(st, q, pair, 2, c)
+                              : push_point(st, q, st->table.keys + e->key_at, e->size, c);
     e = &st->table.entries[at];
     if (id >= 0) {
         e->point = id;
@@ -516,6 +870,16 @@ static int32_t face_point(stage *st, int64_t at, int64_t c)
         st->out->face_steiner_points++;
     }
     return id;
+}
+
+/* Counts a split cell (a polyhedron, a mirrored one: the first is remembered for the refusal). */
+static void count_split(stage *st, int64_t c)
+{
+    tpk_tetmesh *out = st->out;
+    out->polyhedra += st->src->cell_types[c] == TPK_CELL_POLYHEDRON;
+    if (st->w.mirrored && (out->mirrored_cells == 0 || c < out->first_mirrored_cell))
+        out->first_mirrored_cell = c;
+    out->mirrored_cells += st->w.mirrored;
 }
 
 /* Tets of a decided cell: its cone, or its star (adding its centre and any new face points). */
@@ -535,8 +899,8 @@ static int emit_cell(stage *st, int64_t c, int cone)
         return -1;
     for (int64_t f = 0; f < w->faces.face_count; f++) {
         const int32_t *v = w->faces.ids + w->faces.starts[f];
-        int64_t n = face_size(w, f), m = smallest_at(w, f), touches = 0;
-        if (w->entry[f] >= 0) {
+        int64_t n = face_size(w, f), m = fan_start(st, f), touches = 0;
+        if (has_point(st, w->entry[f])) {
             int32_t q = face_point(st, w->entry[f], c);
             if (q < 0)
                 return -1;
@@ -556,11 +920,68 @@ static int emit_cell(stage *st, int64_t c, int cone)
         }
     }
     st->out->steiner_cells += !cone;
-    st->out->polyhedra += src->cell_types[c] == TPK_CELL_POLYHEDRON;
-    if (w->mirrored && (st->out->mirrored_cells == 0 || c < st->out->first_mirrored_cell))
-        st->out->first_mirrored_cell = c;
-    st->out->mirrored_cells += w->mirrored;
+    count_split(st, c);
     return 0;
+}
+
+/* Tets of a cell no star fits: tetrahedralized inside its boundary triangles (tools/convert/fixed_boundary.h),
+ * interior points added as its centre would be (the mean of its corners for fields). Returns 0 (also
+ * for a cell left out under TPK_TETRA_SKIP_BAD_CELLS), -1 when out of memory, -2 with a message. */
+static int emit_fixed(stage *st, int64_t c, tpk_diag *diag)
+{
+    const tpk_mesh *src = st->src;
+    const int32_t *corners = src->cell_conn + src->cell_offsets[c];
+    int64_t corner_count = src->cell_offsets[c + 1] - src->cell_offsets[c];
+    local_boundary b;
+    tpk_fixed_tets fixed = {0};
+    char why[600];
+    if (load_cell(st, c))
+        return -1; /* it loaded when decided: only memory can fail now */
+    lookup_faces(st);
+    int rc = local_boundary_build(st, c, 1, &b);
+    if (rc == 0)
+        rc = tpk_fixed_boundary_tets(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count, &fixed,
+                                     why, sizeof why);
+    if (rc == 1 && (st->flags & TPK_TETRA_SKIP_BAD_CELLS)) {
+        st->out->bad_cells_skipped++;
+        rc = 0;
+    } else if (rc == 1) {
+        tpk_diag_fail(diag, "cell %lld (a %s) is too warped or non-convex for a point at its centre or its face "
+                      "centres to split it, and %s; pass --skip-bad-cells to leave such cells out", (long long)c,
+                      tpk_cell_type(src->cell_types[c])->name, why);
+        rc = -2;
+    } else if (rc == 0) {
+        int32_t *vertex = malloc(sizeof *vertex * (size_t)(fixed.point_count ? fixed.point_count : 1));
+        rc = vertex ? 0 : -1;
+        for (int32_t k = (int32_t)b.id_count; k < fixed.point_count; k++)
+            to_file_grid(st, fixed.points + 3 * (int64_t)k);
+        for (int64_t t = 0; rc == 0 && t < fixed.tet_count; t++) {
+            const int32_t *v = fixed.tets + 4 * t;
+            const double *p = fixed.points;
+            if (tpk_orient3d_exact(p + 3 * v[0], p + 3 * v[1], p + 3 * v[2], p + 3 * v[3]) <= 0) {
+                tpk_diag_fail(diag, "cell %lld (a %s): a tet TetGen made inside its boundary is flat or inverted once "
+                              "its points are rounded to the file's float32 grid", (long long)c,
+                              tpk_cell_type(src->cell_types[c])->name);
+                rc = -2;
+            }
+        }
+        for (int32_t k = 0; rc == 0 && k < fixed.point_count; k++)
+            if ((vertex[k] = k < b.id_count ? b.ids[k] : push_point(st, fixed.points + 3 * (int64_t)k, corners,
+                                                                    corner_count, c)) < 0)
+                rc = -1;
+        for (int64_t t = 0; rc == 0 && t < fixed.tet_count; t++) {
+            const int32_t *v = fixed.tets + 4 * t;
+            rc = push_tet(st, vertex[v[0]], vertex[v[1]], vertex[v[2]], vertex[v[3]], c);
+        }
+        free(vertex);
+        if (rc == 0) {
+            st->out->fixed_boundary_cells++;
+            count_split(st, c);
+        }
+    }
+    tpk_fixed_tets_free(&fixed);
+    local_boundary_free(&b);
+    return rc;
 }
 
 int tpk_steiner_stage(const tpk_mesh *src, const int64_t *hard, int64_t hard_count, int flags,
@@ -585,6 +1006,8 @@ int tpk_steiner_stage(const tpk_mesh *src, const int64_t *hard, int64_t hard_cou
         int mode = st.state[c] & S_MODE;
         if (mode == S_STAR || mode == S_CONE)
             rc = emit_cell(&st, c, mode == S_CONE);
+        else if (mode == S_FIXED)
+            rc = emit_fixed(&st, c, diag);
     }
     if (rc == -1 && out->vertex_count >= INT32_MAX) {
         tpk_diag_fail(diag, "the points added to split cells pass the limit of 2^31-1 vertices per file; split "
@@ -596,5 +1019,6 @@ int tpk_steiner_stage(const tpk_mesh *src, const int64_t *hard, int64_t hard_cou
     tpk_polygons_free(&st.w.faces);
     free(st.w.entry);
     free(st.w.key);
+    free(st.w.ring);
     return rc;
 }

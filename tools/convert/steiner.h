@@ -24,19 +24,27 @@ void tpk_added_points_free(tpk_added_points *added);
 
 /* Tetrahedralize the `hard` cells (ascending ids: cells tpk_split_cell refused, and every polyhedron),
  * appending tets (tet_source = the cell), points (vertex_source -1) and their description to `out` and
- * `added`; out->tets and out->tet_source hold *tet_capacity tets and grow. In order of preference:
- *  - a polyhedron: a cone from its smallest vertex over its faces (each fanned from its smallest id;
- *    quads so cut along the smallest-id diagonal, as hexahedra are) when that vertex sees every face
- *    not touching it from inside (as tpk_split_cell's cone), no point added;
- *  - a star from a point at the cell's centre (its corners' mean) to the same face triangles;
- *  - the same, with a point at the centre of each face of 4 or more corners that the centre does not see
- *    whole (non-planar or non-convex faces). Such a face point is shared: every cell on the face, also
- *    one whose plain split was valid, is then starred from its centre with that face point, until no
- *    cell asks for another, so the mesh stays conforming.
- * Every tet is checked with the exact predicate; a cell none of this makes valid is an error naming it
- * (returns -2), or with TPK_TETRA_SKIP_BAD_CELLS is left out and counted. Counts go to out (steiner_cells,
- * face_steiner_points, polyhedra, mirrored_cells, cells_into, bad_cells_skipped). Returns 0, -1 when out
- * of memory, -2 with a message. Deterministic: points are numbered in cell order. */
+ * `added`; out->tets and out->tet_source hold *tet_capacity tets and grow. Faces are cut the same way from
+ * both sides: fanned from their smallest id, or split at a face point, or (a recut quad) along the
+ * diagonal a face table entry names. A face whose fan diagonal joins two corners that another face of the
+ * cell also holds (an edge carrying points, as on OpenFOAM's split faces) always gets a face point, so no
+ * point of the cell is left out. A face point sits at the face's mean, or at the midpoint of a diagonal
+ * when the fan from the mean folds. In order of preference, per cell:
+ *  - a polyhedron with no face point: a cone from its smallest vertex over its face triangles when that
+ *    vertex sees every one not touching it from inside, no point added;
+ *  - a star from a point at the cell's centre (its corners' mean) to its face triangles, with a point at
+ *    the centre of each face of 4 or more corners that the centre does not see whole. Such a face point
+ *    is shared: every cell on the face, also one whose plain split was valid, is then decided again with
+ *    it, until no cell asks for another, so the mesh stays conforming;
+ *  - with TetGen (tools/convert/fixed_boundary.h): a tetrahedralization inside its boundary triangles,
+ *    which must not cross (when they do, its quad faces are cut otherwise, fewest changes first, each face
+ *    at most once; or points go on the faces whose fan folds, then on all; cells on a changed face are
+ *    decided again in the next round).
+ * Every tet is checked with the exact predicate (on the file's float32 grid with TPK_TETRA_FILE_GRID); a
+ * cell none of this makes valid is an error naming it (returns -2), or with TPK_TETRA_SKIP_BAD_CELLS is
+ * left out and counted. Counts go to out (steiner_cells, face_steiner_points, fixed_boundary_cells,
+ * polyhedra, mirrored_cells, cells_into, bad_cells_skipped). Returns 0, -1 when out of memory, -2 with a
+ * message. Deterministic: points are numbered in cell order. Not thread-safe with TetGen. */
 int tpk_steiner_stage(const tpk_mesh *src, const int64_t *hard, int64_t hard_count, int flags,
                       int64_t *tet_capacity, tpk_tetmesh *out, tpk_added_points *added, tpk_diag *diag);
 

@@ -449,6 +449,21 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
     return 1;
 }
 
+/* TPK_TETRA_FILE_GRID: every point moved onto the float32 grid relative to the file's origin
+ * (tpk_points_origin), as the file will store it; in world coordinates still (grid_origin + a float32
+ * value, exact in double). A coordinate float32 cannot hold is left as it is, for the converter to
+ * refuse by name before writing (TPK-M11). */
+static void snap_to_file_grid(tpk_tetmesh *out)
+{
+    tpk_points_origin(out->points, out->vertex_count, out->grid_origin);
+    for (int64_t i = 0; i < 3 * out->vertex_count; i++) {
+        double rel = (double)(float)(out->points[i] - out->grid_origin[i % 3]);
+        if (isfinite(rel))
+            out->points[i] = out->grid_origin[i % 3] + rel;
+    }
+    out->on_grid = 1;
+}
+
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
 static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
@@ -465,6 +480,8 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
             return -1;
         memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
     }
+    if (flags & TPK_TETRA_FILE_GRID)
+        snap_to_file_grid(out);
     if (plain) {
         out->tets = donor->cell_conn;
         donor->cell_conn = NULL;

@@ -1,6 +1,7 @@
 /* Ownership helpers for the converter's in-memory meshes. */
 #include "mesh.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -60,4 +61,39 @@ int tpk_compare_int32(const void *a, const void *b)
 {
     int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
     return (x > y) - (x < y);
+}
+
+/* The origin of one axis (spec §6.8): the number in [lo, hi] with the fewest significant bits, that is
+ * 0 when the box straddles 0, else the one multiple of the largest power of two q that has a multiple
+ * in [lo, hi] (two would make one of them a multiple of 2q). Every stored |x - origin| is at most
+ * hi - lo, so float32 keeps all but at most one bit of the precision a centred origin gives, and a
+ * coordinate that is a float32 multiple of q's granularity (0 and 1 of a unit cube, 10 and 11 of a
+ * cube at 10) is stored exactly, where the centre 0.5 * (lo + hi) may not even be exact itself. */
+static double axis_origin(double lo, double hi)
+{
+    if (!(lo <= hi) || !isfinite(lo) || !isfinite(hi) || (lo <= 0.0 && hi >= 0.0))
+        return 0.0;
+    int e;
+    frexp(fmax(fabs(lo), fabs(hi)), &e);
+    /* q = 2^e exceeds both bounds; halving it ends at the lowest set bit of lo at the latest, whose
+     * multiples include lo itself (ldexp and the division by a power of two are exact). */
+    for (double q = ldexp(1.0, e); q > 0.0; q *= 0.5) {
+        double candidate = ceil(lo / q) * q;
+        if (candidate <= hi)
+            return candidate;
+    }
+    return lo;
+}
+
+void tpk_points_origin(const double *points, int64_t count, double origin[3])
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < count; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = points[3 * i + k];
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
+        }
+    for (int k = 0; k < 3; k++)
+        origin[k] = count ? axis_origin(lo[k], hi[k]) : 0.0;
 }

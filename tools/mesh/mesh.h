@@ -59,6 +59,8 @@ typedef struct tpk_tetmesh {
     double *points;            /* 3 * vertex_count: absolute coordinates until the converter moves them
                                   into the stored frame (relative to origin, float32-exact) */
     double origin[3];          /* add to points for world coordinates (0 until then) */
+    int on_grid;               /* TPK_TETRA_FILE_GRID: points lie on the float32 grid relative to grid_origin */
+    double grid_origin[3];     /* (world coordinates still; tools/convert/convert.c's quantize_points uses it) */
     int32_t *vertex_source;    /* source point id per vertex */
     int64_t tet_count;
     int32_t *tets;             /* 4 * tet_count vertex ids; positive orientation after tpk_orient */
@@ -76,9 +78,15 @@ typedef struct tpk_tetmesh {
                                   more corners, shared by the cells on both sides (vertex_source -1) */
     int64_t polyhedra;         /* polyhedra (VTK 42) tetrahedralized: as a cone from their smallest vertex
                                   where valid, else from a centre point (counted in steiner_cells too) */
+    int64_t fixed_boundary_cells; /* cells no centre or face points fit, tetrahedralized inside their boundary
+                                     triangles by TetGen (interior points vertex_source -1) */
     int64_t bad_cells_skipped; /* cells not even that could split, left out (TPK_TETRA_SKIP_BAD_CELLS) */
 } tpk_tetmesh;
 
 void tpk_tetmesh_free(tpk_tetmesh *mesh);
+
+/* The file's origin for points[0 .. 3 count) (spec §6.8): per axis 0 when the bounding box straddles
+ * 0, else the number in the box with the fewest significant bits (0 for no points). */
+void tpk_points_origin(const double *points, int64_t count, double origin[3]);
 
 #endif
