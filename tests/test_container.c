@@ -1416,14 +1416,12 @@ static int write_bytes(const char *dir, const char *name, const uint8_t *bytes, 
 /* Writes good seeds and every must-fail case into `dir`; returns the number of files written. */
 static int write_corpus(const char *dir)
 {
-    size_t size;
+    size_t size, extra_size;
     uint8_t *good = good_bytes(&size, NULL);
-    if (!good || write_bytes(dir, "good_sample.tpk", good, size))
-        return free(good), -1;
     build_opts o = {.extra_tag = TPK_FOURCC('x', 't', 'r', 'a')};
-    size_t extra_size;
     uint8_t *extra = good_bytes(&extra_size, &o);
-    int failed = !extra || write_bytes(dir, "good_unknown_optional.tpk", extra, extra_size);
+    int failed = !good || !extra || write_bytes(dir, "good_sample.tpk", good, size) ||
+                 write_bytes(dir, "good_unknown_optional.tpk", extra, extra_size);
     free(extra);
     for (size_t k = 0; k < FAIL_CASE_COUNT && !failed; k++) {
         size_t n;
