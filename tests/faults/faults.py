@@ -250,7 +250,8 @@ def run_import(tetpack, data, work, source_dir):
                 for name, payload in mutations.mutations(data_bytes, hash_seed(f, seed), seed == 0):
                     jobs.append((fmt, files, options, damaged, "%s_s%d" % (name, seed), payload, (0, 2)))
     for name, path in mutations.write_vtu_zlib_bombs(work):
-        # Decompression bombs; the clean one first, so that the others are refused for their bomb alone.
+        # Decompression bombs, and the same file without a bomb, which must convert: the others are then
+        # refused for their bomb alone.
         payload = open(path, "rb").read()
         jobs.append(("vtu", [path], [], 0, "zlib_" + name, payload, (0,) if name == "clean" else (2,)))
     with ThreadPoolExecutor(max_workers=workers()) as pool:
