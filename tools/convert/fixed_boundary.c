@@ -8,7 +8,7 @@
 
 #include "base/predicates.h"
 #ifdef TPK_WITH_TETGEN
-#include "mesher/tetgen_shim.h"
+#include "mesher/tetgen_guard.h"
 #endif
 
 void tpk_fixed_tets_free(tpk_fixed_tets *tets)
@@ -134,7 +134,10 @@ static int run_tetgen(const char *switches, const double *points, int32_t point_
         offsets[i] = 3 * (int64_t)i;
     tpk_tetgen_input in = {point_count, points, triangle_count, offsets, triangles};
     char message[400];
-    int code = tpk_tetgen_run(switches, &in, t, message, sizeof message);
+    /* In a child process: TetGen can crash or loop on a cell's boundary (issue 10), and a cell that
+     * makes it do so is then refused by name instead of taking the converter down. */
+    tpk_tetgen_guard guard = {.what = "tetrahedralizing a cell inside its boundary", .time_limit = 600};
+    int code = tpk_tetgen_run_guarded(switches, &in, &guard, t, message, sizeof message);
     free(offsets);
     if (code == TPK_TETGEN_OUT_OF_MEMORY)
         return -1;
