@@ -49,17 +49,17 @@ class Exported:
     point_data and cell_data as NumPy arrays. Not meshio 5: it misreads two of the 134 appended arrays
     of 8-block.g's export (accel_z_t9, force_z_t10), which VTK and this module read alike."""
 
-    def __init__(self, vtu):
+    def __init__(self, vtu=None, grid=None):
         from vtkmodules.util.numpy_support import vtk_to_numpy
         from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
-        reader = vtkXMLUnstructuredGridReader()
-        reader.SetFileName(vtu)
-        reader.Update()
-        grid = reader.GetOutput()
+        if grid is None:
+            reader = vtkXMLUnstructuredGridReader()
+            reader.SetFileName(vtu)
+            reader.Update()
+            grid = reader.GetOutput()
         self.points = vtk_to_numpy(grid.GetPoints().GetData())
-        cells = grid.GetCells()
         assert (vtk_to_numpy(grid.GetCellTypesArray()) == tetpack.VTK_TETRA).all()
-        self.tets = vtk_to_numpy(cells.GetConnectivityArray()).reshape(-1, 4)
+        self.tets = vtk_to_numpy(grid.GetCells().GetConnectivityArray()).reshape(-1, 4)
         self.point_data, self.cell_data = ({data.GetArrayName(i): vtk_to_numpy(data.GetArray(i))
                                             for i in range(data.GetNumberOfArrays())}
                                            for data in (grid.GetPointData(), grid.GetCellData()))

@@ -137,6 +137,7 @@ class CommandLine(unittest.TestCase):
             self.assertEqual({c["codec"] for c in f.chunks()}, {1})
         report = tetpack.check(out)
         self.assertEqual(report["schema"], "tetpack-check/1")
+        self.assertEqual((report["format"], report["tets"], report["problems"]), ("tpk", 1348, False))
         with self.assertRaises(tetpack.CommandError) as caught:
             tetpack.convert(out + ".missing.vtk", out + ".never.tpk")
         self.assertNotEqual(caught.exception.returncode, 0)
