@@ -295,4 +295,21 @@ def info(path):
     return _run_json(["info", path, "--json"])
 
 
+def paraview_plugin_path():
+    """Path of the ParaView reader plugin (tetpack_reader.py) of this build tree or installation."""
+    from ._paths import PARAVIEW_PLUGIN
+    return PARAVIEW_PLUGIN
+
+
+def load_paraview_plugin(ns):
+    """In pvpython: load the reader plugin into namespace `ns` (pass globals()), defining TetpackReader."""
+    import inspect
+    if not hasattr(inspect, "getargspec"):
+        # ParaView 5.11's paraview.detail.pythonalgorithm imports inspect.getargspec, which Python 3.11
+        # removed (Debian 12 ships exactly this pair); it reads only .args, which getfullargspec has too.
+        inspect.getargspec = inspect.getfullargspec
+    from paraview.simple import LoadPlugin
+    LoadPlugin(paraview_plugin_path(), ns=ns)
+
+
 from . import meshio_plugin  # noqa: E402  (registers .tpk with meshio when meshio is installed)
