@@ -25,6 +25,7 @@ class TetpackReader(VTKPythonAlgorithmBase):
         VTKPythonAlgorithmBase.__init__(self, nInputPorts=0, nOutputPorts=1, outputType="vtkUnstructuredGrid")
         self._filename = None
         self._times = None
+        self._geometry = None  # vtk_support.geometry of the file: the same at every step
 
     @smproperty.stringvector(name="FileName")
     @smdomain.filelist()
@@ -33,6 +34,7 @@ class TetpackReader(VTKPythonAlgorithmBase):
         if self._filename != name:
             self._filename = name
             self._times = None
+            self._geometry = None
             self.Modified()
 
     def _steps(self):
@@ -70,6 +72,8 @@ class TetpackReader(VTKPythonAlgorithmBase):
             step = int(np.argmin(np.abs(times - wanted)))  # the nearest stored step
         output = vtkUnstructuredGrid.GetData(outInfo, 0)
         with tetpack.open(self._filename) as f:
-            vtk_support.fill_grid(output, f, step)
+            if self._geometry is None:
+                self._geometry = vtk_support.geometry(f)
+            vtk_support.fill_grid(output, f, step, self._geometry)
         output.GetInformation().Set(output.DATA_TIME_STEP(), float(times[step]))
         return 1

@@ -260,7 +260,7 @@ static PyObject *file_chunk_bytes(File *self, PyObject *args)
     Mapping *m = acquire(self);
     if (!m)
         return NULL;
-    tpk_dir_entry e;
+    tpk_dir_entry e = {0};
     tpk_result r = tpk_get_chunk(m->file, i, &e);
     PyObject *array = NULL;
     int zero_copy = e.codec == TPK_CODEC_NONE;

@@ -30,10 +30,18 @@ def _add(data, name, values):
     data.AddArray(array)
 
 
-def fill_grid(grid, f, step=None):
-    """Fill `grid` (a vtkUnstructuredGrid) from File f; see File.to_vtk for `step`."""
-    grid.SetPoints(_points(f.points()))
-    grid.SetCells(VTK_TETRA, _cells(f.tets()))
+def geometry(f):
+    """(vtkPoints, vtkCellArray) of File f: what every time step of a grid shares."""
+    return _points(f.points()), _cells(f.tets())
+
+
+def fill_grid(grid, f, step=None, shared_geometry=None):
+    """Fill `grid` (a vtkUnstructuredGrid) from File f; see File.to_vtk for `step`. shared_geometry:
+    geometry(f) kept by the caller (the ParaView reader, so that stepping through time recovers the
+    tets once)."""
+    points, cells = shared_geometry or geometry(f)
+    grid.SetPoints(points)
+    grid.SetCells(VTK_TETRA, cells)
     if step is None:
         arrays = f._named_arrays()
     else:
