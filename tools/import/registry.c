@@ -43,6 +43,13 @@ static const tpk_import_format formats[] = {
     {.name = "exodus", .title = "Exodus II (netCDF classic or netCDF-4), every time step",
      .extensions = ".exo .e .g .ex2", .magic = "CDF\x01|CDF\x02|\x89HDF", .read = tpk_import_exodus,
      .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+#ifdef TPK_WITH_CGNS
+    /* After exodus: its netCDF-4 files share the HDF5 signature, so an HDF5 file without an extension
+     * reads as Exodus; .cgns is told by its extension, ADF-format CGNS by its header. */
+    {.name = "cgns", .title = "CGNS (HDF5 or ADF): unstructured, structured and polyhedral zones, every step",
+     .extensions = ".cgns", .magic = "@(#)ADF Database", .read = tpk_import_cgns,
+     .supports = VOLUME_CELLS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
+#endif
     {.name = "meshb", .aliases = "medit", .title = "Medit binary .meshb (libMeshb 1-4, either byte order)",
      .extensions = ".meshb", .read = tpk_import_meshb, .read_memory = tpk_import_meshb_memory,
      .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS},
