@@ -321,3 +321,234 @@ TPK_TEST(written_file_reads_back)
               (long long)rep.polyhedra, (long long)rep.cells_into[1], (long long)rep.cells_into[2],
               (long long)rep.cells_into[3]);
 }
+
+/* A field's step s equals what the CGNS library reads from the solution IOSS wrote for that step: in
+ * aero_blunt_wedge_test3.cgns through CellCenterIndices, in generated.cgns (zeros in its index arrays,
+ * pointers naming no solution) through each solution's "Step" descriptor. generated.cgns repeats its
+ * values at both steps, so only the aero file's steps must differ. */
+TPK_TEST(steps_take_the_right_solutions)
+{
+    static const struct {
+        const char *path, *field, *solution_format;
+        int location, steps, steps_differ;
+    } cases[] = {{"seacas/aero_blunt_wedge_test3.cgns", "density", "CellCenterSolutionAtStep%05d", TPK_ASSOC_TET, 5, 1},
+                 {"seacas/generated.cgns", "NodeBlock_1", "VertexSolutionAtStep%d", TPK_ASSOC_POINT, 2, 0},
+                 {"seacas/generated.cgns", "ElementBlock_2", "CellSolutionAtStep%d", TPK_ASSOC_TET, 2, 0}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        tpk_mesh m;
+        tpk_diag d;
+        memset(&d, 0, sizeof d);
+        CHECK_MSG(tpk_import_any(tpk_data_path(cases[k].path), NULL, &m, &d) == 0, "%s", d.message);
+        const tpk_src_field *field = NULL;
+        for (int i = 0; i < m.field_count; i++)
+            if (!strcmp(m.fields[i].name, cases[k].field) && m.fields[i].association == cases[k].location)
+                field = &m.fields[i];
+        CHECK(field && field->step_count == cases[k].steps);
+        int64_t n = cases[k].location == TPK_ASSOC_TET ? m.cell_count : m.point_count;
+        int fn, differ = 0;
+        CHECK(cg_open(tpk_data_path(cases[k].path), CG_MODE_READ, &fn) == 0);
+        for (int s = 0; s < cases[k].steps; s++) {
+            char name[33];
+            snprintf(name, sizeof name, cases[k].solution_format, s + 1);
+            int sol = 0, count = 0;
+            cg_nsols(fn, 1, 1, &count);
+            for (int i = 1; i <= count && !sol; i++) {
+                char found[33];
+                GridLocation_t at;
+                cg_sol_info(fn, 1, 1, i, found, &at);
+                sol = !strcmp(found, name) ? i : 0;
+            }
+            float values[64];
+            cgsize_t lo[3] = {1, 1, 1}, hi[3] = {(cgsize_t)n, 1, 1};
+            if (!strcmp(cases[k].path, "seacas/aero_blunt_wedge_test3.cgns"))
+                hi[0] = 4, hi[1] = 4, hi[2] = 1; /* its 4 x 4 x 1 structured cells */
+            CHECK(n <= 64 && sol && cg_field_read(fn, 1, 1, sol, cases[k].field, RealSingle, lo, hi, values) == 0);
+            CHECK_MSG(!memcmp(values, field->values + s * n, sizeof *values * (size_t)n), "%s step %d", cases[k].path, s);
+            differ += s > 0 && memcmp(values, field->values, sizeof *values * (size_t)n) != 0;
+        }
+        cg_close(fn);
+        tpk_mesh_free(&m);
+        CHECK_MSG(!cases[k].steps_differ || differ == cases[k].steps - 1, "%s: the steps of '%s' are not all different", cases[k].path,
+                  cases[k].field);
+    }
+}
+
+/* ---- Errors: each names the file, the place, what was expected and what was found ---- */
+
+static const double cube_x[8] = {0, 1, 1, 0, 0, 1, 1, 0}, cube_y[8] = {0, 0, 1, 1, 0, 0, 1, 1},
+                    cube_z[8] = {0, 0, 0, 0, 1, 1, 1, 1};
+
+/* A unit cube's 8 points in zone "z" of base "b" (cell dimension `cell_dim`), `cells` declared, then
+ * one section "s" of `count` elements of `type` (offsets for MIXED/NGON_n/NFACE_n, else NULL), and
+ * NGON_n faces first when `faces` is given. Returns the open file (CG_MODE_WRITE) or -1. */
+static int write_cube_zone(const char *path, int cell_dim, cgsize_t cells, ElementType_t type, const cgsize_t *conn,
+                           const cgsize_t *offsets, cgsize_t count, int *zone)
+{
+    int fn, base, s;
+    cgsize_t size[3] = {8, cells, 0};
+    if (cg_open(path, CG_MODE_WRITE, &fn) || cg_base_write(fn, "b", cell_dim, 3, &base) ||
+        cg_zone_write(fn, base, "z", size, Unstructured, zone) || write_coords(fn, base, *zone, cube_x, cube_y, cube_z))
+        return -1;
+    if (type == NFACE_n) { /* the cube's six faces as NGON_n elements 1-6 */
+        static const cgsize_t quads[24] = {1, 4, 3, 2, 5, 6, 7, 8, 1, 2, 6, 5, 2, 3, 7, 6, 3, 4, 8, 7, 4, 1, 5, 8};
+        static const cgsize_t quad_offsets[7] = {0, 4, 8, 12, 16, 20, 24};
+        if (cg_poly_section_write(fn, base, *zone, "faces", NGON_n, 1, 6, 0, quads, quad_offsets, &s))
+            return -1;
+    }
+    cgsize_t start = type == NFACE_n ? 7 : 1;
+    int bad = offsets ? cg_poly_section_write(fn, base, *zone, "s", type, start, start + count - 1, 0, conn, offsets, &s)
+                      : cg_section_write(fn, base, *zone, "s", type, start, start + count - 1, 0, conn, &s);
+    return bad ? -1 : fn;
+}
+
+/* Import `path`; it must fail with every piece of `expected` ('|'-separated) in the message. */
+static int fails_with(const char *path, const char *expected)
+{
+    tpk_mesh m;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    if (tpk_import_any(path, NULL, &m, &d) == 0) {
+        tpk_mesh_free(&m);
+        fprintf(stderr, "%s: read, expected an error with '%s'\n", path, expected);
+        return 0;
+    }
+    char pieces[512];
+    snprintf(pieces, sizeof pieces, "%s", expected);
+    for (char *piece = strtok(pieces, "|"); piece; piece = strtok(NULL, "|"))
+        if (!strstr(d.message, piece)) {
+            fprintf(stderr, "%s: message '%s' lacks '%s'\n", path, d.message, piece);
+            return 0;
+        }
+    return m.points == NULL && m.cell_count == 0;
+}
+
+TPK_TEST(errors_name_the_place)
+{
+    static const cgsize_t hex_far[8] = {1, 2, 3, 4, 5, 6, 7, 99}, hex[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    static const cgsize_t quad[4] = {1, 2, 3, 4}, nface_missing[6] = {1, 2, 3, 4, 5, 50}, nface_three[3] = {1, 2, 3};
+    static const cgsize_t six[2] = {0, 6}, three[2] = {0, 3}, mixed_bad[9] = {HEXA_8, 1, 2, 3, 4, 5, 6, 7, 0},
+                          mixed_offsets[2] = {0, 9};
+    static const struct {
+        const char *file, *expected;
+        int cell_dim;
+        ElementType_t type;
+        const cgsize_t *conn, *offsets;
+    } cases[] = {
+        {"far.cgns", "far.cgns: zone 'z' section 's' element 1 uses vertex 99, expected 1 to 8", 3, HEXA_8, hex_far, NULL},
+        {"flat.cgns", "flat.cgns: expected a base of cell and physical dimension 3|'b' (cell dimension 2", 2, QUAD_4,
+         quad, NULL},
+        {"faces.cgns", "faces.cgns: no volume cells", 3, QUAD_4, quad, NULL},
+        {"missing_face.cgns", "missing_face.cgns: zone 'z' section 's' element 7 uses face 50, which no NGON_n", 3,
+         NFACE_n, nface_missing, six},
+        {"three_faces.cgns", "three_faces.cgns: zone 'z' section 's' element 7: ", 3, NFACE_n, nface_three, three},
+        {"mixed.cgns", "mixed.cgns: zone 'z' section 's' element 1 uses vertex 0, expected 1 to 8", 3, MIXED, mixed_bad,
+         mixed_offsets}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        const char *path = tpk_temp_path(cases[k].file);
+        int zone, fn = write_cube_zone(path, cases[k].cell_dim, 1, cases[k].type, cases[k].conn, cases[k].offsets,
+                                       1, &zone);
+        CHECK_MSG(fn >= 0, "writing %s: %s", cases[k].file, cg_get_error());
+        cg_close(fn);
+        CHECK(fails_with(path, cases[k].expected));
+    }
+    /* Two cells declared, one volume element: a CellCenter field of 2 values fits no cell list. */
+    const char *path = tpk_temp_path("field.cgns");
+    int zone, fn = write_cube_zone(path, 3, 2, HEXA_8, hex, NULL, 1, &zone);
+    static const double two[2] = {1, 2};
+    CHECK(fn >= 0 && write_field(fn, 1, zone, "sol", CellCenter, "p", two) == 0);
+    cg_close(fn);
+    CHECK(fails_with(path, "field.cgns: zone 'z' FlowSolution 'sol' field 'p' has 2 values, expected 1 (one per cell)"));
+    path = tpk_temp_path("text.cgns");
+    FILE *f = fopen(path, "w");
+    CHECK(f != NULL);
+    fputs("CGNS? no, text\n", f);
+    fclose(f);
+    CHECK(fails_with(path, "text.cgns: cannot open it as a CGNS file"));
+    CHECK(fails_with(tpk_temp_path("absent.cgns"), "absent.cgns: cannot open the file"));
+}
+
+static size_t read_whole(const char *path, unsigned char *bytes, size_t cap)
+{
+    FILE *in = fopen(path, "rb");
+    size_t n = in ? fread(bytes, 1, cap, in) : 0;
+    if (in)
+        fclose(in);
+    return n;
+}
+
+static void write_whole(const char *path, const unsigned char *bytes, size_t n)
+{
+    FILE *out = fopen(path, "wb");
+    if (out) {
+        fwrite(bytes, 1, n, out);
+        fclose(out);
+    }
+}
+
+/* The library reads files, so there is no memory reader to fuzz: damaged files on disk instead. Cut
+ * short, each SEACAS file is refused with its name (HDF5 checks the end-of-file address its superblock
+ * records); with bytes overwritten at 16 places the import reads or fails cleanly, never crashes (the
+ * ASan build runs this). */
+TPK_TEST(damaged_files_fail_cleanly)
+{
+    static const char *const files[] = {"seacas/BC_without_parents.cgns", "seacas/aero_blunt_wedge_test3.cgns",
+                                        "seacas/generated.cgns"};
+    static unsigned char bytes[1 << 20];
+    const char *path = tpk_temp_path("cut.cgns");
+    for (int f = 0; f < 3; f++) {
+        size_t n = read_whole(tpk_data_path(files[f]), bytes, sizeof bytes);
+        CHECK(n > 1000 && n < sizeof bytes);
+        const size_t cuts[4] = {n - 1, n / 2, n / 4, 10};
+        for (int c = 0; c < 4; c++) {
+            write_whole(path, bytes, cuts[c]);
+            CHECK_MSG(fails_with(path, "cut.cgns: "), "%s cut to %zu bytes", files[f], cuts[c]);
+        }
+        int read = 0;
+        for (int k = 1; k < 16; k++) {
+            unsigned char saved[64];
+            size_t at = n * (size_t)k / 16;
+            memcpy(saved, bytes + at, sizeof saved);
+            for (size_t i = 0; i < sizeof saved; i++)
+                bytes[at + i] ^= 0xA5;
+            write_whole(path, bytes, n);
+            memcpy(bytes + at, saved, sizeof saved);
+            tpk_mesh m;
+            tpk_diag d;
+            memset(&d, 0, sizeof d);
+            if (tpk_import_any(path, NULL, &m, &d) == 0) {
+                read++;
+                tpk_mesh_free(&m);
+            } else
+                CHECK_MSG(strstr(d.message, "cut.cgns: ") != NULL, "%s damaged at %zu: '%s'", files[f], at, d.message);
+        }
+        printf("%s: %d of 15 damaged copies still read\n", files[f], read);
+    }
+}
+
+/* .cgns is picked by extension although its HDF5 signature is also Exodus's (netCDF-4); an HDF5 file
+ * with no telling extension stays Exodus's (the row before), and `--format cgns` reads it; a CGNS file
+ * in the ADF format is told by its header. */
+TPK_TEST(detection)
+{
+    const tpk_import_format *row = tpk_import_format_detect(tpk_data_path("seacas/generated.cgns"));
+    CHECK(row && !strcmp(row->name, "cgns") && row->read_memory == NULL);
+    static unsigned char bytes[1 << 16];
+    size_t n = read_whole(tpk_data_path("seacas/generated.cgns"), bytes, sizeof bytes);
+    const char *plain = tpk_temp_path("hdf5_without_extension");
+    write_whole(plain, bytes, n);
+    row = tpk_import_format_detect(plain);
+    CHECK(row && !strcmp(row->name, "exodus"));
+    tpk_mesh m;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    CHECK_MSG(tpk_import_any(plain, "cgns", &m, &d) == 0 && m.cell_count == 8, "%s", d.message);
+    tpk_mesh_free(&m);
+    const char *adf = tpk_temp_path("adf_file");
+    int points = write_test_file(adf, CG_FILE_ADF);
+    CHECK_MSG(points > 0, "writing ADF: %s", cg_get_error());
+    row = tpk_import_format_detect(adf);
+    CHECK(row && !strcmp(row->name, "cgns"));
+    CHECK_MSG(tpk_import_any(adf, NULL, &m, &d) == 0, "%s", d.message);
+    CHECK(m.cell_count == (int64_t)sizeof expected_types && !memcmp(m.cell_types, expected_types, sizeof expected_types));
+    tpk_mesh_free(&m);
+}

@@ -45,9 +45,10 @@ static const tpk_import_format formats[] = {
      .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
 #ifdef TPK_WITH_CGNS
     /* After exodus: its netCDF-4 files share the HDF5 signature, so an HDF5 file without an extension
-     * reads as Exodus; .cgns is told by its extension, ADF-format CGNS by its header. */
+     * reads as Exodus; .cgns is told by its extension, ADF-format CGNS by its header (the ADF library
+     * writes its "@(#)" with the high bits set). */
     {.name = "cgns", .title = "CGNS (HDF5 or ADF): unstructured, structured and polyhedral zones, every step",
-     .extensions = ".cgns", .magic = "@(#)ADF Database", .read = tpk_import_cgns,
+     .extensions = ".cgns", .magic = "\xc0\xa8\xa3\xa9" "ADF Database|@(#)ADF Database", .read = tpk_import_cgns,
      .supports = VOLUME_CELLS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
 #endif
     {.name = "meshb", .aliases = "medit", .title = "Medit binary .meshb (libMeshb 1-4, either byte order)",
