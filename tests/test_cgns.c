@@ -552,3 +552,50 @@ TPK_TEST(detection)
     CHECK(m.cell_count == (int64_t)sizeof expected_types && !memcmp(m.cell_types, expected_types, sizeof expected_types));
     tpk_mesh_free(&m);
 }
+
+typedef struct warnings {
+    char text[512];
+    int count;
+} warnings;
+
+static void keep_warning(void *user, const char *text)
+{
+    warnings *w = user;
+    w->count++;
+    snprintf(w->text + strlen(w->text), sizeof w->text - strlen(w->text), "%s\n", text);
+}
+
+/* Two static Vertex solutions of one zone both with "p": the second becomes "b/p". Two steps whose
+ * FlowSolutionPointers name a solution the zone lacks: no step is trusted, the solutions stay static
+ * and a warning says so. */
+TPK_TEST(static_solutions_and_unresolved_pointers)
+{
+    static const cgsize_t hex[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    static const double ones[8] = {1, 1, 1, 1, 1, 1, 1, 1}, twos[8] = {2, 2, 2, 2, 2, 2, 2, 2}, times[2] = {0, 1};
+    const char *path = tpk_temp_path("pointers.cgns");
+    int zone, fn = write_cube_zone(path, 3, 1, HEXA_8, hex, NULL, 1, &zone);
+    cgsize_t steps = 2, dims[2] = {32, 2};
+    char pointers[65];
+    snprintf(pointers, sizeof pointers, "%-32s%-32s", "a", "nowhere");
+    CHECK(fn >= 0 && write_field(fn, 1, zone, "a", Vertex, "p", ones) == 0 &&
+          write_field(fn, 1, zone, "b", Vertex, "p", twos) == 0 && cg_biter_write(fn, 1, "TimeIterValues", 2) == 0 &&
+          cg_goto(fn, 1, "BaseIterativeData_t", 1, "end") == 0 &&
+          cg_array_write("TimeValues", RealDouble, 1, &steps, times) == 0 &&
+          cg_ziter_write(fn, 1, zone, "ZoneIterativeData") == 0 &&
+          cg_goto(fn, 1, "Zone_t", zone, "ZoneIterativeData_t", 1, "end") == 0 &&
+          cg_array_write("FlowSolutionPointers", Character, 2, dims, pointers) == 0);
+    cg_close(fn);
+    tpk_mesh m;
+    tpk_diag d;
+    warnings w;
+    memset(&d, 0, sizeof d);
+    memset(&w, 0, sizeof w);
+    d.warn = keep_warning, d.warn_user = &w;
+    CHECK_MSG(tpk_import_any(path, NULL, &m, &d) == 0, "%s", d.message);
+    int ok = m.field_count == 2 && !strcmp(m.fields[0].name, "p") && !strcmp(m.fields[1].name, "b/p") &&
+             m.fields[0].step_count == 1 && m.fields[1].step_count == 1 && m.fields[0].values[7] == 1 &&
+             m.fields[1].values[7] == 2 && m.step_count == 2;
+    tpk_mesh_free(&m);
+    CHECK_MSG(ok, "fields or steps differ");
+    CHECK_MSG(strstr(w.text, "pointers.cgns: zone 'z': its ZoneIterativeData points at no FlowSolution"), "%s", w.text);
+}

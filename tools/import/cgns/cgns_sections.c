@@ -69,7 +69,7 @@ static int read_section(const cgns_reader *r, const cgns_zone *zone, cgns_sectio
                         &boundary, &parent_flag) ||
         cg_ElementDataSize(r->fn, r->base, zone->index, sec->index, &sec->data_size))
         return CGNS_FAIL(r, "zone '%s': cannot read element section %d", zone->name, sec->index);
-    cgsize_t count = sec->end - sec->start + 1;
+    int64_t count = (int64_t)sec->end - sec->start + 1;
     int npe = 0;
     if (sec->start < 1 || count < 1 || count > r->file_size || sec->data_size < count || sec->data_size > r->file_size)
         return tpk_diag_fail(r->diag, "%s: zone '%s' section '%s': elements %lld to %lld with %lld connectivity "
@@ -267,6 +267,8 @@ int cgns_sections_emit(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *ou
         const cgns_section *sec = &zone->sections[s];
         cgsize_t count = sec->end - sec->start + 1;
         int npe = 0;
+        if (sec->type == CGNS_ENUMV(NGON_n))
+            continue; /* faces, used through NFACE_n */
         if (!is_poly_storage(sec->type))
             cg_npe(sec->type, &npe);
         for (cgsize_t i = 0; i < count; i++) {

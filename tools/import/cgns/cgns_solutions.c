@@ -56,8 +56,11 @@ int cgns_read_times(cgns_reader *r, tpk_mesh *out)
     out->step_count = 1;
     if (rc == CG_NODE_NOT_FOUND)
         return 0;
-    if (rc || steps < 1 || steps > r->file_size)
-        return CGNS_FAIL(r, "BaseIterativeData: cannot read it, or %d steps (expected at least 1)", steps);
+    if (rc)
+        return CGNS_FAIL(r, "cannot read BaseIterativeData%s", "");
+    if (steps < 1 || steps > r->file_size)
+        return tpk_diag_fail(r->diag, "%s: BaseIterativeData '%s' has %d steps, expected 1 to %lld (the file's size)",
+                             r->path, name, steps, (long long)r->file_size);
     r->steps = out->step_count = steps;
     cgsize_t size = 0;
     CGNS_ENUMT(DataType_t) type;
@@ -108,10 +111,14 @@ static int read_index_arrays(const cgns_reader *r, const cgns_zone *zone, int co
         int a = find_array(arrays[l], &size, &type), *index = a ? malloc(sizeof *index * (size_t)r->steps) : NULL;
         if (!a)
             continue;
-        if (!index || size != r->steps || cg_array_read_as(a, CGNS_ENUMV(Integer), index)) {
+        if (!index || size != r->steps) {
             free(index);
-            return CGNS_FAIL(r, "zone '%s': ZoneIterativeData %s has %lld entries, expected %d (one per step)",
-                             zone->name, arrays[l], (long long)size, r->steps);
+            return tpk_diag_fail(r->diag, "%s: zone '%s': ZoneIterativeData %s has %lld entries, expected %d (one per "
+                                 "step)", r->path, zone->name, arrays[l], (long long)size, r->steps);
+        }
+        if (cg_array_read_as(a, CGNS_ENUMV(Integer), index)) {
+            free(index);
+            return CGNS_FAIL(r, "zone '%s': cannot read ZoneIterativeData %s", zone->name, arrays[l]);
         }
         for (int s = 0; s < r->steps; s++)
             if (index[s] >= 1 && index[s] <= count && location[index[s] - 1] == l)
@@ -131,11 +138,13 @@ static int read_pointers(const cgns_reader *r, const cgns_zone *zone, int count,
     int a = find_array("FlowSolutionPointers", &size, &type);
     if (!a)
         return 0;
-    char *text = size == 32 * (cgsize_t)r->steps ? malloc((size_t)size) : NULL;
+    if ((int64_t)size != 32 * (int64_t)r->steps)
+        return tpk_diag_fail(r->diag, "%s: zone '%s': FlowSolutionPointers has %lld characters, expected %d (32 per "
+                             "step)", r->path, zone->name, (long long)size, 32 * r->steps);
+    char *text = malloc((size_t)size);
     if (!text || cg_array_read(a, text)) {
         free(text);
-        return CGNS_FAIL(r, "zone '%s': FlowSolutionPointers has %lld characters, expected %d (32 per step)",
-                         zone->name, (long long)size, 32 * r->steps);
+        return CGNS_FAIL(r, "zone '%s': cannot read FlowSolutionPointers", zone->name);
     }
     int rc = 0;
     for (int s = 0; s < r->steps && rc == 0; s++) {

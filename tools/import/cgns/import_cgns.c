@@ -3,7 +3,6 @@
  * interface appear once per zone (`--merge-duplicates` welds them). Unstructured zones come from
  * cgns_sections.c; a structured zone's (i, j, k) grid becomes hexahedra, i fastest, in the order CGNS
  * numbers its cells, so CellCenter data lines up. */
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,15 +15,19 @@
 /* Structured zone: vertex counts along i, j, k; cells from their product. */
 static int scan_structured(const cgns_reader *r, cgns_zone *zone, const cgsize_t *size)
 {
-    int64_t cells = 1;
+    int64_t cells = 1, vertices = 1;
     for (int a = 0; a < 3; a++) {
         zone->dims[a] = size[a];
-        if (size[a] < 2)
-            return tpk_diag_fail(r->diag, "%s: structured zone '%s' has %lld vertices along %c, expected at least 2",
-                                 r->path, zone->name, (long long)size[a], "ijk"[a]);
+        if (size[a] < 2 || size[a] > r->file_size)
+            return tpk_diag_fail(r->diag, "%s: structured zone '%s' has %lld vertices along %c, expected 2 to %lld "
+                                 "(the file's size)", r->path, zone->name, (long long)size[a], "ijk"[a],
+                                 (long long)r->file_size);
         cells *= size[a] - 1;
+        vertices *= size[a]; /* at most file size cubed so far: no overflow before the check in scan_zone */
+        if (vertices > r->file_size)
+            break;
     }
-    zone->vertices = zone->dims[0] * zone->dims[1] * zone->dims[2];
+    zone->vertices = vertices;
     zone->cells = cells;
     zone->conn = 8 * cells;
     return 0;
