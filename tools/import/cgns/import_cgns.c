@@ -176,8 +176,9 @@ static int read_zones(cgns_reader *r, cgns_zone *zones, int zone_count, tpk_mesh
         return tpk_diag_fail(r->diag, "%s: %lld points and %lld connectivity entries, expected at most %d of each",
                              r->path, (long long)points, (long long)conn, INT32_MAX);
     if (cells == 0)
-        return tpk_diag_fail(r->diag, "%s: no volume cells in %d zones (expected TETRA, PYRA, PENTA, HEXA, MIXED "
-                             "or NFACE_n elements, or a structured zone)", r->path, zone_count);
+        return tpk_diag_fail(r->diag, "%s: no volume cells in %d zones: expected TETRA, PYRA, PENTA, HEXA, MIXED or "
+                             "NFACE_n elements, or a structured zone; found %lld faces, edges or nodes", r->path,
+                             zone_count, (long long)dropped);
     if (dropped)
         tpk_diag_warn(r->diag, "%s: left out %lld elements that are not volumes (faces, edges, nodes)", r->path,
                       (long long)dropped);
@@ -235,9 +236,11 @@ int tpk_import_cgns(const char *path, tpk_mesh *out, tpk_diag *diag)
     cgns_reader r = {.path = path, .file_size = (int64_t)st.st_size, .diag = diag};
     /* cg_is_cgns first: cg_open on a file that is neither HDF5 nor ADF may leave a half-open handle. */
     int file_type = 0;
-    if (cg_is_cgns(path, &file_type) || cg_open(path, CG_MODE_READ, &r.fn))
-        return tpk_diag_fail(diag, "%s: cannot open it as a CGNS file (HDF5 or ADF) (CGNS library: %s)", path,
-                             cg_get_error());
+    if (cg_is_cgns(path, &file_type))
+        return tpk_diag_fail(diag, "%s: cannot open it as a CGNS file: expected an HDF5 or ADF file with a "
+                             "CGNSLibraryVersion node (or it is cut short or damaged)", path);
+    if (cg_open(path, CG_MODE_READ, &r.fn))
+        return CGNS_FAIL(&r, "cannot open it as a CGNS file%s", "");
     int rc = read_file(&r, out);
     cg_close(r.fn);
     if (rc == 0)
