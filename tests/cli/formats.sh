@@ -56,7 +56,18 @@ convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/m.tpk" --f
 convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/n.tpk" --format meshb --quiet
 same "$WORK/m.tpk" "$WORK/n.tpk" "--format medit on a .meshb differs from --format meshb"
 expect_exit 2 "$TPK" convert "$WORK/cylinder.dat" "$WORK/c.tpk" --format obj
-expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, vtu, pvd, gmsh, medit, ugrid, exodus, meshb"
+# The list follows the registry's order; optional rows (cgns: TETPACK_WITH_CGNS) may sit between.
+expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, vtu, pvd, gmsh, medit, ugrid, exodus, "
+expect_stderr ", meshb, stl, off, ply, csv, surface, points"
+# CGNS: its HDF5 signature is Exodus's too, so the extension must pick its row, which reads the file
+# when built (the row then carries cells) and says why not otherwise.
+grep -q "^cgns " "$WORK/table" || fail "the formats table lacks cgns"
+if grep "^cgns " "$WORK/table" | grep -q " tets "; then
+    convert_checked "$DATA/seacas/generated.cgns" "$WORK/g.tpk" --quiet
+else
+    expect_exit 2 "$TPK" convert "$DATA/seacas/generated.cgns" "$WORK/g.tpk"
+    expect_stderr "built without CGNS (TETPACK_WITH_CGNS=OFF)"
+fi
 # Detection by content when the extension says nothing: VTK legacy and Gmsh by their first bytes.
 convert_checked "$WORK/cylinder.dat" "$WORK/d.tpk" --quiet
 same "$WORK/a.tpk" "$WORK/d.tpk" "content detection of VTK legacy"

@@ -70,6 +70,14 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
  * time step. */
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
+/* CGNS (.cgns; HDF5 or ADF) through the CGNS library, file only (the library reads files, so no memory
+ * reader and no fuzz target): the first 3-D base, its zones merged (each keeps its vertices);
+ * unstructured TETRA, PYRA, PENTA, HEXA (higher-order reduced to corners), MIXED and NGON_n/NFACE_n
+ * (polyhedra) sections, structured zones as hexahedra; Vertex and CellCenter FlowSolutions as point and
+ * cell fields, with a step per BaseIterativeData step where ZoneIterativeData points at them. Built
+ * with TETPACK_WITH_CGNS (TPK_WITH_CGNS). */
+int tpk_import_cgns(const char *path, tpk_mesh *out, tpk_diag *diag);
+
 /* What a format carries into the converter (tetpack formats prints these). */
 enum {
     TPK_FORMAT_TETS = 1u << 0,

@@ -15,6 +15,16 @@
 #define VOLUME_CELLS (TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_PYRAMIDS)
 #define FIELDS (TPK_FORMAT_POINT_FIELDS | TPK_FORMAT_CELL_FIELDS)
 
+#ifndef TPK_WITH_CGNS
+/* A .cgns file still finds its row, which says why it cannot be read, rather than Exodus's. */
+static int cgns_not_built(const char *path, tpk_mesh *out, tpk_diag *diag)
+{
+    memset(out, 0, sizeof *out);
+    return tpk_diag_fail(diag, "%s: this tetpack was built without CGNS (TETPACK_WITH_CGNS=OFF); install the CGNS "
+                         "library (Debian: libcgns-dev) and build again", path);
+}
+#endif
+
 /* Detection takes the first row whose extension matches, then the first whose magic matches: the order
  * below is the detection order. */
 static const tpk_import_format formats[] = {
@@ -43,6 +53,17 @@ static const tpk_import_format formats[] = {
     {.name = "exodus", .title = "Exodus II (netCDF classic or netCDF-4), every time step",
      .extensions = ".exo .e .g .ex2", .magic = "CDF\x01|CDF\x02|\x89HDF", .read = tpk_import_exodus,
      .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+#ifdef TPK_WITH_CGNS
+    /* After exodus: its netCDF-4 files share the HDF5 signature, so an HDF5 file without an extension
+     * reads as Exodus; .cgns is told by its extension, ADF-format CGNS by its header (the ADF library
+     * writes its "@(#)" with the high bits set). */
+    {.name = "cgns", .title = "CGNS (HDF5 or ADF): unstructured, structured and polyhedral zones, every step",
+     .extensions = ".cgns", .magic = "\xc0\xa8\xa3\xa9" "ADF Database|@(#)ADF Database", .read = tpk_import_cgns,
+     .supports = VOLUME_CELLS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
+#else
+    {.name = "cgns", .title = "CGNS: not in this build (TETPACK_WITH_CGNS=OFF)", .extensions = ".cgns",
+     .read = cgns_not_built},
+#endif
     {.name = "meshb", .aliases = "medit", .title = "Medit binary .meshb (libMeshb 1-4, either byte order)",
      .extensions = ".meshb", .read = tpk_import_meshb, .read_memory = tpk_import_meshb_memory,
      .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS},
