@@ -6,7 +6,7 @@ BIN=$(dirname "$TPK")
 "$TPK" formats > "$WORK/table"
 "$TPK" formats --json > "$WORK/formats.json"
 names=$("$PY" -c "import json; print(' '.join(f['name'] for f in json.load(open('$WORK/formats.json'))['formats']))")
-for want in vtk vtu pvd gmsh tetgen medit meshb ugrid exodus stl off ply csv surface points; do
+for want in vtk vtu pvd gmsh tetgen medit meshb ugrid inp exodus stl off ply csv surface points; do
     case " $names " in *" $want "*) ;; *) fail "formats --json lacks $want (has: $names)" ;; esac
     grep -q "^$want " "$WORK/table" || fail "the formats table lacks $want"
 done

@@ -65,6 +65,13 @@ int tpk_import_gmsh_memory(const char *name, const char *data, size_t size, tpk_
 int tpk_import_ugrid(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
+/* Abaqus / CalculiX .inp: *NODE, *ELEMENT (solids C3D4/6/8/10/15/20/27 and variants, higher-order ones
+ * reduced to corners; surfaces, shells and beams dropped), *ELSET and ELSET= as the cell field "elset"
+ * (set numbers from 1 in the order the names first appear), *INCLUDE relative to the including file.
+ * The memory form resolves includes relative to `name`. */
+int tpk_import_inp(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_inp_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+
 /* Exodus II (.exo, .e, .g, .ex2; netCDF classic or netCDF-4) through the Exodus library: tetra, hex,
  * wedge and pyramid blocks (higher-order reduced to corners), nodal and element variables with every
  * time step. */
