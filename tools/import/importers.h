@@ -89,7 +89,8 @@ enum {
     TPK_FORMAT_POINT_CLOUD = 1u << 7,  /* points, tetrahedralized (Delaunay) by TetGen */
     TPK_FORMAT_POINT_FIELDS = 1u << 8,
     TPK_FORMAT_CELL_FIELDS = 1u << 9,
-    TPK_FORMAT_TIME_STEPS = 1u << 10
+    TPK_FORMAT_TIME_STEPS = 1u << 10,
+    TPK_FORMAT_GZIP = 1u << 11         /* FILE.<ext>.gz is read too: inflated in memory for read_memory */
 };
 
 /* One row of the registry. */
@@ -116,7 +117,8 @@ const tpk_import_format *tpk_import_formats(size_t *count);
  * one whose extension `path` has (may be NULL). NULL when no row takes it. */
 const tpk_import_format *tpk_import_format_named(const char *name, const char *path);
 /* The row for a file: the first whose extension `path` has, else the first whose magic starts the
- * file. NULL when neither tells (or the file cannot be read). */
+ * file. NULL when neither tells (or the file cannot be read). For FILE.gz, the same on the name without
+ * ".gz" and the inflated first bytes. */
 const tpk_import_format *tpk_import_format_detect(const char *path);
 /* The format names (and aliases) as "vtk, vtu, ..." into buf; returns buf. */
 const char *tpk_import_format_names(char *buf, size_t cap);
@@ -131,7 +133,9 @@ void tpk_import_input_files(const char *path, const char *format, tpk_import_fil
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one by a
  * registry name (tpk_import_format_named). A TetGen stem (no file, but STEM.node exists) reads as
- * TetGen. */
+ * TetGen. A path ending in ".gz" is inflated in memory (gzip_input.h) and read by the memory reader of
+ * the row its inner name or content picks, when that row has TPK_FORMAT_GZIP; messages name the .gz
+ * file, with places in the inflated bytes. */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
 /* The same with TetGen's settings for surfaces (NULL: defaults). */
 struct tpk_tetgen_options;
