@@ -6,7 +6,7 @@ BIN=$(dirname "$TPK")
 "$TPK" formats > "$WORK/table"
 "$TPK" formats --json > "$WORK/formats.json"
 names=$("$PY" -c "import json; print(' '.join(f['name'] for f in json.load(open('$WORK/formats.json'))['formats']))")
-for want in vtk vtu pvd gmsh tetgen medit meshb ugrid inp exodus stl off ply csv surface points; do
+for want in vtk vtu pvd gmsh tetgen medit meshb ugrid inp dolfin exodus stl off ply csv surface points; do
     case " $names " in *" $want "*) ;; *) fail "formats --json lacks $want (has: $names)" ;; esac
     grep -q "^$want " "$WORK/table" || fail "the formats table lacks $want"
 done
@@ -60,7 +60,7 @@ convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/m.tpk" --f
 convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/n.tpk" --format meshb --quiet
 same "$WORK/m.tpk" "$WORK/n.tpk" "--format medit on a .meshb differs from --format meshb"
 expect_exit 2 "$TPK" convert "$WORK/cylinder.dat" "$WORK/c.tpk" --format obj
-expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, vtu, pvd, gmsh, medit, ugrid, exodus, meshb"
+expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, dolfin, vtu, pvd, gmsh, medit, ugrid, exodus, meshb"
 # Detection by content when the extension says nothing: VTK legacy and Gmsh by their first bytes.
 convert_checked "$WORK/cylinder.dat" "$WORK/d.tpk" --quiet
 same "$WORK/a.tpk" "$WORK/d.tpk" "content detection of VTK legacy"

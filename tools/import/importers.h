@@ -72,6 +72,13 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
 int tpk_import_inp(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_inp_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
+/* Legacy DOLFIN XML (FEniCS; meshio's dolfin-xml): tetrahedron or hexahedron meshes (hexahedra from
+ * DOLFIN's lexicographic vertex order to VTK's), <domains> value collections of cells as cell fields.
+ * tpk_sniff_dolfin: "<dolfin" is among the first bytes. */
+int tpk_import_dolfin(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_dolfin_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+int tpk_sniff_dolfin(const char *head, size_t n);
+
 /* Exodus II (.exo, .e, .g, .ex2; netCDF classic or netCDF-4) through the Exodus library: tetra, hex,
  * wedge and pyramid blocks (higher-order reduced to corners), nodal and element variables with every
  * time step. */
@@ -93,6 +100,9 @@ enum {
     TPK_FORMAT_GZIP = 1u << 11         /* FILE.<ext>.gz is read too: inflated in memory for read_memory */
 };
 
+/* How many first bytes detection reads for magic and sniff. */
+#define TPK_IMPORT_HEAD_BYTES 512
+
 /* One row of the registry. */
 typedef struct tpk_import_format {
     const char *name;       /* what --format takes */
@@ -101,6 +111,9 @@ typedef struct tpk_import_format {
     const char *extensions; /* space-separated, compared case-insensitively ("" : only by name) */
     const char *magic;      /* sniffer: the file starts (after blanks) with one of these, '|'-separated;
                                NULL: not recognised by content */
+    /* NULL, or a check of the first bytes (up to TPK_IMPORT_HEAD_BYTES) that a match by extension or
+     * magic must also pass: for generic extensions and magic (".xml", "<?xml") shared with other rows. */
+    int (*sniff)(const char *head, size_t n);
     /* The file reader; NULL for TetGen readings, which go through tpk_import_surface. */
     int (*read)(const char *path, tpk_mesh *out, tpk_diag *diag);
     /* Parses a whole file held in memory, nothing else (no TetGen); NULL: none. Each format that has one

@@ -19,8 +19,9 @@
 #define FIELDS (TPK_FORMAT_POINT_FIELDS | TPK_FORMAT_CELL_FIELDS)
 #define GZ TPK_FORMAT_GZIP
 
-/* Detection takes the first row whose extension matches, then the first whose magic matches: the order
- * below is the detection order. */
+/* Detection takes the first row whose extension matches, then the first whose magic matches (either
+ * only where the row's sniff, if any, accepts the first bytes): the order below is the detection order.
+ * DOLFIN comes before VTU: both may start "<?xml", DOLFIN's sniff then looks for "<dolfin". */
 static const tpk_import_format formats[] = {
     {.name = "vtk", .aliases = "vtk-legacy", .title = "VTK legacy UNSTRUCTURED_GRID, ASCII or BINARY",
      .extensions = ".vtk", .magic = "# vtk DataFile", .read = tpk_import_vtk_legacy,
@@ -29,6 +30,9 @@ static const tpk_import_format formats[] = {
     {.name = "tetgen", .title = "TetGen .node/.ele (a path may name either file or their stem)",
      .extensions = ".node .ele", .read = tpk_import_tetgen, .read_memory = tpk_import_tetgen_bundle_memory,
      .supports = TPK_FORMAT_TETS | FIELDS},
+    {.name = "dolfin", .aliases = "dolfin-xml fenics", .title = "legacy DOLFIN XML (FEniCS): tetrahedra, hexahedra, domains",
+     .extensions = ".xml", .magic = "<dolfin|<?xml", .sniff = tpk_sniff_dolfin, .read = tpk_import_dolfin,
+     .read_memory = tpk_import_dolfin_memory, .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_CELL_FIELDS | GZ},
     {.name = "vtu", .title = "VTK XML UnstructuredGrid: ascii, base64, appended raw, zlib",
      .extensions = ".vtu", .magic = "<VTKFile|<?xml", .read = tpk_import_vtu, .read_memory = tpk_import_vtu_memory,
      .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | GZ},
@@ -147,40 +151,38 @@ static int gzipped(const char *path)
     return n > 3 && strcasecmp(path + n - 3, ".gz") == 0;
 }
 
-static const tpk_import_format *row_by_extension(const char *path)
+static int sniff_passes(const tpk_import_format *row, const char *head, size_t got)
 {
-    for (size_t i = 0; i < FORMAT_COUNT; i++)
-        if (has_any_extension(path, formats[i].extensions))
-            return &formats[i];
-    return NULL;
+    return !row->sniff || row->sniff(head, got);
 }
 
-static const tpk_import_format *row_by_magic(const char *head, size_t got)
+/* The row for a file named `name` (its extension) starting with head[0..got). */
+static const tpk_import_format *detect_row(const char *name, const char *head, size_t got)
 {
     for (size_t i = 0; i < FORMAT_COUNT; i++)
-        if (magic_matches(formats[i].magic, head, got))
+        if (has_any_extension(name, formats[i].extensions) && sniff_passes(&formats[i], head, got))
+            return &formats[i];
+    for (size_t i = 0; i < FORMAT_COUNT; i++)
+        if (magic_matches(formats[i].magic, head, got) && sniff_passes(&formats[i], head, got))
             return &formats[i];
     return NULL;
 }
 
 const tpk_import_format *tpk_import_format_detect(const char *path)
 {
-    char head[64] = {0};
+    char head[TPK_IMPORT_HEAD_BYTES + 1] = {0};
+    size_t got = 0;
     if (gzipped(path)) {
         char inner[4096];
         snprintf(inner, sizeof inner, "%.*s", (int)strlen(path) - 3, path);
-        const tpk_import_format *row = row_by_extension(inner);
-        return row ? row : row_by_magic(head, tpk_gzip_head(path, head, sizeof head - 1));
+        return detect_row(inner, head, tpk_gzip_head(path, head, TPK_IMPORT_HEAD_BYTES));
     }
-    const tpk_import_format *row = row_by_extension(path);
-    if (row)
-        return row;
     FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    size_t got = fread(head, 1, sizeof head - 1, f);
-    fclose(f);
-    return row_by_magic(head, got);
+    if (f) {
+        got = fread(head, 1, TPK_IMPORT_HEAD_BYTES, f);
+        fclose(f);
+    }
+    return detect_row(path, head, got);
 }
 
 const char *tpk_import_format_names(char *buf, size_t cap)
