@@ -168,6 +168,7 @@ TPK_TEST(bad_input)
                    "element 1 uses node 9, which no *NODE line defines");
     expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, four\n", "bad.inp:7:",
                    "expected a node id (an integer), found 'four'");
+    expect_failure("*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n", "bad.inp:", "element 1 uses node 1, which no *NODE line defines");
     expect_failure(TET_NODES "4, 1, 1, 1\n", "bad.inp:", "node id 4 is defined twice");
     expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n1, 1, 2, 3, 4\n", "bad.inp:", "element id 1 is defined twice");
     expect_failure(TET_NODES "*ELSET\n1\n", "bad.inp:6:", "*ELSET: expected ELSET=<name>, found none");

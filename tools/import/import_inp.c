@@ -461,6 +461,8 @@ static int compare_ids(const void *a, const void *b)
 
 static int64_t find_id(const id_index *sorted, int64_t n, int64_t id)
 {
+    if (n == 0)
+        return -1; /* no array at all: bsearch must not see NULL */
     const id_index key = {id, 0};
     const id_index *hit = bsearch(&key, sorted, (size_t)n, sizeof *sorted, compare_ids);
     return hit ? hit->index : -1;
