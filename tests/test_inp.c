@@ -78,6 +78,23 @@ TPK_TEST(features)
     tpk_mesh_free(&m);
 }
 
+/* A GENERATE line of a few bytes may span any number of ids: kept as a range, not expanded. */
+TPK_TEST(generate_spans_any_range)
+{
+    /* 7 - (-8999999999999999998) is a multiple of 7, 7 - (-8999999999999999997) is not: element 7 is in All,
+     * not in Miss (which would win, coming later) */
+    static const char text[] = CUBE_NODES "*ELEMENT, TYPE=C3D8\n7, 101, 102, 103, 104, 105, 106, 107, 108\n"
+                                          "*ELSET, ELSET=All, GENERATE\n-8999999999999999998, 9000000000000000000, 7\n"
+                                          "*ELSET, ELSET=Miss, GENERATE\n-8999999999999999997, 9000000000000000000, 7\n";
+    tpk_mesh m;
+    tpk_diag d;
+    quiet(&d);
+    CHECK_MSG(tpk_import_inp_memory("g.inp", text, sizeof text - 1, &m, &d) == 0, "%s", d.message);
+    const float *set = field(&m, "elset");
+    CHECK(m.cell_count == 1 && set && set[0] == 1.0f);
+    tpk_mesh_free(&m);
+}
+
 static char dir[64];
 
 static void write_file(const char *name, const char *text)

@@ -27,6 +27,13 @@ typedef struct id_index {
     int64_t id, index;
 } id_index;
 
+/* Elements first..last (every step-th) put in set `set`; one id is first == last. Kept as ranges: a
+ * GENERATE line of a few bytes may span any number of ids. */
+typedef struct elset_range {
+    int64_t first, last, step;
+    int set;
+} elset_range;
+
 typedef struct inp_reader {
     tpk_diag *diag;
     const char *chain[INP_MAX_DEPTH + 1]; /* the files being read, outermost first: a cycle check */
@@ -42,7 +49,7 @@ typedef struct inp_reader {
     int64_t *conn;
     id_index *cell_ids;
     float *cell_sets; /* 1-based set number, 0: in no set */
-    id_index *members; /* (element id, set number) from *ELSET lists */
+    elset_range *members; /* from *ELSET lists, in file order (a later one wins) */
     int64_t member_count, member_cap;
     char (*set_names)[TPK_NAME_MAX];
     int set_count;
@@ -280,11 +287,11 @@ static int read_element_line(inp_reader *r, tpk_scan *s, inp_block *b, const cha
     return 0;
 }
 
-static int add_member(inp_reader *r, tpk_scan *s, int64_t element, int set)
+static int add_member(inp_reader *r, tpk_scan *s, int64_t first, int64_t last, int64_t step, int set)
 {
     if (grow((void **)&r->members, &r->member_cap, r->member_count + 1, sizeof *r->members))
         return tpk_scan_fail(s, "out of memory for element set members");
-    r->members[r->member_count++] = (id_index){element, set};
+    r->members[r->member_count++] = (elset_range){first, last, step, set};
     return 0;
 }
 
@@ -299,14 +306,11 @@ static int read_elset_line(inp_reader *r, tpk_scan *s, inp_block *b, const char 
         for (int i = 0; i < n; i++)
             if (field_int(s, field[i], flen[i], &v[i], "an element id (an integer)"))
                 return -1;
-        if (v[2] < 1 || v[1] < v[0] || (v[1] - v[0]) / v[2] > 100000000)
-            return tpk_scan_fail(s, "*ELSET, GENERATE: expected first <= last and a step of 1 or more (at most "
-                                    "10^8 ids), found %lld, %lld, %lld",
+        if (v[2] < 1 || v[1] < v[0])
+            return tpk_scan_fail(s, "*ELSET, GENERATE: expected first <= last and a step of 1 or more, found %lld, "
+                                    "%lld, %lld",
                                  (long long)v[0], (long long)v[1], (long long)v[2]);
-        for (int64_t e = v[0]; e <= v[1]; e += v[2])
-            if (add_member(r, s, e, b->set))
-                return -1;
-        return 0;
+        return add_member(r, s, v[0], v[1], v[2], b->set);
     }
     for (int i = 0; i < n; i++) {
         int64_t e;
@@ -316,7 +320,7 @@ static int read_elset_line(inp_reader *r, tpk_scan *s, inp_block *b, const char 
                           r->set_names[b->set - 1], tpk_scan_quote(field[i], flen[i], q, sizeof q));
             continue;
         }
-        if (add_member(r, s, e, b->set))
+        if (add_member(r, s, e, e, 1, b->set))
             return -1;
     }
     return 0;
@@ -479,6 +483,27 @@ static int sort_ids(inp_reader *r, const char *name, id_index *ids, int64_t n, c
     return 0;
 }
 
+/* Put the cells of one *ELSET range into its set: walk the sorted element ids from the first in range.
+ * Returns 1 for a single id that names no solid element (dropped shells are listed too), else 0. */
+static int apply_range(inp_reader *r, const elset_range *m)
+{
+    int64_t lo = 0, hi = r->cell_count;
+    while (lo < hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (r->cell_ids[mid].id < m->first)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    int hit = 0;
+    for (int64_t i = lo; i < r->cell_count && r->cell_ids[i].id <= m->last; i++)
+        if (((uint64_t)r->cell_ids[i].id - (uint64_t)m->first) % (uint64_t)m->step == 0) { /* id >= first */
+            r->cell_sets[r->cell_ids[i].index] = (float)m->set;
+            hit = 1;
+        }
+    return !hit && m->first == m->last;
+}
+
 /* Node ids to 0-based indices, *ELSET members onto their cells; the mesh takes over the arrays. */
 static int finish(inp_reader *r, const char *name, tpk_mesh *out)
 {
@@ -503,12 +528,8 @@ static int finish(inp_reader *r, const char *name, tpk_mesh *out)
             conn[k] = (int32_t)v;
         }
     int64_t unknown = 0;
-    for (int64_t i = 0; i < r->member_count; i++) {
-        int64_t c = find_id(r->cell_ids, r->cell_count, r->members[i].id);
-        if (c >= 0)
-            r->cell_sets[c] = (float)r->members[i].index;
-        unknown += c < 0;
-    }
+    for (int64_t i = 0; i < r->member_count; i++)
+        unknown += apply_range(r, &r->members[i]);
     if (unknown) /* sets of dropped surface elements list them too */
         tpk_diag_warn(r->diag, "%s: %lld *ELSET members are not solid elements (ignored)", name, (long long)unknown);
     if (r->dropped)
