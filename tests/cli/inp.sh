@@ -26,6 +26,11 @@ read -r tets mirrored tetra wedges hexes fields < <(summary "$WORK/bl.json")
 [ "$(summary "$WORK/bl2.json")" = "$tets 0 $tetra $wedges $hexes 1" ] ||
     fail "bl2.inp (second order) differs: $(summary "$WORK/bl2.json") vs $tets 0 $tetra $wedges $hexes 1"
 grep -q "dropped [0-9]* elements that are not solids" "$WORK/err" || fail "the surface elements were not counted"
+# Gzipped: the same mesh, and the warning names the file read.
+gzip -c "$WORK/bl.inp" > "$WORK/blz.inp.gz"
+convert_checked "$WORK/blz.inp.gz" "$WORK/blz.tpk" --cut-folds --field elset --json > "$WORK/blz.json" 2> "$WORK/err"
+[ "$(summary "$WORK/blz.json")" = "$(summary "$WORK/bl.json")" ] || fail "blz.inp.gz differs from bl.inp"
+grep -q "warning: .*blz.inp.gz: dropped [0-9]* elements" "$WORK/err" || { cat "$WORK/err"; fail "the warning names no .gz"; }
 
 # meshio: hexahedra with an element set, and tets; the same tets as the .mesh gives.
 "$PY" - "$DATA/sfepy" "$WORK" <<'PYEOF'

@@ -226,6 +226,37 @@ static int import_with(const tpk_import_format *row, int forced, const char *pat
     return tpk_import_surface(path, TPK_SURFACE_UNKNOWN, TPK_SURFACE_AUTO, tetgen, out, diag);
 }
 
+/* "inner..." as "inner.gz..." into buf: messages about the inflated bytes name the file read. */
+static const char *name_gz(const char *text, const char *inner, char *buf, size_t cap)
+{
+    size_t n = strlen(inner), all = strlen(text);
+    if (strncmp(text, inner, n) != 0 || all + 4 > cap)
+        return text;
+    memcpy(buf, text, n);
+    memcpy(buf + n, ".gz", 3);
+    memcpy(buf + n + 3, text + n, all - n + 1);
+    return buf;
+}
+
+/* Warnings of the memory reader, renamed, to where the caller's would go. */
+typedef struct gz_warnings {
+    tpk_diag *diag;
+    void (*warn)(void *user, const char *text);
+    void *user;
+    const char *inner;
+} gz_warnings;
+
+static void warn_gz(void *user, const char *text)
+{
+    gz_warnings *w = user;
+    char renamed[1100];
+    text = name_gz(text, w->inner, renamed, sizeof renamed);
+    if (w->warn)
+        w->warn(w->user, text);
+    else
+        fprintf(stderr, "warning: %s\n", text);
+}
+
 /* FILE.gz: inflated, then read by the row's memory reader under the name without ".gz" (UGRID takes its
  * encoding from it, .inp its includes' folder); messages then name the .gz file. */
 static int import_gzip(const tpk_import_format *row, const char *path, tpk_mesh *out, tpk_diag *diag)
@@ -242,14 +273,21 @@ static int import_gzip(const tpk_import_format *row, const char *path, tpk_mesh 
     size_t size;
     if (tpk_gzip_inflate_file(path, 0, &data, &size, diag) != 0)
         return -1;
-    size_t n = strlen(path) - 3;
-    snprintf(inner, sizeof inner, "%.*s", (int)n, path);
+    snprintf(inner, sizeof inner, "%.*s", (int)strlen(path) - 3, path);
+    gz_warnings w = {diag, diag ? diag->warn : NULL, diag ? diag->warn_user : NULL, inner};
+    if (diag) {
+        diag->warn = warn_gz;
+        diag->warn_user = &w;
+    }
     int rc = row->read_memory(inner, data, size, out, diag);
     free(data);
-    if (rc != 0 && diag && !strncmp(diag->message, inner, n) && strlen(diag->message) + 3 < sizeof diag->message) {
-        memmove(diag->message + n + 3, diag->message + n, strlen(diag->message + n) + 1);
-        memcpy(diag->message + n, path + n, 3);
+    if (diag) {
+        diag->warn = w.warn;
+        diag->warn_user = w.user;
     }
+    char renamed[sizeof diag->message];
+    if (rc != 0 && diag)
+        snprintf(diag->message, sizeof diag->message, "%s", name_gz(diag->message, inner, renamed, sizeof renamed));
     return rc;
 }
 
