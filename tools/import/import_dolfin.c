@@ -2,7 +2,6 @@
  * "tetrahedron"|"hexahedron" dim="3"> with <vertices size=N><vertex index x y z/> and <cells size=M>
  * <tetrahedron index v0..v3/> (or <hexahedron v0..v7/>); <domains> value collections of dimension 3
  * become cell fields. Parsed with expat; a DOCTYPE is refused (no entity expansion). */
-#include <expat.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -13,6 +12,7 @@
 
 #include "base/text_scan.h"
 #include "importers.h"
+#include "xml_input.h"
 
 /* DOLFIN numbers a hexahedron's vertices lexicographically (x fastest, then y, then z: its
  * UnitCubeMesh and BoxMesh write them so); VTK goes around each face. */
@@ -306,24 +306,7 @@ static int parse(dolfin_reader *r, const char *data, size_t size)
     XML_SetUserData(r->parser, r);
     XML_SetElementHandler(r->parser, on_start, on_end);
     XML_SetStartDoctypeDeclHandler(r->parser, on_doctype);
-    const size_t chunk = (size_t)1 << 30;
-    size_t pos = 0;
-    do {
-        size_t n = size - pos < chunk ? size - pos : chunk;
-        if (XML_Parse(r->parser, data + pos, (int)n, pos + n == size) == XML_STATUS_ERROR) {
-            if (!r->failed) {
-                enum XML_Error e = XML_GetErrorCode(r->parser);
-                r->failed = 1;
-                tpk_diag_fail(r->diag, "%s: line %ld, column %ld: expected well-formed XML, found an error: %s%s",
-                              r->name, (long)XML_GetCurrentLineNumber(r->parser),
-                              (long)XML_GetCurrentColumnNumber(r->parser), XML_ErrorString(e),
-                              e == XML_ERROR_NO_ELEMENTS || e == XML_ERROR_UNCLOSED_TOKEN ? " (truncated file?)" : "");
-            }
-            break;
-        }
-        pos += n;
-    } while (pos < size);
-    return r->failed ? -1 : 0;
+    return tpk_xml_parse(r->parser, r->name, data, size, 1, &r->failed, r->diag);
 }
 
 /* Every vertex and cell the counts promise is there; the mesh takes over the arrays. */
