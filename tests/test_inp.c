@@ -186,6 +186,9 @@ TPK_TEST(bad_input)
     expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, four\n", "bad.inp:7:",
                    "expected a node id (an integer), found 'four'");
     expect_failure("*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n", "bad.inp:", "element 1 uses node 1, which no *NODE line defines");
+    expect_failure("*NODE, INPUT=nodes.txt\n", "bad.inp:1:", "*NODE, INPUT=: data read from another file is not supported");
+    expect_failure("*PART, NAME=a\n" TET_NODES "*END PART\n*PART, NAME=b\n" TET_NODES, "bad.inp:",
+                   "node id 1 is defined twice (the file has several *PART blocks");
     expect_failure(TET_NODES "4, 1, 1, 1\n", "bad.inp:", "node id 4 is defined twice");
     expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n1, 1, 2, 3, 4\n", "bad.inp:", "element id 1 is defined twice");
     expect_failure(TET_NODES "*ELSET\n1\n", "bad.inp:6:", "*ELSET: expected ELSET=<name>, found none");

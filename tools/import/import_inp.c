@@ -54,6 +54,7 @@ typedef struct inp_reader {
     char (*set_names)[TPK_NAME_MAX];
     int set_count;
     int64_t dropped; /* non-solid elements */
+    int parts;       /* *PART keywords: each part numbers its nodes and elements on its own */
     int64_t dropped_by_type[256];
 } inp_reader;
 
@@ -394,7 +395,12 @@ static int read_keyword(inp_reader *r, tpk_scan *s, inp_block *b, const char *li
         return include_file(r, s, v ? v : "", v ? vlen : 0);
     } else if (!klen) {
         return tpk_scan_fail(s, "expected a keyword after '*', found '%s'", tpk_scan_quote(line, len, q, sizeof q));
+    } else if (tpk_token_is(key, klen, "PART")) {
+        r->parts++;
     }
+    if (b->kind != DATA_SKIP && param(field, flen, n, "INPUT", &vlen))
+        return tpk_scan_fail(s, "*%.*s, INPUT=: data read from another file is not supported here; *INCLUDE it "
+                                "instead", (int)(klen < 20 ? klen : 20), key);
     if ((b->kind == DATA_ELEMENT || b->kind == DATA_ELSET) && (v = param(field, flen, n, "ELSET", &vlen)) && vlen &&
         (b->set = set_number(r, v, vlen)) < 0)
         return tpk_scan_fail(s, "more than %d element sets, or out of memory", INP_MAX_SETS);
@@ -479,7 +485,11 @@ static int sort_ids(inp_reader *r, const char *name, id_index *ids, int64_t n, c
         qsort(ids, (size_t)n, sizeof *ids, compare_ids);
     for (int64_t i = 1; i < n; i++)
         if (ids[i].id == ids[i - 1].id)
-            return tpk_diag_fail(r->diag, "%s: %s id %lld is defined twice", name, what, (long long)ids[i].id);
+            return tpk_diag_fail(r->diag, "%s: %s id %lld is defined twice%s", name, what, (long long)ids[i].id,
+                                 r->parts > 1 ? " (the file has several *PART blocks, each numbering its own ids: "
+                                                "an assembly of parts is not read yet; export the flattened "
+                                                "input file)"
+                                              : "");
     return 0;
 }
 
