@@ -62,7 +62,7 @@ same "$WORK/m.tpk" "$WORK/n.tpk" "--format medit on a .meshb differs from --form
 expect_exit 2 "$TPK" convert "$WORK/cylinder.dat" "$WORK/c.tpk" --format obj
 # The list follows the registry's order; optional rows (cgns: TETPACK_WITH_CGNS) may sit between.
 expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, dolfin, vtu, pvd, gmsh, medit, ugrid, exodus, "
-expect_stderr ", meshb, stl, off, ply, csv, surface, points"
+expect_stderr ", stl, off, ply, csv, surface, points"
 # CGNS: its HDF5 signature is Exodus's too, so the extension must pick its row, which reads the file
 # when built (the row then carries cells) and says why not otherwise.
 grep -q "^cgns " "$WORK/table" || fail "the formats table lacks cgns"
