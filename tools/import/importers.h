@@ -70,6 +70,15 @@ int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk
  * time step. */
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
+/* XDMF (.xdmf, .xmf; Xdmf 2 and 3) as meshio, FEniCS/dolfinx and many solvers write it: the Uniform
+ * Grid with volume cells (Tetrahedron, Pyramid, Wedge, Hexahedron, Mixed; higher-order types reduced to
+ * corners; surfaces dropped), Geometry XYZ, XY or X_Y_Z, Node and Cell Attributes as fields; a Temporal
+ * Collection's grids as time steps (one mesh, by XInclude or Reference, or identical). DataItems in XML
+ * text, or in HDF5 (file.h5:/dataset, relative to the .xdmf file; needs TETPACK_WITH_HDF5). */
+int tpk_import_xdmf(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* Same from memory (for fuzzing): XML DataItems only, HDF data refused. */
+int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+
 /* What a format carries into the converter (tetpack formats prints these). */
 enum {
     TPK_FORMAT_TETS = 1u << 0,

@@ -1,0 +1,155 @@
+/* XDMF importer: a DataItem's values. Dimensions give the count; NumberType (XDMF 2) or DataType
+ * (XDMF 3) with Precision the kind; Format XML holds the numbers as text, Format HDF names a dataset
+ * as file.h5:/path/to/dataset (import_xdmf_hdf.c). Other formats and item types are refused. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "import_xdmf_internal.h"
+#include "base/text_scan.h"
+
+const xdmf_node *xdmf_first_item(xdmf_reader *r, const xdmf_node *parent)
+{
+    for (const xdmf_node *c = parent->first; c; c = c->next)
+        if (xdmf_is(c, "DataItem"))
+            return c;
+    xdmf_fail(r, parent, "expected a <DataItem> inside, found none");
+    return NULL;
+}
+
+static int is_blank(char c)
+{
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r';
+}
+
+static int parse_dimensions(xdmf_reader *r, const xdmf_node *item, xdmf_values *out, int64_t *count)
+{
+    const char *dims = xdmf_attr(item, "Dimensions");
+    if (!dims)
+        return xdmf_fail(r, item, "expected a Dimensions attribute, found none");
+    double total = 1;
+    out->rank = 0;
+    for (const char *p = dims;;) {
+        while (is_blank(*p))
+            p++;
+        if (!*p)
+            break;
+        size_t len = strcspn(p, " \t\n\r");
+        int64_t d;
+        if (out->rank == 8 || tpk_parse_int64(p, len, &d) || d < 0)
+            return xdmf_fail(r, item, "expected Dimensions of 1 to 8 whole numbers >= 0, found \"%.60s\"", dims);
+        out->dims[out->rank++] = d;
+        total *= (double)d;
+        p += len;
+    }
+    if (out->rank == 0 || total > (double)INT32_MAX * 8)
+        return xdmf_fail(r, item, "expected Dimensions of 1 to 8 whole numbers (at most 2^34 values), found \"%.60s\"",
+                         dims);
+    *count = (int64_t)total;
+    return 0;
+}
+
+/* NumberType or DataType: Float, Int, UInt, Char, UChar (Precision only changes the stored width). */
+static int parse_number_type(xdmf_reader *r, const xdmf_node *item, xdmf_values *out)
+{
+    const char *type = xdmf_attr(item, "NumberType");
+    if (!type)
+        type = xdmf_attr(item, "DataType");
+    if (!type || !strcasecmp(type, "Float") || !strcasecmp(type, "Double"))
+        out->integer = 0;
+    else if (!strcasecmp(type, "Int") || !strcasecmp(type, "UInt") || !strcasecmp(type, "Char") ||
+             !strcasecmp(type, "UChar"))
+        out->integer = 1;
+    else
+        return xdmf_fail(r, item, "expected NumberType Float, Int, UInt, Char or UChar, found \"%.40s\"", type);
+    const char *precision = xdmf_attr(item, "Precision");
+    if (precision && strcmp(precision, "1") && strcmp(precision, "2") && strcmp(precision, "4") &&
+        strcmp(precision, "8"))
+        return xdmf_fail(r, item, "expected Precision 1, 2, 4 or 8, found \"%.40s\"", precision);
+    return 0;
+}
+
+/* Format XML: exactly `want` numbers in the element's text. */
+static int read_text(xdmf_reader *r, const xdmf_node *item, int64_t want, xdmf_values *out)
+{
+    size_t len;
+    const char *p = xdmf_trimmed(item, &len), *end = p + len;
+    /* Every number takes at least one character and a separator: bounds the allocation by the text. */
+    if ((double)want > (double)len / 2 + 1)
+        return xdmf_fail(r, item, "expected %lld numbers (Dimensions \"%.60s\"), found text of only %zu characters",
+                         (long long)want, xdmf_attr(item, "Dimensions"), len);
+    out->v = malloc(sizeof *out->v * (size_t)(want ? want : 1));
+    if (!out->v)
+        return xdmf_fail(r, item, "out of memory for %lld values", (long long)want);
+    int64_t got = 0;
+    while (p < end) {
+        size_t n = 0;
+        while (p + n < end && !is_blank(p[n]))
+            n++;
+        char q[64];
+        if (got == want)
+            return xdmf_fail(r, item, "expected %lld numbers (Dimensions \"%.60s\"), found more", (long long)want,
+                             xdmf_attr(item, "Dimensions"));
+        if (tpk_parse_double(p, n, &out->v[got]) || (out->integer && out->v[got] != (double)(int64_t)out->v[got]))
+            return xdmf_fail(r, item, "value %lld: expected %s, found '%s'", (long long)got,
+                             out->integer ? "an integer" : "a number", tpk_scan_quote(p, n, q, sizeof q));
+        got++;
+        p += n;
+        while (p < end && is_blank(*p))
+            p++;
+    }
+    if (got != want)
+        return xdmf_fail(r, item, "expected %lld numbers (Dimensions \"%.60s\"), found %lld", (long long)want,
+                         xdmf_attr(item, "Dimensions"), (long long)got);
+    out->count = want;
+    return 0;
+}
+
+/* Format HDF: "file.h5:/path/to/dataset". */
+static int read_hdf_item(xdmf_reader *r, const xdmf_node *item, int64_t want, xdmf_values *out)
+{
+    size_t len;
+    const char *text = xdmf_trimmed(item, &len);
+    const char *sep = NULL;
+    for (size_t i = 0; i + 1 < len && !sep; i++)
+        if (text[i] == ':' && text[i + 1] == '/')
+            sep = text + i;
+    if (!sep || sep == text || len > 4000)
+        return xdmf_fail(r, item, "Format HDF: expected file.h5:/path/to/dataset, found \"%.*s\"",
+                         (int)(len < 80 ? len : 80), text);
+    if (!r->allow_files)
+        return xdmf_fail(r, item, "Format HDF (\"%.*s\"): HDF data is not read from memory, only from a file",
+                         (int)(len < 80 ? len : 80), text);
+    char file[4096], dataset[4096];
+    snprintf(file, sizeof file, "%.*s", (int)(sep - text), text);
+    snprintf(dataset, sizeof dataset, "%.*s", (int)(text + len - sep - 1), sep + 1);
+    return xdmf_read_hdf(r, item, file, dataset, want, out);
+}
+
+int xdmf_read_item(xdmf_reader *r, const xdmf_node *item, xdmf_values *out)
+{
+    memset(out, 0, sizeof *out);
+    if (xdmf_follow_reference(r, item, &item))
+        return -1;
+    const char *item_type = xdmf_attr(item, "ItemType");
+    if (item_type && strcasecmp(item_type, "Uniform"))
+        return xdmf_fail(r, item, "expected ItemType Uniform, found \"%.40s\" (HyperSlab, Function and other "
+                         "computed items are not read)", item_type);
+    int64_t want = 0;
+    if (parse_dimensions(r, item, out, &want) || parse_number_type(r, item, out))
+        return -1;
+    const char *format = xdmf_attr(item, "Format");
+    int rc;
+    if (!format || !strcasecmp(format, "XML"))
+        rc = read_text(r, item, want, out);
+    else if (!strcasecmp(format, "HDF"))
+        rc = read_hdf_item(r, item, want, out);
+    else
+        rc = xdmf_fail(r, item, "expected Format XML or HDF, found \"%.40s\" (not read)", format);
+    if (rc) {
+        free(out->v);
+        out->v = NULL;
+    }
+    return rc;
+}
