@@ -375,9 +375,9 @@ int xdmf_read_attribute(xdmf_reader *r, const xdmf_node *attribute, const tpk_me
         free(v.v);
         if (lenient)
             return 1;
-        return xdmf_fail(r, item, "Attribute '%.60s' (%s, Center %s): expected %s %lld values (one %s per %s), "
+        return xdmf_fail(r, item, "Attribute '%.60s' (%s, Center %s): expected %s%lld values (one %s per %s), "
                          "found %lld", name, type ? type : "Scalar", on_cells ? "Cell" : "Node",
-                         scalar ? "" : "a multiple of", (long long)tuples, scalar ? "value" : "tuple",
+                         scalar ? "" : "a multiple of ", (long long)tuples, scalar ? "value" : "tuple",
                          on_cells ? "cell" : "point", (long long)v.count);
     }
     int64_t kept = on_cells ? mesh->cell_count : tuples;
