@@ -139,6 +139,11 @@ with h5py.File(sys.argv[1], 'w') as f:
 " "$WORK/data.h5"
 hdf_file hdf_ok '<DataItem Dimensions="4 3" Format="HDF">data.h5:/mesh/geometry</DataItem>'
 convert_checked "$WORK/hdf_ok.xdmf" "$WORK/hdf_ok.tpk" > /dev/null
+# The .h5 is an input too: an output there is refused, the data left as it was.
+sha1sum "$WORK/data.h5" > "$WORK/h5.sum"
+expect_exit 2 "$TPK" convert "$WORK/hdf_ok.xdmf" "$WORK/data.h5"
+expect_stderr "OUTPUT '$WORK/data.h5' is a file the input reads (same file as '$WORK/data.h5', read for INPUT '$WORK/hdf_ok.xdmf')"
+sha1sum -c --quiet "$WORK/h5.sum" || fail "data.h5 changed"
 hdf_file missing_h5 '<DataItem Dimensions="4 3" Format="HDF">gone.h5:/mesh/geometry</DataItem>'
 broken missing_h5 "missing_h5.xdmf: line 4: <DataItem>: cannot open the HDF5 file .*gone.h5 (No such file"
 hdf_file wrong_dataset '<DataItem Dimensions="4 3" Format="HDF">data.h5:/mesh/geometri</DataItem>'

@@ -76,6 +76,9 @@ int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
  * Collection's grids as time steps (one mesh, by XInclude or Reference, or identical). DataItems in XML
  * text, or in HDF5 (file.h5:/dataset, relative to the .xdmf file; needs TETPACK_WITH_HDF5). */
 int tpk_import_xdmf(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* The HDF5 files its DataItems name, as tpk_import_xdmf resolves them; none when the XML does not
+ * parse (the import then says why). */
+void tpk_import_xdmf_files(const char *path, tpk_import_file_fn each, void *user);
 /* Same from memory (for fuzzing): XML DataItems only, HDF data refused. */
 int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
@@ -127,8 +130,8 @@ const char *tpk_import_format_supports(unsigned supports, char *buf, size_t cap)
 
 /* Every file that reading `path` (as tpk_import_any_with would, `format` forcing a row or NULL) opens,
  * each passed to `each`: `path` itself first, then TetGen's .node and .ele (from either file or their
- * stem), a .pvd's pieces; other formats are one file. Files need not exist. For refusing an output that
- * would replace an input (base/output_file.h). */
+ * stem), a .pvd's pieces, an XDMF file's HDF5 files; other formats are one file. Files need not exist.
+ * For refusing an output that would replace an input (base/output_file.h). */
 void tpk_import_input_files(const char *path, const char *format, tpk_import_file_fn each, void *user);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one by a

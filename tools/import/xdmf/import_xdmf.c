@@ -369,3 +369,36 @@ int tpk_import_xdmf(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
     return tpk_import_mapped(path, parse_file, out, diag);
 }
+
+/* Each HDF file of the tree's DataItems once (in the order of first use). */
+static void each_hdf_file(xdmf_reader *r, const xdmf_node *n, char *last, size_t cap, tpk_import_file_fn each,
+                          void *user)
+{
+    for (const xdmf_node *c = n->first; c; c = c->next) {
+        const char *format = xdmf_attr(c, "Format"), *dataset;
+        char path[4096];
+        size_t len;
+        if (xdmf_is(c, "DataItem") && format && !strcasecmp(format, "HDF") &&
+            xdmf_hdf_source(r, c, path, sizeof path, &dataset, &len) == 0 && strcmp(path, last)) {
+            each(user, path);
+            snprintf(last, cap, "%s", path);
+        }
+        each_hdf_file(r, c, last, cap, each, user);
+    }
+}
+
+void tpk_import_xdmf_files(const char *path, tpk_import_file_fn each, void *user)
+{
+    tpk_diag quiet;
+    memset(&quiet, 0, sizeof quiet);
+    const char *data;
+    size_t size;
+    if (tpk_map_file(path, &data, &size, &quiet) != 0)
+        return;
+    xdmf_reader r = {.name = path, .data = data, .size = size, .allow_files = 1, .diag = &quiet};
+    char last[4096] = "";
+    if (xdmf_parse_tree(&r) == 0)
+        each_hdf_file(&r, r.doc, last, sizeof last, each, user);
+    xdmf_tree_free(r.doc);
+    tpk_unmap_file(data, size);
+}

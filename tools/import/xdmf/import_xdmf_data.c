@@ -110,22 +110,17 @@ static int read_text(xdmf_reader *r, const xdmf_node *item, int64_t want, xdmf_v
 /* Format HDF: "file.h5:/path/to/dataset". */
 static int read_hdf_item(xdmf_reader *r, const xdmf_node *item, int64_t want, xdmf_values *out)
 {
-    size_t len;
-    const char *text = xdmf_trimmed(item, &len);
-    const char *sep = NULL;
-    for (size_t i = 0; i + 1 < len && !sep; i++)
-        if (text[i] == ':' && text[i + 1] == '/')
-            sep = text + i;
-    if (!sep || sep == text || len > 4000)
+    size_t len, dataset_len;
+    const char *text = xdmf_trimmed(item, &len), *dataset;
+    char path[4096], name[4096];
+    if (xdmf_hdf_source(r, item, path, sizeof path, &dataset, &dataset_len) || dataset_len >= sizeof name)
         return xdmf_fail(r, item, "Format HDF: expected file.h5:/path/to/dataset, found \"%.*s\"",
                          (int)(len < 80 ? len : 80), text);
     if (!r->allow_files)
         return xdmf_fail(r, item, "Format HDF (\"%.*s\"): HDF data is not read from memory, only from a file",
                          (int)(len < 80 ? len : 80), text);
-    char file[4096], dataset[4096];
-    snprintf(file, sizeof file, "%.*s", (int)(sep - text), text);
-    snprintf(dataset, sizeof dataset, "%.*s", (int)(text + len - sep - 1), sep + 1);
-    return xdmf_read_hdf(r, item, file, dataset, want, out);
+    snprintf(name, sizeof name, "%.*s", (int)dataset_len, dataset);
+    return xdmf_read_hdf(r, item, path, name, want, out);
 }
 
 int xdmf_read_item(xdmf_reader *r, const xdmf_node *item, xdmf_values *out)

@@ -14,12 +14,8 @@
 /* zlib's deflate packs at most about this many bytes into one (HDF5's common filter). */
 #define DEFLATE_MAX_RATIO 1032.0
 
-static int open_file(xdmf_reader *r, const xdmf_node *item, const char *file, char *path, size_t cap)
+static int open_file(xdmf_reader *r, const xdmf_node *item, const char *path)
 {
-    const char *slash = strrchr(r->name, '/');
-    size_t dir = slash && file[0] != '/' ? (size_t)(slash - r->name) + 1 : 0;
-    if ((size_t)snprintf(path, cap, "%.*s%s", (int)dir, r->name, file) >= cap)
-        return xdmf_fail(r, item, "HDF file name \"%.100s\" is too long", file);
     if (r->hdf && r->hdf_path && !strcmp(r->hdf_path, path))
         return 0;
     xdmf_hdf_close(r);
@@ -69,15 +65,14 @@ static int check_extent(xdmf_reader *r, const xdmf_node *item, const char *path,
     return 0;
 }
 
-int xdmf_read_hdf(xdmf_reader *r, const xdmf_node *item, const char *file, const char *dataset, int64_t want,
+int xdmf_read_hdf(xdmf_reader *r, const xdmf_node *item, const char *path, const char *dataset, int64_t want,
                   xdmf_values *out)
 {
-    char path[4096];
     H5E_auto2_t old_func;
     void *old_data;
     H5Eget_auto2(H5E_DEFAULT, &old_func, &old_data);
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* the message below says what failed; no HDF5 stack dump */
-    int rc = open_file(r, item, file, path, sizeof path);
+    int rc = open_file(r, item, path);
     hid_t ds = -1;
     if (rc == 0 && (H5Lexists(*(hid_t *)r->hdf, dataset, H5P_DEFAULT) <= 0 ||
                     (ds = H5Dopen2(*(hid_t *)r->hdf, dataset, H5P_DEFAULT)) < 0))
@@ -108,10 +103,10 @@ void xdmf_hdf_close(xdmf_reader *r)
 
 #else
 
-int xdmf_read_hdf(xdmf_reader *r, const xdmf_node *item, const char *file, const char *dataset, int64_t want,
+int xdmf_read_hdf(xdmf_reader *r, const xdmf_node *item, const char *path, const char *dataset, int64_t want,
                   xdmf_values *out)
 {
-    (void)file, (void)dataset, (void)want, (void)out;
+    (void)path, (void)dataset, (void)want, (void)out;
     return xdmf_fail(r, item, "HDF data: this tetpack was built without HDF5 (TETPACK_WITH_HDF5=OFF); rebuild it "
                      "with libhdf5-dev installed");
 }

@@ -7,7 +7,8 @@
  *   import_xdmf_data.c   xdmf_read_item (DataItem: Dimensions, number type, XML text or HDF)
  *   import_xdmf_hdf.c    xdmf_read_hdf (the HDF5 library; a refusal when built without it)
  *   import_xdmf_path.c   xdmf_select (the XPath subset of XInclude xpointers and References)
- *   import_xdmf_tree.c   xdmf_parse_tree, xdmf_tree_free, xdmf_attr, xdmf_is, xdmf_trimmed
+ *   import_xdmf_tree.c   xdmf_parse_tree, xdmf_tree_free, xdmf_attr, xdmf_is, xdmf_trimmed,
+ *                        xdmf_hdf_source
  *   import_xdmf_fail.c   xdmf_fail
  * Not installed. */
 #ifndef TPK_IMPORT_XDMF_INTERNAL_H
@@ -65,6 +66,12 @@ int xdmf_is(const xdmf_node *n, const char *name);
 /* The element's text without leading and trailing blanks: *len gets its length. */
 const char *xdmf_trimmed(const xdmf_node *n, size_t *len);
 
+/* A Format="HDF" DataItem's text "file.h5:/path/to/dataset": 0 with `path` the file relative to the
+ * .xdmf file's folder (unless absolute) and *dataset pointing at "/path/to/dataset" in the text
+ * (*dataset_len long); -1 when the text is not of that form (no message). */
+int xdmf_hdf_source(const xdmf_reader *r, const xdmf_node *item, char *path, size_t cap, const char **dataset,
+                    size_t *dataset_len);
+
 /* ---- XPath subset (import_xdmf_path.c) -------------------------------------------------------------
  * Evaluate an absolute path like /Xdmf/Domain/Grid[@Name="mesh"][1]/Geometry
  * or //Grid[@Name='mesh']/Geometry from the document; *found gets a malloc'd array of *count nodes
@@ -77,9 +84,9 @@ int xdmf_select(xdmf_reader *r, const xdmf_node *at, const char *path, size_t le
 int xdmf_follow_reference(xdmf_reader *r, const xdmf_node *n, const xdmf_node **out);
 
 /* ---- HDF5 (import_xdmf_hdf.c) ---------------------------------------------------------------------
- * Read dataset `dataset` of file `file` (relative to the .xdmf file's folder unless absolute) into
- * out->v as doubles; its element count must be `want`. `item` is the DataItem, for messages. 0 or -1. */
-int xdmf_read_hdf(xdmf_reader *r, const xdmf_node *item, const char *file, const char *dataset, int64_t want,
+ * Read dataset `dataset` of the HDF5 file at `path` into out->v as doubles; its element count must be
+ * `want`. `item` is the DataItem, for messages. 0 or -1. */
+int xdmf_read_hdf(xdmf_reader *r, const xdmf_node *item, const char *path, const char *dataset, int64_t want,
                   xdmf_values *out);
 /* Close the file kept open. */
 void xdmf_hdf_close(xdmf_reader *r);

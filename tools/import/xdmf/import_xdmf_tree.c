@@ -2,6 +2,7 @@
  * Entity declarations are refused (XDMF has no use for them, and they could expand without bound);
  * a DOCTYPE without them, as dolfinx writes, is fine. */
 #include <expat.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -190,4 +191,24 @@ const char *xdmf_trimmed(const xdmf_node *n, size_t *len)
         l--;
     *len = l;
     return s;
+}
+
+int xdmf_hdf_source(const xdmf_reader *r, const xdmf_node *item, char *path, size_t cap, const char **dataset,
+                    size_t *dataset_len)
+{
+    size_t len;
+    const char *text = xdmf_trimmed(item, &len);
+    const char *sep = NULL;
+    for (size_t i = 1; i + 1 < len && !sep; i++)
+        if (text[i] == ':' && text[i + 1] == '/')
+            sep = text + i;
+    if (!sep)
+        return -1;
+    const char *slash = strrchr(r->name, '/');
+    size_t dir = slash && text[0] != '/' ? (size_t)(slash - r->name) + 1 : 0;
+    if ((size_t)snprintf(path, cap, "%.*s%.*s", (int)dir, r->name, (int)(sep - text), text) >= cap)
+        return -1;
+    *dataset = sep + 1;
+    *dataset_len = (size_t)(text + len - sep - 1);
+    return 0;
 }
