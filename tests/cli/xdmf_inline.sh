@@ -35,9 +35,13 @@ assert j["source_cells"] == 1 and j["mirrored_cells"] == 0 and j["vertices"] == 
 assert j["cells_split"]["hexahedron_into_5"] + j["cells_split"]["hexahedron_into_6"] == 1, j
 PYEOF
 "$TPK" info "$WORK/hex2.tpk" | grep -q "height .*range \[0, 1\]" || fail "hex2.tpk: height should span 0..1"
-# No extension tetpack knows: found by its first bytes, "<Xdmf".
+# No extension tetpack knows: found by its first bytes, "<Xdmf", also after an XML declaration and a
+# DOCTYPE (which VTU's "<?xml" magic would claim otherwise).
 sed '1,2d' "$WORK/hex2.xmf" > "$WORK/hex2.dat"
 convert_checked "$WORK/hex2.dat" "$WORK/hex2_dat.tpk" > /dev/null
+cp "$WORK/hex2.xmf" "$WORK/hex2_decl.dat"
+convert_checked "$WORK/hex2_decl.dat" "$WORK/hex2_decl.tpk" > /dev/null
+"$TPK" info "$WORK/hex2_decl.tpk" | grep -q '"format":"xdmf"' || fail "hex2_decl.dat: not read as XDMF"
 # A quadratic tet (Tetrahedron_10) reduced to its corners, a triangle dropped, in a Mixed topology
 # (codes 38 and 4).
 cat > "$WORK/tet10.xdmf" <<'XML'

@@ -79,6 +79,8 @@ int tpk_import_xdmf(const char *path, tpk_mesh *out, tpk_diag *diag);
 /* The HDF5 files its DataItems name, as tpk_import_xdmf resolves them; none when the XML does not
  * parse (the import then says why). */
 void tpk_import_xdmf_files(const char *path, tpk_import_file_fn each, void *user);
+/* An XML declaration, comments and a DOCTYPE at most before the root element <Xdmf (registry sniff). */
+int tpk_import_xdmf_sniff(const char *head, size_t got);
 /* Same from memory (for fuzzing): XML DataItems only, HDF data refused. */
 int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
@@ -105,6 +107,10 @@ typedef struct tpk_import_format {
     const char *extensions; /* space-separated, compared case-insensitively ("" : only by name) */
     const char *magic;      /* sniffer: the file starts (after blanks) with one of these, '|'-separated;
                                NULL: not recognised by content */
+    /* Optional finer sniffer over the file's first bytes (head[0 .. got)): 1 when they are this format.
+     * Detection asks these before any magic, so a row can claim files a broader magic also matches
+     * (XDMF's "<?xml ... <Xdmf" before VTU's "<?xml"). NULL: none. */
+    int (*sniff)(const char *head, size_t got);
     /* The file reader; NULL for TetGen readings, which go through tpk_import_surface. */
     int (*read)(const char *path, tpk_mesh *out, tpk_diag *diag);
     /* Parses a whole file held in memory, nothing else (no TetGen); NULL: none. Each format that has one
@@ -120,8 +126,8 @@ const tpk_import_format *tpk_import_formats(size_t *count);
 /* The row `--format name` selects (name or alias, any case); where several rows take the name, the
  * one whose extension `path` has (may be NULL). NULL when no row takes it. */
 const tpk_import_format *tpk_import_format_named(const char *name, const char *path);
-/* The row for a file: the first whose extension `path` has, else the first whose magic starts the
- * file. NULL when neither tells (or the file cannot be read). */
+/* The row for a file: the first whose extension `path` has, else the first whose sniff function takes
+ * the file's first bytes, else the first whose magic starts the file. NULL when neither tells (or the file cannot be read). */
 const tpk_import_format *tpk_import_format_detect(const char *path);
 /* The format names (and aliases) as "vtk, vtu, ..." into buf; returns buf. */
 const char *tpk_import_format_names(char *buf, size_t cap);

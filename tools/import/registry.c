@@ -47,7 +47,7 @@ static const tpk_import_format formats[] = {
      .extensions = ".meshb", .read = tpk_import_meshb, .read_memory = tpk_import_meshb_memory,
      .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS},
     {.name = "xdmf", .title = "XDMF 2 and 3 (meshio, FEniCS/dolfinx): XML or HDF5 data, temporal collections",
-     .extensions = ".xdmf .xmf", .magic = "<Xdmf", .read = tpk_import_xdmf, .read_memory = tpk_import_xdmf_memory,
+     .extensions = ".xdmf .xmf", .magic = "<Xdmf", .sniff = tpk_import_xdmf_sniff, .read = tpk_import_xdmf, .read_memory = tpk_import_xdmf_memory,
      .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
     {.name = "stl", .title = "STL closed surface, ASCII or binary (TetGen fills it)", .extensions = ".stl",
      .magic = "solid", .read_memory = tpk_read_stl, .surface_kind = TPK_SURFACE_STL,
@@ -141,12 +141,15 @@ const tpk_import_format *tpk_import_format_detect(const char *path)
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (has_any_extension(path, formats[i].extensions))
             return &formats[i];
-    char head[64] = {0};
+    char head[512] = {0};
     FILE *f = fopen(path, "rb");
     if (!f)
         return NULL;
     size_t got = fread(head, 1, sizeof head - 1, f);
     fclose(f);
+    for (size_t i = 0; i < FORMAT_COUNT; i++)
+        if (formats[i].sniff && formats[i].sniff(head, got))
+            return &formats[i];
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (magic_matches(formats[i].magic, head, got))
             return &formats[i];

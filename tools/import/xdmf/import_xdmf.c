@@ -402,3 +402,31 @@ void tpk_import_xdmf_files(const char *path, tpk_import_file_fn each, void *user
     xdmf_tree_free(r.doc);
     tpk_unmap_file(data, size);
 }
+
+/* After blanks, the end of the first `close` at or after `at`, or `got` when the head ends first. */
+static size_t skip_past(const char *head, size_t got, size_t at, const char *close)
+{
+    size_t n = strlen(close);
+    for (; at + n <= got; at++)
+        if (!memcmp(head + at, close, n))
+            return at + n;
+    return got;
+}
+
+int tpk_import_xdmf_sniff(const char *head, size_t got)
+{
+    size_t at = 0;
+    for (;;) {
+        while (at < got && (head[at] == ' ' || head[at] == '\t' || head[at] == '\r' || head[at] == '\n'))
+            at++;
+        if (got - at >= 4 && !memcmp(head + at, "<!--", 4))
+            at = skip_past(head, got, at + 4, "-->");
+        else if (got - at >= 2 && !memcmp(head + at, "<?", 2))
+            at = skip_past(head, got, at + 2, "?>");
+        else if (got - at >= 2 && !memcmp(head + at, "<!", 2))
+            at = skip_past(head, got, at + 2, ">"); /* a DOCTYPE; dolfinx's has an empty "[]" subset */
+        else
+            return got - at >= 6 && !memcmp(head + at, "<Xdmf", 5) &&
+                   strchr(" \t\r\n>/", head[at + 5]) && head[at + 5];
+    }
+}
