@@ -139,20 +139,22 @@ static int wait_child(pid_t pid, const tpk_tetgen_guard *guard, int *timed_out)
     int status = 0, shown = -1;
     *timed_out = 0;
     for (;;) {
-        pid_t got = waitpid(pid, &status, WNOHANG);
-        if (got == pid || (got < 0 && errno != EINTR))
-            break;
+        /* The line comes before the first wait: a stage that ends before the parent first looks (a
+         * busy machine) still shows it. */
         double spent = seconds_since(&start);
-        if (guard->time_limit > 0 && spent > guard->time_limit && !*timed_out) {
-            kill(pid, SIGKILL);
-            *timed_out = 1;
-        }
         if (guard->progress && (int)spent != shown) {
             shown = (int)spent;
             fprintf(stderr, "\r\033[K[tetpack] TetGen: %s... %d s", guard->what, shown);
             if (guard->time_limit > 0)
                 fprintf(stderr, " (of at most %g)", guard->time_limit);
             fflush(stderr);
+        }
+        pid_t got = waitpid(pid, &status, WNOHANG);
+        if (got == pid || (got < 0 && errno != EINTR))
+            break;
+        if (guard->time_limit > 0 && spent > guard->time_limit && !*timed_out) {
+            kill(pid, SIGKILL);
+            *timed_out = 1;
         }
         nanosleep(&nap, NULL);
         if (nap.tv_nsec < 50000000) /* short runs return quickly, long ones cost no CPU */
