@@ -185,4 +185,7 @@ broken gap "gap.xdmf: Attribute 'u' has no value at time 1 (step 1 of 3)"
 # An xpointer that names nothing.
 sed "s|@GridType='Uniform'|@Name='nomesh'|" "$WORK/dolfinx.xdmf" > "$WORK/dangling.xdmf"
 broken dangling "dangling.xdmf: line 20: <xi:include>: xpointer \"xpointer(/Xdmf/Domain/Grid\[@Name='nomesh'\].*names no element"
+# A relative path in an xpointer (only absolute ones are read).
+sed 's|xpointer(/Xdmf|xpointer(Xdmf|' "$WORK/dolfinx.xdmf" > "$WORK/relative.xdmf"
+broken relative "relative.xdmf: line 20: <xi:include>: path \"Xdmf/Domain/.*\": expected an absolute path starting with '/' at character 1, found 'X'"
 echo "1 passed, 0 failed"

@@ -107,8 +107,8 @@ int xdmf_read_hdf(xdmf_reader *r, const xdmf_node *item, const char *path, const
                   xdmf_values *out)
 {
     (void)path, (void)dataset, (void)want, (void)out;
-    return xdmf_fail(r, item, "HDF data: this tetpack was built without HDF5 (TETPACK_WITH_HDF5=OFF); rebuild it "
-                     "with libhdf5-dev installed");
+    return xdmf_fail(r, item, "HDF data: this tetpack was built without HDF5 (TETPACK_WITH_HDF5=OFF); configure it "
+                     "with -DTETPACK_WITH_HDF5=ON (Debian: libhdf5-dev)");
 }
 
 void xdmf_hdf_close(xdmf_reader *r)

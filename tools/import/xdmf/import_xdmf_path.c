@@ -3,6 +3,7 @@
  * [N] (1-based position among the step's matches under one parent) and [self::A or self::B]. meshio
  * writes //Grid[@Name="mesh"]/ * [self::Topology or self::Geometry] (without the blanks); dolfinx
  * /Xdmf/Domain/Grid[@GridType='Uniform'][1]/ * [...] alike. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -39,8 +40,12 @@ typedef struct path_scan {
 
 static int bad_path(path_scan *s, const char *expected)
 {
-    return xdmf_fail(s->r, s->at, "path \"%.*s\": expected %s at character %d, found %s", (int)(s->end - s->start),
-                     s->start, expected, (int)(s->p - s->start) + 1, s->p < s->end ? "something else" : "its end");
+    char found[8] = "its end";
+    if (s->p < s->end)
+        snprintf(found, sizeof found, "'%c'", *s->p >= 32 && *s->p < 127 ? *s->p : '?');
+    return xdmf_fail(s->r, s->at, "path \"%.*s\": expected %s at character %d, found %s",
+                     (int)(s->end - s->start < 200 ? s->end - s->start : 200), s->start, expected,
+                     (int)(s->p - s->start) + 1, found);
 }
 
 static int is_name_char(char c)
