@@ -35,6 +35,15 @@ assert j["source_cells"] == 1 and j["mirrored_cells"] == 0 and j["vertices"] == 
 assert j["cells_split"]["hexahedron_into_5"] + j["cells_split"]["hexahedron_into_6"] == 1, j
 PYEOF
 "$TPK" info "$WORK/hex2.tpk" | grep -q "height .*range \[0, 1\]" || fail "hex2.tpk: height should span 0..1"
+# dolfinx writes mesh tags as a second Grid of facets on the mesh's Geometry: dropped with a warning.
+sed 's|  </Grid>|  </Grid>\
+  <Grid Name="facet_tags"><xi:include xmlns:xi="http://www.w3.org/2001/XInclude" xpointer="xpointer(/Xdmf/Domain/Grid/Geometry)"/>\
+   <Topology TopologyType="Quadrilateral" NumberOfElements="1"><DataItem Dimensions="1 4">0 3 2 1</DataItem></Topology>\
+   <Attribute Name="facet_tags" Center="Cell"><DataItem Dimensions="1">4</DataItem></Attribute></Grid>|' \
+    "$WORK/hex2.xmf" > "$WORK/tags.xmf"
+convert_checked "$WORK/tags.xmf" "$WORK/tags.tpk" --json > "$WORK/tags.json" 2> "$WORK/err"
+expect_stderr "tags.xmf: line 20: Grid 'facet_tags' has no volume cells (TopologyType Quadrilateral): dropped"
+grep -q '"source_cells":1,' "$WORK/tags.json" || fail "tags.xmf: $(cat "$WORK/tags.json")"
 # No extension tetpack knows: found by its first bytes, "<Xdmf", also after an XML declaration and a
 # DOCTYPE (which VTU's "<?xml" magic would claim otherwise).
 sed '1,2d' "$WORK/hex2.xmf" > "$WORK/hex2.dat"
