@@ -78,6 +78,9 @@ static const tpk_import_format formats[] = {
     {.name = "inp", .aliases = "abaqus calculix", .title = "Abaqus / CalculiX .inp: solids, element sets, includes",
      .extensions = ".inp", .magic = "*HEADING|*NODE", .read = tpk_import_inp, .read_memory = tpk_import_inp_memory,
      .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_CELL_FIELDS | GZ},
+    {.name = "xdmf", .title = "XDMF 2 and 3 (meshio, FEniCS/dolfinx): XML or HDF5 data, temporal collections",
+     .extensions = ".xdmf .xmf", .magic = "<Xdmf", .sniff = tpk_import_xdmf_sniff, .read = tpk_import_xdmf,
+     .read_memory = tpk_import_xdmf_memory, .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
     {.name = "stl", .title = "STL closed surface, ASCII or binary (TetGen fills it)", .extensions = ".stl",
      .magic = "solid", .read_memory = tpk_read_stl, .surface_kind = TPK_SURFACE_STL,
      .surface_mode = TPK_SURFACE_FACES, .supports = TPK_FORMAT_SURFACE},
@@ -182,6 +185,9 @@ static const tpk_import_format *detect_row(const char *name, const char *head, s
 {
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (has_any_extension(name, formats[i].extensions) && sniff_passes(&formats[i], head, got))
+            return &formats[i];
+    for (size_t i = 0; i < FORMAT_COUNT; i++)
+        if (formats[i].sniff && formats[i].sniff(head, got))
             return &formats[i];
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (magic_matches(formats[i].magic, head, got) && sniff_passes(&formats[i], head, got))
@@ -370,4 +376,6 @@ void tpk_import_input_files(const char *path, const char *format, tpk_import_fil
         tpk_import_tetgen_files(path, each, user);
     else if (row && row->read == tpk_import_pvd)
         tpk_import_pvd_files(path, each, user);
+    else if (row && row->read == tpk_import_xdmf)
+        tpk_import_xdmf_files(path, each, user);
 }
