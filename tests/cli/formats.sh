@@ -6,7 +6,7 @@ BIN=$(dirname "$TPK")
 "$TPK" formats > "$WORK/table"
 "$TPK" formats --json > "$WORK/formats.json"
 names=$("$PY" -c "import json; print(' '.join(f['name'] for f in json.load(open('$WORK/formats.json'))['formats']))")
-for want in vtk vtu pvd gmsh tetgen medit meshb ugrid exodus stl off ply csv surface points; do
+for want in vtk vtu pvd gmsh tetgen medit meshb ugrid inp dolfin exodus stl off ply csv surface points; do
     case " $names " in *" $want "*) ;; *) fail "formats --json lacks $want (has: $names)" ;; esac
     grep -q "^$want " "$WORK/table" || fail "the formats table lacks $want"
 done
@@ -24,7 +24,11 @@ for r in fuzzed:
 for r in rows:
     assert r["extensions"] or r["reader"] == "tetgen", r
     assert set(r["supports"]) <= {"tets", "hexahedra", "wedges", "pyramids", "voxels", "polyhedra", "surface",
-                                  "point-cloud", "point-fields", "cell-fields", "time-steps"}, r
+                                  "point-cloud", "point-fields", "cell-fields", "time-steps", "gzip"}, r
+    # FILE.gz goes to the memory reader: only rows that have one (TetGen's needs two files) say gzip.
+    if "gzip" in r["supports"]:
+        assert r["fuzz_target"] and r["reader"] == "file" and r["name"] != "tetgen", r
+assert {r["name"] for r in rows if "gzip" in r["supports"]} >= {"vtk", "vtu", "gmsh", "medit", "inp"}, rows
 PYEOF
 
 # The README's list of inputs names every extension of the registry (the list is prose, kept by hand).
@@ -56,7 +60,18 @@ convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/m.tpk" --f
 convert_checked "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$WORK/n.tpk" --format meshb --quiet
 same "$WORK/m.tpk" "$WORK/n.tpk" "--format medit on a .meshb differs from --format meshb"
 expect_exit 2 "$TPK" convert "$WORK/cylinder.dat" "$WORK/c.tpk" --format obj
-expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, vtu, pvd, gmsh, medit, ugrid, exodus, meshb"
+# The list follows the registry's order; optional rows (cgns: TETPACK_WITH_CGNS) may sit between.
+expect_stderr "unknown input format 'obj'; supported: vtk, tetgen, dolfin, vtu, pvd, gmsh, medit, ugrid, exodus, "
+expect_stderr ", stl, off, ply, csv, surface, points"
+# CGNS: its HDF5 signature is Exodus's too, so the extension must pick its row, which reads the file
+# when built (the row then carries cells) and says why not otherwise.
+grep -q "^cgns " "$WORK/table" || fail "the formats table lacks cgns"
+if grep "^cgns " "$WORK/table" | grep -q " tets "; then
+    convert_checked "$DATA/seacas/generated.cgns" "$WORK/g.tpk" --quiet
+else
+    expect_exit 2 "$TPK" convert "$DATA/seacas/generated.cgns" "$WORK/g.tpk"
+    expect_stderr "built without CGNS (TETPACK_WITH_CGNS=OFF)"
+fi
 # Detection by content when the extension says nothing: VTK legacy and Gmsh by their first bytes.
 convert_checked "$WORK/cylinder.dat" "$WORK/d.tpk" --quiet
 same "$WORK/a.tpk" "$WORK/d.tpk" "content detection of VTK legacy"

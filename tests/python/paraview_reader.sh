@@ -1,7 +1,7 @@
 #!/bin/sh
 # ctest python.paraview_reader: run pv_reader.py under pvpython, headless. Exit 77 (a visible skip) when
-# ParaView is not installed: ./dev does not install it (540 MB, and python3-paraview conflicts with the
-# python3-vtk9 that the VTK tests use). Debian's ParaView renders through GLX only, hence Xvfb.
+# ParaView is not installed (./dev installs it; a build elsewhere may lack it). Debian's ParaView renders
+# through GLX only, hence Xvfb.
 # usage: paraview_reader.sh DATA_DIR OUT_DIR
 set -e
 if ! command -v pvpython >/dev/null 2>&1; then

@@ -1,4 +1,4 @@
-"""f.to_vtk() and f.shell_to_vtk() (Debian's python3-vtk9) hold what `tetpack export` writes."""
+"""f.to_vtk() and f.shell_to_vtk() (Debian's python3-vtk9, or python3-paraview's own VTK) hold what `tetpack export` writes."""
 import unittest
 
 import numpy as np

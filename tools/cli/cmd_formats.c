@@ -11,8 +11,8 @@ static const char formats_help[] =
     "\n"
     "Lists every input format convert and check read: the name --format takes, its extensions, the\n"
     "first bytes that identify it when the extension does not, and what it carries (cell kinds,\n"
-    "point and cell fields, time steps). Detection tries the extensions in this order, then the\n"
-    "first bytes.\n"
+    "point and cell fields, time steps; gzip: FILE.EXT.gz is read too, inflated in memory). Detection\n"
+    "tries the extensions in this order, then the first bytes.\n"
     "\n"
     "  --json   one JSON object: {\"formats\": [{name, aliases, title, extensions, magic, supports,\n"
     "           reader (\"file\" or \"tetgen\"), fuzz_target (or null)}]}\n";

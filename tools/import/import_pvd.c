@@ -80,16 +80,6 @@ static int by_time(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Same points and cells as the first step? */
-static int same_mesh(const tpk_mesh *a, const tpk_mesh *b)
-{
-    return a->point_count == b->point_count && a->cell_count == b->cell_count &&
-           !memcmp(a->points, b->points, sizeof *a->points * 3 * (size_t)a->point_count) &&
-           !memcmp(a->cell_types, b->cell_types, (size_t)a->cell_count) &&
-           !memcmp(a->cell_offsets, b->cell_offsets, sizeof *a->cell_offsets * (size_t)(a->cell_count + 1)) &&
-           !memcmp(a->cell_conn, b->cell_conn, sizeof *a->cell_conn * (size_t)a->cell_offsets[a->cell_count]);
-}
-
 /* Append step s of every field of `step` to the matching field of `out` (grown to `steps` steps). */
 static int merge_fields(tpk_mesh *out, const tpk_mesh *step, int s, int steps, const char *file, tpk_diag *diag)
 {
@@ -196,7 +186,7 @@ int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag)
         }
         if (s == 0)
             continue;
-        if (!same_mesh(out, &step))
+        if (!tpk_mesh_same_cells(out, &step))
             rc = tpk_diag_fail(diag, "%s: step %d (%s) holds a different mesh than the first step; a series "
                                      "must keep its points and cells", path, s, file);
         else

@@ -65,10 +65,45 @@ int tpk_import_gmsh_memory(const char *name, const char *data, size_t size, tpk_
 int tpk_import_ugrid(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
+/* Abaqus / CalculiX .inp: *NODE, *ELEMENT (solids C3D4/6/8/10/15/20/27 and variants, higher-order ones
+ * reduced to corners; surfaces, shells and beams dropped), *ELSET and ELSET= as the cell field "elset"
+ * (set numbers from 1 in the order the names first appear), *INCLUDE relative to the including file.
+ * The memory form resolves includes relative to `name`. */
+int tpk_import_inp(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_inp_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+
+/* Legacy DOLFIN XML (FEniCS; meshio's dolfin-xml): tetrahedron or hexahedron meshes (hexahedra from
+ * DOLFIN's lexicographic vertex order to VTK's), <domains> value collections of cells as cell fields.
+ * tpk_sniff_dolfin: "<dolfin" is among the first bytes. */
+int tpk_import_dolfin(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_dolfin_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+int tpk_sniff_dolfin(const char *head, size_t n);
+
 /* Exodus II (.exo, .e, .g, .ex2; netCDF classic or netCDF-4) through the Exodus library: tetra, hex,
  * wedge and pyramid blocks (higher-order reduced to corners), nodal and element variables with every
  * time step. */
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
+
+/* CGNS (.cgns; HDF5 or ADF) through the CGNS library, file only (the library reads files, so no memory
+ * reader and no fuzz target): the first 3-D base, its zones merged (each keeps its vertices);
+ * unstructured TETRA, PYRA, PENTA, HEXA (higher-order reduced to corners), MIXED and NGON_n/NFACE_n
+ * (polyhedra) sections, structured zones as hexahedra; Vertex and CellCenter FlowSolutions as point and
+ * cell fields, with a step per BaseIterativeData step where ZoneIterativeData points at them. Built
+ * with TETPACK_WITH_CGNS (TPK_WITH_CGNS). */
+int tpk_import_cgns(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* XDMF (.xdmf, .xmf; Xdmf 2 and 3) as meshio, FEniCS/dolfinx and many solvers write it: the Uniform
+ * Grid with volume cells (Tetrahedron, Pyramid, Wedge, Hexahedron, Mixed; higher-order types reduced to
+ * corners; surfaces dropped), Geometry XYZ, XY or X_Y_Z, Node and Cell Attributes as fields; a Temporal
+ * Collection's grids as time steps (one mesh, by XInclude or Reference, or identical). DataItems in XML
+ * text, or in HDF5 (file.h5:/dataset, relative to the .xdmf file; needs TETPACK_WITH_HDF5). */
+int tpk_import_xdmf(const char *path, tpk_mesh *out, tpk_diag *diag);
+/* The HDF5 files its DataItems name, as tpk_import_xdmf resolves them; none when the XML does not
+ * parse (the import then says why). */
+void tpk_import_xdmf_files(const char *path, tpk_import_file_fn each, void *user);
+/* An XML declaration, comments and a DOCTYPE at most before the root element <Xdmf (registry sniff). */
+int tpk_import_xdmf_sniff(const char *head, size_t got);
+/* Same from memory (for fuzzing): XML DataItems only, HDF data refused. */
+int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
 /* What a format carries into the converter (tetpack formats prints these). */
 enum {
@@ -82,8 +117,12 @@ enum {
     TPK_FORMAT_POINT_CLOUD = 1u << 7,  /* points, tetrahedralized (Delaunay) by TetGen */
     TPK_FORMAT_POINT_FIELDS = 1u << 8,
     TPK_FORMAT_CELL_FIELDS = 1u << 9,
-    TPK_FORMAT_TIME_STEPS = 1u << 10
+    TPK_FORMAT_TIME_STEPS = 1u << 10,
+    TPK_FORMAT_GZIP = 1u << 11         /* FILE.<ext>.gz is read too: inflated in memory for read_memory */
 };
+
+/* How many first bytes detection reads for magic and sniff. */
+#define TPK_IMPORT_HEAD_BYTES 512
 
 /* One row of the registry. */
 typedef struct tpk_import_format {
@@ -93,6 +132,11 @@ typedef struct tpk_import_format {
     const char *extensions; /* space-separated, compared case-insensitively ("" : only by name) */
     const char *magic;      /* sniffer: the file starts (after blanks) with one of these, '|'-separated;
                                NULL: not recognised by content */
+    /* NULL, or a check of the first bytes (head[0 .. n), up to TPK_IMPORT_HEAD_BYTES): a match by extension
+     * or magic must also pass it (for generic extensions and magic shared with other rows: ".xml",
+     * "<?xml"), and detection asks it before any magic, so a row claims the files it recognises (XDMF's
+     * "<?xml ... <Xdmf" before VTU's "<?xml"). */
+    int (*sniff)(const char *head, size_t n);
     /* The file reader; NULL for TetGen readings, which go through tpk_import_surface. */
     int (*read)(const char *path, tpk_mesh *out, tpk_diag *diag);
     /* Parses a whole file held in memory, nothing else (no TetGen); NULL: none. Each format that has one
@@ -108,8 +152,10 @@ const tpk_import_format *tpk_import_formats(size_t *count);
 /* The row `--format name` selects (name or alias, any case); where several rows take the name, the
  * one whose extension `path` has (may be NULL). NULL when no row takes it. */
 const tpk_import_format *tpk_import_format_named(const char *name, const char *path);
-/* The row for a file: the first whose extension `path` has, else the first whose magic starts the
- * file. NULL when neither tells (or the file cannot be read). */
+/* The row for a file: the first whose extension `path` has (and whose sniff, if any, passes), else the
+ * first whose sniff takes the file's first bytes, else the first whose magic starts the file. NULL when
+ * none tells (or the file cannot be read). For FILE.gz, the same on the name without ".gz" and the
+ * inflated first bytes. */
 const tpk_import_format *tpk_import_format_detect(const char *path);
 /* The format names (and aliases) as "vtk, vtu, ..." into buf; returns buf. */
 const char *tpk_import_format_names(char *buf, size_t cap);
@@ -118,13 +164,15 @@ const char *tpk_import_format_supports(unsigned supports, char *buf, size_t cap)
 
 /* Every file that reading `path` (as tpk_import_any_with would, `format` forcing a row or NULL) opens,
  * each passed to `each`: `path` itself first, then TetGen's .node and .ele (from either file or their
- * stem), a .pvd's pieces; other formats are one file. Files need not exist. For refusing an output that
- * would replace an input (base/output_file.h). */
+ * stem), a .pvd's pieces, an XDMF file's HDF5 files; other formats are one file. Files need not exist.
+ * For refusing an output that would replace an input (base/output_file.h). */
 void tpk_import_input_files(const char *path, const char *format, tpk_import_file_fn each, void *user);
 
 /* Pick the importer from the extension (and the file's first bytes); format may force one by a
  * registry name (tpk_import_format_named). A TetGen stem (no file, but STEM.node exists) reads as
- * TetGen. */
+ * TetGen. A path ending in ".gz" is inflated in memory (gzip_input.h) and read by the memory reader of
+ * the row its inner name or content picks, when that row has TPK_FORMAT_GZIP; messages name the .gz
+ * file, with places in the inflated bytes. */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
 /* The same with TetGen's settings for surfaces (NULL: defaults). */
 struct tpk_tetgen_options;

@@ -5,47 +5,82 @@
  * inside a row: tests/fuzz/CMakeLists.txt reads the rows that have a .read_memory to make the fuzz
  * targets. */
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include "gzip_input.h"
 #include "importers.h"
 #include "surface/surface.h"
 
 #define VOLUME_CELLS (TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_PYRAMIDS)
 #define FIELDS (TPK_FORMAT_POINT_FIELDS | TPK_FORMAT_CELL_FIELDS)
+#define GZ TPK_FORMAT_GZIP
 
-/* Detection takes the first row whose extension matches, then the first whose magic matches: the order
- * below is the detection order. */
+#ifndef TPK_WITH_CGNS
+/* A .cgns file still finds its row, which says why it cannot be read, rather than Exodus's. */
+static int cgns_not_built(const char *path, tpk_mesh *out, tpk_diag *diag)
+{
+    memset(out, 0, sizeof *out);
+    return tpk_diag_fail(diag, "%s: this tetpack was built without CGNS (TETPACK_WITH_CGNS=OFF); install the CGNS "
+                         "library (Debian: libcgns-dev) and build again", path);
+}
+#endif
+
+/* Detection takes the first row whose extension matches, then the first whose magic matches (either
+ * only where the row's sniff, if any, accepts the first bytes): the order below is the detection order.
+ * DOLFIN comes before VTU: both may start "<?xml", DOLFIN's sniff then looks for "<dolfin". */
 static const tpk_import_format formats[] = {
     {.name = "vtk", .aliases = "vtk-legacy", .title = "VTK legacy UNSTRUCTURED_GRID, ASCII or BINARY",
      .extensions = ".vtk", .magic = "# vtk DataFile", .read = tpk_import_vtk_legacy,
      .read_memory = tpk_import_vtk_legacy_memory,
-     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS},
+     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | GZ},
     {.name = "tetgen", .title = "TetGen .node/.ele (a path may name either file or their stem)",
      .extensions = ".node .ele", .read = tpk_import_tetgen, .read_memory = tpk_import_tetgen_bundle_memory,
      .supports = TPK_FORMAT_TETS | FIELDS},
+    {.name = "dolfin", .aliases = "dolfin-xml fenics", .title = "legacy DOLFIN XML (FEniCS): tetrahedra, hexahedra, domains",
+     .extensions = ".xml", .magic = "<dolfin|<?xml", .sniff = tpk_sniff_dolfin, .read = tpk_import_dolfin,
+     .read_memory = tpk_import_dolfin_memory, .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_CELL_FIELDS | GZ},
     {.name = "vtu", .title = "VTK XML UnstructuredGrid: ascii, base64, appended raw, zlib",
      .extensions = ".vtu", .magic = "<VTKFile|<?xml", .read = tpk_import_vtu, .read_memory = tpk_import_vtu_memory,
-     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS},
+     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | GZ},
     {.name = "pvd", .title = "ParaView series: one .vtu per time step", .extensions = ".pvd",
      .read = tpk_import_pvd,
      .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
     {.name = "gmsh", .title = "Gmsh .msh 2.2 and 4.1, ASCII and binary", .extensions = ".msh",
      .magic = "$MeshFormat", .read = tpk_import_gmsh, .read_memory = tpk_import_gmsh_memory,
-     .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+     .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS | GZ},
     {.name = "medit", .title = "Medit .mesh (ASCII; INRIA, MMG, TetWild, refine, sfepy)", .extensions = ".mesh",
      .magic = "MeshVersionFormatted", .read = tpk_import_medit, .read_memory = tpk_import_medit_memory,
-     .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS},
+     .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS | GZ},
     {.name = "ugrid", .title = "NASA/AFLR3 UGRID: ASCII, big- and little-endian binary",
      .extensions = ".ugrid .b8.ugrid .lb8.ugrid", .read = tpk_import_ugrid, .read_memory = tpk_import_ugrid_memory,
-     .supports = VOLUME_CELLS},
+     .supports = VOLUME_CELLS | GZ},
     {.name = "exodus", .title = "Exodus II (netCDF classic or netCDF-4), every time step",
      .extensions = ".exo .e .g .ex2", .magic = "CDF\x01|CDF\x02|\x89HDF", .read = tpk_import_exodus,
      .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+#ifdef TPK_WITH_CGNS
+    /* After exodus: its netCDF-4 files share the HDF5 signature, so an HDF5 file without an extension
+     * reads as Exodus; .cgns is told by its extension, ADF-format CGNS by its header (the ADF library
+     * writes its "@(#)" with the high bits set). */
+    {.name = "cgns", .title = "CGNS (HDF5 or ADF): unstructured, structured and polyhedral zones, every step",
+     .extensions = ".cgns", .magic = "\xc0\xa8\xa3\xa9" "ADF Database|@(#)ADF Database", .read = tpk_import_cgns,
+     .supports = VOLUME_CELLS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
+#else
+    {.name = "cgns", .title = "CGNS: not in this build (TETPACK_WITH_CGNS=OFF)", .extensions = ".cgns",
+     .read = cgns_not_built},
+#endif
     {.name = "meshb", .aliases = "medit", .title = "Medit binary .meshb (libMeshb 1-4, either byte order)",
      .extensions = ".meshb", .read = tpk_import_meshb, .read_memory = tpk_import_meshb_memory,
-     .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS},
+     .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | FIELDS | GZ},
+    {.name = "inp", .aliases = "abaqus calculix", .title = "Abaqus / CalculiX .inp: solids, element sets, includes",
+     .extensions = ".inp", .magic = "*HEADING|*NODE", .read = tpk_import_inp, .read_memory = tpk_import_inp_memory,
+     .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_CELL_FIELDS | GZ},
+    {.name = "xdmf", .title = "XDMF 2 and 3 (meshio, FEniCS/dolfinx): XML or HDF5 data, temporal collections",
+     .extensions = ".xdmf .xmf", .magic = "<Xdmf", .sniff = tpk_import_xdmf_sniff, .read = tpk_import_xdmf,
+     .read_memory = tpk_import_xdmf_memory, .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
     {.name = "stl", .title = "STL closed surface, ASCII or binary (TetGen fills it)", .extensions = ".stl",
      .magic = "solid", .read_memory = tpk_read_stl, .surface_kind = TPK_SURFACE_STL,
      .surface_mode = TPK_SURFACE_FACES, .supports = TPK_FORMAT_SURFACE},
@@ -133,21 +168,48 @@ const tpk_import_format *tpk_import_format_named(const char *name, const char *p
     return first;
 }
 
-const tpk_import_format *tpk_import_format_detect(const char *path)
+/* `path` ends in ".gz" (any case) after something. */
+static int gzipped(const char *path)
+{
+    size_t n = strlen(path);
+    return n > 3 && strcasecmp(path + n - 3, ".gz") == 0;
+}
+
+static int sniff_passes(const tpk_import_format *row, const char *head, size_t got)
+{
+    return !row->sniff || row->sniff(head, got);
+}
+
+/* The row for a file named `name` (its extension) starting with head[0..got). */
+static const tpk_import_format *detect_row(const char *name, const char *head, size_t got)
 {
     for (size_t i = 0; i < FORMAT_COUNT; i++)
-        if (has_any_extension(path, formats[i].extensions))
+        if (has_any_extension(name, formats[i].extensions) && sniff_passes(&formats[i], head, got))
             return &formats[i];
-    char head[64] = {0};
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return NULL;
-    size_t got = fread(head, 1, sizeof head - 1, f);
-    fclose(f);
     for (size_t i = 0; i < FORMAT_COUNT; i++)
-        if (magic_matches(formats[i].magic, head, got))
+        if (formats[i].sniff && formats[i].sniff(head, got))
+            return &formats[i];
+    for (size_t i = 0; i < FORMAT_COUNT; i++)
+        if (magic_matches(formats[i].magic, head, got) && sniff_passes(&formats[i], head, got))
             return &formats[i];
     return NULL;
+}
+
+const tpk_import_format *tpk_import_format_detect(const char *path)
+{
+    char head[TPK_IMPORT_HEAD_BYTES + 1] = {0};
+    size_t got = 0;
+    if (gzipped(path)) {
+        char inner[4096];
+        snprintf(inner, sizeof inner, "%.*s", (int)strlen(path) - 3, path);
+        return detect_row(inner, head, tpk_gzip_head(path, head, TPK_IMPORT_HEAD_BYTES));
+    }
+    FILE *f = fopen(path, "rb");
+    if (f) {
+        got = fread(head, 1, TPK_IMPORT_HEAD_BYTES, f);
+        fclose(f);
+    }
+    return detect_row(path, head, got);
 }
 
 const char *tpk_import_format_names(char *buf, size_t cap)
@@ -164,7 +226,8 @@ const char *tpk_import_format_names(char *buf, size_t cap)
 const char *tpk_import_format_supports(unsigned supports, char *buf, size_t cap)
 {
     static const char *const words[] = {"tets", "hexahedra", "wedges", "pyramids", "voxels", "polyhedra",
-                                        "surface", "point-cloud", "point-fields", "cell-fields", "time-steps"};
+                                        "surface", "point-cloud", "point-fields", "cell-fields", "time-steps",
+                                        "gzip"};
     size_t used = 0;
     buf[0] = 0;
     for (size_t b = 0; b < sizeof words / sizeof words[0] && used < cap; b++) {
@@ -190,6 +253,71 @@ static int import_with(const tpk_import_format *row, int forced, const char *pat
     return tpk_import_surface(path, TPK_SURFACE_UNKNOWN, TPK_SURFACE_AUTO, tetgen, out, diag);
 }
 
+/* "inner..." as "inner.gz..." into buf: messages about the inflated bytes name the file read. */
+static const char *name_gz(const char *text, const char *inner, char *buf, size_t cap)
+{
+    size_t n = strlen(inner), all = strlen(text);
+    if (strncmp(text, inner, n) != 0 || all + 4 > cap)
+        return text;
+    memcpy(buf, text, n);
+    memcpy(buf + n, ".gz", 3);
+    memcpy(buf + n + 3, text + n, all - n + 1);
+    return buf;
+}
+
+/* Warnings of the memory reader, renamed, to where the caller's would go. */
+typedef struct gz_warnings {
+    tpk_diag *diag;
+    void (*warn)(void *user, const char *text);
+    void *user;
+    const char *inner;
+} gz_warnings;
+
+static void warn_gz(void *user, const char *text)
+{
+    gz_warnings *w = user;
+    char renamed[1100];
+    text = name_gz(text, w->inner, renamed, sizeof renamed);
+    if (w->warn)
+        w->warn(w->user, text);
+    else
+        fprintf(stderr, "warning: %s\n", text);
+}
+
+/* FILE.gz: inflated, then read by the row's memory reader under the name without ".gz" (UGRID takes its
+ * encoding from it, .inp its includes' folder); messages then name the .gz file. */
+static int import_gzip(const tpk_import_format *row, const char *path, tpk_mesh *out, tpk_diag *diag)
+{
+    char inner[4096];
+    memset(out, 0, sizeof *out);
+    if (!row)
+        return tpk_diag_fail(diag, "%s: cannot tell the input format from the name without .gz or the inflated "
+                                   "first bytes (force one with --format; tetpack formats lists them)", path);
+    if (!(row->supports & TPK_FORMAT_GZIP) || !row->read_memory)
+        return tpk_diag_fail(diag, "%s: %s input is not read compressed (tetpack formats lists the formats whose "
+                                   "CARRIES say gzip); gunzip it first", path, row->name);
+    char *data;
+    size_t size;
+    if (tpk_gzip_inflate_file(path, 0, &data, &size, diag) != 0)
+        return -1;
+    snprintf(inner, sizeof inner, "%.*s", (int)strlen(path) - 3, path);
+    gz_warnings w = {diag, diag ? diag->warn : NULL, diag ? diag->warn_user : NULL, inner};
+    if (diag) {
+        diag->warn = warn_gz;
+        diag->warn_user = &w;
+    }
+    int rc = row->read_memory(inner, data, size, out, diag);
+    free(data);
+    if (diag) {
+        diag->warn = w.warn;
+        diag->warn_user = w.user;
+    }
+    char renamed[sizeof diag->message];
+    if (rc != 0 && diag)
+        snprintf(diag->message, sizeof diag->message, "%s", name_gz(diag->message, inner, renamed, sizeof renamed));
+    return rc;
+}
+
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag)
 {
     return tpk_import_any_with(path, format, NULL, out, diag);
@@ -203,6 +331,8 @@ int tpk_import_any_with(const char *path, const char *format, const struct tpk_t
     char names[512];
     if (format && *format && strcasecmp(format, "auto") != 0) {
         const tpk_import_format *row = tpk_import_format_named(format, path);
+        if (row && gzipped(path))
+            return import_gzip(row, path, out, diag);
         if (row)
             return import_with(row, 1, path, tetgen, out, diag);
         memset(out, 0, sizeof *out);
@@ -210,6 +340,8 @@ int tpk_import_any_with(const char *path, const char *format, const struct tpk_t
                              path, format, tpk_import_format_names(names, sizeof names));
     }
     const tpk_import_format *row = tpk_import_format_detect(path);
+    if (gzipped(path) && access(path, F_OK) == 0)
+        return import_gzip(row, path, out, diag);
     if (row)
         return import_with(row, 0, path, tetgen, out, diag);
     memset(out, 0, sizeof *out);
@@ -238,8 +370,12 @@ void tpk_import_input_files(const char *path, const char *format, tpk_import_fil
                                        ? tpk_import_format_named(format, path)
                                        : tpk_import_format_detect(path);
     struct stat st;
+    if (gzipped(path)) /* one file: the compressed forms of TetGen and .pvd are refused */
+        return;
     if ((row && row->read == tpk_import_tetgen) || (!row && stat(path, &st) != 0)) /* a TetGen stem */
         tpk_import_tetgen_files(path, each, user);
     else if (row && row->read == tpk_import_pvd)
         tpk_import_pvd_files(path, each, user);
+    else if (row && row->read == tpk_import_xdmf)
+        tpk_import_xdmf_files(path, each, user);
 }

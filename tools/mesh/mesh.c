@@ -27,6 +27,15 @@ void tpk_mesh_free(tpk_mesh *mesh)
     memset(mesh, 0, sizeof *mesh);
 }
 
+int tpk_mesh_same_cells(const tpk_mesh *a, const tpk_mesh *b)
+{
+    return a->point_count == b->point_count && a->cell_count == b->cell_count &&
+           !memcmp(a->points, b->points, sizeof *a->points * 3 * (size_t)a->point_count) &&
+           !memcmp(a->cell_types, b->cell_types, (size_t)a->cell_count) &&
+           !memcmp(a->cell_offsets, b->cell_offsets, sizeof *a->cell_offsets * (size_t)(a->cell_count + 1)) &&
+           !memcmp(a->cell_conn, b->cell_conn, sizeof *a->cell_conn * (size_t)a->cell_offsets[a->cell_count]);
+}
+
 int tpk_mesh_add_field(tpk_mesh *mesh, const char *name, int association, int components,
                        int step_count, float *values)
 {

@@ -47,6 +47,9 @@ typedef struct tpk_mesh {
 } tpk_mesh;
 
 void tpk_mesh_free(tpk_mesh *mesh);
+/* The same points (bit for bit) and cells (types and connectivity) in both: the mesh of a time series'
+ * steps. Fields are not compared. */
+int tpk_mesh_same_cells(const tpk_mesh *a, const tpk_mesh *b);
 /* qsort/bsearch order of int32 ids (vertex or cell ids), ascending. */
 int tpk_compare_int32(const void *a, const void *b);
 /* Append a field; takes ownership of values. Returns 0 or -1 on allocation failure. */

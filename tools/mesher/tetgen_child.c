@@ -139,8 +139,8 @@ static int wait_child(pid_t pid, const tpk_tetgen_guard *guard, int *timed_out)
     int status = 0, shown = -1;
     *timed_out = 0;
     for (;;) {
+        /* The progress line first, so a stage that ends at once still says it ran. */
         double spent = seconds_since(&start);
-        /* Shown before the first wait: a child that ends before it (a loaded machine) still gets its line. */
         if (guard->progress && (int)spent != shown) {
             shown = (int)spent;
             fprintf(stderr, "\r\033[K[tetpack] TetGen: %s... %d s", guard->what, shown);

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "import_vtu_internal.h"
+#include "import/xml_input.h"
 #include "base/text_scan.h"
 
 static long cur_line(vtu_reader *r)
@@ -383,32 +384,7 @@ int vtu_parse_xml(vtu_reader *r)
     XML_SetElementHandler(r->parser, on_start, on_end);
     XML_SetCharacterDataHandler(r->parser, on_text);
     XML_SetStartDoctypeDeclHandler(r->parser, on_doctype);
-    size_t pos = 0;
-    const size_t chunk = (size_t)1 << 30;
-    int rc = 0;
-    do {
-        size_t n = xml_len - pos < chunk ? xml_len - pos : chunk;
-        int last = pos + n == xml_len && !partial;
-        if (XML_Parse(r->parser, (const char *)r->data + pos, (int)n, last) == XML_STATUS_ERROR) {
-            if (!r->failed) {
-                long line = (long)XML_GetCurrentLineNumber(r->parser);
-                long col = (long)XML_GetCurrentColumnNumber(r->parser);
-                enum XML_Error e = XML_GetErrorCode(r->parser);
-                r->failed = 1;
-                tpk_diag_fail(r->diag, "%s: line %ld, column %ld: expected well-formed XML, found an error: %s%s", r->name,
-                              line, col, XML_ErrorString(e),
-                              e == XML_ERROR_NO_ELEMENTS || e == XML_ERROR_UNCLOSED_TOKEN ||
-                                      e == XML_ERROR_PARTIAL_CHAR
-                                  ? " (truncated file?)"
-                                  : "");
-            }
-            rc = -1;
-            break;
-        }
-        pos += n;
-    } while (pos < xml_len);
-    if (r->failed)
-        rc = -1;
+    int rc = tpk_xml_parse(r->parser, r->name, (const char *)r->data, xml_len, !partial, &r->failed, r->diag);
     XML_ParserFree(r->parser);
     r->parser = NULL;
     if (rc == 0 && partial && !r->appended_seen)

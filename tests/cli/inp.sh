@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# Abaqus .inp files written by real tools. gmsh writes the boundary-layer mesh (tests/cli/sphere_bl.geo)
+# as C3D4/C3D6/C3D8, and as C3D10/C3D15/C3D20 when second order: no cell may come out mirrored (the
+# node-order map is right; gmsh's own .vtk of this mesh has every prism mirrored, tests/cli/folds.sh),
+# the second-order file gives the same tets. meshio writes sfepy's meshes (C3D8RH with an *ELSET, C3D4):
+# the same tets as converting the .mesh itself; read through an *INCLUDE from another folder too.
+source "$(dirname "$0")/common.sh" "$@"
+command -v gmsh > /dev/null || fail "gmsh not installed (./dev deps installs it)"
+
+summary() { # the --json fields the asserts below use, as one line
+    "$PY" -c "import json,sys; d=json.load(open(sys.argv[1])); s=d['cells_split']; print(d['tets'], d['mirrored_cells'], s['tetra'], s['wedge_into_3'], s['hexahedron_into_5']+s['hexahedron_into_6'], d['fields'])" "$1"
+}
+
+# The mesh has folded faces of its own (tests/cli/folds.sh): cut them to convert.
+gmsh -3 -nt 1 "$SRC/tests/cli/sphere_bl.geo" -format inp -o "$WORK/bl.inp" > "$WORK/gmsh.log" 2>&1 ||
+    { tail "$WORK/gmsh.log"; fail "gmsh failed"; }
+gmsh -3 -nt 1 -order 2 -string "Mesh.SecondOrderIncomplete=1;" "$SRC/tests/cli/sphere_bl.geo" -format inp \
+    -o "$WORK/bl2.inp" > "$WORK/gmsh.log" 2>&1 || { tail "$WORK/gmsh.log"; fail "gmsh failed (order 2)"; }
+grep -q "type=C3D6," "$WORK/bl.inp" && grep -q "type=C3D20," "$WORK/bl2.inp" || fail "gmsh wrote other element types"
+convert_checked "$WORK/bl.inp" "$WORK/bl.tpk" --cut-folds --field elset --json > "$WORK/bl.json" 2> "$WORK/err"
+convert_checked "$WORK/bl2.inp" "$WORK/bl2.tpk" --cut-folds --field elset --json > "$WORK/bl2.json" 2> "$WORK/err"
+read -r tets mirrored tetra wedges hexes fields < <(summary "$WORK/bl.json")
+[ "$mirrored" -eq 0 ] || fail "bl.inp: $mirrored cells mirrored: the C3D4/C3D6/C3D8 node order is wrong"
+[ "$tetra" -gt 0 ] && [ "$wedges" -gt 0 ] && [ "$hexes" -gt 0 ] || fail "bl.inp: not every solid kind read"
+[ "$fields" -eq 1 ] || fail "bl.inp: no elset field"
+[ "$(summary "$WORK/bl2.json")" = "$tets 0 $tetra $wedges $hexes 1" ] ||
+    fail "bl2.inp (second order) differs: $(summary "$WORK/bl2.json") vs $tets 0 $tetra $wedges $hexes 1"
+grep -q "dropped [0-9]* elements that are not solids" "$WORK/err" || fail "the surface elements were not counted"
+# Gzipped: the same mesh, and the warning names the file read.
+gzip -c "$WORK/bl.inp" > "$WORK/blz.inp.gz"
+convert_checked "$WORK/blz.inp.gz" "$WORK/blz.tpk" --cut-folds --field elset --json > "$WORK/blz.json" 2> "$WORK/err"
+[ "$(summary "$WORK/blz.json")" = "$(summary "$WORK/bl.json")" ] || fail "blz.inp.gz differs from bl.inp"
+grep -q "warning: .*blz.inp.gz: dropped [0-9]* elements" "$WORK/err" || { cat "$WORK/err"; fail "the warning names no .gz"; }
+
+# meshio: hexahedra with an element set, and tets; the same tets as the .mesh gives.
+"$PY" - "$DATA/sfepy" "$WORK" <<'PYEOF'
+import sys, meshio, numpy as np
+src, work = sys.argv[1], sys.argv[2]
+for name in ("cube_medium_hexa", "cube_medium_tetra"):
+    m = meshio.read("%s/%s.mesh" % (src, name))
+    cells = [(c.type, c.data) for c in m.cells if c.type in ("hexahedron", "tetra")]
+    n = len(cells[0][1])
+    meshio.Mesh(m.points, cells, cell_sets={"half": [np.arange(0, n, 2)]}).write("%s/%s.inp" % (work, name))
+PYEOF
+grep -q "TYPE=C3D8" "$WORK/cube_medium_hexa.inp" && grep -q "^\*ELSET" "$WORK/cube_medium_hexa.inp" ||
+    fail "meshio wrote no C3D8 or *ELSET"
+for name in cube_medium_hexa cube_medium_tetra; do
+    convert_checked "$DATA/sfepy/$name.mesh" "$WORK/m.tpk" --json > "$WORK/m.json"
+    convert_checked "$WORK/$name.inp" "$WORK/i.tpk" --field elset --json > "$WORK/i.json"
+    "$PY" - "$WORK/m.json" "$WORK/i.json" "$name" <<'PYEOF' || fail "$name.inp"
+import json, sys
+m, i = (json.load(open(f)) for f in sys.argv[1:3])
+assert i["mirrored_cells"] == 0 and m["mirrored_cells"] == 0, (sys.argv[3], m, i)
+for k in ("source_cells", "tets", "vertices", "shell_faces", "cells_split"):
+    assert i[k] == m[k], (sys.argv[3], k, m[k], i[k])
+assert i["fields"] == 1, i
+PYEOF
+done
+
+# *INCLUDE from a file in another folder, relative to the including file.
+mkdir -p "$WORK/model/parts"
+mv "$WORK/cube_medium_hexa.inp" "$WORK/model/parts/hexa.inp"
+printf '*HEADING\n main file\n** the mesh\n*INCLUDE, INPUT=parts/hexa.inp\n' > "$WORK/model/main.inp"
+convert_checked "$WORK/model/main.inp" "$WORK/inc.tpk" --json > "$WORK/inc.json"
+convert_checked "$DATA/sfepy/cube_medium_hexa.mesh" "$WORK/m.tpk" --json > "$WORK/m.json"
+"$PY" -c "import json; a,b=(json.load(open(f)) for f in ('$WORK/inc.json','$WORK/m.json')); assert a['source_cells']==1000 and a['tets']==b['tets'], (a,b)" ||
+    fail "main.inp with *INCLUDE"
+# A missing include names the including file and line.
+printf '*NODE\n1, 0, 0, 0\n*INCLUDE, INPUT=nowhere.inp\n' > "$WORK/model/bad.inp"
+expect_exit 2 "$TPK" convert "$WORK/model/bad.inp" "$WORK/bad.tpk"
+expect_stderr "bad.inp:3: \*INCLUDE: .*nowhere.inp: cannot open"
+echo "1 passed, 0 failed"
