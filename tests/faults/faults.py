@@ -171,6 +171,7 @@ REAL_INPUTS = {
     "meshb": ["nasa_refine/om6_om6-curv-no-geom.meshb"],
     "ugrid": ["nasa_refine/cube_polar1.ugrid"],
     "exodus": ["seacas/cube.g", "seacas/8-block.g"],
+    "cgns": ["seacas/generated.cgns"],
     "tetgen": ["tetgen/part1_small.node"],
 }
 
@@ -192,7 +193,7 @@ def importer_sources(tetpack, data, source_dir, folder):
         sources += [(fmt, [p], []) for p in paths]
     made = mutations.write_meshio_files(os.path.join(source_dir, "samples/cylinder.vtk"), folder)
     if made is None:
-        TALLY.skips.append("import: python3 without meshio: no binary Gmsh or zlib VTU cases")
+        TALLY.skips.append("import: python3 without meshio: no binary Gmsh, zlib VTU, inp, XDMF or DOLFIN cases")
     for fmt, paths in (made or {}).items():
         sources += [(fmt, [p], []) for p in paths]
     sources.append(("surface", [surfaces["stl"][1]], ["--format", "surface"]))

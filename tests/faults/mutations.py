@@ -173,19 +173,24 @@ def write_binary_ugrid(ascii_path, folder):
 
 
 def write_meshio_files(source, folder):
-    """Binary Gmsh 4.1 and 2.2 and a zlib-compressed VTU of `source`, written by meshio (an independent
-    writer; zlib blocks are where inflate bombs hide): {format: [paths]}, or None without meshio."""
+    """Binary Gmsh 4.1 and 2.2, a zlib-compressed VTU (zlib blocks are where inflate bombs hide), Abaqus
+    .inp, XDMF with inline XML data and DOLFIN XML of `source`, written by meshio (an independent writer):
+    {format: [paths]}, or None without meshio."""
     try:
         import meshio
     except ImportError:
         return None
     mesh = meshio.read(source)
     paths = {"gmsh": [os.path.join(folder, "bin41.msh"), os.path.join(folder, "bin22.msh")],
-             "vtu": [os.path.join(folder, "zlib.vtu")]}
+             "vtu": [os.path.join(folder, "zlib.vtu")], "inp": [os.path.join(folder, "meshio.inp")],
+             "xdmf": [os.path.join(folder, "inline.xdmf")], "dolfin": [os.path.join(folder, "dolfin.xml")]}
     with open(os.devnull, "w") as quiet, contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(quiet):
         meshio.write(paths["gmsh"][0], mesh, file_format="gmsh", binary=True)
         meshio.write(paths["gmsh"][1], mesh, file_format="gmsh22", binary=True)
         meshio.write(paths["vtu"][0], mesh, binary=True, compression="zlib")
+        meshio.write(paths["inp"][0], mesh, file_format="abaqus")
+        meshio.write(paths["xdmf"][0], mesh, file_format="xdmf", data_format="XML")
+        meshio.write(paths["dolfin"][0], meshio.Mesh(mesh.points, mesh.cells), file_format="dolfin-xml")
     return paths
 
 
