@@ -8,7 +8,7 @@
 # must also return the connectivity meshio wrote, unpermuted. (meshio's .vtu is no reference: meshio 5
 # writes wedges into VTU as [0,2,1,3,5,4], which VTK's own wedge volume finds negative.)
 source "$(dirname "$0")/common.sh" "$@"
-command -v gmsh >/dev/null || { echo "gmsh not installed: skipped"; exit 77; }
+command -v gmsh >/dev/null || skip "gmsh not installed"
 cat > "$WORK/pyr.geo" <<'GEO'
 // A box of tets whose two recombined (quad) faces Gmsh joins to the tets with pyramids.
 SetFactory("OpenCASCADE");
