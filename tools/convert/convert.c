@@ -421,126 +421,158 @@ static void note_merged_ids(const tpk_merge_report *merged, tpk_diag *diag)
              "%lld points%s)", (long long)merged->merged_vertices, merged->cell_source ? " and collapsed cells" : "");
 }
 
-int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage_fn stage,
-                void *stage_user, tpk_diag *diag)
-{
+/* What one conversion holds between its stages. */
+typedef struct conversion {
+    const tpk_convert_options *o;
+    tpk_convert_report *rep;
+    tpk_stage_fn stage;
+    void *stage_user;
+    tpk_diag *diag;
     tpk_mesh src;
     tpk_tetmesh mesh;
-    memset(&src, 0, sizeof src);
-    memset(&mesh, 0, sizeof mesh);
-    memset(rep, 0, sizeof *rep);
-    int32_t *neighbors = NULL;
-    uint8_t *turned_over = NULL;
+    int32_t *neighbors;
+    uint8_t *turned_over; /* per tet: turned over by orient (connect asks whether that folded it) */
     tpk_header_fields header;
-    memset(&header, 0, sizeof header);
-    char source_format[32] = "";
+    char source_format[32];
     tpk_merge_report merged;
-    memset(&merged, 0, sizeof merged);
-    int rc = -1;
-    double t0 = now_seconds(), t = t0;
+} conversion;
 
-    announce(stage, stage_user, "import");
-    if (tpk_import_any_with(o->input, o->format, o->tetgen, &src, diag) != 0)
-        goto done;
-    rep->source_points = src.point_count;
-    rep->source_cells = src.cell_count;
-    memcpy(source_format, src.format, sizeof source_format);
-    source_format[sizeof source_format - 1] = 0;
-    rep->t_import = now_seconds() - t;
+static int read_source(conversion *c)
+{
+    double t = now_seconds();
+    announce(c->stage, c->stage_user, "import");
+    if (tpk_import_any_with(c->o->input, c->o->format, c->o->tetgen, &c->src, c->diag) != 0)
+        return -1;
+    c->rep->source_points = c->src.point_count;
+    c->rep->source_cells = c->src.cell_count;
+    memcpy(c->source_format, c->src.format, sizeof c->source_format);
+    c->source_format[sizeof c->source_format - 1] = 0;
+    c->rep->t_import = now_seconds() - t;
+    return 0;
+}
 
-    t = now_seconds(); /* merging counts as part of tetrahedralizing */
+/* Duplicate points merged when asked, source cells into tets on the file's float32 grid, then the
+ * points into the stored frame. */
+static int make_tets(conversion *c)
+{
+    const tpk_convert_options *o = c->o;
+    tpk_convert_report *rep = c->rep;
     if (o->merge_duplicates) {
-        announce(stage, stage_user, "merge duplicates");
-        if (tpk_merge_vertices(&src, o->merge_tolerance, o->drop_degenerate, &merged, diag) != 0)
-            goto done;
-        rep->merged_vertices = merged.merged_vertices;
-        rep->collapsed_cells_dropped = merged.collapsed_cells;
+        announce(c->stage, c->stage_user, "merge duplicates");
+        if (tpk_merge_vertices(&c->src, o->merge_tolerance, o->drop_degenerate, &c->merged, c->diag) != 0)
+            return -1;
+        rep->merged_vertices = c->merged.merged_vertices;
+        rep->collapsed_cells_dropped = c->merged.collapsed_cells;
     }
-    announce(stage, stage_user, "tetrahedralize");
-    if (tpk_tetrahedralize_consume(&src, o->fields, o->field_count,
+    announce(c->stage, c->stage_user, "tetrahedralize");
+    if (tpk_tetrahedralize_consume(&c->src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
                                        (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0) | TPK_TETRA_FILE_GRID,
-                                   &mesh, diag) != 0) {
-        note_merged_ids(&merged, diag);
-        goto done;
+                                   &c->mesh, c->diag) != 0) {
+        note_merged_ids(&c->merged, c->diag);
+        return -1;
     }
-    tpk_mesh_free(&src);
-    map_to_source(&mesh, &merged);
-    memcpy(rep->cells_into, mesh.cells_into, sizeof rep->cells_into);
-    rep->mirrored_cells = mesh.mirrored_cells;
-    rep->steiner_cells = mesh.steiner_cells;
-    rep->fixed_boundary_cells = mesh.fixed_boundary_cells;
-    rep->face_steiner_points = mesh.face_steiner_points;
-    rep->polyhedra = mesh.polyhedra;
-    rep->bad_cells_skipped = mesh.bad_cells_skipped;
-    if (quantize_points(&mesh, &header, diag) != 0)
-        goto done;
-    rep->t_tetrahedralize = now_seconds() - t;
+    tpk_mesh_free(&c->src);
+    map_to_source(&c->mesh, &c->merged);
+    memcpy(rep->cells_into, c->mesh.cells_into, sizeof rep->cells_into);
+    rep->mirrored_cells = c->mesh.mirrored_cells;
+    rep->steiner_cells = c->mesh.steiner_cells;
+    rep->fixed_boundary_cells = c->mesh.fixed_boundary_cells;
+    rep->face_steiner_points = c->mesh.face_steiner_points;
+    rep->polyhedra = c->mesh.polyhedra;
+    rep->bad_cells_skipped = c->mesh.bad_cells_skipped;
+    return quantize_points(&c->mesh, &c->header, c->diag);
+}
 
-    /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
-    t = now_seconds();
-    if (!o->no_reorder) {
-        announce(stage, stage_user, "reorder");
-        if (tpk_reorder(&mesh, o->threads, diag) != 0)
-            goto done;
-    }
-    rep->t_reorder = now_seconds() - t;
-
-    announce(stage, stage_user, "orient");
-    t = now_seconds();
+/* Every tet positive (exact), each turned-over one marked for connect. */
+static int orient_tets(conversion *c)
+{
+    announce(c->stage, c->stage_user, "orient");
+    double t = now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
-    turned_over = malloc((size_t)(mesh.tet_count ? mesh.tet_count : 1));
-    if (!turned_over) {
-        tpk_diag_fail(diag, "out of memory for the orientation of %lld tets", (long long)mesh.tet_count);
-        goto done;
-    }
-    if (tpk_orient_marked(&mesh, (o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
-                                     (o->strict_orientation ? TPK_ORIENT_REFUSE_INVERTED : 0),
-                          o->threads, &os, turned_over, diag) != 0)
-        goto done;
-    rep->inverted_fixed = os.inverted_fixed;
-    rep->degenerate_dropped = o->drop_degenerate ? os.degenerate : 0;
-    rep->t_orient = now_seconds() - t;
-    if (mesh.tet_count == 0) {
-        tpk_diag_fail(diag, "%s: no tetrahedra left to write", o->input);
-        goto done;
-    }
+    c->turned_over = malloc((size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1));
+    if (!c->turned_over)
+        return tpk_diag_fail(c->diag, "out of memory for the orientation of %lld tets", (long long)c->mesh.tet_count);
+    if (tpk_orient_marked(&c->mesh, (c->o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
+                                        (c->o->strict_orientation ? TPK_ORIENT_REFUSE_INVERTED : 0),
+                          c->o->threads, &os, c->turned_over, c->diag) != 0)
+        return -1;
+    c->rep->inverted_fixed = os.inverted_fixed;
+    c->rep->degenerate_dropped = c->o->drop_degenerate ? os.degenerate : 0;
+    c->rep->t_orient = now_seconds() - t;
+    if (c->mesh.tet_count == 0)
+        return tpk_diag_fail(c->diag, "%s: no tetrahedra left to write", c->o->input);
+    return 0;
+}
 
-    announce(stage, stage_user, "connect");
-    t = now_seconds();
-    neighbors = tpk_alloc_large(sizeof *neighbors * 4 * (size_t)(mesh.tet_count ? mesh.tet_count : 1));
-    if (!neighbors) {
-        tpk_diag_fail(diag, "out of memory for the neighbors of %lld tets", (long long)mesh.tet_count);
-        goto done;
-    }
+/* Neighbors by face matching, with folds refused, or cut (TPK-M06). */
+static int connect_tets(conversion *c)
+{
+    announce(c->stage, c->stage_user, "connect");
+    double t = now_seconds();
+    c->neighbors = tpk_alloc_large(sizeof *c->neighbors * 4 * (size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1));
+    if (!c->neighbors)
+        return tpk_diag_fail(c->diag, "out of memory for the neighbors of %lld tets", (long long)c->mesh.tet_count);
     tpk_unfold_stats unfold;
-    if (tpk_connect_unfolded(&mesh, turned_over, (o->skip_bad_cells ? TPK_UNFOLD_SKIP_BAD_TETS : 0) |
-                                                     (o->cut_folds ? TPK_UNFOLD_CUT_FOLDS : 0),
-                             o->threads, neighbors, &unfold, diag) != 0)
-        goto done;
-    rep->inverted_fixed -= unfold.bad_tets; /* left out, not turned over */
-    rep->bad_cells_skipped += unfold.bad_tets;
-    rep->folds_cut = unfold.folds_cut;
-    rep->t_connect = now_seconds() - t;
+    if (tpk_connect_unfolded(&c->mesh, c->turned_over, (c->o->skip_bad_cells ? TPK_UNFOLD_SKIP_BAD_TETS : 0) |
+                                                           (c->o->cut_folds ? TPK_UNFOLD_CUT_FOLDS : 0),
+                             c->o->threads, c->neighbors, &unfold, c->diag) != 0)
+        return -1;
+    c->rep->inverted_fixed -= unfold.bad_tets; /* left out, not turned over */
+    c->rep->bad_cells_skipped += unfold.bad_tets;
+    c->rep->folds_cut = unfold.folds_cut;
+    c->rep->t_connect = now_seconds() - t;
+    return 0;
+}
 
-    announce(stage, stage_user, "write");
-    t = now_seconds();
-    rep->vertices = mesh.vertex_count;
-    rep->tets = mesh.tet_count;
-    rep->field_count = mesh.field_count;
-    rep->step_count = mesh.step_count > 0 ? mesh.step_count : 1;
-    if (write_file(o, &mesh, neighbors, &header, rep, source_format, diag) != 0)
-        goto done;
-    rep->t_write = now_seconds() - t;
-    rc = 0;
-done:
+static int write_output(conversion *c)
+{
+    announce(c->stage, c->stage_user, "write");
+    double t = now_seconds();
+    c->rep->vertices = c->mesh.vertex_count;
+    c->rep->tets = c->mesh.tet_count;
+    c->rep->field_count = c->mesh.field_count;
+    c->rep->step_count = c->mesh.step_count > 0 ? c->mesh.step_count : 1;
+    if (write_file(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format, c->diag) != 0)
+        return -1;
+    c->rep->t_write = now_seconds() - t;
+    return 0;
+}
+
+int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage_fn stage,
+                void *stage_user, tpk_diag *diag)
+{
+    conversion c;
+    memset(&c, 0, sizeof c);
+    memset(rep, 0, sizeof *rep);
+    c.o = o, c.rep = rep, c.stage = stage, c.stage_user = stage_user, c.diag = diag;
+    double t0 = now_seconds();
+    int rc = read_source(&c);
+    if (rc == 0) {
+        double t = now_seconds();
+        rc = make_tets(&c);
+        rep->t_tetrahedralize = now_seconds() - t;
+    }
+    /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
+    if (rc == 0 && !o->no_reorder) {
+        double t = now_seconds();
+        announce(stage, stage_user, "reorder");
+        rc = tpk_reorder(&c.mesh, o->threads, diag);
+        rep->t_reorder = now_seconds() - t;
+    }
+    if (rc == 0)
+        rc = orient_tets(&c);
+    if (rc == 0)
+        rc = connect_tets(&c);
+    if (rc == 0)
+        rc = write_output(&c);
     rep->t_total = now_seconds() - t0;
-    free(neighbors);
-    free(turned_over);
-    tpk_merge_report_free(&merged);
-    tpk_mesh_free(&src);
-    tpk_tetmesh_free(&mesh);
-    return rc;
+    free(c.neighbors);
+    free(c.turned_over);
+    tpk_merge_report_free(&c.merged);
+    tpk_mesh_free(&c.src);
+    tpk_tetmesh_free(&c.mesh);
+    return rc ? -1 : 0;
 }
