@@ -29,8 +29,8 @@ int tpk_cli_parse_int(const char *text, int lo, int hi, int *out);
 /* Value of option argv[*i] ("--opt value" or "--opt=value"); advances *i. NULL if missing. */
 const char *tpk_cli_value(int argc, char **argv, int *i, const char *name);
 /* "tetpack" and the arguments joined by spaces, leaving out the argument `skip` (pointer identity; the
- * output path) and --threads, so the recorded command does not depend on where the file goes or on how
- * many threads made it. Static buffer. */
+ * output path), --threads and --progress/--no-progress, so the recorded command does not depend on where
+ * the file goes, on how many threads made it or on whether a terminal watched. Static buffer. */
 const char *tpk_cli_joined(int argc, char **argv, const char *skip);
 
 /* Print "tetpack <cmd>: error: PATH: why" (just "why" when it already names PATH) and return

@@ -6,6 +6,7 @@
 #include "cli.h"
 #include "convert/convert.h"
 #include "convert/merge_vertices.h"
+#include "base/progress.h"
 #include "base/strbuf.h"
 #include "import/surface/surface.h"
 
@@ -68,12 +69,14 @@ static const char convert_help[] =
     "                              (default 10000000: a few GiB and minutes)\n"
     "  --tetgen-time-limit S       stop TetGen after S seconds (default 3600; 0: no limit)\n"
     "  --json                      print the summary as JSON\n"
-    "  --quiet                     print nothing on success\n"
+    "  --quiet                     print nothing on success (and no progress)\n"
+    "  --progress / --no-progress  a progress bar per stage on stderr (import, tetrahedralize, reorder,\n"
+    "                              orient, connect, write; default: when stderr is a terminal)\n"
     "\n"
     "TetGen runs in a child process: a crash inside it, a time-out, or its memory running out (it may use\n"
     "the machine's memory) is an error naming the input; points that span no volume (all on one plane,\n"
     "decided exactly) or coordinates beyond 1e50 in magnitude (or spanning less than 1e-50) are refused\n"
-    "before it starts. On a terminal a progress line shows each TetGen stage and its seconds.\n"
+    "before it starts. With progress (above) a line shows each TetGen stage and its seconds.\n"
     "\n"
     "Input formats (--format NAME; tetpack formats says what each carries):\n";
 
@@ -82,6 +85,7 @@ typedef struct convert_args {
     tpk_tetgen_options tetgen;
     const char *fields[256];
     int json, quiet;
+    int progress; /* -1: when stderr is a terminal */
 } convert_args;
 
 static int parse_layout(const char *text, unsigned *layouts)
@@ -210,6 +214,10 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->json = 1;
         } else if (!strcmp(arg, "--quiet")) {
             a->quiet = 1;
+        } else if (!strcmp(arg, "--progress")) {
+            a->progress = 1;
+        } else if (!strcmp(arg, "--no-progress")) {
+            a->progress = 0;
         } else if ((rc = parse_tetgen_option(argc, argv, &i, a)) != 0) {
             if (rc != 1)
                 return rc;
@@ -229,11 +237,20 @@ static int parse_args(int argc, char **argv, convert_args *a)
     return 0;
 }
 
+/* The stage now drawn, so that the next one (or the end) can complete its bar first. */
+typedef struct stage_bar {
+    const char *stage;
+} stage_bar;
+
+/* The driver names each stage as it starts: the previous one is then done (its bar at 100%, erased). */
 static void show_stage(void *user, const char *stage)
 {
-    (void)user;
-    fprintf(stderr, "\r\033[K[tetpack] %s...", stage);
-    fflush(stderr);
+    stage_bar *bar = user;
+    if (bar->stage)
+        tpk_progress_draw("convert", bar->stage, 1.0);
+    bar->stage = stage;
+    if (stage)
+        tpk_progress_draw("convert", stage, 0.0);
 }
 
 /* One line per repair asked for, with what it did (also when it found nothing to do); orientation and
@@ -322,6 +339,7 @@ int tpk_cmd_convert(int argc, char **argv)
 {
     static convert_args a;
     memset(&a, 0, sizeof a);
+    a.progress = -1;
     int rc = parse_args(argc, argv, &a);
     if (rc == 0)
         rc = tpk_cli_check_convert_output(a.options.input, a.options.format, a.options.output);
@@ -331,12 +349,16 @@ int tpk_cmd_convert(int argc, char **argv)
     tpk_convert_report report;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
-    int progress = !a.quiet && isatty(2);
+    /* Scripts and tests read a quiet stderr: progress only on a terminal, or when asked. */
+    int progress = !a.quiet && (a.progress >= 0 ? a.progress : isatty(2));
     a.tetgen.progress = progress;
     a.options.tetgen = &a.tetgen;
-    rc = tpk_convert(&a.options, &report, progress ? show_stage : NULL, NULL, &diag);
-    if (progress)
-        fprintf(stderr, "\r\033[K");
+    stage_bar bar = {NULL};
+    rc = tpk_convert(&a.options, &report, progress ? show_stage : NULL, &bar, &diag);
+    if (progress && rc == 0)
+        show_stage(&bar, NULL);
+    else if (progress)
+        fprintf(stderr, "\r\033[K"); /* a failed stage's bar is left unfinished: erase it for the message */
     if (rc != 0) {
         const char *why = diag.message[0] ? diag.message : "conversion failed";
         /* Pipeline stages speak of tets and vertices; say which file they came from. */

@@ -74,6 +74,9 @@ const char *tpk_cli_joined(int argc, char **argv, const char *skip)
             i += argv[i][9] == '=' ? 0 : 1;
             continue;
         }
+        /* Nor does progress on stderr: a file converted on a terminal equals one converted in a script. */
+        if (!strcmp(argv[i], "--progress") || !strcmp(argv[i], "--no-progress"))
+            continue;
         int n = snprintf(joined + used, sizeof joined - used, " %s", argv[i]);
         if (n < 0)
             break;
