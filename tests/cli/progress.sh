@@ -17,6 +17,27 @@ stages=$(tr '\r' '\n' < "$WORK/bar.err" | sed -n 's/^convert: \([a-z ]*[a-z]\) *
 [ "$(tr '\r' '\n' < "$WORK/bar.err" | grep -c '100%')" -eq 6 ] || fail "not every stage completed its bar"
 [ -z "$(tr '\r' '\n' < "$WORK/bar.err" | tail -n 1 | tr -d ' ')" ] || fail "the last bar was not erased"
 
+# 42^3 hexahedra: more than the 65536 cells between two reports of the split, so its bar moves between
+# 0 and 100% (at 65536 of 74088 cells: 88%); the split file too is the same with and without the bar.
+awk -v n=42 'BEGIN {
+    m = n + 1
+    print "# vtk DataFile Version 3.0"; print "hexahedra"; print "ASCII"; print "DATASET UNSTRUCTURED_GRID"
+    printf "POINTS %d double\n", m * m * m
+    for (k = 0; k < m; k++) for (j = 0; j < m; j++) for (i = 0; i < m; i++) print i, j, k
+    printf "CELLS %d %d\n", n * n * n, 9 * n * n * n
+    for (k = 0; k < n; k++) for (j = 0; j < n; j++) for (i = 0; i < n; i++) {
+        p = i + m * (j + m * k)
+        print 8, p, p + 1, p + 1 + m, p + m, p + m * m, p + 1 + m * m, p + 1 + m + m * m, p + m + m * m
+    }
+    printf "CELL_TYPES %d\n", n * n * n
+    for (c = 0; c < n * n * n; c++) print 12
+}' > "$WORK/hex.vtk"
+convert_checked "$WORK/hex.vtk" "$WORK/hex.tpk" > /dev/null
+"$TPK" convert "$WORK/hex.vtk" "$WORK/hex_bar.tpk" --progress > /dev/null 2> "$WORK/hex.err"
+cmp "$WORK/hex.tpk" "$WORK/hex_bar.tpk" || fail "the split .tpk differs with --progress"
+tr '\r' '\n' < "$WORK/hex.err" | grep -q '^convert: tetrahedralize \[#*\.*\]  88%$' ||
+    { tr '\r' '\n' < "$WORK/hex.err" >&2; fail "tetrahedralize did not report the cells split"; }
+
 "$TPK" convert "$IN" "$WORK/no.tpk" --progress --no-progress > /dev/null 2> "$WORK/no.err"
 [ ! -s "$WORK/no.err" ] || fail "--no-progress printed on stderr"
 cmp "$WORK/quiet.tpk" "$WORK/no.tpk" || fail "the .tpk differs with --no-progress"

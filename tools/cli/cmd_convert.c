@@ -242,15 +242,15 @@ typedef struct stage_bar {
     const char *stage;
 } stage_bar;
 
-/* The driver names each stage as it starts: the previous one is then done (its bar at 100%, erased). */
-static void show_stage(void *user, const char *stage)
+/* A new stage name means the previous stage is done (its bar at 100%, erased); NULL: the last is done. */
+static void show_stage(void *user, const char *stage, double fraction)
 {
     stage_bar *bar = user;
-    if (bar->stage)
+    if (bar->stage && (!stage || strcmp(stage, bar->stage)))
         tpk_progress_draw("convert", bar->stage, 1.0);
     bar->stage = stage;
     if (stage)
-        tpk_progress_draw("convert", stage, 0.0);
+        tpk_progress_draw("convert", stage, fraction);
 }
 
 /* One line per repair asked for, with what it did (also when it found nothing to do); orientation and
@@ -356,7 +356,7 @@ int tpk_cmd_convert(int argc, char **argv)
     stage_bar bar = {NULL};
     rc = tpk_convert(&a.options, &report, progress ? show_stage : NULL, &bar, &diag);
     if (progress && rc == 0)
-        show_stage(&bar, NULL);
+        show_stage(&bar, NULL, 1.0);
     else if (progress)
         fprintf(stderr, "\r\033[K"); /* a failed stage's bar is left unfinished: erase it for the message */
     if (rc != 0) {

@@ -28,7 +28,7 @@ static double now_seconds(void)
 static void announce(tpk_stage_fn stage, void *user, const char *name)
 {
     if (stage)
-        stage(user, name);
+        stage(user, name, 0.0);
 }
 
 typedef struct chunk_writer {
@@ -451,6 +451,12 @@ static int read_source(conversion *c)
     return 0;
 }
 
+static void tetrahedralize_progress(void *user, double fraction)
+{
+    conversion *c = user;
+    c->stage(c->stage_user, "tetrahedralize", fraction);
+}
+
 /* Duplicate points merged when asked, source cells into tets on the file's float32 grid, then the
  * points into the stored frame. */
 static int make_tets(conversion *c)
@@ -465,11 +471,12 @@ static int make_tets(conversion *c)
         rep->collapsed_cells_dropped = c->merged.collapsed_cells;
     }
     announce(c->stage, c->stage_user, "tetrahedralize");
-    if (tpk_tetrahedralize_consume(&c->src, o->fields, o->field_count,
+    tpk_tetra_progress progress = {tetrahedralize_progress, c};
+    if (tpk_tetrahedralize_watched(&c->src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
                                        (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0) | TPK_TETRA_FILE_GRID,
-                                   &c->mesh, c->diag) != 0) {
+                                   c->stage ? &progress : NULL, &c->mesh, c->diag) != 0) {
         note_merged_ids(&c->merged, c->diag);
         return -1;
     }

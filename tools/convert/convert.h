@@ -55,8 +55,10 @@ typedef struct tpk_convert_report {
     double t_import, t_tetrahedralize, t_orient, t_reorder, t_connect, t_write, t_total; /* layouts and shell are built while writing */
 } tpk_convert_report;
 
-/* Progress callback: stage name when a stage starts. May be NULL. */
-typedef void (*tpk_stage_fn)(void *user, const char *stage);
+/* Progress callback: the stage name with fraction 0 when a stage starts, then again with the fraction
+ * done where the stage can tell (tetrahedralize: source cells split); a stage is done when the next
+ * starts or tpk_convert returns. Called from the calling thread. May be NULL. */
+typedef void (*tpk_stage_fn)(void *user, const char *stage, double fraction);
 
 struct tpk_strbuf;
 /* Appends the "repairs" JSON object (what was asked for and what was done), as META records it:

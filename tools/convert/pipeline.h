@@ -37,6 +37,15 @@ int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int 
  * src stays valid for tpk_mesh_free but must not be used otherwise. */
 int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                                tpk_tetmesh *out, tpk_diag *diag);
+/* Who watches a long split: fn(user, fraction of the source cells done) every 65536 cells, from the
+ * calling thread (all-tet input is taken over whole and reports nothing). */
+typedef struct tpk_tetra_progress {
+    void (*fn)(void *user, double fraction);
+    void *user;
+} tpk_tetra_progress;
+/* tpk_tetrahedralize_consume, reporting to `progress` (may be NULL). */
+int tpk_tetrahedralize_watched(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
+                               const tpk_tetra_progress *progress, tpk_tetmesh *out, tpk_diag *diag);
 
 typedef struct tpk_orient_stats {
     int64_t inverted_fixed;   /* negative tets made positive by a swap (found, with REFUSE_INVERTED) */

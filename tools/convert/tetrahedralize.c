@@ -396,12 +396,15 @@ static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh
  * it refuses, and polyhedra, go to tools/convert/steiner.c, which appends theirs and may take back the plain
  * split of a cell next to a face it puts a point on. Returns 0, -1 when out of memory, or -2 with a
  * message for a cell that cannot be split. */
-static int split_cells(const tpk_mesh *src, int flags, int64_t *tet_capacity, tpk_added_points *added,
-                       tpk_tetmesh *out, tpk_diag *diag)
+static int split_cells(const tpk_mesh *src, int flags, const tpk_tetra_progress *progress,
+                       int64_t *tet_capacity, tpk_added_points *added, tpk_tetmesh *out, tpk_diag *diag)
 {
     int64_t t = 0, hard_count = 0, hard_capacity = 0;
     int64_t *hard = NULL;
     for (int64_t c = 0; c < src->cell_count; c++) {
+        /* Every 2^16 cells: a few hundred reports for 10M cells, one mask test per cell otherwise. */
+        if (progress && !(c & 0xffff))
+            progress->fn(progress->user, (double)c / (double)src->cell_count);
         int type = src->cell_types[c];
         const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
         if (!max_tets(type) && type != TPK_CELL_POLYHEDRON) /* lower-dimensional: count_tets let only these by */
@@ -467,7 +470,8 @@ static void snap_to_file_grid(tpk_tetmesh *out)
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
 static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
-                         tpk_added_points *added, tpk_tetmesh *out, tpk_diag *diag)
+                         const tpk_tetra_progress *progress, tpk_added_points *added, tpk_tetmesh *out,
+                         tpk_diag *diag)
 {
     size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
     int plain = donor && all_plain_tets(src, tet_capacity);
@@ -498,11 +502,12 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
     out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
     if (!out->tets || !out->tet_source)
         return -1;
-    return split_cells(src, flags, &tet_capacity, added, out, diag);
+    return split_cells(src, flags, progress, &tet_capacity, added, out, diag);
 }
 
 static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
-                          int field_name_count, int flags, tpk_tetmesh *out, tpk_diag *diag)
+                          int field_name_count, int flags, const tpk_tetra_progress *progress, tpk_tetmesh *out,
+                          tpk_diag *diag)
 {
     field_request *reqs = NULL;
     int req_count = 0;
@@ -534,7 +539,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     }
     /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
      * field copy reads src (cell_to_point uses the taken-over connectivity as out->tets). */
-    int geometry = take_geometry(src, donor, tet_capacity, flags, &added, out, diag);
+    int geometry = take_geometry(src, donor, tet_capacity, flags, progress, &added, out, diag);
     if (geometry == 0 && out->mirrored_cells > 0 && (flags & TPK_TETRA_REFUSE_MIRRORED))
         geometry = refuse_mirrored(src, out->first_mirrored_cell, out, diag) ? -2 : 0;
     if (geometry == -2) {
@@ -571,11 +576,17 @@ out_of_memory:
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag)
 {
-    return tetrahedralize(src, NULL, field_names, field_name_count, flags, out, diag);
+    return tetrahedralize(src, NULL, field_names, field_name_count, flags, NULL, out, diag);
 }
 
 int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                                tpk_tetmesh *out, tpk_diag *diag)
 {
-    return tetrahedralize(src, src, field_names, field_name_count, flags, out, diag);
+    return tetrahedralize(src, src, field_names, field_name_count, flags, NULL, out, diag);
+}
+
+int tpk_tetrahedralize_watched(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
+                               const tpk_tetra_progress *progress, tpk_tetmesh *out, tpk_diag *diag)
+{
+    return tetrahedralize(src, src, field_names, field_name_count, flags, progress, out, diag);
 }
