@@ -375,8 +375,21 @@ int tpk_map_file(const char *path, const char **data, size_t *size, tpk_diag *di
     return 0;
 }
 
+/* A process-wide hook rather than a field of tpk_scan: the importers' signatures stay as they are, and only
+ * the converter, which imports one file at a time, sets it. */
+static void (*scan_watcher)(void *user, double fraction);
+static void *scan_watcher_user;
+
+void tpk_scan_watch(void (*fn)(void *user, double fraction), void *user)
+{
+    scan_watcher = fn;
+    scan_watcher_user = user;
+}
+
 void tpk_scan_release_consumed(tpk_scan *s)
 {
+    if (scan_watcher && s->size)
+        scan_watcher(scan_watcher_user, (double)s->pos / (double)s->size);
     if (!s->mapped)
         return;
     size_t page = (size_t)sysconf(_SC_PAGESIZE);

@@ -69,6 +69,11 @@ int tpk_token_is(const char *tok, size_t len, const char *word);
  * it. Does nothing for other buffers. */
 void tpk_scan_release_consumed(tpk_scan *s);
 
+/* Who watches the import: the readers call tpk_scan_release_consumed after each section or block, and it
+ * then reports fn(user, bytes read / bytes of the input). One watcher for the process (the converter
+ * sets it around its import and clears it with NULL); not for concurrent imports. */
+void tpk_scan_watch(void (*fn)(void *user, double fraction), void *user);
+
 /* Map a whole file read-only (the bytes are not NUL-terminated). Returns 0, or -1 with
  * "path: cannot ...: reason". Release with tpk_unmap_file(data, size). */
 int tpk_map_file(const char *path, const char **data, size_t *size, tpk_diag *diag);

@@ -242,14 +242,15 @@ typedef struct stage_bar {
     const char *stage;
 } stage_bar;
 
-/* A new stage name means the previous stage is done (its bar at 100%, erased); NULL: the last is done. */
+/* A new stage name means the previous stage is done (its bar at 100%, erased); NULL: the last is done.
+ * A stage's own 100% (import after its last section) waits for that, so each bar is erased once. */
 static void show_stage(void *user, const char *stage, double fraction)
 {
     stage_bar *bar = user;
     if (bar->stage && (!stage || strcmp(stage, bar->stage)))
         tpk_progress_draw("convert", bar->stage, 1.0);
     bar->stage = stage;
-    if (stage)
+    if (stage && fraction < 1.0)
         tpk_progress_draw("convert", stage, fraction);
 }
 

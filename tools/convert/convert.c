@@ -16,6 +16,7 @@
 #include "base/parallel.h"
 #include "pipeline.h"
 #include "base/strbuf.h"
+#include "base/text_scan.h"
 #include "tetpack.h"
 
 static double now_seconds(void)
@@ -437,11 +438,21 @@ typedef struct conversion {
     tpk_merge_report merged;
 } conversion;
 
+static void import_progress(void *user, double fraction)
+{
+    conversion *c = user;
+    c->stage(c->stage_user, "import", fraction);
+}
+
 static int read_source(conversion *c)
 {
     double t = now_seconds();
     announce(c->stage, c->stage_user, "import");
-    if (tpk_import_any_with(c->o->input, c->o->format, c->o->tetgen, &c->src, c->diag) != 0)
+    if (c->stage)
+        tpk_scan_watch(import_progress, c);
+    int rc = tpk_import_any_with(c->o->input, c->o->format, c->o->tetgen, &c->src, c->diag);
+    tpk_scan_watch(NULL, NULL);
+    if (rc != 0)
         return -1;
     c->rep->source_points = c->src.point_count;
     c->rep->source_cells = c->src.cell_count;

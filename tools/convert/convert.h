@@ -56,7 +56,8 @@ typedef struct tpk_convert_report {
 } tpk_convert_report;
 
 /* Progress callback: the stage name with fraction 0 when a stage starts, then again with the fraction
- * done where the stage can tell (tetrahedralize: source cells split); a stage is done when the next
+ * done where the stage can tell (import: bytes read, by the readers of base/text_scan.h, per section or
+ * block; tetrahedralize: source cells split); a stage is done when the next
  * starts or tpk_convert returns. Called from the calling thread. May be NULL. */
 typedef void (*tpk_stage_fn)(void *user, const char *stage, double fraction);
 
