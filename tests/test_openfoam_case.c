@@ -89,16 +89,22 @@ TPK_TEST(cavity_fields_and_time_steps)
     tpk_mesh m;
     tpk_diag d = {0};
     CHECK_MSG(tpk_import_any(CASES "cavity_binary", NULL, &m, &d) == 0, "%s", d.message);
-    const tpk_src_field *p = field_named(&m, "p"), *pp = field_named(&m, "pp");
-    int ok = p && pp && m.step_count == 2 && m.times && m.times[0] == 0.25 && m.times[1] == 0.5 &&
+    const tpk_src_field *p = field_named(&m, "p"), *pp = field_named(&m, "pp"), *u = field_named(&m, "U");
+    int ok = p && pp && u && u->components == 3 && u->association == TPK_ASSOC_TET && m.step_count == 2 && m.times && m.times[0] == 0.25 && m.times[1] == 0.5 &&
              p->association == TPK_ASSOC_TET && p->step_count == 2 && pp->association == TPK_ASSOC_POINT;
     /* make_cases.sh: at 0.25 p uniform 2 and pp uniform 1; at 0.5 p = 0.5 + cell / 1000, pp = point id. */
     for (int64_t c = 0; ok && c < m.cell_count; c++)
         ok = p->values[c] == 2.0f && p->values[m.cell_count + c] == (float)(0.5 + c / 1000.0);
+    /* U: uniform (1 2 3) at 0.25; (cell, -cell, 0.25) at 0.5. */
+    for (int64_t c = 0; ok && c < m.cell_count; c++) {
+        const float *at25 = u->values + 3 * c, *at5 = u->values + 3 * (m.cell_count + c);
+        ok = at25[0] == 1 && at25[1] == 2 && at25[2] == 3 && at5[0] == (float)c && at5[1] == (float)-c &&
+             at5[2] == 0.25f;
+    }
     for (int64_t i = 0; ok && i < m.point_count; i++)
         ok = pp->values[i] == 1.0f && pp->values[m.point_count + i] == (float)i;
     tpk_mesh_free(&m);
-    CHECK_MSG(ok, "fields p and pp or their time steps differ from what make_cases.sh wrote");
+    CHECK_MSG(ok, "fields p, pp and U or their time steps differ from what make_cases.sh wrote");
 }
 
 TPK_TEST(cavity_volume_and_conversion)

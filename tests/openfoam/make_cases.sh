@@ -100,6 +100,9 @@ for c in "$@"; do
         field pointScalarField pp 0.5 "nonuniform List<scalar> $np ($(awk -v n="$np" 'BEGIN { for (i = 0; i < n; i++) printf "%s%d", i ? " " : "", i }'))" > 0.5/pp
         field volScalarField p 0.25 "uniform 2" > 0.25/p
         field pointScalarField pp 0.25 "uniform 1" > 0.25/pp
+        # U (volVectorField): uniform (1 2 3) at 0.25; (cell id, -cell id, 0.25) at 0.5.
+        field volVectorField U 0.25 "uniform (1 2 3)" > 0.25/U
+        field volVectorField U 0.5 "nonuniform List<vector> $n ($(awk -v n="$n" 'BEGIN { for (i = 0; i < n; i++) printf "%s(%d %d 0.25)", i ? " " : "", i, -i }'))" > 0.5/U
         rm -rf "$OUT/cases" && mkdir -p "$OUT/cases"
         for form in ascii binary gzip; do
             rm -rf "$WORK/cavity_$form" && mkdir -p "$WORK/cavity_$form"

@@ -1,6 +1,7 @@
 /* OpenFOAM's file container: the FoamFile dictionary header and the lists that follow it, ASCII or
  * binary (raw little-endian bytes between the list's parentheses), read whole into memory. */
 #include <errno.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -246,8 +247,11 @@ static int read_items(tpk_foam_file *f, int64_t n, int width, double *values, in
             double v;
             if (ascii_number(f, &v, what) != 0)
                 return -1;
-            if (labels && (v != (double)(int32_t)v))
-                return tpk_foam_fail(f, "expected a label (integer), found %.17g", v);
+            /* Range first: converting an out-of-range double to int32 is undefined. */
+            if (labels && !(v >= INT32_MIN && v <= INT32_MAX && v == floor(v)))
+                return tpk_foam_fail(f, "expected a label (32-bit integer), found %.17g", v);
+            if (!labels && !isfinite(v))
+                return tpk_foam_fail(f, "expected a finite number, found %.17g", v);
             if (labels)
                 labels[i * width + k] = (int32_t)v;
             else

@@ -3,6 +3,7 @@
  * outward as stored and neighbour faces are reversed), and the latest numeric time directory's
  * volScalarField/volVectorField (cell fields) and pointScalarField (point fields). */
 #include <dirent.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -183,6 +184,10 @@ static int load_poly_mesh(const char *dir, poly_mesh *m, int *binary, tpk_diag *
         read_mesh_file(dir, "owner", "labelList", read_owner, m, binary, diag) != 0 ||
         read_mesh_file(dir, "neighbour", "labelList", read_neighbour, m, binary, diag) != 0)
         return -1;
+    for (int64_t i = 0; i < 3 * m->point_count; i++)
+        if (!isfinite(m->points[i]))
+            return tpk_diag_fail(diag, "%s/points: point %lld: expected finite coordinates, found %g", dir,
+                                 (long long)(i / 3), m->points[i]);
     if (check_ids(dir, "faces", m->face_ids, m->face_starts[m->face_count], m->point_count, "point id", diag))
         return -1;
     if (m->owner_count != m->face_count)
@@ -252,8 +257,8 @@ static int build_cells(const poly_mesh *m, tpk_mesh *out, tpk_diag *diag, const 
     for (int64_t c = 0; c < cells; c++) {
         int64_t bad;
         char why[200];
-        if (tpk_face_stream_check(out->cell_conn + out->cell_offsets[c], out->cell_offsets[c + 1] - out->cell_offsets[c],
-                                  out->point_count, &bad, why, sizeof why) != 0)
+        int64_t at = out->cell_offsets[c], n = out->cell_offsets[c + 1] - at;
+        if (tpk_face_stream_check(out->cell_conn + at, n, out->point_count, &bad, why, sizeof why) != 0)
             return tpk_diag_fail(diag, "%s: cell %lld: %s", dir, (long long)c, why);
     }
     if (tpk_mesh_take_face_streams(out) != 0)
@@ -434,7 +439,10 @@ static int read_fields(const char *case_dir, tpk_mesh *out, tpk_diag *diag)
     for (struct dirent *e; d && rc == 0 && (e = readdir(d)) != NULL;) {
         char name[256];
         size_t n = strlen(e->d_name);
-        if (e->d_name[0] == '.' || n >= sizeof name)
+        char file[4700];
+        snprintf(file, sizeof file, "%s/%s", latest, e->d_name);
+        /* Solvers write folders (uniform/) and files of other kinds beside the fields: fields are files. */
+        if (e->d_name[0] == '.' || n >= sizeof name || is_dir(file))
             continue;
         snprintf(name, sizeof name, "%.*s", (int)(n > 3 && strcmp(e->d_name + n - 3, ".gz") == 0 ? n - 3 : n),
                  e->d_name);
@@ -460,7 +468,8 @@ int tpk_import_openfoam(const char *path, tpk_mesh *out, tpk_diag *diag)
     char case_dir[4096], mesh_dir[4096];
     poly_mesh m = {0};
     int binary = 0;
-    if (locate(path, case_dir, mesh_dir, sizeof case_dir, diag) != 0 || load_poly_mesh(mesh_dir, &m, &binary, diag) != 0)
+    if (locate(path, case_dir, mesh_dir, sizeof case_dir, diag) != 0 ||
+        load_poly_mesh(mesh_dir, &m, &binary, diag) != 0)
         goto fail;
     out->point_count = m.point_count;
     out->points = m.points;
