@@ -263,32 +263,36 @@ static int read_items(tpk_foam_file *f, int64_t n, int width, double *values, in
     return expect(f, ')', "closing the list");
 }
 
-int tpk_foam_labels(tpk_foam_file *f, int64_t *count, int32_t **out, const char *what)
+/* A list of count * width labels (4 bytes each in binary) or scalars (8) into a malloc'ed *out. */
+static int read_list(tpk_foam_file *f, int width, int labels, int64_t *count, void **out, const char *what)
 {
+    size_t item = labels ? 4 : 8;
     *out = NULL;
-    if (list_count(f, f->binary ? 4 : 2, count, what) != 0)
+    if (list_count(f, (size_t)width * (f->binary ? item : 2), count, what) != 0)
         return -1;
-    if ((*out = malloc((size_t)(*count ? *count : 1) * sizeof **out)) == NULL)
+    if ((*out = malloc((size_t)(*count ? *count : 1) * (size_t)width * item)) == NULL)
         return tpk_foam_fail(f, "out of memory for %lld %s", (long long)*count, what);
-    if (read_items(f, *count, 1, NULL, *out, what) == 0)
+    if (read_items(f, *count, width, labels ? NULL : *out, labels ? *out : NULL, what) == 0)
         return 0;
     free(*out);
     *out = NULL;
     return -1;
 }
 
+int tpk_foam_labels(tpk_foam_file *f, int64_t *count, int32_t **out, const char *what)
+{
+    void *list;
+    int rc = read_list(f, 1, 1, count, &list, what);
+    *out = list;
+    return rc;
+}
+
 int tpk_foam_scalars(tpk_foam_file *f, int width, int64_t *count, double **out, const char *what)
 {
-    *out = NULL;
-    if (list_count(f, (size_t)width * (f->binary ? 8 : 2), count, what) != 0)
-        return -1;
-    if ((*out = malloc((size_t)(*count ? *count : 1) * (size_t)width * sizeof **out)) == NULL)
-        return tpk_foam_fail(f, "out of memory for %lld %s", (long long)*count, what);
-    if (read_items(f, *count, width, *out, NULL, what) == 0)
-        return 0;
-    free(*out);
-    *out = NULL;
-    return -1;
+    void *list;
+    int rc = read_list(f, width, 0, count, &list, what);
+    *out = list;
+    return rc;
 }
 
 int tpk_foam_face_list(tpk_foam_file *f, int64_t *count, int64_t **starts, int32_t **ids)

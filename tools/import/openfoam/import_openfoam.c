@@ -212,6 +212,11 @@ static int build_cells(const poly_mesh *m, tpk_mesh *out, tpk_diag *diag, const 
         cells = m->owner[f] + 1 > cells ? m->owner[f] + 1 : cells;
     for (int64_t f = 0; f < m->neighbour_count; f++)
         cells = m->neighbour[f] + 1 > cells ? m->neighbour[f] + 1 : cells;
+    /* Every cell is some face's owner or neighbour: a larger id leaves gaps (and is not allocated). */
+    if (cells > m->owner_count + m->neighbour_count)
+        return tpk_diag_fail(diag, "%s/owner, neighbour: cell ids up to %lld, but only %lld owner and neighbour "
+                             "entries to name them", dir, (long long)cells - 1,
+                             (long long)(m->owner_count + m->neighbour_count));
     int64_t *len = calloc((size_t)cells + 1, sizeof *len);
     if (!len)
         return tpk_diag_fail(diag, "%s: out of memory for %lld cells", dir, (long long)cells);
