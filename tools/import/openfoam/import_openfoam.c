@@ -119,9 +119,10 @@ static int read_faces(tpk_foam_file *f, poly_mesh *m)
     }
     m->face_count = n ? n - 1 : 0;
     if (!n || starts[0] != 0 || starts[n - 1] != ids) {
+        int32_t first = n ? starts[0] : -1, last = n ? starts[n - 1] : -1;
         free(starts);
-        return tpk_foam_fail(f, "face starts run from %d to %d, expected 0 to %lld (the point ids listed)",
-                             n ? starts[0] : -1, n ? starts[n - 1] : -1, (long long)ids);
+        return tpk_foam_fail(f, "face starts run from %d to %d, expected 0 to %lld (the point ids listed)", first,
+                             last, (long long)ids);
     }
     if ((m->face_starts = malloc((size_t)n * sizeof *m->face_starts)) == NULL) {
         free(starts);
@@ -129,10 +130,11 @@ static int read_faces(tpk_foam_file *f, poly_mesh *m)
     }
     for (int64_t i = 0; i < n; i++) {
         m->face_starts[i] = starts[i];
-        if (i && starts[i] - starts[i - 1] < 3) {
+        int64_t points = i ? (int64_t)starts[i] - starts[i - 1] : 3;
+        if (points < 3) {
             free(starts);
-            return tpk_foam_fail(f, "face %lld has %d points; a face needs at least 3", (long long)i - 1,
-                                 starts[i] - starts[i - 1]);
+            return tpk_foam_fail(f, "face %lld has %lld points; a face needs at least 3", (long long)i - 1,
+                                 (long long)points);
         }
     }
     free(starts);
