@@ -114,6 +114,9 @@ int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_
  * constant/polyMesh/faces or faces.gz, or is such a polyMesh directory (detection). */
 int tpk_import_openfoam(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_openfoam_is_case(const char *path);
+/* The polyMesh files the case's mesh comes from (each plain and .gz, existing or not); none when `path`
+ * is not a case. */
+void tpk_import_openfoam_files(const char *path, tpk_import_file_fn each, void *user);
 
 /* What a format carries into the converter (tetpack formats prints these). */
 enum {

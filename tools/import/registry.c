@@ -385,4 +385,6 @@ void tpk_import_input_files(const char *path, const char *format, tpk_import_fil
         tpk_import_pvd_files(path, each, user);
     else if (row && row->read == tpk_import_xdmf)
         tpk_import_xdmf_files(path, each, user);
+    else if ((row && row->read == tpk_import_openfoam) || tpk_openfoam_is_case(path))
+        tpk_import_openfoam_files(path, each, user);
 }

@@ -468,6 +468,19 @@ static int read_fields(const char *case_dir, tpk_mesh *out, tpk_diag *diag)
     return rc;
 }
 
+void tpk_import_openfoam_files(const char *path, tpk_import_file_fn each, void *user)
+{
+    static const char *const names[] = {"points", "faces", "owner", "neighbour"};
+    char case_dir[4096], mesh_dir[4096];
+    if (locate(path, case_dir, mesh_dir, sizeof case_dir, NULL) != 0)
+        return;
+    for (int i = 0; i < 8; i++) {
+        char file[4200];
+        snprintf(file, sizeof file, "%s/%s%s", mesh_dir, names[i / 2], i % 2 ? ".gz" : "");
+        each(user, file);
+    }
+}
+
 int tpk_import_openfoam(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
     if (tpk_import_begin(path, out, diag) != 0)
