@@ -79,7 +79,16 @@ for c in "$@"; do
         log blockMesh
         log surfaceFeatureExtract
         log snappyHexMesh -overwrite
-        finish_case flange ;;
+        finish_case flange
+        # The same mesh as a case directory: binary (foamFormatConvert), each polyMesh file gzipped here
+        # (v1912 leaves constant/polyMesh uncompressed with writeCompression on).
+        foamDictionary -entry writeFormat -set binary system/controlDict > /dev/null
+        log foamFormatConvert -constant
+        rm -rf "$OUT/cases/flange_binary" && mkdir -p "$OUT/cases/flange_binary/constant/polyMesh"
+        for f in points faces owner neighbour; do
+            gzip -9n -c "constant/polyMesh/$f" > "$OUT/cases/flange_binary/constant/polyMesh/$f.gz"
+        done
+        touch "$OUT/cases/flange_binary/flange.foam" ;;
     cavity)
         copy_case incompressible/icoFoam/cavity/cavity cavity
         log blockMesh
@@ -103,7 +112,7 @@ for c in "$@"; do
         # U (volVectorField): uniform (1 2 3) at 0.25; (cell id, -cell id, 0.25) at 0.5.
         field volVectorField U 0.25 "uniform (1 2 3)" > 0.25/U
         field volVectorField U 0.5 "nonuniform List<vector> $n ($(awk -v n="$n" 'BEGIN { for (i = 0; i < n; i++) printf "%s(%d %d 0.25)", i ? " " : "", i, -i }'))" > 0.5/U
-        rm -rf "$OUT/cases" && mkdir -p "$OUT/cases"
+        rm -rf "$OUT/cases"/cavity_* && mkdir -p "$OUT/cases"
         for form in ascii binary gzip; do
             rm -rf "$WORK/cavity_$form" && mkdir -p "$WORK/cavity_$form"
             cp -r system constant 0.25 0.5 "$WORK/cavity_$form/"
