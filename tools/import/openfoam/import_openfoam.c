@@ -312,7 +312,8 @@ static int list_times(const char *case_dir, time_dir **out, int *count, tpk_diag
         snprintf((*out)[(*count)++].name, sizeof(*out)->name, "%s", e->d_name);
     }
     closedir(d);
-    qsort(*out, (size_t)*count, sizeof **out, compare_times);
+    if (*count > 1) /* qsort must not be given NULL, even for no elements */
+        qsort(*out, (size_t)*count, sizeof **out, compare_times);
     return 0;
 }
 
