@@ -46,6 +46,12 @@ refused "OUTPUT '$WORK/t.ele' is a file the input reads" "$TPK" convert "$WORK/t
 # A piece the .pvd names.
 refused "OUTPUT '$WORK/p1.vtu' is a file the input reads (same file as '$WORK/p1.vtu', read for INPUT '$WORK/p.pvd')" \
     "$TPK" convert "$WORK/p.pvd" "$WORK/p1.vtu"
+# An OpenFOAM case's polyMesh files (a copy: the output would overwrite it), given as the case or its .foam.
+cp -r "$SRC/tests/data/openfoam/cases/cavity_gzip" "$WORK/foam"
+refused "OUTPUT '$WORK/foam/constant/polyMesh/owner.gz' is a file the input reads" \
+    "$TPK" convert "$WORK/foam" "$WORK/foam/constant/polyMesh/owner.gz"
+refused "OUTPUT '$WORK/foam/constant/polyMesh/faces.gz' is a file the input reads" \
+    "$TPK" convert "$WORK/foam/cavity.foam" "$WORK/foam/constant/polyMesh/faces.gz"
 # export and render.
 refused "--vtu '$WORK/good.tpk' is the input file (same file as FILE.tpk '$WORK/good.tpk')" \
     "$TPK" export "$WORK/good.tpk" --vtu "$WORK/good.tpk"

@@ -196,6 +196,11 @@ def importer_sources(tetpack, data, source_dir, folder):
         TALLY.skips.append("import: python3 without meshio: no binary Gmsh, zlib VTU, inp, XDMF or DOLFIN cases")
     for fmt, paths in (made or {}).items():
         sources += [(fmt, [p], []) for p in paths]
+    # An OpenFOAM case is a directory: convert is given its CASE.foam; each mesh and field file is damaged.
+    case = os.path.join(source_dir, "tests/data/openfoam/cases/cavity_binary")
+    sources.append(("openfoam", [os.path.join(case, "cavity.foam")] +
+                    [os.path.join(case, "constant/polyMesh", n) for n in ("points", "faces", "owner", "neighbour")] +
+                    [os.path.join(case, "0.5", n) for n in ("p", "pp")], []))
     sources.append(("surface", [surfaces["stl"][1]], ["--format", "surface"]))
     sources.append(("points", [surfaces["ply"][0]], ["--format", "points"]))
     listed = json.loads(subprocess.run([tetpack, "formats", "--json"], check=True, capture_output=True).stdout)
@@ -213,7 +218,9 @@ def import_case(tetpack, work, fmt, files, options, damaged, name, payload, allo
     inputs = os.path.join(folder, "in")
     os.mkdir(inputs)
     for k, f in enumerate(files):
-        target = os.path.join(inputs, os.path.basename(f))
+        # Kept where they lie relative to the first file (an OpenFOAM case's folders).
+        target = os.path.join(inputs, os.path.relpath(f, os.path.dirname(files[0])))
+        os.makedirs(os.path.dirname(target), exist_ok=True)
         if k == damaged:
             with open(target, "wb") as out:
                 out.write(payload)
@@ -248,6 +255,8 @@ def run_import(tetpack, data, work, source_dir):
         for seed in range(SEEDS):
             for damaged, f in enumerate(files):
                 data_bytes = open(f, "rb").read()
+                if not data_bytes:  # nothing to damage (ParaView's empty CASE.foam)
+                    continue
                 for name, payload in mutations.mutations(data_bytes, hash_seed(f, seed), seed == 0):
                     jobs.append((fmt, files, options, damaged, "%s_s%d" % (name, seed), payload, (0, 2)))
     for name, path in mutations.write_vtu_zlib_bombs(work):

@@ -4,7 +4,9 @@
 # volumes, so that tests can check that `tetpack convert` keeps every cell and its volume.
 # Needs OpenFOAM (Debian 12: apt-get install openfoam openfoam-examples, OpenFOAM v1912). CI does not run
 # this; it runs the tests on the files this wrote (tests/test_openfoam.sh).
-#   tests/openfoam/make_cases.sh OUTDIR [CASE...]   (CASE: wind, wind_full, igloo, flange; default wind igloo flange)
+#   tests/openfoam/make_cases.sh OUTDIR [CASE...]   (CASE: wind, wind_full, igloo, flange, cavity; default wind igloo flange)
+# cavity: the icoFoam cavity's polyMesh as case directories (OUTDIR/cases/cavity_{ascii,binary,gzip}) with a
+# cell field p and a point field pp written from known formulas, and foamToVTK's cavity.vtk of the same mesh.
 set -eu
 OUT=${1:?usage: make_cases.sh OUTDIR [CASE...]}
 shift
@@ -77,7 +79,55 @@ for c in "$@"; do
         log blockMesh
         log surfaceFeatureExtract
         log snappyHexMesh -overwrite
-        finish_case flange ;;
-    *) echo "make_cases.sh: unknown case '$c' (wind, wind_full, igloo, flange)" >&2; exit 2 ;;
+        finish_case flange
+        # The same mesh as a case directory: binary (foamFormatConvert), each polyMesh file gzipped here
+        # (v1912 leaves constant/polyMesh uncompressed with writeCompression on).
+        foamDictionary -entry writeFormat -set binary system/controlDict > /dev/null
+        log foamFormatConvert -constant
+        rm -rf "$OUT/cases/flange_binary" && mkdir -p "$OUT/cases/flange_binary/constant/polyMesh"
+        for f in points faces owner neighbour; do
+            gzip -9n -c "constant/polyMesh/$f" > "$OUT/cases/flange_binary/constant/polyMesh/$f.gz"
+        done
+        touch "$OUT/cases/flange_binary/flange.foam" ;;
+    cavity)
+        copy_case incompressible/icoFoam/cavity/cavity cavity
+        log blockMesh
+        log checkMesh -constant
+        foamDictionary -entry writePrecision -set 17 system/controlDict > /dev/null
+        log foamToVTK -constant -legacy -no-boundary -no-point-data
+        cp "$(find VTK -maxdepth 2 -name '*.vtk' | sort | head -1)" "$OUT/cavity.vtk"
+        # Fields with values a test can recompute: p = 0.5 + cell id / 1000 at time 0.5, pp = point id at
+        # time 0.5 (a pointScalarField), p uniform 2 and pp uniform 1 at time 0.25 (time steps sort numerically, not by name).
+        n=$(sed -n 's/.*nCells:\([0-9]*\).*/\1/p' constant/polyMesh/owner)
+        np=$(awk '/^[0-9]+$/ { print; exit }' constant/polyMesh/points)
+        mkdir -p 0.5 0.25
+        field() { # CLASS NAME TIME INTERNAL
+            printf 'FoamFile\n{\n    version 2.0;\n    format ascii;\n    class %s;\n    object %s;\n}\n\n' "$1" "$2"
+            printf 'dimensions [0 2 -2 0 0 0 0];\n\ninternalField %s;\n\nboundaryField\n{\n    ".*"\n    {\n        type calculated;\n    }\n}\n' "$4"
+        }
+        field volScalarField p 0.5 "nonuniform List<scalar> $n ($(awk -v n="$n" 'BEGIN { for (i = 0; i < n; i++) printf "%s%.17g", i ? " " : "", 0.5 + i / 1000 }'))" > 0.5/p
+        field pointScalarField pp 0.5 "nonuniform List<scalar> $np ($(awk -v n="$np" 'BEGIN { for (i = 0; i < n; i++) printf "%s%d", i ? " " : "", i }'))" > 0.5/pp
+        field volScalarField p 0.25 "uniform 2" > 0.25/p
+        field pointScalarField pp 0.25 "uniform 1" > 0.25/pp
+        # U (volVectorField): uniform (1 2 3) at 0.25; (cell id, -cell id, 0.25) at 0.5.
+        field volVectorField U 0.25 "uniform (1 2 3)" > 0.25/U
+        field volVectorField U 0.5 "nonuniform List<vector> $n ($(awk -v n="$n" 'BEGIN { for (i = 0; i < n; i++) printf "%s(%d %d 0.25)", i ? " " : "", i, -i }'))" > 0.5/U
+        rm -rf "$OUT/cases"/cavity_* && mkdir -p "$OUT/cases"
+        for form in ascii binary gzip; do
+            rm -rf "$WORK/cavity_$form" && mkdir -p "$WORK/cavity_$form"
+            cp -r system constant 0.25 0.5 "$WORK/cavity_$form/"
+            case $form in
+            binary) foamDictionary -entry writeFormat -set binary "$WORK/cavity_$form/system/controlDict" > /dev/null ;;
+            gzip) foamDictionary -entry writeCompression -set on "$WORK/cavity_$form/system/controlDict" > /dev/null ;;
+            esac
+            [ $form = ascii ] || (cd "$WORK/cavity_$form" && log foamFormatConvert -constant && log foamFormatConvert -time 0.25,0.5)
+            mkdir -p "$OUT/cases/cavity_$form/constant"
+            cp -r "$WORK/cavity_$form/constant/polyMesh" "$OUT/cases/cavity_$form/constant/"
+            cp -r "$WORK/cavity_$form/0.25" "$WORK/cavity_$form/0.5" "$OUT/cases/cavity_$form/"
+            rm -f "$OUT/cases/cavity_$form/constant/polyMesh/boundary"*
+            touch "$OUT/cases/cavity_$form/cavity.foam"
+        done
+        echo "cavity: $n cells, $np points" ;;
+    *) echo "make_cases.sh: unknown case '$c' (wind, wind_full, igloo, flange, cavity)" >&2; exit 2 ;;
     esac
 done

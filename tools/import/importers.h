@@ -105,6 +105,19 @@ int tpk_import_xdmf_sniff(const char *head, size_t got);
 /* Same from memory (for fuzzing): XML DataItems only, HDF data refused. */
 int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
+/* OpenFOAM case directories: `path` is the case, its constant/polyMesh, or a file in the case (ParaView's
+ * CASE.foam). constant/polyMesh's points, faces (faceList or faceCompactList), owner and neighbour, ASCII
+ * or binary (arch "LSB;label=32;scalar=64"), each plain or .gz; every cell a polyhedron (VTK 42) with
+ * outward faces. The numeric time directories' volScalarField, volVectorField (cell fields) and
+ * pointScalarField (point fields) named in the latest one, one time step per directory in time order.
+ * A directory format: no memory reader. tpk_openfoam_is_case: `path` is a directory holding
+ * constant/polyMesh/faces or faces.gz, or is such a polyMesh directory (detection). */
+int tpk_import_openfoam(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_openfoam_is_case(const char *path);
+/* The polyMesh files the case's mesh comes from (each plain and .gz, existing or not); none when `path`
+ * is not a case. */
+void tpk_import_openfoam_files(const char *path, tpk_import_file_fn each, void *user);
+
 /* What a format carries into the converter (tetpack formats prints these). */
 enum {
     TPK_FORMAT_TETS = 1u << 0,

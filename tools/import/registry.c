@@ -81,6 +81,10 @@ static const tpk_import_format formats[] = {
     {.name = "xdmf", .title = "XDMF 2 and 3 (meshio, FEniCS/dolfinx): XML or HDF5 data, temporal collections",
      .extensions = ".xdmf .xmf", .magic = "<Xdmf", .sniff = tpk_import_xdmf_sniff, .read = tpk_import_xdmf,
      .read_memory = tpk_import_xdmf_memory, .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+    /* Its files may each be .gz, read by the reader itself: the row does not say gzip (FILE.gz inputs). */
+    {.name = "openfoam", .title = "OpenFOAM case directory (or its CASE.foam): polyMesh ASCII, binary, .gz; fields",
+     .extensions = ".foam", .read = tpk_import_openfoam,
+     .supports = TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
     {.name = "stl", .title = "STL closed surface, ASCII or binary (TetGen fills it)", .extensions = ".stl",
      .magic = "solid", .read_memory = tpk_read_stl, .surface_kind = TPK_SURFACE_STL,
      .surface_mode = TPK_SURFACE_FACES, .supports = TPK_FORMAT_SURFACE},
@@ -339,6 +343,9 @@ int tpk_import_any_with(const char *path, const char *format, const struct tpk_t
         return tpk_diag_fail(diag, "%s: unknown input format '%s'; supported: %s (tetpack formats lists them)",
                              path, format, tpk_import_format_names(names, sizeof names));
     }
+    /* A directory names no format by extension or content: an OpenFOAM case is told by its polyMesh. */
+    if (tpk_openfoam_is_case(path))
+        return import_with(tpk_import_format_named("openfoam", NULL), 0, path, tetgen, out, diag);
     const tpk_import_format *row = tpk_import_format_detect(path);
     if (gzipped(path) && access(path, F_OK) == 0)
         return import_gzip(row, path, out, diag);
@@ -378,4 +385,6 @@ void tpk_import_input_files(const char *path, const char *format, tpk_import_fil
         tpk_import_pvd_files(path, each, user);
     else if (row && row->read == tpk_import_xdmf)
         tpk_import_xdmf_files(path, each, user);
+    else if ((row && row->read == tpk_import_openfoam) || tpk_openfoam_is_case(path))
+        tpk_import_openfoam_files(path, each, user);
 }
