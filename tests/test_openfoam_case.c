@@ -106,17 +106,39 @@ TPK_TEST(cavity_fields_and_time_steps)
     CHECK_MSG(ok, "fields p, pp and U or their time steps differ from what make_cases.sh wrote");
 }
 
-TPK_TEST(cavity_volume_and_conversion)
+/* A case and foamToVTK's .vtk of the same cells, both imported and tetrahedralized: cell counts, tets and
+ * volumes (NaN volume, with d's message, when a split fails). Returns 0, or -1 when an import fails. */
+typedef struct case_and_vtk {
+    int64_t cells, tets, vtk_cells, vtk_tets;
+    double volume, vtk_volume;
+} case_and_vtk;
+
+static int import_case_and_vtk(const char *case_path, const char *vtk_path, case_and_vtk *out, tpk_diag *d)
 {
     tpk_mesh foam, vtk;
-    tpk_diag d = {0};
-    int64_t foam_tets = 0, vtk_tets = 0;
-    CHECK_MSG(tpk_import_any(CASES "cavity_gzip", NULL, &foam, &d) == 0, "%s", d.message);
-    CHECK_MSG(tpk_import_vtk_legacy(TPK_SOURCE_DIR "/tests/data/openfoam/cavity.vtk", &vtk, &d) == 0, "%s", d.message);
-    int64_t foam_cells = foam.cell_count, vtk_cells = vtk.cell_count;
-    double foam_volume = tets_volume(&foam, &foam_tets, &d), vtk_volume = tets_volume(&vtk, &vtk_tets, &d);
+    memset(out, 0, sizeof *out);
+    if (tpk_import_any(case_path, NULL, &foam, d) != 0)
+        return -1;
+    if (tpk_import_vtk_legacy(vtk_path, &vtk, d) != 0) {
+        tpk_mesh_free(&foam);
+        return -1;
+    }
+    out->cells = foam.cell_count, out->vtk_cells = vtk.cell_count;
+    out->volume = tets_volume(&foam, &out->tets, d);
+    out->vtk_volume = tets_volume(&vtk, &out->vtk_tets, d);
     tpk_mesh_free(&foam);
     tpk_mesh_free(&vtk);
+    return 0;
+}
+
+TPK_TEST(cavity_volume_and_conversion)
+{
+    tpk_diag d = {0};
+    case_and_vtk c;
+    CHECK_MSG(import_case_and_vtk(CASES "cavity_gzip", TPK_SOURCE_DIR "/tests/data/openfoam/cavity.vtk", &c, &d) == 0,
+              "%s", d.message);
+    int64_t foam_cells = c.cells, vtk_cells = c.vtk_cells, foam_tets = c.tets;
+    double foam_volume = c.volume, vtk_volume = c.vtk_volume;
     printf("cavity: %lld cells, %lld tets, volume %.17g; foamToVTK's: %lld cells, volume %.17g\n",
            (long long)foam_cells, (long long)foam_tets, foam_volume, (long long)vtk_cells, vtk_volume);
     CHECK_EQ_INT(foam_cells, vtk_cells);
@@ -226,15 +248,12 @@ TPK_TEST(broken_cases_refused)
  * and prisms split there as such, so warped faces take other diagonals). */
 TPK_TEST(flange_binary_volume)
 {
-    tpk_mesh m, vtk;
     tpk_diag d = {0};
-    int64_t tets = 0, vtk_tets = 0;
-    CHECK_MSG(tpk_import_any(CASES "flange_binary/flange.foam", NULL, &m, &d) == 0, "%s", d.message);
-    CHECK_MSG(tpk_import_vtk_legacy(TPK_SOURCE_DIR "/tests/data/openfoam/flange.vtk", &vtk, &d) == 0, "%s", d.message);
-    int64_t cells = m.cell_count, vtk_cells = vtk.cell_count;
-    double volume = tets_volume(&m, &tets, &d), vtk_volume = tets_volume(&vtk, &vtk_tets, &d);
-    tpk_mesh_free(&m);
-    tpk_mesh_free(&vtk);
+    case_and_vtk c;
+    CHECK_MSG(import_case_and_vtk(CASES "flange_binary/flange.foam", TPK_SOURCE_DIR "/tests/data/openfoam/flange.vtk",
+                                  &c, &d) == 0, "%s", d.message);
+    int64_t cells = c.cells, vtk_cells = c.vtk_cells, tets = c.tets;
+    double volume = c.volume, vtk_volume = c.vtk_volume;
 #ifndef TPK_WITH_TETGEN
     /* 4 of its cells only TetGen splits inside their boundary: refused by name. */
     CHECK_MSG(isnan(volume) && strstr(d.message, "TetGen"), "%s", d.message);
