@@ -30,7 +30,25 @@ typedef struct tpk_render_options {
     int integration;               /* 0: exact per segment (default), 1: sampling with steps of
                                       unit_distance / 2 at most (and at least 1 sample per segment) */
     float background[4];           /* RGBA, straight alpha, composited behind the volume */
+    /* ---- Effects (zero: off). Both backends (CPU reference, Vulkan) implement each one with the
+     * same definition, so their pictures agree; the definitions live in render.h's comments and in
+     * docs/ARCHITECTURE.md "Render effects". */
+    const float *tet_scalars;      /* per tet (a tet field): constant in each tet, replaces the
+                                      point scalars of the mesh for colour, opacity and iso */
+    int iso_count;                 /* 0..TPK_RENDER_MAX_ISO exact isosurfaces of the linear scalar */
+    double iso[4];                 /* iso values (in scalar units, not TF units) */
+    double iso_opacity;            /* opacity of an isosurface hit; <= 0: 1 (opaque) */
+    int clip;                      /* nonzero: only the volume inside [clip_min, clip_max] shows */
+    double clip_min[3], clip_max[3];
+    int shading;                   /* gradient (Lambert, two-sided) shading of volume and isosurfaces */
+    int shadows;                   /* transmittance toward the point light, marched through the volume */
+    int have_light;                /* zero: a headlight at the camera eye */
+    double light[3];               /* point light position, world coordinates */
+    int ao_rays;                   /* ambient occlusion with this many hemisphere rays; 0: off */
+    double ao_radius;              /* AO ray length; <= 0: bounds diagonal / 10 */
 } tpk_render_options;
+
+#define TPK_RENDER_MAX_ISO 4
 
 /* width 800, height 600, integration 0, threads all, background opaque dark gray (0.1, 0.1, 0.1, 1);
  * the camera, tf and range are left zero for the caller. */
