@@ -92,6 +92,10 @@ printf '# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 
 refused "OUTPUT '$WORK' is a directory" "$TPK" convert "$WORK/trunc.vtk" "$WORK"
 refused "--vtu is empty" "$TPK" export "$WORK/good.tpk" --vtu ""
 refused "--shell '$WORK' is a directory" "$TPK" export "$WORK/good.tpk" --shell "$WORK"
+# Two outputs of one export that are one file: the second would replace the first.
+refused "--vtu '$WORK/both.vtu' and --shell '$WORK/both.vtu' name the same file" \
+    "$TPK" export "$WORK/good.tpk" --vtu "$WORK/both.vtu" --shell "$WORK/both.vtu"
+[ ! -e "$WORK/both.vtu" ] || fail "a refused export wrote $WORK/both.vtu"
 refused "-o '$WORK' is a directory" "$TPK" render "$WORK/good.tpk" -o "$WORK"
 # ... and the directory check comes before opening FILE.tpk (a broken one is not read either).
 refused "-o is empty" "$TPK" render "$WORK/trunc.vtk" -o ""
