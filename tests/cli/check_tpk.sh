@@ -22,6 +22,9 @@ cp "$WORK/c.tpk" "$WORK/flip.tpk"
 printf '\x55' | dd of="$WORK/flip.tpk" bs=1 seek=$((offset + 20)) conv=notrunc status=none
 expect_exit 1 "$TPK" check "$WORK/flip.tpk"
 grep -q "600 error   file_rule" "$WORK/out" || fail "no 600 line: $(cat "$WORK/out")"
+# The header's counts are still reported (they were "0 vertices, 0 cells").
+counts=$("$TPK" info "$WORK/c.tpk" --json | $PY -c 'import json,sys; d=json.load(sys.stdin); print(d["vertices"], d["tets"])')
+grep -q "tpk, ${counts% *} vertices, ${counts#* } cells" "$WORK/out" || fail "no header counts ($counts): $(head -1 "$WORK/out")"
 expect_exit 1 "$TPK" check "$WORK/flip.tpk" --json
 $PY - "$WORK/out" <<'PY'
 import json, sys

@@ -71,8 +71,11 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
         report->seconds[6] = now_seconds() - t0;
         report->ran[6] = 1;
         tpk_file_info info;
-        if (tpk_get_info(file, &info) == TPK_OK)
+        if (tpk_get_info(file, &info) == TPK_OK) { /* the header's counts, also when a chunk is damaged */
             report->tets = (int64_t)info.tet_count;
+            report->vertices = (int64_t)info.vertex_count;
+            report->cells = (int64_t)info.tet_count;
+        }
         if (rc == 0) {
             tpk_diag sub = *diag;
             if (tpk_check_tpk_mesh_tets(file, tets, &mesh, &sub) == 0)
