@@ -132,7 +132,8 @@ void tpk_render_options_default(tpk_render_options *opt);
 
 typedef struct tpk_render_stats {
     uint64_t rays;      /* primary rays (one per pixel) */
-    uint64_t tet_steps; /* tets the marcher stepped through, all rays */
+    uint64_t tet_steps; /* tets the marcher stepped through, all rays (secondary ones included) */
+    uint64_t secondary_rays; /* shadow and AO rays */
     double seconds;     /* wall time of the render (marcher creation included) */
 } tpk_render_stats;
 
