@@ -340,6 +340,21 @@ static int check_field(const render_args *a, tpk_file *file, int *association)
                         used ? "fields: " : "no fields", names);
 }
 
+/* The steps of the field rendered (the named one, or the first point field; 1 without a field), so a
+ * step range past them is refused before any frame is written. */
+static uint32_t field_steps(tpk_file *file, const char *name, char found[80])
+{
+    snprintf(found, 80, "(no field)");
+    for (uint32_t i = 0; i < tpk_field_count(file); i++) {
+        tpk_field_desc d;
+        if (tpk_get_field(file, i, &d) == TPK_OK && (name ? !strcmp(name, d.name) : d.association == TPK_ASSOC_POINT)) {
+            snprintf(found, 80, "field '%s'", d.name);
+            return d.step_count;
+        }
+    }
+    return 1;
+}
+
 /* -o with --steps: exactly one %d conversion (flags 0-9 only, e.g. %04d) and no other '%' but "%%". */
 static int frame_pattern_ok(const char *pattern)
 {
@@ -414,6 +429,11 @@ static int render_file(render_args *a, tpk_file *file)
     int association;
     if (check_field(a, file, &association))
         return TPK_EXIT_USAGE;
+    char name[80];
+    uint32_t steps = field_steps(file, a->field, name);
+    if ((uint32_t)a->step_last >= steps)
+        return tpk_cli_fail("render", "%s: %s has %u step(s) (0..%u), step %d asked", a->path, name, steps,
+                            steps - 1, a->step_last);
     tpk_transfer_function tf;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
