@@ -118,9 +118,11 @@ typedef struct tpk_render_options {
  * 1), m at the hit point with the normal above (the hit is a shade point; the volume schedule is not
  * changed by it).
  *
- * INTEGRATION of the volume between shade points and hits: exact / sampled / midpoint as
- * `integration` says, the piece's m multiplying its rgb. Midpoint: one sample at the middle of the piece,
- * alpha = 1 - exp(-length * k(u(s_mid))). */
+ * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
+ * the piece's m multiplying its rgb, as `integration` says. Exact: split where u crosses a TF control
+ * point, then steps of optical depth <= 0.05 with colour weighted by extinction. Sampled: equal steps of
+ * at most unit_distance / 2, sampled at their middles, none once T <= 0.02. Midpoint: one sample at the
+ * middle of the stretch, alpha = 1 - exp(-length * k(u(s_mid))). */
 #define TPK_RENDER_AMBIENT 0.3
 #define TPK_RENDER_SHADE_STEP (1.0 / 32.0)
 #define TPK_RENDER_SELF_EPS 1e-3
