@@ -15,6 +15,7 @@ R "$WORK/c.tpk" -o "$WORK/clip_half.png" --clip-box -1,-1,-1,0.05,1,1
 R "$WORK/c.tpk" -o "$WORK/shaded.png" --shading --light -0.1,0,0
 R "$WORK/c.tpk" -o "$WORK/shadows.png" --shading --shadows --light -0.1,0,0
 R "$WORK/c.tpk" -o "$WORK/ao.png" --ao 4
+R "$WORK/c.tpk" -o "$WORK/ao_short.png" --ao 4 --ao-radius 0.001
 R "$WORK/c.tpk" -o "$WORK/midpoint.png" --integration midpoint
 "$PY" - "$WORK" "$(dirname "$0")" <<'PY'
 import json, sys
@@ -23,7 +24,7 @@ sys.path.insert(0, sys.argv[2])
 from png_read import pixels
 w = sys.argv[1]
 img = {n: pixels("%s/%s.png" % (w, n)) for n in
-       ["plain", "iso", "iso_shaded", "clip_none", "clip_half", "shaded", "shadows", "ao", "midpoint"]}
+       ["plain", "iso", "iso_shaded", "clip_none", "clip_half", "shaded", "shadows", "ao", "ao_short", "midpoint"]}
 bg = img["plain"][0, 0]
 def shown(a):
     return np.any(a != bg, axis=2)
@@ -49,6 +50,10 @@ assert 0.3 < ratio < 0.7, ratio
 for dark, light in [("shadows", "shaded"), ("ao", "plain")]:
     d = img[dark][..., :3].astype(int) - img[light][..., :3]
     assert d.max() <= 1 and (d < -2).sum() > 50, (dark, d.max(), (d < -2).sum())
+# shorter AO rays see less volume: brighter than the default length, darker than none
+short = img["ao_short"][..., :3].astype(int)
+assert (short - img["ao"][..., :3]).min() >= -1 and (img["plain"][..., :3] - short).min() >= -1
+assert (short > img["ao"][..., :3] + 2).sum() > 50
 # one sample per piece: close to the exact integral, not the same
 d = np.abs(img["midpoint"].astype(int) - img["plain"])
 assert 0 < d.max() and d.mean() < 2, (d.max(), d.mean())

@@ -45,8 +45,8 @@ static const char render_help[] =
     "  --shading                    gradient shading (two-sided Lambert, ambient 0.3)\n"
     "  --shadows                    shadows: transmittance marched toward the light\n"
     "  --light x,y,z                point light position (default: at the eye)\n"
-    "  --ao N                       ambient occlusion from N hemisphere rays (1..1024) of length\n"
-    "                               bounds diagonal / 10\n"
+    "  --ao N                       ambient occlusion from N hemisphere rays (1..1024)\n"
+    "  --ao-radius R                length of the AO rays (default: bounds diagonal / 10)\n"
     "Effect definitions: docs/ARCHITECTURE.md, \"Render effects\".\n"
     "  --threads N                  worker threads (default: all cores)\n"
     "  --json                       print render statistics as JSON\n";
@@ -183,6 +183,11 @@ static int opt_light(const char *v, render_args *a)
 
 static int opt_ao(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->ao_rays); }
 
+static int opt_ao_radius(const char *v, render_args *a)
+{
+    return tpk_cli_parse_doubles(v, &a->ao_radius, 1) || !(a->ao_radius > 0) ? -1 : 0;
+}
+
 typedef struct render_option {
     const char *name, *alias; /* alias: a short form, or NULL */
     int takes_value;
@@ -211,6 +216,7 @@ static const render_option render_options[] = {
     {"--shadows", NULL, 0, opt_shadows, NULL},
     {"--light", NULL, 1, opt_light, "3 numbers x,y,z"},
     {"--ao", NULL, 1, opt_ao, "a ray count 1..1024"},
+    {"--ao-radius", NULL, 1, opt_ao_radius, "a positive length"},
 };
 
 /* The table entry `arg` names ("--name", "--name=value" or the alias), or NULL. */
@@ -314,6 +320,7 @@ void render_args_to_options(const render_args *a, tpk_file *file, const tpk_tran
     opt->have_light = a->have_light;
     memcpy(opt->light, a->light, sizeof opt->light);
     opt->ao_rays = a->ao_rays;
+    opt->ao_radius = a->ao_radius;
 }
 
 /* The association of the named field (-1 when there is none), or a usage error naming the fields the

@@ -17,7 +17,7 @@ typedef struct render_args {
     int clip;
     double clip_box[6]; /* x0,y0,z0,x1,y1,z1 */
     int shading, shadows, have_light, ao_rays;
-    double light[3];
+    double light[3], ao_radius; /* ao_radius 0: the renderer's default */
 } render_args;
 
 /* Defaults: 512x512, step 0, everything else off. */
