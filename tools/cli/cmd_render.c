@@ -1,4 +1,5 @@
-/* tetpack render: CPU reference rendering of a .tpk to PNG (emission-absorption). */
+/* tetpack render: CPU reference rendering of a .tpk to PNG (emission-absorption and the effects of
+ * render.h), one image or one per time step. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -8,6 +9,7 @@
 #include "render/render.h"
 #include "tetpack.h"
 #include "render/transfer_function.h"
+#include "render_args.h"
 
 static const char render_help[] =
     "usage: tetpack render FILE.tpk -o IMAGE.png [options]\n"
@@ -24,84 +26,223 @@ static const char render_help[] =
     "                               (default: a 3/4 view framing the bounds)\n"
     "  --tf PRESET|FILE             transfer function: a preset (viridis, cool-warm, inferno,\n"
     "                               grayscale) or a text file of lines 's r g b a' (default viridis)\n"
-    "  --field NAME                 point field to render (default: the first point field)\n"
+    "  --field NAME                 field to render: a point field (linear in each tet) or a tet\n"
+    "                               field (constant in each tet) (default: the first point field)\n"
     "  --step N                     time step of the field (default 0)\n"
+    "  --steps A:B                  render steps A..B, one PNG each: -o must hold one %d\n"
+    "                               conversion for the step, e.g. -o frame_%04d.png\n"
     "  --range LO,HI                scalar range mapped onto the TF (default: the field's range)\n"
     "  --layout tet16|tet20|tet32   which stored layout to march (default: the first present)\n"
     "  --unit-distance D            TF opacity is per distance D (default: bounds diagonal / 100)\n"
-    "  --integration exact|sampled  per-piece integration as above (default), or point samples\n"
-    "                               at most unit-distance/2 apart\n"
+    "  --integration exact|sampled|midpoint\n"
+    "                               per-piece integration as above (default), point samples at\n"
+    "                               most unit-distance/2 apart, or one sample per tet piece at its\n"
+    "                               midpoint\n"
+    "  --iso V[,V...]               up to 4 exact isosurfaces of the field (scalar units), coloured\n"
+    "                               by the TF at V\n"
+    "  --iso-opacity A              opacity of an isosurface, in (0,1] (default 1)\n"
+    "  --clip-box x0,y0,z0,x1,y1,z1 show only the volume inside this box (world coordinates)\n"
+    "  --shading                    gradient shading (two-sided Lambert, ambient 0.3)\n"
+    "  --shadows                    shadows: transmittance marched toward the light\n"
+    "  --light x,y,z                point light position (default: at the eye)\n"
+    "  --ao N                       ambient occlusion from N hemisphere rays (1..1024)\n"
+    "  --ao-radius R                length of the AO rays (default: bounds diagonal / 10)\n"
+    "Effect definitions: docs/ARCHITECTURE.md, \"Render effects\".\n"
     "  --threads N                  worker threads (default: all cores)\n"
     "  --json                       print render statistics as JSON\n";
 
-typedef struct render_args {
-    const char *path, *output, *tf, *field, *layout;
-    int width, height, step, threads, json, have_camera, have_range, integration;
-    double camera[10], range[2], unit_distance;
-} render_args;
+void render_args_default(render_args *a)
+{
+    memset(a, 0, sizeof *a);
+    a->width = a->height = 512;
+}
 
 static int parse_size(const char *text, int *w, int *h)
 {
     char *end;
-    long a = strtol(text, &end, 10);
+    long x = strtol(text, &end, 10);
     if (end == text || (*end != 'x' && *end != 'X'))
         return -1;
     const char *rest = end + 1;
-    long b = strtol(rest, &end, 10);
-    if (end == rest || *end || a < 1 || b < 1 || a > 16384 || b > 16384)
+    long y = strtol(rest, &end, 10);
+    if (end == rest || *end || x < 1 || y < 1 || x > 16384 || y > 16384)
         return -1;
-    *w = (int)a;
-    *h = (int)b;
+    *w = (int)x;
+    *h = (int)y;
     return 0;
+}
+
+/* 1 to `max` comma-separated numbers. */
+static int parse_list(const char *text, double *out, int max, int *count)
+{
+    char *end;
+    for (int n = 0; n < max; n++) {
+        out[n] = strtod(text, &end);
+        if (end == text || !isfinite(out[n]))
+            return -1;
+        if (!*end) {
+            *count = n + 1;
+            return 0;
+        }
+        if (*end != ',')
+            return -1;
+        text = end + 1;
+    }
+    return -1;
+}
+
+/* ---- The option table: one parser per option; each returns 0 or -1 (then the table's `expects` is
+ * printed with the value found). */
+
+static int opt_output(const char *v, render_args *a) { a->output = v; return 0; }
+static int opt_size(const char *v, render_args *a) { return parse_size(v, &a->width, &a->height); }
+static int opt_tf(const char *v, render_args *a) { a->tf = v; return 0; }
+static int opt_field(const char *v, render_args *a) { a->field = v; return 0; }
+static int opt_json(const char *v, render_args *a) { (void)v; a->json = 1; return 0; }
+static int opt_shading(const char *v, render_args *a) { (void)v; a->shading = 1; return 0; }
+static int opt_shadows(const char *v, render_args *a) { (void)v; a->shadows = 1; return 0; }
+
+static int opt_camera(const char *v, render_args *a)
+{
+    a->have_camera = 1;
+    return tpk_cli_parse_doubles(v, a->camera, 10) || !(a->camera[9] > 0 && a->camera[9] < 180) ? -1 : 0;
+}
+
+static int opt_step(const char *v, render_args *a)
+{
+    a->have_steps = 0;
+    if (tpk_cli_parse_int(v, 0, 1 << 30, &a->step))
+        return -1;
+    a->step_last = a->step;
+    return 0;
+}
+
+static int opt_steps(const char *v, render_args *a)
+{
+    char first[32];
+    const char *colon = strchr(v, ':');
+    if (!colon || (size_t)(colon - v) >= sizeof first)
+        return -1;
+    memcpy(first, v, (size_t)(colon - v));
+    first[colon - v] = 0;
+    if (tpk_cli_parse_int(first, 0, 1 << 30, &a->step) || tpk_cli_parse_int(colon + 1, 0, 1 << 30, &a->step_last) ||
+        a->step_last < a->step || a->step_last - a->step >= 100000)
+        return -1;
+    a->have_steps = 1;
+    return 0;
+}
+
+static int opt_range(const char *v, render_args *a)
+{
+    a->have_range = 1;
+    return tpk_cli_parse_doubles(v, a->range, 2) || !(a->range[0] < a->range[1]) ? -1 : 0;
+}
+
+static int opt_layout(const char *v, render_args *a)
+{
+    a->layout = v;
+    return strcmp(v, "tet16") && strcmp(v, "tet20") && strcmp(v, "tet32") ? -1 : 0;
+}
+
+static int opt_unit(const char *v, render_args *a)
+{
+    return tpk_cli_parse_doubles(v, &a->unit_distance, 1) || !(a->unit_distance > 0) ? -1 : 0;
+}
+
+static int opt_integration(const char *v, render_args *a)
+{
+    a->integration = !strcmp(v, "exact") ? TPK_INTEGRATION_EXACT : !strcmp(v, "sampled") ? TPK_INTEGRATION_SAMPLED
+                     : !strcmp(v, "midpoint") ? TPK_INTEGRATION_MIDPOINT : -1;
+    return a->integration < 0 ? -1 : 0;
+}
+
+static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->threads); }
+static int opt_iso(const char *v, render_args *a) { return parse_list(v, a->iso, TPK_RENDER_MAX_ISO, &a->iso_count); }
+
+static int opt_iso_opacity(const char *v, render_args *a)
+{
+    return tpk_cli_parse_doubles(v, &a->iso_opacity, 1) || !(a->iso_opacity > 0 && a->iso_opacity <= 1) ? -1 : 0;
+}
+
+static int opt_clip(const char *v, render_args *a)
+{
+    a->clip = 1;
+    if (tpk_cli_parse_doubles(v, a->clip_box, 6))
+        return -1;
+    for (int k = 0; k < 3; k++)
+        if (!(a->clip_box[k] <= a->clip_box[k + 3]))
+            return -1;
+    return 0;
+}
+
+static int opt_light(const char *v, render_args *a)
+{
+    a->have_light = 1;
+    return tpk_cli_parse_doubles(v, a->light, 3);
+}
+
+static int opt_ao(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->ao_rays); }
+
+static int opt_ao_radius(const char *v, render_args *a)
+{
+    return tpk_cli_parse_doubles(v, &a->ao_radius, 1) || !(a->ao_radius > 0) ? -1 : 0;
+}
+
+typedef struct render_option {
+    const char *name, *alias; /* alias: a short form, or NULL */
+    int takes_value;
+    int (*parse)(const char *value, render_args *a);
+    const char *expects;
+} render_option;
+
+static const render_option render_options[] = {
+    {"--output", "-o", 1, opt_output, "an output PNG path"},
+    {"--size", NULL, 1, opt_size, "WxH (1..16384)"},
+    {"--camera", NULL, 1, opt_camera, "10 numbers ex,ey,ez,ax,ay,az,ux,uy,uz,fovy (fovy in (0,180))"},
+    {"--tf", NULL, 1, opt_tf, "a preset name or a file"},
+    {"--field", NULL, 1, opt_field, "a field name"},
+    {"--step", NULL, 1, opt_step, "a step number >= 0"},
+    {"--steps", NULL, 1, opt_steps, "A:B with 0 <= A <= B, at most 100000 steps"},
+    {"--range", NULL, 1, opt_range, "LO,HI with LO < HI"},
+    {"--layout", NULL, 1, opt_layout, "tet16, tet20 or tet32"},
+    {"--unit-distance", NULL, 1, opt_unit, "a positive number"},
+    {"--integration", NULL, 1, opt_integration, "exact, sampled or midpoint"},
+    {"--threads", NULL, 1, opt_threads, "1..1024"},
+    {"--json", NULL, 0, opt_json, NULL},
+    {"--iso", NULL, 1, opt_iso, "1 to 4 comma-separated finite numbers"},
+    {"--iso-opacity", NULL, 1, opt_iso_opacity, "a number in (0,1]"},
+    {"--clip-box", NULL, 1, opt_clip, "6 numbers x0,y0,z0,x1,y1,z1 with x0 <= x1, y0 <= y1, z0 <= z1"},
+    {"--shading", NULL, 0, opt_shading, NULL},
+    {"--shadows", NULL, 0, opt_shadows, NULL},
+    {"--light", NULL, 1, opt_light, "3 numbers x,y,z"},
+    {"--ao", NULL, 1, opt_ao, "a ray count 1..1024"},
+    {"--ao-radius", NULL, 1, opt_ao_radius, "a positive length"},
+};
+
+/* The table entry `arg` names ("--name", "--name=value" or the alias), or NULL. */
+static const render_option *find_option(const char *arg)
+{
+    for (size_t k = 0; k < sizeof render_options / sizeof render_options[0]; k++) {
+        const render_option *o = &render_options[k];
+        size_t n = strlen(o->name);
+        if ((o->alias && !strcmp(arg, o->alias)) || !strcmp(arg, o->name) ||
+            (o->takes_value && !strncmp(arg, o->name, n) && arg[n] == '='))
+            return o;
+    }
+    return NULL;
 }
 
 static int parse_option(int argc, char **argv, int *i, render_args *a)
 {
-    const char *arg = argv[*i], *v = NULL;
-#define VALUE(name) (v = tpk_cli_value(argc, argv, i, name))
-    if (!strcmp(arg, "-o") || !strncmp(arg, "--output", 8)) {
-        if (!VALUE(arg[1] == 'o' ? "-o" : "--output"))
-            return tpk_cli_fail("render", "-o expects an output PNG path");
-        a->output = v;
-    } else if (!strncmp(arg, "--size", 6)) {
-        if (!VALUE("--size") || parse_size(v, &a->width, &a->height))
-            return tpk_cli_fail("render", "--size expects WxH (1..16384), found '%s'", v ? v : "");
-    } else if (!strncmp(arg, "--camera", 8)) {
-        if (!VALUE("--camera") || tpk_cli_parse_doubles(v, a->camera, 10) || !(a->camera[9] > 0 && a->camera[9] < 180))
-            return tpk_cli_fail("render", "--camera expects 10 numbers ex,ey,ez,ax,ay,az,ux,uy,uz,fovy "
-                                          "(fovy in (0,180)), found '%s'", v ? v : "");
-        a->have_camera = 1;
-    } else if (!strncmp(arg, "--tf", 4)) {
-        if (!VALUE("--tf"))
-            return tpk_cli_fail("render", "--tf expects a preset name or a file");
-        a->tf = v;
-    } else if (!strncmp(arg, "--field", 7)) {
-        if (!VALUE("--field"))
-            return tpk_cli_fail("render", "--field expects a field name");
-        a->field = v;
-    } else if (!strncmp(arg, "--step", 6)) {
-        if (!VALUE("--step") || tpk_cli_parse_int(v, 0, 1 << 30, &a->step))
-            return tpk_cli_fail("render", "--step expects a step number >= 0, found '%s'", v ? v : "");
-    } else if (!strncmp(arg, "--range", 7)) {
-        if (!VALUE("--range") || tpk_cli_parse_doubles(v, a->range, 2) || !(a->range[0] < a->range[1]))
-            return tpk_cli_fail("render", "--range expects LO,HI with LO < HI, found '%s'", v ? v : "");
-        a->have_range = 1;
-    } else if (!strncmp(arg, "--layout", 8)) {
-        if (!VALUE("--layout") || (strcmp(v, "tet16") && strcmp(v, "tet20") && strcmp(v, "tet32")))
-            return tpk_cli_fail("render", "--layout expects tet16, tet20 or tet32, found '%s'", v ? v : "");
-        a->layout = v;
-    } else if (!strncmp(arg, "--unit-distance", 15)) {
-        if (!VALUE("--unit-distance") || tpk_cli_parse_doubles(v, &a->unit_distance, 1) || !(a->unit_distance > 0))
-            return tpk_cli_fail("render", "--unit-distance expects a positive number, found '%s'", v ? v : "");
-    } else if (!strncmp(arg, "--integration", 13)) {
-        if (!VALUE("--integration") || (strcmp(v, "exact") && strcmp(v, "sampled")))
-            return tpk_cli_fail("render", "--integration expects exact or sampled, found '%s'", v ? v : "");
-        a->integration = !strcmp(v, "sampled");
-    } else if (!strncmp(arg, "--threads", 9)) {
-        if (!VALUE("--threads") || tpk_cli_parse_int(v, 1, 1024, &a->threads))
-            return tpk_cli_fail("render", "--threads expects 1..1024, found '%s'", v ? v : "");
-    } else if (!strcmp(arg, "--json")) {
-        a->json = 1;
+    const char *arg = argv[*i];
+    const render_option *o = find_option(arg);
+    if (o) {
+        const char *v = o->takes_value ? tpk_cli_value(argc, argv, i, o->alias && !strcmp(arg, o->alias) ? o->alias : o->name)
+                                       : NULL;
+        if (o->takes_value && !v)
+            return tpk_cli_fail("render", "%s expects %s", o->name, o->expects);
+        if (o->parse(v, a))
+            return tpk_cli_fail("render", "%s expects %s, found '%s'", o->name, o->expects, v ? v : "");
     } else if (arg[0] == '-' && arg[1]) {
         return tpk_cli_fail("render", "unknown option '%s' (see tetpack render --help)", arg);
     } else if (!a->path) {
@@ -109,7 +250,6 @@ static int parse_option(int argc, char **argv, int *i, render_args *a)
     } else {
         return tpk_cli_fail("render", "expected one FILE.tpk, found a second argument '%s'", arg);
     }
-#undef VALUE
     return 0;
 }
 
@@ -125,16 +265,17 @@ static tpk_layout pick_layout(tpk_file *file, const char *name)
     return TPK_LAYOUT_TET32;
 }
 
-/* The range of the field being rendered, from its descriptor. */
+/* The range of the field being rendered, from its descriptor (min and max over all steps, so frames
+ * of a step range share one colour scale): the named field, or the first point field. */
 static void field_range(tpk_file *file, const char *name, double range[2])
 {
     range[0] = 0.0;
     range[1] = 1.0;
     for (uint32_t i = 0; i < tpk_field_count(file); i++) {
         tpk_field_desc d;
-        if (tpk_get_field(file, i, &d) != TPK_OK || d.association != TPK_ASSOC_POINT)
+        if (tpk_get_field(file, i, &d) != TPK_OK)
             continue;
-        if (name && strcmp(name, d.name))
+        if (name ? strcmp(name, d.name) != 0 : d.association != TPK_ASSOC_POINT)
             continue;
         if (d.min_value < d.max_value) {
             range[0] = d.min_value;
@@ -144,100 +285,210 @@ static void field_range(tpk_file *file, const char *name, double range[2])
     }
 }
 
-/* The renderer interpolates per-point values linearly inside each tet; say so, and which fields fit,
- * when the named field is per-tet or missing. */
-static int check_field(const render_args *a, tpk_file *file)
+void render_args_to_options(const render_args *a, tpk_file *file, const tpk_transfer_function *tf,
+                            tpk_render_options *opt)
 {
+    tpk_file_info info;
+    tpk_get_info(file, &info);
+    opt->width = a->width;
+    opt->height = a->height;
+    if (a->have_camera) {
+        memcpy(opt->camera.eye, a->camera, sizeof opt->camera.eye);
+        memcpy(opt->camera.at, a->camera + 3, sizeof opt->camera.at);
+        memcpy(opt->camera.up, a->camera + 6, sizeof opt->camera.up);
+        opt->camera.fovy_deg = a->camera[9];
+    } else {
+        tpk_camera_default(info.bounds_min, info.bounds_max, &opt->camera);
+    }
+    opt->tf = tf;
+    double range[2] = {a->range[0], a->range[1]};
+    if (!a->have_range)
+        field_range(file, a->field, range);
+    opt->range_min = range[0];
+    opt->range_max = range[1];
+    opt->unit_distance = a->unit_distance;
+    opt->threads = a->threads;
+    opt->integration = a->integration;
+    opt->iso_count = a->iso_count;
+    memcpy(opt->iso, a->iso, sizeof opt->iso);
+    opt->iso_opacity = a->iso_opacity;
+    opt->clip = a->clip;
+    memcpy(opt->clip_min, a->clip_box, sizeof opt->clip_min);
+    memcpy(opt->clip_max, a->clip_box + 3, sizeof opt->clip_max);
+    opt->shading = a->shading;
+    opt->shadows = a->shadows;
+    opt->have_light = a->have_light;
+    memcpy(opt->light, a->light, sizeof opt->light);
+    opt->ao_rays = a->ao_rays;
+    opt->ao_radius = a->ao_radius;
+}
+
+/* The association of the named field (-1 when there is none), or a usage error naming the fields the
+ * file has. */
+static int check_field(const render_args *a, tpk_file *file, int *association)
+{
+    *association = TPK_ASSOC_POINT;
     if (!a->field)
         return 0;
-    char points[512] = "";
+    char names[512] = "";
     size_t used = 0;
-    int found = -1;
     for (uint32_t i = 0; i < tpk_field_count(file); i++) {
         tpk_field_desc d;
         if (tpk_get_field(file, i, &d) != TPK_OK)
             continue;
-        if (!strcmp(d.name, a->field))
-            found = (int)d.association;
-        if (d.association == TPK_ASSOC_POINT && used + strlen(d.name) + 3 < sizeof points)
-            used += (size_t)snprintf(points + used, sizeof points - used, "%s%s", used ? ", " : "", d.name);
+        if (!strcmp(d.name, a->field)) {
+            *association = (int)d.association;
+            return 0;
+        }
+        if (used + strlen(d.name) + 3 < sizeof names)
+            used += (size_t)snprintf(names + used, sizeof names - used, "%s%s", used ? ", " : "", d.name);
     }
-    if (found == TPK_ASSOC_POINT)
-        return 0;
-    return tpk_cli_fail("render", "%s: %s '%s'; render needs a per-point field (this file has %s%s)", a->path,
-                        found < 0 ? "no field named" : "per-tet field", a->field,
-                        used ? "point fields: " : "no point field", points);
+    return tpk_cli_fail("render", "%s: no field named '%s' (this file has %s%s)", a->path, a->field,
+                        used ? "fields: " : "no fields", names);
+}
+
+/* The steps of the field rendered (the named one, or the first point field; 1 without a field), so a
+ * step range past them is refused before any frame is written. */
+static uint32_t field_steps(tpk_file *file, const char *name, char found[80])
+{
+    snprintf(found, 80, "(no field)");
+    for (uint32_t i = 0; i < tpk_field_count(file); i++) {
+        tpk_field_desc d;
+        if (tpk_get_field(file, i, &d) == TPK_OK && (name ? !strcmp(name, d.name) : d.association == TPK_ASSOC_POINT)) {
+            snprintf(found, 80, "field '%s'", d.name);
+            return d.step_count;
+        }
+    }
+    return 1;
+}
+
+/* -o with --steps: exactly one %d conversion (flags 0-9 only, e.g. %04d) and no other '%' but "%%". */
+static int frame_pattern_ok(const char *pattern)
+{
+    int conversions = 0;
+    for (const char *p = pattern; *p; p++) {
+        if (*p != '%')
+            continue;
+        if (p[1] == '%') {
+            p++;
+            continue;
+        }
+        p++;
+        while (*p >= '0' && *p <= '9')
+            p++;
+        if (*p != 'd')
+            return 0;
+        conversions++;
+    }
+    return conversions == 1;
+}
+
+/* The field values of one step: point scalars into mesh, or a tet field into opt->tet_scalars. */
+static int load_step(const render_args *a, tpk_file *file, int tet_field, int step, tpk_mesh_arrays *mesh,
+                     tpk_render_options *opt)
+{
+    tpk_layout layout = pick_layout(file, a->layout);
+    tpk_result r = tpk_load_arrays(file, layout, tet_field ? NULL : a->field, (uint32_t)step, mesh);
+    if (r == TPK_OK && tet_field) {
+        mesh->scalars = NULL; /* the tet field replaces any point field */
+        r = tpk_load_tet_field(file, a->field, (uint32_t)step, &opt->tet_scalars);
+    }
+    return r == TPK_OK ? 0 : tpk_cli_fail_file("render", a->path, tpk_error_text(file));
+}
+
+static int render_frame(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
+                        const char *output, uint8_t *rgba)
+{
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    tpk_render_stats stats;
+    memset(&stats, 0, sizeof stats);
+    if (tpk_render_cpu(mesh, opt, rgba, &stats, &diag) != 0)
+        return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
+    if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    if (a->json)
+        printf("{\"image\":\"%s\",\"width\":%d,\"height\":%d,\"rays\":%llu,\"secondary_rays\":%llu,"
+               "\"tet_steps\":%llu,\"seconds\":%.6f}\n",
+               output, a->width, a->height, (unsigned long long)stats.rays,
+               (unsigned long long)stats.secondary_rays, (unsigned long long)stats.tet_steps, stats.seconds);
+    else
+        printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
+               (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,
+               (unsigned long long)stats.tet_steps, stats.seconds);
+    return TPK_EXIT_OK;
+}
+
+/* The output path of `step`: -o itself, or its pattern filled in with --steps. */
+static int frame_path(const render_args *a, int step, char *path, size_t cap)
+{
+    if (!a->have_steps)
+        return snprintf(path, cap, "%s", a->output) < (int)cap ? 0 : -1;
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wformat-nonliteral" /* checked by frame_pattern_ok */
+    int n = snprintf(path, cap, a->output, step);
+#pragma GCC diagnostic pop
+    return n >= 0 && n < (int)cap ? 0 : -1;
 }
 
 static int render_file(render_args *a, tpk_file *file)
 {
-    if (check_field(a, file))
+    int association;
+    if (check_field(a, file, &association))
         return TPK_EXIT_USAGE;
-    tpk_mesh_arrays mesh;
-    tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, &mesh);
-    if (r != TPK_OK)
-        return tpk_cli_fail_file("render", a->path, tpk_error_text(file));
+    char name[80];
+    uint32_t steps = field_steps(file, a->field, name);
+    if ((uint32_t)a->step_last >= steps)
+        return tpk_cli_fail("render", "%s: %s has %u step(s) (0..%u), step %d asked", a->path, name, steps,
+                            steps - 1, a->step_last);
     tpk_transfer_function tf;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     if (tpk_tf_load(a->tf ? a->tf : "viridis", &tf, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
-    tpk_file_info info;
-    tpk_get_info(file, &info);
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
-    opt.width = a->width;
-    opt.height = a->height;
-    if (a->have_camera) {
-        memcpy(opt.camera.eye, a->camera, sizeof opt.camera.eye);
-        memcpy(opt.camera.at, a->camera + 3, sizeof opt.camera.at);
-        memcpy(opt.camera.up, a->camera + 6, sizeof opt.camera.up);
-        opt.camera.fovy_deg = a->camera[9];
-    } else {
-        tpk_camera_default(info.bounds_min, info.bounds_max, &opt.camera);
-    }
-    opt.tf = &tf;
-    if (a->have_range) {
-        opt.range_min = a->range[0];
-        opt.range_max = a->range[1];
-    } else {
-        double range[2];
-        field_range(file, a->field, range);
-        opt.range_min = range[0];
-        opt.range_max = range[1];
-    }
-    opt.unit_distance = a->unit_distance;
-    opt.threads = a->threads;
-    opt.integration = a->integration;
+    render_args_to_options(a, file, &tf, &opt);
     uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
     if (!rgba)
         return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
-    tpk_render_stats stats;
-    memset(&stats, 0, sizeof stats);
-    int rc = tpk_render_cpu(&mesh, &opt, rgba, &stats, &diag);
-    if (rc != 0) {
-        free(rgba);
-        return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
+    int rc = TPK_EXIT_OK;
+    for (int step = a->step; step <= a->step_last && rc == TPK_EXIT_OK; step++) {
+        char path[4096];
+        tpk_mesh_arrays mesh;
+        if (frame_path(a, step, path, sizeof path))
+            rc = tpk_cli_fail("render", "-o: the image path of step %d is too long", step);
+        if (rc == TPK_EXIT_OK)
+            rc = load_step(a, file, association == TPK_ASSOC_TET, step, &mesh, &opt);
+        if (rc == TPK_EXIT_OK)
+            rc = render_frame(a, &mesh, &opt, path, rgba);
     }
-    rc = tpk_write_png(a->output, a->width, a->height, rgba, &diag);
     free(rgba);
-    if (rc != 0)
-        return tpk_cli_fail("render", "%s", diag.message);
-    if (a->json)
-        printf("{\"image\":\"%s\",\"width\":%d,\"height\":%d,\"rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f}\n",
-               a->output, a->width, a->height, (unsigned long long)stats.rays,
-               (unsigned long long)stats.tet_steps, stats.seconds);
-    else
-        printf("%s: %dx%d, %llu rays, %llu tet steps, %.3f s\n", a->output, a->width, a->height,
-               (unsigned long long)stats.rays, (unsigned long long)stats.tet_steps, stats.seconds);
-    return TPK_EXIT_OK;
+    return rc;
+}
+
+/* Every output (each frame with --steps) against the inputs, before any work. */
+static int check_outputs(const render_args *a)
+{
+    /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
+    tpk_output_input inputs[2] = {{.arg = "FILE.tpk", .given = a->path}, {.arg = "--tf", .given = a->tf}};
+    if (a->have_steps && !frame_pattern_ok(a->output))
+        return tpk_cli_fail("render", "--steps expects -o with one %%d conversion for the step (e.g. "
+                                      "frame_%%04d.png), found '%s'", a->output);
+    for (int step = a->step; step <= a->step_last; step++) {
+        char path[4096];
+        if (frame_path(a, step, path, sizeof path))
+            return tpk_cli_fail("render", "-o: the image path of step %d is too long", step);
+        if (tpk_cli_check_output("render", "-o", path, inputs, a->tf ? 2 : 1))
+            return TPK_EXIT_USAGE;
+    }
+    return 0;
 }
 
 int tpk_cmd_render(int argc, char **argv)
 {
     render_args a;
-    memset(&a, 0, sizeof a);
-    a.width = a.height = 512;
+    render_args_default(&a);
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             fputs(render_help, stdout);
@@ -249,9 +500,7 @@ int tpk_cmd_render(int argc, char **argv)
     }
     if (!a.path || !a.output)
         return tpk_cli_fail("render", "expected FILE.tpk and -o IMAGE.png (see tetpack render --help)");
-    /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
-    tpk_output_input inputs[2] = {{.arg = "FILE.tpk", .given = a.path}, {.arg = "--tf", .given = a.tf}};
-    if (tpk_cli_check_output("render", "-o", a.output, inputs, a.tf ? 2 : 1))
+    if (check_outputs(&a))
         return TPK_EXIT_USAGE;
     tpk_file *file = NULL;
     if (tpk_cli_open("render", a.path, &file))
