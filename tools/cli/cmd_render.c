@@ -6,6 +6,7 @@
 #include "base/output_file.h"
 #include "cli.h"
 #include "render/render.h"
+#include "scene/scene.h"
 #include "tetpack.h"
 #include "render/transfer_function.h"
 
@@ -32,12 +33,17 @@ static const char render_help[] =
     "  --integration exact|sampled  per-piece integration as above (default), or point samples\n"
     "                               at most unit-distance/2 apart\n"
     "  --threads N                  worker threads (default: all cores)\n"
+    "  --scene FILE                 a scene file (spec/scene-json.md): its values first, then the\n"
+    "                               options given here override them\n"
+    "  --save-scene FILE            write the scene of this render (every value it used) as JSON\n"
     "  --json                       print render statistics as JSON\n";
 
 typedef struct render_args {
     const char *path, *output, *tf, *field, *layout;
     int width, height, step, threads, json, have_camera, have_range, integration;
     double camera[10], range[2], unit_distance;
+    const char *scene_path, *save_scene; /* --scene, --save-scene */
+    tpk_scene scene;
 } render_args;
 
 static int parse_size(const char *text, int *w, int *h)
@@ -100,6 +106,13 @@ static int parse_option(int argc, char **argv, int *i, render_args *a)
     } else if (!strncmp(arg, "--threads", 9)) {
         if (!VALUE("--threads") || tpk_cli_parse_int(v, 1, 1024, &a->threads))
             return tpk_cli_fail("render", "--threads expects 1..1024, found '%s'", v ? v : "");
+    } else if (!strncmp(arg, "--scene", 7)) {
+        if (!VALUE("--scene"))
+            return tpk_cli_fail("render", "--scene expects a scene file");
+    } else if (!strncmp(arg, "--save-scene", 12)) {
+        if (!VALUE("--save-scene"))
+            return tpk_cli_fail("render", "--save-scene expects an output path");
+        a->save_scene = v;
     } else if (!strcmp(arg, "--json")) {
         a->json = 1;
     } else if (arg[0] == '-' && arg[1]) {
@@ -169,6 +182,67 @@ static int check_field(const render_args *a, tpk_file *file)
                         used ? "point fields: " : "no point field", points);
 }
 
+/* The scene of this render, every value it used, so that render --scene gives the same image. */
+static int save_scene(const render_args *a, tpk_file *file, const tpk_mesh_arrays *mesh, const tpk_render_options *opt)
+{
+    char first[sizeof ((tpk_field_desc *)0)->name] = "";
+    for (uint32_t i = 0; !a->field && mesh->scalars && !first[0] && i < tpk_field_count(file); i++) {
+        tpk_field_desc d;
+        if (tpk_get_field(file, i, &d) == TPK_OK && d.association == TPK_ASSOC_POINT)
+            memcpy(first, d.name, sizeof first); /* the first point field: the one tpk_load_arrays took */
+    }
+    const char *field = a->field ? a->field : first;
+    tpk_scene scene;
+    tpk_scene_from_options(opt, field, a->step, mesh->layout, &scene);
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_scene_write(a->save_scene, &scene, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    return 0;
+}
+
+/* Scene values first (--scene): they fill what the command line leaves unset; the options parsed after
+ * this override them. */
+static int merge_scene(int argc, char **argv, render_args *a)
+{
+    for (int i = 1; i < argc; i++) {
+        if (strncmp(argv[i], "--scene", 7) || (argv[i][7] && argv[i][7] != '='))
+            continue;
+        a->scene_path = tpk_cli_value(argc, argv, &i, "--scene");
+    }
+    if (!a->scene_path)
+        return 0;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    tpk_scene *s = &a->scene;
+    if (tpk_scene_load(a->scene_path, s, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    if ((s->given & TPK_SCENE_STEP) && s->step_first != s->step_last)
+        return tpk_cli_fail("render", "%s: the scene gives steps %d..%d; this command renders one image: choose a "
+                            "step with --step N", a->scene_path, s->step_first, s->step_last);
+    if (s->given & TPK_SCENE_BACKEND && s->backend == TPK_SCENE_BACKEND_VULKAN)
+        fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; this build renders on the CPU "
+                "(the reference, same picture)\n", a->scene_path);
+    if (s->given & TPK_SCENE_SIZE)
+        a->width = s->width, a->height = s->height;
+    if (s->given & TPK_SCENE_CAMERA) {
+        const tpk_camera *c = &s->camera;
+        double v[10] = {c->eye[0], c->eye[1], c->eye[2], c->at[0], c->at[1], c->at[2], c->up[0], c->up[1], c->up[2],
+                        c->fovy_deg};
+        memcpy(a->camera, v, sizeof v);
+        a->have_camera = 1;
+    }
+    if (s->given & TPK_SCENE_RANGE)
+        a->range[0] = s->range[0], a->range[1] = s->range[1], a->have_range = 1;
+    a->field = s->given & TPK_SCENE_FIELD ? s->field : NULL;
+    a->step = s->step_first;
+    a->layout = !(s->given & TPK_SCENE_LAYOUT) ? NULL : s->layout == TPK_LAYOUT_TET16 ? "tet16"
+                                               : s->layout == TPK_LAYOUT_TET20 ? "tet20" : "tet32";
+    a->unit_distance = s->unit_distance;
+    a->integration = s->integration;
+    return 0;
+}
+
 static int render_file(render_args *a, tpk_file *file)
 {
     if (check_field(a, file))
@@ -180,12 +254,15 @@ static int render_file(render_args *a, tpk_file *file)
     tpk_transfer_function tf;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (tpk_tf_load(a->tf ? a->tf : "viridis", &tf, &diag) != 0)
+    if (!a->tf && (a->scene.given & TPK_SCENE_TF))
+        tf = a->scene.tf;
+    else if (tpk_tf_load(a->tf ? a->tf : "viridis", &tf, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
     tpk_file_info info;
     tpk_get_info(file, &info);
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
+    tpk_scene_apply(&a->scene, &opt);   /* then the values below: the command line's, merged over the scene */
     opt.width = a->width;
     opt.height = a->height;
     if (a->have_camera) {
@@ -223,6 +300,8 @@ static int render_file(render_args *a, tpk_file *file)
     free(rgba);
     if (rc != 0)
         return tpk_cli_fail("render", "%s", diag.message);
+    if (a->save_scene && save_scene(a, file, &mesh, &opt) != 0)
+        return TPK_EXIT_USAGE;
     if (a->json)
         printf("{\"image\":\"%s\",\"width\":%d,\"height\":%d,\"rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f}\n",
                a->output, a->width, a->height, (unsigned long long)stats.rays,
@@ -238,6 +317,8 @@ int tpk_cmd_render(int argc, char **argv)
     render_args a;
     memset(&a, 0, sizeof a);
     a.width = a.height = 512;
+    if (merge_scene(argc, argv, &a))
+        return TPK_EXIT_USAGE;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             fputs(render_help, stdout);
@@ -250,8 +331,14 @@ int tpk_cmd_render(int argc, char **argv)
     if (!a.path || !a.output)
         return tpk_cli_fail("render", "expected FILE.tpk and -o IMAGE.png (see tetpack render --help)");
     /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
-    tpk_output_input inputs[2] = {{.arg = "FILE.tpk", .given = a.path}, {.arg = "--tf", .given = a.tf}};
-    if (tpk_cli_check_output("render", "-o", a.output, inputs, a.tf ? 2 : 1))
+    tpk_output_input inputs[3] = {{.arg = "FILE.tpk", .given = a.path}};
+    size_t input_count = 1;
+    if (a.scene_path)
+        inputs[input_count++] = (tpk_output_input){.arg = "--scene", .given = a.scene_path};
+    if (a.tf)
+        inputs[input_count++] = (tpk_output_input){.arg = "--tf", .given = a.tf};
+    if (tpk_cli_check_output("render", "-o", a.output, inputs, input_count) ||
+        (a.save_scene && tpk_cli_check_output("render", "--save-scene", a.save_scene, inputs, input_count)))
         return TPK_EXIT_USAGE;
     tpk_file *file = NULL;
     if (tpk_cli_open("render", a.path, &file))
