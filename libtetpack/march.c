@@ -87,11 +87,12 @@ static inline int rank4(int32_t x, int32_t a, int32_t b, int32_t c, int32_t d)
 }
 
 /* Report the piece [t_in, t_out] of `tet` clipped to [tmin, tmax]; sets p->stop when done. */
-static inline void report(march_params *p, int32_t tet, double t_in, double t_out, double s_in, double s_out)
+static inline void report(march_params *p, int32_t tet, const int32_t v[4], double t_in, double t_out,
+                          double s_in, double s_out)
 {
     if (t_out < p->tmin)
         return;
-    tpk_segment seg = {tet, t_in, t_out, s_in, s_out};
+    tpk_segment seg = {tet, t_in, t_out, s_in, s_out, {v[0], v[1], v[2], v[3]}};
     double len = t_out - t_in;
     if (t_in < p->tmin) {
         seg.t_in = p->tmin;
@@ -192,7 +193,8 @@ static inline __attribute__((always_inline)) tpk_result march_run(march_params *
         if (next < -1 || next >= tet_count)
             return TPK_ERR_MESH;
 
-        report(p, tet, in.t, t_out, s_in, s_out);
+        const int32_t verts[4] = {a, b, c, d};
+        report(p, tet, verts, in.t, t_out, s_in, s_out);
         if (next < 0)
             p->exit_t = t_out;
         if (p->stop || next < 0)

@@ -154,6 +154,12 @@ typedef struct tpk_mesh_arrays {
 tpk_result tpk_load_arrays(tpk_file *file, tpk_layout layout, const char *field_name, uint32_t step,
                            tpk_mesh_arrays *out);
 
+/* The values of tet field `field_name` (association 1, spec §7.2) at `step`: tet_count floats, element
+ * i the constant value in tet i; zero-copy or decoded into handle-owned memory like tpk_load_arrays.
+ * TPK_ERR_NOT_FOUND (with a message) for a missing field, a point field or a step past its count.
+ * Untrusted input: safe (checksum and element count checked). */
+tpk_result tpk_load_tet_field(tpk_file *file, const char *field_name, uint32_t step, const float **out);
+
 /* Recover positively oriented vertex quadruples (4 per tet) from any layout: direct for Tet32, by a
  * walk from the shell through neighbors for Tet20/Tet16. dst holds 4 * tet_count int32. */
 tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst);
@@ -233,6 +239,8 @@ typedef struct tpk_segment {
     int32_t tet;
     double t_in, t_out;       /* ray parameters, clipped to [tmin, tmax] */
     double scalar_in, scalar_out; /* interpolated at t_in/t_out (0 when the mesh has no scalars) */
+    int32_t v[4];             /* the tet's vertices: v[0..2] the face the ray entered through (before
+                                 any clipping to tmin), v[3] the fourth; for gradients and face normals */
 } tpk_segment;
 
 /* Return nonzero to stop the ray early (e.g. opacity reached). */
