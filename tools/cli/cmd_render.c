@@ -43,6 +43,7 @@ typedef struct render_args {
     int width, height, step, threads, json, have_camera, have_range, integration;
     double camera[10], range[2], unit_distance;
     const char *scene_path, *save_scene; /* --scene, --save-scene */
+    int have_step;
     tpk_scene scene;
 } render_args;
 
@@ -88,6 +89,7 @@ static int parse_option(int argc, char **argv, int *i, render_args *a)
     } else if (!strncmp(arg, "--step", 6)) {
         if (!VALUE("--step") || tpk_cli_parse_int(v, 0, 1 << 30, &a->step))
             return tpk_cli_fail("render", "--step expects a step number >= 0, found '%s'", v ? v : "");
+        a->have_step = 1;
     } else if (!strncmp(arg, "--range", 7)) {
         if (!VALUE("--range") || tpk_cli_parse_doubles(v, a->range, 2) || !(a->range[0] < a->range[1]))
             return tpk_cli_fail("render", "--range expects LO,HI with LO < HI, found '%s'", v ? v : "");
@@ -217,9 +219,6 @@ static int merge_scene(int argc, char **argv, render_args *a)
     tpk_scene *s = &a->scene;
     if (tpk_scene_load(a->scene_path, s, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
-    if ((s->given & TPK_SCENE_STEP) && s->step_first != s->step_last)
-        return tpk_cli_fail("render", "%s: the scene gives steps %d..%d; this command renders one image: choose a "
-                            "step with --step N", a->scene_path, s->step_first, s->step_last);
     if (s->given & TPK_SCENE_BACKEND && s->backend == TPK_SCENE_BACKEND_VULKAN)
         fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; this build renders on the CPU "
                 "(the reference, same picture)\n", a->scene_path);
@@ -330,6 +329,9 @@ int tpk_cmd_render(int argc, char **argv)
     }
     if (!a.path || !a.output)
         return tpk_cli_fail("render", "expected FILE.tpk and -o IMAGE.png (see tetpack render --help)");
+    if (a.scene.step_first != a.scene.step_last && !a.have_step)
+        return tpk_cli_fail("render", "%s: the scene gives steps %d..%d; this command renders one image: choose a "
+                            "step with --step N", a.scene_path, a.scene.step_first, a.scene.step_last);
     /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
     tpk_output_input inputs[3] = {{.arg = "FILE.tpk", .given = a.path}};
     size_t input_count = 1;
