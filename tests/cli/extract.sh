@@ -91,6 +91,29 @@ for s in 2 4; do
     same_picture "$WORK/exo.tpk" "$WORK/exo_small.tpk" "$WORK/exo.json" "$WORK/exo_small_step.json" --step $s
 done
 
+# A per-tet field (a cell field of the same file): its values follow the kept tets (each tet of a source
+# cell holds the cell's value, so TMAP says which value each kept tet must have), steps 1..3 of 5.
+convert_checked "$DATA/seacas/exomerge_unit_test.e" "$WORK/exo_tet.tpk" --field disp_z --field vm_stress \
+    --layout tet20 > /dev/null
+"$TPK" extract "$WORK/exo_tet.tpk" "$WORK/exo_tet_small.tpk" --field vm_stress --steps 1:3 \
+    --clip-box 0,0,0,0.5,0.5,0.5 > /dev/null
+check_6xx "$WORK/exo_tet_small.tpk"
+"$PY" - "$HERE" "$WORK/exo_tet.tpk" "$WORK/exo_tet_small.tpk" <<'PYEOF' || fail "the per-tet field's values do not follow the tets"
+import struct, sys
+sys.path.insert(0, sys.argv[1])
+import extract_check
+(hs, cs), (he, ce) = extract_check.load(sys.argv[2]), extract_check.load(sys.argv[3])
+names = [cs[("FDSC", 0, 0)][128 * i:128 * i + 64].rstrip(b"\0").decode() for i in range(len(cs[("FDSC", 0, 0)]) // 128)]
+f = names.index("vm_stress")
+assert len(ce[("FDSC", 0, 0)]) == 128 and ce[("FDSC", 0, 0)][:9] == b"vm_stress" and ("FDAT", 0, 3) not in ce
+tmap_s, tmap_e = extract_check.ints(cs[("TMAP", 0, 0)]), extract_check.ints(ce[("TMAP", 0, 0)])
+for step in range(3):
+    src = struct.unpack("<%df" % hs["tet_count"], cs[("FDAT", f, step + 1)])
+    out = struct.unpack("<%df" % he["tet_count"], ce[("FDAT", 0, step)])
+    by_cell = {tmap_s[t]: v for t, v in enumerate(src)}
+    assert all(by_cell[tmap_e[t]] == v for t, v in enumerate(out)), step
+PYEOF
+
 # A real tet mesh (no field: constant density), Tet20, a box across the elbow given as an option over a
 # scene that has none.
 convert_checked "$DATA/sfepy/elbow.mesh" "$WORK/elbow.tpk" --layout tet20 > /dev/null
