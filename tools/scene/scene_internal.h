@@ -10,8 +10,9 @@
 void tpk_scene_line_col(const char *text, size_t offset, int *line, int *col);
 
 /* Byte offset of the key `path` ("effects.ao_rays": a key of an object nested in key "effects") in
- * the JSON `text`, at its opening quote; the first occurrence when a key repeats. -1 when absent. */
-long tpk_scene_key_offset(const char *text, const char *path);
+ * the JSON `text`, at its opening quote; `nth` 0 for its first occurrence, 1 for a repeat. -1 when
+ * absent. */
+long tpk_scene_key_offset(const char *text, const char *path, int nth);
 
 /* The path of keys ("camera.eye") whose value encloses byte `offset` of `text`, as far as the text up
  * to there shows (for a syntax error: the key being read when the text went wrong); "" at the top. */

@@ -98,6 +98,7 @@ void tpk_scene_line_col(const char *text, size_t offset, int *line, int *col)
 
 typedef struct find {
     const char *target;
+    int skip; /* occurrences still to pass */
     long offset;
 } find;
 
@@ -106,16 +107,16 @@ static int match_key(void *user, const scan *s, size_t quote)
     find *f = user;
     char path[512];
     join_path(s, path, sizeof path);
-    if (strcmp(path, f->target))
+    if (strcmp(path, f->target) || f->skip-- > 0)
         return 0;
     f->offset = (long)quote;
     return 1;
 }
 
-long tpk_scene_key_offset(const char *text, const char *path)
+long tpk_scene_key_offset(const char *text, const char *path, int nth)
 {
     scan s = {.text = text};
-    find f = {path, -1};
+    find f = {path, nth, -1};
     walk(&s, strlen(text), match_key, &f);
     return f.offset;
 }

@@ -20,15 +20,15 @@ typedef struct parser {
     tpk_diag *diag;
 } parser;
 
-/* "NAME:LINE:COL: key 'PATH': <message>", at the key (or, for a key that is missing, its parent). */
-static int fail_key(parser *p, const char *path, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static int fail_key(parser *p, const char *path, const char *fmt, ...)
+/* "NAME:LINE:COL: key 'PATH': WHY", at the key's `nth` occurrence (or, for a key that is missing, at its
+ * parent). */
+static int fail_at(parser *p, const char *path, int nth, const char *why)
 {
     char where[512];
     snprintf(where, sizeof where, "%s", path);
     long offset = -1;
     while (offset < 0 && where[0]) {
-        offset = tpk_scene_key_offset(p->text, where);
+        offset = tpk_scene_key_offset(p->text, where, strcmp(where, path) ? 0 : nth);
         char *dot = strrchr(where, '.');
         if (offset < 0)
             *(dot ? dot : where) = 0;
@@ -36,12 +36,18 @@ static int fail_key(parser *p, const char *path, const char *fmt, ...)
     int line = 1, col = 1;
     if (offset >= 0)
         tpk_scene_line_col(p->text, (size_t)offset, &line, &col);
+    return tpk_diag_fail(p->diag, "%s:%d:%d: key '%s': %s", p->name, line, col, path, why);
+}
+
+static int fail_key(parser *p, const char *path, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static int fail_key(parser *p, const char *path, const char *fmt, ...)
+{
     char why[768];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(why, sizeof why, fmt, ap);
     va_end(ap);
-    return tpk_diag_fail(p->diag, "%s:%d:%d: key '%s': %s", p->name, line, col, path, why);
+    return fail_at(p, path, 0, why);
 }
 
 /* The value as JSON, cut to fit a message. */
@@ -62,7 +68,9 @@ static const char *shown(const cJSON *v, char buf[64])
 static int number(parser *p, const cJSON *v, const char *path, const char *expected, double *out)
 {
     char buf[64];
-    if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble))
+    if (cJSON_IsNumber(v) && !isfinite(v->valuedouble))
+        return fail_key(p, path, "expected %s, found a number beyond the range of a double", expected);
+    if (!cJSON_IsNumber(v))
         return fail_key(p, path, "expected %s, found %s", expected, shown(v, buf));
     *out = v->valuedouble;
     return 0;
@@ -162,8 +170,8 @@ static int check_keys(parser *p, const cJSON *obj, const char *path, const char 
             return fail_key(p, key_path, "unknown key; known keys%s%s: %s", path[0] ? " of " : "", path, list);
         }
         for (const cJSON *f = obj->child; f != e; f = f->next)
-            if (!strcmp(f->string, e->string)) /* the position given is the first one's */
-                return fail_key(p, key_path, "appears twice in the same object (remove one)");
+            if (!strcmp(f->string, e->string))
+                return fail_at(p, key_path, 1, "appears twice in the same object (remove one)"); /* at the second */
     }
     return 0;
 }
