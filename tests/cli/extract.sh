@@ -125,6 +125,22 @@ check_clean "$WORK/elbow_small.tpk"
 printf '{"clip_box": [0.05, -1, -1, 0.3, 0.1, 0.02], "size": [64, 64], "effects": {"shading": true}}' > "$WORK/elbow.json"
 same_picture "$WORK/elbow.tpk" "$WORK/elbow_small.tpk" "$WORK/elbow.json" "$WORK/elbow_small.json"
 
+# Cut folds (a gmsh boundary-layer mesh converted with --cut-folds): connect on the kept tets would pair
+# the two faces of a fold again; the exact fold test cuts them again, so the whole mesh extracted keeps
+# every shell face, and a half passes the 6xx checks.
+gmsh -3 -nt 1 "$SRC/tests/cli/sphere_bl.geo" -format vtk -o "$WORK/bl.vtk" > "$WORK/gmsh.log" 2>&1 ||
+    { tail "$WORK/gmsh.log"; fail "gmsh failed"; }
+convert_checked "$WORK/bl.vtk" "$WORK/bl.tpk" --cut-folds > /dev/null 2>&1
+"$TPK" extract "$WORK/bl.tpk" "$WORK/bl_all.tpk" --json > "$WORK/bl.json"
+check_6xx "$WORK/bl_all.tpk"
+"$PY" -c "
+import json; r = json.load(open('$WORK/bl.json'))
+assert r['tets_after'] == r['tets_before'] and r['shell_faces_after'] == r['shell_faces_before'] > 0, r" ||
+    fail "extract of a file with cut folds changed its shell: $(cat "$WORK/bl.json")"
+"$TPK" extract "$WORK/bl.tpk" "$WORK/bl_half.tpk" --clip-box -10,-10,-10,0,10,10 > /dev/null
+check_6xx "$WORK/bl_half.tpk"
+"$PY" "$HERE/extract_check.py" "$WORK/bl.tpk" "$WORK/bl_half.tpk"
+
 # Refusals: exit 2 with the reason; nothing written.
 expect_exit 2 "$TPK" extract "$WORK/cyl.tpk" "$WORK/none.tpk" --clip-box 5,5,5,6,6,6
 expect_stderr "no tet meets the clip box"
