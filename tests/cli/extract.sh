@@ -148,6 +148,8 @@ expect_exit 2 "$TPK" extract "$WORK/cyl.tpk" "$WORK/none.tpk" --field pressure
 expect_stderr "no field named 'pressure'"
 expect_exit 2 "$TPK" extract "$WORK/cyl.tpk" "$WORK/none.tpk" --steps 0:3
 expect_stderr "field 'temperature' has steps 0..0; steps 0..3 asked"
+expect_exit 2 "$TPK" extract "$WORK/elbow.tpk" "$WORK/none.tpk" --steps 1:2
+expect_stderr "steps 1..2 asked, but the file has no point field"
 expect_exit 2 "$TPK" extract "$WORK/cyl_tet20.tpk" "$WORK/none.tpk" --layout tet16
 expect_stderr "no Tet16 layout in the file"
 expect_exit 2 "$TPK" extract "$WORK/cyl.tpk" "$WORK/cyl.tpk"

@@ -68,6 +68,9 @@ static int pick_field(extraction *x)
     if (x->o->field && x->field < 0)
         return tpk_diag_fail(x->diag, "%s: no field named '%s' (the file has %u fields; tetpack info lists them)",
                              x->o->input, x->o->field, n);
+    if (x->field < 0 && x->o->step_last > 0)
+        return tpk_diag_fail(x->diag, "%s: steps %d..%d asked, but the file has no point field (name a field with "
+                             "--field)", x->o->input, x->o->step_first, x->o->step_last);
     if (x->field < 0)
         return 0;
     if (x->o->step_first < 0 || x->o->step_last < x->o->step_first || (uint32_t)x->o->step_last >= x->desc.step_count)
