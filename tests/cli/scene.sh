@@ -41,6 +41,15 @@ cmp "$WORK/over.png" "$WORK/over_opts.png" || fail "options over a scene differ 
 "$TPK" render "$WORK/cyl.tpk" -o "$WORK/over2.png" --scene "$WORK/hand.json" > /dev/null
 cmp -s "$WORK/over.png" "$WORK/over2.png" && fail "the overriding options changed nothing"
 
+# Effects come from the scene: shading and a clip box each change the picture.
+printf '{"size": [48, 48], "effects": {"shading": true}}' > "$WORK/shaded.json"
+printf '{"size": [48, 48], "clip_box": [0, -1, -1, 0.05, 1, 1]}' > "$WORK/clipped.json"
+"$TPK" render "$WORK/cyl.tpk" -o "$WORK/plain.png" --size 48x48 > /dev/null
+"$TPK" render "$WORK/cyl.tpk" -o "$WORK/shaded.png" --scene "$WORK/shaded.json" > /dev/null
+cmp -s "$WORK/plain.png" "$WORK/shaded.png" && fail "the scene's shading changed nothing"
+"$TPK" render "$WORK/cyl.tpk" -o "$WORK/clipped.png" --scene "$WORK/clipped.json" > /dev/null
+cmp -s "$WORK/plain.png" "$WORK/clipped.png" && fail "the scene's clip box changed nothing"
+
 # A TF file named by the scene is found next to the scene, wherever render runs.
 mkdir -p "$WORK/sub"
 cp "$WORK/tf.txt" "$WORK/sub/tf.txt"
