@@ -115,6 +115,13 @@ tpk_result tpk_find_chunk(const tpk_file *file, uint32_t tag, uint32_t index, ui
 tpk_result tpk_view_chunk(tpk_file *file, uint64_t i, const void **out_data, uint64_t *out_size);
 /* Decode chunk `i` into dst (dst_size >= entry.raw_size), decompressing if needed, and check it. */
 tpk_result tpk_read_chunk(tpk_file *file, uint64_t i, void *dst, uint64_t dst_size);
+/* What this handle has done with chunk i so far, as TPK_CHUNK_USE_* bits. Chunks are read lazily:
+ * opening reads only the header, the directory and FDSC; tpk_load_arrays then reads POS3, one layout,
+ * SHEL and one FDAT step, and nothing else. For tools and tests that check a reader touches only what
+ * it needs. Thread safety: safe while other threads read the handle. */
+#define TPK_CHUNK_USE_READ 0x1u     /* its bytes were read: viewed, decoded, or checksummed */
+#define TPK_CHUNK_USE_VERIFIED 0x2u /* its checksum was checked */
+tpk_result tpk_get_chunk_use(const tpk_file *file, uint64_t i, uint32_t *out_bits);
 /* Check every chunk's checksum and the cross-chunk rules of the spec that need no geometry
  * (counts agree with the header, field descriptors valid, ids in range). */
 tpk_result tpk_verify(tpk_file *file);

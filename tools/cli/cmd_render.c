@@ -7,6 +7,7 @@
 #include "base/output_file.h"
 #include "cli.h"
 #include "render/render.h"
+#include "scene/scene.h"
 #include "tetpack.h"
 #include "render/transfer_function.h"
 #include "render_args.h"
@@ -49,6 +50,9 @@ static const char render_help[] =
     "  --ao-radius R                length of the AO rays (default: bounds diagonal / 10)\n"
     "Effect definitions: docs/ARCHITECTURE.md, \"Render effects\".\n"
     "  --threads N                  worker threads (default: all cores)\n"
+    "  --scene FILE                 a scene file (spec/scene-json.md): its values first, then the\n"
+    "                               options given here override them\n"
+    "  --save-scene FILE            write the scene of this render (every value it used) as JSON\n"
     "  --json                       print render statistics as JSON\n";
 
 void render_args_default(render_args *a)
@@ -156,6 +160,8 @@ static int opt_integration(const char *v, render_args *a)
     return a->integration < 0 ? -1 : 0;
 }
 
+static int opt_scene(const char *v, render_args *a) { (void)v; (void)a; return 0; } /* read by merge_scene */
+static int opt_save_scene(const char *v, render_args *a) { a->save_scene = v; return 0; }
 static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->threads); }
 static int opt_iso(const char *v, render_args *a) { return parse_list(v, a->iso, TPK_RENDER_MAX_ISO, &a->iso_count); }
 
@@ -217,6 +223,8 @@ static const render_option render_options[] = {
     {"--light", NULL, 1, opt_light, "3 numbers x,y,z"},
     {"--ao", NULL, 1, opt_ao, "a ray count 1..1024"},
     {"--ao-radius", NULL, 1, opt_ao_radius, "a positive length"},
+    {"--scene", NULL, 1, opt_scene, "a scene file"},
+    {"--save-scene", NULL, 1, opt_save_scene, "an output path"},
 };
 
 /* The table entry `arg` names ("--name", "--name=value" or the alias), or NULL. */
@@ -431,6 +439,77 @@ static int frame_path(const render_args *a, int step, char *path, size_t cap)
     return n >= 0 && n < (int)cap ? 0 : -1;
 }
 
+/* The scene of this render, every value it used, so that render --scene gives the same images. */
+static int save_scene(const render_args *a, tpk_file *file, const tpk_render_options *opt)
+{
+    char first[sizeof ((tpk_field_desc *)0)->name] = "";
+    for (uint32_t i = 0; !a->field && !first[0] && i < tpk_field_count(file); i++) {
+        tpk_field_desc d;
+        if (tpk_get_field(file, i, &d) == TPK_OK && d.association == TPK_ASSOC_POINT)
+            memcpy(first, d.name, sizeof first); /* the first point field: the one tpk_load_arrays took */
+    }
+    tpk_scene scene;
+    tpk_scene_from_options(opt, a->field ? a->field : first, a->step, pick_layout(file, a->layout), &scene);
+    scene.step_last = a->step_last;
+    scene.step_range = a->have_steps;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_scene_write(a->save_scene, &scene, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    return 0;
+}
+
+/* Scene values first (--scene): they fill the arguments, and the options parsed after this override
+ * them; render_args_to_options then turns both into render options in one place. */
+static int merge_scene(int argc, char **argv, render_args *a)
+{
+    for (int i = 1; i < argc; i++)
+        if (!strncmp(argv[i], "--scene", 7) && (!argv[i][7] || argv[i][7] == '='))
+            a->scene_path = tpk_cli_value(argc, argv, &i, "--scene");
+    if (!a->scene_path)
+        return 0;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    const tpk_scene *s = &a->scene;
+    if (tpk_scene_load(a->scene_path, &a->scene, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    if (s->given & TPK_SCENE_BACKEND && s->backend == TPK_SCENE_BACKEND_VULKAN)
+        fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; this build renders on the CPU "
+                "(the reference, same picture)\n", a->scene_path);
+    if (s->given & TPK_SCENE_SIZE)
+        a->width = s->width, a->height = s->height;
+    if (s->given & TPK_SCENE_CAMERA) {
+        const tpk_camera *c = &s->camera;
+        double v[10] = {c->eye[0], c->eye[1], c->eye[2], c->at[0], c->at[1], c->at[2], c->up[0], c->up[1], c->up[2],
+                        c->fovy_deg};
+        memcpy(a->camera, v, sizeof v);
+        a->have_camera = 1;
+    }
+    if (s->given & TPK_SCENE_RANGE)
+        a->range[0] = s->range[0], a->range[1] = s->range[1], a->have_range = 1;
+    a->field = s->given & TPK_SCENE_FIELD ? s->field : NULL;
+    a->step = s->step_first;
+    a->step_last = s->step_last;
+    a->have_steps = s->step_range;
+    a->layout = !(s->given & TPK_SCENE_LAYOUT) ? NULL : s->layout == TPK_LAYOUT_TET16 ? "tet16"
+                                               : s->layout == TPK_LAYOUT_TET20 ? "tet20" : "tet32";
+    a->unit_distance = s->unit_distance;
+    a->integration = s->integration;
+    a->clip = (s->given & TPK_SCENE_CLIP) != 0;
+    memcpy(a->clip_box, s->clip_min, sizeof s->clip_min);
+    memcpy(a->clip_box + 3, s->clip_max, sizeof s->clip_max);
+    a->iso_count = s->iso_count;
+    memcpy(a->iso, s->iso, sizeof a->iso);
+    a->iso_opacity = s->iso_opacity;
+    a->shading = s->shading;
+    a->shadows = s->shadows;
+    a->have_light = (s->given & TPK_SCENE_LIGHT) != 0;
+    memcpy(a->light, s->light, sizeof a->light);
+    a->ao_rays = s->ao_rays;
+    a->ao_radius = s->ao_radius;
+    return 0;
+}
+
 static int render_file(render_args *a, tpk_file *file)
 {
     int association;
@@ -444,7 +523,9 @@ static int render_file(render_args *a, tpk_file *file)
     tpk_transfer_function tf;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
-    if (tpk_tf_load(a->tf ? a->tf : "viridis", &tf, &diag) != 0)
+    if (!a->tf && (a->scene.given & TPK_SCENE_TF))
+        tf = a->scene.tf;
+    else if (tpk_tf_load(a->tf ? a->tf : "viridis", &tf, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
@@ -464,6 +545,8 @@ static int render_file(render_args *a, tpk_file *file)
             rc = render_frame(a, &mesh, &opt, path, rgba);
     }
     free(rgba);
+    if (rc == TPK_EXIT_OK && a->save_scene && save_scene(a, file, &opt) != 0)
+        return TPK_EXIT_USAGE;
     return rc;
 }
 
@@ -471,15 +554,27 @@ static int render_file(render_args *a, tpk_file *file)
 static int check_outputs(const render_args *a)
 {
     /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
-    tpk_output_input inputs[2] = {{.arg = "FILE.tpk", .given = a->path}, {.arg = "--tf", .given = a->tf}};
-    if (a->have_steps && !frame_pattern_ok(a->output))
+    tpk_output_input inputs[3] = {{.arg = "FILE.tpk", .given = a->path}};
+    size_t count = 1;
+    if (a->scene_path)
+        inputs[count++] = (tpk_output_input){.arg = "--scene", .given = a->scene_path};
+    if (a->tf)
+        inputs[count++] = (tpk_output_input){.arg = "--tf", .given = a->tf};
+    if (a->have_steps && !frame_pattern_ok(a->output)) {
+        if (a->scene.step_range && a->step == a->scene.step_first && a->step_last == a->scene.step_last)
+            return tpk_cli_fail("render", "%s: the scene gives steps %d..%d: -o needs one %%d conversion for the "
+                                "step (e.g. frame_%%04d.png), or choose one step with --step N, found '%s'",
+                                a->scene_path, a->step, a->step_last, a->output);
         return tpk_cli_fail("render", "--steps expects -o with one %%d conversion for the step (e.g. "
                                       "frame_%%04d.png), found '%s'", a->output);
+    }
+    if (a->save_scene && tpk_cli_check_output("render", "--save-scene", a->save_scene, inputs, count))
+        return TPK_EXIT_USAGE;
     for (int step = a->step; step <= a->step_last; step++) {
         char path[4096];
         if (frame_path(a, step, path, sizeof path))
             return tpk_cli_fail("render", "-o: the image path of step %d is too long", step);
-        if (tpk_cli_check_output("render", "-o", path, inputs, a->tf ? 2 : 1))
+        if (tpk_cli_check_output("render", "-o", path, inputs, count))
             return TPK_EXIT_USAGE;
     }
     return 0;
@@ -489,6 +584,8 @@ int tpk_cmd_render(int argc, char **argv)
 {
     render_args a;
     render_args_default(&a);
+    if (merge_scene(argc, argv, &a))
+        return TPK_EXIT_USAGE;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             fputs(render_help, stdout);

@@ -4,6 +4,7 @@
 #define TPK_CLI_RENDER_ARGS_H
 
 #include "render/render.h"
+#include "scene/scene.h"
 #include "tetpack.h"
 
 typedef struct render_args {
@@ -18,6 +19,8 @@ typedef struct render_args {
     double clip_box[6]; /* x0,y0,z0,x1,y1,z1 */
     int shading, shadows, have_light, ao_rays;
     double light[3], ao_radius; /* ao_radius 0: the renderer's default */
+    const char *scene_path, *save_scene; /* --scene, --save-scene */
+    tpk_scene scene;                     /* what --scene gave (scene.given = 0 without one) */
 } render_args;
 
 /* Defaults: 512x512, step 0, everything else off. */
