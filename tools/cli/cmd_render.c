@@ -169,21 +169,23 @@ static int check_field(const render_args *a, tpk_file *file)
                         used ? "point fields: " : "no point field", points);
 }
 
-static int render_file(render_args *a, tpk_file *file)
+/* What is rendered: one file's arrays, or a part set's marcher, with its box and default range. */
+typedef struct scene {
+    const tpk_mesh_arrays *mesh;
+    const tpk_set_marcher *set;
+    int has_scalars;
+    double diagonal;
+    double bounds_min[3], bounds_max[3];
+    double range[2];
+} scene;
+
+static int render_scene(const render_args *a, const scene *sc)
 {
-    if (check_field(a, file))
-        return TPK_EXIT_USAGE;
-    tpk_mesh_arrays mesh;
-    tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, &mesh);
-    if (r != TPK_OK)
-        return tpk_cli_fail_file("render", a->path, tpk_error_text(file));
     tpk_transfer_function tf;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     if (tpk_tf_load(a->tf ? a->tf : "viridis", &tf, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
-    tpk_file_info info;
-    tpk_get_info(file, &info);
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
     opt.width = a->width;
@@ -194,18 +196,11 @@ static int render_file(render_args *a, tpk_file *file)
         memcpy(opt.camera.up, a->camera + 6, sizeof opt.camera.up);
         opt.camera.fovy_deg = a->camera[9];
     } else {
-        tpk_camera_default(info.bounds_min, info.bounds_max, &opt.camera);
+        tpk_camera_default(sc->bounds_min, sc->bounds_max, &opt.camera);
     }
     opt.tf = &tf;
-    if (a->have_range) {
-        opt.range_min = a->range[0];
-        opt.range_max = a->range[1];
-    } else {
-        double range[2];
-        field_range(file, a->field, range);
-        opt.range_min = range[0];
-        opt.range_max = range[1];
-    }
+    opt.range_min = a->have_range ? a->range[0] : sc->range[0];
+    opt.range_max = a->have_range ? a->range[1] : sc->range[1];
     opt.unit_distance = a->unit_distance;
     opt.threads = a->threads;
     opt.integration = a->integration;
@@ -214,7 +209,8 @@ static int render_file(render_args *a, tpk_file *file)
         return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
     tpk_render_stats stats;
     memset(&stats, 0, sizeof stats);
-    int rc = tpk_render_cpu(&mesh, &opt, rgba, &stats, &diag);
+    int rc = sc->set ? tpk_render_cpu_set(sc->set, sc->has_scalars, sc->diagonal, &opt, rgba, &stats, &diag)
+                     : tpk_render_cpu(sc->mesh, &opt, rgba, &stats, &diag);
     if (rc != 0) {
         free(rgba);
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
@@ -231,6 +227,91 @@ static int render_file(render_args *a, tpk_file *file)
         printf("%s: %dx%d, %llu rays, %llu tet steps, %.3f s\n", a->output, a->width, a->height,
                (unsigned long long)stats.rays, (unsigned long long)stats.tet_steps, stats.seconds);
     return TPK_EXIT_OK;
+}
+
+static int render_file(render_args *a, tpk_file *file)
+{
+    if (check_field(a, file))
+        return TPK_EXIT_USAGE;
+    tpk_mesh_arrays mesh;
+    tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, &mesh);
+    if (r != TPK_OK)
+        return tpk_cli_fail_file("render", a->path, tpk_error_text(file));
+    tpk_file_info info;
+    tpk_get_info(file, &info);
+    scene sc = {&mesh, NULL, mesh.scalars != NULL, 0, {0}, {0}, {0}};
+    memcpy(sc.bounds_min, info.bounds_min, sizeof sc.bounds_min);
+    memcpy(sc.bounds_max, info.bounds_max, sizeof sc.bounds_max);
+    field_range(file, a->field, sc.range);
+    return render_scene(a, &sc);
+}
+
+/* Part p's arrays and links into the scene's box, range and diagonal. */
+static int load_part(render_args *a, tpk_partset *set, uint32_t p, tpk_mesh_arrays *mesh, const tpk_link **links,
+                     uint64_t *link_count, scene *sc, double lo[3], double hi[3])
+{
+    tpk_file *file = tpk_partset_file(set, p);
+    if (check_field(a, file))
+        return TPK_EXIT_USAGE;
+    tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, mesh);
+    if (r == TPK_OK)
+        r = tpk_partset_links(set, p, links, link_count);
+    if (r != TPK_OK)
+        return tpk_cli_fail("render", "%s: part %u: %s", a->path, p, tpk_error_text(file));
+    tpk_file_info info;
+    tpk_get_info(file, &info);
+    double range[2];
+    field_range(file, a->field, range);
+    sc->has_scalars = mesh->scalars != NULL;
+    for (int k = 0; k < 3; k++) {
+        sc->bounds_min[k] = p == 0 || info.bounds_min[k] < sc->bounds_min[k] ? info.bounds_min[k] : sc->bounds_min[k];
+        sc->bounds_max[k] = p == 0 || info.bounds_max[k] > sc->bounds_max[k] ? info.bounds_max[k] : sc->bounds_max[k];
+    }
+    sc->range[0] = p == 0 || range[0] < sc->range[0] ? range[0] : sc->range[0];
+    sc->range[1] = p == 0 || range[1] > sc->range[1] ? range[1] : sc->range[1];
+    for (uint64_t i = 0; i < mesh->vertex_count; i++) /* the box of the stored positions, as one file's */
+        for (int k = 0; k < 3; k++) {
+            double x = mesh->positions[3 * i + k];
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
+        }
+    return 0;
+}
+
+/* A part set (spec §15): every part loaded, marched across the cuts by its links. */
+static int render_set(render_args *a)
+{
+    tpk_partset *set = NULL;
+    char err[1024] = "";
+    tpk_result r = tpk_partset_open(&set, a->path, NULL, NULL, NULL, err, sizeof err);
+    if (r != TPK_OK)
+        return tpk_cli_fail("render", "%s", err[0] ? err : tpk_result_string(r));
+    uint32_t n = tpk_partset_part_count(set);
+    tpk_mesh_arrays *meshes = calloc(n, sizeof *meshes);
+    const tpk_link **links = calloc(n, sizeof *links);
+    uint64_t *link_counts = calloc(n, sizeof *link_counts);
+    scene sc = {NULL, NULL, 0, 0, {0}, {0}, {0}};
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    int rc = meshes && links && link_counts ? 0 : tpk_cli_fail("render", "out of memory for %u parts", n);
+    for (uint32_t p = 0; rc == 0 && p < n; p++)
+        rc = load_part(a, set, p, &meshes[p], &links[p], &link_counts[p], &sc, lo, hi);
+    tpk_set_marcher *marcher = NULL;
+    if (rc == 0 && (r = tpk_set_marcher_create(&marcher, n, meshes, links, link_counts)) != TPK_OK)
+        rc = tpk_cli_fail("render", "%s: cannot march across its parts: %s", a->path, tpk_result_string(r));
+    if (rc == 0) {
+        double d2 = 0;
+        for (int k = 0; k < 3; k++)
+            d2 += hi[k] > lo[k] ? (hi[k] - lo[k]) * (hi[k] - lo[k]) : 0;
+        sc.diagonal = sqrt(d2);
+        sc.set = marcher;
+        rc = render_scene(a, &sc);
+    }
+    tpk_set_marcher_destroy(marcher);
+    free(meshes);
+    free(links);
+    free(link_counts);
+    tpk_partset_close(set);
+    return rc;
 }
 
 int tpk_cmd_render(int argc, char **argv)
@@ -256,6 +337,11 @@ int tpk_cmd_render(int argc, char **argv)
     tpk_file *file = NULL;
     if (tpk_cli_open("render", a.path, &file))
         return TPK_EXIT_USAGE;
+    uint64_t part_chunk;
+    if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
+        tpk_close(file);
+        return render_set(&a);
+    }
     int rc = render_file(&a, file);
     tpk_close(file);
     return rc;

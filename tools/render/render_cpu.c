@@ -50,6 +50,7 @@ void tpk_render_options_default(tpk_render_options *opt)
 typedef struct render_job {
     const tpk_render_options *opt;
     const tpk_marcher *marcher;
+    const tpk_set_marcher *set; /* a part set instead (spec §15) */
     int has_scalars;
     double inv_range;          /* 1 / (range_max - range_min), 0 when the range is empty */
     double inv_unit;           /* 1 / unit_distance */
@@ -186,7 +187,8 @@ static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t *st
         dir[k] *= inv_len; /* unit direction: t is the distance from the eye */
     ray_state ray = {job, {0, 0, 0}, 1.0};
     tpk_march_stats st;
-    tpk_result r = tpk_march_ray(job->marcher, job->eye, dir, 0.0, INFINITY, on_segment, &ray, &st);
+    tpk_result r = job->set ? tpk_set_march_ray(job->set, job->eye, dir, 0.0, INFINITY, on_segment, &ray, NULL, &st)
+                            : tpk_march_ray(job->marcher, job->eye, dir, 0.0, INFINITY, on_segment, &ray, &st);
     *steps += st.tet_steps;
     const float *bg = opt->background;
     double alpha = (1.0 - ray.transmittance) + ray.transmittance * bg[3];
@@ -272,7 +274,7 @@ static int setup_camera(render_job *job, const tpk_camera *cam, tpk_diag *diag)
     return 0;
 }
 
-static double bbox_diagonal(const tpk_mesh_arrays *mesh)
+double tpk_positions_diagonal(const tpk_mesh_arrays *mesh)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint64_t i = 0; i < mesh->vertex_count; i++)
@@ -300,14 +302,9 @@ static int thread_count(const tpk_render_options *opt)
     return (int)n;
 }
 
-int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                   tpk_render_stats *stats, tpk_diag *diag)
+static int check_options(const tpk_render_options *opt, const void *scene, uint8_t *rgba, tpk_diag *diag)
 {
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    if (stats)
-        memset(stats, 0, sizeof *stats);
-    if (!mesh || !opt || !rgba)
+    if (!scene || !opt || !rgba)
         return tpk_diag_fail(diag, "render: mesh, options and image buffer are required");
     if (opt->width < 1 || opt->height < 1 || opt->width > 32768 || opt->height > 32768)
         return tpk_diag_fail(diag, "render: expected width and height in 1..32768, found %dx%d", opt->width,
@@ -319,30 +316,22 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
                              opt->integration);
     if (!isfinite(opt->range_min) || !isfinite(opt->range_max))
         return tpk_diag_fail(diag, "render: the scalar range must be finite");
+    return 0;
+}
 
-    render_job *job = calloc(1, sizeof *job);
-    if (!job)
-        return tpk_diag_fail(diag, "render: out of memory");
-    job->opt = opt;
-    job->rgba = rgba;
-    job->has_scalars = mesh->scalars != NULL;
+/* The rows on all threads, once job's marcher (or set) is in place. */
+static int run_render(render_job *job, double diagonal, tpk_render_stats *stats, const struct timespec *t0,
+                      tpk_diag *diag)
+{
+    const tpk_render_options *opt = job->opt;
     job->inv_range = opt->range_max != opt->range_min ? 1.0 / (opt->range_max - opt->range_min) : 0.0;
     double unit = opt->unit_distance;
     if (!(unit > 0) || !isfinite(unit))
-        unit = bbox_diagonal(mesh) / 100.0;
+        unit = diagonal / 100.0;
     job->inv_unit = unit > 0 ? 1.0 / unit : 1.0;
     int rc = setup_camera(job, &opt->camera, diag);
-    if (rc != 0) {
-        free(job);
+    if (rc != 0)
         return rc;
-    }
-    tpk_marcher *marcher = NULL;
-    tpk_result r = tpk_marcher_create(&marcher, mesh);
-    if (r != TPK_OK) {
-        free(job);
-        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
-    }
-    job->marcher = marcher;
     atomic_init(&job->next_row, 0);
     atomic_init(&job->failed, 0);
     atomic_init(&job->tet_steps, 0);
@@ -361,14 +350,62 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
     if (atomic_load(&job->failed))
         rc = tpk_diag_fail(diag, "render: ray of pixel (%d, %d): %s", job->error_x, job->error_y,
                            tpk_result_string(job->error));
+    struct timespec t1;
     clock_gettime(CLOCK_MONOTONIC, &t1);
     if (stats) {
         stats->rays = (uint64_t)opt->width * (uint64_t)opt->height;
         stats->tet_steps = atomic_load(&job->tet_steps);
-        stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+        stats->seconds = (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
     }
     pthread_mutex_destroy(&job->error_lock);
+    return rc;
+}
+
+int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                   tpk_render_stats *stats, tpk_diag *diag)
+{
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (check_options(opt, mesh, rgba, diag) != 0)
+        return -1;
+    render_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "render: out of memory");
+    job->opt = opt;
+    job->rgba = rgba;
+    job->has_scalars = mesh->scalars != NULL;
+    tpk_marcher *marcher = NULL;
+    tpk_result r = tpk_marcher_create(&marcher, mesh);
+    if (r != TPK_OK) {
+        free(job);
+        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
+    }
+    job->marcher = marcher;
+    int rc = run_render(job, tpk_positions_diagonal(mesh), stats, &t0, diag);
     tpk_marcher_destroy(marcher);
+    free(job);
+    return rc;
+}
+
+int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double diagonal,
+                       const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag)
+{
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (check_options(opt, marcher, rgba, diag) != 0)
+        return -1;
+    render_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "render: out of memory");
+    job->opt = opt;
+    job->rgba = rgba;
+    job->has_scalars = has_scalars;
+    job->set = marcher;
+    int rc = run_render(job, diagonal, stats, &t0, diag);
     free(job);
     return rc;
 }
