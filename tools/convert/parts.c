@@ -179,7 +179,7 @@ static void part_bounds(const tpk_tetmesh *m, tpk_header_fields *hdr)
 }
 
 /* The header checksum the part was written with: the manifest binds the part by it (spec §15.2). */
-static int read_header_checksum(const char *path, uint64_t *out, tpk_diag *diag)
+int tpk_read_header_checksum(const char *path, uint64_t *out, tpk_diag *diag)
 {
     FILE *f = fopen(path, "rb");
     uint8_t header[TPK_HEADER_SIZE];
@@ -192,8 +192,7 @@ static int read_header_checksum(const char *path, uint64_t *out, tpk_diag *diag)
     return 0;
 }
 
-/* "<dir>/<stem>-<p>.tpk" for the manifest "<dir>/<stem>.tpkset"; record->file gets "<stem>-<p>.tpk". */
-static int part_path(const char *manifest, int p, int count, tpk_part_record *record, char **out, tpk_diag *diag)
+int tpk_part_path(const char *manifest, int p, int count, tpk_part_record *record, char **out, tpk_diag *diag)
 {
     const char *slash = strrchr(manifest, '/');
     const char *name = slash ? slash + 1 : manifest;
@@ -216,7 +215,7 @@ static int write_part(const part_plan *plan, int p, const tpk_convert_options *o
                       tpk_diag *diag)
 {
     char *path = NULL;
-    if (part_path(o->output, p, plan->count, record, &path, diag) != 0)
+    if (tpk_part_path(o->output, p, plan->count, record, &path, diag) != 0)
         return -1;
     part_mesh pm;
     memset(&pm, 0, sizeof pm);
@@ -232,7 +231,7 @@ static int write_part(const part_plan *plan, int p, const tpk_convert_options *o
     if (rc == 0)
         rc = tpk_write_tpk(&po, &pm.mesh, pm.neighbors, &hdr, &prep, source_format, &extras, diag);
     if (rc == 0)
-        rc = read_header_checksum(path, &record->header_checksum, diag);
+        rc = tpk_read_header_checksum(path, &record->header_checksum, diag);
     if (rc == 0) {
         record->file_size = prep.output_bytes;
         record->vertex_count = hdr.vertex_count;

@@ -23,4 +23,10 @@ int tpk_write_part_set(const tpk_convert_options *o, const tpk_tetmesh *mesh, co
 int tpk_write_manifest(const char *path, const double origin[3], const tpk_part_record *records, int count,
                        const char *meta_json, tpk_diag *diag);
 
+/* "<dir>/<stem>-<p>.tpk" (malloc'd, *out) for the manifest "<dir>/<stem>.tpkset"; record->file gets
+ * "<stem>-<p>.tpk", p zero-padded to the width of count - 1. */
+int tpk_part_path(const char *manifest, int p, int count, tpk_part_record *record, char **out, tpk_diag *diag);
+/* The header_checksum of the .tpk at path (the manifest binds each part by it). */
+int tpk_read_header_checksum(const char *path, uint64_t *out, tpk_diag *diag);
+
 #endif

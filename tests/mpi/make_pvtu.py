@@ -1,0 +1,64 @@
+#!/usr/bin/python3
+"""Decompose a real mesh into the pieces of a .pvtu, as a solver writes one file per rank.
+
+usage: make_pvtu.py INPUT OUT.pvtu PIECES [--global-ids]
+
+The volume cells are sorted by the x of their centroid and cut into PIECES slabs of equal count (a
+decomposition unrelated to tetpack's Hilbert cut); each piece keeps the points its cells use, renumbered,
+with their point data, and is written as a .vtu by meshio. With --global-ids each piece also carries the
+point field GlobalPointIds (the point's index in INPUT), as decomposers (ParaView's D3, VTK's
+vtkGenerateGlobalIds) write it; without, the pieces share boundary points only by their coordinates.
+"""
+import os
+import sys
+
+import meshio
+import numpy as np
+
+VOLUME = {"tetra", "hexahedron", "wedge", "pyramid"}
+VTK_NAMES = {"tetra": 10, "hexahedron": 12, "wedge": 13, "pyramid": 14}
+
+
+def scalar(values):
+    """A scalar point field as a 1-D array (meshio reads VTK scalars as (n, 1)), or None."""
+    v = np.asarray(values)
+    if v.ndim == 2 and v.shape[1] == 1:
+        v = v[:, 0]
+    return v if v.ndim == 1 else None
+
+
+def main():
+    src, out, pieces = sys.argv[1], sys.argv[2], int(sys.argv[3])
+    global_ids = "--global-ids" in sys.argv[4:]
+    mesh = meshio.read(src)
+    cells = [(b.type, c) for b in mesh.cells if b.type in VOLUME for c in b.data]
+    centroid_x = np.array([mesh.points[c][:, 0].mean() for _, c in cells])
+    order = np.argsort(centroid_x, kind="stable")
+    stem = os.path.splitext(os.path.basename(out))[0]
+    folder = os.path.dirname(out) or "."
+    names = []
+    for k in range(pieces):
+        chosen = [cells[i] for i in order[len(cells) * k // pieces:len(cells) * (k + 1) // pieces]]
+        used = np.unique(np.concatenate([c for _, c in chosen]))
+        local = {int(g): i for i, g in enumerate(used)}
+        blocks = {}
+        for kind, c in chosen:
+            blocks.setdefault(kind, []).append([local[int(g)] for g in c])
+        point_data = {name: scalar(v)[used] for name, v in mesh.point_data.items() if scalar(v) is not None}
+        if global_ids:
+            point_data["GlobalPointIds"] = used.astype(np.float64)
+        name = "%s_%d.vtu" % (stem, k)
+        meshio.write(os.path.join(folder, name),
+                     meshio.Mesh(mesh.points[used], [(kind, np.array(c)) for kind, c in blocks.items()],
+                                 point_data=point_data), binary=True)
+        names.append(name)
+    with open(out, "w") as f:
+        f.write('<?xml version="1.0"?>\n<VTKFile type="PUnstructuredGrid" version="0.1">\n'
+                '  <PUnstructuredGrid GhostLevel="0">\n    <PPoints>\n'
+                '      <PDataArray type="Float64" NumberOfComponents="3"/>\n    </PPoints>\n')
+        for name in names:
+            f.write('    <Piece Source="%s"/>\n' % name)
+        f.write("  </PUnstructuredGrid>\n</VTKFile>\n")
+
+
+main()

@@ -1,0 +1,154 @@
+/* Global vertex ids across ranks. Each point is sent to the rank that owns its key (a Morton key of its
+ * coordinates, owners by key range, or its given id); the owner sorts what it got, gives equal
+ * coordinates one id, and sends the ids back. The points of piece boundaries, the only ones two ranks
+ * share, meet at their owner whichever ranks hold them. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "exchange.h"
+
+typedef struct point_record {
+    uint64_t key;  /* Morton key, or the given global id */
+    double x[3];
+    int64_t slot;  /* at the owner: where the record came in (the reply goes back in that order) */
+} point_record;
+
+static uint64_t spread21(uint64_t v)
+{
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+}
+
+static uint64_t morton_key(const double p[3], const double lo[3], double scale)
+{
+    uint64_t key = 0;
+    for (int k = 0; k < 3; k++) {
+        double q = (p[k] - lo[k]) * scale;
+        uint64_t c = q > 0 ? (q < 2097151.0 ? (uint64_t)q : 2097151u) : 0;
+        key |= spread21(c) << k;
+    }
+    return key; /* 63 bits */
+}
+
+static int compare_records(const void *a, const void *b)
+{
+    const point_record *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    for (int k = 0; k < 3; k++)
+        if (x->x[k] != y->x[k])
+            return x->x[k] < y->x[k] ? -1 : 1;
+    return (x->slot > y->slot) - (x->slot < y->slot);
+}
+
+/* The field "GlobalPointIds" when this rank's pieces carry it as an exact integer per point, else NULL. */
+static const float *given_ids(const tpk_mesh *m)
+{
+    for (int f = 0; f < m->field_count; f++) {
+        const tpk_src_field *g = &m->fields[f];
+        if (strcmp(g->name, "GlobalPointIds") || g->association != TPK_ASSOC_POINT || g->components != 1)
+            continue;
+        for (int64_t i = 0; i < m->point_count; i++)
+            if (!(g->values[i] >= 0 && g->values[i] < 16777216.0f && g->values[i] == (float)(int64_t)g->values[i]))
+                return NULL;
+        return g->values;
+    }
+    return NULL;
+}
+
+/* At the owner: ids for the sorted records, in their slots; -1 when one given id names two positions. */
+static int number_records(MPI_Comm comm, point_record *recs, int64_t n, int given, int64_t *reply)
+{
+    qsort(recs, (size_t)n, sizeof *recs, compare_records);
+    int64_t unique = 0;
+    int bad = 0;
+    for (int64_t i = 0; i < n; i++) {
+        int same_key = i > 0 && recs[i].key == recs[i - 1].key;
+        int same_point = same_key && !memcmp(recs[i].x, recs[i - 1].x, sizeof recs[i].x);
+        if (given && same_key && !same_point)
+            bad = 1;
+        if (!same_point)
+            unique++;
+        reply[recs[i].slot] = unique - 1; /* rebased below */
+    }
+    int64_t offset = 0;
+    MPI_Exscan(&unique, &offset, 1, MPI_INT64_T, MPI_SUM, comm);
+    int rank;
+    MPI_Comm_rank(comm, &rank);
+    if (rank == 0)
+        offset = 0; /* MPI_Exscan leaves rank 0's result undefined */
+    for (int64_t i = 0; i < n; i++)
+        reply[recs[i].slot] = given ? (int64_t)recs[i].key : reply[recs[i].slot] + offset;
+    return bad ? -1 : 0;
+}
+
+int tpk_global_ids(MPI_Comm comm, const tpk_mesh *mesh, const double lo[3], const double hi[3], int64_t *ids,
+                   int64_t *global_count, int64_t *exchanged, tpk_diag *diag)
+{
+    int size;
+    MPI_Comm_size(comm, &size);
+    const float *gid = given_ids(mesh);
+    int mine = gid != NULL, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
+    double extent = 0;
+    for (int k = 0; k < 3; k++)
+        extent = hi[k] - lo[k] > extent ? hi[k] - lo[k] : extent;
+    double scale = extent > 0 ? 2097151.0 / extent : 0;
+    int64_t n = mesh->point_count;
+    int64_t *counts = calloc((size_t)size * 2, sizeof *counts), *recv_counts = counts + size;
+    int *dest = malloc(sizeof *dest * (size_t)(n ? n : 1));
+    point_record *send = malloc(sizeof *send * (size_t)(n ? n : 1));
+    int ok = counts && dest && send;
+    for (int64_t i = 0; ok && i < n; i++) {
+        const double *p = mesh->points + 3 * i;
+        uint64_t key = all ? (uint64_t)gid[i] : morton_key(p, lo, scale);
+        dest[i] = all ? (int)(key % (uint64_t)size) : (int)(((unsigned __int128)key * (unsigned)size) >> 63);
+        counts[dest[i]]++;
+    }
+    int64_t *start = malloc(sizeof *start * (size_t)size);
+    ok = ok && start;
+    if (tpk_agree(comm, !ok) != 0) {
+        free(counts), free(dest), free(send), free(start);
+        return tpk_diag_fail(diag, "global ids: out of memory for %lld points", (long long)n);
+    }
+    for (int r = 0, s = 0; r < size; s += (int)counts[r], r++)
+        start[r] = s;
+    int64_t *pos = malloc(sizeof *pos * (size_t)(n ? n : 1)); /* where point i went in send order */
+    for (int64_t i = 0; pos && i < n; i++) {
+        pos[i] = start[dest[i]]++;
+        send[pos[i]] = (point_record){all ? (uint64_t)gid[i] : morton_key(mesh->points + 3 * i, lo, scale),
+                                      {mesh->points[3 * i], mesh->points[3 * i + 1], mesh->points[3 * i + 2]}, 0};
+    }
+    *exchanged += (int64_t)sizeof *send * n;
+    point_record *recv = NULL;
+    int64_t total = 0;
+    int rc = tpk_alltoallv(comm, send, counts, sizeof *send, (void **)&recv, recv_counts, &total, diag);
+    int64_t *reply = rc == 0 ? malloc(sizeof *reply * (size_t)(total ? total : 1)) : NULL;
+    if (rc == 0 && tpk_agree(comm, !pos || !reply) != 0)
+        rc = tpk_diag_fail(diag, "global ids: out of memory");
+    int bad = 0;
+    if (rc == 0) {
+        for (int64_t i = 0; i < total; i++)
+            recv[i].slot = i;
+        bad = number_records(comm, recv, total, all, reply);
+    }
+    int64_t *back = NULL, back_total = 0;
+    if (rc == 0) /* the ids go back the way the points came: counts swap roles */
+        rc = tpk_alltoallv(comm, reply, recv_counts, sizeof *reply, (void **)&back, counts, &back_total, diag);
+    if (rc == 0 && tpk_agree(comm, bad) != 0)
+        rc = tpk_diag_fail(diag, "global ids: a GlobalPointIds value names points at different positions");
+    for (int64_t i = 0; rc == 0 && i < n; i++)
+        ids[i] = back[pos[i]];
+    int64_t largest = -1;
+    for (int64_t i = 0; rc == 0 && i < n; i++)
+        largest = ids[i] > largest ? ids[i] : largest;
+    MPI_Allreduce(&largest, global_count, 1, MPI_INT64_T, MPI_MAX, comm);
+    (*global_count)++;
+    free(counts), free(dest), free(send), free(start), free(pos), free(recv), free(reply), free(back);
+    return rc;
+}
