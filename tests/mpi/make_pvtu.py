@@ -1,13 +1,15 @@
 #!/usr/bin/python3
 """Decompose a real mesh into the pieces of a .pvtu, as a solver writes one file per rank.
 
-usage: make_pvtu.py INPUT OUT.pvtu PIECES [--global-ids]
+usage: make_pvtu.py INPUT OUT.pvtu PIECES [--global-ids] [--no-point-data]
 
 The volume cells are sorted by the x of their centroid and cut into PIECES slabs of equal count (a
 decomposition unrelated to tetpack's Hilbert cut); each piece keeps the points its cells use, renumbered,
 with their point data, and is written as a .vtu by meshio. With --global-ids each piece also carries the
 point field GlobalPointIds (the point's index in INPUT), as decomposers (ParaView's D3, VTK's
 vtkGenerateGlobalIds) write it; without, the pieces share boundary points only by their coordinates.
+--no-point-data leaves out INPUT's point data (meshio reads Medit vertex refs as point data, which tetpack's
+own Medit reader does not keep, so the pieces would carry a field the single-file conversion has not).
 """
 import os
 import sys
@@ -29,8 +31,10 @@ def scalar(values):
 
 def main():
     src, out, pieces = sys.argv[1], sys.argv[2], int(sys.argv[3])
-    global_ids = "--global-ids" in sys.argv[4:]
     mesh = meshio.read(src)
+    global_ids = "--global-ids" in sys.argv[4:]
+    if "--no-point-data" in sys.argv[4:]:
+        mesh.point_data = {}
     cells = [(b.type, c) for b in mesh.cells if b.type in VOLUME for c in b.data]
     centroid_x = np.array([mesh.points[c][:, 0].mean() for _, c in cells])
     order = np.argsort(centroid_x, kind="stable")
