@@ -18,7 +18,6 @@ import meshio
 import numpy as np
 
 VOLUME = {"tetra", "hexahedron", "wedge", "pyramid"}
-VTK_NAMES = {"tetra": 10, "hexahedron": 12, "wedge": 13, "pyramid": 14}
 
 
 def scalar(values):
@@ -35,25 +34,27 @@ def main():
     global_ids = "--global-ids" in sys.argv[4:]
     if "--no-point-data" in sys.argv[4:]:
         mesh.point_data = {}
-    cells = [(b.type, c) for b in mesh.cells if b.type in VOLUME for c in b.data]
-    centroid_x = np.array([mesh.points[c][:, 0].mean() for _, c in cells])
+    blocks = [(b.type, np.asarray(b.data)) for b in mesh.cells if b.type in VOLUME]
+    kinds = np.concatenate([np.full(len(d), i) for i, (_, d) in enumerate(blocks)])
+    rows = np.concatenate([np.arange(len(d)) for _, d in blocks])
+    centroid_x = np.concatenate([mesh.points[d][:, :, 0].mean(axis=1) for _, d in blocks])
     order = np.argsort(centroid_x, kind="stable")
     stem = os.path.splitext(os.path.basename(out))[0]
     folder = os.path.dirname(out) or "."
     names = []
     for k in range(pieces):
-        chosen = [cells[i] for i in order[len(cells) * k // pieces:len(cells) * (k + 1) // pieces]]
-        used = np.unique(np.concatenate([c for _, c in chosen]))
-        local = {int(g): i for i, g in enumerate(used)}
-        blocks = {}
-        for kind, c in chosen:
-            blocks.setdefault(kind, []).append([local[int(g)] for g in c])
+        chosen = order[len(order) * k // pieces:len(order) * (k + 1) // pieces]
+        piece_blocks = [(kind, d[np.sort(rows[chosen][kinds[chosen] == i])])
+                        for i, (kind, d) in enumerate(blocks) if np.any(kinds[chosen] == i)]
+        used = np.unique(np.concatenate([d.ravel() for _, d in piece_blocks]))
+        local = np.full(len(mesh.points), -1, dtype=np.int64)
+        local[used] = np.arange(len(used))
         point_data = {name: scalar(v)[used] for name, v in mesh.point_data.items() if scalar(v) is not None}
         if global_ids:
             point_data["GlobalPointIds"] = used.astype(np.float64)
         name = "%s_%d.vtu" % (stem, k)
         meshio.write(os.path.join(folder, name),
-                     meshio.Mesh(mesh.points[used], [(kind, np.array(c)) for kind, c in blocks.items()],
+                     meshio.Mesh(mesh.points[used], [(kind, local[d]) for kind, d in piece_blocks],
                                  point_data=point_data), binary=True)
         names.append(name)
     with open(out, "w") as f:
