@@ -486,3 +486,65 @@ TPK_TEST(vectors_two_parts)
     tpk_set_marcher_destroy(sm);
     tpk_partset_close(set);
 }
+
+/* A copy of two_parts.tpkset in the temp folder (beside copies of its parts) with `patch` applied to its
+ * part records and the checksums recomputed: what tpk_partset_open says. */
+static tpk_result open_patched_set(void (*patch)(tpk_part_record *records), char *err, size_t cap)
+{
+    byte_buffer b = {0};
+    if (load_bytes(vector_path("two_parts.tpkset"), &b) != 0)
+        return TPK_ERR_IO;
+    for (int p = 0; p < 2; p++) {
+        byte_buffer part = {0};
+        char name[64];
+        snprintf(name, sizeof name, "two_parts-%d.tpk", p);
+        if (load_bytes(vector_path(name), &part) == 0)
+            save_bytes(tpk_temp_path(name), part.data, part.size);
+        free(part.data);
+    }
+    tpk_dir_entry *e = entry_of(&b, TPK_TAG_PART);
+    tpk_part_record *records = (tpk_part_record *)(b.data + e->offset);
+    patch(records);
+    e->checksum = XXH64(records, e->raw_size, 0);
+    reseal(&b);
+    save_bytes(tpk_temp_path("patched.tpkset"), b.data, b.size);
+    free(b.data);
+    tpk_partset *set = NULL;
+    tpk_result r = tpk_partset_open(&set, tpk_temp_path("patched.tpkset"), NULL, NULL, NULL, err, cap);
+    tpk_partset_close(set);
+    return r;
+}
+
+static void patch_nothing(tpk_part_record *r) { (void)r; }
+static void rename_part(tpk_part_record *r, const char *name)
+{
+    memset(r->file, 0, sizeof r->file); /* NUL-padded: bytes after the name must be 0 */
+    snprintf(r->file, sizeof r->file, "%s", name);
+}
+static void patch_parent_dir(tpk_part_record *r) { rename_part(&r[1], "../two_parts-1.tpk"); }
+static void patch_missing(tpk_part_record *r) { rename_part(&r[0], "gone.tpk"); }
+static void patch_padding(tpk_part_record *r) { r[0].file[100] = 'x'; }
+static void patch_count(tpk_part_record *r) { r[1].tet_count = 2; }
+static void patch_checksum(tpk_part_record *r) { r[0].header_checksum ^= 1; }
+static void patch_reserved(tpk_part_record *r) { r[0].reserved[31] = 1; }
+
+TPK_TEST(part_set_refused)
+{
+    char err[512] = "";
+    CHECK_EQ_INT(open_patched_set(patch_nothing, err, sizeof err), TPK_OK);
+    CHECK_EQ_INT(open_patched_set(patch_parent_dir, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "part 1: the file name") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_missing, err, sizeof err), TPK_ERR_IO);
+    CHECK_MSG(strstr(err, "gone.tpk") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_count, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "counts differ") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_checksum, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "header_checksum") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_reserved, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_EQ_INT(open_patched_set(patch_padding, err, sizeof err), TPK_ERR_CORRUPT);
+    /* A plain .tpk is not a set. */
+    tpk_partset *set = NULL;
+    CHECK_EQ_INT(tpk_partset_open(&set, vector_path("one_tet.tpk"), NULL, NULL, NULL, err, sizeof err),
+                 TPK_ERR_NOT_FOUND);
+    CHECK(set == NULL);
+}
