@@ -48,8 +48,9 @@ static int append_field(tpk_src_field *dst, int64_t dst_n, const tpk_src_field *
     if (!values)
         return -1;
     for (size_t s = 0; s < steps; s++) {
-        memcpy(values + s * comp * (size_t)(dst_n + src_n), dst->values + s * comp * (size_t)dst_n,
-               sizeof *values * comp * (size_t)dst_n);
+        if (dst_n > 0) /* the first piece's values go into an empty field */
+            memcpy(values + s * comp * (size_t)(dst_n + src_n), dst->values + s * comp * (size_t)dst_n,
+                   sizeof *values * comp * (size_t)dst_n);
         memcpy(values + s * comp * (size_t)(dst_n + src_n) + comp * (size_t)dst_n,
                src->values + s * comp * (size_t)src_n, sizeof *values * comp * (size_t)src_n);
     }
