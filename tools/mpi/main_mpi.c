@@ -93,10 +93,12 @@ static void report(const mpi_args *a, const tpk_mpi_rank_report *all, int size)
         printf("%s{\"rank\":%d,\"pieces\":%lld,\"points_read\":%lld,\"vertices\":%lld,\"tets\":%lld,\"shell_faces\":%lld,"
                "\"links\":%lld,\"global_vertices\":%lld,\"exchanged_bytes\":%lld,\"peak_rss_bytes\":%lld,"
                "\"file_bytes\":%lld,\"seconds\":{\"read\":%.6f,\"ids\":%.6f,\"tets\":%.6f,\"cut\":%.6f,"
-               "\"write\":%.6f,\"total\":%.6f}}", r ? "," : "", r, (long long)p->pieces, (long long)p->points_read,
+               "\"write\":%.6f,\"total\":%.6f},\"cpu_seconds\":{\"read\":%.6f,\"ids\":%.6f,\"tets\":%.6f,"
+               "\"cut\":%.6f,\"write\":%.6f}}", r ? "," : "", r, (long long)p->pieces, (long long)p->points_read,
                (long long)p->vertices, (long long)p->tets, (long long)p->shell_faces, (long long)p->links,
                (long long)p->global_vertices, (long long)p->exchanged_bytes, (long long)p->peak_rss_bytes,
-               (long long)p->file_bytes, p->t_read, p->t_ids, p->t_tets, p->t_cut, p->t_write, p->t_total);
+               (long long)p->file_bytes, p->t_read, p->t_ids, p->t_tets, p->t_cut, p->t_write, p->t_total,
+               p->cpu_read, p->cpu_ids, p->cpu_tets, p->cpu_cut, p->cpu_write);
     }
     printf("]}\n");
 }

@@ -48,6 +48,13 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+static double cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 static int read_input(rank_state *s)
 {
     int rc = tpk_pvtu_pieces(s->o->input, &s->list, s->diag);
@@ -291,11 +298,12 @@ static void free_state(rank_state *s)
     free(s->links);
 }
 
-/* A phase: its seconds into *t, then the ranks agree (a failure anywhere stops every rank here). */
-#define PHASE(call, t)                              \
+/* A phase: its wall and CPU seconds, then the ranks agree (a failure anywhere stops every rank here). */
+#define PHASE(call, t, cpu)                         \
     do {                                            \
-        double t0_ = now_seconds();                 \
+        double t0_ = now_seconds(), c0_ = cpu_seconds(); \
         rc = (call);                                \
+        (cpu) = cpu_seconds() - c0_;                \
         (t) = now_seconds() - t0_;                  \
         if (tpk_agree(s.comm, rc) != 0) {           \
             rc = -1;                                \
@@ -313,16 +321,17 @@ int tpk_mpi_convert(MPI_Comm comm, const tpk_mpi_options *o, tpk_mpi_rank_report
     MPI_Comm_size(comm, &s.size);
     double start = now_seconds();
     int rc = 0;
-    PHASE(read_input(&s), rep->t_read);
-    PHASE(global_vertices(&s), rep->t_ids);
-    PHASE(make_tets(&s), rep->t_tets);
+    PHASE(read_input(&s), rep->t_read, rep->cpu_read);
+    PHASE(global_vertices(&s), rep->t_ids, rep->cpu_ids);
+    PHASE(make_tets(&s), rep->t_tets, rep->cpu_tets);
     PHASE(tpk_cut_faces(comm, s.mesh.tets, s.neighbors, s.mesh.tet_count, s.vertex_gid, &s.links, &s.link_count,
                         &rep->exchanged_bytes, diag),
-          rep->t_cut);
-    PHASE(write_part(&s), rep->t_write);
-    double t_manifest = 0;
-    PHASE(write_manifest(&s), t_manifest);
+          rep->t_cut, rep->cpu_cut);
+    PHASE(write_part(&s), rep->t_write, rep->cpu_write);
+    double t_manifest = 0, cpu_manifest = 0;
+    PHASE(write_manifest(&s), t_manifest, cpu_manifest);
     rep->t_write += t_manifest;
+    rep->cpu_write += cpu_manifest;
     rep->vertices = s.mesh.vertex_count;
     rep->tets = s.mesh.tet_count;
     rep->shell_faces = (int64_t)s.hdr.shell_face_count;

@@ -21,6 +21,10 @@ typedef struct tpk_mpi_rank_report {
     int64_t pieces, points_read, vertices, tets, shell_faces, links, global_vertices;
     int64_t exchanged_bytes, peak_rss_bytes, file_bytes;
     double t_read, t_ids, t_tets, t_cut, t_write, t_total; /* t_tets: split, orient and connect */
+    /* CPU seconds of this rank's process in each phase, without the agreement that ends it: on a loaded
+     * machine the work a phase costs, where wall time also counts waiting for a core (and OpenMPI spins
+     * while it waits inside an exchange, so ids and cut count some waiting too). */
+    double cpu_read, cpu_ids, cpu_tets, cpu_cut, cpu_write;
 } tpk_mpi_rank_report;
 
 /* Collective over comm. Returns 0, or -1 on every rank (diag set on the ranks that know why). */
