@@ -87,68 +87,89 @@ static int number_records(MPI_Comm comm, point_record *recs, int64_t n, int give
     return bad ? -1 : 0;
 }
 
+/* Where each point goes: its record, in send order grouped by owner rank (counts[r] per rank), and
+ * pos[i], the place of point i in that order. Local; -1 when out of memory. */
+typedef struct send_plan {
+    point_record *send;
+    int64_t *counts, *recv_counts; /* size each */
+    int64_t *pos;
+} send_plan;
+
+static void free_plan(send_plan *plan)
+{
+    free(plan->send), free(plan->counts), free(plan->pos);
+}
+
+static int plan_sends(const tpk_mesh *mesh, const float *given, const double lo[3], const double hi[3], int size,
+                      send_plan *plan)
+{
+    int64_t n = mesh->point_count;
+    double extent = 0;
+    for (int k = 0; k < 3; k++)
+        extent = hi[k] - lo[k] > extent ? hi[k] - lo[k] : extent;
+    double scale = extent > 0 ? 2097151.0 / extent : 0;
+    plan->counts = calloc((size_t)size * 3, sizeof *plan->counts);
+    plan->send = malloc(sizeof *plan->send * (size_t)(n ? n : 1));
+    plan->pos = malloc(sizeof *plan->pos * (size_t)(n ? n : 1));
+    if (!plan->counts || !plan->send || !plan->pos)
+        return -1;
+    plan->recv_counts = plan->counts + size;
+    int64_t *start = plan->counts + 2 * size;
+    for (int64_t i = 0; i < n; i++) { /* pos holds the owner first, then the place */
+        uint64_t key = given ? (uint64_t)given[i] : morton_key(mesh->points + 3 * i, lo, scale);
+        plan->pos[i] = given ? (int64_t)(key % (uint64_t)size) : (int64_t)(((unsigned __int128)key * (unsigned)size) >> 63);
+        plan->counts[plan->pos[i]]++;
+    }
+    for (int r = 1; r < size; r++)
+        start[r] = start[r - 1] + plan->counts[r - 1];
+    for (int64_t i = 0; i < n; i++) {
+        const double *p = mesh->points + 3 * i;
+        plan->pos[i] = start[plan->pos[i]]++;
+        plan->send[plan->pos[i]] = (point_record){given ? (uint64_t)given[i] : morton_key(p, lo, scale),
+                                                  {p[0], p[1], p[2]}, 0};
+    }
+    return 0;
+}
+
 int tpk_global_ids(MPI_Comm comm, const tpk_mesh *mesh, const double lo[3], const double hi[3], int64_t *ids,
                    int64_t *global_count, int64_t *exchanged, tpk_diag *diag)
 {
     int size;
     MPI_Comm_size(comm, &size);
-    const float *gid = given_ids(mesh);
-    int mine = gid != NULL, all = 0;
-    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
-    double extent = 0;
-    for (int k = 0; k < 3; k++)
-        extent = hi[k] - lo[k] > extent ? hi[k] - lo[k] : extent;
-    double scale = extent > 0 ? 2097151.0 / extent : 0;
-    int64_t n = mesh->point_count;
-    int64_t *counts = calloc((size_t)size * 2, sizeof *counts), *recv_counts = counts + size;
-    int *dest = malloc(sizeof *dest * (size_t)(n ? n : 1));
-    point_record *send = malloc(sizeof *send * (size_t)(n ? n : 1));
-    int ok = counts && dest && send;
-    for (int64_t i = 0; ok && i < n; i++) {
-        const double *p = mesh->points + 3 * i;
-        uint64_t key = all ? (uint64_t)gid[i] : morton_key(p, lo, scale);
-        dest[i] = all ? (int)(key % (uint64_t)size) : (int)(((unsigned __int128)key * (unsigned)size) >> 63);
-        counts[dest[i]]++;
+    const float *given = given_ids(mesh);
+    int mine = given != NULL, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm); /* the file's ids only when every rank has them */
+    send_plan plan = {0};
+    if (tpk_agree(comm, plan_sends(mesh, all ? given : NULL, lo, hi, size, &plan)) != 0) {
+        free_plan(&plan);
+        return tpk_diag_fail(diag, "global ids: out of memory for %lld points", (long long)mesh->point_count);
     }
-    int64_t *start = malloc(sizeof *start * (size_t)size);
-    ok = ok && start;
-    if (tpk_agree(comm, !ok) != 0) {
-        free(counts), free(dest), free(send), free(start);
-        return tpk_diag_fail(diag, "global ids: out of memory for %lld points", (long long)n);
-    }
-    for (int r = 0, s = 0; r < size; s += (int)counts[r], r++)
-        start[r] = s;
-    int64_t *pos = malloc(sizeof *pos * (size_t)(n ? n : 1)); /* where point i went in send order */
-    for (int64_t i = 0; pos && i < n; i++) {
-        pos[i] = start[dest[i]]++;
-        send[pos[i]] = (point_record){all ? (uint64_t)gid[i] : morton_key(mesh->points + 3 * i, lo, scale),
-                                      {mesh->points[3 * i], mesh->points[3 * i + 1], mesh->points[3 * i + 2]}, 0};
-    }
-    *exchanged += (int64_t)sizeof *send * n;
+    *exchanged += (int64_t)sizeof *plan.send * mesh->point_count;
     point_record *recv = NULL;
-    int64_t total = 0;
-    int rc = tpk_alltoallv(comm, send, counts, sizeof *send, (void **)&recv, recv_counts, &total, diag);
-    int64_t *reply = rc == 0 ? malloc(sizeof *reply * (size_t)(total ? total : 1)) : NULL;
-    if (rc == 0 && tpk_agree(comm, !pos || !reply) != 0)
+    int64_t total = 0, *reply = NULL, *back = NULL, back_total = 0;
+    int rc = tpk_alltoallv(comm, plan.send, plan.counts, sizeof *plan.send, (void **)&recv, plan.recv_counts, &total,
+                           diag);
+    if (rc == 0 && tpk_agree(comm, !(reply = malloc(sizeof *reply * (size_t)(total ? total : 1)))) != 0)
         rc = tpk_diag_fail(diag, "global ids: out of memory");
     int bad = 0;
     if (rc == 0) {
         for (int64_t i = 0; i < total; i++)
             recv[i].slot = i;
         bad = number_records(comm, recv, total, all, reply);
+        /* the ids go back the way the points came: the counts swap roles */
+        rc = tpk_alltoallv(comm, reply, plan.recv_counts, sizeof *reply, (void **)&back, plan.counts, &back_total,
+                           diag);
     }
-    int64_t *back = NULL, back_total = 0;
-    if (rc == 0) /* the ids go back the way the points came: counts swap roles */
-        rc = tpk_alltoallv(comm, reply, recv_counts, sizeof *reply, (void **)&back, counts, &back_total, diag);
     if (rc == 0 && tpk_agree(comm, bad) != 0)
         rc = tpk_diag_fail(diag, "global ids: a GlobalPointIds value names points at different positions");
-    for (int64_t i = 0; rc == 0 && i < n; i++)
-        ids[i] = back[pos[i]];
     int64_t largest = -1;
-    for (int64_t i = 0; rc == 0 && i < n; i++)
+    for (int64_t i = 0; rc == 0 && i < mesh->point_count; i++) {
+        ids[i] = back[plan.pos[i]];
         largest = ids[i] > largest ? ids[i] : largest;
+    }
     MPI_Allreduce(&largest, global_count, 1, MPI_INT64_T, MPI_MAX, comm);
     (*global_count)++;
-    free(counts), free(dest), free(send), free(start), free(pos), free(recv), free(reply), free(back);
+    free_plan(&plan);
+    free(recv), free(reply), free(back);
     return rc;
 }
