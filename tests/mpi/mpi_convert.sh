@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # tetpack-mpi convert on real decomposed inputs (a real mesh cut into .pvtu pieces by make_pvtu.py, as a
-# solver writes one piece per rank), under mpirun -np 2 and -np 4 (oversubscribed): the part set holds
+# solver writes one piece per rank; an OpenFOAM case decomposed by decomposePar), under mpirun -np 2 and -np 4 (oversubscribed): the part set holds
 # the tets and the outer shell of the single-process conversion of the whole mesh, every cut face is
 # linked both ways (check 614 and 600..613 clean), and it renders the same picture.
 # $1 tetpack, $2 data dir, $3 source dir, $4 tetpack-mpi.
@@ -49,6 +49,32 @@ same_as_whole cylinder_np4 "$SRC/samples/cylinder.vtk" 4 7
 # Hexahedra with the decomposer's GlobalPointIds: quads split through the same smallest id as the whole.
 same_as_whole acoustic_np4 "$DATA/sfepy/acoustic_wg.vtk" 4 6 --global-ids
 same_as_whole tetra_np2 "$DATA/sfepy/cube_medium_tetra.mesh" 2 3 --no-point-data
+
+# OpenFOAM: blockMesh's prisms and hexahedra (tests/cli/openfoam_prisms/, read as polyhedra), decomposed by
+# decomposePar into processor0..3; the point ids come from each processor's pointProcAddressing.
+export WM_PROJECT_DIR=${WM_PROJECT_DIR:-/usr/share/openfoam}
+foam="$WORK/foam"
+cp -r "$SRC/tests/cli/openfoam_prisms" "$foam"
+mkdir -p "$foam/constant"
+cat > "$foam/system/decomposeParDict" <<'FOAM'
+FoamFile { version 2.0; format ascii; class dictionary; object decomposeParDict; }
+numberOfSubdomains 4;
+method simple;
+simpleCoeffs { n (2 2 1); delta 0.001; }
+FOAM
+(cd "$foam" && blockMesh > log.blockMesh 2>&1 && decomposePar -force > log.decomposePar 2>&1) ||
+    { tail "$foam/log."*; fail "OpenFOAM failed"; }
+convert_checked "$foam" "$WORK/foam_whole.tpk" > /dev/null
+keys "$WORK/foam_whole.keys" "$WORK/foam_whole.tpk"
+"$TPK" render "$WORK/foam_whole.tpk" -o "$WORK/foam_whole.png" --size 160x120 > /dev/null
+for ranks in 2 4; do
+    mpi "$ranks" convert "$foam" "$WORK/foam$ranks.tpkset" --threads 1 --quiet || fail "foam, $ranks ranks: failed"
+    expect_exit 0 "$TPK" check "$WORK/foam$ranks.tpkset"
+    keys "$WORK/foam$ranks.keys" "$WORK"/foam$ranks-*.tpk
+    cmp -s "$WORK/foam_whole.keys" "$WORK/foam$ranks.keys" || fail "foam, $ranks ranks: not the tets of the whole case"
+    "$TPK" render "$WORK/foam$ranks.tpkset" -o "$WORK/foam$ranks.png" --size 160x120 > /dev/null
+    cmp -s "$WORK/foam_whole.png" "$WORK/foam$ranks.png" || fail "foam, $ranks ranks: a different picture"
+done
 
 # Hexahedra without global ids: ids follow space, so quads may split along the other diagonal than in the
 # single file; the set is still sound, its links answered, and it holds as many tets.

@@ -16,13 +16,13 @@
 int tpk_alltoallv(MPI_Comm comm, const void *send, const int64_t *send_counts, size_t record, void **recv,
                   int64_t *recv_counts, int64_t *recv_total, tpk_diag *diag);
 
-/* One global id per point of `mesh` (ids[point_count]): the point field "GlobalPointIds" when every rank's
- * pieces carry it (integers, exact in float32: below 2^24), else exact coordinate matching: points with
- * the same coordinates on any rank get the same id, numbered along a Morton curve of the box [lo, hi], so
+/* One global id per point of `mesh` (ids[point_count]): given[i] (the files' ids, checked: one id, one
+ * position) when every rank has them (given non-NULL), else exact coordinate matching: points with the
+ * same coordinates on any rank get the same id, numbered along a Morton curve of the box [lo, hi], so
  * that ids follow space. *global_count: 1 + the largest id. `exchanged` adds the bytes this rank sent.
- * Collective. Returns 0, or -1 (diag set) on every rank when one failed (ids of one point disagree...). */
-int tpk_global_ids(MPI_Comm comm, const tpk_mesh *mesh, const double lo[3], const double hi[3], int64_t *ids,
-                   int64_t *global_count, int64_t *exchanged, tpk_diag *diag);
+ * Collective. Returns 0, or -1 (diag set) on every rank when one failed. */
+int tpk_global_ids(MPI_Comm comm, const tpk_mesh *mesh, const int64_t *given, const double lo[3],
+                   const double hi[3], int64_t *ids, int64_t *global_count, int64_t *exchanged, tpk_diag *diag);
 
 /* The faces on cuts: every shell face of this rank (tet order then face order, as SHEL numbers them) is
  * sent, keyed by its sorted global vertex ids (vertex_gid per vertex, -1 for a point the converter added,

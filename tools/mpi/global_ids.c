@@ -1,5 +1,5 @@
 /* Global vertex ids across ranks. Each point is sent to the rank that owns its key (a Morton key of its
- * coordinates, owners by key range, or its given id); the owner sorts what it got, gives equal
+ * coordinates, owners by key range, or the id the files give it); the owner sorts what it got, gives equal
  * coordinates one id, and sends the ids back. The points of piece boundaries, the only ones two ranks
  * share, meet at their owner whichever ranks hold them. */
 #include <stdlib.h>
@@ -46,21 +46,6 @@ static int compare_records(const void *a, const void *b)
     return (x->slot > y->slot) - (x->slot < y->slot);
 }
 
-/* The field "GlobalPointIds" when this rank's pieces carry it as an exact integer per point, else NULL. */
-static const float *given_ids(const tpk_mesh *m)
-{
-    for (int f = 0; f < m->field_count; f++) {
-        const tpk_src_field *g = &m->fields[f];
-        if (strcmp(g->name, "GlobalPointIds") || g->association != TPK_ASSOC_POINT || g->components != 1)
-            continue;
-        for (int64_t i = 0; i < m->point_count; i++)
-            if (!(g->values[i] >= 0 && g->values[i] < 16777216.0f && g->values[i] == (float)(int64_t)g->values[i]))
-                return NULL;
-        return g->values;
-    }
-    return NULL;
-}
-
 /* At the owner: ids for the sorted records, in their slots; -1 when one given id names two positions. */
 static int number_records(MPI_Comm comm, point_record *recs, int64_t n, int given, int64_t *reply)
 {
@@ -100,7 +85,7 @@ static void free_plan(send_plan *plan)
     free(plan->send), free(plan->counts), free(plan->pos);
 }
 
-static int plan_sends(const tpk_mesh *mesh, const float *given, const double lo[3], const double hi[3], int size,
+static int plan_sends(const tpk_mesh *mesh, const int64_t *given, const double lo[3], const double hi[3], int size,
                       send_plan *plan)
 {
     int64_t n = mesh->point_count;
@@ -131,12 +116,11 @@ static int plan_sends(const tpk_mesh *mesh, const float *given, const double lo[
     return 0;
 }
 
-int tpk_global_ids(MPI_Comm comm, const tpk_mesh *mesh, const double lo[3], const double hi[3], int64_t *ids,
-                   int64_t *global_count, int64_t *exchanged, tpk_diag *diag)
+int tpk_global_ids(MPI_Comm comm, const tpk_mesh *mesh, const int64_t *given, const double lo[3],
+                   const double hi[3], int64_t *ids, int64_t *global_count, int64_t *exchanged, tpk_diag *diag)
 {
     int size;
     MPI_Comm_size(comm, &size);
-    const float *given = given_ids(mesh);
     int mine = given != NULL, all = 0;
     MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm); /* the file's ids only when every rank has them */
     send_plan plan = {0};
@@ -161,7 +145,7 @@ int tpk_global_ids(MPI_Comm comm, const tpk_mesh *mesh, const double lo[3], cons
                            diag);
     }
     if (rc == 0 && tpk_agree(comm, bad) != 0)
-        rc = tpk_diag_fail(diag, "global ids: a GlobalPointIds value names points at different positions");
+        rc = tpk_diag_fail(diag, "global ids: a global point id the files give names points at different positions");
     int64_t largest = -1;
     for (int64_t i = 0; rc == 0 && i < mesh->point_count; i++) {
         ids[i] = back[plan.pos[i]];

@@ -9,11 +9,13 @@
 #include "mpi_convert.h"
 
 static const char mpi_help[] =
-    "usage: mpirun -np P tetpack-mpi convert INPUT.pvtu OUTPUT.tpkset [options]\n"
+    "usage: mpirun -np P tetpack-mpi convert INPUT OUTPUT.tpkset [options]\n"
     "\n"
-    "Converts a mesh decomposed into the pieces of a .pvtu into a part set (spec §15): rank r reads the\n"
-    "r-th block of pieces, vertices are identified across ranks by the point field GlobalPointIds when\n"
-    "every piece has it (integers below 2^24), else by exact coordinates; each rank splits, orients and\n"
+    "Converts a decomposed mesh into a part set (spec §15). INPUT is a .pvtu (its pieces), or an OpenFOAM\n"
+    "case folder decomposed by decomposePar (processor0, processor1, ...). Rank r reads the r-th block of\n"
+    "pieces; vertices are identified across ranks by the files' global ids (OpenFOAM's pointProcAddressing,\n"
+    "or a point field GlobalPointIds of integers below 2^24 in every piece), else by exact coordinates;\n"
+    "each rank splits, orients and\n"
     "connects its cells on the whole mesh's float32 grid, the faces on cuts are matched by an exchange\n"
     "keyed by their sorted global vertex ids, each rank writes OUTPUT's stem + -<rank>.tpk with its links\n"
     "and rank 0 the manifest OUTPUT. Needs at least P pieces.\n"
@@ -62,7 +64,8 @@ static int parse(int argc, char **argv, mpi_args *a, int rank)
     }
     if (n != 2 || (a->o.layouts & 0x80000000u) || !strcmp(pos[0], pos[1])) {
         if (rank == 0)
-            fprintf(stderr, "tetpack-mpi convert: error: expected INPUT.pvtu OUTPUT.tpkset (a different file), "
+            fprintf(stderr, "tetpack-mpi convert: error: expected INPUT (.pvtu or decomposed OpenFOAM case) and "
+                            "OUTPUT.tpkset (a different file), "
                             "--layout tet16|tet20|tet32, --zstd 1..22 (see --help)\n");
         return 2;
     }

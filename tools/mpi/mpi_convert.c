@@ -1,4 +1,5 @@
-/* tetpack-mpi convert, rank by rank: each rank reads its block of the .pvtu's pieces, the ranks agree on
+/* tetpack-mpi convert, rank by rank: each rank reads its block of the pieces (a .pvtu's, or an OpenFOAM
+ * case's processor folders), the ranks agree on
  * global vertex ids (exchange.h), each rank splits its cells into tets on the whole mesh's float32 grid
  * (ids ascending by global id, so quads split as the single-file converter splits them when the ids come
  * from the file), orients and connects them, the faces on cuts are matched by an exchange, each rank
@@ -57,7 +58,7 @@ static double cpu_seconds(void)
 
 static int read_input(rank_state *s)
 {
-    int rc = tpk_pvtu_pieces(s->o->input, &s->list, s->diag);
+    int rc = tpk_input_pieces(s->o->input, &s->list, s->diag);
     if (rc == 0 && s->list.count < s->size)
         rc = tpk_diag_fail(s->diag, "%s: %d pieces for %d ranks: each rank needs at least one piece", s->o->input,
                            s->list.count, s->size);
@@ -123,6 +124,11 @@ static int merge_points(rank_state *s, const int64_t *gid)
     }
     for (int64_t c = 0; m->cell_count && c < m->cell_offsets[m->cell_count]; c++)
         m->cell_conn[c] = new_id[m->cell_conn[c]];
+    tpk_face_stream_ids(m, 0, new_id, 0);
+    for (int64_t c = 0; c < m->cell_count; c++) /* a polyhedron lists its points ascending (mesh.h) */
+        if (m->cell_types[c] == TPK_CELL_POLYHEDRON)
+            qsort(m->cell_conn + m->cell_offsets[c], (size_t)(m->cell_offsets[c + 1] - m->cell_offsets[c]),
+                  sizeof *m->cell_conn, tpk_compare_int32);
     int rc = 0;
     for (int f = 0; rc == 0 && f < m->field_count; f++) {
         tpk_src_field *fld = &m->fields[f];
@@ -182,7 +188,7 @@ static int global_vertices(rank_state *s)
     int64_t *gid = malloc(sizeof *gid * (size_t)(s->in.mesh.point_count ? s->in.mesh.point_count : 1));
     if (tpk_agree(s->comm, !gid) != 0)
         return tpk_diag_fail(s->diag, "out of memory for global ids");
-    int rc = tpk_global_ids(s->comm, &s->in.mesh, s->lo, s->hi, gid, &s->rep->global_vertices,
+    int rc = tpk_global_ids(s->comm, &s->in.mesh, s->in.given_ids, s->lo, s->hi, gid, &s->rep->global_vertices,
                             &s->rep->exchanged_bytes, s->diag);
     if (rc == 0)
         rc = merge_points(s, gid);

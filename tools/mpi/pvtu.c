@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "import/xml_input.h"
 
@@ -127,4 +128,43 @@ void tpk_piece_list_free(tpk_piece_list *list)
         free(list->paths[i]);
     free(list->paths);
     memset(list, 0, sizeof *list);
+}
+
+/* A decomposed OpenFOAM case: CASE/processor<k>, k = 0, 1, ... while they exist. */
+static int processor_dirs(const char *path, tpk_piece_list *out, tpk_diag *diag)
+{
+    memset(out, 0, sizeof *out);
+    out->openfoam = 1;
+    for (;;) {
+        char dir[4096];
+        struct stat st;
+        snprintf(dir, sizeof dir, "%s/processor%d", path, out->count);
+        if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
+            break;
+        char **grown = realloc(out->paths, sizeof *grown * (size_t)(out->count + 1));
+        char *copy = strdup(dir);
+        if (!grown || !copy) {
+            free(copy);
+            if (grown)
+                out->paths = grown;
+            tpk_piece_list_free(out);
+            return tpk_diag_fail(diag, "%s: out of memory for the processor folders", path);
+        }
+        out->paths = grown;
+        out->paths[out->count++] = copy;
+    }
+    if (out->count == 0) {
+        tpk_piece_list_free(out);
+        return tpk_diag_fail(diag, "%s: expected a .pvtu, or an OpenFOAM case decomposed by decomposePar "
+                             "(processor0, processor1, ...), found a folder without processor0", path);
+    }
+    return 0;
+}
+
+int tpk_input_pieces(const char *path, tpk_piece_list *out, tpk_diag *diag)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+        return processor_dirs(path, out, diag);
+    return tpk_pvtu_pieces(path, out, diag);
 }

@@ -7,8 +7,13 @@
 
 typedef struct tpk_piece_list {
     int count;
-    char **paths; /* each resolved against the .pvtu's folder; malloc'd */
+    char **paths; /* each resolved against the .pvtu's folder (or the case's processor<k> folders) */
+    int openfoam; /* the pieces are OpenFOAM processor folders (decomposePar) */
 } tpk_piece_list;
+
+/* The pieces of INPUT: a .pvtu's, or an OpenFOAM case folder's processor0, processor1, ... (as many as
+ * exist in a row, at least one). Returns 0, or -1 with a message. */
+int tpk_input_pieces(const char *path, tpk_piece_list *out, tpk_diag *diag);
 
 /* Read `path`'s piece list. A Source with a '/' at its start or a ".." component is refused (pieces live
  * beside or below the .pvtu). Returns 0, or -1 with a message naming the file and the place. */
