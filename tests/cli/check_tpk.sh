@@ -48,3 +48,15 @@ for bad in "$WORK/short.tpk" "$SRC/samples/vectors/bad_magic.tpk" "$SRC/samples/
     expect_stderr "$(basename "$bad")"
     [ ! -s "$WORK/out" ] || fail "output for an unreadable file: $(cat "$WORK/out")"
 done
+
+# Part sets (spec §13.4): two_parts.tpkset checks clean; bad_link.tpkset's containers are valid but its
+# links do not answer each other: check 614 for both links, exit 1.
+expect_exit 0 "$TPK" check "$SRC/samples/vectors/two_parts.tpkset"
+expect_exit 1 "$TPK" check "$SRC/samples/vectors/bad_link.tpkset" --json
+$PY - "$WORK/out" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+f = {x["id"]: x for x in d["findings"]}
+assert d["format"] == "tpkset" and list(f) == [614] and f[614]["count"] == 2, d["findings"]
+assert f[614]["name"] == "tpk_s01_links" and "link the face back" in f[614]["examples"][0]["note"], f[614]
+PY

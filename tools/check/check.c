@@ -64,6 +64,14 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
                 return tpk_diag_fail(diag, "%s", why);
             return tpk_diag_fail(diag, "%s: %s", path, why);
         }
+        uint64_t part_chunk;
+        if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
+            tpk_close(file);
+            double t0 = now_seconds();
+            int rc = tpk_check_set(path, report, diag);
+            report->seconds[6] = now_seconds() - t0;
+            return rc;
+        }
         snprintf(report->format, sizeof report->format, "tpk");
         double t0 = now_seconds();
         int32_t *tets = NULL; /* recovered by the 6xx walk, handed to the mesh build */

@@ -404,14 +404,23 @@ static int load_step(const render_args *a, tpk_file *file, int tet_field, int st
     return r == TPK_OK ? 0 : tpk_cli_fail_file("render", a->path, tpk_error_text(file));
 }
 
-static int render_frame(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
+/* What a frame marches: one file's arrays, or a part set's link-following marcher. */
+typedef struct frame_source {
+    const tpk_mesh_arrays *mesh;
+    const tpk_set_marcher *set;
+    int has_scalars;  /* the set's parts carry a point field */
+    double diagonal;  /* of the box of all the set's positions */
+} frame_source;
+
+static int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt,
                         const char *output, uint8_t *rgba)
 {
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     tpk_render_stats stats;
     memset(&stats, 0, sizeof stats);
-    if (tpk_render_cpu(mesh, opt, rgba, &stats, &diag) != 0)
+    if ((src->set ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
+                  : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
     if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
@@ -510,6 +519,18 @@ static int merge_scene(int argc, char **argv, render_args *a)
     return 0;
 }
 
+/* The transfer function: --tf, else the scene's, else viridis. */
+static int load_tf(const render_args *a, tpk_transfer_function *tf)
+{
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (!a->tf && (a->scene.given & TPK_SCENE_TF))
+        *tf = a->scene.tf;
+    else if (tpk_tf_load(a->tf ? a->tf : "viridis", tf, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    return 0;
+}
+
 static int render_file(render_args *a, tpk_file *file)
 {
     int association;
@@ -521,12 +542,8 @@ static int render_file(render_args *a, tpk_file *file)
         return tpk_cli_fail("render", "%s: %s has %u step(s) (0..%u), step %d asked", a->path, name, steps,
                             steps - 1, a->step_last);
     tpk_transfer_function tf;
-    tpk_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (!a->tf && (a->scene.given & TPK_SCENE_TF))
-        tf = a->scene.tf;
-    else if (tpk_tf_load(a->tf ? a->tf : "viridis", &tf, &diag) != 0)
-        return tpk_cli_fail("render", "%s", diag.message);
+    if (load_tf(a, &tf))
+        return TPK_EXIT_USAGE;
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
     render_args_to_options(a, file, &tf, &opt);
@@ -542,7 +559,7 @@ static int render_file(render_args *a, tpk_file *file)
         if (rc == TPK_EXIT_OK)
             rc = load_step(a, file, association == TPK_ASSOC_TET, step, &mesh, &opt);
         if (rc == TPK_EXIT_OK)
-            rc = render_frame(a, &mesh, &opt, path, rgba);
+            rc = render_frame(a, &(frame_source){.mesh = &mesh}, &opt, path, rgba);
     }
     free(rgba);
     if (rc == TPK_EXIT_OK && a->save_scene && save_scene(a, file, &opt) != 0)
@@ -580,6 +597,109 @@ static int check_outputs(const render_args *a)
     return 0;
 }
 
+/* ---- Part sets (spec §15): every part loaded, marched across the cuts by its links ---------------- */
+
+typedef struct set_view {
+    double bounds_min[3], bounds_max[3]; /* of the parts' headers */
+    double range[2];                     /* the field's, over all parts */
+    double lo[3], hi[3];                 /* of the stored positions, as one file's */
+    int has_scalars;
+} set_view;
+
+/* Part p's arrays and links, merged into the view's boxes and range. */
+static int load_part(const render_args *a, tpk_partset *set, uint32_t p, tpk_mesh_arrays *mesh,
+                     const tpk_link **links, uint64_t *link_count, set_view *v)
+{
+    tpk_file *file = tpk_partset_file(set, p);
+    int association;
+    if (check_field(a, file, &association))
+        return TPK_EXIT_USAGE;
+    if (association == TPK_ASSOC_TET)
+        return tpk_cli_fail("render", "%s: '%s' is a tet field; a part set renders point fields (render a part, "
+                            "or the single file)", a->path, a->field);
+    tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, mesh);
+    if (r == TPK_OK)
+        r = tpk_partset_links(set, p, links, link_count);
+    if (r != TPK_OK)
+        return tpk_cli_fail("render", "%s: part %u: %s", a->path, p, tpk_error_text(file));
+    tpk_file_info info;
+    tpk_get_info(file, &info);
+    double range[2];
+    field_range(file, a->field, range);
+    v->has_scalars = mesh->scalars != NULL;
+    for (int k = 0; k < 3; k++) {
+        v->bounds_min[k] = p == 0 || info.bounds_min[k] < v->bounds_min[k] ? info.bounds_min[k] : v->bounds_min[k];
+        v->bounds_max[k] = p == 0 || info.bounds_max[k] > v->bounds_max[k] ? info.bounds_max[k] : v->bounds_max[k];
+    }
+    v->range[0] = p == 0 || range[0] < v->range[0] ? range[0] : v->range[0];
+    v->range[1] = p == 0 || range[1] > v->range[1] ? range[1] : v->range[1];
+    for (uint64_t i = 0; i < mesh->vertex_count; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = mesh->positions[3 * i + k];
+            v->lo[k] = x < v->lo[k] ? x : v->lo[k];
+            v->hi[k] = x > v->hi[k] ? x : v->hi[k];
+        }
+    return 0;
+}
+
+/* One frame of the set: the options from the arguments, with the set's box and range as defaults. */
+static int render_set_frame(const render_args *a, tpk_partset *set, const tpk_set_marcher *marcher,
+                            const set_view *v)
+{
+    tpk_transfer_function tf;
+    if (load_tf(a, &tf))
+        return TPK_EXIT_USAGE;
+    tpk_render_options opt;
+    tpk_render_options_default(&opt);
+    render_args_to_options(a, tpk_partset_file(set, 0), &tf, &opt);
+    if (!a->have_camera)
+        tpk_camera_default(v->bounds_min, v->bounds_max, &opt.camera);
+    if (!a->have_range)
+        opt.range_min = v->range[0], opt.range_max = v->range[1];
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += v->hi[k] > v->lo[k] ? (v->hi[k] - v->lo[k]) * (v->hi[k] - v->lo[k]) : 0;
+    frame_source src = {.set = marcher, .has_scalars = v->has_scalars, .diagonal = sqrt(d2)};
+    uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
+    if (!rgba)
+        return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
+    int rc = render_frame(a, &src, &opt, a->output, rgba);
+    free(rgba);
+    if (rc == TPK_EXIT_OK && a->save_scene && save_scene(a, tpk_partset_file(set, 0), &opt) != 0)
+        return TPK_EXIT_USAGE;
+    return rc;
+}
+
+static int render_set(const render_args *a)
+{
+    if (a->have_steps)
+        return tpk_cli_fail("render", "%s: a part set renders one step (--step N), not a range", a->path);
+    tpk_partset *set = NULL;
+    char err[1024] = "";
+    tpk_result r = tpk_partset_open(&set, a->path, NULL, NULL, NULL, err, sizeof err);
+    if (r != TPK_OK)
+        return tpk_cli_fail("render", "%s", err[0] ? err : tpk_result_string(r));
+    uint32_t n = tpk_partset_part_count(set);
+    tpk_mesh_arrays *meshes = calloc(n, sizeof *meshes);
+    const tpk_link **links = calloc(n, sizeof *links);
+    uint64_t *link_counts = calloc(n, sizeof *link_counts);
+    set_view v = {.lo = {INFINITY, INFINITY, INFINITY}, .hi = {-INFINITY, -INFINITY, -INFINITY}};
+    int rc = meshes && links && link_counts ? 0 : tpk_cli_fail("render", "out of memory for %u parts", n);
+    for (uint32_t p = 0; rc == 0 && p < n; p++)
+        rc = load_part(a, set, p, &meshes[p], &links[p], &link_counts[p], &v);
+    tpk_set_marcher *marcher = NULL;
+    if (rc == 0 && (r = tpk_set_marcher_create(&marcher, n, meshes, links, link_counts)) != TPK_OK)
+        rc = tpk_cli_fail("render", "%s: cannot march across its parts: %s", a->path, tpk_result_string(r));
+    if (rc == 0)
+        rc = render_set_frame(a, set, marcher, &v);
+    tpk_set_marcher_destroy(marcher);
+    free(meshes);
+    free(links);
+    free(link_counts);
+    tpk_partset_close(set);
+    return rc;
+}
+
 int tpk_cmd_render(int argc, char **argv)
 {
     render_args a;
@@ -602,6 +722,11 @@ int tpk_cmd_render(int argc, char **argv)
     tpk_file *file = NULL;
     if (tpk_cli_open("render", a.path, &file))
         return TPK_EXIT_USAGE;
+    uint64_t part_chunk;
+    if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
+        tpk_close(file);
+        return render_set(&a);
+    }
     int rc = render_file(&a, file);
     tpk_close(file);
     return rc;

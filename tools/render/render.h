@@ -149,6 +149,14 @@ typedef struct tpk_render_stats {
 int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                    tpk_render_stats *stats, tpk_diag *diag);
 
+/* The same over a part set (spec §15) through its link-following marcher: the picture of the one file
+ * the parts were cut from. has_scalars: the parts' arrays carry a point field; diagonal: of the box of
+ * all parts' positions (tpk_positions_diagonal), for the default unit distance. */
+int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double diagonal,
+                       const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag);
+/* The diagonal of the box of mesh->positions (0 for fewer than two distinct points). */
+double tpk_positions_diagonal(const tpk_mesh_arrays *mesh);
+
 /* Write an 8-bit RGBA PNG, rows top to bottom, atomically: a temporary file in the same directory,
  * renamed over `path` only when complete. Returns 0, or -1 with a message naming the path. */
 int tpk_write_png(const char *path, int width, int height, const uint8_t *rgba, tpk_diag *diag);

@@ -157,7 +157,8 @@ static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t cou
     double lo = 0.0, hi = INFINITY;
     if (rl_clip(opt, job->eye, ray.dir, &lo, &hi)) {
         tpk_march_stats st;
-        r = tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, on_segment, &ray, &st);
+        r = job->set ? tpk_set_march_ray(job->set, job->eye, ray.dir, lo, hi, on_segment, &ray, NULL, &st)
+                     : tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, on_segment, &ray, &st);
         ray.steps += st.tet_steps;
     }
     counts[0] += ray.steps;
@@ -247,7 +248,7 @@ static int setup_camera(render_job *job, const tpk_camera *cam, tpk_diag *diag)
     return 0;
 }
 
-static double bbox_diagonal(const tpk_mesh_arrays *mesh)
+double tpk_positions_diagonal(const tpk_mesh_arrays *mesh)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint64_t i = 0; i < mesh->vertex_count; i++)
@@ -321,15 +322,13 @@ static int check_options(const tpk_render_options *opt, tpk_diag *diag)
 }
 
 /* Everything of the job that depends on the mesh and the options, except the camera. */
-static void setup_job(render_job *job, const tpk_mesh_arrays *mesh, const tpk_render_options *opt)
+static void setup_job(render_job *job, int has_point_scalars, double diagonal, const tpk_render_options *opt)
 {
     job->opt = opt;
-    job->mesh = mesh;
     job->tet_scalars = opt->tet_scalars;
-    job->has_scalars = mesh->scalars != NULL || opt->tet_scalars != NULL;
+    job->has_scalars = has_point_scalars || opt->tet_scalars != NULL;
     job->range_min = opt->range_min;
     job->inv_range = opt->range_max != opt->range_min ? 1.0 / (opt->range_max - opt->range_min) : 0.0;
-    double diagonal = bbox_diagonal(mesh);
     double unit = opt->unit_distance;
     if (!(unit > 0) || !isfinite(unit))
         unit = diagonal / 100.0;
@@ -341,36 +340,15 @@ static void setup_job(render_job *job, const tpk_mesh_arrays *mesh, const tpk_re
     job->lighting = job->cast || opt->shading;
 }
 
-int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                   tpk_render_stats *stats, tpk_diag *diag)
+/* The rows on all threads, once the job's marcher (or part set) and options are in place. */
+static int run_render(render_job *job, tpk_render_stats *stats, const struct timespec *t0, tpk_diag *diag)
 {
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    if (stats)
-        memset(stats, 0, sizeof *stats);
-    if (!mesh || !opt || !rgba)
-        return tpk_diag_fail(diag, "render: mesh, options and image buffer are required");
-    if (check_options(opt, diag))
-        return -1;
-    render_job *job = calloc(1, sizeof *job);
-    if (!job)
-        return tpk_diag_fail(diag, "render: out of memory");
-    job->rgba = rgba;
-    setup_job(job, mesh, opt);
+    const tpk_render_options *opt = job->opt;
     int rc = setup_camera(job, &opt->camera, diag);
-    if (rc != 0) {
-        free(job);
+    if (rc != 0)
         return rc;
-    }
     for (int k = 0; k < 3; k++)
         job->light[k] = opt->have_light ? opt->light[k] : job->eye[k];
-    tpk_marcher *marcher = NULL;
-    tpk_result r = tpk_marcher_create(&marcher, mesh);
-    if (r != TPK_OK) {
-        free(job);
-        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
-    }
-    job->marcher = marcher;
     atomic_init(&job->next_row, 0);
     atomic_init(&job->failed, 0);
     atomic_init(&job->tet_steps, 0);
@@ -390,15 +368,70 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
     if (atomic_load(&job->failed))
         rc = tpk_diag_fail(diag, "render: ray of pixel (%d, %d): %s", job->error_x, job->error_y,
                            tpk_result_string(job->error));
+    struct timespec t1;
     clock_gettime(CLOCK_MONOTONIC, &t1);
     if (stats) {
         stats->rays = (uint64_t)opt->width * (uint64_t)opt->height;
         stats->tet_steps = atomic_load(&job->tet_steps);
         stats->secondary_rays = atomic_load(&job->secondary_rays);
-        stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+        stats->seconds = (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
     }
     pthread_mutex_destroy(&job->error_lock);
+    return rc;
+}
+
+int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                   tpk_render_stats *stats, tpk_diag *diag)
+{
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (!mesh || !opt || !rgba)
+        return tpk_diag_fail(diag, "render: mesh, options and image buffer are required");
+    if (check_options(opt, diag))
+        return -1;
+    render_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "render: out of memory");
+    job->rgba = rgba;
+    job->mesh = mesh;
+    setup_job(job, mesh->scalars != NULL, tpk_positions_diagonal(mesh), opt);
+    tpk_marcher *marcher = NULL;
+    tpk_result r = tpk_marcher_create(&marcher, mesh);
+    if (r != TPK_OK) {
+        free(job);
+        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
+    }
+    job->marcher = marcher;
+    int rc = run_render(job, stats, &t0, diag);
     tpk_marcher_destroy(marcher);
+    free(job);
+    return rc;
+}
+
+int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double diagonal,
+                       const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag)
+{
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (!marcher || !opt || !rgba)
+        return tpk_diag_fail(diag, "render: part set, options and image buffer are required");
+    if (check_options(opt, diag))
+        return -1;
+    /* Normals and tet fields index one file's vertices and tets; a set's segments name a part's. */
+    if (opt->shading || opt->shadows || opt->ao_rays > 0 || opt->tet_scalars)
+        return tpk_diag_fail(diag, "render: a part set renders emission-absorption, isosurfaces and a clip box; "
+                                   "shading, shadows, ambient occlusion and tet fields need the single file");
+    render_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "render: out of memory");
+    job->rgba = rgba;
+    job->set = marcher;
+    setup_job(job, has_scalars, diagonal, opt);
+    int rc = run_render(job, stats, &t0, diag);
     free(job);
     return rc;
 }

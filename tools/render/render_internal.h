@@ -16,6 +16,7 @@ typedef struct render_job {
     const tpk_render_options *opt;
     const tpk_mesh_arrays *mesh;
     const tpk_marcher *marcher;
+    const tpk_set_marcher *set; /* a part set instead (spec §15): no lighting, no tet field */
     const float *tet_scalars;  /* opt->tet_scalars (a tet field) or NULL */
     int has_scalars;           /* a point or a tet field */
     double range_min;
