@@ -223,21 +223,28 @@ typedef struct hard_ray {
     double t_in[HARD_MAX_PIECES], t_out[HARD_MAX_PIECES];
     double length; /* sum of t_out - t_in, in units of |dir| */
     int pieces, overflow, backwards;
-    double last_t;
+    double last_t, overlap; /* overlap: how far a piece started before the previous one ended */
 } hard_ray;
 
 static inline int hard_on_piece(void *user, const tpk_segment *s)
 {
     hard_ray *r = user;
-    if (s->t_out < s->t_in || s->t_in < r->last_t)
+    /* Pieces come in increasing t; where a ray leaves the shell and re-enters at the same point (a
+     * touching vertex or edge), the entry's t, computed from another face, may fall a few ulps before
+     * the exit's: measured (overlap) and allowed up to 8 ulps. */
+    double slack = 8 * ldexp(fabs(r->last_t) > 1 ? fabs(r->last_t) : 1.0, -52);
+    if (s->t_out < s->t_in || s->t_in < r->last_t - slack)
         r->backwards++;
+    if (s->t_in < r->last_t)
+        r->overlap = fmax(r->overlap, r->last_t - s->t_in);
     r->last_t = s->t_out;
     r->length += s->t_out - s->t_in;
     if (r->pieces < HARD_MAX_PIECES) {
         r->t_in[r->pieces] = s->t_in, r->t_out[r->pieces] = s->t_out;
         r->tets[r->pieces++] = s->tet;
-    } else
+    } else {
         r->overflow = 1;
+    }
     return 0;
 }
 
@@ -252,7 +259,7 @@ static inline int hard_cmp_i32(const void *a, const void *b)
 static inline tpk_result hard_march(const hard_tpk *t, int l, const double org[3], const double dir[3], double tmin,
                                     hard_ray *r, tpk_march_stats *st)
 {
-    r->length = 0, r->pieces = 0, r->overflow = 0, r->backwards = 0, r->last_t = -INFINITY;
+    r->length = 0, r->pieces = 0, r->overflow = 0, r->backwards = 0, r->last_t = -INFINITY, r->overlap = 0;
     tpk_result res = tpk_march_ray(t->marcher[l], org, dir, tmin, INFINITY, hard_on_piece, r, st);
     if (res != TPK_OK)
         return res;
