@@ -222,7 +222,8 @@ typedef struct hard_ray {
     int32_t tets[HARD_MAX_PIECES];
     double t_in[HARD_MAX_PIECES], t_out[HARD_MAX_PIECES];
     double length; /* sum of t_out - t_in, in units of |dir| */
-    int pieces, overflow, backwards;
+    int pieces, overflow, backwards, repeats;
+    tpk_result marcher; /* what tpk_march_ray returned */
     double last_t, overlap; /* overlap: how far a piece started before the previous one ended */
 } hard_ray;
 
@@ -260,11 +261,10 @@ static inline tpk_result hard_march(const hard_tpk *t, int l, const double org[3
                                     hard_ray *r, tpk_march_stats *st)
 {
     r->length = 0, r->pieces = 0, r->overflow = 0, r->backwards = 0, r->last_t = -INFINITY, r->overlap = 0;
-    tpk_result res = tpk_march_ray(t->marcher[l], org, dir, tmin, INFINITY, hard_on_piece, r, st);
+    r->repeats = 0;
+    tpk_result res = r->marcher = tpk_march_ray(t->marcher[l], org, dir, tmin, INFINITY, hard_on_piece, r, st);
     if (res != TPK_OK)
         return res;
-    if (r->overflow || r->backwards)
-        return TPK_ERR_MESH;
     int32_t *sorted = malloc(sizeof *sorted * (size_t)(r->pieces ? r->pieces : 1));
     if (!sorted)
         abort();
@@ -274,7 +274,8 @@ static inline tpk_result hard_march(const hard_tpk *t, int l, const double org[3
     for (int i = 1; i < r->pieces; i++)
         repeat |= sorted[i] == sorted[i - 1];
     free(sorted);
-    return repeat ? TPK_ERR_MESH : TPK_OK;
+    r->repeats = repeat;
+    return repeat || r->overflow || r->backwards ? TPK_ERR_MESH : TPK_OK;
 }
 
 /* Chord of org + t dir (t >= tmin) through the axis-aligned box [lo, hi], in units of |dir|. */
