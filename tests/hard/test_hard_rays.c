@@ -86,13 +86,41 @@ static void squash(double s, const double in[3], double out[3])
         out[k] = in[k] - (1 - s) * d * n[k];
 }
 
+/* An n^3 grid of unit cubes as tets (6 per cube around its main diagonal, positively oriented): given as
+ * tets, not hexahedra, so that float32 flattening them is decided by orient (exactly, at once), not by
+ * the hexahedron splitter's TetGen diagnosis (seconds per cell). */
+static void kuhn_grid(hard_mesh *m, int n)
+{
+    for (int k = 0; k <= n; k++)
+        for (int j = 0; j <= n; j++)
+            for (int i = 0; i <= n; i++)
+                hard_add_point(m, i, j, k);
+    static const int axes[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++)
+                for (int p = 0; p < 6; p++) {
+                    int c[3] = {i, j, k};
+                    int32_t tet[4];
+                    tet[0] = (int32_t)((c[2] * (n + 1) + c[1]) * (n + 1) + c[0]);
+                    for (int s = 0; s < 3; s++) {
+                        c[axes[p][s]]++;
+                        tet[s + 1] = (int32_t)((c[2] * (n + 1) + c[1]) * (n + 1) + c[0]);
+                    }
+                    if (p == 1 || p == 2 || p == 5) { /* odd permutations walk the cube the other way round */
+                        int32_t t = tet[2];
+                        tet[2] = tet[3], tet[3] = t;
+                    }
+                    hard_add_cell(m, 10, tet, 4);
+                }
+}
+
 static void sliver_case(double s, long *rays, double *max_rel, tpk_convert_report *rep, char *outcome, size_t cap,
                         int *converted)
 {
     enum { N = 4 };
     hard_mesh m = {0};
-    const double zero[3] = {0, 0, 0};
-    hard_hex_grid(&m, N, 1.0, zero, NULL, 11);
+    kuhn_grid(&m, N);
     for (int64_t p = 0; p < m.point_count; p++) {
         double q[3];
         squash(s, m.points + 3 * p, q);
