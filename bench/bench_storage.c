@@ -175,7 +175,7 @@ static int quant_main(const char *path, int size, int threads)
                "\"rmse\":%.4e,\"psnr\":%.2f,\"max_abs\":%.3e,\"bytes_saved_per_vertex\":%d,"
                "\"bytes_saved_per_tet\":%.3f,\"file_bytes_per_tet\":%.3f}\n",
                path, (unsigned long long)base.tet_count, nv, qname[variants[v][0]], qname[variants[v][1]], flat,
-               inverted, pixels, entered, refused, failed, lost, differs, rmse, bi_psnr(rmse), mx, saved,
+               inverted, pixels, entered, refused, failed, lost, differs, rmse, fmin(bi_psnr(rmse), 999.0), mx, saved,
                (double)saved * (double)nv / (double)base.tet_count,
                (double)m.info.file_size / (double)base.tet_count);
         fflush(stdout);
