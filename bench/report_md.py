@@ -327,11 +327,11 @@ def section_scaling(summary):
 def section_hard(summary):
     rows = jsonl("hard.jsonl")
     out = ["## Hard cases (ctest label `hard`, `tests/hard/test_hard_*.c`)\n\n",
-           "Each case asserts a measured outcome in ctest; here `test_hard --report` prints the figures it "
-           "asserted on.\n\n"]
+           "Each case asserts a measured outcome in ctest; each `tests/hard/test_hard_*` executable, run without "
+           "arguments, prints the figures it asserted on, one JSON line per case.\n\n"]
     out.append(table(["case", "passed", "outcome", "figures"],
                      [[r.get("case"), "yes" if r.get("passed") else "**no**", r.get("outcome", ""),
-                       "; ".join(f"{k} {fmt(v)}" for k, v in r.get("figures", {}).items())] for r in rows]))
+                       "<br>".join(f"{k}: {fmt(v)}" for k, v in r.get("figures", {}).items())] for r in rows]))
     passed = sum(1 for r in rows if r.get("passed"))
     summary.append(f"Hard cases: {passed} of {len(rows)} pass")
     return "".join(out) + "\n"

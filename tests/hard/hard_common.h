@@ -301,6 +301,15 @@ static inline double hard_box_chord(const double lo[3], const double hi[3], cons
 
 /* ---- the case's figures ---------------------------------------------------------------------------- */
 
+/* A refusal's first clause (up to its first ':'), safe inside a JSON string: for the figures. */
+static inline void hard_clause(char *dst, size_t cap, const char *message)
+{
+    size_t n = 0;
+    for (const char *c = message; *c && *c != ':' && n + 1 < cap; c++)
+        dst[n++] = *c == '"' || *c == '\\' || *c == '\n' ? '\'' : *c;
+    dst[n] = 0;
+}
+
 /* Prints {"case":NAME,"passed":true,"outcome":OUTCOME,"figures":{FIGURES}}: FIGURES is a printf format
  * of "key":value pairs. Called at the end of a case, after every CHECK passed. */
 static inline void hard_report(const char *name, const char *outcome, const char *figures, ...)

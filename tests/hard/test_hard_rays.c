@@ -137,7 +137,9 @@ static void sliver_case(double s, long *rays, double *max_rel, tpk_convert_repor
         CHECK_MSG(strstr(diag.message, "cell ") && (strstr(diag.message, "fold") || strstr(diag.message, "volume") ||
                                                     strstr(diag.message, "warped") || strstr(diag.message, "degenerate")),
                   "%s", diag.message);
-        snprintf(outcome, cap, "refused: %.150s", diag.message);
+        char clause[160];
+        hard_clause(clause, sizeof clause, diag.message);
+        snprintf(outcome, cap, "refused: %s", clause);
         return;
     }
     snprintf(outcome, cap, "converted");
@@ -189,8 +191,6 @@ TPK_TEST(slivers_and_flat_tets)
         /* float32 keeps a 1e-2 squash: its tets must convert and march (1e-4 of a chord at most) */
         if (thickness[i] >= 1e-2)
             CHECK_MSG(converted, "%s", outcome);
-        for (char *c = outcome; *c; c++)
-            *c = *c == '"' || *c == '\\' || *c == '\n' ? '\'' : *c;
         used += (size_t)snprintf(figures + used, sizeof figures - used, "%s\"s=%g\":\"%s; tets %lld; rays %ld; largest "
                                  "length error / bound %.2g\"", i ? "," : "", thickness[i], outcome,
                                  (long long)rep.tets, rays, max_rel);
@@ -223,9 +223,7 @@ static void scales_case(int far)
         if (far) {
             CHECK_MSG(rc != 0 && strstr(diag.message, "zero volume"), "%s", diag.message);
             char refusal[200];
-            snprintf(refusal, sizeof refusal, "%.150s", diag.message);
-            for (char *c = refusal; *c; c++)
-                *c = *c == '"' || *c == '\\' ? '\'' : *c;
+            hard_clause(refusal, sizeof refusal, diag.message);
             CHECK_MSG(hard_convert(tpk_temp_path(vtk), tpk_temp_path(out), HARD_DROP, &rep, &diag) == 0, "%s",
                       diag.message);
             CHECK_EQ_INT(rep.tets, 1);

@@ -71,11 +71,9 @@ TPK_TEST(repairs_on_inverted_flat_and_folded_cells)
             for (int w = 0; words[w]; w++)
                 named |= strstr(diag.message, words[w]) != NULL;
             CHECK_MSG(named && strlen(diag.message) > 20, "options '%s': refusal names nothing: %s", name, diag.message);
-            char first[90];
-            snprintf(first, sizeof first, "%.80s", diag.message);
-            for (char *p = first; *p; p++)
-                *p = *p == '"' || *p == '\\' ? '\'' : *p;
-            used += (size_t)snprintf(figures + used, sizeof figures - used, "\"%s\":\"refused: %s...\",", name, first);
+            char first[120];
+            hard_clause(first, sizeof first, diag.message);
+            used += (size_t)snprintf(figures + used, sizeof figures - used, "\"%s\":\"refused: %s\",", name, first);
             refused++;
             continue;
         }
