@@ -42,11 +42,11 @@ static int has_faces(const char *dir)
 {
     char p[4200];
     struct stat st;
-    snprintf(p, sizeof p, "%s/faces", dir);
-    if (stat(p, &st) == 0)
+    int n = snprintf(p, sizeof p, "%s/faces", dir); /* a path cut short names no file of the case */
+    if (n > 0 && (size_t)n < sizeof p && stat(p, &st) == 0)
         return 1;
-    snprintf(p, sizeof p, "%s/faces.gz", dir);
-    return stat(p, &st) == 0;
+    n = snprintf(p, sizeof p, "%s/faces.gz", dir);
+    return n > 0 && (size_t)n < sizeof p && stat(p, &st) == 0;
 }
 
 int tpk_openfoam_is_case(const char *path)
