@@ -1,0 +1,147 @@
+#!/usr/bin/python3
+"""Issue 11's speed table, measured side by side: tetpack's importers against meshio's readers, and the
+whole conversion of a 971k-hexahedron mesh against the VTK pipeline (read, vtkDataSetTriangleFilter,
+vtkDataSetSurfaceFilter).
+
+    bench/bench_import.py [TETPACK] [--runs N] [--vtk-runs N] [--dir DIR]
+
+Makes the meshes once (gmsh 4.1 binary from ../shared/data/gmsh/*.geo, ASCII and VTU from those; cached
+in DIR, default /tmp/tpk_bench_import), then runs every measurement of a round before the next round
+starts (A B C A B C ...), so that the load of a shared machine falls on all of them alike, and prints
+medians as a markdown table. Needs Debian's python3 with python3-meshio and python3-paraview (VTK).
+Our import time is the `import` stage of `tetpack convert --json`; meshio's is meshio.read() timed in
+its own process (Python's start-up left out); whole conversions are process wall times; peak memory is
+/usr/bin/time's maximum resident set size.
+"""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+GEO = os.path.join(ROOT, "..", "shared", "data", "gmsh")
+PY = "/usr/bin/python3"
+
+MESHIO_READ = """
+import sys, time, meshio
+t = time.perf_counter(); meshio.read(sys.argv[1]); print(time.perf_counter() - t)
+"""
+TO_VTU = """
+import sys, meshio
+m = meshio.read(sys.argv[1])
+keep = [i for i, c in enumerate(m.cells) if c.type in ("tetra", "hexahedron", "wedge", "pyramid")]
+meshio.write(sys.argv[2], meshio.Mesh(m.points, [m.cells[i] for i in keep]), binary=True, compression="zlib")
+"""
+VTK_PIPELINE = """
+import sys
+from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+from vtkmodules.vtkFiltersGeneral import vtkDataSetTriangleFilter
+from vtkmodules.vtkFiltersGeometry import vtkDataSetSurfaceFilter
+r = vtkXMLUnstructuredGridReader(); r.SetFileName(sys.argv[1])
+t = vtkDataSetTriangleFilter(); t.SetInputConnection(r.GetOutputPort())
+s = vtkDataSetSurfaceFilter(); s.SetInputConnection(t.GetOutputPort()); s.Update()
+print(t.GetOutput().GetNumberOfCells(), s.GetOutput().GetNumberOfCells())
+"""
+
+
+def make_meshes(d):
+    """The issue's meshes: t5.geo at -clscale 0.215 (1.05M tets), hexrecomb.geo (971k hexahedra)."""
+    os.makedirs(d, exist_ok=True)
+    made = {"tets.msh": ["t5.geo", "-clscale", "0.215"], "hex.msh": ["hexrecomb.geo"]}
+    for name, args in made.items():
+        path = os.path.join(d, name)
+        if not os.path.exists(path):
+            print(f"making {path} with gmsh", file=sys.stderr)
+            subprocess.run(["gmsh", os.path.join(GEO, args[0]), "-3", *args[1:], "-nt", "1", "-format", "msh41",
+                            "-bin", "-o", path + ".part"], check=True, stdout=subprocess.DEVNULL)
+            os.replace(path + ".part", path)
+    ascii_path = os.path.join(d, "tets_ascii.msh")
+    if not os.path.exists(ascii_path):
+        subprocess.run(["gmsh", os.path.join(d, "tets.msh"), "-save", "-format", "msh41", "-o",
+                        ascii_path + ".msh"], check=True, stdout=subprocess.DEVNULL)
+        os.replace(ascii_path + ".msh", ascii_path)
+    for name in ("tets", "hex"):
+        vtu = os.path.join(d, name + ".vtu")
+        if not os.path.exists(vtu):
+            subprocess.run([PY, "-c", TO_VTU, os.path.join(d, name + ".msh"), vtu + ".vtu"], check=True)
+            os.replace(vtu + ".vtu", vtu)
+
+
+def timed(cmd):
+    """(wall seconds, peak RSS KiB, stdout) of one process."""
+    with tempfile.NamedTemporaryFile("r") as rss:
+        t = time.perf_counter()
+        out = subprocess.run(["/usr/bin/time", "-f", "%M", "-o", rss.name, *cmd], check=True,
+                             stdout=subprocess.PIPE, text=True).stdout
+        wall = time.perf_counter() - t
+        return wall, int(rss.read().split()[-1]), out
+
+
+def tetpack(exe, src, out):
+    wall, rss, text = timed([exe, "convert", src, out, "--json", "--no-progress"])
+    d = json.loads(text)
+    return {"wall": wall, "rss": rss, "tets": d["tets"], **{k: v for k, v in d["seconds"].items()}}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("tetpack", nargs="?", default=os.path.join(ROOT, "build", "tetpack"))
+    ap.add_argument("--runs", type=int, default=5)
+    ap.add_argument("--vtk-runs", type=int, default=3)
+    ap.add_argument("--dir", default="/tmp/tpk_bench_import")
+    a = ap.parse_args()
+    make_meshes(a.dir)
+    files = ["tets.msh", "hex.msh", "tets.vtu", "hex.vtu", "tets_ascii.msh"]
+    ours = {f: [] for f in files}
+    meshio = {f: [] for f in files}
+    vtk = []
+    out = os.path.join(a.dir, "out.tpk")
+    for r in range(a.runs):
+        for f in files:
+            path = os.path.join(a.dir, f)
+            ours[f].append(tetpack(a.tetpack, path, out))
+            meshio[f].append(float(subprocess.run([PY, "-c", MESHIO_READ, path], check=True,
+                                                  stdout=subprocess.PIPE, text=True).stdout))
+        if r < a.vtk_runs:
+            wall, rss, _ = timed([PY, "-c", VTK_PIPELINE, os.path.join(a.dir, "hex.vtu")])
+            vtk.append((wall, rss))
+        print(f"round {r + 1}/{a.runs} done", file=sys.stderr)
+
+    med = statistics.median
+    print(f"Medians of {a.runs} interleaved runs ({a.vtk_runs} for VTK), {time.strftime('%Y-%m-%d %H:%M')}\n")
+    print("| file | size | our import | meshio read | meshio / ours | target |")
+    print("|---|---|---|---|---|---|")
+    for f in files:
+        mb = os.path.getsize(os.path.join(a.dir, f)) / 1e6
+        o = med(x["import"] for x in ours[f])
+        m = med(meshio[f])
+        target = 1.5 if "ascii" in f else 3.0
+        ok = "met" if m / o >= target else "NOT met"
+        print(f"| {f} | {mb:.0f} MB | {o:.3f} s | {m:.3f} s | {m / o:.2f}x | {target}x {ok} |")
+    print("\n| conversion | tets | import | tetrahedralize | orient | reorder | connect | write | total (json)"
+          " | process wall | peak RSS |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for f in files:
+        runs = ours[f]
+        stages = " | ".join(f"{med(x[k] for x in runs):.3f}" for k in
+                            ("import", "tetrahedralize", "orient", "reorder", "connect", "write", "total"))
+        print(f"| {f} | {runs[0]['tets']:,} | {stages} | {med(x['wall'] for x in runs):.3f} s"
+              f" | {med(x['rss'] for x in runs) / 1024:.0f} MiB |")
+    hexes = ours["hex.vtu"]
+    tetra = med(x["tetrahedralize"] for x in hexes)
+    print(f"\ntetrahedralize, hex.vtu: {hexes[0]['tets'] / tetra / 1e6:.1f} M output tets/s (target 30)")
+    vw = med(w for w, _ in vtk)
+    ow = med(x["wall"] for x in hexes)
+    print(f"hex.vtu whole conversion {ow:.3f} s, VTK pipeline {vw:.3f} s (peak {med(r for _, r in vtk) / 1024:.0f}"
+          f" MiB): {vw / ow:.2f}x (target 4x)")
+    mw = med(x["wall"] for x in ours["hex.msh"])
+    print(f"hex.msh whole conversion {mw:.3f} s (target < 0.8 s), peak"
+          f" {med(x['rss'] for x in ours['hex.msh']) / 1024:.0f} MiB (target <= 308 MiB)")
+
+
+if __name__ == "__main__":
+    main()
