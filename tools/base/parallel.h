@@ -34,4 +34,11 @@ void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx);
  * free(). NULL when out of memory. */
 void *tpk_alloc_large(size_t size);
 
+/* free() for a large array the caller is done with (any malloc'ed block of `size` bytes): the largest
+ * such block of 2 MiB or more is kept, already in memory, and the next tpk_alloc_large of between half
+ * its size and its size gets it instead of fresh pages (a first touch costs about 2 ms per MB on a
+ * loaded machine: reorder's old tet array becomes connect's neighbors). At most one block is kept, so
+ * this costs at most the largest array's memory until it is taken; the block it replaces is freed. */
+void tpk_free_large(void *block, size_t size);
+
 #endif
