@@ -238,16 +238,25 @@ static int64_t volume_physical(const gmsh_reader *r, int64_t entity)
 }
 
 /* One element's nodes (after its tag, type and tags are read). */
+/* gmsh_node_index for a node of element `tag`; the element is named (snprintf costs more than the rest
+ * of reading an element) only when the dense numbering does not give the index at once. */
+static int32_t element_node_index(gmsh_reader *r, int64_t id, int64_t tag, const gmsh_type *t)
+{
+    if (r->node_dense && id >= 1 && id <= r->point_count)
+        return (int32_t)(id - 1);
+    char user[96];
+    snprintf(user, sizeof user, "element %lld (%s)", (long long)tag, t->name);
+    return gmsh_node_index(r, id, user);
+}
+
 static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t physical,
                               int64_t entity)
 {
-    char user[96];
     int width = r->version == 41 ? 8 : 4;
-    snprintf(user, sizeof user, "element %lld (%s)", (long long)tag, t->name);
     if (!t->vtk) {
         for (int k = 0; k < t->nodes; k++) {
             int64_t id;
-            if (gmsh_num(r, &id, "an element node tag", width) || gmsh_node_index(r, id, user) < 0)
+            if (gmsh_num(r, &id, "an element node tag", width) || element_node_index(r, id, tag, t) < 0)
                 return -1;
         }
         r->dropped++;
@@ -259,7 +268,7 @@ static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, i
         int64_t id;
         if (gmsh_num(r, &id, "an element node tag", width))
             return -1;
-        int32_t i = gmsh_node_index(r, id, user);
+        int32_t i = element_node_index(r, id, tag, t);
         if (i < 0)
             return -1;
         if (k < t->corners)
