@@ -59,6 +59,7 @@ typedef struct vtu_reader {
     int64_t point_count, cell_count;
     /* The DataArray being read. */
     int in_array, array_depth, collect;
+    int64_t array_fed_offset; /* where its start tag began in what expat was given */
     vtu_array cur;
     char *text;
     size_t text_len, text_cap;
