@@ -80,7 +80,23 @@ int tpk_xml_parse_taking(XML_Parser parser, const char *name, const char *data, 
             return -1;
         line += count_lines(pos, (size_t)(cut - pos));
         pos = cut;
-        size_t took = pos < end ? take(user, (size_t)(start - data) - taken, pos, (size_t)(end - pos)) : 0;
+        /* Blanks before the text (a newline after the tag, indentation) go to expat first, so that its
+         * lines stay right: they are text it hands over at once (no '\r', which it holds back). */
+        size_t lead = 0;
+        while (start && pos + lead < end && (pos[lead] == ' ' || pos[lead] == '\t' || pos[lead] == '\n'))
+            lead++;
+        if (lead && pos + lead < end) {
+            if (feed(parser, pos, lead, 0))
+                return report_error(parser, name, failed,
+                                    (long)XML_GetCurrentLineNumber(parser) == shift_line ? shift : 0, diag);
+            if (*failed)
+                return -1;
+            line += count_lines(pos, lead);
+            pos += lead;
+        } else {
+            lead = 0;
+        }
+        size_t took = start && pos < end ? take(user, (size_t)(start - data) - taken, lead, pos, (size_t)(end - pos)) : 0;
         if (took) {
             if (shift_line != line)
                 shift = 0;
