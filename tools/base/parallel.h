@@ -29,9 +29,10 @@ typedef void (*tpk_range_fn)(void *ctx, int64_t begin, int64_t end, int worker);
  * the call always completes. */
 void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx);
 
-/* malloc for large scratch arrays: 2 MiB aligned and, where the kernel offers it, backed by huge pages
- * (fewer page faults on first touch, which dominate a pass over a fresh 500 MB array). Release with
- * free(). NULL when out of memory. */
+/* malloc for large scratch arrays: the block tpk_free_large kept, when it fits (below), else fresh,
+ * 2 MiB aligned and, where the kernel offers it, backed by huge pages (fewer page faults on first touch,
+ * which dominate a pass over a fresh 500 MB array). Only malloc's alignment is promised. Release with
+ * free() or tpk_free_large. NULL when out of memory. */
 void *tpk_alloc_large(size_t size);
 
 /* free() for a large array the caller is done with (any malloc'ed block of `size` bytes): the largest
