@@ -3,7 +3,7 @@
 whole conversion of a 971k-hexahedron mesh against the VTK pipeline (read, vtkDataSetTriangleFilter,
 vtkDataSetSurfaceFilter).
 
-    bench/bench_import.py [TETPACK] [--runs N] [--vtk-runs N] [--dir DIR]
+    bench/bench_import.py [TETPACK] [--runs N] [--vtk-runs N] [--dir DIR] [--baseline OLD_TETPACK]
 
 Makes the meshes once (gmsh 4.1 binary from ../shared/data/gmsh/*.geo, ASCII and VTU from those; cached
 in DIR, default /tmp/tpk_bench_import), then runs every measurement of a round before the next round
@@ -11,7 +11,8 @@ starts (A B C A B C ...), so that the load of a shared machine falls on all of t
 medians as a markdown table. Needs Debian's python3 with python3-meshio and python3-paraview (VTK).
 Our import time is the `import` stage of `tetpack convert --json`; meshio's is meshio.read() timed in
 its own process (Python's start-up left out); whole conversions are process wall times; peak memory is
-/usr/bin/time's maximum resident set size.
+/usr/bin/time's maximum resident set size. With --baseline, another tetpack binary (a build of an older
+commit) is run in the same rounds and its medians are printed beside ours.
 """
 import argparse
 import json
@@ -97,17 +98,21 @@ def main():
     ap.add_argument("--runs", type=int, default=5)
     ap.add_argument("--vtk-runs", type=int, default=3)
     ap.add_argument("--dir", default="/tmp/tpk_bench_import")
+    ap.add_argument("--baseline", help="an older tetpack binary, run in the same rounds")
     a = ap.parse_args()
     make_meshes(a.dir)
     files = ["tets.msh", "hex.msh", "tets.vtu", "hex.vtu", "tets_ascii.msh"]
     ours = {f: [] for f in files}
     meshio = {f: [] for f in files}
+    base = {f: [] for f in files}
     vtk = []
     out = os.path.join(a.dir, "out.tpk")
     for r in range(a.runs):
         for f in files:
             path = os.path.join(a.dir, f)
             ours[f].append(tetpack(a.tetpack, path, out))
+            if a.baseline:
+                base[f].append(tetpack(a.baseline, path, out))
             meshio[f].append(float(subprocess.run([PY, "-c", MESHIO_READ, path], check=True,
                                                   stdout=subprocess.PIPE, text=True).stdout))
         if r < a.vtk_runs:
@@ -135,6 +140,17 @@ def main():
                             ("import", "tetrahedralize", "orient", "reorder", "connect", "write", "total"))
         print(f"| {f} | {runs[0]['tets']:,} | {stages} | {med(x['wall'] for x in runs):.3f} s"
               f" | {med(x['rss'] for x in runs) / 1024:.0f} MiB |")
+    if a.baseline:
+        print(f"\nBaseline {a.baseline}, same rounds:\n")
+        print("| file | import: baseline | ours | total: baseline | ours | peak RSS: baseline | ours |")
+        print("|---|---|---|---|---|---|---|")
+        for f in files:
+            b, o = base[f], ours[f]
+            print(f"| {f} | {med(x['import'] for x in b):.3f} s | {med(x['import'] for x in o):.3f} s"
+                  f" | {med(x['wall'] for x in b):.3f} s | {med(x['wall'] for x in o):.3f} s"
+                  f" | {med(x['rss'] for x in b) / 1024:.0f} MiB | {med(x['rss'] for x in o) / 1024:.0f} MiB |")
+        bt = med(x["tetrahedralize"] for x in base["hex.vtu"])
+        print(f"\nbaseline tetrahedralize, hex.vtu: {base['hex.vtu'][0]['tets'] / bt / 1e6:.1f} M output tets/s")
     hexes = ours["hex.vtu"]
     tetra = med(x["tetrahedralize"] for x in hexes)
     print(f"\ntetrahedralize, hex.vtu: {hexes[0]['tets'] / tetra / 1e6:.1f} M output tets/s (target 30)")
