@@ -444,6 +444,54 @@ TPK_TEST(jittered_grid_conforms_with_added_points)
     CHECK(converted >= 20 && steiner > 0 && face_points > 0);
 }
 
+/* The plain split runs on several cores, each worker writing where its range of cells can start at the
+ * most, the blocks then closed up (tools/convert/split_plain.c): the tets, their source cells and every
+ * count must be those of one worker, on a grid big enough for 3 workers, with 5-tet hexahedra (ids
+ * shuffled), mirrored cells (every 7th cell listed upside down) and cells only an added point splits
+ * (jitter), spread over all ranges. */
+TPK_TEST(split_is_the_same_on_any_thread_count)
+{
+    const int n = 60; /* 216,000 cells: 3 ranges of 65,536 or more */
+    tpk_tetmesh runs[3];
+    for (int r = 0; r < 3; r++) {
+        tpk_mesh src;
+        tpk_diag d;
+        memset(&d, 0, sizeof d);
+        jittered_grid(n, 0.3, 7, &src);
+        for (int64_t c = 0; c < src.cell_count; c += 7) {
+            int32_t *h = src.cell_conn + 8 * c, low[4];
+            memcpy(low, h, sizeof low);
+            memmove(h, h + 4, sizeof low);
+            memcpy(h + 4, low, sizeof low);
+        }
+        int rc = tpk_tetrahedralize_watched(&src, NULL, 0, 0, r + 1, NULL, &runs[r], &d);
+        tpk_mesh_free(&src);
+        CHECK_MSG(rc == 0, "%d threads: %s", r + 1, d.message);
+        if (rc)
+            return;
+    }
+    const tpk_tetmesh *one = &runs[0];
+    fprintf(stderr, "split on 1-3 threads: %lld tets, %lld 5-tet and %lld 6-tet cells, %lld mirrored (first %lld), "
+            "%lld from a centre point\n", (long long)one->tet_count, (long long)one->cells_into[5],
+            (long long)one->cells_into[6], (long long)one->mirrored_cells, (long long)one->first_mirrored_cell,
+            (long long)one->steiner_cells);
+    CHECK(one->cells_into[5] > 1000 && one->mirrored_cells > 1000 && one->steiner_cells > 0);
+    for (int r = 1; r < 3; r++) {
+        const tpk_tetmesh *m = &runs[r];
+        CHECK_MSG(m->tet_count == one->tet_count && m->vertex_count == one->vertex_count, "%d threads: counts", r + 1);
+        CHECK_MSG(m->tet_count == one->tet_count &&
+                      !memcmp(m->tets, one->tets, sizeof *m->tets * 4 * (size_t)m->tet_count) &&
+                      !memcmp(m->tet_source, one->tet_source, sizeof *m->tet_source * (size_t)m->tet_count),
+                  "%d threads: other tets", r + 1);
+        CHECK_MSG(!memcmp(m->cells_into, one->cells_into, sizeof m->cells_into) &&
+                      m->mirrored_cells == one->mirrored_cells && m->first_mirrored_cell == one->first_mirrored_cell &&
+                      m->steiner_cells == one->steiner_cells && m->face_steiner_points == one->face_steiner_points,
+                  "%d threads: other counts", r + 1);
+    }
+    for (int r = 0; r < 3; r++)
+        tpk_tetmesh_free(&runs[r]);
+}
+
 /* tpk_cell_faces: outward faces (positive enclosed volume on the unit cube's corners) that close up,
  * for every type the split knows; nothing for a tetrahedron. */
 TPK_TEST(cell_faces_are_outward_and_closed)

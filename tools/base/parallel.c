@@ -67,12 +67,51 @@ void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx)
     }
 }
 
+/* The one block tpk_free_large keeps (see parallel.h), with its size. */
+static struct {
+    pthread_mutex_t lock;
+    void *block;
+    size_t size;
+} spare = {PTHREAD_MUTEX_INITIALIZER, NULL, 0};
+
+static void *take_spare(size_t size)
+{
+    void *block = NULL;
+    pthread_mutex_lock(&spare.lock);
+    if (spare.block && size <= spare.size && size >= spare.size / 2) {
+        block = spare.block;
+        spare.block = NULL;
+        spare.size = 0;
+    }
+    pthread_mutex_unlock(&spare.lock);
+    return block;
+}
+
+void tpk_free_large(void *block, size_t size)
+{
+    if (!block || size < ((size_t)2 << 20)) {
+        free(block);
+        return;
+    }
+    pthread_mutex_lock(&spare.lock);
+    if (size > spare.size) { /* keep the larger: it serves more requests */
+        void *swap = spare.block;
+        spare.block = block;
+        spare.size = size;
+        block = swap;
+    }
+    pthread_mutex_unlock(&spare.lock);
+    free(block);
+}
+
 void *tpk_alloc_large(size_t size)
 {
     const size_t huge_page = (size_t)2 << 20;
     if (size < huge_page)
         return malloc(size ? size : 1);
-    void *block = NULL;
+    void *block = take_spare(size);
+    if (block)
+        return block;
     if (posix_memalign(&block, huge_page, size) != 0)
         return NULL;
 #ifdef MADV_HUGEPAGE

@@ -29,9 +29,17 @@ typedef void (*tpk_range_fn)(void *ctx, int64_t begin, int64_t end, int worker);
  * the call always completes. */
 void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx);
 
-/* malloc for large scratch arrays: 2 MiB aligned and, where the kernel offers it, backed by huge pages
- * (fewer page faults on first touch, which dominate a pass over a fresh 500 MB array). Release with
- * free(). NULL when out of memory. */
+/* malloc for large scratch arrays: the block tpk_free_large kept, when it fits (below), else fresh,
+ * 2 MiB aligned and, where the kernel offers it, backed by huge pages (fewer page faults on first touch,
+ * which dominate a pass over a fresh 500 MB array). Only malloc's alignment is promised. Release with
+ * free() or tpk_free_large. NULL when out of memory. */
 void *tpk_alloc_large(size_t size);
+
+/* free() for a large array the caller is done with (any malloc'ed block of `size` bytes): the largest
+ * such block of 2 MiB or more is kept, already in memory, and the next tpk_alloc_large of between half
+ * its size and its size gets it instead of fresh pages (a first touch costs about 2 ms per MB on a
+ * loaded machine: reorder's old tet array becomes connect's neighbors). At most one block is kept, so
+ * this costs at most the largest array's memory until it is taken; the block it replaces is freed. */
+void tpk_free_large(void *block, size_t size);
 
 #endif

@@ -51,7 +51,8 @@ typedef struct connect_job {
     const int32_t *tets;
     int64_t tet_count, vertex_count;
     int threads;
-    int64_t *starts[TPK_MAX_THREADS]; /* per worker, per vertex: count, then next slot */
+    uint32_t *starts[TPK_MAX_THREADS]; /* per worker, per vertex: count, then next slot (< 2 * tet_count < 2^32;
+                                        * 32 bits: these arrays are part of the converter's peak memory) */
     int64_t *bucket_start;            /* vertex_count + 1 */
     int64_t largest_bucket;
     uint32_t *entries;                /* 2 * tet_count: tet | ROLE_S1 */
@@ -71,7 +72,7 @@ static inline uint64_t face_key(int32_t mid, int32_t max)
 static void count_entries(void *ctx, int64_t begin, int64_t end, int worker)
 {
     connect_job *job = ctx;
-    int64_t *count = job->starts[worker];
+    uint32_t *count = job->starts[worker];
     memset(count, 0, sizeof *count * (size_t)job->vertex_count);
     job->bad_tet[worker] = -1;
     for (int64_t t = begin; t < end; t++) {
@@ -94,7 +95,7 @@ static void count_entries(void *ctx, int64_t begin, int64_t end, int worker)
 static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
 {
     connect_job *job = ctx;
-    int64_t *next = job->starts[worker];
+    uint32_t *next = job->starts[worker];
     uint32_t *entries = job->entries;
     for (int64_t t = begin; t < end; t++) {
         sorted4 s;
@@ -249,7 +250,7 @@ static void prefix_counts(connect_job *job)
         job->bucket_start[v] = running;
         for (int w = 0; w < job->threads; w++) {
             int64_t c = job->starts[w][v];
-            job->starts[w][v] = running;
+            job->starts[w][v] = (uint32_t)running;
             running += c;
         }
         if (running - job->bucket_start[v] > largest)

@@ -121,7 +121,7 @@ static int make_tets(conversion *c)
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
                                        (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0) | TPK_TETRA_FILE_GRID,
-                                   c->stage ? &progress : NULL, &c->mesh, c->diag) != 0) {
+                                   o->threads, c->stage ? &progress : NULL, &c->mesh, c->diag) != 0) {
         note_merged_ids(&c->merged, c->diag);
         return -1;
     }

@@ -43,9 +43,10 @@ typedef struct tpk_tetra_progress {
     void (*fn)(void *user, double fraction);
     void *user;
 } tpk_tetra_progress;
-/* tpk_tetrahedralize_consume, reporting to `progress` (may be NULL). */
+/* tpk_tetrahedralize_consume on `threads` workers (<= 0: all cores; the result does not depend on it),
+ * reporting to `progress` (may be NULL). The others split on all cores. */
 int tpk_tetrahedralize_watched(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
-                               const tpk_tetra_progress *progress, tpk_tetmesh *out, tpk_diag *diag);
+                               int threads, const tpk_tetra_progress *progress, tpk_tetmesh *out, tpk_diag *diag);
 
 typedef struct tpk_orient_stats {
     int64_t inverted_fixed;   /* negative tets made positive by a swap (found, with REFUSE_INVERTED) */

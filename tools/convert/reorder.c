@@ -382,7 +382,7 @@ static int permute_array(void **array, int64_t count, size_t elem_size, const ui
         return -1;
     permute_job job = {order, *array, permuted, elem_size};
     tpk_parallel_for(count, tpk_threads_for(count, threads, 65536), permute_range, &job);
-    free(*array);
+    tpk_free_large(*array, elem_size * (size_t)count);
     *array = permuted;
     return 0;
 }

@@ -12,6 +12,7 @@
 #include "mesh/cell_types.h"
 #include "pipeline.h"
 #include "mesh/polyhedron.h"
+#include "split_plain.h"
 #include "steiner.h"
 
 /* Tets one cell of this type can give (for sizing); 0 when this converter does not split the type. */
@@ -354,17 +355,6 @@ static int copy_field(const tpk_mesh *src, const field_request *req, const tpk_a
 
 /* ---- the stage ------------------------------------------------------------------------------- */
 
-/* Counts a mirrored cell (already turned over by the split) and remembers the first, so that
- * TPK_TETRA_REFUSE_MIRRORED can name it. */
-static void note_mirrored(tpk_tetmesh *out, int64_t c, int mirrored)
-{
-    if (!mirrored)
-        return;
-    if (out->mirrored_cells == 0 || c < out->first_mirrored_cell)
-        out->first_mirrored_cell = c;
-    out->mirrored_cells++;
-}
-
 /* Only with TPK_TETRA_REFUSE_MIRRORED (--strict-orientation): a cell whose every tet is negative is
  * listed in the mirrored node order, a labeling that turning over fixes without changing the geometry,
  * so that is the default. The refusal is for who wants to catch a writer's or importer's node-order bug
@@ -392,52 +382,27 @@ static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh
                          (long long)out->mirrored_cells, (long long)split);
 }
 
-/* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by count_tets); cells
- * it refuses, and polyhedra, go to tools/convert/steiner.c, which appends theirs and may take back the plain
- * split of a cell next to a face it puts a point on. Returns 0, -1 when out of memory, or -2 with a
- * message for a cell that cannot be split. */
-static int split_cells(const tpk_mesh *src, int flags, const tpk_tetra_progress *progress,
+/* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by count_tets), on all
+ * cores (split_plain.c); cells it refuses, and polyhedra, go to tools/convert/steiner.c, which appends
+ * theirs and may take back the plain split of a cell next to a face it puts a point on. Returns 0, -1
+ * when out of memory, or -2 with a message for a cell that cannot be split. */
+static int split_cells(const tpk_mesh *src, int flags, int threads, const tpk_tetra_progress *progress,
                        int64_t *tet_capacity, tpk_added_points *added, tpk_tetmesh *out, tpk_diag *diag)
 {
-    int64_t t = 0, hard_count = 0, hard_capacity = 0;
-    int64_t *hard = NULL;
-    for (int64_t c = 0; c < src->cell_count; c++) {
-        /* Every 2^16 cells: a few hundred reports for 10M cells, one mask test per cell otherwise. */
-        if (progress && !(c & 0xffff))
-            progress->fn(progress->user, (double)c / (double)src->cell_count);
-        int type = src->cell_types[c];
-        const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
-        if (!max_tets(type) && type != TPK_CELL_POLYHEDRON) /* lower-dimensional: count_tets let only these by */
-            continue;
-        int made = -1, mirrored = 0;
-        if (type == TPK_CELL_TETRA) {
-            memcpy(out->tets + 4 * t, nodes, 4 * sizeof *nodes); /* orientation: tpk_orient */
-            made = 1;
-        } else if (type != TPK_CELL_POLYHEDRON) {
-            made = tpk_split_cell(type, nodes, out->points, out->tets + 4 * t, &mirrored);
-        }
-        if (made < 0) {
-            if (hard_count == hard_capacity) {
-                hard_capacity = hard_capacity ? 2 * hard_capacity : 64;
-                int64_t *grown = realloc(hard, sizeof *hard * (size_t)hard_capacity);
-                if (!grown) {
-                    free(hard);
-                    return -1;
-                }
-                hard = grown;
-            }
-            hard[hard_count++] = c;
-            continue;
-        }
-        note_mirrored(out, c, mirrored);
-        out->cells_into[made]++;
-        for (int i = 0; i < made; i++)
-            out->tet_source[t + i] = (int32_t)c;
-        t += made;
+    tpk_plain_split plain;
+    if (tpk_split_plain(src, out->points, threads, progress, out->tets, out->tet_source, &plain))
+        return -1;
+    out->tet_count = plain.tet_count;
+    for (int k = 0; k < 7; k++)
+        out->cells_into[k] += plain.cells_into[k];
+    if (plain.mirrored_cells) {
+        out->mirrored_cells = plain.mirrored_cells;
+        out->first_mirrored_cell = plain.first_mirrored_cell;
     }
-    out->tet_count = t;
-    int rc = hard_count ? tpk_steiner_stage(src, hard, hard_count, flags, tet_capacity, out, added, diag) : 0;
-    free(hard);
+    int rc = plain.hard_count ? tpk_steiner_stage(src, plain.hard, plain.hard_count, flags, tet_capacity, out, added,
+                                                  diag)
+                              : 0;
+    free(plain.hard);
     return rc;
 }
 
@@ -472,7 +437,7 @@ static void snap_to_file_grid(const tpk_mesh *src, tpk_tetmesh *out)
 
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
  * copy and the memory of a second mesh in the converter. */
-static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags,
+static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags, int threads,
                          const tpk_tetra_progress *progress, tpk_added_points *added, tpk_tetmesh *out,
                          tpk_diag *diag)
 {
@@ -505,11 +470,11 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
     out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
     if (!out->tets || !out->tet_source)
         return -1;
-    return split_cells(src, flags, progress, &tet_capacity, added, out, diag);
+    return split_cells(src, flags, threads, progress, &tet_capacity, added, out, diag);
 }
 
 static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *const *field_names,
-                          int field_name_count, int flags, const tpk_tetra_progress *progress, tpk_tetmesh *out,
+                          int field_name_count, int flags, int threads, const tpk_tetra_progress *progress, tpk_tetmesh *out,
                           tpk_diag *diag)
 {
     field_request *reqs = NULL;
@@ -542,7 +507,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     }
     /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
      * field copy reads src (cell_to_point uses the taken-over connectivity as out->tets). */
-    int geometry = take_geometry(src, donor, tet_capacity, flags, progress, &added, out, diag);
+    int geometry = take_geometry(src, donor, tet_capacity, flags, threads, progress, &added, out, diag);
     if (geometry == 0 && out->mirrored_cells > 0 && (flags & TPK_TETRA_REFUSE_MIRRORED))
         geometry = refuse_mirrored(src, out->first_mirrored_cell, out, diag) ? -2 : 0;
     if (geometry == -2) {
@@ -579,17 +544,17 @@ out_of_memory:
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag)
 {
-    return tetrahedralize(src, NULL, field_names, field_name_count, flags, NULL, out, diag);
+    return tetrahedralize(src, NULL, field_names, field_name_count, flags, 0, NULL, out, diag);
 }
 
 int tpk_tetrahedralize_consume(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                                tpk_tetmesh *out, tpk_diag *diag)
 {
-    return tetrahedralize(src, src, field_names, field_name_count, flags, NULL, out, diag);
+    return tetrahedralize(src, src, field_names, field_name_count, flags, 0, NULL, out, diag);
 }
 
 int tpk_tetrahedralize_watched(tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
-                               const tpk_tetra_progress *progress, tpk_tetmesh *out, tpk_diag *diag)
+                               int threads, const tpk_tetra_progress *progress, tpk_tetmesh *out, tpk_diag *diag)
 {
-    return tetrahedralize(src, src, field_names, field_name_count, flags, progress, out, diag);
+    return tetrahedralize(src, src, field_names, field_name_count, flags, threads, progress, out, diag);
 }

@@ -59,6 +59,9 @@ static const tpk_cell_type_info cell_types[] = {
 
 const tpk_cell_type_info *tpk_cell_type(int type)
 {
+    /* Types 0 to 16 sit at their own index (the linear cells: every importer asks once per cell). */
+    if (type >= 0 && type <= 16 && cell_types[type].type == type)
+        return &cell_types[type];
     for (size_t i = 0; i < sizeof cell_types / sizeof cell_types[0]; i++)
         if (cell_types[i].type == type)
             return &cell_types[i];

@@ -104,6 +104,27 @@ static int read_node_coords(gmsh_reader *r, int64_t at, int extra)
     return 0;
 }
 
+/* The last binary read of `n` bytes ending at the current position, as gmsh_bin_bytes leaves the
+ * scanner: a later message places itself the same way whether the bytes were read one by one or in bulk. */
+static void mark_bulk_read(gmsh_reader *r, size_t last)
+{
+    r->s.tok_pos = r->s.pos - last;
+    r->s.tok_line = r->s.line;
+}
+
+/* 4.1 binary, no parametric coordinates: a block's coordinates are `count` x 3 doubles in a row, copied
+ * at once when the file holds them all (else read one by one, which words the failure). 1 when done. */
+static int bulk_coords(gmsh_reader *r, int64_t at, int64_t count, int64_t param)
+{
+    size_t bytes = sizeof *r->points * 3 * (size_t)count;
+    if (!r->binary || param || count == 0 || gmsh_bytes_left(r) < bytes)
+        return 0;
+    memcpy(&r->points[3 * at], r->s.data + r->s.pos, bytes);
+    r->s.pos += bytes;
+    mark_bulk_read(r, sizeof *r->points);
+    return 1;
+}
+
 static int check_tag(gmsh_reader *r, int64_t tag, const char *what)
 {
     if (tag < 1)
@@ -139,7 +160,7 @@ int gmsh_read_nodes(gmsh_reader *r)
         }
     } else {
         for (int64_t b = 0; b < blocks; b++) {
-            int64_t dim, etag, param, count;
+            int64_t dim, etag, param, count, continue_from;
             if (gmsh_num(r, &dim, "the entity dimension of a node block", 4) ||
                 gmsh_num(r, &etag, "the entity tag of a node block", 4) ||
                 gmsh_num(r, &param, "the parametric flag of a node block", 4) ||
@@ -159,7 +180,11 @@ int gmsh_read_nodes(gmsh_reader *r)
                     return -1;
                 r->node_tags[done + i].index = (int32_t)(done + i);
             }
-            for (int64_t i = 0; i < count; i++)
+            if (bulk_coords(r, done, count, param))
+                continue_from = count;
+            else
+                continue_from = 0;
+            for (int64_t i = continue_from; i < count; i++)
                 if (read_node_coords(r, done + i, param ? (int)dim : 0))
                     return -1;
             done += count;
@@ -238,33 +263,20 @@ static int64_t volume_physical(const gmsh_reader *r, int64_t entity)
 }
 
 /* One element's nodes (after its tag, type and tags are read). */
-static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t physical,
-                              int64_t entity)
+/* gmsh_node_index for a node of element `tag`; the element is named (snprintf costs more than the rest
+ * of reading an element) only when the dense numbering does not give the index at once. */
+static int32_t element_node_index(gmsh_reader *r, int64_t id, int64_t tag, const gmsh_type *t)
 {
+    if (r->node_dense && id >= 1 && id <= r->point_count)
+        return (int32_t)(id - 1);
     char user[96];
-    int width = r->version == 41 ? 8 : 4;
     snprintf(user, sizeof user, "element %lld (%s)", (long long)tag, t->name);
-    if (!t->vtk) {
-        for (int k = 0; k < t->nodes; k++) {
-            int64_t id;
-            if (gmsh_num(r, &id, "an element node tag", width) || gmsh_node_index(r, id, user) < 0)
-                return -1;
-        }
-        r->dropped++;
-        return add_elem_tag(r, tag, -1);
-    }
-    if (reserve_cell(r, t->corners))
-        return -1;
-    for (int k = 0; k < t->nodes; k++) {
-        int64_t id;
-        if (gmsh_num(r, &id, "an element node tag", width))
-            return -1;
-        int32_t i = gmsh_node_index(r, id, user);
-        if (i < 0)
-            return -1;
-        if (k < t->corners)
-            r->conn[r->conn_count + k] = i; /* identity mapping for all four kinds (see gmsh_types) */
-    }
+    return gmsh_node_index(r, id, user);
+}
+
+/* The cell whose corners are at r->conn + conn_count: counted, typed, tagged. */
+static int finish_cell(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t physical, int64_t entity)
+{
     if (t->corners != t->nodes)
         r->reduced++;
     int64_t c = r->cell_count;
@@ -278,6 +290,78 @@ static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, i
     r->cell_count++;
     r->offsets[r->cell_count] = r->conn_count;
     return 0;
+}
+
+static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t physical,
+                              int64_t entity)
+{
+    int width = r->version == 41 ? 8 : 4;
+    if (!t->vtk) {
+        for (int k = 0; k < t->nodes; k++) {
+            int64_t id;
+            if (gmsh_num(r, &id, "an element node tag", width) || element_node_index(r, id, tag, t) < 0)
+                return -1;
+        }
+        r->dropped++;
+        return add_elem_tag(r, tag, -1);
+    }
+    if (reserve_cell(r, t->corners))
+        return -1;
+    for (int k = 0; k < t->nodes; k++) {
+        int64_t id;
+        if (gmsh_num(r, &id, "an element node tag", width))
+            return -1;
+        int32_t i = element_node_index(r, id, tag, t);
+        if (i < 0)
+            return -1;
+        if (k < t->corners)
+            r->conn[r->conn_count + k] = i; /* identity mapping for all four kinds (see gmsh_types) */
+    }
+    return finish_cell(r, tag, t, physical, entity);
+}
+
+/* 4.1 binary: the elements of a volume block that need nothing but copying (tag 1 to 2^63-1, node tags
+ * numbered densely 1..point_count), straight from the mapped bytes. Returns how many it took (0 to
+ * count), or -1; the first element that needs more, and all after it, go through read_element_nodes,
+ * which reads them one by one and words any failure. */
+static int64_t read_plain_elements(gmsh_reader *r, const gmsh_type *t, int64_t count, int64_t physical,
+                                   int64_t entity)
+{
+    if (!r->binary || !t->vtk || !r->node_dense)
+        return 0;
+    size_t record = sizeof(uint64_t) * (size_t)(1 + t->nodes);
+    int64_t fit = (int64_t)(gmsh_bytes_left(r) / record), e = 0;
+    if (fit > count)
+        fit = count;
+    const unsigned char *p = (const unsigned char *)r->s.data + r->s.pos;
+    for (; e < fit; e++, p += record) {
+        uint64_t v[1 + 27];
+        memcpy(v, p, record);
+        int plain = v[0] >= 1 && v[0] <= (uint64_t)INT64_MAX;
+        for (int k = 1; k <= t->nodes; k++)
+            plain &= v[k] >= 1 && v[k] <= (uint64_t)r->point_count;
+        if (!plain)
+            break;
+        if (r->cell_count + 1 > r->cell_cap || r->conn_count + t->corners > r->conn_cap) {
+            /* Grow where the one-by-one reader grows, with the scanner where it has it then (just past
+             * the element's tag), so that a failure reads the same. */
+            size_t saved = r->s.pos, start = saved + (size_t)e * record;
+            r->s.pos = start + sizeof(uint64_t);
+            mark_bulk_read(r, sizeof(uint64_t));
+            if (reserve_cell(r, t->corners))
+                return -1;
+            r->s.pos = saved;
+        }
+        for (int k = 0; k < t->corners; k++)
+            r->conn[r->conn_count + k] = (int32_t)(v[1 + k] - 1);
+        if (finish_cell(r, (int64_t)v[0], t, physical, entity))
+            return -1;
+    }
+    if (e > 0) {
+        r->s.pos += (size_t)e * record;
+        mark_bulk_read(r, sizeof(uint64_t));
+    }
+    return e;
 }
 
 /* `which` names the element (2.2) or the element block (4.1) in the message. */
@@ -392,7 +476,10 @@ int gmsh_read_elements(gmsh_reader *r)
                                             "of the %lld announced", (long long)b + 1, (long long)count,
                                      (long long)(n - done), (long long)n);
             int64_t physical = dim == 3 ? volume_physical(r, etag) : 0;
-            for (int64_t e = 0; e < count; e++) {
+            int64_t plain = read_plain_elements(r, t, count, physical, etag);
+            if (plain < 0)
+                return -1;
+            for (int64_t e = plain; e < count; e++) {
                 int64_t tag;
                 if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "element") ||
                     read_element_nodes(r, tag, t, physical, etag))

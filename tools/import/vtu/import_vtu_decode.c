@@ -4,7 +4,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <zlib.h>
 
 #include "import_vtu_internal.h"
 #include "base/text_scan.h"
@@ -40,95 +39,6 @@ vtu_type vtu_type_from_name(const char *name)
     return type;
 }
 
-/* ---- Byte sources: raw bytes, or base64 text decoded as it is read ------------------------------ */
-
-static int src_fail(bsrc *s, const char *what)
-{
-    if (s->in_file)
-        snprintf(s->error_buf, sizeof s->error_buf, "%s at byte %zu of the file", what, s->base + s->pos);
-    else
-        snprintf(s->error_buf, sizeof s->error_buf, "%s at character %zu of the array's text", what, s->pos);
-    s->error = s->error_buf;
-    return -1;
-}
-
-static int b64_value(unsigned char c)
-{
-    if (c >= 'A' && c <= 'Z')
-        return c - 'A';
-    if (c >= 'a' && c <= 'z')
-        return c - 'a' + 26;
-    if (c >= '0' && c <= '9')
-        return c - '0' + 52;
-    if (c == '+')
-        return 62;
-    if (c == '/')
-        return 63;
-    if (c == '=')
-        return -2;
-    return -1;
-}
-
-int vtu_is_space(unsigned char c)
-{
-    return c == ' ' || c == '\t' || c == '\n' || c == '\r';
-}
-
-/* An upper bound on the bytes the source can still give. */
-static uint64_t src_left(const bsrc *s)
-{
-    if (!s->b64)
-        return s->len - s->pos;
-    return (uint64_t)(s->len - s->pos) / 4 * 3 + 3 + (uint64_t)(s->npend - s->ipend);
-}
-
-/* Base64 is decoded group by group, so streams concatenated with their own '=' padding (VTK encodes
- * the header and the data separately) decode as one. */
-static int src_read(bsrc *s, unsigned char *out, size_t n)
-{
-    if (!s->b64) {
-        if (n > s->len - s->pos) {
-            return src_fail(s, "found the end of the data");
-        }
-        memcpy(out, s->p + s->pos, n);
-        s->pos += n;
-        return 0;
-    }
-    while (n) {
-        if (s->ipend < s->npend) {
-            *out++ = s->pend[s->ipend++];
-            n--;
-            continue;
-        }
-        int v[4], k = 0;
-        while (k < 4 && s->pos < s->len) {
-            unsigned char c = s->p[s->pos++];
-            if (vtu_is_space(c))
-                continue;
-            v[k] = b64_value(c);
-            if (v[k] == -1) {
-                s->pos--;
-                return src_fail(s, "found a character that is not base64");
-            }
-            k++;
-        }
-        if (k == 0) {
-            return src_fail(s, "found the end of the base64 data");
-        }
-        if (k < 4 || v[0] < 0 || v[1] < 0 || (v[2] == -2 && v[3] != -2)) {
-            return src_fail(s, "found an incomplete or badly padded base64 group");
-        }
-        uint32_t bits = (uint32_t)v[0] << 18 | (uint32_t)v[1] << 12 | (uint32_t)(v[2] < 0 ? 0 : v[2]) << 6 |
-                        (uint32_t)(v[3] < 0 ? 0 : v[3]);
-        s->pend[0] = (unsigned char)(bits >> 16);
-        s->pend[1] = (unsigned char)(bits >> 8);
-        s->pend[2] = (unsigned char)bits;
-        s->npend = v[2] == -2 ? 1 : v[3] == -2 ? 2 : 3;
-        s->ipend = 0;
-    }
-    return 0;
-}
-
 static uint64_t get_uint(const unsigned char *p, unsigned size, int big)
 {
     uint64_t v = 0;
@@ -140,7 +50,7 @@ static uint64_t get_uint(const unsigned char *p, unsigned size, int big)
 static int read_header_word(vtu_reader *r, const vtu_array *a, bsrc *s, uint64_t *out, const char *what)
 {
     unsigned char b[8];
-    if (src_read(s, b, r->header_size))
+    if (vtu_src_read(s, b, r->header_size))
         return vtu_fail_array(r, a, "expected the header's %s (%s), %s", what,
                               r->header_size == 8 ? "UInt64" : "UInt32", s->error);
     *out = get_uint(b, r->header_size, r->big_endian);
@@ -159,9 +69,9 @@ static unsigned char *read_plain(vtu_reader *r, const vtu_array *a, bsrc *s, uin
                        (unsigned long long)expected, vtu_type_name(a->type), (unsigned long long)n);
         return NULL;
     }
-    if (n > src_left(s)) {
+    if (n > vtu_src_left(s)) {
         vtu_fail_array(r, a, "data truncated: the header says %llu bytes, at most %llu are left",
-                       (unsigned long long)n, (unsigned long long)src_left(s));
+                       (unsigned long long)n, (unsigned long long)vtu_src_left(s));
         return NULL;
     }
     unsigned char *buf = malloc(n ? (size_t)n : 1);
@@ -169,7 +79,7 @@ static unsigned char *read_plain(vtu_reader *r, const vtu_array *a, bsrc *s, uin
         vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)n);
         return NULL;
     }
-    if (src_read(s, buf, (size_t)n)) {
+    if (vtu_src_read(s, buf, (size_t)n)) {
         free(buf);
         vtu_fail_array(r, a, "expected %llu data bytes, %s", (unsigned long long)n, s->error);
         return NULL;
@@ -178,13 +88,6 @@ static unsigned char *read_plain(vtu_reader *r, const vtu_array *a, bsrc *s, uin
     return buf;
 }
 
-/* The zlib header of compressed data: block count, block size, last block size, then each block's
- * compressed size. */
-typedef struct zlib_blocks {
-    uint64_t count, size, last, total; /* last: the last block's size (never 0); total: all bytes */
-    uint64_t *csizes, cmax;            /* compressed sizes, and the largest */
-} zlib_blocks;
-
 static int read_block_counts(vtu_reader *r, const vtu_array *a, bsrc *s, uint64_t expected, uint64_t want,
                              zlib_blocks *z)
 {
@@ -192,9 +95,9 @@ static int read_block_counts(vtu_reader *r, const vtu_array *a, bsrc *s, uint64_
     if (read_header_word(r, a, s, &z->count, "block count") || read_header_word(r, a, s, &z->size, "block size") ||
         read_header_word(r, a, s, &last_size, "last block size"))
         return -1;
-    if (z->count > src_left(s) / r->header_size)
+    if (z->count > vtu_src_left(s) / r->header_size)
         return vtu_fail_array(r, a, "expected at most %llu compressed blocks in the data left, found a header "
-                              "saying %llu", (unsigned long long)(src_left(s) / r->header_size),
+                              "saying %llu", (unsigned long long)(vtu_src_left(s) / r->header_size),
                               (unsigned long long)z->count);
     if (last_size > z->size)
         return vtu_fail_array(r, a, "expected the last block size (%llu) <= the block size (%llu)",
@@ -225,45 +128,18 @@ static int read_block_sizes(vtu_reader *r, const vtu_array *a, bsrc *s, zlib_blo
         if (read_header_word(r, a, s, &z->csizes[b], "compressed block size"))
             return -1;
         uint64_t usize = b + 1 == z->count ? z->last : z->size;
-        if (z->csizes[b] > src_left(s) || (usize > 64 && (usize - 64) / ZLIB_MAX_RATIO > z->csizes[b]))
+        if (z->csizes[b] > vtu_src_left(s) || (usize > 64 && (usize - 64) / ZLIB_MAX_RATIO > z->csizes[b]))
             return vtu_fail_array(r, a, "zlib block %llu of %llu: expected a compressed size that can hold %llu "
                                   "bytes within the data left (%llu), found %llu", (unsigned long long)b + 1,
                                   (unsigned long long)z->count, (unsigned long long)usize,
-                                  (unsigned long long)src_left(s), (unsigned long long)z->csizes[b]);
+                                  (unsigned long long)vtu_src_left(s), (unsigned long long)z->csizes[b]);
         csum += z->csizes[b];
         if (z->csizes[b] > z->cmax)
             z->cmax = z->csizes[b];
     }
-    if (csum > src_left(s))
+    if (csum > vtu_src_left(s))
         return vtu_fail_array(r, a, "data truncated: the compressed blocks take %llu bytes, at most %llu are left",
-                              (unsigned long long)csum, (unsigned long long)src_left(s));
-    return 0;
-}
-
-/* Inflates every block into out (z->total bytes); tmp holds z->cmax bytes. */
-static int inflate_blocks(vtu_reader *r, const vtu_array *a, bsrc *s, const zlib_blocks *z, unsigned char *out,
-                          unsigned char *tmp)
-{
-    uint64_t o = 0;
-    for (uint64_t b = 0; b < z->count; b++) {
-        uint64_t usize = b + 1 == z->count ? z->last : z->size;
-        if (src_read(s, tmp, (size_t)z->csizes[b]))
-            return vtu_fail_array(r, a, "zlib block %llu of %llu: expected %llu compressed bytes, %s",
-                                  (unsigned long long)b + 1, (unsigned long long)z->count,
-                                  (unsigned long long)z->csizes[b], s->error);
-        uLongf dlen = (uLongf)usize;
-        int zrc = uncompress(out + o, &dlen, tmp, (uLong)z->csizes[b]);
-        if (zrc != Z_OK)
-            return vtu_fail_array(r, a, "zlib block %llu of %llu does not decompress: %s", (unsigned long long)b + 1,
-                                  (unsigned long long)z->count,
-                                  zrc == Z_BUF_ERROR ? "it is incomplete or holds more than the header's size"
-                                                     : zError(zrc));
-        if (dlen != usize)
-            return vtu_fail_array(r, a, "zlib block %llu of %llu: expected %llu bytes, found %llu",
-                                  (unsigned long long)b + 1, (unsigned long long)z->count, (unsigned long long)usize,
-                                  (unsigned long long)dlen);
-        o += usize;
-    }
+                              (unsigned long long)csum, (unsigned long long)vtu_src_left(s));
     return 0;
 }
 
@@ -275,17 +151,15 @@ static unsigned char *read_binary(vtu_reader *r, const vtu_array *a, bsrc *s, ui
     if (!r->compressed)
         return read_plain(r, a, s, expected, want, nbytes);
     zlib_blocks z = {0};
-    unsigned char *out = NULL, *tmp = NULL;
+    unsigned char *out = NULL;
     int rc = read_block_counts(r, a, s, expected, want, &z);
     if (rc == 0)
         rc = read_block_sizes(r, a, s, &z);
     if (rc == 0) {
         out = malloc(z.total ? (size_t)z.total : 1);
-        tmp = malloc(z.cmax ? (size_t)z.cmax : 1);
-        rc = out && tmp ? inflate_blocks(r, a, s, &z, out, tmp)
-                        : vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)z.total);
+        rc = out ? vtu_inflate_blocks(r, a, s, &z, out)
+                 : vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)z.total);
     }
-    free(tmp);
     free(z.csizes);
     if (rc) {
         free(out);
@@ -324,6 +198,41 @@ static double value_at(const unsigned char *p, vtu_type t, int big)
     return 0;
 }
 
+static int host_is_little_endian(void)
+{
+    const uint16_t one = 1;
+    unsigned char first;
+    memcpy(&first, &one, 1);
+    return first == 1;
+}
+
+/* value_at for every value of a host-order array, one loop per type (the per-value switch and byte
+ * assembly cost more than the rest of decoding). */
+#define WIDEN(ctype)                                                                                                    \
+    for (uint64_t i = 0; i < n; i++) {                                                                                \
+        ctype v;                                                                                                      \
+        memcpy(&v, bytes + i * sizeof v, sizeof v);                                                                   \
+        out[i] = (double)v;                                                                                           \
+    }                                                                                                                 \
+    break
+static void widen_native(const unsigned char *bytes, uint64_t n, vtu_type t, double *out)
+{
+    switch (t) {
+    case T_I8: WIDEN(int8_t);
+    case T_U8: WIDEN(uint8_t);
+    case T_I16: WIDEN(int16_t);
+    case T_U16: WIDEN(uint16_t);
+    case T_I32: WIDEN(int32_t);
+    case T_U32: WIDEN(uint32_t);
+    case T_I64: WIDEN(int64_t);
+    case T_U64: WIDEN(uint64_t);
+    case T_F32: WIDEN(float);
+    case T_F64: WIDEN(double);
+    case T_NONE: break;
+    }
+}
+#undef WIDEN
+
 /* The number of values expected in an array of this role, or UINT64_MAX when not known yet. Read
  * leniently (tetpack check), field arrays take any length; vtu_build_mesh records a wrong one. */
 static uint64_t expected_count(const vtu_reader *r, const vtu_array *a)
@@ -354,13 +263,24 @@ int vtu_decode_binary(vtu_reader *r, vtu_array *a, bsrc *s)
                               (unsigned long long)nbytes);
     }
     uint64_t n = nbytes / tsize;
+    if (tsize == sizeof(double) && !r->big_endian && host_is_little_endian()) {
+        /* Widened where they lie: each value is read before its own 8 bytes are written, and a fresh
+         * array as large as the data (points, and meshio's Int64 connectivity) costs its page faults. */
+        widen_native(bytes, n, a->type, (double *)(void *)bytes);
+        a->values = (double *)(void *)bytes;
+        a->count = n;
+        return 0;
+    }
     a->values = malloc(sizeof(double) * (size_t)(n ? n : 1));
     if (!a->values) {
         free(bytes);
         return vtu_fail_array(r, a, "out of memory for %llu values", (unsigned long long)n);
     }
-    for (uint64_t i = 0; i < n; i++)
-        a->values[i] = value_at(bytes + i * tsize, a->type, r->big_endian);
+    if (!r->big_endian && host_is_little_endian())
+        widen_native(bytes, n, a->type, a->values);
+    else
+        for (uint64_t i = 0; i < n; i++)
+            a->values[i] = value_at(bytes + i * tsize, a->type, r->big_endian);
     a->count = n;
     free(bytes);
     return 0;

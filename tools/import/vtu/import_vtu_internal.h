@@ -4,8 +4,10 @@
  *   import_vtu.c         tpk_import_vtu, tpk_import_vtu_memory (calls xml, decode, mesh in turn)
  *   import_vtu_xml.c     vtu_parse_xml
  *   import_vtu_mesh.c    vtu_build_mesh
- *   import_vtu_decode.c  vtu_type_from_name, vtu_type_name, vtu_is_int_type, vtu_is_space,
+ *   import_vtu_decode.c  vtu_type_from_name, vtu_type_name, vtu_is_int_type,
  *                        vtu_decode_binary, vtu_decode_ascii, vtu_decode_appended
+ *   import_vtu_inflate.c vtu_inflate_blocks
+ *   import_vtu_source.c  vtu_is_space, vtu_src_read, vtu_src_left, vtu_src_fail
  *   import_vtu_fail.c    vtu_fail_line, vtu_fail_array
  * Not installed. */
 #ifndef TPK_IMPORT_VTU_INTERNAL_H
@@ -57,6 +59,7 @@ typedef struct vtu_reader {
     int64_t point_count, cell_count;
     /* The DataArray being read. */
     int in_array, array_depth, collect;
+    int64_t array_fed_offset; /* where its start tag began in what expat was given */
     vtu_array cur;
     char *text;
     size_t text_len, text_cap;
@@ -82,6 +85,13 @@ typedef struct bsrc {
     char error_buf[160];
 } bsrc;
 
+/* The zlib header of compressed data: block count, block size, last block size, then each block's
+ * compressed size. */
+typedef struct zlib_blocks {
+    uint64_t count, size, last, total; /* last: the last block's size (never 0); total: all bytes */
+    uint64_t *csizes, cmax;            /* compressed sizes, and the largest */
+} zlib_blocks;
+
 /* ---- Messages (import_vtu_fail.c) ----------------------------------------------------------------
  * Both set the diag message once (the first failure wins), stop the XML parser when it runs, and
  * return -1. line <= 0: no line in the message. */
@@ -98,13 +108,26 @@ int vtu_parse_xml(vtu_reader *r);
 vtu_type vtu_type_from_name(const char *name);
 const char *vtu_type_name(vtu_type t);
 int vtu_is_int_type(vtu_type t);
-int vtu_is_space(unsigned char c);
 /* Decode a's values (header, then plain or zlib-compressed data) from s into a->values. 0 or -1. */
 int vtu_decode_binary(vtu_reader *r, vtu_array *a, bsrc *s);
 /* Decode a's whitespace-separated ascii values from text[0 .. len) into a->values. 0 or -1. */
 int vtu_decode_ascii(vtu_reader *r, vtu_array *a, const char *text, size_t len);
 /* Decode every format="appended" array from the appended data, by its offset. 0 or -1. */
 int vtu_decode_appended(vtu_reader *r);
+
+/* ---- Compressed blocks (import_vtu_inflate.c) ----------------------------------------------------
+ * Read z's blocks from s (in order) and inflate them into out (z->total bytes), on all cores. On a
+ * failure, the message names the first block that failed, as a block-by-block reader would. 0 or -1. */
+int vtu_inflate_blocks(vtu_reader *r, const vtu_array *a, bsrc *s, const zlib_blocks *z, unsigned char *out);
+
+/* ---- Byte sources (import_vtu_source.c) ----------------------------------------------------------- */
+int vtu_is_space(unsigned char c);
+/* n bytes from s into out; 0, or -1 with s->error saying what was found where. */
+int vtu_src_read(bsrc *s, unsigned char *out, size_t n);
+/* An upper bound on the bytes s can still give. */
+uint64_t vtu_src_left(const bsrc *s);
+/* Sets s->error to `what` at the current place; returns -1. */
+int vtu_src_fail(bsrc *s, const char *what);
 
 /* ---- The mesh (import_vtu_mesh.c) ----------------------------------------------------------------
  * Check the decoded arrays against each other and fill `out` (cells kept, reduced or dropped by

@@ -151,8 +151,10 @@ static int check_cell_nodes(vtu_reader *r, const cell_arrays *a, int64_t c, int 
     return 0;
 }
 
-/* Checks every cell, finds its span, and counts what is kept, reduced and dropped. */
-static int scan_cells(vtu_reader *r, const cell_arrays *a, cell_span *span, cell_tally *t)
+/* Checks every cell, finds its span, and counts what is kept, reduced and dropped; rule_of[type]:
+ * tpk_cell_rule_for(type), looked up once per type rather than once per cell. */
+static int scan_cells(vtu_reader *r, const cell_arrays *a, const tpk_cell_rule *rule_of, cell_span *span,
+                      cell_tally *t)
 {
     int64_t face_prev = 0;
     for (int64_t c = 0; c < r->cell_count; c++) {
@@ -160,7 +162,7 @@ static int scan_cells(vtu_reader *r, const cell_arrays *a, cell_span *span, cell
         int64_t begin = c ? (int64_t)a->offs->values[c - 1] : 0, face_begin = 0;
         span[c].v = a->conn->values + begin;
         span[c].n = (int64_t)a->offs->values[c] - begin;
-        tpk_cell_rule rule = tpk_cell_rule_for(type);
+        tpk_cell_rule rule = rule_of[type];
         if (rule.kind == TPK_RULE_UNKNOWN)
             return vtu_fail_array(r, a->types, "cell %lld has unsupported cell type %d (%s)", (long long)c, type,
                                   rule.name);
@@ -183,8 +185,8 @@ static int scan_cells(vtu_reader *r, const cell_arrays *a, cell_span *span, cell
 }
 
 /* Points and the kept cells into `out`; keep[c] says whether source cell c was kept. */
-static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a, const cell_span *span,
-                      const cell_tally *t, uint8_t *keep, tpk_mesh *out)
+static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a, const tpk_cell_rule *rule_of,
+                      const cell_span *span, const cell_tally *t, uint8_t *keep, tpk_mesh *out)
 {
     out->point_count = r->point_count;
     out->points = malloc(sizeof(double) * 3 * (size_t)(r->point_count ? r->point_count : 1));
@@ -199,7 +201,7 @@ static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a,
     int64_t k = 0, o = 0;
     out->cell_offsets[0] = 0;
     for (int64_t c = 0; c < r->cell_count; c++) {
-        tpk_cell_rule rule = tpk_cell_rule_for((int)a->types->values[c]);
+        tpk_cell_rule rule = rule_of[(int)a->types->values[c]];
         keep[c] = rule.kind != TPK_RULE_DROP;
         if (!keep[c])
             continue;
@@ -271,14 +273,17 @@ int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
     uint8_t *keep = malloc((size_t)(nc ? nc : 1));
     cell_tally t;
     memset(&t, 0, sizeof t);
-    int rc = !span || !keep ? vtu_fail_line(r, 0, "out of memory") : scan_cells(r, &a, span, &t);
+    tpk_cell_rule rule_of[256];
+    for (int type = 0; type < 256; type++)
+        rule_of[type] = tpk_cell_rule_for(type);
+    int rc = !span || !keep ? vtu_fail_line(r, 0, "out of memory") : scan_cells(r, &a, rule_of, span, &t);
     if (rc == 0 && t.drop_total)
         tpk_warn_cell_counts(r->diag, r->name, t.dropped, t.drop_total, "dropped cells that are not volumes:");
     if (rc == 0 && t.reduce_total)
         tpk_warn_cell_counts(r->diag, r->name, t.reduced, t.reduce_total,
                              "reduced higher-order cells to their corner nodes:");
     if (rc == 0)
-        rc = copy_cells(r, pts, &a, span, &t, keep, out);
+        rc = copy_cells(r, pts, &a, rule_of, span, &t, keep, out);
     free(span);
     for (int i = 0; rc == 0 && i < r->array_count; i++)
         if (r->arrays[i].role == ROLE_POINT_FIELD || r->arrays[i].role == ROLE_CELL_FIELD)

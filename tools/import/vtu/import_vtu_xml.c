@@ -171,6 +171,7 @@ static int start_array(vtu_reader *r, const XML_Char **atts)
             return vtu_fail_array(r, a, "expected one such array, found a second");
     r->in_array = 1;
     r->array_depth = r->depth;
+    r->array_fed_offset = (int64_t)XML_GetCurrentByteIndex(r->parser);
     r->collect = a->format != 2;
     r->text_len = 0;
     return 0;
@@ -259,12 +260,9 @@ static void XMLCALL on_end(void *user, const XML_Char *el)
     r->depth--;
 }
 
-static void XMLCALL on_text(void *user, const XML_Char *s, int len)
+static void collect_text(vtu_reader *r, const char *s, size_t len)
 {
-    vtu_reader *r = user;
-    if (r->failed || !r->in_array || !r->collect || r->depth != r->array_depth || len <= 0)
-        return;
-    if (r->text_len + (size_t)len > r->text_cap) {
+    if (r->text_len + len > r->text_cap) {
         size_t cap = r->text_cap ? r->text_cap : 4096;
         while (cap < r->text_len + (size_t)len)
             cap *= 2;
@@ -276,8 +274,43 @@ static void XMLCALL on_text(void *user, const XML_Char *s, int len)
         r->text = grown;
         r->text_cap = cap;
     }
-    memcpy(r->text + r->text_len, s, (size_t)len);
-    r->text_len += (size_t)len;
+    memcpy(r->text + r->text_len, s, len);
+    r->text_len += len;
+}
+
+static void XMLCALL on_text(void *user, const XML_Char *s, int len)
+{
+    vtu_reader *r = user;
+    if (r->failed || !r->in_array || !r->collect || r->depth != r->array_depth || len <= 0)
+        return;
+    collect_text(r, s, (size_t)len);
+}
+
+/* Base64 characters and blanks: what a binary DataArray's text is made of, and what expat would pass
+ * on unchanged (no newline, so lines stay the same). A table: this runs over every byte of the file. */
+#define B64_RANGE(first, last) [first ... last] = 1
+static const unsigned char plain_base64_char[256] = {B64_RANGE('A', 'Z'), B64_RANGE('a', 'z'), B64_RANGE('0', '9'),
+                                                     ['+'] = 1, ['/'] = 1, ['='] = 1, [' '] = 1, ['\t'] = 1};
+#undef B64_RANGE
+
+/* tpk_xml_take_fn: the base64 text right after the start tag of a binary DataArray (and the blanks
+ * expat gave the text already) is collected here without expat, which would spend more time scanning
+ * it than the whole decoding takes; expat goes on from the first other character. Only where the
+ * element just started is that very tag, expat handed over all the blanks, and the run is long enough
+ * to matter. */
+static size_t take_base64(void *user, size_t fed_offset, size_t lead, const char *at, size_t left)
+{
+    vtu_reader *r = user;
+    if (r->failed || !r->in_array || !r->collect || r->cur.format != 1 || r->depth != r->array_depth ||
+        r->array_fed_offset != (int64_t)fed_offset || r->text_len != lead)
+        return 0;
+    size_t n = 0;
+    while (n < left && plain_base64_char[(unsigned char)at[n]])
+        n++;
+    if (n < 4096)
+        return 0;
+    collect_text(r, at, n);
+    return r->failed ? 0 : n;
 }
 
 static void XMLCALL on_doctype(void *user, const XML_Char *name, const XML_Char *sysid, const XML_Char *pubid,
@@ -384,7 +417,8 @@ int vtu_parse_xml(vtu_reader *r)
     XML_SetElementHandler(r->parser, on_start, on_end);
     XML_SetCharacterDataHandler(r->parser, on_text);
     XML_SetStartDoctypeDeclHandler(r->parser, on_doctype);
-    int rc = tpk_xml_parse(r->parser, r->name, (const char *)r->data, xml_len, !partial, &r->failed, r->diag);
+    int rc = tpk_xml_parse_taking(r->parser, r->name, (const char *)r->data, xml_len, !partial, &r->failed, r->diag,
+                                  "<DataArray", take_base64, r);
     XML_ParserFree(r->parser);
     r->parser = NULL;
     if (rc == 0 && partial && !r->appended_seen)
