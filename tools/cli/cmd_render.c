@@ -8,6 +8,9 @@
 #include "render/render.h"
 #include "tetpack.h"
 #include "render/transfer_function.h"
+#ifdef TPK_WITH_VULKAN
+#include "render_vk/render_vk.h"
+#endif
 
 static const char render_help[] =
     "usage: tetpack render FILE.tpk -o IMAGE.png [options]\n"
@@ -31,11 +34,14 @@ static const char render_help[] =
     "  --unit-distance D            TF opacity is per distance D (default: bounds diagonal / 100)\n"
     "  --integration exact|sampled  per-piece integration as above (default), or point samples\n"
     "                               at most unit-distance/2 apart\n"
-    "  --threads N                  worker threads (default: all cores)\n"
+    "  --threads N                  worker threads of the CPU backend (default: all cores)\n"
+    "  --backend vulkan|cpu         vulkan: compute shaders on the first Vulkan device (a GPU, else\n"
+    "                               lavapipe); cpu: the reference renderer. Same options, same picture.\n"
+    "                               Default: vulkan when a Vulkan device is present, else cpu\n"
     "  --json                       print render statistics as JSON\n";
 
 typedef struct render_args {
-    const char *path, *output, *tf, *field, *layout;
+    const char *path, *output, *tf, *field, *layout, *backend;
     int width, height, step, threads, json, have_camera, have_range, integration;
     double camera[10], range[2], unit_distance;
 } render_args;
@@ -100,6 +106,10 @@ static int parse_option(int argc, char **argv, int *i, render_args *a)
     } else if (!strncmp(arg, "--threads", 9)) {
         if (!VALUE("--threads") || tpk_cli_parse_int(v, 1, 1024, &a->threads))
             return tpk_cli_fail("render", "--threads expects 1..1024, found '%s'", v ? v : "");
+    } else if (!strncmp(arg, "--backend", 9)) {
+        if (!VALUE("--backend") || (strcmp(v, "vulkan") && strcmp(v, "cpu")))
+            return tpk_cli_fail("render", "--backend expects vulkan or cpu, found '%s'", v ? v : "");
+        a->backend = v;
     } else if (!strcmp(arg, "--json")) {
         a->json = 1;
     } else if (arg[0] == '-' && arg[1]) {
@@ -169,6 +179,27 @@ static int check_field(const render_args *a, tpk_file *file)
                         used ? "point fields: " : "no point field", points);
 }
 
+/* Render with the chosen backend; without --backend, Vulkan when a device is present. `device` gets
+ * the device name ("cpu" for the reference). */
+static int run_backend(render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                       tpk_render_stats *stats, char *device, size_t device_size, tpk_diag *diag)
+{
+#ifdef TPK_WITH_VULKAN
+    if (!a->backend)
+        a->backend = tpk_vulkan_available(device, device_size) ? "vulkan" : "cpu";
+    else if (!strcmp(a->backend, "vulkan") && !tpk_vulkan_available(device, device_size))
+        return tpk_diag_fail(diag, "--backend vulkan: %s", device);
+    if (!strcmp(a->backend, "vulkan"))
+        return tpk_render_vulkan(mesh, opt, rgba, stats, diag);
+#else
+    if (a->backend && !strcmp(a->backend, "vulkan"))
+        return tpk_diag_fail(diag, "--backend vulkan: this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)");
+#endif
+    a->backend = "cpu";
+    snprintf(device, device_size, "cpu");
+    return tpk_render_cpu(mesh, opt, rgba, stats, diag);
+}
+
 static int render_file(render_args *a, tpk_file *file)
 {
     if (check_field(a, file))
@@ -214,7 +245,8 @@ static int render_file(render_args *a, tpk_file *file)
         return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
     tpk_render_stats stats;
     memset(&stats, 0, sizeof stats);
-    int rc = tpk_render_cpu(&mesh, &opt, rgba, &stats, &diag);
+    char device[256] = "cpu";
+    int rc = run_backend(a, &mesh, &opt, rgba, &stats, device, sizeof device, &diag);
     if (rc != 0) {
         free(rgba);
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
@@ -224,8 +256,9 @@ static int render_file(render_args *a, tpk_file *file)
     if (rc != 0)
         return tpk_cli_fail("render", "%s", diag.message);
     if (a->json)
-        printf("{\"image\":\"%s\",\"width\":%d,\"height\":%d,\"rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f}\n",
-               a->output, a->width, a->height, (unsigned long long)stats.rays,
+        printf("{\"image\":\"%s\",\"backend\":\"%s\",\"device\":\"%s\",\"width\":%d,\"height\":%d,"
+               "\"rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f}\n",
+               a->output, a->backend, device, a->width, a->height, (unsigned long long)stats.rays,
                (unsigned long long)stats.tet_steps, stats.seconds);
     else
         printf("%s: %dx%d, %llu rays, %llu tet steps, %.3f s\n", a->output, a->width, a->height,

@@ -1,0 +1,686 @@
+// The Vulkan renderer's compute shader: one invocation per pixel. Finds the ray's shell entries in
+// order with the shell BVH, marches tets through neighbor links with watertight face tests, and
+// integrates emission-absorption per tet piece exactly as tools/render/render_cpu.c does. The marcher
+// follows libtetpack/march.c, ray.c and shell_bvh.c step for step (same entry order, same exit-face
+// rule, same tie-breaks), in float instead of double. Watertightness does not need double: every edge
+// decision is a deterministic function of its two vertex ids and their projections (computed by one
+// `precise` function, so no call site fuses differently), evaluated in the canonical (lower id first)
+// order, with an exact sign (Dekker products) on the slow path.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "vk_layout.h"
+
+layout(local_size_x = TPK_VK_GROUP, local_size_y = TPK_VK_GROUP) in;
+
+layout(constant_id = TPK_VK_SPEC_LAYOUT) const int LAYOUT = TPK_VK_LAYOUT_TET16;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_VERTS)) const int PARTS_VERTS = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_VERTS)) const int SHIFT_VERTS = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TETS)) const int PARTS_TETS = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_TETS)) const int SHIFT_TETS = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_SHELL)) const int PARTS_SHELL = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_SHELL)) const int SHIFT_SHELL = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_NODES)) const int PARTS_NODES = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_NODES)) const int SHIFT_NODES = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TET_SCALARS)) const int PARTS_TET_SCALARS = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_TET_SCALARS)) const int SHIFT_TET_SCALARS = 27;
+
+// Mirrors tpk_vk_params in render_vk_internal.h (std140).
+layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
+    vec4 eye;        // xyz: the eye relative to the mesh origin
+    vec4 forward;    // xyz: unit view direction; w: tan(fovy/2) * width / height
+    vec4 right;      // xyz; w: tan(fovy/2)
+    vec4 up;         // xyz; w: extra box padding for the float box test
+    vec4 background; // straight RGBA
+    vec4 scalar_map; // x: range_min, y: 1 / (range_max - range_min) or 0, z: 1 / unit_distance
+    ivec4 dims;      // width, height, first row of this dispatch, TF point count
+    ivec4 mode;      // x: tet count, y: vertex count, z: integration (0 exact, 1 sampled),
+                     // w: scalars (0 none, 1 per point, 2 per tet)
+    vec4 clip_lo;    // xyz: clip box (relative to the origin); w: 1 when clipping
+    vec4 clip_hi;
+    ivec4 shell_info; // x: shell face count
+    vec4 tf_s[TPK_VK_TF_MAX / 4];
+    vec4 tf_rgba[TPK_VK_TF_MAX];
+} P;
+
+layout(std430, set = 0, binding = TPK_VK_BIND_PIXELS) writeonly buffer Pixels { uint pixels[]; };
+layout(std430, set = 0, binding = TPK_VK_BIND_STEPS) writeonly buffer Steps { uvec2 steps[]; };
+
+// Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away.
+#define DECLARE_ARRAY(SAMPLER, NAME, ARRAY)                                                   \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 0) uniform SAMPLER NAME##0;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 1) uniform SAMPLER NAME##1;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 2) uniform SAMPLER NAME##2;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 3) uniform SAMPLER NAME##3;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 4) uniform SAMPLER NAME##4;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 5) uniform SAMPLER NAME##5;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 6) uniform SAMPLER NAME##6;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 7) uniform SAMPLER NAME##7;
+
+#define FETCH_FUNCTION(RET, NAME, PARTS, SHIFT)                                               \
+    RET fetch_##NAME(uint i)                                                                  \
+    {                                                                                         \
+        if (PARTS == 1)                                                                       \
+            return texelFetch(NAME##0, int(i));                                               \
+        int j = int(i & ((1u << SHIFT) - 1u));                                                \
+        switch (i >> SHIFT) {                                                                 \
+        case 0u: return texelFetch(NAME##0, j);                                               \
+        case 1u: return texelFetch(NAME##1, j);                                               \
+        case 2u: return texelFetch(NAME##2, j);                                               \
+        case 3u: return texelFetch(NAME##3, j);                                               \
+        case 4u: return texelFetch(NAME##4, j);                                               \
+        case 5u: return texelFetch(NAME##5, j);                                               \
+        case 6u: return texelFetch(NAME##6, j);                                               \
+        default: return texelFetch(NAME##7, j);                                               \
+        }                                                                                     \
+    }
+
+DECLARE_ARRAY(samplerBuffer, verts, TPK_VK_ARRAY_VERTS)
+DECLARE_ARRAY(isamplerBuffer, tets, TPK_VK_ARRAY_TETS)
+DECLARE_ARRAY(isamplerBuffer, shell, TPK_VK_ARRAY_SHELL)
+DECLARE_ARRAY(usamplerBuffer, nodes, TPK_VK_ARRAY_NODES)
+DECLARE_ARRAY(samplerBuffer, tet_scalars, TPK_VK_ARRAY_TET_SCALARS)
+FETCH_FUNCTION(vec4, verts, PARTS_VERTS, SHIFT_VERTS)
+FETCH_FUNCTION(ivec4, tets, PARTS_TETS, SHIFT_TETS)
+FETCH_FUNCTION(ivec4, shell, PARTS_SHELL, SHIFT_SHELL)
+FETCH_FUNCTION(uvec4, nodes, PARTS_NODES, SHIFT_NODES)
+FETCH_FUNCTION(vec4, tet_scalars, PARTS_TET_SCALARS, SHIFT_TET_SCALARS)
+
+// ---- The ray frame and the watertight edge test (libtetpack/internal_ray.h, ray.c) --------------
+
+struct Frame {
+    vec3 org;
+    float sx, sy, sz;
+    int kx, ky, kz;
+};
+
+Frame frame;       // of this invocation's ray
+vec3 ray_dir;
+
+// Projection of vertex v and its scalar (w). The one place positions become 2-D coordinates.
+vec4 project(int v, out float scalar)
+{
+    vec4 p = fetch_verts(uint(v));
+    scalar = p.w;
+    precise vec3 q = p.xyz - frame.org;
+    precise float x = q[frame.kx] - frame.sx * q[frame.kz];
+    precise float y = q[frame.ky] - frame.sy * q[frame.kz];
+    precise float z = frame.sz * q[frame.kz];
+    return vec4(x, y, z, 0.0);
+}
+
+// Error-free product (Dekker): a * b == p + err exactly, no fused multiply-add needed.
+float two_prod(float a, float b, out float err)
+{
+    precise float p = a * b;
+    precise float ca = 4097.0 * a;
+    precise float ahi = ca - (ca - a);
+    precise float alo = a - ahi;
+    precise float cb = 4097.0 * b;
+    precise float bhi = cb - (cb - b);
+    precise float blo = b - bhi;
+    precise float e = ((ahi * bhi - p) + ahi * blo + alo * bhi) + alo * blo;
+    err = e;
+    return p;
+}
+
+float two_sum(float a, float b, out float err)
+{
+    precise float s = a + b;
+    precise float bv = s - a;
+    precise float av = s - bv;
+    precise float e = (a - av) + (b - bv);
+    err = e;
+    return s;
+}
+
+// Exact sign of a*d - b*c (ray.c, tpki_det2_sign_exact, in float).
+int det2_sign_exact(float a, float b, float c, float d)
+{
+    float ad_lo, bc_lo, x0, x1, x2, m0, i0, i1;
+    float ad = two_prod(a, d, ad_lo);
+    float bc = two_prod(b, c, bc_lo);
+    i0 = two_sum(ad_lo, -bc_lo, x0);
+    float j = two_sum(ad, i0, m0);
+    i1 = two_sum(m0, -bc, x1);
+    float x3 = two_sum(j, i1, x2);
+    if (x3 != 0.0) return x3 > 0.0 ? 1 : -1;
+    if (x2 != 0.0) return x2 > 0.0 ? 1 : -1;
+    if (x1 != 0.0) return x1 > 0.0 ? 1 : -1;
+    if (x0 != 0.0) return x0 > 0.0 ? 1 : -1;
+    return 0;
+}
+
+// tpk_edge_sign: orient(P_i, P_j, o) with o = (0,0) symbolically perturbed; never 0.
+int edge_sign(int i, vec4 pi, int j, vec4 pj, out float value)
+{
+    vec4 lo = pi, hi = pj;
+    int flip = 1;
+    if (i > j) {
+        lo = pj;
+        hi = pi;
+        flip = -1;
+    }
+    precise float p = lo.x * hi.y;
+    precise float q = lo.y * hi.x;
+    precise float det = p - q;
+    float bound = 2.384185791015625e-7 * (abs(p) + abs(q)); // 4 u, u = 2^-24
+    int sign;
+    if (det > bound) {
+        sign = 1;
+    } else if (det < -bound) {
+        sign = -1;
+    } else {
+        sign = det2_sign_exact(lo.x, lo.y, hi.x, hi.y);
+        if (sign == 0 || (det > 0.0 && sign < 0) || (det < 0.0 && sign > 0) || isnan(det))
+            det = 0.0;
+        if (sign == 0) {
+            float dy = lo.y - hi.y, dx = hi.x - lo.x;
+            sign = dy > 0.0 ? 1 : dy < 0.0 ? -1 : dx > 0.0 ? 1 : dx < 0.0 ? -1 : 1;
+        }
+    }
+    value = float(flip) * det;
+    return flip * sign;
+}
+
+// The face a ray crosses (tpk_face_hit): ids, projections (w unused), edge values, scalars.
+struct Hit {
+    ivec3 v;
+    vec4 p0, p1, p2;
+    vec3 e;
+    vec3 s; // the vertices' point scalars
+    float t;
+};
+
+vec3 edge_weights(Hit h, int zero_edge)
+{
+    int i = zero_edge, j = (zero_edge + 1) % 3, other = (zero_edge + 2) % 3;
+    int lo = h.v[i] < h.v[j] ? i : j, hi = lo == i ? j : i;
+    vec4 P[3] = vec4[3](h.p0, h.p1, h.p2);
+    vec4 a = P[lo], b = P[hi];
+    precise float ex = b.x - a.x;
+    precise float ey = b.y - a.y;
+    precise float len2 = ex * ex + ey * ey;
+    precise float u = len2 > 0.0 ? -(a.x * ex + a.y * ey) / len2 : 0.5;
+    u = clamp(u, 0.0, 1.0);
+    vec3 w;
+    w[lo] = 1.0 - u;
+    w[hi] = u;
+    w[other] = 0.0;
+    return w;
+}
+
+vec3 face_weights(Hit h)
+{
+    int zeros = int(h.e[0] == 0.0) + int(h.e[1] == 0.0) + int(h.e[2] == 0.0);
+    if (zeros == 1)
+        return edge_weights(h, h.e[0] == 0.0 ? 0 : h.e[1] == 0.0 ? 1 : 2);
+    precise float sum = h.e[0] + h.e[1] + h.e[2];
+    if (sum != 0.0 && !isnan(sum)) {
+        precise float inv = 1.0 / sum;
+        return vec3(h.e[1] * inv, h.e[2] * inv, h.e[0] * inv);
+    }
+    return vec3(1.0 / 3.0);
+}
+
+float hit_t(Hit h, vec3 w)
+{
+    precise float t = w[0] * h.p0.z + w[1] * h.p1.z + w[2] * h.p2.z;
+    return t;
+}
+
+// tpki_shell_face_entry: does the line enter the volume through shell face f (outward winding)?
+bool shell_face_entry(ivec4 f, out Hit h)
+{
+    h.v = f.xyz;
+    h.p0 = project(f.x, h.s[0]);
+    h.p1 = project(f.y, h.s[1]);
+    h.p2 = vec4(0.0);
+    h.s[2] = 0.0;
+    h.e = vec3(0.0);
+    h.t = 0.0;
+    if (edge_sign(f.x, h.p0, f.y, h.p1, h.e[0]) > 0)
+        return false;
+    h.p2 = project(f.z, h.s[2]);
+    if (edge_sign(f.y, h.p1, f.z, h.p2, h.e[1]) > 0)
+        return false;
+    if (edge_sign(f.z, h.p2, f.x, h.p0, h.e[2]) > 0)
+        return false;
+    h.t = hit_t(h, face_weights(h));
+    return true;
+}
+
+// ---- Shell entries through the BVH (shell_bvh.c): found one at a time, in (t, face) order ----------
+
+vec3 inv_dir;
+
+// Does the line meet node n's box for some t in [t_low, t_high]? Boxes are widened by P.up.w on top of
+// the builder's padding, for the float slab test.
+bool box_hit(uint n, float t_low, float t_high)
+{
+    uvec4 a = fetch_nodes(2u * n), b = fetch_nodes(2u * n + 1u);
+    vec3 lo = uintBitsToFloat(a.xyz) - P.up.w, hi = uintBitsToFloat(b.xyz) + P.up.w;
+    float tn = -1.0 / 0.0, tf = t_high;
+    for (int k = 0; k < 3; k++) {
+        if (ray_dir[k] == 0.0) {
+            if (frame.org[k] < lo[k] || frame.org[k] > hi[k])
+                return false;
+            continue;
+        }
+        float t0 = (lo[k] - frame.org[k]) * inv_dir[k], t1 = (hi[k] - frame.org[k]) * inv_dir[k];
+        tn = max(tn, min(t0, t1));
+        tf = min(tf, max(t0, t1));
+    }
+    return tn <= tf && tf >= t_low;
+}
+
+#define STACK_SIZE 96 // TPK_SHELL_BVH_STACK
+
+// The last entry before tmin: its t, or -inf when there is none (the ray starts outside).
+float last_entry_before(float tmin)
+{
+    float best = -1.0 / 0.0;
+    uint stack[STACK_SIZE];
+    int top = 0;
+    stack[top++] = 0u;
+    while (top > 0) {
+        uint n = stack[--top];
+        if (!box_hit(n, best, tmin))
+            continue;
+        uvec4 b = fetch_nodes(2u * n + 1u);
+        uint first = fetch_nodes(2u * n).w, count = b.w;
+        if (count == 0u) {
+            stack[top++] = first + 1u;
+            stack[top++] = first;
+            continue;
+        }
+        for (uint i = first; i < first + count; i++) {
+            Hit h;
+            if (shell_face_entry(fetch_shell(i), h) && h.t < tmin && h.t > best)
+                best = h.t;
+        }
+    }
+    return best;
+}
+
+// The first entry (t, face) after (t_prev, face_prev) in lexicographic order; face -1 when none.
+int next_entry(float t_prev, int face_prev, out Hit best_hit)
+{
+    int best = -1;
+    float best_t = 1.0 / 0.0;
+    uint stack[STACK_SIZE];
+    int top = 0;
+    stack[top++] = 0u;
+    while (top > 0) {
+        uint n = stack[--top];
+        if (!box_hit(n, t_prev, best_t))
+            continue;
+        uvec4 b = fetch_nodes(2u * n + 1u);
+        uint first = fetch_nodes(2u * n).w, count = b.w;
+        if (count == 0u) {
+            stack[top++] = first + 1u;
+            stack[top++] = first;
+            continue;
+        }
+        for (uint i = first; i < first + count; i++) {
+            Hit h;
+            int f = int(i);
+            if (!shell_face_entry(fetch_shell(i), h))
+                continue;
+            bool after = h.t > t_prev || (h.t == t_prev && f > face_prev);
+            bool better = best < 0 || h.t < best_t || (h.t == best_t && f < best);
+            if (after && better) {
+                best = f;
+                best_t = h.t;
+                best_hit = h;
+            }
+        }
+    }
+    return best;
+}
+
+// ---- Transfer function and emission-absorption (render_cpu.c) -------------------------------------
+
+float tf_point_s(int i)
+{
+    return P.tf_s[i >> 2][i & 3];
+}
+
+vec4 tf_eval(float s)
+{
+    int n = P.dims.w;
+    if (s <= tf_point_s(0) || n == 1)
+        return P.tf_rgba[0];
+    if (s >= tf_point_s(n - 1))
+        return P.tf_rgba[n - 1];
+    int a = 0, b = n - 1;
+    while (b - a > 1) {
+        int mid = (a + b) / 2;
+        if (tf_point_s(mid) <= s)
+            a = mid;
+        else
+            b = mid;
+    }
+    float u = (s - tf_point_s(a)) / (tf_point_s(b) - tf_point_s(a));
+    return mix(P.tf_rgba[a], P.tf_rgba[b], u);
+}
+
+#define OPAQUE_TRANSMITTANCE 0.02
+#define MAX_PIECE_DEPTH 0.05
+#define MAX_PIECE_STEPS 256
+
+vec3 color;
+float transmittance;
+
+void integrate_linear(float h, vec4 c0, vec4 c1)
+{
+    float inv_unit = P.scalar_map.z;
+    float depth = h * 0.5 * (c0.a + c1.a) * inv_unit;
+    if (!(depth > 0.0))
+        return;
+    int n = clamp(int(ceil(depth / MAX_PIECE_DEPTH)), 1, MAX_PIECE_STEPS);
+    float step = h / float(n);
+    for (int j = 0; j < n; j++) {
+        float u0 = float(j) / float(n), u1 = float(j + 1) / float(n);
+        vec4 e0 = mix(c0, c1, u0), e1 = mix(c0, c1, u1);
+        float k = e0.a + e1.a;
+        if (k <= 0.0)
+            continue;
+        float alpha = 1.0 - exp(-step * 0.5 * k * inv_unit);
+        float weight = transmittance * alpha / k;
+        color += weight * (e0.rgb * e0.a + e1.rgb * e1.a);
+        transmittance *= 1.0 - alpha;
+    }
+}
+
+void integrate_exact(float len, float s0, float s1)
+{
+    vec4 ca = tf_eval(s0);
+    if (s0 == s1) {
+        integrate_linear(len, ca, ca);
+        return;
+    }
+    float ds = s1 - s0, prev_s = s0;
+    int n = P.dims.w;
+    for (int i = 0; i < n; i++) {
+        int k = ds > 0.0 ? i : n - 1 - i;
+        float cs = tf_point_s(k);
+        if (ds > 0.0 ? (cs <= s0 || cs >= s1) : (cs >= s0 || cs <= s1))
+            continue;
+        vec4 cb = P.tf_rgba[k];
+        integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
+        ca = cb;
+        prev_s = cs;
+    }
+    integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval(s1));
+}
+
+void integrate_sampled(float len, float s0, float s1)
+{
+    float max_step = 0.5 / P.scalar_map.z;
+    int n = clamp(int(ceil(len / max_step)), 1, 4096);
+    float step = len / float(n);
+    for (int j = 0; j < n && transmittance > OPAQUE_TRANSMITTANCE; j++) {
+        vec4 c = tf_eval(s0 + (s1 - s0) * ((float(j) + 0.5) / float(n)));
+        float alpha = 1.0 - exp(-step * c.a * P.scalar_map.z);
+        color += transmittance * alpha * c.rgb;
+        transmittance *= 1.0 - alpha;
+    }
+}
+
+float normalized(float scalar)
+{
+    if (P.mode.w == 0 || P.scalar_map.y == 0.0)
+        return 0.5;
+    return (scalar - P.scalar_map.x) * P.scalar_map.y;
+}
+
+// One tet piece [t_in, t_out] with scalars s_in, s_out (on_segment). Returns true when opaque.
+bool segment(float t_in, float t_out, float s_in, float s_out)
+{
+    float len = t_out - t_in;
+    if (len > 0.0) {
+        float a = normalized(s_in), b = normalized(s_out);
+        if (P.mode.z == 1)
+            integrate_sampled(len, a, b);
+        else
+            integrate_exact(len, a, b);
+    }
+    return transmittance <= OPAQUE_TRANSMITTANCE;
+}
+
+// The range of t a piece may contribute: [0, inf), cut to the clip box when there is one.
+float t_min_clip, t_max_clip;
+
+// report(): clip the piece to [t_min_clip, t_max_clip] and integrate it. Returns true to stop the ray.
+bool report(float t_in, float t_out, float s_in, float s_out)
+{
+    if (t_out < t_min_clip)
+        return false;
+    float len = t_out - t_in;
+    float a = t_in, b = t_out, sa = s_in, sb = s_out;
+    if (t_in < t_min_clip) {
+        a = t_min_clip;
+        sa = s_in + (s_out - s_in) * ((t_min_clip - t_in) / len);
+    }
+    if (t_out > t_max_clip) {
+        b = t_max_clip;
+        sb = s_in + (s_out - s_in) * ((t_max_clip - t_in) / len);
+    }
+    if (b > a && segment(a, b, sa, sb))
+        return true;
+    return t_out >= t_max_clip;
+}
+
+// ---- One inside-run (march.c, march_run) --------------------------------------------------------
+
+uint steps_taken;
+uint status;
+
+int rank4(int x, int a, int b, int c, int d)
+{
+    return int(a < x) + int(b < x) + int(c < x) + int(d < x);
+}
+
+float hit_scalar(Hit h, vec3 w)
+{
+    return dot(w, h.s);
+}
+
+// March from the entry face `h` of tet `tet` until the ray leaves the volume. Returns true when the
+// ray is done (opaque, past the clip box, or an error).
+bool march_run(Hit h, int tet)
+{
+    const int tet_count = P.mode.x;
+    int prev = -1;
+    float s_in = hit_scalar(h, face_weights(h));
+    for (int step = 0;; step++) {
+        if (step >= tet_count) {
+            status = TPK_VK_STATUS_MESH; // a cycle: watertight marching never revisits a tet
+            return true;
+        }
+        steps_taken++;
+        if (h.t > t_max_clip)
+            return true;
+        const int a = h.v[0], b = h.v[1], c = h.v[2];
+        ivec4 rec0, rec1 = ivec4(0);
+        int vx;
+        if (LAYOUT == TPK_VK_LAYOUT_TET16) {
+            rec0 = fetch_tets(uint(tet));
+            vx = rec0[TPK_VK_TET16_VX];
+        } else if (LAYOUT == TPK_VK_LAYOUT_TET20) {
+            rec0 = ivec4(0);
+            vx = fetch_tets(uint(tet) * uint(TPK_VK_TET20_WORDS) + uint(TPK_VK_TET20_VX)).x;
+        } else {
+            rec0 = fetch_tets(2u * uint(tet));
+            vx = rec0[TPK_VK_TET32_VX];
+        }
+        const int d = vx ^ a ^ b ^ c;
+        if (d < 0 || d >= P.mode.y || d == a || d == b || d == c) {
+            status = TPK_VK_STATUS_MESH;
+            return true;
+        }
+        int n3 = 0;
+        if (LAYOUT == TPK_VK_LAYOUT_TET16) {
+            int rp = int(a < d) + int(b < d) + int(c < d);
+            n3 = rp == 3 ? prev : (rec0[1 + rp] ^ prev);
+        }
+        float sd;
+        vec4 pd = project(d, sd);
+        float va, vb, vc;
+        const int sa = edge_sign(a, h.p0, d, pd, va);
+        const int sb = edge_sign(b, h.p1, d, pd, vb);
+        const int sc = edge_sign(c, h.p2, d, pd, vc);
+        Hit o;
+        int opposite;
+        if (sb == -1 && sa == 1) {
+            o = Hit(ivec3(a, b, d), h.p0, h.p1, pd, vec3(h.e[0], vb, -va), vec3(h.s[0], h.s[1], sd), 0.0);
+            opposite = c;
+        } else if (sc == -1 && sb == 1) {
+            o = Hit(ivec3(b, c, d), h.p1, h.p2, pd, vec3(h.e[1], vc, -vb), vec3(h.s[1], h.s[2], sd), 0.0);
+            opposite = a;
+        } else if (sa == -1 && sc == 1) {
+            o = Hit(ivec3(c, a, d), h.p2, h.p0, pd, vec3(h.e[2], va, -vc), vec3(h.s[2], h.s[0], sd), 0.0);
+            opposite = b;
+        } else {
+            status = TPK_VK_STATUS_MESH;
+            return true;
+        }
+        vec3 w = face_weights(o);
+        float t_out = hit_t(o, w);
+        if (!(t_out >= h.t))
+            t_out = h.t; // rounding: keep the chain monotone
+        o.t = t_out;
+        float s_out = hit_scalar(o, w);
+
+        int next;
+        if (LAYOUT == TPK_VK_LAYOUT_TET32) {
+            int v3 = rec0[3] ^ rec0[0] ^ rec0[1] ^ rec0[2];
+            int k = opposite == rec0[0] ? 0 : opposite == rec0[1] ? 1 : opposite == rec0[2] ? 2
+                  : opposite == v3      ? 3 : -1;
+            if (k < 0) {
+                status = TPK_VK_STATUS_MESH;
+                return true;
+            }
+            next = fetch_tets(2u * uint(tet) + 1u)[k];
+        } else {
+            int r = rank4(opposite, a, b, c, d);
+            if (LAYOUT == TPK_VK_LAYOUT_TET20)
+                next = fetch_tets(uint(tet) * uint(TPK_VK_TET20_WORDS) + 1u + uint(r)).x;
+            else
+                next = r == 3 ? n3 : (rec0[1 + r] ^ n3);
+        }
+        if (next < -1 || next >= tet_count) {
+            status = TPK_VK_STATUS_MESH;
+            return true;
+        }
+        float piece_in = s_in, piece_out = s_out;
+        if (P.mode.w == 2) // a tet field: constant in the tet
+            piece_in = piece_out = fetch_tet_scalars(uint(tet)).x;
+        if (report(h.t, t_out, piece_in, piece_out))
+            return true;
+        if (next < 0)
+            return false;
+        prev = tet;
+        tet = next;
+        h = o;
+        s_in = s_out;
+    }
+    return true;
+}
+
+// ---- The pixel ----------------------------------------------------------------------------------
+
+// The ray's frame (ray.c, tpki_ray_frame_init); false for a degenerate direction.
+bool frame_init(vec3 org, vec3 dir)
+{
+    int kz = 0;
+    if (abs(dir[1]) > abs(dir[kz]))
+        kz = 1;
+    if (abs(dir[2]) > abs(dir[kz]))
+        kz = 2;
+    if (dir[kz] == 0.0)
+        return false;
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (dir[kz] < 0.0) {
+        int swap = kx;
+        kx = ky;
+        ky = swap;
+    }
+    frame.org = org;
+    frame.kx = kx;
+    frame.ky = ky;
+    frame.kz = kz;
+    frame.sx = dir[kx] / dir[kz];
+    frame.sy = dir[ky] / dir[kz];
+    frame.sz = 1.0 / dir[kz];
+    return true;
+}
+
+// Cut [t_min_clip, t_max_clip] to the clip box; false when the ray misses it.
+bool clip_to_box()
+{
+    t_min_clip = 0.0;
+    t_max_clip = 1.0 / 0.0;
+    if (P.clip_lo.w == 0.0)
+        return true;
+    for (int k = 0; k < 3; k++) {
+        if (ray_dir[k] == 0.0) {
+            if (frame.org[k] < P.clip_lo[k] || frame.org[k] > P.clip_hi[k])
+                return false;
+            continue;
+        }
+        float t0 = (P.clip_lo[k] - frame.org[k]) / ray_dir[k], t1 = (P.clip_hi[k] - frame.org[k]) / ray_dir[k];
+        t_min_clip = max(t_min_clip, min(t0, t1));
+        t_max_clip = min(t_max_clip, max(t0, t1));
+    }
+    return t_min_clip <= t_max_clip;
+}
+
+uint to_byte(float v)
+{
+    return uint(clamp(v, 0.0, 1.0) * 255.0 + 0.5);
+}
+
+void trace()
+{
+    if (P.shell_info.x == 0)
+        return;
+    // Runs that start before the last entry before the first contributing t end before it.
+    float t_prev = last_entry_before(t_min_clip);
+    int face_prev = -1;
+    for (;;) {
+        Hit h;
+        int face = next_entry(t_prev, face_prev, h);
+        if (face < 0 || h.t > t_max_clip)
+            return;
+        t_prev = h.t;
+        face_prev = face;
+        if (march_run(h, fetch_shell(uint(face)).w))
+            return;
+    }
+}
+
+void main()
+{
+    const int x = int(gl_GlobalInvocationID.x), y = P.dims.z + int(gl_GlobalInvocationID.y);
+    if (x >= P.dims.x || y >= P.dims.y)
+        return;
+    const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
+    const float py = (1.0 - 2.0 * (float(y) + 0.5) / float(P.dims.y)) * P.right.w;
+    ray_dir = normalize(P.forward.xyz + px * P.right.xyz + py * P.up.xyz);
+    inv_dir = 1.0 / ray_dir;
+    color = vec3(0.0);
+    transmittance = 1.0;
+    steps_taken = 0u;
+    status = TPK_VK_STATUS_OK;
+    if (frame_init(P.eye.xyz, ray_dir) && clip_to_box())
+        trace();
+    const vec4 bg = P.background;
+    float alpha = (1.0 - transmittance) + transmittance * bg.a;
+    vec3 premult = color + transmittance * bg.a * bg.rgb;
+    vec3 straight = alpha > 0.0 ? premult / alpha : vec3(0.0);
+    uint index = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // within this band of rows
+    pixels[index] = to_byte(straight.r) | (to_byte(straight.g) << 8) | (to_byte(straight.b) << 16) |
+                    (to_byte(alpha) << 24);
+    steps[index] = uvec2(steps_taken, status);
+}
