@@ -54,7 +54,7 @@ typedef struct tpk_vk_array {
 } tpk_vk_array;
 
 /* The largest texel count a binding may hold on this device for texels of `texel_size` bytes: a power
- * of two within maxTexelBufferElements and maxMemoryAllocationSize, lowered by TPK_VK_SPLIT_TEXELS. */
+ * of two within maxTexelBufferElements and maxMemoryAllocationSize, lowered by TPK_VK_SPLIT_BYTES. */
 uint64_t tpk_vk_part_texels(const tpk_vk_context *ctx, uint32_t texel_size);
 
 /* Upload texel_count texels of texel_size bytes (data may be NULL when texel_count is 0: one dummy

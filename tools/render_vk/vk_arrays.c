@@ -41,11 +41,11 @@ uint64_t tpk_vk_part_texels(const tpk_vk_context *ctx, uint32_t texel_size)
     uint64_t by_allocation = ctx->max_allocation / texel_size;
     if (by_allocation < limit)
         limit = by_allocation;
-    const char *env = getenv("TPK_VK_SPLIT_TEXELS");
+    const char *env = getenv("TPK_VK_SPLIT_BYTES");
     if (env && *env) {
-        uint64_t forced = strtoull(env, NULL, 10);
-        if (forced >= 1 && forced < limit)
-            limit = forced;
+        uint64_t forced = strtoull(env, NULL, 10) / texel_size;
+        if (forced < limit)
+            limit = forced < 1 ? 1 : forced;
     }
     limit = floor_pow2(limit < 1 ? 1 : limit);
     /* The shader indexes texels with 32-bit unsigned ints: a part never holds more than 2^31. */
