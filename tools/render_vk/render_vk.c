@@ -12,8 +12,8 @@
 
 #define BAND_PIXELS (1u << 20) /* pixels per submission */
 
-/* Everything one render owns on the device; zero means not created. */
-typedef struct vk_render {
+/* Everything a renderer owns; zero means not created. */
+struct tpk_vk_renderer {
     tpk_vk_context ctx;
     tpk_vk_array arrays[TPK_VK_ARRAY_COUNT];
     tpk_vk_buffer params, pixels, steps;
@@ -21,12 +21,21 @@ typedef struct vk_render {
     VkCommandPool pool;
     VkCommandBuffer cmd;
     VkFence fence;
-} vk_render;
+    tpk_marcher *marcher; /* owns the shell BVH that was uploaded */
+    tpk_shell_bvh bvh;
+    tpk_mesh_arrays mesh; /* the caller's arrays (not copied) */
+    int tet_scalars;      /* tet scalars were uploaded */
+};
+typedef struct tpk_vk_renderer vk_render;
 
-static void vk_render_destroy(vk_render *v)
+void tpk_vk_renderer_destroy(tpk_vk_renderer *v)
 {
+    if (!v)
+        return;
+    tpk_marcher_destroy(v->marcher);
     if (!v->ctx.device) {
         tpk_vk_context_destroy(&v->ctx);
+        free(v);
         return;
     }
     vkDeviceWaitIdle(v->ctx.device);
@@ -41,146 +50,7 @@ static void vk_render_destroy(vk_render *v)
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++)
         tpk_vk_array_destroy(&v->ctx, &v->arrays[a]);
     tpk_vk_context_destroy(&v->ctx);
-}
-
-/* ---- Options and camera (as tpk_render_cpu) ----------------------------------------------------- */
-
-static int check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, const uint8_t *rgba,
-                         tpk_diag *diag)
-{
-    if (!mesh || !opt || !rgba)
-        return tpk_diag_fail(diag, "render: mesh, options and image buffer are required");
-    if (opt->width < 1 || opt->height < 1 || opt->width > 32768 || opt->height > 32768)
-        return tpk_diag_fail(diag, "render: expected width and height in 1..32768, found %dx%d", opt->width,
-                             opt->height);
-    if (!opt->tf || opt->tf->count < 1 || opt->tf->count > TPK_TF_MAX_POINTS)
-        return tpk_diag_fail(diag, "render: a transfer function with at least one point is required");
-    if (opt->integration != 0 && opt->integration != 1)
-        return tpk_diag_fail(diag, "render: expected integration 0 (exact) or 1 (sampling), found %d",
-                             opt->integration);
-    if (!isfinite(opt->range_min) || !isfinite(opt->range_max))
-        return tpk_diag_fail(diag, "render: the scalar range must be finite");
-    for (int k = 0; opt->clip && k < 3; k++) {
-        if (!isfinite(opt->clip_min[k]) || !isfinite(opt->clip_max[k]))
-            return tpk_diag_fail(diag, "render: the clip box must be finite");
-        if (opt->clip_min[k] > opt->clip_max[k])
-            return tpk_diag_fail(diag, "render: clip box min %g above max %g on axis %c", opt->clip_min[k],
-                                 opt->clip_max[k], "xyz"[k]);
-    }
-    if (mesh->vertex_count > 0x7fffffffu || mesh->tet_count > 0x7fffffffu || mesh->shell_face_count > 0x7fffffffu)
-        return tpk_diag_fail(diag, "render: more than 2^31 - 1 vertices, tets or shell faces");
-    return 0;
-}
-
-static void normalize3(double v[3])
-{
-    double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (len > 0)
-        for (int k = 0; k < 3; k++)
-            v[k] /= len;
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* The camera basis exactly as render_cpu.c's setup_camera, into the shader's parameters. */
-static int set_camera(const tpk_render_options *opt, const double origin[3], tpk_vk_params *p, tpk_diag *diag)
-{
-    const tpk_camera *cam = &opt->camera;
-    double forward[3], right[3], up[3];
-    for (int k = 0; k < 3; k++) {
-        if (!isfinite(cam->eye[k]) || !isfinite(cam->at[k]) || !isfinite(cam->up[k]))
-            return tpk_diag_fail(diag, "render: camera eye, at and up must be finite");
-        forward[k] = cam->at[k] - cam->eye[k];
-        up[k] = cam->up[k];
-    }
-    normalize3(forward);
-    if (forward[0] == 0 && forward[1] == 0 && forward[2] == 0)
-        return tpk_diag_fail(diag, "render: camera eye and at are the same point");
-    if (!(cam->fovy_deg > 0 && cam->fovy_deg < 180))
-        return tpk_diag_fail(diag, "render: expected a field of view in (0, 180) degrees, found %g", cam->fovy_deg);
-    cross3(forward, up, right);
-    normalize3(right);
-    if (right[0] == 0 && right[1] == 0 && right[2] == 0) {
-        const double other[3] = {fabs(forward[0]) < 0.9 ? 1.0 : 0.0, fabs(forward[0]) < 0.9 ? 0.0 : 1.0, 0};
-        cross3(forward, other, right);
-        normalize3(right);
-    }
-    double true_up[3];
-    cross3(right, forward, true_up);
-    double tan_half_y = tan(0.5 * cam->fovy_deg * M_PI / 180.0);
-    for (int k = 0; k < 3; k++) {
-        p->eye[k] = (float)(cam->eye[k] - origin[k]);
-        p->forward[k] = (float)forward[k];
-        p->right[k] = (float)right[k];
-        p->up[k] = (float)true_up[k];
-    }
-    p->forward[3] = (float)(tan_half_y * opt->width / opt->height);
-    p->right[3] = (float)tan_half_y;
-    return 0;
-}
-
-static double bbox_diagonal(const tpk_mesh_arrays *mesh)
-{
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint64_t i = 0; i < mesh->vertex_count; i++)
-        for (int k = 0; k < 3; k++) {
-            double x = mesh->positions[3 * i + k];
-            lo[k] = x < lo[k] ? x : lo[k];
-            hi[k] = x > hi[k] ? x : hi[k];
-        }
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        if (hi[k] > lo[k])
-            d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
-    return sqrt(d2);
-}
-
-static int fill_params(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, const tpk_shell_bvh *bvh,
-                       tpk_vk_params *p, tpk_diag *diag)
-{
-    memset(p, 0, sizeof *p);
-    if (set_camera(opt, mesh->origin, p, diag) != 0)
-        return -1;
-    /* Boxes get 1e-5 of the reach on top of the builder's 1e-6 of the extent: the float slab test and
-     * the float edge tests err by a few ulps of coordinates relative to the eye. */
-    double reach = bvh->extent + fabs(p->eye[0]) + fabs(p->eye[1]) + fabs(p->eye[2]);
-    p->up[3] = (float)(1e-5 * reach);
-    memcpy(p->background, opt->background, sizeof p->background);
-    p->scalar_map[0] = (float)opt->range_min;
-    p->scalar_map[1] = opt->range_max != opt->range_min ? (float)(1.0 / (opt->range_max - opt->range_min)) : 0.0f;
-    double unit = opt->unit_distance;
-    if (!(unit > 0) || !isfinite(unit))
-        unit = bbox_diagonal(mesh) / 100.0;
-    p->scalar_map[2] = unit > 0 ? (float)(1.0 / unit) : 1.0f;
-    p->dims[0] = opt->width;
-    p->dims[1] = opt->height;
-    p->dims[3] = opt->tf->count;
-    p->mode[0] = (int32_t)mesh->tet_count;
-    p->mode[1] = (int32_t)mesh->vertex_count;
-    p->mode[2] = opt->integration;
-    p->mode[3] = opt->tet_scalars ? 2 : mesh->scalars ? 1 : 0;
-    if (opt->clip) {
-        for (int k = 0; k < 3; k++) {
-            p->clip_lo[k] = (float)(opt->clip_min[k] - mesh->origin[k]);
-            p->clip_hi[k] = (float)(opt->clip_max[k] - mesh->origin[k]);
-        }
-        p->clip_lo[3] = 1.0f;
-    }
-    p->shell_info[0] = (int32_t)bvh->face_count;
-    for (int i = 0; i < opt->tf->count; i++) {
-        const tpk_tf_point *t = &opt->tf->points[i];
-        p->tf_s[i] = (float)t->s;
-        p->tf_rgba[i][0] = (float)t->r;
-        p->tf_rgba[i][1] = (float)t->g;
-        p->tf_rgba[i][2] = (float)t->b;
-        p->tf_rgba[i][3] = (float)t->a;
-    }
-    return 0;
+    free(v);
 }
 
 /* ---- Upload ------------------------------------------------------------------------------------- */
@@ -231,8 +101,8 @@ static int upload_tets(vk_render *v, const tpk_mesh_arrays *mesh, tpk_diag *diag
     return tpk_diag_fail(diag, "render: expected layout tet16, tet20 or tet32");
 }
 
-static int upload(vk_render *v, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
-                  const tpk_shell_bvh *bvh, tpk_diag *diag)
+static int upload(vk_render *v, const tpk_mesh_arrays *mesh, const float *tet_scalars, const tpk_shell_bvh *bvh,
+                  tpk_diag *diag)
 {
     float *verts = vertex_texels(mesh);
     uint32_t *nodes = node_texels(bvh);
@@ -248,8 +118,8 @@ static int upload(vk_render *v, const tpk_mesh_arrays *mesh, const tpk_render_op
                             (uint64_t)bvh->face_count, &v->arrays[TPK_VK_ARRAY_SHELL], diag) != 0 ||
         tpk_vk_array_upload(&v->ctx, "shell BVH", VK_FORMAT_R32G32B32A32_UINT, 16, nodes,
                             2 * (uint64_t)bvh->node_count, &v->arrays[TPK_VK_ARRAY_NODES], diag) != 0 ||
-        tpk_vk_array_upload(&v->ctx, "tet scalars", VK_FORMAT_R32_SFLOAT, 4, opt->tet_scalars,
-                            opt->tet_scalars ? mesh->tet_count : 0, &v->arrays[TPK_VK_ARRAY_TET_SCALARS], diag) != 0)
+        tpk_vk_array_upload(&v->ctx, "tet scalars", VK_FORMAT_R32_SFLOAT, 4, tet_scalars,
+                            tet_scalars ? mesh->tet_count : 0, &v->arrays[TPK_VK_ARRAY_TET_SCALARS], diag) != 0)
         goto done;
     rc = 0;
 done:
@@ -349,7 +219,7 @@ static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t 
 static int render_bands(vk_render *v, tpk_vk_params *params, uint8_t *rgba, uint64_t *steps, tpk_diag *diag)
 {
     const int width = params->dims[0], height = params->dims[1];
-    int band = (int)(BAND_PIXELS / (uint32_t)width);
+    int band = (int)(BAND_PIXELS / (uint32_t)width); /* width <= 32768: at least 32 rows */
     band = band < 1 ? 1 : band > height ? height : band;
     for (int row0 = 0; row0 < height; row0 += band) {
         int rows = height - row0 < band ? height - row0 : band;
@@ -361,25 +231,82 @@ static int render_bands(vk_render *v, tpk_vk_params *params, uint8_t *rgba, uint
 
 /* ---- Entry points ------------------------------------------------------------------------------- */
 
-static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
-                        const tpk_shell_bvh *bvh, tpk_diag *diag)
+static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const float *tet_scalars, tpk_diag *diag)
 {
-    if (tpk_vk_context_create(&v->ctx, diag) != 0 || upload(v, mesh, opt, bvh, diag) != 0)
+    if (tpk_vk_context_create(&v->ctx, diag) != 0 || upload(v, mesh, tet_scalars, &v->bvh, diag) != 0)
         return -1;
-    uint32_t band = BAND_PIXELS / (uint32_t)opt->width;
-    band = band < 1 ? 1 : band > (uint32_t)opt->height ? (uint32_t)opt->height : band;
-    VkDeviceSize band_pixels = (VkDeviceSize)band * (VkDeviceSize)opt->width;
     if (tpk_vk_buffer_create(&v->ctx, sizeof(tpk_vk_params), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, "render parameters",
                              &v->params, diag) != 0 ||
-        tpk_vk_buffer_create(&v->ctx, band_pixels * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "the image",
+        tpk_vk_buffer_create(&v->ctx, (VkDeviceSize)BAND_PIXELS * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "the image",
                              &v->pixels, diag) != 0 ||
-        tpk_vk_buffer_create(&v->ctx, band_pixels * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "per-pixel statistics",
-                             &v->steps, diag) != 0)
+        tpk_vk_buffer_create(&v->ctx, (VkDeviceSize)BAND_PIXELS * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                             "per-pixel statistics", &v->steps, diag) != 0)
         return -1;
     if (tpk_vk_pipeline_create(&v->ctx, (int)mesh->layout, v->arrays, &v->params, &v->pixels, &v->steps,
                                &v->pipeline, diag) != 0)
         return -1;
     return create_commands(v, diag);
+}
+
+int tpk_vk_renderer_create(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, const float *tet_scalars,
+                           tpk_diag *diag)
+{
+    *out = NULL;
+    if (!mesh)
+        return tpk_diag_fail(diag, "render: a mesh is required");
+    if (mesh->vertex_count > 0x7fffffffu || mesh->tet_count > 0x7fffffffu || mesh->shell_face_count > 0x7fffffffu)
+        return tpk_diag_fail(diag, "render: more than 2^31 - 1 vertices, tets or shell faces");
+    vk_render *v = calloc(1, sizeof *v);
+    if (!v)
+        return tpk_diag_fail(diag, "render: out of memory");
+    tpk_result r = tpk_marcher_create(&v->marcher, mesh); /* validates the shell and builds its BVH */
+    if (r != TPK_OK) {
+        tpk_vk_renderer_destroy(v);
+        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
+    }
+    tpk_marcher_shell_bvh(v->marcher, &v->bvh);
+    v->mesh = *mesh;
+    v->tet_scalars = tet_scalars != NULL;
+    if (device_setup(v, mesh, tet_scalars, diag) != 0) {
+        tpk_vk_renderer_destroy(v);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+const char *tpk_vk_renderer_device(const tpk_vk_renderer *v)
+{
+    return v->ctx.props.deviceName;
+}
+
+int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats,
+                          tpk_diag *diag)
+{
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (tpk_vk_check_options(&v->mesh, opt, rgba, diag) != 0)
+        return -1;
+    if ((opt->tet_scalars != NULL) != v->tet_scalars)
+        return tpk_diag_fail(diag, "render: tet scalars %s at creation but %s for this frame",
+                             v->tet_scalars ? "given" : "not given", opt->tet_scalars ? "given" : "not");
+    tpk_vk_params *params = malloc(sizeof *params);
+    if (!params)
+        return tpk_diag_fail(diag, "render: out of memory");
+    uint64_t steps = 0;
+    int rc = tpk_vk_params_fill(&v->mesh, opt, v->bvh.extent, v->bvh.face_count, params, diag);
+    if (rc == 0)
+        rc = render_bands(v, params, rgba, &steps, diag);
+    free(params);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (stats) {
+        stats->rays = (uint64_t)opt->width * (uint64_t)opt->height;
+        stats->tet_steps = steps;
+        stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    }
+    return rc;
 }
 
 int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
@@ -389,33 +316,16 @@ int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt
     clock_gettime(CLOCK_MONOTONIC, &t0);
     if (stats)
         memset(stats, 0, sizeof *stats);
-    if (check_options(mesh, opt, rgba, diag) != 0)
+    if (tpk_vk_check_options(mesh, opt, rgba, diag) != 0)
         return -1;
-    tpk_marcher *marcher = NULL;
-    tpk_result r = tpk_marcher_create(&marcher, mesh); /* validates the shell and builds its BVH */
-    if (r != TPK_OK)
-        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
-    tpk_shell_bvh bvh;
-    tpk_marcher_shell_bvh(marcher, &bvh);
-    tpk_vk_params *params = malloc(sizeof *params);
-    vk_render *v = calloc(1, sizeof *v);
-    uint64_t steps = 0;
-    int rc = -1;
-    if (!params || !v)
-        tpk_diag_fail(diag, "render: out of memory");
-    else if (fill_params(mesh, opt, &bvh, params, diag) == 0 && device_setup(v, mesh, opt, &bvh, diag) == 0)
-        rc = render_bands(v, params, rgba, &steps, diag);
-    if (v)
-        vk_render_destroy(v);
-    free(v);
-    free(params);
-    tpk_marcher_destroy(marcher);
+    tpk_vk_renderer *v = NULL;
+    if (tpk_vk_renderer_create(&v, mesh, opt->tet_scalars, diag) != 0)
+        return -1;
+    int rc = tpk_vk_renderer_frame(v, opt, rgba, stats, diag);
+    tpk_vk_renderer_destroy(v);
     clock_gettime(CLOCK_MONOTONIC, &t1);
-    if (stats) {
-        stats->rays = (uint64_t)opt->width * (uint64_t)opt->height;
-        stats->tet_steps = steps;
+    if (stats) /* like the CPU reference's, the time includes the setup */
         stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-    }
     return rc;
 }
 

@@ -21,6 +21,19 @@
 int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                       tpk_render_stats *stats, tpk_diag *diag);
 
+/* A renderer kept across frames (the window, benchmarks): the device set up and the arrays uploaded
+ * once, then one frame per call with any camera, TF and effect options. `mesh` (and tet_scalars, per
+ * tet, or NULL) must outlive the renderer; frames must pass the same tet_scalars (NULL or not) as
+ * creation. Create returns 0, or -1 with a message (as tpk_render_vulkan). */
+typedef struct tpk_vk_renderer tpk_vk_renderer;
+int tpk_vk_renderer_create(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, const float *tet_scalars,
+                           tpk_diag *diag);
+/* stats->seconds is the frame alone: parameters, dispatch, wait and read-back. */
+int tpk_vk_renderer_frame(tpk_vk_renderer *renderer, const tpk_render_options *opt, uint8_t *rgba,
+                          tpk_render_stats *stats, tpk_diag *diag);
+const char *tpk_vk_renderer_device(const tpk_vk_renderer *renderer);
+void tpk_vk_renderer_destroy(tpk_vk_renderer *renderer);
+
 /* Is a Vulkan 1.2 device with a compute queue present? Returns 1 and writes the device's name into
  * `why` (n bytes), or 0 and writes the reason (no loader, no device, too old). */
 int tpk_vulkan_available(char *why, size_t n);

@@ -1,6 +1,8 @@
 /* Private declarations of the Vulkan renderer (tools/render_vk/). Owners, top to bottom (a file calls
  * only files below it):
- *   render_vk.c    tpk_render_vulkan, tpk_vulkan_available (render_vk.h): options, the frame, dispatch
+ *   render_vk.c    render_vk.h: the renderer (upload, dispatch in bands, read back), tpk_render_vulkan,
+ *                  tpk_vulkan_available
+ *   vk_params.c    tpk_vk_check_options, tpk_vk_params_fill: one frame's uniform block
  *   vk_pipeline.c  tpk_vk_pipeline_*: descriptor layout, the embedded shader, one pipeline per layout
  *   vk_arrays.c    tpk_vk_array_*: texel arrays split over bindings; the record-layout checks
  *   vk_context.c   tpk_vk_context_*, tpk_vk_buffer_*, tpk_vk_result_name: instance, device, memory
@@ -12,6 +14,7 @@
 #include <vulkan/vulkan.h>
 
 #include "base/diag.h"
+#include "render/render.h"
 #include "shaders/vk_layout.h"
 
 typedef struct tpk_vk_context {
@@ -80,6 +83,14 @@ typedef struct tpk_vk_params {
     float tf_s[TPK_VK_TF_MAX];
     float tf_rgba[TPK_VK_TF_MAX][4];
 } tpk_vk_params;
+
+/* The options checks of tpk_render_cpu (same messages). Returns 0 or -1 with a message. */
+int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, const uint8_t *rgba,
+                         tpk_diag *diag);
+/* Fill the uniform block for one frame: extent is the marcher's (box padding), face_count the shell's.
+ * Returns 0, or -1 with a message (a bad camera). */
+int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, double extent,
+                       int64_t face_count, tpk_vk_params *p, tpk_diag *diag);
 
 /* Descriptor layout, pipeline layout and a compute pipeline for one marcher layout and one set of
  * array splits. */

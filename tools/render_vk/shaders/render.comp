@@ -253,9 +253,9 @@ bool shell_face_entry(ivec4 f, out Hit h)
 
 vec3 inv_dir;
 
-// Does the line meet node n's box for some t in [t_low, t_high]? Boxes are widened by P.up.w on top of
-// the builder's padding, for the float slab test.
-bool box_hit(uint n, float t_low, float t_high)
+// The t at which the line enters node n's box, if it meets the box for some t in [t_low, t_high];
+// +inf otherwise. Boxes are widened by P.up.w on top of the builder's padding, for the float slab test.
+float box_enter(uint n, float t_low, float t_high)
 {
     uvec4 a = fetch_nodes(2u * n), b = fetch_nodes(2u * n + 1u);
     vec3 lo = uintBitsToFloat(a.xyz) - P.up.w, hi = uintBitsToFloat(b.xyz) + P.up.w;
@@ -263,62 +263,55 @@ bool box_hit(uint n, float t_low, float t_high)
     for (int k = 0; k < 3; k++) {
         if (ray_dir[k] == 0.0) {
             if (frame.org[k] < lo[k] || frame.org[k] > hi[k])
-                return false;
+                return 1.0 / 0.0;
             continue;
         }
         float t0 = (lo[k] - frame.org[k]) * inv_dir[k], t1 = (hi[k] - frame.org[k]) * inv_dir[k];
         tn = max(tn, min(t0, t1));
         tf = min(tf, max(t0, t1));
     }
-    return tn <= tf && tf >= t_low;
+    return tn <= tf && tf >= t_low ? tn : 1.0 / 0.0;
 }
 
 #define STACK_SIZE 96 // TPK_SHELL_BVH_STACK
+#define INF (1.0 / 0.0)
 
-// The last entry before tmin: its t, or -inf when there is none (the ray starts outside).
-float last_entry_before(float tmin)
-{
-    float best = -1.0 / 0.0;
-    uint stack[STACK_SIZE];
-    int top = 0;
-    stack[top++] = 0u;
-    while (top > 0) {
-        uint n = stack[--top];
-        if (!box_hit(n, best, tmin))
-            continue;
-        uvec4 b = fetch_nodes(2u * n + 1u);
-        uint first = fetch_nodes(2u * n).w, count = b.w;
-        if (count == 0u) {
-            stack[top++] = first + 1u;
-            stack[top++] = first;
-            continue;
-        }
-        for (uint i = first; i < first + count; i++) {
-            Hit h;
-            if (shell_face_entry(fetch_shell(i), h) && h.t < tmin && h.t > best)
-                best = h.t;
-        }
-    }
-    return best;
-}
-
-// The first entry (t, face) after (t_prev, face_prev) in lexicographic order; face -1 when none.
-int next_entry(float t_prev, int face_prev, out Hit best_hit)
+// Shell BVH traversal, nearer child first, over boxes met within [t_low, t_high]; t_high shrinks as
+// the query finds better entries. mode 0: the last entry before t_high (the ray's start); mode 1: the
+// first entry after (t_prev, face_prev) in (t, face) order.
+int bvh_query(int mode, float t_low, float t_high, float t_prev, int face_prev, out Hit best_hit)
 {
     int best = -1;
-    float best_t = 1.0 / 0.0;
+    float best_t = mode == 0 ? -INF : INF;
     uint stack[STACK_SIZE];
+    float stack_t[STACK_SIZE];
     int top = 0;
-    stack[top++] = 0u;
+    float t_root = box_enter(0u, t_low, t_high);
+    if (t_root == INF)
+        return -1;
+    stack[top] = 0u;
+    stack_t[top++] = t_root;
     while (top > 0) {
-        uint n = stack[--top];
-        if (!box_hit(n, t_prev, best_t))
-            continue;
-        uvec4 b = fetch_nodes(2u * n + 1u);
-        uint first = fetch_nodes(2u * n).w, count = b.w;
+        --top;
+        uint n = stack[top];
+        if (mode == 1 && stack_t[top] > best_t)
+            continue; // every face in it is after the best entry found since it was pushed
+        uvec4 a = fetch_nodes(2u * n), b = fetch_nodes(2u * n + 1u);
+        uint first = a.w, count = b.w;
         if (count == 0u) {
-            stack[top++] = first + 1u;
-            stack[top++] = first;
+            float hi_t = mode == 1 ? best_t : t_high;
+            float lo_t = mode == 0 ? max(t_low, best_t) : t_low;
+            float t0 = box_enter(first, lo_t, hi_t), t1 = box_enter(first + 1u, lo_t, hi_t);
+            uint near = t0 <= t1 ? first : first + 1u, far = t0 <= t1 ? first + 1u : first;
+            float near_t = min(t0, t1), far_t = max(t0, t1);
+            if (far_t != INF) {
+                stack[top] = far;
+                stack_t[top++] = far_t;
+            }
+            if (near_t != INF) {
+                stack[top] = near;
+                stack_t[top++] = near_t;
+            }
             continue;
         }
         for (uint i = first; i < first + count; i++) {
@@ -326,15 +319,24 @@ int next_entry(float t_prev, int face_prev, out Hit best_hit)
             int f = int(i);
             if (!shell_face_entry(fetch_shell(i), h))
                 continue;
-            bool after = h.t > t_prev || (h.t == t_prev && f > face_prev);
-            bool better = best < 0 || h.t < best_t || (h.t == best_t && f < best);
-            if (after && better) {
-                best = f;
-                best_t = h.t;
-                best_hit = h;
+            if (mode == 0) {
+                if (h.t < t_high && h.t > best_t) {
+                    best_t = h.t;
+                    best = f;
+                }
+            } else {
+                bool after = h.t > t_prev || (h.t == t_prev && f > face_prev);
+                bool better = best < 0 || h.t < best_t || (h.t == best_t && f < best);
+                if (after && better) {
+                    best = f;
+                    best_t = h.t;
+                    best_hit = h;
+                }
             }
         }
     }
+    if (mode == 0)
+        best_hit.t = best_t;
     return best;
 }
 
@@ -475,6 +477,7 @@ bool report(float t_in, float t_out, float s_in, float s_out)
 
 uint steps_taken;
 uint status;
+float run_exit_t; // t of the shell face the last run left through
 
 int rank4(int x, int a, int b, int c, int d)
 {
@@ -578,8 +581,10 @@ bool march_run(Hit h, int tet)
             piece_in = piece_out = fetch_tet_scalars(uint(tet)).x;
         if (report(h.t, t_out, piece_in, piece_out))
             return true;
-        if (next < 0)
+        if (next < 0) {
+            run_exit_t = t_out;
             return false;
+        }
         prev = tet;
         tet = next;
         h = o;
@@ -646,17 +651,21 @@ void trace()
     if (P.shell_info.x == 0)
         return;
     // Runs that start before the last entry before the first contributing t end before it.
-    float t_prev = last_entry_before(t_min_clip);
+    Hit h;
+    float t_prev = bvh_query(0, -INF, t_min_clip, 0.0, -1, h) >= 0 ? h.t : -INF;
     int face_prev = -1;
+    float t_low = t_prev;
     for (;;) {
-        Hit h;
-        int face = next_entry(t_prev, face_prev, h);
+        int face = bvh_query(1, t_low, INF, t_prev, face_prev, h);
         if (face < 0 || h.t > t_max_clip)
             return;
         t_prev = h.t;
         face_prev = face;
         if (march_run(h, fetch_shell(uint(face)).w))
             return;
+        // The next entry is where this run left or beyond (in a valid mesh the runs do not overlap):
+        // boxes that end before that are skipped, with a margin for the rounding of t.
+        t_low = max(t_prev, run_exit_t - 1e-5 * abs(run_exit_t) - P.up.w);
     }
 }
 
