@@ -182,6 +182,24 @@ TPK_TEST(sample_layouts)
     scene_free(&s);
 }
 
+/* The shader's three edge tests (shaders/vk_layout.h): doubles always (CPU devices), a float filter
+ * with doubles near zero (GPUs), and Dekker products without doubles; each against the CPU. */
+TPK_TEST(edge_test_variants)
+{
+    if (!have_device())
+        return;
+    scene s;
+    CHECK(scene_open(&s, tpk_data_path("hard/nonmanifold_vertex_edge_tets.vtu"), "cubes.tpk") == 0);
+    CHECK(scene_layout(&s, TPK_LAYOUT_TET16) == 0);
+    setenv("TPK_VK_EXACT", "1", 1);
+    CHECK(compare_backends(&s, "cubes, float filter + double", NULL) == 0);
+    setenv("TPK_VK_NO_FP64", "1", 1);
+    CHECK(compare_backends(&s, "cubes, float filter + Dekker", NULL) == 0);
+    unsetenv("TPK_VK_NO_FP64");
+    unsetenv("TPK_VK_EXACT");
+    scene_free(&s);
+}
+
 /* Non-convex (hinge: holes and concave parts), two components, and three cubes touching at a vertex
  * and along an edge (rays through the touching points tie between shell entries). */
 TPK_TEST(real_meshes)

@@ -17,7 +17,9 @@
  * the device's limits, a lost device) returns -1 with a message saying which; never aborts.
  * Environment: TPK_VK_DEVICE=N picks the N-th physical device (default: the first discrete, else
  * integrated, else any); TPK_VK_SPLIT_BYTES=N caps every binding at N bytes (rounded down to a
- * power-of-two texel count), so that the split path can be tested on a small mesh. Not thread-safe with itself (one device each). */
+ * power-of-two texel count), so that the split path can be tested on a small mesh; TPK_VK_NO_FP64=1
+ * takes the shader variant without doubles and TPK_VK_EXACT=1|2 the edge test of the FP64 variant
+ * (shaders/vk_layout.h), for tests. Not thread-safe with itself (one device each). */
 int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                       tpk_render_stats *stats, tpk_diag *diag);
 

@@ -26,6 +26,7 @@ typedef struct tpk_vk_context {
     VkPhysicalDeviceProperties props;
     VkPhysicalDeviceMemoryProperties memory;
     VkDeviceSize max_allocation; /* maxMemoryAllocationSize (Vulkan 1.1) */
+    int fp64;                    /* shaderFloat64 supported and enabled */
 } tpk_vk_context;
 
 /* Create instance, device and a compute queue. Returns 0, or -1 with a message naming the step and the
@@ -109,9 +110,12 @@ int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_v
                            const tpk_vk_buffer *params, const tpk_vk_buffer *pixels,
                            const tpk_vk_buffer *steps, tpk_vk_pipeline *out, tpk_diag *diag);
 void tpk_vk_pipeline_destroy(const tpk_vk_context *ctx, tpk_vk_pipeline *p);
+/* The edge test of the FP64 variant for this device: TPK_VK_EXACT_FILTER or TPK_VK_EXACT_ALWAYS. */
+int tpk_vk_exact_mode(const tpk_vk_context *ctx);
 
-/* The SPIR-V of shaders/render.comp (generated at build time by glslc, render_spv.c). */
-extern const uint32_t tpk_vk_render_spv[];
-extern const size_t tpk_vk_render_spv_size; /* bytes */
+/* The SPIR-V of shaders/render.comp with TPK_VK_FP64 1 and 0 (generated at build time by glslc,
+ * render_spv.c); sizes in bytes. */
+extern const uint32_t tpk_vk_render_spv_fp64[], tpk_vk_render_spv_fp32[];
+extern const size_t tpk_vk_render_spv_fp64_size, tpk_vk_render_spv_fp32_size;
 
 #endif

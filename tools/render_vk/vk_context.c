@@ -129,10 +129,18 @@ int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag)
         .queueCount = 1,
         .pQueuePriorities = &priority,
     };
+    VkPhysicalDeviceFeatures supported, enabled;
+    vkGetPhysicalDeviceFeatures(ctx->physical, &supported);
+    memset(&enabled, 0, sizeof enabled);
+    /* TPK_VK_NO_FP64=1 takes the variant without doubles on any device, so that tests run it here */
+    const char *no_fp64 = getenv("TPK_VK_NO_FP64");
+    ctx->fp64 = supported.shaderFloat64 == VK_TRUE && !(no_fp64 && !strcmp(no_fp64, "1"));
+    enabled.shaderFloat64 = ctx->fp64 ? VK_TRUE : VK_FALSE;
     VkDeviceCreateInfo info = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
         .queueCreateInfoCount = 1,
         .pQueueCreateInfos = &queue,
+        .pEnabledFeatures = &enabled,
     };
     VkResult r = vkCreateDevice(ctx->physical, &info, NULL, &ctx->device);
     if (r != VK_SUCCESS) {

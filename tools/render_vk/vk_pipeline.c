@@ -1,6 +1,7 @@
 /* The compute pipeline of the renderer: its descriptor layout (shaders/vk_layout.h's bindings), the
  * SPIR-V embedded at build time, and the specialization constants that pick the marcher (Tet16, Tet20,
  * Tet32) and tell the shader how each array is split. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "render_vk_internal.h"
@@ -39,13 +40,23 @@ static int create_set_layout(const tpk_vk_context *ctx, tpk_vk_pipeline *p, tpk_
     return r == VK_SUCCESS ? 0 : fail(diag, "creating the pipeline layout", r);
 }
 
+/* CPU devices run both sides of every branch, so the always-double edge test is cheaper there than a
+ * filter with a rarely taken slow path (vk_layout.h). TPK_VK_EXACT=1|2 overrides, for tests. */
+int tpk_vk_exact_mode(const tpk_vk_context *ctx)
+{
+    const char *env = getenv("TPK_VK_EXACT");
+    if (env && (!strcmp(env, "1") || !strcmp(env, "2")))
+        return atoi(env);
+    return ctx->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? TPK_VK_EXACT_ALWAYS : TPK_VK_EXACT_FILTER;
+}
+
 static int create_pipeline(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[],
                            tpk_vk_pipeline *p, tpk_diag *diag)
 {
     VkShaderModuleCreateInfo sm = {
         .sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
-        .codeSize = tpk_vk_render_spv_size,
-        .pCode = tpk_vk_render_spv,
+        .codeSize = ctx->fp64 ? tpk_vk_render_spv_fp64_size : tpk_vk_render_spv_fp32_size,
+        .pCode = ctx->fp64 ? tpk_vk_render_spv_fp64 : tpk_vk_render_spv_fp32,
     };
     VkResult r = vkCreateShaderModule(ctx->device, &sm, NULL, &p->shader);
     if (r != VK_SUCCESS)
@@ -53,6 +64,7 @@ static int create_pipeline(const tpk_vk_context *ctx, int layout_id, const tpk_v
     int32_t values[TPK_VK_SPEC_COUNT];
     VkSpecializationMapEntry entries[TPK_VK_SPEC_COUNT];
     values[TPK_VK_SPEC_LAYOUT] = layout_id;
+    values[TPK_VK_SPEC_EXACT] = tpk_vk_exact_mode(ctx);
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++) {
         values[TPK_VK_SPEC_PARTS(a)] = arrays[a].part_count;
         values[TPK_VK_SPEC_SHIFT(a)] = arrays[a].shift;

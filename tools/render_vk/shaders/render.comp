@@ -13,6 +13,7 @@
 layout(local_size_x = TPK_VK_GROUP, local_size_y = TPK_VK_GROUP) in;
 
 layout(constant_id = TPK_VK_SPEC_LAYOUT) const int LAYOUT = TPK_VK_LAYOUT_TET16;
+layout(constant_id = TPK_VK_SPEC_EXACT) const int EXACT = TPK_VK_EXACT_FILTER;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_VERTS)) const int PARTS_VERTS = 1;
 layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_VERTS)) const int SHIFT_VERTS = 27;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TETS)) const int PARTS_TETS = 1;
@@ -108,6 +109,17 @@ vec4 project(int v, out float scalar)
     return vec4(x, y, z, 0.0);
 }
 
+#if TPK_VK_FP64
+// Exact sign of a*d - b*c for floats: the products are exact in double and the one rounding of their
+// difference keeps its sign (and is 0 only when it is exactly 0).
+int det2_sign_exact(float a, float b, float c, float d)
+{
+    precise double ad = double(a) * double(d);
+    precise double bc = double(b) * double(c);
+    precise double det = ad - bc;
+    return det > 0.0LF ? 1 : det < 0.0LF ? -1 : 0;
+}
+#else
 // Error-free product (Dekker): a * b == p + err exactly, no fused multiply-add needed.
 float two_prod(float a, float b, out float err)
 {
@@ -149,6 +161,14 @@ int det2_sign_exact(float a, float b, float c, float d)
     if (x0 != 0.0) return x0 > 0.0 ? 1 : -1;
     return 0;
 }
+#endif
+
+// Ties (the ray's point exactly on the edge's line) fall to the perturbation of the ray's point.
+int tie_sign(vec4 lo, vec4 hi)
+{
+    float dy = lo.y - hi.y, dx = hi.x - lo.x;
+    return dy > 0.0 ? 1 : dy < 0.0 ? -1 : dx > 0.0 ? 1 : dx < 0.0 ? -1 : 1;
+}
 
 // tpk_edge_sign: orient(P_i, P_j, o) with o = (0,0) symbolically perturbed; never 0.
 int edge_sign(int i, vec4 pi, int j, vec4 pj, out float value)
@@ -160,6 +180,16 @@ int edge_sign(int i, vec4 pi, int j, vec4 pj, out float value)
         hi = pi;
         flip = -1;
     }
+#if TPK_VK_FP64
+    if (EXACT == TPK_VK_EXACT_ALWAYS) {
+        precise double ad = double(lo.x) * double(hi.y);
+        precise double bc = double(lo.y) * double(hi.x);
+        precise double dd = ad - bc;
+        int sign = dd > 0.0LF ? 1 : dd < 0.0LF ? -1 : 0;
+        value = sign == 0 ? 0.0 : float(flip) * float(dd);
+        return flip * (sign == 0 ? tie_sign(lo, hi) : sign);
+    }
+#endif
     precise float p = lo.x * hi.y;
     precise float q = lo.y * hi.x;
     precise float det = p - q;
@@ -173,10 +203,8 @@ int edge_sign(int i, vec4 pi, int j, vec4 pj, out float value)
         sign = det2_sign_exact(lo.x, lo.y, hi.x, hi.y);
         if (sign == 0 || (det > 0.0 && sign < 0) || (det < 0.0 && sign > 0) || isnan(det))
             det = 0.0;
-        if (sign == 0) {
-            float dy = lo.y - hi.y, dx = hi.x - lo.x;
-            sign = dy > 0.0 ? 1 : dy < 0.0 ? -1 : dx > 0.0 ? 1 : dx < 0.0 ? -1 : 1;
-        }
+        if (sign == 0)
+            sign = tie_sign(lo, hi);
     }
     value = float(flip) * det;
     return flip * sign;
@@ -193,20 +221,20 @@ struct Hit {
 
 vec3 edge_weights(Hit h, int zero_edge)
 {
-    int i = zero_edge, j = (zero_edge + 1) % 3, other = (zero_edge + 2) % 3;
-    int lo = h.v[i] < h.v[j] ? i : j, hi = lo == i ? j : i;
-    vec4 P[3] = vec4[3](h.p0, h.p1, h.p2);
-    vec4 a = P[lo], b = P[hi];
+    // the edge (i, j) = (zero_edge, zero_edge + 1), interpolated from its lower id (ray.c)
+    vec4 pi = zero_edge == 0 ? h.p0 : zero_edge == 1 ? h.p1 : h.p2;
+    vec4 pj = zero_edge == 0 ? h.p1 : zero_edge == 1 ? h.p2 : h.p0;
+    int vi = zero_edge == 0 ? h.v[0] : zero_edge == 1 ? h.v[1] : h.v[2];
+    int vj = zero_edge == 0 ? h.v[1] : zero_edge == 1 ? h.v[2] : h.v[0];
+    bool i_low = vi < vj;
+    vec4 a = i_low ? pi : pj, b = i_low ? pj : pi;
     precise float ex = b.x - a.x;
     precise float ey = b.y - a.y;
     precise float len2 = ex * ex + ey * ey;
     precise float u = len2 > 0.0 ? -(a.x * ex + a.y * ey) / len2 : 0.5;
     u = clamp(u, 0.0, 1.0);
-    vec3 w;
-    w[lo] = 1.0 - u;
-    w[hi] = u;
-    w[other] = 0.0;
-    return w;
+    float wi = i_low ? 1.0 - u : u, wj = i_low ? u : 1.0 - u;
+    return zero_edge == 0 ? vec3(wi, wj, 0.0) : zero_edge == 1 ? vec3(0.0, wi, wj) : vec3(wj, 0.0, wi);
 }
 
 vec3 face_weights(Hit h)
@@ -394,6 +422,23 @@ void integrate_linear(float h, vec4 c0, vec4 c1)
     }
 }
 
+// The first TF control point with s > x (the count when none): the pieces below visit only the
+// points a piece crosses, not all of them (render_cpu.c skips the others; here a loop that no lane
+// needs costs nothing, while an `if` inside a loop costs on every iteration on a CPU device).
+int tf_first_above(float x)
+{
+    int a = 0, b = P.dims.w;
+    while (a < b) {
+        int mid = (a + b) / 2;
+        if (tf_point_s(mid) <= x)
+            a = mid + 1;
+        else
+            b = mid;
+    }
+    return a;
+}
+
+// render_cpu.c's integrate_exact: split where the scalar crosses a TF control point.
 void integrate_exact(float len, float s0, float s1)
 {
     vec4 ca = tf_eval(s0);
@@ -403,15 +448,26 @@ void integrate_exact(float len, float s0, float s1)
     }
     float ds = s1 - s0, prev_s = s0;
     int n = P.dims.w;
-    for (int i = 0; i < n; i++) {
-        int k = ds > 0.0 ? i : n - 1 - i;
-        float cs = tf_point_s(k);
-        if (ds > 0.0 ? (cs <= s0 || cs >= s1) : (cs >= s0 || cs <= s1))
-            continue;
-        vec4 cb = P.tf_rgba[k];
-        integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
-        ca = cb;
-        prev_s = cs;
+    if (ds > 0.0) {
+        for (int k = tf_first_above(s0); k < n && tf_point_s(k) < s1; k++) {
+            float cs = tf_point_s(k);
+            vec4 cb = P.tf_rgba[k];
+            integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
+            ca = cb;
+            prev_s = cs;
+        }
+    } else {
+        // points below s0 (those equal to it are not crossed), downwards while above s1
+        int k = tf_first_above(s0) - 1;
+        while (k >= 0 && tf_point_s(k) >= s0)
+            k--;
+        for (; k >= 0 && tf_point_s(k) > s1; k--) {
+            float cs = tf_point_s(k);
+            vec4 cb = P.tf_rgba[k];
+            integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
+            ca = cb;
+            prev_s = cs;
+        }
     }
     integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval(s1));
 }

@@ -52,7 +52,17 @@
 #define TPK_VK_SPEC_LAYOUT 0
 #define TPK_VK_SPEC_PARTS(a) (1 + 2 * (a))
 #define TPK_VK_SPEC_SHIFT(a) (2 + 2 * (a))
-#define TPK_VK_SPEC_COUNT (1 + 2 * TPK_VK_ARRAY_COUNT)
+#define TPK_VK_SPEC_EXACT (1 + 2 * TPK_VK_ARRAY_COUNT) /* the FP64 variant's edge test, below */
+#define TPK_VK_SPEC_COUNT (2 + 2 * TPK_VK_ARRAY_COUNT)
+
+/* The shader is built twice: with TPK_VK_FP64 1 (for devices with shaderFloat64) and 0. The exact
+ * sign of an edge function of float coordinates is the sign of one double expression (the products
+ * are exact in double); without doubles it takes Dekker's error-free products. In the FP64 variant,
+ * TPK_VK_SPEC_EXACT picks: TPK_VK_EXACT_FILTER, a float filter with the double test only near zero
+ * (GPUs, which branch), or TPK_VK_EXACT_ALWAYS, the double test every time (CPU devices such as
+ * lavapipe, which run both sides of a branch under a mask, so that a rare slow path costs always). */
+#define TPK_VK_EXACT_FILTER 1
+#define TPK_VK_EXACT_ALWAYS 2
 
 /* Per-pixel status written by the shader. */
 #define TPK_VK_STATUS_OK 0
