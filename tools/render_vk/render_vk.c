@@ -160,7 +160,7 @@ static int create_commands(vk_render *v, tpk_diag *diag)
 }
 
 /* Render rows [row0, row0 + rows) into the band buffers and wait for them. */
-static int run_band(vk_render *v, tpk_vk_params *params, int row0, int rows, tpk_diag *diag)
+static int run_band(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, int row0, int rows, tpk_diag *diag)
 {
     params->dims[2] = row0;
     memcpy(v->params.mapped, params, sizeof *params);
@@ -171,7 +171,7 @@ static int run_band(vk_render *v, tpk_vk_params *params, int row0, int rows, tpk
     if (vk_check(vkResetCommandBuffer(v->cmd, 0), "resetting the command buffer", diag) ||
         vk_check(vkBeginCommandBuffer(v->cmd, &begin), "recording commands", diag))
         return -1;
-    vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->pipeline.pipeline);
+    vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline);
     vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->pipeline.layout, 0, 1, &v->pipeline.set, 0,
                             NULL);
     vkCmdDispatch(v->cmd, ((uint32_t)params->dims[0] + TPK_VK_GROUP - 1) / TPK_VK_GROUP,
@@ -216,14 +216,15 @@ static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t 
     return 0;
 }
 
-static int render_bands(vk_render *v, tpk_vk_params *params, uint8_t *rgba, uint64_t *steps, tpk_diag *diag)
+static int render_bands(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, uint8_t *rgba, uint64_t *steps,
+                        tpk_diag *diag)
 {
     const int width = params->dims[0], height = params->dims[1];
     int band = (int)(BAND_PIXELS / (uint32_t)width); /* width <= 32768: at least 32 rows */
     band = band < 1 ? 1 : band > height ? height : band;
     for (int row0 = 0; row0 < height; row0 += band) {
         int rows = height - row0 < band ? height - row0 : band;
-        if (run_band(v, params, row0, rows, diag) != 0 || read_band(v, width, row0, rows, rgba, steps, diag) != 0)
+        if (run_band(v, pipeline, params, row0, rows, diag) != 0 || read_band(v, width, row0, rows, rgba, steps, diag) != 0)
             return -1;
     }
     return 0;
@@ -297,8 +298,11 @@ int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uin
         return tpk_diag_fail(diag, "render: out of memory");
     uint64_t steps = 0;
     int rc = tpk_vk_params_fill(&v->mesh, opt, v->bvh.extent, v->bvh.face_count, params, diag);
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    if (rc == 0 && !(pipeline = tpk_vk_pipeline_get(&v->ctx, &v->pipeline, tpk_vk_effects(opt), diag)))
+        rc = -1;
     if (rc == 0)
-        rc = render_bands(v, params, rgba, &steps, diag);
+        rc = render_bands(v, pipeline, params, rgba, &steps, diag);
     free(params);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     if (stats) {

@@ -81,6 +81,8 @@ typedef struct tpk_vk_params {
     float clip_lo[4];
     float clip_hi[4];
     int32_t shell_info[4];
+    float iso[4];
+    float light[4];
     float tf_s[TPK_VK_TF_MAX];
     float tf_rgba[TPK_VK_TF_MAX][4];
 } tpk_vk_params;
@@ -92,17 +94,25 @@ int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *
  * Returns 0, or -1 with a message (a bad camera). */
 int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, double extent,
                        int64_t face_count, tpk_vk_params *p, tpk_diag *diag);
+/* The TPK_VK_EFFECT_* bits the options ask for. */
+int tpk_vk_effects(const tpk_render_options *opt);
 
-/* Descriptor layout, pipeline layout and a compute pipeline for one marcher layout and one set of
- * array splits. */
+/* Descriptor layout, pipeline layout and the compute pipelines of one marcher layout and one set of
+ * array splits: one pipeline per combination of effects, made when first needed. */
 typedef struct tpk_vk_pipeline {
     VkDescriptorSetLayout set_layout;
     VkPipelineLayout layout;
     VkShaderModule shader;
-    VkPipeline pipeline;
+    VkPipeline pipelines[TPK_VK_EFFECT_MASKS];
     VkDescriptorPool pool;
     VkDescriptorSet set;
+    int layout_id;
+    int32_t spec[TPK_VK_SPEC_COUNT];
 } tpk_vk_pipeline;
+
+/* The pipeline for `effects` (TPK_VK_EFFECT_* bits), compiled on first use. Returns VK_NULL_HANDLE
+ * with a message on failure. */
+VkPipeline tpk_vk_pipeline_get(const tpk_vk_context *ctx, tpk_vk_pipeline *p, int effects, tpk_diag *diag);
 
 /* layout_id: TPK_VK_LAYOUT_*; arrays: TPK_VK_ARRAY_COUNT uploaded arrays (their splits become
  * specialization constants). Binds params, pixels and steps too. Returns 0 or -1 with a message. */

@@ -18,8 +18,8 @@ int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *
                              opt->height);
     if (!opt->tf || opt->tf->count < 1 || opt->tf->count > TPK_TF_MAX_POINTS)
         return tpk_diag_fail(diag, "render: a transfer function with at least one point is required");
-    if (opt->integration != 0 && opt->integration != 1)
-        return tpk_diag_fail(diag, "render: expected integration 0 (exact) or 1 (sampling), found %d",
+    if (opt->integration < 0 || opt->integration > 2)
+        return tpk_diag_fail(diag, "render: expected integration 0 (exact), 1 (sampled) or 2 (midpoint), found %d",
                              opt->integration);
     if (!isfinite(opt->range_min) || !isfinite(opt->range_max))
         return tpk_diag_fail(diag, "render: the scalar range must be finite");
@@ -30,6 +30,14 @@ int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *
             return tpk_diag_fail(diag, "render: clip box min %g above max %g on axis %c", opt->clip_min[k],
                                  opt->clip_max[k], "xyz"[k]);
     }
+    if (opt->iso_count < 0 || opt->iso_count > TPK_RENDER_MAX_ISO)
+        return tpk_diag_fail(diag, "render: expected 0..%d iso values, found %d", TPK_RENDER_MAX_ISO, opt->iso_count);
+    for (int j = 0; j < opt->iso_count; j++)
+        if (!isfinite(opt->iso[j]))
+            return tpk_diag_fail(diag, "render: iso values must be finite");
+    if (opt->shadows || opt->ao_rays > 0)
+        return tpk_diag_fail(diag, "render: shadows and ambient occlusion are not in the Vulkan renderer yet; "
+                                   "render them with the CPU reference (--backend cpu)");
     if (mesh->vertex_count > 0x7fffffffu || mesh->tet_count > 0x7fffffffu || mesh->shell_face_count > 0x7fffffffu)
         return tpk_diag_fail(diag, "render: more than 2^31 - 1 vertices, tets or shell faces");
     return 0;
@@ -135,6 +143,12 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
         p->clip_lo[3] = 1.0f;
     }
     p->shell_info[0] = (int32_t)face_count;
+    p->shell_info[1] = opt->iso_count;
+    for (int j = 0; j < opt->iso_count; j++)
+        p->iso[j] = (float)opt->iso[j];
+    for (int k = 0; k < 3; k++) /* render.h: LIGHT, the eye without a light */
+        p->light[k] = opt->have_light ? (float)(opt->light[k] - mesh->origin[k]) : p->eye[k];
+    p->light[3] = opt->iso_opacity > 0 ? (float)opt->iso_opacity : 1.0f;
     for (int i = 0; i < opt->tf->count; i++) {
         const tpk_tf_point *t = &opt->tf->points[i];
         p->tf_s[i] = (float)t->s;
@@ -146,3 +160,8 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     return 0;
 }
 
+
+int tpk_vk_effects(const tpk_render_options *opt)
+{
+    return (opt->iso_count > 0 ? TPK_VK_EFFECT_ISO : 0) | (opt->shading ? TPK_VK_EFFECT_SHADING : 0);
+}

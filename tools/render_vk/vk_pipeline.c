@@ -50,8 +50,8 @@ int tpk_vk_exact_mode(const tpk_vk_context *ctx)
     return ctx->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? TPK_VK_EXACT_ALWAYS : TPK_VK_EXACT_FILTER;
 }
 
-static int create_pipeline(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[],
-                           tpk_vk_pipeline *p, tpk_diag *diag)
+static int create_shader(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[], tpk_vk_pipeline *p,
+                         tpk_diag *diag)
 {
     VkShaderModuleCreateInfo sm = {
         .sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
@@ -61,14 +61,28 @@ static int create_pipeline(const tpk_vk_context *ctx, int layout_id, const tpk_v
     VkResult r = vkCreateShaderModule(ctx->device, &sm, NULL, &p->shader);
     if (r != VK_SUCCESS)
         return fail(diag, "loading the shader", r);
-    int32_t values[TPK_VK_SPEC_COUNT];
-    VkSpecializationMapEntry entries[TPK_VK_SPEC_COUNT];
+    int32_t *values = p->spec;
     values[TPK_VK_SPEC_LAYOUT] = layout_id;
     values[TPK_VK_SPEC_EXACT] = tpk_vk_exact_mode(ctx);
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++) {
         values[TPK_VK_SPEC_PARTS(a)] = arrays[a].part_count;
         values[TPK_VK_SPEC_SHIFT(a)] = arrays[a].shift;
     }
+    return 0;
+}
+
+VkPipeline tpk_vk_pipeline_get(const tpk_vk_context *ctx, tpk_vk_pipeline *p, int effects, tpk_diag *diag)
+{
+    if (effects < 0 || effects >= TPK_VK_EFFECT_MASKS) {
+        tpk_diag_fail(diag, "vulkan: no pipeline for effects %d", effects);
+        return VK_NULL_HANDLE;
+    }
+    if (p->pipelines[effects])
+        return p->pipelines[effects];
+    int32_t values[TPK_VK_SPEC_COUNT];
+    memcpy(values, p->spec, sizeof values);
+    values[TPK_VK_SPEC_EFFECTS] = effects;
+    VkSpecializationMapEntry entries[TPK_VK_SPEC_COUNT];
     for (uint32_t i = 0; i < TPK_VK_SPEC_COUNT; i++)
         entries[i] = (VkSpecializationMapEntry){i, i * (uint32_t)sizeof(int32_t), sizeof(int32_t)};
     VkSpecializationInfo spec = {TPK_VK_SPEC_COUNT, entries, sizeof values, values};
@@ -81,12 +95,12 @@ static int create_pipeline(const tpk_vk_context *ctx, int layout_id, const tpk_v
                   .pSpecializationInfo = &spec},
         .layout = p->layout,
     };
-    r = vkCreateComputePipelines(ctx->device, VK_NULL_HANDLE, 1, &info, NULL, &p->pipeline);
+    VkResult r = vkCreateComputePipelines(ctx->device, VK_NULL_HANDLE, 1, &info, NULL, &p->pipelines[effects]);
     if (r != VK_SUCCESS) {
-        p->pipeline = VK_NULL_HANDLE;
-        return fail(diag, "compiling the compute pipeline", r);
+        p->pipelines[effects] = VK_NULL_HANDLE;
+        fail(diag, "compiling the compute pipeline", r);
     }
-    return 0;
+    return p->pipelines[effects];
 }
 
 /* Write every binding; parts an array does not use repeat its first view (the shader never reads them). */
@@ -144,7 +158,7 @@ int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_v
                            const tpk_vk_buffer *steps, tpk_vk_pipeline *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
-    if (create_set_layout(ctx, out, diag) != 0 || create_pipeline(ctx, layout_id, arrays, out, diag) != 0 ||
+    if (create_set_layout(ctx, out, diag) != 0 || create_shader(ctx, layout_id, arrays, out, diag) != 0 ||
         write_set(ctx, arrays, params, pixels, steps, out, diag) != 0) {
         tpk_vk_pipeline_destroy(ctx, out);
         return -1;
@@ -156,8 +170,9 @@ void tpk_vk_pipeline_destroy(const tpk_vk_context *ctx, tpk_vk_pipeline *p)
 {
     if (p->pool)
         vkDestroyDescriptorPool(ctx->device, p->pool, NULL);
-    if (p->pipeline)
-        vkDestroyPipeline(ctx->device, p->pipeline, NULL);
+    for (int e = 0; e < TPK_VK_EFFECT_MASKS; e++)
+        if (p->pipelines[e])
+            vkDestroyPipeline(ctx->device, p->pipelines[e], NULL);
     if (p->shader)
         vkDestroyShaderModule(ctx->device, p->shader, NULL);
     if (p->layout)

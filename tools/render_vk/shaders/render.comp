@@ -14,6 +14,11 @@ layout(local_size_x = TPK_VK_GROUP, local_size_y = TPK_VK_GROUP) in;
 
 layout(constant_id = TPK_VK_SPEC_LAYOUT) const int LAYOUT = TPK_VK_LAYOUT_TET16;
 layout(constant_id = TPK_VK_SPEC_EXACT) const int EXACT = TPK_VK_EXACT_FILTER;
+// Effects compiled in (TPK_VK_EFFECT_* bits): code for an effect that is off is not there at all, as
+// a CPU device would otherwise run it under a mask on every step.
+layout(constant_id = TPK_VK_SPEC_EFFECTS) const int EFFECTS = 0;
+const bool ISO = (EFFECTS & TPK_VK_EFFECT_ISO) != 0;
+const bool SHADING = (EFFECTS & TPK_VK_EFFECT_SHADING) != 0;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_VERTS)) const int PARTS_VERTS = 1;
 layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_VERTS)) const int SHIFT_VERTS = 27;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TETS)) const int PARTS_TETS = 1;
@@ -38,7 +43,9 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
                      // w: scalars (0 none, 1 per point, 2 per tet)
     vec4 clip_lo;    // xyz: clip box (relative to the origin); w: 1 when clipping
     vec4 clip_hi;
-    ivec4 shell_info; // x: shell face count
+    ivec4 shell_info; // x: shell face count, y: iso value count
+    vec4 iso;         // iso values (scalar units)
+    vec4 light;       // xyz: point light (relative to the origin; the eye without one); w: iso opacity
     vec4 tf_s[TPK_VK_TF_MAX / 4];
     vec4 tf_rgba[TPK_VK_TF_MAX];
 } P;
@@ -400,6 +407,7 @@ vec4 tf_eval(float s)
 
 vec3 color;
 float transmittance;
+float shade_m = 1.0; // lighting factor m of the stretch being integrated (render.h: LIGHTING FACTOR)
 
 void integrate_linear(float h, vec4 c0, vec4 c1)
 {
@@ -416,7 +424,7 @@ void integrate_linear(float h, vec4 c0, vec4 c1)
         if (k <= 0.0)
             continue;
         float alpha = 1.0 - exp(-step * 0.5 * k * inv_unit);
-        float weight = transmittance * alpha / k;
+        float weight = shade_m * transmittance * alpha / k;
         color += weight * (e0.rgb * e0.a + e1.rgb * e1.a);
         transmittance *= 1.0 - alpha;
     }
@@ -472,17 +480,35 @@ void integrate_exact(float len, float s0, float s1)
     integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval(s1));
 }
 
+// One point sample of `step` length at TF coordinate u.
+void composite_sample(float step, float u)
+{
+    vec4 c = tf_eval(u);
+    float alpha = 1.0 - exp(-step * c.a * P.scalar_map.z);
+    color += shade_m * transmittance * alpha * c.rgb;
+    transmittance *= 1.0 - alpha;
+}
+
 void integrate_sampled(float len, float s0, float s1)
 {
     float max_step = 0.5 / P.scalar_map.z;
     int n = clamp(int(ceil(len / max_step)), 1, 4096);
     float step = len / float(n);
-    for (int j = 0; j < n && transmittance > OPAQUE_TRANSMITTANCE; j++) {
-        vec4 c = tf_eval(s0 + (s1 - s0) * ((float(j) + 0.5) / float(n)));
-        float alpha = 1.0 - exp(-step * c.a * P.scalar_map.z);
-        color += transmittance * alpha * c.rgb;
-        transmittance *= 1.0 - alpha;
-    }
+    for (int j = 0; j < n && transmittance > OPAQUE_TRANSMITTANCE; j++)
+        composite_sample(step, s0 + (s1 - s0) * ((float(j) + 0.5) / float(n)));
+}
+
+// ri_integrate: one stretch of volume, as `integration` says.
+void integrate(float len, float u0, float u1)
+{
+    if (!(len > 0.0))
+        return;
+    if (P.mode.z == 1)
+        integrate_sampled(len, u0, u1);
+    else if (P.mode.z == 2)
+        composite_sample(len, 0.5 * (u0 + u1));
+    else
+        integrate_exact(len, u0, u1);
 }
 
 float normalized(float scalar)
@@ -492,17 +518,140 @@ float normalized(float scalar)
     return (scalar - P.scalar_map.x) * P.scalar_map.y;
 }
 
-// One tet piece [t_in, t_out] with scalars s_in, s_out (on_segment). Returns true when opaque.
-bool segment(float t_in, float t_out, float s_in, float s_out)
+// ---- Effects (render.h: ISOSURFACES, NORMAL, LIGHTING FACTOR) -------------------------------------
+
+vec3 eye_dir_point(float t)
 {
-    float len = t_out - t_in;
-    if (len > 0.0) {
-        float a = normalized(s_in), b = normalized(s_out);
-        if (P.mode.z == 1)
-            integrate_sampled(len, a, b);
-        else
-            integrate_exact(len, a, b);
+    return P.eye.xyz + t * ray_dir;
+}
+
+// m at x with normal n (has_n false: no normal): shading only, so S = A = 1.
+float lighting_factor(vec3 x, bool has_n, vec3 n)
+{
+    float d = 1.0;
+    vec3 to_light = P.light.xyz - x;
+    float len = length(to_light);
+    if (SHADING && has_n && len > 0.0 && !isinf(len))
+        d = abs(dot(n, to_light / len));
+    return 0.3 + 0.7 * d; // TPK_RENDER_AMBIENT
+}
+
+bool unit_or_none(vec3 v, out vec3 n)
+{
+    float len = length(v);
+    n = v / len;
+    return len > 0.0 && !isinf(len) && !isnan(len);
+}
+
+// The unit gradient of the point scalar over the tet v[0..3] (false where it is zero).
+bool tet_normal(ivec4 v, out vec3 n)
+{
+    vec4 p0 = fetch_verts(uint(v.x)), p1 = fetch_verts(uint(v.y)), p2 = fetch_verts(uint(v.z)),
+         p3 = fetch_verts(uint(v.w));
+    vec3 e1 = p1.xyz - p0.xyz, e2 = p2.xyz - p0.xyz, e3 = p3.xyz - p0.xyz;
+    vec3 c23 = cross(e2, e3), c31 = cross(e3, e1), c12 = cross(e1, e2);
+    float det = dot(e1, c23);
+    vec3 g = ((p1.w - p0.w) * c23 + (p2.w - p0.w) * c31 + (p3.w - p0.w) * c12) / det;
+    return unit_or_none(g, n);
+}
+
+bool face_normal(ivec4 v, out vec3 n)
+{
+    vec3 p0 = fetch_verts(uint(v.x)).xyz, p1 = fetch_verts(uint(v.y)).xyz, p2 = fetch_verts(uint(v.z)).xyz;
+    return unit_or_none(cross(p1 - p0, p2 - p0), n);
+}
+
+// Iso crossings of one piece, in increasing t (equal t: increasing j).
+int crossing_j[4];
+float crossing_t[4];
+
+int add_crossing(int n, float t, int j)
+{
+    int k = n;
+    while (k > 0 && (crossing_t[k - 1] > t || (crossing_t[k - 1] == t && crossing_j[k - 1] > j))) {
+        crossing_t[k] = crossing_t[k - 1];
+        crossing_j[k] = crossing_j[k - 1];
+        k--;
     }
+    crossing_t[k] = t;
+    crossing_j[k] = j;
+    return n + 1;
+}
+
+// Point field: where the linear scalar crosses each value (half-open, so a face counts once).
+int point_crossings(float t_in, float t_out, float s_in, float s_out)
+{
+    int n = 0;
+    for (int j = 0; j < P.shell_info.y; j++) {
+        float v = P.iso[j];
+        if ((s_in < v && v <= s_out) || (s_in > v && v >= s_out))
+            n = add_crossing(n, clamp(t_in + (v - s_in) / (s_out - s_in) * (t_out - t_in), t_in, t_out), j);
+    }
+    return n;
+}
+
+// Tet field: the jump between two consecutive pieces, at t.
+int jump_crossings(float t, float s_prev, float s)
+{
+    int n = 0;
+    for (int j = 0; j < P.shell_info.y; j++) {
+        float v = P.iso[j];
+        if ((s_prev < v && v <= s) || (s_prev > v && v >= s))
+            n = add_crossing(n, t, j);
+    }
+    return n;
+}
+
+bool have_prev = false; // the previous piece of this ray (tet-field iso)
+float prev_t_out, prev_s;
+
+void composite_iso(float t, float v, bool has_n, vec3 n)
+{
+    float m = SHADING ? lighting_factor(eye_dir_point(t), has_n, n) : 1.0;
+    vec4 c = tf_eval(normalized(v));
+    float alpha = P.light.w;
+    color += transmittance * alpha * m * c.rgb;
+    transmittance *= 1.0 - alpha;
+}
+
+// One tet piece [t_in, t_out] of tet vertices v (entry face, fourth) with scalars s_in, s_out
+// (render_cpu.c's on_segment). Returns true when the ray is opaque.
+bool segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
+{
+    const bool tet_field = P.mode.w == 2;
+    int nh = 0;
+    if (ISO) {
+        if (!tet_field)
+            nh = point_crossings(t_in, t_out, s_in, s_out);
+        else if (have_prev && prev_t_out == t_in)
+            nh = jump_crossings(t_in, prev_s, s_in);
+        have_prev = true;
+        prev_t_out = t_out;
+        prev_s = s_in;
+    }
+    vec3 n = vec3(0.0);
+    bool has_n = false;
+    shade_m = 1.0;
+    if (SHADING) {
+        has_n = !tet_field && P.mode.w == 1 && tet_normal(v, n);
+        if (t_out > t_in)
+            shade_m = lighting_factor(eye_dir_point(0.5 * (t_in + t_out)), has_n, n);
+    }
+    float u_in = normalized(s_in), u_out = normalized(s_out), cur_t = t_in, cur_u = u_in;
+    for (int i = 0; ISO && i < nh && transmittance > OPAQUE_TRANSMITTANCE; i++) {
+        float value = P.iso[crossing_j[i]];
+        float hit_u = tet_field ? u_in : normalized(value);
+        integrate(crossing_t[i] - cur_t, cur_u, hit_u);
+        vec3 hn = n;
+        bool has_hn = has_n;
+        if (SHADING && tet_field)
+            has_hn = face_normal(v, hn);
+        composite_iso(crossing_t[i], value, has_hn, hn);
+        cur_t = crossing_t[i];
+        cur_u = hit_u;
+    }
+    if (transmittance > OPAQUE_TRANSMITTANCE)
+        integrate(t_out - cur_t, cur_u, u_out);
     return transmittance <= OPAQUE_TRANSMITTANCE;
 }
 
@@ -510,7 +659,7 @@ bool segment(float t_in, float t_out, float s_in, float s_out)
 float t_min_clip, t_max_clip;
 
 // report(): clip the piece to [t_min_clip, t_max_clip] and integrate it. Returns true to stop the ray.
-bool report(float t_in, float t_out, float s_in, float s_out)
+bool report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
 {
     if (t_out < t_min_clip)
         return false;
@@ -524,7 +673,7 @@ bool report(float t_in, float t_out, float s_in, float s_out)
         b = t_max_clip;
         sb = s_in + (s_out - s_in) * ((t_max_clip - t_in) / len);
     }
-    if (b > a && segment(a, b, sa, sb))
+    if (segment(a, b, sa, sb, v))
         return true;
     return t_out >= t_max_clip;
 }
@@ -635,7 +784,7 @@ bool march_run(Hit h, int tet)
         float piece_in = s_in, piece_out = s_out;
         if (P.mode.w == 2) // a tet field: constant in the tet
             piece_in = piece_out = fetch_tet_scalars(uint(tet)).x;
-        if (report(h.t, t_out, piece_in, piece_out))
+        if (report(h.t, t_out, piece_in, piece_out, ivec4(a, b, c, d)))
             return true;
         if (next < 0) {
             run_exit_t = t_out;

@@ -53,7 +53,11 @@
 #define TPK_VK_SPEC_PARTS(a) (1 + 2 * (a))
 #define TPK_VK_SPEC_SHIFT(a) (2 + 2 * (a))
 #define TPK_VK_SPEC_EXACT (1 + 2 * TPK_VK_ARRAY_COUNT) /* the FP64 variant's edge test, below */
-#define TPK_VK_SPEC_COUNT (2 + 2 * TPK_VK_ARRAY_COUNT)
+#define TPK_VK_SPEC_EFFECTS (2 + 2 * TPK_VK_ARRAY_COUNT) /* TPK_VK_EFFECT_* bits */
+#define TPK_VK_SPEC_COUNT (3 + 2 * TPK_VK_ARRAY_COUNT)
+#define TPK_VK_EFFECT_ISO 1
+#define TPK_VK_EFFECT_SHADING 2
+#define TPK_VK_EFFECT_MASKS 4 /* pipelines per renderer, one per combination */
 
 /* The shader is built twice: with TPK_VK_FP64 1 (for devices with shaderFloat64) and 0. The exact
  * sign of an edge function of float coordinates is the sign of one double expression (the products
