@@ -83,6 +83,8 @@ typedef struct tpk_vk_params {
     int32_t shell_info[4];
     float iso[4];
     float light[4];
+    float cast_info[4];
+    int32_t cast_count[4];
     float tf_s[TPK_VK_TF_MAX];
     float tf_rgba[TPK_VK_TF_MAX][4];
 } tpk_vk_params;

@@ -35,9 +35,8 @@ int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *
     for (int j = 0; j < opt->iso_count; j++)
         if (!isfinite(opt->iso[j]))
             return tpk_diag_fail(diag, "render: iso values must be finite");
-    if (opt->shadows || opt->ao_rays > 0)
-        return tpk_diag_fail(diag, "render: shadows and ambient occlusion are not in the Vulkan renderer yet; "
-                                   "render them with the CPU reference (--backend cpu)");
+    if (opt->ao_rays < 0 || opt->ao_rays > 1024 || !isfinite(opt->ao_radius))
+        return tpk_diag_fail(diag, "render: expected 0..1024 AO rays and a finite AO radius");
     if (mesh->vertex_count > 0x7fffffffu || mesh->tet_count > 0x7fffffffu || mesh->shell_face_count > 0x7fffffffu)
         return tpk_diag_fail(diag, "render: more than 2^31 - 1 vertices, tets or shell faces");
     return 0;
@@ -124,10 +123,15 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     memcpy(p->background, opt->background, sizeof p->background);
     p->scalar_map[0] = (float)opt->range_min;
     p->scalar_map[1] = opt->range_max != opt->range_min ? (float)(1.0 / (opt->range_max - opt->range_min)) : 0.0f;
-    double unit = opt->unit_distance;
+    double diagonal = bbox_diagonal(mesh), unit = opt->unit_distance; /* as render_cpu.c */
     if (!(unit > 0) || !isfinite(unit))
-        unit = bbox_diagonal(mesh) / 100.0;
-    p->scalar_map[2] = unit > 0 ? (float)(1.0 / unit) : 1.0f;
+        unit = diagonal / 100.0;
+    unit = unit > 0 ? unit : 1.0;
+    p->scalar_map[2] = (float)(1.0 / unit);
+    p->cast_info[0] = (float)(opt->ao_radius > 0 ? opt->ao_radius : diagonal / 10.0);
+    p->cast_info[1] = (float)(1e-3 * unit); /* TPK_RENDER_SELF_EPS */
+    p->cast_info[2] = (float)unit;
+    p->cast_count[0] = opt->ao_rays;
     p->dims[0] = opt->width;
     p->dims[1] = opt->height;
     p->dims[3] = opt->tf->count;
@@ -163,5 +167,6 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
 
 int tpk_vk_effects(const tpk_render_options *opt)
 {
-    return (opt->iso_count > 0 ? TPK_VK_EFFECT_ISO : 0) | (opt->shading ? TPK_VK_EFFECT_SHADING : 0);
+    return (opt->iso_count > 0 ? TPK_VK_EFFECT_ISO : 0) | (opt->shading ? TPK_VK_EFFECT_SHADING : 0) |
+           (opt->shadows ? TPK_VK_EFFECT_SHADOWS : 0) | (opt->ao_rays > 0 ? TPK_VK_EFFECT_AO : 0);
 }

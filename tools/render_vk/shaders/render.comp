@@ -19,6 +19,10 @@ layout(constant_id = TPK_VK_SPEC_EXACT) const int EXACT = TPK_VK_EXACT_FILTER;
 layout(constant_id = TPK_VK_SPEC_EFFECTS) const int EFFECTS = 0;
 const bool ISO = (EFFECTS & TPK_VK_EFFECT_ISO) != 0;
 const bool SHADING = (EFFECTS & TPK_VK_EFFECT_SHADING) != 0;
+const bool SHADOWS = (EFFECTS & TPK_VK_EFFECT_SHADOWS) != 0;
+const bool AO = (EFFECTS & TPK_VK_EFFECT_AO) != 0;
+const bool CAST = SHADOWS || AO;
+const bool LIGHTING = SHADING || CAST;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_VERTS)) const int PARTS_VERTS = 1;
 layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_VERTS)) const int SHIFT_VERTS = 27;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TETS)) const int PARTS_TETS = 1;
@@ -46,6 +50,8 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
     ivec4 shell_info; // x: shell face count, y: iso value count
     vec4 iso;         // iso values (scalar units)
     vec4 light;       // xyz: point light (relative to the origin; the eye without one); w: iso opacity
+    vec4 cast_info;   // x: AO ray length, y: TPK_RENDER_SELF_EPS * unit distance, z: unit distance
+    ivec4 cast_count; // x: AO rays
     vec4 tf_s[TPK_VK_TF_MAX / 4];
     vec4 tf_rgba[TPK_VK_TF_MAX];
 } P;
@@ -518,6 +524,66 @@ float normalized(float scalar)
     return (scalar - P.scalar_map.x) * P.scalar_map.y;
 }
 
+// The ray's frame (ray.c, tpki_ray_frame_init); false for a degenerate direction.
+bool frame_init(vec3 org, vec3 dir)
+{
+    int kz = 0;
+    if (abs(dir[1]) > abs(dir[kz]))
+        kz = 1;
+    if (abs(dir[2]) > abs(dir[kz]))
+        kz = 2;
+    if (dir[kz] == 0.0)
+        return false;
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (dir[kz] < 0.0) {
+        int swap = kx;
+        kx = ky;
+        ky = swap;
+    }
+    frame.org = org;
+    frame.kx = kx;
+    frame.ky = ky;
+    frame.kz = kz;
+    frame.sx = dir[kx] / dir[kz];
+    frame.sy = dir[ky] / dir[kz];
+    frame.sz = 1.0 / dir[kz];
+    return true;
+}
+
+// render.h's CLIP BOX: cut [lo, hi] of the ray org + t dir to the box; false when it misses.
+bool clip_ray(vec3 org, vec3 dir, inout float lo, inout float hi)
+{
+    if (P.clip_lo.w == 0.0)
+        return true;
+    for (int k = 0; k < 3; k++) {
+        if (dir[k] == 0.0) {
+            if (org[k] < P.clip_lo[k] || org[k] > P.clip_hi[k])
+                return false;
+            continue;
+        }
+        float t0 = (P.clip_lo[k] - org[k]) / dir[k], t1 = (P.clip_hi[k] - org[k]) / dir[k];
+        lo = max(lo, min(t0, t1));
+        hi = min(hi, max(t0, t1));
+    }
+    return lo <= hi;
+}
+
+// ---- One inside-run (march.c, march_run) --------------------------------------------------------
+
+uint steps_taken;
+uint status;
+float run_exit_t; // t of the shell face the last run left through
+
+int rank4(int x, int a, int b, int c, int d)
+{
+    return int(a < x) + int(b < x) + int(c < x) + int(d < x);
+}
+
+float hit_scalar(Hit h, vec3 w)
+{
+    return dot(w, h.s);
+}
+
 // ---- Effects (render.h: ISOSURFACES, NORMAL, LIGHTING FACTOR) -------------------------------------
 
 vec3 eye_dir_point(float t)
@@ -525,15 +591,15 @@ vec3 eye_dir_point(float t)
     return P.eye.xyz + t * ray_dir;
 }
 
-// m at x with normal n (has_n false: no normal): shading only, so S = A = 1.
-float lighting_factor(vec3 x, bool has_n, vec3 n)
+// m at x with normal n (has_n false: no normal), shadow transmittance S and AO factor A (rl_factor).
+float lighting_factor(vec3 x, bool has_n, vec3 n, float S, float A)
 {
     float d = 1.0;
     vec3 to_light = P.light.xyz - x;
     float len = length(to_light);
     if (SHADING && has_n && len > 0.0 && !isinf(len))
         d = abs(dot(n, to_light / len));
-    return 0.3 + 0.7 * d; // TPK_RENDER_AMBIENT
+    return A * (0.3 + 0.7 * d * S); // TPK_RENDER_AMBIENT
 }
 
 bool unit_or_none(vec3 v, out vec3 n)
@@ -602,12 +668,187 @@ int jump_crossings(float t, float s_prev, float s)
     return n;
 }
 
+// ---- Secondary rays: shadows and ambient occlusion (render.h: TRANSMITTANCE, AO DIRECTIONS) -------
+
+// Optical depth of a stretch of length len from TF coordinate u0 to u1: the exact mean of the TF's
+// alpha (trapezoids between the control points crossed) times length / unit (ri_optical_depth).
+float optical_depth(float len, float u0, float u1)
+{
+    if (!(len > 0.0))
+        return 0.0;
+    float a0 = tf_eval(u0).a;
+    if (u0 == u1)
+        return len * a0 * P.scalar_map.z;
+    float du = u1 - u0, prev_u = u0, prev_a = a0, sum = 0.0;
+    int n = P.dims.w;
+    if (du > 0.0) {
+        for (int k = tf_first_above(u0); k < n && tf_point_s(k) < u1; k++) {
+            float cu = tf_point_s(k), ca = P.tf_rgba[k].a;
+            sum += 0.5 * (prev_a + ca) * (cu - prev_u);
+            prev_u = cu;
+            prev_a = ca;
+        }
+    } else {
+        int k = tf_first_above(u0) - 1;
+        while (k >= 0 && tf_point_s(k) >= u0)
+            k--;
+        for (; k >= 0 && tf_point_s(k) > u1; k--) {
+            float cu = tf_point_s(k), ca = P.tf_rgba[k].a;
+            sum += 0.5 * (prev_a + ca) * (cu - prev_u);
+            prev_u = cu;
+            prev_a = ca;
+        }
+    }
+    sum += 0.5 * (prev_a + tf_eval(u1).a) * (u1 - prev_u);
+    return len * (sum / du) * P.scalar_map.z;
+}
+
+float trans_tau, trans_iso, trans_lo, trans_hi; // the secondary ray being marched (trans_ray)
+bool trans_have_prev;
+float trans_prev_t_out, trans_prev_s;
+
+// One piece of a secondary ray, already within [trans_lo, trans_hi] (on_trans_segment).
+bool trans_piece(float t_in, float t_out, float s_in, float s_out)
+{
+    float len = t_out - t_in, eps = P.cast_info.y;
+    int hits = 0;
+    if (P.mode.w == 2) {
+        for (int j = 0; ISO && trans_have_prev && trans_prev_t_out == t_in && t_in > eps && j < P.shell_info.y; j++) {
+            float v = P.iso[j];
+            hits += int((trans_prev_s < v && v <= s_in) || (trans_prev_s > v && v >= s_in));
+        }
+        trans_have_prev = true;
+        trans_prev_t_out = t_out;
+        trans_prev_s = s_in;
+        float u = normalized(s_in);
+        trans_tau += optical_depth(len, u, u);
+    } else {
+        for (int j = 0; ISO && j < P.shell_info.y; j++) {
+            float v = P.iso[j];
+            if ((s_in < v && v <= s_out) || (s_in > v && v >= s_out)) {
+                float t = clamp(t_in + (v - s_in) / (s_out - s_in) * len, t_in, t_out);
+                hits += int(t > eps);
+            }
+        }
+        trans_tau += optical_depth(len, normalized(s_in), normalized(s_out));
+    }
+    for (int i = 0; i < hits; i++)
+        trans_iso *= 1.0 - P.light.w;
+    return exp(-trans_tau) * trans_iso <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK;
+}
+
+// report() for secondary rays: clip to [trans_lo, trans_hi] as the marcher does.
+bool trans_report(float t_in, float t_out, float s_in, float s_out)
+{
+    if (t_out < trans_lo)
+        return false;
+    float len = t_out - t_in, a = t_in, b = t_out, sa = s_in, sb = s_out;
+    if (t_in < trans_lo) {
+        a = trans_lo;
+        sa = s_in + (s_out - s_in) * ((trans_lo - t_in) / len);
+    }
+    if (t_out > trans_hi) {
+        b = trans_hi;
+        sb = s_in + (s_out - s_in) * ((trans_hi - t_in) / len);
+    }
+    return trans_piece(a, b, sa, sb) || t_out >= trans_hi;
+}
+
+#define MARCH_RUN march_run_secondary
+#define MARCH_TRACE trace_secondary
+#define MARCH_TMAX trans_hi
+#define MARCH_REPORT(t_in, t_out, s_in, s_out, v) trans_report(t_in, t_out, s_in, s_out)
+#include "march_run.glsl"
+#undef MARCH_RUN
+#undef MARCH_TRACE
+#undef MARCH_TMAX
+#undef MARCH_REPORT
+
+// Transmittance from x along unit w over [0, len], clipped to the box; the primary ray's frame is kept.
+float transmittance_ray(vec3 x, vec3 w, float len)
+{
+    float lo = 0.0, hi = len;
+    if (!clip_ray(x, w, lo, hi))
+        return 1.0;
+    Frame primary = frame;
+    vec3 primary_dir = ray_dir, primary_inv = inv_dir;
+    float primary_exit = run_exit_t;
+    trans_tau = 0.0;
+    trans_iso = 1.0;
+    trans_lo = lo;
+    trans_hi = hi;
+    trans_have_prev = false;
+    if (frame_init(x, w)) {
+        ray_dir = w;
+        inv_dir = 1.0 / w;
+        trace_secondary(lo, hi);
+    }
+    frame = primary;
+    ray_dir = primary_dir;
+    inv_dir = primary_inv;
+    run_exit_t = primary_exit;
+    return exp(-trans_tau) * trans_iso;
+}
+
+uint hash32(uint x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+ivec2 pixel; // of this invocation
+
+// Mean transmittance of the AO rays around unit axis a (render.h: AO DIRECTIONS).
+float ambient(vec3 x, vec3 a)
+{
+    int count = P.cast_count.x;
+    float sgn = a.z >= 0.0 ? 1.0 : -1.0;
+    float p = -1.0 / (sgn + a.z), q = a.x * a.y * p;
+    vec3 b1 = vec3(1.0 + sgn * a.x * a.x * p, sgn * q, -sgn * a.x), b2 = vec3(q, sgn + a.y * a.y * p, -a.y);
+    uint h = hash32(uint(pixel.y) * 65536u + uint(pixel.x));
+    float rot = float(h) * (1.0 / 4294967296.0), sum = 0.0;
+    for (int i = 0; i < count; i++) {
+        float z = 1.0 - (float(i) + 0.5) / float(count), r = sqrt(1.0 - z * z);
+        float phi = 6.283185307179586 * fract(float(i) * 0.6180339887498949 + rot);
+        sum += transmittance_ray(x, r * cos(phi) * b1 + r * sin(phi) * b2 + z * a, P.cast_info.x);
+    }
+    return sum / float(count);
+}
+
+// Shadow and AO factors at x (rl_cast); n the normal where has_n.
+void cast_rays(vec3 x, bool has_n, vec3 n, out float S, out float A)
+{
+    S = 1.0;
+    A = 1.0;
+    if (SHADOWS) {
+        vec3 w = P.light.xyz - x;
+        float len = length(w);
+        if (len > 0.0)
+            S = transmittance_ray(x, w / len, len);
+    }
+    if (AO)
+        A = ambient(x, has_n ? (dot(n, ray_dir) > 0.0 ? -n : n) : -ray_dir);
+}
+
+bool cast_done = false; // shade points of this ray (render.h: SHADE POINTS)
+float t_cast, shade_s = 1.0, shade_a = 1.0;
 bool have_prev = false; // the previous piece of this ray (tet-field iso)
 float prev_t_out, prev_s;
 
 void composite_iso(float t, float v, bool has_n, vec3 n)
 {
-    float m = SHADING ? lighting_factor(eye_dir_point(t), has_n, n) : 1.0;
+    float m = 1.0;
+    if (LIGHTING) {
+        vec3 x = eye_dir_point(t);
+        float S = 1.0, A = 1.0;
+        if (CAST)
+            cast_rays(x, has_n, n, S, A);
+        m = lighting_factor(x, has_n, n, S, A);
+    }
     vec4 c = tf_eval(normalized(v));
     float alpha = P.light.w;
     color += transmittance * alpha * m * c.rgb;
@@ -632,27 +873,39 @@ bool segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
     vec3 n = vec3(0.0);
     bool has_n = false;
     shade_m = 1.0;
-    if (SHADING) {
-        has_n = !tet_field && P.mode.w == 1 && tet_normal(v, n);
-        if (t_out > t_in)
-            shade_m = lighting_factor(eye_dir_point(0.5 * (t_in + t_out)), has_n, n);
-    }
     float u_in = normalized(s_in), u_out = normalized(s_out), cur_t = t_in, cur_u = u_in;
+    if (LIGHTING) {
+        has_n = P.mode.w == 1 && tet_normal(v, n);
+        if (t_out > t_in) {
+            // render.h SHADE POINTS: cast from this piece's middle when the ray has lost 1/32 of
+            // transmittance since the last cast; pieces in between reuse its S and A.
+            vec3 mid = eye_dir_point(0.5 * (t_in + t_out));
+            if (CAST && optical_depth(t_out - t_in, u_in, u_out) > 0.0 &&
+                (!cast_done || t_cast - transmittance >= 1.0 / 32.0)) {
+                cast_rays(mid, has_n, n, shade_s, shade_a);
+                cast_done = true;
+                t_cast = transmittance;
+            }
+            shade_m = lighting_factor(mid, has_n, n, shade_s, shade_a);
+        }
+    }
     for (int i = 0; ISO && i < nh && transmittance > OPAQUE_TRANSMITTANCE; i++) {
         float value = P.iso[crossing_j[i]];
         float hit_u = tet_field ? u_in : normalized(value);
         integrate(crossing_t[i] - cur_t, cur_u, hit_u);
         vec3 hn = n;
         bool has_hn = has_n;
-        if (SHADING && tet_field)
+        if (LIGHTING && tet_field)
             has_hn = face_normal(v, hn);
+        float m = shade_m;
         composite_iso(crossing_t[i], value, has_hn, hn);
+        shade_m = m;
         cur_t = crossing_t[i];
         cur_u = hit_u;
     }
     if (transmittance > OPAQUE_TRANSMITTANCE)
         integrate(t_out - cur_t, cur_u, u_out);
-    return transmittance <= OPAQUE_TRANSMITTANCE;
+    return transmittance <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK;
 }
 
 // The range of t a piece may contribute: [0, inf), cut to the clip box when there is one.
@@ -678,205 +931,27 @@ bool report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
     return t_out >= t_max_clip;
 }
 
-// ---- One inside-run (march.c, march_run) --------------------------------------------------------
-
-uint steps_taken;
-uint status;
-float run_exit_t; // t of the shell face the last run left through
-
-int rank4(int x, int a, int b, int c, int d)
-{
-    return int(a < x) + int(b < x) + int(c < x) + int(d < x);
-}
-
-float hit_scalar(Hit h, vec3 w)
-{
-    return dot(w, h.s);
-}
-
-// March from the entry face `h` of tet `tet` until the ray leaves the volume. Returns true when the
-// ray is done (opaque, past the clip box, or an error).
-bool march_run(Hit h, int tet)
-{
-    const int tet_count = P.mode.x;
-    int prev = -1;
-    float s_in = hit_scalar(h, face_weights(h));
-    for (int step = 0;; step++) {
-        if (step >= tet_count) {
-            status = TPK_VK_STATUS_MESH; // a cycle: watertight marching never revisits a tet
-            return true;
-        }
-        steps_taken++;
-        if (h.t > t_max_clip)
-            return true;
-        const int a = h.v[0], b = h.v[1], c = h.v[2];
-        ivec4 rec0, rec1 = ivec4(0);
-        int vx;
-        if (LAYOUT == TPK_VK_LAYOUT_TET16) {
-            rec0 = fetch_tets(uint(tet));
-            vx = rec0[TPK_VK_TET16_VX];
-        } else if (LAYOUT == TPK_VK_LAYOUT_TET20) {
-            rec0 = ivec4(0);
-            vx = fetch_tets(uint(tet) * uint(TPK_VK_TET20_WORDS) + uint(TPK_VK_TET20_VX)).x;
-        } else {
-            rec0 = fetch_tets(2u * uint(tet));
-            vx = rec0[TPK_VK_TET32_VX];
-        }
-        const int d = vx ^ a ^ b ^ c;
-        if (d < 0 || d >= P.mode.y || d == a || d == b || d == c) {
-            status = TPK_VK_STATUS_MESH;
-            return true;
-        }
-        int n3 = 0;
-        if (LAYOUT == TPK_VK_LAYOUT_TET16) {
-            int rp = int(a < d) + int(b < d) + int(c < d);
-            n3 = rp == 3 ? prev : (rec0[1 + rp] ^ prev);
-        }
-        float sd;
-        vec4 pd = project(d, sd);
-        float va, vb, vc;
-        const int sa = edge_sign(a, h.p0, d, pd, va);
-        const int sb = edge_sign(b, h.p1, d, pd, vb);
-        const int sc = edge_sign(c, h.p2, d, pd, vc);
-        Hit o;
-        int opposite;
-        if (sb == -1 && sa == 1) {
-            o = Hit(ivec3(a, b, d), h.p0, h.p1, pd, vec3(h.e[0], vb, -va), vec3(h.s[0], h.s[1], sd), 0.0);
-            opposite = c;
-        } else if (sc == -1 && sb == 1) {
-            o = Hit(ivec3(b, c, d), h.p1, h.p2, pd, vec3(h.e[1], vc, -vb), vec3(h.s[1], h.s[2], sd), 0.0);
-            opposite = a;
-        } else if (sa == -1 && sc == 1) {
-            o = Hit(ivec3(c, a, d), h.p2, h.p0, pd, vec3(h.e[2], va, -vc), vec3(h.s[2], h.s[0], sd), 0.0);
-            opposite = b;
-        } else {
-            status = TPK_VK_STATUS_MESH;
-            return true;
-        }
-        vec3 w = face_weights(o);
-        float t_out = hit_t(o, w);
-        if (!(t_out >= h.t))
-            t_out = h.t; // rounding: keep the chain monotone
-        o.t = t_out;
-        float s_out = hit_scalar(o, w);
-
-        int next;
-        if (LAYOUT == TPK_VK_LAYOUT_TET32) {
-            int v3 = rec0[3] ^ rec0[0] ^ rec0[1] ^ rec0[2];
-            int k = opposite == rec0[0] ? 0 : opposite == rec0[1] ? 1 : opposite == rec0[2] ? 2
-                  : opposite == v3      ? 3 : -1;
-            if (k < 0) {
-                status = TPK_VK_STATUS_MESH;
-                return true;
-            }
-            next = fetch_tets(2u * uint(tet) + 1u)[k];
-        } else {
-            int r = rank4(opposite, a, b, c, d);
-            if (LAYOUT == TPK_VK_LAYOUT_TET20)
-                next = fetch_tets(uint(tet) * uint(TPK_VK_TET20_WORDS) + 1u + uint(r)).x;
-            else
-                next = r == 3 ? n3 : (rec0[1 + r] ^ n3);
-        }
-        if (next < -1 || next >= tet_count) {
-            status = TPK_VK_STATUS_MESH;
-            return true;
-        }
-        float piece_in = s_in, piece_out = s_out;
-        if (P.mode.w == 2) // a tet field: constant in the tet
-            piece_in = piece_out = fetch_tet_scalars(uint(tet)).x;
-        if (report(h.t, t_out, piece_in, piece_out, ivec4(a, b, c, d)))
-            return true;
-        if (next < 0) {
-            run_exit_t = t_out;
-            return false;
-        }
-        prev = tet;
-        tet = next;
-        h = o;
-        s_in = s_out;
-    }
-    return true;
-}
+#define MARCH_RUN march_run
+#define MARCH_TRACE trace
+#define MARCH_TMAX t_max_clip
+#define MARCH_REPORT(t_in, t_out, s_in, s_out, v) report(t_in, t_out, s_in, s_out, v)
+#include "march_run.glsl"
+#undef MARCH_RUN
+#undef MARCH_TRACE
+#undef MARCH_TMAX
+#undef MARCH_REPORT
 
 // ---- The pixel ----------------------------------------------------------------------------------
-
-// The ray's frame (ray.c, tpki_ray_frame_init); false for a degenerate direction.
-bool frame_init(vec3 org, vec3 dir)
-{
-    int kz = 0;
-    if (abs(dir[1]) > abs(dir[kz]))
-        kz = 1;
-    if (abs(dir[2]) > abs(dir[kz]))
-        kz = 2;
-    if (dir[kz] == 0.0)
-        return false;
-    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
-    if (dir[kz] < 0.0) {
-        int swap = kx;
-        kx = ky;
-        ky = swap;
-    }
-    frame.org = org;
-    frame.kx = kx;
-    frame.ky = ky;
-    frame.kz = kz;
-    frame.sx = dir[kx] / dir[kz];
-    frame.sy = dir[ky] / dir[kz];
-    frame.sz = 1.0 / dir[kz];
-    return true;
-}
-
-// Cut [t_min_clip, t_max_clip] to the clip box; false when the ray misses it.
-bool clip_to_box()
-{
-    t_min_clip = 0.0;
-    t_max_clip = 1.0 / 0.0;
-    if (P.clip_lo.w == 0.0)
-        return true;
-    for (int k = 0; k < 3; k++) {
-        if (ray_dir[k] == 0.0) {
-            if (frame.org[k] < P.clip_lo[k] || frame.org[k] > P.clip_hi[k])
-                return false;
-            continue;
-        }
-        float t0 = (P.clip_lo[k] - frame.org[k]) / ray_dir[k], t1 = (P.clip_hi[k] - frame.org[k]) / ray_dir[k];
-        t_min_clip = max(t_min_clip, min(t0, t1));
-        t_max_clip = min(t_max_clip, max(t0, t1));
-    }
-    return t_min_clip <= t_max_clip;
-}
 
 uint to_byte(float v)
 {
     return uint(clamp(v, 0.0, 1.0) * 255.0 + 0.5);
 }
 
-void trace()
-{
-    if (P.shell_info.x == 0)
-        return;
-    // Runs that start before the last entry before the first contributing t end before it.
-    Hit h;
-    float t_prev = bvh_query(0, -INF, t_min_clip, 0.0, -1, h) >= 0 ? h.t : -INF;
-    int face_prev = -1;
-    float t_low = t_prev;
-    for (;;) {
-        int face = bvh_query(1, t_low, INF, t_prev, face_prev, h);
-        if (face < 0 || h.t > t_max_clip)
-            return;
-        t_prev = h.t;
-        face_prev = face;
-        if (march_run(h, fetch_shell(uint(face)).w))
-            return;
-        // The next entry is where this run left or beyond (in a valid mesh the runs do not overlap):
-        // boxes that end before that are skipped, with a margin for the rounding of t.
-        t_low = max(t_prev, run_exit_t - 1e-5 * abs(run_exit_t) - P.up.w);
-    }
-}
-
 void main()
 {
     const int x = int(gl_GlobalInvocationID.x), y = P.dims.z + int(gl_GlobalInvocationID.y);
+    pixel = ivec2(x, y);
     if (x >= P.dims.x || y >= P.dims.y)
         return;
     const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
@@ -887,8 +962,10 @@ void main()
     transmittance = 1.0;
     steps_taken = 0u;
     status = TPK_VK_STATUS_OK;
-    if (frame_init(P.eye.xyz, ray_dir) && clip_to_box())
-        trace();
+    t_min_clip = 0.0;
+    t_max_clip = INF;
+    if (frame_init(P.eye.xyz, ray_dir) && clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip))
+        trace(t_min_clip, t_max_clip);
     const vec4 bg = P.background;
     float alpha = (1.0 - transmittance) + transmittance * bg.a;
     vec3 premult = color + transmittance * bg.a * bg.rgb;

@@ -57,7 +57,9 @@
 #define TPK_VK_SPEC_COUNT (3 + 2 * TPK_VK_ARRAY_COUNT)
 #define TPK_VK_EFFECT_ISO 1
 #define TPK_VK_EFFECT_SHADING 2
-#define TPK_VK_EFFECT_MASKS 4 /* pipelines per renderer, one per combination */
+#define TPK_VK_EFFECT_SHADOWS 4
+#define TPK_VK_EFFECT_AO 8
+#define TPK_VK_EFFECT_MASKS 16 /* pipelines per renderer, one per combination */
 
 /* The shader is built twice: with TPK_VK_FP64 1 (for devices with shaderFloat64) and 0. The exact
  * sign of an edge function of float coordinates is the sign of one double expression (the products
