@@ -37,7 +37,8 @@ static const char render_help[] =
     "  --threads N                  worker threads of the CPU backend (default: all cores)\n"
     "  --backend vulkan|cpu         vulkan: compute shaders on the first Vulkan device (a GPU, else\n"
     "                               lavapipe); cpu: the reference renderer. Same options, same picture.\n"
-    "                               Default: vulkan when a Vulkan device is present, else cpu\n"
+    "                               Default: $TETPACK_RENDER_BACKEND if set, else vulkan when a\n"
+    "                               Vulkan device is present, else cpu\n"
     "  --json                       print render statistics as JSON\n";
 
 typedef struct render_args {
@@ -184,6 +185,12 @@ static int check_field(const render_args *a, tpk_file *file)
 static int run_backend(render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                        tpk_render_stats *stats, char *device, size_t device_size, tpk_diag *diag)
 {
+    const char *env = getenv("TETPACK_RENDER_BACKEND");
+    if (!a->backend && env && *env) {
+        if (strcmp(env, "vulkan") && strcmp(env, "cpu"))
+            return tpk_diag_fail(diag, "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", env);
+        a->backend = env;
+    }
 #ifdef TPK_WITH_VULKAN
     if (!a->backend)
         a->backend = tpk_vulkan_available(device, device_size) ? "vulkan" : "cpu";
