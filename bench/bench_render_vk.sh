@@ -14,7 +14,8 @@ SIZE=${TPK_BENCH_IMAGE:-512}
 FRAMES=${TPK_BENCH_FRAMES:-5}
 WORK=${TPK_BENCH_DIR:-/tmp/tpk_bench_vk}
 mkdir -p "$WORK"
-cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DTETPACK_WITH_TESTS=OFF >/dev/null
+# A build directory that exists keeps its configuration; a new one is configured for Release.
+[ -f "$BUILD/CMakeCache.txt" ] || cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DTETPACK_WITH_TESTS=OFF >/dev/null
 cmake --build "$BUILD" -j"$THREADS" --target tetpack_cli bench_render_vk >/dev/null
 for mesh in "$DATA/sfepy/cube_big_tetra.mesh" "$DATA/sfepy/piezo_mesh_micro.vtk" ${TPK_BENCH_EXTRA:-}; do
     name=$(basename "$mesh")
