@@ -170,3 +170,7 @@ int tpk_vk_effects(const tpk_render_options *opt)
     return (opt->iso_count > 0 ? TPK_VK_EFFECT_ISO : 0) | (opt->shading ? TPK_VK_EFFECT_SHADING : 0) |
            (opt->shadows ? TPK_VK_EFFECT_SHADOWS : 0) | (opt->ao_rays > 0 ? TPK_VK_EFFECT_AO : 0);
 }
+
+/* render.comp's Params block, std140: 15 vec4 rows, then the TF's 256 s values and 256 colours. */
+_Static_assert(sizeof(tpk_vk_params) == 15 * 16 + TPK_VK_TF_MAX * 4 + TPK_VK_TF_MAX * 16,
+               "tpk_vk_params as render.comp's Params");
