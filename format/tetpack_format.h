@@ -17,7 +17,9 @@ extern "C" {
 #define TPK_MAGIC_SIZE 8
 
 #define TPK_VERSION_MAJOR 1
-#define TPK_VERSION_MINOR 1
+#define TPK_VERSION_MINOR 2
+/* A file without a chunk of 1.2 (PART, LINK) is written as 1.1: its bytes stay those of 1.1 writers. */
+#define TPK_VERSION_MINOR_PLAIN 1
 
 #define TPK_HEADER_SIZE 192u
 #define TPK_DIR_ENTRY_SIZE 64u
@@ -41,6 +43,9 @@ extern "C" {
 #define TPK_TAG_TIME TPK_FOURCC('T', 'I', 'M', 'E') /* float64 time value per step */
 #define TPK_TAG_TMAP TPK_FOURCC('T', 'M', 'A', 'P') /* int32 source cell id per tet */
 #define TPK_TAG_VMAP TPK_FOURCC('V', 'M', 'A', 'P') /* int32 source vertex id per vertex */
+/* Format 1.2, part sets (spec §15): */
+#define TPK_TAG_PART TPK_FOURCC('P', 'A', 'R', 'T') /* manifest: tpk_part_record per part, as BYTE */
+#define TPK_TAG_LINK TPK_FOURCC('L', 'I', 'N', 'K') /* part: tpk_link per cut shell face, as 4 I32 */
 
 /* Directory entry flags. Bits other than these are reserved and must be zero. */
 #define TPK_CHUNK_REQUIRED 0x0001u
@@ -142,6 +147,27 @@ typedef struct tpk_field_desc {
     uint64_t reserved1;   /* 0 */
 } tpk_field_desc;
 
+/* One part of a part set, in the manifest's PART chunk (stored as 256 BYTE elements per record). */
+#define TPK_PART_FILE_MAX 128
+typedef struct tpk_part_record {
+    char file[TPK_PART_FILE_MAX]; /* the part's file name, in the manifest's folder; UTF-8, NUL-padded */
+    uint64_t file_size;           /* the part file's size in bytes */
+    uint64_t header_checksum;     /* the part's header_checksum (covers its directory, hence every chunk) */
+    uint64_t vertex_count, tet_count, shell_face_count;
+    uint64_t link_count;          /* shell faces of the part that lie on a cut (its LINK records) */
+    double bounds_min[3], bounds_max[3]; /* the part's header bounds */
+    uint8_t reserved[32];         /* 0 */
+} tpk_part_record;
+
+/* A shell face on a cut, and the same face seen from the part across it (a part's LINK chunk, stored as
+ * 4 I32 elements per record, sorted by face). */
+typedef struct tpk_link {
+    int32_t face;       /* index into this part's SHEL */
+    int32_t part;       /* index of the other part in the manifest's PART table */
+    int32_t other_face; /* index into the other part's SHEL of the same face */
+    int32_t other_tet;  /* that record's t: the tet across the cut */
+} tpk_link;
+
 #if defined(__cplusplus)
 #define TPK_STATIC_ASSERT static_assert
 #else
@@ -154,6 +180,8 @@ TPK_STATIC_ASSERT(sizeof(tpk_tet20) == 20, "tpk_tet20 layout");
 TPK_STATIC_ASSERT(sizeof(tpk_tet16) == 16, "tpk_tet16 layout");
 TPK_STATIC_ASSERT(sizeof(tpk_shell_face) == 16, "tpk_shell_face layout");
 TPK_STATIC_ASSERT(sizeof(tpk_field_desc) == 128, "tpk_field_desc layout");
+TPK_STATIC_ASSERT(sizeof(tpk_part_record) == 256, "tpk_part_record layout");
+TPK_STATIC_ASSERT(sizeof(tpk_link) == 16, "tpk_link layout");
 
 #ifdef __cplusplus
 }

@@ -127,3 +127,28 @@ tpk_result tpk_load_arrays(tpk_file *file, tpk_layout layout, const char *field_
     *out = m;
     return TPK_OK;
 }
+
+tpk_result tpk_load_tet_field(tpk_file *file, const char *field_name, uint32_t step, const float **out)
+{
+    if (!file || !field_name || !out)
+        return TPK_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    tpk_result r = tpki_file_usable(file);
+    if (r != TPK_OK)
+        return r;
+    uint32_t f;
+    if (tpk_find_field(file, field_name, &f) != TPK_OK)
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "no field named '%s' (the file has %" PRIu32 " fields)",
+                             field_name, file->field_count);
+    const tpk_field_desc *d = &file->fields[f];
+    if (d->association != TPK_ASSOC_TET)
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "field '%s' is per-point, not per-tet", field_name);
+    if (step >= d->step_count)
+        return tpki_file_fail(file, TPK_ERR_NOT_FOUND, "field '%s' has %" PRIu32 " steps, step %" PRIu32 " asked",
+                             d->name, d->step_count, step);
+    const void *values;
+    r = load_chunk(file, TPK_TAG_FDAT, f, step, &values);
+    if (r == TPK_OK)
+        *out = values;
+    return r;
+}

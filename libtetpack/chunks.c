@@ -88,9 +88,15 @@ static tpk_result alloc_decoded(tpk_file *file, uint64_t i, void **out)
                          file->header.tet_count);
 }
 
+void tpki_file_mark_read(tpk_file *file, uint64_t i)
+{
+    atomic_fetch_or(&file->chunk_state[i], TPK_CHUNK_READ);
+}
+
 tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst)
 {
     const tpk_dir_entry *e = &file->entries[i];
+    tpki_file_mark_read(file, i);
     if (e->codec == TPK_CODEC_ZSTD)
         return decode_zstd(file, i, dst);
     if (e->raw_size > 0)
@@ -101,6 +107,7 @@ tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst)
 tpk_result tpki_file_check_sum(tpk_file *file, uint64_t i, const void *raw)
 {
     const tpk_dir_entry *e = &file->entries[i];
+    tpki_file_mark_read(file, i);
     uint64_t sum = XXH64(raw, e->raw_size, 0);
     if (sum != e->checksum) {
         char name[80];
@@ -160,6 +167,7 @@ static tpk_result decoded_copy(tpk_file *file, uint64_t i, const void **out)
 tpk_result tpki_file_chunk_bytes(tpk_file *file, uint64_t i, const void **out)
 {
     const tpk_dir_entry *e = &file->entries[i];
+    tpki_file_mark_read(file, i);
     if (e->codec != TPK_CODEC_NONE)
         return decoded_copy(file, i, out);
     const void *raw = file->data + e->offset;

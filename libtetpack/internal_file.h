@@ -5,7 +5,7 @@
  *   arrays.c   tpk_load_arrays (public), on top of reader.c's tpk_find_chunk and tpk_find_field
  *   reader.c   tpk_open_*, tpk_close, the directory, chunk, field and time queries, tpk_verify (public)
  *   writer.c   tpk_writer_* (public); uses rules.c only
- *   chunks.c   tpki_file_decode, tpki_file_needs_sum, tpki_file_check_sum, tpki_file_chunk_bytes,
+ *   chunks.c   tpki_file_mark_read, tpki_file_decode, tpki_file_needs_sum, tpki_file_check_sum, tpki_file_chunk_bytes,
  *              tpki_file_check_ids, tpki_file_verify_chunk
  *   handle.c   tpki_file_alloc, tpki_file_free, tpki_file_report, tpki_file_refuse, tpki_file_fail,
  *              tpki_file_usable, tpk_error_text (public: the message is the handle's, under its lock)
@@ -40,6 +40,7 @@
 /* Per-chunk state bits, set once with atomic_fetch_or so concurrent readers agree. */
 #define TPK_CHUNK_SUM_OK 0x1u /* checksum (and decode) verified */
 #define TPK_CHUNK_IDS_OK 0x2u /* rule 17 id ranges verified */
+#define TPK_CHUNK_READ 0x4u   /* its bytes were read (decoded, checksummed or handed out): tpk_get_chunk_use */
 
 /* A detailed error text being built by a check, before it reaches a handle or a caller buffer. */
 typedef struct tpki_diag {
@@ -125,6 +126,8 @@ tpk_result tpki_file_fail(tpk_file *file, tpk_result code, const char *fmt, ...)
 tpk_result tpki_file_usable(tpk_file *file);
 
 /* ---- chunk bytes (chunks.c) ---- */
+/* Remember that chunk i's bytes were read (tpk_get_chunk_use). */
+void tpki_file_mark_read(tpk_file *file, uint64_t i);
 /* Decode chunk i into dst (raw_size bytes) without checking its checksum. */
 tpk_result tpki_file_decode(tpk_file *file, uint64_t i, void *dst);
 /* Whether chunk i's checksum is still to be checked before its content is used (not TRUSTED, not done). */

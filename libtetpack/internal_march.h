@@ -1,7 +1,8 @@
 /* libtetpack private declarations of the reference CPU marcher: the shell-face BVH and the marcher
  * handle, on top of the ray frame and edge test of internal_ray.h. Not installed.
  * Owners, top to bottom (a file calls only files below it):
- *   march.c      tpk_marcher_create, tpk_marcher_destroy, tpk_march_ray (public, tetpack.h)
+ *   march_set.c  tpk_set_marcher_* (public, tetpack.h): rays across the parts of a set, on tpki_march_run
+ *   march.c      tpk_marcher_create, tpk_marcher_destroy, tpk_march_ray (public, tetpack.h), tpki_march_run
  *   shell_bvh.c  tpki_shell_bvh_build, tpki_shell_entries, tpki_shell_face_entry
  *   ray.c        see internal_ray.h */
 #ifndef TPK_INTERNAL_MARCH_H
@@ -51,5 +52,24 @@ typedef struct tpk_entry {
 tpk_result tpki_shell_entries(const tpk_marcher *marcher, const tpk_ray_frame *frame, const double dir[3],
                              double tmin, double tmax, tpk_entry *stack_buf, int64_t stack_cap,
                              tpk_entry **out, int64_t *out_count);
+
+/* One inside-run of a ray through one marcher's mesh. */
+typedef struct march_params {
+    const tpk_marcher *m;
+    const tpk_ray_frame *frame;
+    double tmin, tmax;
+    tpk_segment_fn fn;
+    void *user;
+    uint64_t steps;
+    int stop;      /* set when the callback asked to stop or tmax was reached */
+    double exit_t; /* t of the face the run left through (when it reached a neighbor -1) */
+    int32_t exit_tet;       /* the tet it left from, and the face (ids and projections), there */
+    tpk_face_hit exit_face;
+} march_params;
+
+/* March from the face `in` (ids, projections, edge values, t) into `tet` until the ray leaves through a
+ * face with neighbor -1 (exit_* set), the callback stops it or tmax is reached (stop set). Returns
+ * TPK_ERR_MESH on inconsistent connectivity. */
+tpk_result tpki_march_run(march_params *p, const tpk_face_hit *in, int32_t tet);
 
 #endif

@@ -75,17 +75,6 @@ void tpk_marcher_shell_bvh(const tpk_marcher *m, tpk_shell_bvh *out)
 
 /* ---- One inside-run: from a shell entry face to a face with neighbor -1 -------------------------- */
 
-typedef struct march_params {
-    const tpk_marcher *m;
-    const tpk_ray_frame *frame;
-    double tmin, tmax;
-    tpk_segment_fn fn;
-    void *user;
-    uint64_t steps;
-    int stop;      /* set when the callback asked to stop or tmax was reached */
-    double exit_t; /* t of the face the run left through (when it reached a neighbor -1) */
-} march_params;
-
 static inline double face_scalar(const float *scalars, const tpk_face_hit *h, const double w[3])
 {
     if (!scalars)
@@ -99,11 +88,12 @@ static inline int rank4(int32_t x, int32_t a, int32_t b, int32_t c, int32_t d)
 }
 
 /* Report the piece [t_in, t_out] of `tet` clipped to [tmin, tmax]; sets p->stop when done. */
-static inline void report(march_params *p, int32_t tet, double t_in, double t_out, double s_in, double s_out)
+static inline void report(march_params *p, int32_t tet, const int32_t v[4], double t_in, double t_out,
+                          double s_in, double s_out)
 {
     if (t_out < p->tmin)
         return;
-    tpk_segment seg = {tet, t_in, t_out, s_in, s_out};
+    tpk_segment seg = {tet, t_in, t_out, s_in, s_out, {v[0], v[1], v[2], v[3]}};
     double len = t_out - t_in;
     if (t_in < p->tmin) {
         seg.t_in = p->tmin;
@@ -204,9 +194,13 @@ static inline __attribute__((always_inline)) tpk_result march_run(march_params *
         if (next < -1 || next >= tet_count)
             return TPK_ERR_MESH;
 
-        report(p, tet, in.t, t_out, s_in, s_out);
-        if (next < 0)
+        const int32_t verts[4] = {a, b, c, d};
+        report(p, tet, verts, in.t, t_out, s_in, s_out);
+        if (next < 0) {
             p->exit_t = t_out;
+            p->exit_tet = tet;
+            p->exit_face = out;
+        }
         if (p->stop || next < 0)
             return TPK_OK;
         prev = tet;
@@ -216,7 +210,7 @@ static inline __attribute__((always_inline)) tpk_result march_run(march_params *
     }
 }
 
-static tpk_result march_run_any(march_params *p, const tpk_face_hit *in, int32_t tet)
+tpk_result tpki_march_run(march_params *p, const tpk_face_hit *in, int32_t tet)
 {
     switch (p->m->mesh.layout) {
     case TPK_LAYOUT_TET32: return march_run(p, *in, tet, TPK_LAYOUT_TET32);
@@ -238,7 +232,7 @@ static tpk_result run_entry(march_params *p, const tpk_entry *entry)
     tpk_face_hit hit;
     if (!tpki_shell_face_entry(m->mesh.positions, p->frame, face, &hit))
         return TPK_ERR_MESH; /* the same test said yes a moment ago: cannot happen */
-    return march_run_any(p, &hit, face->t);
+    return tpki_march_run(p, &hit, face->t);
 }
 
 /* Several runs entering at (nearly) the same t meet at one shell vertex or edge, where rounding may
@@ -266,7 +260,8 @@ static tpk_result run_tie_group(march_params *p, const tpk_entry *group, int64_t
         return TPK_ERR_OUT_OF_MEMORY;
     tpk_result r = TPK_OK;
     for (int64_t i = 0; i < n && r == TPK_OK; i++) {
-        march_params dry = {p->m, p->frame, -INFINITY, INFINITY, NULL, NULL, 0, 0, group[i].t};
+        march_params dry = {.m = p->m, .frame = p->frame, .tmin = -INFINITY, .tmax = INFINITY, .exit_t = group[i].t,
+                            .exit_tet = -1};
         r = run_entry(&dry, &group[i]);
         p->steps += dry.steps;
         order[i] = (tie_run){dry.exit_t, i};
@@ -303,7 +298,7 @@ tpk_result tpk_march_ray(const tpk_marcher *m, const double org[3], const double
     if (r != TPK_OK)
         return r;
 
-    march_params p = {m, &frame, tmin, tmax, fn, user, 0, 0, 0.0};
+    march_params p = {.m = m, .frame = &frame, .tmin = tmin, .tmax = tmax, .fn = fn, .user = user, .exit_tet = -1};
     uint64_t runs = 0;
     /* Entries closer than rounding of t can order wrongly; see run_tie_group. */
     double dir_len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);

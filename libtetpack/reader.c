@@ -342,6 +342,7 @@ tpk_result tpk_view_chunk(tpk_file *file, uint64_t i, const void **out_data, uin
         return tpki_file_refuse(file, TPK_ERR_UNSUPPORTED_CHUNK, text); /* a caller mistake, not corruption */
     }
     const void *raw = file->data + e->offset;
+    tpki_file_mark_read(file, i);
     if (tpki_file_needs_sum(file, i) && (r = tpki_file_check_sum(file, i, raw)) != TPK_OK)
         return r;
     *out_data = raw;
@@ -365,6 +366,15 @@ tpk_result tpk_read_chunk(tpk_file *file, uint64_t i, void *dst, uint64_t dst_si
     if (r == TPK_OK && tpki_file_needs_sum(file, i))
         r = tpki_file_check_sum(file, i, dst);
     return r;
+}
+
+tpk_result tpk_get_chunk_use(const tpk_file *file, uint64_t i, uint32_t *out_bits)
+{
+    if (!file || !out_bits || i >= file->header.chunk_count)
+        return TPK_ERR_INVALID_ARGUMENT;
+    uint32_t state = atomic_load(&file->chunk_state[i]);
+    *out_bits = ((state & TPK_CHUNK_READ) ? TPK_CHUNK_USE_READ : 0u) | ((state & TPK_CHUNK_SUM_OK) ? TPK_CHUNK_USE_VERIFIED : 0u);
+    return TPK_OK;
 }
 
 /* ---- fields and time ---------------------------------------------------------------------------------- */

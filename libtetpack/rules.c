@@ -88,7 +88,8 @@ int tpki_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
         {TPK_TAG_TT32, TPK_ELEM_TET32, 1},      {TPK_TAG_SHEL, TPK_ELEM_SHELL_FACE, 1},
         {TPK_TAG_FDSC, TPK_ELEM_FIELD_DESC, 1}, {TPK_TAG_FDAT, TPK_ELEM_F32, 1},
         {TPK_TAG_TIME, TPK_ELEM_F64, 0},        {TPK_TAG_TMAP, TPK_ELEM_I32, 0},
-        {TPK_TAG_VMAP, TPK_ELEM_I32, 0},
+        {TPK_TAG_VMAP, TPK_ELEM_I32, 0},        {TPK_TAG_PART, TPK_ELEM_BYTE, 0},
+        {TPK_TAG_LINK, TPK_ELEM_I32, 0},
     };
     for (size_t k = 0; k < sizeof known / sizeof known[0]; k++) {
         if (known[k].tag == tag) {
@@ -370,6 +371,13 @@ static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir
     if (e->tag == TPK_TAG_FDSC && e->elem_count > TPK_MAX_FIELDS)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " field descriptors, at most %u allowed",
                              name, e->elem_count, TPK_MAX_FIELDS);
+    /* Format 1.2: PART and LINK hold whole records (spec §15). */
+    if (e->tag == TPK_TAG_PART && e->elem_count % sizeof(tpk_part_record) != 0)
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " bytes, not a whole number of %zu-byte part records",
+                         name, e->elem_count, sizeof(tpk_part_record));
+    if (e->tag == TPK_TAG_LINK && e->elem_count % 4 != 0)
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " values, not a whole number of 4-value links", name,
+                         e->elem_count);
     if (e->tag == TPK_TAG_FDSC && e->elem_count == 0)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: no field descriptors; a file without fields has no 'FDSC' "
                              "chunk (format 1.1)", name);
@@ -711,6 +719,30 @@ static tpk_result check_tmap(uint64_t i, const tpk_dir_entry *e, const uint8_t *
     return TPK_OK;
 }
 
+/* Rule 17 for LINK (1.2): the face in [0, S), ids on the other side non-negative (their upper bounds
+ * are the other part's, checked when a set is opened), faces strictly ascending so each appears once. */
+static tpk_result check_links(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const uint8_t *raw,
+                              tpki_diag *diag)
+{
+    int64_t previous = -1;
+    for (uint64_t l = 0; l < e->elem_count / 4; l++) {
+        tpk_link link;
+        memcpy(&link, raw + l * sizeof link, sizeof link);
+        if (!in_range(link.face, 0, h->shell_face_count))
+            return id_error(diag, i, e, l, "face", link.face, 0, h->shell_face_count);
+        if (link.face <= previous)
+            return tpki_fail(diag, TPK_ERR_CORRUPT, "chunk %" PRIu64 " 'LINK': link %" PRIu64 " names shell face %d "
+                             "after face %lld: links are sorted by face, one per face", i, l, link.face,
+                             (long long)previous);
+        previous = link.face;
+        if (link.part < 0 || link.other_face < 0 || link.other_tet < 0)
+            return tpki_fail(diag, TPK_ERR_CORRUPT, "chunk %" PRIu64 " 'LINK': link %" PRIu64 " has a negative id "
+                             "(part %d, other face %d, other tet %d)", i, l, link.part, link.other_face,
+                             link.other_tet);
+    }
+    return TPK_OK;
+}
+
 tpk_result tpki_check_records(const tpk_header *h, uint64_t i, const tpk_dir_entry *e, const void *raw,
                              tpki_diag *diag)
 {
@@ -720,6 +752,7 @@ tpk_result tpki_check_records(const tpk_header *h, uint64_t i, const tpk_dir_ent
     case TPK_TAG_TT16: return check_tet16(h, i, e, raw, diag);
     case TPK_TAG_SHEL: return check_shell(h, i, e, raw, diag);
     case TPK_TAG_TMAP: return check_tmap(i, e, raw, diag);
+    case TPK_TAG_LINK: return check_links(h, i, e, raw, diag);
     default: return TPK_OK;
     }
 }

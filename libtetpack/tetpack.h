@@ -115,6 +115,13 @@ tpk_result tpk_find_chunk(const tpk_file *file, uint32_t tag, uint32_t index, ui
 tpk_result tpk_view_chunk(tpk_file *file, uint64_t i, const void **out_data, uint64_t *out_size);
 /* Decode chunk `i` into dst (dst_size >= entry.raw_size), decompressing if needed, and check it. */
 tpk_result tpk_read_chunk(tpk_file *file, uint64_t i, void *dst, uint64_t dst_size);
+/* What this handle has done with chunk i so far, as TPK_CHUNK_USE_* bits. Chunks are read lazily:
+ * opening reads only the header, the directory and FDSC; tpk_load_arrays then reads POS3, one layout,
+ * SHEL and one FDAT step, and nothing else. For tools and tests that check a reader touches only what
+ * it needs. Thread safety: safe while other threads read the handle. */
+#define TPK_CHUNK_USE_READ 0x1u     /* its bytes were read: viewed, decoded, or checksummed */
+#define TPK_CHUNK_USE_VERIFIED 0x2u /* its checksum was checked */
+tpk_result tpk_get_chunk_use(const tpk_file *file, uint64_t i, uint32_t *out_bits);
 /* Check every chunk's checksum and the cross-chunk rules of the spec that need no geometry
  * (counts agree with the header, field descriptors valid, ids in range). */
 tpk_result tpk_verify(tpk_file *file);
@@ -153,6 +160,12 @@ typedef struct tpk_mesh_arrays {
  * file has none. Untrusted input: safe (all chunks verified, ids checked in range). */
 tpk_result tpk_load_arrays(tpk_file *file, tpk_layout layout, const char *field_name, uint32_t step,
                            tpk_mesh_arrays *out);
+
+/* The values of tet field `field_name` (association 1, spec §7.2) at `step`: tet_count floats, element
+ * i the constant value in tet i; zero-copy or decoded into handle-owned memory like tpk_load_arrays.
+ * TPK_ERR_NOT_FOUND (with a message) for a missing field, a point field or a step past its count.
+ * Untrusted input: safe (checksum and element count checked). */
+tpk_result tpk_load_tet_field(tpk_file *file, const char *field_name, uint32_t step, const float **out);
 
 /* Recover positively oriented vertex quadruples (4 per tet) from any layout: direct for Tet32, by a
  * walk from the shell through neighbors for Tet20/Tet16. dst holds 4 * tet_count int32. */
@@ -258,6 +271,8 @@ typedef struct tpk_segment {
     int32_t tet;
     double t_in, t_out;       /* ray parameters, clipped to [tmin, tmax] */
     double scalar_in, scalar_out; /* interpolated at t_in/t_out (0 when the mesh has no scalars) */
+    int32_t v[4];             /* the tet's vertices: v[0..2] the face the ray entered through (before
+                                 any clipping to tmin), v[3] the fourth; for gradients and face normals */
 } tpk_segment;
 
 /* Return nonzero to stop the ray early (e.g. opacity reached). */
@@ -276,6 +291,56 @@ typedef struct tpk_march_stats {
 tpk_result tpk_march_ray(const tpk_marcher *marcher, const double org[3], const double dir[3],
                          double tmin, double tmax, tpk_segment_fn fn, void *user,
                          tpk_march_stats *stats);
+
+/* ---- Part sets (format 1.2, spec §15) ------------------------------------------------------------ */
+
+/* A part set: a manifest (a .tpk with a PART chunk, conventionally .tpkset) listing part files, each
+ * a complete .tpk, whose LINK chunks tie the shell faces on a cut to the same face in another part. */
+typedef struct tpk_partset tpk_partset;
+
+/* Open the manifest at `path` and the parts it lists: all of them when box_min and box_max are NULL,
+ * else those whose bounds meet the box [box_min, box_max] (closed; the others stay unopened). Each part
+ * is opened with `options` and must match its record (file size, header checksum, counts, bounds) and
+ * the manifest's origin, else the whole open fails (TPK_ERR_CORRUPT, naming the part). A manifest that
+ * is a valid .tpk without a PART chunk gives TPK_ERR_NOT_FOUND. Part file names are plain names in the
+ * manifest's folder (no separators, spec §15.2). Untrusted input: safe. On failure *out is NULL. */
+tpk_result tpk_partset_open(tpk_partset **out, const char *path, const tpk_open_options *options,
+                            const double *box_min, const double *box_max, char *err_text, size_t err_cap);
+void tpk_partset_close(tpk_partset *set);
+/* Parts listed in the manifest (opened or not). */
+uint32_t tpk_partset_part_count(const tpk_partset *set);
+/* The manifest's record of part i (a copy). */
+tpk_result tpk_partset_get_part(const tpk_partset *set, uint32_t i, tpk_part_record *out);
+/* The open handle of part i (owned by the set, closed by tpk_partset_close), or NULL when the box left
+ * it out. */
+tpk_file *tpk_partset_file(const tpk_partset *set, uint32_t i);
+/* The origin every part shares (the manifest's). */
+void tpk_partset_origin(const tpk_partset *set, double out[3]);
+/* Part i's links, decoded and checked against the set (other part in range; when that part is open,
+ * other_face in its SHEL and other_tet its record's t). *out is owned by the set; count 0 without a
+ * LINK chunk. Not for a part that is not open (TPK_ERR_INVALID_ARGUMENT). */
+tpk_result tpk_partset_links(tpk_partset *set, uint32_t i, const tpk_link **out, uint64_t *out_count);
+
+/* ---- Marching a part set ---------------------------------------------------------------------------- */
+
+typedef struct tpk_set_marcher tpk_set_marcher;
+
+/* A marcher over several parts that share one origin: parts[i] are part i's arrays (tet_count 0 for a
+ * part not loaded) and links[i], link_counts[i] its links. A BVH per part over the shell faces on no
+ * cut (or linked to a part not loaded) finds where rays enter; a ray that leaves a part through a
+ * linked face continues in the other part at the linked face, without a search. All arrays must outlive
+ * the marcher. TPK_ERR_INVALID_ARGUMENT when the origins differ; TPK_ERR_MESH when a link names a face
+ * or tet outside the other part. */
+tpk_result tpk_set_marcher_create(tpk_set_marcher **out, uint32_t part_count, const tpk_mesh_arrays *parts,
+                                  const tpk_link *const *links, const uint64_t *link_counts);
+void tpk_set_marcher_destroy(tpk_set_marcher *marcher);
+
+/* As tpk_march_ray, over the whole set: segments in increasing t; segment.tet is a tet of the part
+ * given in *segment_part while fn runs (may be NULL). Same pieces as one file of the same tets, when
+ * the parts keep the vertex order of that file on every cut (spec §15.4). */
+tpk_result tpk_set_march_ray(const tpk_set_marcher *marcher, const double org[3], const double dir[3],
+                             double tmin, double tmax, tpk_segment_fn fn, void *user, uint32_t *segment_part,
+                             tpk_march_stats *stats);
 
 #ifdef __cplusplus
 }

@@ -432,7 +432,10 @@ static void build_header(const tpk_writer *w, const tpk_header_fields *fields, u
     memset(h, 0, sizeof *h);
     memcpy(h->magic, TPK_MAGIC, TPK_MAGIC_SIZE);
     h->version_major = TPK_VERSION_MAJOR;
-    h->version_minor = TPK_VERSION_MINOR;
+    h->version_minor = TPK_VERSION_MINOR_PLAIN;
+    for (uint64_t i = 0; i < w->count; i++) /* writer rule 1: 1.2 only where a 1.2 chunk is used */
+        if (w->entries[i].tag == TPK_TAG_PART || w->entries[i].tag == TPK_TAG_LINK)
+            h->version_minor = TPK_VERSION_MINOR;
     h->header_size = TPK_HEADER_SIZE;
     h->dir_entry_size = TPK_DIR_ENTRY_SIZE;
     h->directory_offset = directory_offset;

@@ -446,6 +446,82 @@ static int patch_tet16_vx(byte_buffer *b)
     return 0;
 }
 
+/* ---- part sets (spec §13.4, §15) --------------------------------------------------------------- */
+
+/* two_tets cut between its tets: part p keeps whole vertices part_vertices[p] (in the whole's order,
+ * renumbered 0..3) and its tet; the face {0, 4, 1} of the whole is on the cut. */
+static const int part_vertices[2][4] = {{0, 1, 3, 4}, {0, 1, 2, 4}};
+static const int32_t part_tets[2][1][4] = {{{2, 0, 3, 1}}, {{0, 3, 1, 2}}};
+static const int32_t part_neighbors[1][4] = {{-1, -1, -1, -1}};
+
+static tpk_result write_part(const char *path, int p, const tpk_link *link, tpk_part_record *record)
+{
+    vector_writer w;
+    if (open_writer(&w, path, TPK_CODEC_NONE) != TPK_OK)
+        return w.result;
+    float pos[4][3];
+    for (int i = 0; i < 4; i++)
+        memcpy(pos[i], two_tets_positions[part_vertices[p][i]], sizeof pos[i]);
+    tpk_tet32 t32;
+    tpk_shell_face shell[4];
+    spec_tet32(part_tets[p][0], part_neighbors[0], &t32);
+    size_t shell_count = spec_shell(part_tets[p], part_neighbors, 1, shell);
+    put(&w, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, 4, 0, 0, pos);
+    put(&w, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, 1, 0, 0, &t32);
+    put(&w, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, shell_count, 0, 0, shell);
+    put(&w, TPK_TAG_LINK, 0, TPK_ELEM_I32, 4, 4, 0, 0, link);
+    tpk_header_fields h = {0};
+    h.vertex_count = 4;
+    h.tet_count = 1;
+    h.shell_face_count = shell_count;
+    bounds_of((const float(*)[3])pos, 4, two_tets_origin, &h);
+    tpk_result r = finish(&w, &h);
+    byte_buffer b = {0};
+    if (r == TPK_OK && load_bytes(path, &b) != 0)
+        r = TPK_ERR_IO;
+    if (r == TPK_OK) {
+        const tpk_header *written = (const tpk_header *)b.data;
+        record->file_size = written->file_size;
+        record->header_checksum = written->header_checksum;
+        record->vertex_count = 4;
+        record->tet_count = 1;
+        record->shell_face_count = shell_count;
+        record->link_count = 1;
+        memcpy(record->bounds_min, h.bounds_min, sizeof h.bounds_min);
+        memcpy(record->bounds_max, h.bounds_max, sizeof h.bounds_max);
+    }
+    free(b.data);
+    return r;
+}
+
+/* NAME.tpkset and NAME-0.tpk, NAME-1.tpk; `other_face_of_1` is what part 1's link names (0 is right). */
+static tpk_result write_part_set(const char *dir, const char *name, int32_t other_face_of_1)
+{
+    const tpk_link links[2] = {{0, 1, 3, 0}, {3, 0, other_face_of_1, 0}};
+    tpk_part_record records[2];
+    memset(records, 0, sizeof records);
+    char path[1024];
+    for (int p = 0; p < 2; p++) {
+        snprintf(records[p].file, sizeof records[p].file, "%s-%d.tpk", name, p);
+        snprintf(path, sizeof path, "%s/%s", dir, records[p].file);
+        if (write_part(path, p, &links[p], &records[p]) != TPK_OK)
+            return TPK_ERR_IO;
+    }
+    snprintf(path, sizeof path, "%s/%s.tpkset", dir, name);
+    vector_writer w;
+    if (open_writer(&w, path, TPK_CODEC_NONE) != TPK_OK)
+        return w.result;
+    static const char meta[] = "{\"converter\":{\"name\":\"tetpack make_vectors\",\"version\":\"1.2\"}}";
+    put(&w, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, 0, 0, 0, NULL);
+    put(&w, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, 0, 0, 0, NULL);
+    put(&w, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, 0, 0, 0, NULL);
+    put(&w, TPK_TAG_PART, 0, TPK_ELEM_BYTE, 1, sizeof records, 0, 0, records);
+    put(&w, TPK_TAG_META, 0, TPK_ELEM_BYTE, 1, strlen(meta), 0, 0, meta);
+    tpk_header_fields h = {0};
+    memcpy(h.origin, two_tets_origin, sizeof h.origin);
+    return finish(&w, &h);
+}
+
 /* Write every vector into `dir`. Returns 0 on success. */
 static int tpk_make_vectors(const char *dir)
 {
@@ -474,5 +550,7 @@ static int tpk_make_vectors(const char *dir)
         return -1;
     rc |= make_broken(dir, "unknown_required_chunk.tpk", vendor, patch_required);
     remove(vendor);
+    rc |= write_part_set(dir, "two_parts", 0) != TPK_OK;
+    rc |= write_part_set(dir, "bad_link", 1) != TPK_OK;
     return rc;
 }

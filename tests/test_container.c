@@ -803,6 +803,16 @@ TPK_TEST(fields_and_time)
     CHECK(t == 0.5);
     CHECK_EQ_INT(tpk_get_time(file, 2, &t), TPK_ERR_INVALID_ARGUMENT);
     CHECK_EQ_INT(tpk_find_chunk(file, TPK_TAG_VMAP, 0, 0, &(uint64_t){0}), TPK_ERR_NOT_FOUND);
+    /* the tet field's values per step; a point field, a missing one or a step too far are refused */
+    const float *cells = NULL;
+    CHECK_EQ_INT(tpk_load_tet_field(file, "pressure", 1, &cells), TPK_OK);
+    CHECK(cells && cells[0] == 3.0f && cells[1] == 4.0f);
+    CHECK_EQ_INT(tpk_load_tet_field(file, "pressure", 2, &cells), TPK_ERR_NOT_FOUND);
+    CHECK(cells == NULL && strstr(tpk_error_text(file), "2 steps, step 2 asked"));
+    CHECK_EQ_INT(tpk_load_tet_field(file, "temperature", 0, &cells), TPK_ERR_NOT_FOUND);
+    CHECK(strstr(tpk_error_text(file), "per-point"));
+    CHECK_EQ_INT(tpk_load_tet_field(file, "nope", 0, &cells), TPK_ERR_NOT_FOUND);
+    CHECK_EQ_INT(tpk_load_tet_field(file, NULL, 0, &cells), TPK_ERR_INVALID_ARGUMENT);
     tpk_close(file);
     free(bytes);
 }

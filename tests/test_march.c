@@ -23,6 +23,7 @@ typedef struct recording {
     int overflow;
     int32_t tet[REC_MAX];
     double t_in[REC_MAX], t_out[REC_MAX], s_in[REC_MAX], s_out[REC_MAX];
+    int32_t v[REC_MAX][4];
 } recording;
 
 static int record_segment(void *user, const tpk_segment *s)
@@ -37,6 +38,7 @@ static int record_segment(void *user, const tpk_segment *s)
     r->t_out[r->count] = s->t_out;
     r->s_in[r->count] = s->scalar_in;
     r->s_out[r->count] = s->scalar_out;
+    memcpy(r->v[r->count], s->v, sizeof s->v);
     r->count++;
     return 0;
 }
@@ -542,6 +544,44 @@ TPK_TEST(segments_linear_field_exact)
     CHECK(checked > 10000);
     free(r);
     tpk_marcher_destroy(mr);
+    fx_free(&m);
+}
+
+/* Each segment names its tet's four vertices, the first three being the face the ray came in through:
+ * within a run that face is shared with the previous tet (the renderer's gradients and tet-field iso
+ * normals rely on both). */
+TPK_TEST(segments_carry_vertices)
+{
+    fx_mesh m;
+    CHECK(fx_grid(&m, GRID, GRID, GRID, NULL, 1.0, NULL) == 0);
+    CHECK(fx_relabel(&m, 9) == 0);
+    CHECK(fx_build(&m) == 0);
+    recording *r = rec_new();
+    CHECK(r);
+    uint64_t rng = 11;
+    int64_t shared = 0;
+    for (int layout = 0; layout < 3; layout++) {
+        const tpk_layout lay = layout == 0 ? TPK_LAYOUT_TET16 : layout == 1 ? TPK_LAYOUT_TET20 : TPK_LAYOUT_TET32;
+        tpk_marcher *mr = make_marcher(&m, lay);
+        CHECK(mr);
+        for (int i = 0; i < 500; i++) {
+            double org[3], dir[3], tmin;
+            random_ray(&rng, &m, GRID, org, dir, &tmin);
+            r->count = 0;
+            CHECK_EQ_INT(tpk_march_ray(mr, org, dir, -INFINITY, INFINITY, record_segment, r, NULL), TPK_OK);
+            for (int64_t s = 0; s < r->count; s++) {
+                CHECK_EQ_INT(shared_vertices(r->v[s], &m.tets[4 * r->tet[s]]), 4);
+                if (s > 0 && r->t_in[s] == r->t_out[s - 1]) {
+                    const int32_t face[4] = {r->v[s][0], r->v[s][1], r->v[s][2], -2};
+                    CHECK_EQ_INT(shared_vertices(face, &m.tets[4 * r->tet[s - 1]]), 3);
+                    shared++;
+                }
+            }
+        }
+        tpk_marcher_destroy(mr);
+    }
+    CHECK(shared > 5000);
+    free(r);
     fx_free(&m);
 }
 

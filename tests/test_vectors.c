@@ -22,7 +22,8 @@ static const char *const vector_names[] = {
     "one_tet.tpk",     "two_tets_zstd.tpk",          "bad_magic.tpk",      "truncated.tpk",
     "newer_major.tpk", "unknown_required_chunk.tpk", "chunk_checksum.tpk", "overlap.tpk",
     "nonfinite_origin.tpk", "empty_fdsc.tpk", "tet16_vx.tpk", "zstd_skippable_frame.tpk",
-    "zstd_chunk_checksum.tpk", "implausible_zstd_size.tpk",
+    "zstd_chunk_checksum.tpk", "implausible_zstd_size.tpk", "two_parts.tpkset", "two_parts-0.tpk",
+    "two_parts-1.tpk", "bad_link.tpkset", "bad_link-0.tpk", "bad_link-1.tpk",
 };
 
 static const char *vector_path(const char *name)
@@ -399,4 +400,151 @@ TPK_TEST(vectors_tet16_example)
         for (int r = 0; r < 3; r++)
             CHECK_EQ_INT((int32_t)((uint32_t)t16.nx[r] ^ (uint32_t)n3), t20.n[r]);
     }
+}
+
+/* ---- part sets (spec §13.4) ------------------------------------------------------------------- */
+
+typedef struct piece_list {
+    int count;
+    uint32_t part[8];
+    tpk_segment seg[8];
+    uint32_t current_part;
+} piece_list;
+
+static int collect_piece(void *user, const tpk_segment *segment)
+{
+    piece_list *l = user;
+    if (l->count < 8) {
+        l->part[l->count] = l->current_part;
+        l->seg[l->count++] = *segment;
+    }
+    return 0;
+}
+
+TPK_TEST(vectors_two_parts)
+{
+    tpk_partset *set = NULL;
+    char err[512] = "";
+    CHECK_EQ_INT(tpk_partset_open(&set, vector_path("two_parts.tpkset"), NULL, NULL, NULL, err, sizeof err), TPK_OK);
+    if (!set) {
+        fprintf(stderr, "%s\n", err);
+        return;
+    }
+    CHECK_EQ_INT(tpk_partset_part_count(set), 2);
+    tpk_mesh_arrays parts[2];
+    const tpk_link *links[2];
+    uint64_t counts[2];
+    for (uint32_t p = 0; p < 2; p++) {
+        tpk_file_info info;
+        CHECK_EQ_INT(tpk_get_info(tpk_partset_file(set, p), &info), TPK_OK);
+        CHECK_EQ_INT(info.version_minor, 2);
+        CHECK_EQ_INT(tpk_load_arrays(tpk_partset_file(set, p), TPK_LAYOUT_TET32, NULL, 0, &parts[p]), TPK_OK);
+        CHECK_EQ_INT(tpk_partset_links(set, p, &links[p], &counts[p]), TPK_OK);
+        CHECK_EQ_INT((int)counts[p], 1);
+    }
+    CHECK_EQ_INT(links[0][0].face, 0);
+    CHECK_EQ_INT(links[0][0].other_face, 3);
+    CHECK_EQ_INT(links[1][0].face, 3);
+    CHECK_EQ_INT(links[1][0].other_face, 0);
+    /* Both parts span the unit box: a box beyond x = 1 opens neither, one touching x = 1 both. */
+    tpk_partset *some = NULL;
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+        lo[k] = two_tets_origin[k] + (k == 0 ? 1.5 : 0.2);
+        hi[k] = two_tets_origin[k] + (k == 0 ? 2.0 : 0.4);
+    }
+    CHECK_EQ_INT(tpk_partset_open(&some, vector_path("two_parts.tpkset"), NULL, lo, hi, err, sizeof err), TPK_OK);
+    CHECK(some && !tpk_partset_file(some, 0) && !tpk_partset_file(some, 1));
+    tpk_partset_close(some);
+    lo[0] = two_tets_origin[0] + 1.0;
+    CHECK_EQ_INT(tpk_partset_open(&some, vector_path("two_parts.tpkset"), NULL, lo, hi, err, sizeof err), TPK_OK);
+    CHECK(some && tpk_partset_file(some, 0) && tpk_partset_file(some, 1));
+    tpk_partset_close(some);
+
+    /* A ray through both tets: the set gives the pieces of the single file, in order. */
+    tpk_set_marcher *sm = NULL;
+    CHECK_EQ_INT(tpk_set_marcher_create(&sm, 2, parts, links, counts), TPK_OK);
+    tpk_result opened;
+    tpk_file *whole = open_vector("two_tets_zstd.tpk", 0, TPK_OK, &opened);
+    tpk_mesh_arrays whole_arrays;
+    CHECK_EQ_INT(tpk_load_arrays(whole, TPK_LAYOUT_TET32, NULL, 0, &whole_arrays), TPK_OK);
+    tpk_marcher *m = NULL;
+    CHECK_EQ_INT(tpk_marcher_create(&m, &whole_arrays), TPK_OK);
+    const double org[3] = {two_tets_origin[0] + 0.1, two_tets_origin[1] + 0.2, two_tets_origin[2] - 1.0};
+    const double dir[3] = {0.3, 0.25, 1.0};
+    piece_list a = {0}, b = {0};
+    CHECK_EQ_INT(tpk_march_ray(m, org, dir, 0, INFINITY, collect_piece, &a, NULL), TPK_OK);
+    CHECK_EQ_INT(tpk_set_march_ray(sm, org, dir, 0, INFINITY, collect_piece, &b, &b.current_part, NULL), TPK_OK);
+    CHECK_EQ_INT(a.count, 2);
+    CHECK_EQ_INT(b.count, 2);
+    for (int i = 0; i < a.count && i < b.count; i++) {
+        CHECK_EQ_INT((int)b.part[i], a.seg[i].tet); /* part i holds whole tet i */
+        CHECK(fabs(a.seg[i].t_in - b.seg[i].t_in) < 1e-12 && fabs(a.seg[i].t_out - b.seg[i].t_out) < 1e-12);
+    }
+    tpk_marcher_destroy(m);
+    tpk_close(whole);
+    tpk_set_marcher_destroy(sm);
+    tpk_partset_close(set);
+}
+
+/* A copy of two_parts.tpkset in the temp folder (beside copies of its parts) with `patch` applied to its
+ * part records and the checksums recomputed: what tpk_partset_open says. */
+static tpk_result open_patched_set(void (*patch)(tpk_part_record *records), char *err, size_t cap)
+{
+    byte_buffer b = {0};
+    if (load_bytes(vector_path("two_parts.tpkset"), &b) != 0)
+        return TPK_ERR_IO;
+    for (int p = 0; p < 2; p++) {
+        byte_buffer part = {0};
+        char name[64];
+        snprintf(name, sizeof name, "two_parts-%d.tpk", p);
+        if (load_bytes(vector_path(name), &part) == 0)
+            save_bytes(tpk_temp_path(name), part.data, part.size);
+        free(part.data);
+    }
+    tpk_dir_entry *e = entry_of(&b, TPK_TAG_PART);
+    tpk_part_record *records = (tpk_part_record *)(b.data + e->offset);
+    patch(records);
+    e->checksum = XXH64(records, e->raw_size, 0);
+    reseal(&b);
+    save_bytes(tpk_temp_path("patched.tpkset"), b.data, b.size);
+    free(b.data);
+    tpk_partset *set = NULL;
+    tpk_result r = tpk_partset_open(&set, tpk_temp_path("patched.tpkset"), NULL, NULL, NULL, err, cap);
+    tpk_partset_close(set);
+    return r;
+}
+
+static void patch_nothing(tpk_part_record *r) { (void)r; }
+static void rename_part(tpk_part_record *r, const char *name)
+{
+    memset(r->file, 0, sizeof r->file); /* NUL-padded: bytes after the name must be 0 */
+    snprintf(r->file, sizeof r->file, "%s", name);
+}
+static void patch_parent_dir(tpk_part_record *r) { rename_part(&r[1], "../two_parts-1.tpk"); }
+static void patch_missing(tpk_part_record *r) { rename_part(&r[0], "gone.tpk"); }
+static void patch_padding(tpk_part_record *r) { r[0].file[100] = 'x'; }
+static void patch_count(tpk_part_record *r) { r[1].tet_count = 2; }
+static void patch_checksum(tpk_part_record *r) { r[0].header_checksum ^= 1; }
+static void patch_reserved(tpk_part_record *r) { r[0].reserved[31] = 1; }
+
+TPK_TEST(part_set_refused)
+{
+    char err[512] = "";
+    CHECK_EQ_INT(open_patched_set(patch_nothing, err, sizeof err), TPK_OK);
+    CHECK_EQ_INT(open_patched_set(patch_parent_dir, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "part 1: the file name") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_missing, err, sizeof err), TPK_ERR_IO);
+    CHECK_MSG(strstr(err, "gone.tpk") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_count, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "counts differ") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_checksum, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_MSG(strstr(err, "header_checksum") != NULL, "message: %s", err);
+    CHECK_EQ_INT(open_patched_set(patch_reserved, err, sizeof err), TPK_ERR_CORRUPT);
+    CHECK_EQ_INT(open_patched_set(patch_padding, err, sizeof err), TPK_ERR_CORRUPT);
+    /* A plain .tpk is not a set. */
+    tpk_partset *set = NULL;
+    CHECK_EQ_INT(tpk_partset_open(&set, vector_path("one_tet.tpk"), NULL, NULL, NULL, err, sizeof err),
+                 TPK_ERR_NOT_FOUND);
+    CHECK(set == NULL);
 }

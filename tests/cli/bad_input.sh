@@ -51,14 +51,15 @@ head -c 100 "$WORK/c.tpk" > "$WORK/short.tpk"
 expect_exit 2 "$TPK" info "$WORK/short.tpk"
 expect_stderr "short.tpk"
 
-# Fields: unknown at convert time (the message lists what there is); render needs a point field.
+# Fields: unknown at convert time (the message lists what there is); render takes point and tet fields
+# (tests/cli/render_effects.sh) and names the ones there are.
 expect_exit 2 "$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/f.tpk" --field nosuch
 expect_stderr "available fields: mat_id (cell), temperature (point)"
 convert_checked "$SRC/samples/cylinder.vtk" "$WORK/m.tpk" --field mat_id --quiet
-expect_exit 2 "$TPK" render "$WORK/m.tpk" -o "$WORK/m.png" --field mat_id
-expect_stderr "per-tet field 'mat_id'; render needs a per-point field (this file has no point field)"
+expect_exit 2 "$TPK" render "$WORK/m.tpk" -o "$WORK/m.png" --field nope
+expect_stderr "no field named 'nope' (this file has fields: mat_id)"
 expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --field nope
-expect_stderr "point fields: temperature"
+expect_stderr "fields: temperature"
 expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/m.png" --step 3
 [ ! -e "$WORK/m.png" ] || fail "image left behind"
 # A twisted hexahedron (sfepy's cross3d.mesh, cell 2) cannot be split without a new point: it gets one at

@@ -22,6 +22,9 @@ cp "$WORK/c.tpk" "$WORK/flip.tpk"
 printf '\x55' | dd of="$WORK/flip.tpk" bs=1 seek=$((offset + 20)) conv=notrunc status=none
 expect_exit 1 "$TPK" check "$WORK/flip.tpk"
 grep -q "600 error   file_rule" "$WORK/out" || fail "no 600 line: $(cat "$WORK/out")"
+# The header's counts are still reported (they were "0 vertices, 0 cells").
+counts=$("$TPK" info "$WORK/c.tpk" --json | $PY -c 'import json,sys; d=json.load(sys.stdin); print(d["vertices"], d["tets"])')
+grep -q "tpk, ${counts% *} vertices, ${counts#* } cells" "$WORK/out" || fail "no header counts ($counts): $(head -1 "$WORK/out")"
 expect_exit 1 "$TPK" check "$WORK/flip.tpk" --json
 $PY - "$WORK/out" <<'PY'
 import json, sys
@@ -45,3 +48,15 @@ for bad in "$WORK/short.tpk" "$SRC/samples/vectors/bad_magic.tpk" "$SRC/samples/
     expect_stderr "$(basename "$bad")"
     [ ! -s "$WORK/out" ] || fail "output for an unreadable file: $(cat "$WORK/out")"
 done
+
+# Part sets (spec §13.4): two_parts.tpkset checks clean; bad_link.tpkset's containers are valid but its
+# links do not answer each other: check 614 for both links, exit 1.
+expect_exit 0 "$TPK" check "$SRC/samples/vectors/two_parts.tpkset"
+expect_exit 1 "$TPK" check "$SRC/samples/vectors/bad_link.tpkset" --json
+$PY - "$WORK/out" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+f = {x["id"]: x for x in d["findings"]}
+assert d["format"] == "tpkset" and list(f) == [614] and f[614]["count"] == 2, d["findings"]
+assert f[614]["name"] == "tpk_s01_links" and "link the face back" in f[614]["examples"][0]["note"], f[614]
+PY

@@ -46,3 +46,37 @@ convert_checked() {
     "$TPK" convert "$@"
     check_6xx "$2"
 }
+
+# keys OUT FILE.tpk... : into OUT, sorted tet keys (their 4 world positions, sorted) and outer-face keys of the
+# union of the files, through tetpack export --vtu and meshio.
+keys() {
+    local out=$1
+    shift
+    local vtus=()
+    for f in "$@"; do
+        "$TPK" export "$f" --vtu "$f.vtu" > /dev/null
+        vtus+=("$f.vtu")
+    done
+    "$PY" - "$out" "${vtus[@]}" <<'PYEOF'
+import sys, collections, meshio, numpy as np
+tets, faces = [], collections.Counter()
+for path in sys.argv[2:]:
+    m = meshio.read(path)
+    pts = m.points
+    for block in m.cells:
+        if block.type != "tetra":
+            continue
+        for t in block.data:
+            p = [tuple(pts[i]) for i in t]
+            tets.append(tuple(sorted(p)))
+            for k in range(4):
+                faces[tuple(sorted(p[:k] + p[k + 1:]))] += 1
+outer = sorted(f for f, n in faces.items() if n == 1)
+with open(sys.argv[1], "w") as out:
+    out.write("%d tets %d outer faces\n" % (len(tets), len(outer)))
+    for t in sorted(tets):
+        out.write("T %r\n" % (t,))
+    for f in outer:
+        out.write("F %r\n" % (f,))
+PYEOF
+}

@@ -61,6 +61,14 @@ refused "-o '$WORK/good.tpk' is the input file (same file as FILE.tpk '$WORK/goo
     "$TPK" render "$WORK/good.tpk" -o "$WORK/good.tpk" --size 8x8
 refused "-o '$WORK/tf.txt' is the input file (same file as --tf '$WORK/tf.txt')" \
     "$TPK" render "$WORK/good.tpk" -o "$WORK/tf.txt" --tf "$WORK/tf.txt" --size 8x8
+refused "--save-scene '$WORK/good.tpk' is the input file (same file as FILE.tpk '$WORK/good.tpk')" \
+    "$TPK" render "$WORK/good.tpk" -o "$WORK/x.png" --save-scene "$WORK/good.tpk" --size 8x8
+# extract.
+refused "OUT.tpk '$WORK/good.tpk' is the input file (same file as IN.tpk '$WORK/good.tpk')" \
+    "$TPK" extract "$WORK/good.tpk" "$WORK/good.tpk"
+refused "--save-scene '$WORK/good.tpk' is the input file (same file as IN.tpk '$WORK/good.tpk')" \
+    "$TPK" extract "$WORK/good.tpk" "$WORK/x.tpk" --save-scene "$WORK/good.tpk"
+refused "OUT.tpk '$WORK' is a directory" "$TPK" extract "$WORK/good.tpk" "$WORK"
 
 # ---- item 3: never replace what is not a regular file -------------------------------------------------
 mkfifo "$WORK/fifo"
@@ -92,6 +100,10 @@ printf '# vtk DataFile Version 2.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 
 refused "OUTPUT '$WORK' is a directory" "$TPK" convert "$WORK/trunc.vtk" "$WORK"
 refused "--vtu is empty" "$TPK" export "$WORK/good.tpk" --vtu ""
 refused "--shell '$WORK' is a directory" "$TPK" export "$WORK/good.tpk" --shell "$WORK"
+# Two outputs of one export that are one file: the second would replace the first.
+refused "--vtu '$WORK/both.vtu' and --shell '$WORK/both.vtu' name the same file" \
+    "$TPK" export "$WORK/good.tpk" --vtu "$WORK/both.vtu" --shell "$WORK/both.vtu"
+[ ! -e "$WORK/both.vtu" ] || fail "a refused export wrote $WORK/both.vtu"
 refused "-o '$WORK' is a directory" "$TPK" render "$WORK/good.tpk" -o "$WORK"
 # ... and the directory check comes before opening FILE.tpk (a broken one is not read either).
 refused "-o is empty" "$TPK" render "$WORK/trunc.vtk" -o ""
@@ -188,6 +200,7 @@ for mode in $modes; do
         held "$mode" "$sig" "$OUT/old.vtu" "$TPK" export "$WORK/good.tpk" --vtu "$OUT/old.vtu"
         held "$mode" "$sig" "$OUT/old.ply" "$TPK" export "$WORK/good.tpk" --shell "$OUT/old.ply"
         held "$mode" "$sig" "$OUT/old.png" "$TPK" render "$WORK/good.tpk" -o "$OUT/old.png" --size 16x16
+        held "$mode" "$sig" "$OUT/old.tpk" "$TPK" extract "$WORK/good.tpk" "$OUT/old.tpk"
     done
     # Let go, the outputs replace the old ones (or appear) whole: the same bytes as a plain run.
     released "$mode" "$TPK" convert "$WORK/small.vtk" "$OUT/old.tpk" --quiet

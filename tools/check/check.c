@@ -64,6 +64,14 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
                 return tpk_diag_fail(diag, "%s", why);
             return tpk_diag_fail(diag, "%s: %s", path, why);
         }
+        uint64_t part_chunk;
+        if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
+            tpk_close(file);
+            double t0 = now_seconds();
+            int rc = tpk_check_set(path, report, diag);
+            report->seconds[6] = now_seconds() - t0;
+            return rc;
+        }
         snprintf(report->format, sizeof report->format, "tpk");
         double t0 = now_seconds();
         int32_t *tets = NULL; /* recovered by the 6xx walk, handed to the mesh build */
@@ -71,8 +79,11 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
         report->seconds[6] = now_seconds() - t0;
         report->ran[6] = 1;
         tpk_file_info info;
-        if (tpk_get_info(file, &info) == TPK_OK)
+        if (tpk_get_info(file, &info) == TPK_OK) { /* the header's counts, also when a chunk is damaged */
             report->tets = (int64_t)info.tet_count;
+            report->vertices = (int64_t)info.vertex_count;
+            report->cells = (int64_t)info.tet_count;
+        }
         if (rc == 0) {
             tpk_diag sub = *diag;
             if (tpk_check_tpk_mesh_tets(file, tets, &mesh, &sub) == 0)

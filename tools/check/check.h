@@ -165,6 +165,10 @@ int tpk_check_tpk_file_tets(const char *path, struct tpk_file *file, tpk_check_r
                             tpk_diag *diag);
 int tpk_check_tpk_mesh_tets(struct tpk_file *file, int32_t *tets, tpk_mesh *out, tpk_diag *diag);
 
+/* A part set's manifest (a .tpk with a PART chunk): the 6xx checks of every part, then 614 on the links.
+ * Returns -1 (diag set) when the set cannot be opened (a part missing or not matching its record). */
+int tpk_check_set(const char *path, tpk_check_report *report, tpk_diag *diag);
+
 /* Cells usable by geometric/topological checks: every id in range and no id repeated. */
 int tpk_check_cell_usable(const tpk_mesh *mesh, int64_t cell);
 

@@ -108,6 +108,10 @@ static const tpk_check_def registry[] = {
     {612, "tpk_m12_field_range", E, "file",
      "TPK-M12: a field descriptor's min/max are not exactly the extremes of its values"},
     {613, "tpk_m13_values", E, "file", "TPK-M13: a TIME value is not finite, or a TMAP/VMAP value is out of range"},
+    {614, "tpk_s01_links", E, "file",
+     "TPK-S01 (part sets): a LINK record is not answered by the same face from the other part (its link back, "
+     "its tet, the same three vertex positions, the same order of their ids); ids: face, part, other part, "
+     "other face, other tet"},
 };
 
 const tpk_check_def *tpk_check_registry(int *count)

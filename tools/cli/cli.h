@@ -13,9 +13,12 @@ struct tpk_file;
 int tpk_cmd_convert(int argc, char **argv);
 int tpk_cmd_info(int argc, char **argv);
 int tpk_cmd_render(int argc, char **argv);
+int tpk_cmd_extract(int argc, char **argv);
 int tpk_cmd_export(int argc, char **argv);
 int tpk_cmd_check(int argc, char **argv);
 int tpk_cmd_formats(int argc, char **argv);
+/* `tetpack info` on a part set's manifest (cmd_info_set.c); json: --json. Returns the exit code. */
+int tpk_cli_info_set(const char *path, int json);
 
 /* The input formats, one line each (name, extensions, title), for the --help of convert and check. */
 void tpk_cli_print_formats(FILE *out);

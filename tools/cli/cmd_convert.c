@@ -25,6 +25,11 @@ static const char convert_help[] =
     "                              without --field, scalar cell fields are then kept too\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
+    "  --parts N                   write a part set instead (spec §15): OUTPUT is its manifest (name it\n"
+    "                              .tpkset) and N part files <stem>-<p>.tpk beside it, each a complete\n"
+    "                              .tpk; the tets are cut into N runs of equal length along the Hilbert\n"
+    "                              order, and the faces on each cut are linked across it (LINK). The\n"
+    "                              whole mesh is converted in memory first (inputs are not streamed)\n"
     "\n"
     "Orientation: a tet's node order is a labeling. Inverted tets, polyhedra given inside out, and\n"
     "cells whose every tet is negative (a file or block written in the mirrored node order) are turned\n"
@@ -196,6 +201,10 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.format = v;
         } else if (!strcmp(arg, "--no-reorder")) {
             a->options.no_reorder = 1;
+        } else if (!strncmp(arg, "--parts", 7)) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--parts")) || tpk_cli_parse_int(v, 1, 65536, &a->options.parts))
+                return tpk_cli_fail("convert", "--parts expects a number of parts from 1 to 65536, found '%s'",
+                                    v ? v : "");
         } else if (!strcmp(arg, "--drop-degenerate")) {
             a->options.drop_degenerate = 1;
         } else if (!strcmp(arg, "--reorient")) {

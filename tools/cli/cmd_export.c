@@ -1,5 +1,6 @@
 /* tetpack export: a .tpk's tets and fields as VTU, its shell as PLY, OBJ, OFF or STL. */
 #include <string.h>
+#include <sys/stat.h>
 
 #include "base/output_file.h"
 #include "cli.h"
@@ -22,6 +23,15 @@ static const char export_help[] =
     "                    to OBJ/OFF/STL, those faces on copies of their vertices, with a warning.\n"
     "Outputs are written atomically (an unnamed temporary file, linked into place when complete); an\n"
     "output that is FILE.tpk itself, a directory or not a regular file is refused.\n";
+
+/* Two outputs are the same file when their names match or they already exist as one inode. */
+static int same_output(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    if (!strcmp(a, b))
+        return 1;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
 
 int tpk_cmd_export(int argc, char **argv)
 {
@@ -47,6 +57,9 @@ int tpk_cmd_export(int argc, char **argv)
     }
     if (!path || (!vtu && !shell))
         return tpk_cli_fail("export", "expected FILE.tpk and --vtu OUT.vtu and/or --shell OUT.ply|.obj|.off|.stl");
+    if (vtu && shell && same_output(vtu, shell))
+        return tpk_cli_fail("export", "--vtu '%s' and --shell '%s' name the same file; the second would replace "
+                            "the first: choose two paths", vtu, shell);
     tpk_output_input input = {.arg = "FILE.tpk", .given = path};
     if ((vtu && tpk_cli_check_output("export", "--vtu", vtu, &input, 1)) ||
         (shell && tpk_cli_check_output("export", "--shell", shell, &input, 1)))

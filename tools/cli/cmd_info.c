@@ -13,6 +13,11 @@ static const char info_help[] =
     "checksum and the counts and ids, and prints the counts, bounds, origin, layouts, fields with\n"
     "their time steps, and every chunk with its codec and sizes. Exit 0 when the file is sound,\n"
     "2 when it cannot be used (the message says which rule failed, where).\n"
+    "On a part set's manifest (.tpkset, spec §15) it opens every part, checks it against the manifest\n"
+    "and its links, and prints the totals, the outer shell (faces on no cut) apart from the cut faces,\n"
+    "and the parts (with --json: part_set, part_count, tets, vertex_records, shell_faces (outer),\n"
+    "cut_faces, file_bytes, bounds and parts [{file, vertices, tets, shell_faces, outer_faces,\n"
+    "cut_faces, file_bytes, bounds}]).\n"
     "\n"
     "  --json   one JSON object: format_version, vertices, tets, shell_faces, layouts, fields\n"
     "           [{name, association, steps, units, min, max}], times, bounds {min, max}, origin,\n"
@@ -213,6 +218,11 @@ int tpk_cmd_info(int argc, char **argv)
     tpk_file *file = NULL;
     if (tpk_cli_open("info", path, &file))
         return TPK_EXIT_USAGE;
+    uint64_t part_chunk;
+    if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
+        tpk_close(file);
+        return tpk_cli_info_set(path, json);
+    }
     tpk_file_info info;
     tpk_get_info(file, &info);
     tpk_result verified = tpk_verify(file);

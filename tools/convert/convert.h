@@ -34,6 +34,8 @@ typedef struct tpk_convert_options {
                                      if turned over, instead of failing */
     int cell_to_point;            /* average cell fields to points (and keep them without --field) */
     int threads;                  /* <= 0: all cores */
+    int parts;                    /* 0: one .tpk; >= 1: output is a part set manifest of this many parts
+                                     (spec §15), cut along the Hilbert order */
     const char *command_line;     /* recorded in META; may be NULL */
     const struct tpk_tetgen_options *tetgen; /* surfaces and point clouds (surface.h); NULL: defaults */
 } tpk_convert_options;

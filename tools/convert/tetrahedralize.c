@@ -456,9 +456,12 @@ static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
  * (tpk_points_origin), as the file will store it; in world coordinates still (grid_origin + a float32
  * value, exact in double). A coordinate float32 cannot hold is left as it is, for the converter to
  * refuse by name before writing (TPK-M11). */
-static void snap_to_file_grid(tpk_tetmesh *out)
+static void snap_to_file_grid(const tpk_mesh *src, tpk_tetmesh *out)
 {
-    tpk_points_origin(out->points, out->vertex_count, out->grid_origin);
+    if (src->has_grid_origin) /* a piece of a larger mesh: the whole's grid */
+        memcpy(out->grid_origin, src->grid_origin, sizeof out->grid_origin);
+    else
+        tpk_points_origin(out->points, out->vertex_count, out->grid_origin);
     for (int64_t i = 0; i < 3 * out->vertex_count; i++) {
         double rel = (double)(float)(out->points[i] - out->grid_origin[i % 3]);
         if (isfinite(rel))
@@ -485,7 +488,7 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
         memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
     }
     if (flags & TPK_TETRA_FILE_GRID)
-        snap_to_file_grid(out);
+        snap_to_file_grid(src, out);
     if (plain) {
         out->tets = donor->cell_conn;
         donor->cell_conn = NULL;

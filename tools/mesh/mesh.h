@@ -44,6 +44,10 @@ typedef struct tpk_mesh {
     int step_count;         /* number of time steps (1 when static) */
     double *times;          /* step_count values, or NULL */
     char format[32];        /* "vtk-legacy-ascii", "tetgen", ... */
+    /* Set by a caller that converts one piece of a larger mesh (tetpack-mpi): the origin of the whole,
+     * so TPK_TETRA_FILE_GRID snaps every piece onto the same float32 grid. 0: from this mesh's box. */
+    int has_grid_origin;
+    double grid_origin[3];
 } tpk_mesh;
 
 void tpk_mesh_free(tpk_mesh *mesh);

@@ -27,8 +27,9 @@ typedef struct tpk_render_options {
     double range_min, range_max;   /* scalar range mapped to TF s in [0,1]; equal: every scalar -> 0.5 */
     double unit_distance;          /* TF alpha is opacity per this distance; <= 0: bbox diagonal / 100 */
     int threads;                   /* <= 0: all cores */
-    int integration;               /* 0: exact per segment (default), 1: sampling with steps of
-                                      unit_distance / 2 at most (and at least 1 sample per segment) */
+    int integration;               /* TPK_INTEGRATION_EXACT (0, default), _SAMPLED (1: samples at the
+                                      midpoints of equal steps of at most unit_distance / 2, at least 1
+                                      per piece), _MIDPOINT (2: one sample per piece at its midpoint) */
     float background[4];           /* RGBA, straight alpha, composited behind the volume */
     /* ---- Effects (zero: off). Both backends (CPU reference, Vulkan) implement each one with the
      * same definition, so their pictures agree; the definitions live in render.h's comments and in
@@ -49,6 +50,83 @@ typedef struct tpk_render_options {
 } tpk_render_options;
 
 #define TPK_RENDER_MAX_ISO 4
+#define TPK_INTEGRATION_EXACT 0
+#define TPK_INTEGRATION_SAMPLED 1
+#define TPK_INTEGRATION_MIDPOINT 2
+
+/* ---- Effect definitions (the contract between the CPU reference and the Vulkan renderer) ----------
+ * Notation. Primary ray x(t) = eye + t d, d unit, t = distance. The marcher reports pieces
+ * [t_in, t_out] of one tet (tpk_segment: v[0..2] the face it entered through, v[3] the fourth vertex).
+ * Scalar s: point field: linear on the piece from scalar_in to scalar_out; tet field: tet_scalars[tet]
+ * on the whole piece. u(s) = (s - range_min) / (range_max - range_min), u = 0.5 when the range is empty
+ * or there is no field. TF(u) = (r, g, b, a); extinction k(u) = a / unit_distance. Colour is composited
+ * front to back: C += T * alpha * m * rgb, T *= 1 - alpha, starting at C = 0, T = 1.
+ *
+ * CLIP BOX (clip != 0). Slab test of every ray (primary, shadow, AO) against [clip_min, clip_max]:
+ * per axis k, with d_k != 0, ta = (clip_min_k - o_k) / d_k, tb = (clip_max_k - o_k) / d_k,
+ * lo = max(lo, min(ta, tb)), hi = min(hi, max(ta, tb)); with d_k == 0 the ray misses when o_k is
+ * outside [clip_min_k, clip_max_k]. Start lo = tmin of the ray, hi = its tmax; the ray is marched over
+ * [lo, hi] (the marcher's tmin/tmax) and nothing when lo > hi: outside the box there is no volume and
+ * no isosurface, for every ray. Primary rays: tmin = 0, tmax = infinity.
+ *
+ * EARLY TERMINATION. A primary ray stops after the piece (or iso hit) that brings T <= 0.02.
+ *
+ * NORMAL. Point field: the tet's gradient g = [(s1-s0)(e2 x e3) + (s2-s0)(e3 x e1) + (s3-s0)(e1 x e2)] /
+ * (e1 . (e2 x e3)), e_i = p_i - p0, p_i and s_i the positions and scalars of v[0..3] of the segment;
+ * n = g / |g|, and no normal when g = 0 (or not finite). Tet field: no normal inside a tet; at a tet-field
+ * iso hit n is the unit normal (p1 - p0) x (p2 - p0) of the entry face v[0..2].
+ *
+ * LIGHT. Position light[] (have_light) or the eye. For a point x: L = (light - x) / |light - x|.
+ *
+ * LIGHTING FACTOR m of a shade point x (multiplies rgb; opacity is never changed):
+ *   m = A * (K_AMB + (1 - K_AMB) * D * S),   K_AMB = TPK_RENDER_AMBIENT = 0.3
+ *   D = |n . L| (two-sided Lambert) with shading on and a normal, else 1;
+ *   S = shadow transmittance from x (shadows on), else 1;  A = AO factor at x (ao_rays > 0), else 1.
+ *   With shading, shadows and AO all off, m = 1 (plain emission-absorption).
+ *   A volume piece uses x = its midpoint (t_in + t_out) / 2 for D, each piece its own normal.
+ *
+ * SHADE POINTS (where shadow and AO rays start; bounds their cost). Iso hits: every hit is one. Volume:
+ * before integrating a piece of optical depth tau > 0 (tau = length * mean k over the piece, exact for
+ * the piecewise linear TF), it becomes a shade point, at its midpoint, when no volume piece of this ray
+ * has been one yet or when T_cast - T >= TPK_RENDER_SHADE_STEP (= 1/32), T_cast being T when the last
+ * volume shade point was taken. Pieces in between reuse S and A of the last volume shade point. So a
+ * pixel casts at most ~32 volume shade points (T falls from 1 to 0.02).
+ *
+ * TRANSMITTANCE of a secondary ray from x along unit w over [0, len] (clipped by the box as above):
+ * T2 = exp(-sum over pieces of length * mean k) (exact mean of the piecewise linear TF alpha for a point
+ * field, constant for a tet field, whatever `integration` says), times (1 - iso_opacity) for every iso
+ * crossing at t > TPK_RENDER_SELF_EPS * unit_distance (an isosurface hides what is behind it; the
+ * epsilon keeps a hit from shadowing itself). Marching stops once T2 <= 0.02 (T2 keeps its value).
+ *   Shadow: w = L at x, len = |light - x|.  S = T2.
+ *   AO: len = ao_radius (<= 0: bounds diagonal / 10). A = mean of T2 over the ao_rays directions.
+ *
+ * AO DIRECTIONS. Axis a = n oriented toward the viewer (a = n if n . d <= 0 else -n); a = -d where there
+ * is no normal. Ray i of N (i = 0..N-1), pixel (px, py):
+ *   h = hash32((uint32)py * 65536u + (uint32)px)  with hash32(x): x ^= x >> 16; x *= 0x7feb352du;
+ *       x ^= x >> 15; x *= 0x846ca68bu; x ^= x >> 16   (uint32 arithmetic, wrapping)
+ *   rot = h * 2^-32;  z = 1 - (i + 0.5) / N;  r = sqrt(1 - z*z);
+ *   phi = 2 pi * fract(i * 0.6180339887498949 + rot);   w = r cos(phi) b1 + r sin(phi) b2 + z a
+ *   basis (Duff et al. 2017): sgn = a.z >= 0 ? 1 : -1; p = -1 / (sgn + a.z); q = a.x a.y p;
+ *   b1 = (1 + sgn a.x a.x p, sgn q, -sgn a.x), b2 = (q, sgn + a.y a.y p, -a.y).
+ *
+ * ISOSURFACES (iso_count values v_j, scalar units). Point field: the piece crosses v_j where
+ * (s_in < v_j <= s_out) or (s_in > v_j >= s_out), at t = t_in + (v_j - s_in) / (s_out - s_in) * length
+ * (half-open, so a crossing exactly on a face counts once). Tet field: between two consecutive pieces
+ * of one marcher run (previous t_out == this t_in) whose constants s_prev, s cross v_j the same way,
+ * at t = t_in. Crossings in a piece are taken in increasing t (equal t: increasing j); the volume is
+ * integrated up to each one, then the hit composites rgb = TF(u(v_j)).rgb, alpha = iso_opacity (<= 0:
+ * 1), m at the hit point with the normal above (the hit is a shade point; the volume schedule is not
+ * changed by it).
+ *
+ * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
+ * the piece's m multiplying its rgb, as `integration` says. Exact: split where u crosses a TF control
+ * point, then steps of optical depth <= 0.05 with colour weighted by extinction. Sampled: equal steps of
+ * at most unit_distance / 2, sampled at their middles, none once T <= 0.02. Midpoint: one sample at the
+ * middle of the stretch, alpha = 1 - exp(-length * k(u(s_mid))). */
+#define TPK_RENDER_AMBIENT 0.3
+#define TPK_RENDER_SHADE_STEP (1.0 / 32.0)
+#define TPK_RENDER_SELF_EPS 1e-3
+#define TPK_RENDER_OPAQUE_T 0.02
 
 /* width 800, height 600, integration 0, threads all, background opaque dark gray (0.1, 0.1, 0.1, 1);
  * the camera, tf and range are left zero for the caller. */
@@ -56,7 +134,8 @@ void tpk_render_options_default(tpk_render_options *opt);
 
 typedef struct tpk_render_stats {
     uint64_t rays;      /* primary rays (one per pixel) */
-    uint64_t tet_steps; /* tets the marcher stepped through, all rays */
+    uint64_t tet_steps; /* tets the marcher stepped through, all rays (secondary ones included) */
+    uint64_t secondary_rays; /* shadow and AO rays */
     double seconds;     /* wall time of the render (marcher creation included) */
 } tpk_render_stats;
 
@@ -69,6 +148,14 @@ typedef struct tpk_render_stats {
  * (invalid options, out of memory, TPK_ERR_MESH from the marcher with the pixel it happened at). */
 int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                    tpk_render_stats *stats, tpk_diag *diag);
+
+/* The same over a part set (spec §15) through its link-following marcher: the picture of the one file
+ * the parts were cut from. has_scalars: the parts' arrays carry a point field; diagonal: of the box of
+ * all parts' positions (tpk_positions_diagonal), for the default unit distance. */
+int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double diagonal,
+                       const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag);
+/* The diagonal of the box of mesh->positions (0 for fewer than two distinct points). */
+double tpk_positions_diagonal(const tpk_mesh_arrays *mesh);
 
 /* Write an 8-bit RGBA PNG, rows top to bottom, atomically: a temporary file in the same directory,
  * renamed over `path` only when complete. Returns 0, or -1 with a message naming the path. */

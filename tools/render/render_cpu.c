@@ -1,19 +1,13 @@
 /* The CPU volume renderer: one primary ray per pixel through the reference marcher, emission-absorption
  * integrated per tet piece, rows shared between pthreads through an atomic counter. */
-#include "render.h"
+#include "render_internal.h"
 
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
-
-#define OPAQUE_TRANSMITTANCE 0.02 /* stop at 98% opacity */
-#define MAX_PIECE_DEPTH 0.05      /* optical depth of one quadrature step of the exact integration */
-#define MAX_PIECE_STEPS 256
 
 void tpk_camera_default(const double bounds_min[3], const double bounds_max[3], tpk_camera *out)
 {
@@ -45,123 +39,91 @@ void tpk_render_options_default(tpk_render_options *opt)
     opt->background[3] = 1.0f;
 }
 
-/* ---- Shared state of one render ----------------------------------------------------------------- */
+/* ---- One primary ray: pieces, iso hits, lighting ----------------------------------------------- */
 
-typedef struct render_job {
-    const tpk_render_options *opt;
-    const tpk_marcher *marcher;
-    int has_scalars;
-    double inv_range;          /* 1 / (range_max - range_min), 0 when the range is empty */
-    double inv_unit;           /* 1 / unit_distance */
-    double eye[3], forward[3], right[3], up[3];
-    double tan_half_y, tan_half_x;
-    uint8_t *rgba;
-    atomic_int next_row;
-    atomic_int failed;
-    pthread_mutex_t error_lock;
-    tpk_result error;
-    int error_x, error_y;
-    atomic_uint_least64_t tet_steps;
-} render_job;
-
-typedef struct ray_state {
-    const render_job *job;
-    double color[3];       /* accumulated, premultiplied */
-    double transmittance;
-} ray_state;
-
-static inline double normalized(const render_job *job, double scalar)
+static void point_at(const ray_state *ray, double t, double x[3])
 {
-    if (!job->has_scalars || job->inv_range == 0)
-        return 0.5;
-    return (scalar - job->opt->range_min) * job->inv_range;
+    for (int k = 0; k < 3; k++)
+        x[k] = ray->job->eye[k] + t * ray->dir[k];
 }
 
-/* Add a stretch of length h over which color and extinction go linearly from (c0,k0) to (c1,k1), in
- * steps of optical depth at most MAX_PIECE_DEPTH. */
-static void integrate_linear(ray_state *ray, double h, const double c0[4], const double c1[4])
-{
-    const double inv_unit = ray->job->inv_unit;
-    double depth = h * 0.5 * (c0[3] + c1[3]) * inv_unit;
-    if (!(depth > 0))
-        return;
-    int n = (int)ceil(depth / MAX_PIECE_DEPTH);
-    n = n < 1 ? 1 : n > MAX_PIECE_STEPS ? MAX_PIECE_STEPS : n;
-    double step = h / n;
-    for (int j = 0; j < n; j++) {
-        double u0 = (double)j / n, u1 = (double)(j + 1) / n;
-        double k0 = c0[3] + u0 * (c1[3] - c0[3]), k1 = c0[3] + u1 * (c1[3] - c0[3]);
-        if (k0 + k1 <= 0)
-            continue;
-        double tau = step * 0.5 * (k0 + k1) * inv_unit;
-        double alpha = 1.0 - exp(-tau);
-        double weight = ray->transmittance * alpha / (k0 + k1);
-        for (int c = 0; c < 3; c++) {
-            double e0 = c0[c] + u0 * (c1[c] - c0[c]), e1 = c0[c] + u1 * (c1[c] - c0[c]);
-            ray->color[c] += weight * (e0 * k0 + e1 * k1); /* extinction-weighted mean color */
-        }
-        ray->transmittance *= 1.0 - alpha;
-    }
-}
-
-/* Exact integration of one piece: split where the scalar crosses a TF control point, so that color and
- * opacity are linear in distance on every part. */
-static void integrate_exact(ray_state *ray, double length, double s0, double s1)
-{
-    const tpk_transfer_function *tf = ray->job->opt->tf;
-    double ca[4], cb[4];
-    tpk_tf_eval(tf, s0, ca);
-    if (s0 == s1) {
-        integrate_linear(ray, length, ca, ca);
-        return;
-    }
-    const double ds = s1 - s0;
-    double prev_s = s0;
-    int n = tf->count;
-    for (int i = 0; i < n; i++) {
-        int k = ds > 0 ? i : n - 1 - i;
-        double cs = tf->points[k].s;
-        if (ds > 0 ? (cs <= s0 || cs >= s1) : (cs >= s0 || cs <= s1))
-            continue;
-        tpk_tf_eval(tf, cs, cb);
-        integrate_linear(ray, length * ((cs - prev_s) / ds), ca, cb);
-        memcpy(ca, cb, sizeof ca);
-        prev_s = cs;
-    }
-    tpk_tf_eval(tf, s1, cb);
-    integrate_linear(ray, length * ((s1 - prev_s) / ds), ca, cb);
-}
-
-/* Sampling: midpoints of equal steps no longer than unit_distance / 2. */
-static void integrate_sampled(ray_state *ray, double length, double s0, double s1)
+/* Composite the hit of iso value v at t (render.h: ISOSURFACES); n is the hit's normal or NULL. */
+static void composite_iso(ray_state *ray, double t, double v, const double *n)
 {
     const render_job *job = ray->job;
-    double max_step = 0.5 / job->inv_unit;
-    int n = (int)ceil(length / max_step);
-    n = n < 1 ? 1 : n > 4096 ? 4096 : n;
-    double step = length / n;
-    for (int j = 0; j < n && ray->transmittance > OPAQUE_TRANSMITTANCE; j++) {
-        double c[4];
-        tpk_tf_eval(job->opt->tf, s0 + (s1 - s0) * ((j + 0.5) / n), c);
-        double alpha = 1.0 - exp(-step * c[3] * job->inv_unit);
-        for (int k = 0; k < 3; k++)
-            ray->color[k] += ray->transmittance * alpha * c[k];
-        ray->transmittance *= 1.0 - alpha;
+    double m = 1.0;
+    if (job->lighting) {
+        double x[3], s = 1.0, a = 1.0;
+        point_at(ray, t, x);
+        if (job->cast)
+            rl_cast(ray, x, n, &s, &a);
+        m = rl_factor(ray, x, n, s, a);
     }
+    double c[4];
+    tpk_tf_eval(job->opt->tf, ri_normalized(job, v), c);
+    double alpha = job->iso_opacity;
+    for (int k = 0; k < 3; k++)
+        ray->color[k] += ray->transmittance * alpha * m * c[k];
+    ray->transmittance *= 1.0 - alpha;
+}
+
+/* The lighting factor of a volume piece (render.h: SHADE POINTS, LIGHTING FACTOR) into ray->m. */
+static void light_piece(ray_state *ray, const tpk_segment *seg, const double *n, double u_in, double u_out)
+{
+    const render_job *job = ray->job;
+    double length = seg->t_out - seg->t_in, mid[3];
+    point_at(ray, 0.5 * (seg->t_in + seg->t_out), mid);
+    if (job->cast && ri_optical_depth(job, length, u_in, u_out) > 0 &&
+        (!ray->cast_done || ray->t_cast - ray->transmittance >= TPK_RENDER_SHADE_STEP)) {
+        rl_cast(ray, mid, n, &ray->shade_s, &ray->shade_a);
+        ray->cast_done = 1;
+        ray->t_cast = ray->transmittance;
+    }
+    ray->m = rl_factor(ray, mid, n, ray->shade_s, ray->shade_a);
 }
 
 static int on_segment(void *user, const tpk_segment *seg)
 {
     ray_state *ray = user;
-    double length = seg->t_out - seg->t_in;
-    if (length > 0) {
-        double s0 = normalized(ray->job, seg->scalar_in), s1 = normalized(ray->job, seg->scalar_out);
-        if (ray->job->opt->integration == 1)
-            integrate_sampled(ray, length, s0, s1);
-        else
-            integrate_exact(ray, length, s0, s1);
+    const render_job *job = ray->job;
+    const tpk_render_options *opt = job->opt;
+    const int tet_field = job->tet_scalars != NULL;
+    double s_in = tet_field ? job->tet_scalars[seg->tet] : seg->scalar_in;
+    double s_out = tet_field ? s_in : seg->scalar_out;
+    ri_crossing hits[TPK_RENDER_MAX_ISO];
+    int nh = 0;
+    if (opt->iso_count > 0 && !tet_field)
+        nh = ri_point_crossings(opt, seg->t_in, seg->t_out, s_in, s_out, hits);
+    else if (opt->iso_count > 0 && ray->have_prev && ray->prev_t_out == seg->t_in)
+        nh = ri_jump_crossings(opt, seg->t_in, ray->prev_s, s_in, hits);
+    ray->have_prev = 1;
+    ray->prev_t_out = seg->t_out;
+    ray->prev_s = s_in;
+
+    double n[3], fn[3];
+    const double *np = job->lighting && rl_tet_normal(job, seg, n) ? n : NULL;
+    const double u_in = ri_normalized(job, s_in), u_out = ri_normalized(job, s_out);
+    ray->m = 1.0;
+    if (job->lighting && seg->t_out > seg->t_in)
+        light_piece(ray, seg, np, u_in, u_out);
+    /* the volume up to each hit, the hit, then the rest of the piece */
+    double cur_t = seg->t_in, cur_u = u_in;
+    for (int i = 0; i < nh && ray->transmittance > TPK_RENDER_OPAQUE_T; i++) {
+        double v = opt->iso[hits[i].j];
+        double hit_u = tet_field ? u_in : ri_normalized(job, v);
+        ri_integrate(ray, hits[i].t - cur_t, cur_u, hit_u);
+        const double *hn = np;
+        if (tet_field)
+            hn = job->lighting && rl_face_normal(job, seg, fn) ? fn : NULL;
+        double m = ray->m;
+        composite_iso(ray, hits[i].t, v, hn);
+        ray->m = m;
+        cur_t = hits[i].t;
+        cur_u = hit_u;
     }
-    return ray->transmittance <= OPAQUE_TRANSMITTANCE;
+    if (ray->transmittance > TPK_RENDER_OPAQUE_T)
+        ri_integrate(ray, seg->t_out - cur_t, cur_u, u_out);
+    return ray->transmittance <= TPK_RENDER_OPAQUE_T || ray->error != TPK_OK;
 }
 
 static uint8_t to_byte(double v)
@@ -171,23 +133,36 @@ static uint8_t to_byte(double v)
 }
 
 /* One pixel: returns the marcher's result. */
-static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t *steps)
+static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t counts[2])
 {
     const tpk_render_options *opt = job->opt;
     double px = (2.0 * (x + 0.5) / opt->width - 1.0) * job->tan_half_x;
     double py = (1.0 - 2.0 * (y + 0.5) / opt->height) * job->tan_half_y;
-    double dir[3], len2 = 0;
+    ray_state ray;
+    memset(&ray, 0, sizeof ray);
+    ray.job = job;
+    ray.px = x;
+    ray.py = y;
+    ray.transmittance = 1.0;
+    ray.shade_s = ray.shade_a = 1.0;
+    double len2 = 0;
     for (int k = 0; k < 3; k++) {
-        dir[k] = job->forward[k] + px * job->right[k] + py * job->up[k];
-        len2 += dir[k] * dir[k];
+        ray.dir[k] = job->forward[k] + px * job->right[k] + py * job->up[k];
+        len2 += ray.dir[k] * ray.dir[k];
     }
     double inv_len = 1.0 / sqrt(len2);
     for (int k = 0; k < 3; k++)
-        dir[k] *= inv_len; /* unit direction: t is the distance from the eye */
-    ray_state ray = {job, {0, 0, 0}, 1.0};
-    tpk_march_stats st;
-    tpk_result r = tpk_march_ray(job->marcher, job->eye, dir, 0.0, INFINITY, on_segment, &ray, &st);
-    *steps += st.tet_steps;
+        ray.dir[k] *= inv_len; /* unit direction: t is the distance from the eye */
+    tpk_result r = TPK_OK;
+    double lo = 0.0, hi = INFINITY;
+    if (rl_clip(opt, job->eye, ray.dir, &lo, &hi)) {
+        tpk_march_stats st;
+        r = job->set ? tpk_set_march_ray(job->set, job->eye, ray.dir, lo, hi, on_segment, &ray, NULL, &st)
+                     : tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, on_segment, &ray, &st);
+        ray.steps += st.tet_steps;
+    }
+    counts[0] += ray.steps;
+    counts[1] += ray.secondary;
     const float *bg = opt->background;
     double alpha = (1.0 - ray.transmittance) + ray.transmittance * bg[3];
     uint8_t *out = &job->rgba[4 * ((size_t)y * (size_t)opt->width + (size_t)x)];
@@ -196,19 +171,19 @@ static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t *st
         out[k] = to_byte(alpha > 0 ? premult / alpha : 0.0);
     }
     out[3] = to_byte(alpha);
-    return r;
+    return r != TPK_OK ? r : ray.error;
 }
 
 static void *render_worker(void *arg)
 {
     render_job *job = arg;
-    uint64_t steps = 0;
+    uint64_t counts[2] = {0, 0}; /* marcher steps, secondary rays */
     for (;;) {
         int y = atomic_fetch_add(&job->next_row, 1);
         if (y >= job->opt->height || atomic_load(&job->failed))
             break;
         for (int x = 0; x < job->opt->width; x++) {
-            tpk_result r = render_pixel(job, x, y, &steps);
+            tpk_result r = render_pixel(job, x, y, counts);
             if (r != TPK_OK) {
                 pthread_mutex_lock(&job->error_lock);
                 if (!atomic_load(&job->failed)) {
@@ -222,7 +197,8 @@ static void *render_worker(void *arg)
             }
         }
     }
-    atomic_fetch_add(&job->tet_steps, steps);
+    atomic_fetch_add(&job->tet_steps, counts[0]);
+    atomic_fetch_add(&job->secondary_rays, counts[1]);
     return NULL;
 }
 
@@ -272,7 +248,7 @@ static int setup_camera(render_job *job, const tpk_camera *cam, tpk_diag *diag)
     return 0;
 }
 
-static double bbox_diagonal(const tpk_mesh_arrays *mesh)
+double tpk_positions_diagonal(const tpk_mesh_arrays *mesh)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint64_t i = 0; i < mesh->vertex_count; i++)
@@ -300,52 +276,83 @@ static int thread_count(const tpk_render_options *opt)
     return (int)n;
 }
 
-int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                   tpk_render_stats *stats, tpk_diag *diag)
+static int finite3(const double v[3])
 {
-    struct timespec t0, t1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    if (stats)
-        memset(stats, 0, sizeof *stats);
-    if (!mesh || !opt || !rgba)
-        return tpk_diag_fail(diag, "render: mesh, options and image buffer are required");
+    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
+
+/* The effect options (render.h): values a renderer cannot use are refused, not clamped. */
+static int check_effects(const tpk_render_options *opt, tpk_diag *diag)
+{
+    if (opt->iso_count < 0 || opt->iso_count > TPK_RENDER_MAX_ISO)
+        return tpk_diag_fail(diag, "render: expected 0..%d iso values, found %d", TPK_RENDER_MAX_ISO, opt->iso_count);
+    for (int j = 0; j < opt->iso_count; j++)
+        if (!isfinite(opt->iso[j]))
+            return tpk_diag_fail(diag, "render: iso value %d is not finite", j + 1);
+    if (!isfinite(opt->iso_opacity) || opt->iso_opacity > 1)
+        return tpk_diag_fail(diag, "render: expected an iso opacity <= 1, found %g", opt->iso_opacity);
+    if (opt->clip && (!finite3(opt->clip_min) || !finite3(opt->clip_max)))
+        return tpk_diag_fail(diag, "render: the clip box must be finite");
+    for (int k = 0; opt->clip && k < 3; k++)
+        if (opt->clip_min[k] > opt->clip_max[k])
+            return tpk_diag_fail(diag, "render: clip box min %g above max %g on axis %c", opt->clip_min[k],
+                                 opt->clip_max[k], "xyz"[k]);
+    if (opt->have_light && !finite3(opt->light))
+        return tpk_diag_fail(diag, "render: the light position must be finite");
+    if (opt->ao_rays < 0 || opt->ao_rays > 1024)
+        return tpk_diag_fail(diag, "render: expected 0..1024 AO rays, found %d", opt->ao_rays);
+    if (!isfinite(opt->ao_radius))
+        return tpk_diag_fail(diag, "render: the AO radius must be finite");
+    return 0;
+}
+
+static int check_options(const tpk_render_options *opt, tpk_diag *diag)
+{
     if (opt->width < 1 || opt->height < 1 || opt->width > 32768 || opt->height > 32768)
         return tpk_diag_fail(diag, "render: expected width and height in 1..32768, found %dx%d", opt->width,
                              opt->height);
     if (!opt->tf || opt->tf->count < 1 || opt->tf->count > TPK_TF_MAX_POINTS)
         return tpk_diag_fail(diag, "render: a transfer function with at least one point is required");
-    if (opt->integration != 0 && opt->integration != 1)
-        return tpk_diag_fail(diag, "render: expected integration 0 (exact) or 1 (sampling), found %d",
+    if (opt->integration < TPK_INTEGRATION_EXACT || opt->integration > TPK_INTEGRATION_MIDPOINT)
+        return tpk_diag_fail(diag, "render: expected integration 0 (exact), 1 (sampled) or 2 (midpoint), found %d",
                              opt->integration);
     if (!isfinite(opt->range_min) || !isfinite(opt->range_max))
         return tpk_diag_fail(diag, "render: the scalar range must be finite");
+    return check_effects(opt, diag);
+}
 
-    render_job *job = calloc(1, sizeof *job);
-    if (!job)
-        return tpk_diag_fail(diag, "render: out of memory");
+/* Everything of the job that depends on the mesh and the options, except the camera. */
+static void setup_job(render_job *job, int has_point_scalars, double diagonal, const tpk_render_options *opt)
+{
     job->opt = opt;
-    job->rgba = rgba;
-    job->has_scalars = mesh->scalars != NULL;
+    job->tet_scalars = opt->tet_scalars;
+    job->has_scalars = has_point_scalars || opt->tet_scalars != NULL;
+    job->range_min = opt->range_min;
     job->inv_range = opt->range_max != opt->range_min ? 1.0 / (opt->range_max - opt->range_min) : 0.0;
     double unit = opt->unit_distance;
     if (!(unit > 0) || !isfinite(unit))
-        unit = bbox_diagonal(mesh) / 100.0;
-    job->inv_unit = unit > 0 ? 1.0 / unit : 1.0;
+        unit = diagonal / 100.0;
+    job->unit = unit > 0 ? unit : 1.0;
+    job->inv_unit = 1.0 / job->unit;
+    job->iso_opacity = opt->iso_opacity > 0 ? opt->iso_opacity : 1.0;
+    job->ao_radius = opt->ao_radius > 0 ? opt->ao_radius : diagonal / 10.0;
+    job->cast = opt->shadows || opt->ao_rays > 0;
+    job->lighting = job->cast || opt->shading;
+}
+
+/* The rows on all threads, once the job's marcher (or part set) and options are in place. */
+static int run_render(render_job *job, tpk_render_stats *stats, const struct timespec *t0, tpk_diag *diag)
+{
+    const tpk_render_options *opt = job->opt;
     int rc = setup_camera(job, &opt->camera, diag);
-    if (rc != 0) {
-        free(job);
+    if (rc != 0)
         return rc;
-    }
-    tpk_marcher *marcher = NULL;
-    tpk_result r = tpk_marcher_create(&marcher, mesh);
-    if (r != TPK_OK) {
-        free(job);
-        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
-    }
-    job->marcher = marcher;
+    for (int k = 0; k < 3; k++)
+        job->light[k] = opt->have_light ? opt->light[k] : job->eye[k];
     atomic_init(&job->next_row, 0);
     atomic_init(&job->failed, 0);
     atomic_init(&job->tet_steps, 0);
+    atomic_init(&job->secondary_rays, 0);
     pthread_mutex_init(&job->error_lock, NULL);
 
     int n = thread_count(opt);
@@ -361,14 +368,70 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
     if (atomic_load(&job->failed))
         rc = tpk_diag_fail(diag, "render: ray of pixel (%d, %d): %s", job->error_x, job->error_y,
                            tpk_result_string(job->error));
+    struct timespec t1;
     clock_gettime(CLOCK_MONOTONIC, &t1);
     if (stats) {
         stats->rays = (uint64_t)opt->width * (uint64_t)opt->height;
         stats->tet_steps = atomic_load(&job->tet_steps);
-        stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+        stats->secondary_rays = atomic_load(&job->secondary_rays);
+        stats->seconds = (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
     }
     pthread_mutex_destroy(&job->error_lock);
+    return rc;
+}
+
+int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                   tpk_render_stats *stats, tpk_diag *diag)
+{
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (!mesh || !opt || !rgba)
+        return tpk_diag_fail(diag, "render: mesh, options and image buffer are required");
+    if (check_options(opt, diag))
+        return -1;
+    render_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "render: out of memory");
+    job->rgba = rgba;
+    job->mesh = mesh;
+    setup_job(job, mesh->scalars != NULL, tpk_positions_diagonal(mesh), opt);
+    tpk_marcher *marcher = NULL;
+    tpk_result r = tpk_marcher_create(&marcher, mesh);
+    if (r != TPK_OK) {
+        free(job);
+        return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
+    }
+    job->marcher = marcher;
+    int rc = run_render(job, stats, &t0, diag);
     tpk_marcher_destroy(marcher);
+    free(job);
+    return rc;
+}
+
+int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double diagonal,
+                       const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag)
+{
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (!marcher || !opt || !rgba)
+        return tpk_diag_fail(diag, "render: part set, options and image buffer are required");
+    if (check_options(opt, diag))
+        return -1;
+    /* Normals and tet fields index one file's vertices and tets; a set's segments name a part's. */
+    if (opt->shading || opt->shadows || opt->ao_rays > 0 || opt->tet_scalars)
+        return tpk_diag_fail(diag, "render: a part set renders emission-absorption, isosurfaces and a clip box; "
+                                   "shading, shadows, ambient occlusion and tet fields need the single file");
+    render_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "render: out of memory");
+    job->rgba = rgba;
+    job->set = marcher;
+    setup_job(job, has_scalars, diagonal, opt);
+    int rc = run_render(job, stats, &t0, diag);
     free(job);
     return rc;
 }

@@ -1,0 +1,37 @@
+/* The parsed options of `tetpack render`, shared by the pieces of the command line that fill them (the
+ * option table of cmd_render.c, a scene file) and turned into tpk_render_options in one place. */
+#ifndef TPK_CLI_RENDER_ARGS_H
+#define TPK_CLI_RENDER_ARGS_H
+
+#include "render/render.h"
+#include "scene/scene.h"
+#include "tetpack.h"
+
+typedef struct render_args {
+    const char *path, *output, *tf, *field, *layout;
+    int width, height;
+    int step, step_last, have_steps; /* --step N (step_last = step) or --steps A:B */
+    int threads, json, have_camera, have_range, integration;
+    double camera[10], range[2], unit_distance;
+    int iso_count;
+    double iso[TPK_RENDER_MAX_ISO], iso_opacity;
+    int clip;
+    double clip_box[6]; /* x0,y0,z0,x1,y1,z1 */
+    int shading, shadows, have_light, ao_rays;
+    double light[3], ao_radius; /* ao_radius 0: the renderer's default */
+    const char *scene_path, *save_scene; /* --scene, --save-scene */
+    const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
+    char device[256];                    /* the Vulkan device's name, or "cpu" */
+    tpk_scene scene;                     /* what --scene gave (scene.given = 0 without one) */
+} render_args;
+
+/* Defaults: 512x512, step 0, everything else off. */
+void render_args_default(render_args *a);
+
+/* Fill `opt` (after tpk_render_options_default) from the arguments: size, camera (the default 3/4 view of
+ * the file's bounds unless given), tf, range (the field's from its descriptor unless given), integration,
+ * threads and every effect. The field values themselves (point scalars or tet_scalars) are the caller's. */
+void render_args_to_options(const render_args *a, tpk_file *file, const tpk_transfer_function *tf,
+                            tpk_render_options *opt);
+
+#endif

@@ -1,0 +1,388 @@
+/* Writing one .tpk from the pipeline's tet mesh: positions, layouts and shell streamed block by block,
+ * fields, maps and META (and, for a part of a part set, its LINK chunk), atomically. */
+#include "write_tpk.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "base/output_file.h"
+#include "base/parallel.h"
+#include "base/strbuf.h"
+#include "pipeline.h"
+#include "tetpack.h"
+
+typedef struct chunk_writer {
+    tpk_writer *writer;
+    int zstd_level;
+    int threads; /* for building records */
+    tpk_diag *diag;
+} chunk_writer;
+
+static tpk_chunk_desc chunk_desc(const chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type,
+                                  uint32_t size, uint64_t count, uint32_t index, uint32_t step)
+{
+    tpk_chunk_desc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.tag = tag;
+    desc.flags = required ? TPK_CHUNK_REQUIRED : 0;
+    desc.codec = cw->zstd_level > 0 ? TPK_CODEC_ZSTD : TPK_CODEC_NONE;
+    desc.zstd_level = cw->zstd_level;
+    desc.elem_type = (uint8_t)type;
+    desc.elem_size = size;
+    desc.elem_count = count;
+    desc.index = index;
+    desc.step = step;
+    return desc;
+}
+
+static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type, uint32_t size,
+                     uint64_t count, uint32_t index, uint32_t step, const void *data)
+{
+    tpk_chunk_desc desc = chunk_desc(cw, tag, required, type, size, count, index, step);
+    if (tpk_writer_add_chunk(cw->writer, &desc, data) != TPK_OK)
+        return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
+    return 0;
+}
+
+/* Records made block by block (fill(user, first, count, dst)) and streamed into one chunk, so a large
+ * array never exists whole next to the mesh: the converter's peak memory is the mesh plus one block. */
+#define STREAM_BLOCK ((int64_t)1 << 18)
+
+typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst);
+
+typedef struct fill_job {
+    fill_fn fill;
+    const void *user;
+    int64_t first;
+    char *block;
+    uint32_t elem_size;
+} fill_job;
+
+static void fill_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const fill_job *job = ctx;
+    (void)worker;
+    job->fill(job->user, job->first + begin, end - begin, job->block + (size_t)begin * job->elem_size);
+}
+
+static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user)
+{
+    int64_t total = (int64_t)desc->elem_count;
+    fill_job job = {fill, user, 0, malloc((size_t)STREAM_BLOCK * desc->elem_size), desc->elem_size};
+    if (!job.block)
+        return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
+    tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
+    for (job.first = 0; r == TPK_OK && job.first < total; job.first += STREAM_BLOCK) {
+        int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
+        tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
+        r = tpk_writer_append(cw->writer, job.block, (uint64_t)count * desc->elem_size);
+    }
+    if (r == TPK_OK)
+        r = tpk_writer_end_chunk(cw->writer);
+    free(job.block);
+    if (r != TPK_OK)
+        return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
+    return 0;
+}
+
+/* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the origin
+ * overflows float32, is an error naming it (also when no cell uses it: the file stores every point). */
+static int check_storable(const tpk_tetmesh *mesh, const double *origin, tpk_diag *diag)
+{
+    for (int pass = 0; pass < 2; pass++) /* non-finite points first: they would make every offset overflow */
+        for (int64_t i = 0; i < mesh->vertex_count; i++) {
+            const double *p = mesh->points + 3 * i;
+            int bad = 0;
+            for (int k = 0; k < 3; k++)
+                bad |= pass == 0 ? !isfinite(p[k]) : !isfinite((float)(p[k] - origin[k]));
+            if (bad)
+                return tpk_diag_fail(diag, "point %d is at (%.17g, %.17g, %.17g): %s",
+                                     mesh->vertex_source ? mesh->vertex_source[i] : (int32_t)i, p[0], p[1], p[2],
+                                     pass == 0 ? "a coordinate is not a finite number"
+                                               : "too far from the origin for float32 positions (the "
+                                                 "format stores them relative to it)");
+        }
+    return 0;
+}
+
+/* Move the points into the frame the file stores: relative to the origin of tpk_points_origin (so
+ * meshes far from 0 keep float32 precision) and rounded to float32. Everything after this (exact orientation
+ * included) then decides on exactly the coordinates a reader of the file sees. */
+int tpk_quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *diag)
+{
+    /* On the grid tetrahedralize decided on (TPK_TETRA_FILE_GRID), the same origin keeps it exact. */
+    if (mesh->on_grid)
+        memcpy(hdr->origin, mesh->grid_origin, sizeof hdr->origin);
+    else
+        tpk_points_origin(mesh->points, mesh->vertex_count, hdr->origin);
+    for (int k = 0; k < 3; k++) {
+        hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
+        hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
+    }
+    if (check_storable(mesh, hdr->origin, diag) != 0)
+        return -1;
+    memcpy(mesh->origin, hdr->origin, sizeof mesh->origin);
+    for (int64_t i = 0; i < mesh->vertex_count; i++)
+        for (int k = 0; k < 3; k++) {
+            double rel = (double)(float)(mesh->points[3 * i + k] - hdr->origin[k]);
+            double world = hdr->origin[k] + rel;
+            mesh->points[3 * i + k] = rel;
+            hdr->bounds_min[k] = world < hdr->bounds_min[k] ? world : hdr->bounds_min[k];
+            hdr->bounds_max[k] = world > hdr->bounds_max[k] ? world : hdr->bounds_max[k];
+        }
+    return 0;
+}
+
+static void fill_positions(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const double *points = user;
+    float *pos = dst;
+    for (int64_t i = 0; i < 3 * count; i++)
+        pos[i] = (float)points[3 * first + i]; /* exact: quantize_points rounded them already */
+}
+
+static int write_positions(chunk_writer *cw, const tpk_tetmesh *mesh)
+{
+    tpk_chunk_desc desc = chunk_desc(cw, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, (uint64_t)mesh->vertex_count, 0, 0);
+    return stream_chunk(cw, &desc, fill_positions, mesh->points);
+}
+
+typedef struct layout_source {
+    const int32_t *tets, *neighbors;
+} layout_source;
+
+static void fill_tet16(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet16(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static void fill_tet20(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet20(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static void fill_tet32(const void *user, int64_t first, int64_t count, void *dst)
+{
+    const layout_source *src = user;
+    tpk_build_tet32(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+}
+
+static int write_layouts(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                         unsigned layouts)
+{
+    static const struct {
+        unsigned bit;
+        uint32_t tag;
+        tpk_elem_type type;
+        uint32_t size;
+        fill_fn fill;
+    } kinds[] = {{TPK_LAYOUT_BIT_TET16, TPK_TAG_TT16, TPK_ELEM_TET16, 16, fill_tet16},
+                 {TPK_LAYOUT_BIT_TET20, TPK_TAG_TT20, TPK_ELEM_TET20, 20, fill_tet20},
+                 {TPK_LAYOUT_BIT_TET32, TPK_TAG_TT32, TPK_ELEM_TET32, 32, fill_tet32}};
+    layout_source src = {mesh->tets, neighbors};
+    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+        if (!(layouts & kinds[k].bit))
+            continue;
+        tpk_chunk_desc desc = chunk_desc(cw, kinds[k].tag, 1, kinds[k].type, kinds[k].size,
+                                         (uint64_t)mesh->tet_count, 0, 0);
+        if (stream_chunk(cw, &desc, kinds[k].fill, &src) != 0)
+            return -1;
+    }
+    return 0;
+}
+
+static int write_shell(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                       uint64_t *shell_count)
+{
+    int64_t count = tpk_count_shell_faces(neighbors, mesh->tet_count);
+    tpk_shell_face *shell = malloc(sizeof *shell * (size_t)(count ? count : 1));
+    if (!shell)
+        return tpk_diag_fail(cw->diag, "out of memory for %lld shell faces", (long long)count);
+    tpk_build_shell(mesh->tets, neighbors, mesh->tet_count, shell);
+    *shell_count = (uint64_t)count;
+    int rc = put_chunk(cw, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, (uint64_t)count, 0, 0, shell);
+    free(shell);
+    return rc;
+}
+
+static void field_range(const tpk_src_field *f, size_t values, float *lo, float *hi)
+{
+    float mn = INFINITY, mx = -INFINITY;
+    for (size_t i = 0; i < values; i++) {
+        float v = f->values[i];
+        if (v == v) {
+            mn = v < mn ? v : mn;
+            mx = v > mx ? v : mx;
+        }
+    }
+    if (mn > mx)
+        mn = mx = NAN;
+    *lo = mn;
+    *hi = mx;
+}
+
+static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
+{
+    if (mesh->field_count == 0)
+        return 0;
+    tpk_field_desc *desc = calloc((size_t)mesh->field_count, sizeof *desc);
+    if (!desc)
+        return tpk_diag_fail(cw->diag, "out of memory for field descriptors");
+    int max_steps = 1;
+    for (int i = 0; i < mesh->field_count; i++) {
+        const tpk_src_field *f = &mesh->fields[i];
+        size_t length = strnlen(f->name, sizeof desc[i].name - 1);
+        if (!tpk_utf8_valid(f->name, length)) { /* spec §7.1: names are UTF-8 */
+            free(desc);
+            return tpk_diag_fail(cw->diag, "field '%.*s' (kept field %d): its name is not valid UTF-8 (a name in "
+                                 "another encoding, or cut inside a character at %d bytes); the format stores "
+                                 "UTF-8 names: rename it in the source, or leave it out with --field",
+                                 (int)length, f->name, i + 1, TPK_NAME_MAX - 1);
+        }
+        size_t per_step = (size_t)(f->association == TPK_ASSOC_POINT ? mesh->vertex_count : mesh->tet_count);
+        memcpy(desc[i].name, f->name, length); /* NUL-padded by calloc */
+        desc[i].association = (uint32_t)f->association;
+        desc[i].step_count = (uint32_t)f->step_count;
+        desc[i].components = 1;
+        field_range(f, per_step * (size_t)f->step_count, &desc[i].min_value, &desc[i].max_value);
+        max_steps = f->step_count > max_steps ? f->step_count : max_steps;
+    }
+    int rc = put_chunk(cw, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, (uint64_t)mesh->field_count, 0, 0, desc);
+    free(desc);
+    for (int i = 0; rc == 0 && i < mesh->field_count; i++) {
+        const tpk_src_field *f = &mesh->fields[i];
+        size_t per_step = (size_t)(f->association == TPK_ASSOC_POINT ? mesh->vertex_count : mesh->tet_count);
+        for (int s = 0; rc == 0 && s < f->step_count; s++)
+            rc = put_chunk(cw, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, per_step, (uint32_t)i, (uint32_t)s,
+                           f->values + per_step * (size_t)s);
+    }
+    for (int s = 0; rc == 0 && mesh->times && s < mesh->step_count; s++)
+        if (!isfinite(mesh->times[s])) /* TPK-M13 */
+            rc = tpk_diag_fail(cw->diag, "time step %d has the time %g; the format stores only finite times", s,
+                               mesh->times[s]);
+    if (rc == 0 && mesh->times && mesh->step_count == max_steps && max_steps > 0)
+        rc = put_chunk(cw, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, (uint64_t)max_steps, 0, 0, mesh->times);
+    return rc;
+}
+
+static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_convert_report *rep,
+                      const char *source_format, const tpk_part_extras *part)
+{
+    tpk_strbuf sb = {0};
+    tpk_strbuf_printf(&sb, "{\"converter\":{\"name\":\"tetpack\",\"version\":\"%s\"},\"command_line\":",
+                      TPK_LIBRARY_VERSION);
+    tpk_strbuf_json_string(&sb, o->command_line ? o->command_line : "");
+    tpk_strbuf_printf(&sb, ",\"source\":{\"path\":");
+    tpk_strbuf_json_string(&sb, o->input);
+    tpk_strbuf_printf(&sb, ",\"format\":");
+    tpk_strbuf_json_string(&sb, source_format);
+    tpk_strbuf_printf(&sb, ",\"cells\":%lld,\"points\":%lld}", (long long)rep->source_cells,
+                      (long long)rep->source_points);
+    tpk_strbuf_printf(&sb, ",\"pipeline\":{\"reordered\":%s,\"steiner_cells\":%lld,\"face_steiner_points\":%lld,"
+                      "\"polyhedra\":%lld,\"bad_cells_skipped\":%lld}",
+                      o->no_reorder ? "false" : "true", (long long)rep->steiner_cells,
+                      (long long)rep->face_steiner_points, (long long)rep->polyhedra,
+                      (long long)rep->bad_cells_skipped);
+    tpk_strbuf_printf(&sb, ",\"repairs\":");
+    tpk_convert_repairs_json(&sb, o, rep);
+    if (part)
+        tpk_strbuf_printf(&sb, ",\"part_set\":{\"index\":%d,\"parts\":%d}", part->index, part->count);
+    tpk_strbuf_printf(&sb, "}");
+    int rc;
+    if (sb.failed)
+        rc = tpk_diag_fail(cw->diag, "out of memory for metadata");
+    else
+        rc = put_chunk(cw, TPK_TAG_META, 0, TPK_ELEM_BYTE, 1, sb.length, 0, 0, sb.data);
+    tpk_strbuf_free(&sb);
+    return rc;
+}
+
+void tpk_convert_repairs_json(tpk_strbuf *sb, const tpk_convert_options *o, const tpk_convert_report *r)
+{
+    tpk_strbuf_printf(sb, "{\"reorient\":{\"requested\":%s,\"inverted_tets\":%lld,\"mirrored_cells\":%lld},",
+                      o->strict_orientation ? "false" : "true", (long long)r->inverted_fixed,
+                      (long long)r->mirrored_cells);
+    tpk_strbuf_printf(sb, "\"drop_degenerate\":{\"requested\":%s,\"degenerate_tets\":%lld,\"collapsed_cells\":%lld},",
+                      o->drop_degenerate ? "true" : "false", (long long)r->degenerate_dropped,
+                      (long long)r->collapsed_cells_dropped);
+    tpk_strbuf_printf(sb, "\"merge_duplicates\":{\"requested\":%s,\"tolerance\":",
+                      o->merge_duplicates ? "true" : "false");
+    tpk_strbuf_json_number(sb, o->merge_duplicates ? o->merge_tolerance : 0.0);
+    tpk_strbuf_printf(sb, ",\"merged_vertices\":%lld},", (long long)r->merged_vertices);
+    tpk_strbuf_printf(sb, "\"cut_folds\":{\"requested\":%s,\"folded_faces\":%lld}}", o->cut_folds ? "true" : "false",
+                      (long long)r->folds_cut);
+}
+
+static int write_maps(chunk_writer *cw, const tpk_tetmesh *mesh)
+{
+    int rc = put_chunk(cw, TPK_TAG_TMAP, 0, TPK_ELEM_I32, 4, (uint64_t)mesh->tet_count, 0, 0, mesh->tet_source);
+    if (rc == 0)
+        rc = put_chunk(cw, TPK_TAG_VMAP, 0, TPK_ELEM_I32, 4, (uint64_t)mesh->vertex_count, 0, 0,
+                       mesh->vertex_source);
+    return rc;
+}
+
+static void writer_message(void *user, tpk_result code, const char *text)
+{
+    (void)code;
+    tpk_diag_fail(user, "%s", text);
+}
+
+int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                  tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
+                  const tpk_part_extras *part, tpk_diag *diag)
+{
+    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
+    char err[512] = "";
+    tpk_write_options wopt;
+    memset(&wopt, 0, sizeof wopt);
+    wopt.size = sizeof wopt;
+    wopt.message = writer_message;
+    wopt.message_user = diag;
+    /* The file has no name until it is complete (base/output_file.h): a killed conversion leaves nothing. */
+    tpk_output out;
+    if (tpk_output_open(&out, o->output, diag) != 0)
+        return -1;
+    if (tpk_writer_open_fd(&cw.writer, out.fd, o->output, &wopt, err, sizeof err) != TPK_OK) {
+        tpk_output_abort(&out);
+        return tpk_diag_fail(diag, "%s", err);
+    }
+    hdr->vertex_count = (uint64_t)mesh->vertex_count;
+    hdr->tet_count = (uint64_t)mesh->tet_count;
+    unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
+    int rc = write_positions(&cw, mesh);
+    if (rc == 0)
+        rc = write_layouts(&cw, mesh, neighbors, layouts);
+    if (rc == 0)
+        rc = write_shell(&cw, mesh, neighbors, &hdr->shell_face_count);
+    if (rc == 0)
+        rc = write_fields(&cw, mesh);
+    if (rc == 0)
+        rc = write_maps(&cw, mesh);
+    if (rc == 0)
+        rc = write_meta(&cw, o, rep, source_format, part);
+    if (rc == 0 && part && part->link_count > 0) /* spec §15.3: LINK, optional, 4 I32 per link */
+        rc = put_chunk(&cw, TPK_TAG_LINK, 0, TPK_ELEM_I32, 4, 4 * (uint64_t)part->link_count, 0, 0, part->links);
+    if (rc != 0) {
+        tpk_writer_abort(cw.writer);
+        tpk_output_abort(&out);
+        return rc;
+    }
+    rep->shell_faces = (int64_t)hdr->shell_face_count;
+    if (tpk_writer_finish(cw.writer, hdr) != TPK_OK) {
+        tpk_output_abort(&out);
+        return diag->message[0] ? -1 : tpk_diag_fail(diag, "%s: could not finish the file", o->output);
+    }
+    if (tpk_output_commit(&out, diag) != 0)
+        return -1;
+    struct stat st;
+    if (stat(o->output, &st) == 0)
+        rep->output_bytes = (uint64_t)st.st_size;
+    return 0;
+}
+

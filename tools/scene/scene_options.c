@@ -1,0 +1,130 @@
+/* Between scenes and render options: what a scene sets on a render, and the scene of a render. */
+#include <string.h>
+
+#include "scene.h"
+
+static void apply_effects(const tpk_scene *s, tpk_render_options *opt)
+{
+    if (s->given & TPK_SCENE_CLIP) {
+        opt->clip = 1;
+        memcpy(opt->clip_min, s->clip_min, sizeof opt->clip_min);
+        memcpy(opt->clip_max, s->clip_max, sizeof opt->clip_max);
+    }
+    if (s->given & TPK_SCENE_ISO) {
+        opt->iso_count = s->iso_count;
+        memcpy(opt->iso, s->iso, sizeof opt->iso);
+    }
+    if (s->given & TPK_SCENE_ISO_OPACITY)
+        opt->iso_opacity = s->iso_opacity;
+    if (s->given & TPK_SCENE_SHADING)
+        opt->shading = s->shading;
+    if (s->given & TPK_SCENE_SHADOWS)
+        opt->shadows = s->shadows;
+    if (s->given & TPK_SCENE_LIGHT) {
+        opt->have_light = 1;
+        memcpy(opt->light, s->light, sizeof opt->light);
+    }
+    if (s->given & TPK_SCENE_AO_RAYS)
+        opt->ao_rays = s->ao_rays;
+    if (s->given & TPK_SCENE_AO_RADIUS)
+        opt->ao_radius = s->ao_radius;
+}
+
+void tpk_scene_apply(const tpk_scene *s, tpk_render_options *opt)
+{
+    if (s->given & TPK_SCENE_CAMERA)
+        opt->camera = s->camera;
+    if (s->given & TPK_SCENE_TF)
+        opt->tf = &s->tf;
+    if (s->given & TPK_SCENE_RANGE) {
+        opt->range_min = s->range[0];
+        opt->range_max = s->range[1];
+    }
+    if (s->given & TPK_SCENE_UNIT_DISTANCE)
+        opt->unit_distance = s->unit_distance;
+    if (s->given & TPK_SCENE_INTEGRATION)
+        opt->integration = s->integration;
+    if (s->given & TPK_SCENE_SIZE) {
+        opt->width = s->width;
+        opt->height = s->height;
+    }
+    apply_effects(s, opt);
+}
+
+/* A preset whose points are exactly these is written by name. */
+static void set_tf(const tpk_transfer_function *tf, tpk_scene *out)
+{
+    tpk_transfer_function preset;
+    tpk_diag quiet;
+    memset(&quiet, 0, sizeof quiet);
+    out->tf = *tf;
+    out->tf_kind = TPK_SCENE_TF_POINTS;
+    if (tpk_tf_load(tf->name, &preset, &quiet) == 0 && !strcmp(preset.name, tf->name) && preset.count == tf->count &&
+        !memcmp(preset.points, tf->points, sizeof preset.points[0] * (size_t)tf->count)) {
+        out->tf_kind = TPK_SCENE_TF_PRESET;
+        strncpy(out->tf_source, tf->name, sizeof out->tf_source - 1);
+    }
+}
+
+static void effects_from(const tpk_render_options *opt, tpk_scene *out)
+{
+    if (opt->clip) {
+        out->given |= TPK_SCENE_CLIP;
+        memcpy(out->clip_min, opt->clip_min, sizeof out->clip_min);
+        memcpy(out->clip_max, opt->clip_max, sizeof out->clip_max);
+    }
+    if (opt->iso_count > 0) {
+        out->given |= TPK_SCENE_ISO;
+        out->iso_count = opt->iso_count;
+        memcpy(out->iso, opt->iso, sizeof out->iso);
+    }
+    if (opt->iso_count > 0 && opt->iso_opacity > 0) {
+        out->given |= TPK_SCENE_ISO_OPACITY;
+        out->iso_opacity = opt->iso_opacity;
+    }
+    out->shading = opt->shading != 0;
+    out->shadows = opt->shadows != 0;
+    out->given |= (opt->shading ? TPK_SCENE_SHADING : 0) | (opt->shadows ? TPK_SCENE_SHADOWS : 0);
+    if (opt->have_light) {
+        out->given |= TPK_SCENE_LIGHT;
+        memcpy(out->light, opt->light, sizeof out->light);
+    }
+    if (opt->ao_rays > 0) {
+        out->given |= TPK_SCENE_AO_RAYS | (opt->ao_radius > 0 ? TPK_SCENE_AO_RADIUS : 0);
+        out->ao_rays = opt->ao_rays;
+        out->ao_radius = opt->ao_radius > 0 ? opt->ao_radius : 0;
+    }
+}
+
+void tpk_scene_from_options(const tpk_render_options *opt, const char *field, int step, tpk_layout layout,
+                            tpk_scene *out)
+{
+    memset(out, 0, sizeof *out);
+    out->given = TPK_SCENE_CAMERA | TPK_SCENE_INTEGRATION | TPK_SCENE_SIZE | TPK_SCENE_STEP |
+                 TPK_SCENE_LAYOUT | TPK_SCENE_BACKEND;
+    out->camera = opt->camera;
+    if (opt->tf) {
+        out->given |= TPK_SCENE_TF;
+        set_tf(opt->tf, out);
+    }
+    if (field && field[0]) {
+        out->given |= TPK_SCENE_FIELD;
+        strncpy(out->field, field, sizeof out->field - 1);
+    }
+    out->step_first = out->step_last = step;
+    if (opt->range_min < opt->range_max) { /* equal: no range (a scene's range has low < high) */
+        out->given |= TPK_SCENE_RANGE;
+        out->range[0] = opt->range_min;
+        out->range[1] = opt->range_max;
+    }
+    if (opt->unit_distance > 0) {
+        out->given |= TPK_SCENE_UNIT_DISTANCE;
+        out->unit_distance = opt->unit_distance;
+    }
+    out->integration = opt->integration;
+    out->width = opt->width;
+    out->height = opt->height;
+    out->layout = layout;
+    out->backend = TPK_SCENE_BACKEND_CPU; /* the only renderer this build has */
+    effects_from(opt, out);
+}
