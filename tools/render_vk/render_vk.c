@@ -193,8 +193,9 @@ static int run_band(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, in
     return 0;
 }
 
-/* Copy a finished band out: pixels into rgba, steps summed; the first failed ray is an error. */
-static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t *rgba, uint64_t *steps,
+/* Copy a finished band out: pixels into rgba, tet steps (counts[0]) and secondary rays (counts[1])
+ * summed; the first failed ray is an error. */
+static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t *rgba, uint64_t counts[2],
                      tpk_diag *diag)
 {
     size_t n = (size_t)width * (size_t)rows;
@@ -208,23 +209,24 @@ static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t 
     }
     const uint32_t *st = v->steps.mapped;
     for (size_t i = 0; i < n; i++) {
-        *steps += st[2 * i];
-        if (st[2 * i + 1] != TPK_VK_STATUS_OK)
+        counts[0] += st[4 * i];
+        counts[1] += st[4 * i + 2];
+        if (st[4 * i + 1] != TPK_VK_STATUS_OK)
             return tpk_diag_fail(diag, "render: ray of pixel (%d, %d): %s", (int)(i % (size_t)width),
                                  row0 + (int)(i / (size_t)width), tpk_result_string(TPK_ERR_MESH));
     }
     return 0;
 }
 
-static int render_bands(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, uint8_t *rgba, uint64_t *steps,
-                        tpk_diag *diag)
+static int render_bands(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, uint8_t *rgba,
+                        uint64_t counts[2], tpk_diag *diag)
 {
     const int width = params->dims[0], height = params->dims[1];
     int band = (int)(BAND_PIXELS / (uint32_t)width); /* width <= 32768: at least 32 rows */
     band = band < 1 ? 1 : band > height ? height : band;
     for (int row0 = 0; row0 < height; row0 += band) {
         int rows = height - row0 < band ? height - row0 : band;
-        if (run_band(v, pipeline, params, row0, rows, diag) != 0 || read_band(v, width, row0, rows, rgba, steps, diag) != 0)
+        if (run_band(v, pipeline, params, row0, rows, diag) != 0 || read_band(v, width, row0, rows, rgba, counts, diag) != 0)
             return -1;
     }
     return 0;
@@ -240,7 +242,7 @@ static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const float *
                              &v->params, diag) != 0 ||
         tpk_vk_buffer_create(&v->ctx, (VkDeviceSize)BAND_PIXELS * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, "the image",
                              &v->pixels, diag) != 0 ||
-        tpk_vk_buffer_create(&v->ctx, (VkDeviceSize)BAND_PIXELS * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+        tpk_vk_buffer_create(&v->ctx, (VkDeviceSize)BAND_PIXELS * 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                              "per-pixel statistics", &v->steps, diag) != 0)
         return -1;
     if (tpk_vk_pipeline_create(&v->ctx, (int)mesh->layout, v->arrays, &v->params, &v->pixels, &v->steps,
@@ -296,18 +298,19 @@ int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uin
     tpk_vk_params *params = malloc(sizeof *params);
     if (!params)
         return tpk_diag_fail(diag, "render: out of memory");
-    uint64_t steps = 0;
+    uint64_t counts[2] = {0, 0};
     int rc = tpk_vk_params_fill(&v->mesh, opt, v->bvh.extent, v->bvh.face_count, params, diag);
     VkPipeline pipeline = VK_NULL_HANDLE;
     if (rc == 0 && !(pipeline = tpk_vk_pipeline_get(&v->ctx, &v->pipeline, tpk_vk_effects(opt), diag)))
         rc = -1;
     if (rc == 0)
-        rc = render_bands(v, pipeline, params, rgba, &steps, diag);
+        rc = render_bands(v, pipeline, params, rgba, counts, diag);
     free(params);
     clock_gettime(CLOCK_MONOTONIC, &t1);
     if (stats) {
         stats->rays = (uint64_t)opt->width * (uint64_t)opt->height;
-        stats->tet_steps = steps;
+        stats->tet_steps = counts[0];
+        stats->secondary_rays = counts[1];
         stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     }
     return rc;

@@ -9,14 +9,15 @@ bool MARCH_RUN(Hit h, int tet)
     const int tet_count = P.mode.x;
     int prev = -1;
     float s_in = hit_scalar(h, face_weights(h));
+    bool done = true;
     for (int step = 0;; step++) {
         if (step >= tet_count) {
             status = TPK_VK_STATUS_MESH; // a cycle: watertight marching never revisits a tet
-            return true;
+            break;
         }
         steps_taken++;
         if (h.t > MARCH_TMAX)
-            return true;
+            break;
         const int a = h.v[0], b = h.v[1], c = h.v[2];
         ivec4 rec0, rec1 = ivec4(0);
         int vx;
@@ -33,7 +34,7 @@ bool MARCH_RUN(Hit h, int tet)
         const int d = vx ^ a ^ b ^ c;
         if (d < 0 || d >= P.mode.y || d == a || d == b || d == c) {
             status = TPK_VK_STATUS_MESH;
-            return true;
+            break;
         }
         int n3 = 0;
         if (LAYOUT == TPK_VK_LAYOUT_TET16) {
@@ -59,7 +60,7 @@ bool MARCH_RUN(Hit h, int tet)
             opposite = b;
         } else {
             status = TPK_VK_STATUS_MESH;
-            return true;
+            break;
         }
         vec3 w = face_weights(o);
         float t_out = hit_t(o, w);
@@ -75,7 +76,7 @@ bool MARCH_RUN(Hit h, int tet)
                   : opposite == v3      ? 3 : -1;
             if (k < 0) {
                 status = TPK_VK_STATUS_MESH;
-                return true;
+                break;
             }
             next = fetch_tets(2u * uint(tet) + 1u)[k];
         } else {
@@ -87,23 +88,24 @@ bool MARCH_RUN(Hit h, int tet)
         }
         if (next < -1 || next >= tet_count) {
             status = TPK_VK_STATUS_MESH;
-            return true;
+            break;
         }
         float piece_in = s_in, piece_out = s_out;
         if (P.mode.w == 2) // a tet field: constant in the tet
             piece_in = piece_out = fetch_tet_scalars(uint(tet)).x;
         if (MARCH_REPORT(h.t, t_out, piece_in, piece_out, ivec4(a, b, c, d)))
-            return true;
+            break;
         if (next < 0) {
             run_exit_t = t_out;
-            return false;
+            done = false;
+            break;
         }
         prev = tet;
         tet = next;
         h = o;
         s_in = s_out;
     }
-    return true;
+    return done; // one exit: no `return` inside the loop (Mesa 22.3 mishandled those inlined into loops)
 }
 
 // The ray's runs over [tmin, tmax] (march.c, tpk_march_ray): the last shell entry before tmin (the ray
@@ -111,20 +113,16 @@ bool MARCH_RUN(Hit h, int tet)
 // last run left (in a valid mesh runs do not overlap; the margin covers the rounding of t).
 void MARCH_TRACE(float tmin, float tmax)
 {
-    if (P.shell_info.x == 0)
-        return;
     Hit h;
-    float t_prev = bvh_query(0, -INF, tmin, 0.0, -1, h) >= 0 ? h.t : -INF;
+    float t_prev = P.shell_info.x != 0 && bvh_query(0, -INF, tmin, 0.0, -1, h) >= 0 ? h.t : -INF;
     int face_prev = -1;
     float t_low = t_prev;
-    for (;;) {
+    for (int run = 0; P.shell_info.x != 0; run++) {
         int face = bvh_query(1, t_low, INF, t_prev, face_prev, h);
-        if (face < 0 || h.t > tmax)
-            return;
+        if (face < 0 || h.t > tmax || MARCH_RUN(h, fetch_shell(uint(face)).w))
+            break;
         t_prev = h.t;
         face_prev = face;
-        if (MARCH_RUN(h, fetch_shell(uint(face)).w))
-            return;
         t_low = max(t_prev, run_exit_t - 1e-5 * abs(run_exit_t) - P.up.w);
     }
 }

@@ -57,7 +57,7 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
 } P;
 
 layout(std430, set = 0, binding = TPK_VK_BIND_PIXELS) writeonly buffer Pixels { uint pixels[]; };
-layout(std430, set = 0, binding = TPK_VK_BIND_STEPS) writeonly buffer Steps { uvec2 steps[]; };
+layout(std430, set = 0, binding = TPK_VK_BIND_STEPS) writeonly buffer Steps { uvec4 steps[]; }; // steps, status, secondary rays
 
 // Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away.
 #define DECLARE_ARRAY(SAMPLER, NAME, ARRAY)                                                   \
@@ -301,17 +301,17 @@ float box_enter(uint n, float t_low, float t_high)
     uvec4 a = fetch_nodes(2u * n), b = fetch_nodes(2u * n + 1u);
     vec3 lo = uintBitsToFloat(a.xyz) - P.up.w, hi = uintBitsToFloat(b.xyz) + P.up.w;
     float tn = -1.0 / 0.0, tf = t_high;
+    bool meets = true;
     for (int k = 0; k < 3; k++) {
         if (ray_dir[k] == 0.0) {
-            if (frame.org[k] < lo[k] || frame.org[k] > hi[k])
-                return 1.0 / 0.0;
+            meets = meets && frame.org[k] >= lo[k] && frame.org[k] <= hi[k];
             continue;
         }
         float t0 = (lo[k] - frame.org[k]) * inv_dir[k], t1 = (hi[k] - frame.org[k]) * inv_dir[k];
         tn = max(tn, min(t0, t1));
         tf = min(tf, max(t0, t1));
     }
-    return tn <= tf && tf >= t_low ? tn : 1.0 / 0.0;
+    return meets && tn <= tf && tf >= t_low ? tn : 1.0 / 0.0;
 }
 
 #define STACK_SIZE 96 // TPK_SHELL_BVH_STACK
@@ -553,19 +553,17 @@ bool frame_init(vec3 org, vec3 dir)
 // render.h's CLIP BOX: cut [lo, hi] of the ray org + t dir to the box; false when it misses.
 bool clip_ray(vec3 org, vec3 dir, inout float lo, inout float hi)
 {
-    if (P.clip_lo.w == 0.0)
-        return true;
-    for (int k = 0; k < 3; k++) {
+    bool meets = true;
+    for (int k = 0; P.clip_lo.w != 0.0 && k < 3; k++) {
         if (dir[k] == 0.0) {
-            if (org[k] < P.clip_lo[k] || org[k] > P.clip_hi[k])
-                return false;
+            meets = meets && org[k] >= P.clip_lo[k] && org[k] <= P.clip_hi[k];
             continue;
         }
         float t0 = (P.clip_lo[k] - org[k]) / dir[k], t1 = (P.clip_hi[k] - org[k]) / dir[k];
         lo = max(lo, min(t0, t1));
         hi = min(hi, max(t0, t1));
     }
-    return lo <= hi;
+    return meets && lo <= hi;
 }
 
 // ---- One inside-run (march.c, march_run) --------------------------------------------------------
@@ -704,6 +702,7 @@ float optical_depth(float len, float u0, float u1)
 }
 
 float trans_tau, trans_iso, trans_lo, trans_hi; // the secondary ray being marched (trans_ray)
+uint secondary_rays = 0u;
 bool trans_have_prev;
 float trans_prev_t_out, trans_prev_s;
 
@@ -769,7 +768,7 @@ float transmittance_ray(vec3 x, vec3 w, float len)
 {
     float lo = 0.0, hi = len;
     if (!clip_ray(x, w, lo, hi))
-        return 1.0;
+        lo = hi = -1.0; // misses the box: marches nothing, T2 = 1 (one exit, see march_run.glsl)
     Frame primary = frame;
     vec3 primary_dir = ray_dir, primary_inv = inv_dir;
     float primary_exit = run_exit_t;
@@ -778,7 +777,8 @@ float transmittance_ray(vec3 x, vec3 w, float len)
     trans_lo = lo;
     trans_hi = hi;
     trans_have_prev = false;
-    if (frame_init(x, w)) {
+    secondary_rays += lo >= 0.0 ? 1u : 0u;
+    if (lo >= 0.0 && frame_init(x, w)) {
         ray_dir = w;
         inv_dir = 1.0 / w;
         trace_secondary(lo, hi);
@@ -973,5 +973,5 @@ void main()
     uint index = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // within this band of rows
     pixels[index] = to_byte(straight.r) | (to_byte(straight.g) << 8) | (to_byte(straight.b) << 16) |
                     (to_byte(alpha) << 24);
-    steps[index] = uvec2(steps_taken, status);
+    steps[index] = uvec4(steps_taken, status, secondary_rays, 0u);
 }

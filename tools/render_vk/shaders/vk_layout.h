@@ -44,7 +44,7 @@
 
 #define TPK_VK_BIND_PARAMS 0 /* uniform block */
 #define TPK_VK_BIND_PIXELS 1 /* storage buffer: packed RGBA8 per pixel */
-#define TPK_VK_BIND_STEPS 2  /* storage buffer: per pixel, tet steps and a status */
+#define TPK_VK_BIND_STEPS 2  /* storage buffer: per pixel, tet steps, a status, secondary rays, 0 */
 #define TPK_VK_BIND_ARRAY(a) (3 + (a) * TPK_VK_MAX_PARTS)
 #define TPK_VK_BIND_COUNT TPK_VK_BIND_ARRAY(TPK_VK_ARRAY_COUNT)
 
