@@ -13,19 +13,13 @@
 #include "internal_ray.h"
 #include "tetpack.h"
 
-/* BVH node over shell faces. Leaves (count > 0) hold faces [first, first + count) of the reordered
- * face array; inner nodes (count == 0) have children first and first + 1. Boxes are padded so that a
- * face the watertight test reports as crossed is never culled by a box test. */
-typedef struct tpk_bvh_node {
-    float lo[3], hi[3];
-    int32_t first;
-    int32_t count;
-} tpk_bvh_node;
+/* BVH node over shell faces: the public tpk_shell_bvh_node (tetpack.h), which says what it holds. */
+typedef tpk_shell_bvh_node tpk_bvh_node;
 
 /* A traversal stack this deep always suffices: the builder forces balanced splits past
  * TPK_BVH_SAH_DEPTH levels, so no leaf is deeper than TPK_BVH_SAH_DEPTH + 32. */
 #define TPK_BVH_SAH_DEPTH 48
-#define TPK_BVH_STACK 96
+#define TPK_BVH_STACK TPK_SHELL_BVH_STACK
 #define TPK_BVH_LEAF_SIZE 4
 
 struct tpk_marcher {

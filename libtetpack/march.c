@@ -61,6 +61,18 @@ void tpk_marcher_destroy(tpk_marcher *m)
     free(m);
 }
 
+void tpk_marcher_shell_bvh(const tpk_marcher *m, tpk_shell_bvh *out)
+{
+    memset(out, 0, sizeof *out);
+    if (!m)
+        return;
+    out->nodes = m->nodes;
+    out->node_count = m->node_count;
+    out->faces = m->faces;
+    out->face_count = m->face_count;
+    out->extent = m->extent;
+}
+
 /* ---- One inside-run: from a shell entry face to a face with neighbor -1 -------------------------- */
 
 static inline double face_scalar(const float *scalars, const tpk_face_hit *h, const double w[3])

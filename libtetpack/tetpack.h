@@ -242,6 +242,31 @@ typedef struct tpk_marcher tpk_marcher;
 tpk_result tpk_marcher_create(tpk_marcher **out, const tpk_mesh_arrays *mesh);
 void tpk_marcher_destroy(tpk_marcher *marcher);
 
+/* A node of the marcher's shell BVH. Leaves (count > 0) hold faces [first, first + count) of the
+ * reordered face array; inner nodes (count == 0) have children first and first + 1. Boxes are padded
+ * (by 1e-6 of `extent`) so that a face the watertight test reports as crossed is not culled. */
+typedef struct tpk_shell_bvh_node {
+    float lo[3], hi[3];
+    int32_t first;
+    int32_t count;
+} tpk_shell_bvh_node;
+
+/* The shell BVH tpk_marcher_create built, for renderers that upload it instead of building their own
+ * (the Vulkan renderer): nodes (root first), the shell records in leaf order (copies of the file's
+ * records), and the largest extent or coordinate magnitude of the positions. Owned by the marcher,
+ * valid while it lives. A traversal stack of TPK_SHELL_BVH_STACK entries always suffices. */
+typedef struct tpk_shell_bvh {
+    const tpk_shell_bvh_node *nodes;
+    int64_t node_count;
+    const tpk_shell_face *faces;
+    int64_t face_count;
+    double extent;
+} tpk_shell_bvh;
+
+#define TPK_SHELL_BVH_STACK 96
+
+void tpk_marcher_shell_bvh(const tpk_marcher *marcher, tpk_shell_bvh *out);
+
 typedef struct tpk_segment {
     int32_t tet;
     double t_in, t_out;       /* ray parameters, clipped to [tmin, tmax] */

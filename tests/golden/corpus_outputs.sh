@@ -15,7 +15,7 @@ one() { # tag input convert-options...
     local tpk="$out/$tag.tpk"
     if "$tetpack" convert "$input" "$tpk" --threads 2 "$@" >/dev/null 2>"$out/$tag.err"; then
         "$tetpack" export "$tpk" --vtu "$out/$tag.vtu" --shell "$out/$tag.ply" >/dev/null 2>&1 || echo "export-failed $tag"
-        "$tetpack" render "$tpk" -o "$out/$tag.png" --size 96x72 --threads 2 >/dev/null 2>&1 || echo "render-failed $tag"
+        TETPACK_RENDER_BACKEND=cpu "$tetpack" render "$tpk" -o "$out/$tag.png" --size 96x72 --threads 2 >/dev/null 2>&1 || echo "render-failed $tag"
         (cd "$out" && sha256sum "$tag.tpk" "$tag.vtu" "$tag.ply" "$tag.png" 2>/dev/null)
     else
         echo "refused($?) $tag: $(head -c 300 "$out/$tag.err" | tr '\n' ' ')"

@@ -11,6 +11,9 @@
 #include "tetpack.h"
 #include "render/transfer_function.h"
 #include "render_args.h"
+#ifdef TPK_WITH_VULKAN
+#include "render_vk/render_vk.h"
+#endif
 
 static const char render_help[] =
     "usage: tetpack render FILE.tpk -o IMAGE.png [options]\n"
@@ -49,7 +52,11 @@ static const char render_help[] =
     "  --ao N                       ambient occlusion from N hemisphere rays (1..1024)\n"
     "  --ao-radius R                length of the AO rays (default: bounds diagonal / 10)\n"
     "Effect definitions: docs/ARCHITECTURE.md, \"Render effects\".\n"
-    "  --threads N                  worker threads (default: all cores)\n"
+    "  --threads N                  worker threads of the CPU backend (default: all cores)\n"
+    "  --backend vulkan|cpu         vulkan: compute shaders on the first Vulkan device (a GPU, else\n"
+    "                               lavapipe); cpu: the reference renderer. Same options, same picture.\n"
+    "                               Default: $TETPACK_RENDER_BACKEND if set, else vulkan when a\n"
+    "                               Vulkan device is present, else cpu (part sets: cpu)\n"
     "  --scene FILE                 a scene file (spec/scene-json.md): its values first, then the\n"
     "                               options given here override them\n"
     "  --save-scene FILE            write the scene of this render (every value it used) as JSON\n"
@@ -163,6 +170,11 @@ static int opt_integration(const char *v, render_args *a)
 static int opt_scene(const char *v, render_args *a) { (void)v; (void)a; return 0; } /* read by merge_scene */
 static int opt_save_scene(const char *v, render_args *a) { a->save_scene = v; return 0; }
 static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->threads); }
+static int opt_backend(const char *v, render_args *a)
+{
+    a->backend = v;
+    return strcmp(v, "vulkan") && strcmp(v, "cpu");
+}
 static int opt_iso(const char *v, render_args *a) { return parse_list(v, a->iso, TPK_RENDER_MAX_ISO, &a->iso_count); }
 
 static int opt_iso_opacity(const char *v, render_args *a)
@@ -214,6 +226,7 @@ static const render_option render_options[] = {
     {"--unit-distance", NULL, 1, opt_unit, "a positive number"},
     {"--integration", NULL, 1, opt_integration, "exact, sampled or midpoint"},
     {"--threads", NULL, 1, opt_threads, "1..1024"},
+    {"--backend", NULL, 1, opt_backend, "vulkan or cpu"},
     {"--json", NULL, 0, opt_json, NULL},
     {"--iso", NULL, 1, opt_iso, "1 to 4 comma-separated finite numbers"},
     {"--iso-opacity", NULL, 1, opt_iso_opacity, "a number in (0,1]"},
@@ -419,15 +432,23 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
     memset(&diag, 0, sizeof diag);
     tpk_render_stats stats;
     memset(&stats, 0, sizeof stats);
-    if ((src->set ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
-                  : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
+    int vulkan = 0;
+#ifdef TPK_WITH_VULKAN
+    vulkan = !src->set && !strcmp(a->backend, "vulkan");
+#endif
+    if ((src->set     ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
+#ifdef TPK_WITH_VULKAN
+         : vulkan     ? tpk_render_vulkan(src->mesh, opt, rgba, &stats, &diag)
+#endif
+                      : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
     if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
     if (a->json)
-        printf("{\"image\":\"%s\",\"width\":%d,\"height\":%d,\"rays\":%llu,\"secondary_rays\":%llu,"
-               "\"tet_steps\":%llu,\"seconds\":%.6f}\n",
-               output, a->width, a->height, (unsigned long long)stats.rays,
+        printf("{\"image\":\"%s\",\"backend\":\"%s\",\"device\":\"%s\",\"width\":%d,\"height\":%d,"
+               "\"rays\":%llu,\"secondary_rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f}\n",
+               output, vulkan ? "vulkan" : "cpu", vulkan ? a->device : "cpu", a->width, a->height,
+               (unsigned long long)stats.rays,
                (unsigned long long)stats.secondary_rays, (unsigned long long)stats.tet_steps, stats.seconds);
     else
         printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
@@ -531,6 +552,31 @@ static int load_tf(const render_args *a, tpk_transfer_function *tf)
     return 0;
 }
 
+/* The backend of this render: --backend, else $TETPACK_RENDER_BACKEND, else Vulkan when a device is
+ * present; a->device gets the device's name ("cpu" for the reference). Returns 0 or -1 with a message. */
+static int resolve_backend(render_args *a, tpk_diag *diag)
+{
+    const char *env = getenv("TETPACK_RENDER_BACKEND");
+    if (!a->backend && env && *env) {
+        if (strcmp(env, "vulkan") && strcmp(env, "cpu"))
+            return tpk_diag_fail(diag, "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", env);
+        a->backend = env;
+    }
+#ifdef TPK_WITH_VULKAN
+    if (!a->backend)
+        a->backend = tpk_vulkan_available(a->device, sizeof a->device) ? "vulkan" : "cpu";
+    else if (!strcmp(a->backend, "vulkan") && !tpk_vulkan_available(a->device, sizeof a->device))
+        return tpk_diag_fail(diag, "--backend vulkan: %s", a->device);
+#else
+    if (a->backend && !strcmp(a->backend, "vulkan"))
+        return tpk_diag_fail(diag, "--backend vulkan: this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)");
+    a->backend = "cpu";
+#endif
+    if (!strcmp(a->backend, "cpu"))
+        snprintf(a->device, sizeof a->device, "cpu");
+    return 0;
+}
+
 static int render_file(render_args *a, tpk_file *file)
 {
     int association;
@@ -541,6 +587,10 @@ static int render_file(render_args *a, tpk_file *file)
     if ((uint32_t)a->step_last >= steps)
         return tpk_cli_fail("render", "%s: %s has %u step(s) (0..%u), step %d asked", a->path, name, steps,
                             steps - 1, a->step_last);
+    tpk_diag backend_diag;
+    memset(&backend_diag, 0, sizeof backend_diag);
+    if (resolve_backend(a, &backend_diag) != 0)
+        return tpk_cli_fail("render", "%s", backend_diag.message);
     tpk_transfer_function tf;
     if (load_tf(a, &tf))
         return TPK_EXIT_USAGE;
@@ -674,6 +724,8 @@ static int render_set(const render_args *a)
 {
     if (a->have_steps)
         return tpk_cli_fail("render", "%s: a part set renders one step (--step N), not a range", a->path);
+    if (a->backend && !strcmp(a->backend, "vulkan"))
+        return tpk_cli_fail("render", "%s: a part set renders with the CPU reference only (--backend cpu)", a->path);
     tpk_partset *set = NULL;
     char err[1024] = "";
     tpk_result r = tpk_partset_open(&set, a->path, NULL, NULL, NULL, err, sizeof err);

@@ -1,0 +1,62 @@
+# tetpack render --backend vulkan|cpu: both backends write the same picture (PSNR >= 40 dB, compared
+# with numpy), --json names the backend and the device, the default is Vulkan when a device is present
+# and the CPU otherwise, and every Vulkan failure is a clear message with exit 2, never a crash.
+source "$(dirname "$0")/common.sh"
+# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe, tests/CMakeLists.txt) for the
+# tetpack runs only, so that LeakSanitizer can name the driver's own leaks.
+tpk() {
+    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
+}
+
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --layout tet16 --layout tet20 > /dev/null
+tpk render --help | grep -q -- "--backend vulkan|cpu" || fail "render --help lacks --backend"
+
+for layout in tet16 tet20; do
+    for backend in cpu vulkan; do
+        tpk render "$WORK/cyl.tpk" -o "$WORK/$backend-$layout.png" --size 96x80 --layout $layout \
+            --backend $backend --json > "$WORK/$backend.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "render $backend"; }
+    done
+    grep -q '"backend":"vulkan","device":"llvmpipe' "$WORK/vulkan.json" || fail "vulkan json: $(cat "$WORK/vulkan.json")"
+    grep -q '"backend":"cpu","device":"cpu"' "$WORK/cpu.json" || fail "cpu json: $(cat "$WORK/cpu.json")"
+    "$PY" - "$WORK/cpu-$layout.png" "$WORK/vulkan-$layout.png" <<'PYEOF' || fail "vulkan and cpu pictures differ ($layout)"
+import sys, numpy as np, vtkmodules.vtkIOImage as io
+from vtkmodules.util.numpy_support import vtk_to_numpy
+def read(path):
+    r = io.vtkPNGReader(); r.SetFileName(path); r.Update()
+    return vtk_to_numpy(r.GetOutput().GetPointData().GetScalars()).astype(float)
+a, b = read(sys.argv[1]), read(sys.argv[2])
+mse = ((a - b) ** 2).mean()
+psnr = 99.0 if mse == 0 else 10 * np.log10(255.0 ** 2 / mse)
+print("PSNR %.2f dB, max pixel difference %d" % (psnr, abs(a - b).max()))
+sys.exit(0 if psnr >= 40 and a.std() > 0 else 1)
+PYEOF
+done
+
+# the default: Vulkan here (lavapipe is installed); TETPACK_RENDER_BACKEND overrides it
+unset TETPACK_RENDER_BACKEND
+tpk render "$WORK/cyl.tpk" -o "$WORK/default.png" --size 32x32 --json > "$WORK/default.json"
+grep -q '"backend":"vulkan"' "$WORK/default.json" || fail "default backend: $(cat "$WORK/default.json")"
+TETPACK_RENDER_BACKEND=cpu tpk render "$WORK/cyl.tpk" -o "$WORK/env.png" --size 32x32 --json > "$WORK/env.json"
+grep -q '"backend":"cpu"' "$WORK/env.json" || fail "TETPACK_RENDER_BACKEND=cpu: $(cat "$WORK/env.json")"
+export TETPACK_RENDER_BACKEND=metal
+expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/env.png" --size 32x32
+expect_stderr "TETPACK_RENDER_BACKEND expects vulkan or cpu"
+unset TETPACK_RENDER_BACKEND
+
+# no Vulkan driver: --backend vulkan is an error (exit 2), the default falls back to the CPU
+export VK_ICD_FILENAMES="$WORK/no_such_icd.json"
+expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/none.png" --size 32x32 --backend vulkan
+expect_stderr "vulkan: creating the instance"
+[ ! -e "$WORK/none.png" ] || fail "an image was written after a Vulkan error"
+tpk render "$WORK/cyl.tpk" -o "$WORK/fallback.png" --size 32x32 --json > "$WORK/fallback.json"
+grep -q '"backend":"cpu"' "$WORK/fallback.json" || fail "fallback backend: $(cat "$WORK/fallback.json")"
+unset VK_ICD_FILENAMES
+
+# a binding limit the file cannot fit in: refused with exit 2 and a message, not a crash
+export TPK_VK_SPLIT_BYTES=64
+expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/small.png" --size 32x32 --backend vulkan
+expect_stderr "larger than the device"
+unset TPK_VK_SPLIT_BYTES
+expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/x.png" --backend metal
+expect_stderr "backend expects vulkan or cpu"
+echo "render_vulkan: ok"

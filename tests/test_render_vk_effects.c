@@ -1,0 +1,186 @@
+/* The Vulkan renderer's effects against the CPU reference's (render.h, "Effect definitions"), on
+ * lavapipe: isosurfaces of a point field and of a tet field, gradient shading, the clip box, a tet
+ * field, midpoint integration, shadows, ambient occlusion, and combinations; PSNR >= 40 dB each, max
+ * pixel difference printed. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "harness.h"
+#include "render/render.h"
+#include "render/transfer_function.h"
+#include "render_vk/render_vk.h"
+#include "tetpack.h"
+#include "tpk_assert.h"
+
+#define SIZE 64
+
+typedef struct fx_scene {
+    tpk_file *file;
+    tpk_mesh_arrays mesh;
+    float *tet_field; /* centroid x of each tet, a piecewise-constant field */
+    tpk_transfer_function tf;
+    tpk_render_options opt;
+} fx_scene;
+
+static int open_scene(fx_scene *s, const char *input, const char *name)
+{
+    memset(s, 0, sizeof *s);
+    char msg[512];
+    tpk_convert_options o;
+    memset(&o, 0, sizeof o);
+    o.input = input;
+    o.output = tpk_temp_path(name);
+    o.layouts = TPK_LAYOUT_BIT_TET16 | TPK_LAYOUT_BIT_TET32;
+    tpk_convert_report report;
+    tpk_diag diag = {0};
+    tpk_file_info info;
+    if (tpk_convert_checked(&o, &report, &diag) != 0 ||
+        tpk_open_path(&s->file, o.output, NULL, msg, sizeof msg) != TPK_OK || tpk_get_info(s->file, &info) != TPK_OK ||
+        tpk_tf_load("viridis", &s->tf, &diag) != 0 || tpk_load_arrays(s->file, TPK_LAYOUT_TET32, NULL, 0, &s->mesh))
+        return -1;
+    s->tet_field = malloc((s->mesh.tet_count ? s->mesh.tet_count : 1) * sizeof(float));
+    if (!s->tet_field)
+        return -1;
+    for (uint64_t t = 0; t < s->mesh.tet_count; t++) {
+        const tpk_tet32 *r = &s->mesh.tet32[t];
+        int32_t v[4] = {r->v[0], r->v[1], r->v[2], r->vx ^ r->v[0] ^ r->v[1] ^ r->v[2]};
+        double x = 0;
+        for (int i = 0; i < 4; i++)
+            x += s->mesh.positions[3 * v[i]];
+        s->tet_field[t] = (float)(x / 4 + s->mesh.origin[0]);
+    }
+    if (tpk_load_arrays(s->file, TPK_LAYOUT_TET16, NULL, 0, &s->mesh) != TPK_OK)
+        return -1;
+    tpk_render_options_default(&s->opt);
+    s->opt.width = s->opt.height = SIZE;
+    tpk_camera_default(info.bounds_min, info.bounds_max, &s->opt.camera);
+    s->opt.tf = &s->tf;
+    tpk_field_desc d;
+    if (tpk_get_field(s->file, 0, &d) == TPK_OK) {
+        s->opt.range_min = d.min_value;
+        s->opt.range_max = d.max_value;
+    }
+    return 0;
+}
+
+static void close_scene(fx_scene *s)
+{
+    free(s->tet_field);
+    tpk_close(s->file);
+}
+
+static int agree(fx_scene *s, const char *what)
+{
+    size_t n = (size_t)SIZE * SIZE * 4;
+    uint8_t *cpu = malloc(n), *vk = malloc(n);
+    tpk_diag diag = {0};
+    int rc = -1;
+    if (!cpu || !vk)
+        goto done;
+    if (tpk_render_cpu(&s->mesh, &s->opt, cpu, NULL, &diag) != 0) {
+        fprintf(stderr, "%s: cpu: %s\n", what, diag.message);
+        goto done;
+    }
+    if (tpk_render_vulkan(&s->mesh, &s->opt, vk, NULL, &diag) != 0) {
+        fprintf(stderr, "%s: vulkan: %s\n", what, diag.message);
+        goto done;
+    }
+    double se = 0;
+    int max_diff = 0, shown = 0;
+    for (size_t i = 0; i < n; i++) {
+        int d = abs((int)cpu[i] - (int)vk[i]);
+        se += (double)d * d;
+        max_diff = d > max_diff ? d : max_diff;
+    }
+    for (size_t p = 0; p < n / 4; p++)
+        shown += memcmp(&cpu[4 * p], cpu, 4) != 0;
+    double db = se == 0 ? 99.0 : 10.0 * log10(255.0 * 255.0 / (se / (double)n));
+    printf("%-36s PSNR %6.2f dB, max pixel difference %3d, %d pixels show the volume\n", what, db, max_diff, shown);
+    rc = db >= 40.0 && shown > (int)(n / 4 / 20) ? 0 : -1;
+done:
+    free(cpu);
+    free(vk);
+    return rc;
+}
+
+TPK_TEST(point_field_effects)
+{
+    char why[256];
+    if (!tpk_vulkan_available(why, sizeof why)) {
+        tpk_test_skip(why);
+        return;
+    }
+    fx_scene s;
+    CHECK(open_scene(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder.tpk") == 0);
+    double lo = s.opt.range_min, hi = s.opt.range_max;
+    s.opt.iso_count = 2;
+    s.opt.iso[0] = lo + 0.3 * (hi - lo);
+    s.opt.iso[1] = lo + 0.7 * (hi - lo);
+    s.opt.iso_opacity = 0.6;
+    CHECK(agree(&s, "iso, opacity 0.6") == 0);
+    s.opt.shading = 1;
+    CHECK(agree(&s, "iso + shading (headlight)") == 0);
+    s.opt.iso_count = 0;
+    s.opt.have_light = 1;
+    s.opt.light[0] = s.opt.camera.eye[0];
+    s.opt.light[1] = -s.opt.camera.eye[1];
+    s.opt.light[2] = s.opt.camera.eye[2];
+    CHECK(agree(&s, "shading, point light") == 0);
+    s.opt.shading = 0;
+    s.opt.clip = 1;
+    for (int k = 0; k < 3; k++) {
+        s.opt.clip_min[k] = s.opt.camera.at[k] - 0.3;
+        s.opt.clip_max[k] = s.opt.camera.at[k] + 2.0;
+    }
+    CHECK(agree(&s, "clip box") == 0);
+    s.opt.clip = 0;
+    s.opt.integration = 2;
+    CHECK(agree(&s, "midpoint integration") == 0);
+    s.opt.integration = 0;
+    s.opt.shading = 1;
+    s.opt.shadows = 1;
+    CHECK(agree(&s, "shading + shadows") == 0);
+    s.opt.iso_count = 1;
+    s.opt.iso_opacity = 0.5;
+    CHECK(agree(&s, "iso + shading + shadows") == 0);
+    s.opt.shadows = 0;
+    s.opt.ao_rays = 4;
+    CHECK(agree(&s, "iso + shading + AO (4 rays)") == 0);
+    s.opt.iso_count = 0;
+    s.opt.shadows = 1;
+    s.opt.ao_radius = 0.5;
+    CHECK(agree(&s, "shading + shadows + AO, radius 0.5") == 0);
+    close_scene(&s);
+}
+
+TPK_TEST(tet_field_effects)
+{
+    char why[256];
+    if (!tpk_vulkan_available(why, sizeof why)) {
+        tpk_test_skip(why);
+        return;
+    }
+    fx_scene s;
+    CHECK(open_scene(&s, tpk_data_path("sfepy/elbow.mesh"), "elbow.tpk") == 0);
+    float lo = INFINITY, hi = -INFINITY;
+    for (uint64_t t = 0; t < s.mesh.tet_count; t++) {
+        lo = fminf(lo, s.tet_field[t]);
+        hi = fmaxf(hi, s.tet_field[t]);
+    }
+    s.opt.tet_scalars = s.tet_field;
+    s.opt.range_min = lo;
+    s.opt.range_max = hi;
+    CHECK(agree(&s, "tet field") == 0);
+    s.opt.iso_count = 1;
+    s.opt.iso[0] = lo + 0.5 * (hi - lo);
+    s.opt.iso_opacity = 0.8;
+    CHECK(agree(&s, "tet field iso") == 0);
+    s.opt.shading = 1;
+    CHECK(agree(&s, "tet field iso + shading") == 0);
+    s.opt.shadows = 1;
+    s.opt.ao_rays = 3;
+    CHECK(agree(&s, "tet field iso + shadows + AO") == 0);
+    close_scene(&s);
+}

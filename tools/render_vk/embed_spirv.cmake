@@ -1,0 +1,12 @@
+# Wrap glslc's `-mfmt=c` outputs (brace-enclosed lists of 32-bit words) of the two shader variants into
+# one C source, so the renderer carries its SPIR-V and needs no file at run time.
+# Usage: cmake -DDIR=<dir with render_fp64.inc and render_fp32.inc> -DOUT=x.c -P this
+set(text "/* Generated from tools/render_vk/shaders/render.comp by glslc at build time; do not edit. */\n")
+string(APPEND text "#include <stddef.h>\n#include <stdint.h>\n")
+foreach(variant fp64 fp32)
+  file(READ "${DIR}/render_${variant}.inc" words)
+  string(APPEND text "\nconst uint32_t tpk_vk_render_spv_${variant}[] = ${words};\n"
+         "const size_t tpk_vk_render_spv_${variant}_size = sizeof tpk_vk_render_spv_${variant};\n")
+endforeach()
+file(WRITE "${OUT}.tmp" "${text}")
+file(RENAME "${OUT}.tmp" "${OUT}")

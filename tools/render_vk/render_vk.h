@@ -1,0 +1,43 @@
+/* The Vulkan renderer: the same pictures as the CPU reference (tools/render/render.h), from compute
+ * shaders on any Vulkan 1.2 device (lavapipe included). The file's arrays are uploaded as they are
+ * (texel buffers, split over several bindings when larger than one), plus the shell BVH the CPU
+ * marcher builds at load; no connectivity is rebuilt. */
+#ifndef TPK_RENDER_VK_H
+#define TPK_RENDER_VK_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/diag.h"
+#include "render/render.h"
+
+/* Render `mesh` into rgba (width * height * 4 bytes, caller-owned) with the options and definitions of
+ * tpk_render_cpu (opt->threads is ignored). stats->tet_steps counts tets stepped through as the CPU
+ * reference does. Every Vulkan failure (no loader or device, out of device memory, a file larger than
+ * the device's limits, a lost device) returns -1 with a message saying which; never aborts.
+ * Environment: TPK_VK_DEVICE=N picks the N-th physical device (default: the first discrete, else
+ * integrated, else any); TPK_VK_SPLIT_BYTES=N caps every binding at N bytes (rounded down to a
+ * power-of-two texel count), so that the split path can be tested on a small mesh; TPK_VK_NO_FP64=1
+ * takes the shader variant without doubles and TPK_VK_EXACT=1|2 the edge test of the FP64 variant
+ * (shaders/vk_layout.h), for tests. Not thread-safe with itself (one device each). */
+int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                      tpk_render_stats *stats, tpk_diag *diag);
+
+/* A renderer kept across frames (the window, benchmarks): the device set up and the arrays uploaded
+ * once, then one frame per call with any camera, TF and effect options. `mesh` (and tet_scalars, per
+ * tet, or NULL) must outlive the renderer; frames must pass the same tet_scalars (NULL or not) as
+ * creation. Create returns 0, or -1 with a message (as tpk_render_vulkan). */
+typedef struct tpk_vk_renderer tpk_vk_renderer;
+int tpk_vk_renderer_create(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, const float *tet_scalars,
+                           tpk_diag *diag);
+/* stats->seconds is the frame alone: parameters, dispatch, wait and read-back. */
+int tpk_vk_renderer_frame(tpk_vk_renderer *renderer, const tpk_render_options *opt, uint8_t *rgba,
+                          tpk_render_stats *stats, tpk_diag *diag);
+const char *tpk_vk_renderer_device(const tpk_vk_renderer *renderer);
+void tpk_vk_renderer_destroy(tpk_vk_renderer *renderer);
+
+/* Is a Vulkan 1.2 device with a compute queue present? Returns 1 and writes the device's name into
+ * `why` (n bytes), or 0 and writes the reason (no loader, no device, too old). */
+int tpk_vulkan_available(char *why, size_t n);
+
+#endif

@@ -1,0 +1,977 @@
+// The Vulkan renderer's compute shader: one invocation per pixel. Finds the ray's shell entries in
+// order with the shell BVH, marches tets through neighbor links with watertight face tests, and
+// integrates emission-absorption per tet piece exactly as tools/render/render_cpu.c does. The marcher
+// follows libtetpack/march.c, ray.c and shell_bvh.c step for step (same entry order, same exit-face
+// rule, same tie-breaks), in float instead of double. Watertightness does not need double: every edge
+// decision is a deterministic function of its two vertex ids and their projections (computed by one
+// `precise` function, so no call site fuses differently), evaluated in the canonical (lower id first)
+// order, with an exact sign (Dekker products) on the slow path.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "vk_layout.h"
+
+layout(local_size_x = TPK_VK_GROUP, local_size_y = TPK_VK_GROUP) in;
+
+layout(constant_id = TPK_VK_SPEC_LAYOUT) const int LAYOUT = TPK_VK_LAYOUT_TET16;
+layout(constant_id = TPK_VK_SPEC_EXACT) const int EXACT = TPK_VK_EXACT_FILTER;
+// Effects compiled in (TPK_VK_EFFECT_* bits): code for an effect that is off is not there at all, as
+// a CPU device would otherwise run it under a mask on every step.
+layout(constant_id = TPK_VK_SPEC_EFFECTS) const int EFFECTS = 0;
+const bool ISO = (EFFECTS & TPK_VK_EFFECT_ISO) != 0;
+const bool SHADING = (EFFECTS & TPK_VK_EFFECT_SHADING) != 0;
+const bool SHADOWS = (EFFECTS & TPK_VK_EFFECT_SHADOWS) != 0;
+const bool AO = (EFFECTS & TPK_VK_EFFECT_AO) != 0;
+const bool CAST = SHADOWS || AO;
+const bool LIGHTING = SHADING || CAST;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_VERTS)) const int PARTS_VERTS = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_VERTS)) const int SHIFT_VERTS = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TETS)) const int PARTS_TETS = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_TETS)) const int SHIFT_TETS = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_SHELL)) const int PARTS_SHELL = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_SHELL)) const int SHIFT_SHELL = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_NODES)) const int PARTS_NODES = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_NODES)) const int SHIFT_NODES = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TET_SCALARS)) const int PARTS_TET_SCALARS = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_TET_SCALARS)) const int SHIFT_TET_SCALARS = 27;
+
+// Mirrors tpk_vk_params in render_vk_internal.h (std140).
+layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
+    vec4 eye;        // xyz: the eye relative to the mesh origin
+    vec4 forward;    // xyz: unit view direction; w: tan(fovy/2) * width / height
+    vec4 right;      // xyz; w: tan(fovy/2)
+    vec4 up;         // xyz; w: extra box padding for the float box test
+    vec4 background; // straight RGBA
+    vec4 scalar_map; // x: range_min, y: 1 / (range_max - range_min) or 0, z: 1 / unit_distance
+    ivec4 dims;      // width, height, first row of this dispatch, TF point count
+    ivec4 mode;      // x: tet count, y: vertex count, z: integration (0 exact, 1 sampled),
+                     // w: scalars (0 none, 1 per point, 2 per tet)
+    vec4 clip_lo;    // xyz: clip box (relative to the origin); w: 1 when clipping
+    vec4 clip_hi;
+    ivec4 shell_info; // x: shell face count, y: iso value count
+    vec4 iso;         // iso values (scalar units)
+    vec4 light;       // xyz: point light (relative to the origin; the eye without one); w: iso opacity
+    vec4 cast_info;   // x: AO ray length, y: TPK_RENDER_SELF_EPS * unit distance, z: unit distance
+    ivec4 cast_count; // x: AO rays
+    vec4 tf_s[TPK_VK_TF_MAX / 4];
+    vec4 tf_rgba[TPK_VK_TF_MAX];
+} P;
+
+layout(std430, set = 0, binding = TPK_VK_BIND_PIXELS) writeonly buffer Pixels { uint pixels[]; };
+layout(std430, set = 0, binding = TPK_VK_BIND_STEPS) writeonly buffer Steps { uvec4 steps[]; }; // steps, status, secondary rays
+
+// Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away.
+#define DECLARE_ARRAY(SAMPLER, NAME, ARRAY)                                                   \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 0) uniform SAMPLER NAME##0;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 1) uniform SAMPLER NAME##1;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 2) uniform SAMPLER NAME##2;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 3) uniform SAMPLER NAME##3;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 4) uniform SAMPLER NAME##4;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 5) uniform SAMPLER NAME##5;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 6) uniform SAMPLER NAME##6;         \
+    layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 7) uniform SAMPLER NAME##7;
+
+#define FETCH_FUNCTION(RET, NAME, PARTS, SHIFT)                                               \
+    RET fetch_##NAME(uint i)                                                                  \
+    {                                                                                         \
+        if (PARTS == 1)                                                                       \
+            return texelFetch(NAME##0, int(i));                                               \
+        int j = int(i & ((1u << SHIFT) - 1u));                                                \
+        switch (i >> SHIFT) {                                                                 \
+        case 0u: return texelFetch(NAME##0, j);                                               \
+        case 1u: return texelFetch(NAME##1, j);                                               \
+        case 2u: return texelFetch(NAME##2, j);                                               \
+        case 3u: return texelFetch(NAME##3, j);                                               \
+        case 4u: return texelFetch(NAME##4, j);                                               \
+        case 5u: return texelFetch(NAME##5, j);                                               \
+        case 6u: return texelFetch(NAME##6, j);                                               \
+        default: return texelFetch(NAME##7, j);                                               \
+        }                                                                                     \
+    }
+
+DECLARE_ARRAY(samplerBuffer, verts, TPK_VK_ARRAY_VERTS)
+DECLARE_ARRAY(isamplerBuffer, tets, TPK_VK_ARRAY_TETS)
+DECLARE_ARRAY(isamplerBuffer, shell, TPK_VK_ARRAY_SHELL)
+DECLARE_ARRAY(usamplerBuffer, nodes, TPK_VK_ARRAY_NODES)
+DECLARE_ARRAY(samplerBuffer, tet_scalars, TPK_VK_ARRAY_TET_SCALARS)
+FETCH_FUNCTION(vec4, verts, PARTS_VERTS, SHIFT_VERTS)
+FETCH_FUNCTION(ivec4, tets, PARTS_TETS, SHIFT_TETS)
+FETCH_FUNCTION(ivec4, shell, PARTS_SHELL, SHIFT_SHELL)
+FETCH_FUNCTION(uvec4, nodes, PARTS_NODES, SHIFT_NODES)
+FETCH_FUNCTION(vec4, tet_scalars, PARTS_TET_SCALARS, SHIFT_TET_SCALARS)
+
+// ---- The ray frame and the watertight edge test (libtetpack/internal_ray.h, ray.c) --------------
+
+struct Frame {
+    vec3 org;
+    float sx, sy, sz;
+    int kx, ky, kz;
+};
+
+Frame frame;       // of this invocation's ray
+vec3 ray_dir;
+
+// Projection of vertex v and its scalar (w). The one place positions become 2-D coordinates.
+vec4 project(int v, out float scalar)
+{
+    vec4 p = fetch_verts(uint(v));
+    scalar = p.w;
+    precise vec3 q = p.xyz - frame.org;
+    precise float x = q[frame.kx] - frame.sx * q[frame.kz];
+    precise float y = q[frame.ky] - frame.sy * q[frame.kz];
+    precise float z = frame.sz * q[frame.kz];
+    return vec4(x, y, z, 0.0);
+}
+
+#if TPK_VK_FP64
+// Exact sign of a*d - b*c for floats: the products are exact in double and the one rounding of their
+// difference keeps its sign (and is 0 only when it is exactly 0).
+int det2_sign_exact(float a, float b, float c, float d)
+{
+    precise double ad = double(a) * double(d);
+    precise double bc = double(b) * double(c);
+    precise double det = ad - bc;
+    return det > 0.0LF ? 1 : det < 0.0LF ? -1 : 0;
+}
+#else
+// Error-free product (Dekker): a * b == p + err exactly, no fused multiply-add needed.
+float two_prod(float a, float b, out float err)
+{
+    precise float p = a * b;
+    precise float ca = 4097.0 * a;
+    precise float ahi = ca - (ca - a);
+    precise float alo = a - ahi;
+    precise float cb = 4097.0 * b;
+    precise float bhi = cb - (cb - b);
+    precise float blo = b - bhi;
+    precise float e = ((ahi * bhi - p) + ahi * blo + alo * bhi) + alo * blo;
+    err = e;
+    return p;
+}
+
+float two_sum(float a, float b, out float err)
+{
+    precise float s = a + b;
+    precise float bv = s - a;
+    precise float av = s - bv;
+    precise float e = (a - av) + (b - bv);
+    err = e;
+    return s;
+}
+
+// Exact sign of a*d - b*c (ray.c, tpki_det2_sign_exact, in float).
+int det2_sign_exact(float a, float b, float c, float d)
+{
+    float ad_lo, bc_lo, x0, x1, x2, m0, i0, i1;
+    float ad = two_prod(a, d, ad_lo);
+    float bc = two_prod(b, c, bc_lo);
+    i0 = two_sum(ad_lo, -bc_lo, x0);
+    float j = two_sum(ad, i0, m0);
+    i1 = two_sum(m0, -bc, x1);
+    float x3 = two_sum(j, i1, x2);
+    if (x3 != 0.0) return x3 > 0.0 ? 1 : -1;
+    if (x2 != 0.0) return x2 > 0.0 ? 1 : -1;
+    if (x1 != 0.0) return x1 > 0.0 ? 1 : -1;
+    if (x0 != 0.0) return x0 > 0.0 ? 1 : -1;
+    return 0;
+}
+#endif
+
+// Ties (the ray's point exactly on the edge's line) fall to the perturbation of the ray's point.
+int tie_sign(vec4 lo, vec4 hi)
+{
+    float dy = lo.y - hi.y, dx = hi.x - lo.x;
+    return dy > 0.0 ? 1 : dy < 0.0 ? -1 : dx > 0.0 ? 1 : dx < 0.0 ? -1 : 1;
+}
+
+// tpk_edge_sign: orient(P_i, P_j, o) with o = (0,0) symbolically perturbed; never 0.
+int edge_sign(int i, vec4 pi, int j, vec4 pj, out float value)
+{
+    vec4 lo = pi, hi = pj;
+    int flip = 1;
+    if (i > j) {
+        lo = pj;
+        hi = pi;
+        flip = -1;
+    }
+#if TPK_VK_FP64
+    if (EXACT == TPK_VK_EXACT_ALWAYS) {
+        precise double ad = double(lo.x) * double(hi.y);
+        precise double bc = double(lo.y) * double(hi.x);
+        precise double dd = ad - bc;
+        int sign = dd > 0.0LF ? 1 : dd < 0.0LF ? -1 : 0;
+        value = sign == 0 ? 0.0 : float(flip) * float(dd);
+        return flip * (sign == 0 ? tie_sign(lo, hi) : sign);
+    }
+#endif
+    precise float p = lo.x * hi.y;
+    precise float q = lo.y * hi.x;
+    precise float det = p - q;
+    float bound = 2.384185791015625e-7 * (abs(p) + abs(q)); // 4 u, u = 2^-24
+    int sign;
+    if (det > bound) {
+        sign = 1;
+    } else if (det < -bound) {
+        sign = -1;
+    } else {
+        sign = det2_sign_exact(lo.x, lo.y, hi.x, hi.y);
+        if (sign == 0 || (det > 0.0 && sign < 0) || (det < 0.0 && sign > 0) || isnan(det))
+            det = 0.0;
+        if (sign == 0)
+            sign = tie_sign(lo, hi);
+    }
+    value = float(flip) * det;
+    return flip * sign;
+}
+
+// The face a ray crosses (tpk_face_hit): ids, projections (w unused), edge values, scalars.
+struct Hit {
+    ivec3 v;
+    vec4 p0, p1, p2;
+    vec3 e;
+    vec3 s; // the vertices' point scalars
+    float t;
+};
+
+vec3 edge_weights(Hit h, int zero_edge)
+{
+    // the edge (i, j) = (zero_edge, zero_edge + 1), interpolated from its lower id (ray.c)
+    vec4 pi = zero_edge == 0 ? h.p0 : zero_edge == 1 ? h.p1 : h.p2;
+    vec4 pj = zero_edge == 0 ? h.p1 : zero_edge == 1 ? h.p2 : h.p0;
+    int vi = zero_edge == 0 ? h.v[0] : zero_edge == 1 ? h.v[1] : h.v[2];
+    int vj = zero_edge == 0 ? h.v[1] : zero_edge == 1 ? h.v[2] : h.v[0];
+    bool i_low = vi < vj;
+    vec4 a = i_low ? pi : pj, b = i_low ? pj : pi;
+    precise float ex = b.x - a.x;
+    precise float ey = b.y - a.y;
+    precise float len2 = ex * ex + ey * ey;
+    precise float u = len2 > 0.0 ? -(a.x * ex + a.y * ey) / len2 : 0.5;
+    u = clamp(u, 0.0, 1.0);
+    float wi = i_low ? 1.0 - u : u, wj = i_low ? u : 1.0 - u;
+    return zero_edge == 0 ? vec3(wi, wj, 0.0) : zero_edge == 1 ? vec3(0.0, wi, wj) : vec3(wj, 0.0, wi);
+}
+
+vec3 face_weights(Hit h)
+{
+    int zeros = int(h.e[0] == 0.0) + int(h.e[1] == 0.0) + int(h.e[2] == 0.0);
+    if (zeros == 1)
+        return edge_weights(h, h.e[0] == 0.0 ? 0 : h.e[1] == 0.0 ? 1 : 2);
+    precise float sum = h.e[0] + h.e[1] + h.e[2];
+    if (sum != 0.0 && !isnan(sum)) {
+        precise float inv = 1.0 / sum;
+        return vec3(h.e[1] * inv, h.e[2] * inv, h.e[0] * inv);
+    }
+    return vec3(1.0 / 3.0);
+}
+
+float hit_t(Hit h, vec3 w)
+{
+    precise float t = w[0] * h.p0.z + w[1] * h.p1.z + w[2] * h.p2.z;
+    return t;
+}
+
+// tpki_shell_face_entry: does the line enter the volume through shell face f (outward winding)?
+bool shell_face_entry(ivec4 f, out Hit h)
+{
+    h.v = f.xyz;
+    h.p0 = project(f.x, h.s[0]);
+    h.p1 = project(f.y, h.s[1]);
+    h.p2 = vec4(0.0);
+    h.s[2] = 0.0;
+    h.e = vec3(0.0);
+    h.t = 0.0;
+    if (edge_sign(f.x, h.p0, f.y, h.p1, h.e[0]) > 0)
+        return false;
+    h.p2 = project(f.z, h.s[2]);
+    if (edge_sign(f.y, h.p1, f.z, h.p2, h.e[1]) > 0)
+        return false;
+    if (edge_sign(f.z, h.p2, f.x, h.p0, h.e[2]) > 0)
+        return false;
+    h.t = hit_t(h, face_weights(h));
+    return true;
+}
+
+// ---- Shell entries through the BVH (shell_bvh.c): found one at a time, in (t, face) order ----------
+
+vec3 inv_dir;
+
+// The t at which the line enters node n's box, if it meets the box for some t in [t_low, t_high];
+// +inf otherwise. Boxes are widened by P.up.w on top of the builder's padding, for the float slab test.
+float box_enter(uint n, float t_low, float t_high)
+{
+    uvec4 a = fetch_nodes(2u * n), b = fetch_nodes(2u * n + 1u);
+    vec3 lo = uintBitsToFloat(a.xyz) - P.up.w, hi = uintBitsToFloat(b.xyz) + P.up.w;
+    float tn = -1.0 / 0.0, tf = t_high;
+    bool meets = true;
+    for (int k = 0; k < 3; k++) {
+        if (ray_dir[k] == 0.0) {
+            meets = meets && frame.org[k] >= lo[k] && frame.org[k] <= hi[k];
+            continue;
+        }
+        float t0 = (lo[k] - frame.org[k]) * inv_dir[k], t1 = (hi[k] - frame.org[k]) * inv_dir[k];
+        tn = max(tn, min(t0, t1));
+        tf = min(tf, max(t0, t1));
+    }
+    return meets && tn <= tf && tf >= t_low ? tn : 1.0 / 0.0;
+}
+
+#define STACK_SIZE 96 // TPK_SHELL_BVH_STACK
+#define INF (1.0 / 0.0)
+
+// Shell BVH traversal, nearer child first, over boxes met within [t_low, t_high]; t_high shrinks as
+// the query finds better entries. mode 0: the last entry before t_high (the ray's start); mode 1: the
+// first entry after (t_prev, face_prev) in (t, face) order.
+int bvh_query(int mode, float t_low, float t_high, float t_prev, int face_prev, out Hit best_hit)
+{
+    int best = -1;
+    float best_t = mode == 0 ? -INF : INF;
+    uint stack[STACK_SIZE];
+    float stack_t[STACK_SIZE];
+    int top = 0;
+    float t_root = box_enter(0u, t_low, t_high);
+    if (t_root == INF)
+        return -1;
+    stack[top] = 0u;
+    stack_t[top++] = t_root;
+    while (top > 0) {
+        --top;
+        uint n = stack[top];
+        if (mode == 1 && stack_t[top] > best_t)
+            continue; // every face in it is after the best entry found since it was pushed
+        uvec4 a = fetch_nodes(2u * n), b = fetch_nodes(2u * n + 1u);
+        uint first = a.w, count = b.w;
+        if (count == 0u) {
+            float hi_t = mode == 1 ? best_t : t_high;
+            float lo_t = mode == 0 ? max(t_low, best_t) : t_low;
+            float t0 = box_enter(first, lo_t, hi_t), t1 = box_enter(first + 1u, lo_t, hi_t);
+            uint near = t0 <= t1 ? first : first + 1u, far = t0 <= t1 ? first + 1u : first;
+            float near_t = min(t0, t1), far_t = max(t0, t1);
+            if (far_t != INF) {
+                stack[top] = far;
+                stack_t[top++] = far_t;
+            }
+            if (near_t != INF) {
+                stack[top] = near;
+                stack_t[top++] = near_t;
+            }
+            continue;
+        }
+        for (uint i = first; i < first + count; i++) {
+            Hit h;
+            int f = int(i);
+            if (!shell_face_entry(fetch_shell(i), h))
+                continue;
+            if (mode == 0) {
+                if (h.t < t_high && h.t > best_t) {
+                    best_t = h.t;
+                    best = f;
+                }
+            } else {
+                bool after = h.t > t_prev || (h.t == t_prev && f > face_prev);
+                bool better = best < 0 || h.t < best_t || (h.t == best_t && f < best);
+                if (after && better) {
+                    best = f;
+                    best_t = h.t;
+                    best_hit = h;
+                }
+            }
+        }
+    }
+    if (mode == 0)
+        best_hit.t = best_t;
+    return best;
+}
+
+// ---- Transfer function and emission-absorption (render_cpu.c) -------------------------------------
+
+float tf_point_s(int i)
+{
+    return P.tf_s[i >> 2][i & 3];
+}
+
+vec4 tf_eval(float s)
+{
+    int n = P.dims.w;
+    if (s <= tf_point_s(0) || n == 1)
+        return P.tf_rgba[0];
+    if (s >= tf_point_s(n - 1))
+        return P.tf_rgba[n - 1];
+    int a = 0, b = n - 1;
+    while (b - a > 1) {
+        int mid = (a + b) / 2;
+        if (tf_point_s(mid) <= s)
+            a = mid;
+        else
+            b = mid;
+    }
+    float u = (s - tf_point_s(a)) / (tf_point_s(b) - tf_point_s(a));
+    return mix(P.tf_rgba[a], P.tf_rgba[b], u);
+}
+
+#define OPAQUE_TRANSMITTANCE 0.02
+#define MAX_PIECE_DEPTH 0.05
+#define MAX_PIECE_STEPS 256
+
+vec3 color;
+float transmittance;
+float shade_m = 1.0; // lighting factor m of the stretch being integrated (render.h: LIGHTING FACTOR)
+
+void integrate_linear(float h, vec4 c0, vec4 c1)
+{
+    float inv_unit = P.scalar_map.z;
+    float depth = h * 0.5 * (c0.a + c1.a) * inv_unit;
+    if (!(depth > 0.0))
+        return;
+    int n = clamp(int(ceil(depth / MAX_PIECE_DEPTH)), 1, MAX_PIECE_STEPS);
+    float step = h / float(n);
+    for (int j = 0; j < n; j++) {
+        float u0 = float(j) / float(n), u1 = float(j + 1) / float(n);
+        vec4 e0 = mix(c0, c1, u0), e1 = mix(c0, c1, u1);
+        float k = e0.a + e1.a;
+        if (k <= 0.0)
+            continue;
+        float alpha = 1.0 - exp(-step * 0.5 * k * inv_unit);
+        float weight = shade_m * transmittance * alpha / k;
+        color += weight * (e0.rgb * e0.a + e1.rgb * e1.a);
+        transmittance *= 1.0 - alpha;
+    }
+}
+
+// The first TF control point with s > x (the count when none): the pieces below visit only the
+// points a piece crosses, not all of them (render_cpu.c skips the others; here a loop that no lane
+// needs costs nothing, while an `if` inside a loop costs on every iteration on a CPU device).
+int tf_first_above(float x)
+{
+    int a = 0, b = P.dims.w;
+    while (a < b) {
+        int mid = (a + b) / 2;
+        if (tf_point_s(mid) <= x)
+            a = mid + 1;
+        else
+            b = mid;
+    }
+    return a;
+}
+
+// render_cpu.c's integrate_exact: split where the scalar crosses a TF control point.
+void integrate_exact(float len, float s0, float s1)
+{
+    vec4 ca = tf_eval(s0);
+    if (s0 == s1) {
+        integrate_linear(len, ca, ca);
+        return;
+    }
+    float ds = s1 - s0, prev_s = s0;
+    int n = P.dims.w;
+    if (ds > 0.0) {
+        for (int k = tf_first_above(s0); k < n && tf_point_s(k) < s1; k++) {
+            float cs = tf_point_s(k);
+            vec4 cb = P.tf_rgba[k];
+            integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
+            ca = cb;
+            prev_s = cs;
+        }
+    } else {
+        // points below s0 (those equal to it are not crossed), downwards while above s1
+        int k = tf_first_above(s0) - 1;
+        while (k >= 0 && tf_point_s(k) >= s0)
+            k--;
+        for (; k >= 0 && tf_point_s(k) > s1; k--) {
+            float cs = tf_point_s(k);
+            vec4 cb = P.tf_rgba[k];
+            integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
+            ca = cb;
+            prev_s = cs;
+        }
+    }
+    integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval(s1));
+}
+
+// One point sample of `step` length at TF coordinate u.
+void composite_sample(float step, float u)
+{
+    vec4 c = tf_eval(u);
+    float alpha = 1.0 - exp(-step * c.a * P.scalar_map.z);
+    color += shade_m * transmittance * alpha * c.rgb;
+    transmittance *= 1.0 - alpha;
+}
+
+void integrate_sampled(float len, float s0, float s1)
+{
+    float max_step = 0.5 / P.scalar_map.z;
+    int n = clamp(int(ceil(len / max_step)), 1, 4096);
+    float step = len / float(n);
+    for (int j = 0; j < n && transmittance > OPAQUE_TRANSMITTANCE; j++)
+        composite_sample(step, s0 + (s1 - s0) * ((float(j) + 0.5) / float(n)));
+}
+
+// ri_integrate: one stretch of volume, as `integration` says.
+void integrate(float len, float u0, float u1)
+{
+    if (!(len > 0.0))
+        return;
+    if (P.mode.z == 1)
+        integrate_sampled(len, u0, u1);
+    else if (P.mode.z == 2)
+        composite_sample(len, 0.5 * (u0 + u1));
+    else
+        integrate_exact(len, u0, u1);
+}
+
+float normalized(float scalar)
+{
+    if (P.mode.w == 0 || P.scalar_map.y == 0.0)
+        return 0.5;
+    return (scalar - P.scalar_map.x) * P.scalar_map.y;
+}
+
+// The ray's frame (ray.c, tpki_ray_frame_init); false for a degenerate direction.
+bool frame_init(vec3 org, vec3 dir)
+{
+    int kz = 0;
+    if (abs(dir[1]) > abs(dir[kz]))
+        kz = 1;
+    if (abs(dir[2]) > abs(dir[kz]))
+        kz = 2;
+    if (dir[kz] == 0.0)
+        return false;
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (dir[kz] < 0.0) {
+        int swap = kx;
+        kx = ky;
+        ky = swap;
+    }
+    frame.org = org;
+    frame.kx = kx;
+    frame.ky = ky;
+    frame.kz = kz;
+    frame.sx = dir[kx] / dir[kz];
+    frame.sy = dir[ky] / dir[kz];
+    frame.sz = 1.0 / dir[kz];
+    return true;
+}
+
+// render.h's CLIP BOX: cut [lo, hi] of the ray org + t dir to the box; false when it misses.
+bool clip_ray(vec3 org, vec3 dir, inout float lo, inout float hi)
+{
+    bool meets = true;
+    for (int k = 0; P.clip_lo.w != 0.0 && k < 3; k++) {
+        if (dir[k] == 0.0) {
+            meets = meets && org[k] >= P.clip_lo[k] && org[k] <= P.clip_hi[k];
+            continue;
+        }
+        float t0 = (P.clip_lo[k] - org[k]) / dir[k], t1 = (P.clip_hi[k] - org[k]) / dir[k];
+        lo = max(lo, min(t0, t1));
+        hi = min(hi, max(t0, t1));
+    }
+    return meets && lo <= hi;
+}
+
+// ---- One inside-run (march.c, march_run) --------------------------------------------------------
+
+uint steps_taken;
+uint status;
+float run_exit_t; // t of the shell face the last run left through
+
+int rank4(int x, int a, int b, int c, int d)
+{
+    return int(a < x) + int(b < x) + int(c < x) + int(d < x);
+}
+
+float hit_scalar(Hit h, vec3 w)
+{
+    return dot(w, h.s);
+}
+
+// ---- Effects (render.h: ISOSURFACES, NORMAL, LIGHTING FACTOR) -------------------------------------
+
+vec3 eye_dir_point(float t)
+{
+    return P.eye.xyz + t * ray_dir;
+}
+
+// m at x with normal n (has_n false: no normal), shadow transmittance S and AO factor A (rl_factor).
+float lighting_factor(vec3 x, bool has_n, vec3 n, float S, float A)
+{
+    float d = 1.0;
+    vec3 to_light = P.light.xyz - x;
+    float len = length(to_light);
+    if (SHADING && has_n && len > 0.0 && !isinf(len))
+        d = abs(dot(n, to_light / len));
+    return A * (0.3 + 0.7 * d * S); // TPK_RENDER_AMBIENT
+}
+
+bool unit_or_none(vec3 v, out vec3 n)
+{
+    float len = length(v);
+    n = v / len;
+    return len > 0.0 && !isinf(len) && !isnan(len);
+}
+
+// The unit gradient of the point scalar over the tet v[0..3] (false where it is zero).
+bool tet_normal(ivec4 v, out vec3 n)
+{
+    vec4 p0 = fetch_verts(uint(v.x)), p1 = fetch_verts(uint(v.y)), p2 = fetch_verts(uint(v.z)),
+         p3 = fetch_verts(uint(v.w));
+    vec3 e1 = p1.xyz - p0.xyz, e2 = p2.xyz - p0.xyz, e3 = p3.xyz - p0.xyz;
+    vec3 c23 = cross(e2, e3), c31 = cross(e3, e1), c12 = cross(e1, e2);
+    float det = dot(e1, c23);
+    vec3 g = ((p1.w - p0.w) * c23 + (p2.w - p0.w) * c31 + (p3.w - p0.w) * c12) / det;
+    return unit_or_none(g, n);
+}
+
+bool face_normal(ivec4 v, out vec3 n)
+{
+    vec3 p0 = fetch_verts(uint(v.x)).xyz, p1 = fetch_verts(uint(v.y)).xyz, p2 = fetch_verts(uint(v.z)).xyz;
+    return unit_or_none(cross(p1 - p0, p2 - p0), n);
+}
+
+// Iso crossings of one piece, in increasing t (equal t: increasing j).
+int crossing_j[4];
+float crossing_t[4];
+
+int add_crossing(int n, float t, int j)
+{
+    int k = n;
+    while (k > 0 && (crossing_t[k - 1] > t || (crossing_t[k - 1] == t && crossing_j[k - 1] > j))) {
+        crossing_t[k] = crossing_t[k - 1];
+        crossing_j[k] = crossing_j[k - 1];
+        k--;
+    }
+    crossing_t[k] = t;
+    crossing_j[k] = j;
+    return n + 1;
+}
+
+// Point field: where the linear scalar crosses each value (half-open, so a face counts once).
+int point_crossings(float t_in, float t_out, float s_in, float s_out)
+{
+    int n = 0;
+    for (int j = 0; j < P.shell_info.y; j++) {
+        float v = P.iso[j];
+        if ((s_in < v && v <= s_out) || (s_in > v && v >= s_out))
+            n = add_crossing(n, clamp(t_in + (v - s_in) / (s_out - s_in) * (t_out - t_in), t_in, t_out), j);
+    }
+    return n;
+}
+
+// Tet field: the jump between two consecutive pieces, at t.
+int jump_crossings(float t, float s_prev, float s)
+{
+    int n = 0;
+    for (int j = 0; j < P.shell_info.y; j++) {
+        float v = P.iso[j];
+        if ((s_prev < v && v <= s) || (s_prev > v && v >= s))
+            n = add_crossing(n, t, j);
+    }
+    return n;
+}
+
+// ---- Secondary rays: shadows and ambient occlusion (render.h: TRANSMITTANCE, AO DIRECTIONS) -------
+
+// Optical depth of a stretch of length len from TF coordinate u0 to u1: the exact mean of the TF's
+// alpha (trapezoids between the control points crossed) times length / unit (ri_optical_depth).
+float optical_depth(float len, float u0, float u1)
+{
+    if (!(len > 0.0))
+        return 0.0;
+    float a0 = tf_eval(u0).a;
+    if (u0 == u1)
+        return len * a0 * P.scalar_map.z;
+    float du = u1 - u0, prev_u = u0, prev_a = a0, sum = 0.0;
+    int n = P.dims.w;
+    if (du > 0.0) {
+        for (int k = tf_first_above(u0); k < n && tf_point_s(k) < u1; k++) {
+            float cu = tf_point_s(k), ca = P.tf_rgba[k].a;
+            sum += 0.5 * (prev_a + ca) * (cu - prev_u);
+            prev_u = cu;
+            prev_a = ca;
+        }
+    } else {
+        int k = tf_first_above(u0) - 1;
+        while (k >= 0 && tf_point_s(k) >= u0)
+            k--;
+        for (; k >= 0 && tf_point_s(k) > u1; k--) {
+            float cu = tf_point_s(k), ca = P.tf_rgba[k].a;
+            sum += 0.5 * (prev_a + ca) * (cu - prev_u);
+            prev_u = cu;
+            prev_a = ca;
+        }
+    }
+    sum += 0.5 * (prev_a + tf_eval(u1).a) * (u1 - prev_u);
+    return len * (sum / du) * P.scalar_map.z;
+}
+
+float trans_tau, trans_iso, trans_lo, trans_hi; // the secondary ray being marched (trans_ray)
+uint secondary_rays = 0u;
+bool trans_have_prev;
+float trans_prev_t_out, trans_prev_s;
+
+// One piece of a secondary ray, already within [trans_lo, trans_hi] (on_trans_segment).
+bool trans_piece(float t_in, float t_out, float s_in, float s_out)
+{
+    float len = t_out - t_in, eps = P.cast_info.y;
+    int hits = 0;
+    if (P.mode.w == 2) {
+        for (int j = 0; ISO && trans_have_prev && trans_prev_t_out == t_in && t_in > eps && j < P.shell_info.y; j++) {
+            float v = P.iso[j];
+            hits += int((trans_prev_s < v && v <= s_in) || (trans_prev_s > v && v >= s_in));
+        }
+        trans_have_prev = true;
+        trans_prev_t_out = t_out;
+        trans_prev_s = s_in;
+        float u = normalized(s_in);
+        trans_tau += optical_depth(len, u, u);
+    } else {
+        for (int j = 0; ISO && j < P.shell_info.y; j++) {
+            float v = P.iso[j];
+            if ((s_in < v && v <= s_out) || (s_in > v && v >= s_out)) {
+                float t = clamp(t_in + (v - s_in) / (s_out - s_in) * len, t_in, t_out);
+                hits += int(t > eps);
+            }
+        }
+        trans_tau += optical_depth(len, normalized(s_in), normalized(s_out));
+    }
+    for (int i = 0; i < hits; i++)
+        trans_iso *= 1.0 - P.light.w;
+    return exp(-trans_tau) * trans_iso <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK;
+}
+
+// report() for secondary rays: clip to [trans_lo, trans_hi] as the marcher does.
+bool trans_report(float t_in, float t_out, float s_in, float s_out)
+{
+    if (t_out < trans_lo)
+        return false;
+    float len = t_out - t_in, a = t_in, b = t_out, sa = s_in, sb = s_out;
+    if (t_in < trans_lo) {
+        a = trans_lo;
+        sa = s_in + (s_out - s_in) * ((trans_lo - t_in) / len);
+    }
+    if (t_out > trans_hi) {
+        b = trans_hi;
+        sb = s_in + (s_out - s_in) * ((trans_hi - t_in) / len);
+    }
+    return trans_piece(a, b, sa, sb) || t_out >= trans_hi;
+}
+
+#define MARCH_RUN march_run_secondary
+#define MARCH_TRACE trace_secondary
+#define MARCH_TMAX trans_hi
+#define MARCH_REPORT(t_in, t_out, s_in, s_out, v) trans_report(t_in, t_out, s_in, s_out)
+#include "march_run.glsl"
+#undef MARCH_RUN
+#undef MARCH_TRACE
+#undef MARCH_TMAX
+#undef MARCH_REPORT
+
+// Transmittance from x along unit w over [0, len], clipped to the box; the primary ray's frame is kept.
+float transmittance_ray(vec3 x, vec3 w, float len)
+{
+    float lo = 0.0, hi = len;
+    if (!clip_ray(x, w, lo, hi))
+        lo = hi = -1.0; // misses the box: marches nothing, T2 = 1 (one exit, see march_run.glsl)
+    Frame primary = frame;
+    vec3 primary_dir = ray_dir, primary_inv = inv_dir;
+    float primary_exit = run_exit_t;
+    trans_tau = 0.0;
+    trans_iso = 1.0;
+    trans_lo = lo;
+    trans_hi = hi;
+    trans_have_prev = false;
+    secondary_rays += lo >= 0.0 ? 1u : 0u;
+    if (lo >= 0.0 && frame_init(x, w)) {
+        ray_dir = w;
+        inv_dir = 1.0 / w;
+        trace_secondary(lo, hi);
+    }
+    frame = primary;
+    ray_dir = primary_dir;
+    inv_dir = primary_inv;
+    run_exit_t = primary_exit;
+    return exp(-trans_tau) * trans_iso;
+}
+
+uint hash32(uint x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+ivec2 pixel; // of this invocation
+
+// Mean transmittance of the AO rays around unit axis a (render.h: AO DIRECTIONS).
+float ambient(vec3 x, vec3 a)
+{
+    int count = P.cast_count.x;
+    float sgn = a.z >= 0.0 ? 1.0 : -1.0;
+    float p = -1.0 / (sgn + a.z), q = a.x * a.y * p;
+    vec3 b1 = vec3(1.0 + sgn * a.x * a.x * p, sgn * q, -sgn * a.x), b2 = vec3(q, sgn + a.y * a.y * p, -a.y);
+    uint h = hash32(uint(pixel.y) * 65536u + uint(pixel.x));
+    float rot = float(h) * (1.0 / 4294967296.0), sum = 0.0;
+    for (int i = 0; i < count; i++) {
+        float z = 1.0 - (float(i) + 0.5) / float(count), r = sqrt(1.0 - z * z);
+        float phi = 6.283185307179586 * fract(float(i) * 0.6180339887498949 + rot);
+        sum += transmittance_ray(x, r * cos(phi) * b1 + r * sin(phi) * b2 + z * a, P.cast_info.x);
+    }
+    return sum / float(count);
+}
+
+// Shadow and AO factors at x (rl_cast); n the normal where has_n.
+void cast_rays(vec3 x, bool has_n, vec3 n, out float S, out float A)
+{
+    S = 1.0;
+    A = 1.0;
+    if (SHADOWS) {
+        vec3 w = P.light.xyz - x;
+        float len = length(w);
+        if (len > 0.0)
+            S = transmittance_ray(x, w / len, len);
+    }
+    if (AO)
+        A = ambient(x, has_n ? (dot(n, ray_dir) > 0.0 ? -n : n) : -ray_dir);
+}
+
+bool cast_done = false; // shade points of this ray (render.h: SHADE POINTS)
+float t_cast, shade_s = 1.0, shade_a = 1.0;
+bool have_prev = false; // the previous piece of this ray (tet-field iso)
+float prev_t_out, prev_s;
+
+void composite_iso(float t, float v, bool has_n, vec3 n)
+{
+    float m = 1.0;
+    if (LIGHTING) {
+        vec3 x = eye_dir_point(t);
+        float S = 1.0, A = 1.0;
+        if (CAST)
+            cast_rays(x, has_n, n, S, A);
+        m = lighting_factor(x, has_n, n, S, A);
+    }
+    vec4 c = tf_eval(normalized(v));
+    float alpha = P.light.w;
+    color += transmittance * alpha * m * c.rgb;
+    transmittance *= 1.0 - alpha;
+}
+
+// One tet piece [t_in, t_out] of tet vertices v (entry face, fourth) with scalars s_in, s_out
+// (render_cpu.c's on_segment). Returns true when the ray is opaque.
+bool segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
+{
+    const bool tet_field = P.mode.w == 2;
+    int nh = 0;
+    if (ISO) {
+        if (!tet_field)
+            nh = point_crossings(t_in, t_out, s_in, s_out);
+        else if (have_prev && prev_t_out == t_in)
+            nh = jump_crossings(t_in, prev_s, s_in);
+        have_prev = true;
+        prev_t_out = t_out;
+        prev_s = s_in;
+    }
+    vec3 n = vec3(0.0);
+    bool has_n = false;
+    shade_m = 1.0;
+    float u_in = normalized(s_in), u_out = normalized(s_out), cur_t = t_in, cur_u = u_in;
+    if (LIGHTING) {
+        has_n = P.mode.w == 1 && tet_normal(v, n);
+        if (t_out > t_in) {
+            // render.h SHADE POINTS: cast from this piece's middle when the ray has lost 1/32 of
+            // transmittance since the last cast; pieces in between reuse its S and A.
+            vec3 mid = eye_dir_point(0.5 * (t_in + t_out));
+            if (CAST && optical_depth(t_out - t_in, u_in, u_out) > 0.0 &&
+                (!cast_done || t_cast - transmittance >= 1.0 / 32.0)) {
+                cast_rays(mid, has_n, n, shade_s, shade_a);
+                cast_done = true;
+                t_cast = transmittance;
+            }
+            shade_m = lighting_factor(mid, has_n, n, shade_s, shade_a);
+        }
+    }
+    for (int i = 0; ISO && i < nh && transmittance > OPAQUE_TRANSMITTANCE; i++) {
+        float value = P.iso[crossing_j[i]];
+        float hit_u = tet_field ? u_in : normalized(value);
+        integrate(crossing_t[i] - cur_t, cur_u, hit_u);
+        vec3 hn = n;
+        bool has_hn = has_n;
+        if (LIGHTING && tet_field)
+            has_hn = face_normal(v, hn);
+        float m = shade_m;
+        composite_iso(crossing_t[i], value, has_hn, hn);
+        shade_m = m;
+        cur_t = crossing_t[i];
+        cur_u = hit_u;
+    }
+    if (transmittance > OPAQUE_TRANSMITTANCE)
+        integrate(t_out - cur_t, cur_u, u_out);
+    return transmittance <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK;
+}
+
+// The range of t a piece may contribute: [0, inf), cut to the clip box when there is one.
+float t_min_clip, t_max_clip;
+
+// report(): clip the piece to [t_min_clip, t_max_clip] and integrate it. Returns true to stop the ray.
+bool report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
+{
+    if (t_out < t_min_clip)
+        return false;
+    float len = t_out - t_in;
+    float a = t_in, b = t_out, sa = s_in, sb = s_out;
+    if (t_in < t_min_clip) {
+        a = t_min_clip;
+        sa = s_in + (s_out - s_in) * ((t_min_clip - t_in) / len);
+    }
+    if (t_out > t_max_clip) {
+        b = t_max_clip;
+        sb = s_in + (s_out - s_in) * ((t_max_clip - t_in) / len);
+    }
+    if (segment(a, b, sa, sb, v))
+        return true;
+    return t_out >= t_max_clip;
+}
+
+#define MARCH_RUN march_run
+#define MARCH_TRACE trace
+#define MARCH_TMAX t_max_clip
+#define MARCH_REPORT(t_in, t_out, s_in, s_out, v) report(t_in, t_out, s_in, s_out, v)
+#include "march_run.glsl"
+#undef MARCH_RUN
+#undef MARCH_TRACE
+#undef MARCH_TMAX
+#undef MARCH_REPORT
+
+// ---- The pixel ----------------------------------------------------------------------------------
+
+uint to_byte(float v)
+{
+    return uint(clamp(v, 0.0, 1.0) * 255.0 + 0.5);
+}
+
+void main()
+{
+    const int x = int(gl_GlobalInvocationID.x), y = P.dims.z + int(gl_GlobalInvocationID.y);
+    pixel = ivec2(x, y);
+    if (x >= P.dims.x || y >= P.dims.y)
+        return;
+    const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
+    const float py = (1.0 - 2.0 * (float(y) + 0.5) / float(P.dims.y)) * P.right.w;
+    ray_dir = normalize(P.forward.xyz + px * P.right.xyz + py * P.up.xyz);
+    inv_dir = 1.0 / ray_dir;
+    color = vec3(0.0);
+    transmittance = 1.0;
+    steps_taken = 0u;
+    status = TPK_VK_STATUS_OK;
+    t_min_clip = 0.0;
+    t_max_clip = INF;
+    if (frame_init(P.eye.xyz, ray_dir) && clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip))
+        trace(t_min_clip, t_max_clip);
+    const vec4 bg = P.background;
+    float alpha = (1.0 - transmittance) + transmittance * bg.a;
+    vec3 premult = color + transmittance * bg.a * bg.rgb;
+    vec3 straight = alpha > 0.0 ? premult / alpha : vec3(0.0);
+    uint index = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // within this band of rows
+    pixels[index] = to_byte(straight.r) | (to_byte(straight.g) << 8) | (to_byte(straight.b) << 16) |
+                    (to_byte(alpha) << 24);
+    steps[index] = uvec4(steps_taken, status, secondary_rays, 0u);
+}

@@ -1,0 +1,80 @@
+/* The Vulkan renderer's data layout, shared by its C side and its GLSL shader (both include this file;
+ * only #defines, so it is valid in both languages). vk_arrays.c asserts every record number below
+ * against the structs of format/tetpack_format.h, so the shader reads what the format defines.
+ *
+ * Each array of the file is uploaded unchanged as a texel buffer of 16-byte (or 4-byte) texels:
+ *   positions + point scalar   RGBA32F, one texel per vertex: x, y, z (relative to the origin), scalar
+ *   Tet16                      RGBA32I, one texel per tet: vx, nx[0], nx[1], nx[2]
+ *   Tet32                      RGBA32I, two texels per tet: v[0], v[1], v[2], vx | n[0..3]
+ *   Tet20                      R32I, five texels per tet: vx, n[0..3]
+ *   shell faces (BVH order)    RGBA32I, one texel per face: a, b, c, t
+ *   shell BVH nodes            RGBA32UI, two texels per node: lo xyz (float bits), first | hi xyz, count
+ *   tet scalars (tet field)    R32F, one texel per tet
+ * An array larger than one binding is split into TPK_VK_MAX_PARTS bindings at most, each holding
+ * 2^shift texels (the shift is a specialization constant), so texel i is texel i & (2^shift - 1) of
+ * binding i >> shift. */
+#ifndef TPK_VK_LAYOUT_H
+#define TPK_VK_LAYOUT_H
+
+/* Record geometry in 32-bit words (checked against format/tetpack_format.h in vk_arrays.c). */
+#define TPK_VK_TET16_WORDS 4
+#define TPK_VK_TET16_VX 0    /* then nx[0..2] at words 1..3 */
+#define TPK_VK_TET20_WORDS 5
+#define TPK_VK_TET20_VX 0    /* then n[0..3] at words 1..4 */
+#define TPK_VK_TET32_WORDS 8
+#define TPK_VK_TET32_V 0     /* v[0..2] at words 0..2 */
+#define TPK_VK_TET32_VX 3
+#define TPK_VK_TET32_N 4     /* n[0..3] at words 4..7 */
+#define TPK_VK_SHELL_WORDS 4 /* a, b, c, t */
+#define TPK_VK_NODE_WORDS 8  /* lo[3], hi[3], first, count as stored; uploaded as lo, first | hi, count */
+
+/* Layout ids: the specialization constant that selects the marcher (same values as tpk_layout). */
+#define TPK_VK_LAYOUT_TET32 32
+#define TPK_VK_LAYOUT_TET20 20
+#define TPK_VK_LAYOUT_TET16 16
+
+/* The texel arrays, each with TPK_VK_MAX_PARTS consecutive bindings starting at its base. */
+#define TPK_VK_MAX_PARTS 8
+#define TPK_VK_ARRAY_VERTS 0
+#define TPK_VK_ARRAY_TETS 1
+#define TPK_VK_ARRAY_SHELL 2
+#define TPK_VK_ARRAY_NODES 3
+#define TPK_VK_ARRAY_TET_SCALARS 4
+#define TPK_VK_ARRAY_COUNT 5
+
+#define TPK_VK_BIND_PARAMS 0 /* uniform block */
+#define TPK_VK_BIND_PIXELS 1 /* storage buffer: packed RGBA8 per pixel */
+#define TPK_VK_BIND_STEPS 2  /* storage buffer: per pixel, tet steps, a status, secondary rays, 0 */
+#define TPK_VK_BIND_ARRAY(a) (3 + (a) * TPK_VK_MAX_PARTS)
+#define TPK_VK_BIND_COUNT TPK_VK_BIND_ARRAY(TPK_VK_ARRAY_COUNT)
+
+/* Specialization constants: the layout, then per array its part count and shift. */
+#define TPK_VK_SPEC_LAYOUT 0
+#define TPK_VK_SPEC_PARTS(a) (1 + 2 * (a))
+#define TPK_VK_SPEC_SHIFT(a) (2 + 2 * (a))
+#define TPK_VK_SPEC_EXACT (1 + 2 * TPK_VK_ARRAY_COUNT) /* the FP64 variant's edge test, below */
+#define TPK_VK_SPEC_EFFECTS (2 + 2 * TPK_VK_ARRAY_COUNT) /* TPK_VK_EFFECT_* bits */
+#define TPK_VK_SPEC_COUNT (3 + 2 * TPK_VK_ARRAY_COUNT)
+#define TPK_VK_EFFECT_ISO 1
+#define TPK_VK_EFFECT_SHADING 2
+#define TPK_VK_EFFECT_SHADOWS 4
+#define TPK_VK_EFFECT_AO 8
+#define TPK_VK_EFFECT_MASKS 16 /* pipelines per renderer, one per combination */
+
+/* The shader is built twice: with TPK_VK_FP64 1 (for devices with shaderFloat64) and 0. The exact
+ * sign of an edge function of float coordinates is the sign of one double expression (the products
+ * are exact in double); without doubles it takes Dekker's error-free products. In the FP64 variant,
+ * TPK_VK_SPEC_EXACT picks: TPK_VK_EXACT_FILTER, a float filter with the double test only near zero
+ * (GPUs, which branch), or TPK_VK_EXACT_ALWAYS, the double test every time (CPU devices such as
+ * lavapipe, which run both sides of a branch under a mask, so that a rare slow path costs always). */
+#define TPK_VK_EXACT_FILTER 1
+#define TPK_VK_EXACT_ALWAYS 2
+
+/* Per-pixel status written by the shader. */
+#define TPK_VK_STATUS_OK 0
+#define TPK_VK_STATUS_MESH 1 /* inconsistent connectivity (TPK_ERR_MESH on the CPU) */
+
+#define TPK_VK_TF_MAX 256   /* == TPK_TF_MAX_POINTS */
+#define TPK_VK_GROUP 8      /* workgroup: 8 x 8 pixels */
+
+#endif

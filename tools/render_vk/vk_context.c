@@ -1,0 +1,232 @@
+/* The Vulkan instance, device and compute queue of the renderer, and host-visible buffers. Every
+ * failure becomes a message naming the step and the VkResult: the caller exits cleanly. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render_vk_internal.h"
+
+const char *tpk_vk_result_name(VkResult r)
+{
+    switch (r) {
+    case VK_SUCCESS: return "VK_SUCCESS";
+    case VK_NOT_READY: return "VK_NOT_READY";
+    case VK_TIMEOUT: return "VK_TIMEOUT";
+    case VK_ERROR_OUT_OF_HOST_MEMORY: return "VK_ERROR_OUT_OF_HOST_MEMORY (out of host memory)";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "VK_ERROR_OUT_OF_DEVICE_MEMORY (out of device memory)";
+    case VK_ERROR_INITIALIZATION_FAILED: return "VK_ERROR_INITIALIZATION_FAILED";
+    case VK_ERROR_DEVICE_LOST: return "VK_ERROR_DEVICE_LOST (the device stopped, e.g. a GPU time-out)";
+    case VK_ERROR_LAYER_NOT_PRESENT: return "VK_ERROR_LAYER_NOT_PRESENT";
+    case VK_ERROR_EXTENSION_NOT_PRESENT: return "VK_ERROR_EXTENSION_NOT_PRESENT";
+    case VK_ERROR_FEATURE_NOT_PRESENT: return "VK_ERROR_FEATURE_NOT_PRESENT";
+    case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER (no usable Vulkan driver)";
+    case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
+    case VK_ERROR_OUT_OF_POOL_MEMORY: return "VK_ERROR_OUT_OF_POOL_MEMORY";
+    default: return "a Vulkan error";
+    }
+}
+
+static int vk_fail(tpk_diag *diag, const char *step, VkResult r)
+{
+    return tpk_diag_fail(diag, "vulkan: %s failed: %s (%d)", step, tpk_vk_result_name(r), (int)r);
+}
+
+static int create_instance(tpk_vk_context *ctx, tpk_diag *diag)
+{
+    VkApplicationInfo app = {
+        .sType = VK_STRUCTURE_TYPE_APPLICATION_INFO,
+        .pApplicationName = "tetpack",
+        .pEngineName = "tetpack",
+        .apiVersion = VK_API_VERSION_1_2,
+    };
+    VkInstanceCreateInfo info = {.sType = VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO, .pApplicationInfo = &app};
+    VkResult r = vkCreateInstance(&info, NULL, &ctx->instance);
+    if (r != VK_SUCCESS) {
+        ctx->instance = VK_NULL_HANDLE;
+        return vk_fail(diag, "creating the instance (is a Vulkan driver installed? VK_ICD_FILENAMES?)", r);
+    }
+    return 0;
+}
+
+static int compute_family(VkPhysicalDevice dev, uint32_t *family)
+{
+    uint32_t n = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(dev, &n, NULL);
+    VkQueueFamilyProperties props[64];
+    n = n > 64 ? 64 : n;
+    vkGetPhysicalDeviceQueueFamilyProperties(dev, &n, props);
+    for (uint32_t i = 0; i < n; i++)
+        if (props[i].queueFlags & VK_QUEUE_COMPUTE_BIT) {
+            *family = i;
+            return 0;
+        }
+    return -1;
+}
+
+static int type_rank(VkPhysicalDeviceType t)
+{
+    return t == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU     ? 0
+           : t == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU ? 1
+           : t == VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU    ? 2
+                                                         : 3;
+}
+
+/* TPK_VK_DEVICE=N, else the best-ranked Vulkan 1.2 device with a compute queue. */
+static int pick_device(tpk_vk_context *ctx, tpk_diag *diag)
+{
+    uint32_t n = 0;
+    VkResult r = vkEnumeratePhysicalDevices(ctx->instance, &n, NULL);
+    if (r != VK_SUCCESS)
+        return vk_fail(diag, "listing the devices", r);
+    if (n == 0)
+        return tpk_diag_fail(diag, "vulkan: no Vulkan device (the loader found no driver with a device)");
+    VkPhysicalDevice devs[16];
+    n = n > 16 ? 16 : n;
+    r = vkEnumeratePhysicalDevices(ctx->instance, &n, devs);
+    if (r != VK_SUCCESS && r != VK_INCOMPLETE)
+        return vk_fail(diag, "listing the devices", r);
+    const char *env = getenv("TPK_VK_DEVICE");
+    int wanted = env && *env ? atoi(env) : -1;
+    if (wanted >= (int)n)
+        return tpk_diag_fail(diag, "vulkan: TPK_VK_DEVICE=%d but there are %u devices", wanted, n);
+    int best = -1, best_rank = 99;
+    for (uint32_t i = 0; i < n; i++) {
+        VkPhysicalDeviceProperties p;
+        vkGetPhysicalDeviceProperties(devs[i], &p);
+        uint32_t family;
+        if (p.apiVersion < VK_API_VERSION_1_2 || compute_family(devs[i], &family) != 0)
+            continue;
+        if (wanted == (int)i || (wanted < 0 && type_rank(p.deviceType) < best_rank)) {
+            best = (int)i;
+            best_rank = type_rank(p.deviceType);
+            ctx->queue_family = family;
+        }
+    }
+    if (best < 0)
+        return tpk_diag_fail(diag, "vulkan: no Vulkan 1.2 device with a compute queue%s",
+                             wanted >= 0 ? " at TPK_VK_DEVICE" : "");
+    ctx->physical = devs[best];
+    vkGetPhysicalDeviceProperties(ctx->physical, &ctx->props);
+    vkGetPhysicalDeviceMemoryProperties(ctx->physical, &ctx->memory);
+    VkPhysicalDeviceMaintenance3Properties m3 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+    VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &m3};
+    vkGetPhysicalDeviceProperties2(ctx->physical, &p2);
+    ctx->max_allocation = m3.maxMemoryAllocationSize ? m3.maxMemoryAllocationSize : (VkDeviceSize)1 << 30;
+    return 0;
+}
+
+int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag)
+{
+    memset(ctx, 0, sizeof *ctx);
+    if (create_instance(ctx, diag) != 0 || pick_device(ctx, diag) != 0) {
+        tpk_vk_context_destroy(ctx);
+        return -1;
+    }
+    const float priority = 1.0f;
+    VkDeviceQueueCreateInfo queue = {
+        .sType = VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO,
+        .queueFamilyIndex = ctx->queue_family,
+        .queueCount = 1,
+        .pQueuePriorities = &priority,
+    };
+    VkPhysicalDeviceFeatures supported, enabled;
+    vkGetPhysicalDeviceFeatures(ctx->physical, &supported);
+    memset(&enabled, 0, sizeof enabled);
+    /* TPK_VK_NO_FP64=1 takes the variant without doubles on any device, so that tests run it here */
+    const char *no_fp64 = getenv("TPK_VK_NO_FP64");
+    ctx->fp64 = supported.shaderFloat64 == VK_TRUE && !(no_fp64 && !strcmp(no_fp64, "1"));
+    enabled.shaderFloat64 = ctx->fp64 ? VK_TRUE : VK_FALSE;
+    VkDeviceCreateInfo info = {
+        .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
+        .queueCreateInfoCount = 1,
+        .pQueueCreateInfos = &queue,
+        .pEnabledFeatures = &enabled,
+    };
+    VkResult r = vkCreateDevice(ctx->physical, &info, NULL, &ctx->device);
+    if (r != VK_SUCCESS) {
+        ctx->device = VK_NULL_HANDLE;
+        tpk_vk_context_destroy(ctx);
+        return vk_fail(diag, "creating the device", r);
+    }
+    vkGetDeviceQueue(ctx->device, ctx->queue_family, 0, &ctx->queue);
+    return 0;
+}
+
+void tpk_vk_context_destroy(tpk_vk_context *ctx)
+{
+    if (ctx->device)
+        vkDestroyDevice(ctx->device, NULL);
+    if (ctx->instance)
+        vkDestroyInstance(ctx->instance, NULL);
+    memset(ctx, 0, sizeof *ctx);
+}
+
+/* ---- Buffers ------------------------------------------------------------------------------------- */
+
+/* A memory type allowed by `bits` with all of `flags`; -1 when none. */
+static int memory_type(const tpk_vk_context *ctx, uint32_t bits, VkMemoryPropertyFlags flags)
+{
+    for (uint32_t i = 0; i < ctx->memory.memoryTypeCount; i++)
+        if ((bits & (1u << i)) && (ctx->memory.memoryTypes[i].propertyFlags & flags) == flags)
+            return (int)i;
+    return -1;
+}
+
+int tpk_vk_buffer_create(const tpk_vk_context *ctx, VkDeviceSize size, VkBufferUsageFlags usage,
+                         const char *what, tpk_vk_buffer *out, tpk_diag *diag)
+{
+    memset(out, 0, sizeof *out);
+    VkBufferCreateInfo info = {
+        .sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
+        .size = size,
+        .usage = usage,
+        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
+    };
+    VkResult r = vkCreateBuffer(ctx->device, &info, NULL, &out->buffer);
+    if (r != VK_SUCCESS) {
+        out->buffer = VK_NULL_HANDLE;
+        return tpk_diag_fail(diag, "vulkan: creating the buffer for %s (%llu bytes) failed: %s", what,
+                             (unsigned long long)size, tpk_vk_result_name(r));
+    }
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(ctx->device, out->buffer, &req);
+    const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    int types[2] = {memory_type(ctx, req.memoryTypeBits, host | VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT),
+                    memory_type(ctx, req.memoryTypeBits, host)};
+    r = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    for (int k = 0; k < 2 && r != VK_SUCCESS; k++) {
+        if (types[k] < 0)
+            continue;
+        VkMemoryAllocateInfo alloc = {
+            .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
+            .allocationSize = req.size,
+            .memoryTypeIndex = (uint32_t)types[k],
+        };
+        r = vkAllocateMemory(ctx->device, &alloc, NULL, &out->memory);
+    }
+    if (r != VK_SUCCESS) {
+        out->memory = VK_NULL_HANDLE;
+        tpk_vk_buffer_destroy(ctx, out);
+        return tpk_diag_fail(diag, "vulkan: allocating %llu bytes for %s failed: %s", (unsigned long long)req.size,
+                             what, tpk_vk_result_name(r));
+    }
+    if ((r = vkBindBufferMemory(ctx->device, out->buffer, out->memory, 0)) != VK_SUCCESS ||
+        (r = vkMapMemory(ctx->device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS) {
+        out->mapped = NULL;
+        tpk_vk_buffer_destroy(ctx, out);
+        return tpk_diag_fail(diag, "vulkan: mapping the memory of %s failed: %s", what, tpk_vk_result_name(r));
+    }
+    out->size = size;
+    return 0;
+}
+
+void tpk_vk_buffer_destroy(const tpk_vk_context *ctx, tpk_vk_buffer *b)
+{
+    if (b->mapped)
+        vkUnmapMemory(ctx->device, b->memory);
+    if (b->buffer)
+        vkDestroyBuffer(ctx->device, b->buffer, NULL);
+    if (b->memory)
+        vkFreeMemory(ctx->device, b->memory, NULL);
+    memset(b, 0, sizeof *b);
+}
