@@ -257,7 +257,7 @@ static int write_part(rank_state *s)
     memset(&cr, 0, sizeof cr);
     cr.source_points = s->rep->points_read;
     tpk_part_extras extras = {s->links, s->link_count, s->rank, s->size};
-    int rc = tpk_write_tpk(&co, &s->mesh, s->neighbors, &s->hdr, &cr, "vtu-pieces", &extras, s->diag);
+    int rc = tpk_write_tpk(&co, &s->mesh, s->neighbors, &s->hdr, &cr, s->list.format, &extras, s->diag);
     if (rc == 0)
         rc = tpk_read_header_checksum(path, &s->record.header_checksum, s->diag);
     if (rc == 0) {
@@ -285,8 +285,8 @@ static int write_manifest(rank_state *s)
         tpk_strbuf_printf(&sb, "{\"converter\":{\"name\":\"tetpack-mpi\",\"version\":\"%s\"},\"source\":{\"path\":",
                           TPK_LIBRARY_VERSION);
         tpk_strbuf_json_string(&sb, s->o->input);
-        tpk_strbuf_printf(&sb, ",\"format\":\"pvtu\",\"pieces\":%d},\"part_set\":{\"parts\":%d,\"vertices\":%lld,"
-                          "\"cut\":\"ranks\"}}", s->list.count, s->size, (long long)s->rep->global_vertices);
+        tpk_strbuf_printf(&sb, ",\"format\":\"%s\",\"pieces\":%d},\"part_set\":{\"parts\":%d,\"vertices\":%lld,"
+                          "\"cut\":\"ranks\"}}", s->list.format, s->list.count, s->size, (long long)s->rep->global_vertices);
         rc = sb.failed ? tpk_diag_fail(s->diag, "out of memory")
                        : tpk_write_manifest(s->o->output, s->hdr.origin, records, s->size, sb.data, s->diag);
         tpk_strbuf_free(&sb);

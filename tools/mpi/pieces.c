@@ -154,9 +154,18 @@ static const float *id_field(const tpk_mesh *m)
 }
 
 /* Piece k's global point ids into ids[0 .. point_count): 1 when it gives them, 0 when not, -1 on a
- * pointProcAddressing that cannot be read or does not fit the piece. */
+ * pointProcAddressing that cannot be read or does not fit the piece, or an id past 32 bits. The
+ * importer's exact ids (Exodus node number maps) first, then OpenFOAM's, then a float field. */
 static int piece_ids(const tpk_piece_list *list, int k, const tpk_mesh *m, int64_t *ids, tpk_diag *diag)
 {
+    if (m->global_point_ids) { /* exact, from the importer (Exodus node number maps) */
+        for (int64_t i = 0; i < m->point_count; i++)
+            if ((ids[i] = m->global_point_ids[i]) > INT32_MAX - 1)
+                return tpk_diag_fail(diag, "%s: point %lld has global id %lld, expected an id below 2^31-1 (a part "
+                                     "set numbers its vertices in 32 bits)",
+                                     list->paths[k], (long long)i, (long long)ids[i]);
+        return 1;
+    }
     if (!list->openfoam) {
         const float *f = id_field(m);
         for (int64_t i = 0; f && i < m->point_count; i++)

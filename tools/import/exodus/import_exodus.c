@@ -4,7 +4,8 @@
  * exodus-element-types.md) list the same outward faces as VTK's cells (hexahedra also checked on
  * SEACAS's files). Blocks of lower dimension (shells, bars, spheres) are dropped with a count. Nodal
  * and element variables become point and cell fields with every time step, and the time values are
- * kept. */
+ * kept. The node number map becomes the mesh's global_point_ids (tetpack-mpi matches the points of
+ * per-processor files by it). */
 #include <exodusII.h>
 #include <math.h>
 #include <stdio.h>
@@ -208,6 +209,24 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
     return rc;
 }
 
+/* The node number map (global node ids, 1-based, as a decomposer such as nem_slice writes in each
+ * processor's file; 1..nodes when the file stores none) into out->global_point_ids, 0-based. Read as
+ * int64 so that ids past 2^31 stay exact. */
+static int read_node_map(exo_reader *r, tpk_mesh *out)
+{
+    out->global_point_ids = malloc(sizeof *out->global_point_ids * (size_t)(r->nodes ? r->nodes : 1));
+    if (!out->global_point_ids)
+        return tpk_diag_fail(r->diag, "%s: out of memory for the node number map", r->path);
+    ex_set_int64_status(r->exoid, EX_MAPS_INT64_API);
+    if (ex_get_id_map(r->exoid, EX_NODE_MAP, out->global_point_ids) < 0)
+        return tpk_diag_fail(r->diag, "%s: cannot read the node number map", r->path);
+    for (int64_t v = 0; v < r->nodes; v++)
+        if (out->global_point_ids[v]-- < 1)
+            return tpk_diag_fail(r->diag, "%s: node number map: node %lld has id %lld, expected an id >= 1", r->path,
+                                 (long long)v + 1, (long long)out->global_point_ids[v] + 1);
+    return 0;
+}
+
 static int read_times(exo_reader *r, tpk_mesh *out)
 {
     out->step_count = r->steps > 0 ? (int)r->steps : 1;
@@ -255,6 +274,8 @@ int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag)
     r.steps = rc == 0 ? ex_inquire_int(r.exoid, EX_INQ_TIME) : 0;
     if (rc == 0)
         rc = read_points(&r, out, dim);
+    if (rc == 0)
+        rc = read_node_map(&r, out);
     if (rc == 0)
         rc = read_blocks(&r, out);
     if (rc == 0)
