@@ -28,6 +28,20 @@ exodus_same_as_whole() { # name input ranks pieces [piece to name]
     cp "$input" "$dir/mesh.e"
     "$MAKE_EXO" "$dir/mesh.e" "$dir/mesh.e" "$pieces" || fail "$name: make_exodus_pieces failed"
     set_is_whole "$name" "$dir/mesh.e" "$dir/${5:-mesh.e}" "$ranks"
+    # The element number maps give each tet the whole file's source cell (TMAP), as in its conversion.
+    "$PY" - "$dir/whole.tpk.vtu" "$dir"/set-*.tpk.vtu <<'PYEOF' || fail "$name: source cells differ from the whole's"
+import sys, meshio
+def cells(paths):
+    out = {}
+    for path in paths:
+        m = meshio.read(path)
+        for block, src in zip(m.cells, m.cell_data["source_cell"]):
+            for t, c in zip(block.data, src):
+                out[tuple(sorted(tuple(m.points[i]) for i in t))] = int(c)
+    return out
+whole, parts = cells(sys.argv[1:2]), cells(sys.argv[2:])
+assert len(whole) == len(parts) and whole == parts, [k for k in whole if whole[k] != parts.get(k)][:3]
+PYEOF
 }
 
 set_is_whole() { # name whole-input set-input ranks

@@ -155,7 +155,23 @@ static int merge_points(rank_state *s, const int64_t *gid)
     return rc;
 }
 
-/* TMAP numbering (spec §5.3): volume cells piece after piece in the .pvtu's order. */
+/* TMAP from the files' cell ids (Exodus element number maps) when every rank has them; -1 on an id
+ * past 32 bits. */
+static int given_cell_numbers(rank_state *s)
+{
+    const tpk_mesh *m = &s->in.mesh;
+    int bad = -1;
+    for (int64_t c = 0; c < m->cell_count; c++)
+        if ((s->cell_global[c] = s->in.given_cell_ids[c]) > INT32_MAX - 1 && bad < 0)
+            bad = (int)c;
+    if (bad >= 0)
+        tpk_diag_fail(s->diag, "%s: cell %d has global id %lld, expected an id below 2^31-1 (TMAP holds 32 bits)",
+                      s->o->input, bad, (long long)s->in.given_cell_ids[bad]);
+    return tpk_agree(s->comm, bad >= 0 ? -1 : 0);
+}
+
+/* TMAP numbering (spec §5.3): the files' global cell ids, else volume cells piece after piece in the
+ * input's order. */
 static int number_cells(rank_state *s)
 {
     int64_t *counts = calloc((size_t)s->list.count, sizeof *counts), *sums = calloc((size_t)s->list.count, sizeof *sums);
@@ -165,6 +181,12 @@ static int number_cells(rank_state *s)
     if (tpk_agree(s->comm, !ok) != 0) {
         free(counts), free(sums);
         return tpk_diag_fail(s->diag, "out of memory for the cell numbers");
+    }
+    int mine = s->in.given_cell_ids != NULL, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, s->comm);
+    if (all) {
+        free(counts), free(sums);
+        return given_cell_numbers(s);
     }
     for (int64_t c = 0; c < m->cell_count; c++)
         if (s->in.cell_volume[c] >= 0)
