@@ -89,6 +89,15 @@ static int list_pieces(const char *base, size_t base_len, long n, int width, tpk
     return 0;
 }
 
+/* Not tpk_piece_list_free: pvtu.c calls this file, and files must not call each other both ways. */
+static void drop(tpk_piece_list *list)
+{
+    for (int i = 0; i < list->count; i++)
+        free(list->paths[i]);
+    free(list->paths);
+    memset(list, 0, sizeof *list);
+}
+
 int tpk_exodus_pieces(const char *path, tpk_piece_list *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
@@ -110,7 +119,7 @@ int tpk_exodus_pieces(const char *path, tpk_piece_list *out, tpk_diag *diag)
         return -1;
     }
     if (list_pieces(path, base_len, n, width, out, diag) != 0) {
-        tpk_piece_list_free(out);
+        drop(out);
         return -1;
     }
     return 0;

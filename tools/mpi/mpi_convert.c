@@ -1,5 +1,5 @@
-/* tetpack-mpi convert, rank by rank: each rank reads its block of the pieces (a .pvtu's, or an OpenFOAM
- * case's processor folders), the ranks agree on
+/* tetpack-mpi convert, rank by rank: each rank reads its block of the pieces (a .pvtu's, an OpenFOAM
+ * case's processor folders, or Exodus files per processor), the ranks agree on
  * global vertex ids (exchange.h), each rank splits its cells into tets on the whole mesh's float32 grid
  * (ids ascending by global id, so quads split as the single-file converter splits them when the ids come
  * from the file), orients and connects them, the faces on cuts are matched by an exchange, each rank
