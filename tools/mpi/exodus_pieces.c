@@ -106,14 +106,18 @@ int tpk_exodus_pieces(const char *path, tpk_piece_list *out, tpk_diag *diag)
     size_t dir_len = slash ? (size_t)(slash - path + 1) : 0;
     long n = 0;
     int width = 0;
-    size_t base_len = piece_name(path + dir_len, &n, &width);
+    size_t piece_base = piece_name(path + dir_len, &n, &width), base_len = 0;
+    long beside = 0;
+    int piece_width = width;
     struct stat st;
-    if (base_len && stat(path, &st) == 0)
-        base_len += dir_len; /* one of the pieces named */
-    else if ((n = count_beside(path, &width, diag)) > 0)
-        base_len = strlen(path);
+    if (piece_base && stat(path, &st) == 0)
+        base_len = dir_len + piece_base; /* one of the pieces named */
+    else if ((beside = count_beside(path, &width, diag)) > 0)
+        base_len = strlen(path), n = beside;
+    else if (beside == 0 && piece_base) /* a piece named that does not exist: list_pieces names it */
+        base_len = dir_len + piece_base, width = piece_width;
     else {
-        if (n == 0)
+        if (beside == 0)
             tpk_diag_fail(diag, "%s: expected a .pvtu, an OpenFOAM case folder, or Exodus files per processor "
                           "(%s.N.K, K = 0 .. N-1, as nem_slice writes them), found none", path, path);
         return -1;
