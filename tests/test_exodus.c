@@ -218,3 +218,50 @@ TPK_TEST(wedge_and_pyramid_blocks)
     write_exodus(path, &cube);
     check_read_back(path, &cube, 0, 6);
 }
+
+/* One hexahedron with the given node and element number maps (as a decomposer writes them per processor). */
+static void write_mapped_hex(const char *path, const int *node_map, int elem_id)
+{
+    static const double x[8] = {0, 1, 1, 0, 0, 1, 1, 0}, y[8] = {0, 0, 1, 1, 0, 0, 1, 1}, z[8] = {0, 0, 0, 0, 1, 1, 1, 1};
+    static const int conn[8] = {1, 2, 3, 4, 5, 6, 7, 8};
+    int cpu_ws = 8, io_ws = 8;
+    int exoid = ex_create(path, EX_CLOBBER, &cpu_ws, &io_ws);
+    CHECK(exoid >= 0);
+    CHECK(ex_put_init(exoid, "mapped", 3, 8, 1, 1, 0, 0) == 0);
+    CHECK(ex_put_coord(exoid, x, y, z) == 0);
+    CHECK(ex_put_elem_block(exoid, 7, "HEX8", 1, 8, 0) == 0);
+    CHECK(ex_put_elem_conn(exoid, 7, conn) == 0);
+    CHECK(ex_put_id_map(exoid, EX_NODE_MAP, node_map) == 0);
+    CHECK(ex_put_id_map(exoid, EX_ELEM_MAP, &elem_id) == 0);
+    CHECK(ex_close(exoid) == 0);
+}
+
+/* Node and element number maps become exact 0-based global ids (tetpack-mpi's vertex identity), ids past
+ * 2^24 included; without maps they count 0, 1, ...; an id below 1 is refused with the node named. */
+TPK_TEST(number_maps)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/exodus_maps.e", TPK_BINARY_DIR);
+    const int map[8] = {40000003, 12, 7, 40000001, 5, 99, 3, 16777217};
+    write_mapped_hex(path, map, 42);
+    tpk_mesh m;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    CHECK_MSG(tpk_import_any(path, NULL, &m, &d) == 0, "%s", d.message);
+    CHECK(m.global_point_ids && m.global_cell_ids && m.cell_count == 1);
+    for (int i = 0; m.global_point_ids && i < 8; i++)
+        CHECK_MSG(m.global_point_ids[i] == map[i] - 1, "node %d: %lld", i, (long long)m.global_point_ids[i]);
+    CHECK(m.global_cell_ids && m.global_cell_ids[0] == 41);
+    tpk_mesh_free(&m);
+    CHECK_MSG(tpk_import_any(tpk_data_path("seacas/8-block.g"), NULL, &m, &d) == 0, "%s", d.message);
+    int64_t off = 0;
+    for (int64_t i = 0; i < m.point_count; i++)
+        off += m.global_point_ids[i] != i;
+    CHECK_MSG(off == 0, "8-block.g: %lld nodes with an id other than their index", (long long)off);
+    tpk_mesh_free(&m);
+    const int bad[8] = {1, 2, 3, 0, 5, 6, 7, 8};
+    write_mapped_hex(path, bad, 1);
+    CHECK(tpk_import_any(path, NULL, &m, &d) != 0);
+    CHECK_MSG(strstr(d.message, "node number map: node 4 has id 0") != NULL, "%s", d.message);
+    remove(path);
+}

@@ -24,6 +24,8 @@ void tpk_mesh_free(tpk_mesh *mesh)
     free(mesh->faces);
     free_fields(mesh->fields, mesh->field_count);
     free(mesh->times);
+    free(mesh->global_point_ids);
+    free(mesh->global_cell_ids);
     memset(mesh, 0, sizeof *mesh);
 }
 

@@ -48,6 +48,14 @@ typedef struct tpk_mesh {
      * so TPK_TETRA_FILE_GRID snaps every piece onto the same float32 grid. 0: from this mesh's box. */
     int has_grid_origin;
     double grid_origin[3];
+    /* Per point: its 0-based id in the whole mesh the file is a piece of, exact (int64), or NULL. Set by
+     * importers whose files carry one (Exodus: the node number map, minus 1); tetpack-mpi identifies the
+     * points of pieces by it. The single-file converter ignores it. */
+    int64_t *global_point_ids;
+    /* Per cell: its 0-based id in the whole mesh, or NULL (Exodus: the element number map, minus 1; it
+     * counts the elements of every block, kept or not). tetpack-mpi numbers the parts' source cells (TMAP)
+     * by it. */
+    int64_t *global_cell_ids;
 } tpk_mesh;
 
 void tpk_mesh_free(tpk_mesh *mesh);

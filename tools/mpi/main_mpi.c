@@ -1,5 +1,6 @@
 /* tetpack-mpi: the MPI front end. `mpirun -np P tetpack-mpi convert IN.pvtu OUT.tpkset` converts a
- * decomposed mesh into a part set, one part per rank (tools/mpi/mpi_convert.h). */
+ * decomposed mesh (.pvtu, OpenFOAM processor folders, Exodus files per processor) into a part set, one
+ * part per rank (tools/mpi/mpi_convert.h). */
 #include <mpi.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,10 +12,12 @@
 static const char mpi_help[] =
     "usage: mpirun -np P tetpack-mpi convert INPUT OUTPUT.tpkset [options]\n"
     "\n"
-    "Converts a decomposed mesh into a part set (spec §15). INPUT is a .pvtu (its pieces), or an OpenFOAM\n"
-    "case folder decomposed by decomposePar (processor0, processor1, ...). Rank r reads the r-th block of\n"
-    "pieces; vertices are identified across ranks by the files' global ids (OpenFOAM's pointProcAddressing,\n"
-    "or a point field GlobalPointIds of integers below 2^24 in every piece), else by exact coordinates;\n"
+    "Converts a decomposed mesh into a part set (spec §15). INPUT is a .pvtu (its pieces), an OpenFOAM\n"
+    "case folder decomposed by decomposePar (processor0, processor1, ...), or Exodus files per processor as\n"
+    "SEACAS's nem_slice/decomp write them (mesh.e.4.0 .. mesh.e.4.3: name one of them, or mesh.e when they\n"
+    "lie beside it). Rank r reads the r-th block of pieces; vertices are identified across ranks by the\n"
+    "files' global ids (Exodus node number maps, OpenFOAM's pointProcAddressing, or a point field\n"
+    "GlobalPointIds of integers below 2^24 in every piece), else by exact coordinates;\n"
     "each rank splits, orients and connects its cells on the whole mesh's float32 grid, the faces on\n"
     "cuts are matched by an exchange keyed by their sorted global vertex ids, each rank writes OUTPUT's\n"
     "stem + -<rank>.tpk with its links and rank 0 the manifest OUTPUT. Needs at least P pieces.\n"
@@ -63,7 +66,8 @@ static int parse(int argc, char **argv, mpi_args *a, int rank)
     }
     if (n != 2 || (a->o.layouts & 0x80000000u) || !strcmp(pos[0], pos[1])) {
         if (rank == 0)
-            fprintf(stderr, "tetpack-mpi convert: error: expected INPUT (.pvtu or decomposed OpenFOAM case) and "
+            fprintf(stderr, "tetpack-mpi convert: error: expected INPUT (.pvtu, decomposed OpenFOAM case or "
+                            "Exodus files per processor) and "
                             "OUTPUT.tpkset (a different file), "
                             "--layout tet16|tet20|tet32, --zstd 1..22 (see --help)\n");
         return 2;

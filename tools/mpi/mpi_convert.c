@@ -1,5 +1,5 @@
-/* tetpack-mpi convert, rank by rank: each rank reads its block of the pieces (a .pvtu's, or an OpenFOAM
- * case's processor folders), the ranks agree on
+/* tetpack-mpi convert, rank by rank: each rank reads its block of the pieces (a .pvtu's, an OpenFOAM
+ * case's processor folders, or Exodus files per processor), the ranks agree on
  * global vertex ids (exchange.h), each rank splits its cells into tets on the whole mesh's float32 grid
  * (ids ascending by global id, so quads split as the single-file converter splits them when the ids come
  * from the file), orients and connects them, the faces on cuts are matched by an exchange, each rank
@@ -155,7 +155,23 @@ static int merge_points(rank_state *s, const int64_t *gid)
     return rc;
 }
 
-/* TMAP numbering (spec §5.3): volume cells piece after piece in the .pvtu's order. */
+/* TMAP from the files' cell ids (Exodus element number maps) when every rank has them; -1 on an id
+ * past 32 bits. */
+static int given_cell_numbers(rank_state *s)
+{
+    const tpk_mesh *m = &s->in.mesh;
+    int bad = -1;
+    for (int64_t c = 0; c < m->cell_count; c++)
+        if ((s->cell_global[c] = s->in.given_cell_ids[c]) > INT32_MAX - 1 && bad < 0)
+            bad = (int)c;
+    if (bad >= 0)
+        tpk_diag_fail(s->diag, "%s: cell %d has global id %lld, expected an id below 2^31-1 (TMAP holds 32 bits)",
+                      s->o->input, bad, (long long)s->in.given_cell_ids[bad]);
+    return tpk_agree(s->comm, bad >= 0 ? -1 : 0);
+}
+
+/* TMAP numbering (spec §5.3): the files' global cell ids, else volume cells piece after piece in the
+ * input's order. */
 static int number_cells(rank_state *s)
 {
     int64_t *counts = calloc((size_t)s->list.count, sizeof *counts), *sums = calloc((size_t)s->list.count, sizeof *sums);
@@ -165,6 +181,12 @@ static int number_cells(rank_state *s)
     if (tpk_agree(s->comm, !ok) != 0) {
         free(counts), free(sums);
         return tpk_diag_fail(s->diag, "out of memory for the cell numbers");
+    }
+    int mine = s->in.given_cell_ids != NULL, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, s->comm);
+    if (all) {
+        free(counts), free(sums);
+        return given_cell_numbers(s);
     }
     for (int64_t c = 0; c < m->cell_count; c++)
         if (s->in.cell_volume[c] >= 0)
@@ -257,7 +279,7 @@ static int write_part(rank_state *s)
     memset(&cr, 0, sizeof cr);
     cr.source_points = s->rep->points_read;
     tpk_part_extras extras = {s->links, s->link_count, s->rank, s->size};
-    int rc = tpk_write_tpk(&co, &s->mesh, s->neighbors, &s->hdr, &cr, "vtu-pieces", &extras, s->diag);
+    int rc = tpk_write_tpk(&co, &s->mesh, s->neighbors, &s->hdr, &cr, s->list.format, &extras, s->diag);
     if (rc == 0)
         rc = tpk_read_header_checksum(path, &s->record.header_checksum, s->diag);
     if (rc == 0) {
@@ -285,8 +307,8 @@ static int write_manifest(rank_state *s)
         tpk_strbuf_printf(&sb, "{\"converter\":{\"name\":\"tetpack-mpi\",\"version\":\"%s\"},\"source\":{\"path\":",
                           TPK_LIBRARY_VERSION);
         tpk_strbuf_json_string(&sb, s->o->input);
-        tpk_strbuf_printf(&sb, ",\"format\":\"pvtu\",\"pieces\":%d},\"part_set\":{\"parts\":%d,\"vertices\":%lld,"
-                          "\"cut\":\"ranks\"}}", s->list.count, s->size, (long long)s->rep->global_vertices);
+        tpk_strbuf_printf(&sb, ",\"format\":\"%s\",\"pieces\":%d},\"part_set\":{\"parts\":%d,\"vertices\":%lld,"
+                          "\"cut\":\"ranks\"}}", s->list.format, s->list.count, s->size, (long long)s->rep->global_vertices);
         rc = sb.failed ? tpk_diag_fail(s->diag, "out of memory")
                        : tpk_write_manifest(s->o->output, s->hdr.origin, records, s->size, sb.data, s->diag);
         tpk_strbuf_free(&sb);

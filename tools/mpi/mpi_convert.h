@@ -8,7 +8,7 @@
 #include "base/diag.h"
 
 typedef struct tpk_mpi_options {
-    const char *input;        /* .pvtu */
+    const char *input;        /* .pvtu, OpenFOAM case, Exodus files per processor */
     const char *output;       /* the manifest, .tpkset; parts <stem>-<rank>.tpk beside it */
     unsigned layouts;         /* TPK_LAYOUT_BIT_*; 0: Tet16 */
     int zstd_level;

@@ -19,6 +19,7 @@ void tpk_rank_pieces_free(tpk_rank_pieces *p)
 {
     tpk_mesh_free(&p->mesh);
     free(p->given_ids);
+    free(p->given_cell_ids);
     free(p->cell_piece);
     free(p->cell_volume);
     memset(p, 0, sizeof *p);
@@ -154,9 +155,18 @@ static const float *id_field(const tpk_mesh *m)
 }
 
 /* Piece k's global point ids into ids[0 .. point_count): 1 when it gives them, 0 when not, -1 on a
- * pointProcAddressing that cannot be read or does not fit the piece. */
+ * pointProcAddressing that cannot be read or does not fit the piece, or an id past 32 bits. The
+ * importer's exact ids (Exodus node number maps) first, then OpenFOAM's, then a float field. */
 static int piece_ids(const tpk_piece_list *list, int k, const tpk_mesh *m, int64_t *ids, tpk_diag *diag)
 {
+    if (m->global_point_ids) { /* exact, from the importer (Exodus node number maps) */
+        for (int64_t i = 0; i < m->point_count; i++)
+            if ((ids[i] = m->global_point_ids[i]) > INT32_MAX - 1)
+                return tpk_diag_fail(diag, "%s: point %lld has global id %lld, expected an id below 2^31-1 (a part "
+                                     "set numbers its vertices in 32 bits)",
+                                     list->paths[k], (long long)i, (long long)ids[i]);
+        return 1;
+    }
     if (!list->openfoam) {
         const float *f = id_field(m);
         for (int64_t i = 0; f && i < m->point_count; i++)
@@ -202,6 +212,23 @@ static int append_ids(tpk_rank_pieces *out, const tpk_piece_list *list, int k, i
     return rc < 0 ? -1 : 0;
 }
 
+/* Appends piece k's global cell ids (kept only while every piece gives them). */
+static int append_cell_ids(tpk_rank_pieces *out, int k, int first, const tpk_mesh *m)
+{
+    if ((k > first && !out->given_cell_ids) || !m->global_cell_ids) {
+        free(out->given_cell_ids);
+        out->given_cell_ids = NULL;
+        return 0;
+    }
+    int64_t before = out->mesh.cell_count - m->cell_count;
+    int64_t *grown = realloc(out->given_cell_ids, sizeof *grown * (size_t)(out->mesh.cell_count + 1));
+    if (!grown)
+        return -1;
+    out->given_cell_ids = grown;
+    memcpy(grown + before, m->global_cell_ids, sizeof *grown * (size_t)m->cell_count);
+    return 0;
+}
+
 int tpk_read_pieces(const tpk_piece_list *list, int first, int last, tpk_rank_pieces *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
@@ -227,7 +254,7 @@ int tpk_read_pieces(const tpk_piece_list *list, int first, int last, tpk_rank_pi
             memcpy(out->mesh.format, m.format, sizeof m.format);
             why = out->mesh.fields ? NULL : "out of memory";
         }
-        if (!why && append_piece(out, &m, k) != 0)
+        if (!why && (append_piece(out, &m, k) != 0 || append_cell_ids(out, k, first, &m) != 0))
             why = "out of memory";
         if (!why && append_ids(out, list, k, first, &m, diag) != 0) {
             tpk_mesh_free(&m);

@@ -11,9 +11,12 @@
 typedef struct tpk_rank_pieces {
     tpk_mesh mesh;          /* pieces [first, last) one after another: points, cells (polyhedra with their
                                face streams) and fields */
-    int64_t *given_ids;     /* per point: its global id as the files give it (OpenFOAM's
-                               pointProcAddressing, or an exact integer point field GlobalPointIds), or NULL
+    int64_t *given_ids;     /* per point: its global id as the files give it (the importer's exact
+                               global_point_ids, e.g. Exodus node number maps; OpenFOAM's
+                               pointProcAddressing; or an exact integer point field GlobalPointIds), or NULL
                                when a piece gives none */
+    int64_t *given_cell_ids; /* per cell: its global id from the files (the importer's global_cell_ids,
+                                Exodus element number maps), or NULL when a piece gives none */
     int32_t *cell_piece;    /* per cell: the piece (index in the .pvtu) it came from */
     int64_t *cell_volume;   /* per cell: its index among its piece's volume cells, or -1 (lower dimension) */
     int64_t points_read;    /* before any merging: the pieces' points, each boundary point once per piece */

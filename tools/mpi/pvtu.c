@@ -102,6 +102,7 @@ int tpk_pvtu_pieces(const char *path, tpk_piece_list *out, tpk_diag *diag)
     if (!data)
         return -1;
     const char *slash = strrchr(path, '/');
+    out->format = "pvtu";
     pvtu_state st = {path, slash ? (size_t)(slash - path + 1) : 0, out, 0, 0, diag, XML_ParserCreate(NULL)};
     if (!st.parser) {
         free(data);
@@ -135,6 +136,7 @@ static int processor_dirs(const char *path, tpk_piece_list *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
     out->openfoam = 1;
+    out->format = "openfoam";
     for (;;) {
         char dir[4096];
         struct stat st;
@@ -166,5 +168,8 @@ int tpk_input_pieces(const char *path, tpk_piece_list *out, tpk_diag *diag)
     struct stat st;
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
         return processor_dirs(path, out, diag);
-    return tpk_pvtu_pieces(path, out, diag);
+    size_t len = strlen(path);
+    if (len >= 5 && !strcmp(path + len - 5, ".pvtu"))
+        return tpk_pvtu_pieces(path, out, diag);
+    return tpk_exodus_pieces(path, out, diag);
 }

@@ -4,7 +4,8 @@
  * exodus-element-types.md) list the same outward faces as VTK's cells (hexahedra also checked on
  * SEACAS's files). Blocks of lower dimension (shells, bars, spheres) are dropped with a count. Nodal
  * and element variables become point and cell fields with every time step, and the time values are
- * kept. */
+ * kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
+ * (tetpack-mpi matches the points of per-processor files by them and numbers the source cells). */
 #include <exodusII.h>
 #include <math.h>
 #include <stdio.h>
@@ -208,6 +209,51 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
     return rc;
 }
 
+/* The node number map (global node ids, 1-based, as a decomposer such as nem_slice writes in each
+ * processor's file; 1..nodes when the file stores none) into out->global_point_ids, 0-based. Read as
+ * int64 so that ids past 2^31 stay exact. */
+static int read_node_map(exo_reader *r, tpk_mesh *out)
+{
+    out->global_point_ids = malloc(sizeof *out->global_point_ids * (size_t)(r->nodes ? r->nodes : 1));
+    if (!out->global_point_ids)
+        return tpk_diag_fail(r->diag, "%s: out of memory for the node number map", r->path);
+    ex_set_int64_status(r->exoid, EX_MAPS_INT64_API);
+    if (ex_get_id_map(r->exoid, EX_NODE_MAP, out->global_point_ids) < 0)
+        return tpk_diag_fail(r->diag, "%s: cannot read the node number map", r->path);
+    for (int64_t v = 0; v < r->nodes; v++)
+        if (out->global_point_ids[v]-- < 1)
+            return tpk_diag_fail(r->diag, "%s: node number map: node %lld has id %lld, expected an id >= 1", r->path,
+                                 (long long)v + 1, (long long)out->global_point_ids[v] + 1);
+    return 0;
+}
+
+/* The element number map (1-based over the elements of all blocks) for the kept cells, 0-based, into
+ * out->global_cell_ids. */
+static int read_element_map(exo_reader *r, tpk_mesh *out)
+{
+    int64_t *map = malloc(sizeof *map * (size_t)(r->elems ? r->elems : 1));
+    out->global_cell_ids = malloc(sizeof *out->global_cell_ids * (size_t)out->cell_count);
+    if (!map || !out->global_cell_ids) {
+        free(map);
+        return tpk_diag_fail(r->diag, "%s: out of memory for the element number map", r->path);
+    }
+    int rc = ex_get_id_map(r->exoid, EX_ELEM_MAP, map) < 0
+                 ? tpk_diag_fail(r->diag, "%s: cannot read the element number map", r->path) : 0;
+    int64_t element = 0; /* the block's first element among all elements */
+    for (int64_t b = 0; rc == 0 && b < r->block_count; element += r->blocks[b++].count) {
+        const exo_block *blk = &r->blocks[b];
+        if (element + blk->count > r->elems)
+            rc = tpk_diag_fail(r->diag, "%s: element blocks hold more than the %lld elements of the header", r->path,
+                               (long long)r->elems);
+        for (int64_t e = 0; rc == 0 && blk->first_cell >= 0 && e < blk->count; e++)
+            if ((out->global_cell_ids[blk->first_cell + e] = map[element + e] - 1) < 0)
+                rc = tpk_diag_fail(r->diag, "%s: element number map: element %lld has id %lld, expected an id >= 1",
+                                   r->path, (long long)(element + e + 1), (long long)map[element + e]);
+    }
+    free(map);
+    return rc;
+}
+
 static int read_times(exo_reader *r, tpk_mesh *out)
 {
     out->step_count = r->steps > 0 ? (int)r->steps : 1;
@@ -256,7 +302,11 @@ int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag)
     if (rc == 0)
         rc = read_points(&r, out, dim);
     if (rc == 0)
+        rc = read_node_map(&r, out);
+    if (rc == 0)
         rc = read_blocks(&r, out);
+    if (rc == 0)
+        rc = read_element_map(&r, out);
     if (rc == 0)
         rc = read_times(&r, out);
     if (rc == 0)
