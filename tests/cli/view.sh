@@ -1,7 +1,7 @@
 # tetpack view under Xvfb: the window's last frame (read back from the window) equals the headless
 # render of the same scene (same size, camera, TF, backend) for each layout and with effects; --orbit
 # turns the camera as a render with the turned camera shows it, and the scene it saves replays to the
-# same picture; no display, a bad file and bad options end with exit 2 and a message.
+# same picture; the keys change field, step, layout, TF and effects as the scene they save says; no display, a bad file and bad options end with exit 2 and a message.
 set -euo pipefail
 # One X server for the whole script (xvfb-run: -a picks a free display; 24-bit so that frames read back
 # exactly).
@@ -62,6 +62,22 @@ psnr_at_least "$WORK/orbit.png" "$WORK/orbit-scene.png" "view --orbit and its sc
 tpk view "$WORK/cyl.tpk" --scene "$WORK/orbit.json" --frames 1 --screenshot "$WORK/orbit-view.png" 2> /dev/null
 psnr_at_least "$WORK/orbit-view.png" "$WORK/orbit-scene.png" "view --scene"
 
+# the keys (--keys types them before the first frame): on a file with 12 point fields of 11 steps, four
+# steps forward and one back, the fourth field, the next layout, TF preset, iso, shading and clip box;
+# the scene view saves says so, and render draws it the same
+convert_checked "$DATA/seacas/8-block.g" "$WORK/blocks.tpk" --layout tet16 --layout tet32 > /dev/null
+tpk view "$WORK/blocks.tpk" --size $SIZE --frames 1 --keys ']]]][FFFLTISC' --screenshot "$WORK/keys.png" \
+    --save-scene "$WORK/keys.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --keys"; }
+"$PY" - "$WORK/keys.json" <<'PYEOF' || fail "the keys' scene: $(cat "$WORK/keys.json")"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert (s["field"], s["step"], s["layout"], s["tf"]["preset"]) == ("accel_x", 3, "tet32", "cool-warm"), s
+assert abs(s["iso"][0] - sum(s["range"]) / 2) < 1e-9 and s["effects"]["shading"], s
+assert s["clip_box"] == [0, 0, 0, 0.5, 1, 1], s
+PYEOF
+tpk render "$WORK/blocks.tpk" --scene "$WORK/keys.json" --backend vulkan -o "$WORK/keys-render.png" > /dev/null
+psnr_at_least "$WORK/keys.png" "$WORK/keys-render.png" "view --keys and render of its scene"
+
 # no Vulkan device: the CPU reference, with a note
 VK_ICD_FILENAMES="$WORK/no_such_icd.json" tpk view "$WORK/cyl.tpk" --size $SIZE --frames 1 \
     --screenshot "$WORK/view-cpu.png" 2> "$WORK/err" || { cat "$WORK/err"; fail "view without Vulkan"; }
@@ -82,4 +98,6 @@ expect_stderr "no field named 'pressure'"
 expect_exit 2 tpk view "$WORK/cyl.tpk" -o "$WORK/x.png"
 expect_stderr "option of tetpack render"
 expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --screenshot "$WORK/cyl.tpk"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --keys X
+expect_stderr "--keys expects"
 echo "view: ok"

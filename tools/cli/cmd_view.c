@@ -35,12 +35,14 @@ static const char view_help[] =
     "  --frames N                   show N frames, then close (with --screenshot: tests, scripts)\n"
     "  --orbit DEG                  turn the camera by DEG degrees per frame around its up axis\n"
     "  --screenshot IMAGE.png       the window's last frame as PNG when it closes (and P's file)\n"
+    "  --keys KEYS                  press these keys (of the list above) before the first frame\n"
     "--size WxH is the window's size (default 640x480); a scene's size is used when it gives one.\n";
 
 typedef struct view_args {
     int frames;
     double orbit;
     const char *screenshot;
+    const char *keys;
 } view_args;
 
 /* The options only view has. 1 when argv[*i] is one (parsed, *i advanced), 0 when it is not, or
@@ -60,6 +62,11 @@ static int view_option(int argc, char **argv, int *i, view_args *v)
     } else if (!strncmp(arg, "--screenshot", 12) && (!arg[12] || arg[12] == '=')) {
         if (!(v->screenshot = tpk_cli_value(argc, argv, i, "--screenshot")))
             return tpk_cli_fail("view", "--screenshot expects an output PNG path") + 1;
+    } else if (!strncmp(arg, "--keys", 6) && (!arg[6] || arg[6] == '=')) {
+        v->keys = tpk_cli_value(argc, argv, i, "--keys");
+        if (!v->keys || strspn(v->keys, "TtFf[]LlIiSsCcPpWwQq") != strlen(v->keys))
+            return tpk_cli_fail("view", "--keys expects keys of T F [ ] L I S C P W Q, found '%s'",
+                                v->keys ? v->keys : "") + 1;
     } else if (!strcmp(arg, "-o") || !strncmp(arg, "--output", 8) || !strncmp(arg, "--steps", 7) ||
                !strcmp(arg, "--json")) {
         return tpk_cli_fail("view", "%s is an option of tetpack render; view shows one step at a time ([ and ] "
@@ -139,6 +146,7 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
     o.orbit_deg = v->orbit;
     o.screenshot = v->screenshot;
     o.save_scene = a->save_scene;
+    o.keys = v->keys;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     if (tpk_view_run(&o, &diag) != 0)
@@ -157,7 +165,7 @@ int tpk_cmd_view(int argc, char **argv)
     render_args a;
     render_args_default(&a);
     a.width = 640, a.height = 480;
-    view_args v = {0, 0.0, NULL};
+    view_args v = {0, 0.0, NULL, NULL};
     if (render_args_merge_scene("view", argc, argv, &a) || parse_args(argc, argv, &a, &v))
         return TPK_EXIT_USAGE;
 #ifdef TPK_WITH_VIEW

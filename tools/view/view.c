@@ -148,6 +148,11 @@ static int run(view_loop *l, tpk_diag *diag)
 {
     const tpk_view_options *o = l->o;
     int dirty = 1, reduced = 0;
+    for (const char *k = o->keys; k && *k; k++) { /* --keys: as if typed before the window showed */
+        int rc = apply_action(l, view_key_action((unsigned char)*k), diag);
+        if (rc)
+            return rc < 0 ? -1 : 0;
+    }
     while (!view_window_closing(l->window)) {
         view_input in;
         view_window_poll(l->window, !dirty && o->frames <= 0, &in);

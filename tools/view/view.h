@@ -21,6 +21,7 @@ typedef struct tpk_view_options {
     double orbit_deg;             /* turn the camera by this much per frame around its up axis */
     const char *screenshot;       /* write the last frame's window contents here (PNG) on exit */
     const char *save_scene;       /* where W writes the scene (and, with `frames`, the last frame's) */
+    const char *keys;             /* keys pressed before the first frame, in order ("LI]"), as typed */
 } tpk_view_options;
 
 /* Open the window and run until it is closed (or `frames` frames were shown). Returns 0; -1 with a

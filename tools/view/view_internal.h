@@ -70,6 +70,8 @@ typedef struct view_input {
 } view_input;
 
 typedef struct view_window view_window;
+/* The action of a key: T F [ ] L I S C P W Q (letters either case), VIEW_NONE for others. */
+view_action view_key_action(int key);
 /* Open a window of width x height pixels. 0; -2 with a message when there is no display (or GLFW
  * cannot start); -1 with a message for another failure. */
 int view_window_open(view_window **out, int width, int height, const char *title, tpk_diag *diag);

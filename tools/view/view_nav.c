@@ -59,7 +59,7 @@ void tpk_view_tilt(tpk_camera *camera, double deg)
     cross3(up, offset, right);
     if (normalize3(right) != 0)
         return;
-    rotate3(offset, right, (now - to) * deg_to_rad);
+    rotate3(offset, right, (to - now) * deg_to_rad); /* around up x offset: + turns away from up */
     for (int k = 0; k < 3; k++)
         camera->eye[k] = camera->at[k] + offset[k];
 }

@@ -29,26 +29,34 @@ static void push(view_window *w, view_action a)
         w->input.actions[w->input.action_count++] = a;
 }
 
+view_action view_key_action(int key)
+{
+    switch (key) {
+    case 'T': case 't': return VIEW_NEXT_TF;
+    case 'F': case 'f': return VIEW_NEXT_FIELD;
+    case '[': return VIEW_STEP_BACK;
+    case ']': return VIEW_STEP_FORWARD;
+    case 'L': case 'l': return VIEW_NEXT_LAYOUT;
+    case 'I': case 'i': return VIEW_ISO;
+    case 'S': case 's': return VIEW_SHADING;
+    case 'C': case 'c': return VIEW_CLIP;
+    case 'P': case 'p': return VIEW_SCREENSHOT;
+    case 'W': case 'w': return VIEW_WRITE_SCENE;
+    case 'Q': case 'q': return VIEW_QUIT;
+    default: return VIEW_NONE;
+    }
+}
+
 static void on_key(GLFWwindow *window, int key, int scancode, int action, int mods)
 {
     (void)scancode, (void)mods;
     view_window *w = glfwGetWindowUserPointer(window);
     if (action != GLFW_PRESS && action != GLFW_REPEAT)
         return;
-    switch (key) {
-    case GLFW_KEY_T: push(w, VIEW_NEXT_TF); break;
-    case GLFW_KEY_F: push(w, VIEW_NEXT_FIELD); break;
-    case GLFW_KEY_LEFT_BRACKET: push(w, VIEW_STEP_BACK); break;
-    case GLFW_KEY_RIGHT_BRACKET: push(w, VIEW_STEP_FORWARD); break;
-    case GLFW_KEY_L: push(w, VIEW_NEXT_LAYOUT); break;
-    case GLFW_KEY_I: push(w, VIEW_ISO); break;
-    case GLFW_KEY_S: push(w, VIEW_SHADING); break;
-    case GLFW_KEY_C: push(w, VIEW_CLIP); break;
-    case GLFW_KEY_P: push(w, VIEW_SCREENSHOT); break;
-    case GLFW_KEY_W: push(w, VIEW_WRITE_SCENE); break;
-    case GLFW_KEY_Q: case GLFW_KEY_ESCAPE: push(w, VIEW_QUIT); break;
-    default: break;
-    }
+    /* GLFW's codes of letters and brackets are their (upper case) ASCII codes, whatever the keyboard */
+    view_action a = key == GLFW_KEY_ESCAPE ? VIEW_QUIT : key > 0 && key < 128 ? view_key_action(key) : VIEW_NONE;
+    if (a != VIEW_NONE)
+        push(w, a);
 }
 
 static void on_button(GLFWwindow *window, int button, int action, int mods)
