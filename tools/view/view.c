@@ -22,6 +22,8 @@ typedef struct view_loop {
     int frame;              /* frames shown */
     int screenshots;        /* P presses so far, for the file names */
     int screenshot_due;     /* P was pressed: save the next full frame before it is swapped away */
+    double frame_seconds[256]; /* the first full frames' render times, for the summary of --frames */
+    int timed;
 } view_loop;
 
 static double now_seconds(void)
@@ -105,8 +107,10 @@ static int show_frame(view_loop *l, int reduced, tpk_diag *diag)
     if (view_renderer_frame(&l->renderer, &l->state, w, h, l->rgba, &stats, diag) != 0)
         return -1;
     double seconds = now_seconds() - t0;
-    if (zoom == 1)
-        l->full_seconds = seconds;
+    if (zoom == 1) /* the size a scene written now says */
+        l->full_seconds = seconds, l->state.opt.width = width, l->state.opt.height = height;
+    if (zoom == 1 && l->timed < 256)
+        l->frame_seconds[l->timed++] = seconds;
     view_window_draw(l->window, l->rgba, w, h, zoom);
     char what[1024], title[1400];
     view_state_describe(&l->state, what, sizeof what);
@@ -132,9 +136,20 @@ static int screenshot_now(view_loop *l, tpk_diag *diag)
     return save_screenshot(l, path, width, height, diag);
 }
 
-/* The headless end: the last frame's window contents and scene, as asked. */
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The headless end: the frame times, the last frame's window contents and scene, as asked. */
 static int finish(view_loop *l, tpk_diag *diag)
 {
+    qsort(l->frame_seconds, (size_t)l->timed, sizeof l->frame_seconds[0], by_value);
+    int w, h;
+    view_window_size(l->window, &w, &h);
+    fprintf(stderr, "tetpack view: %d frames of %dx%d on %s, render time median %.1f ms (first %d)\n", l->frame, w,
+            h, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], l->timed);
     int width, height;
     view_window_size(l->window, &width, &height);
     if (l->o->screenshot && save_screenshot(l, l->o->screenshot, width, height, diag) != 0)

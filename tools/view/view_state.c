@@ -94,9 +94,10 @@ int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag)
 static int next_field(view_state *s, tpk_diag *diag)
 {
     uint32_t n = tpk_field_count(s->file), at = 0;
-    if (n < 2)
+    if (n == 0 || (n == 1 && s->field[0]))
         return 0;
-    tpk_find_field(s->file, s->field, &at);
+    if (!s->field[0] || tpk_find_field(s->file, s->field, &at) != TPK_OK)
+        at = n - 1; /* no field shown yet: the first one is next */
     tpk_field_desc d;
     if (tpk_get_field(s->file, (at + 1) % n, &d) != TPK_OK)
         return tpk_diag_fail(diag, "%s: %s", s->path, tpk_error_text(s->file));
