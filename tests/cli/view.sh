@@ -62,6 +62,23 @@ psnr_at_least "$WORK/orbit.png" "$WORK/orbit-scene.png" "view --orbit and its sc
 tpk view "$WORK/cyl.tpk" --scene "$WORK/orbit.json" --frames 1 --screenshot "$WORK/orbit-view.png" 2> /dev/null
 psnr_at_least "$WORK/orbit-view.png" "$WORK/orbit-scene.png" "view --scene"
 
+# a user: mouse drags (orbit, pan, zoom), the wheel, then W, P and Q sent through XTEST while the view
+# runs; the screenshot after them equals render of the scene W wrote, whose camera moved
+tpk view "$WORK/cyl.tpk" --size $SIZE --keys P --screenshot "$WORK/user.png" --save-scene "$WORK/user.json" \
+    2> "$WORK/user.err" &
+VIEW_PID=$!
+"$PY" "$SRC/tests/cli/view_input.py" "$WORK/user.png" "$WORK/user.json" || { kill $VIEW_PID; fail "driving the view"; }
+wait $VIEW_PID || { cat "$WORK/user.err"; fail "view driven by input"; }
+tpk render "$WORK/cyl.tpk" --scene "$WORK/user.json" --backend vulkan -o "$WORK/user-render.png" > /dev/null
+psnr_at_least "$WORK/user.png" "$WORK/user-render.png" "view after mouse and keys, and render of its scene"
+"$PY" - "$WORK/user.json" "$WORK/view-tet16.json" <<'PYEOF' || fail "the drags did not move the camera"
+import json, sys
+a, b = (json.load(open(p))["camera"] for p in sys.argv[1:3])
+moved = lambda k: max(abs(x - y) for x, y in zip(a[k], b[k]))
+print("camera moved: eye %.3g, look-at %.3g" % (moved("eye"), moved("at")))
+sys.exit(0 if moved("eye") > 1e-3 and moved("at") > 1e-4 else 1)
+PYEOF
+
 # the keys (--keys types them before the first frame): on a file with 12 point fields of 11 steps, four
 # steps forward and one back, the fourth field, the next layout, TF preset, iso, shading and clip box;
 # the scene view saves says so, and render draws it the same
