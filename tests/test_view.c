@@ -56,7 +56,8 @@ TPK_TEST(zoom_scales_the_distance)
 TPK_TEST(pan_follows_the_cursor)
 {
     /* 100 pixels high at fovy 90 and distance 2: the view is 4 units high there, 0.04 per pixel. The
-     * camera looks along -x with up +z, so screen right is forward x up = +y, and the content follows the cursor: the camera moves the other way. */
+     * camera looks along -x with up +z, so screen right is forward x up = +y; the content follows the
+     * cursor, so the camera moves the other way. */
     tpk_camera c = start();
     c.fovy_deg = 90;
     tpk_view_pan(&c, 10, 0, 100); /* content 10 pixels right: camera 0.4 left */

@@ -1,7 +1,9 @@
 # tetpack view under Xvfb: the window's last frame (read back from the window) equals the headless
 # render of the same scene (same size, camera, TF, backend) for each layout and with effects; --orbit
 # turns the camera as a render with the turned camera shows it, and the scene it saves replays to the
-# same picture; the keys change field, step, layout, TF and effects as the scene they save says; no display, a bad file and bad options end with exit 2 and a message.
+# same picture; mouse drags and keys sent to the running window, and --keys, change the camera, field,
+# step, layout, TF and effects as the scene they save says; no display, a bad file and bad options end
+# with exit 2 and a message.
 set -euo pipefail
 # One X server for the whole script (xvfb-run: -a picks a free display; 24-bit so that frames read back
 # exactly).
@@ -30,7 +32,8 @@ for layout in tet16 tet20 tet32; do
         --save-scene "$WORK/view-$layout.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --layout $layout"; }
     tpk render "$WORK/cyl.tpk" --size $SIZE --layout $layout --backend vulkan -o "$WORK/render-$layout.png" > /dev/null
     psnr_at_least "$WORK/view-$layout.png" "$WORK/render-$layout.png" "view and render, $layout"
-    grep -q "\"layout\":.*\"$layout\"" "$WORK/view-$layout.json" || fail "scene of $layout: $(cat "$WORK/view-$layout.json")"
+    grep -q "\"layout\":.*\"$layout\"" "$WORK/view-$layout.json" ||
+        fail "scene of $layout: $(cat "$WORK/view-$layout.json")"
 done
 # effects through the shared options: iso, shading, clip box, another TF
 FX=(--iso 335 --shading --clip-box 0,-1,-1,0.06,1,1 --tf inferno)

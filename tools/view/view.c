@@ -146,12 +146,10 @@ static int by_value(const void *a, const void *b)
 static int finish(view_loop *l, tpk_diag *diag)
 {
     qsort(l->frame_seconds, (size_t)l->timed, sizeof l->frame_seconds[0], by_value);
-    int w, h;
-    view_window_size(l->window, &w, &h);
-    fprintf(stderr, "tetpack view: %d frames of %dx%d on %s, render time median %.1f ms (first %d)\n", l->frame, w,
-            h, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], l->timed);
     int width, height;
     view_window_size(l->window, &width, &height);
+    fprintf(stderr, "tetpack view: %d frames of %dx%d on %s, render time median %.1f ms (of the first %d)\n",
+            l->frame, width, height, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], l->timed);
     if (l->o->screenshot && save_screenshot(l, l->o->screenshot, width, height, diag) != 0)
         return -1;
     if (l->o->save_scene && apply_action(l, VIEW_WRITE_SCENE, diag) != 0)
