@@ -11,7 +11,7 @@
 int view_renderer_open(view_renderer *r, const view_state *s, int cpu, tpk_diag *diag)
 {
     view_renderer_close(r);
-    (void)diag;
+    (void)s, (void)diag; /* without Vulkan: unused */
 #ifdef TPK_WITH_VULKAN
     char why[256] = "";
     if (!cpu && !r->cpu_only && !tpk_vulkan_available(why, sizeof why)) {
@@ -36,6 +36,7 @@ int view_renderer_open(view_renderer *r, const view_state *s, int cpu, tpk_diag 
 int view_renderer_frame(view_renderer *r, const view_state *s, int width, int height, uint8_t *rgba,
                         tpk_render_stats *stats, tpk_diag *diag)
 {
+    (void)r; /* without Vulkan: unused */
     tpk_render_options opt = s->opt;
     opt.width = width;
     opt.height = height;
