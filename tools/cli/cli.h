@@ -13,6 +13,7 @@ struct tpk_file;
 int tpk_cmd_convert(int argc, char **argv);
 int tpk_cmd_info(int argc, char **argv);
 int tpk_cmd_render(int argc, char **argv);
+int tpk_cmd_view(int argc, char **argv);
 int tpk_cmd_extract(int argc, char **argv);
 int tpk_cmd_export(int argc, char **argv);
 int tpk_cmd_check(int argc, char **argv);

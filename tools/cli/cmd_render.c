@@ -167,7 +167,7 @@ static int opt_integration(const char *v, render_args *a)
     return a->integration < 0 ? -1 : 0;
 }
 
-static int opt_scene(const char *v, render_args *a) { (void)v; (void)a; return 0; } /* read by merge_scene */
+static int opt_scene(const char *v, render_args *a) { (void)v; (void)a; return 0; } /* read by render_args_merge_scene */
 static int opt_save_scene(const char *v, render_args *a) { a->save_scene = v; return 0; }
 static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->threads); }
 static int opt_backend(const char *v, render_args *a)
@@ -253,7 +253,7 @@ static const render_option *find_option(const char *arg)
     return NULL;
 }
 
-static int parse_option(int argc, char **argv, int *i, render_args *a)
+int render_args_parse_option(const char *cmd, int argc, char **argv, int *i, render_args *a)
 {
     const char *arg = argv[*i];
     const render_option *o = find_option(arg);
@@ -261,20 +261,20 @@ static int parse_option(int argc, char **argv, int *i, render_args *a)
         const char *v = o->takes_value ? tpk_cli_value(argc, argv, i, o->alias && !strcmp(arg, o->alias) ? o->alias : o->name)
                                        : NULL;
         if (o->takes_value && !v)
-            return tpk_cli_fail("render", "%s expects %s", o->name, o->expects);
+            return tpk_cli_fail(cmd, "%s expects %s", o->name, o->expects);
         if (o->parse(v, a))
-            return tpk_cli_fail("render", "%s expects %s, found '%s'", o->name, o->expects, v ? v : "");
+            return tpk_cli_fail(cmd, "%s expects %s, found '%s'", o->name, o->expects, v ? v : "");
     } else if (arg[0] == '-' && arg[1]) {
-        return tpk_cli_fail("render", "unknown option '%s' (see tetpack render --help)", arg);
+        return tpk_cli_fail(cmd, "unknown option '%s' (see tetpack %s --help)", arg, cmd);
     } else if (!a->path) {
         a->path = arg;
     } else {
-        return tpk_cli_fail("render", "expected one FILE.tpk, found a second argument '%s'", arg);
+        return tpk_cli_fail(cmd, "expected one FILE.tpk, found a second argument '%s'", arg);
     }
     return 0;
 }
 
-static tpk_layout pick_layout(tpk_file *file, const char *name)
+tpk_layout render_args_layout(tpk_file *file, const char *name)
 {
     if (name)
         return !strcmp(name, "tet16") ? TPK_LAYOUT_TET16 : !strcmp(name, "tet20") ? TPK_LAYOUT_TET20 : TPK_LAYOUT_TET32;
@@ -408,7 +408,7 @@ static int frame_pattern_ok(const char *pattern)
 static int load_step(const render_args *a, tpk_file *file, int tet_field, int step, tpk_mesh_arrays *mesh,
                      tpk_render_options *opt)
 {
-    tpk_layout layout = pick_layout(file, a->layout);
+    tpk_layout layout = render_args_layout(file, a->layout);
     tpk_result r = tpk_load_arrays(file, layout, tet_field ? NULL : a->field, (uint32_t)step, mesh);
     if (r == TPK_OK && tet_field) {
         mesh->scalars = NULL; /* the tet field replaces any point field */
@@ -479,7 +479,7 @@ static int save_scene(const render_args *a, tpk_file *file, const tpk_render_opt
             memcpy(first, d.name, sizeof first); /* the first point field: the one tpk_load_arrays took */
     }
     tpk_scene scene;
-    tpk_scene_from_options(opt, a->field ? a->field : first, a->step, pick_layout(file, a->layout), &scene);
+    tpk_scene_from_options(opt, a->field ? a->field : first, a->step, render_args_layout(file, a->layout), &scene);
     scene.step_last = a->step_last;
     scene.step_range = a->have_steps;
     tpk_diag diag;
@@ -491,7 +491,7 @@ static int save_scene(const render_args *a, tpk_file *file, const tpk_render_opt
 
 /* Scene values first (--scene): they fill the arguments, and the options parsed after this override
  * them; render_args_to_options then turns both into render options in one place. */
-static int merge_scene(int argc, char **argv, render_args *a)
+int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args *a)
 {
     for (int i = 1; i < argc; i++)
         if (!strncmp(argv[i], "--scene", 7) && (!argv[i][7] || argv[i][7] == '='))
@@ -502,10 +502,12 @@ static int merge_scene(int argc, char **argv, render_args *a)
     memset(&diag, 0, sizeof diag);
     const tpk_scene *s = &a->scene;
     if (tpk_scene_load(a->scene_path, &a->scene, &diag) != 0)
-        return tpk_cli_fail("render", "%s", diag.message);
+        return tpk_cli_fail(cmd, "%s", diag.message);
+#ifndef TPK_WITH_VULKAN
     if (s->given & TPK_SCENE_BACKEND && s->backend == TPK_SCENE_BACKEND_VULKAN)
         fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; this build renders on the CPU "
                 "(the reference, same picture)\n", a->scene_path);
+#endif
     if (s->given & TPK_SCENE_SIZE)
         a->width = s->width, a->height = s->height;
     if (s->given & TPK_SCENE_CAMERA) {
@@ -541,14 +543,14 @@ static int merge_scene(int argc, char **argv, render_args *a)
 }
 
 /* The transfer function: --tf, else the scene's, else viridis. */
-static int load_tf(const render_args *a, tpk_transfer_function *tf)
+int render_args_load_tf(const char *cmd, const render_args *a, tpk_transfer_function *tf)
 {
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     if (!a->tf && (a->scene.given & TPK_SCENE_TF))
         *tf = a->scene.tf;
     else if (tpk_tf_load(a->tf ? a->tf : "viridis", tf, &diag) != 0)
-        return tpk_cli_fail("render", "%s", diag.message);
+        return tpk_cli_fail(cmd, "%s", diag.message);
     return 0;
 }
 
@@ -592,7 +594,7 @@ static int render_file(render_args *a, tpk_file *file)
     if (resolve_backend(a, &backend_diag) != 0)
         return tpk_cli_fail("render", "%s", backend_diag.message);
     tpk_transfer_function tf;
-    if (load_tf(a, &tf))
+    if (render_args_load_tf("render", a, &tf))
         return TPK_EXIT_USAGE;
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
@@ -667,7 +669,7 @@ static int load_part(const render_args *a, tpk_partset *set, uint32_t p, tpk_mes
     if (association == TPK_ASSOC_TET)
         return tpk_cli_fail("render", "%s: '%s' is a tet field; a part set renders point fields (render a part, "
                             "or the single file)", a->path, a->field);
-    tpk_result r = tpk_load_arrays(file, pick_layout(file, a->layout), a->field, (uint32_t)a->step, mesh);
+    tpk_result r = tpk_load_arrays(file, render_args_layout(file, a->layout), a->field, (uint32_t)a->step, mesh);
     if (r == TPK_OK)
         r = tpk_partset_links(set, p, links, link_count);
     if (r != TPK_OK)
@@ -697,7 +699,7 @@ static int render_set_frame(const render_args *a, tpk_partset *set, const tpk_se
                             const set_view *v)
 {
     tpk_transfer_function tf;
-    if (load_tf(a, &tf))
+    if (render_args_load_tf("render", a, &tf))
         return TPK_EXIT_USAGE;
     tpk_render_options opt;
     tpk_render_options_default(&opt);
@@ -756,14 +758,14 @@ int tpk_cmd_render(int argc, char **argv)
 {
     render_args a;
     render_args_default(&a);
-    if (merge_scene(argc, argv, &a))
+    if (render_args_merge_scene("render", argc, argv, &a))
         return TPK_EXIT_USAGE;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             fputs(render_help, stdout);
             return TPK_EXIT_OK;
         }
-        int rc = parse_option(argc, argv, &i, &a);
+        int rc = render_args_parse_option("render", argc, argv, &i, &a);
         if (rc)
             return rc;
     }

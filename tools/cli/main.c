@@ -14,6 +14,7 @@ static const struct {
     {"convert", tpk_cmd_convert, "turn a simulation mesh (tetpack formats lists them) into a render-ready .tpk"},
     {"info", tpk_cmd_info, "print a .tpk file's header, chunks, fields and checksum status"},
     {"render", tpk_cmd_render, "render a .tpk to PNG with the CPU reference marcher"},
+    {"view", tpk_cmd_view, "a window that renders a .tpk as you orbit, zoom and change what it shows"},
     {"extract", tpk_cmd_extract, "keep only what a scene needs (layout, field, steps, clip box) in a smaller .tpk"},
     {"export", tpk_cmd_export, "write a .tpk's tets and fields as VTU, or its shell as PLY"},
     {"check", tpk_cmd_check, "validate a mesh or a .tpk file: connectivity, degeneracies, spec MUSTs"},

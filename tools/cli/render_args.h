@@ -34,4 +34,18 @@ void render_args_default(render_args *a);
 void render_args_to_options(const render_args *a, tpk_file *file, const tpk_transfer_function *tf,
                             tpk_render_options *opt);
 
+/* One option of the table (argv[*i], advancing *i past its value) or the FILE.tpk argument; `cmd` names
+ * the command in messages. 0, or a message and TPK_EXIT_USAGE. */
+int render_args_parse_option(const char *cmd, int argc, char **argv, int *i, render_args *a);
+
+/* --scene FILE, if given anywhere in argv: its values fill `a` first, so that the options parsed after
+ * override them. 0, or a message and TPK_EXIT_USAGE. */
+int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args *a);
+
+/* The transfer function: --tf, else the scene's, else viridis. 0, or a message and TPK_EXIT_USAGE. */
+int render_args_load_tf(const char *cmd, const render_args *a, tpk_transfer_function *tf);
+
+/* The layout `name` says (tet16, tet20, tet32), or with NULL the first the file stores. */
+tpk_layout render_args_layout(tpk_file *file, const char *name);
+
 #endif

@@ -1,0 +1,123 @@
+# tetpack view under Xvfb: the window's last frame (read back from the window) equals the headless
+# render of the same scene (same size, camera, TF, backend) for each layout and with effects; --orbit
+# turns the camera as a render with the turned camera shows it, and the scene it saves replays to the
+# same picture; mouse drags and keys sent to the running window, and --keys, change the camera, field,
+# step, layout, TF and effects as the scene they save says; no display, a bad file and bad options end
+# with exit 2 and a message.
+set -euo pipefail
+# One X server for the whole script (xvfb-run: -a picks a free display; 24-bit so that frames read back
+# exactly).
+if [ -z "${TPK_VIEW_XVFB:-}" ]; then
+    command -v xvfb-run > /dev/null || { echo "FAIL: xvfb-run not installed (xvfb, xauth)" >&2; exit 1; }
+    TPK_VIEW_XVFB=1 exec xvfb-run -a -s "-screen 0 320x240x24" bash "$0" "$@"
+fi
+source "$(dirname "$0")/common.sh"
+# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe, tests/CMakeLists.txt) for the
+# tetpack runs only, so that LeakSanitizer can name the drivers' own leaks.
+tpk() {
+    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
+}
+psnr_at_least() { # A.png B.png what
+    "$PY" "$SRC/tests/cli/psnr.py" "$1" "$2" --min 40 > "$WORK/psnr" || fail "$3: $(cat "$WORK/psnr")"
+    echo "$3: $(cat "$WORK/psnr")"
+}
+unset TETPACK_RENDER_BACKEND
+SIZE=72x56
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --layout tet16 --layout tet20 --layout tet32 > /dev/null
+tpk view --help | grep -q -- "--orbit DEG" || fail "view --help lacks --orbit"
+
+# each layout: a few frames, the last one against the headless render of the scene view saved
+for layout in tet16 tet20 tet32; do
+    tpk view "$WORK/cyl.tpk" --size $SIZE --layout $layout --frames 3 --screenshot "$WORK/view-$layout.png" \
+        --save-scene "$WORK/view-$layout.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --layout $layout"; }
+    tpk render "$WORK/cyl.tpk" --size $SIZE --layout $layout --backend vulkan -o "$WORK/render-$layout.png" > /dev/null
+    psnr_at_least "$WORK/view-$layout.png" "$WORK/render-$layout.png" "view and render, $layout"
+    grep -q "\"layout\":.*\"$layout\"" "$WORK/view-$layout.json" ||
+        fail "scene of $layout: $(cat "$WORK/view-$layout.json")"
+done
+# effects through the shared options: iso, shading, clip box, another TF
+FX=(--iso 335 --shading --clip-box 0,-1,-1,0.06,1,1 --tf inferno)
+tpk view "$WORK/cyl.tpk" --size $SIZE --frames 2 "${FX[@]}" --screenshot "$WORK/view-fx.png" 2> "$WORK/err" ||
+    { cat "$WORK/err"; fail "view with effects"; }
+tpk render "$WORK/cyl.tpk" --size $SIZE "${FX[@]}" --backend vulkan -o "$WORK/render-fx.png" > /dev/null
+psnr_at_least "$WORK/view-fx.png" "$WORK/render-fx.png" "view and render, effects"
+
+# --orbit: 4 frames at 25 degrees, the last one turned by 75 degrees around up (+z) from the first
+tpk view "$WORK/cyl.tpk" --size $SIZE --frames 4 --orbit 25 --screenshot "$WORK/orbit.png" \
+    --save-scene "$WORK/orbit.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --orbit"; }
+CAMERA=$("$PY" - "$WORK/view-tet16.json" <<'PYEOF'
+import json, math, sys
+c = json.load(open(sys.argv[1]))["camera"]
+eye, at = c["eye"], c["at"]
+a = math.radians(75)
+x, y = eye[0] - at[0], eye[1] - at[1]
+eye = [at[0] + x * math.cos(a) - y * math.sin(a), at[1] + x * math.sin(a) + y * math.cos(a), eye[2]]
+print(",".join("%.17g" % v for v in eye + at + c["up"] + [c["fovy"]]))
+PYEOF
+)
+tpk render "$WORK/cyl.tpk" --size $SIZE --camera "$CAMERA" --backend vulkan -o "$WORK/orbit-render.png" > /dev/null
+psnr_at_least "$WORK/orbit.png" "$WORK/orbit-render.png" "view --orbit and render with the turned camera"
+tpk render "$WORK/cyl.tpk" --scene "$WORK/orbit.json" --backend vulkan -o "$WORK/orbit-scene.png" > /dev/null
+psnr_at_least "$WORK/orbit.png" "$WORK/orbit-scene.png" "view --orbit and its scene replayed"
+! "$PY" "$SRC/tests/cli/psnr.py" "$WORK/orbit.png" "$WORK/view-tet16.png" --min 40 > /dev/null ||
+    fail "--orbit did not turn the camera"
+# the scene replayed by view gives view's own picture
+tpk view "$WORK/cyl.tpk" --scene "$WORK/orbit.json" --frames 1 --screenshot "$WORK/orbit-view.png" 2> /dev/null
+psnr_at_least "$WORK/orbit-view.png" "$WORK/orbit-scene.png" "view --scene"
+
+# a user: mouse drags (orbit, pan, zoom), the wheel, then W, P and Q sent through XTEST while the view
+# runs; the screenshot after them equals render of the scene W wrote, whose camera moved
+tpk view "$WORK/cyl.tpk" --size $SIZE --keys P --screenshot "$WORK/user.png" --save-scene "$WORK/user.json" \
+    2> "$WORK/user.err" &
+VIEW_PID=$!
+"$PY" "$SRC/tests/cli/view_input.py" "$WORK/user.png" "$WORK/user.json" || { kill $VIEW_PID; fail "driving the view"; }
+wait $VIEW_PID || { cat "$WORK/user.err"; fail "view driven by input"; }
+tpk render "$WORK/cyl.tpk" --scene "$WORK/user.json" --backend vulkan -o "$WORK/user-render.png" > /dev/null
+psnr_at_least "$WORK/user.png" "$WORK/user-render.png" "view after mouse and keys, and render of its scene"
+"$PY" - "$WORK/user.json" "$WORK/view-tet16.json" <<'PYEOF' || fail "the drags did not move the camera"
+import json, sys
+a, b = (json.load(open(p))["camera"] for p in sys.argv[1:3])
+moved = lambda k: max(abs(x - y) for x, y in zip(a[k], b[k]))
+print("camera moved: eye %.3g, look-at %.3g" % (moved("eye"), moved("at")))
+sys.exit(0 if moved("eye") > 1e-3 and moved("at") > 1e-4 else 1)
+PYEOF
+
+# the keys (--keys types them before the first frame): on a file with 12 point fields of 11 steps, four
+# steps forward and one back, the fourth field, the next layout, TF preset, iso, shading and clip box;
+# the scene view saves says so, and render draws it the same
+convert_checked "$DATA/seacas/8-block.g" "$WORK/blocks.tpk" --layout tet16 --layout tet32 > /dev/null
+tpk view "$WORK/blocks.tpk" --size $SIZE --frames 1 --keys ']]]][FFFLTISC' --screenshot "$WORK/keys.png" \
+    --save-scene "$WORK/keys.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --keys"; }
+"$PY" - "$WORK/keys.json" <<'PYEOF' || fail "the keys' scene: $(cat "$WORK/keys.json")"
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert (s["field"], s["step"], s["layout"], s["tf"]["preset"]) == ("accel_x", 3, "tet32", "cool-warm"), s
+assert abs(s["iso"][0] - sum(s["range"]) / 2) < 1e-9 and s["effects"]["shading"], s
+assert s["clip_box"] == [0, 0, 0, 0.5, 1, 1], s
+PYEOF
+tpk render "$WORK/blocks.tpk" --scene "$WORK/keys.json" --backend vulkan -o "$WORK/keys-render.png" > /dev/null
+psnr_at_least "$WORK/keys.png" "$WORK/keys-render.png" "view --keys and render of its scene"
+
+# no Vulkan device: the CPU reference, with a note
+VK_ICD_FILENAMES="$WORK/no_such_icd.json" tpk view "$WORK/cyl.tpk" --size $SIZE --frames 1 \
+    --screenshot "$WORK/view-cpu.png" 2> "$WORK/err" || { cat "$WORK/err"; fail "view without Vulkan"; }
+expect_stderr "no Vulkan device"
+tpk render "$WORK/cyl.tpk" --size $SIZE --backend cpu -o "$WORK/render-cpu.png" > /dev/null
+psnr_at_least "$WORK/view-cpu.png" "$WORK/render-cpu.png" "view on the CPU reference"
+
+# errors: exit 2 with a message
+expect_exit 2 env -u DISPLAY "$TPK" view "$WORK/cyl.tpk" --frames 1
+expect_stderr "tetpack render writes images without one"
+echo "not a tetpack file" > "$WORK/bad.tpk"
+expect_exit 2 tpk view "$WORK/bad.tpk" --frames 1
+expect_stderr "bad.tpk"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 0
+expect_stderr "--frames expects"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --field pressure --frames 1
+expect_stderr "no field named 'pressure'"
+expect_exit 2 tpk view "$WORK/cyl.tpk" -o "$WORK/x.png"
+expect_stderr "option of tetpack render"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --screenshot "$WORK/cyl.tpk"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --keys X
+expect_stderr "--keys expects"
+echo "view: ok"

@@ -1,0 +1,183 @@
+/* tetpack view: the window viewer (tools/view/) over the options of tetpack render (render_args.h). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/output_file.h"
+#include "cli.h"
+#include "render_args.h"
+#include "tetpack.h"
+#ifdef TPK_WITH_VIEW
+#include "view/view.h"
+#endif
+#ifdef TPK_WITH_VULKAN
+#include "render_vk/render_vk.h"
+#endif
+
+static const char view_help[] =
+    "usage: tetpack view FILE.tpk [--scene scene.json] [options]\n"
+    "\n"
+    "Opens a window that renders the file with the Vulkan renderer (the CPU reference where there is\n"
+    "no Vulkan device) and shows each frame; the title shows what is shown, the device, the frame rate\n"
+    "and the frame time. Needs a display: for images without one, use tetpack render.\n"
+    "\n"
+    "Mouse: left drag orbits around the look-at point, right drag or the wheel zooms, middle drag (or\n"
+    "shift + left drag) pans. While dragging, frames that take longer than 1/15 s are rendered at a\n"
+    "fraction of the resolution.\n"
+    "Keys: T next transfer function preset, F next field, [ ] previous / next time step, L next layout\n"
+    "(of those stored), I isosurface at the middle of the range on/off, S shading on/off, C clip box\n"
+    "(the half of the bounds below the middle of x) on/off, P screenshot (--screenshot, else\n"
+    "view_NNN.png), W write the scene (--save-scene, else view_scene.json), Q or Esc quit.\n"
+    "\n"
+    "Options: those of tetpack render that say what to show (--size, --camera, --tf, --field, --step,\n"
+    "--range, --layout, --unit-distance, --integration, --iso, --iso-opacity, --clip-box, --shading,\n"
+    "--shadows, --light, --ao, --ao-radius, --threads, --backend, --scene, --save-scene), and:\n"
+    "  --frames N                   show N frames, then close (with --screenshot: tests, scripts)\n"
+    "  --orbit DEG                  turn the camera by DEG degrees per frame around its up axis\n"
+    "  --screenshot IMAGE.png       the window's last frame as PNG when it closes (and P's file)\n"
+    "  --keys KEYS                  press these keys (of the list above) before the first frame\n"
+    "--size WxH is the window's size (default 640x480); a scene's size is used when it gives one.\n";
+
+typedef struct view_args {
+    int frames;
+    double orbit;
+    const char *screenshot;
+    const char *keys;
+} view_args;
+
+/* The options only view has. 1 when argv[*i] is one (parsed, *i advanced), 0 when it is not, or
+ * TPK_EXIT_USAGE + 1 on a bad value. */
+static int view_option(int argc, char **argv, int *i, view_args *v)
+{
+    const char *arg = argv[*i], *value;
+    if (!strncmp(arg, "--frames", 8) && (!arg[8] || arg[8] == '=')) {
+        value = tpk_cli_value(argc, argv, i, "--frames");
+        if (!value || tpk_cli_parse_int(value, 1, 1 << 30, &v->frames))
+            return tpk_cli_fail("view", "--frames expects a frame count >= 1, found '%s'", value ? value : "") + 1;
+    } else if (!strncmp(arg, "--orbit", 7) && (!arg[7] || arg[7] == '=')) {
+        value = tpk_cli_value(argc, argv, i, "--orbit");
+        if (!value || tpk_cli_parse_doubles(value, &v->orbit, 1) || !(fabs(v->orbit) <= 360))
+            return tpk_cli_fail("view", "--orbit expects degrees per frame in [-360, 360], found '%s'",
+                                value ? value : "") + 1;
+    } else if (!strncmp(arg, "--screenshot", 12) && (!arg[12] || arg[12] == '=')) {
+        if (!(v->screenshot = tpk_cli_value(argc, argv, i, "--screenshot")))
+            return tpk_cli_fail("view", "--screenshot expects an output PNG path") + 1;
+    } else if (!strncmp(arg, "--keys", 6) && (!arg[6] || arg[6] == '=')) {
+        v->keys = tpk_cli_value(argc, argv, i, "--keys");
+        if (!v->keys || strspn(v->keys, "TtFf[]LlIiSsCcPpWwQq") != strlen(v->keys))
+            return tpk_cli_fail("view", "--keys expects keys of T F [ ] L I S C P W Q, found '%s'",
+                                v->keys ? v->keys : "") + 1;
+    } else if (!strcmp(arg, "-o") || !strncmp(arg, "--output", 8) || !strncmp(arg, "--steps", 7) ||
+               !strcmp(arg, "--json")) {
+        return tpk_cli_fail("view", "%s is an option of tetpack render; view shows one step at a time ([ and ] "
+                            "step) and saves with --screenshot or P", arg) + 1;
+    } else {
+        return 0;
+    }
+    return 1;
+}
+
+static int parse_args(int argc, char **argv, render_args *a, view_args *v)
+{
+    for (int i = 1; i < argc; i++) {
+        int rc = view_option(argc, argv, &i, v);
+        if (rc > 1)
+            return TPK_EXIT_USAGE;
+        if (rc == 0 && (rc = render_args_parse_option("view", argc, argv, &i, a)) != 0)
+            return rc;
+    }
+    if (!a->path)
+        return tpk_cli_fail("view", "expected FILE.tpk (see tetpack view --help)");
+    tpk_output_input inputs[2] = {{.arg = "FILE.tpk", .given = a->path}};
+    size_t count = 1;
+    if (a->scene_path)
+        inputs[count++] = (tpk_output_input){.arg = "--scene", .given = a->scene_path};
+    if (v->screenshot && tpk_cli_check_output("view", "--screenshot", v->screenshot, inputs, count))
+        return TPK_EXIT_USAGE;
+    if (a->save_scene && tpk_cli_check_output("view", "--save-scene", a->save_scene, inputs, count))
+        return TPK_EXIT_USAGE;
+    return 0;
+}
+
+#ifdef TPK_WITH_VIEW
+/* 1: the CPU reference (--backend cpu, or TETPACK_RENDER_BACKEND=cpu as for render), 0: Vulkan where
+ * present (the view falls back with a note), -1: an error printed. */
+static int want_cpu(const render_args *a)
+{
+    const char *backend = a->backend ? a->backend : getenv("TETPACK_RENDER_BACKEND");
+    if (!backend || !*backend)
+        return 0;
+    if (strcmp(backend, "vulkan") && strcmp(backend, "cpu"))
+        return tpk_cli_fail("view", "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", backend), -1;
+    if (!strcmp(backend, "cpu"))
+        return 1;
+#ifdef TPK_WITH_VULKAN
+    char why[256];
+    if (a->backend && !tpk_vulkan_available(why, sizeof why))
+        return tpk_cli_fail("view", "--backend vulkan: %s", why), -1;
+    return 0;
+#else
+    if (a->backend)
+        return tpk_cli_fail("view", "--backend vulkan: this tetpack was built without Vulkan"), -1;
+    return 1;
+#endif
+}
+
+static int view_file(render_args *a, const view_args *v, tpk_file *file)
+{
+    uint64_t part_chunk;
+    if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK)
+        return tpk_cli_fail("view", "%s is a part set's manifest: view shows one file (tetpack render renders "
+                            "part sets)", a->path);
+    tpk_view_options o;
+    memset(&o, 0, sizeof o);
+    int cpu = want_cpu(a);
+    if (cpu < 0 || render_args_load_tf("view", a, &o.tf))
+        return TPK_EXIT_USAGE;
+    tpk_render_options_default(&o.render);
+    render_args_to_options(a, file, &o.tf, &o.render);
+    o.file = file;
+    o.path = a->path;
+    o.field = a->field;
+    o.step = a->step;
+    o.layout = render_args_layout(file, a->layout);
+    o.cpu = cpu;
+    o.frames = v->frames;
+    o.orbit_deg = v->orbit;
+    o.screenshot = v->screenshot;
+    o.save_scene = a->save_scene;
+    o.keys = v->keys;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_view_run(&o, &diag) != 0)
+        return tpk_cli_fail("view", "%s", diag.message);
+    return TPK_EXIT_OK;
+}
+#endif
+
+int tpk_cmd_view(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            fputs(view_help, stdout);
+            return TPK_EXIT_OK;
+        }
+    render_args a;
+    render_args_default(&a);
+    a.width = 640, a.height = 480;
+    view_args v = {0, 0.0, NULL, NULL};
+    if (render_args_merge_scene("view", argc, argv, &a) || parse_args(argc, argv, &a, &v))
+        return TPK_EXIT_USAGE;
+#ifdef TPK_WITH_VIEW
+    tpk_file *file = NULL;
+    if (tpk_cli_open("view", a.path, &file))
+        return TPK_EXIT_USAGE;
+    int rc = view_file(&a, &v, file);
+    tpk_close(file);
+    return rc;
+#else
+    (void)v;
+    return tpk_cli_fail("view", "this tetpack was built without the window viewer (TETPACK_WITH_VIEW=OFF or GLFW "
+                        "not found); tetpack render writes images");
+#endif
+}

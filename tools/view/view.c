@@ -1,0 +1,217 @@
+/* tetpack view's loop: input to camera and state, a frame when something changed (at a reduced
+ * resolution while dragging when full frames are slow), the window's title with the frame rate. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "view_internal.h"
+
+/* A drag shows frames at a fraction of the resolution when full frames take longer than this. */
+static const double drag_frame_seconds = 1.0 / 15.0;
+
+typedef struct view_loop {
+    const tpk_view_options *o;
+    view_state state;
+    view_renderer renderer;
+    view_window *window;
+    uint8_t *rgba;          /* the frame, at most the drawable's size */
+    size_t rgba_bytes;
+    double full_seconds;    /* the last full-resolution frame's render time */
+    int frame;              /* frames shown */
+    int screenshots;        /* P presses so far, for the file names */
+    int screenshot_due;     /* P was pressed: save the next full frame before it is swapped away */
+    double frame_seconds[256]; /* the first full frames' render times, for the summary of --frames */
+    int timed;
+} view_loop;
+
+static double now_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Mouse drags onto the camera: 0.4 degree per pixel, a wheel step zooms by 10%. */
+static int apply_drags(view_loop *l, const view_input *in)
+{
+    tpk_camera *c = &l->state.opt.camera;
+    int height = 0, width = 0;
+    view_window_size(l->window, &width, &height);
+    if (in->orbit[0] != 0 || in->orbit[1] != 0) {
+        tpk_view_orbit(c, -0.4 * in->orbit[0]);
+        tpk_view_tilt(c, 0.4 * in->orbit[1]);
+    }
+    if (in->pan[0] != 0 || in->pan[1] != 0)
+        tpk_view_pan(c, in->pan[0], in->pan[1], height);
+    if (in->zoom != 0)
+        tpk_view_zoom(c, pow(1.1, in->zoom));
+    return in->orbit[0] != 0 || in->orbit[1] != 0 || in->pan[0] != 0 || in->pan[1] != 0 || in->zoom != 0;
+}
+
+/* The window's contents (the last frame drawn) as a PNG. */
+static int save_screenshot(view_loop *l, const char *path, int width, int height, tpk_diag *diag)
+{
+    view_window_read(l->window, l->rgba, width, height);
+    if (tpk_write_png(path, width, height, l->rgba, diag) != 0)
+        return -1;
+    fprintf(stderr, "tetpack view: wrote %s (%dx%d)\n", path, width, height);
+    return 0;
+}
+
+/* One key's action. Returns 1 to quit, 0 to go on, -1 with a message. */
+static int apply_action(view_loop *l, view_action a, tpk_diag *diag)
+{
+    if (a == VIEW_QUIT)
+        return 1;
+    if (a == VIEW_SCREENSHOT) {
+        l->screenshot_due = 1;
+        return 0;
+    }
+    if (a == VIEW_WRITE_SCENE) {
+        const char *path = l->o->save_scene ? l->o->save_scene : "view_scene.json";
+        if (view_state_write_scene(&l->state, path, l->renderer.vk != NULL, diag) != 0)
+            return -1;
+        fprintf(stderr, "tetpack view: wrote %s\n", path);
+        return 0;
+    }
+    int changed = view_state_apply(&l->state, a, diag);
+    if (changed < 0) /* a step or layout that does not load: say so, keep showing what was shown */
+        fprintf(stderr, "tetpack view: %s\n", diag->message);
+    if (changed > 0 && view_renderer_open(&l->renderer, &l->state, l->o->cpu, diag) != 0)
+        return -1;
+    return 0;
+}
+
+/* Render and draw one frame; `reduced`: at a fraction of the resolution (a drag on a slow device). */
+static int show_frame(view_loop *l, int reduced, tpk_diag *diag)
+{
+    int width, height;
+    view_window_size(l->window, &width, &height);
+    if (width < 1 || height < 1) /* minimized */
+        return 0;
+    int zoom = 1;
+    if (reduced && l->full_seconds > drag_frame_seconds)
+        zoom = (int)fmin(8.0, ceil(sqrt(l->full_seconds / drag_frame_seconds)));
+    int w = (width + zoom - 1) / zoom, h = (height + zoom - 1) / zoom;
+    size_t bytes = (size_t)width * (size_t)height * 4;
+    if (bytes > l->rgba_bytes) {
+        uint8_t *grown = realloc(l->rgba, bytes);
+        if (!grown)
+            return tpk_diag_fail(diag, "out of memory for a %dx%d frame", width, height);
+        l->rgba = grown, l->rgba_bytes = bytes;
+    }
+    tpk_render_stats stats;
+    double t0 = now_seconds();
+    if (view_renderer_frame(&l->renderer, &l->state, w, h, l->rgba, &stats, diag) != 0)
+        return -1;
+    double seconds = now_seconds() - t0;
+    if (zoom == 1) /* the size a scene written now says */
+        l->full_seconds = seconds, l->state.opt.width = width, l->state.opt.height = height;
+    if (zoom == 1 && l->timed < 256)
+        l->frame_seconds[l->timed++] = seconds;
+    view_window_draw(l->window, l->rgba, w, h, zoom);
+    char what[1024], title[1400];
+    view_state_describe(&l->state, what, sizeof what);
+    snprintf(title, sizeof title, "%s | %s | %.1f fps, %.1f ms, %dx%d", what, l->renderer.device, 1.0 / seconds,
+             1e3 * seconds, w, h);
+    view_window_title(l->window, title);
+    l->frame++;
+    return 0;
+}
+
+/* P: the frame just drawn (before the swap), to --screenshot or view_NNN.png. */
+static int screenshot_now(view_loop *l, tpk_diag *diag)
+{
+    char path[4096];
+    if (l->o->screenshot)
+        snprintf(path, sizeof path, "%s", l->o->screenshot);
+    else
+        snprintf(path, sizeof path, "view_%03d.png", l->screenshots);
+    l->screenshots++;
+    l->screenshot_due = 0;
+    int width, height;
+    view_window_size(l->window, &width, &height);
+    return save_screenshot(l, path, width, height, diag);
+}
+
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The headless end: the frame times, the last frame's window contents and scene, as asked. */
+static int finish(view_loop *l, tpk_diag *diag)
+{
+    qsort(l->frame_seconds, (size_t)l->timed, sizeof l->frame_seconds[0], by_value);
+    int width, height;
+    view_window_size(l->window, &width, &height);
+    fprintf(stderr, "tetpack view: %d frames of %dx%d on %s, render time median %.1f ms (of the first %d)\n",
+            l->frame, width, height, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], l->timed);
+    if (l->o->screenshot && save_screenshot(l, l->o->screenshot, width, height, diag) != 0)
+        return -1;
+    if (l->o->save_scene && apply_action(l, VIEW_WRITE_SCENE, diag) != 0)
+        return -1;
+    return 0;
+}
+
+static int run(view_loop *l, tpk_diag *diag)
+{
+    const tpk_view_options *o = l->o;
+    int dirty = 1, reduced = 0;
+    for (const char *k = o->keys; k && *k; k++) { /* --keys: as if typed before the window showed */
+        int rc = apply_action(l, view_key_action((unsigned char)*k), diag);
+        if (rc)
+            return rc < 0 ? -1 : 0;
+    }
+    while (!view_window_closing(l->window)) {
+        view_input in;
+        view_window_poll(l->window, !dirty && o->frames <= 0, &in);
+        dirty |= apply_drags(l, &in) | in.resized;
+        reduced = in.dragging;
+        if (in.released) /* a drag's reduced frames end with a full one */
+            dirty = 1;
+        for (int i = 0; i < in.action_count; i++) {
+            int rc = apply_action(l, in.actions[i], diag);
+            if (rc)
+                return rc < 0 ? -1 : 0;
+            dirty |= in.actions[i] != VIEW_WRITE_SCENE;
+        }
+        if (o->frames > 0 && l->frame > 0)
+            tpk_view_orbit(&l->state.opt.camera, o->orbit_deg);
+        if ((dirty || o->frames > 0) && show_frame(l, reduced && !l->screenshot_due, diag) != 0)
+            return -1;
+        dirty = 0; /* wait for the next event (a drag's motion, a key) */
+        if (o->frames > 0 && l->frame >= o->frames)
+            return finish(l, diag);
+        if (l->screenshot_due && screenshot_now(l, diag) != 0)
+            return -1;
+        view_window_swap(l->window);
+    }
+    return 0;
+}
+
+int tpk_view_run(const tpk_view_options *o, tpk_diag *diag)
+{
+    view_loop *l = calloc(1, sizeof *l);
+    if (!l)
+        return tpk_diag_fail(diag, "out of memory");
+    l->o = o;
+    int rc = view_state_init(&l->state, o, diag);
+    if (rc == 0) {
+        char title[1024];
+        view_state_describe(&l->state, title, sizeof title);
+        rc = view_window_open(&l->window, o->render.width, o->render.height, title, diag);
+    }
+    if (rc == 0)
+        rc = view_renderer_open(&l->renderer, &l->state, o->cpu, diag);
+    if (rc == 0)
+        rc = run(l, diag);
+    view_renderer_close(&l->renderer);
+    view_window_close(l->window);
+    free(l->rgba);
+    free(l);
+    return rc;
+}

@@ -1,0 +1,198 @@
+/* What the viewer shows: the file's arrays for one layout, field and step, the render options, and the
+ * keys that change them (TF preset, field, step, layout, iso, shading, clip box); the scene of it all. */
+#include <stdio.h>
+#include <string.h>
+
+#include "scene/scene.h"
+#include "view_internal.h"
+
+static const tpk_layout layouts[3] = {TPK_LAYOUT_TET16, TPK_LAYOUT_TET20, TPK_LAYOUT_TET32};
+static const uint32_t layout_tags[3] = {TPK_TAG_TT16, TPK_TAG_TT20, TPK_TAG_TT32};
+
+/* The i-th preset name of tpk_tf_preset_names() ("a, b, c"), or 0 when there is none. */
+static int preset_name(int i, char *out, size_t n)
+{
+    const char *p = tpk_tf_preset_names();
+    for (; i > 0 && p; i--)
+        p = (p = strchr(p, ',')) ? p + 2 : NULL;
+    if (!p)
+        return 0;
+    size_t len = strchr(p, ',') ? (size_t)(strchr(p, ',') - p) : strlen(p);
+    snprintf(out, n, "%.*s", (int)(len < n ? len : n - 1), p);
+    return 1;
+}
+
+static int find_preset(const char *name)
+{
+    char p[64];
+    for (int i = 0; preset_name(i, p, sizeof p); i++)
+        if (!strcmp(p, name))
+            return i;
+    return -1;
+}
+
+/* Field `i`'s descriptor into the state (name, association, steps, range): the TF's range follows it. */
+static void take_field(view_state *s, const tpk_field_desc *d)
+{
+    snprintf(s->field, sizeof s->field, "%s", d->name);
+    s->tet_field = d->association == TPK_ASSOC_TET;
+    s->step_count = d->step_count;
+    s->opt.range_min = 0.0, s->opt.range_max = 1.0; /* as render: an empty range maps onto [0, 1] */
+    if (d->min_value < d->max_value)
+        s->opt.range_min = d->min_value, s->opt.range_max = d->max_value;
+    if (s->opt.iso_count)
+        s->opt.iso[0] = 0.5 * (s->opt.range_min + s->opt.range_max);
+}
+
+/* The arrays of the state's layout, field and step. */
+static int load(view_state *s, tpk_diag *diag)
+{
+    const char *point_field = s->field[0] && !s->tet_field ? s->field : NULL;
+    tpk_result r = tpk_load_arrays(s->file, s->layout, point_field, (uint32_t)s->step, &s->mesh);
+    s->opt.tet_scalars = NULL;
+    if (r == TPK_OK && s->tet_field) {
+        s->mesh.scalars = NULL; /* the tet field replaces any point field */
+        r = tpk_load_tet_field(s->file, s->field, (uint32_t)s->step, &s->opt.tet_scalars);
+    }
+    return r == TPK_OK ? 0 : tpk_diag_fail(diag, "%s: %s", s->path, tpk_error_text(s->file));
+}
+
+int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag)
+{
+    memset(s, 0, sizeof *s);
+    s->file = o->file;
+    s->path = o->path;
+    s->opt = o->render;
+    s->tf = o->tf;
+    s->opt.tf = &s->tf;
+    s->tf_preset = find_preset(s->tf.name);
+    s->step = o->step;
+    s->step_count = 1;
+    s->layout = o->layout;
+    tpk_file_info info;
+    tpk_get_info(o->file, &info);
+    memcpy(s->bounds_min, info.bounds_min, sizeof s->bounds_min);
+    memcpy(s->bounds_max, info.bounds_max, sizeof s->bounds_max);
+    for (uint32_t i = 0; i < tpk_field_count(o->file); i++) {
+        tpk_field_desc d;
+        if (tpk_get_field(o->file, i, &d) == TPK_OK &&
+            (o->field ? !strcmp(o->field, d.name) : d.association == TPK_ASSOC_POINT)) {
+            tpk_render_options given = s->opt; /* its range and iso are the caller's (--range, a scene) */
+            take_field(s, &d);
+            s->opt = given;
+            break;
+        }
+    }
+    if (o->field && !s->field[0])
+        return tpk_diag_fail(diag, "%s: no field named '%s'", o->path, o->field);
+    if (s->step < 0 || (uint32_t)s->step >= s->step_count)
+        return tpk_diag_fail(diag, "%s: field '%s' has %u step(s), step %d asked", o->path, s->field, s->step_count,
+                             s->step);
+    return load(s, diag);
+}
+
+static int next_field(view_state *s, tpk_diag *diag)
+{
+    uint32_t n = tpk_field_count(s->file), at = 0;
+    if (n == 0 || (n == 1 && s->field[0]))
+        return 0;
+    if (!s->field[0] || tpk_find_field(s->file, s->field, &at) != TPK_OK)
+        at = n - 1; /* no field shown yet: the first one is next */
+    tpk_field_desc d;
+    if (tpk_get_field(s->file, (at + 1) % n, &d) != TPK_OK)
+        return tpk_diag_fail(diag, "%s: %s", s->path, tpk_error_text(s->file));
+    view_state before = *s;
+    take_field(s, &d);
+    s->step = s->step < (int)s->step_count ? s->step : (int)s->step_count - 1;
+    if (load(s, diag) != 0) {
+        *s = before;
+        return -1;
+    }
+    return 1;
+}
+
+static int next_layout(view_state *s, tpk_diag *diag)
+{
+    int at = 0;
+    while (at < 3 && layouts[at] != s->layout)
+        at++;
+    for (int k = 1; k <= 3; k++) {
+        uint64_t chunk;
+        int i = (at + k) % 3;
+        if (tpk_find_chunk(s->file, layout_tags[i], 0, 0, &chunk) != TPK_OK)
+            continue;
+        if (layouts[i] == s->layout)
+            return 0;
+        tpk_layout before = s->layout;
+        s->layout = layouts[i];
+        if (load(s, diag) != 0) {
+            s->layout = before;
+            return -1;
+        }
+        return 1;
+    }
+    return 0;
+}
+
+static int step_by(view_state *s, int delta, tpk_diag *diag)
+{
+    int to = s->step + delta;
+    if (to < 0 || (uint32_t)to >= s->step_count)
+        return 0;
+    s->step = to;
+    if (load(s, diag) != 0) {
+        s->step -= delta;
+        return -1;
+    }
+    return 1;
+}
+
+static int next_tf(view_state *s, tpk_diag *diag)
+{
+    char name[64];
+    int next = s->tf_preset + 1;
+    if (!preset_name(next, name, sizeof name))
+        preset_name(next = 0, name, sizeof name);
+    if (tpk_tf_load(name, &s->tf, diag) != 0)
+        return -1;
+    s->tf_preset = next;
+    return 0;
+}
+
+int view_state_apply(view_state *s, view_action action, tpk_diag *diag)
+{
+    switch (action) {
+    case VIEW_NEXT_TF: return next_tf(s, diag);
+    case VIEW_NEXT_FIELD: return next_field(s, diag);
+    case VIEW_STEP_BACK: return step_by(s, -1, diag);
+    case VIEW_STEP_FORWARD: return step_by(s, 1, diag);
+    case VIEW_NEXT_LAYOUT: return next_layout(s, diag);
+    case VIEW_ISO:
+        s->opt.iso_count = !s->opt.iso_count;
+        s->opt.iso[0] = 0.5 * (s->opt.range_min + s->opt.range_max);
+        return 0;
+    case VIEW_SHADING: s->opt.shading = !s->opt.shading; return 0;
+    case VIEW_CLIP: /* the half of the bounds below the middle of x */
+        s->opt.clip = !s->opt.clip;
+        memcpy(s->opt.clip_min, s->bounds_min, sizeof s->opt.clip_min);
+        memcpy(s->opt.clip_max, s->bounds_max, sizeof s->opt.clip_max);
+        s->opt.clip_max[0] = 0.5 * (s->bounds_min[0] + s->bounds_max[0]);
+        return 0;
+    default: return 0;
+    }
+}
+
+int view_state_write_scene(const view_state *s, const char *path, int vulkan, tpk_diag *diag)
+{
+    tpk_scene scene;
+    tpk_scene_from_options(&s->opt, s->field, s->step, s->layout, &scene);
+    scene.backend = vulkan ? TPK_SCENE_BACKEND_VULKAN : TPK_SCENE_BACKEND_CPU;
+    return tpk_scene_write(path, &scene, diag);
+}
+
+void view_state_describe(const view_state *s, char *out, size_t n)
+{
+    snprintf(out, n, "%s: %s%s step %d/%u, tet%d, %s%s%s%s", s->path, s->field[0] ? s->field : "(no field)",
+             s->tet_field ? " (tet)" : "", s->step, s->step_count, (int)s->layout, s->tf.name,
+             s->opt.iso_count ? ", iso" : "", s->opt.shading ? ", shading" : "", s->opt.clip ? ", clip" : "");
+}
