@@ -173,6 +173,7 @@ static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int
 static int opt_backend(const char *v, render_args *a)
 {
     a->backend = v;
+    a->backend_from_scene = 0;
     return strcmp(v, "vulkan") && strcmp(v, "cpu");
 }
 static int opt_iso(const char *v, render_args *a) { return parse_list(v, a->iso, TPK_RENDER_MAX_ISO, &a->iso_count); }
@@ -480,6 +481,8 @@ static int save_scene(const render_args *a, tpk_file *file, const tpk_render_opt
     }
     tpk_scene scene;
     tpk_scene_from_options(opt, a->field ? a->field : first, a->step, render_args_layout(file, a->layout), &scene);
+    if (a->backend && !strcmp(a->backend, "vulkan")) /* the backend that drew it (same picture either way) */
+        scene.backend = TPK_SCENE_BACKEND_VULKAN;
     scene.step_last = a->step_last;
     scene.step_range = a->have_steps;
     tpk_diag diag;
@@ -503,11 +506,10 @@ int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args 
     const tpk_scene *s = &a->scene;
     if (tpk_scene_load(a->scene_path, &a->scene, &diag) != 0)
         return tpk_cli_fail(cmd, "%s", diag.message);
-#ifndef TPK_WITH_VULKAN
-    if (s->given & TPK_SCENE_BACKEND && s->backend == TPK_SCENE_BACKEND_VULKAN)
-        fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; this build renders on the CPU "
-                "(the reference, same picture)\n", a->scene_path);
-#endif
+    if (s->given & TPK_SCENE_BACKEND) { /* --backend, parsed after this, still overrides it */
+        a->backend = s->backend == TPK_SCENE_BACKEND_VULKAN ? "vulkan" : "cpu";
+        a->backend_from_scene = 1;
+    }
     if (s->given & TPK_SCENE_SIZE)
         a->width = s->width, a->height = s->height;
     if (s->given & TPK_SCENE_CAMERA) {
@@ -559,6 +561,17 @@ int render_args_load_tf(const char *cmd, const render_args *a, tpk_transfer_func
 static int resolve_backend(render_args *a, tpk_diag *diag)
 {
     const char *env = getenv("TETPACK_RENDER_BACKEND");
+    if (a->backend_from_scene && !strcmp(a->backend, "vulkan")) {
+        int have = 0;
+#ifdef TPK_WITH_VULKAN
+        have = tpk_vulkan_available(a->device, sizeof a->device);
+#endif
+        if (!have) {
+            fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; no Vulkan device here, so the CPU "
+                    "reference renders it (the same picture)\n", a->scene_path);
+            a->backend = "cpu";
+        }
+    }
     if (!a->backend && env && *env) {
         if (strcmp(env, "vulkan") && strcmp(env, "cpu"))
             return tpk_diag_fail(diag, "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", env);
@@ -726,7 +739,7 @@ static int render_set(const render_args *a)
 {
     if (a->have_steps)
         return tpk_cli_fail("render", "%s: a part set renders one step (--step N), not a range", a->path);
-    if (a->backend && !strcmp(a->backend, "vulkan"))
+    if (a->backend && !strcmp(a->backend, "vulkan") && !a->backend_from_scene)
         return tpk_cli_fail("render", "%s: a part set renders with the CPU reference only (--backend cpu)", a->path);
     tpk_partset *set = NULL;
     char err[1024] = "";

@@ -21,6 +21,7 @@ typedef struct render_args {
     double light[3], ao_radius; /* ao_radius 0: the renderer's default */
     const char *scene_path, *save_scene; /* --scene, --save-scene */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
+    int backend_from_scene;              /* backend is the scene's: without a device, the CPU (same picture) */
     char device[256];                    /* the Vulkan device's name, or "cpu" */
     tpk_scene scene;                     /* what --scene gave (scene.given = 0 without one) */
 } render_args;
