@@ -242,6 +242,54 @@ TPK_TEST(small_41)
     CHECK(ok);
 }
 
+/* Element tags that are a run (4, 5, 6: no tag table is built) and one that breaks it after two
+ * elements (4, 5, 9: the table is written out then); $ElementData finds its cells either way, and a tag
+ * past the run is unknown. */
+static const char run22_head[] =
+    "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
+    "$Nodes\n5\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n"
+    "$Elements\n3\n4 4 2 0 1 1 2 3 4\n5 4 2 0 1 2 3 4 5\n";
+
+static void check_run(const char *last, const char *data, float v0, float v1, float v2)
+{
+    char text[1024];
+    snprintf(text, sizeof text, "%s%s$EndElements\n$ElementData\n1\n\"p\"\n1\n0\n3\n0\n1\n%s$EndElementData\n",
+             run22_head, last, data);
+    tpk_mesh m;
+    tpk_diag d;
+    quiet(&d);
+    CHECK_MSG(tpk_import_gmsh_memory("run.msh", text, strlen(text), &m, &d) == 0, "%s", d.message);
+    const tpk_src_field *p = field(&m, "p");
+    CHECK(m.cell_count == 3 && p != NULL);
+    if (p) {
+        CHECK(isnan(v0) ? isnan(p->values[0]) : p->values[0] == v0);
+        CHECK(p->values[1] == v1 && p->values[2] == v2);
+    }
+    tpk_mesh_free(&m);
+}
+
+TPK_TEST(element_tag_run)
+{
+    check_run("6 4 2 0 1 1 3 4 5\n", "2\n6 60\n5 50\n", NAN, 50, 60);
+    check_run("9 4 2 0 1 1 3 4 5\n", "3\n9 90\n5 50\n4 40\n", 40, 50, 90);
+    char text[1024];
+    snprintf(text, sizeof text, "%s6 4 2 0 1 1 3 4 5\n$EndElements\n$ElementData\n1\n\"p\"\n1\n0\n3\n0\n1\n1\n"
+             "7 70\n$EndElementData\n", run22_head);
+    tpk_mesh m;
+    tpk_diag d;
+    quiet(&d);
+    int rc = tpk_import_gmsh_memory("run.msh", text, strlen(text), &m, &d);
+    if (rc == 0)
+        tpk_mesh_free(&m);
+    CHECK(rc == -1 && strstr(d.message, "uses element tag 7, which $Elements does not define") != NULL);
+    snprintf(text, sizeof text, "%s9 4 2 0 1 1 3 4 5\n$EndElements\n$ElementData\n1\n\"p\"\n1\n0\n3\n0\n1\n1\n"
+             "6 60\n$EndElementData\n", run22_head);
+    rc = tpk_import_gmsh_memory("run.msh", text, strlen(text), &m, &d);
+    if (rc == 0)
+        tpk_mesh_free(&m);
+    CHECK(rc == -1 && strstr(d.message, "uses element tag 6, which $Elements does not define") != NULL);
+}
+
 static void expect_error_size(const char *text, size_t size, const char *message)
 {
     tpk_mesh m;

@@ -2,7 +2,9 @@
 #include "parallel.h"
 
 #include <pthread.h>
+#include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -67,23 +69,44 @@ void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx)
     }
 }
 
-/* The one block tpk_free_large keeps (see parallel.h), with its size. */
+/* The blocks tpk_free_large keeps (see parallel.h), each with its size; unused slots are NULL. */
+#define KEPT_BLOCKS 6
 static struct {
     pthread_mutex_t lock;
-    void *block;
-    size_t size;
-} spare = {PTHREAD_MUTEX_INITIALIZER, NULL, 0};
+    void *block[KEPT_BLOCKS];
+    size_t size[KEPT_BLOCKS];
+} kept = {PTHREAD_MUTEX_INITIALIZER, {NULL}, {0}};
 
-static void *take_spare(size_t size)
+/* The smallest kept block that holds size bytes and is at most twice that, taken out of the list. On a
+ * miss the caller maps fresh pages next: every kept block but the largest (likely the next stage's big
+ * array: reorder's old tets become connect's neighbors) is freed first, so that what is kept adds little
+ * to the fresh pages (the peak stays near that of the arrays in use). */
+static void *take_kept(size_t size)
 {
-    void *block = NULL;
-    pthread_mutex_lock(&spare.lock);
-    if (spare.block && size <= spare.size && size >= spare.size / 2) {
-        block = spare.block;
-        spare.block = NULL;
-        spare.size = 0;
+    void *block = NULL, *drop[KEPT_BLOCKS] = {NULL};
+    pthread_mutex_lock(&kept.lock);
+    int best = -1, largest = -1;
+    for (int i = 0; i < KEPT_BLOCKS; i++) {
+        if (!kept.block[i])
+            continue;
+        if (size <= kept.size[i] && size >= kept.size[i] / 2 && (best < 0 || kept.size[i] < kept.size[best]))
+            best = i;
+        if (largest < 0 || kept.size[i] > kept.size[largest])
+            largest = i;
     }
-    pthread_mutex_unlock(&spare.lock);
+    for (int i = 0; i < KEPT_BLOCKS; i++) {
+        if (best >= 0 ? i != best : i == largest)
+            continue;
+        if (i == best)
+            block = kept.block[i];
+        else
+            drop[i] = kept.block[i];
+        kept.block[i] = NULL;
+        kept.size[i] = 0;
+    }
+    pthread_mutex_unlock(&kept.lock);
+    for (int i = 0; i < KEPT_BLOCKS; i++)
+        free(drop[i]);
     return block;
 }
 
@@ -93,14 +116,18 @@ void tpk_free_large(void *block, size_t size)
         free(block);
         return;
     }
-    pthread_mutex_lock(&spare.lock);
-    if (size > spare.size) { /* keep the larger: it serves more requests */
-        void *swap = spare.block;
-        spare.block = block;
-        spare.size = size;
+    pthread_mutex_lock(&kept.lock);
+    int slot = 0; /* an empty slot, else the smallest block, which the new one replaces if larger */
+    for (int i = 1; i < KEPT_BLOCKS && kept.block[slot]; i++)
+        if (!kept.block[i] || kept.size[i] < kept.size[slot])
+            slot = i;
+    if (!kept.block[slot] || size > kept.size[slot]) {
+        void *swap = kept.block[slot];
+        kept.block[slot] = block;
+        kept.size[slot] = size;
         block = swap;
     }
-    pthread_mutex_unlock(&spare.lock);
+    pthread_mutex_unlock(&kept.lock);
     free(block);
 }
 
@@ -109,7 +136,7 @@ void *tpk_alloc_large(size_t size)
     const size_t huge_page = (size_t)2 << 20;
     if (size < huge_page)
         return malloc(size ? size : 1);
-    void *block = take_spare(size);
+    void *block = take_kept(size);
     if (block)
         return block;
     if (posix_memalign(&block, huge_page, size) != 0)
@@ -117,6 +144,30 @@ void *tpk_alloc_large(size_t size)
 #ifdef MADV_HUGEPAGE
     madvise(block, size, MADV_HUGEPAGE); /* advice only: failure changes nothing */
 #endif
+    return block;
+}
+
+void tpk_release_kept(void)
+{
+    void *drop[KEPT_BLOCKS];
+    pthread_mutex_lock(&kept.lock);
+    for (int i = 0; i < KEPT_BLOCKS; i++) {
+        drop[i] = kept.block[i];
+        kept.block[i] = NULL;
+        kept.size[i] = 0;
+    }
+    pthread_mutex_unlock(&kept.lock);
+    for (int i = 0; i < KEPT_BLOCKS; i++)
+        free(drop[i]);
+}
+
+void *tpk_calloc_large(size_t count, size_t size)
+{
+    if (size && count > SIZE_MAX / size)
+        return NULL;
+    void *block = tpk_alloc_large(count * size);
+    if (block)
+        memset(block, 0, count * size > 0 ? count * size : 1);
     return block;
 }
 

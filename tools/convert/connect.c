@@ -232,13 +232,13 @@ static int report_bad_tet(const connect_job *job, int64_t t, tpk_diag *diag)
 static void free_job(connect_job *job)
 {
     for (int w = 0; w < TPK_MAX_THREADS; w++) {
-        free(job->starts[w]);
+        tpk_free_large(job->starts[w], sizeof *job->starts[w] * (size_t)(job->vertex_count ? job->vertex_count : 1));
         free(job->scratch[w].faces);
         free(job->scratch[w].slots);
         free(job->scratch[w].table);
     }
-    free(job->bucket_start);
-    free(job->entries);
+    tpk_free_large(job->bucket_start, sizeof *job->bucket_start * (size_t)(job->vertex_count + 1));
+    tpk_free_large(job->entries, sizeof *job->entries * 2 * (size_t)job->tet_count);
     free(job);
 }
 
@@ -294,11 +294,11 @@ int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, in
     job->vertex_count = vertex_count;
     job->neighbors = neighbors;
     job->threads = tpk_threads_for(tet_count, tpk_thread_count(threads), 32768);
-    job->bucket_start = malloc(sizeof *job->bucket_start * (size_t)(vertex_count + 1));
+    job->bucket_start = tpk_alloc_large(sizeof *job->bucket_start * (size_t)(vertex_count + 1));
     job->entries = tpk_alloc_large(sizeof *job->entries * 2 * (size_t)tet_count);
     int ok = job->bucket_start && job->entries;
     for (int w = 0; w < job->threads && ok; w++)
-        ok = (job->starts[w] = malloc(sizeof *job->starts[w] * (size_t)(vertex_count ? vertex_count : 1))) != NULL;
+        ok = (job->starts[w] = tpk_alloc_large(sizeof *job->starts[w] * (size_t)(vertex_count ? vertex_count : 1))) != NULL;
     if (!ok) {
         free_job(job);
         return tpk_diag_fail(diag, "connect: out of memory (%lld tets)", (long long)tet_count);

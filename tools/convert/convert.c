@@ -144,7 +144,7 @@ static int orient_tets(conversion *c)
     double t = now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
-    c->turned_over = malloc((size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1));
+    c->turned_over = tpk_alloc_large((size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1));
     if (!c->turned_over)
         return tpk_diag_fail(c->diag, "out of memory for the orientation of %lld tets", (long long)c->mesh.tet_count);
     if (tpk_orient_marked(&c->mesh, (c->o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
@@ -175,6 +175,7 @@ static int connect_tets(conversion *c)
     c->rep->inverted_fixed -= unfold.bad_tets; /* left out, not turned over */
     c->rep->bad_cells_skipped += unfold.bad_tets;
     c->rep->folds_cut = unfold.folds_cut;
+    tpk_release_kept(); /* the last stage to use them: writing wants no more large arrays */
     c->rep->t_connect = now_seconds() - t;
     return 0;
 }

@@ -168,7 +168,7 @@ int tpk_orient_marked(tpk_tetmesh *mesh, int flags, int threads_requested, tpk_o
             return tpk_diag_fail(diag, "orient: tet %lld names vertex %d; the mesh has %lld vertices",
                                  (long long)(i / 4), mesh->tets[i], (long long)mesh->vertex_count);
     orient_job *job = calloc(1, sizeof *job);
-    int8_t *kinds = malloc((size_t)(mesh->tet_count ? mesh->tet_count : 1));
+    int8_t *kinds = tpk_alloc_large((size_t)(mesh->tet_count ? mesh->tet_count : 1));
     if (!job || !kinds) {
         free(job);
         free(kinds);
@@ -195,7 +195,7 @@ int tpk_orient_marked(tpk_tetmesh *mesh, int flags, int threads_requested, tpk_o
     else if (turned_over)
         for (int64_t t = 0; t < mesh->tet_count; t++)
             turned_over[t] = kinds[t] == TET_INVERTED;
-    free(kinds);
+    free(kinds); /* not kept: connect maps its arrays next, and a kept block would add to its peak */
     free(job);
     return rc;
 }

@@ -258,7 +258,7 @@ static int hilbert_order(const hilbert_table *table, const double *points, int64
                          uint32_t *order, int threads)
 {
     uint64_t *keys = tpk_alloc_large(sizeof *keys * 2 * (size_t)(count ? count : 1));
-    uint32_t *vals_tmp = malloc(sizeof *vals_tmp * (size_t)(count ? count : 1));
+    uint32_t *vals_tmp = tpk_alloc_large(sizeof *vals_tmp * (size_t)(count ? count : 1));
     int rc = -1;
     if (keys && vals_tmp) {
         key_job job = {table, points, bounds, keys, order};
@@ -266,8 +266,8 @@ static int hilbert_order(const hilbert_table *table, const double *points, int64
         tpk_parallel_for(count, key_threads, key_range, &job);
         rc = radix_sort(keys, order, keys + count, vals_tmp, count, tpk_threads_for(count, threads, 65536));
     }
-    free(keys);
-    free(vals_tmp);
+    tpk_free_large(keys, sizeof *keys * 2 * (size_t)(count ? count : 1));
+    tpk_free_large(vals_tmp, sizeof *vals_tmp * (size_t)(count ? count : 1));
     return rc;
 }
 
@@ -313,7 +313,7 @@ static int min_vertex_order(const int32_t *tets, int64_t nt, int64_t nv, uint32_
     uint32_t *next[TPK_MAX_THREADS] = {NULL};
     int rc = 0;
     for (int w = 0; w < threads && rc == 0; w++)
-        if (!(next[w] = calloc((size_t)nv + 1, sizeof *next[w])))
+        if (!(next[w] = tpk_calloc_large((size_t)nv + 1, sizeof *next[w])))
             rc = -1;
     if (rc == 0) {
         min_sort_job job = {tets, nv, next, order};
@@ -328,7 +328,7 @@ static int min_vertex_order(const int32_t *tets, int64_t nt, int64_t nv, uint32_
         tpk_parallel_for(nt, threads, min_scatter, &job);
     }
     for (int w = 0; w < threads; w++)
-        free(next[w]);
+        tpk_free_large(next[w], ((size_t)nv + 1) * sizeof *next[w]);
     return rc;
 }
 
@@ -390,7 +390,7 @@ static int permute_array(void **array, int64_t count, size_t elem_size, const ui
 static int permute_fields(tpk_tetmesh *mesh, int association, int64_t count, const uint32_t *order,
                           int threads)
 {
-    float *tmp = malloc(sizeof *tmp * (size_t)(count ? count : 1));
+    float *tmp = tpk_alloc_large(sizeof *tmp * (size_t)(count ? count : 1));
     if (!tmp)
         return -1;
     for (int f = 0; f < mesh->field_count; f++) {
@@ -403,7 +403,7 @@ static int permute_fields(tpk_tetmesh *mesh, int association, int64_t count, con
             memcpy(step, tmp, sizeof *tmp * (size_t)count);
         }
     }
-    free(tmp);
+    tpk_free_large(tmp, sizeof *tmp * (size_t)(count ? count : 1));
     return 0;
 }
 
@@ -411,7 +411,7 @@ static int ensure_identity(int32_t **source, int64_t count)
 {
     if (*source)
         return 0;
-    *source = malloc(sizeof **source * (size_t)(count ? count : 1));
+    *source = tpk_alloc_large(sizeof **source * (size_t)(count ? count : 1));
     if (!*source)
         return -1;
     for (int64_t i = 0; i < count; i++)
@@ -435,12 +435,12 @@ static void remap_range(void *ctx, int64_t begin, int64_t end, int worker)
 static int apply_vertex_order(tpk_tetmesh *mesh, const uint32_t *order, int threads)
 {
     int64_t n = mesh->vertex_count;
-    int32_t *new_id = malloc(sizeof *new_id * (size_t)(n ? n : 1));
+    int32_t *new_id = tpk_alloc_large(sizeof *new_id * (size_t)(n ? n : 1));
     if (!new_id || ensure_identity(&mesh->vertex_source, n) ||
         permute_array((void **)&mesh->points, n, 3 * sizeof *mesh->points, order, threads) ||
         permute_array((void **)&mesh->vertex_source, n, sizeof *mesh->vertex_source, order, threads) ||
         permute_fields(mesh, TPK_ASSOC_POINT, n, order, threads)) {
-        free(new_id);
+        tpk_free_large(new_id, sizeof *new_id * (size_t)(n ? n : 1));
         return -1;
     }
     for (int64_t i = 0; i < n; i++)
@@ -448,7 +448,7 @@ static int apply_vertex_order(tpk_tetmesh *mesh, const uint32_t *order, int thre
     remap_job job = {mesh->tets, new_id};
     tpk_parallel_for(4 * mesh->tet_count, tpk_threads_for(4 * mesh->tet_count, threads, 65536), remap_range,
                      &job);
-    free(new_id);
+    tpk_free_large(new_id, sizeof *new_id * (size_t)(n ? n : 1));
     return 0;
 }
 
@@ -478,13 +478,14 @@ int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
     build_hilbert_table(&table);
     box bounds = bounding_box(mesh->points, nv);
     /* Vertices along the curve first; tets then follow their smallest vertex. */
-    uint32_t *order = malloc(sizeof *order * (size_t)(nv > nt ? (nv ? nv : 1) : nt));
+    size_t order_bytes = sizeof(uint32_t) * (size_t)(nv > nt ? (nv ? nv : 1) : nt);
+    uint32_t *order = tpk_alloc_large(order_bytes);
     int rc = -1;
     if (order && !hilbert_order(&table, mesh->points, nv, bounds, order, threads) &&
         !apply_vertex_order(mesh, order, threads) && !min_vertex_order(mesh->tets, nt, nv, order, threads) &&
         !apply_tet_order(mesh, order, threads))
         rc = 0;
-    free(order);
+    tpk_free_large(order, order_bytes);
     if (rc)
         return tpk_diag_fail(diag, "reorder: out of memory (%lld vertices, %lld tets)", (long long)nv,
                              (long long)nt);

@@ -12,6 +12,7 @@
 #include "mesh/cell_types.h"
 #include "pipeline.h"
 #include "mesh/polyhedron.h"
+#include "base/parallel.h"
 #include "split_plain.h"
 #include "steiner.h"
 
@@ -457,7 +458,7 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
     if (plain) {
         out->tets = donor->cell_conn;
         donor->cell_conn = NULL;
-        out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+        out->tet_source = tpk_alloc_large(sizeof *out->tet_source * (size_t)tet_capacity);
         if (!out->tet_source)
             return -1;
         for (int64_t t = 0; t < tet_capacity; t++)
@@ -466,8 +467,8 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
         out->cells_into[1] = tet_capacity;
         return 0;
     }
-    out->tets = malloc(sizeof *out->tets * 4 * (size_t)tet_capacity);
-    out->tet_source = malloc(sizeof *out->tet_source * (size_t)tet_capacity);
+    out->tets = tpk_alloc_large(sizeof *out->tets * 4 * (size_t)tet_capacity);
+    out->tet_source = tpk_alloc_large(sizeof *out->tet_source * (size_t)tet_capacity);
     if (!out->tets || !out->tet_source)
         return -1;
     return split_cells(src, flags, threads, progress, &tet_capacity, added, out, diag);

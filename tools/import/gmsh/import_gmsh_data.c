@@ -100,7 +100,7 @@ int gmsh_read_data(gmsh_reader *r, int association)
     if (count < 0 || (uint64_t)count > gmsh_bytes_left(r) / (2 * (uint64_t)(components + 1)) + 1)
         return tpk_scan_fail(&r->s, "%s '%s': %lld values cannot fit in the %zu bytes left (wrong count or "
                                     "truncated file)", section, name, (long long)count, gmsh_bytes_left(r));
-    if (association != TPK_ASSOC_POINT && !r->elem_sorted) {
+    if (association != TPK_ASSOC_POINT && r->elem_listed && !r->elem_sorted) {
         if (gmsh_sort_tags(r, r->elem_tags, r->elem_count, "element"))
             return -1;
         r->elem_sorted = 1;
@@ -143,7 +143,10 @@ int gmsh_read_data(gmsh_reader *r, int association)
                 return -1;
         } else {
             int found;
-            at = gmsh_lookup(r->elem_tags, r->elem_count, tag, &found);
+            if (r->elem_listed)
+                at = gmsh_lookup(r->elem_tags, r->elem_count, tag, &found);
+            else if ((found = tag >= r->elem_first_tag && tag - r->elem_first_tag < r->elem_count))
+                at = (int32_t)(tag - r->elem_first_tag); /* the run: tag - first is the cell */
             if (!found)
                 return tpk_scan_fail(&r->s, "%s '%s' uses element tag %lld, which $Elements does not define",
                                      section, name, (long long)tag);

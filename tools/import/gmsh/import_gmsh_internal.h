@@ -49,8 +49,13 @@ typedef struct gmsh_reader {
     int64_t *offsets;
     int32_t *conn;
     float *physical, *entity;
-    tag_index *elem_tags; /* every element (dropped ones too), sorted once needed */
-    int64_t elem_count, elem_cap;
+    /* Every element (dropped ones too), sorted once needed. Listed only once the elements stop being a
+     * run: while each is a kept cell whose tag is elem_first_tag plus its index (a mesh of volume
+     * elements numbered in order), the table would be the identity, and building it cost 16 bytes of
+     * fresh memory per element. */
+    tag_index *elem_tags;
+    int64_t elem_count, elem_cap, elem_first_tag;
+    int elem_listed;
     int elem_sorted;
     int64_t dropped, reduced;
     entity_phys *volumes; /* 4.1 $Entities: volume tag -> first physical tag */

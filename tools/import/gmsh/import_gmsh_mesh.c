@@ -205,8 +205,40 @@ int gmsh_read_nodes(gmsh_reader *r)
 
 /* ---- $Elements, $Entities ----------------------------------------------------------------------- */
 
+/* The implicit run (see elem_tags) written out as a table, with the capacity the table would have had. */
+static int list_elem_tags(gmsh_reader *r)
+{
+    int64_t cap = 1024;
+    while (cap <= r->elem_count)
+        cap *= 2;
+    if (r->elem_count == 0)
+        cap = 0; /* add_elem_tag allocates the first 1024 */
+    tag_index *t = cap ? malloc(sizeof *t * (size_t)cap) : NULL;
+    if (cap && !t)
+        return tpk_scan_fail(&r->s, "out of memory");
+    for (int64_t i = 0; i < r->elem_count; i++) {
+        t[i].tag = r->elem_first_tag + i;
+        t[i].index = (int32_t)i;
+    }
+    r->elem_tags = t;
+    r->elem_cap = cap;
+    r->elem_listed = 1;
+    return 0;
+}
+
 static int add_elem_tag(gmsh_reader *r, int64_t tag, int32_t cell)
 {
+    if (!r->elem_listed) {
+        if (r->elem_count == 0)
+            r->elem_first_tag = tag; /* a run starts at a tag of 1 or more (tag - first cannot overflow) */
+        if (cell == r->elem_count && r->elem_first_tag >= 1 && tag >= r->elem_first_tag &&
+            tag - r->elem_first_tag == r->elem_count) {
+            r->elem_count++;
+            return 0;
+        }
+        if (list_elem_tags(r))
+            return -1;
+    }
     if (r->elem_count == r->elem_cap) {
         int64_t cap = r->elem_cap ? 2 * r->elem_cap : 1024;
         tag_index *t = realloc(r->elem_tags, sizeof *t * (size_t)cap);
