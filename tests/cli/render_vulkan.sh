@@ -59,4 +59,17 @@ expect_stderr "larger than the device"
 unset TPK_VK_SPLIT_BYTES
 expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/x.png" --backend metal
 expect_stderr "backend expects vulkan or cpu"
+
+# The scene's backend is used on replay (over $TETPACK_RENDER_BACKEND; --backend overrides it); without a
+# Vulkan device the CPU reference draws it, with a note. A saved scene records the backend that drew it.
+printf '{"size": [32, 24], "backend": "vulkan"}' > "$WORK/vk.json"
+TETPACK_RENDER_BACKEND=cpu tpk render "$WORK/cyl.tpk" -o "$WORK/vk.png" --scene "$WORK/vk.json" --json --save-scene "$WORK/vk_saved.json" > "$WORK/vk.txt"
+grep -q '"backend":"vulkan"' "$WORK/vk.txt" || fail "the scene's backend was not used: $(cat "$WORK/vk.txt")"
+grep -q '"backend":[[:space:]]*"vulkan"' "$WORK/vk_saved.json" || fail "the saved scene does not record vulkan"
+tpk render "$WORK/cyl.tpk" -o "$WORK/vk_cpu.png" --scene "$WORK/vk.json" --backend cpu --json > "$WORK/vk.txt"
+grep -q '"backend":"cpu"' "$WORK/vk.txt" || fail "--backend cpu did not override the scene: $(cat "$WORK/vk.txt")"
+VK_ICD_FILENAMES=/nonexistent/icd.json tpk render "$WORK/cyl.tpk" -o "$WORK/vk_none.png" --scene "$WORK/vk.json" \
+    --json > "$WORK/vk.txt" 2> "$WORK/vk.err" || fail "a Vulkan scene without a device failed: $(cat "$WORK/vk.err")"
+grep -q "no Vulkan device here, so the CPU reference renders it" "$WORK/vk.err" || fail "no note: $(cat "$WORK/vk.err")"
+grep -q '"backend":"cpu"' "$WORK/vk.txt" || fail "no CPU fallback: $(cat "$WORK/vk.txt")"
 echo "render_vulkan: ok"

@@ -86,15 +86,3 @@ expect_exit 2 "$TPK" render "$WORK/cyl.tpk" -o "$WORK/x.png" --scene "$WORK/miss
 expect_stderr "missing.json: cannot open the scene file"
 echo "scene: ok"
 
-# The scene's backend is used on replay (over $TETPACK_RENDER_BACKEND; --backend overrides it); without a
-# Vulkan device the CPU reference draws it, with a note. A saved scene records the backend that drew it.
-printf '{"size": [32, 24], "backend": "vulkan"}' > "$WORK/vk.json"
-"$TPK" render "$WORK/cyl.tpk" -o "$WORK/vk.png" --scene "$WORK/vk.json" --json --save-scene "$WORK/vk_saved.json" > "$WORK/vk.txt"
-grep -q '"backend":"vulkan"' "$WORK/vk.txt" || fail "the scene's backend was not used: $(cat "$WORK/vk.txt")"
-grep -q '"backend":[[:space:]]*"vulkan"' "$WORK/vk_saved.json" || fail "the saved scene does not record vulkan"
-"$TPK" render "$WORK/cyl.tpk" -o "$WORK/vk_cpu.png" --scene "$WORK/vk.json" --backend cpu --json > "$WORK/vk.txt"
-grep -q '"backend":"cpu"' "$WORK/vk.txt" || fail "--backend cpu did not override the scene: $(cat "$WORK/vk.txt")"
-VK_ICD_FILENAMES=/nonexistent/icd.json "$TPK" render "$WORK/cyl.tpk" -o "$WORK/vk_none.png" --scene "$WORK/vk.json" \
-    --json > "$WORK/vk.txt" 2> "$WORK/vk.err" || fail "a Vulkan scene without a device failed: $(cat "$WORK/vk.err")"
-grep -q "no Vulkan device here, so the CPU reference renders it" "$WORK/vk.err" || fail "no note: $(cat "$WORK/vk.err")"
-grep -q '"backend":"cpu"' "$WORK/vk.txt" || fail "no CPU fallback: $(cat "$WORK/vk.txt")"
