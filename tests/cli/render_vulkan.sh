@@ -72,4 +72,20 @@ VK_ICD_FILENAMES=/nonexistent/icd.json tpk render "$WORK/cyl.tpk" -o "$WORK/vk_n
     --json > "$WORK/vk.txt" 2> "$WORK/vk.err" || fail "a Vulkan scene without a device failed: $(cat "$WORK/vk.err")"
 grep -q "no Vulkan device here, so the CPU reference renders it" "$WORK/vk.err" || fail "no note: $(cat "$WORK/vk.err")"
 grep -q '"backend":"cpu"' "$WORK/vk.txt" || fail "no CPU fallback: $(cat "$WORK/vk.txt")"
+# Device memory per layout (--json device_bytes): the mesh arrays as they are, so Tet20 holds 4 bytes per
+# tet more than Tet16; the CPU reference holds none.
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl3.tpk" --layout tet16 --layout tet20 --layout tet32 > /dev/null
+for layout in tet16 tet20 tet32; do
+    tpk render "$WORK/cyl3.tpk" -o "$WORK/mem.png" --size 16x16 --backend vulkan --layout $layout --json > "$WORK/mem_$layout.json"
+done
+tpk render "$WORK/cyl3.tpk" -o "$WORK/mem.png" --size 16x16 --backend cpu --json > "$WORK/mem_cpu.json"
+"$TPK" info "$WORK/cyl3.tpk" --json > "$WORK/cyl3_info.json"
+$PY - "$WORK" <<'PY' || fail "device_bytes per layout"
+import json, sys
+w = sys.argv[1]
+b = {l: json.load(open(f"{w}/mem_{l}.json"))["device_bytes"] for l in ("tet16", "tet20", "tet32", "cpu")}
+tets = json.load(open(f"{w}/cyl3_info.json"))["tets"]
+assert b["cpu"] == 0 and b["tet16"] > 16 * tets, b
+assert b["tet20"] - b["tet16"] == 4 * tets and b["tet32"] - b["tet20"] == 12 * tets, (b, tets)
+PY
 echo "render_vulkan: ok"

@@ -447,10 +447,11 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
         return tpk_cli_fail("render", "%s", diag.message);
     if (a->json)
         printf("{\"image\":\"%s\",\"backend\":\"%s\",\"device\":\"%s\",\"width\":%d,\"height\":%d,"
-               "\"rays\":%llu,\"secondary_rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f}\n",
+               "\"rays\":%llu,\"secondary_rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f,\"device_bytes\":%llu}\n",
                output, vulkan ? "vulkan" : "cpu", vulkan ? a->device : "cpu", a->width, a->height,
                (unsigned long long)stats.rays,
-               (unsigned long long)stats.secondary_rays, (unsigned long long)stats.tet_steps, stats.seconds);
+               (unsigned long long)stats.secondary_rays, (unsigned long long)stats.tet_steps, stats.seconds,
+               (unsigned long long)stats.device_bytes);
     else
         printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
                (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,

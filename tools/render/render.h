@@ -137,6 +137,8 @@ typedef struct tpk_render_stats {
     uint64_t tet_steps; /* tets the marcher stepped through, all rays (secondary ones included) */
     uint64_t secondary_rays; /* shadow and AO rays */
     double seconds;     /* wall time of the render (marcher creation included) */
+    uint64_t device_bytes; /* Vulkan: device memory of the renderer's buffers (mesh arrays, BVH, image
+                              band, parameters); 0 for the CPU reference */
 } tpk_render_stats;
 
 /* Render `mesh` into rgba (width * height * 4 bytes, caller-owned). Emission-absorption front to back

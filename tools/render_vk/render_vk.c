@@ -232,6 +232,17 @@ static int render_bands(vk_render *v, VkPipeline pipeline, tpk_vk_params *params
     return 0;
 }
 
+/* What the renderer holds on the device: every array part and buffer it created (sizes as requested;
+ * the driver may round each allocation up to its alignment). */
+static uint64_t device_bytes(const vk_render *v)
+{
+    uint64_t total = (uint64_t)v->params.size + (uint64_t)v->pixels.size + (uint64_t)v->steps.size;
+    for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++)
+        for (int p = 0; p < v->arrays[a].part_count; p++)
+            total += (uint64_t)v->arrays[a].parts[p].size;
+    return total;
+}
+
 /* ---- Entry points ------------------------------------------------------------------------------- */
 
 static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const float *tet_scalars, tpk_diag *diag)
@@ -312,6 +323,7 @@ int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uin
         stats->tet_steps = counts[0];
         stats->secondary_rays = counts[1];
         stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+        stats->device_bytes = device_bytes(v);
     }
     return rc;
 }
