@@ -471,10 +471,25 @@ int tf_first_above(float x)
     return a;
 }
 
+// The TF at the last scalar integrate_exact looked up: a piece starts at the scalar the one before
+// ended at, so its tf_eval is skipped (IF_ANY) in the common case.
+float tf_last_s = uintBitsToFloat(0x7fc00000u); // NaN: equal to nothing
+vec4 tf_last_c;
+
+vec4 tf_eval_cached(float s)
+{
+    vec4 c = tf_last_c;
+    IF_ANY(!(s == tf_last_s))
+        c = tf_eval(s);
+    tf_last_s = s;
+    tf_last_c = c;
+    return c;
+}
+
 // render_cpu.c's integrate_exact: split where the scalar crosses a TF control point.
 void integrate_exact(float len, float s0, float s1)
 {
-    vec4 ca = tf_eval(s0);
+    vec4 ca = tf_eval_cached(s0);
     if (s0 == s1) {
         integrate_linear(len, ca, ca);
         return;
@@ -502,7 +517,7 @@ void integrate_exact(float len, float s0, float s1)
             prev_s = cs;
         }
     }
-    integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval(s1));
+    integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval_cached(s1));
 }
 
 // One point sample of `step` length at TF coordinate u.
