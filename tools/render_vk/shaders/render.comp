@@ -99,6 +99,12 @@ FETCH_FUNCTION(ivec4, shell, PARTS_SHELL, SHIFT_SHELL)
 FETCH_FUNCTION(uvec4, nodes, PARTS_NODES, SHIFT_NODES)
 FETCH_FUNCTION(vec4, tet_scalars, PARTS_TET_SCALARS, SHIFT_TET_SCALARS)
 
+// `IF_ANY(c) { ... }` runs the block once where c holds. On a CPU device (lavapipe) every lane runs
+// both sides of an `if` under a mask, whatever the lanes decided; a loop that no lane enters is
+// skipped. So a block that is rarely needed costs nothing in the common case. No `return` inside
+// (see march_run.glsl).
+#define IF_ANY(c) for (bool rare_once = (c); rare_once; rare_once = false)
+
 // ---- The ray frame and the watertight edge test (libtetpack/internal_ray.h, ray.c) --------------
 
 struct Frame {
@@ -207,12 +213,10 @@ int edge_sign(int i, vec4 pi, int j, vec4 pj, out float value)
     precise float q = lo.y * hi.x;
     precise float det = p - q;
     float bound = 2.384185791015625e-7 * (abs(p) + abs(q)); // 4 u, u = 2^-24
-    int sign;
-    if (det > bound) {
-        sign = 1;
-    } else if (det < -bound) {
-        sign = -1;
-    } else {
+    int sign = det > bound ? 1 : -1;
+    // The exact test near zero, in a loop rather than an `if`: a CPU device runs an `if` under a mask
+    // for every lane, but skips a loop that no lane enters, and this one is rarely entered.
+    IF_ANY(!(det > bound || det < -bound)) {
         sign = det2_sign_exact(lo.x, lo.y, hi.x, hi.y);
         if (sign == 0 || (det > 0.0 && sign < 0) || (det < 0.0 && sign > 0) || isnan(det))
             det = 0.0;
@@ -252,15 +256,13 @@ vec3 edge_weights(Hit h, int zero_edge)
 
 vec3 face_weights(Hit h)
 {
-    int zeros = int(h.e[0] == 0.0) + int(h.e[1] == 0.0) + int(h.e[2] == 0.0);
-    if (zeros == 1)
-        return edge_weights(h, h.e[0] == 0.0 ? 0 : h.e[1] == 0.0 ? 1 : 2);
     precise float sum = h.e[0] + h.e[1] + h.e[2];
-    if (sum != 0.0 && !isnan(sum)) {
-        precise float inv = 1.0 / sum;
-        return vec3(h.e[1] * inv, h.e[2] * inv, h.e[0] * inv);
-    }
-    return vec3(1.0 / 3.0);
+    precise float inv = 1.0 / sum;
+    vec3 w = sum != 0.0 && !isnan(sum) ? vec3(h.e[1] * inv, h.e[2] * inv, h.e[0] * inv) : vec3(1.0 / 3.0);
+    int zeros = int(h.e[0] == 0.0) + int(h.e[1] == 0.0) + int(h.e[2] == 0.0);
+    IF_ANY(zeros == 1) // the ray through an edge: rare, so a loop (see edge_sign)
+        w = edge_weights(h, h.e[0] == 0.0 ? 0 : h.e[1] == 0.0 ? 1 : 2);
+    return w;
 }
 
 float hit_t(Hit h, vec3 w)
@@ -383,18 +385,35 @@ int bvh_query(int mode, float t_low, float t_high, float t_prev, int face_prev, 
 
 // ---- Transfer function and emission-absorption (render_cpu.c) -------------------------------------
 
+// The TF, copied from the uniform block into shared memory once per workgroup (tf_to_shared): lavapipe
+// reads a uniform block at a per-lane index lane by lane, and shared memory faster.
+shared float tf_s_shared[TPK_VK_TF_MAX];
+shared vec4 tf_rgba_shared[TPK_VK_TF_MAX];
+
+void tf_to_shared()
+{
+    const uint group_size = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
+    for (uint i = gl_LocalInvocationIndex; i < uint(P.dims.w); i += group_size) {
+        tf_s_shared[i] = P.tf_s[i >> 2][i & 3];
+        tf_rgba_shared[i] = P.tf_rgba[i];
+    }
+    barrier();
+}
+
+#define TF_RGBA(i) tf_rgba_shared[i]
+
 float tf_point_s(int i)
 {
-    return P.tf_s[i >> 2][i & 3];
+    return tf_s_shared[i];
 }
 
 vec4 tf_eval(float s)
 {
     int n = P.dims.w;
     if (s <= tf_point_s(0) || n == 1)
-        return P.tf_rgba[0];
+        return TF_RGBA(0);
     if (s >= tf_point_s(n - 1))
-        return P.tf_rgba[n - 1];
+        return TF_RGBA(n - 1);
     int a = 0, b = n - 1;
     while (b - a > 1) {
         int mid = (a + b) / 2;
@@ -404,7 +423,7 @@ vec4 tf_eval(float s)
             b = mid;
     }
     float u = (s - tf_point_s(a)) / (tf_point_s(b) - tf_point_s(a));
-    return mix(P.tf_rgba[a], P.tf_rgba[b], u);
+    return mix(TF_RGBA(a), TF_RGBA(b), u);
 }
 
 #define OPAQUE_TRANSMITTANCE 0.02
@@ -452,10 +471,25 @@ int tf_first_above(float x)
     return a;
 }
 
+// The TF at the last scalar integrate_exact looked up: a piece starts at the scalar the one before
+// ended at, so its tf_eval is skipped (IF_ANY) in the common case.
+float tf_last_s = uintBitsToFloat(0x7fc00000u); // NaN: equal to nothing
+vec4 tf_last_c;
+
+vec4 tf_eval_cached(float s)
+{
+    vec4 c = tf_last_c;
+    IF_ANY(!(s == tf_last_s))
+        c = tf_eval(s);
+    tf_last_s = s;
+    tf_last_c = c;
+    return c;
+}
+
 // render_cpu.c's integrate_exact: split where the scalar crosses a TF control point.
 void integrate_exact(float len, float s0, float s1)
 {
-    vec4 ca = tf_eval(s0);
+    vec4 ca = tf_eval_cached(s0);
     if (s0 == s1) {
         integrate_linear(len, ca, ca);
         return;
@@ -465,7 +499,7 @@ void integrate_exact(float len, float s0, float s1)
     if (ds > 0.0) {
         for (int k = tf_first_above(s0); k < n && tf_point_s(k) < s1; k++) {
             float cs = tf_point_s(k);
-            vec4 cb = P.tf_rgba[k];
+            vec4 cb = TF_RGBA(k);
             integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
             ca = cb;
             prev_s = cs;
@@ -477,13 +511,13 @@ void integrate_exact(float len, float s0, float s1)
             k--;
         for (; k >= 0 && tf_point_s(k) > s1; k--) {
             float cs = tf_point_s(k);
-            vec4 cb = P.tf_rgba[k];
+            vec4 cb = TF_RGBA(k);
             integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
             ca = cb;
             prev_s = cs;
         }
     }
-    integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval(s1));
+    integrate_linear(len * ((s1 - prev_s) / ds), ca, tf_eval_cached(s1));
 }
 
 // One point sample of `step` length at TF coordinate u.
@@ -681,7 +715,7 @@ float optical_depth(float len, float u0, float u1)
     int n = P.dims.w;
     if (du > 0.0) {
         for (int k = tf_first_above(u0); k < n && tf_point_s(k) < u1; k++) {
-            float cu = tf_point_s(k), ca = P.tf_rgba[k].a;
+            float cu = tf_point_s(k), ca = TF_RGBA(k).a;
             sum += 0.5 * (prev_a + ca) * (cu - prev_u);
             prev_u = cu;
             prev_a = ca;
@@ -691,7 +725,7 @@ float optical_depth(float len, float u0, float u1)
         while (k >= 0 && tf_point_s(k) >= u0)
             k--;
         for (; k >= 0 && tf_point_s(k) > u1; k--) {
-            float cu = tf_point_s(k), ca = P.tf_rgba[k].a;
+            float cu = tf_point_s(k), ca = TF_RGBA(k).a;
             sum += 0.5 * (prev_a + ca) * (cu - prev_u);
             prev_u = cu;
             prev_a = ca;
@@ -950,6 +984,7 @@ uint to_byte(float v)
 
 void main()
 {
+    tf_to_shared(); // before any invocation returns: every one reaches the barrier
     const int x = int(gl_GlobalInvocationID.x), y = P.dims.z + int(gl_GlobalInvocationID.y);
     pixel = ivec2(x, y);
     if (x >= P.dims.x || y >= P.dims.y)
