@@ -18,6 +18,16 @@ typedef struct tpk_camera {
  * enough that the bounding sphere fits the view with a margin, up = +z, fovy 35. */
 void tpk_camera_default(const double bounds_min[3], const double bounds_max[3], tpk_camera *out);
 
+/* The view basis of a camera: unit forward (eye to at), right and up (up from the camera's up, made
+ * perpendicular; any perpendicular where up is along the view), and tan of half the field of view in y
+ * and in x for a width x height image. Both backends take their rays from this one function. Returns 0,
+ * or -1 with a message (a coordinate that is not finite, eye == at, fovy outside (0, 180)). */
+typedef struct tpk_camera_basis {
+    double forward[3], right[3], up[3];
+    double tan_half_x, tan_half_y;
+} tpk_camera_basis;
+int tpk_camera_basis_of(const tpk_camera *cam, int width, int height, tpk_camera_basis *out, tpk_diag *diag);
+
 /* Render options. tpk_render_options_default fills friendly defaults; a zero-initialised struct
  * (plus width, height, camera and tf) also works: then the background is transparent black. */
 typedef struct tpk_render_options {

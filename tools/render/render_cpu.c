@@ -204,47 +204,17 @@ static void *render_worker(void *arg)
 
 /* ---- Setup -------------------------------------------------------------------------------------- */
 
-static void normalize3(double v[3])
-{
-    double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (len > 0)
-        for (int k = 0; k < 3; k++)
-            v[k] /= len;
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 static int setup_camera(render_job *job, const tpk_camera *cam, tpk_diag *diag)
 {
-    double up[3];
-    for (int k = 0; k < 3; k++) {
-        job->eye[k] = cam->eye[k];
-        job->forward[k] = cam->at[k] - cam->eye[k];
-        up[k] = cam->up[k];
-        if (!isfinite(cam->eye[k]) || !isfinite(cam->at[k]) || !isfinite(cam->up[k]))
-            return tpk_diag_fail(diag, "render: camera eye, at and up must be finite");
-    }
-    normalize3(job->forward);
-    if (job->forward[0] == 0 && job->forward[1] == 0 && job->forward[2] == 0)
-        return tpk_diag_fail(diag, "render: camera eye and at are the same point");
-    if (!(cam->fovy_deg > 0 && cam->fovy_deg < 180))
-        return tpk_diag_fail(diag, "render: expected a field of view in (0, 180) degrees, found %g", cam->fovy_deg);
-    cross3(job->forward, up, job->right);
-    normalize3(job->right);
-    if (job->right[0] == 0 && job->right[1] == 0 && job->right[2] == 0) {
-        /* up along the view direction: pick any perpendicular */
-        const double other[3] = {fabs(job->forward[0]) < 0.9 ? 1.0 : 0.0, fabs(job->forward[0]) < 0.9 ? 0.0 : 1.0, 0};
-        cross3(job->forward, other, job->right);
-        normalize3(job->right);
-    }
-    cross3(job->right, job->forward, job->up);
-    job->tan_half_y = tan(0.5 * cam->fovy_deg * M_PI / 180.0);
-    job->tan_half_x = job->tan_half_y * job->opt->width / job->opt->height;
+    tpk_camera_basis basis;
+    if (tpk_camera_basis_of(cam, job->opt->width, job->opt->height, &basis, diag) != 0)
+        return -1;
+    memcpy(job->eye, cam->eye, sizeof job->eye);
+    memcpy(job->forward, basis.forward, sizeof job->forward);
+    memcpy(job->right, basis.right, sizeof job->right);
+    memcpy(job->up, basis.up, sizeof job->up);
+    job->tan_half_y = basis.tan_half_y;
+    job->tan_half_x = basis.tan_half_x;
     return 0;
 }
 

@@ -42,55 +42,21 @@ int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *
     return 0;
 }
 
-static void normalize3(double v[3])
-{
-    double len = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    if (len > 0)
-        for (int k = 0; k < 3; k++)
-            v[k] /= len;
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* The camera basis exactly as render_cpu.c's setup_camera, into the shader's parameters. */
+/* The camera basis of both backends (tpk_camera_basis_of), into the shader's parameters. */
 static int set_camera(const tpk_render_options *opt, const double origin[3], tpk_vk_params *p, tpk_diag *diag)
 {
     const tpk_camera *cam = &opt->camera;
-    double forward[3], right[3], up[3];
-    for (int k = 0; k < 3; k++) {
-        if (!isfinite(cam->eye[k]) || !isfinite(cam->at[k]) || !isfinite(cam->up[k]))
-            return tpk_diag_fail(diag, "render: camera eye, at and up must be finite");
-        forward[k] = cam->at[k] - cam->eye[k];
-        up[k] = cam->up[k];
-    }
-    normalize3(forward);
-    if (forward[0] == 0 && forward[1] == 0 && forward[2] == 0)
-        return tpk_diag_fail(diag, "render: camera eye and at are the same point");
-    if (!(cam->fovy_deg > 0 && cam->fovy_deg < 180))
-        return tpk_diag_fail(diag, "render: expected a field of view in (0, 180) degrees, found %g", cam->fovy_deg);
-    cross3(forward, up, right);
-    normalize3(right);
-    if (right[0] == 0 && right[1] == 0 && right[2] == 0) {
-        const double other[3] = {fabs(forward[0]) < 0.9 ? 1.0 : 0.0, fabs(forward[0]) < 0.9 ? 0.0 : 1.0, 0};
-        cross3(forward, other, right);
-        normalize3(right);
-    }
-    double true_up[3];
-    cross3(right, forward, true_up);
-    double tan_half_y = tan(0.5 * cam->fovy_deg * M_PI / 180.0);
+    tpk_camera_basis basis;
+    if (tpk_camera_basis_of(cam, opt->width, opt->height, &basis, diag) != 0)
+        return -1;
     for (int k = 0; k < 3; k++) {
         p->eye[k] = (float)(cam->eye[k] - origin[k]);
-        p->forward[k] = (float)forward[k];
-        p->right[k] = (float)right[k];
-        p->up[k] = (float)true_up[k];
+        p->forward[k] = (float)basis.forward[k];
+        p->right[k] = (float)basis.right[k];
+        p->up[k] = (float)basis.up[k];
     }
-    p->forward[3] = (float)(tan_half_y * opt->width / opt->height);
-    p->right[3] = (float)tan_half_y;
+    p->forward[3] = (float)basis.tan_half_x;
+    p->right[3] = (float)basis.tan_half_y;
     return 0;
 }
 
