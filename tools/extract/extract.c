@@ -9,6 +9,7 @@
 
 #include "base/output_file.h"
 #include "convert/pipeline.h"
+#include "render/render.h"
 #include "extract_internal.h"
 
 typedef struct extraction {
@@ -84,22 +85,6 @@ static int pick_field(extraction *x)
     return 0;
 }
 
-/* The diagonal of the stored positions' box, computed as tools/render/render_cpu.c does. */
-static double stored_diagonal(const tpk_mesh_arrays *mesh)
-{
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, d2 = 0;
-    for (uint64_t i = 0; i < mesh->vertex_count; i++)
-        for (int k = 0; k < 3; k++) {
-            double x = mesh->positions[3 * i + k];
-            lo[k] = x < lo[k] ? x : lo[k];
-            hi[k] = x > hi[k] ? x : hi[k];
-        }
-    for (int k = 0; k < 3; k++)
-        if (hi[k] > lo[k])
-            d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
-    return sqrt(d2);
-}
-
 /* Positions, the layout and the shell (tpk_load_arrays reads only these, and a point field's step), then
  * the tets' vertex quadruples. */
 static int load_mesh(extraction *x)
@@ -108,7 +93,7 @@ static int load_mesh(extraction *x)
     if (tpk_load_arrays(x->file, x->layout, point ? x->desc.name : NULL, point ? (uint32_t)x->o->step_first : 0,
                         &x->mesh) != TPK_OK)
         return fail_file(x);
-    x->rep->diagonal = stored_diagonal(&x->mesh);
+    x->rep->diagonal = tpk_positions_diagonal(&x->mesh); /* the diagonal render takes */
     x->tets = malloc(sizeof *x->tets * 4 * (size_t)(x->mesh.tet_count ? x->mesh.tet_count : 1));
     if (!x->tets)
         return tpk_diag_fail(x->diag, "out of memory for %llu tets", (unsigned long long)x->mesh.tet_count);

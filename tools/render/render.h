@@ -142,6 +142,12 @@ typedef struct tpk_render_options {
  * the camera, tf and range are left zero for the caller. */
 void tpk_render_options_default(tpk_render_options *opt);
 
+/* The lengths the effects use, as every backend resolves them from the options and the diagonal of the
+ * stored positions' box (tpk_positions_diagonal): the unit distance (opt->unit_distance when positive
+ * and finite, else diagonal / 100, else 1) and the AO ray length (opt->ao_radius when positive, else
+ * diagonal / 10). */
+void tpk_render_lengths(const tpk_render_options *opt, double diagonal, double *unit, double *ao_radius);
+
 typedef struct tpk_render_stats {
     uint64_t rays;      /* primary rays (one per pixel) */
     uint64_t tet_steps; /* tets the marcher stepped through, all rays (secondary ones included) */

@@ -299,13 +299,9 @@ static void setup_job(render_job *job, int has_point_scalars, double diagonal, c
     job->has_scalars = has_point_scalars || opt->tet_scalars != NULL;
     job->range_min = opt->range_min;
     job->inv_range = opt->range_max != opt->range_min ? 1.0 / (opt->range_max - opt->range_min) : 0.0;
-    double unit = opt->unit_distance;
-    if (!(unit > 0) || !isfinite(unit))
-        unit = diagonal / 100.0;
-    job->unit = unit > 0 ? unit : 1.0;
+    tpk_render_lengths(opt, diagonal, &job->unit, &job->ao_radius);
     job->inv_unit = 1.0 / job->unit;
     job->iso_opacity = opt->iso_opacity > 0 ? opt->iso_opacity : 1.0;
-    job->ao_radius = opt->ao_radius > 0 ? opt->ao_radius : diagonal / 10.0;
     job->cast = opt->shadows || opt->ao_rays > 0;
     job->lighting = job->cast || opt->shading;
 }

@@ -60,22 +60,6 @@ static int set_camera(const tpk_render_options *opt, const double origin[3], tpk
     return 0;
 }
 
-static double bbox_diagonal(const tpk_mesh_arrays *mesh)
-{
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (uint64_t i = 0; i < mesh->vertex_count; i++)
-        for (int k = 0; k < 3; k++) {
-            double x = mesh->positions[3 * i + k];
-            lo[k] = x < lo[k] ? x : lo[k];
-            hi[k] = x > hi[k] ? x : hi[k];
-        }
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        if (hi[k] > lo[k])
-            d2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
-    return sqrt(d2);
-}
-
 int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, double extent, int64_t face_count,
                        tpk_vk_params *p, tpk_diag *diag)
 {
@@ -89,12 +73,10 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     memcpy(p->background, opt->background, sizeof p->background);
     p->scalar_map[0] = (float)opt->range_min;
     p->scalar_map[1] = opt->range_max != opt->range_min ? (float)(1.0 / (opt->range_max - opt->range_min)) : 0.0f;
-    double diagonal = bbox_diagonal(mesh), unit = opt->unit_distance; /* as render_cpu.c */
-    if (!(unit > 0) || !isfinite(unit))
-        unit = diagonal / 100.0;
-    unit = unit > 0 ? unit : 1.0;
+    double unit, ao_radius;
+    tpk_render_lengths(opt, tpk_positions_diagonal(mesh), &unit, &ao_radius);
     p->scalar_map[2] = (float)(1.0 / unit);
-    p->cast_info[0] = (float)(opt->ao_radius > 0 ? opt->ao_radius : diagonal / 10.0);
+    p->cast_info[0] = (float)ao_radius;
     p->cast_info[1] = (float)(1e-3 * unit); /* TPK_RENDER_SELF_EPS */
     p->cast_info[2] = (float)unit;
     p->cast_count[0] = opt->ao_rays;

@@ -1,5 +1,5 @@
-/* The camera's view basis, shared by the CPU reference and the Vulkan renderer so that both cast the
- * same primary rays. */
+/* What every backend derives from the options in the same way, so that the CPU reference and the Vulkan
+ * renderer cast the same rays and weigh them alike: the camera's view basis and the effects' lengths. */
 #include <math.h>
 
 #include "render.h"
@@ -46,4 +46,13 @@ int tpk_camera_basis_of(const tpk_camera *cam, int width, int height, tpk_camera
     out->tan_half_y = tan(0.5 * cam->fovy_deg * M_PI / 180.0);
     out->tan_half_x = out->tan_half_y * width / height;
     return 0;
+}
+
+void tpk_render_lengths(const tpk_render_options *opt, double diagonal, double *unit, double *ao_radius)
+{
+    double u = opt->unit_distance;
+    if (!(u > 0) || !isfinite(u))
+        u = diagonal / 100.0;
+    *unit = u > 0 ? u : 1.0;
+    *ao_radius = opt->ao_radius > 0 ? opt->ao_radius : diagonal / 10.0;
 }
