@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "base/parallel.h"
+#include "base/spread_bits.h"
 #include "pipeline.h"
 
 #define HILBERT_BITS 21
@@ -13,18 +14,6 @@
 #define RADIX_SIZE (1 << RADIX_BITS)
 
 /* ---- Hilbert index ------------------------------------------------------------------------------ */
-
-/* Spreads the low 21 bits of x so bit i lands at bit 3i. */
-static uint64_t spread3(uint64_t x)
-{
-    x &= 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffull;
-    x = (x | x << 16) & 0x1f0000ff0000ffull;
-    x = (x | x << 8) & 0x100f00f00f00f00full;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-}
 
 /* Hilbert index by a state machine over octants (Hamilton's formulation, "Compact Hilbert indices",
  * Dalhousie CS-2006-07): the state is an entry corner e (3 bits) and a direction d (0..2); at each level
@@ -101,7 +90,7 @@ static void build_hilbert_table(hilbert_table *table)
 static uint64_t hilbert_key_with(const hilbert_table *table, uint32_t x, uint32_t y, uint32_t z)
 {
     /* Interleave once (x bits at 3i+2, y at 3i+1, z at 3i), then walk 9 bits per lookup. */
-    uint64_t octants = spread3(x) << 2 | spread3(y) << 1 | spread3(z), key = 0;
+    uint64_t octants = tpk_spread_bits3(x) << 2 | tpk_spread_bits3(y) << 1 | tpk_spread_bits3(z), key = 0;
     unsigned state = 0;
     for (int shift = 3 * HILBERT_BITS - 9; shift >= 0; shift -= 9) {
         unsigned entry = table->step3[state][(octants >> shift) & 511];

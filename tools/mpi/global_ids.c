@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/spread_bits.h"
 #include "exchange.h"
 
 typedef struct point_record {
@@ -13,24 +14,13 @@ typedef struct point_record {
     int64_t slot;  /* at the owner: where the record came in (the reply goes back in that order) */
 } point_record;
 
-static uint64_t spread21(uint64_t v)
-{
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffULL;
-    v = (v | v << 16) & 0x1f0000ff0000ffULL;
-    v = (v | v << 8) & 0x100f00f00f00f00fULL;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-    v = (v | v << 2) & 0x1249249249249249ULL;
-    return v;
-}
-
 static uint64_t morton_key(const double p[3], const double lo[3], double scale)
 {
     uint64_t key = 0;
     for (int k = 0; k < 3; k++) {
         double q = (p[k] - lo[k]) * scale;
         uint64_t c = q > 0 ? (q < 2097151.0 ? (uint64_t)q : 2097151u) : 0;
-        key |= spread21(c) << k;
+        key |= tpk_spread_bits3(c) << k;
     }
     return key; /* 63 bits */
 }
