@@ -5,11 +5,11 @@
 # step, layout, TF and effects as the scene they save says; no display, a bad file and bad options end
 # with exit 2 and a message.
 set -euo pipefail
-# One X server for the whole script (xvfb-run: -a picks a free display; 24-bit so that frames read back
-# exactly).
+# One X server for the whole script (tests/with_xvfb.sh: a display of its own; 24-bit so that frames
+# read back exactly).
 if [ -z "${TPK_VIEW_XVFB:-}" ]; then
-    command -v xvfb-run > /dev/null || { echo "FAIL: xvfb-run not installed (xvfb, xauth)" >&2; exit 1; }
-    TPK_VIEW_XVFB=1 exec xvfb-run -a -s "-screen 0 320x240x24" bash "$0" "$@"
+    command -v Xvfb > /dev/null || { echo "FAIL: Xvfb not installed (xvfb, xauth)" >&2; exit 1; }
+    TPK_VIEW_XVFB=1 exec sh "$(dirname "$0")/../with_xvfb.sh" -screen 320x240x24 bash "$0" "$@"
 fi
 source "$(dirname "$0")/common.sh"
 # Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe, tests/CMakeLists.txt) for the
