@@ -53,7 +53,9 @@ typedef struct connect_job {
     int threads;
     uint32_t *starts[TPK_MAX_THREADS]; /* per worker, per vertex: count, then next slot (< 2 * tet_count < 2^32;
                                         * 32 bits: these arrays are part of the converter's peak memory) */
-    int64_t *bucket_start;            /* vertex_count + 1 */
+    const uint32_t *bucket_end;       /* after the scatter: the last worker's next slots, which are where each
+                                       * bucket ends (bucket v is [v ? end[v - 1] : 0, end[v])); no array of
+                                       * its own, as that would add to the peak */
     int64_t largest_bucket;
     uint32_t *entries;                /* 2 * tet_count: tet | ROLE_S1 */
     bucket_scratch scratch[TPK_MAX_THREADS];
@@ -105,12 +107,17 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
+static inline int64_t bucket_first(const connect_job *job, int64_t b)
+{
+    return b ? (int64_t)job->bucket_end[b - 1] : 0;
+}
+
 /* Expands a bucket's entries into faces; returns the face count. */
 static int64_t bucket_faces(const connect_job *job, int64_t b, uint64_t *faces, int64_t *slots)
 {
-    int64_t n = 0, end = job->bucket_start[b + 1];
-    for (int64_t i = job->bucket_start[b]; i < end; i++) {
-        if (i + 8 < job->bucket_start[job->vertex_count]) /* tets of a bucket are scattered in memory */
+    int64_t n = 0, end = job->bucket_end[b];
+    for (int64_t i = bucket_first(job, b); i < end; i++) {
+        if (i + 8 < 2 * job->tet_count) /* tets of a bucket are scattered in memory */
             __builtin_prefetch(job->tets + 4 * (int64_t)(job->entries[i + 8] & ID_MASK));
         uint32_t entry = job->entries[i];
         int64_t t = entry & ID_MASK;
@@ -237,27 +244,47 @@ static void free_job(connect_job *job)
         free(job->scratch[w].slots);
         free(job->scratch[w].table);
     }
-    tpk_free_large(job->bucket_start, sizeof *job->bucket_start * (size_t)(job->vertex_count + 1));
     tpk_free_large(job->entries, sizeof *job->entries * 2 * (size_t)job->tet_count);
     free(job);
 }
 
-/* Bucket starts from the per-worker counts; each worker's count becomes its first slot. */
+/* Each worker's count becomes its first slot: the workers' parts of a bucket follow each other in
+ * worker order, and the buckets in vertex order. */
 static void prefix_counts(connect_job *job)
 {
     int64_t running = 0, largest = 0;
     for (int64_t v = 0; v < job->vertex_count; v++) {
-        job->bucket_start[v] = running;
+        int64_t begin = running;
         for (int w = 0; w < job->threads; w++) {
             int64_t c = job->starts[w][v];
             job->starts[w][v] = (uint32_t)running;
             running += c;
         }
-        if (running - job->bucket_start[v] > largest)
-            largest = running - job->bucket_start[v];
+        if (running - begin > largest)
+            largest = running - begin;
     }
-    job->bucket_start[job->vertex_count] = running;
     job->largest_bucket = largest;
+}
+
+/* Bucket ranges for the workers, about the same number of entries each: worker w takes the buckets
+ * from the first one that begins at or after w / parts of the entries (as tpk_split_prefix). */
+static void split_buckets(connect_job *job)
+{
+    int parts = job->threads;
+    int64_t n = job->vertex_count, entries = 2 * job->tet_count;
+    job->bucket_begin[0] = 0;
+    for (int w = 1; w < parts; w++) {
+        int64_t target = entries / parts * w, lo = job->bucket_begin[w - 1], hi = n;
+        while (lo < hi) {
+            int64_t mid = lo + (hi - lo) / 2;
+            if (bucket_first(job, mid) < target)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        job->bucket_begin[w] = lo;
+    }
+    job->bucket_begin[parts] = n;
 }
 
 static int alloc_scratch(connect_job *job)
@@ -294,9 +321,8 @@ int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, in
     job->vertex_count = vertex_count;
     job->neighbors = neighbors;
     job->threads = tpk_threads_for(tet_count, tpk_thread_count(threads), 32768);
-    job->bucket_start = tpk_alloc_large(sizeof *job->bucket_start * (size_t)(vertex_count + 1));
     job->entries = tpk_alloc_large(sizeof *job->entries * 2 * (size_t)tet_count);
-    int ok = job->bucket_start && job->entries;
+    int ok = job->entries != NULL;
     for (int w = 0; w < job->threads && ok; w++)
         ok = (job->starts[w] = tpk_alloc_large(sizeof *job->starts[w] * (size_t)(vertex_count ? vertex_count : 1))) != NULL;
     if (!ok) {
@@ -319,8 +345,8 @@ int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, in
         return tpk_diag_fail(diag, "connect: out of memory (a vertex is the smallest id of %lld tets)", largest);
     }
     tpk_parallel_for(tet_count, job->threads, scatter_entries, job);
-    /* Workers get about the same number of entries (2 per tet). */
-    tpk_split_prefix(job->bucket_start, job->vertex_count, 2 * job->tet_count, job->threads, job->bucket_begin);
+    job->bucket_end = job->starts[job->threads - 1];
+    split_buckets(job);
     tpk_parallel_for(job->threads, job->threads, match_faces, job);
     int rc = 0;
     for (int w = 0; w < job->threads && !rc; w++)
