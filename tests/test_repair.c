@@ -14,6 +14,9 @@
 #include "harness.h"
 #include "import/importers.h"
 #include "convert/merge_vertices.h"
+#include "convert/pipeline.h"
+#include "convert/write_tpk.h"
+#include "base/predicates.h"
 #include "tetpack.h"
 #include "tpk_assert.h"
 
@@ -363,6 +366,88 @@ TPK_TEST(folds_refused_by_name_then_cut)
     int ok = strstr(meta, "\"cut_folds\":{\"requested\":true,\"folded_faces\":1}") != NULL;
     CHECK_MSG(ok, "META: %s", meta);
     free(meta);
+}
+
+/* The interior faces of positive tets whose fourth points lie on the same side (or on the plane), found
+ * one exact orientation test per face: what tpk_find_folds decided before it read the vertex order. */
+static int64_t folds_by_exact_test(const tpk_tetmesh *m, const int32_t *neighbors, int64_t *slots, int64_t cap)
+{
+    int64_t n = 0;
+    for (int64_t t = 0; t < m->tet_count; t++)
+        for (int k = 0; k < 4; k++) {
+            int64_t u = neighbors[4 * t + k];
+            if (u <= t)
+                continue;
+            const int32_t *v = m->tets + 4 * t, *w = m->tets + 4 * u;
+            int32_t ia = v[tpk_outward_face[k][0]], ib = v[tpk_outward_face[k][1]], ic = v[tpk_outward_face[k][2]];
+            int32_t iy = w[0] ^ w[1] ^ w[2] ^ w[3] ^ ia ^ ib ^ ic;
+            const double *p = m->points;
+            if (tpk_orient3d_exact(p + 3 * (int64_t)ia, p + 3 * (int64_t)ib, p + 3 * (int64_t)ic, p + 3 * (int64_t)iy) <= 0 &&
+                n < cap)
+                slots[n++] = 4 * t + k;
+        }
+    return n;
+}
+
+/* The converter's shortcuts, against the long way on real meshes: (1) a mesh split only from hexahedra,
+ * wedges and pyramids has every tet's sign checked by the split (tpk_tetmesh.positive_known), so the
+ * converter skips orient: orient finds nothing to turn or drop there, also far from the origin
+ * (huge_offset_hex: the stored frame is an exact translation of the grid the split decided on), and a
+ * Steiner cell (cross3d) or a tetra cell leaves the signs to orient; (2)
+ * tpk_find_folds decides most faces by vertex order alone: it finds exactly the folds that one exact
+ * test per interior face finds, with a fold present (the overlapping cylinder) and without. */
+TPK_TEST(split_signs_and_folds_by_vertex_order_match_the_exact_tests)
+{
+    char fold[4096];
+    snprintf(fold, sizeof fold, "%s", tpk_temp_path("fold_order.vtk"));
+    int64_t cell = -1, shell = 0;
+    CHECK(write_overlapping_cylinder(fold, &cell, &shell) == 0);
+    struct {
+        const char *name; /* in ../shared/data; NULL: the overlapping cylinder */
+        int positive_known;
+        int64_t folds;
+    } cases[] = {
+        {"sfepy/acoustic_wg.vtk", 1, 0},
+        {"hard/huge_offset_hex.vtu", 1, 0},
+        {"seacas/exomerge_unit_test.e", 1, 0},
+        {"sfepy/cross3d.mesh", 0, 0}, /* one hexahedron split from its centre (Steiner) */
+        {"gmsh/t3_hex_prism_ascii41.msh", 0, 0},
+        {"sfepy/cylinder.vtk", 0, 0},
+        {NULL, 0, 1},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s", cases[i].name ? tpk_data_path(cases[i].name) : fold);
+        tpk_mesh src;
+        tpk_tetmesh m;
+        tpk_diag diag;
+        tpk_header_fields hdr;
+        memset(&diag, 0, sizeof diag);
+        memset(&hdr, 0, sizeof hdr);
+        CHECK_MSG(tpk_import_any(path, NULL, &src, &diag) == 0, "%s", diag.message);
+        CHECK_MSG(tpk_tetrahedralize(&src, NULL, 0, TPK_TETRA_FILE_GRID, &m, &diag) == 0, "%s", diag.message);
+        CHECK_MSG(tpk_quantize_points(&m, &hdr, &diag) == 0, "%s", diag.message);
+        CHECK_MSG(m.positive_known == cases[i].positive_known, "%s: positive_known %d", path, m.positive_known);
+        tpk_orient_stats os;
+        CHECK_MSG(tpk_orient(&m, 0, 2, &os, &diag) == 0, "%s", diag.message);
+        if (m.positive_known)
+            CHECK_MSG(os.inverted_fixed == 0 && os.degenerate == 0, "%s: orient turned %lld, found %lld flat",
+                      path, (long long)os.inverted_fixed, (long long)os.degenerate);
+        int32_t *neighbors = malloc(sizeof *neighbors * 4 * (size_t)m.tet_count);
+        int64_t *exact = malloc(sizeof *exact * 64), *found = NULL, found_count = 0;
+        CHECK(neighbors && exact);
+        CHECK_MSG(tpk_connect(m.tets, m.tet_count, m.vertex_count, neighbors, 2, &diag) == 0, "%s", diag.message);
+        CHECK_MSG(tpk_find_folds(m.tets, neighbors, m.tet_count, m.points, 2, &found, &found_count, &diag) == 0, "%s",
+                  diag.message);
+        int64_t exact_count = folds_by_exact_test(&m, neighbors, exact, 64);
+        CHECK_MSG(found_count == exact_count && exact_count == cases[i].folds, "%s: %lld folds by order, %lld by the exact test",
+                  path, (long long)found_count, (long long)exact_count);
+        for (int64_t f = 0; f < found_count && f < exact_count; f++)
+            CHECK_EQ_INT(found[f], exact[f]);
+        free(found), free(exact), free(neighbors);
+        tpk_tetmesh_free(&m);
+        tpk_mesh_free(&src);
+    }
 }
 
 /* The overlapping tet listed in the mirrored order: turned over, it would fold, so it is a bad cell (not

@@ -1,7 +1,9 @@
 /* Folds (pipeline stage 4b, after connect): interior faces whose two tets lie on the same side of the
  * face's plane, which TPK-M06 forbids. They come from overlapping cells in the source (gmsh boundary
- * layers) or from a tet turned over against its neighbours. One exact orientation test per interior
- * face, on the points as the file stores them, so what passes here passes `tetpack check` 606. */
+ * layers) or from a tet turned over against its neighbours. Every caller passes tets that are all
+ * positive, exactly (orient ran first): then the side is decided by the vertex order alone (is_folded),
+ * and the exact test on the points as the file stores them confirms each fold, so what passes here
+ * passes `tetpack check` 606. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,11 +31,21 @@ int tpk_face_across(const int32_t *tets, int64_t t, int k, int64_t u)
 
 /* Face k of positive tet t in outward order (a, b, c): the neighbour's fourth vertex y lies beyond the
  * face exactly when det[b-a, c-a, y-a] > 0. Zero counts as a fold too: y on the plane is not "the
- * other side" (and orient lets no flat tet through). */
+ * other side" (and orient lets no flat tet through).
+ * As u is positive too, y lies on the inner side of u's own outward face, which holds a, b and c: in
+ * the opposite cyclic order (a, c, b) when y is beyond, in the same order (a, b, c) when the face is
+ * folded. So only a face whose orders agree needs the points; the exact sign then decides. */
 static int is_folded(const fold_job *job, int64_t t, int k, int64_t u)
 {
     const int32_t *v = job->tets + 4 * t, *w = job->tets + 4 * u;
     int32_t ia = v[tpk_outward_face[k][0]], ib = v[tpk_outward_face[k][1]], ic = v[tpk_outward_face[k][2]];
+    int j = tpk_face_across(job->tets, t, k, u);
+    if (j >= 0) {
+        int32_t face[3] = {w[tpk_outward_face[j][0]], w[tpk_outward_face[j][1]], w[tpk_outward_face[j][2]]};
+        int at = face[0] == ia ? 0 : face[1] == ia ? 1 : 2;
+        if (face[(at + 1) % 3] == ic) /* (a, c, b) cyclically: opposite sides */
+            return 0;
+    }
     int32_t iy = w[0] ^ w[1] ^ w[2] ^ w[3] ^ ia ^ ib ^ ic; /* u's fourth vertex (spec §6.2, vx) */
     const double *p = job->points;
     return tpk_orient3d_exact(p + 3 * (int64_t)ia, p + 3 * (int64_t)ib, p + 3 * (int64_t)ic, p + 3 * (int64_t)iy) <= 0;

@@ -394,6 +394,10 @@ static int split_cells(const tpk_mesh *src, int flags, int threads, const tpk_te
     if (tpk_split_plain(src, out->points, threads, progress, out->tets, out->tet_source, &plain))
         return -1;
     out->tet_count = plain.tet_count;
+    /* tpk_split_cell checks each tet's sign exactly and keeps a cell only when all are strictly positive
+     * (after turning a mirrored cell over); tetra cells are copied unchecked, and the Steiner stage
+     * builds its own. On the file grid, the stored frame is an exact translation, so the signs hold. */
+    out->positive_known = out->on_grid && plain.hard_count == 0 && plain.cells_into[1] == 0;
     for (int k = 0; k < 7; k++)
         out->cells_into[k] += plain.cells_into[k];
     if (plain.mirrored_cells) {

@@ -75,6 +75,9 @@ typedef struct tpk_tetmesh {
                                   into the stored frame (relative to origin, float32-exact) */
     double origin[3];          /* add to points for world coordinates (0 until then) */
     int on_grid;               /* TPK_TETRA_FILE_GRID: points lie on the float32 grid relative to grid_origin */
+    int positive_known;        /* every tet was split from a cell whose tets the split found positive, exactly,
+                                  on these grid points (which the stored frame only translates): orient has
+                                  nothing to turn or drop. 0: unknown (tpk_orient finds out) */
     double grid_origin[3];     /* (world coordinates still; tools/convert/convert.c's quantize_points uses it) */
     int32_t *vertex_source;    /* source point id per vertex */
     int64_t tet_count;
