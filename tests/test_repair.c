@@ -393,9 +393,10 @@ static int64_t folds_by_exact_test(const tpk_tetmesh *m, const int32_t *neighbor
  * wedges and pyramids has every tet's sign checked by the split (tpk_tetmesh.positive_known), so the
  * converter skips orient: orient finds nothing to turn or drop there, also far from the origin
  * (huge_offset_hex: the stored frame is an exact translation of the grid the split decided on), and a
- * Steiner cell (cross3d) or a tetra cell leaves the signs to orient; (2)
- * tpk_find_folds decides most faces by vertex order alone: it finds exactly the folds that one exact
- * test per interior face finds, with a fold present (the overlapping cylinder) and without. */
+ * Steiner cell (cross3d) or a tetra cell leaves the signs to orient; (2) tpk_find_folds and
+ * tpk_connect_folds (face matching) decide most faces by vertex order alone: both find exactly the folds
+ * that one exact test per interior face finds, with a fold present (the overlapping cylinder) and
+ * without, and the matching gives the same neighbors as tpk_connect. */
 TPK_TEST(split_signs_and_folds_by_vertex_order_match_the_exact_tests)
 {
     char fold[4096];
@@ -444,7 +445,18 @@ TPK_TEST(split_signs_and_folds_by_vertex_order_match_the_exact_tests)
                   path, (long long)found_count, (long long)exact_count);
         for (int64_t f = 0; f < found_count && f < exact_count; f++)
             CHECK_EQ_INT(found[f], exact[f]);
-        free(found), free(exact), free(neighbors);
+        free(found);
+        /* The same folds when face matching finds them (the converter's way), and the same neighbors. */
+        int32_t *again = malloc(sizeof *again * 4 * (size_t)m.tet_count);
+        CHECK(again != NULL);
+        CHECK_MSG(tpk_connect_folds(m.tets, m.tet_count, m.vertex_count, m.points, again, 2, &found, &found_count,
+                                    &diag) == 0, "%s", diag.message);
+        CHECK(memcmp(again, neighbors, sizeof *again * 4 * (size_t)m.tet_count) == 0);
+        CHECK_MSG(found_count == exact_count, "%s: %lld folds in face matching, %lld by the exact test", path,
+                  (long long)found_count, (long long)exact_count);
+        for (int64_t f = 0; f < found_count && f < exact_count; f++)
+            CHECK_EQ_INT(found[f], exact[f]);
+        free(found), free(again), free(exact), free(neighbors);
         tpk_tetmesh_free(&m);
         tpk_mesh_free(&src);
     }

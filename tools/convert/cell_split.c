@@ -172,8 +172,11 @@ int tpk_split_cell(int type, const int32_t *cell_nodes, const double *points, in
             t[2] = t[3];
             t[3] = swap;
         }
-        int sign = tpk_orient3d_exact(points + 3 * (int64_t)nodes[t[0]], points + 3 * (int64_t)nodes[t[1]],
-                                      points + 3 * (int64_t)nodes[t[2]], points + 3 * (int64_t)nodes[t[3]]);
+        const double *a = points + 3 * (int64_t)nodes[t[0]], *b = points + 3 * (int64_t)nodes[t[1]];
+        const double *c = points + 3 * (int64_t)nodes[t[2]], *d = points + 3 * (int64_t)nodes[t[3]];
+        int sign = tpk_orient3d_filter(a, b, c, d); /* inline; the exact call only where it cannot tell */
+        if (sign == 0)
+            sign = tpk_orient3d_exact(a, b, c, d);
         positive += sign > 0;
         negative += sign < 0;
     }

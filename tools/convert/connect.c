@@ -17,6 +17,10 @@
 #define MAX_LISTED_TETS 16
 #define ROLE_S1 0x80000000u /* bucket entry flag: the tet's face opposite s0, not its three s0 faces */
 #define ID_MASK 0x7fffffffu
+/* A face's slot (4 * tet + k) carries, in bit 62, the parity of its outward vertex order (tpk_outward_face)
+ * against ascending ids: two positive tets that share a face see it in opposite orders unless it folds. */
+#define SLOT_ODD ((int64_t)1 << 62)
+#define SLOT_MASK (SLOT_ODD - 1)
 
 typedef struct sorted4 {
     int32_t id[4];
@@ -43,8 +47,11 @@ static inline int has_repeat(const int32_t *v)
 /* Scratch of one worker for matching a bucket. */
 typedef struct bucket_scratch {
     uint64_t *faces;  /* (mid << 31 | max) per face of the bucket */
-    int64_t *slots;   /* 4 * tet + k per face */
+    int64_t *slots;   /* 4 * tet + k per face, and SLOT_ODD */
     int32_t *table;   /* open addressing over face indices */
+    int64_t *agree;   /* pairs of slots whose faces' orders agree (fold candidates), when asked */
+    int64_t agree_count, agree_cap;
+    int agree_failed; /* out of memory for them */
 } bucket_scratch;
 
 typedef struct connect_job {
@@ -64,6 +71,7 @@ typedef struct connect_job {
     int64_t bad_tet[TPK_MAX_THREADS];    /* first tet with an id out of range or repeated, or -1 */
     int64_t bad_bucket[TPK_MAX_THREADS]; /* first bucket with a face of 3+ tets, or -1 */
     uint64_t bad_face[TPK_MAX_THREADS];  /* that face (mid << 31 | max) */
+    int want_folds;                      /* keep the fold candidates (scratch[w].agree) */
 } connect_job;
 
 static inline uint64_t face_key(int32_t mid, int32_t max)
@@ -112,6 +120,13 @@ static inline int64_t bucket_first(const connect_job *job, int64_t b)
     return b ? (int64_t)job->bucket_end[b - 1] : 0;
 }
 
+/* Parity of the outward order of the face opposite local vertex k against ascending ids. */
+static inline int64_t face_parity(const int32_t *v, int k)
+{
+    int32_t a = v[tpk_outward_face[k][0]], b = v[tpk_outward_face[k][1]], c = v[tpk_outward_face[k][2]];
+    return ((a > b) ^ (a > c) ^ (b > c)) ? SLOT_ODD : 0;
+}
+
 /* Expands a bucket's entries into faces; returns the face count. */
 static int64_t bucket_faces(const connect_job *job, int64_t b, uint64_t *faces, int64_t *slots)
 {
@@ -121,30 +136,48 @@ static int64_t bucket_faces(const connect_job *job, int64_t b, uint64_t *faces, 
             __builtin_prefetch(job->tets + 4 * (int64_t)(job->entries[i + 8] & ID_MASK));
         uint32_t entry = job->entries[i];
         int64_t t = entry & ID_MASK;
+        const int32_t *v = job->tets + 4 * t;
         sorted4 s;
-        sort_tet(job->tets + 4 * t, &s);
+        sort_tet(v, &s);
         if (entry & ROLE_S1) {
             faces[n] = face_key(s.id[2], s.id[3]);
-            slots[n++] = 4 * t + s.local[0];
+            slots[n++] = (4 * t + s.local[0]) | face_parity(v, s.local[0]);
         } else {
             faces[n] = face_key(s.id[1], s.id[2]);
-            slots[n++] = 4 * t + s.local[3];
+            slots[n++] = (4 * t + s.local[3]) | face_parity(v, s.local[3]);
             faces[n] = face_key(s.id[1], s.id[3]);
-            slots[n++] = 4 * t + s.local[2];
+            slots[n++] = (4 * t + s.local[2]) | face_parity(v, s.local[2]);
             faces[n] = face_key(s.id[2], s.id[3]);
-            slots[n++] = 4 * t + s.local[1];
+            slots[n++] = (4 * t + s.local[1]) | face_parity(v, s.local[1]);
         }
     }
     return n;
 }
 
+static void keep_agreeing(bucket_scratch *s, int64_t a, int64_t b)
+{
+    if (s->agree_count + 2 > s->agree_cap) {
+        int64_t cap = s->agree_cap ? 2 * s->agree_cap : 64;
+        int64_t *grown = realloc(s->agree, sizeof *grown * (size_t)cap);
+        if (!grown) {
+            s->agree_failed = 1;
+            return;
+        }
+        s->agree = grown;
+        s->agree_cap = cap;
+    }
+    s->agree[s->agree_count++] = a;
+    s->agree[s->agree_count++] = b;
+}
+
 /* Table values: -1 empty; i >= 0 the first face i of a face key seen once; -2 - i seen twice.
- * Returns nonzero (and the face) if a face key occurs three times or more. */
+ * Returns nonzero (and the face) if a face key occurs three times or more. With `agree`, the pairs whose
+ * faces' orders agree go there. */
 static int match_bucket(const uint64_t *faces, const int64_t *slots, int64_t n, int32_t *table,
-                        int32_t *neighbors, uint64_t *bad_face)
+                        int32_t *neighbors, uint64_t *bad_face, bucket_scratch *agree)
 {
     if (n == 1) {
-        neighbors[slots[0]] = -1;
+        neighbors[slots[0] & SLOT_MASK] = -1;
         return 0;
     }
     int bits = 2;
@@ -159,18 +192,21 @@ static int match_bucket(const uint64_t *faces, const int64_t *slots, int64_t n, 
             int32_t at = table[h];
             if (at == -1) {
                 table[h] = (int32_t)i;
-                neighbors[slots[i]] = -1;
+                neighbors[slots[i] & SLOT_MASK] = -1;
                 break;
             }
             int32_t first = at >= 0 ? at : -2 - at;
             if (faces[first] != faces[i])
                 continue;
             if (at >= 0) {
+                int64_t si = slots[i] & SLOT_MASK, sa = slots[at] & SLOT_MASK;
                 table[h] = -2 - at;
-                neighbors[slots[i]] = (int32_t)(slots[at] >> 2);
-                neighbors[slots[at]] = (int32_t)(slots[i] >> 2);
+                neighbors[si] = (int32_t)(sa >> 2);
+                neighbors[sa] = (int32_t)(si >> 2);
+                if (agree && !((slots[i] ^ slots[at]) & SLOT_ODD))
+                    keep_agreeing(agree, si, sa);
             } else {
-                neighbors[slots[i]] = -1;
+                neighbors[slots[i] & SLOT_MASK] = -1;
                 if (!failed)
                     *bad_face = faces[i];
                 failed = 1;
@@ -191,7 +227,9 @@ static void match_faces(void *ctx, int64_t begin, int64_t end, int worker)
     for (int64_t b = job->bucket_begin[worker]; b < job->bucket_begin[worker + 1]; b++) {
         int64_t n = bucket_faces(job, b, scratch->faces, scratch->slots);
         uint64_t face = 0;
-        if (n > 0 && match_bucket(scratch->faces, scratch->slots, n, scratch->table, job->neighbors, &face) &&
+        if (n > 0 &&
+            match_bucket(scratch->faces, scratch->slots, n, scratch->table, job->neighbors, &face,
+                         job->want_folds ? scratch : NULL) &&
             job->bad_bucket[worker] < 0) {
             job->bad_bucket[worker] = b;
             job->bad_face[worker] = face;
@@ -208,7 +246,7 @@ static int report_shared_face(const connect_job *job, int w, tpk_diag *diag)
     int64_t n = bucket_faces(job, b, scratch->faces, scratch->slots);
     for (int64_t i = 0; i < n; i++)
         if (scratch->faces[i] == face && run++ < MAX_LISTED_TETS)
-            listed[run - 1] = (int32_t)(scratch->slots[i] >> 2);
+            listed[run - 1] = (int32_t)((scratch->slots[i] & SLOT_MASK) >> 2);
     int shown = run < MAX_LISTED_TETS ? (int)run : MAX_LISTED_TETS;
     qsort(listed, (size_t)shown, sizeof *listed, tpk_compare_int32);
     char list[256] = "";
@@ -243,6 +281,7 @@ static void free_job(connect_job *job)
         free(job->scratch[w].faces);
         free(job->scratch[w].slots);
         free(job->scratch[w].table);
+        free(job->scratch[w].agree);
     }
     tpk_free_large(job->entries, sizeof *job->entries * 2 * (size_t)job->tet_count);
     free(job);
@@ -303,9 +342,52 @@ static int alloc_scratch(connect_job *job)
     return 0;
 }
 
-int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, int32_t *neighbors,
-                int threads, tpk_diag *diag)
+static int compare_int64(const void *a, const void *b)
 {
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* The candidates of every worker, each confirmed by the exact test from its lower tet: *slots ascending. */
+static int confirm_folds(const connect_job *job, const double *points, int64_t **slots, int64_t *count,
+                         tpk_diag *diag)
+{
+    int64_t total = 0;
+    for (int w = 0; w < job->threads; w++) {
+        if (job->scratch[w].agree_failed)
+            return tpk_diag_fail(diag, "folds: out of memory for the folded faces");
+        total += job->scratch[w].agree_count / 2;
+    }
+    if (total == 0)
+        return 0;
+    int64_t *found = malloc(sizeof *found * (size_t)total), n = 0;
+    if (!found)
+        return tpk_diag_fail(diag, "folds: out of memory for the folded faces");
+    for (int w = 0; w < job->threads; w++)
+        for (int64_t i = 0; i < job->scratch[w].agree_count; i += 2) {
+            int64_t a = job->scratch[w].agree[i], b = job->scratch[w].agree[i + 1];
+            int64_t lower = (a >> 2) < (b >> 2) ? a : b, upper = lower == a ? b : a;
+            if (tpk_face_folded(job->tets, points, lower >> 2, (int)(lower & 3), upper >> 2))
+                found[n++] = lower;
+        }
+    qsort(found, (size_t)n, sizeof *found, compare_int64);
+    if (n == 0) {
+        free(found);
+        found = NULL;
+    }
+    *slots = found;
+    *count = n;
+    return 0;
+}
+
+static int connect_run(const int32_t *tets, int64_t tet_count, int64_t vertex_count, const double *points,
+                       int32_t *neighbors, int threads, int64_t **fold_slots, int64_t *fold_count, tpk_diag *diag)
+{
+    if (fold_slots) {
+        *fold_slots = NULL;
+        *fold_count = 0;
+    }
+
     if (tet_count < 0 || vertex_count < 0 || (tet_count > 0 && (!tets || !neighbors)))
         return tpk_diag_fail(diag, "connect: invalid arguments");
     if (tet_count > INT32_MAX || vertex_count > INT32_MAX)
@@ -321,6 +403,7 @@ int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, in
     job->vertex_count = vertex_count;
     job->neighbors = neighbors;
     job->threads = tpk_threads_for(tet_count, tpk_thread_count(threads), 32768);
+    job->want_folds = fold_slots != NULL;
     job->entries = tpk_alloc_large(sizeof *job->entries * 2 * (size_t)tet_count);
     int ok = job->entries != NULL;
     for (int w = 0; w < job->threads && ok; w++)
@@ -352,6 +435,20 @@ int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, in
     for (int w = 0; w < job->threads && !rc; w++)
         if (job->bad_bucket[w] >= 0)
             rc = report_shared_face(job, w, diag);
+    if (rc == 0 && fold_slots)
+        rc = confirm_folds(job, points, fold_slots, fold_count, diag);
     free_job(job);
     return rc;
+}
+
+int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, int32_t *neighbors,
+                int threads, tpk_diag *diag)
+{
+    return connect_run(tets, tet_count, vertex_count, NULL, neighbors, threads, NULL, NULL, diag);
+}
+
+int tpk_connect_folds(const int32_t *tets, int64_t tet_count, int64_t vertex_count, const double *points,
+                      int32_t *neighbors, int threads, int64_t **slots, int64_t *count, tpk_diag *diag)
+{
+    return connect_run(tets, tet_count, vertex_count, points, neighbors, threads, slots, count, diag);
 }

@@ -144,13 +144,11 @@ static int orient_tets(conversion *c)
     double t = now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
-    c->turned_over = tpk_alloc_large((size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1));
-    if (!c->turned_over)
-        return tpk_diag_fail(c->diag, "out of memory for the orientation of %lld tets", (long long)c->mesh.tet_count);
     if (c->mesh.positive_known) {
-        /* Every sign already checked exactly by the split (tpk_tetmesh.positive_known): none to turn,
-         * none flat (test_pipeline's positive_known_* orient such meshes again and find nothing). */
-        memset(c->turned_over, 0, (size_t)c->mesh.tet_count);
+        /* Every sign already checked exactly by the split (tpk_tetmesh.positive_known): none to turn, none
+         * flat, so no marks either (test_repair's split_signs_* orient such meshes again: nothing). */
+    } else if (!(c->turned_over = tpk_alloc_large((size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1)))) {
+        return tpk_diag_fail(c->diag, "out of memory for the orientation of %lld tets", (long long)c->mesh.tet_count);
     } else if (tpk_orient_marked(&c->mesh, (c->o->drop_degenerate ? TPK_ORIENT_DROP_DEGENERATE : 0) |
                                         (c->o->strict_orientation ? TPK_ORIENT_REFUSE_INVERTED : 0),
                           c->o->threads, &os, c->turned_over, c->diag) != 0)

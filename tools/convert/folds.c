@@ -38,7 +38,7 @@ int tpk_face_across(const int32_t *tets, int64_t t, int k, int64_t u)
 static int is_folded(const fold_job *job, int64_t t, int k, int64_t u)
 {
     const int32_t *v = job->tets + 4 * t, *w = job->tets + 4 * u;
-    int32_t ia = v[tpk_outward_face[k][0]], ib = v[tpk_outward_face[k][1]], ic = v[tpk_outward_face[k][2]];
+    int32_t ia = v[tpk_outward_face[k][0]], ic = v[tpk_outward_face[k][2]];
     int j = tpk_face_across(job->tets, t, k, u);
     if (j >= 0) {
         int32_t face[3] = {w[tpk_outward_face[j][0]], w[tpk_outward_face[j][1]], w[tpk_outward_face[j][2]]};
@@ -46,8 +46,14 @@ static int is_folded(const fold_job *job, int64_t t, int k, int64_t u)
         if (face[(at + 1) % 3] == ic) /* (a, c, b) cyclically: opposite sides */
             return 0;
     }
+    return tpk_face_folded(job->tets, job->points, t, k, u);
+}
+
+int tpk_face_folded(const int32_t *tets, const double *p, int64_t t, int k, int64_t u)
+{
+    const int32_t *v = tets + 4 * t, *w = tets + 4 * u;
+    int32_t ia = v[tpk_outward_face[k][0]], ib = v[tpk_outward_face[k][1]], ic = v[tpk_outward_face[k][2]];
     int32_t iy = w[0] ^ w[1] ^ w[2] ^ w[3] ^ ia ^ ib ^ ic; /* u's fourth vertex (spec §6.2, vx) */
-    const double *p = job->points;
     return tpk_orient3d_exact(p + 3 * (int64_t)ia, p + 3 * (int64_t)ib, p + 3 * (int64_t)ic, p + 3 * (int64_t)iy) <= 0;
 }
 

@@ -92,6 +92,13 @@ void tpk_build_tet16(const int32_t *tets, const int32_t *neighbors, int64_t tet_
  * result does not depend on it. */
 int tpk_find_folds(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, const double *points,
                    int threads, int64_t **slots, int64_t *count, tpk_diag *diag);
+/* tpk_connect and tpk_find_folds in one pass, with the same results (tets all positive, exactly): the
+ * face matching compares the two tets' vertex orders of each face it pairs, and only a pair whose orders
+ * agree gets the exact test (tpk_face_folded). */
+int tpk_connect_folds(const int32_t *tets, int64_t tet_count, int64_t vertex_count, const double *points,
+                      int32_t *neighbors, int threads, int64_t **slots, int64_t *count, tpk_diag *diag);
+/* Face k of positive tet t and its neighbour u, exactly: u's fourth vertex on the plane or on t's side. */
+int tpk_face_folded(const int32_t *tets, const double *points, int64_t t, int k, int64_t u);
 /* Cuts the adjacency at the listed faces: both tets get neighbor -1 there, so both faces become shell
  * faces (spec §6.7 allows this only at a fold). */
 void tpk_cut_folds(const int32_t *tets, int32_t *neighbors, const int64_t *slots, int64_t count);

@@ -91,9 +91,8 @@ static int drop_folding_turned(tpk_tetmesh *mesh, const uint8_t *turned_over, in
         if (mesh->tet_count == 0)
             rc = tpk_diag_fail(diag, "no tetrahedra left to write (all %lld were inverted tets that would fold)",
                                (long long)count);
-        else if (tpk_connect(mesh->tets, mesh->tet_count, mesh->vertex_count, neighbors, threads, diag) != 0 ||
-                 tpk_find_folds(mesh->tets, neighbors, mesh->tet_count, mesh->points, threads, folds, fold_count,
-                                diag) != 0)
+        else if (tpk_connect_folds(mesh->tets, mesh->tet_count, mesh->vertex_count, mesh->points, neighbors, threads,
+                                   folds, fold_count, diag) != 0)
             rc = -1;
     }
     free(bad);
@@ -105,9 +104,8 @@ int tpk_connect_unfolded(tpk_tetmesh *mesh, const uint8_t *turned_over, int flag
 {
     int64_t *folds = NULL, fold_count = 0;
     stats->bad_tets = stats->folds_cut = 0;
-    int rc = tpk_connect(mesh->tets, mesh->tet_count, mesh->vertex_count, neighbors, threads, diag) != 0 ||
-             tpk_find_folds(mesh->tets, neighbors, mesh->tet_count, mesh->points, threads, &folds, &fold_count,
-                            diag) != 0 ? -1 : 0;
+    int rc = tpk_connect_folds(mesh->tets, mesh->tet_count, mesh->vertex_count, mesh->points, neighbors, threads,
+                               &folds, &fold_count, diag) != 0 ? -1 : 0;
     if (rc == 0 && fold_count > 0 && turned_over)
         rc = drop_folding_turned(mesh, turned_over, flags, threads, neighbors, &folds, &fold_count,
                                  &stats->bad_tets, diag);
