@@ -658,3 +658,129 @@ TPK_TEST(binary_truncation_never_crashes)
     CHECK_EQ_INT(cut_everywhere((const char *)meshio22_bin, sizeof meshio22_bin), 3);
     CHECK_EQ_INT(cut_everywhere((const char *)meshio41_bin, sizeof meshio41_bin), 3);
 }
+
+/* ---- binary 4.1 volume blocks read on all cores (read_element_run) ------------------------------- */
+
+typedef struct byte_buf {
+    char *data;
+    size_t size, cap;
+} byte_buf;
+
+static void put(byte_buf *b, const void *bytes, size_t n)
+{
+    if (b->size + n > b->cap) {
+        b->cap = 2 * (b->size + n);
+        b->data = realloc(b->data, b->cap);
+    }
+    memcpy(b->data + b->size, bytes, n);
+    b->size += n;
+}
+
+static void put_text(byte_buf *b, const char *text)
+{
+    put(b, text, strlen(text));
+}
+
+static void put_u64(byte_buf *b, uint64_t v)
+{
+    put(b, &v, sizeof v);
+}
+
+static void put_i32(byte_buf *b, int32_t v)
+{
+    put(b, &v, sizeof v);
+}
+
+enum { RUN_POINTS = 1000, RUN_TETS = 150000 };
+
+/* One tet block of RUN_TETS elements as Gmsh 4.1, ASCII (*asc) and binary (*bin): element e has tag
+ * tag0 + e (+ jump from element `at` on), and node `bad_node` instead of its first node at `at` when
+ * bad_node is not 0. */
+static void make_run_files(byte_buf *asc, byte_buf *bin, uint64_t tag0, int64_t at, uint64_t jump,
+                           uint64_t bad_node)
+{
+    char line[160];
+    put_text(asc, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n");
+    put_text(bin, "$MeshFormat\n4.1 1 8\n");
+    put_i32(bin, 1);
+    put_text(bin, "\n$EndMeshFormat\n$Nodes\n");
+    snprintf(line, sizeof line, "1 %d 1 %d\n3 1 0 %d\n", RUN_POINTS, RUN_POINTS, RUN_POINTS);
+    put_text(asc, line);
+    put_u64(bin, 1), put_u64(bin, RUN_POINTS), put_u64(bin, 1), put_u64(bin, RUN_POINTS);
+    put_i32(bin, 3), put_i32(bin, 1), put_i32(bin, 0), put_u64(bin, RUN_POINTS);
+    for (int i = 1; i <= RUN_POINTS; i++) {
+        snprintf(line, sizeof line, "%d\n", i);
+        put_text(asc, line);
+        put_u64(bin, (uint64_t)i);
+    }
+    for (int i = 0; i < RUN_POINTS; i++) {
+        double p[3] = {i % 10 * 0.5, i / 10 % 10 * 0.25, i / 100 * 0.125};
+        snprintf(line, sizeof line, "%.17g %.17g %.17g\n", p[0], p[1], p[2]);
+        put_text(asc, line);
+        put(bin, p, sizeof p);
+    }
+    put_text(asc, "$EndNodes\n$Elements\n");
+    put_text(bin, "\n$EndNodes\n$Elements\n");
+    uint64_t last = tag0 + RUN_TETS - 1 + (at >= 0 ? jump : 0);
+    snprintf(line, sizeof line, "1 %d %llu %llu\n3 7 4 %d\n", RUN_TETS, (unsigned long long)tag0,
+             (unsigned long long)last, RUN_TETS);
+    put_text(asc, line);
+    put_u64(bin, 1), put_u64(bin, RUN_TETS), put_u64(bin, tag0), put_u64(bin, last);
+    put_i32(bin, 3), put_i32(bin, 7), put_i32(bin, 4), put_u64(bin, RUN_TETS);
+    for (int64_t e = 0; e < RUN_TETS; e++) {
+        uint64_t tag = tag0 + (uint64_t)e + (at >= 0 && e >= at ? jump : 0);
+        uint64_t n[4] = {(uint64_t)(e * 7 % RUN_POINTS) + 1, (uint64_t)(e * 13 % RUN_POINTS) + 1,
+                         (uint64_t)(e * 29 % RUN_POINTS) + 1, (uint64_t)(e * 31 % RUN_POINTS) + 1};
+        if (bad_node && e == at)
+            n[0] = bad_node;
+        snprintf(line, sizeof line, "%llu %llu %llu %llu %llu\n", (unsigned long long)tag, (unsigned long long)n[0],
+                 (unsigned long long)n[1], (unsigned long long)n[2], (unsigned long long)n[3]);
+        put_text(asc, line);
+        put_u64(bin, tag);
+        for (int k = 0; k < 4; k++)
+            put_u64(bin, n[k]);
+    }
+    put_text(asc, "$EndElements\n");
+    put_text(bin, "\n$EndElements\n");
+}
+
+/* A binary block of 150k plain elements is read on all cores in ranges; where an element breaks the tag
+ * run (a jump in worker 1's range, or tags starting at 5) or names a node that does not exist, the rest
+ * is read one by one: the mesh equals the ASCII file's (read one by one throughout), and a bad node is
+ * refused naming the same element. */
+TPK_TEST(binary_runs_on_all_cores_equal_ascii)
+{
+    static const struct {
+        uint64_t tag0;
+        int64_t at;
+        uint64_t jump, bad_node;
+    } cases[] = {{1, -1, 0, 0}, {5, -1, 0, 0}, {1, 100000, 3, 0}, {1, 30000, 1, 0}, {1, 120000, 0, RUN_POINTS + 1},
+                 {1, 20000, 0, 0xffffffffffull}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        byte_buf asc = {0}, bin = {0};
+        make_run_files(&asc, &bin, cases[i].tag0, cases[i].at, cases[i].jump, cases[i].bad_node);
+        CHECK(asc.data && bin.data);
+        tpk_mesh a, b;
+        tpk_diag da, db;
+        quiet(&da);
+        quiet(&db);
+        int ra = tpk_import_gmsh_memory("run.msh", asc.data, asc.size, &a, &da);
+        int rb = tpk_import_gmsh_memory("run.msh", bin.data, bin.size, &b, &db);
+        if (cases[i].bad_node) {
+            char named[64];
+            snprintf(named, sizeof named, "element %llu (",
+                     (unsigned long long)(cases[i].tag0 + (uint64_t)cases[i].at));
+            CHECK_MSG(ra != 0 && rb != 0 && strstr(da.message, named) && strstr(db.message, named),
+                      "case %zu: ASCII: %s; binary: %s", i, da.message, db.message);
+        } else {
+            CHECK_MSG(ra == 0, "case %zu: %s", i, da.message);
+            CHECK_MSG(rb == 0, "case %zu: %s", i, db.message);
+            CHECK_MSG(same_mesh(&a, &b) && b.cell_count == RUN_TETS && !strcmp(b.format, "gmsh-4.1-binary"),
+                      "case %zu: binary and ASCII imports differ", i);
+            tpk_mesh_free(&a);
+            tpk_mesh_free(&b);
+        }
+        free(asc.data);
+        free(bin.data);
+    }
+}
