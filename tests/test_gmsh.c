@@ -695,9 +695,9 @@ enum { RUN_POINTS = 1000, RUN_TETS = 150000 };
 
 /* One tet block of RUN_TETS elements as Gmsh 4.1, ASCII (*asc) and binary (*bin): element e has tag
  * tag0 + e (+ jump from element `at` on), and node `bad_node` instead of its first node at `at` when
- * bad_node is not 0. */
+ * bad_node is not 0. Node i has tag i + node_shift (node 500's is node_500_tag when that is not 1). */
 static void make_run_files(byte_buf *asc, byte_buf *bin, uint64_t tag0, int64_t at, uint64_t jump,
-                           uint64_t bad_node)
+                           uint64_t bad_node, uint64_t node_shift, int64_t node_500_tag)
 {
     char line[160];
     put_text(asc, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n");
@@ -709,9 +709,10 @@ static void make_run_files(byte_buf *asc, byte_buf *bin, uint64_t tag0, int64_t 
     put_u64(bin, 1), put_u64(bin, RUN_POINTS), put_u64(bin, 1), put_u64(bin, RUN_POINTS);
     put_i32(bin, 3), put_i32(bin, 1), put_i32(bin, 0), put_u64(bin, RUN_POINTS);
     for (int i = 1; i <= RUN_POINTS; i++) {
-        snprintf(line, sizeof line, "%d\n", i);
+        int64_t tag = i == 500 && node_500_tag != 1 ? node_500_tag : (int64_t)(i + node_shift);
+        snprintf(line, sizeof line, "%lld\n", (long long)tag);
         put_text(asc, line);
-        put_u64(bin, (uint64_t)i);
+        put_u64(bin, (uint64_t)tag);
     }
     for (int i = 0; i < RUN_POINTS; i++) {
         double p[3] = {i % 10 * 0.5, i / 10 % 10 * 0.25, i / 100 * 0.125};
@@ -729,8 +730,8 @@ static void make_run_files(byte_buf *asc, byte_buf *bin, uint64_t tag0, int64_t 
     put_i32(bin, 3), put_i32(bin, 7), put_i32(bin, 4), put_u64(bin, RUN_TETS);
     for (int64_t e = 0; e < RUN_TETS; e++) {
         uint64_t tag = tag0 + (uint64_t)e + (at >= 0 && e >= at ? jump : 0);
-        uint64_t n[4] = {(uint64_t)(e * 7 % RUN_POINTS) + 1, (uint64_t)(e * 13 % RUN_POINTS) + 1,
-                         (uint64_t)(e * 29 % RUN_POINTS) + 1, (uint64_t)(e * 31 % RUN_POINTS) + 1};
+        uint64_t n[4] = {(uint64_t)(e * 7 % RUN_POINTS) + 1 + node_shift, (uint64_t)(e * 13 % RUN_POINTS) + 1 + node_shift,
+                         (uint64_t)(e * 29 % RUN_POINTS) + 1 + node_shift, (uint64_t)(e * 31 % RUN_POINTS) + 1 + node_shift};
         if (bad_node && e == at)
             n[0] = bad_node;
         snprintf(line, sizeof line, "%llu %llu %llu %llu %llu\n", (unsigned long long)tag, (unsigned long long)n[0],
@@ -747,18 +748,22 @@ static void make_run_files(byte_buf *asc, byte_buf *bin, uint64_t tag0, int64_t 
 /* A binary block of 150k plain elements is read on all cores in ranges; where an element breaks the tag
  * run (a jump in worker 1's range, or tags starting at 5) or names a node that does not exist, the rest
  * is read one by one: the mesh equals the ASCII file's (read one by one throughout), and a bad node is
- * refused naming the same element. */
+ * refused naming the same element. Node tags are read in bulk: tags from 4 (a table, looked up) read
+ * as the ASCII file does, and a tag 0 is refused in both. */
 TPK_TEST(binary_runs_on_all_cores_equal_ascii)
 {
     static const struct {
         uint64_t tag0;
         int64_t at;
-        uint64_t jump, bad_node;
-    } cases[] = {{1, -1, 0, 0}, {5, -1, 0, 0}, {1, 100000, 3, 0}, {1, 30000, 1, 0}, {1, 120000, 0, RUN_POINTS + 1},
-                 {1, 20000, 0, 0xffffffffffull}};
+        uint64_t jump, bad_node, node_shift;
+        int64_t node_500_tag;
+    } cases[] = {{1, -1, 0, 0, 0, 1},          {5, -1, 0, 0, 0, 1},           {1, 100000, 3, 0, 0, 1},
+                 {1, 30000, 1, 0, 0, 1},       {1, 120000, 0, RUN_POINTS + 1, 0, 1},
+                 {1, 20000, 0, 0xffffffffffull, 0, 1}, {1, -1, 0, 0, 3, 1},  {1, -1, 0, 0, 0, 0}};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         byte_buf asc = {0}, bin = {0};
-        make_run_files(&asc, &bin, cases[i].tag0, cases[i].at, cases[i].jump, cases[i].bad_node);
+        make_run_files(&asc, &bin, cases[i].tag0, cases[i].at, cases[i].jump, cases[i].bad_node, cases[i].node_shift,
+                       cases[i].node_500_tag);
         CHECK(asc.data && bin.data);
         tpk_mesh a, b;
         tpk_diag da, db;
@@ -766,7 +771,11 @@ TPK_TEST(binary_runs_on_all_cores_equal_ascii)
         quiet(&db);
         int ra = tpk_import_gmsh_memory("run.msh", asc.data, asc.size, &a, &da);
         int rb = tpk_import_gmsh_memory("run.msh", bin.data, bin.size, &b, &db);
-        if (cases[i].bad_node) {
+        if (cases[i].node_500_tag != 1) {
+            CHECK_MSG(ra != 0 && rb != 0 && strstr(da.message, "expected a node tag of 1 or more, found 0") &&
+                          strstr(db.message, "expected a node tag of 1 or more, found 0"),
+                      "case %zu: ASCII: %s; binary: %s", i, da.message, db.message);
+        } else if (cases[i].bad_node) {
             char named[64];
             snprintf(named, sizeof named, "element %llu (",
                      (unsigned long long)(cases[i].tag0 + (uint64_t)cases[i].at));

@@ -84,8 +84,8 @@ int32_t gmsh_node_index(gmsh_reader *r, int64_t tag, const char *user)
 {
     if (r->node_dense && tag >= 1 && tag <= r->point_count)
         return (int32_t)(tag - 1);
-    int found;
-    int32_t i = gmsh_lookup(r->node_tags, r->point_count, tag, &found);
+    int found = 0; /* dense tags have no table: a tag outside 1..point_count is not there */
+    int32_t i = r->node_dense ? -1 : gmsh_lookup(r->node_tags, r->point_count, tag, &found);
     if (!found)
         tpk_scan_fail(&r->s, "%s uses node tag %lld, which $Nodes does not define", user, (long long)tag);
     return i;
@@ -133,6 +133,49 @@ static int check_tag(gmsh_reader *r, int64_t tag, const char *what)
     return 0;
 }
 
+/* Node `at` (of n) has `tag`. While the tags are 1, 2, 3, ... there is no table (node_dense); the first
+ * other tag writes out the run so far and lists the rest. */
+static int note_node_tag(gmsh_reader *r, int64_t at, int64_t tag, int64_t n)
+{
+    if (!r->node_tags) {
+        if (tag == at + 1)
+            return 0;
+        r->node_tags = malloc(sizeof *r->node_tags * (size_t)(n ? n : 1));
+        if (!r->node_tags)
+            return tpk_scan_fail(&r->s, "%lld nodes: out of memory", (long long)n);
+        for (int64_t i = 0; i < at; i++) {
+            r->node_tags[i].tag = i + 1;
+            r->node_tags[i].index = (int32_t)i;
+        }
+    }
+    r->node_tags[at].tag = tag;
+    r->node_tags[at].index = (int32_t)at;
+    return 0;
+}
+
+/* 4.1 binary: the tags of a node block read straight from the mapping; the first one below 1 (and all
+ * after it) is left to the one-by-one reader, which words the failure. Returns how many it took. */
+static int64_t bulk_node_tags(gmsh_reader *r, int64_t at, int64_t count, int64_t n)
+{
+    if (!r->binary || gmsh_bytes_left(r) / sizeof(uint64_t) < (uint64_t)count)
+        return 0;
+    const unsigned char *p = (const unsigned char *)r->s.data + r->s.pos;
+    int64_t i = 0;
+    for (; i < count; i++) {
+        uint64_t tag;
+        memcpy(&tag, p + sizeof tag * (size_t)i, sizeof tag);
+        if (tag < 1 || tag > (uint64_t)INT64_MAX)
+            break;
+        if (note_node_tag(r, at + i, (int64_t)tag, n))
+            return -1;
+    }
+    if (i > 0) {
+        r->s.pos += sizeof(uint64_t) * (size_t)i;
+        mark_bulk_read(r, sizeof(uint64_t));
+    }
+    return i;
+}
+
 int gmsh_read_nodes(gmsh_reader *r)
 {
     int64_t n, blocks = 0, tmp;
@@ -147,17 +190,17 @@ int gmsh_read_nodes(gmsh_reader *r)
         return -1;
     if (r->version == 22 && gmsh_bin_start(r, "the number of nodes"))
         return -1;
-    r->points = malloc(sizeof *r->points * 3 * (size_t)(n ? n : 1));
-    r->node_tags = malloc(sizeof *r->node_tags * (size_t)(n ? n : 1));
-    if (!r->points || !r->node_tags)
+    /* huge-page advised when large (tpk_alloc_large): 1M nodes fault in 2 MiB at a time */
+    r->points = tpk_alloc_large(sizeof *r->points * 3 * (size_t)(n ? n : 1));
+    if (!r->points)
         return tpk_scan_fail(&r->s, "%lld nodes: out of memory", (long long)n);
     int64_t done = 0;
     if (r->version == 22) {
         for (; done < n; done++) {
-            if (gmsh_num(r, &r->node_tags[done].tag, "a node tag", 4) ||
-                check_tag(r, r->node_tags[done].tag, "node") || read_node_coords(r, done, 0))
+            int64_t tag;
+            if (gmsh_num(r, &tag, "a node tag", 4) || check_tag(r, tag, "node") || note_node_tag(r, done, tag, n) ||
+                read_node_coords(r, done, 0))
                 return -1;
-            r->node_tags[done].index = (int32_t)done;
         }
     } else {
         for (int64_t b = 0; b < blocks; b++) {
@@ -175,11 +218,14 @@ int gmsh_read_nodes(gmsh_reader *r)
                 return tpk_scan_fail(&r->s, "node block %lld holds %lld nodes, more than the %lld left of the "
                                             "%lld announced", (long long)b + 1, (long long)count,
                                      (long long)(n - done), (long long)n);
-            for (int64_t i = 0; i < count; i++) {
-                if (gmsh_num(r, &r->node_tags[done + i].tag, "a node tag", 8) ||
-                    check_tag(r, r->node_tags[done + i].tag, "node"))
+            int64_t bulk = bulk_node_tags(r, done, count, n);
+            if (bulk < 0)
+                return -1;
+            for (int64_t i = bulk; i < count; i++) {
+                int64_t tag;
+                if (gmsh_num(r, &tag, "a node tag", 8) || check_tag(r, tag, "node") ||
+                    note_node_tag(r, done + i, tag, n))
                     return -1;
-                r->node_tags[done + i].index = (int32_t)(done + i);
             }
             if (bulk_coords(r, done, count, param))
                 continue_from = count;
@@ -198,9 +244,7 @@ int gmsh_read_nodes(gmsh_reader *r)
     if (gmsh_expect_end(r, "$EndNodes"))
         return -1;
     r->point_count = n;
-    r->node_dense = 1;
-    for (int64_t i = 0; i < n && r->node_dense; i++)
-        r->node_dense = r->node_tags[i].tag == i + 1;
+    r->node_dense = r->node_tags == NULL; /* no tag broke the run 1, 2, 3, ... (note_node_tag) */
     return r->node_dense ? 0 : gmsh_sort_tags(r, r->node_tags, n, "node");
 }
 
