@@ -708,3 +708,68 @@ TPK_TEST(long_base64_runs_keep_error_places)
     free(bad);
     free(text);
 }
+
+/* ---- Large arrays on all cores ------------------------------------------------------------------ */
+
+/* 140,000 tets and 12 dropped triangles over 20,000 points, with a cell field, by meshio: ASCII, base64
+ * uncompressed (its connectivity 6 MB of base64, decoded on all cores), the same with the base64 broken
+ * into 76-character lines, zlib; and with point ids out of range at cells 100,000 and 120,000 (both in
+ * the second worker's half of the cells, with two workers). */
+static const char big_script[] =
+    "import sys, re, numpy as np, meshio\n"
+    "rng = np.random.default_rng(7)\n"
+    "pts = rng.integers(0, 1000, (20000, 3)) / 8.0  # short decimals: ASCII holds them exactly\n"
+    "tets = rng.integers(0, 20000, (140000, 4))\n"
+    "tris = rng.integers(0, 20000, (12, 3))\n"
+    "cd = {'mat': [np.arange(140000, dtype=float), np.zeros(12)]}\n"
+    "d = sys.argv[1]\n"
+    "m = meshio.Mesh(pts, [('tetra', tets), ('triangle', tris)], cell_data=cd)\n"
+    "meshio.write(d + '/big_ascii.vtu', m, binary=False)\n"
+    "meshio.write(d + '/big_raw.vtu', m, binary=True, compression=None)\n"
+    "meshio.write(d + '/big_zlib.vtu', m, binary=True, compression='zlib')\n"
+    "text = open(d + '/big_raw.vtu').read()\n"
+    "wrap = lambda t: '\\n'.join(t[i:i + 76] for i in range(0, len(t), 76))\n"
+    "text = re.sub(r'(format=\"binary\"[^>]*>)\\s*([A-Za-z0-9+/=]{4096,})', lambda g: g.group(1) + '\\n' + wrap(g.group(2)), text)\n"
+    "open(d + '/big_wrapped.vtu', 'w').write(text)\n"
+    "bad = tets.copy(); bad[100000, 2] = 20000; bad[120000, 0] = 25000\n"
+    "b = meshio.Mesh(pts, [('tetra', bad), ('triangle', tris)], cell_data=cd)\n"
+    "meshio.write(d + '/big_bad_ascii.vtu', b, binary=False)\n"
+    "meshio.write(d + '/big_bad_raw.vtu', b, binary=True, compression=None)\n";
+
+TPK_TEST(large_arrays_on_all_cores_agree)
+{
+    FILE *f = fopen(tpk_temp_path("make_big.py"), "w");
+    CHECK(f != NULL);
+    fputs(big_script, f);
+    fclose(f);
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "/usr/bin/python3 %s %s", tpk_temp_path("make_big.py"), tpk_temp_dir());
+    CHECK(system(cmd) == 0);
+    tpk_mesh ref;
+    tpk_diag d;
+    quiet(&d);
+    char why[200];
+    CHECK_MSG(tpk_import_vtu(tpk_temp_path("big_ascii.vtu"), &ref, &d) == 0, "%s", d.message);
+    CHECK_EQ_INT(ref.cell_count, 140000);
+    const char *names[] = {"big_raw.vtu", "big_wrapped.vtu", "big_zlib.vtu"};
+    for (int i = 0; i < 3; i++) {
+        tpk_mesh m;
+        quiet(&d);
+        int rc = tpk_import_vtu(tpk_temp_path(names[i]), &m, &d);
+        int ok = rc == 0 && same_mesh(&ref, &m, why, sizeof why);
+        if (rc == 0)
+            tpk_mesh_free(&m);
+        if (!ok)
+            tpk_mesh_free(&ref);
+        CHECK_MSG(ok, "%s: %s", names[i], rc ? d.message : why);
+    }
+    tpk_mesh_free(&ref);
+    const char *bad[] = {"big_bad_ascii.vtu", "big_bad_raw.vtu"};
+    for (int i = 0; i < 2; i++) {
+        tpk_mesh m;
+        quiet(&d);
+        CHECK(tpk_import_vtu(tpk_temp_path(bad[i]), &m, &d) != 0);
+        CHECK_MSG(strstr(d.message, "cell 100000 uses point id 20000, but there are only 20000 points"), "%s: %s",
+                  bad[i], d.message);
+    }
+}

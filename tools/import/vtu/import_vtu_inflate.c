@@ -70,6 +70,17 @@ static int locate_blocks(vtu_reader *r, const vtu_array *a, bsrc *s, const zlib_
     if (s->b64 && !(*decoded = malloc(csum ? (size_t)csum : 1)))
         return vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)csum);
     uint64_t at = 0;
+    if (s->b64) { /* all blocks' base64 in one read (decoded on all cores when large); where it fails, again
+                   * block by block from the start, which finds how many blocks were whole */
+        bsrc saved = *s;
+        if (vtu_src_read(s, *decoded, (size_t)csum) == 0) {
+            for (uint64_t b = 0; b < z->count; at += z->csizes[b], b++)
+                cblock[b] = *decoded + at;
+            *readable = z->count;
+            return 0;
+        }
+        *s = saved;
+    }
     for (*readable = 0; *readable < z->count; ++*readable) {
         uint64_t b = *readable, n = z->csizes[b];
         if (s->b64) {

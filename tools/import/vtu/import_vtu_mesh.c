@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "mesh/cell_types.h"
 #include "import_vtu_internal.h"
 #include "mesh/polyhedron.h"
@@ -184,9 +185,80 @@ static int scan_cells(vtu_reader *r, const cell_arrays *a, const tpk_cell_rule *
     return 0;
 }
 
-/* Points and the kept cells into `out`; keep[c] says whether source cell c was kept. */
-static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a, const tpk_cell_rule *rule_of,
-                      const cell_span *span, const cell_tally *t, uint8_t *keep, tpk_mesh *out)
+/* ---- The same two passes on all cores (meshes without polyhedra) ---------------------------------- */
+
+/* Each worker checks and tallies its range of cells; the first cell that fails any check stops it, and
+ * then the one-core pass runs from the start to word the message (so it names the first bad cell, as
+ * before). Then each worker copies its kept cells where the tallies before it put them. */
+typedef struct cells_job {
+    vtu_reader *r;
+    const cell_arrays *a;
+    const tpk_cell_rule *rule_of;
+    cell_span *span;
+    uint8_t *keep;
+    tpk_mesh *out;
+    cell_tally tally[TPK_MAX_THREADS];
+    int64_t bad[TPK_MAX_THREADS];
+    int64_t first_cell[TPK_MAX_THREADS], first_conn[TPK_MAX_THREADS]; /* where a worker's kept cells go */
+} cells_job;
+
+static void scan_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    cells_job *job = ctx;
+    const cell_arrays *a = job->a;
+    cell_tally *t = &job->tally[w];
+    double points = (double)job->r->point_count;
+    job->bad[w] = -1;
+    for (int64_t c = begin; c < end; c++) {
+        int type = (int)a->types->values[c];
+        int64_t first = c ? (int64_t)a->offs->values[c - 1] : 0, n = (int64_t)a->offs->values[c] - first;
+        const double *v = a->conn->values + first;
+        job->span[c].v = v;
+        job->span[c].n = n;
+        tpk_cell_rule rule = job->rule_of[type];
+        int ok = rule.kind != TPK_RULE_UNKNOWN && type != TPK_CELL_POLYHEDRON &&
+                 (rule.kind == TPK_RULE_DROP || !((rule.nodes > 0 && n != rule.nodes) || (rule.nodes < 0 && n < -rule.nodes)));
+        for (int64_t j = 0; ok && j < n; j++)
+            ok = v[j] >= 0 && v[j] < points;
+        if (!ok) {
+            job->bad[w] = c;
+            return;
+        }
+        if (rule.kind == TPK_RULE_DROP) {
+            t->dropped[type]++;
+            t->drop_total++;
+            continue;
+        }
+        if (rule.kind == TPK_RULE_REDUCE) {
+            t->reduced[type]++;
+            t->reduce_total++;
+        }
+        t->kept++;
+        t->conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : n;
+    }
+}
+
+static void copy_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    cells_job *job = ctx;
+    tpk_mesh *out = job->out;
+    int64_t k = job->first_cell[w], o = job->first_conn[w];
+    for (int64_t c = begin; c < end; c++) {
+        tpk_cell_rule rule = job->rule_of[(int)job->a->types->values[c]];
+        job->keep[c] = rule.kind != TPK_RULE_DROP;
+        if (!job->keep[c])
+            continue;
+        int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : job->span[c].n;
+        const double *v = job->span[c].v;
+        for (int64_t j = 0; j < n; j++)
+            out->cell_conn[o++] = (int32_t)v[j];
+        out->cell_types[k] = rule.out_type;
+        out->cell_offsets[++k] = o;
+    }
+}
+
+/* Points and the output arrays for t->kept cells. */
+static int alloc_output(vtu_reader *r, const vtu_array *pts, const cell_tally *t, tpk_mesh *out)
 {
     out->point_count = r->point_count;
     out->points = malloc(sizeof(double) * 3 * (size_t)(r->point_count ? r->point_count : 1));
@@ -198,8 +270,59 @@ static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a,
         return vtu_fail_line(r, 0, "out of memory");
     if (r->point_count)
         memcpy(out->points, pts->values, sizeof(double) * 3 * (size_t)r->point_count);
-    int64_t k = 0, o = 0;
     out->cell_offsets[0] = 0;
+    return 0;
+}
+
+/* scan_cells and copy_cells on all cores: 1 when it did both (or failed, -1), 0 when the mesh is one for
+ * the one-core passes (polyhedra, few cells, or a bad cell to word). */
+static int build_cells_parallel(vtu_reader *r, const vtu_array *pts, const cell_arrays *a,
+                                const tpk_cell_rule *rule_of, cell_span *span, cell_tally *t, uint8_t *keep,
+                                tpk_mesh *out)
+{
+    int64_t nc = r->cell_count;
+    if (nc < 65536 || a->foffs || a->faces)
+        return 0;
+    cells_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return 0;
+    job->r = r, job->a = a, job->rule_of = rule_of, job->span = span, job->keep = keep, job->out = out;
+    int threads = tpk_threads_for(nc, tpk_thread_count(0), 65536);
+    tpk_parallel_for(nc, threads, scan_range, job);
+    int clean = 1;
+    for (int w = 0; w < threads; w++)
+        clean &= job->bad[w] < 0;
+    if (!clean) {
+        free(job);
+        return 0;
+    }
+    for (int w = 0; w < threads; w++) {
+        const cell_tally *x = &job->tally[w];
+        job->first_cell[w] = t->kept;
+        job->first_conn[w] = t->conn_size;
+        for (int type = 0; type < 256; type++) {
+            t->dropped[type] += x->dropped[type];
+            t->reduced[type] += x->reduced[type];
+        }
+        t->drop_total += x->drop_total;
+        t->reduce_total += x->reduce_total;
+        t->kept += x->kept;
+        t->conn_size += x->conn_size;
+    }
+    int rc = alloc_output(r, pts, t, out);
+    if (rc == 0)
+        tpk_parallel_for(nc, threads, copy_range, job);
+    free(job);
+    return rc ? -1 : 1;
+}
+
+/* Points and the kept cells into `out`; keep[c] says whether source cell c was kept. */
+static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a, const tpk_cell_rule *rule_of,
+                      const cell_span *span, const cell_tally *t, uint8_t *keep, tpk_mesh *out)
+{
+    if (alloc_output(r, pts, t, out))
+        return -1;
+    int64_t k = 0, o = 0;
     for (int64_t c = 0; c < r->cell_count; c++) {
         tpk_cell_rule rule = rule_of[(int)a->types->values[c]];
         keep[c] = rule.kind != TPK_RULE_DROP;
@@ -276,13 +399,14 @@ int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
     tpk_cell_rule rule_of[256];
     for (int type = 0; type < 256; type++)
         rule_of[type] = tpk_cell_rule_for(type);
-    int rc = !span || !keep ? vtu_fail_line(r, 0, "out of memory") : scan_cells(r, &a, rule_of, span, &t);
+    int both = !span || !keep ? 0 : build_cells_parallel(r, pts, &a, rule_of, span, &t, keep, out);
+    int rc = both < 0 ? -1 : !span || !keep ? vtu_fail_line(r, 0, "out of memory") : both ? 0 : scan_cells(r, &a, rule_of, span, &t);
     if (rc == 0 && t.drop_total)
         tpk_warn_cell_counts(r->diag, r->name, t.dropped, t.drop_total, "dropped cells that are not volumes:");
     if (rc == 0 && t.reduce_total)
         tpk_warn_cell_counts(r->diag, r->name, t.reduced, t.reduce_total,
                              "reduced higher-order cells to their corner nodes:");
-    if (rc == 0)
+    if (rc == 0 && !both)
         rc = copy_cells(r, pts, &a, rule_of, span, &t, keep, out);
     free(span);
     for (int i = 0; rc == 0 && i < r->array_count; i++)

@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "import_vtu_internal.h"
 
 int vtu_src_fail(bsrc *s, const char *what)
@@ -56,11 +57,66 @@ uint64_t vtu_src_left(const bsrc *s)
     return (uint64_t)(s->len - s->pos) / 4 * 3 + 3 + (uint64_t)(s->npend - s->ipend);
 }
 
+/* Groups [begin, end) of `in` into `out`; the index of the first group that is not four plain digits, or
+ * end. */
+static size_t decode_groups(const unsigned char *in, unsigned char *out, size_t begin, size_t end)
+{
+    for (size_t g = begin; g < end; g++) {
+        const unsigned char *p = in + 4 * g;
+        unsigned a = b64_plus1[p[0]], b = b64_plus1[p[1]], c = b64_plus1[p[2]], d = b64_plus1[p[3]];
+        if (!a || !b || !c || !d)
+            return g;
+        uint32_t bits = (a - 1) << 18 | (b - 1) << 12 | (c - 1) << 6 | (d - 1);
+        out[3 * g] = (unsigned char)(bits >> 16);
+        out[3 * g + 1] = (unsigned char)(bits >> 8);
+        out[3 * g + 2] = (unsigned char)bits;
+    }
+    return end;
+}
+
+typedef struct groups_job {
+    const unsigned char *in;
+    unsigned char *out;
+    size_t stop[TPK_MAX_THREADS]; /* per worker: its first group that is not plain, or its end */
+} groups_job;
+
+static void groups_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    groups_job *job = ctx;
+    job->stop[w] = decode_groups(job->in, job->out, (size_t)begin, (size_t)end);
+}
+
+/* Many groups (a large array without line breaks, as VTK and meshio write it) on all cores: the run of
+ * plain groups up to the first one that is not (later workers' bytes past it are written again by the
+ * careful path). Returns the groups taken. */
+static size_t plain_groups_parallel(const unsigned char *in, unsigned char *out, size_t groups)
+{
+    int threads = tpk_threads_for((int64_t)groups, tpk_thread_count(0), (int64_t)1 << 18);
+    if (threads < 2)
+        return 0;
+    groups_job job = {in, out, {0}};
+    tpk_parallel_for((int64_t)groups, threads, groups_range, &job);
+    for (int w = 0; w < threads; w++) {
+        int64_t begin, end;
+        tpk_parallel_range((int64_t)groups, threads, w, &begin, &end);
+        if (job.stop[w] < (size_t)end)
+            return job.stop[w];
+    }
+    return groups;
+}
+
 /* Whole groups of four plain digits into 3 bytes each, while at least 3 bytes are wanted and nothing is
  * pending: exactly what the careful path below would do with them, in one tight loop. Returns the
  * bytes written. */
 static size_t read_plain_groups(bsrc *s, unsigned char *out, size_t n)
 {
+    size_t groups = (n / 3 < (s->len - s->pos) / 4) ? n / 3 : (s->len - s->pos) / 4;
+    if (groups >= ((size_t)1 << 19)) {
+        size_t taken = plain_groups_parallel(s->p + s->pos, out, groups);
+        s->pos += 4 * taken;
+        if (taken == groups || taken > 0)
+            return 3 * taken;
+    }
     size_t done = 0, pos = s->pos;
     const unsigned char *p = s->p;
     while (n - done >= 3 && s->len - pos >= 4) {
