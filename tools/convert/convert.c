@@ -169,6 +169,9 @@ static int connect_tets(conversion *c)
     c->neighbors = tpk_alloc_large(sizeof *c->neighbors * 4 * (size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1));
     if (!c->neighbors)
         return tpk_diag_fail(c->diag, "out of memory for the neighbors of %lld tets", (long long)c->mesh.tet_count);
+    /* The neighbors took the kept block that fits them (reorder's old tets); no other fits connect's
+     * arrays, and one left kept would stay resident through the converter's peak. */
+    tpk_release_kept();
     tpk_unfold_stats unfold;
     if (tpk_connect_unfolded(&c->mesh, c->turned_over, (c->o->skip_bad_cells ? TPK_UNFOLD_SKIP_BAD_TETS : 0) |
                                                            (c->o->cut_folds ? TPK_UNFOLD_CUT_FOLDS : 0),
