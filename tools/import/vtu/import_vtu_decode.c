@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "import_vtu_internal.h"
+#include "base/parallel.h"
 #include "base/text_scan.h"
 
 static const struct {
@@ -233,6 +234,33 @@ static void widen_native(const unsigned char *bytes, uint64_t n, vtu_type t, dou
 }
 #undef WIDEN
 
+typedef struct widen_job {
+    const unsigned char *bytes;
+    vtu_type type;
+    size_t size; /* bytes per value */
+    double *out;
+} widen_job;
+
+static void widen_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const widen_job *job = ctx;
+    (void)worker;
+    widen_native(job->bytes + job->size * (size_t)begin, (uint64_t)(end - begin), job->type, job->out + begin);
+}
+
+/* widen_native on all cores for large arrays; in place too (out == bytes, 8-byte values): each range
+ * reads and writes only its own values. */
+static void widen_all(const unsigned char *bytes, uint64_t n, vtu_type t, size_t tsize, double *out)
+{
+    int threads = tpk_threads_for((int64_t)n, tpk_thread_count(0), (int64_t)1 << 20);
+    if (threads < 2) {
+        widen_native(bytes, n, t, out);
+        return;
+    }
+    widen_job job = {bytes, t, tsize, out};
+    tpk_parallel_for((int64_t)n, threads, widen_range, &job);
+}
+
 /* The number of values expected in an array of this role, or UINT64_MAX when not known yet. Read
  * leniently (tetpack check), field arrays take any length; vtu_build_mesh records a wrong one. */
 static uint64_t expected_count(const vtu_reader *r, const vtu_array *a)
@@ -266,7 +294,7 @@ int vtu_decode_binary(vtu_reader *r, vtu_array *a, bsrc *s)
     if (tsize == sizeof(double) && !r->big_endian && host_is_little_endian()) {
         /* Widened where they lie: each value is read before its own 8 bytes are written, and a fresh
          * array as large as the data (points, and meshio's Int64 connectivity) costs its page faults. */
-        widen_native(bytes, n, a->type, (double *)(void *)bytes);
+        widen_all(bytes, n, a->type, tsize, (double *)(void *)bytes);
         a->values = (double *)(void *)bytes;
         a->count = n;
         return 0;
@@ -277,7 +305,7 @@ int vtu_decode_binary(vtu_reader *r, vtu_array *a, bsrc *s)
         return vtu_fail_array(r, a, "out of memory for %llu values", (unsigned long long)n);
     }
     if (!r->big_endian && host_is_little_endian())
-        widen_native(bytes, n, a->type, a->values);
+        widen_all(bytes, n, a->type, tsize, a->values);
     else
         for (uint64_t i = 0; i < n; i++)
             a->values[i] = value_at(bytes + i * tsize, a->type, r->big_endian);
