@@ -75,7 +75,7 @@ static unsigned char *read_plain(vtu_reader *r, const vtu_array *a, bsrc *s, uin
                        (unsigned long long)n, (unsigned long long)vtu_src_left(s));
         return NULL;
     }
-    unsigned char *buf = malloc(n ? (size_t)n : 1);
+    unsigned char *buf = tpk_alloc_large(n ? (size_t)n : 1); /* huge-page advised when large */
     if (!buf) {
         vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)n);
         return NULL;
@@ -157,7 +157,7 @@ static unsigned char *read_binary(vtu_reader *r, const vtu_array *a, bsrc *s, ui
     if (rc == 0)
         rc = read_block_sizes(r, a, s, &z);
     if (rc == 0) {
-        out = malloc(z.total ? (size_t)z.total : 1);
+        out = tpk_alloc_large(z.total ? (size_t)z.total : 1); /* huge-page advised when large */
         rc = out ? vtu_inflate_blocks(r, a, s, &z, out)
                  : vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)z.total);
     }
@@ -299,7 +299,7 @@ int vtu_decode_binary(vtu_reader *r, vtu_array *a, bsrc *s)
         a->count = n;
         return 0;
     }
-    a->values = malloc(sizeof(double) * (size_t)(n ? n : 1));
+    a->values = tpk_alloc_large(sizeof(double) * (size_t)(n ? n : 1));
     if (!a->values) {
         free(bytes);
         return vtu_fail_array(r, a, "out of memory for %llu values", (unsigned long long)n);

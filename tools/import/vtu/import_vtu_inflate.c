@@ -67,7 +67,7 @@ static int locate_blocks(vtu_reader *r, const vtu_array *a, bsrc *s, const zlib_
     for (uint64_t b = 0; b < z->count; b++)
         csum += z->csizes[b];
     *decoded = NULL;
-    if (s->b64 && !(*decoded = malloc(csum ? (size_t)csum : 1)))
+    if (s->b64 && !(*decoded = tpk_alloc_large(csum ? (size_t)csum : 1)))
         return vtu_fail_array(r, a, "out of memory for %llu bytes", (unsigned long long)csum);
     uint64_t at = 0;
     if (s->b64) { /* all blocks' base64 in one read (decoded on all cores when large); where it fails, again
