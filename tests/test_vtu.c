@@ -773,3 +773,43 @@ TPK_TEST(large_arrays_on_all_cores_agree)
                   bad[i], d.message);
     }
 }
+
+/* A long base64 run is decoded where it lies in the file (not copied): a comment inside it makes expat
+ * give the rest as more text, and the array reads as without the comment; a bad character inside it is
+ * placed by its character in the array's text, as when the text was copied. */
+TPK_TEST(long_base64_run_read_in_place)
+{
+    size_t size;
+    char *text = read_whole(TPK_DATA_DIR "/hard/nonmanifold_vertex_edge_tets.vtu", &size);
+    CHECK(text);
+    if (!text)
+        return;
+    const char *run = strstr(text, "format=\"binary\">\n");
+    CHECK(run);
+    size_t at = (size_t)(run - text) + strlen("format=\"binary\">\n");
+    const char comment[] = "<!-- c -->";
+    char *with = malloc(size + sizeof comment);
+    CHECK(with != NULL);
+    memcpy(with, text, at + 9000);
+    memcpy(with + at + 9000, comment, strlen(comment));
+    memcpy(with + at + 9000 + strlen(comment), text + at + 9000, size - at - 9000);
+    tpk_mesh ref, m;
+    tpk_diag d;
+    char why[200];
+    quiet(&d);
+    CHECK_MSG(tpk_import_vtu_memory("ref.vtu", text, size, &ref, &d) == 0, "%s", d.message);
+    quiet(&d);
+    int rc = tpk_import_vtu_memory("comment.vtu", with, size + strlen(comment), &m, &d);
+    int ok = rc == 0 && same_mesh(&ref, &m, why, sizeof why);
+    if (rc == 0)
+        tpk_mesh_free(&m);
+    tpk_mesh_free(&ref);
+    CHECK_MSG(ok, "%s", rc ? d.message : why);
+    text[at + 9000] = '!';
+    quiet(&d);
+    CHECK(tpk_import_vtu_memory("bad.vtu", text, size, &m, &d) != 0);
+    CHECK_MSG(strstr(d.message, "found a character that is not base64 at character 9001 of the array's text"), "%s",
+              d.message);
+    free(with);
+    free(text);
+}

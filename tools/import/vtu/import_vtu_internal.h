@@ -63,6 +63,10 @@ typedef struct vtu_reader {
     vtu_array cur;
     char *text;
     size_t text_len, text_cap;
+    /* The long base64 run take_base64 took, left where it is in the input (no copy): it stands at
+     * text[borrowed_at] in the array's text. NULL when none. */
+    const char *borrowed;
+    size_t borrowed_len, borrowed_at;
     /* Every DataArray kept, in file order. */
     vtu_array *arrays;
     int array_count, array_cap;
@@ -80,7 +84,7 @@ typedef struct bsrc {
     unsigned char pend[3];
     int npend, ipend;
     int in_file;           /* p points into the file at `base` (appended data): places are file offsets */
-    size_t base;
+    size_t base;           /* else: p is the array's text from character `base` on (a run taken alone) */
     const char *error;     /* why a read failed, with the place */
     char error_buf[160];
 } bsrc;

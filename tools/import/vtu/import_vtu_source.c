@@ -12,7 +12,7 @@ int vtu_src_fail(bsrc *s, const char *what)
     if (s->in_file)
         snprintf(s->error_buf, sizeof s->error_buf, "%s at byte %zu of the file", what, s->base + s->pos);
     else
-        snprintf(s->error_buf, sizeof s->error_buf, "%s at character %zu of the array's text", what, s->pos);
+        snprintf(s->error_buf, sizeof s->error_buf, "%s at character %zu of the array's text", what, s->base + s->pos);
     s->error = s->error_buf;
     return -1;
 }

@@ -177,6 +177,7 @@ static int start_array(vtu_reader *r, const XML_Char **atts)
     r->array_fed_offset = (int64_t)XML_GetCurrentByteIndex(r->parser);
     r->collect = a->format != 2;
     r->text_len = 0;
+    r->borrowed = NULL;
     return 0;
 }
 
@@ -232,6 +233,37 @@ static void XMLCALL on_start(void *user, const XML_Char *el, const XML_Char **at
         start_array(r, atts);
 }
 
+static int reserve_text(vtu_reader *r, size_t len);
+
+/* The array's text as one buffer: the borrowed run copied in where it stands, unless all else is blanks
+ * (the usual: the run is the whole array), when *s reads the run where it is. */
+static int array_text(vtu_reader *r, bsrc *s)
+{
+    memset(s, 0, sizeof *s);
+    s->b64 = 1;
+    if (r->borrowed) {
+        size_t blanks = 0;
+        while (blanks < r->text_len && vtu_is_space((unsigned char)r->text[blanks]))
+            blanks++;
+        if (blanks == r->text_len) {
+            s->p = (const unsigned char *)r->borrowed;
+            s->len = r->borrowed_len;
+            s->base = r->borrowed_at; /* places count from the text's start, as when copied */
+            return 0;
+        }
+        size_t tail = r->text_len - r->borrowed_at;
+        if (reserve_text(r, r->borrowed_len))
+            return -1;
+        memmove(r->text + r->borrowed_at + r->borrowed_len, r->text + r->borrowed_at, tail);
+        memcpy(r->text + r->borrowed_at, r->borrowed, r->borrowed_len);
+        r->text_len += r->borrowed_len;
+        r->borrowed = NULL;
+    }
+    s->p = (const unsigned char *)r->text;
+    s->len = r->text_len;
+    return 0;
+}
+
 static void end_array(vtu_reader *r)
 {
     vtu_array *a = &r->cur;
@@ -239,8 +271,8 @@ static void end_array(vtu_reader *r)
     if (a->format == 0 && vtu_decode_ascii(r, a, r->text, r->text_len))
         return;
     if (a->format == 1) {
-        bsrc s = {.p = (const unsigned char *)r->text, .len = r->text_len, .b64 = 1};
-        if (vtu_decode_binary(r, a, &s))
+        bsrc s;
+        if (array_text(r, &s) || vtu_decode_binary(r, a, &s))
             return;
     }
     keep_array(r, a);
@@ -263,20 +295,26 @@ static void XMLCALL on_end(void *user, const XML_Char *el)
     r->depth--;
 }
 
-static void collect_text(vtu_reader *r, const char *s, size_t len)
+/* Room for len more bytes of text. */
+static int reserve_text(vtu_reader *r, size_t len)
 {
     if (r->text_len + len > r->text_cap) {
         size_t cap = r->text_cap ? r->text_cap : 4096;
         while (cap < r->text_len + (size_t)len)
             cap *= 2;
         char *grown = realloc(r->text, cap);
-        if (!grown) {
-            vtu_fail_array(r, &r->cur, "out of memory for the array's text");
-            return;
-        }
+        if (!grown)
+            return vtu_fail_array(r, &r->cur, "out of memory for the array's text");
         r->text = grown;
         r->text_cap = cap;
     }
+    return 0;
+}
+
+static void collect_text(vtu_reader *r, const char *s, size_t len)
+{
+    if (reserve_text(r, len))
+        return;
     memcpy(r->text + r->text_len, s, len);
     r->text_len += len;
 }
@@ -338,8 +376,10 @@ static size_t take_base64(void *user, size_t fed_offset, size_t lead, const char
     size_t n = plain_base64_run(at, left);
     if (n < 4096)
         return 0;
-    collect_text(r, at, n);
-    return r->failed ? 0 : n;
+    r->borrowed = at; /* read where it is at the array's end (array_text): no copy */
+    r->borrowed_len = n;
+    r->borrowed_at = r->text_len;
+    return n;
 }
 
 static void XMLCALL on_doctype(void *user, const XML_Char *name, const XML_Char *sysid, const XML_Char *pubid,
