@@ -670,19 +670,31 @@ static const char *expat_place(const char *text, size_t size, char *place, size_
     return ok ? NULL : place;
 }
 
+/* A real meshio file (binary, base64) and where the text of its first binary DataArray starts (after
+ * the tag's line break); NULL if it cannot be read. */
+static char *read_run_file(size_t *size, size_t *at)
+{
+    char *text = read_whole(TPK_DATA_DIR "/hard/nonmanifold_vertex_edge_tets.vtu", size);
+    const char *run = text ? strstr(text, "format=\"binary\">\n") : NULL;
+    if (!run) {
+        free(text);
+        return NULL;
+    }
+    *at = (size_t)(run - text) + strlen("format=\"binary\">\n");
+    return text;
+}
+
 /* Long base64 runs are read past expat (tools/import/xml_input.c): a file broken in or after one still
  * gets the line and column expat itself finds in the whole file. A real meshio file, broken inside its
  * longest run, with the run's closing tag on its line and misspelt, and cut inside the run. */
 TPK_TEST(long_base64_runs_keep_error_places)
 {
-    size_t size;
-    char *text = read_whole(TPK_DATA_DIR "/hard/nonmanifold_vertex_edge_tets.vtu", &size);
+    size_t size, at = 0;
+    char *text = read_run_file(&size, &at);
     CHECK(text);
     if (!text)
         return;
-    const char *run = strstr(text, "format=\"binary\">\n");
-    CHECK(run);
-    size_t at = (size_t)(run - text) + strlen("format=\"binary\">\n"), len = strcspn(text + at, "<\n");
+    size_t len = strcspn(text + at, "<\n");
     CHECK_MSG(len > 20000, "a run of %zu characters", len); /* long enough to be taken */
     char *bad = malloc(size);
     const struct {
@@ -779,14 +791,11 @@ TPK_TEST(large_arrays_on_all_cores_agree)
  * placed by its character in the array's text, as when the text was copied. */
 TPK_TEST(long_base64_run_read_in_place)
 {
-    size_t size;
-    char *text = read_whole(TPK_DATA_DIR "/hard/nonmanifold_vertex_edge_tets.vtu", &size);
+    size_t size, at = 0;
+    char *text = read_run_file(&size, &at);
     CHECK(text);
     if (!text)
         return;
-    const char *run = strstr(text, "format=\"binary\">\n");
-    CHECK(run);
-    size_t at = (size_t)(run - text) + strlen("format=\"binary\">\n");
     const char comment[] = "<!-- c -->";
     char *with = malloc(size + sizeof comment);
     CHECK(with != NULL);

@@ -152,6 +152,22 @@ static int check_cell_nodes(vtu_reader *r, const cell_arrays *a, int64_t c, int 
     return 0;
 }
 
+/* A checked cell of n nodes counted as kept, reduced or dropped. */
+static void tally_cell(cell_tally *t, int type, tpk_cell_rule rule, int64_t n)
+{
+    if (rule.kind == TPK_RULE_DROP) {
+        t->dropped[type]++;
+        t->drop_total++;
+        return;
+    }
+    if (rule.kind == TPK_RULE_REDUCE) {
+        t->reduced[type]++;
+        t->reduce_total++;
+    }
+    t->kept++;
+    t->conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : n;
+}
+
 /* Checks every cell, finds its span, and counts what is kept, reduced and dropped; rule_of[type]:
  * tpk_cell_rule_for(type), looked up once per type rather than once per cell. */
 static int scan_cells(vtu_reader *r, const cell_arrays *a, const tpk_cell_rule *rule_of, cell_span *span,
@@ -170,17 +186,7 @@ static int scan_cells(vtu_reader *r, const cell_arrays *a, const tpk_cell_rule *
         if (locate_faces(r, a, c, type, &face_prev, &face_begin, &span[c]) ||
             check_cell_nodes(r, a, c, type, rule, &span[c], face_begin))
             return -1;
-        if (rule.kind == TPK_RULE_DROP) {
-            t->dropped[type]++;
-            t->drop_total++;
-            continue;
-        }
-        if (rule.kind == TPK_RULE_REDUCE) {
-            t->reduced[type]++;
-            t->reduce_total++;
-        }
-        t->kept++;
-        t->conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : span[c].n;
+        tally_cell(t, type, rule, span[c].n);
     }
     return 0;
 }
@@ -224,17 +230,7 @@ static void scan_range(void *ctx, int64_t begin, int64_t end, int w)
             job->bad[w] = c;
             return;
         }
-        if (rule.kind == TPK_RULE_DROP) {
-            t->dropped[type]++;
-            t->drop_total++;
-            continue;
-        }
-        if (rule.kind == TPK_RULE_REDUCE) {
-            t->reduced[type]++;
-            t->reduce_total++;
-        }
-        t->kept++;
-        t->conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : n;
+        tally_cell(t, type, rule, n);
     }
 }
 
