@@ -84,8 +84,11 @@ static int refuse_degenerate(const tpk_tetmesh *mesh, const int8_t *kinds, const
 {
     char tet[600];
     int64_t t = first_of(mesh, kinds, TET_FLAT, TET_REPEATED);
-    describe_tet(mesh, t, kinds[t] == TET_REPEATED ? "has a repeated vertex" : "has zero volume (its 4 vertices are coplanar)",
-                 tet, sizeof tet);
+    const char *what = kinds[t] == TET_REPEATED
+                           ? "has a repeated vertex"
+                           : "has zero volume (its 4 vertices are coplanar as the file stores them: float32 offsets "
+                             "from the origin, shown here in world coordinates)";
+    describe_tet(mesh, t, what, tet, sizeof tet);
     return tpk_diag_fail(diag, "%s; %lld degenerate tets in all (%lld with a repeated vertex, %lld flat); "
                                "pass --drop-degenerate to remove them",
                          tet, (long long)stats->degenerate, (long long)stats->repeated_vertex,
