@@ -200,7 +200,6 @@ typedef struct cells_job {
     vtu_reader *r;
     const cell_arrays *a;
     const tpk_cell_rule *rule_of;
-    cell_span *span;
     uint8_t *keep;
     tpk_mesh *out;
     cell_tally tally[TPK_MAX_THREADS];
@@ -219,8 +218,6 @@ static void scan_range(void *ctx, int64_t begin, int64_t end, int w)
         int type = (int)a->types->values[c];
         int64_t first = c ? (int64_t)a->offs->values[c - 1] : 0, n = (int64_t)a->offs->values[c] - first;
         const double *v = a->conn->values + first;
-        job->span[c].v = v;
-        job->span[c].n = n;
         tpk_cell_rule rule = job->rule_of[type];
         int ok = rule.kind != TPK_RULE_UNKNOWN && type != TPK_CELL_POLYHEDRON &&
                  (rule.kind == TPK_RULE_DROP || !((rule.nodes > 0 && n != rule.nodes) || (rule.nodes < 0 && n < -rule.nodes)));
@@ -238,14 +235,16 @@ static void copy_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     cells_job *job = ctx;
     tpk_mesh *out = job->out;
+    const cell_arrays *a = job->a;
     int64_t k = job->first_cell[w], o = job->first_conn[w];
     for (int64_t c = begin; c < end; c++) {
-        tpk_cell_rule rule = job->rule_of[(int)job->a->types->values[c]];
+        tpk_cell_rule rule = job->rule_of[(int)a->types->values[c]];
         job->keep[c] = rule.kind != TPK_RULE_DROP;
         if (!job->keep[c])
             continue;
-        int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : job->span[c].n;
-        const double *v = job->span[c].v;
+        int64_t first = c ? (int64_t)a->offs->values[c - 1] : 0; /* as scan_range found it */
+        int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : (int64_t)a->offs->values[c] - first;
+        const double *v = a->conn->values + first;
         for (int64_t j = 0; j < n; j++)
             out->cell_conn[o++] = (int32_t)v[j];
         out->cell_types[k] = rule.out_type;
@@ -273,7 +272,7 @@ static int alloc_output(vtu_reader *r, const vtu_array *pts, const cell_tally *t
 /* scan_cells and copy_cells on all cores: 1 when it did both (or failed, -1), 0 when the mesh is one for
  * the one-core passes (polyhedra, few cells, or a bad cell to word). */
 static int build_cells_parallel(vtu_reader *r, const vtu_array *pts, const cell_arrays *a,
-                                const tpk_cell_rule *rule_of, cell_span *span, cell_tally *t, uint8_t *keep,
+                                const tpk_cell_rule *rule_of, cell_tally *t, uint8_t *keep,
                                 tpk_mesh *out)
 {
     int64_t nc = r->cell_count;
@@ -282,7 +281,7 @@ static int build_cells_parallel(vtu_reader *r, const vtu_array *pts, const cell_
     cells_job *job = calloc(1, sizeof *job);
     if (!job)
         return 0;
-    job->r = r, job->a = a, job->rule_of = rule_of, job->span = span, job->keep = keep, job->out = out;
+    job->r = r, job->a = a, job->rule_of = rule_of, job->keep = keep, job->out = out;
     int threads = tpk_threads_for(nc, tpk_thread_count(0), 65536);
     tpk_parallel_for(nc, threads, scan_range, job);
     int clean = 1;
@@ -388,15 +387,20 @@ int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
     if (check_offsets_and_types(r, &a))
         return -1;
     int64_t nc = r->cell_count;
-    cell_span *span = malloc(sizeof *span * (size_t)(nc ? nc : 1));
     uint8_t *keep = malloc((size_t)(nc ? nc : 1));
     cell_tally t;
     memset(&t, 0, sizeof t);
     tpk_cell_rule rule_of[256];
     for (int type = 0; type < 256; type++)
         rule_of[type] = tpk_cell_rule_for(type);
-    int both = !span || !keep ? 0 : build_cells_parallel(r, pts, &a, rule_of, span, &t, keep, out);
-    int rc = both < 0 ? -1 : !span || !keep ? vtu_fail_line(r, 0, "out of memory") : both ? 0 : scan_cells(r, &a, rule_of, span, &t);
+    /* the one-core passes keep each cell's span (16 bytes a cell), which the parallel ones recompute */
+    int both = keep ? build_cells_parallel(r, pts, &a, rule_of, &t, keep, out) : 0;
+    cell_span *span = both ? NULL : malloc(sizeof *span * (size_t)(nc ? nc : 1));
+    int rc = -1;
+    if (both >= 0 && (!keep || (!both && !span)))
+        rc = vtu_fail_line(r, 0, "out of memory");
+    else if (both >= 0)
+        rc = both ? 0 : scan_cells(r, &a, rule_of, span, &t);
     if (rc == 0 && t.drop_total)
         tpk_warn_cell_counts(r->diag, r->name, t.dropped, t.drop_total, "dropped cells that are not volumes:");
     if (rc == 0 && t.reduce_total)
