@@ -171,14 +171,15 @@ void *tpk_calloc_large(size_t count, size_t size)
     return block;
 }
 
-void tpk_split_prefix(const int64_t *starts, int64_t n, int64_t entries, int parts, int64_t *begin)
+void tpk_split_by(int64_t (*first)(const void *ctx, int64_t b), const void *ctx, int64_t n, int64_t entries,
+                  int parts, int64_t *begin)
 {
     begin[0] = 0;
     for (int w = 1; w < parts; w++) {
         int64_t target = entries / parts * w, lo = begin[w - 1], hi = n;
         while (lo < hi) { /* first bucket starting at or after target */
             int64_t mid = lo + (hi - lo) / 2;
-            if (starts[mid] < target)
+            if (first(ctx, mid) < target)
                 lo = mid + 1;
             else
                 hi = mid;
@@ -186,4 +187,14 @@ void tpk_split_prefix(const int64_t *starts, int64_t n, int64_t entries, int par
         begin[w] = lo;
     }
     begin[parts] = n;
+}
+
+static int64_t start_in_array(const void *ctx, int64_t b)
+{
+    return ((const int64_t *)ctx)[b];
+}
+
+void tpk_split_prefix(const int64_t *starts, int64_t n, int64_t entries, int parts, int64_t *begin)
+{
+    tpk_split_by(start_in_array, starts, n, entries, parts, begin);
 }

@@ -21,6 +21,10 @@ void tpk_parallel_range(int64_t count, int threads, int w, int64_t *begin, int64
  * about entries / parts entries each: begin[w] is the first bucket starting at or after w * entries /
  * parts (begin[0] = 0, begin[parts] = n). begin holds parts + 1 values. */
 void tpk_split_prefix(const int64_t *starts, int64_t n, int64_t entries, int parts, int64_t *begin);
+/* tpk_split_prefix where bucket b's first entry is first(ctx, b) (nondecreasing in b), for starts kept in
+ * another form. */
+void tpk_split_by(int64_t (*first)(const void *ctx, int64_t b), const void *ctx, int64_t n, int64_t entries,
+                  int parts, int64_t *begin);
 
 typedef void (*tpk_range_fn)(void *ctx, int64_t begin, int64_t end, int worker);
 

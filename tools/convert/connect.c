@@ -120,11 +120,9 @@ static inline int64_t bucket_first(const connect_job *job, int64_t b)
     return b ? (int64_t)job->bucket_end[b - 1] : 0;
 }
 
-/* Parity of the outward order of the face opposite local vertex k against ascending ids. */
 static inline int64_t face_parity(const int32_t *v, int k)
 {
-    int32_t a = v[tpk_outward_face[k][0]], b = v[tpk_outward_face[k][1]], c = v[tpk_outward_face[k][2]];
-    return ((a > b) ^ (a > c) ^ (b > c)) ? SLOT_ODD : 0;
+    return tpk_face_parity(v, k) ? SLOT_ODD : 0;
 }
 
 /* Expands a bucket's entries into faces; returns the face count. */
@@ -305,25 +303,15 @@ static void prefix_counts(connect_job *job)
     job->largest_bucket = largest;
 }
 
-/* Bucket ranges for the workers, about the same number of entries each: worker w takes the buckets
- * from the first one that begins at or after w / parts of the entries (as tpk_split_prefix). */
+static int64_t first_entry(const void *ctx, int64_t b)
+{
+    return bucket_first(ctx, b);
+}
+
+/* Bucket ranges for the workers, about the same number of entries each (2 per tet). */
 static void split_buckets(connect_job *job)
 {
-    int parts = job->threads;
-    int64_t n = job->vertex_count, entries = 2 * job->tet_count;
-    job->bucket_begin[0] = 0;
-    for (int w = 1; w < parts; w++) {
-        int64_t target = entries / parts * w, lo = job->bucket_begin[w - 1], hi = n;
-        while (lo < hi) {
-            int64_t mid = lo + (hi - lo) / 2;
-            if (bucket_first(job, mid) < target)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        job->bucket_begin[w] = lo;
-    }
-    job->bucket_begin[parts] = n;
+    tpk_split_by(first_entry, job, job->vertex_count, 2 * job->tet_count, job->threads, job->bucket_begin);
 }
 
 static int alloc_scratch(connect_job *job)

@@ -37,15 +37,9 @@ int tpk_face_across(const int32_t *tets, int64_t t, int k, int64_t u)
  * folded. So only a face whose orders agree needs the points; the exact sign then decides. */
 static int is_folded(const fold_job *job, int64_t t, int k, int64_t u)
 {
-    const int32_t *v = job->tets + 4 * t, *w = job->tets + 4 * u;
-    int32_t ia = v[tpk_outward_face[k][0]], ic = v[tpk_outward_face[k][2]];
     int j = tpk_face_across(job->tets, t, k, u);
-    if (j >= 0) {
-        int32_t face[3] = {w[tpk_outward_face[j][0]], w[tpk_outward_face[j][1]], w[tpk_outward_face[j][2]]};
-        int at = face[0] == ia ? 0 : face[1] == ia ? 1 : 2;
-        if (face[(at + 1) % 3] == ic) /* (a, c, b) cyclically: opposite sides */
-            return 0;
-    }
+    if (j >= 0 && tpk_face_parity(job->tets + 4 * t, k) != tpk_face_parity(job->tets + 4 * u, j))
+        return 0; /* (a, c, b) cyclically: opposite sides */
     return tpk_face_folded(job->tets, job->points, t, k, u);
 }
 
