@@ -88,6 +88,11 @@ static int read_source(conversion *c)
     tpk_scan_watch(NULL, NULL);
     if (rc != 0)
         return -1;
+    /* Global ids (Exodus maps) number the pieces of a larger mesh for tetpack-mpi; one file needs none. */
+    free(c->src.global_point_ids);
+    free(c->src.global_cell_ids);
+    c->src.global_point_ids = NULL;
+    c->src.global_cell_ids = NULL;
     c->rep->source_points = c->src.point_count;
     c->rep->source_cells = c->src.cell_count;
     memcpy(c->source_format, c->src.format, sizeof c->source_format);
