@@ -27,48 +27,23 @@ PY
 "$TPK" render "$WORK/c.tpk" -o "$WORK/c32.png" --size 96x64 --layout tet32 --threads 1 > /dev/null
 "$TPK" render "$WORK/c.tpk" -o "$WORK/c20.png" --size 96x64 --layout tet20 --threads 2 > /dev/null
 "$TPK" render "$WORK/c.tpk" -o "$WORK/away.png" --size 96x64 --camera 0,0,50,0,0,100,0,1,0,30 > /dev/null
-"$PY" - "$WORK/c.png" "$WORK/c32.png" "$WORK/c20.png" "$WORK/away.png" <<'PY'
-import struct, sys, zlib
-def pixels(path):
-    data = open(path, "rb").read()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n", path
-    at, idat, ihdr = 8, b"", None
-    while at < len(data):
-        n, kind = struct.unpack(">I4s", data[at:at + 8])
-        body = data[at + 8:at + 8 + n]
-        assert zlib.crc32(kind + body) == struct.unpack(">I", data[at + 8 + n:at + 12 + n])[0], (path, kind)
-        if kind == b"IHDR":
-            ihdr = struct.unpack(">IIBBBBB", body)
-        elif kind == b"IDAT":
-            idat += body
-        at += 12 + n
-    w, h, depth, color = ihdr[:4]
-    assert depth == 8 and color in (2, 6), ihdr
-    bpp = 4 if color == 6 else 3
-    raw, rows, prev = zlib.decompress(idat), [], bytearray(w * bpp)
-    for y in range(h):
-        f, line = raw[y * (w * bpp + 1)], bytearray(raw[y * (w * bpp + 1) + 1:(y + 1) * (w * bpp + 1)])
-        for i in range(len(line)):
-            a = line[i - bpp] if i >= bpp else 0
-            b, c = prev[i], prev[i - bpp] if i >= bpp else 0
-            p = a + b - c
-            pred = [0, a, b, (a + b) // 2,
-                    a if abs(p - a) <= abs(p - b) and abs(p - a) <= abs(p - c) else b if abs(p - b) <= abs(p - c) else c][f]
-            line[i] = (line[i] + pred) & 255
-        rows.append([tuple(line[x * bpp:x * bpp + 3]) for x in range(w)])
-        prev = line
-    return w, h, rows
-w, h, img = pixels(sys.argv[1])
+"$PY" - "$(dirname "$0")" "$WORK/c.png" "$WORK/c32.png" "$WORK/c20.png" "$WORK/away.png" <<'PY'
+import sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+from png_read import pixels
+img = pixels(sys.argv[2])[:, :, :3]
+h, w = img.shape[:2]
 assert (w, h) == (96, 64), (w, h)
-bg = img[0][0]
-assert img[0][-1] == img[-1][0] == img[-1][-1] == bg, "corners differ: not background"
-assert img[h // 2][w // 2] != bg, "the middle of the image shows no volume"
-covered = sum(p != bg for row in img for p in row) / (w * h)
+bg = img[0, 0]
+assert (img[0, -1] == bg).all() and (img[-1, 0] == bg).all() and (img[-1, -1] == bg).all(), "corners differ: not background"
+assert (img[h // 2, w // 2] != bg).any(), "the middle of the image shows no volume"
+covered = np.any(img != bg, axis=2).mean()
 assert 0.1 < covered < 0.9, covered
-assert len(set(p for row in img for p in row)) > 20, "too few colors for a shaded volume"
-for other in sys.argv[2:4]:
-    assert pixels(other)[2] == img, other + " differs from the tet16 render"
-assert all(p == bg for row in pixels(sys.argv[4])[2] for p in row), "the camera looking away sees something"
+assert len(np.unique(img.reshape(-1, 3), axis=0)) > 20, "too few colors for a shaded volume"
+for other in sys.argv[3:5]:
+    assert (pixels(other)[:, :, :3] == img).all(), other + " differs from the tet16 render"
+assert (pixels(sys.argv[5])[:, :, :3] == bg).all(), "the camera looking away sees something"
 PY
 
 "$TPK" export "$WORK/c.tpk" --vtu "$WORK/c.vtu" --shell "$WORK/c.ply"
