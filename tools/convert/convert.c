@@ -8,9 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 
 #include "import/importers.h"
+#include "base/clock.h"
 #include "merge_vertices.h"
 #include "base/output_file.h"
 #include "base/parallel.h"
@@ -20,13 +20,6 @@
 #include "base/strbuf.h"
 #include "base/text_scan.h"
 #include "tetpack.h"
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void announce(tpk_stage_fn stage, void *user, const char *name)
 {
@@ -80,7 +73,7 @@ static void import_progress(void *user, double fraction)
 
 static int read_source(conversion *c)
 {
-    double t = now_seconds();
+    double t = tpk_now_seconds();
     announce(c->stage, c->stage_user, "import");
     if (c->stage)
         tpk_scan_watch(import_progress, c);
@@ -97,7 +90,7 @@ static int read_source(conversion *c)
     c->rep->source_cells = c->src.cell_count;
     memcpy(c->source_format, c->src.format, sizeof c->source_format);
     c->source_format[sizeof c->source_format - 1] = 0;
-    c->rep->t_import = now_seconds() - t;
+    c->rep->t_import = tpk_now_seconds() - t;
     return 0;
 }
 
@@ -146,7 +139,7 @@ static int make_tets(conversion *c)
 static int orient_tets(conversion *c)
 {
     announce(c->stage, c->stage_user, "orient");
-    double t = now_seconds();
+    double t = tpk_now_seconds();
     tpk_orient_stats os;
     memset(&os, 0, sizeof os);
     if (c->mesh.positive_known) {
@@ -160,7 +153,7 @@ static int orient_tets(conversion *c)
         return -1;
     c->rep->inverted_fixed = os.inverted_fixed;
     c->rep->degenerate_dropped = c->o->drop_degenerate ? os.degenerate : 0;
-    c->rep->t_orient = now_seconds() - t;
+    c->rep->t_orient = tpk_now_seconds() - t;
     if (c->mesh.tet_count == 0)
         return tpk_diag_fail(c->diag, "%s: no tetrahedra left to write", c->o->input);
     return 0;
@@ -170,7 +163,7 @@ static int orient_tets(conversion *c)
 static int connect_tets(conversion *c)
 {
     announce(c->stage, c->stage_user, "connect");
-    double t = now_seconds();
+    double t = tpk_now_seconds();
     c->neighbors = tpk_alloc_large(sizeof *c->neighbors * 4 * (size_t)(c->mesh.tet_count ? c->mesh.tet_count : 1));
     if (!c->neighbors)
         return tpk_diag_fail(c->diag, "out of memory for the neighbors of %lld tets", (long long)c->mesh.tet_count);
@@ -186,14 +179,14 @@ static int connect_tets(conversion *c)
     c->rep->bad_cells_skipped += unfold.bad_tets;
     c->rep->folds_cut = unfold.folds_cut;
     tpk_release_kept(); /* the last stage to use them: writing wants no more large arrays */
-    c->rep->t_connect = now_seconds() - t;
+    c->rep->t_connect = tpk_now_seconds() - t;
     return 0;
 }
 
 static int write_output(conversion *c)
 {
     announce(c->stage, c->stage_user, "write");
-    double t = now_seconds();
+    double t = tpk_now_seconds();
     c->rep->vertices = c->mesh.vertex_count;
     c->rep->tets = c->mesh.tet_count;
     c->rep->field_count = c->mesh.field_count;
@@ -203,7 +196,7 @@ static int write_output(conversion *c)
                         : tpk_write_tpk(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format, NULL,
                                         c->diag) != 0)
         return -1;
-    c->rep->t_write = now_seconds() - t;
+    c->rep->t_write = tpk_now_seconds() - t;
     return 0;
 }
 
@@ -214,19 +207,19 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     memset(&c, 0, sizeof c);
     memset(rep, 0, sizeof *rep);
     c.o = o, c.rep = rep, c.stage = stage, c.stage_user = stage_user, c.diag = diag;
-    double t0 = now_seconds();
+    double t0 = tpk_now_seconds();
     int rc = read_source(&c);
     if (rc == 0) {
-        double t = now_seconds();
+        double t = tpk_now_seconds();
         rc = make_tets(&c);
-        rep->t_tetrahedralize = now_seconds() - t;
+        rep->t_tetrahedralize = tpk_now_seconds() - t;
     }
     /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
     if (rc == 0 && !o->no_reorder) {
-        double t = now_seconds();
+        double t = tpk_now_seconds();
         announce(stage, stage_user, "reorder");
         rc = tpk_reorder(&c.mesh, o->threads, diag);
-        rep->t_reorder = now_seconds() - t;
+        rep->t_reorder = tpk_now_seconds() - t;
     }
     if (rc == 0)
         rc = orient_tets(&c);
@@ -234,7 +227,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
         rc = connect_tets(&c);
     if (rc == 0)
         rc = write_output(&c);
-    rep->t_total = now_seconds() - t0;
+    rep->t_total = tpk_now_seconds() - t0;
     free(c.neighbors);
     free(c.turned_over);
     tpk_merge_report_free(&c.merged);

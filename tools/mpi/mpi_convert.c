@@ -16,6 +16,7 @@
 #include "convert/parts.h"
 #include "convert/pipeline.h"
 #include "convert/write_tpk.h"
+#include "base/clock.h"
 #include "base/strbuf.h"
 #include "exchange.h"
 #include "pieces.h"
@@ -41,13 +42,6 @@ typedef struct rank_state {
     int64_t link_count;
     tpk_part_record record;
 } rank_state;
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static double cpu_seconds(void)
 {
@@ -329,10 +323,10 @@ static void free_state(rank_state *s)
 /* A phase: its wall and CPU seconds, then the ranks agree (a failure anywhere stops every rank here). */
 #define PHASE(call, t, cpu)                         \
     do {                                            \
-        double t0_ = now_seconds(), c0_ = cpu_seconds(); \
+        double t0_ = tpk_now_seconds(), c0_ = cpu_seconds(); \
         rc = (call);                                \
         (cpu) = cpu_seconds() - c0_;                \
-        (t) = now_seconds() - t0_;                  \
+        (t) = tpk_now_seconds() - t0_;                  \
         if (tpk_agree(s.comm, rc) != 0) {           \
             rc = -1;                                \
             goto done;                              \
@@ -347,7 +341,7 @@ int tpk_mpi_convert(MPI_Comm comm, const tpk_mpi_options *o, tpk_mpi_rank_report
     s.comm = comm, s.o = o, s.rep = rep, s.diag = diag;
     MPI_Comm_rank(comm, &s.rank);
     MPI_Comm_size(comm, &s.size);
-    double start = now_seconds();
+    double start = tpk_now_seconds();
     int rc = 0;
     PHASE(read_input(&s), rep->t_read, rep->cpu_read);
     PHASE(global_vertices(&s), rep->t_ids, rep->cpu_ids);
@@ -365,7 +359,7 @@ int tpk_mpi_convert(MPI_Comm comm, const tpk_mpi_options *o, tpk_mpi_rank_report
     rep->shell_faces = (int64_t)s.hdr.shell_face_count;
     rep->links = s.link_count;
 done:
-    rep->t_total = now_seconds() - start;
+    rep->t_total = tpk_now_seconds() - start;
     struct rusage ru;
     if (getrusage(RUSAGE_SELF, &ru) == 0)
         rep->peak_rss_bytes = (int64_t)ru.ru_maxrss * 1024;

@@ -4,8 +4,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "base/clock.h"
 #include "view_internal.h"
 
 /* A drag shows frames at a fraction of the resolution when full frames take longer than this. */
@@ -25,13 +25,6 @@ typedef struct view_loop {
     double frame_seconds[256]; /* the first full frames' render times, for the summary of --frames */
     int timed;
 } view_loop;
-
-static double now_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 /* Mouse drags onto the camera: 0.4 degree per pixel, a wheel step zooms by 10%. */
 static int apply_drags(view_loop *l, const view_input *in)
@@ -103,10 +96,10 @@ static int show_frame(view_loop *l, int reduced, tpk_diag *diag)
         l->rgba = grown, l->rgba_bytes = bytes;
     }
     tpk_render_stats stats;
-    double t0 = now_seconds();
+    double t0 = tpk_now_seconds();
     if (view_renderer_frame(&l->renderer, &l->state, w, h, l->rgba, &stats, diag) != 0)
         return -1;
-    double seconds = now_seconds() - t0;
+    double seconds = tpk_now_seconds() - t0;
     if (zoom == 1) /* the size a scene written now says */
         l->full_seconds = seconds, l->state.opt.width = width, l->state.opt.height = height;
     if (zoom == 1 && l->timed < 256)
