@@ -203,6 +203,21 @@ static inline int fx_build(fx_mesh *m)
     return 0;
 }
 
+/* The render tests' mesh: an 8^3 grid of unit cubes, built, with scalar = x (0..8) when with_scalars. */
+static inline int fx_render_grid(fx_mesh *m, int with_scalars)
+{
+    if (fx_grid(m, 8, 8, 8, NULL, 1.0, NULL) != 0 || fx_build(m) != 0)
+        return -1;
+    if (!with_scalars)
+        return 0;
+    m->scalars = malloc((size_t)m->vertex_count * sizeof(float));
+    if (!m->scalars)
+        return -1;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        m->scalars[v] = m->positions[3 * v];
+    return 0;
+}
+
 static inline tpk_mesh_arrays fx_arrays(const fx_mesh *m, tpk_layout layout)
 {
     tpk_mesh_arrays a;

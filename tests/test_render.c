@@ -14,21 +14,6 @@
 #include "render/render.h"
 #include "render/transfer_function.h"
 
-/* An 8^3 grid with scalar = x (0..8). */
-static int make_grid(fx_mesh *m, int with_scalars)
-{
-    if (fx_grid(m, 8, 8, 8, NULL, 1.0, NULL) != 0 || fx_build(m) != 0)
-        return -1;
-    if (with_scalars) {
-        m->scalars = malloc((size_t)m->vertex_count * sizeof(float));
-        if (!m->scalars)
-            return -1;
-        for (int64_t v = 0; v < m->vertex_count; v++)
-            m->scalars[v] = m->positions[3 * v];
-    }
-    return 0;
-}
-
 static void base_options(tpk_render_options *opt, const tpk_transfer_function *tf)
 {
     tpk_render_options_default(opt);
@@ -44,7 +29,7 @@ static void base_options(tpk_render_options *opt, const tpk_transfer_function *t
 TPK_TEST(render_nonempty_and_deterministic)
 {
     fx_mesh m;
-    CHECK(make_grid(&m, 1) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_mesh_arrays arrays = fx_arrays(&m, TPK_LAYOUT_TET16);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
@@ -113,7 +98,7 @@ static int one_pixel(const fx_mesh *m, const tpk_transfer_function *tf, int inte
 TPK_TEST(render_integration_analytic)
 {
     fx_mesh m;
-    CHECK(make_grid(&m, 1) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_diag diag = {0};
     tpk_transfer_function tf;
     /* opacity ramp 0 -> 0.2 over the field 0..8: optical depth integral_0^8 0.2 x/8 dx = 0.8 */
@@ -138,7 +123,7 @@ TPK_TEST(render_integration_analytic)
 TPK_TEST(render_early_termination)
 {
     fx_mesh m;
-    CHECK(make_grid(&m, 1) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_mesh_arrays arrays = fx_arrays(&m, TPK_LAYOUT_TET16);
     tpk_diag diag = {0};
     tpk_transfer_function opaque, faint;
@@ -163,7 +148,7 @@ TPK_TEST(render_early_termination)
 TPK_TEST(render_bad_options)
 {
     fx_mesh m;
-    CHECK(make_grid(&m, 0) == 0);
+    CHECK(fx_render_grid(&m, 0) == 0);
     tpk_mesh_arrays arrays = fx_arrays(&m, TPK_LAYOUT_TET16);
     tpk_transfer_function tf;
     tpk_diag diag = {0};

@@ -14,18 +14,6 @@
 
 enum { W = 64, H = 64, N = W * H * 4 };
 
-static int make_grid(fx_mesh *m)
-{
-    if (fx_grid(m, 8, 8, 8, NULL, 1.0, NULL) != 0 || fx_build(m) != 0)
-        return -1;
-    m->scalars = malloc((size_t)m->vertex_count * sizeof(float));
-    if (!m->scalars)
-        return -1;
-    for (int64_t v = 0; v < m->vertex_count; v++)
-        m->scalars[v] = m->positions[3 * v];
-    return 0;
-}
-
 /* Options over the grid: range 0..8 (u = x / 8), unit distance 1, transparent black background. */
 static void grid_options(tpk_render_options *opt, const tpk_transfer_function *tf, const double eye[3])
 {
@@ -125,7 +113,7 @@ static void check_plane(const uint8_t *img, const tpk_camera *cam, double v, con
 TPK_TEST(iso_plane_position_and_colour)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
     CHECK(tpk_tf_parse("red-blue", "0 1 0 0 0\n1 0 0 1 0\n", &tf, &diag) == 0); /* transparent volume */
@@ -178,7 +166,7 @@ TPK_TEST(iso_plane_position_and_colour)
 TPK_TEST(tet_field)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     float *cells = malloc((size_t)m.tet_count * sizeof(float));
     CHECK(cells);
     for (int64_t t = 0; t < m.tet_count; t++) {
@@ -259,7 +247,7 @@ static int coverage(const uint8_t *img)
 TPK_TEST(clip_box)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
     CHECK(tpk_tf_parse("constant", "0 1 1 1 0.3\n1 1 1 1 0.3\n", &tf, &diag) == 0);
@@ -307,7 +295,7 @@ TPK_TEST(clip_box)
 TPK_TEST(shadows_closed_form)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
     CHECK(tpk_tf_parse("slab", "0 1 1 1 0\n0.7 1 1 1 0\n0.75 1 1 1 0.5\n1 1 1 1 0.5\n", &tf, &diag) == 0);
@@ -354,7 +342,7 @@ TPK_TEST(shadows_closed_form)
 TPK_TEST(ao_closed_form)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
     CHECK(tpk_tf_parse("bw", "0 0 0 0 0\n0.4375 0 0 0 0\n0.5 1 1 1 0\n1 1 1 1 0\n", &tf, &diag) == 0);
@@ -389,7 +377,7 @@ TPK_TEST(ao_closed_form)
 TPK_TEST(shading_and_darkening)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
     CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
@@ -448,7 +436,7 @@ TPK_TEST(shading_and_darkening)
 TPK_TEST(effects_deterministic)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
     CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
@@ -498,7 +486,7 @@ TPK_TEST(effects_deterministic)
 TPK_TEST(effects_bad_options)
 {
     fx_mesh m;
-    CHECK(make_grid(&m) == 0);
+    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
     tpk_diag diag = {0};
     CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
