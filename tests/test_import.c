@@ -626,6 +626,58 @@ TPK_TEST(vtk_bad_binary)
     free(b.data);
 }
 
+/* COLOR_SCALARS in BINARY are unsigned chars scaled to [0, 1]. Read leniently (tetpack check), a block of
+ * the wrong length is recorded and dropped; the scaling must not touch a field that is not there (a
+ * fuzzer's SIGSEGV: ../shared/crashers/check_vtk_color_scalars.vtk). */
+static void color_scalars_file(buf *b, int announced)
+{
+    put_text(b, BINHDR "POINTS 4 float\n");
+    for (int i = 0; i < 12; i++)
+        put_float(b, 1, (float)(i % 4 == 0));
+    put_text(b, "\nCELLS 1 5\n");
+    for (int i = 0; i < 5; i++)
+        put_int(b, 1, i ? i - 1 : 4, 4);
+    put_text(b, "\nCELL_TYPES 1\n");
+    put_int(b, 1, 10, 4);
+    char line[64];
+    snprintf(line, sizeof line, "\nPOINT_DATA %d\nCOLOR_SCALARS rgb 3\n", announced);
+    put_text(b, line);
+    for (int i = 0; i < 3 * announced; i++)
+        put(b, (const char[]){(char)(unsigned char)(i * 51 % 256)}, 1);
+    put_text(b, "\n");
+}
+
+TPK_TEST(vtk_color_scalars_strict_and_lenient)
+{
+    buf b = {0};
+    color_scalars_file(&b, 4);
+    tpk_mesh m;
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    CHECK(tpk_import_vtk_legacy_memory("rgb.vtk", b.data, b.size, &m, &d) == 0);
+    const tpk_src_field *f = find_field(&m, "rgb");
+    CHECK(f && f->components == 3);
+    for (int i = 0; f && i < 12; i++)
+        CHECK_MSG(f->values[i] == (float)(i * 51 % 256) / 255.0f, "value %d: %g", i, (double)f->values[i]);
+    tpk_mesh_free(&m);
+    free(b.data);
+
+    /* 2 colors for 4 points: refused strictly, dropped leniently (the crasher's shape: no other field). */
+    b = (buf){0};
+    color_scalars_file(&b, 2);
+    memset(&d, 0, sizeof d);
+    CHECK(tpk_import_vtk_legacy_memory("rgb.vtk", b.data, b.size, &m, &d) != 0);
+    CHECK_MSG(strstr(d.message, "POINT_DATA 2: expected 4 (one per point)") != NULL, "got %s", d.message);
+    memset(&d, 0, sizeof d);
+    d.lenient_fields = 1;
+    CHECK(tpk_import_vtk_legacy_memory("rgb.vtk", b.data, b.size, &m, &d) == 0);
+    CHECK_EQ_INT(m.field_count, 0);
+    CHECK_EQ_INT(d.field_problem_count, 1);
+    CHECK(!strcmp(d.field_problems[0].name, "rgb"));
+    tpk_mesh_free(&m);
+    free(b.data);
+}
+
 /* Truncate valid files at every offset: each import must fail with the file name and a place, or
  * (at a section boundary) succeed; never crash or leak (run under ASan). */
 TPK_TEST(vtk_truncated_everywhere)

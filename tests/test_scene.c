@@ -5,6 +5,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "harness.h"
 #include "scene/scene.h"
@@ -82,6 +84,11 @@ TPK_TEST(out_of_range)
                       "s.json:1:9: key 'tf.points': point 1: s must increase strictly, found 0 after 0");
     CHECK_PARSE_ERROR("{\"tf\": {\"preset\": \"jet\"}}",
                       "s.json:1:9: key 'tf.preset': expected one of viridis, cool-warm, inferno, grayscale, found \"jet\"");
+    /* An empty name is no preset (it made the old substring search loop for ever). */
+    CHECK_PARSE_ERROR("{\"tf\": {\"preset\": \"\"}}",
+                      "s.json:1:9: key 'tf.preset': expected one of viridis, cool-warm, inferno, grayscale, found \"\"");
+    CHECK_PARSE_ERROR("{\"tf\": {\"preset\": \"cool\"}}",
+                      "s.json:1:9: key 'tf.preset': expected one of viridis, cool-warm, inferno, grayscale, found \"cool\"");
     CHECK_PARSE_ERROR("{\"tetpack_scene\": 2}",
                       "s.json:1:2: key 'tetpack_scene': expected 1 (the scene format this tetpack reads), found 2");
     CHECK_PARSE_ERROR("{\"camera\": {\"eye\": [1, 1, 1], \"at\": [0, 0, 0], \"up\": [0, 0, 1]}}",
@@ -107,6 +114,26 @@ TPK_TEST(load_names_file)
     snprintf(expected, sizeof expected, "%s:2:10: key 'tf.file': %s/missing_tf.txt: not a transfer function preset", path,
              tpk_temp_dir());
     CHECK_MSG(!strncmp(diag.message, expected, strlen(expected)), "got %s", diag.message);
+}
+
+/* A TF file that is a FIFO is refused at once, not waited on. */
+TPK_TEST(tf_file_fifo_refused)
+{
+    const char *fifo = tpk_temp_path("tf.fifo");
+    unlink(fifo);
+    CHECK(mkfifo(fifo, 0600) == 0);
+    const char *path = tpk_temp_path("fifo.json");
+    FILE *f = fopen(path, "w");
+    CHECK(f);
+    fprintf(f, "{\"tf\": {\"file\": \"%s\"}}\n", fifo);
+    fclose(f);
+    tpk_scene scene;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    CHECK(tpk_scene_load(path, &scene, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "key 'tf.file': ") && strstr(diag.message, "tf.fifo: not a regular file"), "got %s",
+              diag.message);
+    unlink(fifo);
 }
 
 static const char full_scene[] =

@@ -350,7 +350,9 @@ int tpk_map_file(const char *path, const char **data, size_t *size, tpk_diag *di
     static const char empty[1];
     *data = NULL;
     *size = 0;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    /* O_NONBLOCK: opening a FIFO (or a device) returns at once instead of waiting for a writer, and
+     * fstat then refuses it; a regular file reads the same either way. */
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
     if (fd < 0)
         return tpk_diag_fail(diag, "%s: cannot open: %s", path, strerror(errno));
     struct stat st;

@@ -7,6 +7,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+
+#include "base/text_scan.h"
 
 typedef struct tf_preset {
     const char *name;
@@ -41,6 +44,19 @@ static const tf_preset presets[] = {
 const char *tpk_tf_preset_names(void)
 {
     return "viridis, cool-warm, inferno, grayscale";
+}
+
+const char *tpk_tf_preset(int i)
+{
+    return i >= 0 && (size_t)i < sizeof presets / sizeof presets[0] ? presets[i].name : NULL;
+}
+
+int tpk_tf_is_preset(const char *name)
+{
+    for (int i = 0; name && tpk_tf_preset(i); i++)
+        if (!strcmp(name, tpk_tf_preset(i)))
+            return 1;
+    return 0;
 }
 
 static double preset_alpha(const tf_preset *p, double s)
@@ -147,29 +163,30 @@ int tpk_tf_load(const char *preset_or_path, tpk_transfer_function *out, tpk_diag
             build_preset(&presets[i], out);
             return 0;
         }
-    FILE *f = fopen(preset_or_path, "rb");
-    if (!f)
+    /* The file is mapped, so a FIFO or a directory is refused with a message instead of blocking. */
+    if (access(preset_or_path, F_OK) != 0)
         return tpk_diag_fail(diag, "%s: not a transfer function preset (%s) and cannot open it as a file: %s",
                              preset_or_path, tpk_tf_preset_names(), strerror(errno));
+    const char *data;
+    size_t n;
+    if (tpk_map_file(preset_or_path, &data, &n, diag) != 0)
+        return -1;
     enum { MAX_BYTES = 1 << 20 };
-    char *text = malloc(MAX_BYTES + 1);
-    size_t n = text ? fread(text, 1, MAX_BYTES + 1, f) : 0;
-    int read_error = ferror(f);
-    fclose(f);
-    if (!text)
-        return tpk_diag_fail(diag, "%s: out of memory", preset_or_path);
+    char *text = n <= MAX_BYTES ? malloc(n + 1) : NULL;
     int rc;
-    if (read_error)
-        rc = tpk_diag_fail(diag, "%s: read error", preset_or_path);
-    else if (n > MAX_BYTES)
+    if (n > MAX_BYTES)
         rc = tpk_diag_fail(diag, "%s: expected a transfer function file under 1 MiB, found a larger file",
                            preset_or_path);
-    else if (memchr(text, 0, n))
+    else if (!text)
+        rc = tpk_diag_fail(diag, "%s: out of memory", preset_or_path);
+    else if (memchr(data, 0, n))
         rc = tpk_diag_fail(diag, "%s: expected text 's r g b a' lines, found a NUL byte", preset_or_path);
     else {
+        memcpy(text, data, n);
         text[n] = 0;
         rc = tpk_tf_parse(preset_or_path, text, out, diag);
     }
+    tpk_unmap_file(data, n);
     free(text);
     return rc;
 }

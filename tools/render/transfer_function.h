@@ -34,6 +34,12 @@ int tpk_tf_parse(const char *name, const char *text, tpk_transfer_function *out,
 /* The preset names, comma separated, for --help: "viridis, cool-warm, inferno, grayscale". */
 const char *tpk_tf_preset_names(void);
 
+/* The i-th preset's name (i from 0), or NULL past the last: the one list that names presets. */
+const char *tpk_tf_preset(int i);
+
+/* 1 when `name` is exactly a preset's name (the empty string is none), else 0. */
+int tpk_tf_is_preset(const char *name);
+
 /* Color and opacity at normalized scalar s (clamped to the end points). rgba[3] is the `a` column. */
 void tpk_tf_eval(const tpk_transfer_function *tf, double s, double rgba[4]);
 

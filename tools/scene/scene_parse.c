@@ -228,16 +228,6 @@ static int key_camera(parser *p, const cJSON *v)
     return 0;
 }
 
-static int is_preset(const char *name)
-{
-    const char *list = tpk_tf_preset_names();
-    size_t n = strlen(name);
-    for (const char *s = list; (s = strstr(s, name)) != NULL; s += n)
-        if ((s == list || (s - list >= 2 && s[-2] == ',')) && (s[n] == ',' || s[n] == 0))
-            return 1;
-    return 0;
-}
-
 static int tf_points(parser *p, const cJSON *v)
 {
     tpk_transfer_function *tf = &p->out->tf;
@@ -294,7 +284,7 @@ static int key_tf(parser *p, const cJSON *v)
     const cJSON *e = v->child;
     if (!strcmp(e->string, "preset")) {
         p->out->tf_kind = TPK_SCENE_TF_PRESET;
-        if (!cJSON_IsString(e) || !is_preset(e->valuestring))
+        if (!cJSON_IsString(e) || !tpk_tf_is_preset(e->valuestring))
             return fail_key(p, "tf.preset", "expected one of %s, found %s", tpk_tf_preset_names(), shown(e, buf));
         snprintf(p->out->tf_source, sizeof p->out->tf_source, "%s", e->valuestring);
         return tpk_tf_load(e->valuestring, &p->out->tf, p->diag);

@@ -9,24 +9,10 @@
 static const tpk_layout layouts[3] = {TPK_LAYOUT_TET16, TPK_LAYOUT_TET20, TPK_LAYOUT_TET32};
 static const uint32_t layout_tags[3] = {TPK_TAG_TT16, TPK_TAG_TT20, TPK_TAG_TT32};
 
-/* The i-th preset name of tpk_tf_preset_names() ("a, b, c"), or 0 when there is none. */
-static int preset_name(int i, char *out, size_t n)
-{
-    const char *p = tpk_tf_preset_names();
-    for (; i > 0 && p; i--)
-        p = (p = strchr(p, ',')) ? p + 2 : NULL;
-    if (!p)
-        return 0;
-    size_t len = strchr(p, ',') ? (size_t)(strchr(p, ',') - p) : strlen(p);
-    snprintf(out, n, "%.*s", (int)(len < n ? len : n - 1), p);
-    return 1;
-}
-
 static int find_preset(const char *name)
 {
-    char p[64];
-    for (int i = 0; preset_name(i, p, sizeof p); i++)
-        if (!strcmp(p, name))
+    for (int i = 0; tpk_tf_preset(i); i++)
+        if (!strcmp(tpk_tf_preset(i), name))
             return i;
     return -1;
 }
@@ -149,11 +135,8 @@ static int step_by(view_state *s, int delta, tpk_diag *diag)
 
 static int next_tf(view_state *s, tpk_diag *diag)
 {
-    char name[64];
-    int next = s->tf_preset + 1;
-    if (!preset_name(next, name, sizeof name))
-        preset_name(next = 0, name, sizeof name);
-    if (tpk_tf_load(name, &s->tf, diag) != 0)
+    int next = tpk_tf_preset(s->tf_preset + 1) ? s->tf_preset + 1 : 0;
+    if (tpk_tf_load(tpk_tf_preset(next), &s->tf, diag) != 0)
         return -1;
     s->tf_preset = next;
     return 0;

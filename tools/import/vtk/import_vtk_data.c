@@ -41,9 +41,11 @@ static int wrong_length(vtk_reader *r, const char *name, int64_t comps, int64_t 
                        (long long)r->assoc_expected, r->assoc == TPK_ASSOC_POINT ? "point" : "cell");
 }
 
-/* Read `tuples * comps` values and keep them as a field (keep = 0: parse and drop). */
+/* Read `tuples * comps` values, each divided by `unit`, and keep them as a field (keep = 0: parse and drop). The
+ * division happens here, on the values just read, because a field read leniently may be dropped: no caller
+ * may assume the mesh's last field is the one it asked for. */
 static int read_field_values(vtk_reader *r, const char *name, vtk_type type, int64_t comps, int64_t tuples,
-                             int keep, const char *block)
+                             int keep, float unit, const char *block)
 {
     if (comps < 1 || comps > 65536)
         return vtk_fail_kw(r, "%s '%s': expected 1 to 65536 components, found %lld", block, name, (long long)comps);
@@ -70,6 +72,9 @@ static int read_field_values(vtk_reader *r, const char *name, vtk_type type, int
         free(values);
         return 0;
     }
+    if (unit != 1.0f)
+        for (uint64_t i = 0; i < count; i++)
+            values[i] /= unit;
     int assoc = r->assoc == TPK_ASSOC_POINT ? TPK_ASSOC_POINT : TPK_ASSOC_TET;
     if (tpk_mesh_add_field(&r->fields, name, assoc, (int)comps, 1, values) != 0) {
         free(values);
@@ -107,7 +112,7 @@ int vtk_read_scalars(vtk_reader *r)
             tpk_scan_end_line(&r->s, "LOOKUP_TABLE name"))
             return -1;
     }
-    return read_field_values(r, name, type, comps, r->assoc_count, 1, "SCALARS");
+    return read_field_values(r, name, type, comps, r->assoc_count, 1, 1.0f, "SCALARS");
 }
 
 /* VECTORS, NORMALS, TENSORS, TENSORS6, GLOBAL_IDS, PEDIGREE_IDS: name type, fixed components. */
@@ -118,7 +123,7 @@ int vtk_read_fixed_attribute(vtk_reader *r, const char *kw, int comps)
     if (need_data_section(r, kw) || vtk_arg_name(r, kw, name) || vtk_arg_type(r, kw, &type) ||
         tpk_scan_end_line(&r->s, kw))
         return -1;
-    return read_field_values(r, name, type, comps, r->assoc_count, 1, kw);
+    return read_field_values(r, name, type, comps, r->assoc_count, 1, 1.0f, kw);
 }
 
 int vtk_read_texture_coordinates(vtk_reader *r)
@@ -132,7 +137,7 @@ int vtk_read_texture_coordinates(vtk_reader *r)
         return -1;
     if (dim < 1 || dim > 3)
         return vtk_fail_kw(r, "%s %s: expected a dimension 1 to 3, found %lld", kw, name, (long long)dim);
-    return read_field_values(r, name, type, dim, r->assoc_count, 1, kw);
+    return read_field_values(r, name, type, dim, r->assoc_count, 1, 1.0f, kw);
 }
 
 /* COLOR_SCALARS name n: floats in ASCII, unsigned chars (scaled to [0,1]) in BINARY. */
@@ -144,14 +149,8 @@ int vtk_read_color_scalars(vtk_reader *r)
     if (need_data_section(r, kw) || vtk_arg_name(r, kw, name) || vtk_arg_count(r, kw, "a component count", &comps) ||
         tpk_scan_end_line(&r->s, kw))
         return -1;
-    if (read_field_values(r, name, r->binary ? VT_U8 : VT_F32, comps, r->assoc_count, 1, kw))
-        return -1;
-    if (r->binary) {
-        tpk_src_field *f = &r->fields.fields[r->fields.field_count - 1];
-        for (int64_t i = 0; i < comps * r->assoc_count; i++)
-            f->values[i] /= 255.0f;
-    }
-    return 0;
+    return read_field_values(r, name, r->binary ? VT_U8 : VT_F32, comps, r->assoc_count, 1,
+                             r->binary ? 255.0f : 1.0f, kw);
 }
 
 /* A lookup table definition: LOOKUP_TABLE name size, then size RGBA entries. Skipped. */
@@ -163,7 +162,7 @@ int vtk_skip_lookup_table(vtk_reader *r)
     if (vtk_arg_token(r, "LOOKUP_TABLE", "a table name", &tok, &len) ||
         vtk_arg_count(r, "LOOKUP_TABLE", "a table size", &n) || tpk_scan_end_line(&r->s, "LOOKUP_TABLE name size"))
         return -1;
-    return read_field_values(r, "lookup_table", r->binary ? VT_U8 : VT_F32, 4, n, 0, "LOOKUP_TABLE");
+    return read_field_values(r, "lookup_table", r->binary ? VT_U8 : VT_F32, 4, n, 0, 1.0f, "LOOKUP_TABLE");
 }
 
 /* METADATA: lines of text up to an empty line. */
@@ -215,7 +214,7 @@ int vtk_read_field(vtk_reader *r)
             vtk_arg_type(r, name, &type) || tpk_scan_end_line(&r->s, "name components tuples type"))
             return -1;
         int keep = r->assoc >= 0;
-        if (read_field_values(r, name, type, comps, tuples, keep, "FIELD array"))
+        if (read_field_values(r, name, type, comps, tuples, keep, 1.0f, "FIELD array"))
             return -1;
     }
     return 0;
