@@ -4,7 +4,9 @@
 
 // OpenMesh's property arrays push_back default-constructed (uninitialized) Vec3d; GCC 12 sees that
 // through std::vector's inlined allocator and warns in the system headers. Nothing reads them unset.
+#if defined(__GNUC__) && !defined(__clang__) // clang has no such warning and refuses the unknown name
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
