@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "import/importers.h"
+#include "support.h"
 
 #ifndef TPK_FUZZ_FORMAT
 #error "TPK_FUZZ_FORMAT names the registry row to fuzz"
@@ -45,6 +46,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     char name[64];
     file_name(row->extensions, data[0], name, sizeof name);
+    if (getenv("TPK_FUZZ_KEEP")) { /* ./dev fuzz: the file as tetpack would read it */
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s", tpk_fuzz_fresh_dir(NULL), name);
+        tpk_fuzz_write(path, data + 1, size - 1);
+    }
     for (int lenient = 0; lenient < 2; lenient++) {
         tpk_mesh mesh;
         tpk_diag diag;

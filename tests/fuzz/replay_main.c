@@ -8,6 +8,41 @@
 #include <sys/stat.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+/* A target's custom mutator (fuzz_tpk_struct), when it has one: the replay runs it too. */
+size_t LLVMFuzzerCustomMutator(uint8_t *data, size_t size, size_t max_size, unsigned int seed) __attribute__((weak));
+
+/* libFuzzer's byte mutator, for a custom mutator that falls back on it: here one byte changes. */
+size_t LLVMFuzzerMutate(uint8_t *data, size_t size, size_t max_size);
+size_t LLVMFuzzerMutate(uint8_t *data, size_t size, size_t max_size)
+{
+    static unsigned calls;
+    calls++;
+    if (size > 0)
+        data[calls * 2654435761u % size] ^= (uint8_t)(1u << calls % 8);
+    else if (max_size > 0)
+        data[size++] = (uint8_t)calls;
+    return size;
+}
+
+/* The custom mutator on a copy of the input, a few seeds, each result replayed (exact size). */
+static void replay_mutations(const uint8_t *data, size_t size)
+{
+    size_t max_size = size * 2 + 4096;
+    for (unsigned seed = 1; seed <= 16; seed++) {
+        uint8_t *copy = malloc(max_size);
+        if (!copy)
+            return;
+        memcpy(copy, data, size);
+        size_t mutated = LLVMFuzzerCustomMutator(copy, size, max_size, seed);
+        uint8_t *exact = malloc(mutated ? mutated : 1);
+        if (exact) {
+            memcpy(exact, copy, mutated);
+            LLVMFuzzerTestOneInput(exact, mutated);
+        }
+        free(exact);
+        free(copy);
+    }
+}
 
 static int replay_file(const char *path)
 {
@@ -29,6 +64,8 @@ static int replay_file(const char *path)
     }
     fclose(f);
     LLVMFuzzerTestOneInput(data, (size_t)size);
+    if (LLVMFuzzerCustomMutator)
+        replay_mutations(data, (size_t)size);
     free(data);
     return 0;
 }
