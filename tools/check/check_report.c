@@ -129,8 +129,10 @@ void tpk_histogram_add(tpk_histogram *h, double value)
 {
     if (!h || !isfinite(value))
         return;
-    int b = (int)((value - h->lo) / (h->hi - h->lo) * TPK_HIST_BINS);
-    b = b < 0 ? 0 : b >= TPK_HIST_BINS ? TPK_HIST_BINS - 1 : b;
+    /* clamped as a double: a value far outside [lo, hi] (a radius ratio of a nearly flat tet) does not
+     * fit an int (found by fuzz_tpk_struct) */
+    double at = (value - h->lo) / (h->hi - h->lo) * TPK_HIST_BINS;
+    int b = !(at >= 0) ? 0 : at >= TPK_HIST_BINS ? TPK_HIST_BINS - 1 : (int)at;
     h->bins[b]++;
     h->count++;
     h->sum += value;
