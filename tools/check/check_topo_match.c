@@ -259,7 +259,7 @@ static void face_of(const match_job *job, uint32_t cell, uint32_t local, tpk_top
     const int32_t *v = job->mesh->cell_conn + 4 * (int64_t)cell; /* no offsets or types to read */
     out->n = 3;
     for (int i = 0; i < 3; i++)
-        out->v[i] = v[tpk_topo_tet_faces[local][i]];
+        out->v[i] = v[tpk_tet_faces[local][i]];
 }
 
 /* A tet's faces whose smallest id is v (its smallest or second smallest id); face k is opposite k. */

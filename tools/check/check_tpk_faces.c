@@ -16,7 +16,7 @@
 
 static void sorted_face(const int32_t q[4], int k, int32_t f[3])
 {
-    const int *p = tpkc_outward[k];
+    const int *p = tpk_tet_faces[k];
     int32_t a = q[p[0]], b = q[p[1]], d = q[p[2]], s;
     if (a > b) { s = a; a = b; b = s; }
     if (b > d) { s = b; b = d; d = s; }

@@ -17,7 +17,7 @@
 #define MAX_LISTED_TETS 16
 #define ROLE_S1 0x80000000u /* bucket entry flag: the tet's face opposite s0, not its three s0 faces */
 #define ID_MASK 0x7fffffffu
-/* A face's slot (4 * tet + k) carries, in bit 62, the parity of its outward vertex order (tpk_outward_face)
+/* A face's slot (4 * tet + k) carries, in bit 62, the parity of its outward vertex order (tpk_tet_faces)
  * against ascending ids: two positive tets that share a face see it in opposite orders unless it folds. */
 #define SLOT_ODD ((int64_t)1 << 62)
 #define SLOT_MASK (SLOT_ODD - 1)
