@@ -98,8 +98,9 @@ void tpk_warn_cell_counts(tpk_diag *diag, const char *name, const int64_t *by_ty
     tpk_diag_warn(diag, "%s: %s %lld cells (%s)", name, what, (long long)total, list);
 }
 
-/* Indexed by VTK code - 10 (tpk_cell_shape_of). Faces are outward on `ref` (tests/test_split.c checks each against the enclosed volume, exactly); a
- * voxel is a hexahedron with corners 2,3 and 6,7 swapped (x fastest, then y, then z). */
+/* Indexed by VTK code - 10 (tpk_cell_shape_of). Faces are outward on `ref` (tests/test_split.c checks
+ * the volume they enclose, exactly, and that each edge bounds two faces); a voxel is a hexahedron with
+ * corners 2,3 and 6,7 swapped (x fastest, then y, then z). */
 static const tpk_cell_shape shapes[] = {
     {TPK_CELL_TETRA, 4, 4, {3, 3, 3, 3}, TPK_TET_FACE_LIST,
      6, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
