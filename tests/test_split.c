@@ -47,8 +47,7 @@ static int has_edge(const int32_t *tets, int n, int32_t a, int32_t b)
 
 TPK_TEST(every_cube_labelling)
 {
-    static const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                    {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    const int (*faces)[4] = tpk_cell_shape_of(TPK_CELL_HEXAHEDRON)->faces; /* outward: tested below */
     int32_t label[8] = {0, 1, 2, 3, 4, 5, 6, 7};
     double points[8][3];
     int fives = 0, total = 0;
