@@ -2,11 +2,10 @@
  * A counting sort puts every tet into two buckets, by the rule of mesh/face_buckets.h: bucket s0 for its
  * three faces that contain its smallest id s0, bucket s1 for its face opposite s0. So bucket v holds
  * exactly the faces whose smallest id is v, with only 4 bytes per tet per bucket (the tet id, and one
- * bit for which of the two roles). Buckets are small
- * (about 12 tets, 24 faces in a typical mesh): each is expanded into its faces and matched with a small
- * hash table keyed by the other two ids: a face seen once is a boundary face, twice makes neighbors,
- * more is an error. Workers take contiguous tet ranges and bucket ranges, so the result does not
- * depend on timing. */
+ * bit for which of the two roles). Buckets are small (about 12 tets, 24 faces in a typical mesh): each
+ * is expanded into its faces and matched with a small hash table keyed by the other two ids: a face
+ * seen once is a boundary face, twice makes neighbors, more is an error. Workers take contiguous tet
+ * ranges and bucket ranges, so the result does not depend on timing. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
