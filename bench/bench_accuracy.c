@@ -18,6 +18,7 @@
 
 #include "convert/cell_split.h"
 #include "import/importers.h"
+#include "mesh/cell_types.h"
 #include "mesh/mesh.h"
 
 #define SAMPLES_PER_CELL 64
@@ -249,7 +250,7 @@ static int jittered_grid(cell_mesh *m, int type, int n, double jitter, char *nam
     static const int off[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
     /* wedges: triangles (0,1,2) and (0,2,3) of the bottom face, extruded; pyramids: a face and the centre */
     static const int wedge[2][6] = {{0, 1, 2, 4, 5, 6}, {0, 2, 3, 4, 6, 7}};
-    static const int pyr[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    const int (*pyr)[4] = tpk_cell_shape_of(TPK_CELL_HEXAHEDRON)->faces; /* outward cube faces */
     long c = 0;
     for (int k = 0; k < n; k++)
         for (int j = 0; j < n; j++)

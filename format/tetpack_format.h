@@ -135,6 +135,16 @@ typedef struct tpk_shell_face {
     int32_t a, b, c, t;
 } tpk_shell_face;
 
+/* The faces of a tet (v0, v1, v2, v3): face k is the one opposite v[k] (the face its neighbor k lies
+ * across, §3), listed in outward order, the winding of a shell record (§6.6): for a positive tet
+ * (det[p1-p0, p2-p0, p3-p0] > 0) the normal (pb-pa) x (pc-pa) of face (a, b, c) points away from p[k].
+ * (p0,p1,p2) faces p3, so (p0,p2,p1) faces out; (p1,p2,p3,p0) is an odd permutation of (p0..p3), so
+ * (p1,p2,p3) faces away from p0; (p0,p2,p3,p1) is even: (p0,p3,p2); (p0,p1,p3,p2) is odd: (p0,p1,p3).
+ * This is the one place the order is written: the marchers' recovery, the converter's shell and face
+ * matching, the checker and the tools' cell shapes (tools/mesh/cell_types.c) all read it from here. */
+#define TPK_TET_FACE_LIST {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}
+static const int tpk_tet_faces[4][3] = TPK_TET_FACE_LIST;
+
 typedef struct tpk_field_desc {
     char name[64];        /* UTF-8, NUL-terminated, NUL-padded, non-empty, unique in the file */
     char units[32];       /* UTF-8, NUL-terminated, NUL-padded; may be empty */

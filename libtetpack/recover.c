@@ -2,8 +2,8 @@
  * Tet32 stores three vertices, so the fourth is vx ^ v0 ^ v1 ^ v2. Tet20 and Tet16 store only vx and
  * neighbors, so the order is found by a breadth-first walk from the shell:
  *   - a shell face (a,b,c) of t faces out of t, so t = (a,c,b,x) is positive, x = vx ^ a ^ b ^ c;
- *   - for a positive tet (p0..p3) the face opposite p_j in outward order is F_j = (1,2,3), (0,3,2),
- *     (0,1,3), (0,2,1) for j = 0..3; seen from the neighbor u across it, F_j faces inward, so
+ *   - for a positive tet (p0..p3) the face opposite p_j in outward order is F_j = tpk_tet_faces[j]
+ *     (format/tetpack_format.h); seen from the neighbor u across it, F_j faces inward, so
  *     u = (F_j, y) is positive, y = vx[u] ^ F_j[0] ^ F_j[1] ^ F_j[2].
  * Tet16 neighbors are decoded from the tet we arrived from: it is n[rank of the apex y].
  * Untrusted input: every decoded id is range-checked, every tet is assigned once and each later visit
@@ -12,8 +12,6 @@
 #include <string.h>
 
 #include "tetpack.h"
-
-static const int OUTWARD_FACE[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 typedef struct walk {
     const tpk_mesh_arrays *mesh;
@@ -121,7 +119,7 @@ static tpk_result drain(walk *w)
             int32_t u = n[rank_of(q, j)];
             if (u < 0)
                 continue;
-            int32_t f[3] = {q[OUTWARD_FACE[j][0]], q[OUTWARD_FACE[j][1]], q[OUTWARD_FACE[j][2]]};
+            int32_t f[3] = {q[tpk_tet_faces[j][0]], q[tpk_tet_faces[j][1]], q[tpk_tet_faces[j][2]]};
             rc = visit(w, u, f, t);
         }
         if (rc)

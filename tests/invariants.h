@@ -15,8 +15,6 @@
 #include "convert/pipeline.h"
 #include "tetpack.h"
 
-static const int tpk_inv_outward[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-
 static inline int tpk_inv_fail(char *msg, size_t cap, const char *fmt, ...)
 {
     va_list ap;
@@ -83,7 +81,7 @@ static inline int tpk_check_invariants_flags(const tpk_tetmesh *m, const int32_t
             if (u < 0 || u >= T || u == t)
                 return tpk_inv_fail(msg, cap, "tet %lld: neighbor %d invalid", (long long)t, u);
             const int32_t *w = m->tets + 4 * (int64_t)u;
-            int32_t f[3] = {v[tpk_inv_outward[k][0]], v[tpk_inv_outward[k][1]], v[tpk_inv_outward[k][2]]};
+            int32_t f[3] = {v[tpk_tet_faces[k][0]], v[tpk_tet_faces[k][1]], v[tpk_tet_faces[k][2]]};
             int apex = -1, shared = 0;
             for (int j = 0; j < 4; j++) {
                 int in = w[j] == f[0] || w[j] == f[1] || w[j] == f[2];
@@ -198,7 +196,7 @@ static inline int64_t tpk_count_same_side_pairs(const tpk_tetmesh *m, const int3
             for (int j = 0; j < 4; j++)
                 if (w[j] != v[0] && w[j] != v[1] && w[j] != v[2] && w[j] != v[3])
                     apex = w[j];
-            int32_t q[4] = {v[tpk_inv_outward[k][0]], v[tpk_inv_outward[k][1]], v[tpk_inv_outward[k][2]], apex};
+            int32_t q[4] = {v[tpk_tet_faces[k][0]], v[tpk_tet_faces[k][1]], v[tpk_tet_faces[k][2]], apex};
             if (apex < 0 || tpk_inv_orient(m, q) <= 0) {
                 if (*first < 0)
                     *first = t;

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mesh/cell_types.h"
 #include "mesh/mesh.h"
 
 typedef struct tpk_gen_options {
@@ -125,8 +126,7 @@ static inline tpk_mesh tpk_gen_cube_pyramids(void)
 {
     static double points[9][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1},
                                   {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0.5, 0.5, 0.5}};
-    static const int outward[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                      {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    const int (*outward)[4] = tpk_cell_shape_of(TPK_CELL_HEXAHEDRON)->faces;
     static uint8_t types[6];
     static int64_t offsets[7];
     static int32_t conn[30];

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "convert/cell_split.h"
+#include "mesh/cell_types.h"
 #include "harness.h"
 #include "import/importers.h"
 #include "convert/pipeline.h"

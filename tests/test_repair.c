@@ -379,7 +379,7 @@ static int64_t folds_by_exact_test(const tpk_tetmesh *m, const int32_t *neighbor
             if (u <= t)
                 continue;
             const int32_t *v = m->tets + 4 * t, *w = m->tets + 4 * u;
-            int32_t ia = v[tpk_outward_face[k][0]], ib = v[tpk_outward_face[k][1]], ic = v[tpk_outward_face[k][2]];
+            int32_t ia = v[tpk_tet_faces[k][0]], ib = v[tpk_tet_faces[k][1]], ic = v[tpk_tet_faces[k][2]];
             int32_t iy = w[0] ^ w[1] ^ w[2] ^ w[3] ^ ia ^ ib ^ ic;
             const double *p = m->points;
             if (tpk_orient3d_exact(p + 3 * (int64_t)ia, p + 3 * (int64_t)ib, p + 3 * (int64_t)ic, p + 3 * (int64_t)iy) <= 0 &&

@@ -10,6 +10,7 @@
 #include "harness.h"
 #include "import/importers.h"
 #include "convert/pipeline.h"
+#include "mesh/cell_types.h"
 #include "mesh/polyhedron.h"
 
 static const double cube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
@@ -46,8 +47,7 @@ static int has_edge(const int32_t *tets, int n, int32_t a, int32_t b)
 
 TPK_TEST(every_cube_labelling)
 {
-    static const int faces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
-                                    {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+    const int (*faces)[4] = tpk_cell_shape_of(TPK_CELL_HEXAHEDRON)->faces; /* outward: tested below */
     int32_t label[8] = {0, 1, 2, 3, 4, 5, 6, 7};
     double points[8][3];
     int fives = 0, total = 0;
@@ -516,4 +516,44 @@ TPK_TEST(cell_faces_are_outward_and_closed)
     int starts[7];
     CHECK_EQ_INT(tpk_cell_faces(TPK_CELL_TETRA, hex, ids, starts), 0);
     tpk_polygons_free(&p);
+}
+
+/* tpk_cell_shape_of (mesh/cell_types.c), the one table of cell faces and edges: every shape's faces
+ * enclose its reference cell with positive volume (outward), every edge bounds exactly two faces and the
+ * faces have no other edges, a tet's faces are format's tpk_tet_faces. */
+TPK_TEST(cell_shapes_are_outward_with_their_edges)
+{
+    static const double volume6[5] = {1, 6, 6, 3, 2}; /* tetra, voxel, hexahedron, wedge, pyramid */
+    for (int type = TPK_CELL_TETRA; type <= TPK_CELL_PYRAMID; type++) {
+        const tpk_cell_shape *s = tpk_cell_shape_of(type);
+        CHECK(s != NULL && s->type == type);
+        double v6 = 0;
+        int uses[12] = {0}, face_edges = 0;
+        for (int f = 0; f < s->face_count; f++) {
+            const int *q = s->faces[f];
+            for (int i = 1; i + 1 < s->face_size[f]; i++) { /* fan: 6V = sum of a . (b x c) */
+                const double *a = s->ref[q[0]], *b = s->ref[q[i]], *c = s->ref[q[i + 1]];
+                v6 += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                      a[2] * (b[0] * c[1] - b[1] * c[0]);
+            }
+            for (int i = 0; i < s->face_size[f]; i++, face_edges++) {
+                int x = q[i], y = q[(i + 1) % s->face_size[f]], found = -1;
+                for (int e = 0; e < s->edge_count; e++)
+                    if ((s->edges[e][0] == x && s->edges[e][1] == y) || (s->edges[e][0] == y && s->edges[e][1] == x))
+                        found = e;
+                CHECK_MSG(found >= 0, "type %d: face %d has edge (%d, %d), not in the edge table", type, f, x, y);
+                if (found >= 0)
+                    uses[found]++;
+            }
+        }
+        CHECK_MSG(v6 == volume6[type - TPK_CELL_TETRA], "type %d: 6V %g", type, v6);
+        CHECK_EQ_INT(face_edges, 2 * s->edge_count);
+        for (int e = 0; e < s->edge_count; e++)
+            CHECK_MSG(uses[e] == 2, "type %d: edge %d bounds %d faces", type, e, uses[e]);
+    }
+    const tpk_cell_shape *tet = tpk_cell_shape_of(TPK_CELL_TETRA);
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < 3; i++)
+            CHECK_EQ_INT(tet->faces[k][i], tpk_tet_faces[k][i]);
+    CHECK(tpk_cell_shape_of(TPK_CELL_POLYHEDRON) == NULL && tpk_cell_shape_of(9) == NULL);
 }

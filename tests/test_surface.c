@@ -211,7 +211,7 @@ static int32_t *shell_triangles(const tpk_tetmesh *tm, const int32_t *nb, int64_
         for (int k = 0; k < 4; k++)
             if (nb[4 * t + k] < 0) {
                 for (int j = 0; j < 3; j++)
-                    tri[3 * *count + j] = tm->tets[4 * t + tpk_inv_outward[k][j]];
+                    tri[3 * *count + j] = tm->tets[4 * t + tpk_tet_faces[k][j]];
                 ++*count;
             }
     return tri;

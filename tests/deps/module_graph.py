@@ -7,15 +7,60 @@
    file on top, calling down.
 2. No .c/.cpp file directly in tools/: every source lives in the room of its stage.
 3. A private header (*internal*.h) is included only by files in its own folder.
+4. Folders in one order (FOLDER_ORDER below, the only place it is written): a file may include a header
+   of, and use a symbol defined in, its own folder or a folder of a lower level, never one of its own
+   level or above. Checked on the quoted #includes of format/, libtetpack/ and tools/, and on the
+   objects of every binary (TARGETS, tetpack-mpi included).
 
 usage: module_graph.py SOURCE_DIR BUILD_DIR [--dot]    exit 0 when every rule holds, 1 otherwise
+       BUILD_DIR "-": the source rules only (2, 3, 4 on includes), for trees with no build
 """
 import os
 import re
 import subprocess
 import sys
 
-TARGETS = ("tetpack", "tetpack_tools", "tetpack_cli")
+TARGETS = ("tetpack", "tetpack_tools", "tetpack_cli", "tetpack_mpi")
+
+# The folders, lowest first (docs/ARCHITECTURE.md §3). Folders on one level are siblings: neither may use
+# the other. A folder of tools/ is named by its first component (import/vtk is import).
+FOLDER_ORDER = (
+    ("format",),
+    ("libtetpack",),
+    ("base",),
+    ("mesh",),
+    ("mesher",),
+    ("import",),
+    ("convert",),
+    ("check", "export", "render"),
+    ("render_vk", "scene"),
+    ("extract", "view"),
+    ("cli",),
+    ("mpi",),
+)
+LEVEL = {room: level for level, rooms in enumerate(FOLDER_ORDER) for room in rooms}
+
+
+def room_of(path):
+    """The folder of FOLDER_ORDER a project file belongs to, or None (tests, bench, python)."""
+    parts = path.split(os.sep)
+    if parts[0] == "tools":
+        return parts[1] if len(parts) > 2 else None
+    return parts[0] if parts[0] in ("format", "libtetpack") else None
+
+
+def order_problem(user, used, what):
+    """A message when file `user` may not use file `used` under FOLDER_ORDER, else None."""
+    a, b = room_of(user), room_of(used)
+    if a is None or b is None or a == b:
+        return None
+    for room, path in ((a, user), (b, used)):
+        if room not in LEVEL:
+            return f"{path}: folder {room}/ is not in FOLDER_ORDER (tests/deps/module_graph.py); declare its level"
+    if LEVEL[b] < LEVEL[a]:
+        return None
+    where = "the same level as" if LEVEL[b] == LEVEL[a] else "above"
+    return f"{user}: {what} {used}, but {b}/ is {where} {a}/ in the folder order"
 
 
 def objects(source_dir, build_dir):
@@ -140,14 +185,20 @@ def resolve(source_dir, including, name):
 
 def include_problems(source_dir):
     problems = []
-    for rel in sorted(sources(source_dir, "tools")):
+    files = [rel for top in ("format", "libtetpack", "tools") for rel in sources(source_dir, top)]
+    for rel in sorted(files):
         if os.path.dirname(rel) == "tools" and rel.endswith((".c", ".cpp")):
             problems.append(f"{rel}: a source file directly in tools/; move it into the room of its stage")
         with open(os.path.join(source_dir, rel), encoding="utf-8", errors="replace") as f:
             text = f.read()
         for name in INCLUDE.findall(text):
             target = resolve(source_dir, rel, name)
-            if not target or not target.startswith("tools" + os.sep):
+            if not target:
+                continue
+            order = order_problem(rel, target, f'includes "{name}", from')
+            if order:
+                problems.append(order)
+            if not target.startswith("tools" + os.sep):
                 continue
             same_room = os.path.dirname(target) == os.path.dirname(rel)
             if "internal" in os.path.basename(target) and not same_room:
@@ -160,6 +211,12 @@ def main(argv):
         print(__doc__, file=sys.stderr)
         return 2
     source_dir, build_dir = argv[1], argv[2]
+    if build_dir == "-":
+        problems = include_problems(source_dir)
+        for p in problems:
+            print(p)
+        print(f"module_graph: sources only, {len(problems)} placement problems")
+        return 1 if problems else 0
     objs = objects(source_dir, build_dir)
     if not objs:
         print(f"module_graph: no object files of {', '.join(TARGETS)} under {build_dir}", file=sys.stderr)
@@ -174,6 +231,11 @@ def main(argv):
         return 0
     cycles = [c for c in strongly_connected(graph) if len(c) > 1]
     problems = include_problems(source_dir)
+    for src in sorted(graph):
+        for dst in sorted(graph[src]):
+            order = order_problem(src, dst, "uses a symbol of")
+            if order:
+                problems.append(order)
     for comp in cycles:
         edges = [f"{a} -> {b}" for a in comp for b in sorted(graph[a]) if b in comp]
         problems.append("call cycle between " + ", ".join(comp) + ":\n    " + "\n    ".join(edges))

@@ -1,12 +1,8 @@
-// The only CGAL translation unit: exact orientation behind a C interface (predicates.h, pipeline.h).
+// The only CGAL translation unit: exact orientation behind a C interface (predicates.h).
 // CGAL::orientation(p, q, r, s) is the sign of det[q-p, r-p, s-p] (orientationC3 in
 // CGAL/predicates/kernel_ftC3.h); tests check that convention on constructed cases.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
-// pipeline.h has no extern "C" guard of its own.
-extern "C" {
-#include "convert/pipeline.h"
-}
 #include "predicates.h"
 
 namespace {

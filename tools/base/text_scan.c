@@ -407,26 +407,3 @@ void tpk_unmap_file(const char *data, size_t size)
     if (data && size > 0)
         munmap((void *)data, size);
 }
-
-int tpk_import_begin(const char *name, tpk_mesh *out, tpk_diag *diag)
-{
-    if (!out)
-        return tpk_diag_fail(diag, "%s: no output mesh given", name ? name : "(input)");
-    memset(out, 0, sizeof *out);
-    if (diag)
-        diag->message[0] = 0;
-    return 0;
-}
-
-int tpk_import_mapped(const char *path, tpk_parse_fn parse, tpk_mesh *out, tpk_diag *diag)
-{
-    const char *data;
-    size_t size;
-    if (out)
-        memset(out, 0, sizeof *out);
-    if (tpk_map_file(path, &data, &size, diag) != 0)
-        return -1;
-    int rc = parse(path, data, size, 1, out, diag);
-    tpk_unmap_file(data, size);
-    return rc;
-}

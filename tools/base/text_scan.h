@@ -7,7 +7,6 @@
 #include <stdint.h>
 
 #include "diag.h"
-#include "mesh/mesh.h"
 
 typedef struct tpk_scan {
     const char *name;            /* file name used in messages */
@@ -78,15 +77,5 @@ void tpk_scan_watch(void (*fn)(void *user, double fraction), void *user);
  * "path: cannot ...: reason". Release with tpk_unmap_file(data, size). */
 int tpk_map_file(const char *path, const char **data, size_t *size, tpk_diag *diag);
 void tpk_unmap_file(const char *data, size_t size);
-
-/* An importer's parser over a whole file's bytes; `mapped` says they are a tpk_map_file mapping (so
- * consumed pages may be dropped). Names the input `name` in messages; leaves *out empty on error. */
-typedef int (*tpk_parse_fn)(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out,
-                            tpk_diag *diag);
-/* What every importer does first: 0 with *out emptied and diag's message cleared, or -1 when no output
- * mesh is given (the message names `name`). */
-int tpk_import_begin(const char *name, tpk_mesh *out, tpk_diag *diag);
-/* What every path importer does: empty *out, map the file, parse it, unmap. */
-int tpk_import_mapped(const char *path, tpk_parse_fn parse, tpk_mesh *out, tpk_diag *diag);
 
 #endif

@@ -20,36 +20,14 @@
 #include <string.h>
 
 #include "convert/cell_split.h"
+#include "mesh/cell_types.h"
 #include "check_cells_internal.h"
 #include "convert/pipeline.h"
 #include "base/predicates.h"
 
-typedef struct cell_shape {
-    int nodes, face_count;
-    int face_size[6];
-    int faces[6][4];  /* VTK node order, outward on a positively oriented cell */
-    double ref[8][3]; /* a valid positively oriented cell with these nodes (VTK parametric corners) */
-} cell_shape;
-
-static const cell_shape hexahedron = {
-    8, 6, {4, 4, 4, 4, 4, 4},
-    {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}},
-    {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
-
-static const cell_shape voxel = {
-    8, 6, {4, 4, 4, 4, 4, 4},
-    {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {1, 3, 7, 5}, {3, 2, 6, 7}, {2, 0, 4, 6}},
-    {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}}};
-
-static const cell_shape wedge = {
-    6, 5, {3, 3, 4, 4, 4},
-    {{0, 2, 1}, {3, 4, 5}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}},
-    {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}}};
-
-static const cell_shape pyramid = {
-    5, 5, {4, 3, 3, 3, 3},
-    {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}},
-    {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}}};
+/* mesh/cell_types.h: corners, faces (VTK node order, outward on a positively oriented cell) and a valid
+ * positively oriented cell with these nodes (VTK parametric corners). */
+typedef tpk_cell_shape cell_shape;
 
 typedef struct cell_view {
     const cell_shape *s;
@@ -84,9 +62,9 @@ static void explain_split(const tpk_mesh *mesh, cell_view *v, tpk_cell_hits *hit
     int32_t rank[8], out[6 * 4];
     int corner_of_rank[8], mirrored = 0;
     double ref[8][3];
-    for (int i = 0; i < v->s->nodes; i++) {
+    for (int i = 0; i < v->s->corners; i++) {
         rank[i] = 0;
-        for (int j = 0; j < v->s->nodes; j++)
+        for (int j = 0; j < v->s->corners; j++)
             rank[i] += v->ids[j] < v->ids[i];
         corner_of_rank[rank[i]] = i;
         memcpy(ref[rank[i]], v->s->ref[i], sizeof ref[0]);
@@ -241,7 +219,7 @@ static int check_convex(const tpk_mesh *mesh, const cell_view *v, tpk_cell_hits 
             const int *tri = quad_tris[t];
             tri_plane pl;
             plane_of(v->p[q[tri[0]]], v->p[q[tri[1]]], v->p[q[tri[2]]], &pl);
-            for (int x = 0; x < v->s->nodes; x++) {
+            for (int x = 0; x < v->s->corners; x++) {
                 if (on_face(v->s, f, x))
                     continue;
                 int side = sign * plane_side(&pl, v->p[x]);
@@ -332,13 +310,11 @@ void tpk_check_split_cell(const tpk_mesh *mesh, int64_t cell, double warp_deg, t
 {
     cell_view v;
     v.type = mesh->cell_types[cell];
-    v.s = v.type == TPK_CELL_HEXAHEDRON ? &hexahedron
-          : v.type == TPK_CELL_VOXEL    ? &voxel
-          : v.type == TPK_CELL_WEDGE    ? &wedge
-                                        : &pyramid;
+    /* Called for voxels, hexahedra, wedges and pyramids only (tpk_check_cells). */
+    v.s = tpk_cell_shape_of(v.type);
     v.cell = cell;
     const int32_t *conn = mesh->cell_conn + mesh->cell_offsets[cell];
-    for (int i = 0; i < v.s->nodes; i++) {
+    for (int i = 0; i < v.s->corners; i++) {
         v.ids[i] = conn[i];
         v.p[i] = mesh->points + 3 * (int64_t)conn[i];
     }

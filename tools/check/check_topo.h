@@ -5,7 +5,7 @@
  * check_topo_match.c (tpk_topo_match_faces, tpk_topo_match_free) and check_shell.c (tpk_check_shell),
  * which calls check_topo_shell_edges.c (tpk_check_shell_edges) and check_shell_cgal.cpp. At the bottom
  * check_topo_faces.c holds what they share: tpk_topo_cell_faces, tpk_topo_cell_face,
- * tpk_topo_face_count, tpk_topo_tet_faces, tpk_topo_face_triangle, tpk_topo_face_centre,
+ * tpk_topo_face_count, tpk_topo_face_triangle, tpk_topo_face_centre,
  * tpk_topo_orient, tpk_uf_find, tpk_uf_union, and tpk_check_cell_usable (declared in check.h). */
 #ifndef TPK_CHECK_TOPO_H
 #define TPK_CHECK_TOPO_H
@@ -14,6 +14,7 @@
 
 #include "check.h"
 #include "check_shell_cgal.h"
+#include "tetpack_format.h" /* tpk_tet_faces */
 
 /* Triangles and quads. Polyhedra (type 42) add their explicit faces in check_topo_faces.c (the three
  * functions tpk_topo_face_count, tpk_topo_cell_faces, tpk_topo_cell_face); the matching keys every face
@@ -32,9 +33,6 @@ typedef struct tpk_topo_face {
  * of cell_split.c), or 0 when the cell is not a volume cell the checks handle. Ids are not checked:
  * callers use cells for which tpk_check_cell_usable() holds. */
 int tpk_topo_cell_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces);
-
-/* A tet's faces in outward order: face k is opposite corner k. */
-extern const int tpk_topo_tet_faces[4][3];
 
 /* Face `local` of a volume cell (local < tpk_topo_face_count), as tpk_topo_cell_faces gives it. */
 void tpk_topo_cell_face(const tpk_mesh *mesh, int64_t cell, int local, tpk_topo_face *face);

@@ -1,39 +1,17 @@
 /* Faces of the volume cells for the connectivity and shell checks, in outward order, and which cells
- * take part (tpk_check_cell_usable). The tables are those of cell_split.c (outward on VTK's parametric
- * corners, so a positive cell's faces point out) and shell.c for tets; tests/test_check_topology.c
- * checks each face against its cell's centre exactly. */
+ * take part (tpk_check_cell_usable). The tables are mesh/cell_types.c's (outward on VTK's parametric
+ * corners, so a positive cell's faces point out); tests/test_check_topology.c checks each face against
+ * its cell's centre exactly. */
 #include "check_topo.h"
 #include "convert/pipeline.h"
+#include "mesh/cell_types.h"
 #include "base/predicates.h"
 
-typedef struct face_table {
-    int count;
-    int size[6];
-    int local[6][4];
-} face_table;
-
-static const face_table TET = {4, {3, 3, 3, 3}, {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}}};
-const int tpk_topo_tet_faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-static const face_table HEX = {
-    6, {4, 4, 4, 4, 4, 4},
-    {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}}};
-/* A voxel is a hexahedron with corners 2,3 and 6,7 swapped (x fastest, then y, then z). */
-static const face_table VOXEL = {
-    6, {4, 4, 4, 4, 4, 4},
-    {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {1, 3, 7, 5}, {3, 2, 6, 7}, {2, 0, 4, 6}}};
-static const face_table WEDGE = {5, {3, 3, 4, 4, 4}, {{0, 2, 1}, {3, 4, 5}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}};
-static const face_table PYRAMID = {5, {4, 3, 3, 3, 3}, {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}}};
-
-static const face_table *table_for(int type, int64_t nodes)
+/* The shape of a tet, voxel, hexahedron, wedge or pyramid with its node count, else NULL. */
+static const tpk_cell_shape *table_for(int type, int64_t nodes)
 {
-    switch (type) {
-    case TPK_CELL_TETRA: return nodes == 4 ? &TET : NULL;
-    case TPK_CELL_VOXEL: return nodes == 8 ? &VOXEL : NULL;
-    case TPK_CELL_HEXAHEDRON: return nodes == 8 ? &HEX : NULL;
-    case TPK_CELL_WEDGE: return nodes == 6 ? &WEDGE : NULL;
-    case TPK_CELL_PYRAMID: return nodes == 5 ? &PYRAMID : NULL;
-    default: return NULL; /* polyhedra: poly_faces */
-    }
+    const tpk_cell_shape *s = tpk_cell_shape_of(type); /* NULL for polyhedra: poly_faces */
+    return s && nodes == s->corners ? s : NULL;
 }
 
 /* A polyhedron's explicit faces (its VTK face stream, which VTK asks to be outward), when it has at most
@@ -83,29 +61,29 @@ int tpk_check_cell_usable(const tpk_mesh *mesh, int64_t cell)
 int tpk_topo_face_count(const tpk_mesh *mesh, int64_t cell)
 {
     int64_t begin = mesh->cell_offsets[cell];
-    const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
-    return t ? t->count : poly_faces(mesh, cell, NULL);
+    const tpk_cell_shape *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
+    return t ? t->face_count : poly_faces(mesh, cell, NULL);
 }
 
 int tpk_topo_cell_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces)
 {
     int64_t begin = mesh->cell_offsets[cell];
-    const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
+    const tpk_cell_shape *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
     if (!t)
         return poly_faces(mesh, cell, faces);
     const int32_t *nodes = mesh->cell_conn + begin;
-    for (int f = 0; f < t->count; f++) {
-        faces[f].n = t->size[f];
-        for (int i = 0; i < t->size[f]; i++)
-            faces[f].v[i] = nodes[t->local[f][i]];
+    for (int f = 0; f < t->face_count; f++) {
+        faces[f].n = t->face_size[f];
+        for (int i = 0; i < t->face_size[f]; i++)
+            faces[f].v[i] = nodes[t->faces[f][i]];
     }
-    return t->count;
+    return t->face_count;
 }
 
 void tpk_topo_cell_face(const tpk_mesh *mesh, int64_t cell, int local, tpk_topo_face *face)
 {
     int64_t begin = mesh->cell_offsets[cell];
-    const face_table *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
+    const tpk_cell_shape *t = table_for(mesh->cell_types[cell], mesh->cell_offsets[cell + 1] - begin);
     if (!t) {
         tpk_topo_face all[TPK_TOPO_MAX_CELL_FACES];
         poly_faces(mesh, cell, all);
@@ -113,9 +91,9 @@ void tpk_topo_cell_face(const tpk_mesh *mesh, int64_t cell, int local, tpk_topo_
         return;
     }
     const int32_t *nodes = mesh->cell_conn + begin;
-    face->n = t->size[local];
-    for (int i = 0; i < t->size[local]; i++)
-        face->v[i] = nodes[t->local[local][i]];
+    face->n = t->face_size[local];
+    for (int i = 0; i < t->face_size[local]; i++)
+        face->v[i] = nodes[t->faces[local][i]];
 }
 
 void tpk_topo_face_triangle(const tpk_topo_face *f, int t, int32_t tri[3])

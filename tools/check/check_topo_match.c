@@ -1,16 +1,18 @@
 /* Face matching for `tetpack check` (301, 302, 305, components, the shell), sort-based like
- * tools/convert/connect.c but for any volume cell: a counting sort puts every cell into the bucket of each
- * distinct smallest id of its faces (4 bytes per entry: the cell id), so bucket v holds exactly the
- * faces whose smallest id is v. A worker expands its buckets into faces keyed by their other sorted ids,
- * sorts each bucket (a few dozen faces) and walks runs of equal keys: one face is shell, two are
- * neighbours (orientation and fold-over are checked, the cells joined), more is a non-manifold face.
- * Workers take contiguous cell and bucket ranges and their results are merged in order, so counts,
- * examples and the shell order (by sorted vertex ids) do not depend on the thread count. */
+ * tools/convert/connect.c (tets by the same rule, mesh/face_buckets.h) but for any volume cell: a
+ * counting sort puts every cell into the bucket of each distinct smallest id of its faces (4 bytes per
+ * entry: the cell id), so bucket v holds exactly the faces whose smallest id is v. A worker expands its
+ * buckets into faces keyed by their other sorted ids, sorts each bucket (a few dozen faces) and walks
+ * runs of equal keys: one face is shell, two are neighbours (orientation and fold-over are checked, the
+ * cells joined), more is a non-manifold face. Workers take contiguous cell and bucket ranges and their
+ * results are merged in order, so counts, examples and the shell order (by sorted vertex ids) do not
+ * depend on the thread count. */
 #include <stdlib.h>
 #include <string.h>
 
 #include "check_topo.h"
 #include "base/parallel.h"
+#include "mesh/face_buckets.h"
 
 enum { HIT_NONMANIFOLD, HIT_ORIENTATION, HIT_FOLDED, HIT_KINDS };
 static const int HIT_IDS[HIT_KINDS] = {301, 302, 305};
@@ -67,28 +69,15 @@ static int face_mins(const tpk_topo_face *faces, int count, int32_t *mins)
     return n;
 }
 
-/* Ids of a tet sorted, and the local index of each (branchless: rank = how many others are smaller). */
-static inline void sort_tet(const int32_t *v, int32_t id[4], int local[4])
-{
-    int c01 = v[0] > v[1], c02 = v[0] > v[2], c03 = v[0] > v[3];
-    int c12 = v[1] > v[2], c13 = v[1] > v[3], c23 = v[2] > v[3];
-    int rank[4] = {c01 + c02 + c03, 1 - c01 + c12 + c13, 2 - c02 - c12 + c23, 3 - c03 - c13 - c23};
-    for (int k = 0; k < 4; k++) {
-        id[rank[k]] = v[k];
-        local[rank[k]] = k;
-    }
-}
-
 /* The buckets of a cell: for a tet its two smallest ids (three faces hold the smallest, the fourth
  * face's smallest is the second). */
 static int cell_buckets(const match_job *job, int64_t c, int32_t *mins)
 {
     if (job->tets_only) {
-        int32_t id[4];
-        int local[4];
-        sort_tet(job->mesh->cell_conn + 4 * c, id, local);
-        mins[0] = id[0];
-        mins[1] = id[1];
+        tpk_sorted_tet s;
+        tpk_sort_tet(job->mesh->cell_conn + 4 * c, &s);
+        mins[0] = s.id[0];
+        mins[1] = s.id[1];
         return 2;
     }
     tpk_topo_face faces[TPK_TOPO_MAX_CELL_FACES];
@@ -259,25 +248,22 @@ static void face_of(const match_job *job, uint32_t cell, uint32_t local, tpk_top
     const int32_t *v = job->mesh->cell_conn + 4 * (int64_t)cell; /* no offsets or types to read */
     out->n = 3;
     for (int i = 0; i < 3; i++)
-        out->v[i] = v[tpk_topo_tet_faces[local][i]];
+        out->v[i] = v[tpk_tet_faces[local][i]];
 }
 
-/* A tet's faces whose smallest id is v (its smallest or second smallest id); face k is opposite k. */
+/* A tet's faces whose smallest id is v (its smallest or second smallest id), by mesh/face_buckets.h. */
 static int tet_recs(const int32_t *conn, uint32_t entry, int32_t v, face_rec *r)
 {
     uint32_t c = entry & ENTRY_CELL;
     int8_t sign = (int8_t)((int)(entry >> ENTRY_SIGN_SHIFT) - 1);
-    int32_t id[4];
-    int local[4];
-    sort_tet(conn + 4 * (int64_t)c, id, local);
-    if (id[0] != v) {
-        r[0] = (face_rec){(uint64_t)(uint32_t)id[2] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint16_t)local[0], sign};
-        return 1;
-    }
-    r[0] = (face_rec){(uint64_t)(uint32_t)id[1] << 32 | (uint32_t)id[2], UINT32_MAX, c, (uint16_t)local[3], sign};
-    r[1] = (face_rec){(uint64_t)(uint32_t)id[1] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint16_t)local[2], sign};
-    r[2] = (face_rec){(uint64_t)(uint32_t)id[2] << 32 | (uint32_t)id[3], UINT32_MAX, c, (uint16_t)local[1], sign};
-    return 3;
+    tpk_sorted_tet s;
+    tpk_sort_tet(conn + 4 * (int64_t)c, &s);
+    tpk_bucket_face f[3];
+    int n = tpk_tet_bucket_faces(&s, s.id[0] == v, f);
+    for (int i = 0; i < n; i++)
+        r[i] = (face_rec){(uint64_t)(uint32_t)f[i].mid << 32 | (uint32_t)f[i].max, UINT32_MAX, c,
+                          (uint16_t)f[i].opposite, sign};
+    return n;
 }
 
 static int cell_recs(const tpk_mesh *mesh, uint32_t c, int32_t v, face_rec *r)

@@ -1,4 +1,4 @@
-/* What every 6xx pass shares (check_tpk_internal.h): the outward face table, the per-worker finding
+/* What every 6xx pass shares (check_tpk_internal.h): the per-worker finding
  * sinks and their ordered merge into the report, and the parallel pass over the tets. Below check_tpk.c
  * and every check_tpk_*.c pass, so no pass calls back up into the entry file. */
 #include <stdlib.h>
@@ -6,8 +6,6 @@
 
 #include "check_tpk_internal.h"
 #include "base/parallel.h"
-
-const int tpkc_outward[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 tpk_example *tpkc_hit(tpkc_sink *sink, int id, const char *kind)
 {

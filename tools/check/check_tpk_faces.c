@@ -1,14 +1,16 @@
 /* Face use (TPK-M05, 605): a triple of vertex ids is a face of at most two tets, and a face has neighbor
  * -1 exactly when no other tet has it, or when its two tets lie on the same side of it (a fold whose
- * adjacency the writer cut, spec §6.7; decided exactly, after the pass, for the few such faces). Faces are bucketed by their smallest id (a counting sort) and
- * compared within buckets. A mutual neighbor pair is one entry of weight 2, so interior faces cost one
- * key, not two; the buckets are filled a vertex window at a time so the keys never exceed a fixed
- * budget, whatever the mesh size. */
+ * adjacency the writer cut, spec §6.7; decided exactly, after the pass, for the few such faces). Faces
+ * are bucketed by their smallest id (a counting sort, by the rule of mesh/face_buckets.h that connect
+ * and check_topo_match.c use) and compared within buckets. A mutual neighbor pair is one entry of
+ * weight 2, so interior faces cost one key, not two; the buckets are filled a vertex window at a time so
+ * the keys never exceed a fixed budget, whatever the mesh size. */
 #include <inttypes.h>
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
 #include "base/parallel.h"
+#include "mesh/face_buckets.h"
 
 #define KEY_BUDGET ((int64_t)1 << 22) /* keys in memory at once, over all workers: 32 MiB */
 #define KEY_BOUNDARY 1u
@@ -16,7 +18,7 @@
 
 static void sorted_face(const int32_t q[4], int k, int32_t f[3])
 {
-    const int *p = tpkc_outward[k];
+    const int *p = tpk_tet_faces[k];
     int32_t a = q[p[0]], b = q[p[1]], d = q[p[2]], s;
     if (a > b) { s = a; a = b; b = s; }
     if (b > d) { s = b; b = d; d = s; }
@@ -31,15 +33,6 @@ static int face_class(const tpkc *c, int64_t t, int k)
     return (c->face_class[t] >> (2 * k)) & 3;
 }
 
-/* The two smallest ids of q: the smallest id of face k is lo[0], or lo[1] when q[k] is lo[0]. */
-static void two_smallest(const int32_t q[4], int32_t lo[2])
-{
-    int32_t a = q[0] < q[1] ? q[0] : q[1], b = q[0] < q[1] ? q[1] : q[0];
-    int32_t d = q[2] < q[3] ? q[2] : q[3], e = q[2] < q[3] ? q[3] : q[2];
-    lo[0] = a < d ? a : d;
-    lo[1] = a < d ? (b < d ? b : d) : (e < a ? e : a);
-}
-
 /* Pass 1: start[v + 1] = number of keys whose smallest id is v, then prefix sums; span[2v], span[2v+1]
  * = the first and last tet with such a face, so a window scans only the tets that can feed it (few, in
  * a file whose tets follow their smallest vertex, as the converter writes them). */
@@ -50,14 +43,15 @@ static void count_keys(const tpkc *c, int64_t *start, int32_t *span)
         span[2 * v + 1] = -1;
     }
     for (int64_t t = 0; t < c->T; t++) {
-        int32_t q[4], lo[2];
+        int32_t q[4];
         if (!c->face_class[t] || !tpkc_tet(c, t, q))
             continue;
-        two_smallest(q, lo);
+        tpk_sorted_tet s;
+        tpk_sort_tet(q, &s);
         for (int k = 0; k < 4; k++) {
             if (face_class(c, t, k) == TPKC_FACE_SKIP)
                 continue;
-            int32_t v = q[k] == lo[0] ? lo[1] : lo[0];
+            int32_t v = tpk_tet_face_bucket(&s, k);
             start[v + 1]++;
             span[2 * v] = span[2 * v] < t ? span[2 * v] : (int32_t)t;
             span[2 * v + 1] = (int32_t)t;
@@ -72,21 +66,26 @@ static void fill_window(const tpkc *c, int64_t lo, int64_t hi, int64_t first_tet
                         int64_t base, uint64_t *keys)
 {
     for (int64_t t = first_tet; t < end_tet; t++) {
-        int32_t q[4], f[3], low[2];
+        int32_t q[4];
         if (!c->face_class[t] || !tpkc_tet(c, t, q))
             continue;
-        two_smallest(q, low);
-        if ((low[0] < lo || low[0] >= hi) && (low[1] < lo || low[1] >= hi))
+        tpk_sorted_tet s;
+        tpk_sort_tet(q, &s);
+        if ((s.id[0] < lo || s.id[0] >= hi) && (s.id[1] < lo || s.id[1] >= hi))
             continue; /* no face of t starts in this window: the common case */
-        for (int k = 0; k < 4; k++) {
-            int cls = face_class(c, t, k);
-            if (cls == TPKC_FACE_SKIP)
+        for (int smallest = 1; smallest >= 0; smallest--) {
+            int32_t v = s.id[smallest ? 0 : 1];
+            if (v < lo || v >= hi)
                 continue;
-            sorted_face(q, k, f);
-            if (f[0] < lo || f[0] >= hi)
-                continue;
-            uint64_t flags = cls == TPKC_FACE_BOUNDARY ? KEY_BOUNDARY : cls == TPKC_FACE_PAIR ? KEY_PAIR : 0;
-            keys[start[f[0]]++ - base] = ((uint64_t)f[1] << 33) | ((uint64_t)f[2] << 2) | flags;
+            tpk_bucket_face f[3];
+            int n = tpk_tet_bucket_faces(&s, smallest, f);
+            for (int i = 0; i < n; i++) {
+                int cls = face_class(c, t, f[i].opposite);
+                if (cls == TPKC_FACE_SKIP)
+                    continue;
+                uint64_t flags = cls == TPKC_FACE_BOUNDARY ? KEY_BOUNDARY : cls == TPKC_FACE_PAIR ? KEY_PAIR : 0;
+                keys[start[v]++ - base] = ((uint64_t)f[i].mid << 33) | ((uint64_t)f[i].max << 2) | flags;
+            }
         }
     }
 }

@@ -11,7 +11,7 @@
  * passes; each pass has its file: tpkc_walk (check_tpk_walk.c), tpkc_check_shell (check_tpk_shell.c),
  * tpkc_check_tets (check_tpk_tets.c), tpkc_check_faces (check_tpk_faces.c), tpkc_check_layouts
  * (check_tpk_layouts.c), tpkc_check_values (check_tpk_values.c). Below them check_tpk_context.c holds
- * what they share: tpkc_outward, tpkc_hit, tpkc_merge, tpkc_run_tet_pass, tpkc_example_ids32. The
+ * what they share: tpkc_hit, tpkc_merge, tpkc_run_tet_pass, tpkc_example_ids32. The
  * inline accessors (tpkc_tet, tpkc_neighbors, tpkc_orient, ...) live here. A pass calls down (the
  * context, check_report.c, check_progress.c), never back into check_tpk.c. */
 #ifndef TPK_CHECK_TPK_INTERNAL_H
@@ -84,9 +84,6 @@ typedef struct tpkc {
     int serial_walk;             /* walk on one thread (the deterministic walk) */
     int walked_in_parallel;      /* the reference came from the parallel walk (see check_tpk_walk.c) */
 } tpkc;
-
-/* Outward faces of a positive tet (q0..q3): face k (opposite q_k) as positions, in outward order. */
-extern const int tpkc_outward[4][3];
 
 static inline int tpkc_distinct(const int32_t q[4])
 {

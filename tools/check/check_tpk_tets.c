@@ -51,7 +51,7 @@ static int shared_face(const int32_t q[4], const int32_t w[4], int *missing, int
 static void check_fold(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q[4], int t_sign, int k, int32_t u,
                        int32_t y)
 {
-    const int *f = tpkc_outward[k];
+    const int *f = tpk_tet_faces[k];
     int sign = tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], y);
     if (t_sign <= 0) /* t itself is flat or inverted (602): compare the two sides directly */
         sign = sign * -tpkc_orient(c, q[f[0]], q[f[1]], q[f[2]], q[k]);
@@ -113,7 +113,7 @@ static int check_slot(const tpkc *c, tpkc_sink *sink, int64_t t, const int32_t q
 static void report_missing_shell(tpkc_sink *sink, int64_t t, const int32_t q[4], int k)
 {
     tpk_example *ex = tpkc_hit(sink, 609, "face");
-    const int *f = tpkc_outward[k];
+    const int *f = tpk_tet_faces[k];
     tpk_example_ids(ex, 4, (const int64_t[]){t, q[f[0]], q[f[1]], q[f[2]]});
     tpk_example_note(ex, "boundary face (neighbor -1) of tet %" PRId64 " opposite %d has no SHEL record", t, q[k]);
 }

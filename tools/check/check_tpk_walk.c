@@ -109,7 +109,7 @@ static void drain(walker *w)
             int32_t u = n[k];
             if (u < 0 || is_done(w, u))
                 continue;
-            int32_t face[3] = {q[tpkc_outward[k][0]], q[tpkc_outward[k][1]], q[tpkc_outward[k][2]]};
+            int32_t face[3] = {q[tpk_tet_faces[k][0]], q[tpk_tet_faces[k][1]], q[tpk_tet_faces[k][2]]};
             enter(w, u, face, t);
         }
     }

@@ -1,35 +1,16 @@
-/* Conformal split of voxels, hexahedra, wedges and pyramids into tets (docs/ARCHITECTURE.md §5). Each shape is
- * described by its VTK parametric corner coordinates and its faces, oriented outward there; tets are
+/* Conformal split of voxels, hexahedra, wedges and pyramids into tets (docs/ARCHITECTURE.md §5). Each shape
+ * (tpk_cell_shape_of) has its VTK parametric corner coordinates and its faces, oriented outward there; tets are
  * first ordered so they are positive on that reference cell, then checked on the real coordinates with
  * the exact predicate. */
 #include "cell_split.h"
 
 #include <string.h>
 
+#include "mesh/cell_types.h"
 #include "mesh/mesh.h"
 #include "pipeline.h"
 
-typedef struct shape {
-    int nodes, face_count;
-    int face_size[6];
-    int faces[6][4];   /* outward on `ref` */
-    double ref[8][3];  /* VTK parametric coordinates of the corners */
-} shape;
-
-static const shape hexahedron = {
-    8, 6, {4, 4, 4, 4, 4, 4},
-    {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}},
-    {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
-
-static const shape wedge = {
-    6, 5, {3, 3, 4, 4, 4},
-    {{0, 2, 1}, {3, 4, 5}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}},
-    {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}}};
-
-static const shape pyramid = {
-    5, 5, {4, 3, 3, 3, 3},
-    {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}},
-    {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}}};
+typedef tpk_cell_shape shape; /* mesh/cell_types.h: corners, outward faces, reference corners */
 
 int tpk_split_max_tets(int type)
 {
@@ -75,7 +56,7 @@ static int hex_five(const int32_t *nodes, int (*tets)[4])
     static const int five_b[5][4] = {{1, 3, 4, 6}, {0, 1, 3, 4}, {2, 3, 1, 6}, {5, 4, 6, 1}, {7, 6, 4, 3}};
     int in_a = 0;
     for (int f = 0; f < 6; f++) {
-        int m = smallest(nodes, hexahedron.faces[f], 4);
+        int m = smallest(nodes, tpk_cell_shape_of(TPK_CELL_HEXAHEDRON)->faces[f], 4);
         in_a += m == set_a[0] || m == set_a[1] || m == set_a[2] || m == set_a[3];
     }
     (void)set_b;
@@ -91,7 +72,7 @@ static int hex_five(const int32_t *nodes, int (*tets)[4])
 static int cone(const shape *s, const int32_t *nodes, int (*tets)[4])
 {
     int all[8] = {0, 1, 2, 3, 4, 5, 6, 7};
-    int apex = smallest(nodes, all, s->nodes), n = 0;
+    int apex = smallest(nodes, all, s->corners), n = 0;
     for (int f = 0; f < s->face_count; f++) {
         const int *v = s->faces[f];
         int size = s->face_size[f], touches = 0;
@@ -125,28 +106,12 @@ static int cone(const shape *s, const int32_t *nodes, int (*tets)[4])
 static const shape *shape_of(int type, const int32_t *cell_nodes, int32_t *nodes)
 {
     static const int voxel_to_hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
-    const shape *s = type == TPK_CELL_VOXEL || type == TPK_CELL_HEXAHEDRON ? &hexahedron
-                     : type == TPK_CELL_WEDGE                             ? &wedge
-                     : type == TPK_CELL_PYRAMID                           ? &pyramid
+    const shape *s = type == TPK_CELL_VOXEL || type == TPK_CELL_HEXAHEDRON ? tpk_cell_shape_of(TPK_CELL_HEXAHEDRON)
+                     : type == TPK_CELL_WEDGE || type == TPK_CELL_PYRAMID  ? tpk_cell_shape_of(type)
                                                                           : NULL;
-    for (int i = 0; s && i < s->nodes; i++)
+    for (int i = 0; s && i < s->corners; i++)
         nodes[i] = cell_nodes[type == TPK_CELL_VOXEL ? voxel_to_hex[i] : i];
     return s;
-}
-
-int tpk_cell_faces(int type, const int32_t *cell_nodes, int32_t *ids, int *starts)
-{
-    int32_t nodes[8];
-    const shape *s = shape_of(type, cell_nodes, nodes);
-    if (!s)
-        return 0;
-    starts[0] = 0;
-    for (int f = 0; f < s->face_count; f++) {
-        for (int i = 0; i < s->face_size[f]; i++)
-            ids[starts[f] + i] = nodes[s->faces[f][i]];
-        starts[f + 1] = starts[f] + s->face_size[f];
-    }
-    return s->face_count;
 }
 
 int tpk_split_cell(int type, const int32_t *cell_nodes, const double *points, int32_t *out, int *mirrored)
@@ -156,12 +121,12 @@ int tpk_split_cell(int type, const int32_t *cell_nodes, const double *points, in
     *mirrored = 0;
     if (!s)
         return -1;
-    for (int i = 0; i < s->nodes; i++)
+    for (int i = 0; i < s->corners; i++)
         for (int j = 0; j < i; j++)
             if (nodes[i] == nodes[j])
                 return -1; /* a repeated corner: degenerate */
     int tets[6][4];
-    int n = s == &hexahedron ? hex_five(nodes, tets) : 0;
+    int n = s->type == TPK_CELL_HEXAHEDRON ? hex_five(nodes, tets) : 0;
     if (n == 0)
         n = cone(s, nodes, tets);
     int positive = 0, negative = 0;

@@ -28,9 +28,4 @@ int tpk_star_max_tets(int type);
 int tpk_star_cell(int type, const int32_t *nodes, const double *points, const double centre[3],
                   int32_t centre_id, int32_t *out, int *mirrored);
 
-/* The faces of a voxel, hexahedron, wedge or pyramid as global-id polygons, outward when the cell is not
- * mirrored (VTK node order): face f is ids[starts[f] .. starts[f+1]). Returns the face count (at most 6;
- * `ids` holds 24, `starts` 7), or 0 for another type. */
-int tpk_cell_faces(int type, const int32_t *nodes, int32_t *ids, int *starts);
-
 #endif

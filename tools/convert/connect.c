@@ -1,43 +1,26 @@
 /* Face matching (pipeline stage 4), sort-based and multithreaded (docs/ARCHITECTURE.md §4).
- * A counting sort puts every tet into two buckets: with its ids sorted s0 < s1 < s2 < s3, tet t goes
- * to bucket s0 for its three faces that contain s0, and to bucket s1 for its face opposite s0 (which
- * has s1 as its smallest id). So bucket v holds exactly the faces whose smallest id is v, with only 4
- * bytes per tet per bucket (the tet id, and one bit for which of the two roles). Buckets are small
- * (about 12 tets, 24 faces in a typical mesh): each is expanded into its faces and matched with a small
- * hash table keyed by the other two ids: a face seen once is a boundary face, twice makes neighbors,
- * more is an error. Workers take contiguous tet ranges and bucket ranges, so the result does not
- * depend on timing. */
+ * A counting sort puts every tet into two buckets, by the rule of mesh/face_buckets.h: bucket s0 for its
+ * three faces that contain its smallest id s0, bucket s1 for its face opposite s0. So bucket v holds
+ * exactly the faces whose smallest id is v, with only 4 bytes per tet per bucket (the tet id, and one
+ * bit for which of the two roles). Buckets are small (about 12 tets, 24 faces in a typical mesh): each
+ * is expanded into its faces and matched with a small hash table keyed by the other two ids: a face
+ * seen once is a boundary face, twice makes neighbors, more is an error. Workers take contiguous tet
+ * ranges and bucket ranges, so the result does not depend on timing. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "base/parallel.h"
+#include "mesh/face_buckets.h"
 #include "pipeline.h"
 
 #define MAX_LISTED_TETS 16
 #define ROLE_S1 0x80000000u /* bucket entry flag: the tet's face opposite s0, not its three s0 faces */
 #define ID_MASK 0x7fffffffu
-/* A face's slot (4 * tet + k) carries, in bit 62, the parity of its outward vertex order (tpk_outward_face)
+/* A face's slot (4 * tet + k) carries, in bit 62, the parity of its outward vertex order (tpk_tet_faces)
  * against ascending ids: two positive tets that share a face see it in opposite orders unless it folds. */
 #define SLOT_ODD ((int64_t)1 << 62)
 #define SLOT_MASK (SLOT_ODD - 1)
-
-typedef struct sorted4 {
-    int32_t id[4];
-    int local[4];
-} sorted4;
-
-/* Sorts the 4 (distinct) ids by rank, without branches: rank = how many of the others are smaller. */
-static inline void sort_tet(const int32_t *v, sorted4 *s)
-{
-    int c01 = v[0] > v[1], c02 = v[0] > v[2], c03 = v[0] > v[3];
-    int c12 = v[1] > v[2], c13 = v[1] > v[3], c23 = v[2] > v[3];
-    int rank[4] = {c01 + c02 + c03, 1 - c01 + c12 + c13, 2 - c02 - c12 + c23, 3 - c03 - c13 - c23};
-    for (int k = 0; k < 4; k++) {
-        s->id[rank[k]] = v[k];
-        s->local[rank[k]] = k;
-    }
-}
 
 static inline int has_repeat(const int32_t *v)
 {
@@ -91,8 +74,8 @@ static void count_entries(void *ctx, int64_t begin, int64_t end, int worker)
             job->bad_tet[worker] = t;
             return;
         }
-        sorted4 s;
-        sort_tet(v, &s);
+        tpk_sorted_tet s;
+        tpk_sort_tet(v, &s);
         if (s.id[0] < 0 || s.id[3] >= job->vertex_count) {
             job->bad_tet[worker] = t;
             return;
@@ -108,8 +91,8 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
     uint32_t *next = job->starts[worker];
     uint32_t *entries = job->entries;
     for (int64_t t = begin; t < end; t++) {
-        sorted4 s;
-        sort_tet(job->tets + 4 * t, &s);
+        tpk_sorted_tet s;
+        tpk_sort_tet(job->tets + 4 * t, &s);
         entries[next[s.id[0]]++] = (uint32_t)t;
         entries[next[s.id[1]]++] = (uint32_t)t | ROLE_S1;
     }
@@ -125,6 +108,13 @@ static inline int64_t face_parity(const int32_t *v, int k)
     return tpk_face_parity(v, k) ? SLOT_ODD : 0;
 }
 
+static inline void put_face(uint64_t *faces, int64_t *slots, int64_t at, int64_t t, const int32_t *v,
+                            const tpk_bucket_face *f)
+{
+    faces[at] = face_key(f->mid, f->max);
+    slots[at] = (4 * t + f->opposite) | face_parity(v, f->opposite);
+}
+
 /* Expands a bucket's entries into faces; returns the face count. */
 static int64_t bucket_faces(const connect_job *job, int64_t b, uint64_t *faces, int64_t *slots)
 {
@@ -135,18 +125,16 @@ static int64_t bucket_faces(const connect_job *job, int64_t b, uint64_t *faces, 
         uint32_t entry = job->entries[i];
         int64_t t = entry & ID_MASK;
         const int32_t *v = job->tets + 4 * t;
-        sorted4 s;
-        sort_tet(v, &s);
-        if (entry & ROLE_S1) {
-            faces[n] = face_key(s.id[2], s.id[3]);
-            slots[n++] = (4 * t + s.local[0]) | face_parity(v, s.local[0]);
+        tpk_sorted_tet s;
+        tpk_sort_tet(v, &s);
+        tpk_bucket_face f[3];
+        if (entry & ROLE_S1) { /* each branch with its own count, so both are unrolled */
+            tpk_tet_bucket_faces(&s, 0, f);
+            put_face(faces, slots, n++, t, v, &f[0]);
         } else {
-            faces[n] = face_key(s.id[1], s.id[2]);
-            slots[n++] = (4 * t + s.local[3]) | face_parity(v, s.local[3]);
-            faces[n] = face_key(s.id[1], s.id[3]);
-            slots[n++] = (4 * t + s.local[2]) | face_parity(v, s.local[2]);
-            faces[n] = face_key(s.id[2], s.id[3]);
-            slots[n++] = (4 * t + s.local[1]) | face_parity(v, s.local[1]);
+            tpk_tet_bucket_faces(&s, 1, f);
+            for (int i = 0; i < 3; i++)
+                put_face(faces, slots, n++, t, v, &f[i]);
         }
     }
     return n;

@@ -46,7 +46,7 @@ static int is_folded(const fold_job *job, int64_t t, int k, int64_t u)
 int tpk_face_folded(const int32_t *tets, const double *p, int64_t t, int k, int64_t u)
 {
     const int32_t *v = tets + 4 * t, *w = tets + 4 * u;
-    int32_t ia = v[tpk_outward_face[k][0]], ib = v[tpk_outward_face[k][1]], ic = v[tpk_outward_face[k][2]];
+    int32_t ia = v[tpk_tet_faces[k][0]], ib = v[tpk_tet_faces[k][1]], ic = v[tpk_tet_faces[k][2]];
     int32_t iy = w[0] ^ w[1] ^ w[2] ^ w[3] ^ ia ^ ib ^ ic; /* u's fourth vertex (spec §6.2, vx) */
     return tpk_orient3d_exact(p + 3 * (int64_t)ia, p + 3 * (int64_t)ib, p + 3 * (int64_t)ic, p + 3 * (int64_t)iy) <= 0;
 }
@@ -136,7 +136,7 @@ void tpk_describe_fold(const tpk_tetmesh *mesh, const int32_t *neighbors, int64_
     tpk_strbuf_printf(&sb, "the face of points ");
     for (int i = 0; i < 3; i++) {
         tpk_strbuf_printf(&sb, "%s", i ? ", " : "");
-        describe_vertex(&sb, mesh, v[tpk_outward_face[k][i]]);
+        describe_vertex(&sb, mesh, v[tpk_tet_faces[k][i]]);
     }
     tpk_strbuf_printf(&sb, " is shared by cell %d (tet %lld, fourth point ",
                       mesh->tet_source ? mesh->tet_source[t] : (int32_t)t, (long long)t);

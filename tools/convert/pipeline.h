@@ -122,15 +122,12 @@ typedef struct tpk_unfold_stats {
 int tpk_connect_unfolded(tpk_tetmesh *mesh, const uint8_t *turned_over, int flags, int threads, int32_t *neighbors,
                          tpk_unfold_stats *stats, tpk_diag *diag);
 
-/* tpk_outward_face[k]: the local vertices of the face opposite vertex k of a positive tet, in outward order
- * (their normal points away from vertex k). */
-extern const int tpk_outward_face[4][3];
 /* 1 when the face opposite local vertex k of tet v, in outward order, is an odd permutation of its ids in
  * ascending order (0 when even). Two positive tets that share a face see it with different parities
  * unless it is folded (tpk_connect_folds, tpk_find_folds). */
 static inline int tpk_face_parity(const int32_t *v, int k)
 {
-    int32_t a = v[tpk_outward_face[k][0]], b = v[tpk_outward_face[k][1]], c = v[tpk_outward_face[k][2]];
+    int32_t a = v[tpk_tet_faces[k][0]], b = v[tpk_tet_faces[k][1]], c = v[tpk_tet_faces[k][2]];
     return (a > b) ^ (a > c) ^ (b > c);
 }
 

@@ -1,11 +1,7 @@
-/* Boundary faces (pipeline stage 6) as outward int4 records.
- * For a positive tet (p0,p1,p2,p3), det[p1-p0, p2-p0, p3-p0] = ((p1-p0) x (p2-p0)) . (p3-p0) > 0, so
- * (p0,p1,p2) faces p3 and (p0,p2,p1) faces out. The other faces follow from the parity of the vertex
- * permutation: (p1,p2,p3,p0) is odd, so (p1,p2,p3) already faces away from p0; (p0,p2,p3,p1) is even,
- * so (p0,p3,p2) faces out; (p0,p1,p3,p2) is odd, so (p0,p1,p3) faces out. Tests check it exactly. */
+/* Boundary faces (pipeline stage 6) as outward int4 records: each face of a tet with no neighbor, in
+ * the outward order of tpk_tet_faces (format/tetpack_format.h, which says why it is outward). Tests
+ * check it exactly. */
 #include "pipeline.h"
-
-const int tpk_outward_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count)
 {
@@ -25,9 +21,9 @@ void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_
             if (neighbors[4 * t + k] >= 0)
                 continue;
             tpk_shell_face *f = &dst[out++];
-            f->a = v[tpk_outward_face[k][0]];
-            f->b = v[tpk_outward_face[k][1]];
-            f->c = v[tpk_outward_face[k][2]];
+            f->a = v[tpk_tet_faces[k][0]];
+            f->b = v[tpk_tet_faces[k][1]];
+            f->c = v[tpk_tet_faces[k][2]];
             f->t = (int32_t)t;
         }
     }

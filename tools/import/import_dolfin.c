@@ -11,6 +11,7 @@
 #include "tetpack_format.h"
 
 #include "base/text_scan.h"
+#include "import_file.h"
 #include "importers.h"
 #include "xml_input.h"
 

@@ -13,6 +13,7 @@
 #include "tetpack_format.h"
 
 #include "base/text_scan.h"
+#include "import_file.h"
 #include "importers.h"
 #include "mesh/cell_types.h"
 

@@ -13,6 +13,7 @@
 #include "mesh/cell_types.h"
 #include "importers.h"
 #include "base/text_scan.h"
+#include "import_file.h"
 
 typedef struct medit_reader {
     tpk_scan s;

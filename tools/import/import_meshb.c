@@ -13,6 +13,7 @@
 #include "importers.h"
 #include "tetpack_format.h"
 #include "base/text_scan.h"
+#include "import_file.h"
 
 enum { KW_DIMENSION = 3, KW_VERTICES = 4, KW_TETRAHEDRA = 8, KW_PRISMS = 9, KW_HEXAHEDRA = 10, KW_PYRAMIDS = 49,
        KW_END = 54 };

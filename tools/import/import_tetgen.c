@@ -7,6 +7,7 @@
 #include "importers.h"
 #include "tetpack_format.h"
 #include "base/text_scan.h"
+#include "import_file.h"
 
 /* One number of a record. first = 1: the record's first number (may follow blank and comment lines);
  * otherwise it must be on the same line. Messages: "expected <what> of <item> <index>, found ...". */

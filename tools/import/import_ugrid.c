@@ -17,6 +17,7 @@
 
 #include "importers.h"
 #include "base/text_scan.h"
+#include "import_file.h"
 
 typedef struct ugrid_reader {
     tpk_scan s;

@@ -1,9 +1,12 @@
 /* The VTK cell type table (VTK's vtkCellType.h codes and node orders; higher-order cells list their
- * corner nodes first, in the order of the linear cell). */
+ * corner nodes first, in the order of the linear cell) and the shapes of the linear volume cells. */
 #include "cell_types.h"
 
 #include <stddef.h>
 #include <stdio.h>
+
+#include "mesh.h"
+#include "tetpack_format.h"
 
 static const tpk_cell_type_info cell_types[] = {
     {0, "empty cell", 0, 0, 0, 0},
@@ -93,4 +96,49 @@ void tpk_warn_cell_counts(tpk_diag *diag, const char *name, const int64_t *by_ty
                               tpk_cell_rule_for(t).name);
     }
     tpk_diag_warn(diag, "%s: %s %lld cells (%s)", name, what, (long long)total, list);
+}
+
+/* Indexed by VTK code - 10 (tpk_cell_shape_of). Faces are outward on `ref` (tests/test_split.c checks
+ * the volume they enclose, exactly, and that each edge bounds two faces); a voxel is a hexahedron with
+ * corners 2,3 and 6,7 swapped (x fastest, then y, then z). */
+static const tpk_cell_shape shapes[] = {
+    {TPK_CELL_TETRA, 4, 4, {3, 3, 3, 3}, TPK_TET_FACE_LIST,
+     6, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
+     {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}},
+    {TPK_CELL_VOXEL, 8, 6, {4, 4, 4, 4, 4, 4},
+     {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {1, 3, 7, 5}, {3, 2, 6, 7}, {2, 0, 4, 6}},
+     12, {{0, 1}, {1, 3}, {2, 3}, {0, 2}, {4, 5}, {5, 7}, {6, 7}, {4, 6}, {0, 4}, {1, 5}, {2, 6}, {3, 7}},
+     {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}}},
+    {TPK_CELL_HEXAHEDRON, 8, 6, {4, 4, 4, 4, 4, 4},
+     {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}},
+     12, {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}},
+     {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}},
+    {TPK_CELL_WEDGE, 6, 5, {3, 3, 4, 4, 4},
+     {{0, 2, 1}, {3, 4, 5}, {0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}},
+     9, {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}},
+     {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}}},
+    {TPK_CELL_PYRAMID, 5, 5, {4, 3, 3, 3, 3},
+     {{0, 3, 2, 1}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}},
+     8, {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}},
+     {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}}},
+};
+
+const tpk_cell_shape *tpk_cell_shape_of(int type)
+{
+    /* The shapes in the order of their VTK codes, 10 to 14: the checks ask once per cell. */
+    return type >= TPK_CELL_TETRA && type <= TPK_CELL_PYRAMID ? &shapes[type - TPK_CELL_TETRA] : NULL;
+}
+
+int tpk_cell_faces(int type, const int32_t *nodes, int32_t *ids, int *starts)
+{
+    const tpk_cell_shape *s = type == TPK_CELL_TETRA ? NULL : tpk_cell_shape_of(type);
+    if (!s)
+        return 0;
+    starts[0] = 0;
+    for (int f = 0; f < s->face_count; f++) {
+        for (int i = 0; i < s->face_size[f]; i++)
+            ids[starts[f] + i] = nodes[s->faces[f][i]];
+        starts[f + 1] = starts[f] + s->face_size[f];
+    }
+    return s->face_count;
 }

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "convert/cell_split.h"
+#include "cell_types.h"
 
 int tpk_face_stream_check(const int32_t *stream, int64_t n, int64_t point_count, int64_t *bad_at, char *why,
                           size_t why_cap)

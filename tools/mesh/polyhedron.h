@@ -35,7 +35,7 @@ typedef struct tpk_polygons {
 void tpk_polygons_free(tpk_polygons *p);
 /* Faces of a checked face stream. Returns 0 or -1 (out of memory). */
 int tpk_polygons_from_stream(tpk_polygons *p, const int32_t *stream, int64_t n);
-/* Faces of a voxel, hexahedron, wedge or pyramid (tools/convert/cell_split.h order). Returns 0 or -1. */
+/* Faces of a voxel, hexahedron, wedge or pyramid (tpk_cell_faces, cell_types.h). Returns 0 or -1. */
 int tpk_polygons_from_cell(tpk_polygons *p, int type, const int32_t *nodes);
 
 /* Turn faces over so that every edge is walked once in each direction (a consistently oriented closed

@@ -16,6 +16,7 @@
 
 #include "import_gmsh_internal.h"
 #include "base/text_scan.h"
+#include "import/import_file.h"
 
 /* ---- $MeshFormat and the section loop ----------------------------------------------------------- */
 

@@ -559,6 +559,120 @@ static const gmsh_type *element_type(gmsh_reader *r, int64_t type, const char *w
     return t;
 }
 
+/* 2.2: an element's tags after their count (physical, elementary, then partitions: the first two are
+ * kept), then its nodes. */
+static int read_tags_and_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t ntags)
+{
+    int64_t physical = 0, entity = 0, v;
+    for (int64_t k = 0; k < ntags; k++) {
+        if (gmsh_num(r, &v, "an element tag (physical, elementary, partitions)", 4))
+            return -1;
+        if (k == 0)
+            physical = v;
+        else if (k == 1)
+            entity = v;
+    }
+    return read_element_nodes(r, tag, t, physical, entity);
+}
+
+/* 2.2 binary: groups of elements of one type and tag count; per element its tag, tags and nodes (all
+ * int). */
+static int read_elements_22_binary(gmsh_reader *r, int64_t n)
+{
+    if (gmsh_bin_start(r, "the number of elements"))
+        return -1;
+    for (int64_t e = 0; e < n;) {
+        int64_t type, follow, ntags, tag;
+        if (gmsh_num(r, &type, "an element type", 4) ||
+            gmsh_num(r, &follow, "the number of elements of a group", 4) ||
+            gmsh_num(r, &ntags, "the number of element tags", 4))
+            return -1;
+        char which[64];
+        snprintf(which, sizeof which, "element group at element %lld", (long long)e + 1);
+        const gmsh_type *t = element_type(r, type, which);
+        if (!t)
+            return -1;
+        if (follow < 1 || follow > n - e)
+            return tpk_scan_fail(&r->s, "expected 1 to %lld elements in a group, found %lld", (long long)(n - e),
+                                 (long long)follow);
+        if (ntags < 0 || (uint64_t)ntags > gmsh_bytes_left(r) / 4)
+            return tpk_scan_fail(&r->s, "expected a number of element tags that fits the %zu bytes left, "
+                                        "found %lld", gmsh_bytes_left(r), (long long)ntags);
+        if ((uint64_t)follow > gmsh_bytes_left(r) / (4 * (uint64_t)(1 + ntags + t->nodes)))
+            return tpk_scan_fail(&r->s, "%lld elements of %lld numbers cannot fit in the %zu bytes left "
+                                        "(wrong count or truncated file)", (long long)follow,
+                                 (long long)(1 + ntags + t->nodes), gmsh_bytes_left(r));
+        for (int64_t i = 0; i < follow; i++, e++)
+            if (gmsh_num(r, &tag, "an element tag", 4) || check_tag(r, tag, "element") ||
+                read_tags_and_nodes(r, tag, t, ntags))
+                return -1;
+        tpk_scan_release_consumed(&r->s);
+    }
+    return 0;
+}
+
+/* 2.2 ASCII: per element its tag, type, tag count, tags and nodes. */
+static int read_elements_22_text(gmsh_reader *r, int64_t n)
+{
+    for (int64_t e = 0; e < n; e++) {
+        int64_t tag, type, ntags;
+        if (tpk_scan_int64(&r->s, &tag, "an element tag") || check_tag(r, tag, "element") ||
+            tpk_scan_int64(&r->s, &type, "an element type"))
+            return -1;
+        char which[48];
+        snprintf(which, sizeof which, "element %lld", (long long)tag);
+        const gmsh_type *t = element_type(r, type, which);
+        if (!t || gmsh_read_count(r, "element tags", 1, &ntags, 0) || read_tags_and_nodes(r, tag, t, ntags))
+            return -1;
+        if ((e & 0xffff) == 0)
+            tpk_scan_release_consumed(&r->s);
+    }
+    return 0;
+}
+
+/* 4.1: blocks of one entity and type; the plain part of each block straight from the bytes, the rest
+ * element by element. */
+static int read_elements_41(gmsh_reader *r, int64_t n, int64_t blocks)
+{
+    int64_t done = 0;
+    for (int64_t b = 0; b < blocks; b++) {
+        int64_t dim, etag, type, count;
+        if (gmsh_num(r, &dim, "the entity dimension of an element block", 4) ||
+            gmsh_num(r, &etag, "the entity tag of an element block", 4) ||
+            gmsh_num(r, &type, "the element type of an element block", 4))
+            return -1;
+        char which[96];
+        snprintf(which, sizeof which, "element block %lld (entity %lld, dimension %lld)", (long long)b + 1,
+                 (long long)etag, (long long)dim);
+        const gmsh_type *t = element_type(r, type, which);
+        if (!t || gmsh_read_count(r, "elements in the block", 1 + t->nodes, &count, 8))
+            return -1;
+        if (count > n - done)
+            return tpk_scan_fail(&r->s, "element block %lld holds %lld elements, more than the %lld left "
+                                        "of the %lld announced", (long long)b + 1, (long long)count,
+                                 (long long)(n - done), (long long)n);
+        int64_t physical = dim == 3 ? volume_physical(r, etag) : 0;
+        /* count fits the bytes left (gmsh_read_count): room for the whole block at once */
+        if (t->vtk && reserve_cells(r, count, count * t->corners))
+            return -1;
+        int64_t plain = read_plain_elements(r, t, count, physical, etag);
+        if (plain < 0)
+            return -1;
+        for (int64_t e = plain; e < count; e++) {
+            int64_t tag;
+            if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "element") ||
+                read_element_nodes(r, tag, t, physical, etag))
+                return -1;
+        }
+        done += count;
+        tpk_scan_release_consumed(&r->s);
+    }
+    if (done != n)
+        return tpk_scan_fail(&r->s, "expected %lld elements in the element blocks, found %lld", (long long)n,
+                             (long long)done);
+    return 0;
+}
+
 int gmsh_read_elements(gmsh_reader *r)
 {
     int64_t n, blocks = 0, tmp;
@@ -575,111 +689,10 @@ int gmsh_read_elements(gmsh_reader *r)
     if (r->version == 41 &&
         (gmsh_num(r, &tmp, "the smallest element tag", 8) || gmsh_num(r, &tmp, "the largest element tag", 8)))
         return -1;
-    if (r->version == 22 && r->binary) {
-        /* groups: type, count, number of tags; then per element its tag, tags and nodes (all int) */
-        if (gmsh_bin_start(r, "the number of elements"))
-            return -1;
-        for (int64_t e = 0; e < n;) {
-            int64_t type, follow, ntags, tag, v;
-            if (gmsh_num(r, &type, "an element type", 4) ||
-                gmsh_num(r, &follow, "the number of elements of a group", 4) ||
-                gmsh_num(r, &ntags, "the number of element tags", 4))
-                return -1;
-            char which[64];
-            snprintf(which, sizeof which, "element group at element %lld", (long long)e + 1);
-            const gmsh_type *t = element_type(r, type, which);
-            if (!t)
-                return -1;
-            if (follow < 1 || follow > n - e)
-                return tpk_scan_fail(&r->s, "expected 1 to %lld elements in a group, found %lld", (long long)(n - e),
-                                     (long long)follow);
-            if (ntags < 0 || (uint64_t)ntags > gmsh_bytes_left(r) / 4)
-                return tpk_scan_fail(&r->s, "expected a number of element tags that fits the %zu bytes left, "
-                                            "found %lld", gmsh_bytes_left(r), (long long)ntags);
-            if ((uint64_t)follow > gmsh_bytes_left(r) / (4 * (uint64_t)(1 + ntags + t->nodes)))
-                return tpk_scan_fail(&r->s, "%lld elements of %lld numbers cannot fit in the %zu bytes left "
-                                            "(wrong count or truncated file)", (long long)follow,
-                                     (long long)(1 + ntags + t->nodes), gmsh_bytes_left(r));
-            for (int64_t i = 0; i < follow; i++, e++) {
-                int64_t physical = 0, entity = 0;
-                if (gmsh_num(r, &tag, "an element tag", 4) || check_tag(r, tag, "element"))
-                    return -1;
-                for (int64_t k = 0; k < ntags; k++) {
-                    if (gmsh_num(r, &v, "an element tag (physical, elementary, partitions)", 4))
-                        return -1;
-                    if (k == 0)
-                        physical = v;
-                    else if (k == 1)
-                        entity = v;
-                }
-                if (read_element_nodes(r, tag, t, physical, entity))
-                    return -1;
-            }
-            tpk_scan_release_consumed(&r->s);
-        }
-    } else if (r->version == 22) {
-        for (int64_t e = 0; e < n; e++) {
-            int64_t tag, type, ntags, physical = 0, entity = 0, v;
-            if (tpk_scan_int64(&r->s, &tag, "an element tag") || check_tag(r, tag, "element") ||
-                tpk_scan_int64(&r->s, &type, "an element type"))
-                return -1;
-            char which[48];
-            snprintf(which, sizeof which, "element %lld", (long long)tag);
-            const gmsh_type *t = element_type(r, type, which);
-            if (!t || gmsh_read_count(r, "element tags", 1, &ntags, 0))
-                return -1;
-            for (int64_t k = 0; k < ntags; k++) {
-                if (tpk_scan_int64(&r->s, &v, "an element tag (physical, elementary, partitions)"))
-                    return -1;
-                if (k == 0)
-                    physical = v;
-                else if (k == 1)
-                    entity = v;
-            }
-            if (read_element_nodes(r, tag, t, physical, entity))
-                return -1;
-            if ((e & 0xffff) == 0)
-                tpk_scan_release_consumed(&r->s);
-        }
-    } else {
-        int64_t done = 0;
-        for (int64_t b = 0; b < blocks; b++) {
-            int64_t dim, etag, type, count;
-            if (gmsh_num(r, &dim, "the entity dimension of an element block", 4) ||
-                gmsh_num(r, &etag, "the entity tag of an element block", 4) ||
-                gmsh_num(r, &type, "the element type of an element block", 4))
-                return -1;
-            char which[96];
-            snprintf(which, sizeof which, "element block %lld (entity %lld, dimension %lld)", (long long)b + 1,
-                     (long long)etag, (long long)dim);
-            const gmsh_type *t = element_type(r, type, which);
-            if (!t || gmsh_read_count(r, "elements in the block", 1 + t->nodes, &count, 8))
-                return -1;
-            if (count > n - done)
-                return tpk_scan_fail(&r->s, "element block %lld holds %lld elements, more than the %lld left "
-                                            "of the %lld announced", (long long)b + 1, (long long)count,
-                                     (long long)(n - done), (long long)n);
-            int64_t physical = dim == 3 ? volume_physical(r, etag) : 0;
-            /* count fits the bytes left (gmsh_read_count): room for the whole block at once */
-            if (t->vtk && reserve_cells(r, count, count * t->corners))
-                return -1;
-            int64_t plain = read_plain_elements(r, t, count, physical, etag);
-            if (plain < 0)
-                return -1;
-            for (int64_t e = plain; e < count; e++) {
-                int64_t tag;
-                if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "element") ||
-                    read_element_nodes(r, tag, t, physical, etag))
-                    return -1;
-            }
-            done += count;
-            tpk_scan_release_consumed(&r->s);
-        }
-        if (done != n)
-            return tpk_scan_fail(&r->s, "expected %lld elements in the element blocks, found %lld", (long long)n,
-                                 (long long)done);
-    }
-    return gmsh_expect_end(r, "$EndElements");
+    int rc = r->version == 41 ? read_elements_41(r, n, blocks)
+             : r->binary      ? read_elements_22_binary(r, n)
+                              : read_elements_22_text(r, n);
+    return rc ? rc : gmsh_expect_end(r, "$EndElements");
 }
 
 /* 4.1 $Entities: keep the first physical tag of each volume. */

@@ -14,6 +14,7 @@
 #include "mesh/polyhedron.h"
 #include "tetpack_format.h"
 #include "base/text_scan.h"
+#include "import/import_file.h"
 
 typedef struct poly_mesh {
     int64_t point_count, face_count, owner_count, neighbour_count;

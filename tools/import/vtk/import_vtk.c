@@ -12,6 +12,7 @@
 #include "import_vtk_internal.h"
 #include "mesh/polyhedron.h"
 #include "base/text_scan.h"
+#include "import/import_file.h"
 
 /* ---- Cells: classify, reduce, drop -------------------------------------------------------------- */
 

@@ -11,6 +11,7 @@
 
 #include "import_vtu_internal.h"
 #include "base/text_scan.h"
+#include "import/import_file.h"
 
 /* ---- Entry points ------------------------------------------------------------------------------- */
 

@@ -12,6 +12,7 @@
 #include "import_xdmf_internal.h"
 #include "tetpack_format.h"
 #include "base/text_scan.h"
+#include "import/import_file.h"
 
 #define MAX_STEPS 100000
 

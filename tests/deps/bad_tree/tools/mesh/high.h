@@ -1,0 +1,2 @@
+/* A function of mesh/, which base/low.c may not use. */
+int tpk_fake_high(void);
