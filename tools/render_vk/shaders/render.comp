@@ -51,13 +51,13 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
     vec4 iso;         // iso values (scalar units)
     vec4 light;       // xyz: point light (relative to the origin; the eye without one); w: iso opacity
     vec4 cast_info;   // x: AO ray length, y: TPK_RENDER_SELF_EPS * unit distance, z: unit distance
-    ivec4 cast_count; // x: AO rays
+    ivec4 cast_count; // x: AO rays; y: the row after this dispatch's rows (a band need not be whole groups)
     vec4 tf_s[TPK_VK_TF_MAX / 4];
     vec4 tf_rgba[TPK_VK_TF_MAX];
 } P;
 
 layout(std430, set = 0, binding = TPK_VK_BIND_PIXELS) writeonly buffer Pixels { uint pixels[]; };
-layout(std430, set = 0, binding = TPK_VK_BIND_STEPS) writeonly buffer Steps { uvec4 steps[]; }; // steps, status, secondary rays
+layout(std430, set = 0, binding = TPK_VK_BIND_COUNTERS) buffer Counters { uint counters[TPK_VK_COUNT_WORDS]; };
 
 // Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away.
 #define DECLARE_ARRAY(SAMPLER, NAME, ARRAY)                                                   \
@@ -982,31 +982,72 @@ uint to_byte(float v)
     return uint(clamp(v, 0.0, 1.0) * 255.0 + 0.5);
 }
 
+// The workgroup's statistics (vk_layout.h, TPK_VK_COUNT_*), summed in shared memory before one atomic
+// per word goes to the counters buffer: no per-pixel statistics leave the device.
+shared uint group_counts[TPK_VK_COUNT_WORDS];
+
+// 64-bit add of v to words [at, at + 1] of the group's sums: the carry of the low word goes to the high.
+void group_add64(int at, uint v)
+{
+    uint old = atomicAdd(group_counts[at], v);
+    if (old + v < old)
+        atomicAdd(group_counts[at + 1], 1u);
+}
+
+void counters_add64(int at)
+{
+    uint lo = group_counts[at], hi = group_counts[at + 1];
+    uint old = atomicAdd(counters[at], lo);
+    hi += old + lo < old ? 1u : 0u;
+    if (hi != 0u)
+        atomicAdd(counters[at + 1], hi);
+}
+
 void main()
 {
-    tf_to_shared(); // before any invocation returns: every one reaches the barrier
+    if (gl_LocalInvocationIndex == 0u) {
+        for (int i = 0; i < TPK_VK_COUNT_WORDS; i++)
+            group_counts[i] = 0u;
+        group_counts[TPK_VK_COUNT_FIRST] = 0xffffffffu;
+    }
+    tf_to_shared(); // its barrier also publishes group_counts' zeros
     const int x = int(gl_GlobalInvocationID.x), y = P.dims.z + int(gl_GlobalInvocationID.y);
     pixel = ivec2(x, y);
-    if (x >= P.dims.x || y >= P.dims.y)
-        return;
-    const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
-    const float py = (1.0 - 2.0 * (float(y) + 0.5) / float(P.dims.y)) * P.right.w;
-    ray_dir = normalize(P.forward.xyz + px * P.right.xyz + py * P.up.xyz);
-    inv_dir = 1.0 / ray_dir;
-    color = vec3(0.0);
-    transmittance = 1.0;
-    steps_taken = 0u;
-    status = TPK_VK_STATUS_OK;
-    t_min_clip = 0.0;
-    t_max_clip = INF;
-    if (frame_init(P.eye.xyz, ray_dir) && clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip))
-        trace(t_min_clip, t_max_clip);
-    const vec4 bg = P.background;
-    float alpha = (1.0 - transmittance) + transmittance * bg.a;
-    vec3 premult = color + transmittance * bg.a * bg.rgb;
-    vec3 straight = alpha > 0.0 ? premult / alpha : vec3(0.0);
-    uint index = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // within this band of rows
-    pixels[index] = to_byte(straight.r) | (to_byte(straight.g) << 8) | (to_byte(straight.b) << 16) |
-                    (to_byte(alpha) << 24);
-    steps[index] = uvec4(steps_taken, status, secondary_rays, 0u);
+    // every invocation reaches the barrier below, so pixels outside the image do no work but return late
+    if (x < P.dims.x && y < P.cast_count.y) {
+        const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
+        const float py = (1.0 - 2.0 * (float(y) + 0.5) / float(P.dims.y)) * P.right.w;
+        ray_dir = normalize(P.forward.xyz + px * P.right.xyz + py * P.up.xyz);
+        inv_dir = 1.0 / ray_dir;
+        color = vec3(0.0);
+        transmittance = 1.0;
+        steps_taken = 0u;
+        status = TPK_VK_STATUS_OK;
+        t_min_clip = 0.0;
+        t_max_clip = INF;
+        if (frame_init(P.eye.xyz, ray_dir) && clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip))
+            trace(t_min_clip, t_max_clip);
+        const vec4 bg = P.background;
+        float alpha = (1.0 - transmittance) + transmittance * bg.a;
+        vec3 premult = color + transmittance * bg.a * bg.rgb;
+        vec3 straight = alpha > 0.0 ? premult / alpha : vec3(0.0);
+        uint index = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // within this band of rows
+        pixels[index] = to_byte(straight.r) | (to_byte(straight.g) << 8) | (to_byte(straight.b) << 16) |
+                        (to_byte(alpha) << 24);
+        group_add64(TPK_VK_COUNT_STEPS, steps_taken);
+        group_add64(TPK_VK_COUNT_SECONDARY, secondary_rays);
+        if (status != TPK_VK_STATUS_OK) {
+            atomicAdd(group_counts[TPK_VK_COUNT_FAILED], 1u);
+            atomicMin(group_counts[TPK_VK_COUNT_FIRST], index);
+        }
+    }
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        counters_add64(TPK_VK_COUNT_STEPS);
+        counters_add64(TPK_VK_COUNT_SECONDARY);
+        if (group_counts[TPK_VK_COUNT_FAILED] != 0u) {
+            atomicAdd(counters[TPK_VK_COUNT_FAILED], group_counts[TPK_VK_COUNT_FAILED]);
+            atomicMin(counters[TPK_VK_COUNT_FIRST], group_counts[TPK_VK_COUNT_FIRST]);
+        }
+    }
 }

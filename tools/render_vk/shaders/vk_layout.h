@@ -44,7 +44,7 @@
 
 #define TPK_VK_BIND_PARAMS 0 /* uniform block */
 #define TPK_VK_BIND_PIXELS 1 /* storage buffer: packed RGBA8 per pixel */
-#define TPK_VK_BIND_STEPS 2  /* storage buffer: per pixel, tet steps, a status, secondary rays, 0 */
+#define TPK_VK_BIND_COUNTERS 2 /* storage buffer: the dispatch's statistics, TPK_VK_COUNT_* below */
 #define TPK_VK_BIND_ARRAY(a) (3 + (a) * TPK_VK_MAX_PARTS)
 #define TPK_VK_BIND_COUNT TPK_VK_BIND_ARRAY(TPK_VK_ARRAY_COUNT)
 
@@ -70,7 +70,16 @@
 #define TPK_VK_EXACT_FILTER 1
 #define TPK_VK_EXACT_ALWAYS 2
 
-/* Per-pixel status written by the shader. */
+/* The statistics of one dispatch, reduced on the device: each workgroup sums its pixels in shared
+ * memory, then adds its sums to these words with one atomic each. 64-bit sums are two words (low, high)
+ * added with carry. The host resets them before each dispatch. */
+#define TPK_VK_COUNT_STEPS 0     /* tet steps, 64-bit: words 0 (low) and 1 (high) */
+#define TPK_VK_COUNT_SECONDARY 2 /* shadow and AO rays, 64-bit: words 2 and 3 */
+#define TPK_VK_COUNT_FAILED 4    /* pixels whose ray failed (TPK_VK_STATUS_MESH) */
+#define TPK_VK_COUNT_FIRST 5     /* the smallest failed pixel index in the dispatch (0xffffffff: none) */
+#define TPK_VK_COUNT_WORDS 8
+
+/* Per-pixel status of the shader. */
 #define TPK_VK_STATUS_OK 0
 #define TPK_VK_STATUS_MESH 1 /* inconsistent connectivity (TPK_ERR_MESH on the CPU) */
 
