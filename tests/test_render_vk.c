@@ -494,3 +494,52 @@ TPK_TEST(pipeline_cache)
     unsetenv("XDG_CACHE_HOME");
     scene_free(&s);
 }
+
+/* Rays in slices (vk_layout.h, "Slices": on by default on lavapipe) against rays in one dispatch: the
+ * state saved between slices is the whole state, so the pictures are the same bit for bit and the
+ * counts equal, with shadow rays (a ray pauses for its casts) and in bands of 900 pixels. With AO rays
+ * too, a ray in one dispatch passes lavapipe's 65535 loop iterations here and is cut short; in slices
+ * its counts are the CPU reference's (within the AO directions' float rounding). */
+TPK_TEST(slices)
+{
+    if (!have_device())
+        return;
+    scene s;
+    CHECK(scene_open(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder.tpk") == 0);
+    CHECK(scene_layout(&s, TPK_LAYOUT_TET16) == 0);
+    size_t n = (size_t)SIZE * SIZE * 4;
+    uint8_t *whole = malloc(n), *sliced = malloc(n);
+    CHECK(whole && sliced);
+    s.opt.shading = 1;
+    s.opt.shadows = 1;
+    tpk_render_stats a, b, c;
+    setenv("TPK_VK_SLICED", "0", 1);
+    int rc = render_env(&s, NULL, NULL, NULL, whole, &a);
+    setenv("TPK_VK_SLICED", "1", 1);
+    rc |= render_env(&s, "900", NULL, NULL, sliced, &b);
+    CHECK(rc == 0);
+    printf("shadows: tet steps %llu and %llu, secondary rays %llu and %llu\n", (unsigned long long)a.tet_steps,
+           (unsigned long long)b.tet_steps, (unsigned long long)a.secondary_rays, (unsigned long long)b.secondary_rays);
+    CHECK(a.secondary_rays > 0);
+    CHECK_EQ_INT(b.tet_steps, a.tet_steps);
+    CHECK_EQ_INT(b.secondary_rays, a.secondary_rays);
+    CHECK(memcmp(whole, sliced, n) == 0);
+
+    s.opt.ao_rays = 3;
+    s.opt.iso_count = 1;
+    s.opt.iso[0] = 0.5 * (s.opt.range_min + s.opt.range_max);
+    s.opt.iso_opacity = 0.4;
+    tpk_diag diag = {0};
+    CHECK_MSG(tpk_render_cpu(&s.mesh, &s.opt, whole, &c, &diag) == 0, "%s", diag.message);
+    CHECK(render_env(&s, "900", NULL, NULL, sliced, &b) == 0);
+    unsetenv("TPK_VK_SLICED");
+    printf("iso + shadows + AO: tet steps cpu %llu, sliced %llu; secondary rays %llu, %llu\n",
+           (unsigned long long)c.tet_steps, (unsigned long long)b.tet_steps, (unsigned long long)c.secondary_rays,
+           (unsigned long long)b.secondary_rays);
+    CHECK(c.secondary_rays > 0);
+    CHECK(fabs((double)b.secondary_rays - (double)c.secondary_rays) <= 0.005 * (double)c.secondary_rays);
+    CHECK(fabs((double)b.tet_steps - (double)c.tet_steps) <= 0.005 * (double)c.tet_steps);
+    free(whole);
+    free(sliced);
+    scene_free(&s);
+}

@@ -20,6 +20,8 @@ struct tpk_vk_renderer {
     tpk_vk_buffer pixels;   /* the band's image: device memory, or host-visible on unified memory */
     tpk_vk_buffer counters; /* the band's statistics (TPK_VK_COUNT_*), as pixels */
     tpk_vk_buffer readback; /* staged: pixels then counters copied out, HOST_CACHED; else unused */
+    tpk_vk_buffer state;    /* sliced: each pixel's ray between slices (a stand-in of 16 bytes else) */
+    int sliced;             /* rays run in slices (tpk_vk_sliced) */
     tpk_vk_pipeline pipeline;
     VkCommandPool pool;
     VkCommandBuffer cmd;
@@ -57,6 +59,7 @@ void tpk_vk_renderer_destroy(tpk_vk_renderer *v)
     tpk_vk_buffer_destroy(&v->ctx, &v->pixels);
     tpk_vk_buffer_destroy(&v->ctx, &v->counters);
     tpk_vk_buffer_destroy(&v->ctx, &v->readback);
+    tpk_vk_buffer_destroy(&v->ctx, &v->state);
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++)
         tpk_vk_array_destroy(&v->ctx, &v->arrays[a]);
     tpk_vk_context_destroy(&v->ctx);
@@ -206,7 +209,10 @@ static void record_band(vk_render *v, VkPipeline pipeline, const tpk_vk_params *
     static const uint32_t zero_counts[TPK_VK_COUNT_WORDS] = {[TPK_VK_COUNT_FIRST] = 0xffffffffu};
     VkCommandBuffer cmd = v->cmd;
     vkCmdUpdateBuffer(cmd, v->params.buffer, 0, sizeof *params, params);
-    vkCmdUpdateBuffer(cmd, v->counters.buffer, 0, sizeof zero_counts, zero_counts);
+    if (params->cast_count[2] == 0) /* a later slice adds to the band's sums: only its pending count starts at 0 */
+        vkCmdUpdateBuffer(cmd, v->counters.buffer, 0, sizeof zero_counts, zero_counts);
+    else
+        vkCmdUpdateBuffer(cmd, v->counters.buffer, 4 * TPK_VK_COUNT_PENDING, 4, &zero_counts[TPK_VK_COUNT_PENDING]);
     /* also orders the uploads' copies (earlier submissions) before the shader's reads */
     barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
             VK_ACCESS_UNIFORM_READ_BIT | VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
@@ -235,12 +241,44 @@ static void record_band(vk_render *v, VkPipeline pipeline, const tpk_vk_params *
             VK_ACCESS_HOST_READ_BIT);
 }
 
-/* Render rows [row0, row0 + rows) and wait for them; *gpu_seconds += the dispatch's device time. */
+/* The band's statistics as the host reads them (after tpk_vk_buffer_invalidate of band_counters_buffer). */
+static const tpk_vk_buffer *band_counters_buffer(const vk_render *v)
+{
+    return v->ctx.staged ? &v->readback : &v->counters;
+}
+
+static const uint32_t *band_counters(const vk_render *v)
+{
+    return v->ctx.staged ? (const uint32_t *)((const char *)v->readback.mapped + (size_t)v->band_pixels * 4)
+                         : (const uint32_t *)v->counters.mapped;
+}
+
+static int run_slice(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, int rows, double *gpu_seconds,
+                     tpk_diag *diag);
+
+/* Render rows [row0, row0 + rows) and wait for them, in slices until no ray is pending (sliced) or in
+ * one dispatch; *gpu_seconds += the dispatches' device time. */
 static int run_band(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, int row0, int rows, double *gpu_seconds,
                     tpk_diag *diag)
 {
     params->dims[2] = row0;
     params->cast_count[1] = row0 + rows;
+    for (int slice = 0;; slice++) {
+        params->cast_count[2] = slice;
+        if (run_slice(v, pipeline, params, rows, gpu_seconds, diag) != 0)
+            return -1;
+        if (!v->sliced)
+            return 0;
+        if (tpk_vk_buffer_invalidate(&v->ctx, band_counters_buffer(v), diag) != 0)
+            return -1;
+        if (band_counters(v)[TPK_VK_COUNT_PENDING] == 0)
+            return 0;
+    }
+}
+
+static int run_slice(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, int rows, double *gpu_seconds,
+                     tpk_diag *diag)
+{
     VkCommandBufferBeginInfo begin = {
         .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
         .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
@@ -274,7 +312,7 @@ static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t 
 {
     const tpk_vk_buffer *image = v->ctx.staged ? &v->readback : &v->pixels;
     if (tpk_vk_buffer_invalidate(&v->ctx, image, diag) != 0 ||
-        (!v->ctx.staged && tpk_vk_buffer_invalidate(&v->ctx, &v->counters, diag) != 0))
+        (!v->ctx.staged && tpk_vk_buffer_invalidate(&v->ctx, band_counters_buffer(v), diag) != 0))
         return -1;
     size_t n = (size_t)width * (size_t)rows;
     const uint32_t *px = image->mapped;
@@ -289,8 +327,7 @@ static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t 
         dst[4 * i + 3] = (uint8_t)(px[i] >> 24);
     }
 #endif
-    const uint32_t *c = v->ctx.staged ? (const uint32_t *)((const char *)v->readback.mapped + (size_t)v->band_pixels * 4)
-                                      : (const uint32_t *)v->counters.mapped;
+    const uint32_t *c = band_counters(v);
     counts[0] += (uint64_t)c[TPK_VK_COUNT_STEPS] | (uint64_t)c[TPK_VK_COUNT_STEPS + 1] << 32;
     counts[1] += (uint64_t)c[TPK_VK_COUNT_SECONDARY] | (uint64_t)c[TPK_VK_COUNT_SECONDARY + 1] << 32;
     if (c[TPK_VK_COUNT_FAILED] != 0) {
@@ -324,7 +361,8 @@ static int render_bands(vk_render *v, VkPipeline pipeline, tpk_vk_params *params
  * readback buffer is host memory and not counted. */
 static uint64_t device_bytes(const vk_render *v)
 {
-    uint64_t total = (uint64_t)v->params.size + (uint64_t)v->pixels.size + (uint64_t)v->counters.size;
+    uint64_t total =
+        (uint64_t)v->params.size + (uint64_t)v->pixels.size + (uint64_t)v->counters.size + (uint64_t)v->state.size;
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++)
         for (int p = 0; p < v->arrays[a].part_count; p++)
             total += (uint64_t)v->arrays[a].parts[p].size;
@@ -338,7 +376,8 @@ static uint64_t device_bytes(const vk_render *v)
 static int create_band_buffers(vk_render *v, tpk_diag *diag)
 {
     const char *env = getenv("TPK_VK_BAND_PIXELS");
-    v->band_pixels = env && atoi(env) > 0 ? (uint32_t)atoi(env) : BAND_PIXELS;
+    v->sliced = tpk_vk_sliced(&v->ctx);
+    v->band_pixels = env && atoi(env) > 0 ? (uint32_t)atoi(env) : v->sliced ? TPK_VK_SLICED_BAND_PIXELS : BAND_PIXELS;
     const VkBufferUsageFlags storage =
         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     const tpk_vk_memory_use band_use = v->ctx.staged ? TPK_VK_MEMORY_DEVICE : TPK_VK_MEMORY_READBACK;
@@ -348,7 +387,10 @@ static int create_band_buffers(vk_render *v, tpk_diag *diag)
         tpk_vk_buffer_create(&v->ctx, (VkDeviceSize)v->band_pixels * 4, storage, band_use, "the image", &v->pixels,
                              diag) != 0 ||
         tpk_vk_buffer_create(&v->ctx, TPK_VK_COUNT_WORDS * 4, storage, band_use, "render statistics", &v->counters,
-                             diag) != 0)
+                             diag) != 0 ||
+        tpk_vk_buffer_create(&v->ctx, v->sliced ? (VkDeviceSize)v->band_pixels * TPK_VK_STATE_VEC4 * 16 : 16,
+                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, TPK_VK_MEMORY_DEVICE, "the rays between slices",
+                             &v->state, diag) != 0)
         return -1;
     if (v->ctx.staged)
         return tpk_vk_buffer_create(&v->ctx, (VkDeviceSize)v->band_pixels * 4 + TPK_VK_COUNT_WORDS * 4,
@@ -373,7 +415,7 @@ static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const float *
     double t2 = tpk_now_seconds();
     v->upload_seconds = t2 - t1;
     if (tpk_vk_pipeline_create(&v->ctx, (int)mesh->layout, v->arrays, &v->params, &v->pixels, &v->counters,
-                               &v->pipeline, diag) != 0)
+                               &v->state, &v->pipeline, diag) != 0)
         return -1;
     v->pipeline_seconds = tpk_now_seconds() - t2;
     return create_commands(v, diag);

@@ -129,7 +129,7 @@ typedef struct tpk_vk_params {
     float iso[4];
     float light[4];
     float cast_info[4];
-    int32_t cast_count[4];
+    int32_t cast_count[4]; /* AO rays, the row after the band, the slice */
     float tf_s[TPK_VK_TF_MAX];
     float tf_rgba[TPK_VK_TF_MAX][4];
 } tpk_vk_params;
@@ -180,10 +180,14 @@ VkPipeline tpk_vk_pipeline_get(const tpk_vk_context *ctx, tpk_vk_pipeline *p, in
  * specialization constants). Binds params, pixels and counters too. Returns 0 or -1 with a message. */
 int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[],
                            const tpk_vk_buffer *params, const tpk_vk_buffer *pixels,
-                           const tpk_vk_buffer *counters, tpk_vk_pipeline *out, tpk_diag *diag);
+                           const tpk_vk_buffer *counters, const tpk_vk_buffer *state, tpk_vk_pipeline *out,
+                           tpk_diag *diag);
 void tpk_vk_pipeline_destroy(const tpk_vk_context *ctx, tpk_vk_pipeline *p);
 /* The edge test of the FP64 variant for this device: TPK_VK_EXACT_FILTER or TPK_VK_EXACT_ALWAYS. */
 int tpk_vk_exact_mode(const tpk_vk_context *ctx);
+/* Whether rays run in slices (vk_layout.h, TPK_VK_SPEC_SLICED): on CPU devices, whose llvmpipe cuts
+ * loops short past 65535 iterations in all; TPK_VK_SLICED=0|1 overrides, for tests. */
+int tpk_vk_sliced(const tpk_vk_context *ctx);
 
 /* The SPIR-V of shaders/render.comp with TPK_VK_FP64 1 and 0 (generated at build time by glslc,
  * render_spv.c); sizes in bytes. */

@@ -50,6 +50,14 @@ int tpk_vk_exact_mode(const tpk_vk_context *ctx)
     return ctx->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? TPK_VK_EXACT_ALWAYS : TPK_VK_EXACT_FILTER;
 }
 
+int tpk_vk_sliced(const tpk_vk_context *ctx)
+{
+    const char *env = getenv("TPK_VK_SLICED");
+    if (env && (!strcmp(env, "0") || !strcmp(env, "1")))
+        return atoi(env);
+    return ctx->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+}
+
 static int create_shader(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[], tpk_vk_pipeline *p,
                          tpk_diag *diag)
 {
@@ -65,6 +73,7 @@ static int create_shader(const tpk_vk_context *ctx, int layout_id, const tpk_vk_
     int32_t *values = p->spec;
     values[TPK_VK_SPEC_LAYOUT] = layout_id;
     values[TPK_VK_SPEC_EXACT] = tpk_vk_exact_mode(ctx);
+    values[TPK_VK_SPEC_SLICED] = tpk_vk_sliced(ctx);
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++) {
         values[TPK_VK_SPEC_PARTS(a)] = arrays[a].part_count;
         values[TPK_VK_SPEC_SHIFT(a)] = arrays[a].shift;
@@ -122,11 +131,12 @@ VkPipeline tpk_vk_pipeline_get(const tpk_vk_context *ctx, tpk_vk_pipeline *p, in
 
 /* Write every binding; parts an array does not use repeat its first view (the shader never reads them). */
 static int write_set(const tpk_vk_context *ctx, const tpk_vk_array arrays[], const tpk_vk_buffer *params,
-                     const tpk_vk_buffer *pixels, const tpk_vk_buffer *counters, tpk_vk_pipeline *p, tpk_diag *diag)
+                     const tpk_vk_buffer *pixels, const tpk_vk_buffer *counters, const tpk_vk_buffer *state,
+                     tpk_vk_pipeline *p, tpk_diag *diag)
 {
     VkDescriptorPoolSize sizes[3] = {
         {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 2},
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3},
         {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, TPK_VK_ARRAY_COUNT * TPK_VK_MAX_PARTS},
     };
     VkDescriptorPoolCreateInfo pool = {
@@ -146,8 +156,10 @@ static int write_set(const tpk_vk_context *ctx, const tpk_vk_array arrays[], con
     };
     if ((r = vkAllocateDescriptorSets(ctx->device, &alloc, &p->set)) != VK_SUCCESS)
         return fail(diag, "allocating the descriptor set", r);
-    VkDescriptorBufferInfo buffers[3] = {
-        {params->buffer, 0, VK_WHOLE_SIZE}, {pixels->buffer, 0, VK_WHOLE_SIZE}, {counters->buffer, 0, VK_WHOLE_SIZE}};
+    VkDescriptorBufferInfo buffers[4] = {{params->buffer, 0, VK_WHOLE_SIZE},
+                                         {pixels->buffer, 0, VK_WHOLE_SIZE},
+                                         {counters->buffer, 0, VK_WHOLE_SIZE},
+                                         {state->buffer, 0, VK_WHOLE_SIZE}};
     VkWriteDescriptorSet w[TPK_VK_BIND_COUNT];
     memset(w, 0, sizeof w);
     for (uint32_t i = 0; i < TPK_VK_BIND_COUNT; i++) {
@@ -172,11 +184,12 @@ static int write_set(const tpk_vk_context *ctx, const tpk_vk_array arrays[], con
 
 int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[],
                            const tpk_vk_buffer *params, const tpk_vk_buffer *pixels,
-                           const tpk_vk_buffer *counters, tpk_vk_pipeline *out, tpk_diag *diag)
+                           const tpk_vk_buffer *counters, const tpk_vk_buffer *state, tpk_vk_pipeline *out,
+                           tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
     if (create_set_layout(ctx, out, diag) != 0 || create_shader(ctx, layout_id, arrays, out, diag) != 0 ||
-        write_set(ctx, arrays, params, pixels, counters, out, diag) != 0) {
+        write_set(ctx, arrays, params, pixels, counters, state, out, diag) != 0) {
         tpk_vk_pipeline_destroy(ctx, out);
         return -1;
     }
