@@ -341,3 +341,205 @@ TPK_TEST(no_device)
     free(img);
     scene_free(&s);
 }
+
+/* Render with the Vulkan renderer under the given environment (NULL values unset), image and stats out. */
+static int render_env(scene *s, const char *band_pixels, const char *memory, const char *staging, uint8_t *img,
+                      tpk_render_stats *st)
+{
+    const char *names[3] = {"TPK_VK_BAND_PIXELS", "TPK_VK_MEMORY", "TPK_VK_STAGING_BYTES"};
+    const char *values[3] = {band_pixels, memory, staging};
+    for (int i = 0; i < 3; i++)
+        values[i] ? setenv(names[i], values[i], 1) : unsetenv(names[i]);
+    tpk_diag diag = {0};
+    int rc = tpk_render_vulkan(&s->mesh, &s->opt, img, st, &diag);
+    for (int i = 0; i < 3; i++)
+        unsetenv(names[i]);
+    if (rc != 0)
+        fprintf(stderr, "vulkan: %s\n", diag.message);
+    return rc;
+}
+
+/* The statistics are reduced on the device (one atomic per workgroup, 64-bit sums): tet steps and
+ * secondary rays equal the CPU reference's counts, with one band or many (bands of 7 rows and some
+ * pixels, not whole workgroups), read in place or copied out through the readback buffer. */
+TPK_TEST(device_statistics)
+{
+    if (!have_device())
+        return;
+    scene s;
+    CHECK(scene_open(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder.tpk") == 0);
+    CHECK(scene_layout(&s, TPK_LAYOUT_TET20) == 0);
+    size_t n = (size_t)SIZE * SIZE * 4;
+    uint8_t *cpu = malloc(n), *one = malloc(n), *many = malloc(n);
+    CHECK(cpu && one && many);
+    for (int effects = 0; effects < 2; effects++) {
+        s.opt.shadows = effects; /* secondary rays too */
+        tpk_render_stats cs, vs, bs;
+        tpk_diag diag = {0};
+        CHECK_MSG(tpk_render_cpu(&s.mesh, &s.opt, cpu, &cs, &diag) == 0, "%s", diag.message);
+        CHECK(render_env(&s, NULL, NULL, NULL, one, &vs) == 0);
+        CHECK(render_env(&s, "900", "staged", NULL, many, &bs) == 0);
+        printf("shadows %d: tet steps cpu %llu, vulkan %llu, in bands %llu; secondary rays %llu, %llu, %llu\n", effects,
+               (unsigned long long)cs.tet_steps, (unsigned long long)vs.tet_steps, (unsigned long long)bs.tet_steps,
+               (unsigned long long)cs.secondary_rays, (unsigned long long)vs.secondary_rays,
+               (unsigned long long)bs.secondary_rays);
+        CHECK(cs.tet_steps > 0 && (effects == 0 || cs.secondary_rays > 0));
+        CHECK_EQ_INT(vs.tet_steps, cs.tet_steps);
+        CHECK_EQ_INT(vs.secondary_rays, cs.secondary_rays);
+        CHECK_EQ_INT(bs.tet_steps, cs.tet_steps);
+        CHECK_EQ_INT(bs.secondary_rays, cs.secondary_rays);
+        CHECK(vs.rays == (uint64_t)SIZE * SIZE && bs.rays == vs.rays);
+        CHECK(memcmp(one, many, n) == 0);
+    }
+    free(cpu);
+    free(one);
+    free(many);
+    scene_free(&s);
+}
+
+/* The discrete-GPU path on lavapipe (TPK_VK_MEMORY=staged): arrays through a staging buffer of 256
+ * bytes (pieces of 128: every array in many pieces, parts split over bindings too), the image copied
+ * out through the readback buffer; the same picture, bit for bit, as written and read in place. */
+TPK_TEST(staged_upload)
+{
+    if (!have_device())
+        return;
+    scene s;
+    CHECK(scene_open(&s, tpk_data_path("tetgen/hinge_small.ele"), "hinge.tpk") == 0);
+    size_t n = (size_t)SIZE * SIZE * 4;
+    uint8_t *direct = malloc(n), *staged = malloc(n);
+    CHECK(direct && staged);
+    static const tpk_layout layouts[3] = {TPK_LAYOUT_TET16, TPK_LAYOUT_TET20, TPK_LAYOUT_TET32};
+    for (int l = 0; l < 3; l++) {
+        CHECK(scene_layout(&s, layouts[l]) == 0);
+        tpk_render_stats a, b;
+        CHECK(render_env(&s, NULL, NULL, NULL, direct, &a) == 0);
+        setenv("TPK_VK_SPLIT_BYTES", "65536", 1);
+        int rc = render_env(&s, NULL, "staged", "256", staged, &b);
+        unsetenv("TPK_VK_SPLIT_BYTES");
+        CHECK(rc == 0);
+        printf("layout %d: tet steps %llu and %llu, upload %.3f s and %.3f s\n", (int)layouts[l],
+               (unsigned long long)a.tet_steps, (unsigned long long)b.tet_steps, a.setup_upload_seconds,
+               b.setup_upload_seconds);
+        CHECK(a.tet_steps == b.tet_steps && a.tet_steps > 0);
+        CHECK(memcmp(direct, staged, n) == 0);
+    }
+    free(direct);
+    free(staged);
+    scene_free(&s);
+}
+
+/* Timestamps around the dispatches (lavapipe has them): the GPU time of a frame is positive and no
+ * longer than the frame; the setup is reported apart. */
+TPK_TEST(gpu_timestamps)
+{
+    if (!have_device())
+        return;
+    scene s;
+    CHECK(scene_open(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder.tpk") == 0);
+    CHECK(scene_layout(&s, TPK_LAYOUT_TET16) == 0);
+    uint8_t *img = malloc((size_t)SIZE * SIZE * 4);
+    CHECK(img);
+    tpk_render_stats st;
+    CHECK(render_env(&s, NULL, NULL, NULL, img, &st) == 0);
+    printf("seconds %.4f, gpu %.4f; setup: device %.4f, upload %.4f, pipeline %.4f, first frame %.4f\n", st.seconds,
+           st.gpu_seconds, st.setup_device_seconds, st.setup_upload_seconds, st.setup_pipeline_seconds,
+           st.first_frame_seconds);
+    CHECK(st.gpu_seconds > 0 && st.gpu_seconds <= st.first_frame_seconds);
+    CHECK(st.setup_device_seconds > 0 && st.setup_upload_seconds > 0 && st.setup_pipeline_seconds > 0);
+    CHECK(st.setup_device_seconds + st.setup_upload_seconds + st.setup_pipeline_seconds + st.first_frame_seconds <=
+          st.seconds);
+    free(img);
+    scene_free(&s);
+}
+
+/* The pipeline cache on disk ($XDG_CACHE_HOME/tetpack): the first run writes it, the second loads it
+ * and hands it to the driver; a damaged file is
+ * ignored and rewritten; a cache directory that cannot be made is no error. */
+TPK_TEST(pipeline_cache)
+{
+    if (!have_device())
+        return;
+    scene s;
+    CHECK(scene_open(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder.tpk") == 0);
+    CHECK(scene_layout(&s, TPK_LAYOUT_TET16) == 0);
+    s.opt.width = s.opt.height = 16;
+    uint8_t img[16 * 16 * 4];
+    char dir[1024], cmd[2600];
+    snprintf(dir, sizeof dir, "%s", tpk_temp_path("xdg_cache"));
+    setenv("XDG_CACHE_HOME", dir, 1);
+    tpk_render_stats first, second, damaged;
+    CHECK(render_env(&s, NULL, NULL, NULL, img, &first) == 0);
+    CHECK(render_env(&s, NULL, NULL, NULL, img, &second) == 0);
+    printf("first run: loaded %llu bytes; second: loaded %llu bytes, %d hits\n",
+           (unsigned long long)first.pipeline_cache_bytes, (unsigned long long)second.pipeline_cache_bytes,
+           second.pipeline_cache_hits);
+    CHECK(first.pipeline_cache_bytes == 0 && second.pipeline_cache_bytes > 0);
+    /* hits: 1 where the driver keeps compiled pipelines in its cache data, -1 where it does not say;
+     * lavapipe (Mesa 22.3) writes only the cache header, so it finds nothing and compiles again */
+    CHECK(second.pipeline_cache_hits >= -1 && second.pipeline_cache_hits <= 1);
+    /* flip a byte of the driver's data: the checksum no longer holds, the file is not given to the driver */
+    snprintf(cmd, sizeof cmd,
+             "f=$(ls '%s'/tetpack/pipelines-*.bin) && test $(ls '%s'/tetpack | wc -l) = 1 && "
+             "printf '\\377' | dd of=\"$f\" bs=1 seek=80 conv=notrunc status=none", dir, dir);
+    CHECK(system(cmd) == 0);
+    CHECK(render_env(&s, NULL, NULL, NULL, img, &damaged) == 0);
+    CHECK(damaged.pipeline_cache_bytes == 0);
+    CHECK(render_env(&s, NULL, NULL, NULL, img, &second) == 0); /* rewritten by the damaged run */
+    CHECK(second.pipeline_cache_bytes > 0);
+    /* XDG_CACHE_HOME is a file: no cache, no error */
+    setenv("XDG_CACHE_HOME", tpk_temp_path("cylinder.tpk"), 1);
+    CHECK(render_env(&s, NULL, NULL, NULL, img, &second) == 0);
+    CHECK(second.pipeline_cache_bytes == 0);
+    unsetenv("XDG_CACHE_HOME");
+    scene_free(&s);
+}
+
+/* Rays in slices (vk_layout.h, "Slices": on by default on lavapipe) against rays in one dispatch: the
+ * state saved between slices is the whole state, so the pictures are the same bit for bit and the
+ * counts equal, with shadow rays (a ray pauses for its casts) and in bands of 900 pixels. With AO rays
+ * too, a ray in one dispatch passes lavapipe's 65535 loop iterations here and is cut short; in slices
+ * its counts are the CPU reference's (within the AO directions' float rounding). */
+TPK_TEST(slices)
+{
+    if (!have_device())
+        return;
+    scene s;
+    CHECK(scene_open(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder.tpk") == 0);
+    CHECK(scene_layout(&s, TPK_LAYOUT_TET16) == 0);
+    size_t n = (size_t)SIZE * SIZE * 4;
+    uint8_t *whole = malloc(n), *sliced = malloc(n);
+    CHECK(whole && sliced);
+    s.opt.shading = 1;
+    s.opt.shadows = 1;
+    tpk_render_stats a, b, c;
+    setenv("TPK_VK_SLICED", "0", 1);
+    int rc = render_env(&s, NULL, NULL, NULL, whole, &a);
+    setenv("TPK_VK_SLICED", "1", 1);
+    rc |= render_env(&s, "900", NULL, NULL, sliced, &b);
+    CHECK(rc == 0);
+    printf("shadows: tet steps %llu and %llu, secondary rays %llu and %llu\n", (unsigned long long)a.tet_steps,
+           (unsigned long long)b.tet_steps, (unsigned long long)a.secondary_rays, (unsigned long long)b.secondary_rays);
+    CHECK(a.secondary_rays > 0);
+    CHECK_EQ_INT(b.tet_steps, a.tet_steps);
+    CHECK_EQ_INT(b.secondary_rays, a.secondary_rays);
+    CHECK(memcmp(whole, sliced, n) == 0);
+
+    s.opt.ao_rays = 3;
+    s.opt.iso_count = 1;
+    s.opt.iso[0] = 0.5 * (s.opt.range_min + s.opt.range_max);
+    s.opt.iso_opacity = 0.4;
+    tpk_diag diag = {0};
+    CHECK_MSG(tpk_render_cpu(&s.mesh, &s.opt, whole, &c, &diag) == 0, "%s", diag.message);
+    CHECK(render_env(&s, "900", NULL, NULL, sliced, &b) == 0);
+    unsetenv("TPK_VK_SLICED");
+    printf("iso + shadows + AO: tet steps cpu %llu, sliced %llu; secondary rays %llu, %llu\n",
+           (unsigned long long)c.tet_steps, (unsigned long long)b.tet_steps, (unsigned long long)c.secondary_rays,
+           (unsigned long long)b.secondary_rays);
+    CHECK(c.secondary_rays > 0);
+    CHECK(fabs((double)b.secondary_rays - (double)c.secondary_rays) <= 0.005 * (double)c.secondary_rays);
+    CHECK(fabs((double)b.tet_steps - (double)c.tet_steps) <= 0.005 * (double)c.tet_steps);
+    free(whole);
+    free(sliced);
+    scene_free(&s);
+}

@@ -445,14 +445,24 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
     if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
-    if (a->json)
+    if (a->json) {
         printf("{\"image\":\"%s\",\"backend\":\"%s\",\"device\":\"%s\",\"width\":%d,\"height\":%d,"
-               "\"rays\":%llu,\"secondary_rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f,\"device_bytes\":%llu}\n",
+               "\"rays\":%llu,\"secondary_rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f,\"device_bytes\":%llu",
                output, vulkan ? "vulkan" : "cpu", vulkan ? a->device : "cpu", a->width, a->height,
                (unsigned long long)stats.rays,
                (unsigned long long)stats.secondary_rays, (unsigned long long)stats.tet_steps, stats.seconds,
                (unsigned long long)stats.device_bytes);
-    else
+        if (vulkan && stats.gpu_seconds >= 0)
+            printf(",\"gpu_seconds\":%.6f", stats.gpu_seconds);
+        else
+            printf(",\"gpu_seconds\":null"); /* the CPU reference, or a device without timestamps */
+        if (vulkan)
+            printf(",\"setup\":{\"device\":%.6f,\"upload\":%.6f,\"pipeline\":%.6f,\"first_frame\":%.6f},"
+                   "\"pipeline_cache\":{\"loaded_bytes\":%llu,\"hits\":%d}",
+                   stats.setup_device_seconds, stats.setup_upload_seconds, stats.setup_pipeline_seconds,
+                   stats.first_frame_seconds, (unsigned long long)stats.pipeline_cache_bytes, stats.pipeline_cache_hits);
+        printf("}\n");
+    } else
         printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
                (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,
                (unsigned long long)stats.tet_steps, stats.seconds);

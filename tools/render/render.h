@@ -155,6 +155,14 @@ typedef struct tpk_render_stats {
     double seconds;     /* wall time of the render (marcher creation included) */
     uint64_t device_bytes; /* Vulkan: device memory of the renderer's buffers (mesh arrays, BVH, image
                               band, parameters); 0 for the CPU reference */
+    /* Vulkan only (0 for the CPU reference): */
+    double gpu_seconds; /* device time of the frame's dispatches (timestamp queries); -1: no timestamps */
+    double setup_device_seconds;   /* instance and device */
+    double setup_upload_seconds;   /* arrays and BVH into device memory, image buffers */
+    double setup_pipeline_seconds; /* shader, pipeline cache and the pipelines compiled so far */
+    double first_frame_seconds;    /* tpk_render_vulkan: its one frame, without the pipeline it compiled */
+    uint64_t pipeline_cache_bytes; /* pipeline cache data loaded from disk; 0: none */
+    int pipeline_cache_hits;       /* pipelines found in that cache; -1: the driver does not say */
 } tpk_render_stats;
 
 /* Render `mesh` into rgba (width * height * 4 bytes, caller-owned). Emission-absorption front to back

@@ -19,7 +19,11 @@
  * integrated, else any); TPK_VK_SPLIT_BYTES=N caps every binding at N bytes (rounded down to a
  * power-of-two texel count), so that the split path can be tested on a small mesh; TPK_VK_NO_FP64=1
  * takes the shader variant without doubles and TPK_VK_EXACT=1|2 the edge test of the FP64 variant
- * (shaders/vk_layout.h), for tests. Not thread-safe with itself (one device each). */
+ * (shaders/vk_layout.h), for tests; TPK_VK_MEMORY=staged takes the discrete GPU's memory path (staging
+ * upload, readback copy) on any device, TPK_VK_STAGING_BYTES=N and TPK_VK_BAND_PIXELS=N shrink the
+ * staging buffer and the bands, for tests. Pipelines are cached on disk under $XDG_CACHE_HOME/tetpack
+ * (else ~/.cache/tetpack; TPK_VK_PIPELINE_CACHE=0: not). stats also get gpu_seconds (timestamp
+ * queries) and the setup apart (render.h). Not thread-safe with itself (one device each). */
 int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                       tpk_render_stats *stats, tpk_diag *diag);
 
@@ -30,7 +34,9 @@ int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt
 typedef struct tpk_vk_renderer tpk_vk_renderer;
 int tpk_vk_renderer_create(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, const float *tet_scalars,
                            tpk_diag *diag);
-/* stats->seconds is the frame alone: parameters, dispatch, wait and read-back. */
+/* stats->seconds is the frame alone: parameters, dispatch, wait and read-back (and the pipeline of new
+ * effects, compiled on first use); stats->gpu_seconds the dispatches' device time; the setup fields
+ * are the renderer's so far. */
 int tpk_vk_renderer_frame(tpk_vk_renderer *renderer, const tpk_render_options *opt, uint8_t *rgba,
                           tpk_render_stats *stats, tpk_diag *diag);
 const char *tpk_vk_renderer_device(const tpk_vk_renderer *renderer);

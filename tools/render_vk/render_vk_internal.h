@@ -4,8 +4,11 @@
  *                  tpk_vulkan_available
  *   vk_params.c    tpk_vk_check_options, tpk_vk_params_fill: one frame's uniform block
  *   vk_pipeline.c  tpk_vk_pipeline_*: descriptor layout, the embedded shader, one pipeline per layout
+ *   vk_pipeline_cache.c  tpk_vk_cache_*: the pipeline cache on disk
  *   vk_arrays.c    tpk_vk_array_*: texel arrays split over bindings; the record-layout checks
- *   vk_context.c   tpk_vk_context_*, tpk_vk_buffer_*, tpk_vk_result_name: instance, device, memory
+ *   vk_staging.c   tpk_vk_stager_*, tpk_vk_source_fill: uploads in pieces through a bounded buffer
+ *   vk_context.c   tpk_vk_context_*, tpk_vk_buffer_*, tpk_vk_result_name: instance, device, buffers
+ *   vk_memory.c    vk_memory.h: the memory-type choice (pure)
  * The shader and this side share shaders/vk_layout.h. */
 #ifndef TPK_RENDER_VK_INTERNAL_H
 #define TPK_RENDER_VK_INTERNAL_H
@@ -16,6 +19,7 @@
 #include "base/diag.h"
 #include "render/render.h"
 #include "shaders/vk_layout.h"
+#include "vk_memory.h"
 
 typedef struct tpk_vk_context {
     VkInstance instance;
@@ -27,6 +31,11 @@ typedef struct tpk_vk_context {
     VkPhysicalDeviceMemoryProperties memory;
     VkDeviceSize max_allocation; /* maxMemoryAllocationSize (Vulkan 1.1) */
     int fp64;                    /* shaderFloat64 supported and enabled */
+    int unified;                 /* tpk_vk_memory_unified: device memory is the host's */
+    int staged;                  /* arrays go through staging, the image through a readback copy: a
+                                    discrete GPU, or TPK_VK_MEMORY=staged (tests, on lavapipe) */
+    uint32_t timestamp_bits;     /* the queue's timestampValidBits; 0: no timestamps */
+    int creation_feedback;       /* VK_EXT_pipeline_creation_feedback enabled */
 } tpk_vk_context;
 
 /* Create instance, device and a compute queue. Returns 0, or -1 with a message naming the step and the
@@ -35,19 +44,55 @@ int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag);
 void tpk_vk_context_destroy(tpk_vk_context *ctx);
 const char *tpk_vk_result_name(VkResult r);
 
-/* A buffer in host-visible, coherent memory (device-local too when the device has such memory: every
- * CPU device and GPUs with a resizable BAR), mapped for its lifetime. */
+/* A buffer in the memory type tpk_vk_memory_rank puts first for its use (the next when that heap is
+ * full), mapped for its lifetime when that type is host-visible. */
 typedef struct tpk_vk_buffer {
     VkBuffer buffer;
     VkDeviceMemory memory;
     VkDeviceSize size;
-    void *mapped;
+    void *mapped;  /* NULL: not host-visible */
+    int coherent;  /* HOST_COHERENT: no flush or invalidate needed */
 } tpk_vk_buffer;
 
 /* `what` names the buffer in messages ("tet records, part 2"). Returns 0 or -1 with a message. */
 int tpk_vk_buffer_create(const tpk_vk_context *ctx, VkDeviceSize size, VkBufferUsageFlags usage,
-                         const char *what, tpk_vk_buffer *out, tpk_diag *diag);
+                         tpk_vk_memory_use use, const char *what, tpk_vk_buffer *out, tpk_diag *diag);
 void tpk_vk_buffer_destroy(const tpk_vk_context *ctx, tpk_vk_buffer *b);
+/* Make CPU writes visible to the device (flush) or device writes to the CPU (invalidate), for memory
+ * that is not coherent; no-ops otherwise. 0 or -1 with a message. */
+int tpk_vk_buffer_flush(const tpk_vk_context *ctx, const tpk_vk_buffer *b, tpk_diag *diag);
+int tpk_vk_buffer_invalidate(const tpk_vk_context *ctx, const tpk_vk_buffer *b, tpk_diag *diag);
+
+/* Where an array's texels come from: `data` (texel_size bytes each; NULL: zeros), or `fill`, which
+ * writes texels [first, first + count) into dst (arrays built on the fly: no host copy of them). */
+typedef struct tpk_vk_source {
+    const void *data;
+    uint32_t texel_size;
+    void (*fill)(void *dst, uint64_t first, uint64_t count, const void *user);
+    const void *user;
+} tpk_vk_source;
+void tpk_vk_source_fill(const tpk_vk_source *src, void *dst, uint64_t first, uint64_t count);
+
+/* Uploads through two staging slots of TPK_VK_STAGING_BYTES / 2 each (the environment variable of
+ * that name overrides it, for tests): the GPU copies one while the CPU fills the other. */
+#define TPK_VK_STAGING_BYTES ((uint64_t)64 << 20)
+typedef struct tpk_vk_stager {
+    tpk_vk_buffer slots[2];
+    VkCommandPool pool;
+    VkCommandBuffer cmd[2];
+    VkFence fence[2];
+    VkDeviceSize slot_bytes;
+    int next;
+    uint64_t bytes, pieces; /* uploaded so far */
+} tpk_vk_stager;
+/* Slots no larger than `largest` (the largest array part, in bytes) needs. 0 or -1 with a message. */
+int tpk_vk_stager_create(const tpk_vk_context *ctx, uint64_t largest, tpk_vk_stager *s, tpk_diag *diag);
+/* Copy texels [first, first + count) of src to the start of dst, piece by piece. 0 or -1. */
+int tpk_vk_stager_copy(const tpk_vk_context *ctx, tpk_vk_stager *s, const tpk_vk_source *src, uint64_t first,
+                       uint64_t count, VkBuffer dst, tpk_diag *diag);
+/* Wait for every copy. 0 or -1. */
+int tpk_vk_stager_finish(const tpk_vk_context *ctx, tpk_vk_stager *s, tpk_diag *diag);
+void tpk_vk_stager_destroy(const tpk_vk_context *ctx, tpk_vk_stager *s);
 
 /* One array of the file as texel buffers: part k holds texels [k << shift, (k + 1) << shift). */
 typedef struct tpk_vk_array {
@@ -61,11 +106,11 @@ typedef struct tpk_vk_array {
  * of two within maxTexelBufferElements and maxMemoryAllocationSize, lowered by TPK_VK_SPLIT_BYTES. */
 uint64_t tpk_vk_part_texels(const tpk_vk_context *ctx, uint32_t texel_size);
 
-/* Upload texel_count texels of texel_size bytes (data may be NULL when texel_count is 0: one dummy
- * texel is made so every binding has a view). Returns 0, or -1 with a message (too many parts for the
- * device, out of device memory) naming `what`. */
-int tpk_vk_array_upload(const tpk_vk_context *ctx, const char *what, VkFormat format, uint32_t texel_size,
-                        const void *data, uint64_t texel_count, tpk_vk_array *out, tpk_diag *diag);
+/* Upload texel_count texels of src (texel_count 0: one zero texel is made so every binding has a view)
+ * into device memory: in place on unified memory, else through `stager`. Returns 0, or -1 with a
+ * message (too many parts for the device, out of device memory) naming `what`. */
+int tpk_vk_array_upload(const tpk_vk_context *ctx, tpk_vk_stager *stager, const char *what, VkFormat format,
+                        const tpk_vk_source *src, uint64_t texel_count, tpk_vk_array *out, tpk_diag *diag);
 void tpk_vk_array_destroy(const tpk_vk_context *ctx, tpk_vk_array *a);
 
 /* The uniform block of the shader (std140; render.comp's Params). */
@@ -84,7 +129,7 @@ typedef struct tpk_vk_params {
     float iso[4];
     float light[4];
     float cast_info[4];
-    int32_t cast_count[4];
+    int32_t cast_count[4]; /* AO rays, the row after the band, the slice */
     float tf_s[TPK_VK_TF_MAX];
     float tf_rgba[TPK_VK_TF_MAX][4];
 } tpk_vk_params;
@@ -99,6 +144,20 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
 /* The TPK_VK_EFFECT_* bits the options ask for. */
 int tpk_vk_effects(const tpk_render_options *opt);
 
+/* The pipeline cache (vk_pipeline_cache.c): loaded from the cache file of this device, driver and
+ * shader when one is valid, written back (atomically) at close when pipelines were compiled into it.
+ * Never an error: without a cache directory or a valid file it starts empty or is VK_NULL_HANDLE. */
+typedef struct tpk_vk_cache {
+    VkPipelineCache cache; /* VK_NULL_HANDLE: none */
+    char *path;            /* NULL: no cache file (TPK_VK_PIPELINE_CACHE=0, no home) */
+    uint64_t shader_hash;
+    size_t loaded_bytes; /* driver data taken from the file; 0: none */
+    int compiled;        /* pipelines created through it */
+    int hits;            /* of those, found in it; -1: the driver does not say (no creation feedback) */
+} tpk_vk_cache;
+void tpk_vk_cache_open(const tpk_vk_context *ctx, const void *spirv, size_t spirv_size, tpk_vk_cache *c);
+void tpk_vk_cache_close(const tpk_vk_context *ctx, tpk_vk_cache *c);
+
 /* Descriptor layout, pipeline layout and the compute pipelines of one marcher layout and one set of
  * array splits: one pipeline per combination of effects, made when first needed. */
 typedef struct tpk_vk_pipeline {
@@ -110,6 +169,7 @@ typedef struct tpk_vk_pipeline {
     VkDescriptorSet set;
     int layout_id;
     int32_t spec[TPK_VK_SPEC_COUNT];
+    tpk_vk_cache cache;
 } tpk_vk_pipeline;
 
 /* The pipeline for `effects` (TPK_VK_EFFECT_* bits), compiled on first use. Returns VK_NULL_HANDLE
@@ -117,13 +177,17 @@ typedef struct tpk_vk_pipeline {
 VkPipeline tpk_vk_pipeline_get(const tpk_vk_context *ctx, tpk_vk_pipeline *p, int effects, tpk_diag *diag);
 
 /* layout_id: TPK_VK_LAYOUT_*; arrays: TPK_VK_ARRAY_COUNT uploaded arrays (their splits become
- * specialization constants). Binds params, pixels and steps too. Returns 0 or -1 with a message. */
+ * specialization constants). Binds params, pixels and counters too. Returns 0 or -1 with a message. */
 int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[],
                            const tpk_vk_buffer *params, const tpk_vk_buffer *pixels,
-                           const tpk_vk_buffer *steps, tpk_vk_pipeline *out, tpk_diag *diag);
+                           const tpk_vk_buffer *counters, const tpk_vk_buffer *state, tpk_vk_pipeline *out,
+                           tpk_diag *diag);
 void tpk_vk_pipeline_destroy(const tpk_vk_context *ctx, tpk_vk_pipeline *p);
 /* The edge test of the FP64 variant for this device: TPK_VK_EXACT_FILTER or TPK_VK_EXACT_ALWAYS. */
 int tpk_vk_exact_mode(const tpk_vk_context *ctx);
+/* Whether rays run in slices (vk_layout.h, TPK_VK_SPEC_SLICED): on CPU devices, whose llvmpipe cuts
+ * loops short past 65535 iterations in all; TPK_VK_SLICED=0|1 overrides, for tests. */
+int tpk_vk_sliced(const tpk_vk_context *ctx);
 
 /* The SPIR-V of shaders/render.comp with TPK_VK_FP64 1 and 0 (generated at build time by glslc,
  * render_spv.c); sizes in bytes. */

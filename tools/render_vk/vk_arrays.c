@@ -60,10 +60,25 @@ static int log2u(uint64_t p)
     return s;
 }
 
-int tpk_vk_array_upload(const tpk_vk_context *ctx, const char *what, VkFormat format, uint32_t texel_size,
-                        const void *data, uint64_t texel_count, tpk_vk_array *out, tpk_diag *diag)
+/* One part's texels: written in place on unified memory, else copied through the stager. */
+static int fill_part(const tpk_vk_context *ctx, tpk_vk_stager *stager, const tpk_vk_source *src, uint64_t first,
+                     uint64_t count, tpk_vk_buffer *part, tpk_diag *diag)
+{
+    if (!ctx->staged && part->mapped) {
+        tpk_vk_source_fill(src, part->mapped, first, count);
+        return tpk_vk_buffer_flush(ctx, part, diag);
+    }
+    if (!stager)
+        return tpk_diag_fail(diag, "vulkan: device memory that is not host-visible and no staging buffer");
+    return tpk_vk_stager_copy(ctx, stager, src, first, count, part->buffer, diag);
+}
+
+int tpk_vk_array_upload(const tpk_vk_context *ctx, tpk_vk_stager *stager, const char *what, VkFormat format,
+                        const tpk_vk_source *src, uint64_t texel_count, tpk_vk_array *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
+    const uint32_t texel_size = src->texel_size;
+    const tpk_vk_source zero = {.texel_size = texel_size};
     const uint64_t per_part = tpk_vk_part_texels(ctx, texel_size);
     out->shift = log2u(per_part);
     const uint64_t stored = texel_count > 0 ? texel_count : 1;
@@ -78,16 +93,17 @@ int tpk_vk_array_upload(const tpk_vk_context *ctx, const char *what, VkFormat fo
         char name[160];
         snprintf(name, sizeof name, "%s (part %llu of %llu)", what, (unsigned long long)k + 1,
                  (unsigned long long)parts);
-        if (tpk_vk_buffer_create(ctx, count * texel_size, VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT, name,
-                                 &out->parts[k], diag) != 0) {
+        if (tpk_vk_buffer_create(ctx, count * texel_size,
+                                 VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                 TPK_VK_MEMORY_DEVICE, name, &out->parts[k], diag) != 0) {
             tpk_vk_array_destroy(ctx, out);
             return -1;
         }
         out->part_count = (int)k + 1;
-        if (texel_count > 0)
-            memcpy(out->parts[k].mapped, (const char *)data + first * texel_size, count * texel_size);
-        else
-            memset(out->parts[k].mapped, 0, texel_size);
+        if (fill_part(ctx, stager, texel_count > 0 ? src : &zero, first, count, &out->parts[k], diag) != 0) {
+            tpk_vk_array_destroy(ctx, out);
+            return -1;
+        }
         VkBufferViewCreateInfo view = {
             .sType = VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO,
             .buffer = out->parts[k].buffer,

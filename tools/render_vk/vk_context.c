@@ -1,4 +1,4 @@
-/* The Vulkan instance, device and compute queue of the renderer, and host-visible buffers. Every
+/* The Vulkan instance, device and compute queue of the renderer, and its buffers. Every
  * failure becomes a message naming the step and the VkResult: the caller exits cleanly. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -48,7 +48,7 @@ static int create_instance(tpk_vk_context *ctx, tpk_diag *diag)
     return 0;
 }
 
-static int compute_family(VkPhysicalDevice dev, uint32_t *family)
+static int compute_family(VkPhysicalDevice dev, uint32_t *family, uint32_t *timestamp_bits)
 {
     uint32_t n = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(dev, &n, NULL);
@@ -58,6 +58,7 @@ static int compute_family(VkPhysicalDevice dev, uint32_t *family)
     for (uint32_t i = 0; i < n; i++)
         if (props[i].queueFlags & VK_QUEUE_COMPUTE_BIT) {
             *family = i;
+            *timestamp_bits = props[i].timestampValidBits;
             return 0;
         }
     return -1;
@@ -93,13 +94,14 @@ static int pick_device(tpk_vk_context *ctx, tpk_diag *diag)
     for (uint32_t i = 0; i < n; i++) {
         VkPhysicalDeviceProperties p;
         vkGetPhysicalDeviceProperties(devs[i], &p);
-        uint32_t family;
-        if (p.apiVersion < VK_API_VERSION_1_2 || compute_family(devs[i], &family) != 0)
+        uint32_t family, bits;
+        if (p.apiVersion < VK_API_VERSION_1_2 || compute_family(devs[i], &family, &bits) != 0)
             continue;
         if (wanted == (int)i || (wanted < 0 && type_rank(p.deviceType) < best_rank)) {
             best = (int)i;
             best_rank = type_rank(p.deviceType);
             ctx->queue_family = family;
+            ctx->timestamp_bits = bits;
         }
     }
     if (best < 0)
@@ -112,7 +114,24 @@ static int pick_device(tpk_vk_context *ctx, tpk_diag *diag)
     VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &m3};
     vkGetPhysicalDeviceProperties2(ctx->physical, &p2);
     ctx->max_allocation = m3.maxMemoryAllocationSize ? m3.maxMemoryAllocationSize : (VkDeviceSize)1 << 30;
+    ctx->unified = tpk_vk_memory_unified(&ctx->memory, ctx->props.deviceType);
+    const char *memory = getenv("TPK_VK_MEMORY"); /* "staged": the discrete path on any device, for tests */
+    ctx->staged = !ctx->unified || (memory && !strcmp(memory, "staged"));
     return 0;
+}
+
+static int has_extension(VkPhysicalDevice dev, const char *name)
+{
+    uint32_t n = 0;
+    if (vkEnumerateDeviceExtensionProperties(dev, NULL, &n, NULL) != VK_SUCCESS || n == 0)
+        return 0;
+    VkExtensionProperties *ext = malloc(n * sizeof *ext);
+    int found = 0;
+    if (ext && vkEnumerateDeviceExtensionProperties(dev, NULL, &n, ext) == VK_SUCCESS)
+        for (uint32_t i = 0; i < n && !found; i++)
+            found = !strcmp(ext[i].extensionName, name);
+    free(ext);
+    return found;
 }
 
 int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag)
@@ -136,10 +155,15 @@ int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag)
     const char *no_fp64 = getenv("TPK_VK_NO_FP64");
     ctx->fp64 = supported.shaderFloat64 == VK_TRUE && !(no_fp64 && !strcmp(no_fp64, "1"));
     enabled.shaderFloat64 = ctx->fp64 ? VK_TRUE : VK_FALSE;
+    /* whether a pipeline came from the pipeline cache (render --json says so) */
+    const char *feedback = VK_EXT_PIPELINE_CREATION_FEEDBACK_EXTENSION_NAME;
+    ctx->creation_feedback = has_extension(ctx->physical, feedback);
     VkDeviceCreateInfo info = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
         .queueCreateInfoCount = 1,
         .pQueueCreateInfos = &queue,
+        .enabledExtensionCount = ctx->creation_feedback ? 1 : 0,
+        .ppEnabledExtensionNames = &feedback,
         .pEnabledFeatures = &enabled,
     };
     VkResult r = vkCreateDevice(ctx->physical, &info, NULL, &ctx->device);
@@ -163,17 +187,26 @@ void tpk_vk_context_destroy(tpk_vk_context *ctx)
 
 /* ---- Buffers ------------------------------------------------------------------------------------- */
 
-/* A memory type allowed by `bits` with all of `flags`; -1 when none. */
-static int memory_type(const tpk_vk_context *ctx, uint32_t bits, VkMemoryPropertyFlags flags)
+static VkResult allocate(const tpk_vk_context *ctx, const VkMemoryRequirements *req, tpk_vk_memory_use use,
+                         tpk_vk_buffer *out, VkMemoryPropertyFlags *flags)
 {
-    for (uint32_t i = 0; i < ctx->memory.memoryTypeCount; i++)
-        if ((bits & (1u << i)) && (ctx->memory.memoryTypes[i].propertyFlags & flags) == flags)
-            return (int)i;
-    return -1;
+    uint32_t order[VK_MAX_MEMORY_TYPES];
+    int n = tpk_vk_memory_rank(&ctx->memory, ctx->unified, req->memoryTypeBits, use, order);
+    VkResult r = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    for (int k = 0; k < n && r != VK_SUCCESS; k++) { /* a full heap: the next type */
+        VkMemoryAllocateInfo alloc = {
+            .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
+            .allocationSize = req->size,
+            .memoryTypeIndex = order[k],
+        };
+        r = vkAllocateMemory(ctx->device, &alloc, NULL, &out->memory);
+        *flags = ctx->memory.memoryTypes[order[k]].propertyFlags;
+    }
+    return r;
 }
 
 int tpk_vk_buffer_create(const tpk_vk_context *ctx, VkDeviceSize size, VkBufferUsageFlags usage,
-                         const char *what, tpk_vk_buffer *out, tpk_diag *diag)
+                         tpk_vk_memory_use use, const char *what, tpk_vk_buffer *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
     VkBufferCreateInfo info = {
@@ -190,34 +223,44 @@ int tpk_vk_buffer_create(const tpk_vk_context *ctx, VkDeviceSize size, VkBufferU
     }
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(ctx->device, out->buffer, &req);
-    const VkMemoryPropertyFlags host = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    int types[2] = {memory_type(ctx, req.memoryTypeBits, host | VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT),
-                    memory_type(ctx, req.memoryTypeBits, host)};
-    r = VK_ERROR_OUT_OF_DEVICE_MEMORY;
-    for (int k = 0; k < 2 && r != VK_SUCCESS; k++) {
-        if (types[k] < 0)
-            continue;
-        VkMemoryAllocateInfo alloc = {
-            .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
-            .allocationSize = req.size,
-            .memoryTypeIndex = (uint32_t)types[k],
-        };
-        r = vkAllocateMemory(ctx->device, &alloc, NULL, &out->memory);
-    }
-    if (r != VK_SUCCESS) {
+    VkMemoryPropertyFlags flags = 0;
+    if ((r = allocate(ctx, &req, use, out, &flags)) != VK_SUCCESS) {
         out->memory = VK_NULL_HANDLE;
         tpk_vk_buffer_destroy(ctx, out);
         return tpk_diag_fail(diag, "vulkan: allocating %llu bytes for %s failed: %s", (unsigned long long)req.size,
                              what, tpk_vk_result_name(r));
     }
     if ((r = vkBindBufferMemory(ctx->device, out->buffer, out->memory, 0)) != VK_SUCCESS ||
-        (r = vkMapMemory(ctx->device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS) {
+        ((flags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT) &&
+         (r = vkMapMemory(ctx->device, out->memory, 0, VK_WHOLE_SIZE, 0, &out->mapped)) != VK_SUCCESS)) {
         out->mapped = NULL;
         tpk_vk_buffer_destroy(ctx, out);
         return tpk_diag_fail(diag, "vulkan: mapping the memory of %s failed: %s", what, tpk_vk_result_name(r));
     }
+    out->coherent = (flags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT) != 0;
     out->size = size;
     return 0;
+}
+
+/* The whole mapping: offset 0 and VK_WHOLE_SIZE meet nonCoherentAtomSize whatever it is. */
+int tpk_vk_buffer_flush(const tpk_vk_context *ctx, const tpk_vk_buffer *b, tpk_diag *diag)
+{
+    if (b->coherent || !b->mapped)
+        return 0;
+    VkMappedMemoryRange range = {
+        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .memory = b->memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    VkResult r = vkFlushMappedMemoryRanges(ctx->device, 1, &range);
+    return r == VK_SUCCESS ? 0 : vk_fail(diag, "flushing mapped memory", r);
+}
+
+int tpk_vk_buffer_invalidate(const tpk_vk_context *ctx, const tpk_vk_buffer *b, tpk_diag *diag)
+{
+    if (b->coherent || !b->mapped)
+        return 0;
+    VkMappedMemoryRange range = {
+        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .memory = b->memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    VkResult r = vkInvalidateMappedMemoryRanges(ctx->device, 1, &range);
+    return r == VK_SUCCESS ? 0 : vk_fail(diag, "invalidating mapped memory", r);
 }
 
 void tpk_vk_buffer_destroy(const tpk_vk_context *ctx, tpk_vk_buffer *b)

@@ -50,6 +50,14 @@ int tpk_vk_exact_mode(const tpk_vk_context *ctx)
     return ctx->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? TPK_VK_EXACT_ALWAYS : TPK_VK_EXACT_FILTER;
 }
 
+int tpk_vk_sliced(const tpk_vk_context *ctx)
+{
+    const char *env = getenv("TPK_VK_SLICED");
+    if (env && (!strcmp(env, "0") || !strcmp(env, "1")))
+        return atoi(env);
+    return ctx->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+}
+
 static int create_shader(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[], tpk_vk_pipeline *p,
                          tpk_diag *diag)
 {
@@ -61,9 +69,11 @@ static int create_shader(const tpk_vk_context *ctx, int layout_id, const tpk_vk_
     VkResult r = vkCreateShaderModule(ctx->device, &sm, NULL, &p->shader);
     if (r != VK_SUCCESS)
         return fail(diag, "loading the shader", r);
+    tpk_vk_cache_open(ctx, sm.pCode, sm.codeSize, &p->cache);
     int32_t *values = p->spec;
     values[TPK_VK_SPEC_LAYOUT] = layout_id;
     values[TPK_VK_SPEC_EXACT] = tpk_vk_exact_mode(ctx);
+    values[TPK_VK_SPEC_SLICED] = tpk_vk_sliced(ctx);
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++) {
         values[TPK_VK_SPEC_PARTS(a)] = arrays[a].part_count;
         values[TPK_VK_SPEC_SHIFT(a)] = arrays[a].shift;
@@ -95,21 +105,38 @@ VkPipeline tpk_vk_pipeline_get(const tpk_vk_context *ctx, tpk_vk_pipeline *p, in
                   .pSpecializationInfo = &spec},
         .layout = p->layout,
     };
-    VkResult r = vkCreateComputePipelines(ctx->device, VK_NULL_HANDLE, 1, &info, NULL, &p->pipelines[effects]);
+    VkPipelineCreationFeedbackEXT feedback = {0}, stage_feedback = {0};
+    VkPipelineCreationFeedbackCreateInfoEXT feedback_info = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_CREATION_FEEDBACK_CREATE_INFO_EXT,
+        .pPipelineCreationFeedback = &feedback,
+        .pipelineStageCreationFeedbackCount = 1,
+        .pPipelineStageCreationFeedbacks = &stage_feedback,
+    };
+    if (ctx->creation_feedback)
+        info.pNext = &feedback_info;
+    VkResult r = vkCreateComputePipelines(ctx->device, p->cache.cache, 1, &info, NULL, &p->pipelines[effects]);
     if (r != VK_SUCCESS) {
         p->pipelines[effects] = VK_NULL_HANDLE;
         fail(diag, "compiling the compute pipeline", r);
+        return VK_NULL_HANDLE;
     }
+    p->cache.compiled++;
+    if (!ctx->creation_feedback || !(feedback.flags & VK_PIPELINE_CREATION_FEEDBACK_VALID_BIT_EXT))
+        p->cache.hits = -1;
+    else if (p->cache.hits >= 0 &&
+             (feedback.flags & VK_PIPELINE_CREATION_FEEDBACK_APPLICATION_PIPELINE_CACHE_HIT_BIT_EXT))
+        p->cache.hits++;
     return p->pipelines[effects];
 }
 
 /* Write every binding; parts an array does not use repeat its first view (the shader never reads them). */
 static int write_set(const tpk_vk_context *ctx, const tpk_vk_array arrays[], const tpk_vk_buffer *params,
-                     const tpk_vk_buffer *pixels, const tpk_vk_buffer *steps, tpk_vk_pipeline *p, tpk_diag *diag)
+                     const tpk_vk_buffer *pixels, const tpk_vk_buffer *counters, const tpk_vk_buffer *state,
+                     tpk_vk_pipeline *p, tpk_diag *diag)
 {
     VkDescriptorPoolSize sizes[3] = {
         {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 2},
+        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3},
         {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, TPK_VK_ARRAY_COUNT * TPK_VK_MAX_PARTS},
     };
     VkDescriptorPoolCreateInfo pool = {
@@ -129,8 +156,10 @@ static int write_set(const tpk_vk_context *ctx, const tpk_vk_array arrays[], con
     };
     if ((r = vkAllocateDescriptorSets(ctx->device, &alloc, &p->set)) != VK_SUCCESS)
         return fail(diag, "allocating the descriptor set", r);
-    VkDescriptorBufferInfo buffers[3] = {
-        {params->buffer, 0, VK_WHOLE_SIZE}, {pixels->buffer, 0, VK_WHOLE_SIZE}, {steps->buffer, 0, VK_WHOLE_SIZE}};
+    VkDescriptorBufferInfo buffers[4] = {{params->buffer, 0, VK_WHOLE_SIZE},
+                                         {pixels->buffer, 0, VK_WHOLE_SIZE},
+                                         {counters->buffer, 0, VK_WHOLE_SIZE},
+                                         {state->buffer, 0, VK_WHOLE_SIZE}};
     VkWriteDescriptorSet w[TPK_VK_BIND_COUNT];
     memset(w, 0, sizeof w);
     for (uint32_t i = 0; i < TPK_VK_BIND_COUNT; i++) {
@@ -155,11 +184,12 @@ static int write_set(const tpk_vk_context *ctx, const tpk_vk_array arrays[], con
 
 int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[],
                            const tpk_vk_buffer *params, const tpk_vk_buffer *pixels,
-                           const tpk_vk_buffer *steps, tpk_vk_pipeline *out, tpk_diag *diag)
+                           const tpk_vk_buffer *counters, const tpk_vk_buffer *state, tpk_vk_pipeline *out,
+                           tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
     if (create_set_layout(ctx, out, diag) != 0 || create_shader(ctx, layout_id, arrays, out, diag) != 0 ||
-        write_set(ctx, arrays, params, pixels, steps, out, diag) != 0) {
+        write_set(ctx, arrays, params, pixels, counters, state, out, diag) != 0) {
         tpk_vk_pipeline_destroy(ctx, out);
         return -1;
     }
@@ -175,6 +205,7 @@ void tpk_vk_pipeline_destroy(const tpk_vk_context *ctx, tpk_vk_pipeline *p)
             vkDestroyPipeline(ctx->device, p->pipelines[e], NULL);
     if (p->shader)
         vkDestroyShaderModule(ctx->device, p->shader, NULL);
+    tpk_vk_cache_close(ctx, &p->cache);
     if (p->layout)
         vkDestroyPipelineLayout(ctx->device, p->layout, NULL);
     if (p->set_layout)

@@ -1,23 +1,52 @@
 // One inside-run of the marcher (march.c, march_run), included twice by render.comp: for primary rays
 // and for the secondary rays of shadows and ambient occlusion, which GLSL cannot reach by recursion.
-// The includer defines MARCH_RUN (the function's name), MARCH_TMAX (the ray's tmax) and
-// MARCH_REPORT(t_in, t_out, s_in, s_out, v) (what a piece does; true stops the ray).
-// March from the entry face `h` of tet `tet` until the ray leaves the volume. Returns true when the
-// ray is done (opaque, past the clip box, or an error).
-bool MARCH_RUN(Hit h, int tet)
+// The includer defines MARCH_RUN (the function's name), MARCH_TRACE (the runs' loop), MARCH_TMAX (the
+// ray's tmax), MARCH_REPORT(t_in, t_out, s_in, s_out, v) (what a piece does: MARCH_GO on, MARCH_STOP
+// the ray, or MARCH_PAUSE: stop before this piece and redo it on the next call) and MARCH_OUT_OF_WORK
+// (true pauses the run before its next step: a sliced ray's work in this dispatch is done).
+//
+// Why pause: the primary ray's shade points cast secondary rays, each a whole march of its own. Cast
+// from inside the primary march, a ray's state would be spread over two nested marches; paused, the
+// primary march stops before a piece that needs casts, main() casts them at the top level, and the
+// march resumes from the state it kept (a MarchRun and a MarchTrace), redoing that piece. So the whole
+// state of a ray lies in a few variables between two steps of main()'s loop, where a sliced ray
+// (vk_layout.h, "Slices") can stop and be saved for the next dispatch.
+
+// Starts a run at entry face `h` of tet `tet`.
+MarchRun MARCH_RUN_START(Hit h, int tet)
+{
+    MarchRun m;
+    m.h = h;
+    m.tet = tet;
+    m.prev = -1;
+    m.step = 0;
+    m.s_in = hit_scalar(h, face_weights(h));
+    return m;
+}
+
+// March from m's entry face until the ray leaves the volume. Returns MARCH_RAY_DONE (opaque, past the
+// clip box, or an error), MARCH_RAY_EXIT (left the volume through the shell; run_exit_t says where) or
+// MARCH_RAY_PAUSED (m is the tet to redo).
+int MARCH_RUN(inout MarchRun m)
 {
     const int tet_count = P.mode.x;
-    int prev = -1;
-    float s_in = hit_scalar(h, face_weights(h));
-    bool done = true;
-    for (int step = 0;; step++) {
-        if (step >= tet_count) {
+    int result = MARCH_RAY_DONE;
+    for (;;) {
+        if (MARCH_OUT_OF_WORK) {
+            result = MARCH_RAY_PAUSED;
+            break;
+        }
+        if (m.step >= tet_count) {
             status = TPK_VK_STATUS_MESH; // a cycle: watertight marching never revisits a tet
             break;
         }
+        m.step++;
         steps_taken++;
-        if (h.t > MARCH_TMAX)
+        work++;
+        if (m.h.t > MARCH_TMAX)
             break;
+        const Hit h = m.h;
+        const int tet = m.tet, prev = m.prev;
         const int a = h.v[0], b = h.v[1], c = h.v[2];
         ivec4 rec0, rec1 = ivec4(0);
         int vx;
@@ -90,39 +119,71 @@ bool MARCH_RUN(Hit h, int tet)
             status = TPK_VK_STATUS_MESH;
             break;
         }
-        float piece_in = s_in, piece_out = s_out;
+        float piece_in = m.s_in, piece_out = s_out;
         if (P.mode.w == 2) // a tet field: constant in the tet
             piece_in = piece_out = fetch_tet_scalars(uint(tet)).x;
-        if (MARCH_REPORT(h.t, t_out, piece_in, piece_out, ivec4(a, b, c, d)))
+        const int said = MARCH_REPORT(h.t, t_out, piece_in, piece_out, ivec4(a, b, c, d));
+        if (said == MARCH_PAUSE) {
+            m.step--; // this tet is stepped again on the next call
+            steps_taken--;
+            result = MARCH_RAY_PAUSED;
+            break;
+        }
+        if (said == MARCH_STOP)
             break;
         if (next < 0) {
             run_exit_t = t_out;
-            done = false;
+            result = MARCH_RAY_EXIT;
             break;
         }
-        prev = tet;
-        tet = next;
-        h = o;
-        s_in = s_out;
+        m.prev = tet;
+        m.tet = next;
+        m.h = o;
+        m.s_in = s_out;
     }
-    return done; // one exit: no `return` inside the loop (Mesa 22.3 mishandled those inlined into loops)
+    return result; // one exit: no `return` inside the loop (Mesa 22.3 mishandled those inlined into loops)
 }
 
 // The ray's runs over [tmin, tmax] (march.c, tpk_march_ray): the last shell entry before tmin (the ray
 // may start inside), then each next entry in (t, face) order, nearer BVH child first, from where the
 // last run left (in a valid mesh runs do not overlap; the margin covers the rounding of t).
-void MARCH_TRACE(float tmin, float tmax)
+MarchTrace MARCH_TRACE_START(float tmin, float tmax)
 {
+    MarchTrace s;
     Hit h;
-    float t_prev = P.shell_info.x != 0 && bvh_query(0, -INF, tmin, 0.0, -1, h) >= 0 ? h.t : -INF;
-    int face_prev = -1;
-    float t_low = t_prev;
-    for (int run = 0; P.shell_info.x != 0; run++) {
-        int face = bvh_query(1, t_low, INF, t_prev, face_prev, h);
-        if (face < 0 || h.t > tmax || MARCH_RUN(h, fetch_shell(uint(face)).w))
+    s.t_prev = P.shell_info.x != 0 && bvh_query(0, -INF, tmin, 0.0, -1, h) >= 0 ? h.t : -INF;
+    s.face_prev = -1;
+    s.t_low = s.t_prev;
+    s.tmax = tmax;
+    s.in_run = false;
+    return s;
+}
+
+// Runs the ray on from where s stands. Returns false when a run paused (call again to resume), true
+// when the ray is done.
+bool MARCH_TRACE(inout MarchTrace s)
+{
+    bool paused = false;
+    while (P.shell_info.x != 0) {
+        if (!s.in_run) {
+            Hit h;
+            int face = bvh_query(1, s.t_low, INF, s.t_prev, s.face_prev, h);
+            if (face < 0 || h.t > s.tmax)
+                break;
+            s.run = MARCH_RUN_START(h, fetch_shell(uint(face)).w);
+            s.in_run = true;
+            s.t_prev = h.t;
+            s.face_prev = face;
+        }
+        int r = MARCH_RUN(s.run);
+        if (r == MARCH_RAY_PAUSED) {
+            paused = true;
             break;
-        t_prev = h.t;
-        face_prev = face;
-        t_low = max(t_prev, run_exit_t - 1e-5 * abs(run_exit_t) - P.up.w);
+        }
+        s.in_run = false;
+        if (r == MARCH_RAY_DONE)
+            break;
+        s.t_low = max(s.t_prev, run_exit_t - 1e-5 * abs(run_exit_t) - P.up.w);
     }
+    return !paused;
 }

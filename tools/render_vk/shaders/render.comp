@@ -17,6 +17,8 @@ layout(constant_id = TPK_VK_SPEC_EXACT) const int EXACT = TPK_VK_EXACT_FILTER;
 // Effects compiled in (TPK_VK_EFFECT_* bits): code for an effect that is off is not there at all, as
 // a CPU device would otherwise run it under a mask on every step.
 layout(constant_id = TPK_VK_SPEC_EFFECTS) const int EFFECTS = 0;
+// Rays run in slices of bounded work, their state kept between dispatches (vk_layout.h: a CPU device).
+layout(constant_id = TPK_VK_SPEC_SLICED) const bool SLICED = false;
 const bool ISO = (EFFECTS & TPK_VK_EFFECT_ISO) != 0;
 const bool SHADING = (EFFECTS & TPK_VK_EFFECT_SHADING) != 0;
 const bool SHADOWS = (EFFECTS & TPK_VK_EFFECT_SHADOWS) != 0;
@@ -51,13 +53,17 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
     vec4 iso;         // iso values (scalar units)
     vec4 light;       // xyz: point light (relative to the origin; the eye without one); w: iso opacity
     vec4 cast_info;   // x: AO ray length, y: TPK_RENDER_SELF_EPS * unit distance, z: unit distance
-    ivec4 cast_count; // x: AO rays
+    ivec4 cast_count; // x: AO rays; y: the row after this dispatch's rows (a band need not be whole groups);
+                      // z: the slice (SLICED: 0 starts the band's rays, later ones resume them)
     vec4 tf_s[TPK_VK_TF_MAX / 4];
     vec4 tf_rgba[TPK_VK_TF_MAX];
 } P;
 
 layout(std430, set = 0, binding = TPK_VK_BIND_PIXELS) writeonly buffer Pixels { uint pixels[]; };
-layout(std430, set = 0, binding = TPK_VK_BIND_STEPS) writeonly buffer Steps { uvec4 steps[]; }; // steps, status, secondary rays
+layout(std430, set = 0, binding = TPK_VK_BIND_COUNTERS) buffer Counters { uint counters[TPK_VK_COUNT_WORDS]; };
+layout(std430, set = 0, binding = TPK_VK_BIND_STATE) buffer State { vec4 state[]; }; // sliced: rays between slices
+
+uint work = 0u; // this dispatch's iterations of the loops that can run long (sliced: TPK_VK_SLICE_WORK)
 
 // Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away.
 #define DECLARE_ARRAY(SAMPLER, NAME, ARRAY)                                                   \
@@ -336,6 +342,7 @@ int bvh_query(int mode, float t_low, float t_high, float t_prev, int face_prev, 
     stack_t[top++] = t_root;
     while (top > 0) {
         --top;
+        work++;
         uint n = stack[top];
         if (mode == 1 && stack_t[top] > best_t)
             continue; // every face in it is after the best entry found since it was pushed
@@ -443,6 +450,7 @@ void integrate_linear(float h, vec4 c0, vec4 c1)
     int n = clamp(int(ceil(depth / MAX_PIECE_DEPTH)), 1, MAX_PIECE_STEPS);
     float step = h / float(n);
     for (int j = 0; j < n; j++) {
+        work++;
         float u0 = float(j) / float(n), u1 = float(j + 1) / float(n);
         vec4 e0 = mix(c0, c1, u0), e1 = mix(c0, c1, u1);
         float k = e0.a + e1.a;
@@ -498,6 +506,7 @@ void integrate_exact(float len, float s0, float s1)
     int n = P.dims.w;
     if (ds > 0.0) {
         for (int k = tf_first_above(s0); k < n && tf_point_s(k) < s1; k++) {
+            work++;
             float cs = tf_point_s(k);
             vec4 cb = TF_RGBA(k);
             integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
@@ -510,6 +519,7 @@ void integrate_exact(float len, float s0, float s1)
         while (k >= 0 && tf_point_s(k) >= s0)
             k--;
         for (; k >= 0 && tf_point_s(k) > s1; k--) {
+            work++;
             float cs = tf_point_s(k);
             vec4 cb = TF_RGBA(k);
             integrate_linear(len * ((cs - prev_s) / ds), ca, cb);
@@ -605,6 +615,27 @@ bool clip_ray(vec3 org, vec3 dir, inout float lo, inout float hi)
 uint steps_taken;
 uint status;
 float run_exit_t; // t of the shell face the last run left through
+
+// What a piece tells the march (MARCH_REPORT), and how a run ends (march_run.glsl).
+#define MARCH_GO 0
+#define MARCH_STOP 1
+#define MARCH_PAUSE 2
+#define MARCH_RAY_DONE 0
+#define MARCH_RAY_EXIT 1
+#define MARCH_RAY_PAUSED 2
+
+struct MarchRun { // one inside-run, resumable: the tet to step next and how it was entered
+    Hit h;
+    int tet, prev, step;
+    float s_in;
+};
+
+struct MarchTrace { // the runs of one ray, resumable
+    MarchRun run;
+    float t_prev, t_low, tmax;
+    int face_prev;
+    bool in_run;
+};
 
 int rank4(int x, int a, int b, int c, int d)
 {
@@ -715,6 +746,7 @@ float optical_depth(float len, float u0, float u1)
     int n = P.dims.w;
     if (du > 0.0) {
         for (int k = tf_first_above(u0); k < n && tf_point_s(k) < u1; k++) {
+            work++;
             float cu = tf_point_s(k), ca = TF_RGBA(k).a;
             sum += 0.5 * (prev_a + ca) * (cu - prev_u);
             prev_u = cu;
@@ -725,6 +757,7 @@ float optical_depth(float len, float u0, float u1)
         while (k >= 0 && tf_point_s(k) >= u0)
             k--;
         for (; k >= 0 && tf_point_s(k) > u1; k--) {
+            work++;
             float cu = tf_point_s(k), ca = TF_RGBA(k).a;
             sum += 0.5 * (prev_a + ca) * (cu - prev_u);
             prev_u = cu;
@@ -770,29 +803,36 @@ bool trans_piece(float t_in, float t_out, float s_in, float s_out)
     return exp(-trans_tau) * trans_iso <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK;
 }
 
-// report() for secondary rays: clip to [trans_lo, trans_hi] as the marcher does.
-bool trans_report(float t_in, float t_out, float s_in, float s_out)
+// report() for secondary rays: clip to [trans_lo, trans_hi] as the marcher does. Never pauses.
+int trans_report(float t_in, float t_out, float s_in, float s_out)
 {
-    if (t_out < trans_lo)
-        return false;
-    float len = t_out - t_in, a = t_in, b = t_out, sa = s_in, sb = s_out;
-    if (t_in < trans_lo) {
-        a = trans_lo;
-        sa = s_in + (s_out - s_in) * ((trans_lo - t_in) / len);
+    int said = MARCH_GO;
+    if (t_out >= trans_lo) {
+        float len = t_out - t_in, a = t_in, b = t_out, sa = s_in, sb = s_out;
+        if (t_in < trans_lo) {
+            a = trans_lo;
+            sa = s_in + (s_out - s_in) * ((trans_lo - t_in) / len);
+        }
+        if (t_out > trans_hi) {
+            b = trans_hi;
+            sb = s_in + (s_out - s_in) * ((trans_hi - t_in) / len);
+        }
+        said = trans_piece(a, b, sa, sb) || t_out >= trans_hi ? MARCH_STOP : MARCH_GO;
     }
-    if (t_out > trans_hi) {
-        b = trans_hi;
-        sb = s_in + (s_out - s_in) * ((trans_hi - t_in) / len);
-    }
-    return trans_piece(a, b, sa, sb) || t_out >= trans_hi;
+    return said;
 }
 
+#define MARCH_RUN_START march_run_start_secondary
+#define MARCH_OUT_OF_WORK false // a secondary ray runs to its end
 #define MARCH_RUN march_run_secondary
+#define MARCH_TRACE_START trace_start_secondary
 #define MARCH_TRACE trace_secondary
 #define MARCH_TMAX trans_hi
 #define MARCH_REPORT(t_in, t_out, s_in, s_out, v) trans_report(t_in, t_out, s_in, s_out)
 #include "march_run.glsl"
+#undef MARCH_RUN_START
 #undef MARCH_RUN
+#undef MARCH_TRACE_START
 #undef MARCH_TRACE
 #undef MARCH_TMAX
 #undef MARCH_REPORT
@@ -815,7 +855,8 @@ float transmittance_ray(vec3 x, vec3 w, float len)
     if (lo >= 0.0 && frame_init(x, w)) {
         ray_dir = w;
         inv_dir = 1.0 / w;
-        trace_secondary(lo, hi);
+        MarchTrace ts = trace_start_secondary(lo, hi);
+        trace_secondary(ts); // a secondary ray never pauses
     }
     frame = primary;
     ray_dir = primary_dir;
@@ -836,42 +877,115 @@ uint hash32(uint x)
 
 ivec2 pixel; // of this invocation
 
-// Mean transmittance of the AO rays around unit axis a (render.h: AO DIRECTIONS).
-float ambient(vec3 x, vec3 a)
+// The AO axis: the normal turned toward the viewer, -d without one (render.h: AO DIRECTIONS).
+vec3 ao_axis(bool has_n, vec3 n)
+{
+    return has_n ? (dot(n, ray_dir) > 0.0 ? -n : n) : -ray_dir;
+}
+
+// AO ray i of P.cast_count.x around unit axis a (render.h: AO DIRECTIONS).
+vec3 ao_direction(vec3 x, vec3 a, int i)
 {
     int count = P.cast_count.x;
     float sgn = a.z >= 0.0 ? 1.0 : -1.0;
     float p = -1.0 / (sgn + a.z), q = a.x * a.y * p;
     vec3 b1 = vec3(1.0 + sgn * a.x * a.x * p, sgn * q, -sgn * a.x), b2 = vec3(q, sgn + a.y * a.y * p, -a.y);
     uint h = hash32(uint(pixel.y) * 65536u + uint(pixel.x));
-    float rot = float(h) * (1.0 / 4294967296.0), sum = 0.0;
-    for (int i = 0; i < count; i++) {
-        float z = 1.0 - (float(i) + 0.5) / float(count), r = sqrt(1.0 - z * z);
-        float phi = 6.283185307179586 * fract(float(i) * 0.6180339887498949 + rot);
-        sum += transmittance_ray(x, r * cos(phi) * b1 + r * sin(phi) * b2 + z * a, P.cast_info.x);
-    }
-    return sum / float(count);
-}
-
-// Shadow and AO factors at x (rl_cast); n the normal where has_n.
-void cast_rays(vec3 x, bool has_n, vec3 n, out float S, out float A)
-{
-    S = 1.0;
-    A = 1.0;
-    if (SHADOWS) {
-        vec3 w = P.light.xyz - x;
-        float len = length(w);
-        if (len > 0.0)
-            S = transmittance_ray(x, w / len, len);
-    }
-    if (AO)
-        A = ambient(x, has_n ? (dot(n, ray_dir) > 0.0 ? -n : n) : -ray_dir);
+    float rot = float(h) * (1.0 / 4294967296.0);
+    float z = 1.0 - (float(i) + 0.5) / float(count), r = sqrt(1.0 - z * z);
+    float phi = 6.283185307179586 * fract(float(i) * 0.6180339887498949 + rot);
+    return r * cos(phi) * b1 + r * sin(phi) * b2 + z * a;
 }
 
 bool cast_done = false; // shade points of this ray (render.h: SHADE POINTS)
 float t_cast, shade_s = 1.0, shade_a = 1.0;
 bool have_prev = false; // the previous piece of this ray (tet-field iso)
 float prev_t_out, prev_s;
+
+// The casts of the piece being reported: segment() asks for them and pauses the march, main() casts
+// them at the top level (march_run.glsl says why), and the redone piece takes their results in the
+// order asked. A result's secondary rays and steps count when it is taken, so an iso hit behind an
+// opaque stretch of its piece, asked for but never taken, counts nothing (as on the CPU).
+#define MAX_CASTS 5 // a piece's volume shade point and up to 4 iso hits
+int cast_asked = 0;
+int cast_next = 0;
+bool casts_ready = false;
+vec3 cast_x[MAX_CASTS], cast_n[MAX_CASTS];
+bool cast_has_n[MAX_CASTS];
+float cast_S[MAX_CASTS], cast_A[MAX_CASTS];
+uint cast_rays_of[MAX_CASTS], cast_steps_of[MAX_CASTS];
+
+void ask_cast(vec3 x, bool has_n, vec3 n)
+{
+    cast_x[cast_asked] = x;
+    cast_has_n[cast_asked] = has_n;
+    cast_n[cast_asked] = n;
+    cast_asked++;
+}
+
+// The secondary rays of the casts asked, one per call, so that main() marches each at the top level:
+// k counts the shadow ray (SHADOWS) then the AO rays (AO) of cast 0, then of cast 1, ...
+int cast_ray_count()
+{
+    return cast_asked * ((SHADOWS ? 1 : 0) + (AO ? P.cast_count.x : 0));
+}
+
+void cast_one(int k)
+{
+    const int per = (SHADOWS ? 1 : 0) + (AO ? P.cast_count.x : 0);
+    const int i = k / per, j = k - i * per;
+    if (j == 0) {
+        cast_S[i] = 1.0;
+        cast_A[i] = 0.0; // the sum of the AO rays' transmittances until the last one
+        cast_rays_of[i] = 0u;
+        cast_steps_of[i] = 0u;
+    }
+    const vec3 x = cast_x[i];
+    const bool shadow = SHADOWS && j == 0;
+    vec3 w;
+    float len;
+    if (shadow) {
+        w = P.light.xyz - x;
+        len = length(w);
+        w /= len;
+    } else {
+        w = ao_direction(x, ao_axis(cast_has_n[i], cast_n[i]), j - (SHADOWS ? 1 : 0));
+        len = P.cast_info.x;
+    }
+    uint rays = secondary_rays, taken = steps_taken;
+    float T = 1.0;
+    if (!shadow || len > 0.0)
+        T = transmittance_ray(x, w, len);
+    cast_rays_of[i] += secondary_rays - rays;
+    cast_steps_of[i] += steps_taken - taken;
+    secondary_rays = rays;
+    steps_taken = taken;
+    if (shadow)
+        cast_S[i] = T;
+    else
+        cast_A[i] += T;
+    if (AO && j == per - 1)
+        cast_A[i] /= float(P.cast_count.x);
+    if (!AO)
+        cast_A[i] = 1.0;
+}
+
+// After the last cast_one: the redone piece takes the results.
+void casts_cast()
+{
+    cast_asked = 0;
+    cast_next = 0;
+    casts_ready = true;
+}
+
+void take_cast(out float S, out float A)
+{
+    S = cast_S[cast_next];
+    A = cast_A[cast_next];
+    secondary_rays += cast_rays_of[cast_next];
+    steps_taken += cast_steps_of[cast_next];
+    cast_next++;
+}
 
 void composite_iso(float t, float v, bool has_n, vec3 n)
 {
@@ -880,7 +994,7 @@ void composite_iso(float t, float v, bool has_n, vec3 n)
         vec3 x = eye_dir_point(t);
         float S = 1.0, A = 1.0;
         if (CAST)
-            cast_rays(x, has_n, n, S, A);
+            take_cast(S, A);
         m = lighting_factor(x, has_n, n, S, A);
     }
     vec4 c = tf_eval(normalized(v));
@@ -890,8 +1004,9 @@ void composite_iso(float t, float v, bool has_n, vec3 n)
 }
 
 // One tet piece [t_in, t_out] of tet vertices v (entry face, fourth) with scalars s_in, s_out
-// (render_cpu.c's on_segment). Returns true when the ray is opaque.
-bool segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
+// (render_cpu.c's on_segment). Returns MARCH_STOP when the ray is opaque, MARCH_PAUSE (before changing
+// anything) when the piece needs casts that are not ready.
+int segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
 {
     const bool tet_field = P.mode.w == 2;
     int nh = 0;
@@ -900,77 +1015,106 @@ bool segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
             nh = point_crossings(t_in, t_out, s_in, s_out);
         else if (have_prev && prev_t_out == t_in)
             nh = jump_crossings(t_in, prev_s, s_in);
-        have_prev = true;
-        prev_t_out = t_out;
-        prev_s = s_in;
     }
     vec3 n = vec3(0.0);
     bool has_n = false;
-    shade_m = 1.0;
     float u_in = normalized(s_in), u_out = normalized(s_out), cur_t = t_in, cur_u = u_in;
+    bool volume_cast = false;
     if (LIGHTING) {
         has_n = P.mode.w == 1 && tet_normal(v, n);
-        if (t_out > t_in) {
-            // render.h SHADE POINTS: cast from this piece's middle when the ray has lost 1/32 of
-            // transmittance since the last cast; pieces in between reuse its S and A.
+        // render.h SHADE POINTS: cast from this piece's middle when the ray has lost 1/32 of
+        // transmittance since the last cast; pieces in between reuse its S and A.
+        volume_cast = CAST && t_out > t_in && optical_depth(t_out - t_in, u_in, u_out) > 0.0 &&
+                      (!cast_done || t_cast - transmittance >= 1.0 / 32.0);
+    }
+    int said = MARCH_GO;
+    if (CAST && !casts_ready && (volume_cast || nh > 0)) {
+        if (volume_cast)
+            ask_cast(eye_dir_point(0.5 * (t_in + t_out)), has_n, n);
+        for (int i = 0; i < nh; i++) {
+            vec3 hn = n;
+            bool has_hn = has_n;
+            if (tet_field)
+                has_hn = face_normal(v, hn);
+            ask_cast(eye_dir_point(crossing_t[i]), has_hn, hn);
+        }
+        said = MARCH_PAUSE;
+    } else {
+        if (ISO) {
+            have_prev = true;
+            prev_t_out = t_out;
+            prev_s = s_in;
+        }
+        shade_m = 1.0;
+        if (LIGHTING && t_out > t_in) {
             vec3 mid = eye_dir_point(0.5 * (t_in + t_out));
-            if (CAST && optical_depth(t_out - t_in, u_in, u_out) > 0.0 &&
-                (!cast_done || t_cast - transmittance >= 1.0 / 32.0)) {
-                cast_rays(mid, has_n, n, shade_s, shade_a);
+            if (volume_cast) {
+                take_cast(shade_s, shade_a);
                 cast_done = true;
                 t_cast = transmittance;
             }
             shade_m = lighting_factor(mid, has_n, n, shade_s, shade_a);
         }
+        for (int i = 0; ISO && i < nh && transmittance > OPAQUE_TRANSMITTANCE; i++) {
+            float value = P.iso[crossing_j[i]];
+            float hit_u = tet_field ? u_in : normalized(value);
+            integrate(crossing_t[i] - cur_t, cur_u, hit_u);
+            vec3 hn = n;
+            bool has_hn = has_n;
+            if (LIGHTING && tet_field)
+                has_hn = face_normal(v, hn);
+            float m = shade_m;
+            composite_iso(crossing_t[i], value, has_hn, hn);
+            shade_m = m;
+            cur_t = crossing_t[i];
+            cur_u = hit_u;
+        }
+        if (transmittance > OPAQUE_TRANSMITTANCE)
+            integrate(t_out - cur_t, cur_u, u_out);
+        casts_ready = false;
+        said = transmittance <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK ? MARCH_STOP : MARCH_GO;
     }
-    for (int i = 0; ISO && i < nh && transmittance > OPAQUE_TRANSMITTANCE; i++) {
-        float value = P.iso[crossing_j[i]];
-        float hit_u = tet_field ? u_in : normalized(value);
-        integrate(crossing_t[i] - cur_t, cur_u, hit_u);
-        vec3 hn = n;
-        bool has_hn = has_n;
-        if (LIGHTING && tet_field)
-            has_hn = face_normal(v, hn);
-        float m = shade_m;
-        composite_iso(crossing_t[i], value, has_hn, hn);
-        shade_m = m;
-        cur_t = crossing_t[i];
-        cur_u = hit_u;
-    }
-    if (transmittance > OPAQUE_TRANSMITTANCE)
-        integrate(t_out - cur_t, cur_u, u_out);
-    return transmittance <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK;
+    return said;
 }
 
 // The range of t a piece may contribute: [0, inf), cut to the clip box when there is one.
 float t_min_clip, t_max_clip;
 
-// report(): clip the piece to [t_min_clip, t_max_clip] and integrate it. Returns true to stop the ray.
-bool report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
+// report(): clip the piece to [t_min_clip, t_max_clip] and integrate it (MARCH_GO, MARCH_STOP or
+// MARCH_PAUSE, see segment).
+int report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
 {
-    if (t_out < t_min_clip)
-        return false;
-    float len = t_out - t_in;
-    float a = t_in, b = t_out, sa = s_in, sb = s_out;
-    if (t_in < t_min_clip) {
-        a = t_min_clip;
-        sa = s_in + (s_out - s_in) * ((t_min_clip - t_in) / len);
+    int said = MARCH_GO;
+    if (t_out >= t_min_clip) {
+        float len = t_out - t_in;
+        float a = t_in, b = t_out, sa = s_in, sb = s_out;
+        if (t_in < t_min_clip) {
+            a = t_min_clip;
+            sa = s_in + (s_out - s_in) * ((t_min_clip - t_in) / len);
+        }
+        if (t_out > t_max_clip) {
+            b = t_max_clip;
+            sb = s_in + (s_out - s_in) * ((t_max_clip - t_in) / len);
+        }
+        said = segment(a, b, sa, sb, v);
+        if (said == MARCH_GO && t_out >= t_max_clip)
+            said = MARCH_STOP;
     }
-    if (t_out > t_max_clip) {
-        b = t_max_clip;
-        sb = s_in + (s_out - s_in) * ((t_max_clip - t_in) / len);
-    }
-    if (segment(a, b, sa, sb, v))
-        return true;
-    return t_out >= t_max_clip;
+    return said;
 }
 
+#define MARCH_RUN_START march_run_start
+#undef MARCH_OUT_OF_WORK
+#define MARCH_OUT_OF_WORK (SLICED && work >= TPK_VK_SLICE_WORK)
 #define MARCH_RUN march_run
+#define MARCH_TRACE_START trace_start
 #define MARCH_TRACE trace
 #define MARCH_TMAX t_max_clip
 #define MARCH_REPORT(t_in, t_out, s_in, s_out, v) report(t_in, t_out, s_in, s_out, v)
 #include "march_run.glsl"
+#undef MARCH_RUN_START
 #undef MARCH_RUN
+#undef MARCH_TRACE_START
 #undef MARCH_TRACE
 #undef MARCH_TMAX
 #undef MARCH_REPORT
@@ -982,31 +1126,198 @@ uint to_byte(float v)
     return uint(clamp(v, 0.0, 1.0) * 255.0 + 0.5);
 }
 
+// The workgroup's statistics (vk_layout.h, TPK_VK_COUNT_*), summed in shared memory before one atomic
+// per word goes to the counters buffer: no per-pixel statistics leave the device.
+shared uint group_counts[TPK_VK_COUNT_WORDS];
+
+// 64-bit add of v to words [at, at + 1] of the group's sums: the carry of the low word goes to the high.
+void group_add64(int at, uint v)
+{
+    uint old = atomicAdd(group_counts[at], v);
+    if (old + v < old)
+        atomicAdd(group_counts[at + 1], 1u);
+}
+
+void counters_add64(int at)
+{
+    uint lo = group_counts[at], hi = group_counts[at + 1];
+    uint old = atomicAdd(counters[at], lo);
+    hi += old + lo < old ? 1u : 0u;
+    if (hi != 0u)
+        atomicAdd(counters[at + 1], hi);
+}
+
+// ---- Slices: a ray's state between dispatches (SLICED) ----------------------------------------------
+
+#define STATE_IN_RUN 1
+#define STATE_CAST_DONE 2
+#define STATE_HAVE_PREV 4
+#define STATE_CASTS_READY 8
+#define STATE_FINISHED 16
+
+vec4 ibits(int a, int b, int c, int d)
+{
+    return intBitsToFloat(ivec4(a, b, c, d));
+}
+
+void save_state(uint index, MarchTrace ray, int k, int rays, int flags)
+{
+    const uint at = index * uint(TPK_VK_STATE_VEC4);
+    const MarchRun m = ray.run;
+    state[at + 0u] = ibits(m.h.v.x, m.h.v.y, m.h.v.z, m.tet);
+    state[at + 1u] = m.h.p0;
+    state[at + 2u] = m.h.p1;
+    state[at + 3u] = m.h.p2;
+    state[at + 4u] = vec4(m.h.e, m.h.t);
+    state[at + 5u] = vec4(m.h.s, m.s_in);
+    state[at + 6u] = ibits(m.prev, m.step, ray.face_prev,
+                           flags | (ray.in_run ? STATE_IN_RUN : 0) | (cast_done ? STATE_CAST_DONE : 0) |
+                               (have_prev ? STATE_HAVE_PREV : 0) | (casts_ready ? STATE_CASTS_READY : 0));
+    state[at + 7u] = vec4(ray.t_prev, ray.t_low, ray.tmax, run_exit_t);
+    state[at + 8u] = vec4(color, transmittance);
+    state[at + 9u] = ibits(int(steps_taken), int(secondary_rays), int(status), k);
+    state[at + 10u] = ibits(rays, cast_asked, cast_next, 0);
+    state[at + 11u] = vec4(t_cast, shade_s, shade_a, prev_t_out);
+    state[at + 12u] = vec4(prev_s, t_min_clip, t_max_clip, 0.0);
+    for (int i = 0; i < MAX_CASTS; i++) {
+        const uint c = at + 13u + 3u * uint(i);
+        state[c] = vec4(cast_x[i], cast_has_n[i] ? 1.0 : 0.0);
+        state[c + 1u] = vec4(cast_n[i], cast_S[i]);
+        state[c + 2u] = vec4(cast_A[i], uintBitsToFloat(cast_rays_of[i]), uintBitsToFloat(cast_steps_of[i]), 0.0);
+    }
+}
+
+// The ray as the last slice left it; false when it finished in an earlier slice.
+bool load_state(uint index, out MarchTrace ray, out int k, out int rays)
+{
+    const uint at = index * uint(TPK_VK_STATE_VEC4);
+    const ivec4 w0 = floatBitsToInt(state[at + 0u]), w6 = floatBitsToInt(state[at + 6u]),
+                w9 = floatBitsToInt(state[at + 9u]), w10 = floatBitsToInt(state[at + 10u]);
+    const vec4 w4 = state[at + 4u], w5 = state[at + 5u], w7 = state[at + 7u], w8 = state[at + 8u],
+               w11 = state[at + 11u], w12 = state[at + 12u];
+    ray.run.h = Hit(w0.xyz, state[at + 1u], state[at + 2u], state[at + 3u], w4.xyz, w5.xyz, w4.w);
+    ray.run.tet = w0.w;
+    ray.run.s_in = w5.w;
+    ray.run.prev = w6.x;
+    ray.run.step = w6.y;
+    ray.face_prev = w6.z;
+    ray.in_run = (w6.w & STATE_IN_RUN) != 0;
+    cast_done = (w6.w & STATE_CAST_DONE) != 0;
+    have_prev = (w6.w & STATE_HAVE_PREV) != 0;
+    casts_ready = (w6.w & STATE_CASTS_READY) != 0;
+    ray.t_prev = w7.x;
+    ray.t_low = w7.y;
+    ray.tmax = w7.z;
+    run_exit_t = w7.w;
+    color = w8.xyz;
+    transmittance = w8.w;
+    steps_taken = uint(w9.x);
+    secondary_rays = uint(w9.y);
+    status = uint(w9.z);
+    k = w9.w;
+    rays = w10.x;
+    cast_asked = w10.y;
+    cast_next = w10.z;
+    t_cast = w11.x;
+    shade_s = w11.y;
+    shade_a = w11.z;
+    prev_t_out = w11.w;
+    prev_s = w12.x;
+    t_min_clip = w12.y;
+    t_max_clip = w12.z;
+    for (int i = 0; i < MAX_CASTS; i++) {
+        const uint c = at + 13u + 3u * uint(i);
+        const vec4 c0 = state[c], c1 = state[c + 1u], c2 = state[c + 2u];
+        cast_x[i] = c0.xyz;
+        cast_has_n[i] = c0.w != 0.0;
+        cast_n[i] = c1.xyz;
+        cast_S[i] = c1.w;
+        cast_A[i] = c2.x;
+        cast_rays_of[i] = floatBitsToUint(c2.y);
+        cast_steps_of[i] = floatBitsToUint(c2.z);
+    }
+    return (w6.w & STATE_FINISHED) == 0;
+}
+
 void main()
 {
-    tf_to_shared(); // before any invocation returns: every one reaches the barrier
+    if (gl_LocalInvocationIndex == 0u) {
+        for (int i = 0; i < TPK_VK_COUNT_WORDS; i++)
+            group_counts[i] = 0u;
+        group_counts[TPK_VK_COUNT_FIRST] = 0xffffffffu;
+    }
+    tf_to_shared(); // its barrier also publishes group_counts' zeros
     const int x = int(gl_GlobalInvocationID.x), y = P.dims.z + int(gl_GlobalInvocationID.y);
     pixel = ivec2(x, y);
-    if (x >= P.dims.x || y >= P.dims.y)
-        return;
-    const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
-    const float py = (1.0 - 2.0 * (float(y) + 0.5) / float(P.dims.y)) * P.right.w;
-    ray_dir = normalize(P.forward.xyz + px * P.right.xyz + py * P.up.xyz);
-    inv_dir = 1.0 / ray_dir;
-    color = vec3(0.0);
-    transmittance = 1.0;
-    steps_taken = 0u;
-    status = TPK_VK_STATUS_OK;
-    t_min_clip = 0.0;
-    t_max_clip = INF;
-    if (frame_init(P.eye.xyz, ray_dir) && clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip))
-        trace(t_min_clip, t_max_clip);
-    const vec4 bg = P.background;
-    float alpha = (1.0 - transmittance) + transmittance * bg.a;
-    vec3 premult = color + transmittance * bg.a * bg.rgb;
-    vec3 straight = alpha > 0.0 ? premult / alpha : vec3(0.0);
-    uint index = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // within this band of rows
-    pixels[index] = to_byte(straight.r) | (to_byte(straight.g) << 8) | (to_byte(straight.b) << 16) |
-                    (to_byte(alpha) << 24);
-    steps[index] = uvec4(steps_taken, status, secondary_rays, 0u);
+    // every invocation reaches the barrier below, so pixels outside the image do no work but return late
+    if (x < P.dims.x && y < P.cast_count.y) {
+        const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
+        const float py = (1.0 - 2.0 * (float(y) + 0.5) / float(P.dims.y)) * P.right.w;
+        ray_dir = normalize(P.forward.xyz + px * P.right.xyz + py * P.up.xyz);
+        inv_dir = 1.0 / ray_dir;
+        const uint index = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // within this band of rows
+        MarchTrace ray;
+        int k = 0, rays = 0; // the secondary rays of the casts asked: the next, and how many
+        bool done = true, live = true;
+        if (!SLICED || P.cast_count.z == 0) {
+            color = vec3(0.0);
+            transmittance = 1.0;
+            steps_taken = 0u;
+            status = TPK_VK_STATUS_OK;
+            t_min_clip = 0.0;
+            t_max_clip = INF;
+            if (frame_init(P.eye.xyz, ray_dir) && clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip)) {
+                ray = trace_start(t_min_clip, t_max_clip);
+                done = false;
+            }
+        } else {
+            live = load_state(index, ray, k, rays);
+            done = !live;
+            frame_init(P.eye.xyz, ray_dir); // the primary ray's frame, as the first slice made it
+        }
+        // One loop, so that a secondary ray runs at the top level, not inside the primary march
+        // (march_run.glsl), and a sliced ray stops between two steps of it.
+        while (!done && !(SLICED && work >= TPK_VK_SLICE_WORK)) {
+            if (k < rays) {
+                cast_one(k);
+                k++;
+                if (k == rays)
+                    casts_cast();
+            } else {
+                done = trace(ray); // false: paused for casts, or (sliced) out of work
+                k = 0;
+                rays = !done && cast_asked > 0 ? cast_ray_count() : 0;
+                if (!done && cast_asked > 0 && rays == 0)
+                    casts_cast(); // no secondary rays to cast (an AO of no rays): S = A = 1
+            }
+        }
+        if (!done) {
+            save_state(index, ray, k, rays, 0);
+            atomicAdd(counters[TPK_VK_COUNT_PENDING], 1u);
+        } else if (live) {
+            if (SLICED)
+                state[index * uint(TPK_VK_STATE_VEC4) + 6u].w = intBitsToFloat(STATE_FINISHED);
+            const vec4 bg = P.background;
+            float alpha = (1.0 - transmittance) + transmittance * bg.a;
+            vec3 premult = color + transmittance * bg.a * bg.rgb;
+            vec3 straight = alpha > 0.0 ? premult / alpha : vec3(0.0);
+            pixels[index] = to_byte(straight.r) | (to_byte(straight.g) << 8) | (to_byte(straight.b) << 16) |
+                            (to_byte(alpha) << 24);
+            group_add64(TPK_VK_COUNT_STEPS, steps_taken);
+            group_add64(TPK_VK_COUNT_SECONDARY, secondary_rays);
+            if (status != TPK_VK_STATUS_OK) {
+                atomicAdd(group_counts[TPK_VK_COUNT_FAILED], 1u);
+                atomicMin(group_counts[TPK_VK_COUNT_FIRST], index);
+            }
+        }
+    }
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        counters_add64(TPK_VK_COUNT_STEPS);
+        counters_add64(TPK_VK_COUNT_SECONDARY);
+        if (group_counts[TPK_VK_COUNT_FAILED] != 0u) {
+            atomicAdd(counters[TPK_VK_COUNT_FAILED], group_counts[TPK_VK_COUNT_FAILED]);
+            atomicMin(counters[TPK_VK_COUNT_FIRST], group_counts[TPK_VK_COUNT_FIRST]);
+        }
+    }
 }

@@ -44,8 +44,9 @@
 
 #define TPK_VK_BIND_PARAMS 0 /* uniform block */
 #define TPK_VK_BIND_PIXELS 1 /* storage buffer: packed RGBA8 per pixel */
-#define TPK_VK_BIND_STEPS 2  /* storage buffer: per pixel, tet steps, a status, secondary rays, 0 */
-#define TPK_VK_BIND_ARRAY(a) (3 + (a) * TPK_VK_MAX_PARTS)
+#define TPK_VK_BIND_COUNTERS 2 /* storage buffer: the dispatch's statistics, TPK_VK_COUNT_* below */
+#define TPK_VK_BIND_STATE 3 /* storage buffer: each pixel's ray between slices (TPK_VK_SPEC_SLICED, below) */
+#define TPK_VK_BIND_ARRAY(a) (4 + (a) * TPK_VK_MAX_PARTS)
 #define TPK_VK_BIND_COUNT TPK_VK_BIND_ARRAY(TPK_VK_ARRAY_COUNT)
 
 /* Specialization constants: the layout, then per array its part count and shift. */
@@ -54,7 +55,8 @@
 #define TPK_VK_SPEC_SHIFT(a) (2 + 2 * (a))
 #define TPK_VK_SPEC_EXACT (1 + 2 * TPK_VK_ARRAY_COUNT) /* the FP64 variant's edge test, below */
 #define TPK_VK_SPEC_EFFECTS (2 + 2 * TPK_VK_ARRAY_COUNT) /* TPK_VK_EFFECT_* bits */
-#define TPK_VK_SPEC_COUNT (3 + 2 * TPK_VK_ARRAY_COUNT)
+#define TPK_VK_SPEC_SLICED (3 + 2 * TPK_VK_ARRAY_COUNT) /* 1: rays run in slices of bounded work */
+#define TPK_VK_SPEC_COUNT (4 + 2 * TPK_VK_ARRAY_COUNT)
 #define TPK_VK_EFFECT_ISO 1
 #define TPK_VK_EFFECT_SHADING 2
 #define TPK_VK_EFFECT_SHADOWS 4
@@ -70,7 +72,27 @@
 #define TPK_VK_EXACT_FILTER 1
 #define TPK_VK_EXACT_ALWAYS 2
 
-/* Per-pixel status written by the shader. */
+/* The statistics of one dispatch, reduced on the device: each workgroup sums its pixels in shared
+ * memory, then adds its sums to these words with one atomic each. 64-bit sums are two words (low, high)
+ * added with carry. The host resets them before each dispatch. */
+#define TPK_VK_COUNT_STEPS 0     /* tet steps, 64-bit: words 0 (low) and 1 (high) */
+#define TPK_VK_COUNT_SECONDARY 2 /* shadow and AO rays, 64-bit: words 2 and 3 */
+#define TPK_VK_COUNT_FAILED 4    /* pixels whose ray failed (TPK_VK_STATUS_MESH) */
+#define TPK_VK_COUNT_FIRST 5     /* the smallest failed pixel index in the dispatch (0xffffffff: none) */
+#define TPK_VK_COUNT_PENDING 6   /* sliced: pixels whose ray goes on in the next slice */
+#define TPK_VK_COUNT_WORDS 8
+
+/* Slices (TPK_VK_SPEC_SLICED, for CPU devices). llvmpipe ends every loop of a shader once the loops
+ * have run 65535 iterations in all (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS, counted per SIMD group,
+ * silently): a long ray, or one with shadow and AO rays, was cut short there. Sliced, a ray stops at
+ * a safe point once it has done TPK_VK_SLICE_WORK units of work (a tet step or a BVH node visited) in
+ * a dispatch, keeps its state in TPK_VK_STATE_VEC4 vec4s of the state buffer, and the host dispatches
+ * the band again (the slice number in cast_count.z) until no pixel is pending. */
+#define TPK_VK_SLICE_WORK 512
+#define TPK_VK_STATE_VEC4 28
+#define TPK_VK_SLICED_BAND_PIXELS (1u << 16) /* a sliced band's pixels: 28 MiB of state */
+
+/* Per-pixel status of the shader. */
 #define TPK_VK_STATUS_OK 0
 #define TPK_VK_STATUS_MESH 1 /* inconsistent connectivity (TPK_ERR_MESH on the CPU) */
 
