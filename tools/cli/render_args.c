@@ -205,6 +205,8 @@ int render_args_parse_option(const char *cmd, int argc, char **argv, int *i, ren
                                    : NULL;
         if (o->metavar && !v)
             return tpk_cli_fail(cmd, "%s expects %s", o->flag, o->expects);
+        if (!parsers[o->id]) /* a row given a flag but no parser here: a bug, said as such */
+            return tpk_cli_fail(cmd, "%s: no parser for this option (tools/cli/render_args.c)", o->flag);
         if (parsers[o->id](v, a))
             return tpk_cli_fail(cmd, "%s expects %s, found '%s'", o->flag, o->expects, v ? v : "");
     } else if (arg[0] == '-' && arg[1]) {
