@@ -28,10 +28,9 @@ static const char view_help[] =
     "(of those stored), I isosurface at the middle of the range on/off, S shading on/off, C clip box\n"
     "(the half of the bounds below the middle of x) on/off, P screenshot (--screenshot, else\n"
     "view_NNN.png), W write the scene (--save-scene, else view_scene.json), Q or Esc quit.\n"
-    "\n"
-    "Options: those of tetpack render that say what to show (--size, --camera, --tf, --field, --step,\n"
-    "--range, --layout, --unit-distance, --integration, --iso, --iso-opacity, --clip-box, --shading,\n"
-    "--shadows, --light, --ao, --ao-radius, --threads, --backend, --scene, --save-scene), and:\n"
+    "\n"; /* then the options view takes from render (the option table), and its own: */
+
+static const char view_help_own[] =
     "  --frames N                   show N frames, then close (with --screenshot: tests, scripts)\n"
     "  --orbit DEG                  turn the camera by DEG degrees per frame around its up axis\n"
     "  --screenshot IMAGE.png       the window's last frame as PNG when it closes (and P's file)\n"
@@ -67,8 +66,7 @@ static int view_option(int argc, char **argv, int *i, view_args *v)
         if (!v->keys || strspn(v->keys, "TtFf[]LlIiSsCcPpWwQq") != strlen(v->keys))
             return tpk_cli_fail("view", "--keys expects keys of T F [ ] L I S C P W Q, found '%s'",
                                 v->keys ? v->keys : "") + 1;
-    } else if (!strcmp(arg, "-o") || !strncmp(arg, "--output", 8) || !strncmp(arg, "--steps", 7) ||
-               !strcmp(arg, "--json")) {
+    } else if (render_args_find_option(arg) && render_args_find_option(arg)->render_only) {
         return tpk_cli_fail("view", "%s is an option of tetpack render; view shows one step at a time ([ and ] "
                             "step) and saves with --screenshot or P", arg) + 1;
     } else {
@@ -160,6 +158,8 @@ int tpk_cmd_view(int argc, char **argv)
     for (int i = 1; i < argc; i++)
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             fputs(view_help, stdout);
+            render_args_view_list(stdout);
+            fputs(view_help_own, stdout);
             return TPK_EXIT_OK;
         }
     render_args a;

@@ -1,9 +1,13 @@
-/* The parsed options of `tetpack render`, shared by the pieces of the command line that fill them (the
- * option table of cmd_render.c, a scene file) and turned into tpk_render_options in one place. */
+/* The parsed options of `tetpack render` (and `tetpack view`), shared by the pieces of the command line
+ * that fill them (the option table, a scene file) and turned into tpk_render_options in one place.
+ * Owner: render_args.c. */
 #ifndef TPK_CLI_RENDER_ARGS_H
 #define TPK_CLI_RENDER_ARGS_H
 
+#include <stdio.h>
+
 #include "render/render.h"
+#include "scene/option_table.h"
 #include "scene/scene.h"
 #include "tetpack.h"
 
@@ -39,12 +43,36 @@ void render_args_to_options(const render_args *a, tpk_file *file, const tpk_tran
  * the command in messages. 0, or a message and TPK_EXIT_USAGE. */
 int render_args_parse_option(const char *cmd, int argc, char **argv, int *i, render_args *a);
 
+/* The row of the option table (scene/option_table.h) that `arg` names ("--name", "--name=value" or the
+ * alias), or NULL. */
+const tpk_option_row *render_args_find_option(const char *arg);
+
+/* The options part of `tetpack render --help`, from the option table: each flag, its value and its help
+ * in --help order, and after the effects the line that points at their definitions. */
+void render_args_help(FILE *out);
+
+/* The paragraph of `tetpack view --help` that lists the options view takes from render (the table's
+ * rows that are not render_only), wrapped at 100 columns. */
+void render_args_view_list(FILE *out);
+
 /* --scene FILE, if given anywhere in argv: its values fill `a` first, so that the options parsed after
  * override them. 0, or a message and TPK_EXIT_USAGE. */
 int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args *a);
 
 /* The transfer function: --tf, else the scene's, else viridis. 0, or a message and TPK_EXIT_USAGE. */
 int render_args_load_tf(const char *cmd, const render_args *a, tpk_transfer_function *tf);
+
+/* The range of the field rendered, from its descriptor (min and max over all steps, so frames of a step
+ * range share one colour scale): the named field, or the first point field; [0, 1] without one. */
+void render_args_field_range(tpk_file *file, const char *name, double range[2]);
+
+/* The association of the field --field names (TPK_ASSOC_POINT without one) into *association, or a usage
+ * error naming the fields the file has. */
+int render_args_check_field(const char *cmd, const render_args *a, tpk_file *file, int *association);
+
+/* The steps of the field rendered (the named one, or the first point field; 1 without a field), so that
+ * a step range past them is refused before any frame is written; `found` names it for messages. */
+uint32_t render_args_field_steps(tpk_file *file, const char *name, char found[80]);
 
 /* The layout `name` says (tet16, tet20, tet32), or with NULL the first the file stores. */
 tpk_layout render_args_layout(tpk_file *file, const char *name);

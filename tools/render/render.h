@@ -31,7 +31,7 @@ int tpk_camera_basis_of(const tpk_camera *cam, int width, int height, tpk_camera
 /* Render options. tpk_render_options_default fills friendly defaults; a zero-initialised struct
  * (plus width, height, camera and tf) also works: then the background is transparent black. */
 typedef struct tpk_render_options {
-    int width, height;             /* pixels, 1 .. 32768 each */
+    int width, height;             /* pixels, 1 .. TPK_RENDER_MAX_SIZE each */
     tpk_camera camera;
     const tpk_transfer_function *tf;
     double range_min, range_max;   /* scalar range mapped to TF s in [0,1]; equal: every scalar -> 0.5 */
@@ -55,11 +55,14 @@ typedef struct tpk_render_options {
     int shadows;                   /* transmittance toward the point light, marched through the volume */
     int have_light;                /* zero: a headlight at the camera eye */
     double light[3];               /* point light position, world coordinates */
-    int ao_rays;                   /* ambient occlusion with this many hemisphere rays; 0: off */
+    int ao_rays;                   /* ambient occlusion with this many hemisphere rays (at most
+                                      TPK_RENDER_MAX_AO_RAYS); 0: off */
     double ao_radius;              /* AO ray length; <= 0: bounds diagonal / 10 */
 } tpk_render_options;
 
 #define TPK_RENDER_MAX_ISO 4
+#define TPK_RENDER_MAX_SIZE 32768
+#define TPK_RENDER_MAX_AO_RAYS 1024
 #define TPK_INTEGRATION_EXACT 0
 #define TPK_INTEGRATION_SAMPLED 1
 #define TPK_INTEGRATION_MIDPOINT 2
@@ -147,6 +150,32 @@ void tpk_render_options_default(tpk_render_options *opt);
  * and finite, else diagonal / 100, else 1) and the AO ray length (opt->ao_radius when positive, else
  * diagonal / 10). */
 void tpk_render_lengths(const tpk_render_options *opt, double diagonal, double *unit, double *ao_radius);
+
+/* The one validation of render options (render_check.c), which every backend calls before anything
+ * else: a size in 1..TPK_RENDER_MAX_SIZE, a transfer function of 1..TPK_TF_MAX_POINTS points, a known
+ * integration, a finite range, 0..TPK_RENDER_MAX_ISO finite iso values, a finite iso opacity <= 1, a
+ * finite clip box with min <= max, a finite light, 0..TPK_RENDER_MAX_AO_RAYS AO rays, a finite AO radius
+ * and a camera tpk_camera_basis_of accepts. Values a renderer cannot use are refused, not clamped.
+ * Returns 0, or -1 with a message starting "render: " (the same whichever backend asks). Pure. */
+int tpk_render_check_options(const tpk_render_options *opt, tpk_diag *diag);
+
+/* What every backend derives from checked options in the same way (render_setup.c), so that they cast
+ * the same rays and weigh them alike. */
+typedef struct tpk_render_setup {
+    tpk_camera_basis basis; /* tpk_camera_basis_of the camera for the image size */
+    double range_min;
+    double inv_range;       /* 1 / (range_max - range_min); 0 when the range is empty */
+    double unit, inv_unit;  /* tpk_render_lengths' unit distance and its inverse */
+    double ao_radius;       /* tpk_render_lengths' AO ray length */
+    double iso_opacity;     /* opt->iso_opacity, or 1 where it is <= 0 (render.h: ISOSURFACES) */
+    double light[3];        /* the point light, or the eye without one (render.h: LIGHT) */
+    int cast;               /* shadows or AO: shade points cast secondary rays */
+    int lighting;           /* shading, shadows or AO: the lighting factor m is computed */
+} tpk_render_setup;
+
+/* Fill `out` from options that tpk_render_check_options accepted and the diagonal of the stored
+ * positions' box (tpk_positions_diagonal). Returns 0, or -1 with the camera's message. Pure. */
+int tpk_render_setup_of(const tpk_render_options *opt, double diagonal, tpk_render_setup *out, tpk_diag *diag);
 
 typedef struct tpk_render_stats {
     uint64_t rays;      /* primary rays (one per pixel) */

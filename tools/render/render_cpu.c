@@ -204,20 +204,6 @@ static void *render_worker(void *arg)
 
 /* ---- Setup -------------------------------------------------------------------------------------- */
 
-static int setup_camera(render_job *job, const tpk_camera *cam, tpk_diag *diag)
-{
-    tpk_camera_basis basis;
-    if (tpk_camera_basis_of(cam, job->opt->width, job->opt->height, &basis, diag) != 0)
-        return -1;
-    memcpy(job->eye, cam->eye, sizeof job->eye);
-    memcpy(job->forward, basis.forward, sizeof job->forward);
-    memcpy(job->right, basis.right, sizeof job->right);
-    memcpy(job->up, basis.up, sizeof job->up);
-    job->tan_half_y = basis.tan_half_y;
-    job->tan_half_x = basis.tan_half_x;
-    return 0;
-}
-
 double tpk_positions_diagonal(const tpk_mesh_arrays *mesh)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -246,75 +232,39 @@ static int thread_count(const tpk_render_options *opt)
     return (int)n;
 }
 
-static int finite3(const double v[3])
+/* The job's view of the options: tpk_render_setup_of, the derivation every backend shares. */
+static int setup_job(render_job *job, int has_point_scalars, double diagonal, const tpk_render_options *opt,
+                     tpk_diag *diag)
 {
-    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
-}
-
-/* The effect options (render.h): values a renderer cannot use are refused, not clamped. */
-static int check_effects(const tpk_render_options *opt, tpk_diag *diag)
-{
-    if (opt->iso_count < 0 || opt->iso_count > TPK_RENDER_MAX_ISO)
-        return tpk_diag_fail(diag, "render: expected 0..%d iso values, found %d", TPK_RENDER_MAX_ISO, opt->iso_count);
-    for (int j = 0; j < opt->iso_count; j++)
-        if (!isfinite(opt->iso[j]))
-            return tpk_diag_fail(diag, "render: iso value %d is not finite", j + 1);
-    if (!isfinite(opt->iso_opacity) || opt->iso_opacity > 1)
-        return tpk_diag_fail(diag, "render: expected an iso opacity <= 1, found %g", opt->iso_opacity);
-    if (opt->clip && (!finite3(opt->clip_min) || !finite3(opt->clip_max)))
-        return tpk_diag_fail(diag, "render: the clip box must be finite");
-    for (int k = 0; opt->clip && k < 3; k++)
-        if (opt->clip_min[k] > opt->clip_max[k])
-            return tpk_diag_fail(diag, "render: clip box min %g above max %g on axis %c", opt->clip_min[k],
-                                 opt->clip_max[k], "xyz"[k]);
-    if (opt->have_light && !finite3(opt->light))
-        return tpk_diag_fail(diag, "render: the light position must be finite");
-    if (opt->ao_rays < 0 || opt->ao_rays > 1024)
-        return tpk_diag_fail(diag, "render: expected 0..1024 AO rays, found %d", opt->ao_rays);
-    if (!isfinite(opt->ao_radius))
-        return tpk_diag_fail(diag, "render: the AO radius must be finite");
-    return 0;
-}
-
-static int check_options(const tpk_render_options *opt, tpk_diag *diag)
-{
-    if (opt->width < 1 || opt->height < 1 || opt->width > 32768 || opt->height > 32768)
-        return tpk_diag_fail(diag, "render: expected width and height in 1..32768, found %dx%d", opt->width,
-                             opt->height);
-    if (!opt->tf || opt->tf->count < 1 || opt->tf->count > TPK_TF_MAX_POINTS)
-        return tpk_diag_fail(diag, "render: a transfer function with at least one point is required");
-    if (opt->integration < TPK_INTEGRATION_EXACT || opt->integration > TPK_INTEGRATION_MIDPOINT)
-        return tpk_diag_fail(diag, "render: expected integration 0 (exact), 1 (sampled) or 2 (midpoint), found %d",
-                             opt->integration);
-    if (!isfinite(opt->range_min) || !isfinite(opt->range_max))
-        return tpk_diag_fail(diag, "render: the scalar range must be finite");
-    return check_effects(opt, diag);
-}
-
-/* Everything of the job that depends on the mesh and the options, except the camera. */
-static void setup_job(render_job *job, int has_point_scalars, double diagonal, const tpk_render_options *opt)
-{
+    tpk_render_setup setup;
+    if (tpk_render_setup_of(opt, diagonal, &setup, diag) != 0)
+        return -1;
     job->opt = opt;
     job->tet_scalars = opt->tet_scalars;
     job->has_scalars = has_point_scalars || opt->tet_scalars != NULL;
-    job->range_min = opt->range_min;
-    job->inv_range = opt->range_max != opt->range_min ? 1.0 / (opt->range_max - opt->range_min) : 0.0;
-    tpk_render_lengths(opt, diagonal, &job->unit, &job->ao_radius);
-    job->inv_unit = 1.0 / job->unit;
-    job->iso_opacity = opt->iso_opacity > 0 ? opt->iso_opacity : 1.0;
-    job->cast = opt->shadows || opt->ao_rays > 0;
-    job->lighting = job->cast || opt->shading;
+    job->range_min = setup.range_min;
+    job->inv_range = setup.inv_range;
+    job->unit = setup.unit;
+    job->inv_unit = setup.inv_unit;
+    job->ao_radius = setup.ao_radius;
+    job->iso_opacity = setup.iso_opacity;
+    job->cast = setup.cast;
+    job->lighting = setup.lighting;
+    memcpy(job->light, setup.light, sizeof job->light);
+    memcpy(job->eye, opt->camera.eye, sizeof job->eye);
+    memcpy(job->forward, setup.basis.forward, sizeof job->forward);
+    memcpy(job->right, setup.basis.right, sizeof job->right);
+    memcpy(job->up, setup.basis.up, sizeof job->up);
+    job->tan_half_y = setup.basis.tan_half_y;
+    job->tan_half_x = setup.basis.tan_half_x;
+    return 0;
 }
 
 /* The rows on all threads, once the job's marcher (or part set) and options are in place. */
 static int run_render(render_job *job, tpk_render_stats *stats, const struct timespec *t0, tpk_diag *diag)
 {
     const tpk_render_options *opt = job->opt;
-    int rc = setup_camera(job, &opt->camera, diag);
-    if (rc != 0)
-        return rc;
-    for (int k = 0; k < 3; k++)
-        job->light[k] = opt->have_light ? opt->light[k] : job->eye[k];
+    int rc = 0;
     atomic_init(&job->next_row, 0);
     atomic_init(&job->failed, 0);
     atomic_init(&job->tet_steps, 0);
@@ -355,14 +305,17 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
         memset(stats, 0, sizeof *stats);
     if (!mesh || !opt || !rgba)
         return tpk_diag_fail(diag, "render: mesh, options and image buffer are required");
-    if (check_options(opt, diag))
+    if (tpk_render_check_options(opt, diag))
         return -1;
     render_job *job = calloc(1, sizeof *job);
     if (!job)
         return tpk_diag_fail(diag, "render: out of memory");
     job->rgba = rgba;
     job->mesh = mesh;
-    setup_job(job, mesh->scalars != NULL, tpk_positions_diagonal(mesh), opt);
+    if (setup_job(job, mesh->scalars != NULL, tpk_positions_diagonal(mesh), opt, diag) != 0) {
+        free(job);
+        return -1;
+    }
     tpk_marcher *marcher = NULL;
     tpk_result r = tpk_marcher_create(&marcher, mesh);
     if (r != TPK_OK) {
@@ -385,7 +338,7 @@ int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double d
         memset(stats, 0, sizeof *stats);
     if (!marcher || !opt || !rgba)
         return tpk_diag_fail(diag, "render: part set, options and image buffer are required");
-    if (check_options(opt, diag))
+    if (tpk_render_check_options(opt, diag))
         return -1;
     /* Normals and tet fields index one file's vertices and tets; a set's segments name a part's. */
     if (opt->shading || opt->shadows || opt->ao_rays > 0 || opt->tet_scalars)
@@ -396,8 +349,9 @@ int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double d
         return tpk_diag_fail(diag, "render: out of memory");
     job->rgba = rgba;
     job->set = marcher;
-    setup_job(job, has_scalars, diagonal, opt);
-    int rc = run_render(job, stats, &t0, diag);
+    int rc = setup_job(job, has_scalars, diagonal, opt, diag);
+    if (rc == 0)
+        rc = run_render(job, stats, &t0, diag);
     free(job);
     return rc;
 }

@@ -1,5 +1,6 @@
 /* What every backend derives from the options in the same way, so that the CPU reference and the Vulkan
- * renderer cast the same rays and weigh them alike: the camera's view basis and the effects' lengths. */
+ * renderer cast the same rays and weigh them alike: the camera's view basis, the effects' lengths and
+ * the rest of tpk_render_setup. */
 #include <math.h>
 
 #include "render.h"
@@ -55,4 +56,20 @@ void tpk_render_lengths(const tpk_render_options *opt, double diagonal, double *
         u = diagonal / 100.0;
     *unit = u > 0 ? u : 1.0;
     *ao_radius = opt->ao_radius > 0 ? opt->ao_radius : diagonal / 10.0;
+}
+
+int tpk_render_setup_of(const tpk_render_options *opt, double diagonal, tpk_render_setup *out, tpk_diag *diag)
+{
+    if (tpk_camera_basis_of(&opt->camera, opt->width, opt->height, &out->basis, diag) != 0)
+        return -1;
+    out->range_min = opt->range_min;
+    out->inv_range = opt->range_max != opt->range_min ? 1.0 / (opt->range_max - opt->range_min) : 0.0;
+    tpk_render_lengths(opt, diagonal, &out->unit, &out->ao_radius);
+    out->inv_unit = 1.0 / out->unit;
+    out->iso_opacity = opt->iso_opacity > 0 ? opt->iso_opacity : 1.0;
+    for (int k = 0; k < 3; k++)
+        out->light[k] = opt->have_light ? opt->light[k] : opt->camera.eye[k];
+    out->cast = opt->shadows || opt->ao_rays > 0;
+    out->lighting = out->cast || opt->shading;
+    return 0;
 }

@@ -134,7 +134,9 @@ typedef struct tpk_vk_params {
     float tf_rgba[TPK_VK_TF_MAX][4];
 } tpk_vk_params;
 
-/* The options checks of tpk_render_cpu (same messages). Returns 0 or -1 with a message. */
+/* The arguments given, tpk_render_check_options (the check of every backend, so the same options are
+ * refused with the same message), then the limits of this renderer's own buffers (each named "Vulkan
+ * limit"). Returns 0 or -1 with a message. */
 int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, const uint8_t *rgba,
                          tpk_diag *diag);
 /* Fill the uniform block for one frame: extent is the marcher's (box padding), face_count the shell's.

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "option_table.h"
 #include "scene.h"
 #include "scene_internal.h"
 
@@ -197,10 +198,10 @@ static int key_version(parser *p, const cJSON *v)
 
 static int key_camera(parser *p, const cJSON *v)
 {
-    static const char *const keys[] = {"eye", "at", "up", "fovy"};
+    const char *keys[4]; /* eye, at, up, fovy */
     tpk_camera *c = &p->out->camera;
     if (need_object(p, v, "camera", "an object {\"eye\", \"at\", \"up\", \"fovy\"}") ||
-        check_keys(p, v, "camera", keys, 4))
+        check_keys(p, v, "camera", keys, tpk_option_scene_keys("camera", keys, 4)))
         return -1;
     double *dst[3] = {c->eye, c->at, c->up};
     for (int k = 0; k < 3; k++) {
@@ -274,22 +275,22 @@ static int tf_file(parser *p, const cJSON *v)
 
 static int key_tf(parser *p, const cJSON *v)
 {
-    static const char *const keys[] = {"preset", "file", "points"};
+    const char *keys[3]; /* preset, file, points */
     char buf[64];
     if (need_object(p, v, "tf", "an object with one of \"preset\", \"file\", \"points\"") ||
-        check_keys(p, v, "tf", keys, 3))
+        check_keys(p, v, "tf", keys, tpk_option_scene_keys("tf", keys, 3)))
         return -1;
     if (cJSON_GetArraySize(v) != 1)
         return fail_key(p, "tf", "expected exactly one of \"preset\", \"file\", \"points\", found %s", shown(v, buf));
     const cJSON *e = v->child;
-    if (!strcmp(e->string, "preset")) {
+    if (!strcmp(e->string, tpk_option_scene_leaf(TPK_OPT_TF_PRESET))) {
         p->out->tf_kind = TPK_SCENE_TF_PRESET;
         if (!cJSON_IsString(e) || !tpk_tf_is_preset(e->valuestring))
             return fail_key(p, "tf.preset", "expected one of %s, found %s", tpk_tf_preset_names(), shown(e, buf));
         snprintf(p->out->tf_source, sizeof p->out->tf_source, "%s", e->valuestring);
         return tpk_tf_load(e->valuestring, &p->out->tf, p->diag);
     }
-    if (!strcmp(e->string, "file")) {
+    if (!strcmp(e->string, tpk_option_scene_leaf(TPK_OPT_TF_FILE))) {
         p->out->tf_kind = TPK_SCENE_TF_FILE;
         return tf_file(p, e);
     }
@@ -382,28 +383,36 @@ static int key_iso_opacity(parser *p, const cJSON *v)
     return 0;
 }
 
+/* The keys of "effects", by their rows of the option table. */
+static const cJSON *effect(const cJSON *effects, tpk_option_id id)
+{
+    return cJSON_GetObjectItemCaseSensitive(effects, tpk_option_scene_leaf(id));
+}
+
 static int key_effects(parser *p, const cJSON *v)
 {
-    static const char *const keys[] = {"shading", "shadows", "light", "ao_rays", "ao_radius"};
+    const char *keys[8]; /* shading, shadows, light, ao_rays, ao_radius */
+    const tpk_option_row *t = tpk_option_table;
     tpk_scene *s = p->out;
-    if (need_object(p, v, "effects", "an object of effects") || check_keys(p, v, "effects", keys, 5))
+    if (need_object(p, v, "effects", "an object of effects") ||
+        check_keys(p, v, "effects", keys, tpk_option_scene_keys("effects", keys, 8)))
         return -1;
     const cJSON *e;
     int rc = 0;
-    if (!rc && (e = cJSON_GetObjectItemCaseSensitive(v, "shading")) && !(rc = boolean(p, e, "effects.shading", &s->shading)))
+    if (!rc && (e = effect(v, TPK_OPT_SHADING)) && !(rc = boolean(p, e, t[TPK_OPT_SHADING].scene_key, &s->shading)))
         s->given |= TPK_SCENE_SHADING;
-    if (!rc && (e = cJSON_GetObjectItemCaseSensitive(v, "shadows")) && !(rc = boolean(p, e, "effects.shadows", &s->shadows)))
+    if (!rc && (e = effect(v, TPK_OPT_SHADOWS)) && !(rc = boolean(p, e, t[TPK_OPT_SHADOWS].scene_key, &s->shadows)))
         s->given |= TPK_SCENE_SHADOWS;
-    if (!rc && (e = cJSON_GetObjectItemCaseSensitive(v, "light")) &&
-        !(rc = numbers(p, e, "effects.light", 3, "a point [x, y, z]", s->light)))
+    if (!rc && (e = effect(v, TPK_OPT_LIGHT)) &&
+        !(rc = numbers(p, e, t[TPK_OPT_LIGHT].scene_key, 3, "a point [x, y, z]", s->light)))
         s->given |= TPK_SCENE_LIGHT;
-    if (!rc && (e = cJSON_GetObjectItemCaseSensitive(v, "ao_rays")) &&
-        !(rc = integer(p, e, "effects.ao_rays", 0, 1024, &s->ao_rays)))
+    if (!rc && (e = effect(v, TPK_OPT_AO_RAYS)) &&
+        !(rc = integer(p, e, t[TPK_OPT_AO_RAYS].scene_key, 0, TPK_RENDER_MAX_AO_RAYS, &s->ao_rays)))
         s->given |= TPK_SCENE_AO_RAYS;
-    if (!rc && (e = cJSON_GetObjectItemCaseSensitive(v, "ao_radius"))) {
-        rc = number(p, e, "effects.ao_radius", "a positive length", &s->ao_radius);
+    if (!rc && (e = effect(v, TPK_OPT_AO_RADIUS))) {
+        rc = number(p, e, t[TPK_OPT_AO_RADIUS].scene_key, "a positive length", &s->ao_radius);
         if (!rc && !(s->ao_radius > 0))
-            rc = fail_key(p, "effects.ao_radius", "expected a positive length, found %g", s->ao_radius);
+            rc = fail_key(p, t[TPK_OPT_AO_RADIUS].scene_key, "expected a positive length, found %g", s->ao_radius);
         s->given |= TPK_SCENE_AO_RADIUS;
     }
     return rc;
@@ -451,47 +460,49 @@ static int key_integration(parser *p, const cJSON *v)
 
 typedef int (*key_fn)(parser *p, const cJSON *v);
 
+/* The parser of each top-level key of the option table, and the TPK_SCENE_* bit it sets (0: none of its
+ * own; effects sets one per effect). */
 static const struct {
-    const char *name;
     key_fn parse;
-    unsigned bit; /* 0: none of its own (effects sets one per effect) */
-} top_keys[] = {
-    {"tetpack_scene", key_version, 0},
-    {"camera", key_camera, TPK_SCENE_CAMERA},
-    {"tf", key_tf, TPK_SCENE_TF},
-    {"field", key_field, TPK_SCENE_FIELD},
-    {"step", key_step, TPK_SCENE_STEP},
-    {"steps", key_steps, TPK_SCENE_STEP},
-    {"range", key_range, TPK_SCENE_RANGE},
-    {"unit_distance", key_unit_distance, TPK_SCENE_UNIT_DISTANCE},
-    {"clip_box", key_clip_box, TPK_SCENE_CLIP},
-    {"iso", key_iso, TPK_SCENE_ISO},
-    {"iso_opacity", key_iso_opacity, TPK_SCENE_ISO_OPACITY},
-    {"effects", key_effects, 0},
-    {"layout", key_layout, TPK_SCENE_LAYOUT},
-    {"size", key_size, TPK_SCENE_SIZE},
-    {"backend", key_backend, TPK_SCENE_BACKEND},
-    {"integration", key_integration, TPK_SCENE_INTEGRATION},
+    unsigned bit;
+} top_keys[TPK_OPT_COUNT] = {
+    [TPK_OPT_VERSION] = {key_version, 0},
+    [TPK_OPT_CAMERA] = {key_camera, TPK_SCENE_CAMERA},
+    [TPK_OPT_TF] = {key_tf, TPK_SCENE_TF},
+    [TPK_OPT_FIELD] = {key_field, TPK_SCENE_FIELD},
+    [TPK_OPT_STEP] = {key_step, TPK_SCENE_STEP},
+    [TPK_OPT_STEPS] = {key_steps, TPK_SCENE_STEP},
+    [TPK_OPT_RANGE] = {key_range, TPK_SCENE_RANGE},
+    [TPK_OPT_UNIT_DISTANCE] = {key_unit_distance, TPK_SCENE_UNIT_DISTANCE},
+    [TPK_OPT_CLIP_BOX] = {key_clip_box, TPK_SCENE_CLIP},
+    [TPK_OPT_ISO] = {key_iso, TPK_SCENE_ISO},
+    [TPK_OPT_ISO_OPACITY] = {key_iso_opacity, TPK_SCENE_ISO_OPACITY},
+    [TPK_OPT_EFFECTS] = {key_effects, 0},
+    [TPK_OPT_LAYOUT] = {key_layout, TPK_SCENE_LAYOUT},
+    [TPK_OPT_SIZE] = {key_size, TPK_SCENE_SIZE},
+    [TPK_OPT_BACKEND] = {key_backend, TPK_SCENE_BACKEND},
+    [TPK_OPT_INTEGRATION] = {key_integration, TPK_SCENE_INTEGRATION},
 };
-#define TOP_KEY_COUNT (int)(sizeof top_keys / sizeof top_keys[0])
 
 static int parse_root(parser *p, const cJSON *root)
 {
-    const char *names[TOP_KEY_COUNT];
-    for (int i = 0; i < TOP_KEY_COUNT; i++)
-        names[i] = top_keys[i].name;
+    const char *names[TPK_OPT_COUNT];
+    int count = tpk_option_scene_keys("", names, TPK_OPT_COUNT);
     char buf[64];
     if (!cJSON_IsObject(root))
         return tpk_diag_fail(p->diag, "%s:1:1: expected a JSON object at the top of a scene, found %s", p->name,
                              shown(root, buf));
-    if (check_keys(p, root, "", names, TOP_KEY_COUNT))
+    if (check_keys(p, root, "", names, count))
         return -1;
     if (cJSON_GetObjectItemCaseSensitive(root, "step") && cJSON_GetObjectItemCaseSensitive(root, "steps"))
         return fail_key(p, "steps", "a scene gives either 'step' (one) or 'steps' (a range), not both");
-    for (int i = 0; i < TOP_KEY_COUNT; i++) {
-        const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, top_keys[i].name);
+    for (int i = 0; i < TPK_OPT_COUNT; i++) {
+        const char *key = tpk_option_table[i].scene_key;
+        const cJSON *v = key && !strchr(key, '.') ? cJSON_GetObjectItemCaseSensitive(root, key) : NULL;
         if (!v)
             continue;
+        if (!top_keys[i].parse) /* a key of the table this reader has no parser for: a bug, said as such */
+            return fail_key(p, key, "no reader for this key (tools/scene/scene_parse.c)");
         if (top_keys[i].parse(p, v) != 0)
             return -1;
         p->out->given |= top_keys[i].bit;

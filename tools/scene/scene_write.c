@@ -6,7 +6,10 @@
 #include <string.h>
 
 #include "base/output_file.h"
+#include "option_table.h"
 #include "scene.h"
+
+#define KEY(id) tpk_option_scene_leaf(id) /* key names from the option table */
 
 /* A number in the shortest form that reads back exactly. cJSON's own printer accepts a 15-digit form
  * that is only within an epsilon (0.30000000000000004 comes out as 0.3), so the text is made here. */
@@ -35,26 +38,26 @@ static void add_numbers(cJSON *obj, const char *key, const double *v, int n)
 
 static void add_camera(cJSON *root, const tpk_camera *c)
 {
-    cJSON *cam = cJSON_AddObjectToObject(root, "camera");
+    cJSON *cam = cJSON_AddObjectToObject(root, KEY(TPK_OPT_CAMERA));
     if (!cam)
         return;
-    add_numbers(cam, "eye", c->eye, 3);
-    add_numbers(cam, "at", c->at, 3);
-    add_numbers(cam, "up", c->up, 3);
-    add_number(cam, "fovy", c->fovy_deg);
+    add_numbers(cam, KEY(TPK_OPT_CAMERA_EYE), c->eye, 3);
+    add_numbers(cam, KEY(TPK_OPT_CAMERA_AT), c->at, 3);
+    add_numbers(cam, KEY(TPK_OPT_CAMERA_UP), c->up, 3);
+    add_number(cam, KEY(TPK_OPT_CAMERA_FOVY), c->fovy_deg);
 }
 
 /* A preset by name; a TF from a file or inline as its points, so the scene needs no other file. */
 static void add_tf(cJSON *root, const tpk_scene *s)
 {
-    cJSON *tf = cJSON_AddObjectToObject(root, "tf");
+    cJSON *tf = cJSON_AddObjectToObject(root, KEY(TPK_OPT_TF));
     if (!tf)
         return;
     if (s->tf_kind == TPK_SCENE_TF_PRESET) {
-        cJSON_AddStringToObject(tf, "preset", s->tf_source);
+        cJSON_AddStringToObject(tf, KEY(TPK_OPT_TF_PRESET), s->tf_source);
         return;
     }
-    cJSON *points = cJSON_AddArrayToObject(tf, "points");
+    cJSON *points = cJSON_AddArrayToObject(tf, KEY(TPK_OPT_TF_POINTS));
     for (int i = 0; points && i < s->tf.count; i++) {
         const tpk_tf_point *q = &s->tf.points[i];
         double row[5] = {q->s, q->r, q->g, q->b, q->a};
@@ -70,19 +73,19 @@ static void add_effects(cJSON *root, const tpk_scene *s)
     unsigned bits = TPK_SCENE_SHADING | TPK_SCENE_SHADOWS | TPK_SCENE_LIGHT | TPK_SCENE_AO_RAYS | TPK_SCENE_AO_RADIUS;
     if (!(s->given & bits))
         return;
-    cJSON *fx = cJSON_AddObjectToObject(root, "effects");
+    cJSON *fx = cJSON_AddObjectToObject(root, KEY(TPK_OPT_EFFECTS));
     if (!fx)
         return;
     if (s->given & TPK_SCENE_SHADING)
-        cJSON_AddBoolToObject(fx, "shading", s->shading);
+        cJSON_AddBoolToObject(fx, KEY(TPK_OPT_SHADING), s->shading);
     if (s->given & TPK_SCENE_SHADOWS)
-        cJSON_AddBoolToObject(fx, "shadows", s->shadows);
+        cJSON_AddBoolToObject(fx, KEY(TPK_OPT_SHADOWS), s->shadows);
     if (s->given & TPK_SCENE_LIGHT)
-        add_numbers(fx, "light", s->light, 3);
+        add_numbers(fx, KEY(TPK_OPT_LIGHT), s->light, 3);
     if (s->given & TPK_SCENE_AO_RAYS)
-        cJSON_AddNumberToObject(fx, "ao_rays", s->ao_rays);
+        cJSON_AddNumberToObject(fx, KEY(TPK_OPT_AO_RAYS), s->ao_rays);
     if (s->given & TPK_SCENE_AO_RADIUS)
-        add_number(fx, "ao_radius", s->ao_radius);
+        add_number(fx, KEY(TPK_OPT_AO_RADIUS), s->ao_radius);
 }
 
 static const char *layout_name(tpk_layout layout)
@@ -93,40 +96,41 @@ static const char *layout_name(tpk_layout layout)
 static void add_selection(cJSON *root, const tpk_scene *s)
 {
     if (s->given & TPK_SCENE_FIELD)
-        cJSON_AddStringToObject(root, "field", s->field);
+        cJSON_AddStringToObject(root, KEY(TPK_OPT_FIELD), s->field);
     if ((s->given & TPK_SCENE_STEP) && !s->step_range)
-        cJSON_AddNumberToObject(root, "step", s->step_first);
+        cJSON_AddNumberToObject(root, KEY(TPK_OPT_STEP), s->step_first);
     if ((s->given & TPK_SCENE_STEP) && s->step_range) {
         double steps[2] = {s->step_first, s->step_last};
-        add_numbers(root, "steps", steps, 2);
+        add_numbers(root, KEY(TPK_OPT_STEPS), steps, 2);
     }
     if (s->given & TPK_SCENE_RANGE)
-        add_numbers(root, "range", s->range, 2);
+        add_numbers(root, KEY(TPK_OPT_RANGE), s->range, 2);
     if (s->given & TPK_SCENE_UNIT_DISTANCE)
-        add_number(root, "unit_distance", s->unit_distance);
+        add_number(root, KEY(TPK_OPT_UNIT_DISTANCE), s->unit_distance);
     if (s->given & TPK_SCENE_CLIP) {
         double box[6] = {s->clip_min[0], s->clip_min[1], s->clip_min[2], s->clip_max[0], s->clip_max[1], s->clip_max[2]};
-        add_numbers(root, "clip_box", box, 6);
+        add_numbers(root, KEY(TPK_OPT_CLIP_BOX), box, 6);
     }
     if (s->given & TPK_SCENE_ISO)
-        add_numbers(root, "iso", s->iso, s->iso_count);
+        add_numbers(root, KEY(TPK_OPT_ISO), s->iso, s->iso_count);
     if (s->given & TPK_SCENE_ISO_OPACITY)
-        add_number(root, "iso_opacity", s->iso_opacity);
+        add_number(root, KEY(TPK_OPT_ISO_OPACITY), s->iso_opacity);
 }
 
 static void add_output(cJSON *root, const tpk_scene *s)
 {
     if (s->given & TPK_SCENE_LAYOUT)
-        cJSON_AddStringToObject(root, "layout", layout_name(s->layout));
+        cJSON_AddStringToObject(root, KEY(TPK_OPT_LAYOUT), layout_name(s->layout));
     if (s->given & TPK_SCENE_SIZE) {
         double size[2] = {s->width, s->height};
-        add_numbers(root, "size", size, 2);
+        add_numbers(root, KEY(TPK_OPT_SIZE), size, 2);
     }
     if (s->given & TPK_SCENE_BACKEND)
-        cJSON_AddStringToObject(root, "backend", s->backend == TPK_SCENE_BACKEND_VULKAN ? "vulkan" : "cpu");
+        cJSON_AddStringToObject(root, KEY(TPK_OPT_BACKEND), s->backend == TPK_SCENE_BACKEND_VULKAN ? "vulkan" : "cpu");
     if (s->given & TPK_SCENE_INTEGRATION)
-        cJSON_AddStringToObject(root, "integration", s->integration == TPK_INTEGRATION_MIDPOINT ? "midpoint"
-                                                     : s->integration == TPK_INTEGRATION_SAMPLED ? "sampled" : "exact");
+        cJSON_AddStringToObject(root, KEY(TPK_OPT_INTEGRATION), s->integration == TPK_INTEGRATION_MIDPOINT ? "midpoint"
+                                                                : s->integration == TPK_INTEGRATION_SAMPLED ? "sampled"
+                                                                                                             : "exact");
 }
 
 /* Top-level keys the text must have: the version, one per given bit, and one "effects" for five bits. */
@@ -144,7 +148,7 @@ char *tpk_scene_to_json(const tpk_scene *s)
     cJSON *root = cJSON_CreateObject();
     if (!root)
         return NULL;
-    cJSON_AddNumberToObject(root, "tetpack_scene", TPK_SCENE_VERSION);
+    cJSON_AddNumberToObject(root, KEY(TPK_OPT_VERSION), TPK_SCENE_VERSION);
     if (s->given & TPK_SCENE_CAMERA)
         add_camera(root, &s->camera);
     if (s->given & TPK_SCENE_TF)
