@@ -7,44 +7,7 @@
 #include <xxhash.h>
 
 #include "tetpack.h"
-
-#define FUZZ_MAX_CHUNK_BYTES (1u << 20)
-
-static void read_chunks(tpk_file *file)
-{
-    tpk_file_info info;
-    if (tpk_get_info(file, &info) != TPK_OK)
-        return;
-    for (uint64_t i = 0; i < info.chunk_count; i++) {
-        tpk_dir_entry e;
-        if (tpk_get_chunk(file, i, &e) != TPK_OK || e.raw_size > FUZZ_MAX_CHUNK_BYTES)
-            continue;
-        void *dst = malloc(e.raw_size ? (size_t)e.raw_size : 1);
-        if (dst)
-            tpk_read_chunk(file, i, dst, e.raw_size);
-        free(dst);
-        const void *view;
-        uint64_t view_size;
-        tpk_view_chunk(file, i, &view, &view_size);
-    }
-}
-
-static void use_file(tpk_file *file)
-{
-    static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
-    tpk_verify(file);
-    for (int k = 0; k < 3; k++) {
-        tpk_mesh_arrays arrays;
-        tpk_load_arrays(file, layouts[k], NULL, 0, &arrays);
-    }
-    for (uint32_t f = 0; f < tpk_field_count(file); f++) {
-        tpk_field_desc desc;
-        double time;
-        if (tpk_get_field(file, f, &desc) == TPK_OK)
-            tpk_get_time(file, desc.step_count - 1, &time);
-    }
-    read_chunks(file);
-}
+#include "tpk_input.h"
 
 /* Recompute the checksums of uncompressed chunks, the directory and the header where they lie in range. */
 static void fix_checksums(uint8_t *bytes, size_t size)
@@ -82,7 +45,7 @@ static void try_input(const uint8_t *data, size_t size)
         char err[256];
         if (tpk_open_memory(&file, data, size, &options, err, sizeof err) != TPK_OK)
             continue;
-        use_file(file);
+        tpk_fuzz_use_tpk(file);
         tpk_close(file);
     }
 }

@@ -9,8 +9,6 @@
 #include "support.h"
 #include "tetpack.h"
 
-#define FUZZ_MAX_CHUNK_BYTES (1u << 20)
-
 static void read_chunks(tpk_file *file, uint64_t chunk_count)
 {
     for (uint64_t i = 0; i < chunk_count; i++) {
@@ -27,7 +25,7 @@ static void read_chunks(tpk_file *file, uint64_t chunk_count)
     }
 }
 
-static void use_file(tpk_file *file)
+void tpk_fuzz_use_tpk(tpk_file *file)
 {
     static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
     tpk_verify(file);
@@ -85,7 +83,7 @@ void tpk_fuzz_tpk_input(const uint8_t *data, size_t size)
         char err[256];
         if (tpk_open_memory(&file, data, size, &options, err, sizeof err) != TPK_OK)
             continue;
-        use_file(file);
+        tpk_fuzz_use_tpk(file);
         if (k == 0)
             check_file(file);
         tpk_close(file);
