@@ -1,8 +1,12 @@
 /* Clocks for the benchmarks: wall time, and CPU time of the whole process (all threads), which is the
- * steadier measure on a shared, loaded machine. */
+ * steadier measure on a shared, loaded machine; the median of timings and the PSNR of two images. */
 #ifndef TPK_BENCH_CLOCK_H
 #define TPK_BENCH_CLOCK_H
 
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
 #include <time.h>
 
 static inline double bench_clock(clockid_t id)
@@ -20,6 +24,28 @@ static inline double now(void)
 static inline double cpu_now(void)
 {
     return bench_clock(CLOCK_PROCESS_CPUTIME_ID);
+}
+
+static inline int bench_compare_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The median of n values (sorts them: v[0] is then the fastest). */
+static inline double bench_median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, bench_compare_double);
+    return v[n / 2];
+}
+
+/* PSNR in dB of two byte images of n bytes (99 when equal). */
+static inline double bench_psnr(const uint8_t *a, const uint8_t *b, size_t n)
+{
+    double se = 0;
+    for (size_t i = 0; i < n; i++)
+        se += ((double)a[i] - b[i]) * ((double)a[i] - b[i]);
+    return se == 0 ? 99.0 : 10.0 * log10(255.0 * 255.0 / (se / (double)n));
 }
 
 #endif

@@ -15,26 +15,6 @@
 #include "render_vk/render_vk.h"
 #include "tetpack.h"
 
-static int compare_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, compare_double);
-    return v[n / 2];
-}
-
-static double psnr(const uint8_t *a, const uint8_t *b, size_t n)
-{
-    double se = 0;
-    for (size_t i = 0; i < n; i++)
-        se += ((double)a[i] - b[i]) * ((double)a[i] - b[i]);
-    return se == 0 ? 99.0 : 10.0 * log10(255.0 * 255.0 / (se / (double)n));
-}
-
 /* An effect set by name: ea, shading, shadows, ao4 (AO with 4 rays), all. */
 static int set_effects(tpk_render_options *opt, const char *name)
 {
@@ -70,7 +50,7 @@ static int bench_effect(tpk_vk_renderer *r, const tpk_mesh_arrays *mesh, tpk_ren
         wall[f] = st.seconds;
         gpu[f] = st.gpu_seconds;
     }
-    double wall_s = median(wall, b->frames), gpu_s = median(gpu, b->frames), db = -1, cpu_s = -1;
+    double wall_s = bench_median(wall, b->frames), gpu_s = bench_median(gpu, b->frames), db = -1, cpu_s = -1;
     const char *no_psnr = getenv("TPK_GPU_PSNR");
     if (!(no_psnr && !strcmp(no_psnr, "0"))) {
         tpk_render_stats cs;
@@ -78,7 +58,7 @@ static int bench_effect(tpk_vk_renderer *r, const tpk_mesh_arrays *mesh, tpk_ren
             fprintf(stderr, "cpu: %s\n", diag.message);
             return -1;
         }
-        db = psnr(b->cpu, b->vk, (size_t)opt->width * (size_t)opt->height * 4);
+        db = bench_psnr(b->cpu, b->vk, (size_t)opt->width * (size_t)opt->height * 4);
         cpu_s = cs.seconds;
     }
     double per_s = (double)st.tet_steps / (gpu_s > 0 ? gpu_s : wall_s);

@@ -17,26 +17,6 @@
 #include "render_vk/render_vk.h"
 #include "tetpack.h"
 
-static int compare_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, compare_double);
-    return v[n / 2];
-}
-
-static double psnr(const uint8_t *a, const uint8_t *b, size_t n)
-{
-    double se = 0;
-    for (size_t i = 0; i < n; i++)
-        se += ((double)a[i] - b[i]) * ((double)a[i] - b[i]);
-    return se == 0 ? 99.0 : 10.0 * log10(255.0 * 255.0 / (se / (double)n));
-}
-
 /* Median CPU frame seconds over `frames` renders; steps of the last. */
 static int bench_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, int frames, uint8_t *img,
                      double *seconds, double *cpu_seconds, uint64_t *steps)
@@ -54,8 +34,8 @@ static int bench_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
         t[f] = st.seconds;
         *steps = st.tet_steps;
     }
-    *seconds = median(t, frames);
-    *cpu_seconds = median(c, frames);
+    *seconds = bench_median(t, frames);
+    *cpu_seconds = bench_median(c, frames);
     return 0;
 }
 
@@ -84,8 +64,8 @@ static int bench_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *o
     if (rc != 0)
         fprintf(stderr, "vulkan: %s\n", diag.message);
     else {
-        *seconds = median(t, frames);
-        *cpu_seconds = median(c, frames);
+        *seconds = bench_median(t, frames);
+        *cpu_seconds = bench_median(c, frames);
     }
     snprintf(device, device_size, "%s", tpk_vk_renderer_device(r));
     tpk_vk_renderer_destroy(r);
@@ -113,7 +93,7 @@ static int bench_layout(tpk_file *file, tpk_layout layout, const char *name, tpk
                (double)cpu_steps / cpu_s, device, vk_setup, vk_s, (double)vk_steps / vk_s,
                ((double)vk_steps / vk_s) / ((double)cpu_steps / cpu_s), (unsigned long long)cpu_steps,
                (unsigned long long)vk_steps, cpu_c, vk_c, ((double)vk_steps / vk_c) / ((double)cpu_steps / cpu_c),
-               psnr(a, b, n));
+               bench_psnr(a, b, n));
         fflush(stdout);
         rc = 0;
     }

@@ -104,10 +104,4 @@ static inline void bench_scene_setup(bi_scene *sc, const bench_scene_mesh *m, co
     bi_scene_camera(sc, &cam);
 }
 
-static inline int bench_compare_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 #endif
