@@ -136,8 +136,8 @@ static void warn_empty(iso_job *j, const tpk_iso_surface *s)
             continue;
         double v = s->values[i];
         if (v < j->desc.min_value || v > j->desc.max_value)
-            tpk_diag_warn(j->diag, "%s: value %g is outside field '%s''s range [%g, %g]: its surface is empty",
-                          j->o->input, v, j->desc.name, j->desc.min_value, j->desc.max_value);
+            tpk_diag_warn(j->diag, "%s: value %g is outside the range [%g, %g] of field '%s': its surface is empty",
+                          j->o->input, v, j->desc.min_value, j->desc.max_value, j->desc.name);
         else
             tpk_diag_warn(j->diag, "%s: value %g crosses no tet of field '%s' at step %u: its surface is empty",
                           j->o->input, v, j->desc.name, j->o->step);
