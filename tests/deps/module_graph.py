@@ -32,7 +32,7 @@ FOLDER_ORDER = (
     ("mesher",),
     ("import",),
     ("convert",),
-    ("check", "export", "render"),
+    ("check", "export", "iso", "render"),
     ("render_vk", "scene"),
     ("extract", "view"),
     ("cli",),

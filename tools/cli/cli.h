@@ -16,6 +16,7 @@ int tpk_cmd_render(int argc, char **argv);
 int tpk_cmd_view(int argc, char **argv);
 int tpk_cmd_extract(int argc, char **argv);
 int tpk_cmd_export(int argc, char **argv);
+int tpk_cmd_iso(int argc, char **argv);
 int tpk_cmd_check(int argc, char **argv);
 int tpk_cmd_formats(int argc, char **argv);
 /* `tetpack info` on a part set's manifest (cmd_info_set.c); json: --json. Returns the exit code. */

@@ -17,6 +17,7 @@ static const struct {
     {"view", tpk_cmd_view, "a window that renders a .tpk as you orbit, zoom and change what it shows"},
     {"extract", tpk_cmd_extract, "keep only what a scene needs (layout, field, steps, clip box) in a smaller .tpk"},
     {"export", tpk_cmd_export, "write a .tpk's tets and fields as VTU, or its shell as PLY"},
+    {"iso", tpk_cmd_iso, "extract isosurfaces of a point field as triangles: PLY, OBJ or glTF binary (.glb)"},
     {"check", tpk_cmd_check, "validate a mesh or a .tpk file: connectivity, degeneracies, spec MUSTs"},
     {"formats", tpk_cmd_formats, "list the input formats convert and check read (--json for tools)"},
 };
