@@ -1,4 +1,4 @@
-/* tetpack export: a .tpk's tets and fields as VTU, its shell as PLY, OBJ, OFF or STL. */
+/* tetpack export: a .tpk's tets and fields as VTU or VTKHDF, its shell as PLY, OBJ, OFF or STL. */
 #include <string.h>
 #include <sys/stat.h>
 
@@ -7,10 +7,13 @@
 #include "export/exporters.h"
 
 static const char export_help[] =
-    "usage: tetpack export FILE.tpk [--vtu OUT.vtu] [--shell OUT.ply|.obj|.off|.stl]\n"
+    "usage: tetpack export FILE.tpk [--vtu OUT.vtu] [--vtkhdf OUT.vtkhdf] [--shell OUT.ply|.obj|.off|.stl]\n"
     "\n"
     "  --vtu OUT.vtu     tets (positive vertex order), points in world coordinates, every field and\n"
     "                    time step, and the tet->source-cell map; opens in ParaView and meshio\n"
+    "  --vtkhdf OUT      the same as VTKHDF (VTK's HDF5 format): one step as Version 1.0, which VTK 9.1\n"
+    "                    and later read; several as Version 2.0 with a Steps group (VTK 9.3 and later\n"
+    "                    read the steps, 9.1 and 9.2 only the first). Needs a build with HDF5\n"
     "  --shell OUT.EXT   the boundary faces, outward (counter-clockwise seen from outside), only the\n"
     "                    vertices they use, in world coordinates; the format from the extension:\n"
     "                      .ply  binary, float64 positions and a per-face 'tet' property\n"
@@ -35,7 +38,7 @@ static int same_output(const char *a, const char *b)
 
 int tpk_cmd_export(int argc, char **argv)
 {
-    const char *path = NULL, *vtu = NULL, *shell = NULL;
+    const char *path = NULL, *vtu = NULL, *vtkhdf = NULL, *shell = NULL;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
         if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
@@ -44,6 +47,9 @@ int tpk_cmd_export(int argc, char **argv)
         } else if (!strncmp(arg, "--vtu", 5)) {
             if (!(vtu = tpk_cli_value(argc, argv, &i, "--vtu")))
                 return tpk_cli_fail("export", "--vtu expects an output path");
+        } else if (!strncmp(arg, "--vtkhdf", 8)) {
+            if (!(vtkhdf = tpk_cli_value(argc, argv, &i, "--vtkhdf")))
+                return tpk_cli_fail("export", "--vtkhdf expects an output path");
         } else if (!strncmp(arg, "--shell", 7)) {
             if (!(shell = tpk_cli_value(argc, argv, &i, "--shell")))
                 return tpk_cli_fail("export", "--shell expects an output path");
@@ -55,13 +61,18 @@ int tpk_cmd_export(int argc, char **argv)
             return tpk_cli_fail("export", "expected one FILE.tpk, found a second argument '%s'", arg);
         }
     }
-    if (!path || (!vtu && !shell))
-        return tpk_cli_fail("export", "expected FILE.tpk and --vtu OUT.vtu and/or --shell OUT.ply|.obj|.off|.stl");
-    if (vtu && shell && same_output(vtu, shell))
-        return tpk_cli_fail("export", "--vtu '%s' and --shell '%s' name the same file; the second would replace "
-                            "the first: choose two paths", vtu, shell);
+    if (!path || (!vtu && !vtkhdf && !shell))
+        return tpk_cli_fail("export", "expected FILE.tpk and one or more of --vtu OUT.vtu, --vtkhdf OUT.vtkhdf, "
+                            "--shell OUT.ply|.obj|.off|.stl");
+    const char *outputs[3] = {vtu, vtkhdf, shell}, *option[3] = {"--vtu", "--vtkhdf", "--shell"};
+    for (int a = 0; a < 3; a++)
+        for (int b = a + 1; b < 3; b++)
+            if (outputs[a] && outputs[b] && same_output(outputs[a], outputs[b]))
+                return tpk_cli_fail("export", "%s '%s' and %s '%s' name the same file; the second would replace "
+                                    "the first: choose two paths", option[a], outputs[a], option[b], outputs[b]);
     tpk_output_input input = {.arg = "FILE.tpk", .given = path};
     if ((vtu && tpk_cli_check_output("export", "--vtu", vtu, &input, 1)) ||
+        (vtkhdf && tpk_cli_check_output("export", "--vtkhdf", vtkhdf, &input, 1)) ||
         (shell && tpk_cli_check_output("export", "--shell", shell, &input, 1)))
         return TPK_EXIT_USAGE;
     tpk_file *file = NULL;
@@ -79,6 +90,8 @@ int tpk_cmd_export(int argc, char **argv)
     int rc = 0;
     if (vtu)
         rc = tpk_export_vtu(file, vtu, &diag);
+    if (rc == 0 && vtkhdf)
+        rc = tpk_export_vtkhdf(file, vtkhdf, &diag);
     if (rc == 0 && shell)
         rc = tpk_export_shell(file, shell, &diag);
     tpk_close(file);

@@ -1,4 +1,4 @@
-/* Exporters from a loaded .tpk: VTU (tets + fields, for ParaView and meshio) and the shell as PLY, OBJ,
+/* Exporters from a loaded .tpk: VTU and VTKHDF (tets + fields, for ParaView and meshio) and the shell as PLY, OBJ,
  * OFF or STL. Written atomically (temporary file, then rename). */
 #ifndef TPK_EXPORTERS_H
 #define TPK_EXPORTERS_H
@@ -11,6 +11,13 @@
 /* All tets (vertex order positive), positions (origin added back, float64), every field (all steps
  * as NAME, or NAME_t0, NAME_t1, ... when there are several), and the tet->source cell map as cell data "source_cell" when present. */
 int tpk_export_vtu(tpk_file *file, const char *path, tpk_diag *diag);
+
+/* The same content as VTKHDF (VTK's HDF5 format; export_vtkhdf.c): Version 1.0 for one step, which every
+ * vtkHDFReader (VTK 9.1 on) reads; with several steps Version 2.0 and a Steps group (VTK 9.3 on reads the
+ * steps; 9.1 and 9.2 only step 0). Each field one array (float32, a column per component) with every
+ * step's values one after another; source_point and source_cell as Int32. Built in memory by HDF5, then
+ * written atomically. Without HDF5 (TETPACK_WITH_HDF5=OFF) it says so. */
+int tpk_export_vtkhdf(tpk_file *file, const char *path, tpk_diag *diag);
 
 /* The shell of a .tpk as a triangle mesh: only the vertices the shell uses, renumbered in ascending id
  * order, in world coordinates (origin + float32 position, as doubles); faces outward, in the file's

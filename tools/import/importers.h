@@ -105,6 +105,18 @@ int tpk_import_xdmf_sniff(const char *head, size_t got);
 /* Same from memory (for fuzzing): XML DataItems only, HDF data refused. */
 int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
+/* VTKHDF (.vtkhdf, .hdf; VTK's HDF5 format) through the HDF5 C library: Type UnstructuredGrid, Version 1
+ * and 2; the partitions of a step merged into one mesh (points of different partitions with equal
+ * coordinates become one); volume cells as tpk_cell_rule_for keeps them, polyhedra from
+ * FaceConnectivity/FaceOffsets/PolyhedronToFaces/PolyhedronOffsets; PointData and CellData as fields, a
+ * step per Steps entry with Steps/Values as times (every step must have the same mesh). Built with
+ * TETPACK_WITH_HDF5 (TPK_HAVE_HDF5); without it the readers say so. The memory form opens the bytes
+ * as an HDF5 file image (the core driver, a copy). tpk_import_vtkhdf_probe: `path` is an HDF5 file with
+ * a /VTKHDF group (detection of files without the extension). */
+int tpk_import_vtkhdf(const char *path, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_vtkhdf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
+int tpk_import_vtkhdf_probe(const char *path);
+
 /* OpenFOAM case directories: `path` is the case, its constant/polyMesh, or a file in the case (ParaView's
  * CASE.foam). constant/polyMesh's points, faces (faceList or faceCompactList), owner and neighbour, ASCII
  * or binary (arch "LSB;label=32;scalar=64"), each plain or .gz; every cell a polyhedron (VTK 42) with
@@ -150,6 +162,10 @@ typedef struct tpk_import_format {
      * "<?xml"), and detection asks it before any magic, so a row claims the files it recognises (XDMF's
      * "<?xml ... <Xdmf" before VTU's "<?xml"). */
     int (*sniff)(const char *head, size_t n);
+    /* NULL, or a look into the file itself where the first bytes cannot tell (a container such as HDF5):
+     * detection asks it, for a file whose first bytes match `magic` and whose extension no row takes,
+     * before trying rows by magic (VTKHDF's /VTKHDF group before Exodus's "\x89HDF"). */
+    int (*probe)(const char *path);
     /* The file reader; NULL for TetGen readings, which go through tpk_import_surface. */
     int (*read)(const char *path, tpk_mesh *out, tpk_diag *diag);
     /* Parses a whole file held in memory, nothing else (no TetGen); NULL: none. Each format that has one

@@ -78,6 +78,12 @@ static const tpk_import_format formats[] = {
     {.name = "inp", .aliases = "abaqus calculix", .title = "Abaqus / CalculiX .inp: solids, element sets, includes",
      .extensions = ".inp", .magic = "*HEADING|*NODE", .read = tpk_import_inp, .read_memory = tpk_import_inp_memory,
      .supports = TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_CELL_FIELDS | GZ},
+    /* The HDF5 signature is Exodus's (netCDF-4) and CGNS's too: .vtkhdf and .hdf by extension, other names
+     * by the probe (an HDF5 file with a /VTKHDF group). */
+    {.name = "vtkhdf", .title = "VTKHDF (VTK's HDF5 format) UnstructuredGrid 1.x, 2.x: partitions, steps, polyhedra",
+     .extensions = ".vtkhdf .hdf", .magic = "\x89HDF\r\n\x1a\n", .probe = tpk_import_vtkhdf_probe,
+     .read = tpk_import_vtkhdf, .read_memory = tpk_import_vtkhdf_memory,
+     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
     {.name = "xdmf", .title = "XDMF 2 and 3 (meshio, FEniCS/dolfinx): XML or HDF5 data, temporal collections",
      .extensions = ".xdmf .xmf", .magic = "<Xdmf", .sniff = tpk_import_xdmf_sniff, .read = tpk_import_xdmf,
      .read_memory = tpk_import_xdmf_memory, .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
@@ -184,14 +190,18 @@ static int sniff_passes(const tpk_import_format *row, const char *head, size_t g
     return !row->sniff || row->sniff(head, got);
 }
 
-/* The row for a file named `name` (its extension) starting with head[0..got). */
-static const tpk_import_format *detect_row(const char *name, const char *head, size_t got)
+/* The row for a file named `name` (its extension) starting with head[0..got); `path`, when not NULL, is
+ * the file for the rows' probes. */
+static const tpk_import_format *detect_row(const char *name, const char *path, const char *head, size_t got)
 {
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (has_any_extension(name, formats[i].extensions) && sniff_passes(&formats[i], head, got))
             return &formats[i];
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (formats[i].sniff && formats[i].sniff(head, got))
+            return &formats[i];
+    for (size_t i = 0; path && i < FORMAT_COUNT; i++)
+        if (formats[i].probe && magic_matches(formats[i].magic, head, got) && formats[i].probe(path))
             return &formats[i];
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (magic_matches(formats[i].magic, head, got) && sniff_passes(&formats[i], head, got))
@@ -206,14 +216,14 @@ const tpk_import_format *tpk_import_format_detect(const char *path)
     if (gzipped(path)) {
         char inner[4096];
         snprintf(inner, sizeof inner, "%.*s", (int)strlen(path) - 3, path);
-        return detect_row(inner, head, tpk_gzip_head(path, head, TPK_IMPORT_HEAD_BYTES));
+        return detect_row(inner, NULL, head, tpk_gzip_head(path, head, TPK_IMPORT_HEAD_BYTES));
     }
     FILE *f = fopen(path, "rb");
     if (f) {
         got = fread(head, 1, TPK_IMPORT_HEAD_BYTES, f);
         fclose(f);
     }
-    return detect_row(path, head, got);
+    return detect_row(path, path, head, got);
 }
 
 const char *tpk_import_format_names(char *buf, size_t cap)
