@@ -188,6 +188,9 @@ def importer_sources(tetpack, data, source_dir, folder):
             sources.append((fmt, files, []))
     sources.append(("ugrid", [mutations.write_binary_ugrid(os.path.join(data, REAL_INPUTS["ugrid"][0]), folder)], []))
     sources.append(("pvd", mutations.write_pvd(tetpack, data, folder), []))
+    if any(f["name"] == "vtkhdf" for f in json.loads(subprocess.run(
+            [tetpack, "formats", "--json"], check=True, capture_output=True).stdout)["formats"]):
+        sources.append(("vtkhdf", [mutations.write_vtkhdf(tetpack, data, folder)], []))
     surfaces = mutations.write_surfaces(folder)
     for fmt, paths in surfaces.items():
         sources += [(fmt, [p], []) for p in paths]

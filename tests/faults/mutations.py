@@ -158,6 +158,15 @@ def write_pvd(tetpack, data, folder):
     return [path, os.path.join(folder, "step0.vtu"), os.path.join(folder, "step1.vtu")]
 
 
+def write_vtkhdf(tetpack, data, folder):
+    """A VTKHDF file (HDF5) written by `tetpack export --vtkhdf` from a real mesh with a point field."""
+    tpk = os.path.join(folder, "cylinder_vtkhdf.tpk")
+    subprocess.run([tetpack, "convert", os.path.join(data, "sfepy/cylinder.vtk"), tpk, "--quiet"], check=True)
+    path = os.path.join(folder, "cylinder.vtkhdf")
+    subprocess.run([tetpack, "export", tpk, "--vtkhdf", path], check=True)
+    return path
+
+
 def write_binary_ugrid(ascii_path, folder):
     """The ASCII UGRID file as little-endian binary (.lb8.ugrid: int32 and float64): 7 counts, the node
     coordinates, then every other number an integer."""
