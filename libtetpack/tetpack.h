@@ -13,6 +13,11 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+/* The library is built with -fvisibility=hidden: what this header declares is all that the shared
+ * libtetpack exports (internal_*.h stays hidden). */
+#if defined(__GNUC__)
+#pragma GCC visibility push(default)
+#endif
 
 #define TPK_LIBRARY_VERSION "1.0.0"
 
@@ -342,6 +347,9 @@ tpk_result tpk_set_march_ray(const tpk_set_marcher *marcher, const double org[3]
                              double tmin, double tmax, tpk_segment_fn fn, void *user, uint32_t *segment_part,
                              tpk_march_stats *stats);
 
+#if defined(__GNUC__)
+#pragma GCC visibility pop
+#endif
 #ifdef __cplusplus
 }
 #endif

@@ -1,5 +1,6 @@
 """The Python samples run as written, and the module works after `cmake --install` with Debian's python3
 (no build tree on its path: the installed tetpack command and ParaView plugin are the ones it finds)."""
+import glob
 import os
 import subprocess
 import sys
@@ -36,7 +37,10 @@ class Install(unittest.TestCase):
         prefix = os.path.join(WORK, "prefix")
         subprocess.run([os.environ["CMAKE_COMMAND"], "--install", os.environ["TETPACK_BUILD_DIR"], "--prefix", prefix],
                        check=True, capture_output=True)
-        site = os.path.join(prefix, "lib", "python%d.%d" % sys.version_info[:2], "dist-packages")
+        # Where the build put it (python/CMakeLists.txt: from python3's sysconfig for the prefix).
+        inits = glob.glob(os.path.join(prefix, "**", "tetpack", "__init__.py"), recursive=True)
+        self.assertEqual(len(inits), 1, inits)
+        site = os.path.dirname(os.path.dirname(inits[0]))
         env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "TETPACK_EXE")}
         env["PYTHONPATH"] = site
         script = """
