@@ -154,6 +154,16 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .scene_key = "effects.ao_radius", .scene_type = "number",
      .meaning = "length of the AO rays",
      .scene_default = "bounds diagonal / 10", .constraint = "> 0"},
+    {TPK_OPT_OCCLUSION,
+     .flag = "--occlusion", .metavar = "ray|vertex", .expects = "ray or vertex",
+     .help = "where shadow and AO rays start: at each pixel's shade points\n"
+             "(ray, default) or once per frame at the mesh vertices, then\n"
+             "interpolated (vertex: far fewer rays)",
+     .help_rank = 25, .effect = 1,
+     .scene_key = "effects.occlusion", .scene_type = "string",
+     .meaning = "where shadow and AO rays start: `ray` at the shade points of every pixel, `vertex` at the mesh "
+                "vertices (AO over the whole sphere), interpolated in each tet",
+     .scene_default = "`ray`", .constraint = "`ray`, `vertex`"},
     {TPK_OPT_LAYOUT,
      .flag = "--layout", .metavar = "tet16|tet20|tet32", .expects = "tet16, tet20 or tet32",
      .help = "which stored layout to march (default: the first present)",
