@@ -153,6 +153,29 @@ def section_render(summary):
     return "".join(out)
 
 
+def section_occlusion(summary):
+    rows = jsonl("occlusion.jsonl")
+    if not rows:
+        return ""
+    r0 = rows[0]
+    out = [f"## 1b. Effects: shadow and AO rays per shade point against a vertex cache\n\n"
+           f"`bench/bench_occlusion.c`: {r0['tets']:,} tets, {r0['vertices']:,} vertices, shading + shadows + "
+           f"AO {r0['ao_rays']} (headlight: the cache is rebuilt every frame), CPU reference on all cores, median of "
+           f"{r0['runs']} frames. `ray` (render.h SHADE POINTS) is the reference; `vertex` casts N + 1 rays per mesh "
+           f"vertex and interpolates them in each tet (render.h OCCLUSION AT VERTICES).\n\n"]
+    out.append(table(["size", "occlusion", "frame ms", "cache ms", "tet steps", "secondary rays", "PSNR vs ray (dB)"],
+                     [[f"{r['size']}²", r["occlusion"], r["frame_ms"], r["cache_ms"] or "–", r["tet_steps"],
+                       r["secondary_rays"], r["psnr_vs_ray"] if r["occlusion"] != "ray" else "reference"]
+                      for r in rows]))
+    for r in rows:
+        if r["occlusion"] == "vertex":
+            ref = next((q for q in rows if q["occlusion"] == "ray" and q["size"] == r["size"]), None)
+            if ref:
+                summary.append(f"Effects at {r['size']}², {r0['tets']:,} tets: vertex cache {fmt(r['frame_ms'])} ms "
+                               f"against {fmt(ref['frame_ms'])} ms per shade point, {fmt(r['psnr_vs_ray'])} dB")
+    return "".join(out) + "\n"
+
+
 def section_storage(summary):
     out = ["## 2. Storage against error\n\n",
            "Quantization simulated in memory (`bench/bench_storage.c quant`): positions as float16 of the stored "
@@ -387,7 +410,7 @@ def section_gpu(summary):
 def main():
     machine = json.load(open(os.path.join(DATA, "machine.json")))
     summary = []
-    body = (section_render(summary) + section_storage(summary) + section_accuracy(summary)
+    body = (section_render(summary) + section_occlusion(summary) + section_storage(summary) + section_accuracy(summary)
             + section_scaling(summary) + section_gpu(summary) + section_hard(summary))
     closing = "## Summary\n\n" + "".join(f"- {s}\n" for s in summary)
     closing += "\nPlots: " + ", ".join(f"`{p}` ({t})" for p, t in PLOTS) + ".\n"

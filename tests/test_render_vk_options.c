@@ -41,6 +41,7 @@ static const bad_case bad_cases[] = {
     {"camera eye == at", "the same point"},
     {"camera eye not finite", "must be finite"},
     {"field of view 180", "field of view"},
+    {"occlusion 2", "occlusion ray (0) or vertex (1)"},
 };
 #define BAD_CASES (sizeof bad_cases / sizeof bad_cases[0])
 
@@ -67,7 +68,8 @@ static void break_options(size_t c, tpk_render_options *opt, tpk_transfer_functi
     case 16: opt->ao_rays = 1; opt->ao_radius = INFINITY; break;
     case 17: memcpy(opt->camera.at, opt->camera.eye, sizeof opt->camera.at); break;
     case 18: opt->camera.eye[1] = NAN; break;
-    default: opt->camera.fovy_deg = 180; break;
+    case 19: opt->camera.fovy_deg = 180; break;
+    default: opt->occlusion = 2; break;
     }
 }
 
@@ -150,4 +152,11 @@ TPK_TEST(vulkan_limits_named)
     CHECK(tpk_render_check_options(&opt, &diag) == 0);
     CHECK(tpk_render_vulkan(&mesh, &opt, img, NULL, &diag) == -1);
     CHECK_MSG(strstr(diag.message, "2^31 - 1") != NULL, "%s", diag.message);
+    /* The vertex cache is the CPU reference's alone for now (render.h OCCLUSION AT VERTICES). */
+    mesh.vertex_count = 0;
+    opt.occlusion = TPK_OCCLUSION_VERTEX;
+    opt.shadows = 1;
+    CHECK(tpk_render_check_options(&opt, &diag) == 0);
+    CHECK(tpk_render_vulkan(&mesh, &opt, img, NULL, &diag) == -1);
+    CHECK_MSG(strstr(diag.message, "--occlusion vertex") != NULL, "%s", diag.message);
 }

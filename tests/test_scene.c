@@ -59,7 +59,7 @@ TPK_TEST(unknown_key)
                       "backend, integration");
     CHECK_PARSE_ERROR("{\"effects\": {\"glow\": true}}",
                       "s.json:1:14: key 'effects.glow': unknown key; known keys of effects: shading, shadows, light, "
-                      "ao_rays, ao_radius");
+                      "ao_rays, ao_radius, occlusion");
     CHECK_PARSE_ERROR("{\"size\": [64, 48],\n \"size\": [8, 8]}",
                       "s.json:2:2: key 'size': appears twice in the same object (remove one)");
 }
@@ -148,7 +148,8 @@ static const char full_scene[] =
     "  \"clip_box\": [-1, -2, -3, 1, 2, 3.5],\n"
     "  \"iso\": [300, 310.5],\n"
     "  \"iso_opacity\": 0.5,\n"
-    "  \"effects\": {\"shading\": true, \"shadows\": false, \"light\": [1, 2, 3], \"ao_rays\": 8, \"ao_radius\": 0.01},\n"
+    "  \"effects\": {\"shading\": true, \"shadows\": false, \"light\": [1, 2, 3], \"ao_rays\": 8, \"ao_radius\": 0.01,\n"
+    "              \"occlusion\": \"vertex\"},\n"
     "  \"layout\": \"tet20\",\n"
     "  \"size\": [320, 200],\n"
     "  \"backend\": \"vulkan\",\n"
@@ -160,7 +161,7 @@ TPK_TEST(round_trip)
     tpk_scene a, b;
     const char *msg = parse_message(full_scene, &a);
     CHECK_MSG(!msg[0], "%s", msg);
-    CHECK_EQ_INT(a.given, (1u << 18) - 1); /* every key given */
+    CHECK_EQ_INT(a.given, (1u << 19) - 1); /* every key given */
     const char *path = tpk_temp_path("round.json");
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
@@ -189,6 +190,7 @@ TPK_TEST(apply_and_from_options)
     CHECK(opt.clip && opt.clip_max[2] == 3.5 && opt.iso_count == 2 && opt.iso[1] == 310.5 && opt.iso_opacity == 0.5);
     CHECK(opt.shading == 1 && opt.shadows == 0 && opt.have_light && opt.light[2] == 3 && opt.ao_rays == 8);
     CHECK(opt.ao_radius == 0.01 && opt.integration == 1 && opt.unit_distance == 0.001 && opt.camera.fovy_deg == 33.3);
+    CHECK(opt.occlusion == TPK_OCCLUSION_VERTEX);
     tpk_scene_from_options(&opt, "temperature", 2, TPK_LAYOUT_TET20, &back);
     tpk_render_options again;
     tpk_render_options_default(&again);

@@ -165,6 +165,9 @@ static int resolve_backend(render_args *a, tpk_diag *diag)
             return tpk_diag_fail(diag, "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", env);
         a->backend = env;
     }
+    /* The Vulkan renderer has no vertex cache yet (it refuses it): by default those go to the CPU. */
+    if (!a->backend && a->occlusion == TPK_OCCLUSION_VERTEX && (a->shadows || a->ao_rays > 0))
+        a->backend = "cpu";
 #ifdef TPK_WITH_VULKAN
     if (!a->backend)
         a->backend = tpk_vulkan_available(a->device, sizeof a->device) ? "vulkan" : "cpu";

@@ -153,6 +153,12 @@ static int opt_ao_radius(const char *v, render_args *a)
     return tpk_cli_parse_doubles(v, &a->ao_radius, 1) || !(a->ao_radius > 0) ? -1 : 0;
 }
 
+static int opt_occlusion(const char *v, render_args *a)
+{
+    a->occlusion = !strcmp(v, "ray") ? TPK_OCCLUSION_RAY : !strcmp(v, "vertex") ? TPK_OCCLUSION_VERTEX : -1;
+    return a->occlusion < 0 ? -1 : 0;
+}
+
 /* The parser of each row of the option table (scene/option_table.h) that has a flag. */
 typedef int (*option_parser)(const char *value, render_args *a);
 static const option_parser parsers[TPK_OPT_COUNT] = {
@@ -178,6 +184,7 @@ static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_LIGHT] = opt_light,
     [TPK_OPT_AO_RAYS] = opt_ao,
     [TPK_OPT_AO_RADIUS] = opt_ao_radius,
+    [TPK_OPT_OCCLUSION] = opt_occlusion,
     [TPK_OPT_SCENE] = opt_scene,
     [TPK_OPT_SAVE_SCENE] = opt_save_scene,
 };
@@ -352,6 +359,7 @@ void render_args_to_options(const render_args *a, tpk_file *file, const tpk_tran
     memcpy(opt->light, a->light, sizeof opt->light);
     opt->ao_rays = a->ao_rays;
     opt->ao_radius = a->ao_radius;
+    opt->occlusion = a->occlusion;
 }
 
 /* The association of the named field (-1 when there is none), or a usage error naming the fields the
@@ -442,6 +450,7 @@ int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args 
     memcpy(a->light, s->light, sizeof a->light);
     a->ao_rays = s->ao_rays;
     a->ao_radius = s->ao_radius;
+    a->occlusion = s->occlusion;
     return 0;
 }
 

@@ -21,7 +21,7 @@ typedef struct render_args {
     double iso[TPK_RENDER_MAX_ISO], iso_opacity;
     int clip;
     double clip_box[6]; /* x0,y0,z0,x1,y1,z1 */
-    int shading, shadows, have_light, ao_rays;
+    int shading, shadows, have_light, ao_rays, occlusion;
     double light[3], ao_radius; /* ao_radius 0: the renderer's default */
     const char *scene_path, *save_scene; /* --scene, --save-scene */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */

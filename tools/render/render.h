@@ -58,6 +58,9 @@ typedef struct tpk_render_options {
     int ao_rays;                   /* ambient occlusion with this many hemisphere rays (at most
                                       TPK_RENDER_MAX_AO_RAYS); 0: off */
     double ao_radius;              /* AO ray length; <= 0: bounds diagonal / 10 */
+    int occlusion;                 /* where shadow and AO rays start: TPK_OCCLUSION_RAY (0, default: at
+                                      the shade points of every primary ray) or TPK_OCCLUSION_VERTEX (1:
+                                      at the mesh vertices, once per frame, interpolated; below) */
 } tpk_render_options;
 
 #define TPK_RENDER_MAX_ISO 4
@@ -66,6 +69,8 @@ typedef struct tpk_render_options {
 #define TPK_INTEGRATION_EXACT 0
 #define TPK_INTEGRATION_SAMPLED 1
 #define TPK_INTEGRATION_MIDPOINT 2
+#define TPK_OCCLUSION_RAY 0
+#define TPK_OCCLUSION_VERTEX 1
 
 /* ---- Effect definitions (the contract between the CPU reference and the Vulkan renderer) ----------
  * Notation. Primary ray x(t) = eye + t d, d unit, t = distance. The marcher reports pieces
@@ -122,6 +127,24 @@ typedef struct tpk_render_options {
  *   basis (Duff et al. 2017): sgn = a.z >= 0 ? 1 : -1; p = -1 / (sgn + a.z); q = a.x a.y p;
  *   b1 = (1 + sgn a.x a.x p, sgn q, -sgn a.x), b2 = (q, sgn + a.y a.y p, -a.y).
  *
+ * OCCLUSION AT VERTICES (occlusion == TPK_OCCLUSION_VERTEX; the two sections above are then not used).
+ * The secondary rays start at the mesh vertices, not at shade points. Cache: for every vertex v, at
+ * p_v = origin + its stored position (double), with the light and transmittance defined above,
+ *   S_v = shadow transmittance from p_v: w = L at p_v, len = |light - p_v| (1 when len = 0; shadows off: 1);
+ *   A_v = mean T2 over N = ao_rays directions on the whole sphere (view-independent: no axis, no pixel):
+ *       h = hash32((uint32)v), rot = h * 2^-32, z = 1 - 2 (i + 0.5) / N, r = sqrt(1 - z*z),
+ *       phi = 2 pi * fract(i * 0.6180339887498949 + rot), w = (r cos(phi), r sin(phi), z) in world axes,
+ *       len = ao_radius (AO off: 1).
+ * S_v and A_v are stored as float. The cache depends on the mesh and field, light, TF, range, unit
+ * distance, iso values and opacity, clip box, AO rays and radius; not on the camera except through a
+ * headlight (then once per frame: N + 1 rays per vertex instead of per shade point).
+ * Use: every volume piece (x = its midpoint) and every iso hit (x = the hit point) takes S and A
+ * interpolated linearly in the piece's tet v[0..3] (no shade-point schedule, no casts): with e_i and
+ * c1 = e2 x e3, c2 = e3 x e1, c3 = e1 x e2, det = e1 . c1 as for the NORMAL and q = x - origin - p0,
+ * l_i = (q . c_i) / det (i = 1..3), l_0 = 1 - l_1 - l_2 - l_3; S = clamp(sum l_i S_v[i], 0, 1) and A
+ * likewise; where det is 0 or not finite, the mean of the four. m is then as in LIGHTING FACTOR.
+ * secondary_rays and tet_steps count the cache's rays.
+ *
  * ISOSURFACES (iso_count values v_j, scalar units). Point field: the piece crosses v_j where
  * (s_in < v_j <= s_out) or (s_in > v_j >= s_out), at t = t_in + (v_j - s_in) / (s_out - s_in) * length
  * (half-open, so a crossing exactly on a face counts once). Tet field: between two consecutive pieces
@@ -154,8 +177,8 @@ void tpk_render_lengths(const tpk_render_options *opt, double diagonal, double *
 /* The one validation of render options (render_check.c), which every backend calls before anything
  * else: a size in 1..TPK_RENDER_MAX_SIZE, a transfer function of 1..TPK_TF_MAX_POINTS points, a known
  * integration, a finite range, 0..TPK_RENDER_MAX_ISO finite iso values, a finite iso opacity <= 1, a
- * finite clip box with min <= max, a finite light, 0..TPK_RENDER_MAX_AO_RAYS AO rays, a finite AO radius
- * and a camera tpk_camera_basis_of accepts. Values a renderer cannot use are refused, not clamped.
+ * finite clip box with min <= max, a finite light, 0..TPK_RENDER_MAX_AO_RAYS AO rays, a finite AO radius,
+ * a known occlusion and a camera tpk_camera_basis_of accepts. Values a renderer cannot use are refused, not clamped.
  * Returns 0, or -1 with a message starting "render: " (the same whichever backend asks). Pure. */
 int tpk_render_check_options(const tpk_render_options *opt, tpk_diag *diag);
 
@@ -209,6 +232,12 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
  * all parts' positions (tpk_positions_diagonal), for the default unit distance. */
 int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double diagonal,
                        const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag);
+/* The vertex cache of render.h's OCCLUSION AT VERTICES for `mesh` and `opt` (whatever opt->occlusion
+ * says), on all cores (opt->threads): S_v into s[v] and A_v into a[v], vertex_count floats each. stats
+ * (may be NULL) gets the cache's tet steps, secondary rays and time. For tests and other backends to
+ * compare with. Returns 0, or -1 with a message. */
+int tpk_render_vertex_cache(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, float *s, float *a,
+                            tpk_render_stats *stats, tpk_diag *diag);
 /* The diagonal of the box of mesh->positions (0 for fewer than two distinct points). */
 double tpk_positions_diagonal(const tpk_mesh_arrays *mesh);
 

@@ -45,6 +45,8 @@ static int check_effects(const tpk_render_options *opt, tpk_diag *diag)
         return tpk_diag_fail(diag, "render: the light position must be finite");
     if (opt->ao_rays < 0 || opt->ao_rays > TPK_RENDER_MAX_AO_RAYS)
         return tpk_diag_fail(diag, "render: expected 0..%d AO rays, found %d", TPK_RENDER_MAX_AO_RAYS, opt->ao_rays);
+    if (opt->occlusion != TPK_OCCLUSION_RAY && opt->occlusion != TPK_OCCLUSION_VERTEX)
+        return tpk_diag_fail(diag, "render: expected occlusion ray (0) or vertex (1), found %d", opt->occlusion);
     if (!isfinite(opt->ao_radius))
         return tpk_diag_fail(diag, "render: the AO radius must be finite");
     return 0;

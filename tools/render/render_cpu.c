@@ -47,15 +47,18 @@ static void point_at(const ray_state *ray, double t, double x[3])
         x[k] = ray->job->eye[k] + t * ray->dir[k];
 }
 
-/* Composite the hit of iso value v at t (render.h: ISOSURFACES); n is the hit's normal or NULL. */
-static void composite_iso(ray_state *ray, double t, double v, const double *n)
+/* Composite the hit of iso value v at t in seg's tet (render.h: ISOSURFACES); n is the hit's normal or
+ * NULL. */
+static void composite_iso(ray_state *ray, const tpk_segment *seg, double t, double v, const double *n)
 {
     const render_job *job = ray->job;
     double m = 1.0;
     if (job->lighting) {
         double x[3], s = 1.0, a = 1.0;
         point_at(ray, t, x);
-        if (job->cast)
+        if (job->vertex_s)
+            rl_vertex_lookup(job, seg, x, &s, &a);
+        else if (job->cast)
             rl_cast(ray, x, n, &s, &a);
         m = rl_factor(ray, x, n, s, a);
     }
@@ -73,7 +76,9 @@ static void light_piece(ray_state *ray, const tpk_segment *seg, const double *n,
     const render_job *job = ray->job;
     double length = seg->t_out - seg->t_in, mid[3];
     point_at(ray, 0.5 * (seg->t_in + seg->t_out), mid);
-    if (job->cast && ri_optical_depth(job, length, u_in, u_out) > 0 &&
+    if (job->vertex_s)
+        rl_vertex_lookup(job, seg, mid, &ray->shade_s, &ray->shade_a);
+    else if (job->cast && ri_optical_depth(job, length, u_in, u_out) > 0 &&
         (!ray->cast_done || ray->t_cast - ray->transmittance >= TPK_RENDER_SHADE_STEP)) {
         rl_cast(ray, mid, n, &ray->shade_s, &ray->shade_a);
         ray->cast_done = 1;
@@ -116,7 +121,7 @@ static int on_segment(void *user, const tpk_segment *seg)
         if (tet_field)
             hn = job->lighting && rl_face_normal(job, seg, fn) ? fn : NULL;
         double m = ray->m;
-        composite_iso(ray, hits[i].t, v, hn);
+        composite_iso(ray, seg, hits[i].t, v, hn);
         ray->m = m;
         cur_t = hits[i].t;
         cur_u = hit_u;
@@ -323,7 +328,67 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
         return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
     }
     job->marcher = marcher;
-    int rc = run_render(job, stats, &t0, diag);
+    int rc = 0;
+    float *cache = NULL;
+    uint64_t cache_counts[2] = {0, 0}; /* steps, secondary rays */
+    if (job->cast && opt->occlusion == TPK_OCCLUSION_VERTEX) {
+        cache = malloc(2 * sizeof *cache * (mesh->vertex_count ? mesh->vertex_count : 1));
+        if (!cache) {
+            rc = tpk_diag_fail(diag, "render: out of memory for the vertex cache");
+        } else {
+            job->vertex_s = cache;
+            job->vertex_a = cache + mesh->vertex_count;
+            r = rl_vertex_cache(job, opt->threads, cache, cache + mesh->vertex_count, &cache_counts[0],
+                                &cache_counts[1]);
+            if (r != TPK_OK)
+                rc = tpk_diag_fail(diag, "render: vertex cache: %s", tpk_result_string(r));
+        }
+    }
+    if (rc == 0)
+        rc = run_render(job, stats, &t0, diag);
+    if (rc == 0 && stats) {
+        stats->tet_steps += cache_counts[0];
+        stats->secondary_rays += cache_counts[1];
+    }
+    free(cache);
+    tpk_marcher_destroy(marcher);
+    free(job);
+    return rc;
+}
+
+int tpk_render_vertex_cache(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, float *s, float *a,
+                            tpk_render_stats *stats, tpk_diag *diag)
+{
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (!mesh || !opt || !s || !a)
+        return tpk_diag_fail(diag, "render: mesh, options and cache arrays are required");
+    if (tpk_render_check_options(opt, diag))
+        return -1;
+    render_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "render: out of memory");
+    job->mesh = mesh;
+    tpk_marcher *marcher = NULL;
+    int rc = setup_job(job, mesh->scalars != NULL, tpk_positions_diagonal(mesh), opt, diag);
+    tpk_result r = rc == 0 ? tpk_marcher_create(&marcher, mesh) : TPK_OK;
+    if (r != TPK_OK)
+        rc = tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
+    uint64_t counts[2] = {0, 0};
+    if (rc == 0) {
+        job->marcher = marcher;
+        r = rl_vertex_cache(job, opt->threads, s, a, &counts[0], &counts[1]);
+        if (r != TPK_OK)
+            rc = tpk_diag_fail(diag, "render: vertex cache: %s", tpk_result_string(r));
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (stats) {
+        stats->tet_steps = counts[0];
+        stats->secondary_rays = counts[1];
+        stats->seconds = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    }
     tpk_marcher_destroy(marcher);
     free(job);
     return rc;

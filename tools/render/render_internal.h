@@ -27,6 +27,7 @@ typedef struct render_job {
     double light[3];           /* the point light, or the eye */
     int lighting;              /* shading, shadows or AO: m is computed */
     int cast;                  /* shadows or AO: shade points cast secondary rays */
+    const float *vertex_s, *vertex_a; /* TPK_OCCLUSION_VERTEX: S_v and A_v per vertex (NULL: ray) */
     double eye[3], forward[3], right[3], up[3];
     double tan_half_y, tan_half_x;
     uint8_t *rgba;
@@ -89,6 +90,13 @@ int rl_face_normal(const render_job *job, const tpk_segment *seg, double n[3]);
 /* Shadow transmittance S and AO factor A at world point x with normal n (NULL: none); 1 when that
  * effect is off. Adds the secondary marcher steps to ray->steps; a marcher failure goes to ray->error. */
 void rl_cast(ray_state *ray, const double x[3], const double *n, double *s, double *a);
+/* The vertex cache (render.h: OCCLUSION AT VERTICES) on `threads` workers into s[] and a[] (vertex_count
+ * floats each; an effect that is off gives 1); adds its steps and rays to *steps and *secondary.
+ * Returns the first marcher failure, or TPK_OK. */
+tpk_result rl_vertex_cache(const render_job *job, int threads, float *s, float *a, uint64_t *steps,
+                           uint64_t *secondary);
+/* S and A of the vertex cache interpolated at world point x in the segment's tet. */
+void rl_vertex_lookup(const render_job *job, const tpk_segment *seg, const double x[3], double *s, double *a);
 /* The lighting factor m = A * (K_AMB + (1 - K_AMB) * D * S) at x with normal n (NULL: none). */
 double rl_factor(const ray_state *ray, const double x[3], const double *n, double s, double a);
 

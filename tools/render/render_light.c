@@ -2,7 +2,9 @@
  * (transmittance marched through the volume with the same marcher), and the lighting factor m. The
  * definitions, which the Vulkan renderer follows too, are in render.h. */
 #include <math.h>
+#include <string.h>
 
+#include "base/parallel.h"
 #include "render_internal.h"
 
 int rl_clip(const tpk_render_options *opt, const double org[3], const double dir[3], double *lo, double *hi)
@@ -193,6 +195,110 @@ void rl_cast(ray_state *ray, const double x[3], const double *n, double *s, doub
             axis[k] = n ? (flip ? -n[k] : n[k]) : -ray->dir[k];
         *a = ambient(ray, x, axis);
     }
+}
+
+/* ---- The vertex cache (render.h: OCCLUSION AT VERTICES) ---------------------------------------- */
+
+typedef struct cache_work {
+    const render_job *job;
+    float *s, *a;
+    uint64_t steps[TPK_MAX_THREADS], secondary[TPK_MAX_THREADS];
+    tpk_result error[TPK_MAX_THREADS];
+} cache_work;
+
+/* S_v and A_v of one vertex at world point p. */
+static void cache_vertex(ray_state *ray, uint32_t v, const double p[3], float *s, float *a)
+{
+    const render_job *job = ray->job;
+    double sv = 1.0, av = 1.0;
+    if (job->opt->shadows) {
+        double w[3] = {job->light[0] - p[0], job->light[1] - p[1], job->light[2] - p[2]};
+        double len = sqrt(dot3(w, w));
+        if (len > 0) {
+            for (int k = 0; k < 3; k++)
+                w[k] /= len;
+            sv = transmittance(ray, p, w, len);
+        }
+    }
+    const int count = job->opt->ao_rays;
+    if (count > 0) {
+        double rot = (double)hash32(v) * (1.0 / 4294967296.0), sum = 0.0;
+        for (int i = 0; i < count; i++) {
+            double z = 1.0 - 2.0 * (i + 0.5) / count, r = sqrt(1.0 - z * z);
+            double f = i * 0.6180339887498949 + rot;
+            double phi = 2.0 * M_PI * (f - floor(f));
+            const double w[3] = {r * cos(phi), r * sin(phi), z};
+            sum += transmittance(ray, p, w, job->ao_radius);
+        }
+        av = sum / count;
+    }
+    *s = (float)sv;
+    *a = (float)av;
+}
+
+static void cache_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    cache_work *cw = ctx;
+    const render_job *job = cw->job;
+    ray_state ray;
+    memset(&ray, 0, sizeof ray);
+    ray.job = job;
+    for (int64_t v = begin; v < end; v++) {
+        double p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = job->mesh->origin[k] + (double)job->mesh->positions[3 * v + k];
+        cache_vertex(&ray, (uint32_t)v, p, &cw->s[v], &cw->a[v]);
+    }
+    cw->steps[worker] = ray.steps;
+    cw->secondary[worker] = ray.secondary;
+    cw->error[worker] = ray.error;
+}
+
+tpk_result rl_vertex_cache(const render_job *job, int threads, float *s, float *a, uint64_t *steps,
+                           uint64_t *secondary)
+{
+    static cache_work cw_zero;
+    cache_work cw = cw_zero;
+    cw.job = job;
+    cw.s = s;
+    cw.a = a;
+    int64_t count = (int64_t)job->mesh->vertex_count;
+    int n = tpk_threads_for(count, tpk_thread_count(threads), 256);
+    tpk_parallel_for(count, n, cache_range, &cw);
+    tpk_result r = TPK_OK;
+    for (int w = 0; w < n; w++) {
+        *steps += cw.steps[w];
+        *secondary += cw.secondary[w];
+        if (r == TPK_OK)
+            r = cw.error[w];
+    }
+    return r;
+}
+
+void rl_vertex_lookup(const render_job *job, const tpk_segment *seg, const double x[3], double *s, double *a)
+{
+    const float *pos = job->mesh->positions;
+    double e[3][3], c[3][3], q[3];
+    tet_edges(job, seg, e);
+    cross3(e[1], e[2], c[0]);
+    cross3(e[2], e[0], c[1]);
+    cross3(e[0], e[1], c[2]);
+    double det = dot3(e[0], c[0]);
+    for (int k = 0; k < 3; k++)
+        q[k] = x[k] - job->mesh->origin[k] - (double)pos[3 * (size_t)seg->v[0] + k];
+    double l[4] = {0.25, 0.25, 0.25, 0.25};
+    if (det != 0 && isfinite(det)) {
+        for (int i = 0; i < 3; i++)
+            l[i + 1] = dot3(q, c[i]) / det;
+        l[0] = 1.0 - l[1] - l[2] - l[3];
+    }
+    double sv = 0.0, av = 0.0;
+    for (int i = 0; i < 4; i++) {
+        sv += l[i] * job->vertex_s[seg->v[i]];
+        av += l[i] * job->vertex_a[seg->v[i]];
+    }
+    *s = sv < 0 ? 0 : sv > 1 ? 1 : sv;
+    *a = av < 0 ? 0 : av > 1 ? 1 : av;
 }
 
 double rl_factor(const ray_state *ray, const double x[3], const double *n, double s, double a)

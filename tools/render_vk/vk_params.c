@@ -23,6 +23,9 @@ int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *
     /* Vulkan limit: the Params block and the shader index vertices, tets and shell faces with int32. */
     if (mesh->vertex_count > 0x7fffffffu || mesh->tet_count > 0x7fffffffu || mesh->shell_face_count > 0x7fffffffu)
         return tpk_diag_fail(diag, "render: more than 2^31 - 1 vertices, tets or shell faces");
+    /* Not built yet (issue 19 item 3): the vertex cache's pass on the device. */
+    if (opt->occlusion == TPK_OCCLUSION_VERTEX && (opt->shadows || opt->ao_rays > 0))
+        return tpk_diag_fail(diag, "render: --occlusion vertex is drawn by the CPU reference only (--backend cpu)");
     return 0;
 }
 

@@ -154,6 +154,16 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .scene_key = "effects.ao_radius", .scene_type = "number",
      .meaning = "length of the AO rays",
      .scene_default = "bounds diagonal / 10", .constraint = "> 0"},
+    {TPK_OPT_OCCLUSION,
+     .flag = "--occlusion", .metavar = "ray|vertex", .expects = "ray or vertex",
+     .help = "where shadow and AO rays start: at each pixel's shade points\n"
+             "(ray, default) or once per frame at the mesh vertices, then\n"
+             "interpolated (vertex: far fewer rays)",
+     .help_rank = 20, .effect = 1,
+     .scene_key = "effects.occlusion", .scene_type = "string",
+     .meaning = "where shadow and AO rays start: `ray` at the shade points of every pixel, `vertex` at the mesh "
+                "vertices (AO over the whole sphere), interpolated in each tet",
+     .scene_default = "`ray`", .constraint = "`ray`, `vertex`"},
     {TPK_OPT_LAYOUT,
      .flag = "--layout", .metavar = "tet16|tet20|tet32", .expects = "tet16, tet20 or tet32",
      .help = "which stored layout to march (default: the first present)",
@@ -174,7 +184,7 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
              "lavapipe); cpu: the reference renderer. Same options, same picture.\n"
              "Default: $TETPACK_RENDER_BACKEND if set, else vulkan when a\n"
              "Vulkan device is present, else cpu (part sets: cpu)",
-     .help_rank = 21,
+     .help_rank = 22,
      .scene_key = "backend", .scene_type = "string",
      .meaning = "renderer; `render --backend` overrides it, and it overrides `$TETPACK_RENDER_BACKEND`; where "
                 "there is no Vulkan device (or a build without the Vulkan renderer) `vulkan` is drawn by the "
@@ -198,20 +208,20 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_THREADS,
      .flag = "--threads", .metavar = "N", .expects = "1..1024",
      .help = "worker threads of the CPU backend (default: all cores)",
-     .help_rank = 20},
+     .help_rank = 21},
     {TPK_OPT_SCENE,
      .flag = "--scene", .metavar = "FILE", .expects = "a scene file",
      .help = "a scene file (spec/scene-json.md): its values first, then the\n"
              "options given here override them",
-     .help_rank = 22},
+     .help_rank = 23},
     {TPK_OPT_SAVE_SCENE,
      .flag = "--save-scene", .metavar = "FILE", .expects = "an output path",
      .help = "write the scene of this render (every value it used) as JSON",
-     .help_rank = 23},
+     .help_rank = 24},
     {TPK_OPT_JSON,
      .flag = "--json", .metavar = NULL, .expects = NULL,
      .help = "print render statistics as JSON",
-     .help_rank = 24, .render_only = 1},
+     .help_rank = 25, .render_only = 1},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

@@ -35,6 +35,7 @@ typedef enum tpk_option_id {
     TPK_OPT_LIGHT,
     TPK_OPT_AO_RAYS,
     TPK_OPT_AO_RADIUS,
+    TPK_OPT_OCCLUSION,
     TPK_OPT_LAYOUT,
     TPK_OPT_SIZE,
     TPK_OPT_BACKEND,

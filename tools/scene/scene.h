@@ -33,6 +33,7 @@ enum {
     TPK_SCENE_SIZE = 1u << 15,
     TPK_SCENE_BACKEND = 1u << 16,
     TPK_SCENE_INTEGRATION = 1u << 17,
+    TPK_SCENE_OCCLUSION = 1u << 18,
 };
 
 typedef enum tpk_scene_tf_kind { TPK_SCENE_TF_PRESET = 1, TPK_SCENE_TF_FILE = 2, TPK_SCENE_TF_POINTS = 3 } tpk_scene_tf_kind;
@@ -58,6 +59,7 @@ typedef struct tpk_scene {
     double light[3];
     int ao_rays;
     double ao_radius;
+    int occlusion;                 /* TPK_OCCLUSION_RAY or _VERTEX (render.h) */
     tpk_layout layout;
     int width, height;
     tpk_scene_backend backend;

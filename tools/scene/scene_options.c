@@ -28,6 +28,8 @@ static void apply_effects(const tpk_scene *s, tpk_render_options *opt)
         opt->ao_rays = s->ao_rays;
     if (s->given & TPK_SCENE_AO_RADIUS)
         opt->ao_radius = s->ao_radius;
+    if (s->given & TPK_SCENE_OCCLUSION)
+        opt->occlusion = s->occlusion;
 }
 
 void tpk_scene_apply(const tpk_scene *s, tpk_render_options *opt)
@@ -93,6 +95,10 @@ static void effects_from(const tpk_render_options *opt, tpk_scene *out)
         out->given |= TPK_SCENE_AO_RAYS | (opt->ao_radius > 0 ? TPK_SCENE_AO_RADIUS : 0);
         out->ao_rays = opt->ao_rays;
         out->ao_radius = opt->ao_radius > 0 ? opt->ao_radius : 0;
+    }
+    if (opt->occlusion != TPK_OCCLUSION_RAY) {
+        out->given |= TPK_SCENE_OCCLUSION;
+        out->occlusion = opt->occlusion;
     }
 }
 

@@ -391,7 +391,7 @@ static const cJSON *effect(const cJSON *effects, tpk_option_id id)
 
 static int key_effects(parser *p, const cJSON *v)
 {
-    const char *keys[8]; /* shading, shadows, light, ao_rays, ao_radius */
+    const char *keys[8]; /* shading, shadows, light, ao_rays, ao_radius, occlusion */
     const tpk_option_row *t = tpk_option_table;
     tpk_scene *s = p->out;
     if (need_object(p, v, "effects", "an object of effects") ||
@@ -415,6 +415,10 @@ static int key_effects(parser *p, const cJSON *v)
             rc = fail_key(p, t[TPK_OPT_AO_RADIUS].scene_key, "expected a positive length, found %g", s->ao_radius);
         s->given |= TPK_SCENE_AO_RADIUS;
     }
+    static const char *const occlusions[] = {"ray", "vertex"}; /* TPK_OCCLUSION_* order */
+    if (!rc && (e = effect(v, TPK_OPT_OCCLUSION)) &&
+        !(rc = choice(p, e, t[TPK_OPT_OCCLUSION].scene_key, occlusions, 2, &s->occlusion)))
+        s->given |= TPK_SCENE_OCCLUSION;
     return rc;
 }
 

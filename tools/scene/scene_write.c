@@ -10,6 +10,10 @@
 #include "scene.h"
 
 #define KEY(id) tpk_option_scene_leaf(id) /* key names from the option table */
+/* The keys of "effects". */
+#define EFFECT_BITS                                                                                            \
+    (TPK_SCENE_SHADING | TPK_SCENE_SHADOWS | TPK_SCENE_LIGHT | TPK_SCENE_AO_RAYS | TPK_SCENE_AO_RADIUS |        \
+     TPK_SCENE_OCCLUSION)
 
 /* A number in the shortest form that reads back exactly. cJSON's own printer accepts a 15-digit form
  * that is only within an epsilon (0.30000000000000004 comes out as 0.3), so the text is made here. */
@@ -70,8 +74,7 @@ static void add_tf(cJSON *root, const tpk_scene *s)
 
 static void add_effects(cJSON *root, const tpk_scene *s)
 {
-    unsigned bits = TPK_SCENE_SHADING | TPK_SCENE_SHADOWS | TPK_SCENE_LIGHT | TPK_SCENE_AO_RAYS | TPK_SCENE_AO_RADIUS;
-    if (!(s->given & bits))
+    if (!(s->given & EFFECT_BITS))
         return;
     cJSON *fx = cJSON_AddObjectToObject(root, KEY(TPK_OPT_EFFECTS));
     if (!fx)
@@ -86,6 +89,8 @@ static void add_effects(cJSON *root, const tpk_scene *s)
         cJSON_AddNumberToObject(fx, KEY(TPK_OPT_AO_RAYS), s->ao_rays);
     if (s->given & TPK_SCENE_AO_RADIUS)
         add_number(fx, KEY(TPK_OPT_AO_RADIUS), s->ao_radius);
+    if (s->given & TPK_SCENE_OCCLUSION)
+        cJSON_AddStringToObject(fx, KEY(TPK_OPT_OCCLUSION), s->occlusion == TPK_OCCLUSION_VERTEX ? "vertex" : "ray");
 }
 
 static const char *layout_name(tpk_layout layout)
@@ -136,7 +141,7 @@ static void add_output(cJSON *root, const tpk_scene *s)
 /* Top-level keys the text must have: the version, one per given bit, and one "effects" for five bits. */
 static int expected_keys(const tpk_scene *s)
 {
-    unsigned effects = TPK_SCENE_SHADING | TPK_SCENE_SHADOWS | TPK_SCENE_LIGHT | TPK_SCENE_AO_RAYS | TPK_SCENE_AO_RADIUS;
+    const unsigned effects = EFFECT_BITS;
     int n = 1 + ((s->given & effects) != 0);
     for (unsigned bit = 1; bit; bit <<= 1)
         n += (s->given & bit & ~effects) != 0;
