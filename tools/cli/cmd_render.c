@@ -6,19 +6,23 @@
 #include <string.h>
 
 #include "base/output_file.h"
+#include "base/strbuf.h"
 #include "cli.h"
 #include "render/render.h"
+#include "render/render_backend.h"
 #include "scene/scene.h"
 #include "tetpack.h"
 #include "render/transfer_function.h"
 #include "render_args.h"
+#include "render_input.h"
 #ifdef TPK_WITH_VULKAN
 #include "render_vk/render_vk.h"
 #endif
 
 static const char render_help[] =
-    "usage: tetpack render FILE.tpk -o IMAGE.png [options]\n"
+    "usage: tetpack render FILE -o IMAGE.png [options]\n"
     "\n"
+    "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
     "Ray-marches the tets with the reference CPU marcher (shell BVH entry, watertight tet-to-tet\n"
     "marching) on all cores and writes a PNG. Emission-absorption: within a tet the scalar is linear,\n"
     "so each piece is split exactly where the scalar crosses a TF control point; color and extinction\n"
@@ -102,7 +106,10 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
                    "\"pipeline_cache\":{\"loaded_bytes\":%llu,\"hits\":%d}",
                    stats.setup_device_seconds, stats.setup_upload_seconds, stats.setup_pipeline_seconds,
                    stats.first_frame_seconds, (unsigned long long)stats.pipeline_cache_bytes, stats.pipeline_cache_hits);
-        printf("}\n");
+        tpk_strbuf reason = {0};
+        tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
+        printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");
+        tpk_strbuf_free(&reason);
     } else
         printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
                (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,
@@ -144,39 +151,34 @@ static int save_scene(const render_args *a, tpk_file *file, const tpk_render_opt
     return 0;
 }
 
-/* The backend of this render: --backend, else $TETPACK_RENDER_BACKEND, else Vulkan when a device is
- * present; a->device gets the device's name ("cpu" for the reference). Returns 0 or -1 with a message. */
+/* The backend of this render (render/render_backend.h: --backend, the scene's, $TETPACK_RENDER_BACKEND,
+ * else Vulkan on a hardware device and the CPU reference otherwise); a->device gets the device's name
+ * ("cpu" for the reference) and a->backend_reason why. Returns 0 or -1 with a message. */
 static int resolve_backend(render_args *a, tpk_diag *diag)
 {
-    const char *env = getenv("TETPACK_RENDER_BACKEND");
-    if (a->backend_from_scene && !strcmp(a->backend, "vulkan")) {
-        int have = 0;
+    tpk_backend_request req = {.flag = a->backend_from_scene ? NULL : a->backend,
+                               .scene = a->backend_from_scene ? a->backend : NULL,
+                               .env = getenv("TETPACK_RENDER_BACKEND")};
 #ifdef TPK_WITH_VULKAN
-        have = tpk_vulkan_available(a->device, sizeof a->device);
+    req.vulkan_built = 1;
+    int kind = TPK_VK_DEVICE_NONE;
+    if (tpk_backend_needs_device(&req))
+        tpk_vulkan_probe(a->device, sizeof a->device, &kind);
+    req.device = (tpk_vk_device_kind)kind;
+    req.device_name = a->device;
 #endif
-        if (!have) {
-            fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; no Vulkan device here, so the CPU "
-                    "reference renders it (the same picture)\n", a->scene_path);
-            a->backend = "cpu";
-        }
-    }
-    if (!a->backend && env && *env) {
-        if (strcmp(env, "vulkan") && strcmp(env, "cpu"))
-            return tpk_diag_fail(diag, "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", env);
-        a->backend = env;
-    }
-#ifdef TPK_WITH_VULKAN
-    if (!a->backend)
-        a->backend = tpk_vulkan_available(a->device, sizeof a->device) ? "vulkan" : "cpu";
-    else if (!strcmp(a->backend, "vulkan") && !tpk_vulkan_available(a->device, sizeof a->device))
-        return tpk_diag_fail(diag, "--backend vulkan: %s", a->device);
-#else
-    if (a->backend && !strcmp(a->backend, "vulkan"))
-        return tpk_diag_fail(diag, "--backend vulkan: this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)");
-    a->backend = "cpu";
-#endif
-    if (!strcmp(a->backend, "cpu"))
+    tpk_backend_choice choice;
+    if (tpk_backend_choose(&req, &choice, diag) != 0)
+        return -1;
+    if (choice.scene_fallback)
+        fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; no Vulkan device here, so the CPU "
+                "reference renders it (the same picture)\n", a->scene_path);
+    a->backend = choice.vulkan ? "vulkan" : "cpu";
+    snprintf(a->backend_reason, sizeof a->backend_reason, "%s", choice.reason);
+    if (!choice.vulkan)
         snprintf(a->device, sizeof a->device, "cpu");
+    if (a->verbose)
+        fprintf(stderr, "tetpack render: backend %s (%s): %s\n", a->backend, a->device, a->backend_reason);
     return 0;
 }
 
@@ -224,8 +226,12 @@ static int render_file(render_args *a, tpk_file *file)
 static int check_outputs(const render_args *a)
 {
     /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
-    tpk_output_input inputs[3] = {{.arg = "FILE.tpk", .given = a->path}};
+    tpk_output_input inputs[4] = {{.arg = "FILE.tpk", .given = a->path}};
     size_t count = 1;
+    if (a->save_tpk && tpk_cli_check_convert_output("render", "--save-tpk", a->path, NULL, a->save_tpk))
+        return TPK_EXIT_USAGE;
+    if (a->save_tpk)
+        inputs[count++] = (tpk_output_input){.arg = "--save-tpk", .given = a->save_tpk};
     if (a->scene_path)
         inputs[count++] = (tpk_output_input){.arg = "--scene", .given = a->scene_path};
     if (a->tf)
@@ -372,18 +378,21 @@ int tpk_cmd_render(int argc, char **argv)
             return rc;
     }
     if (!a.path || !a.output)
-        return tpk_cli_fail("render", "expected FILE.tpk and -o IMAGE.png (see tetpack render --help)");
+        return tpk_cli_fail("render", "expected FILE and -o IMAGE.png (see tetpack render --help)");
     if (check_outputs(&a))
         return TPK_EXIT_USAGE;
-    tpk_file *file = NULL;
-    if (tpk_cli_open("render", a.path, &file))
+    render_input in;
+    if (render_input_open("render", a.path, a.save_tpk, a.threads, &in))
         return TPK_EXIT_USAGE;
+    if (in.converted && a.verbose)
+        fprintf(stderr, "tetpack render: converted %s with convert's defaults: %lld tets in %.3f s, %s\n", a.path,
+                in.tets, in.convert_seconds, in.tpk_path ? in.tpk_path : "in memory (--save-tpk FILE keeps it)");
     uint64_t part_chunk;
-    if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
-        tpk_close(file);
+    if (tpk_find_chunk(in.file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
+        render_input_close(&in);
         return render_set(&a);
     }
-    int rc = render_file(&a, file);
-    tpk_close(file);
+    int rc = render_file(&a, in.file);
+    render_input_close(&in);
     return rc;
 }

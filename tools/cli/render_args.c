@@ -115,6 +115,9 @@ static int opt_integration(const char *v, render_args *a)
 
 static int opt_scene(const char *v, render_args *a) { (void)v; (void)a; return 0; } /* read by render_args_merge_scene */
 static int opt_save_scene(const char *v, render_args *a) { a->save_scene = v; return 0; }
+static int opt_save_tpk(const char *v, render_args *a) { a->save_tpk = v; return 0; }
+static int opt_legend(const char *v, render_args *a) { (void)v; a->legend = 1; return 0; }
+static int opt_verbose(const char *v, render_args *a) { (void)v; a->verbose = 1; return 0; }
 static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->threads); }
 static int opt_backend(const char *v, render_args *a)
 {
@@ -180,6 +183,9 @@ static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_AO_RADIUS] = opt_ao_radius,
     [TPK_OPT_SCENE] = opt_scene,
     [TPK_OPT_SAVE_SCENE] = opt_save_scene,
+    [TPK_OPT_LEGEND] = opt_legend,
+    [TPK_OPT_SAVE_TPK] = opt_save_tpk,
+    [TPK_OPT_VERBOSE] = opt_verbose,
 };
 
 const tpk_option_row *render_args_find_option(const char *arg)
@@ -214,7 +220,7 @@ int render_args_parse_option(const char *cmd, int argc, char **argv, int *i, ren
     } else if (!a->path) {
         a->path = arg;
     } else {
-        return tpk_cli_fail(cmd, "expected one FILE.tpk, found a second argument '%s'", arg);
+        return tpk_cli_fail(cmd, "expected one FILE, found a second argument '%s'", arg);
     }
     return 0;
 }

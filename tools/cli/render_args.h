@@ -24,9 +24,13 @@ typedef struct render_args {
     int shading, shadows, have_light, ao_rays;
     double light[3], ao_radius; /* ao_radius 0: the renderer's default */
     const char *scene_path, *save_scene; /* --scene, --save-scene */
+    const char *save_tpk;                /* --save-tpk: keep the conversion of a mesh that is not a .tpk */
+    int legend, verbose;                 /* --legend, -v */
+    int iso_auto;                        /* --iso auto: one isosurface at the field's median (render_args_iso_auto) */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
     int backend_from_scene;              /* backend is the scene's: without a device, the CPU (same picture) */
     char device[256];                    /* the Vulkan device's name, or "cpu" */
+    char backend_reason[256];            /* why that backend (render/render_backend.h) */
     tpk_scene scene;                     /* what --scene gave (scene.given = 0 without one) */
 } render_args;
 

@@ -172,8 +172,9 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .flag = "--backend", .metavar = "vulkan|cpu", .expects = "vulkan or cpu",
      .help = "vulkan: compute shaders on the first Vulkan device (a GPU, else\n"
              "lavapipe); cpu: the reference renderer. Same options, same picture.\n"
-             "Default: $TETPACK_RENDER_BACKEND if set, else vulkan when a\n"
-             "Vulkan device is present, else cpu (part sets: cpu)",
+             "Default: $TETPACK_RENDER_BACKEND if set, else vulkan on a hardware\n"
+             "Vulkan device, else cpu (with only a software rasterizer such as\n"
+             "lavapipe the CPU reference is faster; part sets: cpu)",
      .help_rank = 21,
      .scene_key = "backend", .scene_type = "string",
      .meaning = "renderer; `render --backend` overrides it, and it overrides `$TETPACK_RENDER_BACKEND`; where "
@@ -210,8 +211,24 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help_rank = 23},
     {TPK_OPT_JSON,
      .flag = "--json", .metavar = NULL, .expects = NULL,
-     .help = "print render statistics as JSON",
+     .help = "print render statistics as JSON (with the backend and\n"
+             "backend_reason: why that backend)",
      .help_rank = 24, .render_only = 1},
+    {TPK_OPT_LEGEND,
+     .flag = "--legend", .metavar = NULL, .expects = NULL,
+     .help = "draw a colour bar of the TF on the image: the field's name and\n"
+             "units, its range and ticks (cairo; TETPACK_WITH_CAIRO)",
+     .help_rank = 25, .render_only = 1},
+    {TPK_OPT_SAVE_TPK,
+     .flag = "--save-tpk", .metavar = "FILE", .expects = "an output .tpk path",
+     .help = "FILE may be any mesh tetpack convert reads: it is converted\n"
+             "in memory with convert's defaults; --save-tpk keeps the .tpk",
+     .help_rank = 26},
+    {TPK_OPT_VERBOSE,
+     .flag = "--verbose", .alias = "-v", .metavar = NULL, .expects = NULL,
+     .help = "say on stderr which backend renders and why, and what was\n"
+             "converted",
+     .help_rank = 27, .render_only = 1},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)
