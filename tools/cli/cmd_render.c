@@ -9,6 +9,7 @@
 #include "base/strbuf.h"
 #include "cli.h"
 #include "render/render.h"
+#include "render/legend.h"
 #include "render/render_backend.h"
 #include "scene/scene.h"
 #include "tetpack.h"
@@ -69,6 +70,8 @@ typedef struct frame_source {
     const tpk_set_marcher *set;
     int has_scalars;  /* the set's parts carry a point field */
     double diagonal;  /* of the box of all the set's positions */
+    const tpk_field_desc *field; /* the field shown (its name and units for --legend) */
+    double iso_auto;  /* --iso auto's value (NAN: not asked) */
 } frame_source;
 
 static int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt,
@@ -88,6 +91,10 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
 #endif
                       : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
+    tpk_legend legend = {opt->tf, opt->range_min, opt->range_max, src->field ? src->field->name : NULL,
+                         src->field ? src->field->units : NULL};
+    if (a->legend && tpk_legend_draw(rgba, a->width, a->height, &legend, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
     if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
     if (a->json) {
@@ -106,6 +113,8 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
                    "\"pipeline_cache\":{\"loaded_bytes\":%llu,\"hits\":%d}",
                    stats.setup_device_seconds, stats.setup_upload_seconds, stats.setup_pipeline_seconds,
                    stats.first_frame_seconds, (unsigned long long)stats.pipeline_cache_bytes, stats.pipeline_cache_hits);
+        if (!isnan(src->iso_auto))
+            printf(",\"iso_auto\":%.9g", src->iso_auto);
         tpk_strbuf reason = {0};
         tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
         printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");
@@ -202,6 +211,14 @@ static int render_file(render_args *a, tpk_file *file)
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
     render_args_to_options(a, file, &tf, &opt);
+    tpk_field_desc field;
+    int have_field = render_args_field_desc(file, a->field, &field) == 0;
+    double iso_auto = NAN;
+    if (a->iso_auto && render_args_iso_auto("render", a, file, &opt, &iso_auto))
+        return TPK_EXIT_USAGE;
+    if (a->iso_auto && a->verbose)
+        fprintf(stderr, "tetpack render: --iso auto: %.9g, the median of '%s' at step %d\n", iso_auto, field.name,
+                a->step);
     uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
     if (!rgba)
         return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
@@ -214,7 +231,8 @@ static int render_file(render_args *a, tpk_file *file)
         if (rc == TPK_EXIT_OK)
             rc = load_step(a, file, association == TPK_ASSOC_TET, step, &mesh, &opt);
         if (rc == TPK_EXIT_OK)
-            rc = render_frame(a, &(frame_source){.mesh = &mesh}, &opt, path, rgba);
+            rc = render_frame(a, &(frame_source){.mesh = &mesh, .field = have_field ? &field : NULL,
+                                                 .iso_auto = iso_auto}, &opt, path, rgba);
     }
     free(rgba);
     if (rc == TPK_EXIT_OK && a->save_scene && save_scene(a, file, &opt) != 0)
@@ -318,7 +336,14 @@ static int render_set_frame(const render_args *a, tpk_partset *set, const tpk_se
     double d2 = 0;
     for (int k = 0; k < 3; k++)
         d2 += v->hi[k] > v->lo[k] ? (v->hi[k] - v->lo[k]) * (v->hi[k] - v->lo[k]) : 0;
-    frame_source src = {.set = marcher, .has_scalars = v->has_scalars, .diagonal = sqrt(d2)};
+    if (!(a->unit_distance > 0)) /* the default scale of the whole set, not of part 0 */
+        opt.unit_distance = render_args_default_unit(v->bounds_min, v->bounds_max);
+    tpk_field_desc field;
+    int have_field = render_args_field_desc(tpk_partset_file(set, 0), a->field, &field) == 0;
+    if (have_field && !a->have_range)
+        field.min_value = (float)v->range[0], field.max_value = (float)v->range[1];
+    frame_source src = {.set = marcher, .has_scalars = v->has_scalars, .diagonal = sqrt(d2),
+                        .field = have_field ? &field : NULL, .iso_auto = NAN};
     uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
     if (!rgba)
         return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
@@ -333,6 +358,8 @@ static int render_set(const render_args *a)
 {
     if (a->have_steps)
         return tpk_cli_fail("render", "%s: a part set renders one step (--step N), not a range", a->path);
+    if (a->iso_auto)
+        return tpk_cli_fail("render", "%s: --iso auto takes one file's median; for a part set give --iso V", a->path);
     if (a->backend && !strcmp(a->backend, "vulkan") && !a->backend_from_scene)
         return tpk_cli_fail("render", "%s: a part set renders with the CPU reference only (--backend cpu)", a->path);
     tpk_partset *set = NULL;

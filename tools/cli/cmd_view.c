@@ -140,6 +140,9 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
         return TPK_EXIT_USAGE;
     tpk_render_options_default(&o.render);
     render_args_to_options(a, file, &o.tf, &o.render);
+    double iso_auto;
+    if (a->iso_auto && render_args_iso_auto("view", a, file, &o.render, &iso_auto))
+        return TPK_EXIT_USAGE;
     o.file = file;
     o.path = a->path;
     o.field = a->field;

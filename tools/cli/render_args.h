@@ -78,6 +78,21 @@ int render_args_check_field(const char *cmd, const render_args *a, tpk_file *fil
  * a step range past them is refused before any frame is written; `found` names it for messages. */
 uint32_t render_args_field_steps(tpk_file *file, const char *name, char found[80]);
 
+/* The descriptor of the field rendered (the named one, or the first point field): 0, or -1 when the
+ * file has none (out zeroed). */
+int render_args_field_desc(tpk_file *file, const char *name, tpk_field_desc *out);
+
+/* --iso auto: one isosurface at the median of the field's values (point values, or per tet for a tet
+ * field; NaN ignored) at the first step rendered, into opt (iso_count 1) and *value. 0, or a message and
+ * TPK_EXIT_USAGE (no field, no finite value). */
+int render_args_iso_auto(const char *cmd, const render_args *a, tpk_file *file, tpk_render_options *opt,
+                         double *value);
+
+/* The default opacity scale: the TF's opacity is per this distance, diagonal / TPK_CLI_UNIT_DIVISOR of
+ * the bounds (render.h's own default, for callers of the library, is diagonal / 100). */
+#define TPK_CLI_UNIT_DIVISOR 20.0
+double render_args_default_unit(const double bounds_min[3], const double bounds_max[3]);
+
 /* The layout `name` says (tet16, tet20, tet32), or with NULL the first the file stores. */
 tpk_layout render_args_layout(tpk_file *file, const char *name);
 
