@@ -1,7 +1,7 @@
 # The first picture: --legend composites a colour bar whose pixels are the TF's colours (checked in the
 # PNG against a TF file's points, linear between them), and changes nothing else of the picture but its
 # corner; --iso auto is the field's median (--json iso_auto, -v) and draws what --iso with that value
-# draws; the default opacity scale is bounds diagonal / 20 (the same image as --unit-distance D/20).
+# draws; the default opacity scale is bounds diagonal / 30 (the same image as --unit-distance D/30).
 source "$(dirname "$0")/common.sh"
 
 convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" > /dev/null
@@ -50,14 +50,14 @@ PYEOF
 "$TPK" render "$WORK/cyl.tpk" -o "$WORK/iso.png" --size 96x72 --iso "$value" > /dev/null
 cmp -s "$WORK/auto.png" "$WORK/iso.png" || fail "--iso auto differs from --iso $value"
 
-# the default opacity: per bounds diagonal / 20
+# the default opacity: per bounds diagonal / 30
 "$TPK" render "$WORK/cyl.tpk" -o "$WORK/default.png" --size 96x72 --save-scene "$WORK/default.json" > /dev/null
 unit=$("$PY" -c 'import json,sys; print(repr(json.load(open(sys.argv[1]))["unit_distance"]))' "$WORK/default.json")
 diag=$("$TPK" info "$WORK/cyl.tpk" --json | "$PY" -c '
 import json, sys, math
 b = json.load(sys.stdin)["bounds"]
 print(repr(math.dist(b["min"], b["max"])))')
-"$PY" -c "import sys; assert abs($unit - $diag / 20) <= 1e-9 * $diag, ($unit, $diag)" || fail "default unit distance $unit, diagonal $diag"
+"$PY" -c "import sys; assert abs($unit - $diag / 30) <= 1e-9 * $diag, ($unit, $diag)" || fail "default unit distance $unit, diagonal $diag"
 "$TPK" render "$WORK/cyl.tpk" -o "$WORK/explicit.png" --size 96x72 --unit-distance "$unit" > /dev/null
-cmp -s "$WORK/default.png" "$WORK/explicit.png" || fail "the default differs from --unit-distance diagonal/20"
+cmp -s "$WORK/default.png" "$WORK/explicit.png" || fail "the default differs from --unit-distance diagonal/30"
 echo ok

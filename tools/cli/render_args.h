@@ -90,7 +90,7 @@ int render_args_iso_auto(const char *cmd, const render_args *a, tpk_file *file, 
 
 /* The default opacity scale: the TF's opacity is per this distance, diagonal / TPK_CLI_UNIT_DIVISOR of
  * the bounds (render.h's own default, for callers of the library, is diagonal / 100). */
-#define TPK_CLI_UNIT_DIVISOR 20.0
+#define TPK_CLI_UNIT_DIVISOR 30.0
 double render_args_default_unit(const double bounds_min[3], const double bounds_max[3]);
 
 /* The layout `name` says (tet16, tet20, tet32), or with NULL the first the file stores. */

@@ -87,14 +87,14 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .scene_default = "the field's min and max", .constraint = "finite, low < high"},
     {TPK_OPT_UNIT_DISTANCE,
      .flag = "--unit-distance", .metavar = "D", .expects = "a positive number",
-     .help = "TF opacity is per distance D (default: bounds diagonal / 20, so\n"
+     .help = "TF opacity is per distance D (default: bounds diagonal / 30, so\n"
              "a ray across the whole mesh at the presets' mid opacity 0.08 keeps\n"
-             "20% of the light behind it and inner structure shows; the old\n"
-             "default was diagonal / 100: give that D for the old pictures)",
+             "9% of the light behind it, not 0.03%: inner structure shows; the\n"
+             "old default was diagonal / 100: give that D for the old pictures)",
      .help_rank = 10,
      .scene_key = "unit_distance", .scene_type = "number",
      .meaning = "the TF's opacity is per this distance",
-     .scene_default = "bounds diagonal / 20", .constraint = "> 0"},
+     .scene_default = "bounds diagonal / 30", .constraint = "> 0"},
     {TPK_OPT_CLIP_BOX,
      .flag = "--clip-box", .metavar = "x0,y0,z0,x1,y1,z1", .expects = "6 numbers x0,y0,z0,x1,y1,z1 with x0 <= "
              "x1, y0 <= y1, z0 <= z1",
