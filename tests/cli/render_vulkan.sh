@@ -1,6 +1,6 @@
 # tetpack render --backend vulkan|cpu: both backends write the same picture (PSNR >= 40 dB, compared
-# with numpy), --json names the backend and the device, the default is Vulkan when a device is present
-# and the CPU otherwise, and every Vulkan failure is a clear message with exit 2, never a crash.
+# with numpy), --json names the backend, the device and why, the default is Vulkan on a hardware device
+# and the CPU otherwise (lavapipe only, as here, or none), and every Vulkan failure is a clear message with exit 2, never a crash.
 source "$(dirname "$0")/common.sh"
 # Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe, tests/CMakeLists.txt) for the
 # tetpack runs only, so that LeakSanitizer can name the driver's own leaks.
@@ -9,7 +9,8 @@ tpk() {
 }
 
 convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --layout tet16 --layout tet20 > /dev/null
-tpk render --help | grep -q -- "--backend vulkan|cpu" || fail "render --help lacks --backend"
+tpk render --help > "$WORK/help.txt" # (not piped into grep -q: a help longer than stdio's buffer would get SIGPIPE)
+grep -q -- "--backend vulkan|cpu" "$WORK/help.txt" || fail "render --help lacks --backend"
 
 for layout in tet16 tet20; do
     for backend in cpu vulkan; do
@@ -32,12 +33,23 @@ sys.exit(0 if psnr >= 40 and a.std() > 0 else 1)
 PYEOF
 done
 
-# the default: Vulkan here (lavapipe is installed); TETPACK_RENDER_BACKEND overrides it
+# the default: here the only Vulkan device is lavapipe, a software rasterizer, so the CPU reference (a
+# hardware device would be the default: tests/test_render_backend.c); TETPACK_RENDER_BACKEND and --backend
+# override it, and --json and -v say which and why
 unset TETPACK_RENDER_BACKEND
-tpk render "$WORK/cyl.tpk" -o "$WORK/default.png" --size 32x32 --json > "$WORK/default.json"
-grep -q '"backend":"vulkan"' "$WORK/default.json" || fail "default backend: $(cat "$WORK/default.json")"
+tpk render "$WORK/cyl.tpk" -o "$WORK/default.png" --size 32x32 --json -v > "$WORK/default.json" 2> "$WORK/default.err"
+grep -q '"backend":"cpu"' "$WORK/default.json" || fail "default backend: $(cat "$WORK/default.json")"
+grep -q '"backend_reason":"default: the only Vulkan device is a software rasterizer (llvmpipe' "$WORK/default.json" \
+    || fail "default backend_reason: $(cat "$WORK/default.json")"
+grep -q "backend cpu (cpu): default: the only Vulkan device is a software rasterizer" "$WORK/default.err" \
+    || fail "-v: $(cat "$WORK/default.err")"
+TETPACK_RENDER_BACKEND=vulkan tpk render "$WORK/cyl.tpk" -o "$WORK/env.png" --size 32x32 --json > "$WORK/env.json"
+grep -q '"backend":"vulkan".*"backend_reason":"TETPACK_RENDER_BACKEND=vulkan"' "$WORK/env.json" \
+    || fail "TETPACK_RENDER_BACKEND=vulkan: $(cat "$WORK/env.json")"
 TETPACK_RENDER_BACKEND=cpu tpk render "$WORK/cyl.tpk" -o "$WORK/env.png" --size 32x32 --json > "$WORK/env.json"
 grep -q '"backend":"cpu"' "$WORK/env.json" || fail "TETPACK_RENDER_BACKEND=cpu: $(cat "$WORK/env.json")"
+TETPACK_RENDER_BACKEND=cpu tpk render "$WORK/cyl.tpk" -o "$WORK/env.png" --size 32x32 --json --backend vulkan > "$WORK/env.json"
+grep -q '"backend":"vulkan".*"backend_reason":"--backend vulkan"' "$WORK/env.json" || fail "--backend over the environment: $(cat "$WORK/env.json")"
 export TETPACK_RENDER_BACKEND=metal
 expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/env.png" --size 32x32
 expect_stderr "TETPACK_RENDER_BACKEND expects vulkan or cpu"
@@ -49,7 +61,7 @@ expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/none.png" --size 32x32 --back
 expect_stderr "vulkan: creating the instance"
 [ ! -e "$WORK/none.png" ] || fail "an image was written after a Vulkan error"
 tpk render "$WORK/cyl.tpk" -o "$WORK/fallback.png" --size 32x32 --json > "$WORK/fallback.json"
-grep -q '"backend":"cpu"' "$WORK/fallback.json" || fail "fallback backend: $(cat "$WORK/fallback.json")"
+grep -q '"backend":"cpu".*"backend_reason":"default: no Vulkan device' "$WORK/fallback.json" || fail "fallback backend: $(cat "$WORK/fallback.json")"
 unset VK_ICD_FILENAMES
 
 # a binding limit the file cannot fit in: refused with exit 2 and a message, not a crash

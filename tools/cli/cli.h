@@ -46,8 +46,10 @@ struct tpk_output_input;
  * (tpk_output_check): 0, or print "tetpack <cmd>: error: ..." and return TPK_EXIT_USAGE. */
 int tpk_cli_check_output(const char *cmd, const char *arg, const char *path, const struct tpk_output_input *inputs,
                          size_t count);
-/* The same for convert's OUTPUT against every file INPUT consists of (TetGen siblings, .pvd pieces). */
-int tpk_cli_check_convert_output(const char *input, const char *format, const char *output);
+/* The same for a conversion's output (convert's OUTPUT, render's --save-tpk: `arg`) against every file
+ * INPUT consists of (TetGen siblings, .pvd pieces). */
+int tpk_cli_check_convert_output(const char *cmd, const char *arg, const char *input, const char *format,
+                                 const char *output);
 
 /* Open a .tpk; on failure print "tetpack <cmd>: error: PATH: why" and return TPK_EXIT_USAGE. */
 int tpk_cli_open(const char *cmd, const char *path, struct tpk_file **out);

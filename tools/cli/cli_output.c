@@ -47,12 +47,13 @@ static void add_input_file(void *user, const char *file)
     list->items[list->count++] = (tpk_output_input){.arg = "INPUT", .given = list->given, .file = copy};
 }
 
-int tpk_cli_check_convert_output(const char *input, const char *format, const char *output)
+int tpk_cli_check_convert_output(const char *cmd, const char *arg, const char *input, const char *format,
+                                 const char *output)
 {
     input_files list = {.given = input};
     tpk_import_input_files(input, format, add_input_file, &list);
-    int rc = list.failed ? tpk_cli_fail("convert", "out of memory listing the files of INPUT '%s'", input)
-                         : tpk_cli_check_output("convert", "OUTPUT", output, list.items, list.count);
+    int rc = list.failed ? tpk_cli_fail(cmd, "out of memory listing the files of INPUT '%s'", input)
+                         : tpk_cli_check_output(cmd, arg, output, list.items, list.count);
     for (size_t i = 0; i < list.count; i++)
         free((char *)list.items[i].file);
     free(list.items);

@@ -354,7 +354,7 @@ int tpk_cmd_convert(int argc, char **argv)
     a.progress = -1;
     int rc = parse_args(argc, argv, &a);
     if (rc == 0)
-        rc = tpk_cli_check_convert_output(a.options.input, a.options.format, a.options.output);
+        rc = tpk_cli_check_convert_output("convert", "OUTPUT", a.options.input, a.options.format, a.options.output);
     if (rc)
         return rc;
     a.options.command_line = tpk_cli_joined(argc, argv, a.options.output);

@@ -6,6 +6,7 @@
 #include "base/output_file.h"
 #include "base/strbuf.h"
 #include "cli.h"
+#include "render_args.h"
 #include "extract/extract.h"
 #include "scene/scene.h"
 #include "tetpack.h"
@@ -162,7 +163,7 @@ static int save_scene(const extract_args *a, const tpk_extract_report *r)
     }
     if (!(s.given & TPK_SCENE_UNIT_DISTANCE)) { /* the renderer's defaults follow the mesh's size */
         s.given |= TPK_SCENE_UNIT_DISTANCE;
-        s.unit_distance = r->diagonal / 100.0;
+        s.unit_distance = render_args_default_unit(r->bounds_min, r->bounds_max); /* render's own default */
     }
     if ((s.given & TPK_SCENE_AO_RAYS) && s.ao_rays > 0 && !(s.given & TPK_SCENE_AO_RADIUS)) {
         s.given |= TPK_SCENE_AO_RADIUS;

@@ -6,19 +6,24 @@
 #include <string.h>
 
 #include "base/output_file.h"
+#include "base/strbuf.h"
 #include "cli.h"
 #include "render/render.h"
+#include "render/legend.h"
+#include "render/render_backend.h"
 #include "scene/scene.h"
 #include "tetpack.h"
 #include "render/transfer_function.h"
 #include "render_args.h"
+#include "render_input.h"
 #ifdef TPK_WITH_VULKAN
 #include "render_vk/render_vk.h"
 #endif
 
 static const char render_help[] =
-    "usage: tetpack render FILE.tpk -o IMAGE.png [options]\n"
+    "usage: tetpack render FILE -o IMAGE.png [options]\n"
     "\n"
+    "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
     "Ray-marches the tets with the reference CPU marcher (shell BVH entry, watertight tet-to-tet\n"
     "marching) on all cores and writes a PNG. Emission-absorption: within a tet the scalar is linear,\n"
     "so each piece is split exactly where the scalar crosses a TF control point; color and extinction\n"
@@ -65,6 +70,8 @@ typedef struct frame_source {
     const tpk_set_marcher *set;
     int has_scalars;  /* the set's parts carry a point field */
     double diagonal;  /* of the box of all the set's positions */
+    const tpk_field_desc *field; /* the field shown (its name and units for --legend) */
+    double iso_auto;  /* --iso auto's value (NAN: not asked) */
 } frame_source;
 
 static int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt,
@@ -84,6 +91,10 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
 #endif
                       : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
+    tpk_legend legend = {opt->tf, opt->range_min, opt->range_max, src->field ? src->field->name : NULL,
+                         src->field ? src->field->units : NULL};
+    if (a->legend && tpk_legend_draw(rgba, a->width, a->height, &legend, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
     if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
         return tpk_cli_fail("render", "%s", diag.message);
     if (a->json) {
@@ -102,7 +113,12 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
                    "\"pipeline_cache\":{\"loaded_bytes\":%llu,\"hits\":%d}",
                    stats.setup_device_seconds, stats.setup_upload_seconds, stats.setup_pipeline_seconds,
                    stats.first_frame_seconds, (unsigned long long)stats.pipeline_cache_bytes, stats.pipeline_cache_hits);
-        printf("}\n");
+        if (!isnan(src->iso_auto))
+            printf(",\"iso_auto\":%.9g", src->iso_auto);
+        tpk_strbuf reason = {0};
+        tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
+        printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");
+        tpk_strbuf_free(&reason);
     } else
         printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
                (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,
@@ -144,42 +160,36 @@ static int save_scene(const render_args *a, tpk_file *file, const tpk_render_opt
     return 0;
 }
 
-/* The backend of this render: --backend, else $TETPACK_RENDER_BACKEND, else Vulkan when a device is
- * present; a->device gets the device's name ("cpu" for the reference). Returns 0 or -1 with a message. */
+/* The backend of this render (render/render_backend.h: --backend, the scene's, $TETPACK_RENDER_BACKEND,
+ * else Vulkan on a hardware device and the CPU reference otherwise); a->device gets the device's name
+ * ("cpu" for the reference) and a->backend_reason why. Returns 0 or -1 with a message. */
 static int resolve_backend(render_args *a, tpk_diag *diag)
 {
-    const char *env = getenv("TETPACK_RENDER_BACKEND");
-    if (a->backend_from_scene && !strcmp(a->backend, "vulkan")) {
-        int have = 0;
+    tpk_backend_request req = {.flag = a->backend_from_scene ? NULL : a->backend,
+                               .scene = a->backend_from_scene ? a->backend : NULL,
+                               .env = getenv("TETPACK_RENDER_BACKEND"),
+                               /* the Vulkan renderer refuses the vertex cache: by default those go to the CPU */
+                               .cpu_only = a->occlusion == TPK_OCCLUSION_VERTEX && (a->shadows || a->ao_rays > 0)};
 #ifdef TPK_WITH_VULKAN
-        have = tpk_vulkan_available(a->device, sizeof a->device);
+    req.vulkan_built = 1;
+    int kind = TPK_VK_DEVICE_NONE;
+    if (tpk_backend_needs_device(&req))
+        tpk_vulkan_probe(a->device, sizeof a->device, &kind);
+    req.device = (tpk_vk_device_kind)kind;
+    req.device_name = a->device;
 #endif
-        if (!have) {
-            fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; no Vulkan device here, so the CPU "
-                    "reference renders it (the same picture)\n", a->scene_path);
-            a->backend = "cpu";
-        }
-    }
-    if (!a->backend && env && *env) {
-        if (strcmp(env, "vulkan") && strcmp(env, "cpu"))
-            return tpk_diag_fail(diag, "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", env);
-        a->backend = env;
-    }
-    /* The Vulkan renderer has no vertex cache yet (it refuses it): by default those go to the CPU. */
-    if (!a->backend && a->occlusion == TPK_OCCLUSION_VERTEX && (a->shadows || a->ao_rays > 0))
-        a->backend = "cpu";
-#ifdef TPK_WITH_VULKAN
-    if (!a->backend)
-        a->backend = tpk_vulkan_available(a->device, sizeof a->device) ? "vulkan" : "cpu";
-    else if (!strcmp(a->backend, "vulkan") && !tpk_vulkan_available(a->device, sizeof a->device))
-        return tpk_diag_fail(diag, "--backend vulkan: %s", a->device);
-#else
-    if (a->backend && !strcmp(a->backend, "vulkan"))
-        return tpk_diag_fail(diag, "--backend vulkan: this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)");
-    a->backend = "cpu";
-#endif
-    if (!strcmp(a->backend, "cpu"))
+    tpk_backend_choice choice;
+    if (tpk_backend_choose(&req, &choice, diag) != 0)
+        return -1;
+    if (choice.scene_fallback)
+        fprintf(stderr, "tetpack render: note: %s asks for the Vulkan backend; no Vulkan device here, so the CPU "
+                "reference renders it (the same picture)\n", a->scene_path);
+    a->backend = choice.vulkan ? "vulkan" : "cpu";
+    snprintf(a->backend_reason, sizeof a->backend_reason, "%s", choice.reason);
+    if (!choice.vulkan)
         snprintf(a->device, sizeof a->device, "cpu");
+    if (a->verbose)
+        fprintf(stderr, "tetpack render: backend %s (%s): %s\n", a->backend, a->device, a->backend_reason);
     return 0;
 }
 
@@ -203,6 +213,14 @@ static int render_file(render_args *a, tpk_file *file)
     tpk_render_options opt;
     tpk_render_options_default(&opt); /* opaque dark-gray background */
     render_args_to_options(a, file, &tf, &opt);
+    tpk_field_desc field;
+    int have_field = render_args_field_desc(file, a->field, &field) == 0;
+    double iso_auto = NAN;
+    if (a->iso_auto && render_args_iso_auto("render", a, file, &opt, &iso_auto))
+        return TPK_EXIT_USAGE;
+    if (a->iso_auto && a->verbose)
+        fprintf(stderr, "tetpack render: --iso auto: %.9g, the median of '%s' at step %d\n", iso_auto, field.name,
+                a->step);
     uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
     if (!rgba)
         return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
@@ -215,7 +233,8 @@ static int render_file(render_args *a, tpk_file *file)
         if (rc == TPK_EXIT_OK)
             rc = load_step(a, file, association == TPK_ASSOC_TET, step, &mesh, &opt);
         if (rc == TPK_EXIT_OK)
-            rc = render_frame(a, &(frame_source){.mesh = &mesh}, &opt, path, rgba);
+            rc = render_frame(a, &(frame_source){.mesh = &mesh, .field = have_field ? &field : NULL,
+                                                 .iso_auto = iso_auto}, &opt, path, rgba);
     }
     free(rgba);
     if (rc == TPK_EXIT_OK && a->save_scene && save_scene(a, file, &opt) != 0)
@@ -227,8 +246,12 @@ static int render_file(render_args *a, tpk_file *file)
 static int check_outputs(const render_args *a)
 {
     /* A --tf that names a file is read too (a preset name names none: stat fails, nothing matches). */
-    tpk_output_input inputs[3] = {{.arg = "FILE.tpk", .given = a->path}};
+    tpk_output_input inputs[4] = {{.arg = "FILE.tpk", .given = a->path}};
     size_t count = 1;
+    if (a->save_tpk && tpk_cli_check_convert_output("render", "--save-tpk", a->path, NULL, a->save_tpk))
+        return TPK_EXIT_USAGE;
+    if (a->save_tpk)
+        inputs[count++] = (tpk_output_input){.arg = "--save-tpk", .given = a->save_tpk};
     if (a->scene_path)
         inputs[count++] = (tpk_output_input){.arg = "--scene", .given = a->scene_path};
     if (a->tf)
@@ -315,7 +338,14 @@ static int render_set_frame(const render_args *a, tpk_partset *set, const tpk_se
     double d2 = 0;
     for (int k = 0; k < 3; k++)
         d2 += v->hi[k] > v->lo[k] ? (v->hi[k] - v->lo[k]) * (v->hi[k] - v->lo[k]) : 0;
-    frame_source src = {.set = marcher, .has_scalars = v->has_scalars, .diagonal = sqrt(d2)};
+    if (!(a->unit_distance > 0)) /* the default scale of the whole set, not of part 0 */
+        opt.unit_distance = render_args_default_unit(v->bounds_min, v->bounds_max);
+    tpk_field_desc field;
+    int have_field = render_args_field_desc(tpk_partset_file(set, 0), a->field, &field) == 0;
+    if (have_field && !a->have_range)
+        field.min_value = (float)v->range[0], field.max_value = (float)v->range[1];
+    frame_source src = {.set = marcher, .has_scalars = v->has_scalars, .diagonal = sqrt(d2),
+                        .field = have_field ? &field : NULL, .iso_auto = NAN};
     uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
     if (!rgba)
         return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
@@ -330,6 +360,8 @@ static int render_set(const render_args *a)
 {
     if (a->have_steps)
         return tpk_cli_fail("render", "%s: a part set renders one step (--step N), not a range", a->path);
+    if (a->iso_auto)
+        return tpk_cli_fail("render", "%s: --iso auto takes one file's median; for a part set give --iso V", a->path);
     if (a->backend && !strcmp(a->backend, "vulkan") && !a->backend_from_scene)
         return tpk_cli_fail("render", "%s: a part set renders with the CPU reference only (--backend cpu)", a->path);
     tpk_partset *set = NULL;
@@ -375,18 +407,21 @@ int tpk_cmd_render(int argc, char **argv)
             return rc;
     }
     if (!a.path || !a.output)
-        return tpk_cli_fail("render", "expected FILE.tpk and -o IMAGE.png (see tetpack render --help)");
+        return tpk_cli_fail("render", "expected FILE and -o IMAGE.png (see tetpack render --help)");
     if (check_outputs(&a))
         return TPK_EXIT_USAGE;
-    tpk_file *file = NULL;
-    if (tpk_cli_open("render", a.path, &file))
+    render_input in;
+    if (render_input_open("render", a.path, a.save_tpk, a.threads, &in))
         return TPK_EXIT_USAGE;
+    if (in.converted && a.verbose)
+        fprintf(stderr, "tetpack render: converted %s with convert's defaults: %lld tets in %.3f s, %s\n", a.path,
+                in.tets, in.convert_seconds, in.tpk_path ? in.tpk_path : "in memory (--save-tpk FILE keeps it)");
     uint64_t part_chunk;
-    if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
-        tpk_close(file);
+    if (tpk_find_chunk(in.file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
+        render_input_close(&in);
         return render_set(&a);
     }
-    int rc = render_file(&a, file);
-    tpk_close(file);
+    int rc = render_file(&a, in.file);
+    render_input_close(&in);
     return rc;
 }

@@ -6,6 +6,7 @@
 #include "base/output_file.h"
 #include "cli.h"
 #include "render_args.h"
+#include "render_input.h"
 #include "tetpack.h"
 #ifdef TPK_WITH_VIEW
 #include "view/view.h"
@@ -15,8 +16,9 @@
 #endif
 
 static const char view_help[] =
-    "usage: tetpack view FILE.tpk [--scene scene.json] [options]\n"
+    "usage: tetpack view FILE [--scene scene.json] [options]\n"
     "\n"
+    "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
     "Opens a window that renders the file with the Vulkan renderer (the CPU reference where there is\n"
     "no Vulkan device) and shows each frame; the title shows what is shown, the device, the frame rate\n"
     "and the frame time. Needs a display: for images without one, use tetpack render.\n"
@@ -85,9 +87,13 @@ static int parse_args(int argc, char **argv, render_args *a, view_args *v)
             return rc;
     }
     if (!a->path)
-        return tpk_cli_fail("view", "expected FILE.tpk (see tetpack view --help)");
-    tpk_output_input inputs[2] = {{.arg = "FILE.tpk", .given = a->path}};
+        return tpk_cli_fail("view", "expected FILE (see tetpack view --help)");
+    tpk_output_input inputs[3] = {{.arg = "FILE.tpk", .given = a->path}};
     size_t count = 1;
+    if (a->save_tpk && tpk_cli_check_convert_output("view", "--save-tpk", a->path, NULL, a->save_tpk))
+        return TPK_EXIT_USAGE;
+    if (a->save_tpk)
+        inputs[count++] = (tpk_output_input){.arg = "--save-tpk", .given = a->save_tpk};
     if (a->scene_path)
         inputs[count++] = (tpk_output_input){.arg = "--scene", .given = a->scene_path};
     if (v->screenshot && tpk_cli_check_output("view", "--screenshot", v->screenshot, inputs, count))
@@ -134,6 +140,9 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
         return TPK_EXIT_USAGE;
     tpk_render_options_default(&o.render);
     render_args_to_options(a, file, &o.tf, &o.render);
+    double iso_auto;
+    if (a->iso_auto && render_args_iso_auto("view", a, file, &o.render, &iso_auto))
+        return TPK_EXIT_USAGE;
     o.file = file;
     o.path = a->path;
     o.field = a->field;
@@ -169,11 +178,11 @@ int tpk_cmd_view(int argc, char **argv)
     if (render_args_merge_scene("view", argc, argv, &a) || parse_args(argc, argv, &a, &v))
         return TPK_EXIT_USAGE;
 #ifdef TPK_WITH_VIEW
-    tpk_file *file = NULL;
-    if (tpk_cli_open("view", a.path, &file))
+    render_input in;
+    if (render_input_open("view", a.path, a.save_tpk, a.threads, &in))
         return TPK_EXIT_USAGE;
-    int rc = view_file(&a, &v, file);
-    tpk_close(file);
+    int rc = view_file(&a, &v, in.file);
+    render_input_close(&in);
     return rc;
 #else
     (void)v;

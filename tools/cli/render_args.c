@@ -115,6 +115,9 @@ static int opt_integration(const char *v, render_args *a)
 
 static int opt_scene(const char *v, render_args *a) { (void)v; (void)a; return 0; } /* read by render_args_merge_scene */
 static int opt_save_scene(const char *v, render_args *a) { a->save_scene = v; return 0; }
+static int opt_save_tpk(const char *v, render_args *a) { a->save_tpk = v; return 0; }
+static int opt_legend(const char *v, render_args *a) { (void)v; a->legend = 1; return 0; }
+static int opt_verbose(const char *v, render_args *a) { (void)v; a->verbose = 1; return 0; }
 static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->threads); }
 static int opt_backend(const char *v, render_args *a)
 {
@@ -122,7 +125,15 @@ static int opt_backend(const char *v, render_args *a)
     a->backend_from_scene = 0;
     return strcmp(v, "vulkan") && strcmp(v, "cpu");
 }
-static int opt_iso(const char *v, render_args *a) { return parse_list(v, a->iso, TPK_RENDER_MAX_ISO, &a->iso_count); }
+static int opt_iso(const char *v, render_args *a)
+{
+    a->iso_auto = !strcmp(v, "auto");
+    if (a->iso_auto) {
+        a->iso_count = 0;
+        return 0;
+    }
+    return parse_list(v, a->iso, TPK_RENDER_MAX_ISO, &a->iso_count);
+}
 
 static int opt_iso_opacity(const char *v, render_args *a)
 {
@@ -187,6 +198,9 @@ static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_OCCLUSION] = opt_occlusion,
     [TPK_OPT_SCENE] = opt_scene,
     [TPK_OPT_SAVE_SCENE] = opt_save_scene,
+    [TPK_OPT_LEGEND] = opt_legend,
+    [TPK_OPT_SAVE_TPK] = opt_save_tpk,
+    [TPK_OPT_VERBOSE] = opt_verbose,
 };
 
 const tpk_option_row *render_args_find_option(const char *arg)
@@ -221,7 +235,7 @@ int render_args_parse_option(const char *cmd, int argc, char **argv, int *i, ren
     } else if (!a->path) {
         a->path = arg;
     } else {
-        return tpk_cli_fail(cmd, "expected one FILE.tpk, found a second argument '%s'", arg);
+        return tpk_cli_fail(cmd, "expected one FILE, found a second argument '%s'", arg);
     }
     return 0;
 }
@@ -344,7 +358,8 @@ void render_args_to_options(const render_args *a, tpk_file *file, const tpk_tran
         render_args_field_range(file, a->field, range);
     opt->range_min = range[0];
     opt->range_max = range[1];
-    opt->unit_distance = a->unit_distance;
+    opt->unit_distance = a->unit_distance > 0 ? a->unit_distance
+                                              : render_args_default_unit(info.bounds_min, info.bounds_max);
     opt->threads = a->threads;
     opt->integration = a->integration;
     opt->iso_count = a->iso_count;
@@ -360,6 +375,64 @@ void render_args_to_options(const render_args *a, tpk_file *file, const tpk_tran
     opt->ao_rays = a->ao_rays;
     opt->ao_radius = a->ao_radius;
     opt->occlusion = a->occlusion;
+}
+
+double render_args_default_unit(const double bounds_min[3], const double bounds_max[3])
+{
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += (bounds_max[k] - bounds_min[k]) * (bounds_max[k] - bounds_min[k]);
+    return isfinite(d2) && d2 > 0 ? sqrt(d2) / TPK_CLI_UNIT_DIVISOR : 0; /* 0: the renderer's fallback */
+}
+
+int render_args_field_desc(tpk_file *file, const char *name, tpk_field_desc *out)
+{
+    for (uint32_t i = 0; i < tpk_field_count(file); i++)
+        if (tpk_get_field(file, i, out) == TPK_OK && (name ? !strcmp(name, out->name) : out->association == TPK_ASSOC_POINT))
+            return 0;
+    memset(out, 0, sizeof *out);
+    return -1;
+}
+
+static int compare_floats(const void *x, const void *y)
+{
+    float a = *(const float *)x, b = *(const float *)y;
+    return a < b ? -1 : a > b;
+}
+
+int render_args_iso_auto(const char *cmd, const render_args *a, tpk_file *file, tpk_render_options *opt,
+                         double *value)
+{
+    tpk_field_desc d;
+    if (render_args_field_desc(file, a->field, &d) != 0)
+        return tpk_cli_fail(cmd, "%s: --iso auto needs a field, and this file has no point field", a->path);
+    tpk_mesh_arrays mesh;
+    const float *values = NULL;
+    uint64_t count = 0;
+    tpk_result r = tpk_load_arrays(file, render_args_layout(file, a->layout),
+                                   d.association == TPK_ASSOC_POINT ? d.name : NULL, (uint32_t)a->step, &mesh);
+    if (r == TPK_OK && d.association == TPK_ASSOC_POINT)
+        values = mesh.scalars, count = mesh.vertex_count;
+    else if (r == TPK_OK)
+        r = tpk_load_tet_field(file, d.name, (uint32_t)a->step, &values), count = mesh.tet_count;
+    if (r != TPK_OK)
+        return tpk_cli_fail_file(cmd, a->path, tpk_error_text(file));
+    float *sorted = malloc((count ? count : 1) * sizeof *sorted);
+    if (!sorted)
+        return tpk_cli_fail(cmd, "out of memory for --iso auto over %llu values", (unsigned long long)count);
+    size_t finite = 0;
+    for (uint64_t i = 0; values && i < count; i++)
+        if (isfinite(values[i]))
+            sorted[finite++] = values[i];
+    qsort(sorted, finite, sizeof *sorted, compare_floats);
+    double median = finite ? (finite % 2 ? sorted[finite / 2] : 0.5 * ((double)sorted[finite / 2 - 1] + sorted[finite / 2])) : 0;
+    free(sorted);
+    if (!finite)
+        return tpk_cli_fail(cmd, "%s: --iso auto: field '%s' has no finite value at step %d", a->path, d.name, a->step);
+    opt->iso_count = 1;
+    opt->iso[0] = median;
+    *value = median;
+    return 0;
 }
 
 /* The association of the named field (-1 when there is none), or a usage error naming the fields the

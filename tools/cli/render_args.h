@@ -24,9 +24,13 @@ typedef struct render_args {
     int shading, shadows, have_light, ao_rays, occlusion;
     double light[3], ao_radius; /* ao_radius 0: the renderer's default */
     const char *scene_path, *save_scene; /* --scene, --save-scene */
+    const char *save_tpk;                /* --save-tpk: keep the conversion of a mesh that is not a .tpk */
+    int legend, verbose;                 /* --legend, -v */
+    int iso_auto;                        /* --iso auto: one isosurface at the field's median (render_args_iso_auto) */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
     int backend_from_scene;              /* backend is the scene's: without a device, the CPU (same picture) */
     char device[256];                    /* the Vulkan device's name, or "cpu" */
+    char backend_reason[256];            /* why that backend (render/render_backend.h) */
     tpk_scene scene;                     /* what --scene gave (scene.given = 0 without one) */
 } render_args;
 
@@ -73,6 +77,21 @@ int render_args_check_field(const char *cmd, const render_args *a, tpk_file *fil
 /* The steps of the field rendered (the named one, or the first point field; 1 without a field), so that
  * a step range past them is refused before any frame is written; `found` names it for messages. */
 uint32_t render_args_field_steps(tpk_file *file, const char *name, char found[80]);
+
+/* The descriptor of the field rendered (the named one, or the first point field): 0, or -1 when the
+ * file has none (out zeroed). */
+int render_args_field_desc(tpk_file *file, const char *name, tpk_field_desc *out);
+
+/* --iso auto: one isosurface at the median of the field's values (point values, or per tet for a tet
+ * field; NaN ignored) at the first step rendered, into opt (iso_count 1) and *value. 0, or a message and
+ * TPK_EXIT_USAGE (no field, no finite value). */
+int render_args_iso_auto(const char *cmd, const render_args *a, tpk_file *file, tpk_render_options *opt,
+                         double *value);
+
+/* The default opacity scale: the TF's opacity is per this distance, diagonal / TPK_CLI_UNIT_DIVISOR of
+ * the bounds (render.h's own default, for callers of the library, is diagonal / 100). */
+#define TPK_CLI_UNIT_DIVISOR 30.0
+double render_args_default_unit(const double bounds_min[3], const double bounds_max[3]);
 
 /* The layout `name` says (tet16, tet20, tet32), or with NULL the first the file stores. */
 tpk_layout render_args_layout(tpk_file *file, const char *name);

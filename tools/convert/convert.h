@@ -13,7 +13,9 @@
 
 typedef struct tpk_convert_options {
     const char *input;            /* source mesh path */
-    const char *output;           /* .tpk path, written atomically */
+    const char *output;           /* .tpk path, written atomically; with output_fd, only its name in messages */
+    int output_fd;                /* > 0: write the .tpk into this open, empty, seekable file instead (a memfd:
+                                     render converts in memory); the caller owns it. Not with parts */
     const char *format;           /* NULL/"auto" or a forced importer name */
     unsigned layouts;             /* TPK_LAYOUT_BIT_*; 0 means Tet16 */
     const char *const *fields;    /* NULL: all scalar point fields */

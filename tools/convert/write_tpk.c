@@ -345,11 +345,13 @@ int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const i
     wopt.message = writer_message;
     wopt.message_user = diag;
     /* The file has no name until it is complete (base/output_file.h): a killed conversion leaves nothing. */
-    tpk_output out;
-    if (tpk_output_open(&out, o->output, diag) != 0)
+    tpk_output out = {.fd = o->output_fd};
+    int named = o->output_fd <= 0; /* else the caller's file (render's in-memory conversion) */
+    if (named && tpk_output_open(&out, o->output, diag) != 0)
         return -1;
     if (tpk_writer_open_fd(&cw.writer, out.fd, o->output, &wopt, err, sizeof err) != TPK_OK) {
-        tpk_output_abort(&out);
+        if (named)
+            tpk_output_abort(&out);
         return tpk_diag_fail(diag, "%s", err);
     }
     hdr->vertex_count = (uint64_t)mesh->vertex_count;
@@ -370,18 +372,20 @@ int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const i
         rc = put_chunk(&cw, TPK_TAG_LINK, 0, TPK_ELEM_I32, 4, 4 * (uint64_t)part->link_count, 0, 0, part->links);
     if (rc != 0) {
         tpk_writer_abort(cw.writer);
-        tpk_output_abort(&out);
+        if (named)
+            tpk_output_abort(&out);
         return rc;
     }
     rep->shell_faces = (int64_t)hdr->shell_face_count;
     if (tpk_writer_finish(cw.writer, hdr) != TPK_OK) {
-        tpk_output_abort(&out);
+        if (named)
+            tpk_output_abort(&out);
         return diag->message[0] ? -1 : tpk_diag_fail(diag, "%s: could not finish the file", o->output);
     }
-    if (tpk_output_commit(&out, diag) != 0)
+    if (named && tpk_output_commit(&out, diag) != 0)
         return -1;
     struct stat st;
-    if (stat(o->output, &st) == 0)
+    if (named ? stat(o->output, &st) == 0 : fstat(o->output_fd, &st) == 0)
         rep->output_bytes = (uint64_t)st.st_size;
     return 0;
 }

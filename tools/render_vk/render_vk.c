@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "base/clock.h"
+#include "render/render_backend.h"
 #include "render_vk.h"
 #include "render_vk_internal.h"
 
@@ -522,7 +523,7 @@ int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt
     return rc;
 }
 
-int tpk_vulkan_available(char *why, size_t n)
+int tpk_vulkan_probe(char *why, size_t n, int *kind)
 {
     tpk_vk_context ctx;
     tpk_diag diag;
@@ -530,7 +531,15 @@ int tpk_vulkan_available(char *why, size_t n)
     int ok = tpk_vk_context_create(&ctx, &diag) == 0;
     if (why && n)
         snprintf(why, n, "%s", ok ? ctx.props.deviceName : diag.message);
+    if (kind)
+        *kind = !ok ? TPK_VK_DEVICE_NONE
+                : ctx.props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? TPK_VK_DEVICE_SOFTWARE : TPK_VK_DEVICE_HARDWARE;
     if (ok)
         tpk_vk_context_destroy(&ctx);
     return ok;
+}
+
+int tpk_vulkan_available(char *why, size_t n)
+{
+    return tpk_vulkan_probe(why, n, NULL);
 }

@@ -46,4 +46,9 @@ void tpk_vk_renderer_destroy(tpk_vk_renderer *renderer);
  * `why` (n bytes), or 0 and writes the reason (no loader, no device, too old). */
 int tpk_vulkan_available(char *why, size_t n);
 
+/* The same probe, and what the device is: *kind gets TPK_VK_DEVICE_HARDWARE, TPK_VK_DEVICE_SOFTWARE
+ * (VK_PHYSICAL_DEVICE_TYPE_CPU: lavapipe) or TPK_VK_DEVICE_NONE (render/render_backend.h; an int here so
+ * that this header needs no other). Returns 1 when there is a device. */
+int tpk_vulkan_probe(char *why, size_t n, int *kind);
+
 #endif

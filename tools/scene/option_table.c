@@ -87,11 +87,14 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .scene_default = "the field's min and max", .constraint = "finite, low < high"},
     {TPK_OPT_UNIT_DISTANCE,
      .flag = "--unit-distance", .metavar = "D", .expects = "a positive number",
-     .help = "TF opacity is per distance D (default: bounds diagonal / 100)",
+     .help = "TF opacity is per distance D (default: bounds diagonal / 30, so\n"
+             "a ray across the whole mesh at the presets' mid opacity 0.08 keeps\n"
+             "9% of the light behind it, not 0.03%: inner structure shows; the\n"
+             "old default was diagonal / 100: give that D for the old pictures)",
      .help_rank = 10,
      .scene_key = "unit_distance", .scene_type = "number",
      .meaning = "the TF's opacity is per this distance",
-     .scene_default = "bounds diagonal / 100", .constraint = "> 0"},
+     .scene_default = "bounds diagonal / 30", .constraint = "> 0"},
     {TPK_OPT_CLIP_BOX,
      .flag = "--clip-box", .metavar = "x0,y0,z0,x1,y1,z1", .expects = "6 numbers x0,y0,z0,x1,y1,z1 with x0 <= "
              "x1, y0 <= y1, z0 <= z1",
@@ -101,9 +104,10 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .meaning = "`[x0, y0, z0, x1, y1, z1]`: only the volume inside the box shows",
      .scene_default = "no clip", .constraint = "finite, x0 < x1, y0 < y1, z0 < z1"},
     {TPK_OPT_ISO,
-     .flag = "--iso", .metavar = "V[,V...]", .expects = "1 to 4 comma-separated finite numbers",
+     .flag = "--iso", .metavar = "V[,V...]|auto", .expects = "1 to 4 comma-separated finite numbers, or auto",
      .help = "up to 4 exact isosurfaces of the field (scalar units), coloured\n"
-             "by the TF at V",
+             "by the TF at V; auto: one at the median of the field's values\n"
+             "(the step shown; --json's iso_auto and -v give it)",
      .help_rank = 12, .effect = 1,
      .scene_key = "iso", .scene_type = "[number ×1..4]",
      .meaning = "exact isosurfaces at these scalar values",
@@ -182,8 +186,9 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .flag = "--backend", .metavar = "vulkan|cpu", .expects = "vulkan or cpu",
      .help = "vulkan: compute shaders on the first Vulkan device (a GPU, else\n"
              "lavapipe); cpu: the reference renderer. Same options, same picture.\n"
-             "Default: $TETPACK_RENDER_BACKEND if set, else vulkan when a\n"
-             "Vulkan device is present, else cpu (part sets: cpu)",
+             "Default: $TETPACK_RENDER_BACKEND if set, else vulkan on a hardware\n"
+             "Vulkan device, else cpu (with only a software rasterizer such as\n"
+             "lavapipe the CPU reference is faster; part sets: cpu)",
      .help_rank = 22,
      .scene_key = "backend", .scene_type = "string",
      .meaning = "renderer; `render --backend` overrides it, and it overrides `$TETPACK_RENDER_BACKEND`; where "
@@ -220,8 +225,24 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help_rank = 24},
     {TPK_OPT_JSON,
      .flag = "--json", .metavar = NULL, .expects = NULL,
-     .help = "print render statistics as JSON",
+     .help = "print render statistics as JSON (with the backend and\n"
+             "backend_reason: why that backend)",
      .help_rank = 25, .render_only = 1},
+    {TPK_OPT_LEGEND,
+     .flag = "--legend", .metavar = NULL, .expects = NULL,
+     .help = "draw a colour bar of the TF on the image: the field's name and\n"
+             "units, its range and ticks (cairo; TETPACK_WITH_CAIRO)",
+     .help_rank = 26, .render_only = 1},
+    {TPK_OPT_SAVE_TPK,
+     .flag = "--save-tpk", .metavar = "FILE", .expects = "an output .tpk path",
+     .help = "FILE may be any mesh tetpack convert reads: it is converted\n"
+             "in memory with convert's defaults; --save-tpk keeps the .tpk",
+     .help_rank = 27},
+    {TPK_OPT_VERBOSE,
+     .flag = "--verbose", .alias = "-v", .metavar = NULL, .expects = NULL,
+     .help = "say on stderr which backend renders and why, and what was\n"
+             "converted",
+     .help_rank = 28, .render_only = 1},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

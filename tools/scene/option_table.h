@@ -45,6 +45,9 @@ typedef enum tpk_option_id {
     TPK_OPT_SCENE,
     TPK_OPT_SAVE_SCENE,
     TPK_OPT_JSON,
+    TPK_OPT_LEGEND,
+    TPK_OPT_SAVE_TPK,
+    TPK_OPT_VERBOSE,
     TPK_OPT_COUNT
 } tpk_option_id;
 
