@@ -57,9 +57,11 @@ static int create_instance(tpk_vk_context *ctx, const tpk_vk_surface_source *sur
     return 0;
 }
 
-/* The first queue family with compute (that can also present to `surface`, when one is given). */
+/* The first queue family with compute (that can also present to `surface`, when one is given;
+ * TPK_VK_NO_PRESENT=1: none can, so that tests reach the viewer's fallback). */
 static int compute_family(VkPhysicalDevice dev, VkSurfaceKHR surface, uint32_t *family, uint32_t *timestamp_bits)
 {
+    const char *no_present = getenv("TPK_VK_NO_PRESENT");
     uint32_t n = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(dev, &n, NULL);
     VkQueueFamilyProperties props[64];
@@ -67,7 +69,8 @@ static int compute_family(VkPhysicalDevice dev, VkSurfaceKHR surface, uint32_t *
     vkGetPhysicalDeviceQueueFamilyProperties(dev, &n, props);
     for (uint32_t i = 0; i < n; i++) {
         VkBool32 present = VK_TRUE;
-        if (surface && vkGetPhysicalDeviceSurfaceSupportKHR(dev, i, surface, &present) != VK_SUCCESS)
+        if (surface && ((no_present && !strcmp(no_present, "1")) ||
+                        vkGetPhysicalDeviceSurfaceSupportKHR(dev, i, surface, &present) != VK_SUCCESS))
             present = VK_FALSE;
         if ((props[i].queueFlags & VK_QUEUE_COMPUTE_BIT) && present) {
             *family = i;
