@@ -208,7 +208,8 @@ static void record_band_to_target(vk_render *v, const tpk_vk_params *params, int
 {
     VkCommandBuffer cmd = v->cmd;
     barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-            VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_HOST_READ_BIT);
+            VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT,
+            VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_HOST_READ_BIT);
     v->target->record(cmd, v->pixels.buffer, params->dims[0], params->dims[2], rows, v->target->user);
     if (!v->ctx.staged)
         return;
@@ -326,8 +327,8 @@ static int run_slice(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, i
     return 0;
 }
 
-/* Copy a finished band out: pixels into rgba (none when NULL: a presenting frame), tet steps (counts[0]) and secondary rays (counts[1])
- * added; a failed ray is an error naming the first such pixel. */
+/* Copy a finished band out: pixels into rgba (none when NULL: a presenting frame), tet steps
+ * (counts[0]) and secondary rays (counts[1]) added; a failed ray is an error naming the first such pixel. */
 static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t *rgba, uint64_t counts[2],
                      tpk_diag *diag)
 {

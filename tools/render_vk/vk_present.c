@@ -16,6 +16,7 @@ struct tpk_vk_presenter {
     VkSurfaceFormatKHR format;
     VkPresentModeKHR mode;
     VkExtent2D extent;
+    int asked_width, asked_height; /* the drawable's size it was made for (extent may differ: the surface's) */
     uint32_t image_count;
     VkImage images[MAX_IMAGES];
     VkSemaphore rendered[MAX_IMAGES]; /* per image: a present's wait is over once the image comes back */
@@ -136,6 +137,7 @@ static int make_swapchain(tpk_vk_presenter *p, int width, int height, tpk_diag *
         return vk_check(r, "creating the window's swapchain", diag);
     }
     p->extent = extent;
+    p->asked_width = width, p->asked_height = height;
     p->out_of_date = 0;
     p->image_count = MAX_IMAGES;
     r = vkGetSwapchainImagesKHR(p->ctx->device, p->swapchain, &p->image_count, p->images);
@@ -143,7 +145,8 @@ static int make_swapchain(tpk_vk_presenter *p, int width, int height, tpk_diag *
         return vk_check(r, "listing the swapchain's images", diag);
     VkSemaphoreCreateInfo semaphore = {.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
     for (uint32_t i = 0; i < p->image_count; i++)
-        if (vk_check(vkCreateSemaphore(p->ctx->device, &semaphore, NULL, &p->rendered[i]), "creating a semaphore", diag))
+        if (vk_check(vkCreateSemaphore(p->ctx->device, &semaphore, NULL, &p->rendered[i]), "creating a semaphore",
+                     diag))
             return -1;
     return 0;
 }
@@ -314,7 +317,8 @@ static int show(tpk_vk_presenter *p, int width, int height, tpk_diag *diag)
     vkCmdBlitImage(p->cmd, p->frame, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
                    1, &blit, VK_FILTER_NEAREST);
     image_barrier(p->cmd, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
-                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0);
+                  VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT,
+                  0);
     if (submit(p, p->acquired, p->rendered[index], diag) != 0)
         return -1;
     VkPresentInfoKHR present = {
@@ -340,7 +344,7 @@ int tpk_vk_presenter_frame(tpk_vk_presenter *p, const tpk_render_options *opt, i
         memset(stats, 0, sizeof *stats);
     if (width < 1 || height < 1) /* minimized */
         return 0;
-    if ((p->out_of_date || (uint32_t)width != p->extent.width || (uint32_t)height != p->extent.height) &&
+    if ((p->out_of_date || width != p->asked_width || height != p->asked_height) &&
         make_swapchain(p, width, height, diag) != 0)
         return -1;
     if (need_frame(p, opt->width, opt->height, diag) != 0 || prepare_frame(p, diag) != 0)
