@@ -3,7 +3,10 @@
 # turns the camera as a render with the turned camera shows it, and the scene it saves replays to the
 # same picture; mouse drags and keys sent to the running window, and --keys, change the camera, field,
 # step, layout, TF and effects as the scene they save says; no display, a bad file and bad options end
-# with exit 2 and a message.
+# with exit 2 and a message. All of that through OpenGL (--present gl: frames read back); then Vulkan
+# presentation (the swapchain): the window's pixels as the X server has them equal the view's screenshot
+# and render's picture, the title has the GPU time, a resize and a new renderer (L) keep presenting, and
+# auto falls back to OpenGL with a note where the device cannot present.
 set -euo pipefail
 # One X server for the whole script (tests/with_xvfb.sh: a display of its own; 24-bit so that frames
 # read back exactly).
@@ -22,6 +25,7 @@ psnr_at_least() { # A.png B.png what
     echo "$3: $(cat "$WORK/psnr")"
 }
 unset TETPACK_RENDER_BACKEND
+export TETPACK_VIEW_PRESENT=gl # the sections before "Vulkan presentation"
 SIZE=72x56
 convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --layout tet16 --layout tet20 --layout tet32 > /dev/null
 tpk view --help | grep -q -- "--orbit DEG" || fail "view --help lacks --orbit"
@@ -104,6 +108,62 @@ VK_ICD_FILENAMES="$WORK/no_such_icd.json" tpk view "$WORK/cyl.tpk" --size $SIZE 
 expect_stderr "no Vulkan device"
 tpk render "$WORK/cyl.tpk" --size $SIZE --backend cpu -o "$WORK/render-cpu.png" > /dev/null
 psnr_at_least "$WORK/view-cpu.png" "$WORK/render-cpu.png" "view on the CPU reference"
+
+# the OpenGL window as the X server has it: its pixels equal the screenshot (read back by glReadPixels)
+tpk view "$WORK/cyl.tpk" --size $SIZE --layout tet16 --keys P --screenshot "$WORK/gl-shot.png" 2> "$WORK/gl.err" &
+VIEW_PID=$!
+"$PY" "$SRC/tests/cli/view_present.py" "$WORK/gl-shot.png" "$WORK" "OpenGL \\| .* ms, GPU [0-9.]+ ms, $SIZE" 96x64 ||
+    { kill $VIEW_PID; cat "$WORK/gl.err"; fail "the OpenGL window"; }
+wait $VIEW_PID || { cat "$WORK/gl.err"; fail "view --present gl driven"; }
+
+# Vulkan presentation: each frame's bands copied on the device into an image blitted into the swapchain
+unset TETPACK_VIEW_PRESENT
+for layout in tet16 tet32; do
+    tpk view "$WORK/cyl.tpk" --size $SIZE --layout $layout --present vulkan --frames 3 \
+        --screenshot "$WORK/vk-$layout.png" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --present vulkan"; }
+    expect_stderr "presented"
+    psnr_at_least "$WORK/vk-$layout.png" "$WORK/render-$layout.png" "view presented by Vulkan and render, $layout"
+done
+tpk view "$WORK/cyl.tpk" --size $SIZE --present vulkan --frames 2 "${FX[@]}" --screenshot "$WORK/vk-fx.png" \
+    2> "$WORK/err" || { cat "$WORK/err"; fail "view --present vulkan with effects"; }
+psnr_at_least "$WORK/vk-fx.png" "$WORK/render-fx.png" "view presented by Vulkan and render, effects"
+# the discrete GPU's memory path (counters copied out), bands of a few rows each
+TPK_VK_MEMORY=staged TPK_VK_BAND_PIXELS=1000 tpk view "$WORK/cyl.tpk" --size $SIZE --layout tet16 \
+    --present vulkan --frames 2 --screenshot "$WORK/vk-staged.png" 2> "$WORK/err" ||
+    { cat "$WORK/err"; fail "view --present vulkan, staged"; }
+psnr_at_least "$WORK/vk-staged.png" "$WORK/render-tet16.png" "view presented by Vulkan, staged bands, and render"
+# L makes the renderer again, and with it the window's surface and swapchain
+tpk view "$WORK/cyl.tpk" --size $SIZE --layout tet16 --keys L --present vulkan --frames 2 \
+    --screenshot "$WORK/vk-L.png" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --present vulkan --keys L"; }
+psnr_at_least "$WORK/vk-L.png" "$WORK/render-tet20.png" "view presented by Vulkan after L, and render of tet20"
+# auto (the default) presents with Vulkan where it can
+tpk view "$WORK/cyl.tpk" --size $SIZE --frames 1 2> "$WORK/err" || { cat "$WORK/err"; fail "view, auto"; }
+expect_stderr "presented"
+# the window as the X server has it: the view's screenshot, the title with the GPU time; then a resize
+tpk view "$WORK/cyl.tpk" --size $SIZE --layout tet16 --present vulkan --keys P --screenshot "$WORK/vk-shot.png" \
+    2> "$WORK/vk.err" &
+VIEW_PID=$!
+"$PY" "$SRC/tests/cli/view_present.py" "$WORK/vk-shot.png" "$WORK" "presented .* ms, GPU [0-9.]+ ms, $SIZE" 96x64 ||
+    { kill $VIEW_PID; cat "$WORK/vk.err"; fail "the Vulkan-presented window"; }
+wait $VIEW_PID || { cat "$WORK/vk.err"; fail "view --present vulkan driven"; }
+tpk render "$WORK/cyl.tpk" --size 96x64 --layout tet16 --backend vulkan -o "$WORK/render-96x64.png" > /dev/null
+psnr_at_least "$WORK/vk-shot.png" "$WORK/render-96x64.png" "view presented by Vulkan after a resize, and render"
+psnr_at_least "$WORK/grab-96x64.png" "$WORK/render-96x64.png" "the resized window's pixels and render"
+psnr_at_least "$WORK/grab-${SIZE}.png" "$WORK/render-tet16.png" "the window's pixels and render"
+# a device that cannot present: auto shows the frames through OpenGL, with a note; vulkan is an error
+TPK_VK_NO_PRESENT=1 tpk view "$WORK/cyl.tpk" --size $SIZE --layout tet16 --frames 1 --screenshot "$WORK/vk-fb.png" \
+    2> "$WORK/err" || { cat "$WORK/err"; fail "view, auto, without presentation"; }
+expect_stderr "no Vulkan presentation (vulkan: no Vulkan 1.2 device with a compute queue that can present"
+expect_stderr "OpenGL, render time"
+psnr_at_least "$WORK/vk-fb.png" "$WORK/render-tet16.png" "view falling back to OpenGL, and render"
+expect_exit 2 env TPK_VK_NO_PRESENT=1 "$TPK" view "$WORK/cyl.tpk" --size $SIZE --frames 1 --present vulkan
+expect_stderr "--present vulkan: vulkan: no Vulkan 1.2 device"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --present vulkan --backend cpu
+expect_stderr "--present vulkan: the CPU reference shows frames through OpenGL"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --present metal
+expect_stderr "--present expects auto, vulkan or gl, found 'metal'"
+expect_exit 2 env TETPACK_VIEW_PRESENT=x "$TPK" view "$WORK/cyl.tpk" --frames 1
+expect_stderr "TETPACK_VIEW_PRESENT expects"
 
 # errors: exit 2 with a message
 expect_exit 2 env -u DISPLAY "$TPK" view "$WORK/cyl.tpk" --frames 1

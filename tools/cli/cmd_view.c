@@ -20,8 +20,10 @@ static const char view_help[] =
     "\n"
     "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
     "Opens a window that renders the file with the Vulkan renderer (the CPU reference where there is\n"
-    "no Vulkan device) and shows each frame; the title shows what is shown, the device, the frame rate\n"
-    "and the frame time. Needs a display: for images without one, use tetpack render.\n"
+    "no Vulkan device) and shows each frame; the title shows what is shown, the device, the frame rate,\n"
+    "the frame time and the GPU time. Vulkan frames go straight to the window's swapchain where the\n"
+    "device can present to it, else through OpenGL (--present). Needs a display: for images without\n"
+    "one, use tetpack render.\n"
     "\n"
     "Mouse: left drag orbits around the look-at point, right drag or the wheel zooms, middle drag (or\n"
     "shift + left drag) pans. While dragging, frames that take longer than 1/15 s are rendered at a\n"
@@ -37,6 +39,9 @@ static const char view_help_own[] =
     "  --orbit DEG                  turn the camera by DEG degrees per frame around its up axis\n"
     "  --screenshot IMAGE.png       the window's last frame as PNG when it closes (and P's file)\n"
     "  --keys KEYS                  press these keys (of the list above) before the first frame\n"
+    "  --present auto|vulkan|gl     how frames reach the window: the Vulkan swapchain, OpenGL (frames\n"
+    "                               read back), or auto (default; TETPACK_VIEW_PRESENT): Vulkan where\n"
+    "                               the renderer is Vulkan and the device can present, else OpenGL\n"
     "--size WxH is the window's size (default 640x480); a scene's size is used when it gives one.\n";
 
 typedef struct view_args {
@@ -44,6 +49,7 @@ typedef struct view_args {
     double orbit;
     const char *screenshot;
     const char *keys;
+    const char *present; /* NULL: TETPACK_VIEW_PRESENT, else auto */
 } view_args;
 
 /* The options only view has. 1 when argv[*i] is one (parsed, *i advanced), 0 when it is not, or
@@ -68,6 +74,9 @@ static int view_option(int argc, char **argv, int *i, view_args *v)
         if (!v->keys || strspn(v->keys, "TtFf[]LlIiSsCcPpWwQq") != strlen(v->keys))
             return tpk_cli_fail("view", "--keys expects keys of T F [ ] L I S C P W Q, found '%s'",
                                 v->keys ? v->keys : "") + 1;
+    } else if (!strncmp(arg, "--present", 9) && (!arg[9] || arg[9] == '=')) {
+        if (!(v->present = tpk_cli_value(argc, argv, i, "--present")))
+            return tpk_cli_fail("view", "--present expects auto, vulkan or gl") + 1;
     } else if (render_args_find_option(arg) && render_args_find_option(arg)->render_only) {
         return tpk_cli_fail("view", "%s is an option of tetpack render; view shows one step at a time ([ and ] "
                             "step) and saves with --screenshot or P", arg) + 1;
@@ -127,6 +136,22 @@ static int want_cpu(const render_args *a)
 #endif
 }
 
+/* --present, else TETPACK_VIEW_PRESENT, else auto; -1: an error printed. */
+static int want_present(const view_args *v, tpk_view_present *out)
+{
+    const char *present = v->present ? v->present : getenv("TETPACK_VIEW_PRESENT");
+    const char *what = v->present ? "--present" : "TETPACK_VIEW_PRESENT";
+    if (!present || !*present || !strcmp(present, "auto"))
+        *out = TPK_VIEW_PRESENT_AUTO;
+    else if (!strcmp(present, "vulkan"))
+        *out = TPK_VIEW_PRESENT_VULKAN;
+    else if (!strcmp(present, "gl"))
+        *out = TPK_VIEW_PRESENT_GL;
+    else
+        return tpk_cli_fail("view", "%s expects auto, vulkan or gl, found '%s'", what, present), -1;
+    return 0;
+}
+
 static int view_file(render_args *a, const view_args *v, tpk_file *file)
 {
     uint64_t part_chunk;
@@ -136,7 +161,7 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
     tpk_view_options o;
     memset(&o, 0, sizeof o);
     int cpu = want_cpu(a);
-    if (cpu < 0 || render_args_load_tf("view", a, &o.tf))
+    if (cpu < 0 || want_present(v, &o.present) != 0 || render_args_load_tf("view", a, &o.tf))
         return TPK_EXIT_USAGE;
     tpk_render_options_default(&o.render);
     render_args_to_options(a, file, &o.tf, &o.render);
@@ -174,7 +199,7 @@ int tpk_cmd_view(int argc, char **argv)
     render_args a;
     render_args_default(&a);
     a.width = 640, a.height = 480;
-    view_args v = {0, 0.0, NULL, NULL};
+    view_args v = {0, 0.0, NULL, NULL, NULL};
     if (render_args_merge_scene("view", argc, argv, &a) || parse_args(argc, argv, &a, &v))
         return TPK_EXIT_USAGE;
 #ifdef TPK_WITH_VIEW

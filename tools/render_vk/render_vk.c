@@ -35,6 +35,7 @@ struct tpk_vk_renderer {
     int tet_scalars;      /* tet scalars were uploaded */
     double device_seconds, upload_seconds, pipeline_seconds; /* setup, pipelines compiled so far included */
     double frame_compile_seconds; /* of the last frame, the pipeline compiled in it */
+    const tpk_vk_band_target *target; /* during a presenting frame: where the bands go, not the host */
 };
 typedef struct tpk_vk_renderer vk_render;
 
@@ -202,6 +203,23 @@ static void barrier(VkCommandBuffer cmd, VkPipelineStageFlags src_stage, VkAcces
     vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 1, &b, 0, NULL, 0, NULL);
 }
 
+/* A presenting frame's band: the pixels copied by the target's commands on the device, only the
+ * counters to the host (copied into the readback buffer on a discrete GPU, read in place otherwise). */
+static void record_band_to_target(vk_render *v, const tpk_vk_params *params, int rows)
+{
+    VkCommandBuffer cmd = v->cmd;
+    barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+            VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT,
+            VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_HOST_READ_BIT);
+    v->target->record(cmd, v->pixels.buffer, params->dims[0], params->dims[2], rows, v->target->user);
+    if (!v->ctx.staged)
+        return;
+    VkBufferCopy counts = {0, (VkDeviceSize)v->band_pixels * 4, TPK_VK_COUNT_WORDS * 4};
+    vkCmdCopyBuffer(cmd, v->counters.buffer, v->readback.buffer, 1, &counts);
+    barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+            VK_ACCESS_HOST_READ_BIT);
+}
+
 /* The commands of one band: parameters and zeroed counters written by the queue itself (so the
  * uniform block lives in device memory), the dispatch between two timestamps, and on a discrete GPU the
  * band's pixels and counters copied into the HOST_CACHED readback buffer. */
@@ -227,6 +245,10 @@ static void record_band(vk_render *v, VkPipeline pipeline, const tpk_vk_params *
                   ((uint32_t)rows + TPK_VK_GROUP - 1) / TPK_VK_GROUP, 1);
     if (v->timestamps)
         vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, v->timestamps, 1);
+    if (v->target) {
+        record_band_to_target(v, params, rows);
+        return;
+    }
     if (!v->ctx.staged) { /* the host reads pixels and counters where the shader wrote them */
         barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
                 VK_ACCESS_HOST_READ_BIT);
@@ -306,20 +328,21 @@ static int run_slice(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, i
     return 0;
 }
 
-/* Copy a finished band out: pixels into rgba, tet steps (counts[0]) and secondary rays (counts[1])
- * added; a failed ray is an error naming the first such pixel. */
+/* Copy a finished band out: pixels into rgba (none when NULL: a presenting frame), tet steps
+ * (counts[0]) and secondary rays (counts[1]) added; a failed ray is an error naming the first such pixel. */
 static int read_band(const vk_render *v, int width, int row0, int rows, uint8_t *rgba, uint64_t counts[2],
                      tpk_diag *diag)
 {
     const tpk_vk_buffer *image = v->ctx.staged ? &v->readback : &v->pixels;
-    if (tpk_vk_buffer_invalidate(&v->ctx, image, diag) != 0 ||
-        (!v->ctx.staged && tpk_vk_buffer_invalidate(&v->ctx, band_counters_buffer(v), diag) != 0))
+    if ((rgba && tpk_vk_buffer_invalidate(&v->ctx, image, diag) != 0) ||
+        ((!rgba || !v->ctx.staged) && tpk_vk_buffer_invalidate(&v->ctx, band_counters_buffer(v), diag) != 0))
         return -1;
-    size_t n = (size_t)width * (size_t)rows;
+    size_t n = rgba ? (size_t)width * (size_t)rows : 0;
     const uint32_t *px = image->mapped;
-    uint8_t *dst = rgba + 4 * (size_t)width * (size_t)row0;
+    uint8_t *dst = rgba ? rgba + 4 * (size_t)width * (size_t)row0 : NULL;
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-    memcpy(dst, px, 4 * n); /* r | g << 8 | b << 16 | a << 24 is r, g, b, a in memory */
+    if (n)
+        memcpy(dst, px, 4 * n); /* r | g << 8 | b << 16 | a << 24 is r, g, b, a in memory */
 #else
     for (size_t i = 0; i < n; i++) {
         dst[4 * i + 0] = (uint8_t)(px[i] & 0xff);
@@ -404,10 +427,11 @@ static int create_band_buffers(vk_render *v, tpk_diag *diag)
     return 0;
 }
 
-static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const float *tet_scalars, tpk_diag *diag)
+static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const float *tet_scalars,
+                        const tpk_vk_surface_source *surface, tpk_diag *diag)
 {
     double t0 = tpk_now_seconds();
-    if (tpk_vk_context_create(&v->ctx, diag) != 0)
+    if (tpk_vk_context_create_presenting(&v->ctx, surface, diag) != 0)
         return -1;
     double t1 = tpk_now_seconds();
     v->device_seconds = t1 - t0;
@@ -425,6 +449,12 @@ static int device_setup(vk_render *v, const tpk_mesh_arrays *mesh, const float *
 int tpk_vk_renderer_create(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, const float *tet_scalars,
                            tpk_diag *diag)
 {
+    return tpk_vk_renderer_create_presenting(out, mesh, tet_scalars, NULL, diag);
+}
+
+int tpk_vk_renderer_create_presenting(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, const float *tet_scalars,
+                                      const tpk_vk_surface_source *surface, tpk_diag *diag)
+{
     *out = NULL;
     if (!mesh)
         return tpk_diag_fail(diag, "render: a mesh is required");
@@ -441,7 +471,7 @@ int tpk_vk_renderer_create(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, c
     tpk_marcher_shell_bvh(v->marcher, &v->bvh);
     v->mesh = *mesh;
     v->tet_scalars = tet_scalars != NULL;
-    if (device_setup(v, mesh, tet_scalars, diag) != 0) {
+    if (device_setup(v, mesh, tet_scalars, surface, diag) != 0) {
         tpk_vk_renderer_destroy(v);
         return -1;
     }
@@ -454,6 +484,11 @@ const char *tpk_vk_renderer_device(const tpk_vk_renderer *v)
     return v->ctx.props.deviceName;
 }
 
+const tpk_vk_context *tpk_vk_renderer_context(const tpk_vk_renderer *v)
+{
+    return &v->ctx;
+}
+
 /* The pipeline of these effects; its compile time (when made now) counts as pipeline setup. */
 static VkPipeline frame_pipeline(vk_render *v, int effects, tpk_diag *diag)
 {
@@ -464,14 +499,16 @@ static VkPipeline frame_pipeline(vk_render *v, int effects, tpk_diag *diag)
     return pipeline;
 }
 
-int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats,
-                          tpk_diag *diag)
+/* One frame into rgba, or into `target` (rgba NULL) on the device. */
+static int render_frame(vk_render *v, const tpk_render_options *opt, uint8_t *rgba, const tpk_vk_band_target *target,
+                        tpk_render_stats *stats, tpk_diag *diag)
 {
+    static const uint8_t no_image[1]; /* the image goes to the target: the check's buffer argument is moot */
     double t0 = tpk_now_seconds(), gpu_seconds = -1.0;
     v->frame_compile_seconds = 0.0;
     if (stats)
         memset(stats, 0, sizeof *stats);
-    if (tpk_vk_check_options(&v->mesh, opt, rgba, diag) != 0)
+    if (tpk_vk_check_options(&v->mesh, opt, target ? no_image : rgba, diag) != 0)
         return -1;
     if ((opt->tet_scalars != NULL) != v->tet_scalars)
         return tpk_diag_fail(diag, "render: tet scalars %s at creation but %s for this frame",
@@ -484,8 +521,10 @@ int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uin
     VkPipeline pipeline = VK_NULL_HANDLE;
     if (rc == 0 && !(pipeline = frame_pipeline(v, tpk_vk_effects(opt), diag)))
         rc = -1;
+    v->target = target;
     if (rc == 0)
-        rc = render_bands(v, pipeline, params, rgba, counts, &gpu_seconds, diag);
+        rc = render_bands(v, pipeline, params, target ? NULL : rgba, counts, &gpu_seconds, diag);
+    v->target = NULL;
     free(params);
     if (stats) {
         stats->rays = (uint64_t)opt->width * (uint64_t)opt->height;
@@ -501,6 +540,20 @@ int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uin
         stats->pipeline_cache_hits = v->pipeline.cache.hits;
     }
     return rc;
+}
+
+int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats,
+                          tpk_diag *diag)
+{
+    return render_frame(v, opt, rgba, NULL, stats, diag);
+}
+
+int tpk_vk_renderer_frame_to(tpk_vk_renderer *v, const tpk_render_options *opt, const tpk_vk_band_target *target,
+                             tpk_render_stats *stats, tpk_diag *diag)
+{
+    if (!v || !target)
+        return tpk_diag_fail(diag, "render: a renderer and a target are required");
+    return render_frame(v, opt, NULL, target, stats, diag);
 }
 
 int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,

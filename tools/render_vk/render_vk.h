@@ -21,9 +21,10 @@
  * takes the shader variant without doubles and TPK_VK_EXACT=1|2 the edge test of the FP64 variant
  * (shaders/vk_layout.h), for tests; TPK_VK_MEMORY=staged takes the discrete GPU's memory path (staging
  * upload, readback copy) on any device, TPK_VK_STAGING_BYTES=N and TPK_VK_BAND_PIXELS=N shrink the
- * staging buffer and the bands, for tests. Pipelines are cached on disk under $XDG_CACHE_HOME/tetpack
- * (else ~/.cache/tetpack; TPK_VK_PIPELINE_CACHE=0: not). stats also get gpu_seconds (timestamp
- * queries) and the setup apart (render.h). Not thread-safe with itself (one device each). */
+ * staging buffer and the bands, for tests; TPK_VK_NO_PRESENT=1 finds no queue that can present to a
+ * window (render_vk_present.h), for the viewer's fallback tests. Pipelines are cached on disk under
+ * $XDG_CACHE_HOME/tetpack (else ~/.cache/tetpack; TPK_VK_PIPELINE_CACHE=0: not). stats also get
+ * gpu_seconds (timestamp queries) and the setup apart (render.h). Not thread-safe with itself (one device each). */
 int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                       tpk_render_stats *stats, tpk_diag *diag);
 

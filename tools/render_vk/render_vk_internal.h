@@ -1,5 +1,6 @@
 /* Private declarations of the Vulkan renderer (tools/render_vk/). Owners, top to bottom (a file calls
  * only files below it):
+ *   vk_present.c   render_vk_present.h: the window's swapchain, each frame's bands copied into it
  *   render_vk.c    render_vk.h: the renderer (upload, dispatch in bands, read back), tpk_render_vulkan,
  *                  tpk_vulkan_available
  *   vk_params.c    tpk_vk_check_options, tpk_vk_params_fill: one frame's uniform block
@@ -18,6 +19,7 @@
 
 #include "base/diag.h"
 #include "render/render.h"
+#include "render_vk_present.h"
 #include "shaders/vk_layout.h"
 #include "vk_memory.h"
 
@@ -36,11 +38,16 @@ typedef struct tpk_vk_context {
                                     discrete GPU, or TPK_VK_MEMORY=staged (tests, on lavapipe) */
     uint32_t timestamp_bits;     /* the queue's timestampValidBits; 0: no timestamps */
     int creation_feedback;       /* VK_EXT_pipeline_creation_feedback enabled */
+    VkSurfaceKHR surface;        /* the window's, the queue can present to it and VK_KHR_swapchain is
+                                    enabled; VK_NULL_HANDLE: no window */
 } tpk_vk_context;
 
 /* Create instance, device and a compute queue. Returns 0, or -1 with a message naming the step and the
  * VkResult; the context is then empty (destroy is still safe). */
 int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag);
+/* The same with the window's surface made on the instance (its extensions enabled), a queue family that
+ * has compute and can present to it, and VK_KHR_swapchain; NULL: as tpk_vk_context_create. */
+int tpk_vk_context_create_presenting(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, tpk_diag *diag);
 void tpk_vk_context_destroy(tpk_vk_context *ctx);
 const char *tpk_vk_result_name(VkResult r);
 
@@ -190,6 +197,19 @@ int tpk_vk_exact_mode(const tpk_vk_context *ctx);
 /* Whether rays run in slices (vk_layout.h, TPK_VK_SPEC_SLICED): on CPU devices, whose llvmpipe cuts
  * loops short past 65535 iterations in all; TPK_VK_SLICED=0|1 overrides, for tests. */
 int tpk_vk_sliced(const tpk_vk_context *ctx);
+
+/* Where a presenting frame's bands go instead of the host (vk_present.c): `record` adds, after the
+ * band's dispatch and a barrier that makes its pixels readable by transfers, commands that copy rows
+ * [row0, row0 + rows) of a `width`-pixel image, packed RGBA8 from the start of `pixels`, into the
+ * target. Sliced rays record it after every slice; the last one's copy is the band's final pixels. */
+typedef struct tpk_vk_band_target {
+    void (*record)(VkCommandBuffer cmd, VkBuffer pixels, int width, int row0, int rows, void *user);
+    void *user;
+} tpk_vk_band_target;
+/* tpk_vk_renderer_frame with the bands going to `target`: only the statistics are read back. */
+int tpk_vk_renderer_frame_to(tpk_vk_renderer *renderer, const tpk_render_options *opt,
+                             const tpk_vk_band_target *target, tpk_render_stats *stats, tpk_diag *diag);
+const tpk_vk_context *tpk_vk_renderer_context(const tpk_vk_renderer *renderer);
 
 /* The SPIR-V of shaders/render.comp with TPK_VK_FP64 1 and 0 (generated at build time by glslc,
  * render_spv.c); sizes in bytes. */

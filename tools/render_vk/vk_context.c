@@ -1,4 +1,5 @@
-/* The Vulkan instance, device and compute queue of the renderer, and its buffers. Every
+/* The Vulkan instance, device and compute queue of the renderer (with the window's surface and a queue
+ * that can present to it, for tetpack view), and its buffers. Every
  * failure becomes a message naming the step and the VkResult: the caller exits cleanly. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,6 +23,9 @@ const char *tpk_vk_result_name(VkResult r)
     case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER (no usable Vulkan driver)";
     case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
     case VK_ERROR_OUT_OF_POOL_MEMORY: return "VK_ERROR_OUT_OF_POOL_MEMORY";
+    case VK_ERROR_SURFACE_LOST_KHR: return "VK_ERROR_SURFACE_LOST_KHR";
+    case VK_ERROR_NATIVE_WINDOW_IN_USE_KHR: return "VK_ERROR_NATIVE_WINDOW_IN_USE_KHR";
+    case VK_ERROR_OUT_OF_DATE_KHR: return "VK_ERROR_OUT_OF_DATE_KHR";
     default: return "a Vulkan error";
     }
 }
@@ -31,7 +35,7 @@ static int vk_fail(tpk_diag *diag, const char *step, VkResult r)
     return tpk_diag_fail(diag, "vulkan: %s failed: %s (%d)", step, tpk_vk_result_name(r), (int)r);
 }
 
-static int create_instance(tpk_vk_context *ctx, tpk_diag *diag)
+static int create_instance(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, tpk_diag *diag)
 {
     VkApplicationInfo app = {
         .sType = VK_STRUCTURE_TYPE_APPLICATION_INFO,
@@ -39,7 +43,12 @@ static int create_instance(tpk_vk_context *ctx, tpk_diag *diag)
         .pEngineName = "tetpack",
         .apiVersion = VK_API_VERSION_1_2,
     };
-    VkInstanceCreateInfo info = {.sType = VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO, .pApplicationInfo = &app};
+    VkInstanceCreateInfo info = {
+        .sType = VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO,
+        .pApplicationInfo = &app,
+        .enabledExtensionCount = surface ? surface->instance_extension_count : 0,
+        .ppEnabledExtensionNames = surface ? surface->instance_extensions : NULL,
+    };
     VkResult r = vkCreateInstance(&info, NULL, &ctx->instance);
     if (r != VK_SUCCESS) {
         ctx->instance = VK_NULL_HANDLE;
@@ -48,19 +57,27 @@ static int create_instance(tpk_vk_context *ctx, tpk_diag *diag)
     return 0;
 }
 
-static int compute_family(VkPhysicalDevice dev, uint32_t *family, uint32_t *timestamp_bits)
+/* The first queue family with compute (that can also present to `surface`, when one is given;
+ * TPK_VK_NO_PRESENT=1: none can, so that tests reach the viewer's fallback). */
+static int compute_family(VkPhysicalDevice dev, VkSurfaceKHR surface, uint32_t *family, uint32_t *timestamp_bits)
 {
+    const char *no_present = getenv("TPK_VK_NO_PRESENT");
     uint32_t n = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(dev, &n, NULL);
     VkQueueFamilyProperties props[64];
     n = n > 64 ? 64 : n;
     vkGetPhysicalDeviceQueueFamilyProperties(dev, &n, props);
-    for (uint32_t i = 0; i < n; i++)
-        if (props[i].queueFlags & VK_QUEUE_COMPUTE_BIT) {
+    for (uint32_t i = 0; i < n; i++) {
+        VkBool32 present = VK_TRUE;
+        if (surface && ((no_present && !strcmp(no_present, "1")) ||
+                        vkGetPhysicalDeviceSurfaceSupportKHR(dev, i, surface, &present) != VK_SUCCESS))
+            present = VK_FALSE;
+        if ((props[i].queueFlags & VK_QUEUE_COMPUTE_BIT) && present) {
             *family = i;
             *timestamp_bits = props[i].timestampValidBits;
             return 0;
         }
+    }
     return -1;
 }
 
@@ -72,7 +89,8 @@ static int type_rank(VkPhysicalDeviceType t)
                                                          : 3;
 }
 
-/* TPK_VK_DEVICE=N, else the best-ranked Vulkan 1.2 device with a compute queue. */
+/* TPK_VK_DEVICE=N, else the best-ranked Vulkan 1.2 device with a compute queue (that can present to
+ * ctx->surface when there is one). */
 static int pick_device(tpk_vk_context *ctx, tpk_diag *diag)
 {
     uint32_t n = 0;
@@ -95,7 +113,7 @@ static int pick_device(tpk_vk_context *ctx, tpk_diag *diag)
         VkPhysicalDeviceProperties p;
         vkGetPhysicalDeviceProperties(devs[i], &p);
         uint32_t family, bits;
-        if (p.apiVersion < VK_API_VERSION_1_2 || compute_family(devs[i], &family, &bits) != 0)
+        if (p.apiVersion < VK_API_VERSION_1_2 || compute_family(devs[i], ctx->surface, &family, &bits) != 0)
             continue;
         if (wanted == (int)i || (wanted < 0 && type_rank(p.deviceType) < best_rank)) {
             best = (int)i;
@@ -105,7 +123,8 @@ static int pick_device(tpk_vk_context *ctx, tpk_diag *diag)
         }
     }
     if (best < 0)
-        return tpk_diag_fail(diag, "vulkan: no Vulkan 1.2 device with a compute queue%s",
+        return tpk_diag_fail(diag, "vulkan: no Vulkan 1.2 device with a compute queue%s%s",
+                             ctx->surface ? " that can present to the window" : "",
                              wanted >= 0 ? " at TPK_VK_DEVICE" : "");
     ctx->physical = devs[best];
     vkGetPhysicalDeviceProperties(ctx->physical, &ctx->props);
@@ -134,12 +153,33 @@ static int has_extension(VkPhysicalDevice dev, const char *name)
     return found;
 }
 
+/* The window's surface on the new instance. */
+static int create_surface(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, tpk_diag *diag)
+{
+    VkResult r = surface->create(ctx->instance, surface->user, &ctx->surface);
+    if (r != VK_SUCCESS) {
+        ctx->surface = VK_NULL_HANDLE;
+        return vk_fail(diag, "creating the window's surface", r);
+    }
+    return 0;
+}
+
 int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag)
 {
+    return tpk_vk_context_create_presenting(ctx, NULL, diag);
+}
+
+int tpk_vk_context_create_presenting(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, tpk_diag *diag)
+{
     memset(ctx, 0, sizeof *ctx);
-    if (create_instance(ctx, diag) != 0 || pick_device(ctx, diag) != 0) {
+    if (create_instance(ctx, surface, diag) != 0 || (surface && create_surface(ctx, surface, diag) != 0) ||
+        pick_device(ctx, diag) != 0) {
         tpk_vk_context_destroy(ctx);
         return -1;
+    }
+    if (surface && !has_extension(ctx->physical, VK_KHR_SWAPCHAIN_EXTENSION_NAME)) {
+        tpk_vk_context_destroy(ctx);
+        return tpk_diag_fail(diag, "vulkan: the device has no %s", VK_KHR_SWAPCHAIN_EXTENSION_NAME);
     }
     const float priority = 1.0f;
     VkDeviceQueueCreateInfo queue = {
@@ -156,14 +196,19 @@ int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag)
     ctx->fp64 = supported.shaderFloat64 == VK_TRUE && !(no_fp64 && !strcmp(no_fp64, "1"));
     enabled.shaderFloat64 = ctx->fp64 ? VK_TRUE : VK_FALSE;
     /* whether a pipeline came from the pipeline cache (render --json says so) */
-    const char *feedback = VK_EXT_PIPELINE_CREATION_FEEDBACK_EXTENSION_NAME;
-    ctx->creation_feedback = has_extension(ctx->physical, feedback);
+    const char *extensions[2];
+    uint32_t extension_count = 0;
+    ctx->creation_feedback = has_extension(ctx->physical, VK_EXT_PIPELINE_CREATION_FEEDBACK_EXTENSION_NAME);
+    if (ctx->creation_feedback)
+        extensions[extension_count++] = VK_EXT_PIPELINE_CREATION_FEEDBACK_EXTENSION_NAME;
+    if (surface) /* the window's swapchain (vk_present.c) */
+        extensions[extension_count++] = VK_KHR_SWAPCHAIN_EXTENSION_NAME;
     VkDeviceCreateInfo info = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
         .queueCreateInfoCount = 1,
         .pQueueCreateInfos = &queue,
-        .enabledExtensionCount = ctx->creation_feedback ? 1 : 0,
-        .ppEnabledExtensionNames = &feedback,
+        .enabledExtensionCount = extension_count,
+        .ppEnabledExtensionNames = extensions,
         .pEnabledFeatures = &enabled,
     };
     VkResult r = vkCreateDevice(ctx->physical, &info, NULL, &ctx->device);
@@ -180,6 +225,8 @@ void tpk_vk_context_destroy(tpk_vk_context *ctx)
 {
     if (ctx->device)
         vkDestroyDevice(ctx->device, NULL);
+    if (ctx->surface)
+        vkDestroySurfaceKHR(ctx->instance, ctx->surface, NULL);
     if (ctx->instance)
         vkDestroyInstance(ctx->instance, NULL);
     memset(ctx, 0, sizeof *ctx);

@@ -1,5 +1,6 @@
-/* tetpack view's loop: input to camera and state, a frame when something changed (at a reduced
- * resolution while dragging when full frames are slow), the window's title with the frame rate. */
+/* tetpack view's loop: the window and renderer (Vulkan presenting to the window, else OpenGL showing
+ * frames read back), input to camera and state, a frame when something changed (at a reduced resolution
+ * while dragging when full frames are slow), the window's title with the frame rate and GPU time. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,6 +17,7 @@ typedef struct view_loop {
     view_state state;
     view_renderer renderer;
     view_window *window;
+    int vulkan_window;      /* the renderer presents to the window (no OpenGL) */
     uint8_t *rgba;          /* the frame, at most the drawable's size */
     size_t rgba_bytes;
     double full_seconds;    /* the last full-resolution frame's render time */
@@ -23,6 +25,7 @@ typedef struct view_loop {
     int screenshots;        /* P presses so far, for the file names */
     int screenshot_due;     /* P was pressed: save the next full frame before it is swapped away */
     double frame_seconds[256]; /* the first full frames' render times, for the summary of --frames */
+    double gpu_seconds[256];   /* and their GPU times (-1: none) */
     int timed;
 } view_loop;
 
@@ -46,7 +49,10 @@ static int apply_drags(view_loop *l, const view_input *in)
 /* The window's contents (the last frame drawn) as a PNG. */
 static int save_screenshot(view_loop *l, const char *path, int width, int height, tpk_diag *diag)
 {
-    view_window_read(l->window, l->rgba, width, height);
+    if (l->renderer.present && view_renderer_read(&l->renderer, l->rgba, width, height, diag) != 0)
+        return -1;
+    if (!l->renderer.present)
+        view_window_read(l->window, l->rgba, width, height);
     if (tpk_write_png(path, width, height, l->rgba, diag) != 0)
         return -1;
     fprintf(stderr, "tetpack view: wrote %s (%dx%d)\n", path, width, height);
@@ -72,7 +78,8 @@ static int apply_action(view_loop *l, view_action a, tpk_diag *diag)
     int changed = view_state_apply(&l->state, a, diag);
     if (changed < 0) /* a step or layout that does not load: say so, keep showing what was shown */
         fprintf(stderr, "tetpack view: %s\n", diag->message);
-    if (changed > 0 && view_renderer_open(&l->renderer, &l->state, l->o->cpu, diag) != 0)
+    if (changed > 0 &&
+        view_renderer_open(&l->renderer, &l->state, l->o->cpu, l->vulkan_window ? l->window : NULL, diag) != 0)
         return -1;
     return 0;
 }
@@ -103,12 +110,15 @@ static int show_frame(view_loop *l, int reduced, tpk_diag *diag)
     if (zoom == 1) /* the size a scene written now says */
         l->full_seconds = seconds, l->state.opt.width = width, l->state.opt.height = height;
     if (zoom == 1 && l->timed < 256)
-        l->frame_seconds[l->timed++] = seconds;
-    view_window_draw(l->window, l->rgba, w, h, zoom);
-    char what[1024], title[1400];
+        l->gpu_seconds[l->timed] = stats.gpu_seconds, l->frame_seconds[l->timed++] = seconds;
+    if (!l->renderer.present)
+        view_window_draw(l->window, l->rgba, w, h, zoom);
+    char what[1024], gpu[64] = "", title[1500];
     view_state_describe(&l->state, what, sizeof what);
-    snprintf(title, sizeof title, "%s | %s | %.1f fps, %.1f ms, %dx%d", what, l->renderer.device, 1.0 / seconds,
-             1e3 * seconds, w, h);
+    if (l->renderer.vk && stats.gpu_seconds >= 0)
+        snprintf(gpu, sizeof gpu, ", GPU %.2f ms", 1e3 * stats.gpu_seconds);
+    snprintf(title, sizeof title, "%s | %s | %.1f fps, %.1f ms%s, %dx%d", what, l->renderer.device, 1.0 / seconds,
+             1e3 * seconds, gpu, w, h);
     view_window_title(l->window, title);
     l->frame++;
     return 0;
@@ -139,10 +149,14 @@ static int by_value(const void *a, const void *b)
 static int finish(view_loop *l, tpk_diag *diag)
 {
     qsort(l->frame_seconds, (size_t)l->timed, sizeof l->frame_seconds[0], by_value);
+    qsort(l->gpu_seconds, (size_t)l->timed, sizeof l->gpu_seconds[0], by_value);
     int width, height;
     view_window_size(l->window, &width, &height);
-    fprintf(stderr, "tetpack view: %d frames of %dx%d on %s, render time median %.1f ms (of the first %d)\n",
-            l->frame, width, height, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], l->timed);
+    char gpu[64] = "";
+    if (l->renderer.vk && l->timed > 0 && l->gpu_seconds[0] >= 0)
+        snprintf(gpu, sizeof gpu, ", GPU median %.2f ms", 1e3 * l->gpu_seconds[l->timed / 2]);
+    fprintf(stderr, "tetpack view: %d frames of %dx%d on %s, render time median %.1f ms%s (of the first %d)\n",
+            l->frame, width, height, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], gpu, l->timed);
     if (l->o->screenshot && save_screenshot(l, l->o->screenshot, width, height, diag) != 0)
         return -1;
     if (l->o->save_scene && apply_action(l, VIEW_WRITE_SCENE, diag) != 0)
@@ -186,6 +200,51 @@ static int run(view_loop *l, tpk_diag *diag)
     return 0;
 }
 
+/* A window without OpenGL and a renderer presenting to it. 0; -2 without a display; -1 with a message
+ * when Vulkan cannot present (the CPU reference included: l->renderer.present stays NULL). */
+static int open_vulkan(view_loop *l, const char *title, tpk_diag *diag)
+{
+    const tpk_view_options *o = l->o;
+    int rc = view_window_open(&l->window, o->render.width, o->render.height, title, 1, diag);
+    if (rc == 0)
+        rc = view_renderer_open(&l->renderer, &l->state, o->cpu, l->window, diag);
+    if (rc == 0 && !l->renderer.present)
+        rc = tpk_diag_fail(diag, "the renderer is the CPU reference");
+    l->vulkan_window = rc == 0;
+    return rc;
+}
+
+/* The window and renderer as --present asks: Vulkan's swapchain (auto: where it can be had, else a note
+ * and OpenGL), or OpenGL. 0; -2 without a display; -1 with a message. */
+static int open_output(view_loop *l, tpk_diag *diag)
+{
+    const tpk_view_options *o = l->o;
+    char title[1024];
+    view_state_describe(&l->state, title, sizeof title);
+#ifdef TPK_WITH_VULKAN
+    if (o->present != TPK_VIEW_PRESENT_GL && !o->cpu) {
+        int rc = open_vulkan(l, title, diag);
+        if (rc == 0 || rc == -2)
+            return rc;
+        char why[sizeof diag->message];
+        snprintf(why, sizeof why, "%s", diag->message);
+        if (o->present == TPK_VIEW_PRESENT_VULKAN)
+            return tpk_diag_fail(diag, "--present vulkan: %s", why);
+        fprintf(stderr, "tetpack view: note: no Vulkan presentation (%s); showing frames through OpenGL\n", why);
+        view_renderer_close(&l->renderer);
+        view_window_close(l->window);
+        l->window = NULL;
+    }
+#endif
+    if (o->present == TPK_VIEW_PRESENT_VULKAN)
+        return tpk_diag_fail(diag, "--present vulkan: %s", o->cpu ? "the CPU reference shows frames through OpenGL"
+                                                                  : "this tetpack was built without Vulkan");
+    int rc = view_window_open(&l->window, o->render.width, o->render.height, title, 0, diag);
+    if (rc == 0)
+        rc = view_renderer_open(&l->renderer, &l->state, o->cpu, NULL, diag);
+    return rc;
+}
+
 int tpk_view_run(const tpk_view_options *o, tpk_diag *diag)
 {
     view_loop *l = calloc(1, sizeof *l);
@@ -193,13 +252,8 @@ int tpk_view_run(const tpk_view_options *o, tpk_diag *diag)
         return tpk_diag_fail(diag, "out of memory");
     l->o = o;
     int rc = view_state_init(&l->state, o, diag);
-    if (rc == 0) {
-        char title[1024];
-        view_state_describe(&l->state, title, sizeof title);
-        rc = view_window_open(&l->window, o->render.width, o->render.height, title, diag);
-    }
     if (rc == 0)
-        rc = view_renderer_open(&l->renderer, &l->state, o->cpu, diag);
+        rc = open_output(l, diag);
     if (rc == 0)
         rc = run(l, diag);
     view_renderer_close(&l->renderer);

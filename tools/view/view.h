@@ -1,12 +1,21 @@
-/* tetpack view: a window (GLFW, OpenGL presentation) that renders a .tpk with the Vulkan renderer
- * (the CPU reference where there is no Vulkan device) and lets the user orbit, zoom and pan, and change
- * the transfer function, field, step, layout and effects; the frame rate is in the window title. */
+/* tetpack view: a window (GLFW) that renders a .tpk with the Vulkan renderer (the CPU reference where
+ * there is no Vulkan device) and lets the user orbit, zoom and pan, and change the transfer function,
+ * field, step, layout and effects; the frame rate (and the GPU time) is in the window title. Vulkan
+ * frames go to the window's swapchain on the device; OpenGL shows the others, and Vulkan's where the
+ * device cannot present. */
 #ifndef TPK_VIEW_H
 #define TPK_VIEW_H
 
 #include "base/diag.h"
 #include "render/render.h"
 #include "tetpack.h"
+
+/* How frames reach the window. */
+typedef enum tpk_view_present {
+    TPK_VIEW_PRESENT_AUTO,   /* Vulkan's swapchain where the renderer is Vulkan and can present, else OpenGL */
+    TPK_VIEW_PRESENT_VULKAN, /* the swapchain or an error */
+    TPK_VIEW_PRESENT_GL,     /* OpenGL glDrawPixels of each frame read back */
+} tpk_view_present;
 
 typedef struct tpk_view_options {
     tpk_file *file;               /* open, owned by the caller; must outlive tpk_view_run */
@@ -17,6 +26,7 @@ typedef struct tpk_view_options {
     int step;
     tpk_layout layout;
     int cpu;                      /* 1: the CPU reference even where Vulkan is present */
+    tpk_view_present present;
     int frames;                   /* > 0: render this many frames, then close (headless tests) */
     double orbit_deg;             /* turn the camera by this much per frame around its up axis */
     const char *screenshot;       /* write the last frame's window contents here (PNG) on exit */

@@ -1,5 +1,6 @@
 /* The viewer's renderer, kept across frames: the Vulkan renderer with the arrays uploaded once (made
- * again when the arrays change), or the CPU reference where no Vulkan device is present. */
+ * again when the arrays change), presenting to the window's swapchain or read back for OpenGL, or the
+ * CPU reference where no Vulkan device is present. */
 #include <stdio.h>
 #include <string.h>
 
@@ -8,20 +9,42 @@
 #include "render_vk/render_vk.h"
 #endif
 
-int view_renderer_open(view_renderer *r, const view_state *s, int cpu, tpk_diag *diag)
+#ifdef TPK_WITH_VULKAN
+/* A renderer whose device presents to the window, and its swapchain at the drawable's size. */
+static int open_presenting(view_renderer *r, const view_state *s, view_window *window, tpk_diag *diag)
+{
+    tpk_vk_surface_source surface;
+    view_window_surface_source(window, &surface);
+    int width, height;
+    view_window_size(window, &width, &height);
+    if (tpk_vk_renderer_create_presenting(&r->vk, &s->mesh, s->opt.tet_scalars, &surface, diag) != 0 ||
+        tpk_vk_presenter_create(&r->present, r->vk, width, height, diag) != 0) {
+        view_renderer_close(r);
+        return -1;
+    }
+    r->window = window;
+    snprintf(r->device, sizeof r->device, "vulkan: %s, presented (%s)", tpk_vk_renderer_device(r->vk),
+             tpk_vk_presenter_describe(r->present));
+    return 0;
+}
+#endif
+
+int view_renderer_open(view_renderer *r, const view_state *s, int cpu, view_window *window, tpk_diag *diag)
 {
     view_renderer_close(r);
-    (void)s, (void)diag; /* without Vulkan: unused */
+    (void)s, (void)window, (void)diag; /* without Vulkan: unused */
 #ifdef TPK_WITH_VULKAN
     char why[256] = "";
     if (!cpu && !r->cpu_only && !tpk_vulkan_available(why, sizeof why)) {
         fprintf(stderr, "tetpack view: note: no Vulkan device (%s); rendering with the CPU reference\n", why);
         r->cpu_only = 1;
     }
+    if (!cpu && !r->cpu_only && window)
+        return open_presenting(r, s, window, diag);
     if (!cpu && !r->cpu_only) {
         if (tpk_vk_renderer_create(&r->vk, &s->mesh, s->opt.tet_scalars, diag) != 0)
             return -1;
-        snprintf(r->device, sizeof r->device, "vulkan: %s", tpk_vk_renderer_device(r->vk));
+        snprintf(r->device, sizeof r->device, "vulkan: %s, OpenGL", tpk_vk_renderer_device(r->vk));
         return 0;
     }
 #else
@@ -41,16 +64,34 @@ int view_renderer_frame(view_renderer *r, const view_state *s, int width, int he
     opt.width = width;
     opt.height = height;
 #ifdef TPK_WITH_VULKAN
+    if (r->present) {
+        int window_width, window_height;
+        view_window_size(r->window, &window_width, &window_height);
+        return tpk_vk_presenter_frame(r->present, &opt, window_width, window_height, stats, diag);
+    }
     if (r->vk)
         return tpk_vk_renderer_frame(r->vk, &opt, rgba, stats, diag);
 #endif
     return tpk_render_cpu(&s->mesh, &opt, rgba, stats, diag);
 }
 
+int view_renderer_read(view_renderer *r, uint8_t *rgba, int width, int height, tpk_diag *diag)
+{
+    (void)r, (void)rgba, (void)width, (void)height; /* without Vulkan: unused */
+#ifdef TPK_WITH_VULKAN
+    if (r->present)
+        return tpk_vk_presenter_read(r->present, rgba, width, height, diag);
+#endif
+    return tpk_diag_fail(diag, "view: the renderer does not present");
+}
+
 void view_renderer_close(view_renderer *r)
 {
 #ifdef TPK_WITH_VULKAN
+    tpk_vk_presenter_destroy(r->present); /* before the renderer: its device and surface */
     tpk_vk_renderer_destroy(r->vk);
 #endif
+    r->present = NULL;
     r->vk = NULL;
+    r->window = NULL;
 }

@@ -1,6 +1,7 @@
 /* Shared by the files of tools/view/ only. view.c (the loop) calls the others; none calls back:
  * view_state.c: what is shown (file arrays, field, step, layout, TF, effects) and the scene of it;
- * view_frame.c: the renderer kept across frames (Vulkan, else the CPU reference);
+ * view_frame.c: the renderer kept across frames (Vulkan, presenting to the window or not, else the CPU
+ *               reference); calls view_window.c for the window's Vulkan surface;
  * view_window.c: the GLFW window, its input as actions and drags, OpenGL presentation;
  * view_nav.c: camera navigation (declared in view.h). */
 #ifndef TPK_VIEW_INTERNAL_H
@@ -9,6 +10,9 @@
 #include <stdint.h>
 
 #include "view.h"
+#ifdef TPK_WITH_VULKAN
+#include "render_vk/render_vk_present.h"
+#endif
 
 /* ---- view_state.c ---- */
 typedef struct view_state {
@@ -44,18 +48,27 @@ void view_state_describe(const view_state *s, char *out, size_t n);
 
 /* ---- view_frame.c ---- */
 typedef struct tpk_vk_renderer tpk_vk_renderer;
+typedef struct tpk_vk_presenter tpk_vk_presenter;
+typedef struct view_window view_window;
 typedef struct view_renderer {
     tpk_vk_renderer *vk;   /* NULL: the CPU reference */
+    tpk_vk_presenter *present; /* Vulkan frames go to the window's swapchain; NULL: into rgba */
+    view_window *window;   /* the window presented to */
     int cpu_only;          /* Vulkan was not found (or not wanted): do not try again */
-    char device[256];      /* the device's name, or "cpu" */
+    char device[256];      /* the device's name and how frames are shown, or "cpu" */
 } view_renderer;
 
 /* Set up the renderer for the state's arrays: Vulkan where a device is present (and not `cpu`), else the
- * CPU reference with a note on stderr saying why. 0, or -1 with a message. */
-int view_renderer_open(view_renderer *r, const view_state *s, int cpu, tpk_diag *diag);
-/* One frame of the state at width x height (the state's options otherwise) into rgba. */
+ * CPU reference with a note on stderr saying why. With `window` (a view_window_open'ed with `vulkan`),
+ * Vulkan presents to it: a device that cannot is an error (a Vulkan renderer is then not made), the CPU
+ * reference is not (r->present stays NULL). 0, or -1 with a message. */
+int view_renderer_open(view_renderer *r, const view_state *s, int cpu, view_window *window, tpk_diag *diag);
+/* One frame of the state at width x height (the state's options otherwise) into rgba, or, presenting,
+ * shown in the window over its whole drawable (rgba unused). */
 int view_renderer_frame(view_renderer *r, const view_state *s, int width, int height, uint8_t *rgba,
                         tpk_render_stats *stats, tpk_diag *diag);
+/* Presenting: the last frame shown, its top-left width x height pixels (alpha 255) into rgba. */
+int view_renderer_read(view_renderer *r, uint8_t *rgba, int width, int height, tpk_diag *diag);
 void view_renderer_close(view_renderer *r);
 
 /* ---- view_window.c ---- */
@@ -69,17 +82,22 @@ typedef struct view_input {
     int action_count;
 } view_input;
 
-typedef struct view_window view_window;
 /* The action of a key: T F [ ] L I S C P W Q (letters either case), VIEW_NONE for others. */
 view_action view_key_action(int key);
-/* Open a window of width x height pixels. 0; -2 with a message when there is no display (or GLFW
- * cannot start); -1 with a message for another failure. */
-int view_window_open(view_window **out, int width, int height, const char *title, tpk_diag *diag);
+/* Open a window of width x height pixels: with an OpenGL context, or (`vulkan`) with none, for a Vulkan
+ * surface. 0; -2 with a message when there is no display (or GLFW cannot start); -1 with a message for
+ * another failure (no OpenGL context, or GLFW finds no Vulkan loader with its surface extensions). */
+int view_window_open(view_window **out, int width, int height, const char *title, int vulkan, tpk_diag *diag);
+#ifdef TPK_WITH_VULKAN
+/* The window's Vulkan surface, for the renderer to make on its instance (a `vulkan` window). */
+void view_window_surface_source(view_window *w, tpk_vk_surface_source *out);
+#endif
 /* Process events (waiting for one when `wait`) and take the input gathered since the last call. */
 void view_window_poll(view_window *w, int wait, view_input *in);
 int view_window_closing(const view_window *w);
 /* The drawable size in pixels (the frame's full resolution). */
 void view_window_size(const view_window *w, int *width, int *height);
+/* OpenGL windows only (draw, read, swap; swap is a no-op on a Vulkan window): */
 /* Draw an image (top row first) scaled up by `zoom` into the back buffer, from the top-left corner. */
 void view_window_draw(view_window *w, const uint8_t *rgba, int width, int height, int zoom);
 /* Read the back buffer's width x height pixels (top row first, alpha 255) after a draw. */

@@ -1,10 +1,14 @@
-/* The viewer's window: GLFW for the window and its input, OpenGL 1.x glDrawPixels to show the frames
- * (the simplest path that runs anywhere GLFW does, Xvfb with Mesa included). Input is gathered as
- * drags and key actions for view.c to apply. */
+/* The viewer's window: GLFW for the window and its input; either a Vulkan surface for the renderer's
+ * swapchain (no client API), or OpenGL 1.x glDrawPixels to show frames read back (the simplest path
+ * that runs anywhere GLFW does, Xvfb with Mesa included). Input is gathered as drags and key actions
+ * for view.c to apply. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#ifdef TPK_WITH_VULKAN
+#include <vulkan/vulkan.h> /* before GLFW: it declares its Vulkan functions when it sees these types */
+#endif
 #include <GLFW/glfw3.h>
 
 #include "view_internal.h"
@@ -15,6 +19,7 @@ struct view_window {
     double x, y;            /* the cursor at the last event */
     int button;             /* the held button: GLFW_MOUSE_BUTTON_*, -1 none */
     int shift;              /* shift was down when the button went down (shift+left pans) */
+    int gl;                 /* an OpenGL context; 0: no client API, for a Vulkan surface */
 };
 
 static char glfw_error[512];
@@ -99,7 +104,7 @@ static void on_resize(GLFWwindow *window, int width, int height)
     w->input.resized = 1;
 }
 
-int view_window_open(view_window **out, int width, int height, const char *title, tpk_diag *diag)
+int view_window_open(view_window **out, int width, int height, const char *title, int vulkan, tpk_diag *diag)
 {
     *out = NULL;
     glfw_error[0] = 0;
@@ -110,24 +115,33 @@ int view_window_open(view_window **out, int width, int height, const char *title
                       getenv("DISPLAY") ? getenv("DISPLAY") : "not set");
         return -2;
     }
+    if (vulkan && !glfwVulkanSupported()) {
+        glfwTerminate();
+        return tpk_diag_fail(diag, "GLFW finds no Vulkan loader with the window system's surface extensions%s%s",
+                             glfw_error[0] ? ": " : "", glfw_error);
+    }
     view_window *w = calloc(1, sizeof *w);
     if (!w) {
         glfwTerminate();
         return tpk_diag_fail(diag, "out of memory");
     }
     w->button = -1;
+    w->gl = !vulkan;
     glfwWindowHint(GLFW_SCALE_TO_MONITOR, GLFW_FALSE); /* the frame is rendered at the drawable's size */
+    glfwWindowHint(GLFW_CLIENT_API, vulkan ? GLFW_NO_API : GLFW_OPENGL_API);
     w->window = glfwCreateWindow(width, height, title, NULL, NULL);
     if (!w->window) {
         free(w);
         glfwTerminate();
-        tpk_diag_fail(diag, "cannot open a window with an OpenGL context: %s; tetpack render writes images "
-                      "without one", glfw_error[0] ? glfw_error : "unknown GLFW error");
+        tpk_diag_fail(diag, "cannot open a window%s: %s; tetpack render writes images without one",
+                      vulkan ? "" : " with an OpenGL context", glfw_error[0] ? glfw_error : "unknown GLFW error");
         return -2;
     }
     glfwSetWindowUserPointer(w->window, w);
-    glfwMakeContextCurrent(w->window);
-    glfwSwapInterval(0); /* the renderer is the bottleneck; waiting for vsync adds latency */
+    if (w->gl) {
+        glfwMakeContextCurrent(w->window);
+        glfwSwapInterval(0); /* the renderer is the bottleneck; waiting for vsync adds latency */
+    }
     glfwSetKeyCallback(w->window, on_key);
     glfwSetMouseButtonCallback(w->window, on_button);
     glfwSetCursorPosCallback(w->window, on_cursor);
@@ -193,8 +207,27 @@ void view_window_read(view_window *w, uint8_t *rgba, int width, int height)
 
 void view_window_swap(view_window *w)
 {
-    glfwSwapBuffers(w->window);
+    if (w->gl) /* a Vulkan window was presented to by the renderer */
+        glfwSwapBuffers(w->window);
 }
+
+#ifdef TPK_WITH_VULKAN
+static VkResult create_surface(VkInstance instance, void *user, VkSurfaceKHR *surface)
+{
+    const view_window *w = user;
+    return glfwCreateWindowSurface(instance, w->window, NULL, surface);
+}
+
+void view_window_surface_source(view_window *w, tpk_vk_surface_source *out)
+{
+    uint32_t count = 0;
+    const char **extensions = glfwGetRequiredInstanceExtensions(&count);
+    out->instance_extensions = extensions;
+    out->instance_extension_count = extensions ? count : 0;
+    out->create = create_surface;
+    out->user = w;
+}
+#endif
 
 void view_window_title(view_window *w, const char *title)
 {
