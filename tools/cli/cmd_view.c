@@ -1,5 +1,6 @@
 /* tetpack view: the window viewer (tools/view/) over the options of tetpack render (render_args.h). */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -7,6 +8,7 @@
 #include "cli.h"
 #include "render_args.h"
 #include "render_input.h"
+#include "render/render_backend.h"
 #include "tetpack.h"
 #ifdef TPK_WITH_VIEW
 #include "view/view.h"
@@ -113,27 +115,32 @@ static int parse_args(int argc, char **argv, render_args *a, view_args *v)
 }
 
 #ifdef TPK_WITH_VIEW
-/* 1: the CPU reference (--backend cpu, or TETPACK_RENDER_BACKEND=cpu as for render), 0: Vulkan where
- * present (the view falls back with a note), -1: an error printed. */
+/* 1: the CPU reference, 0: Vulkan, by render's rule (render/render_backend.h: --backend, the scene's,
+ * $TETPACK_RENDER_BACKEND, else Vulkan on a hardware device and the CPU reference with only a software
+ * rasterizer); -1: an error printed. Where Vulkan is chosen and fails later, the view falls back with a
+ * note. */
 static int want_cpu(const render_args *a)
 {
-    const char *backend = a->backend ? a->backend : getenv("TETPACK_RENDER_BACKEND");
-    if (!backend || !*backend)
-        return 0;
-    if (strcmp(backend, "vulkan") && strcmp(backend, "cpu"))
-        return tpk_cli_fail("view", "TETPACK_RENDER_BACKEND expects vulkan or cpu, found '%s'", backend), -1;
-    if (!strcmp(backend, "cpu"))
-        return 1;
+    tpk_backend_request req = {.flag = a->backend_from_scene ? NULL : a->backend,
+                               .scene = a->backend_from_scene ? a->backend : NULL,
+                               .env = getenv("TETPACK_RENDER_BACKEND")};
+    char name[256] = "";
 #ifdef TPK_WITH_VULKAN
-    char why[256];
-    if (a->backend && !tpk_vulkan_available(why, sizeof why))
-        return tpk_cli_fail("view", "--backend vulkan: %s", why), -1;
-    return 0;
-#else
-    if (a->backend)
-        return tpk_cli_fail("view", "--backend vulkan: this tetpack was built without Vulkan"), -1;
-    return 1;
+    req.vulkan_built = 1;
+    int kind = TPK_VK_DEVICE_NONE;
+    if (tpk_backend_needs_device(&req))
+        tpk_vulkan_probe(name, sizeof name, &kind);
+    req.device = (tpk_vk_device_kind)kind;
+    req.device_name = name;
 #endif
+    tpk_backend_choice choice;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_backend_choose(&req, &choice, &diag) != 0)
+        return tpk_cli_fail("view", "%s", diag.message), -1;
+    if (!choice.vulkan && !req.flag && !req.scene && !(req.env && *req.env))
+        fprintf(stderr, "tetpack view: note: the CPU reference renders (%s)\n", choice.reason);
+    return !choice.vulkan;
 }
 
 /* --present, else TETPACK_VIEW_PRESENT, else auto; -1: an error printed. */
