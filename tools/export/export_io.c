@@ -167,3 +167,19 @@ int tpk_export_load_chunk(tpk_file *file, uint32_t tag, uint32_t index, uint32_t
     }
     return 1;
 }
+
+int tpk_export_pick_layout(tpk_file *file, const char *path, tpk_layout *out, tpk_diag *diag)
+{
+    static const struct {
+        uint32_t tag;
+        tpk_layout layout;
+    } order[3] = {{TPK_TAG_TT32, TPK_LAYOUT_TET32}, {TPK_TAG_TT20, TPK_LAYOUT_TET20}, {TPK_TAG_TT16, TPK_LAYOUT_TET16}};
+    for (int i = 0; i < 3; i++) {
+        uint64_t index;
+        if (tpk_find_chunk(file, order[i].tag, 0, 0, &index) == TPK_OK) {
+            *out = order[i].layout;
+            return 0;
+        }
+    }
+    return tpk_diag_fail(diag, "%s: cannot export: the file has no tet layout (TT32, TT20 or TT16)", path);
+}

@@ -34,6 +34,10 @@ void tpk_out_i64le(tpk_out *o, const int64_t *v, size_t count);
 int tpk_out_commit(tpk_out *o, tpk_diag *diag);
 void tpk_out_abort(tpk_out *o);
 
+/* The layout the tets are exported from: Tet32, else Tet20, else Tet16 (the first the file has), or -1 with
+ * "path: cannot export: the file has no tet layout". */
+int tpk_export_pick_layout(tpk_file *file, const char *path, tpk_layout *out, tpk_diag *diag);
+
 /* Load chunk (tag, index, step) whose elements must be elem_size bytes and exactly expected_count of
  * them. *data views the mapped file (uncompressed) or *owned (decoded; free it). Returns 1 when
  * loaded, 0 when the file has no such chunk, -1 on error (message names `path` and the chunk). */

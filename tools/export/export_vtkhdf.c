@@ -35,22 +35,6 @@ static int h5_fail(vh_export *x, const char *what)
     return tpk_diag_fail(x->diag, "%s: cannot export: HDF5 could not write %s (out of memory?)", x->path, what);
 }
 
-static int pick_layout(vh_export *x, tpk_layout *out)
-{
-    static const struct {
-        uint32_t tag;
-        tpk_layout layout;
-    } order[3] = {{TPK_TAG_TT32, TPK_LAYOUT_TET32}, {TPK_TAG_TT20, TPK_LAYOUT_TET20}, {TPK_TAG_TT16, TPK_LAYOUT_TET16}};
-    for (int i = 0; i < 3; i++) {
-        uint64_t index;
-        if (tpk_find_chunk(x->file, order[i].tag, 0, 0, &index) == TPK_OK) {
-            *out = order[i].layout;
-            return 0;
-        }
-    }
-    return tpk_diag_fail(x->diag, "%s: cannot export: the file has no tet layout (TT32, TT20 or TT16)", x->path);
-}
-
 /* An empty dataset of rows x cols (cols 0: rank 1) under `group`; -1 on failure. */
 static hid_t create(hid_t group, const char *name, hid_t type, uint64_t rows, uint64_t cols)
 {
@@ -311,7 +295,7 @@ static int load(vh_export *x)
     tpk_result r = tpk_get_info(x->file, &x->info);
     if (r != TPK_OK)
         return lib_fail(x, r, "header");
-    if (pick_layout(x, &layout) != 0)
+    if (tpk_export_pick_layout(x->file, x->path, &layout, x->diag) != 0)
         return -1;
     r = tpk_load_arrays(x->file, layout, NULL, 0, &x->mesh);
     if (r != TPK_OK)

@@ -71,22 +71,6 @@ static int keep_owned(vtu_export *x, void *p)
     return 0;
 }
 
-static int pick_layout(vtu_export *x, tpk_layout *out)
-{
-    static const struct {
-        uint32_t tag;
-        tpk_layout layout;
-    } order[3] = {{TPK_TAG_TT32, TPK_LAYOUT_TET32}, {TPK_TAG_TT20, TPK_LAYOUT_TET20}, {TPK_TAG_TT16, TPK_LAYOUT_TET16}};
-    for (int i = 0; i < 3; i++) {
-        uint64_t index;
-        if (tpk_find_chunk(x->file, order[i].tag, 0, 0, &index) == TPK_OK) {
-            *out = order[i].layout;
-            return 0;
-        }
-    }
-    return tpk_diag_fail(x->diag, "%s: cannot export: the file has no tet layout (TT32, TT20 or TT16)", x->path);
-}
-
 /* Every field at every step: NAME for a single step, NAME_t0, NAME_t1, ... otherwise. */
 static int collect_fields(vtu_export *x)
 {
@@ -283,7 +267,7 @@ int tpk_export_vtu(tpk_file *file, const char *path, tpk_diag *diag)
         lib_fail(&x, r, "header");
         goto done;
     }
-    if (pick_layout(&x, &layout) != 0)
+    if (tpk_export_pick_layout(x.file, x.path, &layout, x.diag) != 0)
         goto done;
     r = tpk_load_arrays(file, layout, NULL, 0, &x.mesh);
     if (r != TPK_OK) {
