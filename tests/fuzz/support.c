@@ -110,7 +110,7 @@ static int name_allowed(const char *name, size_t length)
                      c == '_' || c == '-')) {
             return 0;
         }
-        if (c == '.' && name[i + 1] == '.')
+        if (c == '.' && i + 1 < length && name[i + 1] == '.') /* the name is not NUL-terminated */
             return 0;
     }
     return 1;
