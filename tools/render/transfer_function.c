@@ -4,6 +4,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,9 +42,21 @@ static const tf_preset presets[] = {
     {"grayscale", 2, grayscale_rgb, 0.0f, 0.1f, 0.2f},
 };
 
+/* The names joined from the table (the one list of presets), made once. */
+static char preset_names[128];
+static pthread_once_t preset_names_once = PTHREAD_ONCE_INIT;
+
+static void join_preset_names(void)
+{
+    size_t at = 0;
+    for (size_t i = 0; i < sizeof presets / sizeof presets[0]; i++)
+        at += (size_t)snprintf(preset_names + at, sizeof preset_names - at, "%s%s", i ? ", " : "", presets[i].name);
+}
+
 const char *tpk_tf_preset_names(void)
 {
-    return "viridis, cool-warm, inferno, grayscale";
+    pthread_once(&preset_names_once, join_preset_names);
+    return preset_names;
 }
 
 const char *tpk_tf_preset(int i)
