@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The fuzz campaign behind `./dev fuzz`: every libFuzzer target of BUILD (or the ones named) for SECONDS
-# CPU seconds each, on all cores (-fork=N for SECONDS/N wall seconds), with its dictionary
+# CPU seconds each, on all cores (-fork=N for SECONDS/N wall seconds; on a busy machine a target runs
+# again from its working corpus until its processes have used SECONDS of CPU, measured), with its dictionary
 # (tests/fuzz/dict/), a working corpus seeded from tests/fuzz/corpus/<target>, artifacts under OUT.
-# Prints a table (target, executions, cov and ft from libFuzzer's last stats line, findings); each
+# Prints a table (target, CPU seconds used, executions, cov and ft from libFuzzer's last stats line,
+# findings); each
 # finding is minimized (-minimize_crash=1) and printed with the tetpack command that reproduces it.
 #   campaign.sh BUILD OUT SECONDS [TARGET...]
 set -uo pipefail
@@ -84,8 +86,15 @@ repro() {
     esac
 }
 
+# CPU seconds (user + system) this shell's waited-for children have used so far, into $cpu: `times` run in
+# this shell (in a $(...) subshell it would count the subshell's children only).
+children_cpu() {
+    times > "$out/logs/.times"
+    cpu=$(tail -1 "$out/logs/.times" | awk '{ s = 0; for (i = 1; i <= 2; i++) { split($i, a, "m"); sub("s", "", a[2]); s += a[1] * 60 + a[2] } printf "%d", s }')
+}
+
 table=$out/table.txt
-printf '%-20s %12s %8s %8s %9s\n' target executions cov ft findings | tee "$table"
+printf '%-20s %7s %12s %8s %8s %9s\n' target cpu_s executions cov ft findings | tee "$table"
 for target in "${targets[@]}"; do
     exe=$build/tests/fuzz/$target
     seeds=$fuzz_dir/corpus/$target
@@ -96,19 +105,31 @@ for target in "${targets[@]}"; do
     dict_arg=()
     if [ "$dict" = all ]; then dict_arg=(-dict="$out/all.dict"); elif [ -n "$dict" ]; then dict_arg=(-dict="$fuzz_dir/dict/$dict.dict"); fi
     log=$out/logs/$target.log
-    # -ignore_*: keep fuzzing after a finding, so that every target gets its whole budget
-    (cd "$out/logs" && "$exe" -fork="$jobs" -max_total_time="$wall" -timeout=20 -rss_limit_mb=2560 -close_fd_mask=1 \
-        -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 -artifact_prefix="$artifacts/" "${dict_arg[@]}" \
-        "$corpus" "$seeds") > "$log" 2>&1
-    stats=$(grep -E '^#[0-9]+: cov: ' "$log" | tail -1)
-    execs=$(sed -E 's/^#([0-9]+):.*/\1/' <<< "$stats")
+    : > "$log"
+    children_cpu
+    cpu_start=$cpu used=0 execs=0 stats=
+    while [ "$used" -lt $((budget * 98 / 100)) ]; do
+        left=$(((budget - used + jobs - 1) / jobs))
+        [ "$left" -lt 10 ] && left=10
+        # -ignore_*: keep fuzzing after a finding, so that every target gets its whole budget
+        (cd "$out/logs" && "$exe" -fork="$jobs" -max_total_time="$left" -timeout=20 -rss_limit_mb=2560 -close_fd_mask=1 \
+            -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 -artifact_prefix="$artifacts/" "${dict_arg[@]}" \
+            "$corpus" "$seeds") > "$log.run" 2>&1
+        cat "$log.run" >> "$log"
+        run_stats=$(grep -E '^#[0-9]+: cov: ' "$log.run" | tail -1)
+        [ -n "$run_stats" ] && stats=$run_stats && execs=$((execs + $(sed -E 's/^#([0-9]+):.*/\1/' <<< "$run_stats")))
+        children_cpu
+        used=$((cpu - cpu_start))
+        [ -z "$run_stats" ] && break # it did not start: the log says why
+    done
+    rm -f "$log.run"
     cov=$(sed -E 's/.* cov: ([0-9]+).*/\1/' <<< "$stats")
     ft=$(sed -E 's/.* ft: ([0-9]+).*/\1/' <<< "$stats")
     findings=()
     for f in "$artifacts"/crash-* "$artifacts"/timeout-* "$artifacts"/oom-* "$artifacts"/leak-*; do
         [[ -f $f && $f != *.min ]] && findings+=("$f")
     done
-    printf '%-20s %12s %8s %8s %9s\n' "$target" "${execs:--}" "${cov:--}" "${ft:--}" "${#findings[@]}" | tee -a "$table"
+    printf '%-20s %7s %12s %8s %8s %9s\n' "$target" "$used" "$execs" "${cov:--}" "${ft:--}" "${#findings[@]}" | tee -a "$table"
     for f in "${findings[@]}"; do
         [ -f "$f.min" ] || "$exe" -minimize_crash=1 -max_total_time=60 -timeout=20 -exact_artifact_path="$f.min" "$f" \
             > "$out/logs/$target.minimize.log" 2>&1
@@ -117,4 +138,4 @@ for target in "${targets[@]}"; do
         echo "    reproduce: $(repro "$target" "$f.min")" | tee -a "$table"
     done
 done
-echo "fuzz: ${budget} CPU seconds per target (-fork=$jobs for ${wall}s), table in $table, logs in $out/logs"
+echo "fuzz: ${budget} CPU seconds per target (-fork=$jobs for ${wall}s a run), table in $table, logs in $out/logs"
