@@ -28,7 +28,8 @@ static void check_field(const tpk_mesh *m, int index, const tpk_src_field *f, tp
     int64_t items = f->association == TPK_ASSOC_POINT ? m->point_count : m->cell_count;
     int64_t per_step = items * f->components;
     for (int s = 0; s < f->step_count; s++) {
-        const float *v = f->values + (int64_t)s * per_step;
+        /* no points or cells: no values (values may be NULL, and NULL + 0 is undefined) */
+        const float *v = per_step > 0 ? f->values + (int64_t)s * per_step : NULL;
         double lo = INFINITY, hi = -INFINITY;
         int64_t bad = 0, first_bad = -1;
         for (int64_t i = 0; i < per_step; i++) {

@@ -174,6 +174,10 @@ typedef struct tpk_import_format {
     int surface_kind;       /* TetGen readings: tpk_surface_kind and tpk_surface_mode (surface.h) */
     int surface_mode;
     unsigned supports;      /* TPK_FORMAT_* */
+    /* NULL, or the library we do not control that parses the files ("HDF5"): `read` and `probe` then run
+     * in a child process (isolate.h), so that a crash of that library on a damaged file is an error
+     * naming the file, not the end of tetpack. */
+    const char *isolated;
 } tpk_import_format;
 
 /* The registry's rows, in detection order; *count gets their number. */

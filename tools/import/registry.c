@@ -13,6 +13,7 @@
 
 #include "gzip_input.h"
 #include "importers.h"
+#include "isolate.h"
 #include "surface/surface.h"
 
 #define VOLUME_CELLS (TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_PYRAMIDS)
@@ -60,14 +61,14 @@ static const tpk_import_format formats[] = {
      .supports = VOLUME_CELLS | GZ},
     {.name = "exodus", .title = "Exodus II (netCDF classic or netCDF-4), every time step",
      .extensions = ".exo .e .g .ex2", .magic = "CDF\x01|CDF\x02|\x89HDF", .read = tpk_import_exodus,
-     .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+     .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS, .isolated = "netCDF"},
 #ifdef TPK_WITH_CGNS
     /* After exodus: its netCDF-4 files share the HDF5 signature, so an HDF5 file without an extension
      * reads as Exodus; .cgns is told by its extension, ADF-format CGNS by its header (the ADF library
      * writes its "@(#)" with the high bits set). */
     {.name = "cgns", .title = "CGNS (HDF5 or ADF): unstructured, structured and polyhedral zones, every step",
      .extensions = ".cgns", .magic = "\xc0\xa8\xa3\xa9" "ADF Database|@(#)ADF Database", .read = tpk_import_cgns,
-     .supports = VOLUME_CELLS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
+     .supports = VOLUME_CELLS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS, .isolated = "CGNS"},
 #else
     {.name = "cgns", .title = "CGNS: not in this build (TETPACK_WITH_CGNS=OFF)", .extensions = ".cgns",
      .read = cgns_not_built},
@@ -83,10 +84,12 @@ static const tpk_import_format formats[] = {
     {.name = "vtkhdf", .title = "VTKHDF (VTK's HDF5 format) UnstructuredGrid 1.x, 2.x: partitions, steps, polyhedra",
      .extensions = ".vtkhdf .hdf", .magic = "\x89HDF\r\n\x1a\n", .probe = tpk_import_vtkhdf_probe,
      .read = tpk_import_vtkhdf, .read_memory = tpk_import_vtkhdf_memory,
-     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS},
+     .supports = VOLUME_CELLS | TPK_FORMAT_VOXELS | TPK_FORMAT_POLYHEDRA | FIELDS | TPK_FORMAT_TIME_STEPS,
+     .isolated = "HDF5"},
     {.name = "xdmf", .title = "XDMF 2 and 3 (meshio, FEniCS/dolfinx): XML or HDF5 data, temporal collections",
      .extensions = ".xdmf .xmf", .magic = "<Xdmf", .sniff = tpk_import_xdmf_sniff, .read = tpk_import_xdmf,
-     .read_memory = tpk_import_xdmf_memory, .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS},
+     .read_memory = tpk_import_xdmf_memory, .supports = VOLUME_CELLS | FIELDS | TPK_FORMAT_TIME_STEPS,
+     .isolated = "HDF5"}, /* its HDF DataItems */
     /* Its files may each be .gz, read by the reader itself: the row does not say gzip (FILE.gz inputs). */
     {.name = "openfoam", .title = "OpenFOAM case directory (or its CASE.foam): polyMesh ASCII, binary, .gz; fields",
      .extensions = ".foam", .read = tpk_import_openfoam,
@@ -201,7 +204,8 @@ static const tpk_import_format *detect_row(const char *name, const char *path, c
         if (formats[i].sniff && formats[i].sniff(head, got))
             return &formats[i];
     for (size_t i = 0; path && i < FORMAT_COUNT; i++)
-        if (formats[i].probe && magic_matches(formats[i].magic, head, got) && formats[i].probe(path))
+        if (formats[i].probe && magic_matches(formats[i].magic, head, got) &&
+            (formats[i].isolated ? tpk_isolated_probe(formats[i].probe, path) : formats[i].probe(path)))
             return &formats[i];
     for (size_t i = 0; i < FORMAT_COUNT; i++)
         if (magic_matches(formats[i].magic, head, got) && sniff_passes(&formats[i], head, got))
@@ -259,6 +263,8 @@ const char *tpk_import_format_supports(unsigned supports, char *buf, size_t cap)
 static int import_with(const tpk_import_format *row, int forced, const char *path,
                        const struct tpk_tetgen_options *tetgen, tpk_mesh *out, tpk_diag *diag)
 {
+    if (row->read && row->isolated)
+        return tpk_isolated_read(row->read, row->isolated, path, out, diag);
     if (row->read)
         return row->read(path, out, diag);
     if (forced)
