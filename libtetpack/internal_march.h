@@ -1,6 +1,8 @@
 /* libtetpack private declarations of the reference CPU marcher: the shell-face BVH and the marcher
  * handle, on top of the ray frame and edge test of internal_ray.h. Not installed.
  * Owners, top to bottom (a file calls only files below it):
+ *   range_bvh.c  tpk_range_bvh_*, tpk_march_ray_values (public, tetpack.h): iso rays by range culling,
+ *                each tet's piece as march.c computes it (on the marcher's mesh; tpk_recover_tets)
  *   march_set.c  tpk_set_marcher_* (public, tetpack.h): rays across the parts of a set, on tpki_march_run
  *   march.c      tpk_marcher_create, tpk_marcher_destroy, tpk_march_ray (public, tetpack.h), tpki_march_run
  *   shell_bvh.c  tpki_shell_bvh_build, tpki_shell_entries, tpki_shell_face_entry

@@ -99,16 +99,35 @@ typedef struct tpk_face_hit {
  * gives a bit-identical t (ties between shell entries at one point are then exact). */
 void tpki_edge_weights(const tpk_face_hit *h, int zero_edge, double w[3]);
 
+/* The corner (0..2) of a face's smallest id. Every sum over a face's corners (of the edge values in
+ * tpk_face_weights, of t and of the scalar in tpk_face_sum) starts there, so a face gives bit-identical
+ * weights, t and scalar in whatever rotation it is held: the marcher holds a face in the rotation its
+ * path gave it, and the range culling of iso rays (range_bvh.c) meets a tet without that path. */
+static inline int tpk_face_first(const tpk_face_hit *h)
+{
+    return h->v[1] < h->v[0] ? (h->v[2] < h->v[1] ? 2 : 1) : (h->v[2] < h->v[0] ? 2 : 0);
+}
+
+static const int8_t tpk_face_corner[5] = {0, 1, 2, 0, 1}; /* corner first + k (k < 3) is [first + k] */
+
+/* w[0..2] x[0..2] summed from corner `first` (tpk_face_first) on. */
+static inline double tpk_face_sum(int first, const double w[3], const double x[3])
+{
+    int a = first, b = tpk_face_corner[first + 1], c = tpk_face_corner[first + 2];
+    return w[a] * x[a] + w[b] * x[b] + w[c] * x[c];
+}
+
 /* Barycentric weights of the crossing point: the edge values (the same weights give t and the scalar).
- * A crossing through a vertex gets weights (1,0,0) exactly; through an edge, see tpki_edge_weights. */
-static inline void tpk_face_weights(const tpk_face_hit *h, double w[3])
+ * A crossing through a vertex gets weights (1,0,0) exactly; through an edge, see tpki_edge_weights.
+ * `first`: tpk_face_first(h). */
+static inline void tpk_face_weights(const tpk_face_hit *h, int first, double w[3])
 {
     int zeros = (h->e[0] == 0.0) + (h->e[1] == 0.0) + (h->e[2] == 0.0);
     if (zeros == 1) {
         tpki_edge_weights(h, h->e[0] == 0.0 ? 0 : h->e[1] == 0.0 ? 1 : 2, w);
         return;
     }
-    double sum = h->e[0] + h->e[1] + h->e[2];
+    double sum = h->e[first] + h->e[tpk_face_corner[first + 1]] + h->e[tpk_face_corner[first + 2]];
     if (sum != 0.0 && sum == sum) {
         double inv = 1.0 / sum;
         w[0] = h->e[1] * inv;

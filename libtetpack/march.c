@@ -75,11 +75,11 @@ void tpk_marcher_shell_bvh(const tpk_marcher *m, tpk_shell_bvh *out)
 
 /* ---- One inside-run: from a shell entry face to a face with neighbor -1 -------------------------- */
 
-static inline double face_scalar(const float *scalars, const tpk_face_hit *h, const double w[3])
+static inline double face_scalar(const float *scalars, const tpk_face_hit *h, int first, const double w[3])
 {
     if (!scalars)
         return 0.0;
-    return w[0] * scalars[h->v[0]] + w[1] * scalars[h->v[1]] + w[2] * scalars[h->v[2]];
+    return tpk_face_sum(first, w, (const double[3]){scalars[h->v[0]], scalars[h->v[1]], scalars[h->v[2]]});
 }
 
 static inline int rank4(int32_t x, int32_t a, int32_t b, int32_t c, int32_t d)
@@ -118,8 +118,9 @@ static inline __attribute__((always_inline)) tpk_result march_run(march_params *
     const int64_t tet_count = (int64_t)mesh->tet_count, vertex_count = (int64_t)mesh->vertex_count;
     const int s = -1; /* entry and exit faces are ordered so that all their edge functions are < 0 */
     double w[3];
-    tpk_face_weights(&in, w);
-    double s_in = face_scalar(mesh->scalars, &in, w);
+    int first = tpk_face_first(&in);
+    tpk_face_weights(&in, first, w);
+    double s_in = face_scalar(mesh->scalars, &in, first, w);
     int32_t prev = -1;
 
     for (int64_t step = 0;; step++) {
@@ -167,12 +168,14 @@ static inline __attribute__((always_inline)) tpk_result march_run(march_params *
         } else {
             return TPK_ERR_MESH; /* impossible with exact signs; kept as a guard */
         }
-        tpk_face_weights(&out, w);
-        double t_out = w[0] * out.p[0].z + w[1] * out.p[1].z + w[2] * out.p[2].z;
+        const int in_first = first;
+        first = tpk_face_first(&out);
+        tpk_face_weights(&out, first, w);
+        double t_out = tpk_face_sum(first, w, (const double[3]){out.p[0].z, out.p[1].z, out.p[2].z});
         if (!(t_out >= in.t))
             t_out = in.t; /* rounding (or NaN from hostile positions): keep the chain monotone */
         out.t = t_out;
-        const double s_out = face_scalar(mesh->scalars, &out, w);
+        const double s_out = face_scalar(mesh->scalars, &out, first, w);
 
         int32_t next;
         if (layout == TPK_LAYOUT_TET32) {
@@ -194,7 +197,9 @@ static inline __attribute__((always_inline)) tpk_result march_run(march_params *
         if (next < -1 || next >= tet_count)
             return TPK_ERR_MESH;
 
-        const int32_t verts[4] = {a, b, c, d};
+        /* the entry face from its smallest id on (the segment's v[0..2], for gradients: path-independent) */
+        const int32_t verts[4] = {in.v[in_first], in.v[tpk_face_corner[in_first + 1]],
+                                  in.v[tpk_face_corner[in_first + 2]], d};
         report(p, tet, verts, in.t, t_out, s_in, s_out);
         if (next < 0) {
             p->exit_t = t_out;

@@ -26,8 +26,9 @@ int tpki_shell_face_entry(const float *positions, const tpk_ray_frame *frame, co
     if (tpk_edge_sign(face->c, &hit->p[2], face->a, &hit->p[0], &hit->e[2]) > 0)
         return 0;
     double w[3];
-    tpk_face_weights(hit, w);
-    hit->t = w[0] * hit->p[0].z + w[1] * hit->p[1].z + w[2] * hit->p[2].z;
+    int first = tpk_face_first(hit);
+    tpk_face_weights(hit, first, w);
+    hit->t = tpk_face_sum(first, w, (const double[3]){hit->p[0].z, hit->p[1].z, hit->p[2].z});
     return 1;
 }
 

@@ -277,7 +277,8 @@ typedef struct tpk_segment {
     double t_in, t_out;       /* ray parameters, clipped to [tmin, tmax] */
     double scalar_in, scalar_out; /* interpolated at t_in/t_out (0 when the mesh has no scalars) */
     int32_t v[4];             /* the tet's vertices: v[0..2] the face the ray entered through (before
-                                 any clipping to tmin), v[3] the fourth; for gradients and face normals */
+                                 any clipping to tmin), from its smallest id on, v[3] the fourth; for
+                                 gradients and face normals */
 } tpk_segment;
 
 /* Return nonzero to stop the ray early (e.g. opacity reached). */
@@ -296,6 +297,29 @@ typedef struct tpk_march_stats {
 tpk_result tpk_march_ray(const tpk_marcher *marcher, const double org[3], const double dir[3],
                          double tmin, double tmax, tpk_segment_fn fn, void *user,
                          tpk_march_stats *stats);
+
+/* ---- Range culling for iso rays ------------------------------------------------------------------- */
+
+/* A BVH over the tets of a marcher's mesh whose nodes carry the range of its scalars (mesh.scalars,
+ * which must be set), for rays that look for isosurfaces only: subtrees whose range holds none of the
+ * values are skipped. Built from the tets in file order (runs of 8 consecutive tets, then pairs of
+ * neighbours), about 24 bytes per tet. The marcher (and its arrays) must outlive it. Thread safety: as
+ * the marcher's. TPK_ERR_INVALID_ARGUMENT without scalars; the errors of tpk_recover_tets. */
+typedef struct tpk_range_bvh tpk_range_bvh;
+tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher);
+void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
+/* The share (0..1) of its leaves (runs of 8 tets) whose range holds one of values[0 .. count): where it is
+ * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */
+double tpk_range_bvh_active(const tpk_range_bvh *bvh, const double *values, int count);
+
+/* The pieces of tpk_march_ray(marcher, org, dir, tmin, tmax) that cross one of values[0 .. count) by
+ * the renderers' rule (scalar_in < v <= scalar_out, or scalar_in > v >= scalar_out), in increasing t,
+ * and no others: the same segments, bit for bit (both compute a tet's faces from their smallest ids on),
+ * except in a tet where rounding put the exit before the entry, which the marcher resolves along its
+ * path. stats->tet_steps counts the tets tested. fn may stop the ray as in tpk_march_ray. */
+tpk_result tpk_march_ray_values(const tpk_range_bvh *bvh, const double org[3], const double dir[3], double tmin,
+                                double tmax, const double *values, int count, tpk_segment_fn fn, void *user,
+                                tpk_march_stats *stats);
 
 /* ---- Part sets (format 1.2, spec §15) ------------------------------------------------------------ */
 

@@ -1,5 +1,6 @@
 /* Tests of the reference CPU marcher: watertightness on rays through vertices and edges, identical tet
  * sequences for Tet32/20/16, exact segments on linear fields, non-convex shells, hostile records. */
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -873,4 +874,175 @@ TPK_TEST(layouts_agree_hinge_small)
 TPK_TEST(layouts_agree_cylinder)
 {
     real_mesh_layouts("sfepy/cylinder.vtk", 100000, 0);
+}
+
+/* ---- Range culling for iso rays (libtetpack/range_bvh.c) ----------------------------------------- */
+
+typedef struct crossing_filter {
+    recording *rec;
+    const double *values;
+    int count;
+} crossing_filter;
+
+/* The marcher's pieces that cross a value by the renderers' rule, recorded. */
+static int record_crossing(void *user, const tpk_segment *s)
+{
+    crossing_filter *f = user;
+    for (int j = 0; j < f->count; j++) {
+        double v = f->values[j];
+        if ((s->scalar_in < v && v <= s->scalar_out) || (s->scalar_in > v && v >= s->scalar_out))
+            return record_segment(f->rec, s);
+    }
+    return 0;
+}
+
+static void swap_pieces(recording *r, int64_t a, int64_t b)
+{
+#define SWAP(field)                                                                                         \
+    do {                                                                                                    \
+        __typeof__(r->field[0]) tmp_;                                                                       \
+        memcpy(&tmp_, &r->field[a], sizeof tmp_);                                                           \
+        memcpy(&r->field[a], &r->field[b], sizeof tmp_);                                                    \
+        memcpy(&r->field[b], &tmp_, sizeof tmp_);                                                           \
+    } while (0)
+    SWAP(tet);
+    SWAP(t_in);
+    SWAP(t_out);
+    SWAP(s_in);
+    SWAP(s_out);
+    SWAP(v);
+#undef SWAP
+}
+
+/* Runs of pieces whose t_in are within an ulp or two, sorted by tet (insertion sort: runs are short). */
+static void sort_equal_t_runs(recording *r)
+{
+    for (int64_t i = 1; i < r->count; i++)
+        for (int64_t k = i; k > 0 && fabs(r->t_in[k] - r->t_in[k - 1]) <= 4 * DBL_EPSILON * (fabs(r->t_in[k]) + 1) &&
+                            r->tet[k] < r->tet[k - 1];
+             k--)
+            swap_pieces(r, k, k - 1);
+}
+
+/* Every piece tpk_march_ray_values reports equals, bit for bit and in order, a crossing piece of
+ * tpk_march_ray, and none is missing: on each layout, for `rays` rays of `gen`. Scalars `field`. */
+static void check_culling_agrees(fx_mesh *m, ray_generator gen, int64_t rays, const double *values, int count)
+{
+    static recording marched, culled;
+    for (int l = 0; l < 3; l++) {
+        tpk_marcher *marcher = make_marcher(m, layouts[l]);
+        CHECK(marcher != NULL);
+        tpk_range_bvh *bvh = NULL;
+        CHECK(tpk_range_bvh_create(&bvh, marcher) == TPK_OK);
+        uint64_t rng = 77 + (uint64_t)l;
+        int64_t pieces = 0, rays_with = 0, clamped = 0;
+        for (int64_t i = 0; i < rays; i++) {
+            double org[3], dir[3], tmin;
+            gen(&rng, m, org, dir, &tmin);
+            double tmax = (i % 5 == 0) ? 0.5 * (fabs(org[0]) + 1.0) : INFINITY; /* some rays end inside */
+            marched.count = culled.count = 0;
+            crossing_filter f = {&marched, values, count};
+            tpk_march_stats st;
+            CHECK(tpk_march_ray(marcher, org, dir, tmin, tmax, record_crossing, &f, NULL) == TPK_OK);
+            CHECK(tpk_march_ray_values(bvh, org, dir, tmin, tmax, values, count, record_segment, &culled, &st) ==
+                  TPK_OK);
+            CHECK_MSG(marched.count == culled.count, "layout %d ray %lld: %lld crossing pieces marched, %lld culled",
+                      l, (long long)i, (long long)marched.count, (long long)culled.count);
+            /* pieces of one t (a ray through a vertex or an edge, where several tets have a piece of
+             * length 0 or an ulp) come in the order of the marcher's path or of the tet numbers: sort
+             * such runs of both by tet */
+            sort_equal_t_runs(&marched);
+            sort_equal_t_runs(&culled);
+            for (int64_t k = 0; k < marched.count; k++) {
+                /* t: equal but where the marcher clamped an exit that rounding put before its entry (then
+                 * the tets after it carry that t: a few ulps, at a point where the ray meets a vertex or an
+                 * edge, or in a sliver) */
+                double tol = 8 * DBL_EPSILON * (fabs(marched.t_in[k]) + fabs(marched.t_out[k]) + 1.0);
+                int t_exact = marched.t_in[k] == culled.t_in[k] && marched.t_out[k] == culled.t_out[k];
+                clamped += !t_exact;
+                CHECK_MSG(marched.tet[k] == culled.tet[k] && fabs(marched.t_in[k] - culled.t_in[k]) <= tol &&
+                              fabs(marched.t_out[k] - culled.t_out[k]) <= tol && marched.s_in[k] == culled.s_in[k] &&
+                              marched.s_out[k] == culled.s_out[k] &&
+                              !memcmp(marched.v[k], culled.v[k], sizeof marched.v[k]),
+                          "layout %d ray %lld piece %lld: tet %d [%.17g, %.17g] s %.17g..%.17g marched, tet %d "
+                          "[%.17g, %.17g] s %.17g..%.17g culled", l, (long long)i, (long long)k, marched.tet[k],
+                          marched.t_in[k], marched.t_out[k], marched.s_in[k], marched.s_out[k], culled.tet[k],
+                          culled.t_in[k], culled.t_out[k], culled.s_in[k], culled.s_out[k]);
+            }
+            pieces += marched.count;
+            rays_with += marched.count > 0;
+        }
+        CHECK_MSG(rays_with > rays / 10 && pieces > rays / 10, "layout %d: only %lld of %lld rays met a value", l,
+                  (long long)rays_with, (long long)rays);
+        /* the clamped ones are rare: these rays aim at vertices and run along axes through them on purpose */
+        CHECK_MSG(clamped * 20 < pieces, "layout %d: %lld of %lld pieces differ in t", l, (long long)clamped,
+                  (long long)pieces);
+        if (getenv("TPK_TEST_VERBOSE"))
+            fprintf(stderr, "layout %d: %lld pieces, %lld with t a few ulps off\n", l, (long long)pieces,
+                    (long long)clamped);
+        tpk_range_bvh_destroy(bvh);
+        tpk_marcher_destroy(marcher);
+    }
+}
+
+/* scalar = a smooth wave, or (exact) floor of 2x: a value then lies exactly on whole faces and vertices. */
+static void set_field(fx_mesh *m, int exact)
+{
+    free(m->scalars);
+    m->scalars = malloc((size_t)m->vertex_count * sizeof(float));
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        for (int k = 0; k < 3; k++)
+            lo[k] = fmin(lo[k], m->points[3 * v + k]), hi[k] = fmax(hi[k], m->points[3 * v + k]);
+    for (int64_t v = 0; v < m->vertex_count; v++) {
+        double u[3];
+        for (int k = 0; k < 3; k++)
+            u[k] = (m->points[3 * v + k] - lo[k]) / (hi[k] - lo[k] > 0 ? hi[k] - lo[k] : 1);
+        m->scalars[v] = exact ? (float)floor(4 * u[0]) : (float)(sin(7 * u[0]) * cos(5 * u[1]) + 0.3 * u[2]);
+    }
+}
+
+TPK_TEST(culled_iso_pieces_equal_marched)
+{
+    static const double smooth[] = {0.3, -0.45}, exact[] = {1.0, 2.0};
+    const char *meshes[] = {"sfepy/cylinder.vtk", "tetgen/hinge_small.node"};
+    for (int i = 0; i < 2; i++) {
+        fx_mesh m;
+        CHECK_MSG(load_real(meshes[i], &m) == 0, "cannot load %s", meshes[i]);
+        set_field(&m, 0);
+        check_culling_agrees(&m, real_ray, 4000, smooth, 2);
+        set_field(&m, 1);
+        check_culling_agrees(&m, real_ray, 4000, exact, 2);
+        fx_free(&m);
+    }
+}
+
+TPK_TEST(culled_iso_refuses_and_stops)
+{
+    fx_mesh m;
+    CHECK(fx_render_grid(&m, 0) == 0);
+    tpk_marcher *marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    tpk_range_bvh *bvh = (tpk_range_bvh *)1;
+    CHECK(tpk_range_bvh_create(&bvh, marcher) == TPK_ERR_INVALID_ARGUMENT && bvh == NULL); /* no scalars */
+    tpk_marcher_destroy(marcher);
+    fx_free(&m);
+    CHECK(fx_render_grid(&m, 1) == 0); /* scalar = x, 0..8 */
+    marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    CHECK(tpk_range_bvh_create(&bvh, marcher) == TPK_OK);
+    const double values[] = {2.5, 5.5};
+    const double org[3] = {-1, 3.3, 4.1}, dir[3] = {1, 0.01, 0.02};
+    static recording rec;
+    rec.count = 0;
+    CHECK(tpk_march_ray_values(bvh, org, dir, 0, INFINITY, values, 2, record_segment, &rec, NULL) == TPK_OK);
+    CHECK_MSG(rec.count == 2 && rec.t_in[0] < rec.t_in[1], "%lld pieces", (long long)rec.count);
+    int seen = 0;
+    CHECK(tpk_march_ray_values(bvh, org, dir, 0, INFINITY, values, 2, stop_after_first, &seen, NULL) == TPK_OK);
+    CHECK(seen == 1);
+    CHECK(tpk_range_bvh_active(bvh, values, 2) > 0 && tpk_range_bvh_active(bvh, values, 2) < 1);
+    CHECK(tpk_range_bvh_active(bvh, (const double[]){100.0}, 1) == 0.0);
+    CHECK(tpk_march_ray_values(bvh, org, (const double[3]){0, 0, 0}, 0, 1, values, 2, record_segment, &rec, NULL) ==
+          TPK_ERR_INVALID_ARGUMENT);
+    tpk_range_bvh_destroy(bvh);
+    tpk_marcher_destroy(marcher);
+    fx_free(&m);
 }

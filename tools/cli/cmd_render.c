@@ -115,6 +115,7 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
                    stats.first_frame_seconds, (unsigned long long)stats.pipeline_cache_bytes, stats.pipeline_cache_hits);
         if (!isnan(src->iso_auto))
             printf(",\"iso_auto\":%.9g", src->iso_auto);
+        printf(",\"iso_culling\":%s", stats.iso_culling ? "true" : "false");
         tpk_strbuf reason = {0};
         tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
         printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");

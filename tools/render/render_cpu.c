@@ -162,8 +162,13 @@ static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t cou
     double lo = 0.0, hi = INFINITY;
     if (rl_clip(opt, job->eye, ray.dir, &lo, &hi)) {
         tpk_march_stats st;
-        r = job->set ? tpk_set_march_ray(job->set, job->eye, ray.dir, lo, hi, on_segment, &ray, NULL, &st)
-                     : tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, on_segment, &ray, &st);
+        if (job->set)
+            r = tpk_set_march_ray(job->set, job->eye, ray.dir, lo, hi, on_segment, &ray, NULL, &st);
+        else if (job->range)
+            r = tpk_march_ray_values(job->range, job->eye, ray.dir, lo, hi, opt->iso, opt->iso_count, on_segment,
+                                     &ray, &st);
+        else
+            r = tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, on_segment, &ray, &st);
         ray.steps += st.tet_steps;
     }
     counts[0] += ray.steps;
@@ -208,6 +213,22 @@ static void *render_worker(void *arg)
 }
 
 /* ---- Setup -------------------------------------------------------------------------------------- */
+
+int tpk_render_iso_only(const tpk_render_options *opt, int has_point_scalars)
+{
+    if (!opt || opt->iso_count <= 0 || opt->tet_scalars || !has_point_scalars || !opt->tf)
+        return 0;
+    for (int i = 0; i < opt->tf->count; i++)
+        if (opt->tf->points[i].a != 0.0)
+            return 0;
+    return 1;
+}
+
+int tpk_render_culling_wanted(void)
+{
+    const char *v = getenv("TETPACK_ISO_CULLING");
+    return !v || !*v ? -1 : strcmp(v, "0") == 0 ? 0 : 1;
+}
 
 double tpk_positions_diagonal(const tpk_mesh_arrays *mesh)
 {
@@ -344,13 +365,27 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
                 rc = tpk_diag_fail(diag, "render: vertex cache: %s", tpk_result_string(r));
         }
     }
+    tpk_range_bvh *range = NULL;
+    int culling = tpk_render_culling_wanted();
+    if (rc == 0 && culling != 0 && tpk_render_iso_only(opt, mesh->scalars != NULL)) {
+        r = tpk_range_bvh_create(&range, marcher);
+        if (r != TPK_OK)
+            rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
+        if (range && culling < 0 && tpk_range_bvh_active(range, opt->iso, opt->iso_count) > TPK_RENDER_CULL_ACTIVE) {
+            tpk_range_bvh_destroy(range); /* a dense isosurface: marching finds it sooner */
+            range = NULL;
+        }
+        job->range = range;
+    }
     if (rc == 0)
         rc = run_render(job, stats, &t0, diag);
     if (rc == 0 && stats) {
+        stats->iso_culling = range != NULL;
         stats->tet_steps += cache_counts[0];
         stats->secondary_rays += cache_counts[1];
     }
     free(cache);
+    tpk_range_bvh_destroy(range);
     tpk_marcher_destroy(marcher);
     free(job);
     return rc;

@@ -17,6 +17,8 @@ typedef struct render_job {
     const tpk_mesh_arrays *mesh;
     const tpk_marcher *marcher;
     const tpk_set_marcher *set; /* a part set instead (spec §15): no lighting, no tet field */
+    const tpk_range_bvh *range; /* iso-only (render.h: ISO-ONLY RAYS): primary rays find their pieces by
+                                   range culling, not by marching every tet */
     const float *tet_scalars;  /* opt->tet_scalars (a tet field) or NULL */
     int has_scalars;           /* a point or a tet field */
     double range_min;
