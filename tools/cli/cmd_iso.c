@@ -8,6 +8,9 @@
 #include "base/strbuf.h"
 #include "cli.h"
 #include "iso/iso.h"
+#ifdef TPK_WITH_VULKAN
+#include "render_vk/render_vk.h"
+#endif
 
 static const char iso_help[] =
     "usage: tetpack iso IN.tpk OUT.ply|.obj|.glb --value V[,V...] [--field NAME] [--step N] [options]\n"
@@ -27,6 +30,9 @@ static const char iso_help[] =
     "  --color-field NAME   a second point field interpolated onto the vertices (its step N, or 0 when it\n"
     "                       has one step)\n"
     "  --threads N          worker threads (default: all cores)\n"
+    "  --backend cpu|vulkan where tets are classified and triangles emitted: the CPU (default) or Vulkan\n"
+    "                       compute shaders; vertices and normals are then made as on the CPU, so the\n"
+    "                       output is the same, byte for byte\n"
     "  --json               print the report as JSON (triangles, vertices, seconds, per value counts)\n"
     "\n"
     "Outputs, by extension (written atomically):\n"
@@ -53,7 +59,8 @@ static int parse_values(const char *text, double *out)
     }
 }
 
-static void print_json(const tpk_iso_options *o, const tpk_iso_report *r)
+static void print_json(const tpk_iso_options *o, const tpk_iso_report *r, const char *backend, const char *device,
+                       double device_seconds)
 {
     tpk_strbuf j = {0};
     double seconds = r->seconds_load + r->seconds_extract + r->seconds_write;
@@ -94,13 +101,37 @@ static void print_json(const tpk_iso_options *o, const tpk_iso_report *r)
                           (long long)r->value_vertices[i],
                           r->values[i] >= r->field_min && r->values[i] <= r->field_max ? "true" : "false");
     }
-    tpk_strbuf_printf(&j, "]}\n");
+    tpk_strbuf_printf(&j, "],\"backend\":\"%s\",\"device\":", backend);
+    tpk_strbuf_json_string(&j, device ? device : "");
+    tpk_strbuf_printf(&j, ",\"device_seconds\":");
+    tpk_strbuf_json_number(&j, device_seconds);
+    tpk_strbuf_printf(&j, "}\n");
     if (!j.failed)
         fputs(j.data, stdout);
     tpk_strbuf_free(&j);
 }
 
-static int parse_args(int argc, char **argv, tpk_iso_options *o, double *values, int *json)
+/* The Vulkan extractor, made at the first value (tpk_iso_corners gets the mesh then). */
+typedef struct vk_source {
+    const char *device; /* after the first value */
+#ifdef TPK_WITH_VULKAN
+    tpk_iso_vk *vk;
+#endif
+} vk_source;
+
+#ifdef TPK_WITH_VULKAN
+static int vk_emit(void *user, const tpk_iso_input *in, double value, uint64_t **keys, int64_t *triangles,
+                   tpk_diag *diag)
+{
+    vk_source *s = user;
+    if (!s->vk && tpk_iso_vk_create(&s->vk, in, diag) != 0)
+        return -1;
+    s->device = tpk_iso_vk_device(s->vk);
+    return tpk_iso_vk_emit(s->vk, value, keys, NULL, triangles, diag);
+}
+#endif
+
+static int parse_args(int argc, char **argv, tpk_iso_options *o, double *values, int *json, int *vulkan)
 {
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i], *v = NULL;
@@ -125,6 +156,10 @@ static int parse_args(int argc, char **argv, tpk_iso_options *o, double *values,
         } else if (!strncmp(arg, "--threads", 9)) {
             if (!VALUE("--threads") || tpk_cli_parse_int(v, 1, 1024, &o->threads))
                 return tpk_cli_fail("iso", "--threads expects 1..1024, found '%s'", v ? v : "");
+        } else if (!strncmp(arg, "--backend", 9)) {
+            if (!VALUE("--backend") || (strcmp(v, "cpu") && strcmp(v, "vulkan")))
+                return tpk_cli_fail("iso", "--backend expects cpu or vulkan, found '%s'", v ? v : "");
+            *vulkan = !strcmp(v, "vulkan");
         } else if (!strcmp(arg, "--json")) {
             *json = 1;
         } else if (arg[0] == '-' && arg[1]) {
@@ -155,9 +190,19 @@ int tpk_cmd_iso(int argc, char **argv)
     tpk_iso_options o;
     memset(&o, 0, sizeof o);
     double values[TPK_ISO_MAX_VALUES];
-    int json = 0;
-    if (parse_args(argc, argv, &o, values, &json))
+    int json = 0, vulkan = 0;
+    if (parse_args(argc, argv, &o, values, &json, &vulkan))
         return TPK_EXIT_USAGE;
+    vk_source source;
+    memset(&source, 0, sizeof source);
+#ifdef TPK_WITH_VULKAN
+    tpk_iso_corners corners = {vk_emit, &source};
+    if (vulkan)
+        o.corners = &corners;
+#else
+    if (vulkan)
+        return tpk_cli_fail("iso", "--backend vulkan: this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)");
+#endif
     o.values = values;
     tpk_output_input input = {.arg = "IN.tpk", .given = o.input};
     if (tpk_cli_check_output("iso", "OUTPUT", o.output, &input, 1))
@@ -165,10 +210,20 @@ int tpk_cmd_iso(int argc, char **argv)
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     tpk_iso_report r;
-    if (tpk_iso_run(&o, &r, &diag) != 0)
+    int rc = tpk_iso_run(&o, &r, &diag);
+    double gpu_seconds = 0;
+#ifdef TPK_WITH_VULKAN
+    if (source.vk)
+        gpu_seconds = tpk_iso_vk_seconds(source.vk);
+    char device[256];
+    snprintf(device, sizeof device, "%s", source.device ? source.device : "");
+    tpk_iso_vk_destroy(source.vk);
+    source.device = device;
+#endif
+    if (rc != 0)
         return tpk_cli_fail("iso", "%s", diag.message);
     if (json)
-        print_json(&o, &r);
+        print_json(&o, &r, vulkan ? "vulkan" : "cpu", vulkan ? source.device : "cpu", gpu_seconds);
     else
         printf("%s: %lld triangles, %lld vertices (%d value%s of '%s', step %u) in %.3f s (extraction %.3f s)\n",
                o.output, (long long)r.triangles, (long long)r.vertices, r.value_count, r.value_count == 1 ? "" : "s",

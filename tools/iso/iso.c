@@ -161,7 +161,7 @@ int tpk_iso_run(const tpk_iso_options *o, tpk_iso_report *rep, tpk_diag *diag)
                             .positions = j.mesh.positions, .tets = j.tets, .scalars = j.mesh.scalars,
                             .colors = j.colors};
         memcpy(in.origin, j.mesh.origin, sizeof in.origin);
-        rc = tpk_iso_extract(&in, o->values, o->value_count, o->threads, &s, diag);
+        rc = tpk_iso_extract_from(&in, o->values, o->value_count, o->threads, o->corners, &s, diag);
     }
     double t2 = tpk_now_seconds();
     if (rc == 0) {

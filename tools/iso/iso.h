@@ -57,6 +57,24 @@ int tpk_iso_extract(const tpk_iso_input *in, const double *values, int value_cou
                     tpk_iso_surface *out, tpk_diag *diag);
 void tpk_iso_surface_free(tpk_iso_surface *s);
 
+/* Where the triangles of one value come from: classification, prefix sum and emission of each tet's
+ * triangles as corner keys ((a << 32) | b, a < b mesh vertex ids of the edge the corner lies on), 3 per
+ * triangle, in tet order and then the case table's order (tpk_iso_case_table), a corner being on an
+ * edge whose corners are on both sides of the value (at or above: s >= value, compared in double; a
+ * tet with a NaN makes none). The CPU does this itself (NULL); the Vulkan backend (render_vk/vk_iso.c)
+ * does it in compute shaders. Everything after (vertices shared by edge, positions, normals) is the
+ * same code, so both give the same surface. */
+typedef struct tpk_iso_corners {
+    /* *keys: malloc'ed, 3 * *triangles keys (the caller frees it). 0, or -1 with a message. */
+    int (*emit)(void *user, const tpk_iso_input *in, double value, uint64_t **keys, int64_t *triangles,
+                tpk_diag *diag);
+    void *user;
+} tpk_iso_corners;
+
+/* tpk_iso_extract with the triangles from `corners` (NULL: the CPU's). */
+int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int value_count, int threads,
+                         const tpk_iso_corners *corners, tpk_iso_surface *out, tpk_diag *diag);
+
 /* The case table, for tests: case `mask` (bit k: corner k at or above the value) makes *count triangles,
  * edges[3 i .. 3 i + 2] the tet edges of triangle i, edge k joining corners[k][0] and corners[k][1]. */
 void tpk_iso_case_table(int mask, int *count, int edges[6], int corners[6][2]);
@@ -91,6 +109,7 @@ typedef struct tpk_iso_options {
     const double *values;
     int value_count;
     int threads;             /* <= 0: all cores */
+    const tpk_iso_corners *corners; /* NULL: the CPU classifies and emits; else these (the Vulkan backend) */
 } tpk_iso_options;
 
 typedef struct tpk_iso_report {

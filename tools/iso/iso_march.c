@@ -47,6 +47,7 @@ typedef struct march {
     double *tri_normal;                        /* 3 per triangle, area-weighted */
     tpk_iso_surface *out;
     int64_t vertex_base, triangle_base;
+    const tpk_iso_corners *corners;            /* NULL: count_range and emit_range make corner_key */
 } march;
 
 /* The case of tet t: bit k when corner k is at or above the value; -1 with a NaN. */
@@ -259,24 +260,34 @@ static void free_scratch(march *m)
 static int extract_value(march *m, tpk_diag *diag)
 {
     tpk_iso_surface *o = m->out;
-    int64_t tets = m->in->tet_count;
-    memset(m->worker_first, 0, sizeof m->worker_first);
-    tpk_parallel_for(tets, m->threads, count_range, m);
-    for (int w = 0; w < m->threads; w++)
-        m->worker_first[w + 1] += m->worker_first[w];
-    int64_t triangles = m->worker_first[m->threads], corners = 3 * triangles;
-    if (o->triangle_count + triangles > INT32_MAX)
+    int64_t tets = m->in->tet_count, triangles;
+    if (m->corners) { /* the triangles from elsewhere (the GPU) */
+        if (m->corners->emit(m->corners->user, m->in, m->value, &m->corner_key, &triangles, diag) != 0)
+            return -1;
+    } else {
+        memset(m->worker_first, 0, sizeof m->worker_first);
+        tpk_parallel_for(tets, m->threads, count_range, m);
+        for (int w = 0; w < m->threads; w++)
+            m->worker_first[w + 1] += m->worker_first[w];
+        triangles = m->worker_first[m->threads];
+    }
+    int64_t corners = 3 * triangles;
+    if (o->triangle_count + triangles > INT32_MAX) {
+        free_scratch(m);
         return tpk_diag_fail(diag, "the isosurface of %g has %lld triangles; more than 2^31 - 1 triangles or vertices "
                              "in all do not fit the outputs' 32-bit indices", m->value, (long long)triangles);
+    }
     size_t c1 = (size_t)(corners ? corners : 1);
-    m->corner_key = malloc(c1 * sizeof *m->corner_key);
+    if (!m->corners)
+        m->corner_key = malloc(c1 * sizeof *m->corner_key);
     m->order = malloc(c1 * sizeof *m->order);
     m->vertex_first = malloc((c1 + 1) * sizeof *m->vertex_first);
     m->corner_vertex = malloc(c1 * sizeof *m->corner_vertex);
     m->tri_normal = malloc(c1 * sizeof *m->tri_normal);
     if (!m->corner_key || !m->order || !m->vertex_first || !m->corner_vertex || !m->tri_normal)
         goto fail;
-    tpk_parallel_for(tets, m->threads, emit_range, m);
+    if (!m->corners)
+        tpk_parallel_for(tets, m->threads, emit_range, m);
     int64_t vertices = number_vertices(m, corners);
     if (vertices < 0 || o->vertex_count + vertices > INT32_MAX)
         goto fail;
@@ -302,6 +313,12 @@ fail:
 int tpk_iso_extract(const tpk_iso_input *in, const double *values, int value_count, int threads,
                     tpk_iso_surface *out, tpk_diag *diag)
 {
+    return tpk_iso_extract_from(in, values, value_count, threads, NULL, out, diag);
+}
+
+int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int value_count, int threads,
+                         const tpk_iso_corners *corners, tpk_iso_surface *out, tpk_diag *diag)
+{
     memset(out, 0, sizeof *out);
     if (value_count < 1 || value_count > TPK_ISO_MAX_VALUES)
         return tpk_diag_fail(diag, "iso: %d values given; 1 to %d are allowed", value_count, TPK_ISO_MAX_VALUES);
@@ -313,6 +330,7 @@ int tpk_iso_extract(const tpk_iso_input *in, const double *values, int value_cou
     memset(&m, 0, sizeof m);
     m.in = in;
     m.out = out;
+    m.corners = corners;
     m.threads = tpk_threads_for(in->tet_count, tpk_thread_count(threads), 65536);
     for (int i = 0; i < value_count; i++) {
         m.value = values[i];

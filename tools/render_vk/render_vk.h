@@ -9,6 +9,7 @@
 #include <stdint.h>
 
 #include "base/diag.h"
+#include "iso/iso.h"
 #include "render/render.h"
 
 /* Render `mesh` into rgba (width * height * 4 bytes, caller-owned) with the options and definitions of
@@ -42,6 +43,24 @@ int tpk_vk_renderer_frame(tpk_vk_renderer *renderer, const tpk_render_options *o
                           tpk_render_stats *stats, tpk_diag *diag);
 const char *tpk_vk_renderer_device(const tpk_vk_renderer *renderer);
 void tpk_vk_renderer_destroy(tpk_vk_renderer *renderer);
+
+/* Marching tetrahedra in compute (vk_iso.c, shaders/iso.comp), for tetpack iso --backend vulkan: the
+ * mesh of `in` (its tets, scalars and positions, copied to the device at creation; `in` need not
+ * outlive it), then any number of values. Limits: each array within one storage binding of the device
+ * (maxStorageBufferRange), else an error that says so and suggests the CPU. */
+typedef struct tpk_iso_vk tpk_iso_vk;
+int tpk_iso_vk_create(tpk_iso_vk **out, const tpk_iso_input *in, tpk_diag *diag);
+void tpk_iso_vk_destroy(tpk_iso_vk *v);
+const char *tpk_iso_vk_device(const tpk_iso_vk *v);
+/* Wall time of the device's work so far (submit to fence: dispatches and copies). */
+double tpk_iso_vk_seconds(const tpk_iso_vk *v);
+/* The triangles of `value` as tpk_iso_corners defines them (keys: malloc'ed, 3 per triangle, tet order),
+ * and with `positions` (may be NULL) the float positions the shader computed per corner (3 floats each:
+ * the triangle list as a GPU would draw it, relative to the mesh's origin). 0 or -1 with a message. */
+int tpk_iso_vk_emit(tpk_iso_vk *v, double value, uint64_t **keys, float **positions, int64_t *triangles,
+                    tpk_diag *diag);
+/* The corner source for tpk_iso_extract_from / tpk_iso_options.corners. */
+tpk_iso_corners tpk_iso_vk_corners(tpk_iso_vk *v);
 
 /* Is a Vulkan 1.2 device with a compute queue present? Returns 1 and writes the device's name into
  * `why` (n bytes), or 0 and writes the reason (no loader, no device, too old). */

@@ -1,5 +1,7 @@
 /* Private declarations of the Vulkan renderer (tools/render_vk/). Owners, top to bottom (a file calls
  * only files below it):
+ *   vk_iso.c       render_vk.h: tpk_iso_vk_* (marching tetrahedra in compute, shaders/iso.comp), on
+ *                  vk_context.c only
  *   vk_present.c   render_vk_present.h: the window's swapchain, each frame's bands copied into it
  *   render_vk.c    render_vk.h: the renderer (upload, dispatch in bands, read back), tpk_render_vulkan,
  *                  tpk_vulkan_available
