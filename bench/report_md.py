@@ -176,6 +176,58 @@ def section_occlusion(summary):
     return "".join(out) + "\n"
 
 
+def section_iso(summary):
+    rows = jsonl("iso_render.jsonl")
+    if not rows:
+        return ""
+    same = {r.get("value"): r.get("identical") for r in jsonl("iso_render_same.jsonl") if "value" in r}
+    out = [f"## 1c. Isosurfaces\n\n"
+           f"Iso-only rays (a TF with opacity 0 everywhere) on grid 55 ({rows[0]['size']}², CPU reference on "
+           f"{rows[0]['cores']} cores, median of the runs): marching every tet from the shell against range culling "
+           f"(`TETPACK_ISO_CULLING=0/1`; render.h ISO-ONLY RAYS). The wave field's surfaces at 0.999 are a few "
+           f"caps, at 0.3 they fill the volume. Rays per core-second = rays / (seconds × cores); the seconds are the "
+           f"render's, set-up included: the shell BVH for both, and for culling the tets' vertex order "
+           f"(`tpk_recover_tets`) and the range BVH, which small images do not amortize.\n\n"]
+    table_rows = []
+    for v in sorted({r["value"] for r in rows}, reverse=True):
+        meds = {}
+        for cull in (False, True):
+            rs = [r for r in rows if r["value"] == v and r["culling"] == cull]
+            if rs:
+                sec = sorted(r["seconds"] for r in rs)[len(rs) // 2]
+                meds[cull] = (sec, rs[0])
+        if False in meds and True in meds:
+            (s0, r0), (s1, r1) = meds[False], meds[True]
+            table_rows.append([v, r0["tet_steps"], r1["tet_steps"], s0, s1, r0["rays"] / s0 / r0["cores"] / 1e6,
+                               r1["rays"] / s1 / r1["cores"] / 1e6, s0 / s1, "yes" if same.get(v) else "**no**"])
+            summary.append(f"Iso-only rays, grid 55, value {v}: culling {fmt(s0 / s1)}× the marching speed "
+                           f"({fmt(r1['rays'] / s1 / r1['cores'] / 1e6)}M rays per core-second), pictures identical: "
+                           f"{'yes' if same.get(v) else 'no'}")
+    out.append(table(["value", "tets marched", "tets tested (culled)", "marched s", "culled s", "M rays/core-s marched",
+                      "M rays/core-s culled", "speed-up", "same picture"], table_rows))
+    ext = [r for r in jsonl("iso_extract.jsonl") if "tets" in r]
+    if ext:
+        out.append("\n`tetpack iso --value 0.3` on grid 55: classification, emission and vertex sharing "
+                   "(`seconds_extract`, median of the runs); Vulkan includes the device's set-up and uploads.\n\n")
+        ext_rows = []
+        for key in sorted({(r["backend"], r["threads"]) for r in ext}):
+            rs = [r for r in ext if (r["backend"], r["threads"]) == key]
+            sec = sorted(r["seconds_extract"] for r in rs)[len(rs) // 2]
+            ext_rows.append([key[0], rs[0]["device"], key[1], rs[0]["tets"], rs[0]["triangles"], sec,
+                             rs[0]["tets"] / sec / 1e6, rs[0]["triangles"] / sec / 1e6])
+            summary.append(f"Extraction, grid 55, {key[0]} ({rs[0]['device']}, {key[1]} threads): "
+                           f"{fmt(rs[0]['tets'] / sec / 1e6)}M tets/s")
+        out.append(table(["backend", "device", "threads", "tets", "triangles", "seconds", "M tets/s", "M triangles/s"],
+                         ext_rows))
+        ident = [r for r in jsonl("iso_render_same.jsonl") if "extraction_identical" in r]
+        if ident:
+            out.append(f"\nCPU and Vulkan files identical: {'yes' if ident[0]['extraction_identical'] else 'no'}.\n")
+    for r in jsonl("iso_extract.jsonl"):
+        if "error" in r:
+            out.append(f"\n{r['backend']}: not measured: {r['error']}\n")
+    return "".join(out) + "\n"
+
+
 def section_storage(summary):
     out = ["## 2. Storage against error\n\n",
            "Quantization simulated in memory (`bench/bench_storage.c quant`): positions as float16 of the stored "
@@ -410,7 +462,8 @@ def section_gpu(summary):
 def main():
     machine = json.load(open(os.path.join(DATA, "machine.json")))
     summary = []
-    body = (section_render(summary) + section_occlusion(summary) + section_storage(summary) + section_accuracy(summary)
+    body = (section_render(summary) + section_occlusion(summary) + section_iso(summary) + section_storage(summary)
+            + section_accuracy(summary)
             + section_scaling(summary) + section_gpu(summary) + section_hard(summary))
     closing = "## Summary\n\n" + "".join(f"- {s}\n" for s in summary)
     closing += "\nPlots: " + ", ".join(f"`{p}` ({t})" for p, t in PLOTS) + ".\n"
