@@ -160,6 +160,13 @@ TPK_TEST(point_field_effects)
     s.opt.shadows = 1;
     s.opt.ao_radius = 0.5;
     CHECK(agree(&s, "shading + shadows + AO, radius 0.5") == 0);
+    /* render.h OCCLUSION AT VERTICES: the cache's rays, then S and A interpolated at every shade point */
+    s.opt.occlusion = TPK_OCCLUSION_VERTEX;
+    CHECK(agree(&s, "shading + shadows + AO, vertex cache") == 0);
+    CHECK_MSG(last_secondary[0] == last_secondary[1] && last_secondary[0] > 0, "secondary rays: cpu %llu, vulkan %llu",
+              (unsigned long long)last_secondary[0], (unsigned long long)last_secondary[1]);
+    s.opt.iso_count = 2;
+    CHECK(agree(&s, "iso + shading + shadows + AO, vertex cache") == 0);
     close_scene(&s);
 }
 

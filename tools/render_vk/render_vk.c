@@ -130,6 +130,9 @@ static int upload_items(const tpk_mesh_arrays *mesh, const float *tet_scalars, c
                                               2 * (uint64_t)bvh->node_count};
     items[TPK_VK_ARRAY_TET_SCALARS] = (upload_item){"tet scalars", VK_FORMAT_R32_SFLOAT, {tet_scalars, 4, NULL, NULL},
                                                     tet_scalars ? mesh->tet_count : 0};
+    /* zeros until a frame with --occlusion vertex fills it (vertex_cache below) */
+    items[TPK_VK_ARRAY_VERTEX_SA] = (upload_item){"vertex occlusion cache", VK_FORMAT_R32G32_SFLOAT, {NULL, 8, NULL, NULL},
+                                                  mesh->vertex_count};
     return 0;
 }
 
@@ -499,6 +502,44 @@ static VkPipeline frame_pipeline(vk_render *v, int effects, tpk_diag *diag)
     return pipeline;
 }
 
+/* render.h OCCLUSION AT VERTICES: S_v and A_v of every vertex, computed by the CPU reference's own pass
+ * (tpk_render_vertex_cache, on all cores) for this frame's light, TF, field and AO settings, into the
+ * VERTEX_SA array; the shader interpolates them at each shade point as render_light.c does. Its rays
+ * and steps count into the frame's, as on the CPU. */
+static int vertex_cache(vk_render *v, const tpk_render_options *opt, uint64_t counts[2], tpk_diag *diag)
+{
+    size_t n = (size_t)v->mesh.vertex_count;
+    float *s = malloc(sizeof *s * (n ? n : 1)), *a = malloc(sizeof *a * (n ? n : 1));
+    float *sa = malloc(2 * sizeof *sa * (n ? n : 1));
+    int rc = !s || !a || !sa ? tpk_diag_fail(diag, "render: out of memory for the vertex cache") : 0;
+    tpk_render_options cpu = *opt;
+    cpu.threads = 0; /* all cores */
+    tpk_render_stats st;
+    if (rc == 0)
+        rc = tpk_render_vertex_cache(&v->mesh, &cpu, s, a, &st, diag);
+    if (rc == 0) {
+        for (size_t i = 0; i < n; i++)
+            sa[2 * i] = s[i], sa[2 * i + 1] = a[i];
+        counts[0] += st.tet_steps;
+        counts[1] += st.secondary_rays;
+        tpk_vk_source src = {sa, 8, NULL, NULL};
+        tpk_vk_stager stager;
+        memset(&stager, 0, sizeof stager);
+        if (v->ctx.staged && tpk_vk_stager_create(&v->ctx, 8 * (uint64_t)(n ? n : 1), &stager, diag) != 0)
+            rc = -1;
+        if (rc == 0)
+            rc = tpk_vk_array_refill(&v->ctx, v->ctx.staged ? &stager : NULL, &src, n, &v->arrays[TPK_VK_ARRAY_VERTEX_SA],
+                                     diag);
+        if (rc == 0 && v->ctx.staged)
+            rc = tpk_vk_stager_finish(&v->ctx, &stager, diag);
+        tpk_vk_stager_destroy(&v->ctx, &stager);
+    }
+    free(s);
+    free(a);
+    free(sa);
+    return rc;
+}
+
 /* One frame into rgba, or into `target` (rgba NULL) on the device. */
 static int render_frame(vk_render *v, const tpk_render_options *opt, uint8_t *rgba, const tpk_vk_band_target *target,
                         tpk_render_stats *stats, tpk_diag *diag)
@@ -521,9 +562,14 @@ static int render_frame(vk_render *v, const tpk_render_options *opt, uint8_t *rg
     VkPipeline pipeline = VK_NULL_HANDLE;
     if (rc == 0 && !(pipeline = frame_pipeline(v, tpk_vk_effects(opt), diag)))
         rc = -1;
+    uint64_t cache_counts[2] = {0, 0};
+    if (rc == 0 && (tpk_vk_effects(opt) & TPK_VK_EFFECT_VERTEX))
+        rc = vertex_cache(v, opt, cache_counts, diag);
     v->target = target;
     if (rc == 0)
         rc = render_bands(v, pipeline, params, target ? NULL : rgba, counts, &gpu_seconds, diag);
+    counts[0] += cache_counts[0];
+    counts[1] += cache_counts[1];
     v->target = NULL;
     free(params);
     if (stats) {

@@ -121,6 +121,10 @@ uint64_t tpk_vk_part_texels(const tpk_vk_context *ctx, uint32_t texel_size);
 int tpk_vk_array_upload(const tpk_vk_context *ctx, tpk_vk_stager *stager, const char *what, VkFormat format,
                         const tpk_vk_source *src, uint64_t texel_count, tpk_vk_array *out, tpk_diag *diag);
 void tpk_vk_array_destroy(const tpk_vk_context *ctx, tpk_vk_array *a);
+/* New contents for texels [0, texel_count) of an uploaded array (the same count or fewer): in place on
+ * unified memory, else through `stager`. 0 or -1 with a message. */
+int tpk_vk_array_refill(const tpk_vk_context *ctx, tpk_vk_stager *stager, const tpk_vk_source *src,
+                        uint64_t texel_count, tpk_vk_array *a, tpk_diag *diag);
 
 /* The uniform block of the shader (std140; render.comp's Params). */
 typedef struct tpk_vk_params {

@@ -73,6 +73,21 @@ static int fill_part(const tpk_vk_context *ctx, tpk_vk_stager *stager, const tpk
     return tpk_vk_stager_copy(ctx, stager, src, first, count, part->buffer, diag);
 }
 
+int tpk_vk_array_refill(const tpk_vk_context *ctx, tpk_vk_stager *stager, const tpk_vk_source *src,
+                        uint64_t texel_count, tpk_vk_array *a, tpk_diag *diag)
+{
+    const uint64_t per_part = (uint64_t)1 << a->shift;
+    for (int k = 0; k < a->part_count; k++) {
+        uint64_t first = (uint64_t)k * per_part;
+        if (first >= texel_count)
+            break;
+        uint64_t count = texel_count - first < per_part ? texel_count - first : per_part;
+        if (fill_part(ctx, stager, src, first, count, &a->parts[k], diag) != 0)
+            return -1;
+    }
+    return 0;
+}
+
 int tpk_vk_array_upload(const tpk_vk_context *ctx, tpk_vk_stager *stager, const char *what, VkFormat format,
                         const tpk_vk_source *src, uint64_t texel_count, tpk_vk_array *out, tpk_diag *diag)
 {

@@ -23,9 +23,6 @@ int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *
     /* Vulkan limit: the Params block and the shader index vertices, tets and shell faces with int32. */
     if (mesh->vertex_count > 0x7fffffffu || mesh->tet_count > 0x7fffffffu || mesh->shell_face_count > 0x7fffffffu)
         return tpk_diag_fail(diag, "render: more than 2^31 - 1 vertices, tets or shell faces");
-    /* Not built yet (issue 19 item 3): the vertex cache's pass on the device. */
-    if (opt->occlusion == TPK_OCCLUSION_VERTEX && (opt->shadows || opt->ao_rays > 0))
-        return tpk_diag_fail(diag, "render: --occlusion vertex is drawn by the CPU reference only (--backend cpu)");
     return 0;
 }
 
@@ -99,7 +96,8 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
 int tpk_vk_effects(const tpk_render_options *opt)
 {
     return (opt->iso_count > 0 ? TPK_VK_EFFECT_ISO : 0) | (opt->shading ? TPK_VK_EFFECT_SHADING : 0) |
-           (opt->shadows ? TPK_VK_EFFECT_SHADOWS : 0) | (opt->ao_rays > 0 ? TPK_VK_EFFECT_AO : 0);
+           (opt->shadows ? TPK_VK_EFFECT_SHADOWS : 0) | (opt->ao_rays > 0 ? TPK_VK_EFFECT_AO : 0) |
+           (opt->occlusion == TPK_OCCLUSION_VERTEX && (opt->shadows || opt->ao_rays > 0) ? TPK_VK_EFFECT_VERTEX : 0);
 }
 
 /* render.comp's Params block, std140: 15 vec4 rows, then the TF's 256 s values and 256 colours. */

@@ -23,8 +23,10 @@ const bool ISO = (EFFECTS & TPK_VK_EFFECT_ISO) != 0;
 const bool SHADING = (EFFECTS & TPK_VK_EFFECT_SHADING) != 0;
 const bool SHADOWS = (EFFECTS & TPK_VK_EFFECT_SHADOWS) != 0;
 const bool AO = (EFFECTS & TPK_VK_EFFECT_AO) != 0;
-const bool CAST = SHADOWS || AO;
-const bool LIGHTING = SHADING || CAST;
+// --occlusion vertex: S and A interpolated from the per-vertex cache (render.h OCCLUSION AT VERTICES)
+const bool VERTEX_OCC = (EFFECTS & TPK_VK_EFFECT_VERTEX) != 0;
+const bool CAST = (SHADOWS || AO) && !VERTEX_OCC;
+const bool LIGHTING = SHADING || SHADOWS || AO;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_VERTS)) const int PARTS_VERTS = 1;
 layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_VERTS)) const int SHIFT_VERTS = 27;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TETS)) const int PARTS_TETS = 1;
@@ -35,6 +37,8 @@ layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_NODES)) const int PARTS_NODE
 layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_NODES)) const int SHIFT_NODES = 27;
 layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_TET_SCALARS)) const int PARTS_TET_SCALARS = 1;
 layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_TET_SCALARS)) const int SHIFT_TET_SCALARS = 27;
+layout(constant_id = TPK_VK_SPEC_PARTS(TPK_VK_ARRAY_VERTEX_SA)) const int PARTS_VERTEX_SA = 1;
+layout(constant_id = TPK_VK_SPEC_SHIFT(TPK_VK_ARRAY_VERTEX_SA)) const int SHIFT_VERTEX_SA = 27;
 
 // Mirrors tpk_vk_params in render_vk_internal.h (std140).
 layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
@@ -99,11 +103,13 @@ DECLARE_ARRAY(isamplerBuffer, tets, TPK_VK_ARRAY_TETS)
 DECLARE_ARRAY(isamplerBuffer, shell, TPK_VK_ARRAY_SHELL)
 DECLARE_ARRAY(usamplerBuffer, nodes, TPK_VK_ARRAY_NODES)
 DECLARE_ARRAY(samplerBuffer, tet_scalars, TPK_VK_ARRAY_TET_SCALARS)
+DECLARE_ARRAY(samplerBuffer, vertex_sa, TPK_VK_ARRAY_VERTEX_SA)
 FETCH_FUNCTION(vec4, verts, PARTS_VERTS, SHIFT_VERTS)
 FETCH_FUNCTION(ivec4, tets, PARTS_TETS, SHIFT_TETS)
 FETCH_FUNCTION(ivec4, shell, PARTS_SHELL, SHIFT_SHELL)
 FETCH_FUNCTION(uvec4, nodes, PARTS_NODES, SHIFT_NODES)
 FETCH_FUNCTION(vec4, tet_scalars, PARTS_TET_SCALARS, SHIFT_TET_SCALARS)
+FETCH_FUNCTION(vec4, vertex_sa, PARTS_VERTEX_SA, SHIFT_VERTEX_SA)
 
 // `IF_ANY(c) { ... }` runs the block once where c holds. On a CPU device (lavapipe) every lane runs
 // both sides of an `if` under a mask, whatever the lanes decided; a loop that no lane enters is
@@ -684,6 +690,27 @@ bool tet_normal(ivec4 v, out vec3 n)
     return unit_or_none(g, n);
 }
 
+// render_light.c's rl_vertex_lookup: S and A at x (eye-relative world, as eye_dir_point gives it) from the
+// per-vertex cache, linear in the tet v[0..3] (barycentric from its edges; the mean of the four where
+// the tet is flat), clamped to [0, 1].
+vec2 vertex_lookup(ivec4 v, vec3 x)
+{
+    vec4 p0 = fetch_verts(uint(v.x)), p1 = fetch_verts(uint(v.y)), p2 = fetch_verts(uint(v.z)),
+         p3 = fetch_verts(uint(v.w));
+    vec3 e1 = p1.xyz - p0.xyz, e2 = p2.xyz - p0.xyz, e3 = p3.xyz - p0.xyz;
+    vec3 c1 = cross(e2, e3), c2 = cross(e3, e1), c3 = cross(e1, e2);
+    float det = dot(e1, c1);
+    vec3 q = x - p0.xyz;
+    vec4 l = vec4(0.25);
+    if (det != 0.0 && !isinf(det) && !isnan(det)) {
+        l.yzw = vec3(dot(q, c1), dot(q, c2), dot(q, c3)) / det;
+        l.x = 1.0 - l.y - l.z - l.w;
+    }
+    vec2 sa = l.x * fetch_vertex_sa(uint(v.x)).xy + l.y * fetch_vertex_sa(uint(v.y)).xy +
+              l.z * fetch_vertex_sa(uint(v.z)).xy + l.w * fetch_vertex_sa(uint(v.w)).xy;
+    return clamp(sa, 0.0, 1.0);
+}
+
 bool face_normal(ivec4 v, out vec3 n)
 {
     vec3 p0 = fetch_verts(uint(v.x)).xyz, p1 = fetch_verts(uint(v.y)).xyz, p2 = fetch_verts(uint(v.z)).xyz;
@@ -987,14 +1014,19 @@ void take_cast(out float S, out float A)
     cast_next++;
 }
 
-void composite_iso(float t, float v, bool has_n, vec3 n)
+void composite_iso(float t, float v, bool has_n, vec3 n, ivec4 tet)
 {
     float m = 1.0;
     if (LIGHTING) {
         vec3 x = eye_dir_point(t);
         float S = 1.0, A = 1.0;
-        if (CAST)
+        if (VERTEX_OCC) {
+            vec2 sa = vertex_lookup(tet, x);
+            S = sa.x;
+            A = sa.y;
+        } else if (CAST) {
             take_cast(S, A);
+        }
         m = lighting_factor(x, has_n, n, S, A);
     }
     vec4 c = tf_eval(normalized(v));
@@ -1048,6 +1080,11 @@ int segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
         shade_m = 1.0;
         if (LIGHTING && t_out > t_in) {
             vec3 mid = eye_dir_point(0.5 * (t_in + t_out));
+            if (VERTEX_OCC) {
+                vec2 sa = vertex_lookup(v, mid);
+                shade_s = sa.x;
+                shade_a = sa.y;
+            }
             if (volume_cast) {
                 take_cast(shade_s, shade_a);
                 cast_done = true;
@@ -1064,7 +1101,7 @@ int segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
             if (LIGHTING && tet_field)
                 has_hn = face_normal(v, hn);
             float m = shade_m;
-            composite_iso(crossing_t[i], value, has_hn, hn);
+            composite_iso(crossing_t[i], value, has_hn, hn, v);
             shade_m = m;
             cur_t = crossing_t[i];
             cur_u = hit_u;

@@ -40,7 +40,8 @@
 #define TPK_VK_ARRAY_SHELL 2
 #define TPK_VK_ARRAY_NODES 3
 #define TPK_VK_ARRAY_TET_SCALARS 4
-#define TPK_VK_ARRAY_COUNT 5
+#define TPK_VK_ARRAY_VERTEX_SA 5 /* --occlusion vertex: S_v and A_v per vertex (render.h OCCLUSION AT VERTICES) */
+#define TPK_VK_ARRAY_COUNT 6
 
 #define TPK_VK_BIND_PARAMS 0 /* uniform block */
 #define TPK_VK_BIND_PIXELS 1 /* storage buffer: packed RGBA8 per pixel */
@@ -61,7 +62,8 @@
 #define TPK_VK_EFFECT_SHADING 2
 #define TPK_VK_EFFECT_SHADOWS 4
 #define TPK_VK_EFFECT_AO 8
-#define TPK_VK_EFFECT_MASKS 16 /* pipelines per renderer, one per combination */
+#define TPK_VK_EFFECT_VERTEX 16 /* shadows and AO from the per-vertex cache: no secondary rays in the shader */
+#define TPK_VK_EFFECT_MASKS 32 /* pipelines per renderer, one per combination */
 
 /* The shader is built twice: with TPK_VK_FP64 1 (for devices with shaderFloat64) and 0. The exact
  * sign of an edge function of float coordinates is the sign of one double expression (the products
