@@ -1,5 +1,6 @@
 /* The option table (scene/option_table.h) against what comes from it: the scene spec's key table
  * (spec/scene-json.md §2) row by row, the scene reader's known keys, and the command line's flags. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -105,4 +106,79 @@ TPK_TEST(flags_unique)
             CHECK_MSG(!o->alias || !q->alias || strcmp(q->alias, o->alias), "%s twice", o->alias);
         }
     }
+}
+
+/* A scene giving key `key` ("a" or "a.b") the JSON value `value`; a camera gets its other keys. */
+static int scene_with(const char *key, const char *value, tpk_diag *diag)
+{
+    char text[512];
+    const char *dot = strchr(key, '.');
+    if (!strcmp(key, "camera.fovy"))
+        snprintf(text, sizeof text, "{\"camera\": {\"eye\": [0, 0, 5], \"at\": [0, 0, 0], \"up\": [0, 1, 0], "
+                                    "\"fovy\": %s}}", value);
+    else if (dot)
+        snprintf(text, sizeof text, "{\"%.*s\": {\"%s\": %s}}", (int)(dot - key), key, dot + 1, value);
+    else
+        snprintf(text, sizeof text, "{\"%s\": %s}", key, value);
+    tpk_scene scene;
+    memset(diag, 0, sizeof *diag);
+    return tpk_scene_parse("s.json", text, NULL, &scene, diag);
+}
+
+/* The value rules of the table (kind, range, choices), which the command line checks through the same
+ * functions (tools/cli/render_args.c): the scene reader takes exactly the values they allow, at the ends
+ * of every range and for every choice. */
+TPK_TEST(value_rules_are_the_table)
+{
+    int ruled = 0;
+    for (int i = 0; i < TPK_OPT_COUNT; i++) {
+        const tpk_option_row *r = &tpk_option_table[i];
+        tpk_diag d;
+        char v[64];
+        if (r->kind == TPK_OPT_KIND_OTHER)
+            continue;
+        ruled++;
+        CHECK_MSG(r->flag || r->scene_key, "row %d has a rule but neither a flag nor a key", i);
+        if (!r->scene_key)
+            continue;
+        if (r->kind == TPK_OPT_KIND_INT) {
+            CHECK(tpk_option_int_ok(r->id, r->lo) && tpk_option_int_ok(r->id, r->hi));
+            CHECK(!tpk_option_int_ok(r->id, r->lo - 1) && !tpk_option_int_ok(r->id, r->hi + 1) &&
+                  !tpk_option_int_ok(r->id, r->lo + 0.5));
+            snprintf(v, sizeof v, "%.0f", r->lo);
+            CHECK_MSG(scene_with(r->scene_key, v, &d) == 0, "%s = %s: %s", r->scene_key, v, d.message);
+            snprintf(v, sizeof v, "%.0f", r->hi);
+            CHECK_MSG(scene_with(r->scene_key, v, &d) == 0, "%s = %s: %s", r->scene_key, v, d.message);
+            snprintf(v, sizeof v, "%.0f", r->hi + 1);
+            CHECK_MSG(scene_with(r->scene_key, v, &d) == -1, "%s = %s accepted", r->scene_key, v);
+            snprintf(v, sizeof v, "%.0f", r->lo - 1);
+            CHECK_MSG(scene_with(r->scene_key, v, &d) == -1, "%s = %s accepted", r->scene_key, v);
+        } else if (r->kind == TPK_OPT_KIND_NUMBER) {
+            double inside = isfinite(r->hi) ? 0.5 * (r->lo + r->hi) : r->lo + 1;
+            snprintf(v, sizeof v, "%.17g", inside);
+            CHECK_MSG(tpk_option_number_ok(r->id, inside) && scene_with(r->scene_key, v, &d) == 0, "%s = %s: %s",
+                      r->scene_key, v, d.message);
+            snprintf(v, sizeof v, "%.17g", r->lo);
+            CHECK_MSG((scene_with(r->scene_key, v, &d) == 0) == !r->lo_open && tpk_option_number_ok(r->id, r->lo) == !r->lo_open,
+                      "%s = %s: the low end's rule", r->scene_key, v);
+            if (isfinite(r->hi)) {
+                snprintf(v, sizeof v, "%.17g", r->hi);
+                CHECK_MSG((scene_with(r->scene_key, v, &d) == 0) == !r->hi_open, "%s = %s: the high end's rule",
+                          r->scene_key, v);
+            }
+            CHECK(!tpk_option_number_ok(r->id, NAN) && !tpk_option_number_ok(r->id, r->lo - 1));
+        } else {
+            char name[32];
+            int n = 0;
+            for (; tpk_option_choice_name(r->id, n, name, sizeof name)[0]; n++) {
+                CHECK(tpk_option_choice(r->id, name) == n);
+                snprintf(v, sizeof v, "\"%s\"", name);
+                CHECK_MSG(scene_with(r->scene_key, v, &d) == 0, "%s = %s: %s", r->scene_key, v, d.message);
+            }
+            CHECK_MSG(n >= 2, "%s: %d choices", r->scene_key, n);
+            CHECK(tpk_option_choice(r->id, "nope") == -1 && tpk_option_choice(r->id, "") == -1);
+            CHECK(scene_with(r->scene_key, "\"nope\"", &d) == -1 && strstr(d.message, "expected \""));
+        }
+    }
+    CHECK(ruled >= 10);
 }

@@ -152,11 +152,5 @@ TPK_TEST(vulkan_limits_named)
     CHECK(tpk_render_check_options(&opt, &diag) == 0);
     CHECK(tpk_render_vulkan(&mesh, &opt, img, NULL, &diag) == -1);
     CHECK_MSG(strstr(diag.message, "2^31 - 1") != NULL, "%s", diag.message);
-    /* The vertex cache is the CPU reference's alone for now (render.h OCCLUSION AT VERTICES). */
-    mesh.vertex_count = 0;
-    opt.occlusion = TPK_OCCLUSION_VERTEX;
-    opt.shadows = 1;
-    CHECK(tpk_render_check_options(&opt, &diag) == 0);
-    CHECK(tpk_render_vulkan(&mesh, &opt, img, NULL, &diag) == -1);
-    CHECK_MSG(strstr(diag.message, "--occlusion vertex") != NULL, "%s", diag.message);
+    /* (--occlusion vertex is no longer a Vulkan limit: render_vk_effects.point_field_effects draws it) */
 }

@@ -72,7 +72,7 @@ TPK_TEST(out_of_range)
                       "s.json:1:2: key 'size': expected [width, height] with integers in 1..16384, found [0,48]");
     CHECK_PARSE_ERROR("{\"range\": [5, 5]}", "s.json:1:2: key 'range': expected low < high, found [5, 5]");
     CHECK_PARSE_ERROR("{\"clip_box\": [0, 0, 0, 1, -1, 1]}",
-                      "s.json:1:2: key 'clip_box': expected min < max on every axis, found 0 >= -1 on axis y");
+                      "s.json:1:2: key 'clip_box': expected min <= max on every axis, found 0 > -1 on axis y");
     CHECK_PARSE_ERROR("{\"iso\": [1, 2, 3, 4, 5]}",
                       "s.json:1:2: key 'iso': expected an array of 1..4 iso values, found [1,2,3,4,5]");
     CHECK_PARSE_ERROR("{\"step\": 1, \"steps\": [0, 2]}",

@@ -102,9 +102,14 @@ expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/x.png" --iso 1,2,3,4,5
 expect_stderr "--iso expects 1 to 4"
 expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/x.png" --clip-box 1,1,1,0,0,0
 expect_stderr "--clip-box expects 6 numbers"
-expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/x.png" --ao 0
+expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/x.png" --ao 1025
+expect_stderr "--ao expects a ray count 0..1024 (0: off), found '1025'"
 expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/x.png" --integration trapezoid
 expect_stderr "exact, sampled or midpoint"
 expect_exit 2 "$TPK" render "$WORK/c.tpk" -o "$WORK/x.png" --light 1,2
 ls "$WORK"/x*.png 2>/dev/null && fail "an image was left by a refused command"
+# --ao 0 is AO off, as in a scene (effects.ao_rays 0): the option table gives both the range 0..1024
+"$TPK" render "$WORK/c.tpk" -o "$WORK/ao0.png" --size 32x24 --ao 0 > /dev/null || fail "--ao 0 refused"
+"$TPK" render "$WORK/c.tpk" -o "$WORK/noao.png" --size 32x24 > /dev/null || fail "render failed"
+cmp -s "$WORK/ao0.png" "$WORK/noao.png" || fail "--ao 0 differs from no AO"
 exit 0

@@ -49,7 +49,19 @@ static int parse_list(const char *text, double *out, int max, int *count)
 }
 
 /* ---- The option table: one parser per option; each returns 0 or -1 (then the table's `expects` is
- * printed with the value found). */
+ * printed with the value found). Ranges and choices are the table's (tpk_option_int_ok, _number_ok,
+ * tpk_option_choice), which the scene reader checks too. */
+
+static int int_option(tpk_option_id id, const char *v, int *out)
+{
+    const tpk_option_row *r = &tpk_option_table[id];
+    return tpk_cli_parse_int(v, (int)r->lo, (int)r->hi, out) || !tpk_option_int_ok(id, *out) ? -1 : 0;
+}
+
+static int number_option(tpk_option_id id, const char *v, double *out)
+{
+    return tpk_cli_parse_doubles(v, out, 1) || !tpk_option_number_ok(id, *out) ? -1 : 0;
+}
 
 static int opt_output(const char *v, render_args *a) { a->output = v; return 0; }
 static int opt_size(const char *v, render_args *a) { return parse_size(v, &a->width, &a->height); }
@@ -62,13 +74,13 @@ static int opt_shadows(const char *v, render_args *a) { (void)v; a->shadows = 1;
 static int opt_camera(const char *v, render_args *a)
 {
     a->have_camera = 1;
-    return tpk_cli_parse_doubles(v, a->camera, 10) || !(a->camera[9] > 0 && a->camera[9] < 180) ? -1 : 0;
+    return tpk_cli_parse_doubles(v, a->camera, 10) || !tpk_option_number_ok(TPK_OPT_CAMERA_FOVY, a->camera[9]) ? -1 : 0;
 }
 
 static int opt_step(const char *v, render_args *a)
 {
     a->have_steps = 0;
-    if (tpk_cli_parse_int(v, 0, 1 << 30, &a->step))
+    if (int_option(TPK_OPT_STEP, v, &a->step))
         return -1;
     a->step_last = a->step;
     return 0;
@@ -82,7 +94,7 @@ static int opt_steps(const char *v, render_args *a)
         return -1;
     memcpy(first, v, (size_t)(colon - v));
     first[colon - v] = 0;
-    if (tpk_cli_parse_int(first, 0, 1 << 30, &a->step) || tpk_cli_parse_int(colon + 1, 0, 1 << 30, &a->step_last) ||
+    if (int_option(TPK_OPT_STEP, first, &a->step) || int_option(TPK_OPT_STEP, colon + 1, &a->step_last) ||
         a->step_last < a->step || a->step_last - a->step >= 100000)
         return -1;
     a->have_steps = 1;
@@ -98,18 +110,17 @@ static int opt_range(const char *v, render_args *a)
 static int opt_layout(const char *v, render_args *a)
 {
     a->layout = v;
-    return strcmp(v, "tet16") && strcmp(v, "tet20") && strcmp(v, "tet32") ? -1 : 0;
+    return tpk_option_choice(TPK_OPT_LAYOUT, v) < 0 ? -1 : 0;
 }
 
 static int opt_unit(const char *v, render_args *a)
 {
-    return tpk_cli_parse_doubles(v, &a->unit_distance, 1) || !(a->unit_distance > 0) ? -1 : 0;
+    return number_option(TPK_OPT_UNIT_DISTANCE, v, &a->unit_distance);
 }
 
 static int opt_integration(const char *v, render_args *a)
 {
-    a->integration = !strcmp(v, "exact") ? TPK_INTEGRATION_EXACT : !strcmp(v, "sampled") ? TPK_INTEGRATION_SAMPLED
-                     : !strcmp(v, "midpoint") ? TPK_INTEGRATION_MIDPOINT : -1;
+    a->integration = tpk_option_choice(TPK_OPT_INTEGRATION, v); /* TPK_INTEGRATION_* order */
     return a->integration < 0 ? -1 : 0;
 }
 
@@ -118,12 +129,12 @@ static int opt_save_scene(const char *v, render_args *a) { a->save_scene = v; re
 static int opt_save_tpk(const char *v, render_args *a) { a->save_tpk = v; return 0; }
 static int opt_legend(const char *v, render_args *a) { (void)v; a->legend = 1; return 0; }
 static int opt_verbose(const char *v, render_args *a) { (void)v; a->verbose = 1; return 0; }
-static int opt_threads(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->threads); }
+static int opt_threads(const char *v, render_args *a) { return int_option(TPK_OPT_THREADS, v, &a->threads); }
 static int opt_backend(const char *v, render_args *a)
 {
     a->backend = v;
     a->backend_from_scene = 0;
-    return strcmp(v, "vulkan") && strcmp(v, "cpu");
+    return tpk_option_choice(TPK_OPT_BACKEND, v) < 0 ? -1 : 0;
 }
 static int opt_iso(const char *v, render_args *a)
 {
@@ -137,7 +148,7 @@ static int opt_iso(const char *v, render_args *a)
 
 static int opt_iso_opacity(const char *v, render_args *a)
 {
-    return tpk_cli_parse_doubles(v, &a->iso_opacity, 1) || !(a->iso_opacity > 0 && a->iso_opacity <= 1) ? -1 : 0;
+    return number_option(TPK_OPT_ISO_OPACITY, v, &a->iso_opacity);
 }
 
 static int opt_clip(const char *v, render_args *a)
@@ -157,16 +168,16 @@ static int opt_light(const char *v, render_args *a)
     return tpk_cli_parse_doubles(v, a->light, 3);
 }
 
-static int opt_ao(const char *v, render_args *a) { return tpk_cli_parse_int(v, 1, 1024, &a->ao_rays); }
+static int opt_ao(const char *v, render_args *a) { return int_option(TPK_OPT_AO_RAYS, v, &a->ao_rays); }
 
 static int opt_ao_radius(const char *v, render_args *a)
 {
-    return tpk_cli_parse_doubles(v, &a->ao_radius, 1) || !(a->ao_radius > 0) ? -1 : 0;
+    return number_option(TPK_OPT_AO_RADIUS, v, &a->ao_radius);
 }
 
 static int opt_occlusion(const char *v, render_args *a)
 {
-    a->occlusion = !strcmp(v, "ray") ? TPK_OCCLUSION_RAY : !strcmp(v, "vertex") ? TPK_OCCLUSION_VERTEX : -1;
+    a->occlusion = tpk_option_choice(TPK_OPT_OCCLUSION, v); /* TPK_OCCLUSION_* order */
     return a->occlusion < 0 ? -1 : 0;
 }
 

@@ -1,8 +1,11 @@
 /* The option table (option_table.h): every option of a render, with its flag, its scene key, and the
  * texts of --help and of the scene spec. */
+#include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "option_table.h"
+#include "render/render.h"
 
 const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_VERSION,
@@ -33,7 +36,8 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_CAMERA_FOVY,
      .scene_key = "camera.fovy", .scene_type = "number",
      .meaning = "vertical field of view, degrees",
-     .scene_default = "—", .constraint = "0 < fovy < 180"},
+     .scene_default = "—", .constraint = "0 < fovy < 180",
+     .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = 180, .lo_open = 1, .hi_open = 1},
     {TPK_OPT_TF,
      .flag = "--tf", .metavar = "PRESET|FILE", .expects = "a preset name or a file",
      .help = "transfer function: a preset (viridis, cool-warm, inferno,\n"
@@ -69,7 +73,8 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help_rank = 6,
      .scene_key = "step", .scene_type = "integer",
      .meaning = "the time step of the field",
-     .scene_default = "0", .constraint = "0 ≤ step ≤ 2^30"},
+     .scene_default = "0", .constraint = "0 ≤ step ≤ 2^30",
+     .kind = TPK_OPT_KIND_INT, .lo = 0, .hi = 1 << 30},
     {TPK_OPT_STEPS,
      .flag = "--steps", .metavar = "A:B", .expects = "A:B with 0 <= A <= B, at most 100000 steps",
      .help = "render steps A..B, one PNG each: -o must hold one %d\n"
@@ -94,7 +99,8 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help_rank = 10,
      .scene_key = "unit_distance", .scene_type = "number",
      .meaning = "the TF's opacity is per this distance",
-     .scene_default = "bounds diagonal / 30", .constraint = "> 0"},
+     .scene_default = "bounds diagonal / 30", .constraint = "> 0",
+     .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = INFINITY, .lo_open = 1, .hi_open = 1},
     {TPK_OPT_CLIP_BOX,
      .flag = "--clip-box", .metavar = "x0,y0,z0,x1,y1,z1", .expects = "6 numbers x0,y0,z0,x1,y1,z1 with x0 <= "
              "x1, y0 <= y1, z0 <= z1",
@@ -102,7 +108,7 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help_rank = 14, .effect = 1,
      .scene_key = "clip_box", .scene_type = "[number ×6]",
      .meaning = "`[x0, y0, z0, x1, y1, z1]`: only the volume inside the box shows",
-     .scene_default = "no clip", .constraint = "finite, x0 < x1, y0 < y1, z0 < z1"},
+     .scene_default = "no clip", .constraint = "finite, x0 ≤ x1, y0 ≤ y1, z0 ≤ z1"},
     {TPK_OPT_ISO,
      .flag = "--iso", .metavar = "V[,V...]|auto", .expects = "1 to 4 comma-separated finite numbers, or auto",
      .help = "up to 4 exact isosurfaces of the field (scalar units), coloured\n"
@@ -118,7 +124,8 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help_rank = 13, .effect = 1,
      .scene_key = "iso_opacity", .scene_type = "number",
      .meaning = "opacity of an isosurface hit",
-     .scene_default = "1", .constraint = "0 < value ≤ 1"},
+     .scene_default = "1", .constraint = "0 < value ≤ 1",
+     .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = 1, .lo_open = 1},
     {TPK_OPT_EFFECTS,
      .scene_key = "effects", .scene_type = "object",
      .meaning = "the keys below",
@@ -145,19 +152,21 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .meaning = "point light position, world coordinates",
      .scene_default = "a headlight at the eye", .constraint = "finite"},
     {TPK_OPT_AO_RAYS,
-     .flag = "--ao", .metavar = "N", .expects = "a ray count 1..1024",
-     .help = "ambient occlusion from N hemisphere rays (1..1024)",
+     .flag = "--ao", .metavar = "N", .expects = "a ray count 0..1024 (0: off)",
+     .help = "ambient occlusion from N hemisphere rays (0..1024; 0: off)",
      .help_rank = 18, .effect = 1,
      .scene_key = "effects.ao_rays", .scene_type = "integer",
      .meaning = "ambient occlusion with this many hemisphere rays; 0 is off",
-     .scene_default = "0", .constraint = "0..1024"},
+     .scene_default = "0", .constraint = "0..1024",
+     .kind = TPK_OPT_KIND_INT, .lo = 0, .hi = TPK_RENDER_MAX_AO_RAYS},
     {TPK_OPT_AO_RADIUS,
      .flag = "--ao-radius", .metavar = "R", .expects = "a positive length",
      .help = "length of the AO rays (default: bounds diagonal / 10)",
      .help_rank = 19, .effect = 1,
      .scene_key = "effects.ao_radius", .scene_type = "number",
      .meaning = "length of the AO rays",
-     .scene_default = "bounds diagonal / 10", .constraint = "> 0"},
+     .scene_default = "bounds diagonal / 10", .constraint = "> 0",
+     .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = INFINITY, .lo_open = 1, .hi_open = 1},
     {TPK_OPT_OCCLUSION,
      .flag = "--occlusion", .metavar = "ray|vertex", .expects = "ray or vertex",
      .help = "where shadow and AO rays start: at each pixel's shade points\n"
@@ -167,14 +176,16 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .scene_key = "effects.occlusion", .scene_type = "string",
      .meaning = "where shadow and AO rays start: `ray` at the shade points of every pixel, `vertex` at the mesh "
                 "vertices (AO over the whole sphere), interpolated in each tet",
-     .scene_default = "`ray`", .constraint = "`ray`, `vertex`"},
+     .scene_default = "`ray`", .constraint = "`ray`, `vertex`",
+     .kind = TPK_OPT_KIND_CHOICE, .choices = "ray vertex"},
     {TPK_OPT_LAYOUT,
      .flag = "--layout", .metavar = "tet16|tet20|tet32", .expects = "tet16, tet20 or tet32",
      .help = "which stored layout to march (default: the first present)",
      .help_rank = 9,
      .scene_key = "layout", .scene_type = "string",
      .meaning = "the tet layout to march",
-     .scene_default = "the first present of Tet16, Tet20, Tet32", .constraint = "`tet16`, `tet20`, `tet32`"},
+     .scene_default = "the first present of Tet16, Tet20, Tet32", .constraint = "`tet16`, `tet20`, `tet32`",
+     .kind = TPK_OPT_KIND_CHOICE, .choices = "tet16 tet20 tet32"},
     {TPK_OPT_SIZE,
      .flag = "--size", .metavar = "WxH", .expects = "WxH (1..16384)",
      .help = "image size (default 512x512)",
@@ -195,7 +206,8 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
                 "there is no Vulkan device (or a build without the Vulkan renderer) `vulkan` is drawn by the "
                 "CPU reference with a note (the same picture by definition); a saved scene records the "
                 "backend that drew it",
-     .scene_default = "the default backend", .constraint = "`cpu`, `vulkan`"},
+     .scene_default = "the default backend", .constraint = "`cpu`, `vulkan`",
+     .kind = TPK_OPT_KIND_CHOICE, .choices = "cpu vulkan"},
     {TPK_OPT_INTEGRATION,
      .flag = "--integration", .metavar = "exact|sampled|midpoint", .expects = "exact, sampled or midpoint",
      .help = "per-piece integration as above (default), point samples at\n"
@@ -205,7 +217,8 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .scene_key = "integration", .scene_type = "string",
      .meaning = "`exact` per tet piece, `sampled` at most unit_distance / 2 apart, or `midpoint` (one sample "
                 "per tet piece)",
-     .scene_default = "`exact`", .constraint = "`exact`, `sampled`, `midpoint`"},
+     .scene_default = "`exact`", .constraint = "`exact`, `sampled`, `midpoint`",
+     .kind = TPK_OPT_KIND_CHOICE, .choices = "exact sampled midpoint"},
     {TPK_OPT_OUTPUT,
      .flag = "--output", .alias = "-o", .metavar = "IMAGE.png", .expects = "an output PNG path",
      .help = "output image (written atomically)",
@@ -213,7 +226,8 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_THREADS,
      .flag = "--threads", .metavar = "N", .expects = "1..1024",
      .help = "worker threads of the CPU backend (default: all cores)",
-     .help_rank = 21},
+     .help_rank = 21,
+     .kind = TPK_OPT_KIND_INT, .lo = 1, .hi = 1024},
     {TPK_OPT_SCENE,
      .flag = "--scene", .metavar = "FILE", .expects = "a scene file",
      .help = "a scene file (spec/scene-json.md): its values first, then the\n"
@@ -265,4 +279,53 @@ int tpk_option_scene_keys(const char *parent, const char **names, int cap)
             names[count++] = n == 0 ? key : dot + 1;
     }
     return count;
+}
+
+int tpk_option_int_ok(tpk_option_id id, double v)
+{
+    const tpk_option_row *r = &tpk_option_table[id];
+    return r->kind == TPK_OPT_KIND_INT && v == floor(v) && v >= r->lo && v <= r->hi;
+}
+
+int tpk_option_number_ok(tpk_option_id id, double v)
+{
+    const tpk_option_row *r = &tpk_option_table[id];
+    return r->kind == TPK_OPT_KIND_NUMBER && isfinite(v) && (r->lo_open ? v > r->lo : v >= r->lo) &&
+           (r->hi_open ? v < r->hi : v <= r->hi);
+}
+
+int tpk_option_choice(tpk_option_id id, const char *text)
+{
+    const tpk_option_row *r = &tpk_option_table[id];
+    if (r->kind != TPK_OPT_KIND_CHOICE || !text)
+        return -1;
+    size_t n = strlen(text);
+    int index = 0;
+    for (const char *at = r->choices; *at; index++) {
+        size_t len = strcspn(at, " ");
+        if (len == n && n > 0 && !strncmp(at, text, n))
+            return index;
+        at += len;
+        at += strspn(at, " ");
+    }
+    return -1;
+}
+
+const char *tpk_option_choice_name(tpk_option_id id, int index, char *buf, size_t cap)
+{
+    const tpk_option_row *r = &tpk_option_table[id];
+    buf[0] = 0;
+    if (r->kind != TPK_OPT_KIND_CHOICE || index < 0)
+        return buf;
+    const char *at = r->choices;
+    for (int i = 0; *at; i++) {
+        size_t len = strcspn(at, " ");
+        if (i == index) {
+            snprintf(buf, cap, "%.*s", (int)len, at);
+            return buf;
+        }
+        at += len;
+        at += strspn(at, " ");
+    }
+    return buf;
 }

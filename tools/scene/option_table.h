@@ -1,7 +1,8 @@
 /* The options of a render, one row each: the table that the command line (cli/render_args.c: its option
  * parser, its messages, render's and view's --help), the scene reader and writer (scene_parse.c,
- * scene_write.c: every key) and the scene spec's key table (spec/scene-json.md §2, compared row by row
- * by tests/test_option_table.c) all come from. It lives here, the lowest folder the command line and the
+ * scene_write.c: every key, and the ranges and choices of the values, the command line's too) and the
+ * scene spec's key table (spec/scene-json.md §2, compared row by row by tests/test_option_table.c) all
+ * come from. It lives here, the lowest folder the command line and the
  * scene files share; which values a renderer accepts is render/'s tpk_render_check_options. */
 #ifndef TPK_SCENE_OPTION_TABLE_H
 #define TPK_SCENE_OPTION_TABLE_H
@@ -51,6 +52,15 @@ typedef enum tpk_option_id {
     TPK_OPT_COUNT
 } tpk_option_id;
 
+/* The rule a value obeys, the same for the command line and the scene reader: both check it through
+ * tpk_option_int_ok, tpk_option_number_ok and tpk_option_choice, so the two accept the same values. */
+typedef enum tpk_option_kind {
+    TPK_OPT_KIND_OTHER = 0, /* checked by its own parser (lists, files, names) */
+    TPK_OPT_KIND_INT,       /* an integer in [lo, hi] */
+    TPK_OPT_KIND_NUMBER,    /* a finite number in lo..hi, each end open or closed */
+    TPK_OPT_KIND_CHOICE     /* one of `choices` */
+} tpk_option_kind;
+
 typedef struct tpk_option_row {
     tpk_option_id id;
     /* Command line (flag NULL: none). */
@@ -65,10 +75,24 @@ typedef struct tpk_option_row {
     /* Scene file (scene_key NULL: none); the other four are the spec table's columns. */
     const char *scene_key; /* "effects.ao_rays": a key of the object in key "effects" */
     const char *scene_type, *meaning, *scene_default, *constraint;
+    /* The value's rule (both front ends). */
+    tpk_option_kind kind;
+    double lo, hi;          /* INT and NUMBER */
+    int lo_open, hi_open;   /* NUMBER: lo < v (not <=), v < hi */
+    const char *choices;    /* CHOICE: space-separated, in the order of the values they stand for */
 } tpk_option_row;
 
 /* The table: TPK_OPT_COUNT rows, row i has id i. */
 extern const tpk_option_row tpk_option_table[TPK_OPT_COUNT];
+
+/* v is an integer within the row's [lo, hi] (TPK_OPT_KIND_INT). */
+int tpk_option_int_ok(tpk_option_id id, double v);
+/* v is a finite number within the row's range (TPK_OPT_KIND_NUMBER). */
+int tpk_option_number_ok(tpk_option_id id, double v);
+/* The index of `text` among the row's choices (TPK_OPT_KIND_CHOICE), or -1. */
+int tpk_option_choice(tpk_option_id id, const char *text);
+/* The row's choice `index` into buf (cap bytes); "" past the last. */
+const char *tpk_option_choice_name(tpk_option_id id, int index, char *buf, size_t cap);
 
 /* The leaf of a row's scene key ("ao_rays" for "effects.ao_rays"); NULL when it has none. */
 const char *tpk_option_scene_leaf(tpk_option_id id);

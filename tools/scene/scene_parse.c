@@ -77,12 +77,25 @@ static int number(parser *p, const cJSON *v, const char *path, const char *expec
     return 0;
 }
 
-static int integer(parser *p, const cJSON *v, const char *path, int lo, int hi, int *out)
+/* An integer by its option's rule (option_table.c, the command line's too). */
+static int integer(parser *p, const cJSON *v, const char *path, tpk_option_id id, int *out)
 {
     char buf[64];
-    if (!cJSON_IsNumber(v) || v->valuedouble != floor(v->valuedouble) || v->valuedouble < lo || v->valuedouble > hi)
-        return fail_key(p, path, "expected an integer in %d..%d, found %s", lo, hi, shown(v, buf));
+    const tpk_option_row *r = &tpk_option_table[id];
+    if (!cJSON_IsNumber(v) || !tpk_option_int_ok(id, v->valuedouble))
+        return fail_key(p, path, "expected an integer in %.0f..%.0f, found %s", r->lo, r->hi, shown(v, buf));
     *out = (int)v->valuedouble;
+    return 0;
+}
+
+/* A number by its option's rule; `expected` says it in words. */
+static int ruled_number(parser *p, const cJSON *v, const char *path, tpk_option_id id, const char *expected,
+                        double *out)
+{
+    if (number(p, v, path, expected, out))
+        return -1;
+    if (!tpk_option_number_ok(id, *out))
+        return fail_key(p, path, "expected %s, found %g", expected, *out);
     return 0;
 }
 
@@ -111,18 +124,18 @@ static int boolean(parser *p, const cJSON *v, const char *path, int *out)
     return 0;
 }
 
-/* One of `choices` (count n); *out is its index. */
-static int choice(parser *p, const cJSON *v, const char *path, const char *const *choices, int n, int *out)
+/* One of its option's choices (option_table.c, the command line's too); *out is its index. */
+static int choice(parser *p, const cJSON *v, const char *path, tpk_option_id id, int *out)
 {
-    char list[128] = "", buf[64];
-    for (int i = 0; i < n; i++) {
-        if (cJSON_IsString(v) && !strcmp(v->valuestring, choices[i])) {
-            *out = i;
-            return 0;
-        }
+    char list[128] = "", buf[64], name[32];
+    if (cJSON_IsString(v) && (*out = tpk_option_choice(id, v->valuestring)) >= 0)
+        return 0;
+    int n = 0;
+    while (tpk_option_choice_name(id, n, name, sizeof name)[0])
+        n++;
+    for (int i = 0; i < n; i++)
         snprintf(list + strlen(list), sizeof list - strlen(list), "%s\"%s\"", i ? (i + 1 < n ? ", " : " or ") : "",
-                 choices[i]);
-    }
+                 tpk_option_choice_name(id, i, name, sizeof name));
     return fail_key(p, path, "expected %s, found %s", list, shown(v, buf));
 }
 
@@ -216,10 +229,8 @@ static int key_camera(parser *p, const cJSON *v)
     const cJSON *fovy = cJSON_GetObjectItemCaseSensitive(v, "fovy");
     if (!fovy)
         return fail_key(p, "camera.fovy", "missing: a camera gives eye, at, up and fovy");
-    if (number(p, fovy, "camera.fovy", "a number of degrees in (0, 180)", &c->fovy_deg))
+    if (ruled_number(p, fovy, "camera.fovy", TPK_OPT_CAMERA_FOVY, "a number of degrees in (0, 180)", &c->fovy_deg))
         return -1;
-    if (!(c->fovy_deg > 0 && c->fovy_deg < 180))
-        return fail_key(p, "camera.fovy", "expected a number of degrees in (0, 180), found %g", c->fovy_deg);
     double d[3] = {c->at[0] - c->eye[0], c->at[1] - c->eye[1], c->at[2] - c->eye[2]};
     if (d[0] == 0 && d[1] == 0 && d[2] == 0)
         return fail_key(p, "camera.at", "equals camera.eye: the camera looks nowhere");
@@ -310,7 +321,7 @@ static int key_field(parser *p, const cJSON *v)
 
 static int key_step(parser *p, const cJSON *v)
 {
-    if (integer(p, v, "step", 0, 1 << 30, &p->out->step_first))
+    if (integer(p, v, "step", TPK_OPT_STEP, &p->out->step_first))
         return -1;
     p->out->step_last = p->out->step_first;
     return 0;
@@ -322,7 +333,7 @@ static int key_steps(parser *p, const cJSON *v)
     char buf[64];
     if (numbers(p, v, "steps", 2, "[first, last] steps", s))
         return -1;
-    if (s[0] != floor(s[0]) || s[1] != floor(s[1]) || s[0] < 0 || s[0] > s[1] || s[1] > (1 << 30))
+    if (!tpk_option_int_ok(TPK_OPT_STEP, s[0]) || !tpk_option_int_ok(TPK_OPT_STEP, s[1]) || s[0] > s[1])
         return fail_key(p, "steps", "expected [first, last] with integers 0 <= first <= last <= %d, found %s",
                         1 << 30, shown(v, buf));
     p->out->step_first = (int)s[0];
@@ -343,11 +354,7 @@ static int key_range(parser *p, const cJSON *v)
 
 static int key_unit_distance(parser *p, const cJSON *v)
 {
-    if (number(p, v, "unit_distance", "a positive number", &p->out->unit_distance))
-        return -1;
-    if (!(p->out->unit_distance > 0))
-        return fail_key(p, "unit_distance", "expected a positive number, found %g", p->out->unit_distance);
-    return 0;
+    return ruled_number(p, v, "unit_distance", TPK_OPT_UNIT_DISTANCE, "a positive number", &p->out->unit_distance);
 }
 
 static int key_clip_box(parser *p, const cJSON *v)
@@ -356,8 +363,8 @@ static int key_clip_box(parser *p, const cJSON *v)
     if (numbers(p, v, "clip_box", 6, "[x0, y0, z0, x1, y1, z1]", b))
         return -1;
     for (int k = 0; k < 3; k++)
-        if (!(b[k] < b[k + 3]))
-            return fail_key(p, "clip_box", "expected min < max on every axis, found %g >= %g on axis %c", b[k],
+        if (!(b[k] <= b[k + 3])) /* the renderers' rule (tpk_render_check_options) and --clip-box's */
+            return fail_key(p, "clip_box", "expected min <= max on every axis, found %g > %g on axis %c", b[k],
                             b[k + 3], "xyz"[k]);
     memcpy(p->out->clip_min, b, sizeof p->out->clip_min);
     memcpy(p->out->clip_max, b + 3, sizeof p->out->clip_max);
@@ -376,11 +383,7 @@ static int key_iso(parser *p, const cJSON *v)
 
 static int key_iso_opacity(parser *p, const cJSON *v)
 {
-    if (number(p, v, "iso_opacity", "a number in (0, 1]", &p->out->iso_opacity))
-        return -1;
-    if (!(p->out->iso_opacity > 0 && p->out->iso_opacity <= 1))
-        return fail_key(p, "iso_opacity", "expected a number in (0, 1], found %g", p->out->iso_opacity);
-    return 0;
+    return ruled_number(p, v, "iso_opacity", TPK_OPT_ISO_OPACITY, "a number in (0, 1]", &p->out->iso_opacity);
 }
 
 /* The keys of "effects", by their rows of the option table. */
@@ -407,27 +410,23 @@ static int key_effects(parser *p, const cJSON *v)
         !(rc = numbers(p, e, t[TPK_OPT_LIGHT].scene_key, 3, "a point [x, y, z]", s->light)))
         s->given |= TPK_SCENE_LIGHT;
     if (!rc && (e = effect(v, TPK_OPT_AO_RAYS)) &&
-        !(rc = integer(p, e, t[TPK_OPT_AO_RAYS].scene_key, 0, TPK_RENDER_MAX_AO_RAYS, &s->ao_rays)))
+        !(rc = integer(p, e, t[TPK_OPT_AO_RAYS].scene_key, TPK_OPT_AO_RAYS, &s->ao_rays)))
         s->given |= TPK_SCENE_AO_RAYS;
     if (!rc && (e = effect(v, TPK_OPT_AO_RADIUS))) {
-        rc = number(p, e, t[TPK_OPT_AO_RADIUS].scene_key, "a positive length", &s->ao_radius);
-        if (!rc && !(s->ao_radius > 0))
-            rc = fail_key(p, t[TPK_OPT_AO_RADIUS].scene_key, "expected a positive length, found %g", s->ao_radius);
+        rc = ruled_number(p, e, t[TPK_OPT_AO_RADIUS].scene_key, TPK_OPT_AO_RADIUS, "a positive length", &s->ao_radius);
         s->given |= TPK_SCENE_AO_RADIUS;
     }
-    static const char *const occlusions[] = {"ray", "vertex"}; /* TPK_OCCLUSION_* order */
-    if (!rc && (e = effect(v, TPK_OPT_OCCLUSION)) &&
-        !(rc = choice(p, e, t[TPK_OPT_OCCLUSION].scene_key, occlusions, 2, &s->occlusion)))
+    if (!rc && (e = effect(v, TPK_OPT_OCCLUSION)) && /* TPK_OCCLUSION_* order */
+        !(rc = choice(p, e, t[TPK_OPT_OCCLUSION].scene_key, TPK_OPT_OCCLUSION, &s->occlusion)))
         s->given |= TPK_SCENE_OCCLUSION;
     return rc;
 }
 
 static int key_layout(parser *p, const cJSON *v)
 {
-    static const char *const names[] = {"tet16", "tet20", "tet32"};
-    static const tpk_layout layouts[] = {TPK_LAYOUT_TET16, TPK_LAYOUT_TET20, TPK_LAYOUT_TET32};
+    static const tpk_layout layouts[] = {TPK_LAYOUT_TET16, TPK_LAYOUT_TET20, TPK_LAYOUT_TET32}; /* the choices' order */
     int i;
-    if (choice(p, v, "layout", names, 3, &i))
+    if (choice(p, v, "layout", TPK_OPT_LAYOUT, &i))
         return -1;
     p->out->layout = layouts[i];
     return 0;
@@ -448,9 +447,8 @@ static int key_size(parser *p, const cJSON *v)
 
 static int key_backend(parser *p, const cJSON *v)
 {
-    static const char *const names[] = {"cpu", "vulkan"};
     int i;
-    if (choice(p, v, "backend", names, 2, &i))
+    if (choice(p, v, "backend", TPK_OPT_BACKEND, &i)) /* cpu, vulkan */
         return -1;
     p->out->backend = i == 0 ? TPK_SCENE_BACKEND_CPU : TPK_SCENE_BACKEND_VULKAN;
     return 0;
@@ -458,8 +456,7 @@ static int key_backend(parser *p, const cJSON *v)
 
 static int key_integration(parser *p, const cJSON *v)
 {
-    static const char *const names[] = {"exact", "sampled", "midpoint"}; /* TPK_INTEGRATION_* order */
-    return choice(p, v, "integration", names, 3, &p->out->integration);
+    return choice(p, v, "integration", TPK_OPT_INTEGRATION, &p->out->integration); /* TPK_INTEGRATION_* order */
 }
 
 typedef int (*key_fn)(parser *p, const cJSON *v);

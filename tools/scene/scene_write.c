@@ -28,6 +28,13 @@ static cJSON *exact_number(double v)
     return cJSON_CreateRaw(text);
 }
 
+/* The value's name among its option's choices (option_table.c), as the scene reader takes it. */
+static void add_choice(cJSON *obj, tpk_option_id id, int index)
+{
+    char name[32];
+    cJSON_AddStringToObject(obj, tpk_option_scene_leaf(id), tpk_option_choice_name(id, index, name, sizeof name));
+}
+
 static void add_number(cJSON *obj, const char *key, double v)
 {
     cJSON_AddItemToObject(obj, key, exact_number(v));
@@ -90,12 +97,13 @@ static void add_effects(cJSON *root, const tpk_scene *s)
     if (s->given & TPK_SCENE_AO_RADIUS)
         add_number(fx, KEY(TPK_OPT_AO_RADIUS), s->ao_radius);
     if (s->given & TPK_SCENE_OCCLUSION)
-        cJSON_AddStringToObject(fx, KEY(TPK_OPT_OCCLUSION), s->occlusion == TPK_OCCLUSION_VERTEX ? "vertex" : "ray");
+        add_choice(fx, TPK_OPT_OCCLUSION, s->occlusion); /* TPK_OCCLUSION_* order */
 }
 
-static const char *layout_name(tpk_layout layout)
+/* The layout's place among the table's choices (tet16, tet20, tet32). */
+static int layout_index(tpk_layout layout)
 {
-    return layout == TPK_LAYOUT_TET16 ? "tet16" : layout == TPK_LAYOUT_TET20 ? "tet20" : "tet32";
+    return layout == TPK_LAYOUT_TET16 ? 0 : layout == TPK_LAYOUT_TET20 ? 1 : 2;
 }
 
 static void add_selection(cJSON *root, const tpk_scene *s)
@@ -125,17 +133,15 @@ static void add_selection(cJSON *root, const tpk_scene *s)
 static void add_output(cJSON *root, const tpk_scene *s)
 {
     if (s->given & TPK_SCENE_LAYOUT)
-        cJSON_AddStringToObject(root, KEY(TPK_OPT_LAYOUT), layout_name(s->layout));
+        add_choice(root, TPK_OPT_LAYOUT, layout_index(s->layout));
     if (s->given & TPK_SCENE_SIZE) {
         double size[2] = {s->width, s->height};
         add_numbers(root, KEY(TPK_OPT_SIZE), size, 2);
     }
     if (s->given & TPK_SCENE_BACKEND)
-        cJSON_AddStringToObject(root, KEY(TPK_OPT_BACKEND), s->backend == TPK_SCENE_BACKEND_VULKAN ? "vulkan" : "cpu");
+        add_choice(root, TPK_OPT_BACKEND, s->backend == TPK_SCENE_BACKEND_VULKAN ? 1 : 0); /* cpu, vulkan */
     if (s->given & TPK_SCENE_INTEGRATION)
-        cJSON_AddStringToObject(root, KEY(TPK_OPT_INTEGRATION), s->integration == TPK_INTEGRATION_MIDPOINT ? "midpoint"
-                                                                : s->integration == TPK_INTEGRATION_SAMPLED ? "sampled"
-                                                                                                             : "exact");
+        add_choice(root, TPK_OPT_INTEGRATION, s->integration); /* TPK_INTEGRATION_* order */
 }
 
 /* Top-level keys the text must have: the version, one per given bit, and one "effects" for five bits. */
