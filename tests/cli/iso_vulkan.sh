@@ -26,3 +26,28 @@ triangles=$(grep -o '"triangles":[0-9]*' "$WORK/vulkan.ply.json" | head -1 | cut
 expect_exit 2 tpk iso "$WORK/m.tpk" "$WORK/x.ply" --value 0 --backend metal
 expect_stderr "--backend expects cpu or vulkan, found 'metal'"
 echo "iso_vulkan: $triangles triangles, the same files from both backends"
+
+# render --iso-raster: the surfaces drawn as triangles (compute extraction + indirect draw) against the
+# ray-marched ones of the CPU reference, opaque, iso-only (a TF transparent everywhere), with shading,
+# two values and a clip box: the same picture up to rasterization
+printf '0 0.2 0.4 0.9 0\n1 0.9 0.2 0.1 0\n' > "$WORK/clear.tf"
+for opts in "--iso -0.005" "--iso -0.018,-0.005 --shading" "--iso -0.005 --shading --clip-box -10,-10,-10,10,0.2,10"; do
+    # shellcheck disable=SC2086
+    tpk render "$WORK/m.tpk" -o "$WORK/raster.png" --backend vulkan --size 128x96 --field disp_z --step 4 --tf "$WORK/clear.tf" \
+        $opts --iso-raster --json > "$WORK/raster.json" || fail "--iso-raster $opts"
+    # shellcheck disable=SC2086
+    tpk render "$WORK/m.tpk" -o "$WORK/ray.png" --backend cpu --size 128x96 --field disp_z --step 4 --tf "$WORK/clear.tf" \
+        $opts > /dev/null || fail "ray-marched $opts"
+    grep -q '"iso_raster":{"triangles":[1-9][0-9]*,"path":"compute extraction + indirect draw","mesh_shader":"VK_EXT_mesh_shader' \
+        "$WORK/raster.json" || fail "--iso-raster json: $(cat "$WORK/raster.json")"
+    db=$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/ray.png" "$WORK/raster.png" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p')
+    "$PY" -c "import sys; d = float(sys.argv[1]); sys.exit(0 if d >= 40 else 1)" "$db" || fail "--iso-raster $opts: PSNR $db dB against the ray-marched picture"
+    echo "ok --iso-raster $opts: $db dB against the ray-marched picture"
+done
+expect_exit 2 tpk render "$WORK/m.tpk" -o "$WORK/x.png" --backend cpu --field disp_z --iso -0.005 --iso-raster
+expect_stderr "--iso-raster draws with Vulkan"
+expect_exit 2 tpk render "$WORK/m.tpk" -o "$WORK/x.png" --backend vulkan --field disp_z --iso -0.005 --iso-raster --shadows
+expect_stderr "without --shadows, --ao and --iso-opacity"
+expect_exit 2 tpk render "$WORK/m.tpk" -o "$WORK/x.png" --backend vulkan --field disp_z --iso-raster
+expect_stderr "give --iso V"
+echo "iso_vulkan: --iso-raster matches the ray-marched surfaces"

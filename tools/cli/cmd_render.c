@@ -85,8 +85,17 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
 #ifdef TPK_WITH_VULKAN
     vulkan = !src->set && !strcmp(a->backend, "vulkan");
 #endif
+    if (a->iso_raster && (src->set || !vulkan))
+        return tpk_cli_fail("render", "--iso-raster draws with Vulkan (a single file, --backend vulkan)%s",
+#ifdef TPK_WITH_VULKAN
+                            ""
+#else
+                            ": this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)"
+#endif
+        );
     if ((src->set     ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
 #ifdef TPK_WITH_VULKAN
+         : a->iso_raster ? tpk_render_iso_raster(src->mesh, opt, rgba, &stats, &diag)
          : vulkan     ? tpk_render_vulkan(src->mesh, opt, rgba, &stats, &diag)
 #endif
                       : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
@@ -116,6 +125,10 @@ static int render_frame(const render_args *a, const frame_source *src, const tpk
         if (!isnan(src->iso_auto))
             printf(",\"iso_auto\":%.9g", src->iso_auto);
         printf(",\"iso_culling\":%s", stats.iso_culling ? "true" : "false");
+        if (a->iso_raster)
+            printf(",\"iso_raster\":{\"triangles\":%llu,\"path\":\"compute extraction + indirect draw\","
+                   "\"mesh_shader\":\"%s\"}", (unsigned long long)stats.iso_triangles,
+                   stats.iso_mesh_shader ? "VK_EXT_mesh_shader present, its path not written yet" : "VK_EXT_mesh_shader absent");
         tpk_strbuf reason = {0};
         tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
         printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");

@@ -26,6 +26,7 @@ typedef struct render_args {
     const char *scene_path, *save_scene; /* --scene, --save-scene */
     const char *save_tpk;                /* --save-tpk: keep the conversion of a mesh that is not a .tpk */
     int legend, verbose;                 /* --legend, -v */
+    int iso_raster;                      /* --iso-raster: the isosurfaces drawn as triangles (Vulkan) */
     int iso_auto;                        /* --iso auto: one isosurface at the field's median (render_args_iso_auto) */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
     int backend_from_scene;              /* backend is the scene's: without a device, the CPU (same picture) */

@@ -223,6 +223,8 @@ typedef struct tpk_render_stats {
     uint64_t tet_steps; /* tets the marcher stepped through, all rays (secondary ones included) */
     uint64_t secondary_rays; /* shadow and AO rays */
     int iso_culling;    /* the primary rays were iso-only and range-culled (ISO-ONLY RAYS) */
+    uint64_t iso_triangles; /* --iso-raster: the triangles drawn */
+    int iso_mesh_shader;    /* --iso-raster: the device has VK_EXT_mesh_shader (the compute path draws still) */
     double seconds;     /* wall time of the render (marcher creation included) */
     uint64_t device_bytes; /* Vulkan: device memory of the renderer's buffers (mesh arrays, BVH, image
                               band, parameters); 0 for the CPU reference */

@@ -3,7 +3,7 @@
 # Usage: cmake -DDIR=<dir with render_fp64.inc and render_fp32.inc> -DOUT=x.c -P this
 #        cmake -DDIR=<dir> -DNAME=iso -DOUT=x.c -P this     (one shader, <dir>/iso.inc: tpk_vk_iso_spv)
 if(DEFINED NAME)
-  set(text "/* Generated from tools/render_vk/shaders/${NAME}.comp by glslc at build time; do not edit. */\n")
+  set(text "/* Generated from tools/render_vk/shaders/ (${NAME}) by glslc at build time; do not edit. */\n")
   string(APPEND text "#include <stddef.h>\n#include <stdint.h>\n")
   file(READ "${DIR}/${NAME}.inc" words)
   string(APPEND text "\nconst uint32_t tpk_vk_${NAME}_spv[] = ${words};\n"

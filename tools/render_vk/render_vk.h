@@ -62,6 +62,16 @@ int tpk_iso_vk_emit(tpk_iso_vk *v, double value, uint64_t **keys, float **positi
 /* The corner source for tpk_iso_extract_from / tpk_iso_options.corners. */
 tpk_iso_corners tpk_iso_vk_corners(tpk_iso_vk *v);
 
+/* render --iso-raster (vk_raster.c): the isosurfaces of opt->iso drawn as triangles (the compute
+ * extraction above and an indirect draw per value, depth-tested, two-sided), shaded as the marcher shades
+ * an opaque iso hit (the TF at the value; with shading, 0.3 + 0.7 |n . l|, n the triangle's normal, which
+ * in its tet is the field's gradient); the clip box discards outside points; the volume is not drawn.
+ * Refuses shadows, AO, a partial iso opacity and tet fields (the marcher draws those). The path for
+ * devices without VK_EXT_mesh_shader; stats: seconds, gpu_seconds, iso_triangles, and tet_steps the tets
+ * classified. 0 or -1 with a message. */
+int tpk_render_iso_raster(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                          tpk_render_stats *stats, tpk_diag *diag);
+
 /* Is a Vulkan 1.2 device with a compute queue present? Returns 1 and writes the device's name into
  * `why` (n bytes), or 0 and writes the reason (no loader, no device, too old). */
 int tpk_vulkan_available(char *why, size_t n);

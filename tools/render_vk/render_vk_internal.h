@@ -126,6 +126,44 @@ void tpk_vk_array_destroy(const tpk_vk_context *ctx, tpk_vk_array *a);
 int tpk_vk_array_refill(const tpk_vk_context *ctx, tpk_vk_stager *stager, const tpk_vk_source *src,
                         uint64_t texel_count, tpk_vk_array *a, tpk_diag *diag);
 
+/* The marching-tetrahedra extractor (vk_iso.c), here so that the isosurface rasterizer (vk_raster.c) draws
+ * from its buffers on its device. */
+enum { B_TETS, B_SCALARS, B_POSITIONS, B_CASES, B_COUNTS, B_GROUPS, B_KEYS, B_CORNERS, B_DRAW_ARGS,
+       TPK_ISO_VK_BUFFERS };
+
+typedef struct iso_push {
+    uint32_t mode, tet_count, group_count;
+    float threshold, value;
+    uint32_t base;
+} iso_push;
+
+struct tpk_iso_vk {
+    tpk_vk_context ctx;
+    tpk_vk_buffer buf[TPK_ISO_VK_BUFFERS];
+    VkDescriptorSetLayout set_layout;
+    VkPipelineLayout layout;
+    VkShaderModule shader;
+    VkPipeline pipeline;
+    VkDescriptorPool pool;
+    VkDescriptorSet set;
+    VkCommandPool commands;
+    VkCommandBuffer cmd;
+    VkFence fence;
+    int64_t tet_count;
+    uint32_t group_count;
+    double gpu_seconds; /* wall time of the dispatches and copies, so far */
+    int64_t triangles;  /* so far */
+};
+
+/* Run the passes `first`..`last` of shaders/iso.comp for `value` into the current command buffer (bound
+ * pipeline and set, a barrier after each). */
+void tpk_iso_vk_record(tpk_iso_vk *v, int first, int last, double value);
+/* Passes 0..3 for `value` (submitted, waited for), the triangle count into *total, and the corner
+ * buffers grown to hold them. 0 or -1 with a message. */
+int tpk_iso_vk_count(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag);
+/* Submit the commands `record` writes (with `arg`) and wait. 0 or -1 with a message. */
+int tpk_iso_vk_submit(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void *arg), const void *arg, tpk_diag *diag);
+
 /* The uniform block of the shader (std140; render.comp's Params). */
 typedef struct tpk_vk_params {
     float eye[4];

@@ -16,31 +16,7 @@
 extern const uint32_t tpk_vk_iso_spv[];
 extern const size_t tpk_vk_iso_spv_size;
 
-enum { B_TETS, B_SCALARS, B_POSITIONS, B_CASES, B_COUNTS, B_GROUPS, B_KEYS, B_CORNERS, B_COUNT };
-
-typedef struct iso_push {
-    uint32_t mode, tet_count, group_count;
-    float threshold, value;
-    uint32_t base;
-} iso_push;
-
-struct tpk_iso_vk {
-    tpk_vk_context ctx;
-    tpk_vk_buffer buf[B_COUNT];
-    VkDescriptorSetLayout set_layout;
-    VkPipelineLayout layout;
-    VkShaderModule shader;
-    VkPipeline pipeline;
-    VkDescriptorPool pool;
-    VkDescriptorSet set;
-    VkCommandPool commands;
-    VkCommandBuffer cmd;
-    VkFence fence;
-    int64_t tet_count;
-    uint32_t group_count;
-    double gpu_seconds;  /* wall time of the dispatches and copies, so far */
-    int64_t triangles;   /* so far */
-};
+#define B_COUNT TPK_ISO_VK_BUFFERS
 
 static int vk_ok(VkResult r, const char *step, tpk_diag *diag)
 {
@@ -146,7 +122,7 @@ static int make_buffer(tpk_iso_vk *v, int which, VkDeviceSize bytes, const char 
                              what, (unsigned long long)bytes, v->ctx.props.limits.maxStorageBufferRange);
     return tpk_vk_buffer_create(&v->ctx, bytes ? bytes : 16,
                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
-                                    VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                    VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT,
                                 TPK_VK_MEMORY_DEVICE, what, &v->buf[which], diag);
 }
 
@@ -243,7 +219,8 @@ int tpk_iso_vk_create(tpk_iso_vk **out, const tpk_iso_input *in, tpk_diag *diag)
              make_buffer(v, B_CASES, sizeof cases, "case table", diag) ||
              make_buffer(v, B_COUNTS, 4 * (size_t)in->tet_count, "triangle counts", diag) ||
              make_buffer(v, B_GROUPS, 4 * ((size_t)v->group_count + 1), "group sums", diag) ||
-             make_buffer(v, B_KEYS, 0, "corner keys", diag) || make_buffer(v, B_CORNERS, 0, "corner positions", diag);
+             make_buffer(v, B_KEYS, 0, "corner keys", diag) || make_buffer(v, B_CORNERS, 0, "corner positions", diag) ||
+             make_buffer(v, B_DRAW_ARGS, 16, "draw arguments", diag);
     if (rc == 0)
         rc = make_pipeline(v, diag);
     if (rc == 0)
@@ -298,36 +275,6 @@ double tpk_iso_vk_seconds(const tpk_iso_vk *v)
     return v->gpu_seconds;
 }
 
-/* The passes from `first` to `last` (modes), each over every tet in dispatches of <= 65535 groups, with a
- * barrier between passes. */
-typedef struct pass_arg {
-    int first, last;
-    float threshold, value;
-} pass_arg;
-
-static void record_passes(tpk_iso_vk *v, const void *arg)
-{
-    const pass_arg *a = arg;
-    vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->pipeline);
-    vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->layout, 0, 1, &v->set, 0, NULL);
-    for (int mode = a->first; mode <= a->last; mode++) {
-        uint32_t groups = mode == 2 ? 1 : v->group_count;
-        for (uint32_t g = 0; g < groups; g += 65535) {
-            uint32_t n = groups - g < 65535 ? groups - g : 65535;
-            iso_push p = {(uint32_t)mode, (uint32_t)v->tet_count, v->group_count, a->threshold, a->value, g * 256};
-            vkCmdPushConstants(v->cmd, v->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof p, &p);
-            vkCmdDispatch(v->cmd, n, 1, 1);
-        }
-        VkMemoryBarrier barrier = {.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
-                                   .srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT,
-                                   .dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
-                                                    VK_ACCESS_TRANSFER_READ_BIT};
-        vkCmdPipelineBarrier(v->cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-                             VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &barrier, 0,
-                             NULL, 0, NULL);
-    }
-}
-
 /* The smallest float >= x (x finite): s >= x exactly when (float)s >= this. */
 static float float_at_or_above(double x)
 {
@@ -335,6 +282,73 @@ static float float_at_or_above(double x)
     if ((double)f < x)
         f = nextafterf(f, INFINITY);
     return f;
+}
+
+void tpk_iso_vk_record(tpk_iso_vk *v, int first, int last, double value)
+{
+    const float threshold = float_at_or_above(value), fvalue = (float)value;
+    vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->pipeline);
+    vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->layout, 0, 1, &v->set, 0, NULL);
+    for (int mode = first; mode <= last; mode++) {
+        uint32_t groups = mode == 2 || mode == 5 ? 1 : v->group_count; /* each pass over every tet, */
+        for (uint32_t g = 0; g < groups; g += 65535) {                   /* in dispatches of <= 65535 groups */
+            uint32_t n = groups - g < 65535 ? groups - g : 65535;
+            iso_push p = {(uint32_t)mode, (uint32_t)v->tet_count, v->group_count, threshold, fvalue, g * 256};
+            vkCmdPushConstants(v->cmd, v->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof p, &p);
+            vkCmdDispatch(v->cmd, n, 1, 1);
+        }
+        VkMemoryBarrier barrier = {.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER,
+                                   .srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT,
+                                   .dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                                                    VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT};
+        vkCmdPipelineBarrier(v->cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+                             VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT |
+                                 VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
+                             0, 1, &barrier, 0, NULL, 0, NULL);
+    }
+}
+
+typedef struct pass_arg {
+    int first, last;
+    double value;
+} pass_arg;
+
+static void record_passes(tpk_iso_vk *v, const void *arg)
+{
+    const pass_arg *a = arg;
+    tpk_iso_vk_record(v, a->first, a->last, a->value);
+}
+
+int tpk_iso_vk_submit(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void *arg), const void *arg, tpk_diag *diag)
+{
+    return run_commands(v, record, arg, diag);
+}
+
+int tpk_iso_vk_count(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)
+{
+    *total = 0;
+    pass_arg count = {0, 3, value};
+    if (run_commands(v, record_passes, &count, diag))
+        return -1;
+    uint32_t *groups = malloc(4 * ((size_t)v->group_count + 1));
+    if (!groups)
+        return tpk_diag_fail(diag, "vulkan iso: out of memory");
+    int rc = download(v, &v->buf[B_GROUPS], groups, 4 * ((size_t)v->group_count + 1), diag);
+    *total = groups[v->group_count];
+    free(groups);
+    if (rc)
+        return -1;
+    if ((uint64_t)*total * 3 * 12 > v->ctx.props.limits.maxStorageBufferRange)
+        return tpk_diag_fail(diag, "vulkan iso: the surface of %g has %u triangles; their corners do not fit one "
+                             "binding of this device (Vulkan limit maxStorageBufferRange): use the CPU backend",
+                             value, *total);
+    if (v->buf[B_KEYS].size < (VkDeviceSize)*total * 24 || v->buf[B_CORNERS].size < (VkDeviceSize)*total * 36) {
+        if (make_buffer(v, B_KEYS, (VkDeviceSize)*total * 24, "corner keys", diag) ||
+            make_buffer(v, B_CORNERS, (VkDeviceSize)*total * 36, "corner positions", diag))
+            return -1;
+        write_descriptors(v);
+    }
+    return 0;
 }
 
 int tpk_iso_vk_emit(tpk_iso_vk *v, double value, uint64_t **keys, float **positions, int64_t *triangles,
@@ -346,29 +360,10 @@ int tpk_iso_vk_emit(tpk_iso_vk *v, double value, uint64_t **keys, float **positi
     *triangles = 0;
     if (v->tet_count == 0)
         return (*keys = malloc(8)) ? 0 : tpk_diag_fail(diag, "vulkan iso: out of memory");
-    pass_arg count = {0, 3, float_at_or_above(value), (float)value};
-    uint32_t total = 0;
-    if (run_commands(v, record_passes, &count, diag))
+    uint32_t total;
+    if (tpk_iso_vk_count(v, value, &total, diag))
         return -1;
-    uint32_t *groups = malloc(4 * ((size_t)v->group_count + 1));
-    if (!groups)
-        return tpk_diag_fail(diag, "vulkan iso: out of memory");
-    int rc = download(v, &v->buf[B_GROUPS], groups, 4 * ((size_t)v->group_count + 1), diag);
-    total = groups[v->group_count];
-    free(groups);
-    if (rc)
-        return -1;
-    if ((uint64_t)total * 3 * 12 > v->ctx.props.limits.maxStorageBufferRange)
-        return tpk_diag_fail(diag, "vulkan iso: the surface of %g has %u triangles; their corners do not fit one "
-                             "binding of this device (Vulkan limit maxStorageBufferRange): use the CPU backend",
-                             value, total);
-    if (v->buf[B_KEYS].size < (VkDeviceSize)total * 24 || v->buf[B_CORNERS].size < (VkDeviceSize)total * 36) {
-        if (make_buffer(v, B_KEYS, (VkDeviceSize)total * 24, "corner keys", diag) ||
-            make_buffer(v, B_CORNERS, (VkDeviceSize)total * 36, "corner positions", diag))
-            return -1;
-        write_descriptors(v);
-    }
-    pass_arg emit = {4, 4, count.threshold, count.value};
+    pass_arg emit = {4, 4, value};
     size_t corners = 3 * (size_t)total;
     /* each key is the shader's uvec2 (b, a): little-endian, the uint64 (a << 32) | b */
     uint64_t *k = malloc(8 * (corners ? corners : 1));

@@ -257,6 +257,12 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help = "say on stderr which backend renders and why, and what was\n"
              "converted",
      .help_rank = 28, .render_only = 1},
+    {TPK_OPT_ISO_RASTER,
+     .flag = "--iso-raster", .metavar = NULL, .expects = NULL,
+     .help = "draw the --iso surfaces as triangles (Vulkan: compute extraction\n"
+             "and an indirect draw, depth-tested), opaque, with --shading at most;\n"
+             "no volume. The ray-marched surface's picture up to rasterization",
+     .help_rank = 29, .render_only = 1},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

@@ -6,6 +6,7 @@
 //   2 groups     one invocation: the exclusive prefix sum of the group totals, the grand total after them
 //   3 offsets    per tet: its first triangle (group offset + offset in the group)
 //   4 emit       per tet: its triangles' corners as edge keys (a < b) and float positions
+//   5 draw args  one invocation: the VkDrawIndirectCommand of the triangle list (render --iso-raster)
 // The case table comes from the host (tpk_iso_case_table), so the CPU and this shader share one table.
 // "At or above" compares the float scalar with `threshold`, the smallest float >= the double value:
 // for a float s, s >= value exactly when s >= threshold, so the cases are the CPU's.
@@ -28,6 +29,7 @@ layout(std430, binding = 4) buffer Counts { uint counts[]; };       // per tet: 
 layout(std430, binding = 5) buffer Groups { uint groups[]; };       // per group: total, then offset; + total
 layout(std430, binding = 6) writeonly buffer Keys { uvec2 keys[]; };          // 3 per triangle: (b, a)
 layout(std430, binding = 7) writeonly buffer Corners { float corners[]; };    // 3 floats per corner
+layout(std430, binding = 8) writeonly buffer DrawArgs { uint draw_args[]; };  // vertexCount, instances, 0, 0
 
 const ivec2 EDGES[6] = ivec2[6](ivec2(0, 1), ivec2(0, 2), ivec2(0, 3), ivec2(1, 2), ivec2(1, 3), ivec2(2, 3));
 
@@ -81,6 +83,13 @@ void main()
                 running += n;
             }
             groups[pc.group_count] = running;
+        }
+    } else if (pc.mode == 5u) {
+        if (gl_GlobalInvocationID.x == 0u) {
+            draw_args[0] = 3u * groups[pc.group_count];
+            draw_args[1] = 1u;
+            draw_args[2] = 0u;
+            draw_args[3] = 0u;
         }
     } else if (pc.mode == 3u) {
         if (t < pc.tet_count)
