@@ -48,6 +48,7 @@ typedef struct march {
     tpk_iso_surface *out;
     int64_t vertex_base, triangle_base;
     const tpk_iso_corners *corners;            /* NULL: count_range and emit_range make corner_key */
+    uint8_t *cases;                            /* per tet: its case (count_range), 16 for none (a NaN) */
 } march;
 
 /* The case of tet t: bit k when corner k is at or above the value; -1 with a NaN. */
@@ -71,6 +72,7 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
     int64_t n = 0;
     for (int64_t t = begin; t < end; t++) {
         int c = tet_case(m, t);
+        m->cases[t] = (uint8_t)(c < 0 ? 16 : c); /* emit_range reads it, not the scalars again */
         n += c < 0 ? 0 : iso_cases[c].count;
     }
     m->worker_first[w + 1] = n;
@@ -81,8 +83,8 @@ static void emit_range(void *ctx, int64_t begin, int64_t end, int w)
     march *m = ctx;
     uint64_t *key = m->corner_key + 3 * m->worker_first[w];
     for (int64_t t = begin; t < end; t++) {
-        int c = tet_case(m, t);
-        if (c <= 0 || c == 15)
+        int c = m->cases[t];
+        if (c == 0 || c >= 15)
             continue;
         const int32_t *v = m->in->tets + 4 * t;
         for (int k = 0; k < 3 * iso_cases[c].count; k++) {
@@ -106,62 +108,59 @@ static int compare_key_corner(const void *pa, const void *pb)
     return (a->corner > b->corner) - (a->corner < b->corner);
 }
 
-/* Sort one bucket of corners by (key, corner): insertion sort for the usual few dozen, qsort through
- * `pairs` (room for the largest bucket) for a vertex of many tets. */
-static void sort_bucket(const uint64_t *keys, int64_t *b, int64_t count, key_corner *pairs)
+/* Sort one bucket of (key, corner) pairs by key, keeping corners ascending within a key (they arrive
+ * ascending): insertion sort on the contiguous pairs for the usual few dozen, qsort on (key, corner)
+ * for a vertex of many tets. */
+static void sort_bucket(key_corner *b, int64_t count)
 {
-    if (count > 24) {
-        for (int64_t i = 0; i < count; i++)
-            pairs[i] = (key_corner){keys[b[i]], b[i]};
-        qsort(pairs, (size_t)count, sizeof *pairs, compare_key_corner);
-        for (int64_t i = 0; i < count; i++)
-            b[i] = pairs[i].corner;
+    if (count > 48) {
+        qsort(b, (size_t)count, sizeof *b, compare_key_corner);
         return;
     }
-    for (int64_t i = 1; i < count; i++) /* stable: corners stay ascending within a key */
-        for (int64_t j = i; j > 0 && keys[b[j - 1]] > keys[b[j]]; j--) {
-            int64_t x = b[j];
+    for (int64_t i = 1; i < count; i++) {
+        key_corner x = b[i];
+        int64_t j = i;
+        for (; j > 0 && b[j - 1].key > x.key; j--)
             b[j] = b[j - 1];
-            b[j - 1] = x;
-        }
+        b[j] = x;
+    }
 }
 
-/* Sort corners by (edge key, corner): a counting sort on the lower vertex, then each bucket (the corners
- * at one mesh vertex, a few dozen) by the upper. Returns the number of distinct edges, -1 without memory. */
+/* Sort corners by (edge key, corner): a counting sort of (key, corner) pairs on the lower vertex, then
+ * each bucket (the corners at one mesh vertex, a few dozen) by the upper; the pairs carry their keys,
+ * so the sort reads no key through an index. Returns the number of distinct edges, -1 without memory. */
 static int64_t number_vertices(march *m, int64_t corners)
 {
     int64_t n = m->in->vertex_count;
     int64_t *start = calloc((size_t)n + 1, sizeof *start);
-    if (!start)
+    key_corner *pairs = malloc(sizeof *pairs * (size_t)(corners ? corners : 1));
+    if (!start || !pairs) {
+        free(start);
+        free(pairs);
         return -1;
+    }
     for (int64_t c = 0; c < corners; c++)
         start[(m->corner_key[c] >> 32) + 1]++;
     for (int64_t a = 0; a < n; a++)
         start[a + 1] += start[a];
-    for (int64_t c = 0; c < corners; c++)
-        m->order[start[m->corner_key[c] >> 32]++] = c;
+    for (int64_t c = 0; c < corners; c++) {
+        uint64_t key = m->corner_key[c];
+        pairs[start[key >> 32]++] = (key_corner){key, c};
+    }
     /* start[a] is now the end of bucket a, the start of bucket a + 1 */
-    int64_t largest = 0, vertices = 0, begin = 0;
-    for (int64_t a = 0; a < n; a++)
-        largest = start[a] - (a ? start[a - 1] : 0) > largest ? start[a] - (a ? start[a - 1] : 0) : largest;
-    key_corner *pairs = largest > 24 ? malloc(sizeof *pairs * (size_t)largest) : NULL;
-    if (largest > 24 && !pairs) {
-        free(start);
-        return -1;
-    }
-    for (int64_t a = 0; a < n; a++) {
-        sort_bucket(m->corner_key, m->order + begin, start[a] - begin, pairs);
-        begin = start[a];
-    }
-    free(pairs);
+    for (int64_t a = 0, begin = 0; a < n; begin = start[a], a++)
+        sort_bucket(pairs + begin, start[a] - begin);
     free(start);
+    int64_t vertices = 0;
     for (int64_t i = 0; i < corners; i++) {
-        int64_t c = m->order[i];
-        if (i == 0 || m->corner_key[c] != m->corner_key[m->order[i - 1]])
+        int64_t c = pairs[i].corner;
+        m->order[i] = c;
+        if (i == 0 || pairs[i].key != pairs[i - 1].key)
             m->vertex_first[vertices++] = i;
         m->corner_vertex[c] = (uint32_t)(vertices - 1);
     }
     m->vertex_first[vertices] = corners;
+    free(pairs);
     return vertices;
 }
 
@@ -331,18 +330,25 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
     m.in = in;
     m.out = out;
     m.corners = corners;
+    if (!corners && !(m.cases = malloc((size_t)(in->tet_count ? in->tet_count : 1)))) {
+        tpk_iso_surface_free(out);
+        return tpk_diag_fail(diag, "out of memory for the cases of %lld tets", (long long)in->tet_count);
+    }
     m.threads = tpk_threads_for(in->tet_count, tpk_thread_count(threads), 65536);
     for (int i = 0; i < value_count; i++) {
         m.value = values[i];
         if (!isfinite(values[i])) {
+            free(m.cases);
             tpk_iso_surface_free(out);
             return tpk_diag_fail(diag, "iso: value %g is not a finite number", values[i]);
         }
         if (extract_value(&m, diag) != 0) {
+            free(m.cases);
             tpk_iso_surface_free(out);
             return -1;
         }
     }
+    free(m.cases);
     return 0;
 }
 
