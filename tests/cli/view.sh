@@ -183,4 +183,14 @@ expect_stderr "option of tetpack render"
 expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --screenshot "$WORK/cyl.tpk"
 expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --keys X
 expect_stderr "--keys expects"
+# --iso-raster: the isosurface triangles drawn by Vulkan (each value extracted once, drawn for every
+# camera), shown through OpenGL; the window's frame against render --iso-raster of the same view
+tpk view "$WORK/cyl.tpk" --size $SIZE --frames 3 --iso 0.5 --shading --iso-raster --screenshot "$WORK/raster-view.png" \
+    --save-scene "$WORK/raster.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --iso-raster"; }
+grep -q "isosurface triangles" "$WORK/err" || fail "view --iso-raster does not say it draws triangles: $(cat "$WORK/err")"
+tpk render "$WORK/cyl.tpk" -o "$WORK/raster-render.png" --scene "$WORK/raster.json" --iso-raster > /dev/null ||
+    fail "render --iso-raster of view's scene"
+psnr_at_least "$WORK/raster-view.png" "$WORK/raster-render.png" "view --iso-raster and render --iso-raster"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --frames 1 --iso 0.5 --iso-raster --present vulkan
+expect_stderr "--iso-raster shows its frames through OpenGL"
 echo "view: ok"

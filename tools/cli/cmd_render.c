@@ -182,8 +182,7 @@ static int resolve_backend(render_args *a, tpk_diag *diag)
     tpk_backend_request req = {.flag = a->backend_from_scene ? NULL : a->backend,
                                .scene = a->backend_from_scene ? a->backend : NULL,
                                .env = getenv("TETPACK_RENDER_BACKEND"),
-                               /* the Vulkan renderer refuses the vertex cache: by default those go to the CPU */
-                               .cpu_only = a->occlusion == TPK_OCCLUSION_VERTEX && (a->shadows || a->ao_rays > 0)};
+                               .vulkan_only = a->iso_raster};
 #ifdef TPK_WITH_VULKAN
     req.vulkan_built = 1;
     int kind = TPK_VK_DEVICE_NONE;

@@ -123,7 +123,7 @@ static int want_cpu(const render_args *a)
 {
     tpk_backend_request req = {.flag = a->backend_from_scene ? NULL : a->backend,
                                .scene = a->backend_from_scene ? a->backend : NULL,
-                               .env = getenv("TETPACK_RENDER_BACKEND")};
+                               .env = getenv("TETPACK_RENDER_BACKEND"), .vulkan_only = a->iso_raster};
     char name[256] = "";
 #ifdef TPK_WITH_VULKAN
     req.vulkan_built = 1;
@@ -186,6 +186,13 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
     o.screenshot = v->screenshot;
     o.save_scene = a->save_scene;
     o.keys = v->keys;
+    o.iso_raster = a->iso_raster;
+    if (a->iso_raster && cpu)
+        return tpk_cli_fail("view", "--iso-raster draws with Vulkan: not with --backend cpu");
+    if (a->iso_raster && o.present == TPK_VIEW_PRESENT_VULKAN)
+        return tpk_cli_fail("view", "--iso-raster shows its frames through OpenGL: not with --present vulkan");
+    if (a->iso_raster)
+        o.present = TPK_VIEW_PRESENT_GL;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     if (tpk_view_run(&o, &diag) != 0)

@@ -12,7 +12,7 @@ int tpk_backend_needs_device(const tpk_backend_request *req)
         return asks(req->flag, "vulkan");
     if (req->scene)
         return asks(req->scene, "vulkan");
-    return req->vulkan_built && !asks(req->env, "cpu") && !(req->cpu_only && !(req->env && *req->env));
+    return req->vulkan_built && !asks(req->env, "cpu");
 }
 
 /* Vulkan asked for by `who` ("--backend vulkan", "TETPACK_RENDER_BACKEND=vulkan"): there must be one. */
@@ -58,10 +58,10 @@ int tpk_backend_choose(const tpk_backend_request *req, tpk_backend_choice *out, 
         snprintf(out->reason, sizeof out->reason, "TETPACK_RENDER_BACKEND=cpu");
         return 0;
     }
-    if (req->cpu_only)
-        snprintf(out->reason, sizeof out->reason, "default: the Vulkan renderer has no vertex occlusion cache yet "
-                 "(--occlusion vertex)");
-    else if (!req->vulkan_built)
+    if (req->vulkan_only && req->vulkan_built && req->device != TPK_VK_DEVICE_NONE) {
+        out->vulkan = 1;
+        snprintf(out->reason, sizeof out->reason, "default: --iso-raster draws with Vulkan (%.180s)", name);
+    } else if (!req->vulkan_built)
         snprintf(out->reason, sizeof out->reason, "default: built without Vulkan");
     else if (req->device == TPK_VK_DEVICE_HARDWARE) {
         out->vulkan = 1;

@@ -21,7 +21,8 @@ typedef struct tpk_backend_request {
     int vulkan_built;         /* this tetpack has the Vulkan renderer */
     tpk_vk_device_kind device;
     const char *device_name;  /* the device's name, or why there is none */
-    int cpu_only;             /* an effect only the CPU reference has (--occlusion vertex): the default is the CPU */
+    int vulkan_only;          /* an option only the Vulkan renderer has (--iso-raster): the default is Vulkan on any
+                                 device, software rasterizers included */
 } tpk_backend_request;
 
 typedef struct tpk_backend_choice {

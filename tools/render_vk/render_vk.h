@@ -71,6 +71,15 @@ tpk_iso_corners tpk_iso_vk_corners(tpk_iso_vk *v);
  * classified. 0 or -1 with a message. */
 int tpk_render_iso_raster(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                           tpk_render_stats *stats, tpk_diag *diag);
+/* The same kept across frames (view): the mesh's arrays on the device and each value's triangle list
+ * extracted once, drawn again for every camera; a value that changes is extracted again. `mesh` must
+ * outlive it (a new field or step: a new rasterizer). */
+typedef struct tpk_iso_raster tpk_iso_raster;
+int tpk_iso_raster_create(tpk_iso_raster **out, const tpk_mesh_arrays *mesh, tpk_diag *diag);
+int tpk_iso_raster_frame(tpk_iso_raster *raster, const tpk_render_options *opt, uint8_t *rgba,
+                         tpk_render_stats *stats, tpk_diag *diag);
+const char *tpk_iso_raster_device(const tpk_iso_raster *raster);
+void tpk_iso_raster_destroy(tpk_iso_raster *raster);
 
 /* Is a Vulkan 1.2 device with a compute queue present? Returns 1 and writes the device's name into
  * `why` (n bytes), or 0 and writes the reason (no loader, no device, too old). */

@@ -20,24 +20,34 @@ typedef struct raster_push {
     float eye[4], forward[4], right[4], up[4], light[4], color[4], clip_lo[4], clip_hi[4];
 } raster_push;
 
-typedef struct raster {
-    tpk_iso_vk *iso;
-    VkImage images[2]; /* colour, depth */
+#define RASTER_VALUES TPK_RENDER_MAX_ISO
+
+struct tpk_iso_raster {
+    tpk_iso_vk *iso;   /* the extractor, on its device; the mesh's tets, scalars, positions uploaded */
+    const tpk_mesh_arrays *mesh;
+    VkImage images[2]; /* colour, depth: at the last frame's size */
     VkDeviceMemory memory[2];
     VkImageView views[2];
-    VkRenderPass pass[2]; /* the first value's (clears), the next values' (keeps what is drawn) */
+    VkRenderPass pass;
     VkFramebuffer framebuffer;
     VkDescriptorSetLayout set_layout;
     VkPipelineLayout layout;
     VkShaderModule shaders[2];
     VkPipeline pipeline;
     VkDescriptorPool pool;
-    VkDescriptorSet set;
+    VkDescriptorSet sets[RASTER_VALUES];
     tpk_vk_buffer readback;
     int width, height;
+    /* the triangle lists drawn, one per value, kept across frames until the values change */
+    int value_count;
+    double values[RASTER_VALUES];
+    tpk_vk_buffer corners[RASTER_VALUES], args[RASTER_VALUES];
+    uint64_t triangles[RASTER_VALUES];
+    /* one frame's */
     float clear[4];
-    raster_push push;
-} raster;
+    raster_push push[RASTER_VALUES];
+};
+typedef struct tpk_iso_raster raster;
 
 /* Does the device offer VK_EXT_mesh_shader? (Said in --json; the path that uses it is not written yet.) */
 static int has_mesh_shader(VkPhysicalDevice physical)
@@ -96,7 +106,8 @@ static int shader(raster *ra, int i, const uint32_t *code, size_t size, tpk_diag
     return ok(vkCreateShaderModule(ra->iso->ctx.device, &info, NULL, &ra->shaders[i]), "an iso raster shader", diag);
 }
 
-/* Render pass (colour and depth kept across the values' draws), framebuffer, pipeline, descriptor set. */
+/* Render pass, pipeline (viewport and scissor dynamic: the size may change between frames), descriptor
+ * sets (one per value). Once per rasterizer. */
 static int make_pipeline(raster *ra, tpk_diag *diag)
 {
     VkDevice dev = ra->iso->ctx.device;
@@ -104,36 +115,27 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
         {0, VK_FORMAT_R8G8B8A8_UNORM, VK_SAMPLE_COUNT_1_BIT, VK_ATTACHMENT_LOAD_OP_CLEAR, VK_ATTACHMENT_STORE_OP_STORE,
          VK_ATTACHMENT_LOAD_OP_DONT_CARE, VK_ATTACHMENT_STORE_OP_DONT_CARE, VK_IMAGE_LAYOUT_UNDEFINED,
          VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL},
-        {0, VK_FORMAT_D32_SFLOAT, VK_SAMPLE_COUNT_1_BIT, VK_ATTACHMENT_LOAD_OP_CLEAR, VK_ATTACHMENT_STORE_OP_STORE,
+        {0, VK_FORMAT_D32_SFLOAT, VK_SAMPLE_COUNT_1_BIT, VK_ATTACHMENT_LOAD_OP_CLEAR, VK_ATTACHMENT_STORE_OP_DONT_CARE,
          VK_ATTACHMENT_LOAD_OP_DONT_CARE, VK_ATTACHMENT_STORE_OP_DONT_CARE, VK_IMAGE_LAYOUT_UNDEFINED,
          VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL}};
     VkAttachmentReference color = {0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
     VkAttachmentReference depth = {1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
     VkSubpassDescription sub = {.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS, .colorAttachmentCount = 1,
                                 .pColorAttachments = &color, .pDepthStencilAttachment = &depth};
-    VkSubpassDependency dep = {VK_SUBPASS_EXTERNAL, 0, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+    VkSubpassDependency dep = {VK_SUBPASS_EXTERNAL, 0, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                                VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
-                               VK_ACCESS_SHADER_WRITE_BIT,
+                               VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
                                VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_SHADER_READ_BIT, 0};
     VkRenderPassCreateInfo pass = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO, .attachmentCount = 2,
                                    .pAttachments = att, .subpassCount = 1, .pSubpasses = &sub,
                                    .dependencyCount = 1, .pDependencies = &dep};
-    if (ok(vkCreateRenderPass(dev, &pass, NULL, &ra->pass[0]), "creating the render pass", diag))
+    if (ok(vkCreateRenderPass(dev, &pass, NULL, &ra->pass), "creating the render pass", diag))
         return -1;
-    att[0].loadOp = att[1].loadOp = VK_ATTACHMENT_LOAD_OP_LOAD; /* the next values draw over the first's */
-    att[0].initialLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL;
-    att[1].initialLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-    if (ok(vkCreateRenderPass(dev, &pass, NULL, &ra->pass[1]), "creating the render pass", diag))
-        return -1;
-    VkFramebufferCreateInfo fb = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO, .renderPass = ra->pass[0],
-                                  .attachmentCount = 2, .pAttachments = ra->views, .width = (uint32_t)ra->width,
-                                  .height = (uint32_t)ra->height, .layers = 1};
     VkDescriptorSetLayoutBinding binding = {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, NULL};
     VkDescriptorSetLayoutCreateInfo set_info = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
                                                 .bindingCount = 1, .pBindings = &binding};
     VkPushConstantRange range = {VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(raster_push)};
-    if (ok(vkCreateFramebuffer(dev, &fb, NULL, &ra->framebuffer), "creating the framebuffer", diag) ||
-        ok(vkCreateDescriptorSetLayout(dev, &set_info, NULL, &ra->set_layout), "a descriptor layout", diag))
+    if (ok(vkCreateDescriptorSetLayout(dev, &set_info, NULL, &ra->set_layout), "a descriptor layout", diag))
         return -1;
     VkPipelineLayoutCreateInfo layout = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 1,
                                          .pSetLayouts = &ra->set_layout, .pushConstantRangeCount = 1,
@@ -151,11 +153,11 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
     VkPipelineInputAssemblyStateCreateInfo assembly = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO,
         .topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST};
-    VkViewport viewport = {0, 0, (float)ra->width, (float)ra->height, 0, 1};
-    VkRect2D scissor = {{0, 0}, {(uint32_t)ra->width, (uint32_t)ra->height}};
     VkPipelineViewportStateCreateInfo vp = {.sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO,
-                                            .viewportCount = 1, .pViewports = &viewport, .scissorCount = 1,
-                                            .pScissors = &scissor};
+                                            .viewportCount = 1, .scissorCount = 1};
+    VkDynamicState dynamic[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dyn = {.sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
+                                            .dynamicStateCount = 2, .pDynamicStates = dynamic};
     VkPipelineRasterizationStateCreateInfo rs = {.sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO,
                                                  .polygonMode = VK_POLYGON_MODE_FILL, .cullMode = VK_CULL_MODE_NONE,
                                                  .frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE, .lineWidth = 1};
@@ -171,107 +173,108 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
                                          .pStages = stages, .pVertexInputState = &input,
                                          .pInputAssemblyState = &assembly, .pViewportState = &vp,
                                          .pRasterizationState = &rs, .pMultisampleState = &ms,
-                                         .pDepthStencilState = &ds, .pColorBlendState = &cb, .layout = ra->layout,
-                                         .renderPass = ra->pass[0]}; /* compatible with pass[1] */
-    VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1};
-    VkDescriptorPoolCreateInfo pool = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 1,
+                                         .pDepthStencilState = &ds, .pColorBlendState = &cb, .pDynamicState = &dyn,
+                                         .layout = ra->layout, .renderPass = ra->pass};
+    VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, RASTER_VALUES};
+    VkDescriptorPoolCreateInfo pool = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = RASTER_VALUES,
                                        .poolSizeCount = 1, .pPoolSizes = &size};
     if (ok(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &info, NULL, &ra->pipeline), "the iso raster pipeline",
            diag) ||
         ok(vkCreateDescriptorPool(dev, &pool, NULL, &ra->pool), "a descriptor pool", diag))
         return -1;
+    VkDescriptorSetLayout layouts[RASTER_VALUES];
+    for (int i = 0; i < RASTER_VALUES; i++)
+        layouts[i] = ra->set_layout;
     VkDescriptorSetAllocateInfo alloc = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
-                                         .descriptorPool = ra->pool, .descriptorSetCount = 1,
-                                         .pSetLayouts = &ra->set_layout};
-    return ok(vkAllocateDescriptorSets(dev, &alloc, &ra->set), "a descriptor set", diag);
+                                         .descriptorPool = ra->pool, .descriptorSetCount = RASTER_VALUES,
+                                         .pSetLayouts = layouts};
+    return ok(vkAllocateDescriptorSets(dev, &alloc, ra->sets), "descriptor sets", diag);
 }
 
-static void raster_destroy(raster *ra)
+static void destroy_targets(raster *ra)
 {
-    if (!ra->iso)
-        return;
     VkDevice dev = ra->iso->ctx.device;
-    if (dev) {
+    tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->readback);
+    memset(&ra->readback, 0, sizeof ra->readback);
+    if (ra->framebuffer)
+        vkDestroyFramebuffer(dev, ra->framebuffer, NULL);
+    ra->framebuffer = VK_NULL_HANDLE;
+    for (int i = 0; i < 2; i++) {
+        if (ra->views[i])
+            vkDestroyImageView(dev, ra->views[i], NULL);
+        if (ra->images[i])
+            vkDestroyImage(dev, ra->images[i], NULL);
+        if (ra->memory[i])
+            vkFreeMemory(dev, ra->memory[i], NULL);
+        ra->views[i] = VK_NULL_HANDLE, ra->images[i] = VK_NULL_HANDLE, ra->memory[i] = VK_NULL_HANDLE;
+    }
+    ra->width = ra->height = 0;
+}
+
+/* Images, framebuffer and read-back buffer at width x height (kept while the size stays). */
+static int make_targets(raster *ra, int width, int height, tpk_diag *diag)
+{
+    if (ra->width == width && ra->height == height)
+        return 0;
+    vkDeviceWaitIdle(ra->iso->ctx.device);
+    destroy_targets(ra);
+    ra->width = width;
+    ra->height = height;
+    VkFramebufferCreateInfo fb = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO, .renderPass = ra->pass,
+                                  .attachmentCount = 2, .pAttachments = ra->views, .width = (uint32_t)width,
+                                  .height = (uint32_t)height, .layers = 1};
+    int rc = image(ra, 0, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+                   VK_IMAGE_ASPECT_COLOR_BIT, diag) ||
+             image(ra, 1, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
+                   diag) ||
+             ok(vkCreateFramebuffer(ra->iso->ctx.device, &fb, NULL, &ra->framebuffer), "creating the framebuffer", diag) ||
+             tpk_vk_buffer_create(&ra->iso->ctx, 4 * (VkDeviceSize)width * (VkDeviceSize)height,
+                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT, TPK_VK_MEMORY_READBACK, "iso raster image",
+                                  &ra->readback, diag)
+                 ? -1
+                 : 0;
+    if (rc == 0 && !ra->readback.mapped)
+        rc = tpk_diag_fail(diag, "render: --iso-raster: no host-visible memory for the image");
+    if (rc != 0)
+        destroy_targets(ra);
+    return rc;
+}
+
+void tpk_iso_raster_destroy(raster *ra)
+{
+    if (!ra)
+        return;
+    if (ra->iso && ra->iso->ctx.device) {
+        VkDevice dev = ra->iso->ctx.device;
         vkDeviceWaitIdle(dev);
-        tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->readback);
+        destroy_targets(ra);
+        for (int i = 0; i < RASTER_VALUES; i++) {
+            tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->corners[i]);
+            tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->args[i]);
+        }
         if (ra->pipeline)
             vkDestroyPipeline(dev, ra->pipeline, NULL);
-        for (int i = 0; i < 2; i++) {
+        for (int i = 0; i < 2; i++)
             if (ra->shaders[i])
                 vkDestroyShaderModule(dev, ra->shaders[i], NULL);
-            if (ra->views[i])
-                vkDestroyImageView(dev, ra->views[i], NULL);
-            if (ra->images[i])
-                vkDestroyImage(dev, ra->images[i], NULL);
-            if (ra->memory[i])
-                vkFreeMemory(dev, ra->memory[i], NULL);
-        }
         if (ra->pool)
             vkDestroyDescriptorPool(dev, ra->pool, NULL);
         if (ra->layout)
             vkDestroyPipelineLayout(dev, ra->layout, NULL);
         if (ra->set_layout)
             vkDestroyDescriptorSetLayout(dev, ra->set_layout, NULL);
-        if (ra->framebuffer)
-            vkDestroyFramebuffer(dev, ra->framebuffer, NULL);
-        for (int i = 0; i < 2; i++)
-            if (ra->pass[i])
-                vkDestroyRenderPass(dev, ra->pass[i], NULL);
+        if (ra->pass)
+            vkDestroyRenderPass(dev, ra->pass, NULL);
     }
     tpk_iso_vk_destroy(ra->iso);
+    free(ra);
 }
 
-/* One value: its triangle list and draw arguments (iso.comp passes 4 and 5), then the draw, in one
- * submission; the first value's render pass clears, the others' keep what is drawn. */
-typedef struct draw_arg {
-    raster *ra;
-    double value;
-    int first, last;
-} draw_arg;
-
-static void record_draw(tpk_iso_vk *v, const void *arg)
+int tpk_iso_raster_create(raster **out, const tpk_mesh_arrays *mesh, tpk_diag *diag)
 {
-    const draw_arg *d = arg;
-    raster *ra = d->ra;
-    tpk_iso_vk_record(v, 4, 5, d->value);
-    VkClearValue clears[2] = {{.color = {{ra->clear[0], ra->clear[1], ra->clear[2], ra->clear[3]}}},
-                              {.depthStencil = {0.0f, 0}}}; /* reversed depth: 0 is infinitely far */
-    VkRenderPassBeginInfo begin = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO, .renderPass = ra->pass[d->first ? 0 : 1],
-                                   .framebuffer = ra->framebuffer,
-                                   .renderArea = {{0, 0}, {(uint32_t)ra->width, (uint32_t)ra->height}},
-                                   .clearValueCount = 2, .pClearValues = clears};
-    vkCmdBeginRenderPass(v->cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
-    vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, ra->pipeline);
-    vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, ra->layout, 0, 1, &ra->set, 0, NULL);
-    vkCmdPushConstants(v->cmd, ra->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
-                       sizeof ra->push, &ra->push);
-    vkCmdDrawIndirect(v->cmd, v->buf[B_DRAW_ARGS].buffer, 0, 1, 16);
-    vkCmdEndRenderPass(v->cmd);
-    if (d->last) { /* the image out to the read-back buffer */
-        VkBufferImageCopy region = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
-                                    .imageExtent = {(uint32_t)ra->width, (uint32_t)ra->height, 1}};
-        vkCmdCopyImageToBuffer(v->cmd, ra->images[0], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, ra->readback.buffer, 1,
-                               &region);
-    }
-}
-
-int tpk_render_iso_raster(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                          tpk_render_stats *stats, tpk_diag *diag)
-{
-    double t0 = tpk_now_seconds();
-    if (stats)
-        memset(stats, 0, sizeof *stats);
-    if (tpk_render_check_options(opt, diag) != 0)
-        return -1;
-    if (opt->iso_count < 1 || !mesh->scalars || opt->tet_scalars)
-        return tpk_diag_fail(diag, "render: --iso-raster draws the isosurfaces of a point field: give --iso V and a "
-                                   "point field");
-    if (opt->shadows || opt->ao_rays > 0 || (opt->iso_opacity > 0 && opt->iso_opacity < 1))
-        return tpk_diag_fail(diag, "render: --iso-raster draws opaque isosurfaces with shading at most: without "
-                                   "--shadows, --ao and --iso-opacity (the ray marcher draws those)");
-    tpk_render_setup setup;
-    if (tpk_render_setup_of(opt, tpk_positions_diagonal(mesh), &setup, diag) != 0)
-        return -1;
+    *out = NULL;
+    if (!mesh->scalars)
+        return tpk_diag_fail(diag, "render: --iso-raster draws the isosurfaces of a point field: the file has none");
     int32_t *tets = malloc(16 * (size_t)(mesh->tet_count ? mesh->tet_count : 1));
     if (!tets)
         return tpk_diag_fail(diag, "render: out of memory for the tets");
@@ -283,17 +286,141 @@ int tpk_render_iso_raster(const tpk_mesh_arrays *mesh, const tpk_render_options 
     tpk_iso_input in = {(int64_t)mesh->vertex_count, (int64_t)mesh->tet_count, {0, 0, 0}, mesh->positions, tets,
                         mesh->scalars, NULL};
     memcpy(in.origin, mesh->origin, sizeof in.origin);
-    raster ra;
-    memset(&ra, 0, sizeof ra);
-    ra.width = opt->width;
-    ra.height = opt->height;
-    int rc = tpk_iso_vk_create(&ra.iso, &in, diag);
+    raster *ra = calloc(1, sizeof *ra);
+    if (!ra) {
+        free(tets);
+        return tpk_diag_fail(diag, "render: out of memory");
+    }
+    ra->mesh = mesh;
+    int rc = tpk_iso_vk_create(&ra->iso, &in, diag); /* the arrays are copied to the device: tets can go */
     free(tets);
-    if (rc != 0)
-        return -1;
-    if (!(ra.iso->ctx.props.limits.maxPushConstantsSize >= sizeof(raster_push)))
+    if (rc == 0 && !(ra->iso->ctx.props.limits.maxPushConstantsSize >= sizeof(raster_push)))
         rc = tpk_diag_fail(diag, "render: --iso-raster: the device's push constants are too small");
-    /* near and far: the mesh's box seen from the eye */
+    if (rc == 0)
+        rc = make_pipeline(ra, diag);
+    if (rc != 0) {
+        tpk_iso_raster_destroy(ra);
+        return -1;
+    }
+    *out = ra;
+    return 0;
+}
+
+const char *tpk_iso_raster_device(const raster *ra)
+{
+    return tpk_iso_vk_device(ra->iso);
+}
+
+/* Value i's triangle list and draw arguments copied out of the extractor's buffers into its own. */
+typedef struct keep_arg {
+    raster *ra;
+    int i;
+    double value;
+    VkDeviceSize bytes;
+} keep_arg;
+
+static void record_keep(tpk_iso_vk *v, const void *arg)
+{
+    const keep_arg *k = arg;
+    tpk_iso_vk_record(v, 4, 5, k->value);
+    VkBufferCopy corners = {0, 0, k->bytes}, args = {0, 0, 16};
+    if (k->bytes)
+        vkCmdCopyBuffer(v->cmd, v->buf[B_CORNERS].buffer, k->ra->corners[k->i].buffer, 1, &corners);
+    vkCmdCopyBuffer(v->cmd, v->buf[B_DRAW_ARGS].buffer, k->ra->args[k->i].buffer, 1, &args);
+}
+
+/* The triangle lists of opt's values, extracted again only where a value changed. */
+static int extract_values(raster *ra, const tpk_render_options *opt, tpk_diag *diag)
+{
+    for (int i = 0; i < opt->iso_count; i++) {
+        if (i < ra->value_count && ra->values[i] == opt->iso[i])
+            continue;
+        uint32_t total;
+        if (tpk_iso_vk_count(ra->iso, opt->iso[i], &total, diag))
+            return -1;
+        VkDeviceSize bytes = (VkDeviceSize)total * 36;
+        tpk_vk_context *ctx = &ra->iso->ctx;
+        if (ra->corners[i].size < (bytes ? bytes : 16)) {
+            tpk_vk_buffer_destroy(ctx, &ra->corners[i]);
+            memset(&ra->corners[i], 0, sizeof ra->corners[i]);
+            if (tpk_vk_buffer_create(ctx, bytes ? bytes : 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                     VK_BUFFER_USAGE_TRANSFER_DST_BIT, TPK_VK_MEMORY_DEVICE, "iso raster triangles",
+                                     &ra->corners[i], diag))
+                return -1;
+        }
+        if (!ra->args[i].buffer &&
+            tpk_vk_buffer_create(ctx, 16, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                 TPK_VK_MEMORY_DEVICE, "iso raster draw arguments", &ra->args[i], diag))
+            return -1;
+        keep_arg k = {ra, i, opt->iso[i], bytes};
+        if (tpk_iso_vk_submit(ra->iso, record_keep, &k, diag))
+            return -1;
+        VkDescriptorBufferInfo info = {ra->corners[i].buffer, 0, VK_WHOLE_SIZE};
+        VkWriteDescriptorSet write = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = ra->sets[i],
+                                      .dstBinding = 0, .descriptorCount = 1,
+                                      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &info};
+        vkUpdateDescriptorSets(ctx->device, 1, &write, 0, NULL);
+        ra->values[i] = opt->iso[i];
+        ra->triangles[i] = total;
+        if (ra->value_count <= i)
+            ra->value_count = i + 1;
+    }
+    return 0;
+}
+
+/* Every value's draw in one render pass, then the image out to the read-back buffer. */
+typedef struct draw_arg {
+    raster *ra;
+    int count;
+} draw_arg;
+
+static void record_draw(tpk_iso_vk *v, const void *arg)
+{
+    const draw_arg *d = arg;
+    raster *ra = d->ra;
+    VkClearValue clears[2] = {{.color = {{ra->clear[0], ra->clear[1], ra->clear[2], ra->clear[3]}}},
+                              {.depthStencil = {0.0f, 0}}}; /* reversed depth: 0 is infinitely far */
+    VkRenderPassBeginInfo begin = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO, .renderPass = ra->pass,
+                                   .framebuffer = ra->framebuffer,
+                                   .renderArea = {{0, 0}, {(uint32_t)ra->width, (uint32_t)ra->height}},
+                                   .clearValueCount = 2, .pClearValues = clears};
+    vkCmdBeginRenderPass(v->cmd, &begin, VK_SUBPASS_CONTENTS_INLINE);
+    vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, ra->pipeline);
+    VkViewport viewport = {0, 0, (float)ra->width, (float)ra->height, 0, 1};
+    VkRect2D scissor = {{0, 0}, {(uint32_t)ra->width, (uint32_t)ra->height}};
+    vkCmdSetViewport(v->cmd, 0, 1, &viewport);
+    vkCmdSetScissor(v->cmd, 0, 1, &scissor);
+    for (int i = 0; i < d->count; i++) {
+        vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, ra->layout, 0, 1, &ra->sets[i], 0, NULL);
+        vkCmdPushConstants(v->cmd, ra->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                           sizeof ra->push[i], &ra->push[i]);
+        vkCmdDrawIndirect(v->cmd, ra->args[i].buffer, 0, 1, 16);
+    }
+    vkCmdEndRenderPass(v->cmd);
+    VkBufferImageCopy region = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+                                .imageExtent = {(uint32_t)ra->width, (uint32_t)ra->height, 1}};
+    vkCmdCopyImageToBuffer(v->cmd, ra->images[0], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, ra->readback.buffer, 1, &region);
+}
+
+int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats,
+                         tpk_diag *diag)
+{
+    double t0 = tpk_now_seconds(), gpu0 = tpk_iso_vk_seconds(ra->iso);
+    const tpk_mesh_arrays *mesh = ra->mesh;
+    if (stats)
+        memset(stats, 0, sizeof *stats);
+    if (tpk_render_check_options(opt, diag) != 0)
+        return -1;
+    if (opt->tet_scalars) /* no values (view's iso key off): the background alone */
+        return tpk_diag_fail(diag, "render: --iso-raster draws the isosurfaces of a point field, not a tet field");
+    if (opt->shadows || opt->ao_rays > 0 || (opt->iso_opacity > 0 && opt->iso_opacity < 1))
+        return tpk_diag_fail(diag, "render: --iso-raster draws opaque isosurfaces with shading at most: without "
+                                   "--shadows, --ao and --iso-opacity (the ray marcher draws those)");
+    tpk_render_setup setup;
+    if (tpk_render_setup_of(opt, tpk_positions_diagonal(mesh), &setup, diag) != 0)
+        return -1;
+    /* the near distance: a millionth of the farthest corner of the mesh's box seen from the eye (depth
+     * is near / distance, reversed, in float) */
     double far = 0, eye[3];
     for (int k = 0; k < 3; k++)
         eye[k] = opt->camera.eye[k] - mesh->origin[k];
@@ -313,63 +440,63 @@ int tpk_render_iso_raster(const tpk_mesh_arrays *mesh, const tpk_render_options 
         far = sqrt(d2) > far ? sqrt(d2) : far;
     }
     far = 1.01 * far + 1e-6;
-    raster_push *p = &ra.push;
-    for (int k = 0; k < 3; k++) {
-        p->eye[k] = (float)eye[k];
-        p->forward[k] = (float)setup.basis.forward[k];
-        p->right[k] = (float)setup.basis.right[k];
-        p->up[k] = (float)setup.basis.up[k];
-        p->light[k] = (float)(setup.light[k] - mesh->origin[k]);
-        p->clip_lo[k] = (float)(opt->clip_min[k] - mesh->origin[k]);
-        p->clip_hi[k] = (float)(opt->clip_max[k] - mesh->origin[k]);
-    }
-    p->eye[3] = (float)(far * 1e-6); /* the near distance; depth is near / distance */
-    p->right[3] = (float)setup.basis.tan_half_x;
-    p->up[3] = (float)setup.basis.tan_half_y;
-    p->light[3] = opt->shading ? 1.0f : 0.0f;
-    p->clip_lo[3] = opt->clip ? 1.0f : 0.0f;
-    for (int k = 0; k < 4; k++)
-        ra.clear[k] = k < 3 ? opt->background[k] * opt->background[3] : opt->background[3];
-    if (rc == 0)
-        rc = image(&ra, 0, VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                   VK_IMAGE_ASPECT_COLOR_BIT, diag) ||
-             image(&ra, 1, VK_FORMAT_D32_SFLOAT, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
-                   diag) ||
-             make_pipeline(&ra, diag) ||
-             tpk_vk_buffer_create(&ra.iso->ctx, 4 * (VkDeviceSize)ra.width * (VkDeviceSize)ra.height,
-                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT, TPK_VK_MEMORY_READBACK, "iso raster image",
-                                  &ra.readback, diag);
-    if (rc == 0 && !ra.readback.mapped)
-        rc = tpk_diag_fail(diag, "render: --iso-raster: no host-visible memory for the image");
-    uint64_t triangles = 0;
-    for (int i = 0; rc == 0 && i < opt->iso_count; i++) {
-        uint32_t total;
-        rc = tpk_iso_vk_count(ra.iso, opt->iso[i], &total, diag);
-        if (rc)
-            break;
-        triangles += total;
-        VkDescriptorBufferInfo corners = {ra.iso->buf[B_CORNERS].buffer, 0, VK_WHOLE_SIZE};
-        VkWriteDescriptorSet write = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = ra.set,
-                                      .dstBinding = 0, .descriptorCount = 1,
-                                      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &corners};
-        vkUpdateDescriptorSets(ra.iso->ctx.device, 1, &write, 0, NULL);
+    for (int i = 0; i < opt->iso_count; i++) {
+        raster_push *p = &ra->push[i];
+        memset(p, 0, sizeof *p);
+        for (int k = 0; k < 3; k++) {
+            p->eye[k] = (float)eye[k];
+            p->forward[k] = (float)setup.basis.forward[k];
+            p->right[k] = (float)setup.basis.right[k];
+            p->up[k] = (float)setup.basis.up[k];
+            p->light[k] = (float)(setup.light[k] - mesh->origin[k]);
+            p->clip_lo[k] = (float)(opt->clip_min[k] - mesh->origin[k]);
+            p->clip_hi[k] = (float)(opt->clip_max[k] - mesh->origin[k]);
+        }
+        p->eye[3] = (float)(far * 1e-6);
+        p->right[3] = (float)setup.basis.tan_half_x;
+        p->up[3] = (float)setup.basis.tan_half_y;
+        p->light[3] = opt->shading ? 1.0f : 0.0f;
+        p->clip_lo[3] = opt->clip ? 1.0f : 0.0f;
         double c[4], u = setup.inv_range == 0 ? 0.5 : (opt->iso[i] - setup.range_min) * setup.inv_range;
         tpk_tf_eval(opt->tf, u, c);
         for (int k = 0; k < 3; k++)
             p->color[k] = (float)c[k];
-        draw_arg d = {&ra, opt->iso[i], i == 0, i == opt->iso_count - 1};
-        rc = tpk_iso_vk_submit(ra.iso, record_draw, &d, diag);
     }
-    if (rc == 0 && tpk_vk_buffer_invalidate(&ra.iso->ctx, &ra.readback, diag) == 0)
-        memcpy(rgba, ra.readback.mapped, 4 * (size_t)ra.width * (size_t)ra.height);
-    if (stats && rc == 0) {
-        stats->rays = 0;
-        stats->tet_steps = (uint64_t)mesh->tet_count * (uint64_t)opt->iso_count; /* tets classified */
+    for (int k = 0; k < 4; k++)
+        ra->clear[k] = k < 3 ? opt->background[k] * opt->background[3] : opt->background[3];
+    draw_arg d = {ra, opt->iso_count};
+    if (make_targets(ra, opt->width, opt->height, diag) || extract_values(ra, opt, diag) ||
+        tpk_iso_vk_submit(ra->iso, record_draw, &d, diag) || tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
+        return -1;
+    memcpy(rgba, ra->readback.mapped, 4 * (size_t)ra->width * (size_t)ra->height);
+    if (stats) {
+        stats->tet_steps = 0;
+        for (int i = 0; i < opt->iso_count; i++)
+            stats->iso_triangles += ra->triangles[i];
         stats->seconds = tpk_now_seconds() - t0;
-        stats->gpu_seconds = tpk_iso_vk_seconds(ra.iso);
-        stats->iso_triangles = triangles;
-        stats->iso_mesh_shader = has_mesh_shader(ra.iso->ctx.physical);
+        stats->gpu_seconds = tpk_iso_vk_seconds(ra->iso) - gpu0;
+        stats->iso_mesh_shader = has_mesh_shader(ra->iso->ctx.physical);
     }
-    raster_destroy(&ra);
+    return 0;
+}
+
+int tpk_render_iso_raster(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                          tpk_render_stats *stats, tpk_diag *diag)
+{
+    double t0 = tpk_now_seconds();
+    raster *ra;
+    if (tpk_render_check_options(opt, diag) != 0)
+        return -1;
+    if (opt->iso_count < 1 || opt->tet_scalars)
+        return tpk_diag_fail(diag, "render: --iso-raster draws the isosurfaces of a point field: give --iso V and a "
+                                   "point field");
+    if (tpk_iso_raster_create(&ra, mesh, diag) != 0)
+        return -1;
+    int rc = tpk_iso_raster_frame(ra, opt, rgba, stats, diag);
+    if (rc == 0 && stats) {
+        stats->seconds = tpk_now_seconds() - t0; /* set-up included, as the other renderers' */
+        stats->tet_steps = (uint64_t)mesh->tet_count * (uint64_t)opt->iso_count; /* tets classified */
+    }
+    tpk_iso_raster_destroy(ra);
     return rc;
 }

@@ -262,7 +262,7 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help = "draw the --iso surfaces as triangles (Vulkan: compute extraction\n"
              "and an indirect draw, depth-tested), opaque, with --shading at most;\n"
              "no volume. The ray-marched surface's picture up to rasterization",
-     .help_rank = 29, .render_only = 1},
+     .help_rank = 29},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

@@ -70,7 +70,7 @@ static int apply_action(view_loop *l, view_action a, tpk_diag *diag)
     }
     if (a == VIEW_WRITE_SCENE) {
         const char *path = l->o->save_scene ? l->o->save_scene : "view_scene.json";
-        if (view_state_write_scene(&l->state, path, l->renderer.vk != NULL, diag) != 0)
+        if (view_state_write_scene(&l->state, path, l->renderer.vk != NULL || l->renderer.raster != NULL, diag) != 0)
             return -1;
         fprintf(stderr, "tetpack view: wrote %s\n", path);
         return 0;

@@ -32,6 +32,8 @@ typedef struct tpk_view_options {
     const char *screenshot;       /* write the last frame's window contents here (PNG) on exit */
     const char *save_scene;       /* where W writes the scene (and, with `frames`, the last frame's) */
     const char *keys;             /* keys pressed before the first frame, in order ("LI]"), as typed */
+    int iso_raster;               /* the isosurfaces drawn as triangles (render --iso-raster; Vulkan, shown
+                                     through OpenGL), each value extracted once, drawn for every camera */
 } tpk_view_options;
 
 /* Open the window and run until it is closed (or `frames` frames were shown). Returns 0; -1 with a

@@ -39,6 +39,13 @@ int view_renderer_open(view_renderer *r, const view_state *s, int cpu, view_wind
         fprintf(stderr, "tetpack view: note: no Vulkan device (%s); rendering with the CPU reference\n", why);
         r->cpu_only = 1;
     }
+    if (!cpu && !r->cpu_only && s->iso_raster) { /* read back and shown through OpenGL (cmd_view.c) */
+        if (tpk_iso_raster_create(&r->raster, &s->mesh, diag) != 0)
+            return -1;
+        snprintf(r->device, sizeof r->device, "vulkan: %s, isosurface triangles, OpenGL",
+                 tpk_iso_raster_device(r->raster));
+        return 0;
+    }
     if (!cpu && !r->cpu_only && window)
         return open_presenting(r, s, window, diag);
     if (!cpu && !r->cpu_only) {
@@ -71,6 +78,8 @@ int view_renderer_frame(view_renderer *r, const view_state *s, int width, int he
     }
     if (r->vk)
         return tpk_vk_renderer_frame(r->vk, &opt, rgba, stats, diag);
+    if (r->raster)
+        return tpk_iso_raster_frame(r->raster, &opt, rgba, stats, diag);
 #endif
     return tpk_render_cpu(&s->mesh, &opt, rgba, stats, diag);
 }
@@ -90,8 +99,10 @@ void view_renderer_close(view_renderer *r)
 #ifdef TPK_WITH_VULKAN
     tpk_vk_presenter_destroy(r->present); /* before the renderer: its device and surface */
     tpk_vk_renderer_destroy(r->vk);
+    tpk_iso_raster_destroy(r->raster);
 #endif
     r->present = NULL;
     r->vk = NULL;
+    r->raster = NULL;
     r->window = NULL;
 }

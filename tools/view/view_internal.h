@@ -28,6 +28,7 @@ typedef struct view_state {
     tpk_layout layout;
     tpk_mesh_arrays mesh;
     double bounds_min[3], bounds_max[3];
+    int iso_raster;                /* tpk_view_options.iso_raster */
 } view_state;
 
 /* What a key asks for. */
@@ -49,9 +50,11 @@ void view_state_describe(const view_state *s, char *out, size_t n);
 /* ---- view_frame.c ---- */
 typedef struct tpk_vk_renderer tpk_vk_renderer;
 typedef struct tpk_vk_presenter tpk_vk_presenter;
+typedef struct tpk_iso_raster tpk_iso_raster;
 typedef struct view_window view_window;
 typedef struct view_renderer {
     tpk_vk_renderer *vk;   /* NULL: the CPU reference */
+    tpk_iso_raster *raster; /* --iso-raster: the isosurfaces drawn as triangles instead (Vulkan, read back) */
     tpk_vk_presenter *present; /* Vulkan frames go to the window's swapchain; NULL: into rgba */
     view_window *window;   /* the window presented to */
     int cpu_only;          /* Vulkan was not found (or not wanted): do not try again */

@@ -55,6 +55,7 @@ int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag)
     s->step = o->step;
     s->step_count = 1;
     s->layout = o->layout;
+    s->iso_raster = o->iso_raster;
     tpk_file_info info;
     tpk_get_info(o->file, &info);
     memcpy(s->bounds_min, info.bounds_min, sizeof s->bounds_min);
