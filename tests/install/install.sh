@@ -34,6 +34,7 @@ for f in libtetpack.so libtetpack.a cmake/tetpack/tetpackConfig.cmake cmake/tetp
 done
 if grep -q "tetpack-mpi" "$tmp/install.log" || [ -x "$build/tetpack-mpi" ]; then
     [ -x "$prefix/bin/tetpack-mpi" ] || fail "tetpack-mpi built but not installed"
+    zcat "$prefix/share/man/man1/tetpack-mpi.1.gz" | grep -q "decomposed mesh" || fail "tetpack-mpi's man page is missing or empty"
 fi
 internal=$(find "$prefix" -name "internal_*.h")
 [ -z "$internal" ] || fail "private headers installed: $internal"

@@ -8,6 +8,7 @@
 
 #include "convert/convert.h"
 #include "mpi_convert.h"
+#include "tetpack.h"
 
 static const char mpi_help[] =
     "usage: mpirun -np P tetpack-mpi convert INPUT OUTPUT.tpkset [options]\n"
@@ -117,6 +118,12 @@ int main(int argc, char **argv)
     MPI_Comm_size(MPI_COMM_WORLD, &size);
     mpi_args a;
     memset(&a, 0, sizeof a);
+    if (argc >= 2 && !strcmp(argv[1], "--version")) { /* as tetpack's (help2man reads it for the man page) */
+        if (rank == 0)
+            printf("tetpack-mpi %s (format %d.%d)\n", TPK_LIBRARY_VERSION, TPK_VERSION_MAJOR, TPK_VERSION_MINOR);
+        MPI_Finalize();
+        return 0;
+    }
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") ||
         (argc > 2 && !strcmp(argv[1], "convert") && (!strcmp(argv[2], "--help") || !strcmp(argv[2], "-h")))) {
         if (rank == 0)
