@@ -16,6 +16,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "base/fd_io.h"
 #include "tetpack_format.h"
 
 int tpk_isolate_enabled(void)
@@ -26,26 +27,12 @@ int tpk_isolate_enabled(void)
 
 /* ---- the child's side ---- */
 
-static int write_all(int fd, const void *data, size_t size)
-{
-    const char *at = data;
-    while (size > 0) {
-        ssize_t n = write(fd, at, size);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            return -1;
-        at += n, size -= (size_t)n;
-    }
-    return 0;
-}
-
 static void child_warn(void *user, const char *text)
 {
     int fd = *(int *)user;
     uint32_t len = (uint32_t)strlen(text);
     char tag = 'W';
-    if (write_all(fd, &tag, 1) || write_all(fd, &len, sizeof len) || write_all(fd, text, len))
+    if (tpk_fd_write_all(fd, &tag, 1) || tpk_fd_write_all(fd, &len, sizeof len) || tpk_fd_write_all(fd, text, len))
         _exit(3);
 }
 
@@ -62,13 +49,13 @@ static int64_t field_length(const tpk_mesh *m, const tpk_src_field *f)
 
 #define PUT(ptr, count)                                                                                     \
     do {                                                                                                    \
-        if ((ptr) && write_all(fd, (ptr), sizeof *(ptr) * (size_t)(count)))                                \
+        if ((ptr) && tpk_fd_write_all(fd, (ptr), sizeof *(ptr) * (size_t)(count)))                                \
             return -1;                                                                                      \
     } while (0)
 
 static int write_mesh(int fd, const tpk_mesh *m)
 {
-    if (write_all(fd, m, sizeof *m))
+    if (tpk_fd_write_all(fd, m, sizeof *m))
         return -1;
     PUT(m->points, 3 * m->point_count);
     PUT(m->cell_types, m->cell_count);
@@ -77,7 +64,7 @@ static int write_mesh(int fd, const tpk_mesh *m)
     PUT(m->face_offsets, m->cell_count + 1);
     PUT(m->faces, m->face_offsets ? m->face_offsets[m->cell_count] : 0);
     for (int i = 0; i < m->field_count; i++) {
-        if (write_all(fd, &m->fields[i], sizeof m->fields[i]))
+        if (tpk_fd_write_all(fd, &m->fields[i], sizeof m->fields[i]))
             return -1;
         PUT(m->fields[i].values, field_length(m, &m->fields[i]));
     }
@@ -91,26 +78,12 @@ static int write_result(int fd, int rc, const tpk_diag *diag, const tpk_mesh *ou
 {
     char tag = 'R';
     int32_t r = rc;
-    if (write_all(fd, &tag, 1) || write_all(fd, &r, sizeof r) || write_all(fd, diag, sizeof *diag))
+    if (tpk_fd_write_all(fd, &tag, 1) || tpk_fd_write_all(fd, &r, sizeof r) || tpk_fd_write_all(fd, diag, sizeof *diag))
         return -1;
     return rc == 0 && out ? write_mesh(fd, out) : 0;
 }
 
 /* ---- the parent's side ---- */
-
-static int read_all(int fd, void *data, size_t size)
-{
-    char *at = data;
-    while (size > 0) {
-        ssize_t n = read(fd, at, size);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            return -1;
-        at += n, size -= (size_t)n;
-    }
-    return 0;
-}
 
 /* Replace *ptr (a flag from the child's struct: NULL or not) by count elements read from fd. */
 static int take(int fd, void *ptr_address, size_t element, int64_t count)
@@ -124,14 +97,14 @@ static int take(int fd, void *ptr_address, size_t element, int64_t count)
     size_t bytes = element * (size_t)count;
     if (!(*ptr = malloc(bytes ? bytes : 1)))
         return -1;
-    return read_all(fd, *ptr, bytes);
+    return tpk_fd_read_all(fd, *ptr, bytes);
 }
 
 #define TAKE(field, count) take(fd, &(field), sizeof *(field), (count))
 
 static int read_mesh(int fd, tpk_mesh *m)
 {
-    if (read_all(fd, m, sizeof *m)) {
+    if (tpk_fd_read_all(fd, m, sizeof *m)) {
         memset(m, 0, sizeof *m);
         return -1;
     }
@@ -148,7 +121,7 @@ static int read_mesh(int fd, tpk_mesh *m)
         if (!(m->fields = calloc((size_t)field_count, sizeof *m->fields)))
             return -1;
         for (int i = 0; i < field_count; i++) {
-            if (read_all(fd, &m->fields[i], sizeof m->fields[i])) {
+            if (tpk_fd_read_all(fd, &m->fields[i], sizeof m->fields[i])) {
                 m->fields[i].values = NULL;
                 return -1;
             }
@@ -170,12 +143,12 @@ static stream_end read_stream(int fd, tpk_diag *diag, int *rc, tpk_mesh *out, in
 {
     for (;;) {
         char tag;
-        if (read_all(fd, &tag, 1))
+        if (tpk_fd_read_all(fd, &tag, 1))
             return STREAM_ENDED;
         if (tag == 'W') {
             uint32_t len;
             char text[1024];
-            if (read_all(fd, &len, sizeof len) || len >= sizeof text || read_all(fd, text, len))
+            if (tpk_fd_read_all(fd, &len, sizeof len) || len >= sizeof text || tpk_fd_read_all(fd, text, len))
                 return STREAM_ENDED;
             text[len] = 0;
             tpk_diag_warn(diag, "%s", text);
@@ -185,7 +158,7 @@ static stream_end read_stream(int fd, tpk_diag *diag, int *rc, tpk_mesh *out, in
             return STREAM_ENDED;
         int32_t r;
         tpk_diag child;
-        if (read_all(fd, &r, sizeof r) || read_all(fd, &child, sizeof child))
+        if (tpk_fd_read_all(fd, &r, sizeof r) || tpk_fd_read_all(fd, &child, sizeof child))
             return STREAM_ENDED;
         *rc = r;
         if (result)

@@ -18,6 +18,7 @@
 #include <sys/prctl.h>
 #endif
 
+#include "base/fd_io.h"
 #include "tetgen_guard.h"
 
 enum { CHILD_MAGIC = 0x54475431, CHILD_WRITE_FAILED = 3 };
@@ -30,20 +31,6 @@ typedef struct child_header {
     int64_t tet_count;
     char message[1024];
 } child_header;
-
-static int write_all(int fd, const void *data, size_t size)
-{
-    const char *at = data;
-    while (size > 0) {
-        ssize_t n = write(fd, at, size);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n <= 0)
-            return -1;
-        at += n, size -= (size_t)n;
-    }
-    return 0;
-}
 
 static void limit_memory(int64_t bytes)
 {
@@ -79,10 +66,10 @@ static void run_child(const char *switches, const tpk_tetgen_input *in, const tp
                  "address space", (double)guard->memory_limit / (1024.0 * 1024.0 * 1024.0));
     }
     h.point_count = out.point_count, h.tet_count = out.tet_count, h.triangle_count = out.triangle_count;
-    int failed = write_all(result_fd, &h, sizeof h) ||
-                 write_all(result_fd, out.points, sizeof(double) * 3 * (size_t)out.point_count) ||
-                 write_all(result_fd, out.tets, sizeof(int32_t) * 4 * (size_t)out.tet_count) ||
-                 write_all(result_fd, out.triangles, sizeof(int32_t) * 3 * (size_t)out.triangle_count);
+    int failed = tpk_fd_write_all(result_fd, &h, sizeof h) ||
+                 tpk_fd_write_all(result_fd, out.points, sizeof(double) * 3 * (size_t)out.point_count) ||
+                 tpk_fd_write_all(result_fd, out.tets, sizeof(int32_t) * 4 * (size_t)out.tet_count) ||
+                 tpk_fd_write_all(result_fd, out.triangles, sizeof(int32_t) * 3 * (size_t)out.triangle_count);
     _exit(failed ? CHILD_WRITE_FAILED : 0);
 }
 
