@@ -31,7 +31,7 @@ export TETPACK_VIEW_PRESENT=gl # the sections before "Vulkan presentation"
 export TETPACK_RENDER_BACKEND=vulkan
 SIZE=72x56
 convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --layout tet16 --layout tet20 --layout tet32 > /dev/null
-tpk view --help | grep -q -- "--orbit DEG" || fail "view --help lacks --orbit"
+grep -q -- "--orbit DEG" <<< "$(tpk view --help)" || fail "view --help lacks --orbit"
 
 # each layout: a few frames, the last one against the headless render of the scene view saved
 for layout in tet16 tet20 tet32; do

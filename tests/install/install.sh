@@ -10,6 +10,8 @@
 # EXTRA_C_FLAGS: the sanitizer flags under TETPACK_SANITIZE (a consumer of an ASan library is built with
 # ASan too).
 set -euo pipefail
+# Never `producer | grep -q`: grep leaving at its first match can end the producer by SIGPIPE, which
+# pipefail reports as a failure (it did, once, for ldd of an ASan consumer); grep reads a captured string.
 build=$1 src=$2 cc=$3 python_built=$4 python=$5 flags=${6:-}
 fail() { echo "install.consumer: FAIL: $*" >&2; exit 1; }
 
@@ -34,7 +36,6 @@ for f in libtetpack.so libtetpack.a cmake/tetpack/tetpackConfig.cmake cmake/tetp
 done
 if grep -q "tetpack-mpi" "$tmp/install.log" || [ -x "$build/tetpack-mpi" ]; then
     [ -x "$prefix/bin/tetpack-mpi" ] || fail "tetpack-mpi built but not installed"
-    # (not zcat | grep -q: grep leaving early would fail the pipe under pipefail)
     mpi_man=$(zcat "$prefix/share/man/man1/tetpack-mpi.1.gz" 2>/dev/null || true)
     grep -q "decomposed mesh" <<< "$mpi_man" || fail "tetpack-mpi's man page is missing or empty"
 fi
@@ -71,9 +72,9 @@ cmake -S "$src/examples/consumer" -B "$tmp/cmake" -DCMAKE_C_COMPILER="$cc" -DCMA
       -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF -DCMAKE_C_FLAGS="-Wall -Wextra -Werror $flags" \
       -DCMAKE_EXE_LINKER_FLAGS="$flags" > "$tmp/cmake.log" 2>&1 || { cat "$tmp/cmake.log"; fail "consumer: cmake configure"; }
 cmake --build "$tmp/cmake" > "$tmp/cmake-build.log" 2>&1 || { cat "$tmp/cmake-build.log"; fail "consumer: cmake build"; }
-ldd "$tmp/cmake/consumer" | grep -q "libtetpack.so.1 => $libdir/" || fail "consumer does not load $libdir/libtetpack.so.1"
+grep -q "libtetpack.so.1 => $libdir/" <<< "$(ldd "$tmp/cmake/consumer")" || fail "consumer does not load $libdir/libtetpack.so.1"
 check_counts cmake_shared "$tmp/cmake/consumer"
-ldd "$tmp/cmake/consumer_static" | grep -q libtetpack && fail "consumer_static loads libtetpack.so"
+grep -q libtetpack <<< "$(ldd "$tmp/cmake/consumer_static")" && fail "consumer_static loads libtetpack.so"
 check_counts cmake_static "$tmp/cmake/consumer_static"
 
 # pkg-config: the .pc file of the prefix only.
@@ -104,7 +105,7 @@ complete_words() { # words... (the last is the one being completed)
 [ "$(complete_words tetpack convert --lay)" = --layout ] || fail "completion of 'tetpack convert --lay'"
 [ "$(complete_words tetpack convert x.vtk --layout '' | tr '\n' ' ')" = "tet16 tet20 tet32 " ] \
     || fail "completion of 'tetpack convert --layout '"
-complete_words tetpack render x.tpk --back | grep -qx -- --backend || fail "completion of 'tetpack render --back'"
+grep -qx -- --backend <<< "$(complete_words tetpack render x.tpk --back)" || fail "completion of 'tetpack render --back'"
 echo "bash completion: ok"
 
 # The Python module, from the prefix: libtetpack through _tetpack, and the installed command and plugin.

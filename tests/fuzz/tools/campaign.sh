@@ -80,7 +80,7 @@ repro() {
                     echo "$tetpack extract $keep/fixture.tpk $keep/x.tpk --scene $keep/work/scene.json --threads 1" ;;
                 *) # fuzz_check and the importers: one file under work/; check reads fields leniently, convert strictly
                     local file
-                    file=$(find "$keep/work" -maxdepth 1 -type f 2>/dev/null | head -1)
+                    file=$(find "$keep/work" -maxdepth 1 -type f -print -quit 2>/dev/null)
                     echo "$tetpack check $file; $tetpack convert $file $keep/x.tpk" ;;
             esac ;;
     esac
