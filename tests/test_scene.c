@@ -55,7 +55,7 @@ TPK_TEST(unknown_key)
 {
     CHECK_PARSE_ERROR("{\n  \"size\": [64, 48],\n  \"feild\": \"temperature\"\n}",
                       "s.json:3:3: key 'feild': unknown key (did you mean 'field'?); known keys: tetpack_scene, camera, "
-                      "tf, field, step, steps, range, unit_distance, clip_box, iso, iso_opacity, effects, layout, size, "
+                      "tf, field, step, steps, range, unit_distance, clip_box, probes, iso, iso_opacity, effects, layout, size, "
                       "backend, integration");
     CHECK_PARSE_ERROR("{\"effects\": {\"glow\": true}}",
                       "s.json:1:14: key 'effects.glow': unknown key; known keys of effects: shading, shadows, light, "

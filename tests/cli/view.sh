@@ -105,6 +105,25 @@ PYEOF
 tpk render "$WORK/blocks.tpk" --scene "$WORK/keys.json" --backend vulkan -o "$WORK/keys-render.png" > /dev/null
 psnr_at_least "$WORK/keys.png" "$WORK/keys-render.png" "view --keys and render of its scene"
 
+# the probe keys: O twice (a sphere, then a plane facing the camera), K (cut, not keep), 6 and 9 (moved
+# right and away), then O again (a box), ++ and 8: the scene view saves has the box, moved and grown,
+# and render draws it the same
+tpk view "$WORK/cyl.tpk" --size $SIZE --frames 1 --keys 'OOK69O++8' --screenshot "$WORK/probe.png" \
+    --save-scene "$WORK/probe.json" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --keys with probes"; }
+"$PY" - "$WORK/probe.json" <<'PYEOF' || fail "the probe keys' scene: $(cat "$WORK/probe.json")"
+import json, sys
+p = json.load(open(sys.argv[1]))["probes"]
+assert len(p) == 1 and p[0]["shape"] == "box" and p[0]["mode"] == "cut", p
+size = [b - a for a, b in zip(p[0]["min"], p[0]["max"])]
+assert size[0] > 0.05 * 1.5 and size[1] > 0.02 * 1.5, size  # the upper octant of the cylinder's box, grown 1.5625x
+PYEOF
+tpk render "$WORK/cyl.tpk" --scene "$WORK/probe.json" --backend vulkan -o "$WORK/probe-render.png" > /dev/null
+psnr_at_least "$WORK/probe.png" "$WORK/probe-render.png" "view's probe keys and render of its scene"
+! "$PY" "$SRC/tests/cli/psnr.py" "$WORK/probe.png" "$WORK/view-tet16.png" --min 40 > /dev/null ||
+    fail "the probe keys did not change the picture"
+expect_exit 2 tpk view "$WORK/cyl.tpk" --keys 'O7'
+expect_stderr "--keys expects keys of T F \[ \] L I S C P W Q O K 4 6 8 2 9 3 + -, found 'O7'"
+
 # no Vulkan device: the CPU reference, with a note
 VK_ICD_FILENAMES="$WORK/no_such_icd.json" TETPACK_RENDER_BACKEND= tpk view "$WORK/cyl.tpk" --size $SIZE --frames 1 \
     --screenshot "$WORK/view-cpu.png" 2> "$WORK/err" || { cat "$WORK/err"; fail "view without Vulkan"; }

@@ -20,11 +20,13 @@ static const char extract_help[] =
     "kept exactly; TMAP and VMAP are mapped through, so picks still name source cells and points. Options\n"
     "given here override the scene's values.\n"
     "\n"
-    "  --scene FILE                 take layout, field, step(s) and clip box from a scene file\n"
+    "  --scene FILE                 take layout, field, step(s), clip box and probes from a scene file\n"
     "  --layout tet16|tet20|tet32   the layout to keep (default: the one render picks, the first present)\n"
     "  --field NAME                 the field to keep (default: the first point field, as render)\n"
     "  --step N | --steps A:B       the step or steps to keep (default 0)\n"
     "  --clip-box x0,y0,z0,x1,y1,z1 keep the tets that meet this box (default: all tets)\n"
+    "  --probe SHAPE:NUMBERS[:cut]  keep the tets that may show through this CSG probe (repeat: up to 4;\n"
+    "                               sphere:cx,cy,cz,r, plane:px,py,pz,nx,ny,nz or box:x0,y0,z0,x1,y1,z1)\n"
     "  --zstd LEVEL                 0: store uncompressed, 1..22: zstd (default: as the input stored each)\n"
     "  --save-scene FILE            write the scene for OUT.tpk: steps renumbered, and camera and range\n"
     "                               made explicit from IN.tpk, so it renders the same picture\n"
@@ -34,7 +36,7 @@ static const char extract_help[] =
 typedef struct extract_args {
     tpk_extract_options o;
     const char *scene_path, *save_scene;
-    int have_layout, have_steps, have_clip, json;
+    int have_layout, have_steps, have_clip, have_probes, json;
     tpk_scene scene;
 } extract_args;
 
@@ -92,6 +94,18 @@ static int parse_option(int argc, char **argv, int *i, extract_args *a)
         memcpy(o->clip_min, b, sizeof o->clip_min);
         memcpy(o->clip_max, b + 3, sizeof o->clip_max);
         o->clip = a->have_clip = 1;
+    } else if (!strncmp(arg, "--probe", 7)) {
+        tpk_diag d = {0};
+        if (!a->have_probes)
+            o->probe_count = 0;
+        a->have_probes = 1;
+        if (!VALUE("--probe") || o->probe_count >= TPK_RENDER_MAX_PROBES ||
+            tpk_probe_parse(v, &o->probes[o->probe_count]))
+            return tpk_cli_fail("extract", "--probe expects %s, found '%s'", tpk_option_table[TPK_OPT_PROBE].expects,
+                                v ? v : "");
+        if (tpk_probe_check(&o->probes[o->probe_count], o->probe_count + 1, &d))
+            return tpk_cli_fail("extract", "--probe '%s': %s", v, d.message + strlen("render: "));
+        o->probe_count++;
     } else if (!strncmp(arg, "--zstd", 6)) {
         if (!VALUE("--zstd") || tpk_cli_parse_int(v, 0, 22, &o->zstd_level))
             return tpk_cli_fail("extract", "--zstd expects a level 0..22, found '%s'", v ? v : "");
@@ -134,6 +148,10 @@ static int merge_scene(extract_args *a)
         memcpy(a->o.clip_min, s->clip_min, sizeof a->o.clip_min);
         memcpy(a->o.clip_max, s->clip_max, sizeof a->o.clip_max);
     }
+    if (!a->have_probes && (s->given & TPK_SCENE_PROBES)) {
+        a->o.probe_count = s->probe_count;
+        memcpy(a->o.probes, s->probes, sizeof a->o.probes);
+    }
     return 0;
 }
 
@@ -156,6 +174,11 @@ static int save_scene(const extract_args *a, const tpk_extract_report *r)
         s.given |= TPK_SCENE_CLIP;
         memcpy(s.clip_min, a->o.clip_min, sizeof s.clip_min);
         memcpy(s.clip_max, a->o.clip_max, sizeof s.clip_max);
+    }
+    if (a->o.probe_count > 0) {
+        s.given |= TPK_SCENE_PROBES;
+        s.probe_count = a->o.probe_count;
+        memcpy(s.probes, a->o.probes, sizeof s.probes);
     }
     if (!(s.given & TPK_SCENE_CAMERA)) {
         s.given |= TPK_SCENE_CAMERA;

@@ -34,6 +34,9 @@ static const char view_help[] =
     "(of those stored), I isosurface at the middle of the range on/off, S shading on/off, C clip box\n"
     "(the half of the bounds below the middle of x) on/off, P screenshot (--screenshot, else\n"
     "view_NNN.png), W write the scene (--save-scene, else view_scene.json), Q or Esc quit.\n"
+    "The first CSG probe: O its shape (a cut sphere, then a plane facing the camera that keeps the far\n"
+    "half, then a cut box, then none), K keep/cut, arrows or 4 6 8 2 move it left, right, up, down,\n"
+    "Page Up/Down or 9 3 away and near (a twentieth of the bounds each), + - grow and shrink it.\n"
     "\n"; /* then the options view takes from render (the option table), and its own: */
 
 static const char view_help_own[] =
@@ -73,8 +76,8 @@ static int view_option(int argc, char **argv, int *i, view_args *v)
             return tpk_cli_fail("view", "--screenshot expects an output PNG path") + 1;
     } else if (!strncmp(arg, "--keys", 6) && (!arg[6] || arg[6] == '=')) {
         v->keys = tpk_cli_value(argc, argv, i, "--keys");
-        if (!v->keys || strspn(v->keys, "TtFf[]LlIiSsCcPpWwQq") != strlen(v->keys))
-            return tpk_cli_fail("view", "--keys expects keys of T F [ ] L I S C P W Q, found '%s'",
+        if (!v->keys || strspn(v->keys, "TtFf[]LlIiSsCcPpWwQqOoKk468293+=-") != strlen(v->keys))
+            return tpk_cli_fail("view", "--keys expects keys of T F [ ] L I S C P W Q O K 4 6 8 2 9 3 + -, found '%s'",
                                 v->keys ? v->keys : "") + 1;
     } else if (!strncmp(arg, "--present", 9) && (!arg[9] || arg[9] == '=')) {
         if (!(v->present = tpk_cli_value(argc, argv, i, "--present")))

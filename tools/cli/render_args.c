@@ -163,6 +163,17 @@ static int opt_clip(const char *v, render_args *a)
     return 0;
 }
 
+static int opt_probe(const char *v, render_args *a)
+{
+    if (!a->probes_from_cli)
+        a->probe_count = 0;
+    a->probes_from_cli = 1;
+    if (a->probe_count >= TPK_RENDER_MAX_PROBES || tpk_probe_parse(v, &a->probes[a->probe_count]))
+        return -1;
+    a->probe_count++;
+    return 0;
+}
+
 static int opt_light(const char *v, render_args *a)
 {
     a->have_light = 1;
@@ -202,6 +213,7 @@ static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_ISO] = opt_iso,
     [TPK_OPT_ISO_OPACITY] = opt_iso_opacity,
     [TPK_OPT_CLIP_BOX] = opt_clip,
+    [TPK_OPT_PROBE] = opt_probe,
     [TPK_OPT_SHADING] = opt_shading,
     [TPK_OPT_SHADOWS] = opt_shadows,
     [TPK_OPT_LIGHT] = opt_light,
@@ -381,6 +393,8 @@ void render_args_to_options(const render_args *a, tpk_file *file, const tpk_tran
     opt->clip = a->clip;
     memcpy(opt->clip_min, a->clip_box, sizeof opt->clip_min);
     memcpy(opt->clip_max, a->clip_box + 3, sizeof opt->clip_max);
+    opt->probe_count = a->probe_count;
+    memcpy(opt->probes, a->probes, sizeof opt->probes);
     opt->shading = a->shading;
     opt->shadows = a->shadows;
     opt->have_light = a->have_light;
@@ -527,6 +541,8 @@ int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args 
     a->clip = (s->given & TPK_SCENE_CLIP) != 0;
     memcpy(a->clip_box, s->clip_min, sizeof s->clip_min);
     memcpy(a->clip_box + 3, s->clip_max, sizeof s->clip_max);
+    a->probe_count = s->probe_count;
+    memcpy(a->probes, s->probes, sizeof a->probes);
     a->iso_count = s->iso_count;
     memcpy(a->iso, s->iso, sizeof a->iso);
     a->iso_opacity = s->iso_opacity;

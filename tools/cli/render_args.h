@@ -21,6 +21,8 @@ typedef struct render_args {
     double iso[TPK_RENDER_MAX_ISO], iso_opacity;
     int clip;
     double clip_box[6]; /* x0,y0,z0,x1,y1,z1 */
+    int probe_count, probes_from_cli; /* the first --probe replaces the scene's probes, later ones add */
+    tpk_probe probes[TPK_RENDER_MAX_PROBES];
     int shading, shadows, have_light, ao_rays, occlusion;
     double light[3], ao_radius; /* ao_radius 0: the renderer's default */
     const char *scene_path, *save_scene; /* --scene, --save-scene */

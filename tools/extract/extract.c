@@ -295,6 +295,12 @@ static int write_meta(extraction *x)
     double box[6] = {o->clip_min[0], o->clip_min[1], o->clip_min[2], o->clip_max[0], o->clip_max[1], o->clip_max[2]};
     if (o->clip)
         add_numbers(ex, "clip_box", box, 6);
+    cJSON *probes = o->probe_count > 0 ? cJSON_AddArrayToObject(ex, "probes") : NULL;
+    for (int i = 0; probes && i < o->probe_count; i++) {
+        char text[256];
+        tpk_probe_format(&o->probes[i], text, sizeof text);
+        cJSON_AddItemToArray(probes, cJSON_CreateString(text));
+    }
     double tets[2] = {(double)x->info.tet_count, (double)x->sub.tet_count};
     add_numbers(ex, "tets", tets, 2);
     uint64_t count = 0;

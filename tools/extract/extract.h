@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "base/diag.h"
+#include "render/render.h"
 #include "tetpack.h"
 
 typedef struct tpk_extract_options {
@@ -16,6 +17,8 @@ typedef struct tpk_extract_options {
     int step_first, step_last;  /* steps of the field kept, renumbered from 0 (0, 0: the first step) */
     int clip;                   /* keep only the tets that meet [clip_min, clip_max] (see tpk_extract) */
     double clip_min[3], clip_max[3];
+    int probe_count;            /* and only the tets that may show through these probes (tpk_probe_may_show) */
+    tpk_probe probes[TPK_RENDER_MAX_PROBES];
     int zstd_level;             /* -1: each chunk as the source stored it (zstd at the default level or
                                    none); 0: uncompressed; 1..22: zstd at that level */
     int threads;                /* <= 0: all cores */

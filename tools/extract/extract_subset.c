@@ -1,5 +1,5 @@
 /* The tets extract keeps and their new connectivity. Selection is by bounding box against the clip
- * box; the adjacency of the kept tets is rebuilt by the converter's own stages (connect, then the exact
+ * box, and by tpk_probe_may_show against the probes; the adjacency of the kept tets is rebuilt by the converter's own stages (connect, then the exact
  * fold test), not patched by hand, so the invariants hold by the same code that makes every file. */
 #include <math.h>
 #include <stdlib.h>
@@ -24,6 +24,16 @@ static int meets_box(const tpk_mesh_arrays *mesh, const int32_t *v, const tpk_ex
     return 1;
 }
 
+/* The tet may show through the probes (render.h: tpk_probe_may_show, on its world corners). */
+static int may_show(const tpk_mesh_arrays *mesh, const int32_t *v, const tpk_extract_options *o)
+{
+    double corner[4][3];
+    for (int j = 0; j < 4; j++)
+        for (int k = 0; k < 3; k++)
+            corner[j][k] = mesh->origin[k] + (double)mesh->positions[3 * (size_t)v[j] + k];
+    return tpk_probe_may_show(o->probes, o->probe_count, corner);
+}
+
 /* Mark the kept tets and their vertices; new ids in old order. */
 static int select_tets(const tpk_mesh_arrays *mesh, const int32_t *tets, const tpk_extract_options *o,
                        int32_t *vertex_new, tpk_subset *s, tpk_diag *diag)
@@ -35,12 +45,14 @@ static int select_tets(const tpk_mesh_arrays *mesh, const int32_t *tets, const t
     for (int64_t v = 0; v < V; v++)
         vertex_new[v] = -1;
     for (int64_t t = 0; t < T; t++) {
-        if (o->clip && !meets_box(mesh, tets + 4 * t, o))
+        if ((o->clip && !meets_box(mesh, tets + 4 * t, o)) || (o->probe_count > 0 && !may_show(mesh, tets + 4 * t, o)))
             continue;
         s->tet_old[s->tet_count++] = (int32_t)t;
         for (int j = 0; j < 4; j++)
             vertex_new[tets[4 * t + j]] = 0;
     }
+    if (s->tet_count == 0 && o->probe_count > 0)
+        return tpk_diag_fail(diag, "no tet meets the clip box and shows through the probes");
     if (s->tet_count == 0)
         return tpk_diag_fail(diag, "no tet meets the clip box [%g, %g, %g] .. [%g, %g, %g]", o->clip_min[0],
                              o->clip_min[1], o->clip_min[2], o->clip_max[0], o->clip_max[1], o->clip_max[2]);

@@ -3,6 +3,7 @@
 #ifndef TPK_RENDER_H
 #define TPK_RENDER_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "base/diag.h"
@@ -27,6 +28,20 @@ typedef struct tpk_camera_basis {
     double tan_half_x, tan_half_y;
 } tpk_camera_basis;
 int tpk_camera_basis_of(const tpk_camera *cam, int width, int height, tpk_camera_basis *out, tpk_diag *diag);
+
+/* A CSG probe (PROBES below): a sphere (center a, radius), a half-space (the side of the plane through a
+ * that its normal b points away from) or a box [a, b]; `cut` 0 keeps only what is inside it, 1 cuts
+ * what is inside it away. */
+#define TPK_RENDER_MAX_PROBES_ 4
+#define TPK_PROBE_SPHERE 1
+#define TPK_PROBE_PLANE 2
+#define TPK_PROBE_BOX 3
+typedef struct tpk_probe {
+    int shape; /* TPK_PROBE_* */
+    int cut;   /* 0: keep inside, 1: cut inside away */
+    double a[3], b[3];
+    double radius;
+} tpk_probe;
 
 /* Render options. tpk_render_options_default fills friendly defaults; a zero-initialised struct
  * (plus width, height, camera and tf) also works: then the background is transparent black. */
@@ -61,9 +76,12 @@ typedef struct tpk_render_options {
     int occlusion;                 /* where shadow and AO rays start: TPK_OCCLUSION_RAY (0, default: at
                                       the shade points of every primary ray) or TPK_OCCLUSION_VERTEX (1:
                                       at the mesh vertices, once per frame, interpolated; below) */
+    int probe_count;               /* 0..TPK_RENDER_MAX_PROBES CSG probes (PROBES below) */
+    tpk_probe probes[TPK_RENDER_MAX_PROBES_];
 } tpk_render_options;
 
 #define TPK_RENDER_MAX_ISO 4
+#define TPK_RENDER_MAX_PROBES TPK_RENDER_MAX_PROBES_
 #define TPK_RENDER_MAX_SIZE 32768
 #define TPK_RENDER_MAX_AO_RAYS 1024
 #define TPK_INTEGRATION_EXACT 0
@@ -86,6 +104,21 @@ typedef struct tpk_render_options {
  * outside [clip_min_k, clip_max_k]. Start lo = tmin of the ray, hi = its tmax; the ray is marched over
  * [lo, hi] (the marcher's tmin/tmax) and nothing when lo > hi: outside the box there is no volume and
  * no isosurface, for every ray. Primary rays: tmin = 0, tmax = infinity.
+ *
+ * PROBES (probe_count > 0). Each probe has an inside: sphere |x - a| <= radius (radius > 0); half-space
+ * (x - a) . b <= 0 (b != 0, any length); box a <= x <= b on every axis (a <= b). On a ray (origin o, unit d,
+ * after the clip box has cut it to [lo, hi]) the inside is one interval [t0, t1] or none: sphere with
+ * q = d . (o - a), c = |o - a|^2 - radius^2, disc = q^2 - c: none when disc < 0, else -q -+ sqrt(disc);
+ * half-space with e = (o - a) . b, f = d . b: f = 0: all t when e <= 0, none otherwise; f > 0: (-inf, -e/f];
+ * f < 0: [-e/f, inf); box: the clip box's slab test. The ray is kept where every keep probe (cut 0) holds
+ * it inside and no cut probe (cut 1) does: starting from the one span [lo, hi] (none when lo >= hi), a keep
+ * probe intersects every span with [t0, t1] (none: no span is left); a cut probe replaces every span
+ * [p, q] by [p, min(q, t0)] and [max(p, t1), q] (none: spans unchanged); after each probe, spans of zero or
+ * negative length are dropped. At most probe_count + 1 spans remain, in order. The ray is marched over
+ * [first span's start, last span's end] and each piece is cut to the spans: each part [a, b] of a piece
+ * inside a span is a piece of its own (scalars interpolated linearly to a and b), in order; parts outside
+ * every span contribute nothing. This holds for every ray (primary, shadow, AO, vertex occlusion).
+ * Without probes the spans are the clip box's [lo, hi] alone, as above.
  *
  * EARLY TERMINATION. A primary ray stops after the piece (or iso hit) that brings T <= 0.02.
  *
@@ -136,7 +169,7 @@ typedef struct tpk_render_options {
  *       phi = 2 pi * fract(i * 0.6180339887498949 + rot), w = (r cos(phi), r sin(phi), z) in world axes,
  *       len = ao_radius (AO off: 1).
  * S_v and A_v are stored as float. The cache depends on the mesh and field, light, TF, range, unit
- * distance, iso values and opacity, clip box, AO rays and radius; not on the camera except through a
+ * distance, iso values and opacity, clip box, probes, AO rays and radius; not on the camera except through a
  * headlight (then once per frame: N + 1 rays per vertex instead of per shade point).
  * Use: every volume piece (x = its midpoint) and every iso hit (x = the hit point) takes S and A
  * interpolated linearly in the piece's tet v[0..3] (no shade-point schedule, no casts): with e_i and
@@ -195,10 +228,31 @@ void tpk_render_lengths(const tpk_render_options *opt, double diagonal, double *
 /* The one validation of render options (render_check.c), which every backend calls before anything
  * else: a size in 1..TPK_RENDER_MAX_SIZE, a transfer function of 1..TPK_TF_MAX_POINTS points, a known
  * integration, a finite range, 0..TPK_RENDER_MAX_ISO finite iso values, a finite iso opacity <= 1, a
- * finite clip box with min <= max, a finite light, 0..TPK_RENDER_MAX_AO_RAYS AO rays, a finite AO radius,
+ * finite clip box with min <= max, 0..TPK_RENDER_MAX_PROBES valid probes (tpk_probe_check), a finite light, 0..TPK_RENDER_MAX_AO_RAYS AO rays, a finite AO radius,
  * a known occlusion and a camera tpk_camera_basis_of accepts. Values a renderer cannot use are refused, not clamped.
  * Returns 0, or -1 with a message starting "render: " (the same whichever backend asks). Pure. */
 int tpk_render_check_options(const tpk_render_options *opt, tpk_diag *diag);
+/* The part of that check for one probe (numbered from 1 in messages): 0, or -1 with a message. */
+int tpk_probe_check(const tpk_probe *probe, int number, tpk_diag *diag);
+/* render.h PROBES: the spans of [lo, hi] of the ray org + t dir (unit dir) that the probes keep, into
+ * span[0..n-1] in order (at most TPK_RENDER_MAX_PROBES + 1); returns n (0: nothing of the ray shows). */
+int tpk_probe_spans(const tpk_probe *probes, int count, const double org[3], const double dir[3], double lo,
+                    double hi, double span[][2]);
+/* Whether the point x is in what the probes keep (inside every keep probe, outside every cut probe). */
+int tpk_probe_keeps(const tpk_probe *probes, int count, const double x[3]);
+/* Whether a tet of these corners may show through the probes: 0 only when it is surely outside what
+ * they keep (its bounding box misses a keep probe, or all its corners are inside one cut probe: every
+ * probe is convex). Conservative: extract keeps the tets for which it is nonzero. */
+int tpk_probe_may_show(const tpk_probe *probes, int count, const double corner[4][3]);
+/* The text form of a probe (--probe): "sphere:cx,cy,cz,r", "plane:px,py,pz,nx,ny,nz" or
+ * "box:x0,y0,z0,x1,y1,z1", then ":keep" (the default) or ":cut". tpk_probe_parse reads it (0, or -1 when
+ * it is not that form; tpk_probe_check then judges the values); tpk_probe_format writes it (snprintf's
+ * return), exactly. */
+int tpk_probe_parse(const char *text, tpk_probe *out);
+int tpk_probe_format(const tpk_probe *probe, char *buf, size_t size);
+/* "sphere", "plane", "box" ("?" for another value), and back (0: none of them). */
+const char *tpk_probe_shape_name(int shape);
+int tpk_probe_shape_of(const char *name, size_t length);
 
 /* What every backend derives from checked options in the same way (render_setup.c), so that they cast
  * the same rays and weigh them alike. */

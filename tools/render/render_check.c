@@ -25,6 +25,33 @@ static int check_image(const tpk_render_options *opt, tpk_diag *diag)
     return 0;
 }
 
+int tpk_probe_check(const tpk_probe *p, int number, tpk_diag *diag)
+{
+    if (p->cut != 0 && p->cut != 1)
+        return tpk_diag_fail(diag, "render: probe %d: expected keep (0) or cut (1), found %d", number, p->cut);
+    if (!finite3(p->a) || (p->shape != TPK_PROBE_SPHERE && !finite3(p->b)))
+        return tpk_diag_fail(diag, "render: probe %d: its coordinates must be finite", number);
+    switch (p->shape) {
+    case TPK_PROBE_SPHERE:
+        if (!(isfinite(p->radius) && p->radius > 0))
+            return tpk_diag_fail(diag, "render: probe %d: expected a sphere radius > 0, found %g", number, p->radius);
+        return 0;
+    case TPK_PROBE_PLANE:
+        if (p->b[0] == 0 && p->b[1] == 0 && p->b[2] == 0)
+            return tpk_diag_fail(diag, "render: probe %d: the plane's normal is zero", number);
+        return 0;
+    case TPK_PROBE_BOX:
+        for (int k = 0; k < 3; k++)
+            if (p->a[k] > p->b[k])
+                return tpk_diag_fail(diag, "render: probe %d: box min %g above max %g on axis %c", number, p->a[k],
+                                     p->b[k], "xyz"[k]);
+        return 0;
+    default:
+        return tpk_diag_fail(diag, "render: probe %d: expected shape sphere (1), plane (2) or box (3), found %d",
+                             number, p->shape);
+    }
+}
+
 /* The effects (render.h): each one off when zero. */
 static int check_effects(const tpk_render_options *opt, tpk_diag *diag)
 {
@@ -41,6 +68,11 @@ static int check_effects(const tpk_render_options *opt, tpk_diag *diag)
         if (opt->clip_min[k] > opt->clip_max[k])
             return tpk_diag_fail(diag, "render: clip box min %g above max %g on axis %c", opt->clip_min[k],
                                  opt->clip_max[k], "xyz"[k]);
+    if (opt->probe_count < 0 || opt->probe_count > TPK_RENDER_MAX_PROBES)
+        return tpk_diag_fail(diag, "render: expected 0..%d probes, found %d", TPK_RENDER_MAX_PROBES, opt->probe_count);
+    for (int i = 0; i < opt->probe_count; i++)
+        if (tpk_probe_check(&opt->probes[i], i + 1, diag) != 0)
+            return -1;
     if (opt->have_light && !finite3(opt->light))
         return tpk_diag_fail(diag, "render: the light position must be finite");
     if (opt->ao_rays < 0 || opt->ao_rays > TPK_RENDER_MAX_AO_RAYS)

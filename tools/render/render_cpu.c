@@ -160,15 +160,17 @@ static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t cou
         ray.dir[k] *= inv_len; /* unit direction: t is the distance from the eye */
     tpk_result r = TPK_OK;
     double lo = 0.0, hi = INFINITY;
-    if (rl_clip(opt, job->eye, ray.dir, &lo, &hi)) {
+    rl_spans sp;
+    tpk_segment_fn fn = on_segment;
+    void *user = &ray;
+    if (rl_ray_spans(opt, job->eye, ray.dir, &lo, &hi, &sp, &fn, &user)) {
         tpk_march_stats st;
         if (job->set)
-            r = tpk_set_march_ray(job->set, job->eye, ray.dir, lo, hi, on_segment, &ray, NULL, &st);
+            r = tpk_set_march_ray(job->set, job->eye, ray.dir, lo, hi, fn, user, NULL, &st);
         else if (job->range)
-            r = tpk_march_ray_values(job->range, job->eye, ray.dir, lo, hi, opt->iso, opt->iso_count, on_segment,
-                                     &ray, &st);
+            r = tpk_march_ray_values(job->range, job->eye, ray.dir, lo, hi, opt->iso, opt->iso_count, fn, user, &st);
         else
-            r = tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, on_segment, &ray, &st);
+            r = tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, fn, user, &st);
         ray.steps += st.tet_steps;
     }
     counts[0] += ray.steps;
@@ -442,7 +444,7 @@ int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double d
         return -1;
     /* Normals and tet fields index one file's vertices and tets; a set's segments name a part's. */
     if (opt->shading || opt->shadows || opt->ao_rays > 0 || opt->tet_scalars)
-        return tpk_diag_fail(diag, "render: a part set renders emission-absorption, isosurfaces and a clip box; "
+        return tpk_diag_fail(diag, "render: a part set renders emission-absorption, isosurfaces, a clip box and probes; "
                                    "shading, shadows, ambient occlusion and tet fields need the single file");
     render_job *job = calloc(1, sizeof *job);
     if (!job)

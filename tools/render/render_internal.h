@@ -85,6 +85,18 @@ int ri_jump_crossings(const tpk_render_options *opt, double t, double s_prev, do
 
 /* Clip [*lo, *hi] of the ray org + t dir to the clip box (when opt->clip); 0 when nothing is left. */
 int rl_clip(const tpk_render_options *opt, const double org[3], const double dir[3], double *lo, double *hi);
+/* The probes' spans of one ray (render.h PROBES) and the callback it is marched with. */
+typedef struct rl_spans {
+    double span[TPK_RENDER_MAX_PROBES + 1][2];
+    int n;
+    tpk_segment_fn fn;
+    void *user;
+} rl_spans;
+/* rl_clip, then the probes: [*lo, *hi] becomes the range to march and, with probes, *fn and *user the
+ * callback that cuts each piece to the spans before it calls the given one (kept in sp). 0 when
+ * nothing of the ray is left. */
+int rl_ray_spans(const tpk_render_options *opt, const double org[3], const double dir[3], double *lo, double *hi,
+                 rl_spans *sp, tpk_segment_fn *fn, void **user);
 /* Unit normal of the segment's tet for shading: the point field's gradient direction; 0 when none. */
 int rl_tet_normal(const render_job *job, const tpk_segment *seg, double n[3]);
 /* Unit normal of the segment's entry face v[0..2]; 0 when degenerate. */

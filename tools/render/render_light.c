@@ -25,6 +25,46 @@ int rl_clip(const tpk_render_options *opt, const double org[3], const double dir
     return *lo <= *hi;
 }
 
+/* A piece cut to the spans: each part inside one is a piece of its own, scalars interpolated. */
+static int span_segment(void *user, const tpk_segment *seg)
+{
+    const rl_spans *sp = user;
+    double len = seg->t_out - seg->t_in;
+    for (int i = 0; i < sp->n; i++) {
+        double a = seg->t_in > sp->span[i][0] ? seg->t_in : sp->span[i][0];
+        double b = seg->t_out < sp->span[i][1] ? seg->t_out : sp->span[i][1];
+        if (!(a < b))
+            continue;
+        tpk_segment part = *seg;
+        part.t_in = a;
+        part.t_out = b;
+        part.scalar_in = seg->scalar_in + (seg->scalar_out - seg->scalar_in) * ((a - seg->t_in) / len);
+        part.scalar_out = seg->scalar_in + (seg->scalar_out - seg->scalar_in) * ((b - seg->t_in) / len);
+        if (sp->fn(sp->user, &part))
+            return 1;
+    }
+    return 0;
+}
+
+int rl_ray_spans(const tpk_render_options *opt, const double org[3], const double dir[3], double *lo, double *hi,
+                 rl_spans *sp, tpk_segment_fn *fn, void **user)
+{
+    if (!rl_clip(opt, org, dir, lo, hi))
+        return 0;
+    if (opt->probe_count == 0)
+        return 1;
+    sp->n = tpk_probe_spans(opt->probes, opt->probe_count, org, dir, *lo, *hi, sp->span);
+    if (sp->n == 0)
+        return 0;
+    sp->fn = *fn;
+    sp->user = *user;
+    *fn = span_segment;
+    *user = sp;
+    *lo = sp->span[0][0];
+    *hi = sp->span[sp->n - 1][1];
+    return 1;
+}
+
 static void cross3(const double a[3], const double b[3], double out[3])
 {
     out[0] = a[1] * b[2] - a[2] * b[1];
@@ -129,11 +169,14 @@ static double transmittance(ray_state *ray, const double x[3], const double w[3]
 {
     const render_job *job = ray->job;
     double lo = 0.0, hi = len;
-    if (!rl_clip(job->opt, x, w, &lo, &hi))
-        return 1.0;
     trans_ray tr = {job, 0.0, 1.0, TPK_RENDER_SELF_EPS * job->unit, 0, 0.0, 0.0};
+    rl_spans sp;
+    tpk_segment_fn fn = on_trans_segment;
+    void *user = &tr;
+    if (!rl_ray_spans(job->opt, x, w, &lo, &hi, &sp, &fn, &user))
+        return 1.0;
     tpk_march_stats st;
-    tpk_result r = tpk_march_ray(job->marcher, x, w, lo, hi, on_trans_segment, &tr, &st);
+    tpk_result r = tpk_march_ray(job->marcher, x, w, lo, hi, fn, user, &st);
     ray->steps += st.tet_steps;
     ray->secondary++;
     if (r != TPK_OK && ray->error == TPK_OK)

@@ -181,6 +181,9 @@ typedef struct tpk_vk_params {
     float light[4];
     float cast_info[4];
     int32_t cast_count[4]; /* AO rays, the row after the band, the slice */
+    int32_t probe_info[4]; /* probe count, bit i: probe i cuts */
+    float probe_a[TPK_VK_MAX_PROBES][4]; /* xyz: center, point or min (relative to the origin); w: shape */
+    float probe_b[TPK_VK_MAX_PROBES][4]; /* xyz: the plane's normal or the box's max; w: the radius */
     float tf_s[TPK_VK_TF_MAX];
     float tf_rgba[TPK_VK_TF_MAX][4];
 } tpk_vk_params;

@@ -1,11 +1,15 @@
 /* The Vulkan renderer's parameters for one frame: the options checked by the one check of every backend
  * (tpk_render_check_options) and the limits of this renderer's own buffers, then the camera basis,
- * scalar mapping, clip box and transfer function in the shader's uniform block (render.comp's Params),
+ * scalar mapping, clip box, probes and transfer function in the shader's uniform block (render.comp's Params),
  * derived as every backend derives them (tpk_render_setup_of). No Vulkan call here. */
 #include <math.h>
 #include <string.h>
 
 #include "render_vk_internal.h"
+
+_Static_assert(TPK_VK_MAX_PROBES == TPK_RENDER_MAX_PROBES && TPK_VK_PROBE_SPHERE == TPK_PROBE_SPHERE &&
+                   TPK_VK_PROBE_PLANE == TPK_PROBE_PLANE && TPK_VK_PROBE_BOX == TPK_PROBE_BOX,
+               "the shader's probes are render.h's");
 
 /* ---- Options: the shared check, then what only this renderer limits ------------------------------ */
 
@@ -74,6 +78,17 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
         }
         p->clip_lo[3] = 1.0f;
     }
+    p->probe_info[0] = opt->probe_count;
+    for (int i = 0; i < opt->probe_count; i++) {
+        const tpk_probe *q = &opt->probes[i];
+        p->probe_info[1] |= q->cut ? 1 << i : 0;
+        for (int k = 0; k < 3; k++) {
+            p->probe_a[i][k] = (float)(q->a[k] - mesh->origin[k]);
+            p->probe_b[i][k] = (float)(q->shape == TPK_PROBE_BOX ? q->b[k] - mesh->origin[k] : q->b[k]);
+        }
+        p->probe_a[i][3] = (float)q->shape;
+        p->probe_b[i][3] = (float)q->radius;
+    }
     p->shell_info[0] = (int32_t)face_count;
     p->shell_info[1] = opt->iso_count;
     for (int j = 0; j < opt->iso_count; j++)
@@ -100,6 +115,7 @@ int tpk_vk_effects(const tpk_render_options *opt)
            (opt->occlusion == TPK_OCCLUSION_VERTEX && (opt->shadows || opt->ao_rays > 0) ? TPK_VK_EFFECT_VERTEX : 0);
 }
 
-/* render.comp's Params block, std140: 15 vec4 rows, then the TF's 256 s values and 256 colours. */
-_Static_assert(sizeof(tpk_vk_params) == 15 * 16 + TPK_VK_TF_MAX * 4 + TPK_VK_TF_MAX * 16,
+/* render.comp's Params block, std140: 16 vec4 rows, the probes' 2 x 4, then the TF's 256 s values and 256
+ * colours. */
+_Static_assert(sizeof(tpk_vk_params) == (16 + 2 * TPK_VK_MAX_PROBES) * 16 + TPK_VK_TF_MAX * 4 + TPK_VK_TF_MAX * 16,
                "tpk_vk_params as render.comp's Params");

@@ -416,6 +416,9 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
     if (opt->shadows || opt->ao_rays > 0 || (opt->iso_opacity > 0 && opt->iso_opacity < 1))
         return tpk_diag_fail(diag, "render: --iso-raster draws opaque isosurfaces with shading at most: without "
                                    "--shadows, --ao and --iso-opacity (the ray marcher draws those)");
+    if (opt->probe_count > 0) /* 8 more vec4 than the 128 bytes of push constants every device has */
+        return tpk_diag_fail(diag, "render: --iso-raster cuts isosurfaces with the clip box, not with probes "
+                                   "(the ray marcher draws probes: leave out --iso-raster)");
     tpk_render_setup setup;
     if (tpk_render_setup_of(opt, tpk_positions_diagonal(mesh), &setup, diag) != 0)
         return -1;

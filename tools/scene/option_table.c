@@ -109,6 +109,19 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .scene_key = "clip_box", .scene_type = "[number ×6]",
      .meaning = "`[x0, y0, z0, x1, y1, z1]`: only the volume inside the box shows",
      .scene_default = "no clip", .constraint = "finite, x0 ≤ x1, y0 ≤ y1, z0 ≤ z1"},
+    {TPK_OPT_PROBE,
+     .flag = "--probe", .metavar = "SHAPE:NUMBERS[:cut]", .expects = "sphere:cx,cy,cz,r, plane:px,py,pz,nx,ny,nz or "
+             "box:x0,y0,z0,x1,y1,z1, then :keep (the default) or :cut; at most 4 probes",
+     .help = "a CSG probe (repeat: up to 4): a sphere, a half-space (the\n"
+             "side of the plane its normal points away from) or a box;\n"
+             ":keep shows only what is inside it, :cut cuts that away",
+     .help_rank = 15, .effect = 1,
+     .scene_key = "probes", .scene_type = "[probe ×1..4]",
+     .meaning = "CSG probes, each `{\"shape\": \"sphere\", \"center\": [x, y, z], \"radius\": r}`, "
+                "`{\"shape\": \"plane\", \"point\": [x, y, z], \"normal\": [x, y, z]}` or "
+                "`{\"shape\": \"box\", \"min\": [x, y, z], \"max\": [x, y, z]}`, with `\"mode\": \"keep\"` "
+                "(only the inside shows) or `\"cut\"` (the inside is cut away)",
+     .scene_default = "none", .constraint = "radius > 0, normal ≠ 0, min ≤ max; mode keep (default) or cut"},
     {TPK_OPT_ISO,
      .flag = "--iso", .metavar = "V[,V...]|auto", .expects = "1 to 4 comma-separated finite numbers, or auto",
      .help = "up to 4 exact isosurfaces of the field (scalar units), coloured\n"
@@ -133,28 +146,28 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_SHADING,
      .flag = "--shading", .metavar = NULL, .expects = NULL,
      .help = "gradient shading (two-sided Lambert, ambient 0.3)",
-     .help_rank = 15, .effect = 1,
+     .help_rank = 16, .effect = 1,
      .scene_key = "effects.shading", .scene_type = "boolean",
      .meaning = "gradient (Lambert) shading",
      .scene_default = "false", .constraint = ""},
     {TPK_OPT_SHADOWS,
      .flag = "--shadows", .metavar = NULL, .expects = NULL,
      .help = "shadows: transmittance marched toward the light",
-     .help_rank = 16, .effect = 1,
+     .help_rank = 17, .effect = 1,
      .scene_key = "effects.shadows", .scene_type = "boolean",
      .meaning = "shadows from the point light, transmittance marched through the volume",
      .scene_default = "false", .constraint = ""},
     {TPK_OPT_LIGHT,
      .flag = "--light", .metavar = "x,y,z", .expects = "3 numbers x,y,z",
      .help = "point light position (default: at the eye)",
-     .help_rank = 17, .effect = 1,
+     .help_rank = 18, .effect = 1,
      .scene_key = "effects.light", .scene_type = "[number ×3]",
      .meaning = "point light position, world coordinates",
      .scene_default = "a headlight at the eye", .constraint = "finite"},
     {TPK_OPT_AO_RAYS,
      .flag = "--ao", .metavar = "N", .expects = "a ray count 0..1024 (0: off)",
      .help = "ambient occlusion from N hemisphere rays (0..1024; 0: off)",
-     .help_rank = 18, .effect = 1,
+     .help_rank = 19, .effect = 1,
      .scene_key = "effects.ao_rays", .scene_type = "integer",
      .meaning = "ambient occlusion with this many hemisphere rays; 0 is off",
      .scene_default = "0", .constraint = "0..1024",
@@ -162,7 +175,7 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_AO_RADIUS,
      .flag = "--ao-radius", .metavar = "R", .expects = "a positive length",
      .help = "length of the AO rays (default: bounds diagonal / 10)",
-     .help_rank = 19, .effect = 1,
+     .help_rank = 20, .effect = 1,
      .scene_key = "effects.ao_radius", .scene_type = "number",
      .meaning = "length of the AO rays",
      .scene_default = "bounds diagonal / 10", .constraint = "> 0",
@@ -172,7 +185,7 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help = "where shadow and AO rays start: at each pixel's shade points\n"
              "(ray, default) or once per frame at the mesh vertices, then\n"
              "interpolated (vertex: far fewer rays)",
-     .help_rank = 20, .effect = 1,
+     .help_rank = 21, .effect = 1,
      .scene_key = "effects.occlusion", .scene_type = "string",
      .meaning = "where shadow and AO rays start: `ray` at the shade points of every pixel, `vertex` at the mesh "
                 "vertices (AO over the whole sphere), interpolated in each tet",
@@ -200,7 +213,7 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
              "Default: $TETPACK_RENDER_BACKEND if set, else vulkan on a hardware\n"
              "Vulkan device, else cpu (with only a software rasterizer such as\n"
              "lavapipe the CPU reference is faster; part sets: cpu)",
-     .help_rank = 22,
+     .help_rank = 23,
      .scene_key = "backend", .scene_type = "string",
      .meaning = "renderer; `render --backend` overrides it, and it overrides `$TETPACK_RENDER_BACKEND`; where "
                 "there is no Vulkan device (or a build without the Vulkan renderer) `vulkan` is drawn by the "
@@ -226,43 +239,43 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_THREADS,
      .flag = "--threads", .metavar = "N", .expects = "1..1024",
      .help = "worker threads of the CPU backend (default: all cores)",
-     .help_rank = 21,
+     .help_rank = 22,
      .kind = TPK_OPT_KIND_INT, .lo = 1, .hi = 1024},
     {TPK_OPT_SCENE,
      .flag = "--scene", .metavar = "FILE", .expects = "a scene file",
      .help = "a scene file (spec/scene-json.md): its values first, then the\n"
              "options given here override them",
-     .help_rank = 23},
+     .help_rank = 24},
     {TPK_OPT_SAVE_SCENE,
      .flag = "--save-scene", .metavar = "FILE", .expects = "an output path",
      .help = "write the scene of this render (every value it used) as JSON",
-     .help_rank = 24},
+     .help_rank = 25},
     {TPK_OPT_JSON,
      .flag = "--json", .metavar = NULL, .expects = NULL,
      .help = "print render statistics as JSON (with the backend and\n"
              "backend_reason: why that backend)",
-     .help_rank = 25, .render_only = 1},
+     .help_rank = 26, .render_only = 1},
     {TPK_OPT_LEGEND,
      .flag = "--legend", .metavar = NULL, .expects = NULL,
      .help = "draw a colour bar of the TF on the image: the field's name and\n"
              "units, its range and ticks (cairo; TETPACK_WITH_CAIRO)",
-     .help_rank = 26, .render_only = 1},
+     .help_rank = 27, .render_only = 1},
     {TPK_OPT_SAVE_TPK,
      .flag = "--save-tpk", .metavar = "FILE", .expects = "an output .tpk path",
      .help = "FILE may be any mesh tetpack convert reads: it is converted\n"
              "in memory with convert's defaults; --save-tpk keeps the .tpk",
-     .help_rank = 27},
+     .help_rank = 28},
     {TPK_OPT_VERBOSE,
      .flag = "--verbose", .alias = "-v", .metavar = NULL, .expects = NULL,
      .help = "say on stderr which backend renders and why, and what was\n"
              "converted",
-     .help_rank = 28, .render_only = 1},
+     .help_rank = 29, .render_only = 1},
     {TPK_OPT_ISO_RASTER,
      .flag = "--iso-raster", .metavar = NULL, .expects = NULL,
      .help = "draw the --iso surfaces as triangles (Vulkan: compute extraction\n"
              "and an indirect draw, depth-tested), opaque, with --shading at most;\n"
              "no volume. The ray-marched surface's picture up to rasterization",
-     .help_rank = 29},
+     .help_rank = 30},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

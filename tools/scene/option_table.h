@@ -28,6 +28,7 @@ typedef enum tpk_option_id {
     TPK_OPT_RANGE,
     TPK_OPT_UNIT_DISTANCE,
     TPK_OPT_CLIP_BOX,
+    TPK_OPT_PROBE,
     TPK_OPT_ISO,
     TPK_OPT_ISO_OPACITY,
     TPK_OPT_EFFECTS,

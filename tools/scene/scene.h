@@ -1,5 +1,5 @@
 /* Scene files (spec/scene-json.md): a JSON object that says what a render shows and how (camera,
- * transfer function, field and steps, range, clip box, isosurfaces, effects, layout, size, backend,
+ * transfer function, field and steps, range, clip box, probes, isosurfaces, effects, layout, size, backend,
  * integration). Parsed with cJSON and validated key by key; every error names the file, the line and
  * column, and the key. `render --scene` replays one, `render --save-scene` writes one, and `extract
  * --scene` keeps only what one needs. */
@@ -34,6 +34,7 @@ enum {
     TPK_SCENE_BACKEND = 1u << 16,
     TPK_SCENE_INTEGRATION = 1u << 17,
     TPK_SCENE_OCCLUSION = 1u << 18,
+    TPK_SCENE_PROBES = 1u << 19,
 };
 
 typedef enum tpk_scene_tf_kind { TPK_SCENE_TF_PRESET = 1, TPK_SCENE_TF_FILE = 2, TPK_SCENE_TF_POINTS = 3 } tpk_scene_tf_kind;
@@ -52,6 +53,8 @@ typedef struct tpk_scene {
     double range[2];
     double unit_distance;
     double clip_min[3], clip_max[3];
+    int probe_count;               /* 1..TPK_RENDER_MAX_PROBES when TPK_SCENE_PROBES is given */
+    tpk_probe probes[TPK_RENDER_MAX_PROBES];
     int iso_count;
     double iso[TPK_RENDER_MAX_ISO];
     double iso_opacity;
@@ -85,7 +88,7 @@ char *tpk_scene_to_json(const tpk_scene *scene);
 /* Write the scene to `path` atomically (base/output_file.h). 0, or -1 with a message naming `path`. */
 int tpk_scene_write(const char *path, const tpk_scene *scene, tpk_diag *diag);
 
-/* Set the render options the scene gives (camera, tf, range, unit distance, integration, size, clip,
+/* Set the render options the scene gives (camera, tf, range, unit distance, integration, size, clip, probes,
  * iso, shading, shadows, light, ambient occlusion), leaving the others as they are. `opt->tf` points
  * into `scene`, which must outlive the render. Field, step, layout and backend are for the caller:
  * they pick what to load. */

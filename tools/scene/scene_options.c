@@ -10,6 +10,10 @@ static void apply_effects(const tpk_scene *s, tpk_render_options *opt)
         memcpy(opt->clip_min, s->clip_min, sizeof opt->clip_min);
         memcpy(opt->clip_max, s->clip_max, sizeof opt->clip_max);
     }
+    if (s->given & TPK_SCENE_PROBES) {
+        opt->probe_count = s->probe_count;
+        memcpy(opt->probes, s->probes, sizeof opt->probes);
+    }
     if (s->given & TPK_SCENE_ISO) {
         opt->iso_count = s->iso_count;
         memcpy(opt->iso, s->iso, sizeof opt->iso);
@@ -74,6 +78,11 @@ static void effects_from(const tpk_render_options *opt, tpk_scene *out)
         out->given |= TPK_SCENE_CLIP;
         memcpy(out->clip_min, opt->clip_min, sizeof out->clip_min);
         memcpy(out->clip_max, opt->clip_max, sizeof out->clip_max);
+    }
+    if (opt->probe_count > 0) {
+        out->given |= TPK_SCENE_PROBES;
+        out->probe_count = opt->probe_count;
+        memcpy(out->probes, opt->probes, sizeof out->probes);
     }
     if (opt->iso_count > 0) {
         out->given |= TPK_SCENE_ISO;

@@ -371,6 +371,61 @@ static int key_clip_box(parser *p, const cJSON *v)
     return 0;
 }
 
+/* "probes": 1..TPK_RENDER_MAX_PROBES objects, each checked key by key and by tpk_probe_check. */
+static int key_probes(parser *p, const cJSON *v)
+{
+    char buf[64];
+    int n = cJSON_IsArray(v) ? cJSON_GetArraySize(v) : 0;
+    if (n < 1 || n > TPK_RENDER_MAX_PROBES)
+        return fail_key(p, "probes", "expected an array of 1 to %d probe objects, found %s", TPK_RENDER_MAX_PROBES,
+                        shown(v, buf));
+    int i = 0;
+    for (const cJSON *e = v->child; e; e = e->next, i++) {
+        tpk_probe *q = &p->out->probes[i];
+        memset(q, 0, sizeof *q);
+        if (!cJSON_IsObject(e))
+            return fail_key(p, "probes", "probe %d: expected an object, found %s", i + 1, shown(e, buf));
+        const cJSON *shape = cJSON_GetObjectItemCaseSensitive(e, "shape");
+        if (!cJSON_IsString(shape) || !(q->shape = tpk_probe_shape_of(shape->valuestring, strlen(shape->valuestring))))
+            return fail_key(p, "probes", "probe %d: expected \"shape\": \"sphere\", \"plane\" or \"box\", found %s",
+                            i + 1, shape ? shown(shape, buf) : "no shape");
+        const char *ka = q->shape == TPK_PROBE_SPHERE ? "center" : q->shape == TPK_PROBE_PLANE ? "point" : "min";
+        const char *kb = q->shape == TPK_PROBE_SPHERE ? "radius" : q->shape == TPK_PROBE_PLANE ? "normal" : "max";
+        const char *known[] = {"shape", ka, kb, "mode"};
+        for (const cJSON *f = e->child; f; f = f->next) {
+            int k = 0;
+            while (k < 4 && strcmp(f->string, known[k]))
+                k++;
+            if (k == 4)
+                return fail_key(p, "probes", "probe %d (%s): unknown key '%s'; known keys: shape, %s, %s, mode", i + 1,
+                                shape->valuestring, f->string, ka, kb);
+            for (const cJSON *g = e->child; g != f; g = g->next)
+                if (!strcmp(g->string, f->string))
+                    return fail_key(p, "probes", "probe %d: key '%s' appears twice", i + 1, f->string);
+        }
+        const cJSON *a = cJSON_GetObjectItemCaseSensitive(e, ka), *b = cJSON_GetObjectItemCaseSensitive(e, kb);
+        const cJSON *mode = cJSON_GetObjectItemCaseSensitive(e, "mode");
+        if (!a || !b)
+            return fail_key(p, "probes", "probe %d (%s): expected keys %s and %s", i + 1, shape->valuestring, ka, kb);
+        char what[64];
+        snprintf(what, sizeof what, "probe %d's %s: [x, y, z]", i + 1, ka);
+        if (numbers(p, a, "probes", 3, what, q->a))
+            return -1;
+        snprintf(what, sizeof what, "probe %d's %s: %s", i + 1, kb, q->shape == TPK_PROBE_SPHERE ? "a number" : "[x, y, z]");
+        if (q->shape == TPK_PROBE_SPHERE ? number(p, b, "probes", what, &q->radius) : numbers(p, b, "probes", 3, what, q->b))
+            return -1;
+        if (mode && !(cJSON_IsString(mode) && (!strcmp(mode->valuestring, "keep") || !strcmp(mode->valuestring, "cut"))))
+            return fail_key(p, "probes", "probe %d: expected \"mode\": \"keep\" or \"cut\", found %s", i + 1,
+                            shown(mode, buf));
+        q->cut = mode && !strcmp(mode->valuestring, "cut");
+        tpk_diag d = {0};
+        if (tpk_probe_check(q, i + 1, &d) != 0) /* the renderers' rule, and --probe's */
+            return fail_key(p, "probes", "%s", d.message + strlen("render: "));
+    }
+    p->out->probe_count = n;
+    return 0;
+}
+
 static int key_iso(parser *p, const cJSON *v)
 {
     char buf[64];
@@ -476,6 +531,7 @@ static const struct {
     [TPK_OPT_RANGE] = {key_range, TPK_SCENE_RANGE},
     [TPK_OPT_UNIT_DISTANCE] = {key_unit_distance, TPK_SCENE_UNIT_DISTANCE},
     [TPK_OPT_CLIP_BOX] = {key_clip_box, TPK_SCENE_CLIP},
+    [TPK_OPT_PROBE] = {key_probes, TPK_SCENE_PROBES},
     [TPK_OPT_ISO] = {key_iso, TPK_SCENE_ISO},
     [TPK_OPT_ISO_OPACITY] = {key_iso_opacity, TPK_SCENE_ISO_OPACITY},
     [TPK_OPT_EFFECTS] = {key_effects, 0},

@@ -124,6 +124,25 @@ static void add_selection(cJSON *root, const tpk_scene *s)
         double box[6] = {s->clip_min[0], s->clip_min[1], s->clip_min[2], s->clip_max[0], s->clip_max[1], s->clip_max[2]};
         add_numbers(root, KEY(TPK_OPT_CLIP_BOX), box, 6);
     }
+    if (s->given & TPK_SCENE_PROBES) {
+        cJSON *list = cJSON_AddArrayToObject(root, KEY(TPK_OPT_PROBE));
+        for (int i = 0; list && i < s->probe_count; i++) {
+            const tpk_probe *q = &s->probes[i];
+            cJSON *o = cJSON_CreateObject();
+            if (!o || !cJSON_AddItemToArray(list, o)) {
+                cJSON_Delete(o);
+                break;
+            }
+            cJSON_AddStringToObject(o, "shape", tpk_probe_shape_name(q->shape));
+            add_numbers(o, q->shape == TPK_PROBE_SPHERE ? "center" : q->shape == TPK_PROBE_PLANE ? "point" : "min",
+                        q->a, 3);
+            if (q->shape == TPK_PROBE_SPHERE)
+                add_number(o, "radius", q->radius);
+            else
+                add_numbers(o, q->shape == TPK_PROBE_PLANE ? "normal" : "max", q->b, 3);
+            cJSON_AddStringToObject(o, "mode", q->cut ? "cut" : "keep");
+        }
+    }
     if (s->given & TPK_SCENE_ISO)
         add_numbers(root, KEY(TPK_OPT_ISO), s->iso, s->iso_count);
     if (s->given & TPK_SCENE_ISO_OPACITY)

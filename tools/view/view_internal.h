@@ -34,7 +34,11 @@ typedef struct view_state {
 /* What a key asks for. */
 typedef enum view_action {
     VIEW_NONE, VIEW_NEXT_TF, VIEW_NEXT_FIELD, VIEW_STEP_BACK, VIEW_STEP_FORWARD, VIEW_NEXT_LAYOUT, VIEW_ISO,
-    VIEW_SHADING, VIEW_CLIP, VIEW_SCREENSHOT, VIEW_WRITE_SCENE, VIEW_QUIT
+    VIEW_SHADING, VIEW_CLIP, VIEW_SCREENSHOT, VIEW_WRITE_SCENE, VIEW_QUIT,
+    /* the first probe: its shape (none, sphere, plane, box, none ...), keep or cut, moved along the
+     * camera's right, up and forward axes, grown and shrunk */
+    VIEW_PROBE, VIEW_PROBE_MODE, VIEW_PROBE_LEFT, VIEW_PROBE_RIGHT, VIEW_PROBE_UP, VIEW_PROBE_DOWN, VIEW_PROBE_AWAY,
+    VIEW_PROBE_NEAR, VIEW_PROBE_GROW, VIEW_PROBE_SHRINK
 } view_action;
 
 /* From the options: the field (resolved), step, layout and arrays loaded. 0, or -1 with a message. */
@@ -85,7 +89,8 @@ typedef struct view_input {
     int action_count;
 } view_input;
 
-/* The action of a key: T F [ ] L I S C P W Q (letters either case), VIEW_NONE for others. */
+/* The action of a key: T F [ ] L I S C P W Q O K (letters either case), 4 6 8 2 9 3 + = -, VIEW_NONE for
+ * others. */
 view_action view_key_action(int key);
 /* Open a window of width x height pixels: with an OpenGL context, or (`vulkan`) with none, for a Vulkan
  * surface. 0; -2 with a message when there is no display (or GLFW cannot start); -1 with a message for

@@ -1,5 +1,6 @@
 /* What the viewer shows: the file's arrays for one layout, field and step, the render options, and the
  * keys that change them (TF preset, field, step, layout, iso, shading, clip box); the scene of it all. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -143,6 +144,82 @@ static int next_tf(view_state *s, tpk_diag *diag)
     return 0;
 }
 
+/* The first probe's next shape (none, sphere, plane, box, none ...), made at the middle of the bounds:
+ * a cut sphere of a quarter of the diagonal, a plane facing the camera that keeps the far half, a cut
+ * box from the middle to the upper corner. */
+static void next_probe(view_state *s)
+{
+    tpk_render_options *o = &s->opt;
+    int shape = o->probe_count > 0 ? o->probes[0].shape + 1 : TPK_PROBE_SPHERE;
+    if (shape > TPK_PROBE_BOX) {
+        memmove(o->probes, o->probes + 1, sizeof o->probes[0] * (size_t)(o->probe_count - 1));
+        o->probe_count--;
+        return;
+    }
+    if (o->probe_count == 0)
+        o->probe_count = 1;
+    tpk_probe *p = &o->probes[0];
+    double mid[3], diag2 = 0, fwd[3], len = 0;
+    for (int k = 0; k < 3; k++) {
+        mid[k] = 0.5 * (s->bounds_min[k] + s->bounds_max[k]);
+        diag2 += (s->bounds_max[k] - s->bounds_min[k]) * (s->bounds_max[k] - s->bounds_min[k]);
+        fwd[k] = o->camera.at[k] - o->camera.eye[k];
+        len += fwd[k] * fwd[k];
+    }
+    memset(p, 0, sizeof *p);
+    p->shape = shape;
+    memcpy(p->a, mid, sizeof p->a);
+    if (shape == TPK_PROBE_SPHERE) {
+        p->cut = 1;
+        p->radius = diag2 > 0 ? 0.25 * sqrt(diag2) : 1;
+    } else if (shape == TPK_PROBE_PLANE) {
+        for (int k = 0; k < 3; k++)
+            p->b[k] = len > 0 ? -fwd[k] / sqrt(len) : k == 0;
+    } else {
+        p->cut = 1;
+        memcpy(p->b, s->bounds_max, sizeof p->b);
+        for (int k = 0; k < 3; k++)
+            if (!(p->b[k] > p->a[k]))
+                p->b[k] = p->a[k] + 1;
+    }
+}
+
+/* Move the first probe by a twentieth of the bounds' diagonal along the camera's axis `axis` (0 right,
+ * 1 up, 2 forward) times `sign`, or scale it by 1.25^sign (axis 3: a sphere's radius, a box about its
+ * middle; a plane has no size). */
+static void move_probe(view_state *s, int axis, int sign)
+{
+    tpk_render_options *o = &s->opt;
+    if (o->probe_count == 0)
+        return;
+    tpk_probe *p = &o->probes[0];
+    if (axis == 3) {
+        double f = sign > 0 ? 1.25 : 0.8;
+        if (p->shape == TPK_PROBE_SPHERE)
+            p->radius *= f;
+        for (int k = 0; p->shape == TPK_PROBE_BOX && k < 3; k++) {
+            double mid = 0.5 * (p->a[k] + p->b[k]), half = 0.5 * (p->b[k] - p->a[k]) * f;
+            p->a[k] = mid - half;
+            p->b[k] = mid + half;
+        }
+        return;
+    }
+    tpk_camera_basis basis;
+    tpk_diag quiet = {0};
+    if (tpk_camera_basis_of(&o->camera, 1, 1, &basis, &quiet) != 0)
+        return;
+    const double *dir = axis == 0 ? basis.right : axis == 1 ? basis.up : basis.forward;
+    double diag2 = 0;
+    for (int k = 0; k < 3; k++)
+        diag2 += (s->bounds_max[k] - s->bounds_min[k]) * (s->bounds_max[k] - s->bounds_min[k]);
+    double step = sign * (diag2 > 0 ? sqrt(diag2) / 20 : 0.05);
+    for (int k = 0; k < 3; k++) {
+        p->a[k] += step * dir[k];
+        if (p->shape == TPK_PROBE_BOX)
+            p->b[k] += step * dir[k];
+    }
+}
+
 int view_state_apply(view_state *s, view_action action, tpk_diag *diag)
 {
     switch (action) {
@@ -162,6 +239,19 @@ int view_state_apply(view_state *s, view_action action, tpk_diag *diag)
         memcpy(s->opt.clip_max, s->bounds_max, sizeof s->opt.clip_max);
         s->opt.clip_max[0] = 0.5 * (s->bounds_min[0] + s->bounds_max[0]);
         return 0;
+    case VIEW_PROBE: next_probe(s); return 0;
+    case VIEW_PROBE_MODE:
+        if (s->opt.probe_count > 0)
+            s->opt.probes[0].cut = !s->opt.probes[0].cut;
+        return 0;
+    case VIEW_PROBE_LEFT: move_probe(s, 0, -1); return 0;
+    case VIEW_PROBE_RIGHT: move_probe(s, 0, 1); return 0;
+    case VIEW_PROBE_UP: move_probe(s, 1, 1); return 0;
+    case VIEW_PROBE_DOWN: move_probe(s, 1, -1); return 0;
+    case VIEW_PROBE_AWAY: move_probe(s, 2, 1); return 0;
+    case VIEW_PROBE_NEAR: move_probe(s, 2, -1); return 0;
+    case VIEW_PROBE_GROW: move_probe(s, 3, 1); return 0;
+    case VIEW_PROBE_SHRINK: move_probe(s, 3, -1); return 0;
     default: return 0;
     }
 }
@@ -176,7 +266,9 @@ int view_state_write_scene(const view_state *s, const char *path, int vulkan, tp
 
 void view_state_describe(const view_state *s, char *out, size_t n)
 {
-    snprintf(out, n, "%s: %s%s step %d/%u, tet%d, %s%s%s%s", s->path, s->field[0] ? s->field : "(no field)",
+    snprintf(out, n, "%s: %s%s step %d/%u, tet%d, %s%s%s%s%s%s", s->path, s->field[0] ? s->field : "(no field)",
              s->tet_field ? " (tet)" : "", s->step, s->step_count, (int)s->layout, s->tf.name,
-             s->opt.iso_count ? ", iso" : "", s->opt.shading ? ", shading" : "", s->opt.clip ? ", clip" : "");
+             s->opt.iso_count ? ", iso" : "", s->opt.shading ? ", shading" : "", s->opt.clip ? ", clip" : "",
+             s->opt.probe_count ? ", probe " : "",
+             s->opt.probe_count ? tpk_probe_shape_name(s->opt.probes[0].shape) : "");
 }

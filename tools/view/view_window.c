@@ -48,6 +48,16 @@ view_action view_key_action(int key)
     case 'P': case 'p': return VIEW_SCREENSHOT;
     case 'W': case 'w': return VIEW_WRITE_SCENE;
     case 'Q': case 'q': return VIEW_QUIT;
+    case 'O': case 'o': return VIEW_PROBE;
+    case 'K': case 'k': return VIEW_PROBE_MODE;
+    case '4': return VIEW_PROBE_LEFT;
+    case '6': return VIEW_PROBE_RIGHT;
+    case '8': return VIEW_PROBE_UP;
+    case '2': return VIEW_PROBE_DOWN;
+    case '9': return VIEW_PROBE_AWAY;
+    case '3': return VIEW_PROBE_NEAR;
+    case '+': case '=': return VIEW_PROBE_GROW;
+    case '-': return VIEW_PROBE_SHRINK;
     default: return VIEW_NONE;
     }
 }
@@ -60,6 +70,17 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
         return;
     /* GLFW's codes of letters and brackets are their (upper case) ASCII codes, whatever the keyboard */
     view_action a = key == GLFW_KEY_ESCAPE ? VIEW_QUIT : key > 0 && key < 128 ? view_key_action(key) : VIEW_NONE;
+    switch (key) { /* the arrows and page keys move the probe as 4 6 8 2 9 3 do, as the keypad's keys */
+    case GLFW_KEY_LEFT: case GLFW_KEY_KP_4: a = VIEW_PROBE_LEFT; break;
+    case GLFW_KEY_RIGHT: case GLFW_KEY_KP_6: a = VIEW_PROBE_RIGHT; break;
+    case GLFW_KEY_UP: case GLFW_KEY_KP_8: a = VIEW_PROBE_UP; break;
+    case GLFW_KEY_DOWN: case GLFW_KEY_KP_2: a = VIEW_PROBE_DOWN; break;
+    case GLFW_KEY_PAGE_UP: case GLFW_KEY_KP_9: a = VIEW_PROBE_AWAY; break;
+    case GLFW_KEY_PAGE_DOWN: case GLFW_KEY_KP_3: a = VIEW_PROBE_NEAR; break;
+    case GLFW_KEY_KP_ADD: a = VIEW_PROBE_GROW; break;
+    case GLFW_KEY_KP_SUBTRACT: a = VIEW_PROBE_SHRINK; break;
+    default: break;
+    }
     if (a != VIEW_NONE)
         push(w, a);
 }

@@ -59,6 +59,9 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
     vec4 cast_info;   // x: AO ray length, y: TPK_RENDER_SELF_EPS * unit distance, z: unit distance
     ivec4 cast_count; // x: AO rays; y: the row after this dispatch's rows (a band need not be whole groups);
                       // z: the slice (SLICED: 0 starts the band's rays, later ones resume them)
+    ivec4 probe_info;   // x: probe count; y: bit i set when probe i cuts
+    vec4 probe_a[TPK_VK_MAX_PROBES]; // xyz: center, point or min (relative to the origin); w: shape
+    vec4 probe_b[TPK_VK_MAX_PROBES]; // xyz: the plane's normal or the box's max; w: the sphere's radius
     vec4 tf_s[TPK_VK_TF_MAX / 4];
     vec4 tf_rgba[TPK_VK_TF_MAX];
 } P;
@@ -616,6 +619,97 @@ bool clip_ray(vec3 org, vec3 dir, inout float lo, inout float hi)
     return meets && lo <= hi;
 }
 
+// render.h PROBES (probe.c): the inside of probe i on the ray org + t dir as [t0, t1]; false: missed.
+bool probe_interval(int i, vec3 org, vec3 dir, out float t0, out float t1)
+{
+    const vec4 a = P.probe_a[i], b = P.probe_b[i];
+    t0 = -INF;
+    t1 = INF;
+    if (a.w == float(TPK_VK_PROBE_SPHERE)) {
+        const vec3 e = org - a.xyz;
+        const float q = dot(dir, e), disc = q * q - (dot(e, e) - b.w * b.w);
+        if (disc < 0.0)
+            return false;
+        const float r = sqrt(disc);
+        t0 = -q - r;
+        t1 = -q + r;
+        return true;
+    }
+    if (a.w == float(TPK_VK_PROBE_PLANE)) {
+        const float e = dot(org - a.xyz, b.xyz), f = dot(dir, b.xyz);
+        if (f == 0.0)
+            return e <= 0.0;
+        if (f > 0.0)
+            t1 = -e / f;
+        else
+            t0 = -e / f;
+        return true;
+    }
+    for (int k = 0; k < 3; k++) {
+        if (dir[k] == 0.0) {
+            if (org[k] < a[k] || org[k] > b[k])
+                return false;
+            continue;
+        }
+        const float ta = (a[k] - org[k]) / dir[k], tb = (b[k] - org[k]) / dir[k];
+        t0 = max(t0, min(ta, tb));
+        t1 = min(t1, max(ta, tb));
+    }
+    return t0 <= t1;
+}
+
+#define MAX_SPANS (TPK_VK_MAX_PROBES + 1)
+
+// The spans of [lo, hi] that the probes keep, in order (tpk_probe_spans); their count.
+int probe_spans(vec3 org, vec3 dir, float lo, float hi, out float sa[MAX_SPANS], out float sb[MAX_SPANS])
+{
+    if (!(lo < hi))
+        return 0;
+    int n = 1;
+    sa[0] = lo;
+    sb[0] = hi;
+    for (int i = 0; i < P.probe_info.x && n > 0; i++) {
+        float t0, t1;
+        const bool meets = probe_interval(i, org, dir, t0, t1), cut = (P.probe_info.y & (1 << i)) != 0;
+        if (!meets) {
+            if (!cut)
+                return 0;
+            continue;
+        }
+        float na[MAX_SPANS], nb[MAX_SPANS];
+        int m = 0;
+        for (int j = 0; j < n; j++) {
+            const float p = sa[j], q = sb[j];
+            if (!cut) {
+                const float x = max(p, t0), y = min(q, t1);
+                if (x < y) {
+                    na[m] = x;
+                    nb[m] = y;
+                    m++;
+                }
+                continue;
+            }
+            const float y = min(q, t0), x = max(p, t1);
+            if (p < y && m < MAX_SPANS) {
+                na[m] = p;
+                nb[m] = y;
+                m++;
+            }
+            if (x < q && m < MAX_SPANS) {
+                na[m] = x;
+                nb[m] = q;
+                m++;
+            }
+        }
+        for (int j = 0; j < m; j++) {
+            sa[j] = na[j];
+            sb[j] = nb[j];
+        }
+        n = m;
+    }
+    return n;
+}
+
 // ---- One inside-run (march.c, march_run) --------------------------------------------------------
 
 uint steps_taken;
@@ -796,6 +890,8 @@ float optical_depth(float len, float u0, float u1)
 }
 
 float trans_tau, trans_iso, trans_lo, trans_hi; // the secondary ray being marched (trans_ray)
+float trans_span_a[MAX_SPANS], trans_span_b[MAX_SPANS]; // its spans through the probes
+int trans_span_n;
 uint secondary_rays = 0u;
 bool trans_have_prev;
 float trans_prev_t_out, trans_prev_s;
@@ -834,6 +930,16 @@ bool trans_piece(float t_in, float t_out, float s_in, float s_out)
 int trans_report(float t_in, float t_out, float s_in, float s_out)
 {
     int said = MARCH_GO;
+    if (P.probe_info.x > 0) { // render.h PROBES: each part of the piece inside a span is a piece
+        const float len = t_out - t_in;
+        for (int i = 0; i < trans_span_n; i++) {
+            const float a = max(t_in, trans_span_a[i]), b = min(t_out, trans_span_b[i]);
+            if (a < b && trans_piece(a, b, s_in + (s_out - s_in) * ((a - t_in) / len),
+                                     s_in + (s_out - s_in) * ((b - t_in) / len)))
+                return MARCH_STOP;
+        }
+        return t_out >= trans_hi ? MARCH_STOP : MARCH_GO;
+    }
     if (t_out >= trans_lo) {
         float len = t_out - t_in, a = t_in, b = t_out, sa = s_in, sb = s_out;
         if (t_in < trans_lo) {
@@ -870,6 +976,11 @@ float transmittance_ray(vec3 x, vec3 w, float len)
     float lo = 0.0, hi = len;
     if (!clip_ray(x, w, lo, hi))
         lo = hi = -1.0; // misses the box: marches nothing, T2 = 1 (one exit, see march_run.glsl)
+    else if (P.probe_info.x > 0) {
+        trans_span_n = probe_spans(x, w, lo, hi, trans_span_a, trans_span_b);
+        lo = trans_span_n > 0 ? trans_span_a[0] : -1.0;
+        hi = trans_span_n > 0 ? trans_span_b[trans_span_n - 1] : -1.0;
+    }
     Frame primary = frame;
     vec3 primary_dir = ray_dir, primary_inv = inv_dir;
     float primary_exit = run_exit_t;
@@ -1116,11 +1227,54 @@ int segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
 
 // The range of t a piece may contribute: [0, inf), cut to the clip box when there is one.
 float t_min_clip, t_max_clip;
+// With probes: the primary ray's spans (made again when a slice resumes the ray), and the end of the
+// last part of a piece integrated (a piece redone after MARCH_PAUSE skips the parts already done).
+float span_a[MAX_SPANS], span_b[MAX_SPANS], span_done;
+int span_n;
+
+// [t_min_clip, t_max_clip] cut by the clip box, then by the probes (their first and last span);
+// false when nothing of the primary ray is left.
+bool primary_range()
+{
+    t_min_clip = 0.0;
+    t_max_clip = INF;
+    if (!clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip))
+        return false;
+    if (P.probe_info.x == 0)
+        return true;
+    span_n = probe_spans(P.eye.xyz, ray_dir, t_min_clip, t_max_clip, span_a, span_b);
+    if (span_n == 0)
+        return false;
+    t_min_clip = span_a[0];
+    t_max_clip = span_b[span_n - 1];
+    return true;
+}
+
+// report() with probes: each part of the piece inside a span goes to segment() as a piece of its own.
+int report_spans(float t_in, float t_out, float s_in, float s_out, ivec4 v)
+{
+    const float len = t_out - t_in;
+    for (int i = 0; i < span_n; i++) {
+        const float a = max(t_in, span_a[i]), b = min(t_out, span_b[i]);
+        if (!(a < b) || b <= span_done)
+            continue;
+        const int said = segment(a, b, s_in + (s_out - s_in) * ((a - t_in) / len),
+                                 s_in + (s_out - s_in) * ((b - t_in) / len), v);
+        if (said == MARCH_PAUSE)
+            return MARCH_PAUSE;
+        span_done = b;
+        if (said == MARCH_STOP)
+            return MARCH_STOP;
+    }
+    return t_out >= t_max_clip ? MARCH_STOP : MARCH_GO;
+}
 
 // report(): clip the piece to [t_min_clip, t_max_clip] and integrate it (MARCH_GO, MARCH_STOP or
 // MARCH_PAUSE, see segment).
 int report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
 {
+    if (P.probe_info.x > 0)
+        return report_spans(t_in, t_out, s_in, s_out, v);
     int said = MARCH_GO;
     if (t_out >= t_min_clip) {
         float len = t_out - t_in;
@@ -1215,7 +1369,7 @@ void save_state(uint index, MarchTrace ray, int k, int rays, int flags)
     state[at + 9u] = ibits(int(steps_taken), int(secondary_rays), int(status), k);
     state[at + 10u] = ibits(rays, cast_asked, cast_next, 0);
     state[at + 11u] = vec4(t_cast, shade_s, shade_a, prev_t_out);
-    state[at + 12u] = vec4(prev_s, t_min_clip, t_max_clip, 0.0);
+    state[at + 12u] = vec4(prev_s, t_min_clip, t_max_clip, span_done);
     for (int i = 0; i < MAX_CASTS; i++) {
         const uint c = at + 13u + 3u * uint(i);
         state[c] = vec4(cast_x[i], cast_has_n[i] ? 1.0 : 0.0);
@@ -1262,6 +1416,7 @@ bool load_state(uint index, out MarchTrace ray, out int k, out int rays)
     prev_s = w12.x;
     t_min_clip = w12.y;
     t_max_clip = w12.z;
+    span_done = w12.w;
     for (int i = 0; i < MAX_CASTS; i++) {
         const uint c = at + 13u + 3u * uint(i);
         const vec4 c0 = state[c], c1 = state[c + 1u], c2 = state[c + 2u];
@@ -1301,15 +1456,16 @@ void main()
             transmittance = 1.0;
             steps_taken = 0u;
             status = TPK_VK_STATUS_OK;
-            t_min_clip = 0.0;
-            t_max_clip = INF;
-            if (frame_init(P.eye.xyz, ray_dir) && clip_ray(P.eye.xyz, ray_dir, t_min_clip, t_max_clip)) {
+            span_done = -INF;
+            if (frame_init(P.eye.xyz, ray_dir) && primary_range()) {
                 ray = trace_start(t_min_clip, t_max_clip);
                 done = false;
             }
         } else {
             live = load_state(index, ray, k, rays);
             done = !live;
+            if (live && P.probe_info.x > 0)
+                primary_range(); // the spans the first slice made (the same arithmetic, the same floats)
             frame_init(P.eye.xyz, ray_dir); // the primary ray's frame, as the first slice made it
         }
         // One loop, so that a secondary ray runs at the top level, not inside the primary march

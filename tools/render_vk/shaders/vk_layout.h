@@ -99,6 +99,10 @@
 #define TPK_VK_STATUS_MESH 1 /* inconsistent connectivity (TPK_ERR_MESH on the CPU) */
 
 #define TPK_VK_TF_MAX 256   /* == TPK_TF_MAX_POINTS */
+#define TPK_VK_MAX_PROBES 4 /* == TPK_RENDER_MAX_PROBES */
+#define TPK_VK_PROBE_SPHERE 1 /* == TPK_PROBE_SPHERE, _PLANE, _BOX */
+#define TPK_VK_PROBE_PLANE 2
+#define TPK_VK_PROBE_BOX 3
 #define TPK_VK_GROUP 8      /* workgroup: 8 x 8 pixels */
 
 #endif
