@@ -22,6 +22,8 @@ typedef struct match_job {
     const tpk_face_matcher *m;
     int64_t lo, hi;                   /* the bucket window */
     int64_t first_item;               /* the workers' item ranges start here */
+    int plain;                        /* tets from the array, every one kept, untagged, all buckets: the
+                                       * tight loops below (connect's case) */
     int64_t buckets;                  /* hi - lo */
     uint32_t item_mask;
     uint32_t *starts[TPK_MAX_THREADS]; /* per worker, per bucket: count, then next slot (< 2^32 entries;
@@ -81,6 +83,26 @@ static inline int item_buckets(const match_job *job, int64_t i, int32_t *b)
     return n;
 }
 
+static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *count, int worker)
+{
+    const tpk_face_matcher *m = job->m;
+    for (int64_t t = begin; t < end; t++) {
+        const int32_t *v = m->tets + 4 * t;
+        if (m->check_ids && has_repeat(v)) {
+            job->bad_item[worker] = t;
+            return;
+        }
+        tpk_sorted_tet s;
+        tpk_sort_tet(v, &s);
+        if (m->check_ids && (s.id[0] < 0 || s.id[3] >= m->vertex_count)) {
+            job->bad_item[worker] = t;
+            return;
+        }
+        count[s.id[0]]++;
+        count[s.id[1]]++;
+    }
+}
+
 static void count_entries(void *ctx, int64_t begin, int64_t end, int worker)
 {
     match_job *job = ctx;
@@ -89,6 +111,10 @@ static void count_entries(void *ctx, int64_t begin, int64_t end, int worker)
     int32_t b[256];
     memset(count, 0, sizeof *count * (size_t)job->buckets);
     job->bad_item[worker] = -1;
+    if (job->plain) {
+        count_plain(job, begin, end, count, worker);
+        return;
+    }
     for (int64_t i = begin + job->first_item; i < end + job->first_item; i++) {
         if (m->keep && !m->keep(m->user, i))
             continue;
@@ -108,6 +134,15 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
     const tpk_face_matcher *m = job->m;
     uint32_t *next = job->starts[worker];
     int32_t b[256];
+    if (job->plain) {
+        for (int64_t t = begin; t < end; t++) {
+            tpk_sorted_tet s;
+            tpk_sort_tet(m->tets + 4 * t, &s);
+            job->entries[next[s.id[0]]++] = (uint32_t)t;
+            job->entries[next[s.id[1]]++] = (uint32_t)t;
+        }
+        return;
+    }
     for (int64_t i = begin + job->first_item; i < end + job->first_item; i++) {
         uint32_t entry = (uint32_t)i;
         if (m->tag) {
@@ -415,6 +450,7 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
     job->lo = m->window_hi > 0 ? m->window_lo : 0;
     job->hi = m->window_hi > 0 ? m->window_hi : m->vertex_count;
     job->buckets = job->hi - job->lo;
+    job->plain = m->tets && !m->keep && !m->tag && job->lo == 0 && job->hi == m->vertex_count && items_begin == 0;
     job->item_mask = m->tag_bits ? UINT32_MAX >> m->tag_bits : UINT32_MAX;
     int threads = m->threads;
     for (int w = 0; w < threads; w++)
