@@ -1,20 +1,18 @@
 /* Face use (TPK-M05, 605): a triple of vertex ids is a face of at most two tets, and a face has neighbor
  * -1 exactly when no other tet has it, or when its two tets lie on the same side of it (a fold whose
- * adjacency the writer cut, spec §6.7; decided exactly, after the pass, for the few such faces). Faces
- * are bucketed by their smallest id (a counting sort, by the rule of mesh/face_buckets.h that connect
- * and check_topo_match.c use) and compared within buckets. A mutual neighbor pair is one entry of
- * weight 2, so interior faces cost one key, not two; the buckets are filled a vertex window at a time so
- * the keys never exceed a fixed budget, whatever the mesh size. */
+ * adjacency the writer cut, spec §6.7; decided exactly, after the pass, for the few such faces). The face
+ * matcher (mesh/face_match.h, runs mode) compares the faces bucket by bucket. A mutual neighbor pair counts
+ * as one face of weight 2 (the other side is skipped), and the matcher runs a vertex window at a time, so
+ * the faces in memory never exceed a fixed budget, whatever the mesh size. */
 #include <inttypes.h>
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
 #include "base/parallel.h"
 #include "mesh/face_buckets.h"
+#include "mesh/face_match.h"
 
-#define KEY_BUDGET ((int64_t)1 << 22) /* keys in memory at once, over all workers: 32 MiB */
-#define KEY_BOUNDARY 1u
-#define KEY_PAIR 2u
+#define KEY_BUDGET ((int64_t)1 << 22) /* faces bucketed at once, over all workers */
 
 static void sorted_face(const int32_t q[4], int k, int32_t f[3])
 {
@@ -61,56 +59,6 @@ static void count_keys(const tpkc *c, int64_t *start, int32_t *span)
         start[v + 1] += start[v];
 }
 
-/* Keys of the faces whose smallest id is in [lo, hi); start[v] advances to the end of bucket v. */
-static void fill_window(const tpkc *c, int64_t lo, int64_t hi, int64_t first_tet, int64_t end_tet, int64_t *start,
-                        int64_t base, uint64_t *keys)
-{
-    for (int64_t t = first_tet; t < end_tet; t++) {
-        int32_t q[4];
-        if (!c->face_class[t] || !tpkc_tet(c, t, q))
-            continue;
-        tpk_sorted_tet s;
-        tpk_sort_tet(q, &s);
-        if ((s.id[0] < lo || s.id[0] >= hi) && (s.id[1] < lo || s.id[1] >= hi))
-            continue; /* no face of t starts in this window: the common case */
-        for (int smallest = 1; smallest >= 0; smallest--) {
-            int32_t v = s.id[smallest ? 0 : 1];
-            if (v < lo || v >= hi)
-                continue;
-            tpk_bucket_face f[3];
-            int n = tpk_tet_bucket_faces(&s, smallest, f);
-            for (int i = 0; i < n; i++) {
-                int cls = face_class(c, t, f[i].opposite);
-                if (cls == TPKC_FACE_SKIP)
-                    continue;
-                uint64_t flags = cls == TPKC_FACE_BOUNDARY ? KEY_BOUNDARY : cls == TPKC_FACE_PAIR ? KEY_PAIR : 0;
-                keys[start[v]++ - base] = ((uint64_t)f[i].mid << 33) | ((uint64_t)f[i].max << 2) | flags;
-            }
-        }
-    }
-}
-
-static int compare_keys(const void *pa, const void *pb)
-{
-    uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
-    return a < b ? -1 : a > b;
-}
-
-static void sort_bucket(uint64_t *keys, int64_t n)
-{
-    if (n > 24) {
-        qsort(keys, (size_t)n, sizeof *keys, compare_keys);
-        return;
-    }
-    for (int64_t i = 1; i < n; i++) {
-        uint64_t key = keys[i];
-        int64_t j = i;
-        for (; j > 0 && keys[j - 1] > key; j--)
-            keys[j] = keys[j - 1];
-        keys[j] = key;
-    }
-}
-
 /* A face of two tets that both record neighbor -1 across it: allowed when they lie on the same side. */
 typedef struct cut_face {
     int32_t ids[3];  /* ascending */
@@ -124,7 +72,7 @@ typedef struct cut_list {
     int failed;
 } cut_list;
 
-static void add_cut(cut_list *cuts, int64_t v, uint64_t key)
+static void add_cut(cut_list *cuts, const int32_t ids[3])
 {
     if (cuts->count == cuts->cap) {
         int64_t cap = cuts->cap ? 2 * cuts->cap : 16;
@@ -138,34 +86,46 @@ static void add_cut(cut_list *cuts, int64_t v, uint64_t key)
     }
     cut_face *f = &cuts->faces[cuts->count++];
     memset(f, 0, sizeof *f);
-    f->ids[0] = (int32_t)v;
-    f->ids[1] = (int32_t)(key >> 33);
-    f->ids[2] = (int32_t)((key >> 2) & 0x7fffffff);
+    memcpy(f->ids, ids, sizeof f->ids);
 }
 
-static void check_bucket(tpkc_sink *sink, cut_list *cuts, int64_t v, uint64_t *keys, int64_t n)
+/* The tets of one window: those with a recorded face class, as their layout gives them. */
+static int window_tet(void *user, int64_t t, int32_t q[4]);
+
+typedef struct window_match {
+    const tpkc *c;
+    tpkc_sink *sink;
+    cut_list *cuts;
+} window_match;
+
+static int window_tet(void *user, int64_t t, int32_t q[4])
 {
-    sort_bucket(keys, n);
-    for (int64_t i = 0; i < n;) {
-        int64_t tets = 0, j = i, boundaries = 0;
-        int boundary = 0;
-        for (; j < n && keys[j] >> 2 == keys[i] >> 2; j++) {
-            tets += (keys[j] & KEY_PAIR) ? 2 : 1;
-            boundary |= (keys[j] & KEY_BOUNDARY) != 0;
-            boundaries += (keys[j] & KEY_BOUNDARY) != 0;
-        }
-        if (tets == 2 && boundaries == 2) {
-            add_cut(cuts, v, keys[i]); /* decided by resolve_cuts */
-        } else if (tets >= 3 || (tets == 2 && boundary)) {
-            tpk_example *ex = tpkc_hit(sink, 605, "face");
-            int64_t mid = (int64_t)(keys[i] >> 33), max = (int64_t)((keys[i] >> 2) & 0x7fffffff);
-            tpk_example_ids(ex, 3, (const int64_t[]){v, mid, max});
-            if (tets >= 3)
-                tpk_example_note(ex, "a face of %" PRId64 " tets (their ids follow the 3 vertex ids)", tets);
-            else
-                tpk_example_note(ex, "a face of 2 tets, but one records neighbor -1 across it (tet ids follow)");
-        }
-        i = j;
+    const tpkc *c = ((const window_match *)user)->c;
+    return c->face_class[t] && tpkc_tet(c, t, q);
+}
+
+/* A run of equal faces from the matcher; faces of class SKIP (the other side of a mutual pair, counted by
+ * the pair's weight 2) are left out. */
+static void check_face(void *user, int worker, int64_t v, const tpk_match_face *faces, int64_t n)
+{
+    window_match *w = user;
+    int64_t tets = 0, boundaries = 0;
+    (void)worker;
+    for (int64_t i = 0; i < n; i++) {
+        int cls = face_class(w->c, faces[i].item, faces[i].local);
+        tets += cls == TPKC_FACE_PAIR ? 2 : cls != TPKC_FACE_SKIP;
+        boundaries += cls == TPKC_FACE_BOUNDARY;
+    }
+    int32_t ids[3] = {(int32_t)v, (int32_t)(faces[0].key >> 32), (int32_t)(uint32_t)faces[0].key};
+    if (tets == 2 && boundaries == 2) {
+        add_cut(w->cuts, ids); /* decided by resolve_cuts */
+    } else if (tets >= 3 || (tets == 2 && boundaries)) {
+        tpk_example *ex = tpkc_hit(w->sink, 605, "face");
+        tpk_example_ids(ex, 3, (const int64_t[]){ids[0], ids[1], ids[2]});
+        if (tets >= 3)
+            tpk_example_note(ex, "a face of %" PRId64 " tets (their ids follow the 3 vertex ids)", tets);
+        else
+            tpk_example_note(ex, "a face of 2 tets, but one records neighbor -1 across it (tet ids follow)");
     }
 }
 
@@ -240,31 +200,34 @@ static void resolve_cuts(const tpkc *c, cut_face *cuts, int64_t count, tpkc_sink
 }
 
 typedef struct window {
-    int64_t lo, hi, base;      /* vertices [lo, hi), their keys from start[lo] */
+    int64_t lo, hi;             /* vertices [lo, hi) */
     int64_t first_tet, end_tet; /* the tets with a face starting in the window lie in [first_tet, end_tet) */
 } window;
 
 typedef struct face_pass {
     const tpkc *c;
-    int64_t *start;
     const window *windows;
-    uint64_t **keys;   /* one buffer per worker */
     tpkc_sink *sinks;  /* one per window, merged in window order */
     cut_list *cuts;    /* one per window: faces whose two tets both record -1 */
+    int failed;        /* out of memory in a window */
 } face_pass;
 
 static void window_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     face_pass *p = ctx;
+    (void)worker;
     for (int64_t i = begin; i < end; i++) {
         const window *w = &p->windows[i];
-        fill_window(p->c, w->lo, w->hi, w->first_tet, w->end_tet, p->start, w->base, p->keys[worker]);
-        for (int64_t v = w->lo, first = w->base; v < w->hi; first = p->start[v], v++)
-            check_bucket(&p->sinks[i], &p->cuts[i], v, p->keys[worker] + (first - w->base), p->start[v] - first);
+        window_match user = {p->c, &p->sinks[i], &p->cuts[i]};
+        tpk_face_matcher m = {.item_count = p->c->T, .vertex_count = p->c->V, .window_lo = w->lo,
+                              .window_hi = w->hi, .item_begin = w->first_tet, .item_end = w->end_tet,
+                              .threads = 1, .user = &user, .tet = window_tet, .run = check_face};
+        if (w->end_tet > w->first_tet && tpk_face_match(&m, NULL) != TPK_MATCH_OK)
+            __atomic_store_n(&p->failed, 1, __ATOMIC_RELAXED);
     }
 }
 
-/* Vertex windows whose keys fit `capacity` (a window of one vertex may need more: capacity grows). */
+/* Vertex windows whose faces fit `capacity` (a window of one vertex may need more). */
 static window *plan_windows(const int64_t *start, const int32_t *span, int64_t V, int64_t *capacity,
                             int64_t *count)
 {
@@ -275,7 +238,7 @@ static window *plan_windows(const int64_t *start, const int32_t *span, int64_t V
     for (int64_t lo = 0, hi; lo < V; lo = hi) {
         for (hi = lo + 1; hi < V && start[hi + 1] - start[lo] <= *capacity; hi++)
             ;
-        window w = {lo, hi, start[lo], INT32_MAX, 0};
+        window w = {lo, hi, INT32_MAX, 0};
         for (int64_t v = lo; v < hi; v++) {
             w.first_tet = span[2 * v] < w.first_tet ? span[2 * v] : w.first_tet;
             w.end_tet = span[2 * v + 1] + 1 > w.end_tet ? span[2 * v + 1] + 1 : w.end_tet;
@@ -302,23 +265,20 @@ int tpkc_check_faces(tpkc *c, tpk_diag *diag)
     int64_t capacity = KEY_BUDGET / threads, window_count = 0;
     window *windows = plan_windows(start, span, c->V, &capacity, &window_count);
     free(span);
-    uint64_t *keys[TPK_MAX_THREADS] = {NULL};
+    free(start);
     tpkc_sink *sinks = calloc((size_t)window_count + 1, sizeof *sinks); /* the last: the cut faces */
     cut_list *cuts = calloc((size_t)window_count + 1, sizeof *cuts);
     cut_list all = {0};
     int ok = windows && sinks && cuts;
-    for (int w = 0; ok && w < threads; w++)
-        ok = (keys[w] = malloc(sizeof *keys[w] * (size_t)(capacity + 1))) != NULL;
     if (ok) {
         for (int64_t i = 0; i <= window_count; i++)
             sinks[i].max_examples = c->report->options.max_examples;
-        face_pass pass = {c, start, windows, keys, sinks, cuts};
+        face_pass pass = {c, windows, sinks, cuts, 0};
         tpk_parallel_for(window_count, threads < window_count ? threads : (int)window_count, window_range, &pass);
+        ok = !pass.failed;
         for (int64_t i = 0; i < window_count && ok; i++) {
             for (int64_t k = 0; k < cuts[i].count && !all.failed; k++) {
-                add_cut(&all, 0, 0);
-                if (!all.failed)
-                    all.faces[all.count - 1] = cuts[i].faces[k];
+                add_cut(&all, cuts[i].faces[k].ids);
             }
             ok = !cuts[i].failed && !all.failed;
         }
@@ -332,10 +292,7 @@ int tpkc_check_faces(tpkc *c, tpk_diag *diag)
         free(cuts[i].faces);
     free(cuts);
     free(all.faces);
-    for (int w = 0; w < threads; w++)
-        free(keys[w]);
     free(sinks);
     free(windows);
-    free(start);
     return ok ? 0 : tpk_diag_fail(diag, "out of memory for the face keys of %" PRId64 " tets", c->T);
 }

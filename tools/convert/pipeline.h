@@ -8,6 +8,7 @@
 
 #include "base/diag.h"
 #include "base/predicates.h" /* tpk_orient3d_exact, for the stages' users */
+#include "mesh/face_buckets.h" /* tpk_face_parity */
 #include "mesh/mesh.h"
 #include "tetpack.h"
 
@@ -121,15 +122,6 @@ typedef struct tpk_unfold_stats {
  * are cut. `neighbors` holds 4 * tet_count. */
 int tpk_connect_unfolded(tpk_tetmesh *mesh, const uint8_t *turned_over, int flags, int threads, int32_t *neighbors,
                          tpk_unfold_stats *stats, tpk_diag *diag);
-
-/* 1 when the face opposite local vertex k of tet v, in outward order, is an odd permutation of its ids in
- * ascending order (0 when even). Two positive tets that share a face see it with different parities
- * unless it is folded (tpk_connect_folds, tpk_find_folds). */
-static inline int tpk_face_parity(const int32_t *v, int k)
-{
-    int32_t a = v[tpk_tet_faces[k][0]], b = v[tpk_tet_faces[k][1]], c = v[tpk_tet_faces[k][2]];
-    return (a > b) ^ (a > c) ^ (b > c);
-}
 
 /* Number of boundary faces (neighbor -1). */
 int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count);

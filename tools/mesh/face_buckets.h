@@ -11,6 +11,8 @@
 
 #include <stdint.h>
 
+#include "tetpack_format.h" /* tpk_tet_faces */
+
 /* A tet's ids ascending, and where each came from: id[r] = v[local[r]]. */
 typedef struct tpk_sorted_tet {
     int32_t id[4];
@@ -56,6 +58,15 @@ static inline int tpk_tet_bucket_faces(const tpk_sorted_tet *s, int smallest, tp
     f[1] = (tpk_bucket_face){s->local[2], s->id[1], s->id[3]};
     f[2] = (tpk_bucket_face){s->local[1], s->id[2], s->id[3]};
     return 3;
+}
+
+/* 1 when the face opposite local vertex k of tet v, in outward order, is an odd permutation of its ids in
+ * ascending order (0 when even). Two positive tets that share a face see it with different parities
+ * unless it is folded (connect's fold candidates, tpk_find_folds). */
+static inline int tpk_face_parity(const int32_t *v, int k)
+{
+    int32_t a = v[tpk_tet_faces[k][0]], b = v[tpk_tet_faces[k][1]], c = v[tpk_tet_faces[k][2]];
+    return (a > b) ^ (a > c) ^ (b > c);
 }
 
 #endif
