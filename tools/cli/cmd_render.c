@@ -6,15 +6,14 @@
 #include <string.h>
 
 #include "base/output_file.h"
-#include "base/strbuf.h"
 #include "cli.h"
 #include "render/render.h"
-#include "render/legend.h"
 #include "render/render_backend.h"
 #include "scene/scene.h"
 #include "tetpack.h"
 #include "render/transfer_function.h"
 #include "render_args.h"
+#include "render_frame.h"
 #include "render_input.h"
 #ifdef TPK_WITH_VULKAN
 #include "render_vk/render_vk.h"
@@ -64,82 +63,6 @@ static int load_step(const render_args *a, tpk_file *file, int tet_field, int st
     return r == TPK_OK ? 0 : tpk_cli_fail_file("render", a->path, tpk_error_text(file));
 }
 
-/* What a frame marches: one file's arrays, or a part set's link-following marcher. */
-typedef struct frame_source {
-    const tpk_mesh_arrays *mesh;
-    const tpk_set_marcher *set;
-    int has_scalars;  /* the set's parts carry a point field */
-    double diagonal;  /* of the box of all the set's positions */
-    const tpk_field_desc *field; /* the field shown (its name and units for --legend) */
-    double iso_auto;  /* --iso auto's value (NAN: not asked) */
-} frame_source;
-
-static int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt,
-                        const char *output, uint8_t *rgba)
-{
-    tpk_diag diag;
-    memset(&diag, 0, sizeof diag);
-    tpk_render_stats stats;
-    memset(&stats, 0, sizeof stats);
-    int vulkan = 0;
-#ifdef TPK_WITH_VULKAN
-    vulkan = !src->set && !strcmp(a->backend, "vulkan");
-#endif
-    if (a->iso_raster && (src->set || !vulkan))
-        return tpk_cli_fail("render", "--iso-raster draws with Vulkan (a single file, --backend vulkan)%s",
-#ifdef TPK_WITH_VULKAN
-                            ""
-#else
-                            ": this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)"
-#endif
-        );
-    if ((src->set     ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
-#ifdef TPK_WITH_VULKAN
-         : a->iso_raster ? tpk_render_iso_raster(src->mesh, opt, rgba, &stats, &diag)
-         : vulkan     ? tpk_render_vulkan(src->mesh, opt, rgba, &stats, &diag)
-#endif
-                      : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
-        return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
-    tpk_legend legend = {opt->tf, opt->range_min, opt->range_max, src->field ? src->field->name : NULL,
-                         src->field ? src->field->units : NULL};
-    if (a->legend && tpk_legend_draw(rgba, a->width, a->height, &legend, &diag) != 0)
-        return tpk_cli_fail("render", "%s", diag.message);
-    if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
-        return tpk_cli_fail("render", "%s", diag.message);
-    if (a->json) {
-        printf("{\"image\":\"%s\",\"backend\":\"%s\",\"device\":\"%s\",\"width\":%d,\"height\":%d,"
-               "\"rays\":%llu,\"secondary_rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f,\"device_bytes\":%llu",
-               output, vulkan ? "vulkan" : "cpu", vulkan ? a->device : "cpu", a->width, a->height,
-               (unsigned long long)stats.rays,
-               (unsigned long long)stats.secondary_rays, (unsigned long long)stats.tet_steps, stats.seconds,
-               (unsigned long long)stats.device_bytes);
-        if (vulkan && stats.gpu_seconds >= 0)
-            printf(",\"gpu_seconds\":%.6f", stats.gpu_seconds);
-        else
-            printf(",\"gpu_seconds\":null"); /* the CPU reference, or a device without timestamps */
-        if (vulkan)
-            printf(",\"setup\":{\"device\":%.6f,\"upload\":%.6f,\"pipeline\":%.6f,\"first_frame\":%.6f},"
-                   "\"pipeline_cache\":{\"loaded_bytes\":%llu,\"hits\":%d}",
-                   stats.setup_device_seconds, stats.setup_upload_seconds, stats.setup_pipeline_seconds,
-                   stats.first_frame_seconds, (unsigned long long)stats.pipeline_cache_bytes, stats.pipeline_cache_hits);
-        if (!isnan(src->iso_auto))
-            printf(",\"iso_auto\":%.9g", src->iso_auto);
-        printf(",\"iso_culling\":%s", stats.iso_culling ? "true" : "false");
-        if (a->iso_raster)
-            printf(",\"iso_raster\":{\"triangles\":%llu,\"path\":\"compute extraction + indirect draw\","
-                   "\"mesh_shader\":\"%s\"}", (unsigned long long)stats.iso_triangles,
-                   stats.iso_mesh_shader ? "VK_EXT_mesh_shader present, its path not written yet" : "VK_EXT_mesh_shader absent");
-        tpk_strbuf reason = {0};
-        tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
-        printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");
-        tpk_strbuf_free(&reason);
-    } else
-        printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
-               (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,
-               (unsigned long long)stats.tet_steps, stats.seconds);
-    return TPK_EXIT_OK;
-}
-
 /* The output path of `step`: -o itself, or its pattern filled in with --steps. */
 static int frame_path(const render_args *a, int step, char *path, size_t cap)
 {
@@ -150,28 +73,6 @@ static int frame_path(const render_args *a, int step, char *path, size_t cap)
     int n = snprintf(path, cap, a->output, step);
 #pragma GCC diagnostic pop
     return n >= 0 && n < (int)cap ? 0 : -1;
-}
-
-/* The scene of this render, every value it used, so that render --scene gives the same images. */
-static int save_scene(const render_args *a, tpk_file *file, const tpk_render_options *opt)
-{
-    char first[sizeof ((tpk_field_desc *)0)->name] = "";
-    for (uint32_t i = 0; !a->field && !first[0] && i < tpk_field_count(file); i++) {
-        tpk_field_desc d;
-        if (tpk_get_field(file, i, &d) == TPK_OK && d.association == TPK_ASSOC_POINT)
-            memcpy(first, d.name, sizeof first); /* the first point field: the one tpk_load_arrays took */
-    }
-    tpk_scene scene;
-    tpk_scene_from_options(opt, a->field ? a->field : first, a->step, render_args_layout(file, a->layout), &scene);
-    if (a->backend && !strcmp(a->backend, "vulkan")) /* the backend that drew it (same picture either way) */
-        scene.backend = TPK_SCENE_BACKEND_VULKAN;
-    scene.step_last = a->step_last;
-    scene.step_range = a->have_steps;
-    tpk_diag diag;
-    memset(&diag, 0, sizeof diag);
-    if (tpk_scene_write(a->save_scene, &scene, &diag) != 0)
-        return tpk_cli_fail("render", "%s", diag.message);
-    return 0;
 }
 
 /* The backend of this render (render/render_backend.h: --backend, the scene's, $TETPACK_RENDER_BACKEND,
@@ -250,7 +151,7 @@ static int render_file(render_args *a, tpk_file *file)
                                                  .iso_auto = iso_auto}, &opt, path, rgba);
     }
     free(rgba);
-    if (rc == TPK_EXIT_OK && a->save_scene && save_scene(a, file, &opt) != 0)
+    if (rc == TPK_EXIT_OK && a->save_scene && render_save_scene(a, file, &opt) != 0)
         return TPK_EXIT_USAGE;
     return rc;
 }
@@ -289,120 +190,6 @@ static int check_outputs(const render_args *a)
     return 0;
 }
 
-/* ---- Part sets (spec §15): every part loaded, marched across the cuts by its links ---------------- */
-
-typedef struct set_view {
-    double bounds_min[3], bounds_max[3]; /* of the parts' headers */
-    double range[2];                     /* the field's, over all parts */
-    double lo[3], hi[3];                 /* of the stored positions, as one file's */
-    int has_scalars;
-} set_view;
-
-/* Part p's arrays and links, merged into the view's boxes and range. */
-static int load_part(const render_args *a, tpk_partset *set, uint32_t p, tpk_mesh_arrays *mesh,
-                     const tpk_link **links, uint64_t *link_count, set_view *v)
-{
-    tpk_file *file = tpk_partset_file(set, p);
-    int association;
-    if (render_args_check_field("render", a, file, &association))
-        return TPK_EXIT_USAGE;
-    if (association == TPK_ASSOC_TET)
-        return tpk_cli_fail("render", "%s: '%s' is a tet field; a part set renders point fields (render a part, "
-                            "or the single file)", a->path, a->field);
-    tpk_result r = tpk_load_arrays(file, render_args_layout(file, a->layout), a->field, (uint32_t)a->step, mesh);
-    if (r == TPK_OK)
-        r = tpk_partset_links(set, p, links, link_count);
-    if (r != TPK_OK)
-        return tpk_cli_fail("render", "%s: part %u: %s", a->path, p, tpk_error_text(file));
-    tpk_file_info info;
-    tpk_get_info(file, &info);
-    double range[2];
-    render_args_field_range(file, a->field, range);
-    v->has_scalars = mesh->scalars != NULL;
-    for (int k = 0; k < 3; k++) {
-        v->bounds_min[k] = p == 0 || info.bounds_min[k] < v->bounds_min[k] ? info.bounds_min[k] : v->bounds_min[k];
-        v->bounds_max[k] = p == 0 || info.bounds_max[k] > v->bounds_max[k] ? info.bounds_max[k] : v->bounds_max[k];
-    }
-    v->range[0] = p == 0 || range[0] < v->range[0] ? range[0] : v->range[0];
-    v->range[1] = p == 0 || range[1] > v->range[1] ? range[1] : v->range[1];
-    for (uint64_t i = 0; i < mesh->vertex_count; i++)
-        for (int k = 0; k < 3; k++) {
-            double x = mesh->positions[3 * i + k];
-            v->lo[k] = x < v->lo[k] ? x : v->lo[k];
-            v->hi[k] = x > v->hi[k] ? x : v->hi[k];
-        }
-    return 0;
-}
-
-/* One frame of the set: the options from the arguments, with the set's box and range as defaults. */
-static int render_set_frame(const render_args *a, tpk_partset *set, const tpk_set_marcher *marcher,
-                            const set_view *v)
-{
-    tpk_transfer_function tf;
-    if (render_args_load_tf("render", a, &tf))
-        return TPK_EXIT_USAGE;
-    tpk_render_options opt;
-    tpk_render_options_default(&opt);
-    render_args_to_options(a, tpk_partset_file(set, 0), &tf, &opt);
-    if (!a->have_camera)
-        tpk_camera_default(v->bounds_min, v->bounds_max, &opt.camera);
-    if (!a->have_range)
-        opt.range_min = v->range[0], opt.range_max = v->range[1];
-    double d2 = 0;
-    for (int k = 0; k < 3; k++)
-        d2 += v->hi[k] > v->lo[k] ? (v->hi[k] - v->lo[k]) * (v->hi[k] - v->lo[k]) : 0;
-    if (!(a->unit_distance > 0)) /* the default scale of the whole set, not of part 0 */
-        opt.unit_distance = render_args_default_unit(v->bounds_min, v->bounds_max);
-    tpk_field_desc field;
-    int have_field = render_args_field_desc(tpk_partset_file(set, 0), a->field, &field) == 0;
-    if (have_field && !a->have_range)
-        field.min_value = (float)v->range[0], field.max_value = (float)v->range[1];
-    frame_source src = {.set = marcher, .has_scalars = v->has_scalars, .diagonal = sqrt(d2),
-                        .field = have_field ? &field : NULL, .iso_auto = NAN};
-    uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
-    if (!rgba)
-        return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
-    int rc = render_frame(a, &src, &opt, a->output, rgba);
-    free(rgba);
-    if (rc == TPK_EXIT_OK && a->save_scene && save_scene(a, tpk_partset_file(set, 0), &opt) != 0)
-        return TPK_EXIT_USAGE;
-    return rc;
-}
-
-static int render_set(const render_args *a)
-{
-    if (a->have_steps)
-        return tpk_cli_fail("render", "%s: a part set renders one step (--step N), not a range", a->path);
-    if (a->iso_auto)
-        return tpk_cli_fail("render", "%s: --iso auto takes one file's median; for a part set give --iso V", a->path);
-    if (a->backend && !strcmp(a->backend, "vulkan") && !a->backend_from_scene)
-        return tpk_cli_fail("render", "%s: a part set renders with the CPU reference only (--backend cpu)", a->path);
-    tpk_partset *set = NULL;
-    char err[1024] = "";
-    tpk_result r = tpk_partset_open(&set, a->path, NULL, NULL, NULL, err, sizeof err);
-    if (r != TPK_OK)
-        return tpk_cli_fail("render", "%s", err[0] ? err : tpk_result_string(r));
-    uint32_t n = tpk_partset_part_count(set);
-    tpk_mesh_arrays *meshes = calloc(n, sizeof *meshes);
-    const tpk_link **links = calloc(n, sizeof *links);
-    uint64_t *link_counts = calloc(n, sizeof *link_counts);
-    set_view v = {.lo = {INFINITY, INFINITY, INFINITY}, .hi = {-INFINITY, -INFINITY, -INFINITY}};
-    int rc = meshes && links && link_counts ? 0 : tpk_cli_fail("render", "out of memory for %u parts", n);
-    for (uint32_t p = 0; rc == 0 && p < n; p++)
-        rc = load_part(a, set, p, &meshes[p], &links[p], &link_counts[p], &v);
-    tpk_set_marcher *marcher = NULL;
-    if (rc == 0 && (r = tpk_set_marcher_create(&marcher, n, meshes, links, link_counts)) != TPK_OK)
-        rc = tpk_cli_fail("render", "%s: cannot march across its parts: %s", a->path, tpk_result_string(r));
-    if (rc == 0)
-        rc = render_set_frame(a, set, marcher, &v);
-    tpk_set_marcher_destroy(marcher);
-    free(meshes);
-    free(links);
-    free(link_counts);
-    tpk_partset_close(set);
-    return rc;
-}
-
 int tpk_cmd_render(int argc, char **argv)
 {
     render_args a;
@@ -432,7 +219,7 @@ int tpk_cmd_render(int argc, char **argv)
     uint64_t part_chunk;
     if (tpk_find_chunk(in.file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
         render_input_close(&in);
-        return render_set(&a);
+        return render_part_set(&a);
     }
     int rc = render_file(&a, in.file);
     render_input_close(&in);

@@ -1,0 +1,103 @@
+/* One frame of tetpack render (the backend, --legend, the PNG, the report) and the scene it used; for
+ * cmd_render.c and render_set.c (part sets). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "base/strbuf.h"
+#include "cli.h"
+#include "render/legend.h"
+#include "render/render.h"
+#include "render_frame.h"
+#include "scene/scene.h"
+#include "tetpack.h"
+#ifdef TPK_WITH_VULKAN
+#include "render_vk/render_vk.h"
+#endif
+
+int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt, const char *output,
+                 uint8_t *rgba)
+{
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    tpk_render_stats stats;
+    memset(&stats, 0, sizeof stats);
+    int vulkan = 0;
+#ifdef TPK_WITH_VULKAN
+    vulkan = !src->set && !strcmp(a->backend, "vulkan");
+#endif
+    if (a->iso_raster && (src->set || !vulkan))
+        return tpk_cli_fail("render", "--iso-raster draws with Vulkan (a single file, --backend vulkan)%s",
+#ifdef TPK_WITH_VULKAN
+                            ""
+#else
+                            ": this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)"
+#endif
+        );
+    if ((src->set     ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
+#ifdef TPK_WITH_VULKAN
+         : a->iso_raster ? tpk_render_iso_raster(src->mesh, opt, rgba, &stats, &diag)
+         : vulkan     ? tpk_render_vulkan(src->mesh, opt, rgba, &stats, &diag)
+#endif
+                      : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
+        return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
+    tpk_legend legend = {opt->tf, opt->range_min, opt->range_max, src->field ? src->field->name : NULL,
+                         src->field ? src->field->units : NULL};
+    if (a->legend && tpk_legend_draw(rgba, a->width, a->height, &legend, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    if (tpk_write_png(output, a->width, a->height, rgba, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    if (a->json) {
+        printf("{\"image\":\"%s\",\"backend\":\"%s\",\"device\":\"%s\",\"width\":%d,\"height\":%d,"
+               "\"rays\":%llu,\"secondary_rays\":%llu,\"tet_steps\":%llu,\"seconds\":%.6f,\"device_bytes\":%llu",
+               output, vulkan ? "vulkan" : "cpu", vulkan ? a->device : "cpu", a->width, a->height,
+               (unsigned long long)stats.rays,
+               (unsigned long long)stats.secondary_rays, (unsigned long long)stats.tet_steps, stats.seconds,
+               (unsigned long long)stats.device_bytes);
+        if (vulkan && stats.gpu_seconds >= 0)
+            printf(",\"gpu_seconds\":%.6f", stats.gpu_seconds);
+        else
+            printf(",\"gpu_seconds\":null"); /* the CPU reference, or a device without timestamps */
+        if (vulkan)
+            printf(",\"setup\":{\"device\":%.6f,\"upload\":%.6f,\"pipeline\":%.6f,\"first_frame\":%.6f},"
+                   "\"pipeline_cache\":{\"loaded_bytes\":%llu,\"hits\":%d}",
+                   stats.setup_device_seconds, stats.setup_upload_seconds, stats.setup_pipeline_seconds,
+                   stats.first_frame_seconds, (unsigned long long)stats.pipeline_cache_bytes, stats.pipeline_cache_hits);
+        if (!isnan(src->iso_auto))
+            printf(",\"iso_auto\":%.9g", src->iso_auto);
+        printf(",\"iso_culling\":%s", stats.iso_culling ? "true" : "false");
+        if (a->iso_raster)
+            printf(",\"iso_raster\":{\"triangles\":%llu,\"path\":\"compute extraction + indirect draw\","
+                   "\"mesh_shader\":\"%s\"}", (unsigned long long)stats.iso_triangles,
+                   stats.iso_mesh_shader ? "VK_EXT_mesh_shader present, its path not written yet" : "VK_EXT_mesh_shader absent");
+        tpk_strbuf reason = {0};
+        tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
+        printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");
+        tpk_strbuf_free(&reason);
+    } else
+        printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
+               (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,
+               (unsigned long long)stats.tet_steps, stats.seconds);
+    return TPK_EXIT_OK;
+}
+
+int render_save_scene(const render_args *a, tpk_file *file, const tpk_render_options *opt)
+{
+    char first[sizeof ((tpk_field_desc *)0)->name] = "";
+    for (uint32_t i = 0; !a->field && !first[0] && i < tpk_field_count(file); i++) {
+        tpk_field_desc d;
+        if (tpk_get_field(file, i, &d) == TPK_OK && d.association == TPK_ASSOC_POINT)
+            memcpy(first, d.name, sizeof first); /* the first point field: the one tpk_load_arrays took */
+    }
+    tpk_scene scene;
+    tpk_scene_from_options(opt, a->field ? a->field : first, a->step, render_args_layout(file, a->layout), &scene);
+    if (a->backend && !strcmp(a->backend, "vulkan")) /* the backend that drew it (same picture either way) */
+        scene.backend = TPK_SCENE_BACKEND_VULKAN;
+    scene.step_last = a->step_last;
+    scene.step_range = a->have_steps;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_scene_write(a->save_scene, &scene, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
+    return 0;
+}

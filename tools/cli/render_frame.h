@@ -1,0 +1,32 @@
+/* One frame of tetpack render and the scene it used: cmd_render.c owns them, render_set.c (part sets)
+ * uses them too. */
+#ifndef TPK_CLI_RENDER_FRAME_H
+#define TPK_CLI_RENDER_FRAME_H
+
+#include <stdint.h>
+
+#include "render/render.h"
+#include "render_args.h"
+#include "tetpack.h"
+
+/* What a frame marches: one file's arrays, or a part set's link-following marcher. */
+typedef struct frame_source {
+    const tpk_mesh_arrays *mesh;
+    const tpk_set_marcher *set;
+    int has_scalars;  /* the set's parts carry a point field */
+    double diagonal;  /* of the box of all the set's positions */
+    const tpk_field_desc *field; /* the field shown (its name and units for --legend) */
+    double iso_auto;  /* --iso auto's value (NAN: not asked) */
+} frame_source;
+
+/* Render one frame of `src` with `opt` into rgba (width x height of the arguments) and write it to
+ * `output` as PNG (with --legend, --json, -v as the arguments say). A TPK_EXIT_* code. */
+int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt, const char *output,
+                 uint8_t *rgba);
+/* The scene of this render, every value it used, so that render --scene gives the same images
+ * (--save-scene). 0, or TPK_EXIT_USAGE with a message printed. */
+int render_save_scene(const render_args *a, tpk_file *file, const tpk_render_options *opt);
+/* tetpack render of a part set's manifest (render_set.c). A TPK_EXIT_* code. */
+int render_part_set(const render_args *a);
+
+#endif
