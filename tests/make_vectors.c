@@ -80,7 +80,7 @@ static void spec_tet16(const tpk_tet20 *in, tpk_tet16 *out)
 static size_t spec_shell(const int32_t (*tets)[4], const int32_t (*neighbors)[4], size_t tet_count,
                          tpk_shell_face *out)
 {
-    static const int faces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    const int (*faces)[3] = tpk_tet_faces; /* the spec's order (tetpack_format.h) */
     size_t count = 0;
     for (size_t t = 0; t < tet_count; t++)
         for (int j = 0; j < 4; j++)

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "base/predicates.h"
+#include "tetpack_format.h"
 #ifdef TPK_WITH_TETGEN
 #include "mesher/tetgen_guard.h"
 #endif
@@ -59,7 +60,7 @@ static triple sorted_triple(int32_t a, int32_t b, int32_t c)
 static int boundary_matches(const tpk_fixed_tets *r, const int32_t *triangles, int32_t triangle_count, char *why,
                             size_t cap)
 {
-    static const int opposite[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+    const int (*opposite)[3] = tpk_tet_faces; /* face k opposite corner k; sorted below, so unoriented */
     triple *faces = malloc(sizeof *faces * (size_t)(4 * r->tet_count + 1));
     triple *input = malloc(sizeof *input * (size_t)(triangle_count + 1));
     int rc = faces && input ? 0 : -1;
