@@ -12,6 +12,7 @@
 #include "render/render.h"
 #include "render/transfer_function.h"
 #include "render_vk/render_vk.h"
+#include "vk_device.h"
 #include "tetpack.h"
 #include "tpk_assert.h"
 
@@ -160,15 +161,6 @@ static int compare_layouts(scene *s, const char *name)
     for (int l = 0; l < 3; l++)
         free(img[l]);
     return rc;
-}
-
-static int have_device(void)
-{
-    char why[512];
-    if (tpk_vulkan_available(why, sizeof why))
-        return 1;
-    tpk_test_skip(why);
-    return 0;
 }
 
 TPK_TEST(sample_layouts)

@@ -10,15 +10,7 @@
 #include "iso/iso.h"
 #include "march_fixtures.h"
 #include "render_vk/render_vk.h"
-
-static int have_device(void)
-{
-    char why[512];
-    if (tpk_vulkan_available(why, sizeof why))
-        return 1;
-    tpk_test_skip(why);
-    return 0;
-}
+#include "vk_device.h"
 
 static tpk_iso_input input_of(const fx_mesh *m)
 {

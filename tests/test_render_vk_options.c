@@ -10,6 +10,7 @@
 #include "render/render.h"
 #include "render/transfer_function.h"
 #include "render_vk/render_vk.h"
+#include "vk_device.h"
 #include "tetpack.h"
 #include "tpk_assert.h"
 
@@ -71,15 +72,6 @@ static void break_options(size_t c, tpk_render_options *opt, tpk_transfer_functi
     case 19: opt->camera.fovy_deg = 180; break;
     default: opt->occlusion = 2; break;
     }
-}
-
-static int have_device(void)
-{
-    char why[512];
-    if (tpk_vulkan_available(why, sizeof why))
-        return 1;
-    tpk_test_skip(why);
-    return 0;
 }
 
 TPK_TEST(both_backends_reject_alike)
