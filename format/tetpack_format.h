@@ -17,9 +17,12 @@ extern "C" {
 #define TPK_MAGIC_SIZE 8
 
 #define TPK_VERSION_MAJOR 1
-#define TPK_VERSION_MINOR 2
-/* A file without a chunk of 1.2 (PART, LINK) is written as 1.1: its bytes stay those of 1.1 writers. */
+#define TPK_VERSION_MINOR 3
+/* A file without a chunk of 1.2 (PART, LINK) or 1.3 (LEVL) is written as 1.1: its bytes stay those of
+ * 1.1 writers; one with PART or LINK as 1.2, one with LEVL as 1.3. */
 #define TPK_VERSION_MINOR_PLAIN 1
+#define TPK_VERSION_MINOR_PARTS 2
+#define TPK_VERSION_MINOR_LEVELS 3
 
 #define TPK_HEADER_SIZE 192u
 #define TPK_DIR_ENTRY_SIZE 64u
@@ -46,6 +49,8 @@ extern "C" {
 /* Format 1.2, part sets (spec §15): */
 #define TPK_TAG_PART TPK_FOURCC('P', 'A', 'R', 'T') /* manifest: tpk_part_record per part, as BYTE */
 #define TPK_TAG_LINK TPK_FOURCC('L', 'I', 'N', 'K') /* part: tpk_link per cut shell face, as 4 I32 */
+/* Format 1.3, levels of detail (spec §16): */
+#define TPK_TAG_LEVL TPK_FOURCC('L', 'E', 'V', 'L') /* a complete .tpk of level `index` (1..), as BYTE, codec none */
 
 /* Directory entry flags. Bits other than these are reserved and must be zero. */
 #define TPK_CHUNK_REQUIRED 0x0001u

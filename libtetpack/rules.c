@@ -89,7 +89,7 @@ int tpki_known_tag(uint32_t tag, uint32_t *out_elem_type, int *out_required)
         {TPK_TAG_FDSC, TPK_ELEM_FIELD_DESC, 1}, {TPK_TAG_FDAT, TPK_ELEM_F32, 1},
         {TPK_TAG_TIME, TPK_ELEM_F64, 0},        {TPK_TAG_TMAP, TPK_ELEM_I32, 0},
         {TPK_TAG_VMAP, TPK_ELEM_I32, 0},        {TPK_TAG_PART, TPK_ELEM_BYTE, 0},
-        {TPK_TAG_LINK, TPK_ELEM_I32, 0},
+        {TPK_TAG_LINK, TPK_ELEM_I32, 0},        {TPK_TAG_LEVL, TPK_ELEM_BYTE, 0},
     };
     for (size_t k = 0; k < sizeof known / sizeof known[0]; k++) {
         if (known[k].tag == tag) {
@@ -360,7 +360,7 @@ static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir
     if (e->elem_type != elem_type)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: elem_type %u, but tag %s needs elem_type %" PRIu32,
                              name, e->elem_type, tag, elem_type);
-    if (e->tag != TPK_TAG_FDAT && (e->index != 0 || e->step != 0))
+    if (e->tag != TPK_TAG_FDAT && e->tag != TPK_TAG_LEVL && (e->index != 0 || e->step != 0))
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: index %" PRIu32 " and step %" PRIu32 " must be 0",
                              name, e->index, e->step);
     const char *what = NULL;
@@ -378,6 +378,10 @@ static tpk_result check_entry_tag(const tpk_header *h, uint64_t i, const tpk_dir
     if (e->tag == TPK_TAG_LINK && e->elem_count % 4 != 0)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: %" PRIu64 " values, not a whole number of 4-value links", name,
                          e->elem_count);
+    /* Format 1.3: a level is a whole file, stored as it is, so a reader opens it over the mapping. */
+    if (e->tag == TPK_TAG_LEVL && (e->codec != TPK_CODEC_NONE || e->index == 0 || e->step != 0))
+        return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: a level is stored uncompressed, with index 1 or more and step 0 "
+                         "(codec %u, index %u, step %u)", name, (unsigned)e->codec, e->index, e->step);
     if (e->tag == TPK_TAG_FDSC && e->elem_count == 0)
         return tpki_fail(diag, TPK_ERR_CORRUPT, "%s: no field descriptors; a file without fields has no 'FDSC' "
                              "chunk (format 1.1)", name);

@@ -321,6 +321,17 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *bvh, const double org[3], c
                                 double tmax, const double *values, int count, tpk_segment_fn fn, void *user,
                                 tpk_march_stats *stats);
 
+/* ---- Levels of detail (format 1.3, spec §16) ----------------------------------------------------- */
+
+/* How many levels of detail the file holds (its LEVL chunks; levels 1..n, each coarser than the last,
+ * level 0 being the file itself). */
+uint32_t tpk_level_count(const tpk_file *file);
+/* Open level `level` (1..tpk_level_count) as a file of its own: every function of this header reads it
+ * as it reads any file. It is a view of the parent's bytes: close it before the parent. On failure *out
+ * is NULL and err_text says why (no such level; a LEVL chunk that is not a valid file). */
+tpk_result tpk_open_level(tpk_file *file, uint32_t level, const tpk_open_options *options, tpk_file **out,
+                          char *err_text, size_t err_cap);
+
 /* ---- Part sets (format 1.2, spec §15) ------------------------------------------------------------ */
 
 /* A part set: a manifest (a .tpk with a PART chunk, conventionally .tpkset) listing part files, each

@@ -69,6 +69,8 @@ int tpk_check_path(const char *path, const char *format, tpk_check_report *repor
         double t0 = tpk_now_seconds();
         int32_t *tets = NULL; /* recovered by the 6xx walk, handed to the mesh build */
         int rc = tpk_check_tpk_file_tets(path, file, report, &tets, diag);
+        if (rc == 0)
+            rc = tpk_check_levels(path, file, report, diag);
         report->seconds[6] = tpk_now_seconds() - t0;
         report->ran[6] = 1;
         tpk_file_info info;

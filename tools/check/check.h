@@ -154,6 +154,9 @@ int tpk_check_fields(const tpk_check_input *in, tpk_check_report *report, tpk_di
  * with check ids 601..613). */
 struct tpk_file;
 int tpk_check_tpk_file(const char *path, struct tpk_file *file, tpk_check_report *report, tpk_diag *diag);
+/* Check 615 and 600..613 on every level of detail of the file (spec §16; check_levels.c). 0, or -1 with
+ * a message when a check could not run. */
+int tpk_check_levels(const char *path, struct tpk_file *file, tpk_check_report *report, tpk_diag *diag);
 /* The file's mesh as a tpk_mesh for the mesh-level groups: tets as cells of type 10 (from TT32, else
  * recovered from Tet20/Tet16), world coordinates (origin + stored positions) and every field with all
  * steps. Returns -1 (diag set) when the tets cannot be recovered; the 6xx findings say why. */

@@ -112,6 +112,10 @@ static const tpk_check_def registry[] = {
      "TPK-S01 (part sets): a LINK record is not answered by the same face from the other part (its link back, "
      "its tet, the same three vertex positions, the same order of their ids); ids: face, part, other part, "
      "other face, other tet"},
+    {615, "tpk_l01_levels", E, "file",
+     "TPK-L01 (levels of detail): a LEVL chunk is not a level of this file (it does not open; not numbered "
+     "1..n; not fewer tets than the level before; other fields or layouts; positions outside the file's "
+     "bounds; levels, parts or links of its own); id: the level"},
 };
 
 const tpk_check_def *tpk_check_registry(int *count)

@@ -25,6 +25,11 @@ static const char convert_help[] =
     "                              without --field, scalar cell fields are then kept too\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
+    "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
+    "                              the same domain with about a fifth of the tets of the one before\n"
+    "                              (interior vertices collapsed, tets kept positive, the shell kept\n"
+    "                              exactly), stored in the file; fewer when the mesh stops coarsening.\n"
+    "                              render --level K and --max-ms pick one, extract --level K writes one\n"
     "  --parts N                   write a part set instead (spec §15): OUTPUT is its manifest (name it\n"
     "                              .tpkset) and N part files <stem>-<p>.tpk beside it, each a complete\n"
     "                              .tpk; the tets are cut into N runs of equal length along the Hilbert\n"
@@ -201,6 +206,10 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.format = v;
         } else if (!strcmp(arg, "--no-reorder")) {
             a->options.no_reorder = 1;
+        } else if (!strncmp(arg, "--levels", 8)) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--levels")) || tpk_cli_parse_int(v, 1, 8, &a->options.levels))
+                return tpk_cli_fail("convert", "--levels expects a number of levels from 1 to 8, found '%s'",
+                                    v ? v : "");
         } else if (!strncmp(arg, "--parts", 7)) {
             if (!(v = tpk_cli_value(argc, argv, &i, "--parts")) || tpk_cli_parse_int(v, 1, 65536, &a->options.parts))
                 return tpk_cli_fail("convert", "--parts expects a number of parts from 1 to 65536, found '%s'",
@@ -242,6 +251,8 @@ static int parse_args(int argc, char **argv, convert_args *a)
     }
     if (npos != 2)
         return tpk_cli_fail("convert", "expected INPUT and OUTPUT.tpk (see tetpack convert --help)");
+    if (a->options.levels > 0 && a->options.parts > 0)
+        return tpk_cli_fail("convert", "--levels and --parts: levels of detail are for one file, not a part set");
     a->options.input = positional[0];
     a->options.output = positional[1];
     a->options.fields = a->options.field_count ? a->fields : NULL;
@@ -318,10 +329,23 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                           (long long)r->polyhedra, (long long)r->fixed_boundary_cells, (long long)r->bad_cells_skipped,
                           (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped, (long long)r->folds_cut);
         tpk_convert_repairs_json(&sb, &a->options, r);
+        tpk_strbuf_printf(&sb, ",\"levels\":[");
+        for (int k = 0; k < r->level_count; k++) {
+            tpk_strbuf_printf(&sb, "%s{\"level\":%d,\"vertices\":%lld,\"tets\":%lld,\"bytes\":%llu,"
+                              "\"error_samples\":%lld,\"error_max\":", k ? "," : "", k + 1,
+                              (long long)r->level[k].vertices, (long long)r->level[k].tets,
+                              (unsigned long long)r->level[k].bytes, (long long)r->level[k].error_samples);
+            tpk_strbuf_json_number(&sb, r->level[k].error_max);
+            tpk_strbuf_printf(&sb, ",\"error_rms\":");
+            tpk_strbuf_json_number(&sb, r->level[k].error_rms);
+            tpk_strbuf_printf(&sb, ",\"shell_distance\":");
+            tpk_strbuf_json_number(&sb, r->level[k].shell_distance);
+            tpk_strbuf_printf(&sb, ",\"seconds\":%.6f}", r->level[k].seconds);
+        }
         tpk_strbuf_printf(&sb,
-                          ",\"seconds\":{\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"
-                          "\"connect\":%.6f,\"write\":%.6f,\"total\":%.6f}}\n",
-                          r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect,
+                          "],\"seconds\":{\"import\":%.6f,\"tetrahedralize\":%.6f,\"orient\":%.6f,\"reorder\":%.6f,"
+                          "\"connect\":%.6f,\"levels\":%.6f,\"write\":%.6f,\"total\":%.6f}}\n",
+                          r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect, r->t_levels,
                           r->t_write, r->t_total);
         if (!sb.failed)
             fputs(sb.data, stdout);
@@ -342,9 +366,24 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->polyhedra,
                (long long)r->steiner_cells, (long long)r->face_steiner_points, (long long)r->fixed_boundary_cells,
                (long long)r->bad_cells_skipped);
-    printf("  time: %.3f s (import %.3f, tetrahedralize %.3f, orient %.3f, reorder %.3f, connect %.3f, "
-           "write %.3f)\n",
-           r->t_total, r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect, r->t_write);
+    for (int k = 0; k < r->level_count; k++) {
+        printf("  level %d: %lld tets, %lld vertices, %.2f MiB; ", k + 1, (long long)r->level[k].tets,
+               (long long)r->level[k].vertices, (double)r->level[k].bytes / 1048576.0);
+        if (r->level[k].error_samples > 0)
+            printf("field error at %lld removed vertices: max %.4g, RMS %.4g; ", (long long)r->level[k].error_samples,
+                   r->level[k].error_max, r->level[k].error_rms);
+        else
+            printf("no point field to measure an error on; ");
+        printf("shell distance %g (the same shell)\n", r->level[k].shell_distance);
+    }
+    if (a->options.levels > r->level_count)
+        printf("  levels: %d of the %d asked (the next would keep more than 85%% of the tets before it)\n",
+               r->level_count, a->options.levels);
+    printf("  time: %.3f s (import %.3f, tetrahedralize %.3f, orient %.3f, reorder %.3f, connect %.3f, ", r->t_total,
+           r->t_import, r->t_tetrahedralize, r->t_orient, r->t_reorder, r->t_connect);
+    if (r->level_count)
+        printf("levels %.3f, ", r->t_levels);
+    printf("write %.3f)\n", r->t_write);
 }
 
 int tpk_cmd_convert(int argc, char **argv)

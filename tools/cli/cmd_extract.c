@@ -27,6 +27,8 @@ static const char extract_help[] =
     "  --clip-box x0,y0,z0,x1,y1,z1 keep the tets that meet this box (default: all tets)\n"
     "  --probe SHAPE:NUMBERS[:cut]  keep the tets that may show through this CSG probe (repeat: up to 4;\n"
     "                               sphere:cx,cy,cz,r, plane:px,py,pz,nx,ny,nz or box:x0,y0,z0,x1,y1,z1)\n"
+    "  --level K                    read level of detail K of IN.tpk (spec §16; tetpack info lists them)\n"
+    "                               instead of the full mesh: OUT.tpk is that level, as its own file\n"
     "  --zstd LEVEL                 0: store uncompressed, 1..22: zstd (default: as the input stored each)\n"
     "  --save-scene FILE            write the scene for OUT.tpk: steps renumbered, and camera and range\n"
     "                               made explicit from IN.tpk, so it renders the same picture\n"
@@ -106,6 +108,10 @@ static int parse_option(int argc, char **argv, int *i, extract_args *a)
         if (tpk_probe_check(&o->probes[o->probe_count], o->probe_count + 1, &d))
             return tpk_cli_fail("extract", "--probe '%s': %s", v, d.message + strlen("render: "));
         o->probe_count++;
+    } else if (!strncmp(arg, "--level", 7)) {
+        if (!VALUE("--level") || tpk_cli_parse_int(v, 0, 8, &o->level))
+            return tpk_cli_fail("extract", "--level expects a level of detail 0..8 (0: the file itself), found '%s'",
+                                v ? v : "");
     } else if (!strncmp(arg, "--zstd", 6)) {
         if (!VALUE("--zstd") || tpk_cli_parse_int(v, 0, 22, &o->zstd_level))
             return tpk_cli_fail("extract", "--zstd expects a level 0..22, found '%s'", v ? v : "");

@@ -1,4 +1,5 @@
 /* tetpack info: header, chunks, fields, sizes and checksum status of a .tpk. */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -18,9 +19,11 @@ static const char info_help[] =
     "and the parts (with --json: part_set, part_count, tets, vertex_records, shell_faces (outer),\n"
     "cut_faces, file_bytes, bounds and parts [{file, vertices, tets, shell_faces, outer_faces,\n"
     "cut_faces, file_bytes, bounds}]).\n"
+    "Levels of detail (spec §16) are listed after the chunks, each opened and checked like a file.\n"
     "\n"
     "  --json   one JSON object: format_version, vertices, tets, shell_faces, layouts, fields\n"
     "           [{name, association, steps, units, min, max}], times, bounds {min, max}, origin,\n"
+    "           levels [{level, vertices, tets, shell_faces, file_bytes, ok}],\n"
     "           chunks [{tag, codec, required, index, step, elements, offset, stored_bytes, raw_bytes}],\n"
     "           file_bytes, checksums_ok, metadata (the META chunk's JSON object, or null)\n";
 
@@ -124,6 +127,42 @@ static void json_chunks(tpk_strbuf *sb, tpk_file *file, const tpk_file_info *inf
     tpk_strbuf_printf(sb, "]");
 }
 
+/* Level k's counts (0 when it does not open) and whether its chunks verify. */
+static tpk_result level_info(tpk_file *file, uint32_t k, tpk_file_info *out, char *err, size_t cap)
+{
+    tpk_file *lf = NULL;
+    memset(out, 0, sizeof *out);
+    tpk_result r = tpk_open_level(file, k, NULL, &lf, err, cap);
+    if (r == TPK_OK) {
+        tpk_get_info(lf, out);
+        r = tpk_verify(lf);
+        if (r != TPK_OK)
+            snprintf(err, cap, "level %u: %s", k, tpk_error_text(lf));
+        tpk_close(lf);
+    }
+    return r;
+}
+
+static void json_levels(tpk_strbuf *sb, tpk_file *file)
+{
+    tpk_strbuf_printf(sb, ",\"levels\":[");
+    for (uint32_t k = 1; k <= tpk_level_count(file); k++) {
+        tpk_file_info li;
+        char err[512] = "";
+        tpk_result r = level_info(file, k, &li, err, sizeof err);
+        tpk_strbuf_printf(sb, "%s{\"level\":%u,\"vertices\":%llu,\"tets\":%llu,\"shell_faces\":%llu,"
+                          "\"file_bytes\":%llu,\"ok\":%s", k > 1 ? "," : "", k, (unsigned long long)li.vertex_count,
+                          (unsigned long long)li.tet_count, (unsigned long long)li.shell_face_count,
+                          (unsigned long long)li.file_size, r == TPK_OK ? "true" : "false");
+        if (r != TPK_OK) {
+            tpk_strbuf_printf(sb, ",\"error\":");
+            tpk_strbuf_json_string(sb, err);
+        }
+        tpk_strbuf_printf(sb, "}");
+    }
+    tpk_strbuf_printf(sb, "]");
+}
+
 static int print_json(tpk_file *file, const tpk_file_info *info, tpk_result verified)
 {
     tpk_strbuf sb = {0};
@@ -141,6 +180,7 @@ static int print_json(tpk_file *file, const tpk_file_info *info, tpk_result veri
     tpk_strbuf_printf(&sb, "}");
     json_chunks(&sb, file, info);
     json_fields(&sb, file);
+    json_levels(&sb, file);
     tpk_strbuf_printf(&sb, ",\"checksums_ok\":%s", verified == TPK_OK ? "true" : "false");
     if (verified != TPK_OK) {
         tpk_strbuf_printf(&sb, ",\"error\":");
@@ -185,6 +225,17 @@ static void print_text(const char *path, tpk_file *file, const tpk_file_info *in
                e.index, e.step, (unsigned long long)e.offset, (unsigned long long)e.stored_size,
                (unsigned long long)e.raw_size);
     }
+    for (uint32_t k = 1; k <= tpk_level_count(file); k++) {
+        tpk_file_info li;
+        char err[512] = "";
+        if (level_info(file, k, &li, err, sizeof err) == TPK_OK)
+            printf("  level %u: vertices %llu, tets %llu, shell faces %llu, %llu bytes (a complete file: "
+                   "render --level %u, extract --level %u)\n", k, (unsigned long long)li.vertex_count,
+                   (unsigned long long)li.tet_count, (unsigned long long)li.shell_face_count,
+                   (unsigned long long)li.file_size, k, k);
+        else
+            printf("  level %u: FAILED: %s\n", k, err);
+    }
     if (verified == TPK_OK)
         printf("  checksums and ids: ok\n");
     else
@@ -226,6 +277,14 @@ int tpk_cmd_info(int argc, char **argv)
     tpk_file_info info;
     tpk_get_info(file, &info);
     tpk_result verified = tpk_verify(file);
+    for (uint32_t k = 1; verified == TPK_OK && k <= tpk_level_count(file); k++) { /* every level's chunks too */
+        tpk_file_info li;
+        char err[512] = "";
+        if (level_info(file, k, &li, err, sizeof err) != TPK_OK) {
+            verified = TPK_ERR_CORRUPT;
+            fprintf(stderr, "tetpack info: error: %s: %s\n", path, err);
+        }
+    }
     if (json)
         print_json(file, &info, verified);
     else

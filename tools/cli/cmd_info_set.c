@@ -40,7 +40,7 @@ static void print_json(const tpk_partset *set, const set_totals *s)
     tpk_strbuf sb = {0};
     tpk_strbuf_printf(&sb, "{\"format_version\":\"%d.%d\",\"part_set\":true,\"part_count\":%u,\"tets\":%llu,"
                       "\"vertex_records\":%llu,\"shell_faces\":%llu,\"cut_faces\":%llu,\"file_bytes\":%llu,"
-                      "\"bounds\":{\"min\":", TPK_VERSION_MAJOR, TPK_VERSION_MINOR, tpk_partset_part_count(set),
+                      "\"bounds\":{\"min\":", TPK_VERSION_MAJOR, TPK_VERSION_MINOR_PARTS, tpk_partset_part_count(set),
                       (unsigned long long)s->tets, (unsigned long long)s->vertices,
                       (unsigned long long)(s->shell_faces - s->link_records), (unsigned long long)(s->link_records / 2),
                       (unsigned long long)s->bytes);
@@ -74,7 +74,7 @@ static void print_text(const char *path, const tpk_partset *set, const set_total
 {
     uint32_t n = tpk_partset_part_count(set);
     printf("%s: tetpack part set (format %d.%d), %u parts, %llu bytes in all\n", path, TPK_VERSION_MAJOR,
-           TPK_VERSION_MINOR, n, (unsigned long long)s->bytes);
+           TPK_VERSION_MINOR_PARTS, n, (unsigned long long)s->bytes);
     printf("  tets %llu, vertex records %llu (a vertex on a cut is in each part that uses it)\n",
            (unsigned long long)s->tets, (unsigned long long)s->vertices);
     printf("  outer shell faces %llu (on no cut), cut faces %llu (each linked from both sides)\n",

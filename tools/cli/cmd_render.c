@@ -8,6 +8,7 @@
 #include "base/output_file.h"
 #include "cli.h"
 #include "render/render.h"
+#include "render/budget.h"
 #include "render/render_backend.h"
 #include "scene/scene.h"
 #include "tetpack.h"
@@ -107,6 +108,102 @@ static int resolve_backend(render_args *a, tpk_diag *diag)
     return 0;
 }
 
+/* ---- Levels of detail (spec §16): --level K and --max-ms T ------------------------------------------ */
+
+typedef struct level_set {
+    int count;                      /* levels, the full mesh (0) included */
+    tpk_file *files[9];             /* [0]: the file itself; the others opened over it */
+    int64_t tets[9];
+    double error_max[9], error_rms[9];
+} level_set;
+
+/* The level figures the converter wrote in META ("levels": [{level, error_max, error_rms}]). */
+static void level_errors(tpk_file *file, level_set *ls)
+{
+    for (int k = 0; k < 9; k++)
+        ls->error_max[k] = ls->error_rms[k] = k == 0 ? 0 : NAN;
+    uint64_t i;
+    tpk_dir_entry e;
+    if (tpk_find_chunk(file, TPK_TAG_META, 0, 0, &i) != TPK_OK || tpk_get_chunk(file, i, &e) != TPK_OK ||
+        e.raw_size > (1u << 24))
+        return;
+    char *text = malloc(e.raw_size + 1);
+    if (!text || tpk_read_chunk(file, i, text, e.raw_size) != TPK_OK) {
+        free(text);
+        return;
+    }
+    text[e.raw_size] = 0;
+    for (int k = 1; k < ls->count; k++) { /* the converter's own compact JSON: find {"level":k, */
+        char key[32];
+        snprintf(key, sizeof key, "{\"level\":%d,", k);
+        const char *at = strstr(text, key), *mx = at ? strstr(at, "\"error_max\":") : NULL,
+                   *rms = at ? strstr(at, "\"error_rms\":") : NULL;
+        if (mx && rms) {
+            ls->error_max[k] = strtod(mx + 12, NULL);
+            ls->error_rms[k] = strtod(rms + 12, NULL);
+        }
+    }
+    free(text);
+}
+
+static int open_levels(const render_args *a, tpk_file *file, level_set *ls)
+{
+    memset(ls, 0, sizeof *ls);
+    ls->files[0] = file;
+    tpk_file_info info;
+    tpk_get_info(file, &info);
+    ls->tets[0] = (int64_t)info.tet_count;
+    ls->count = 1;
+    uint32_t n = tpk_level_count(file);
+    for (uint32_t k = 1; k <= n && k <= 8; k++) {
+        char err[512] = "";
+        if (tpk_open_level(file, k, NULL, &ls->files[k], err, sizeof err) != TPK_OK)
+            return tpk_cli_fail("render", "%s: %s", a->path, err);
+        tpk_get_info(ls->files[k], &info);
+        ls->tets[k] = (int64_t)info.tet_count;
+        ls->count++;
+    }
+    if (a->level >= ls->count)
+        return tpk_cli_fail("render", "%s: no level %d: the file has %d level%s of detail (convert --levels N makes "
+                            "them; tetpack info lists them)", a->path, a->level, ls->count - 1, ls->count == 2 ? "" : "s");
+    level_errors(file, ls);
+    return 0;
+}
+
+static void close_levels(level_set *ls)
+{
+    for (int k = 1; k < ls->count; k++)
+        tpk_close(ls->files[k]);
+}
+
+/* --max-ms: the cost model's first frames, the coarsest level at an eighth and a quarter of the size (at
+ * least 16 pixels a side): two sizes, so the fit tells a frame's fixed cost from its cost per ray. */
+static int fit_on_probe(const render_args *a, const level_set *ls, int tet_field, const tpk_render_options *opt,
+                        tpk_cost_model *model)
+{
+    int k = ls->count - 1;
+    for (int div = 8; div >= 4; div /= 2) {
+        tpk_render_options small = *opt;
+        small.width = a->width / div > 16 ? a->width / div : (a->width < 16 ? a->width : 16);
+        small.height = a->height / div > 16 ? a->height / div : (a->height < 16 ? a->height : 16);
+        tpk_mesh_arrays mesh;
+        if (load_step(a, ls->files[k], tet_field, a->step, &mesh, &small))
+            return TPK_EXIT_USAGE;
+        uint8_t *rgba = malloc((size_t)small.width * (size_t)small.height * 4);
+        tpk_render_stats stats;
+        tpk_diag diag;
+        memset(&diag, 0, sizeof diag);
+        memset(&stats, 0, sizeof stats);
+        int rc = rgba && render_image(a, &mesh, &small, rgba, &stats, &diag) == 0 ? 0 : -1;
+        free(rgba);
+        if (rc != 0)
+            return tpk_cli_fail_file("render", a->path, diag.message[0] ? diag.message : "out of memory");
+        tpk_cost_model_add(model, (double)small.width * small.height, (double)ls->tets[k],
+                           render_frame_seconds(a, &stats));
+    }
+    return 0;
+}
+
 static int render_file(render_args *a, tpk_file *file)
 {
     int association;
@@ -135,22 +232,41 @@ static int render_file(render_args *a, tpk_file *file)
     if (a->iso_auto && a->verbose)
         fprintf(stderr, "tetpack render: --iso auto: %.9g, the median of '%s' at step %d\n", iso_auto, field.name,
                 a->step);
-    uint8_t *rgba = malloc((size_t)a->width * (size_t)a->height * 4);
-    if (!rgba)
-        return tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
-    int rc = TPK_EXIT_OK;
+    level_set ls;
+    if (open_levels(a, file, &ls)) {
+        close_levels(&ls);
+        return TPK_EXIT_USAGE;
+    }
+    tpk_cost_model model = {0};
+    int rc = a->max_ms > 0 ? fit_on_probe(a, &ls, association == TPK_ASSOC_TET, &opt, &model) : TPK_EXIT_OK;
+    uint8_t *rgba = rc == TPK_EXIT_OK ? malloc((size_t)a->width * (size_t)a->height * 4) : NULL;
+    if (rc == TPK_EXIT_OK && !rgba)
+        rc = tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
     for (int step = a->step; step <= a->step_last && rc == TPK_EXIT_OK; step++) {
         char path[4096];
         tpk_mesh_arrays mesh;
+        double pixels = (double)a->width * a->height, budget = a->max_ms / 1e3;
+        /* the camera, range and unit distance are the full mesh's (opt): every level shows the same view */
+        int k = a->max_ms > 0 ? tpk_cost_model_pick(&model, pixels, ls.tets, ls.count, budget) : a->level;
         if (frame_path(a, step, path, sizeof path))
             rc = tpk_cli_fail("render", "-o: the image path of step %d is too long", step);
         if (rc == TPK_EXIT_OK)
-            rc = load_step(a, file, association == TPK_ASSOC_TET, step, &mesh, &opt);
+            rc = load_step(a, ls.files[k], association == TPK_ASSOC_TET, step, &mesh, &opt);
+        frame_source src = {.mesh = &mesh, .field = have_field ? &field : NULL, .iso_auto = iso_auto, .level = k,
+                            .level_tets = ls.tets[k], .error_max = ls.error_max[k], .error_rms = ls.error_rms[k],
+                            .budget = a->max_ms > 0 ? budget : 0,
+                            .predicted = tpk_cost_model_predict(&model, pixels, (double)ls.tets[k])};
+        if (rc == TPK_EXIT_OK && a->verbose && (a->max_ms > 0 || k > 0))
+            fprintf(stderr, "tetpack render: level %d (%lld tets)%s\n", k, (long long)ls.tets[k],
+                    a->max_ms > 0 ? ", the finest the cost model fits in --max-ms" : "");
+        tpk_render_stats stats;
         if (rc == TPK_EXIT_OK)
-            rc = render_frame(a, &(frame_source){.mesh = &mesh, .field = have_field ? &field : NULL,
-                                                 .iso_auto = iso_auto}, &opt, path, rgba);
+            rc = render_frame_stats(a, &src, &opt, path, rgba, &stats);
+        if (rc == TPK_EXIT_OK && a->max_ms > 0) /* the model learns from every frame drawn */
+            tpk_cost_model_add(&model, pixels, (double)ls.tets[k], render_frame_seconds(a, &stats));
     }
     free(rgba);
+    close_levels(&ls);
     if (rc == TPK_EXIT_OK && a->save_scene && render_save_scene(a, file, &opt) != 0)
         return TPK_EXIT_USAGE;
     return rc;

@@ -130,6 +130,8 @@ static int opt_save_tpk(const char *v, render_args *a) { a->save_tpk = v; return
 static int opt_legend(const char *v, render_args *a) { (void)v; a->legend = 1; return 0; }
 static int opt_verbose(const char *v, render_args *a) { (void)v; a->verbose = 1; return 0; }
 static int opt_iso_raster(const char *v, render_args *a) { (void)v; a->iso_raster = 1; return 0; }
+static int opt_level(const char *v, render_args *a) { return int_option(TPK_OPT_LEVEL, v, &a->level); }
+static int opt_max_ms(const char *v, render_args *a) { return number_option(TPK_OPT_MAX_MS, v, &a->max_ms); }
 static int opt_threads(const char *v, render_args *a) { return int_option(TPK_OPT_THREADS, v, &a->threads); }
 static int opt_backend(const char *v, render_args *a)
 {
@@ -226,6 +228,8 @@ static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_SAVE_TPK] = opt_save_tpk,
     [TPK_OPT_VERBOSE] = opt_verbose,
     [TPK_OPT_ISO_RASTER] = opt_iso_raster,
+    [TPK_OPT_LEVEL] = opt_level,
+    [TPK_OPT_MAX_MS] = opt_max_ms,
 };
 
 const tpk_option_row *render_args_find_option(const char *arg)

@@ -29,6 +29,8 @@ typedef struct render_args {
     const char *save_tpk;                /* --save-tpk: keep the conversion of a mesh that is not a .tpk */
     int legend, verbose;                 /* --legend, -v */
     int iso_raster;                      /* --iso-raster: the isosurfaces drawn as triangles (Vulkan) */
+    int level;                           /* --level K: level of detail K (0: the full mesh) */
+    double max_ms;                       /* --max-ms T: the time budget (0: none) */
     int iso_auto;                        /* --iso auto: one isosurface at the field's median (render_args_iso_auto) */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
     int backend_from_scene;              /* backend is the scene's: without a device, the CPU (same picture) */

@@ -15,13 +15,38 @@
 #include "render_vk/render_vk.h"
 #endif
 
+int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                 tpk_render_stats *stats, tpk_diag *diag)
+{
+#ifdef TPK_WITH_VULKAN
+    if (!strcmp(a->backend, "vulkan"))
+        return a->iso_raster ? tpk_render_iso_raster(mesh, opt, rgba, stats, diag)
+                             : tpk_render_vulkan(mesh, opt, rgba, stats, diag);
+#endif
+    return tpk_render_cpu(mesh, opt, rgba, stats, diag);
+}
+
+double render_frame_seconds(const render_args *a, const tpk_render_stats *stats)
+{
+    (void)a;
+    return stats->gpu_seconds > 0 ? stats->gpu_seconds : stats->seconds;
+}
+
 int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt, const char *output,
                  uint8_t *rgba)
+{
+    tpk_render_stats stats;
+    return render_frame_stats(a, src, opt, output, rgba, &stats);
+}
+
+int render_frame_stats(const render_args *a, const frame_source *src, const tpk_render_options *opt,
+                       const char *output, uint8_t *rgba, tpk_render_stats *out)
 {
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
     tpk_render_stats stats;
     memset(&stats, 0, sizeof stats);
+    memset(out, 0, sizeof *out);
     int vulkan = 0;
 #ifdef TPK_WITH_VULKAN
     vulkan = !src->set && !strcmp(a->backend, "vulkan");
@@ -34,12 +59,8 @@ int render_frame(const render_args *a, const frame_source *src, const tpk_render
                             ": this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)"
 #endif
         );
-    if ((src->set     ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
-#ifdef TPK_WITH_VULKAN
-         : a->iso_raster ? tpk_render_iso_raster(src->mesh, opt, rgba, &stats, &diag)
-         : vulkan     ? tpk_render_vulkan(src->mesh, opt, rgba, &stats, &diag)
-#endif
-                      : tpk_render_cpu(src->mesh, opt, rgba, &stats, &diag)) != 0)
+    if ((src->set ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
+                  : render_image(a, src->mesh, opt, rgba, &stats, &diag)) != 0)
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
     tpk_legend legend = {opt->tf, opt->range_min, opt->range_max, src->field ? src->field->name : NULL,
                          src->field ? src->field->units : NULL};
@@ -66,6 +87,16 @@ int render_frame(const render_args *a, const frame_source *src, const tpk_render
         if (!isnan(src->iso_auto))
             printf(",\"iso_auto\":%.9g", src->iso_auto);
         printf(",\"iso_culling\":%s", stats.iso_culling ? "true" : "false");
+        if (src->level > 0 || src->budget > 0) {
+            printf(",\"level\":%d,\"level_tets\":%lld", src->level, (long long)src->level_tets);
+            if (src->level > 0 && !isnan(src->error_max))
+                printf(",\"level_error\":{\"max\":%.9g,\"rms\":%.9g}", src->error_max, src->error_rms);
+            else
+                printf(",\"level_error\":%s", src->level == 0 ? "{\"max\":0,\"rms\":0}" : "null");
+        }
+        if (src->budget > 0)
+            printf(",\"max_ms\":%.6g,\"predicted_ms\":%.6g,\"frame_ms\":%.6g", src->budget * 1e3,
+                   src->predicted * 1e3, render_frame_seconds(a, &stats) * 1e3);
         if (a->iso_raster)
             printf(",\"iso_raster\":{\"triangles\":%llu,\"path\":\"compute extraction + indirect draw\","
                    "\"mesh_shader\":\"%s\"}", (unsigned long long)stats.iso_triangles,
@@ -78,6 +109,7 @@ int render_frame(const render_args *a, const frame_source *src, const tpk_render
         printf("%s: %dx%d, %llu rays, %llu secondary rays, %llu tet steps, %.3f s\n", output, a->width, a->height,
                (unsigned long long)stats.rays, (unsigned long long)stats.secondary_rays,
                (unsigned long long)stats.tet_steps, stats.seconds);
+    *out = stats;
     return TPK_EXIT_OK;
 }
 

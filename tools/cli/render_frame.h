@@ -17,12 +17,28 @@ typedef struct frame_source {
     double diagonal;  /* of the box of all the set's positions */
     const tpk_field_desc *field; /* the field shown (its name and units for --legend) */
     double iso_auto;  /* --iso auto's value (NAN: not asked) */
+    /* Levels of detail (spec §16): the level drawn (0: the full mesh), its tets and field error (from the
+     * file's META; NAN when not given), and with --max-ms the budget and the prediction (seconds). */
+    int level;
+    int64_t level_tets;
+    double error_max, error_rms, budget, predicted;
 } frame_source;
+
+/* The picture of `mesh` by the backend of the arguments (the CPU reference, Vulkan, --iso-raster), no
+ * file written. 0, or -1 with diag's message. */
+int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                 tpk_render_stats *stats, tpk_diag *diag);
+/* A frame's seconds for the cost model (tools/render/budget.h): the GPU's time where the device gives it,
+ * else the wall time of the render. */
+double render_frame_seconds(const render_args *a, const tpk_render_stats *stats);
 
 /* Render one frame of `src` with `opt` into rgba (width x height of the arguments) and write it to
  * `output` as PNG (with --legend, --json, -v as the arguments say). A TPK_EXIT_* code. */
 int render_frame(const render_args *a, const frame_source *src, const tpk_render_options *opt, const char *output,
                  uint8_t *rgba);
+/* render_frame, giving the frame's statistics (the cost model of --max-ms learns from them). */
+int render_frame_stats(const render_args *a, const frame_source *src, const tpk_render_options *opt,
+                       const char *output, uint8_t *rgba, tpk_render_stats *stats);
 /* The scene of this render, every value it used, so that render --scene gives the same images
  * (--save-scene). 0, or TPK_EXIT_USAGE with a message printed. */
 int render_save_scene(const render_args *a, tpk_file *file, const tpk_render_options *opt);

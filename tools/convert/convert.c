@@ -11,6 +11,7 @@
 
 #include "import/importers.h"
 #include "base/clock.h"
+#include "levels.h"
 #include "merge_vertices.h"
 #include "base/output_file.h"
 #include "base/parallel.h"
@@ -191,12 +192,32 @@ static int write_output(conversion *c)
     c->rep->tets = c->mesh.tet_count;
     c->rep->field_count = c->mesh.field_count;
     c->rep->step_count = c->mesh.step_count > 0 ? c->mesh.step_count : 1;
-    if (c->o->parts > 0 ? tpk_write_part_set(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format,
-                                             c->diag) != 0
-                        : tpk_write_tpk(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format, NULL,
-                                        c->diag) != 0)
+    tpk_levels levels = {0};
+    if (c->o->levels > 0 && c->o->parts == 0) {
+        announce(c->stage, c->stage_user, "levels");
+        double t0 = tpk_now_seconds();
+        if (tpk_make_levels(c->o, &c->mesh, c->neighbors, c->o->levels, c->source_format, &levels, c->diag) != 0)
+            return -1;
+        c->rep->t_levels = tpk_now_seconds() - t0;
+        c->rep->level_count = levels.count;
+        for (int i = 0; i < levels.count; i++) {
+            const tpk_level *l = &levels.level[i];
+            c->rep->level[i].vertices = l->vertices, c->rep->level[i].tets = l->tets;
+            c->rep->level[i].error_samples = l->error_samples;
+            c->rep->level[i].error_max = l->error_max, c->rep->level[i].error_rms = l->error_rms;
+            c->rep->level[i].shell_distance = l->shell_distance, c->rep->level[i].seconds = l->seconds;
+            c->rep->level[i].bytes = l->size;
+        }
+        announce(c->stage, c->stage_user, "write");
+    }
+    int rc = c->o->parts > 0 ? tpk_write_part_set(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format,
+                                                  c->diag)
+                             : tpk_write_tpk(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format, NULL,
+                                             &levels, c->diag);
+    tpk_levels_free(&levels);
+    if (rc != 0)
         return -1;
-    c->rep->t_write = tpk_now_seconds() - t;
+    c->rep->t_write = tpk_now_seconds() - t - c->rep->t_levels;
     return 0;
 }
 

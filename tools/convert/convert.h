@@ -38,6 +38,7 @@ typedef struct tpk_convert_options {
     int threads;                  /* <= 0: all cores */
     int parts;                    /* 0: one .tpk; >= 1: output is a part set manifest of this many parts
                                      (spec §15), cut along the Hilbert order */
+    int levels;                   /* levels of detail to add (spec §16; 0: none; not with parts) */
     const char *command_line;     /* recorded in META; may be NULL */
     const struct tpk_tetgen_options *tetgen; /* surfaces and point clouds (surface.h); NULL: defaults */
 } tpk_convert_options;
@@ -55,6 +56,13 @@ typedef struct tpk_convert_report {
     int64_t fixed_boundary_cells; /* tetrahedralized inside their boundary triangles (TetGen) */
     int field_count, step_count;
     uint64_t output_bytes;
+    int level_count;              /* levels of detail written (may be fewer than asked: levels.h) */
+    struct {
+        int64_t vertices, tets, error_samples;
+        double error_max, error_rms, shell_distance, seconds;
+        uint64_t bytes;
+    } level[8];                   /* TPK_MAX_LEVELS */
+    double t_levels;
     /* seconds per stage */
     double t_import, t_tetrahedralize, t_orient, t_reorder, t_connect, t_write, t_total; /* layouts and shell are built while writing */
 } tpk_convert_report;

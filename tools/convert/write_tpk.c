@@ -11,6 +11,7 @@
 #include "base/output_file.h"
 #include "base/parallel.h"
 #include "base/strbuf.h"
+#include "levels.h"
 #include "pipeline.h"
 #include "tetpack.h"
 
@@ -270,8 +271,29 @@ static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
     return rc;
 }
 
+/* META "levels": what each level is (spec §16). */
+static void levels_json(tpk_strbuf *sb, const tpk_levels *levels)
+{
+    tpk_strbuf_printf(sb, ",\"levels\":[");
+    for (int i = 0; i < levels->count; i++) {
+        const tpk_level *l = &levels->level[i];
+        tpk_strbuf_printf(sb, "%s{\"level\":%d,\"vertices\":%lld,\"tets\":%lld,\"method\":\"interior half-edge "
+                          "collapse\",\"field\":", i ? "," : "", i + 1, (long long)l->vertices, (long long)l->tets);
+        tpk_strbuf_json_string(sb, l->field);
+        tpk_strbuf_printf(sb, ",\"step\":%d,\"error_samples\":%lld,\"error_max\":", l->field_step,
+                          (long long)l->error_samples);
+        tpk_strbuf_json_number(sb, l->error_max);
+        tpk_strbuf_printf(sb, ",\"error_rms\":");
+        tpk_strbuf_json_number(sb, l->error_rms);
+        tpk_strbuf_printf(sb, ",\"shell_distance\":");
+        tpk_strbuf_json_number(sb, l->shell_distance);
+        tpk_strbuf_printf(sb, "}");
+    }
+    tpk_strbuf_printf(sb, "]");
+}
+
 static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_convert_report *rep,
-                      const char *source_format, const tpk_part_extras *part)
+                      const char *source_format, const tpk_part_extras *part, const tpk_levels *levels)
 {
     tpk_strbuf sb = {0};
     tpk_strbuf_printf(&sb, "{\"converter\":{\"name\":\"tetpack\",\"version\":\"%s\"},\"command_line\":",
@@ -292,6 +314,8 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
     tpk_convert_repairs_json(&sb, o, rep);
     if (part)
         tpk_strbuf_printf(&sb, ",\"part_set\":{\"index\":%d,\"parts\":%d}", part->index, part->count);
+    if (levels && levels->count > 0)
+        levels_json(&sb, levels);
     tpk_strbuf_printf(&sb, "}");
     int rc;
     if (sb.failed)
@@ -335,7 +359,7 @@ static void writer_message(void *user, tpk_result code, const char *text)
 
 int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
                   tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
-                  const tpk_part_extras *part, tpk_diag *diag)
+                  const tpk_part_extras *part, const tpk_levels *levels, tpk_diag *diag)
 {
     chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
     char err[512] = "";
@@ -367,7 +391,13 @@ int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const i
     if (rc == 0)
         rc = write_maps(&cw, mesh);
     if (rc == 0)
-        rc = write_meta(&cw, o, rep, source_format, part);
+        rc = write_meta(&cw, o, rep, source_format, part, levels);
+    for (int i = 0; rc == 0 && levels && i < levels->count; i++) { /* spec §16: whole files, uncompressed */
+        tpk_chunk_desc d = {.tag = TPK_TAG_LEVL, .codec = TPK_CODEC_NONE, .elem_type = TPK_ELEM_BYTE, .elem_size = 1,
+                            .index = (uint32_t)i + 1, .elem_count = levels->level[i].size};
+        if (tpk_writer_add_chunk(cw.writer, &d, levels->level[i].data) != TPK_OK)
+            rc = tpk_diag_fail(diag, "%s", tpk_writer_error_text(cw.writer));
+    }
     if (rc == 0 && part && part->link_count > 0) /* spec §15.3: LINK, optional, 4 I32 per link */
         rc = put_chunk(&cw, TPK_TAG_LINK, 0, TPK_ELEM_I32, 4, 4 * (uint64_t)part->link_count, 0, 0, part->links);
     if (rc != 0) {

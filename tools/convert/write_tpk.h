@@ -22,11 +22,13 @@ typedef struct tpk_part_extras {
  * bounds of hdr. Fails naming a point that is not finite or too far for float32. */
 int tpk_quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *diag);
 
+struct tpk_levels;
 /* Write `mesh` (stored frame, positive tets, their neighbors) to o->output atomically, with the layouts
- * o->layouts asks for, the shell, fields, maps and META; part may be NULL. hdr gives origin and bounds;
- * its counts are filled here, and rep's shell_faces and output_bytes. */
+ * o->layouts asks for, the shell, fields, maps and META; part may be NULL; levels (NULL: none) adds a
+ * LEVL chunk per level (spec §16) and their figures to META. hdr gives origin and bounds; its counts are
+ * filled here, and rep's shell_faces and output_bytes. */
 int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
                   tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
-                  const tpk_part_extras *part, tpk_diag *diag);
+                  const tpk_part_extras *part, const struct tpk_levels *levels, tpk_diag *diag);
 
 #endif

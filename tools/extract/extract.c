@@ -16,6 +16,7 @@ typedef struct extraction {
     const tpk_extract_options *o;
     tpk_extract_report *rep;
     tpk_diag *diag;
+    tpk_file *parent;      /* with options->level: the file the level is in */
     tpk_file *file;
     tpk_file_info info;
     tpk_layout layout;
@@ -287,6 +288,8 @@ static int write_meta(extraction *x)
     cJSON *ex = cJSON_AddObjectToObject(root, "extract");
     cJSON_AddStringToObject(ex, "input", o->input);
     cJSON_AddNumberToObject(ex, "layout", (double)x->layout);
+    if (o->level > 0)
+        cJSON_AddNumberToObject(ex, "level", o->level);
     if (x->field >= 0) {
         cJSON_AddStringToObject(ex, "field", x->desc.name);
         double steps[2] = {o->step_first, o->step_last};
@@ -360,6 +363,12 @@ static int run(extraction *x)
     char err[1024] = "";
     if (tpk_open_path(&x->file, x->o->input, NULL, err, sizeof err) != TPK_OK)
         return tpk_diag_fail(x->diag, "%s: %s", x->o->input, err);
+    if (x->o->level > 0) { /* the level, read as the file it is */
+        x->parent = x->file;
+        x->file = NULL;
+        if (tpk_open_level(x->parent, (uint32_t)x->o->level, NULL, &x->file, err, sizeof err) != TPK_OK)
+            return tpk_diag_fail(x->diag, "%s: %s", x->o->input, err);
+    }
     tpk_get_info(x->file, &x->info);
     tpk_extract_report *r = x->rep;
     r->bytes_before = x->info.file_size;
@@ -388,5 +397,6 @@ int tpk_extract(const tpk_extract_options *options, tpk_extract_report *report, 
     tpk_subset_free(&x.sub);
     free(x.tets);
     tpk_close(x.file);
+    tpk_close(x.parent);
     return rc;
 }

@@ -19,6 +19,7 @@ typedef struct tpk_extract_options {
     double clip_min[3], clip_max[3];
     int probe_count;            /* and only the tets that may show through these probes (tpk_probe_may_show) */
     tpk_probe probes[TPK_RENDER_MAX_PROBES];
+    int level;                  /* 0: the file itself; k >= 1: its level of detail k (spec §16) */
     int zstd_level;             /* -1: each chunk as the source stored it (zstd at the default level or
                                    none); 0: uncompressed; 1..22: zstd at that level */
     int threads;                /* <= 0: all cores */

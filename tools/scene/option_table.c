@@ -276,6 +276,19 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
              "and an indirect draw, depth-tested), opaque, with --shading at most;\n"
              "no volume. The ray-marched surface's picture up to rasterization",
      .help_rank = 30},
+    {TPK_OPT_LEVEL,
+     .flag = "--level", .metavar = "K", .expects = "a level of detail 0..8 (0: the full mesh)",
+     .help = "render level of detail K of the file (convert --levels; tetpack\n"
+             "info lists them), with the full mesh's camera and range",
+     .help_rank = 31, .render_only = 1, .kind = TPK_OPT_KIND_INT, .lo = 0, .hi = 8},
+    {TPK_OPT_MAX_MS,
+     .flag = "--max-ms", .metavar = "T", .expects = "a time in milliseconds > 0",
+     .help = "a time budget: the finest level of detail whose predicted frame\n"
+             "time fits T ms (a cost model fitted on a small frame of the\n"
+             "coarsest level, then on every frame drawn); --json reports the\n"
+             "level, its field error and the prediction",
+     .help_rank = 32, .render_only = 1, .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = INFINITY, .lo_open = 1,
+     .hi_open = 1},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

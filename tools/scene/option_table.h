@@ -51,6 +51,8 @@ typedef enum tpk_option_id {
     TPK_OPT_SAVE_TPK,
     TPK_OPT_VERBOSE,
     TPK_OPT_ISO_RASTER,
+    TPK_OPT_LEVEL,
+    TPK_OPT_MAX_MS,
     TPK_OPT_COUNT
 } tpk_option_id;
 

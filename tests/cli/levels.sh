@@ -1,0 +1,89 @@
+#!/usr/bin/env bash
+# Levels of detail (spec §16) on real meshes: an OpenFOAM case (snappyHexMesh's flange, through
+# foamToVTK), a gmsh boundary-layer mesh (tests/cli/sphere_bl.geo: tets, prisms and hexahedra, folds cut)
+# and an Exodus file with transient fields (SEACAS's exomerge test). `convert --levels` writes levels that
+# `check` finds valid (600..615 on the file and each level), `info` lists, `extract --level` writes as
+# files of their own, and `render --level` / `--max-ms` draw with the full mesh's view, reporting the level,
+# its error and the prediction; bad options are refused by name.
+source "$(dirname "$0")/common.sh"
+
+levels_clean() { # FILE.tpk: no 6xx finding and no 615 (levels), on the file and every level
+    check_6xx "$1"
+    "$TPK" check "$1" --json --no-self-intersections --no-progress > "$WORK/levels_check.json" 2>/dev/null || true
+    "$PY" - "$WORK/levels_check.json" "$1" <<'PYEOF' || fail "$1: a level breaks TPK-L01 or a MUST"
+import json, sys
+bad = [f for f in json.load(open(sys.argv[1]))["findings"] if 600 <= f["id"] <= 615 and f["count"]]
+for f in bad:
+    print("%s: check %d %s: %d, first %s" % (sys.argv[2], f["id"], f["name"], f["count"], f["examples"][:1]), file=sys.stderr)
+sys.exit(1 if bad else 0)
+PYEOF
+}
+
+gmsh -3 -nt 1 "$SRC/tests/cli/sphere_bl.geo" -format vtk -o "$WORK/bl.vtk" > "$WORK/gmsh.log" 2>&1 ||
+    { tail "$WORK/gmsh.log"; fail "gmsh failed"; }
+declare -A extra=([bl]=--cut-folds)
+declare -A input=([flange]="$SRC/tests/data/openfoam/flange.vtk" [bl]="$WORK/bl.vtk"
+                  [exomerge]="$DATA/seacas/exomerge_unit_test.e")
+for name in flange bl exomerge; do
+    # shellcheck disable=SC2086
+    "$TPK" convert "${input[$name]}" "$WORK/$name.tpk" --levels 3 ${extra[$name]:-} --json > "$WORK/$name.json" \
+        2> "$WORK/err" || { cat "$WORK/err"; fail "$name: convert --levels"; }
+    "$PY" - "$WORK/$name.json" "$name" <<'PYEOF' || fail "$name: the levels report: $(cat "$WORK/$name.json")"
+import json, sys
+r = json.load(open(sys.argv[1]))
+levels = r["levels"]
+assert len(levels) >= 1, levels
+tets = [r["tets"]] + [l["tets"] for l in levels]
+assert all(a > b for a, b in zip(tets, tets[1:])), tets
+for l in levels:
+    assert l["shell_distance"] == 0 and l["error_max"] >= l["error_rms"] >= 0 and l["bytes"] > 0, l
+print("%s: %s tets; error max/RMS %s" % (sys.argv[2], " > ".join(map(str, tets)),
+      ", ".join("%.3g/%.3g" % (l["error_max"], l["error_rms"]) for l in levels)))
+PYEOF
+    levels_clean "$WORK/$name.tpk"
+    "$TPK" info "$WORK/$name.tpk" > "$WORK/info.txt" || fail "$name: info"
+    grep -q "^  level 1: vertices [0-9]*, tets [0-9]*" "$WORK/info.txt" || fail "$name: info lists no level"
+    grep -q "format 1.3" "$WORK/info.txt" || fail "$name: a file with levels is not format 1.3"
+    "$TPK" extract "$WORK/$name.tpk" "$WORK/$name-1.tpk" --level 1 > /dev/null || fail "$name: extract --level 1"
+    check_6xx "$WORK/$name-1.tpk"
+    grep -q "format 1.1" <<< "$("$TPK" info "$WORK/$name-1.tpk")" || fail "$name: the extracted level is not plain 1.1"
+done
+
+# the exodus file: a transient field; the error is measured at its step of widest range, and is nonzero
+"$PY" -c "import json,sys; l = json.load(open(sys.argv[1]))['levels'][0]; sys.exit(0 if l['error_samples'] > 0 else 1)" \
+    "$WORK/exomerge.json" || fail "exomerge: no error samples"
+
+# render: a level with the full mesh's camera and range; --max-ms picks one and says why
+f=$WORK/exomerge.tpk
+"$TPK" render "$f" -o "$WORK/full.png" --size 64x64 --field disp_z --step 4 --json > "$WORK/full.json"
+"$TPK" render "$f" -o "$WORK/l1.png" --size 64x64 --field disp_z --step 4 --level 1 --json > "$WORK/l1.json"
+"$PY" - "$WORK/l1.json" <<'PYEOF' || fail "render --level 1 --json: $(cat "$WORK/l1.json")"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["level"] == 1 and d["level_tets"] > 0 and d["level_error"]["max"] >= d["level_error"]["rms"], d
+PYEOF
+db=$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/full.png" "$WORK/l1.png" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p')
+"$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= 20 else 1)" "$db" || fail "level 1 draws another view: $db dB"
+for ms in 0.001 100000; do
+    "$TPK" render "$f" -o "$WORK/b.png" --size 64x64 --max-ms "$ms" --json > "$WORK/b.json" || fail "--max-ms $ms"
+    "$PY" - "$WORK/b.json" "$ms" <<'PYEOF' || fail "--max-ms $ms: $(cat "$WORK/b.json")"
+import json, sys
+d, ms = json.load(open(sys.argv[1])), float(sys.argv[2])
+assert d["max_ms"] == ms and d["predicted_ms"] > 0 and d["frame_ms"] > 0, d
+# a budget no frame fits: the coarsest level; one every frame fits: the full mesh
+assert d["level"] == (0 if ms > 1000 else 1), d
+PYEOF
+done
+echo "render: level 1 at $db dB against the full mesh; --max-ms picks the coarsest and the full mesh"
+
+# refused by name
+expect_exit 2 "$TPK" convert "${input[flange]}" "$WORK/x.tpk" --levels 9
+expect_stderr "--levels expects a number of levels from 1 to 8, found '9'"
+expect_exit 2 "$TPK" convert "${input[flange]}" "$WORK/x.tpkset" --levels 2 --parts 2
+expect_stderr "--levels and --parts"
+expect_exit 2 "$TPK" render "$f" -o "$WORK/x.png" --level 5
+expect_stderr "no level 5: the file has 1 level of detail"
+expect_exit 2 "$TPK" extract "$f" "$WORK/x.tpk" --level 5
+expect_stderr "no level 5"
+[ ! -e "$WORK/x.tpk" ] || fail "extract left a file for a level that is not there"
+echo "levels: ok"

@@ -1,0 +1,317 @@
+/* Levels of detail (spec §16): the converter's levels of real meshes open as files, each coarser, every
+ * tet positive (exactly, on the stored positions), the full mesh's shell face for face, the full mesh's
+ * field at every kept vertex, and `check` finds nothing (600..615) in them; must-fail files (a level
+ * compressed, index 0, a level not coarser) are refused; the cost model of --max-ms picks
+ * deterministically. CLI and more meshes: tests/cli/levels.sh. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/predicates.h"
+#include "check/check.h"
+#include "convert/convert.h"
+#include "harness.h"
+#include "render/budget.h"
+#include "tetpack.h"
+#include "tpk_assert.h"
+
+static int convert_levels(const char *input, const char *output, int levels, tpk_convert_report *rep)
+{
+    tpk_convert_options o;
+    memset(&o, 0, sizeof o);
+    o.input = input;
+    o.output = output;
+    o.layouts = TPK_LAYOUT_BIT_TET16 | TPK_LAYOUT_BIT_TET32;
+    o.levels = levels;
+    o.threads = 2;
+    tpk_diag diag = {0};
+    memset(rep, 0, sizeof *rep);
+    int rc = tpk_convert_checked(&o, rep, &diag);
+    if (rc)
+        fprintf(stderr, "%s: %s\n", input, diag.message);
+    return rc;
+}
+
+/* Shell triangles as sorted world-coordinate triples, sorted: the same set for the same shell. */
+typedef struct { double p[9]; } tri;
+static int compare_tri(const void *a, const void *b)
+{
+    const double *x = ((const tri *)a)->p, *y = ((const tri *)b)->p;
+    for (int k = 0; k < 9; k++)
+        if (x[k] != y[k])
+            return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+static int lex3(const double *a, const double *b)
+{
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k])
+            return a[k] < b[k] ? -1 : 1;
+    return 0;
+}
+static tri *shell_of(const tpk_mesh_arrays *m)
+{
+    tri *t = malloc(sizeof *t * (m->shell_face_count ? m->shell_face_count : 1));
+    for (uint64_t i = 0; t && i < m->shell_face_count; i++) {
+        const int32_t v[3] = {m->shell[i].a, m->shell[i].b, m->shell[i].c};
+        double p[3][3];
+        for (int j = 0; j < 3; j++)
+            for (int k = 0; k < 3; k++)
+                p[j][k] = m->origin[k] + (double)m->positions[3 * (size_t)v[j] + k];
+        for (int i2 = 0; i2 < 2; i2++) /* the three corners in lexicographic order */
+            for (int j = 0; j < 2 - i2; j++)
+                if (lex3(p[j], p[j + 1]) > 0) {
+                    double x[3];
+                    memcpy(x, p[j], sizeof x);
+                    memcpy(p[j], p[j + 1], sizeof x);
+                    memcpy(p[j + 1], x, sizeof x);
+                }
+        memcpy(t[i].p, p, sizeof t[i].p);
+    }
+    if (t)
+        qsort(t, m->shell_face_count, sizeof *t, compare_tri);
+    return t;
+}
+
+/* Every level of `path`: opens, fewer tets, positive tets, the same shell, the same values at the same
+ * source points (VMAP), and check 600..615 find nothing. */
+static void check_levels_of(const char *path, int expect_levels)
+{
+    tpk_file *file = NULL;
+    CHECK(tpk_open_path(&file, path, NULL, NULL, 0) == TPK_OK);
+    if (!file)
+        return;
+    CHECK_MSG((int)tpk_level_count(file) >= expect_levels, "%s: %u levels", path, tpk_level_count(file));
+    tpk_mesh_arrays full;
+    CHECK(tpk_load_arrays(file, TPK_LAYOUT_TET32, NULL, 0, &full) == TPK_OK);
+    tri *full_shell = shell_of(&full);
+    uint64_t i;
+    const int32_t *full_vmap = NULL;
+    const void *view;
+    uint64_t size;
+    if (tpk_find_chunk(file, TPK_TAG_VMAP, 0, 0, &i) == TPK_OK && tpk_view_chunk(file, i, &view, &size) == TPK_OK)
+        full_vmap = view;
+    uint64_t before = full.tet_count;
+    for (uint32_t k = 1; k <= tpk_level_count(file); k++) {
+        tpk_file *lf = NULL;
+        char err[512] = "";
+        CHECK_MSG(tpk_open_level(file, k, NULL, &lf, err, sizeof err) == TPK_OK, "level %u: %s", k, err);
+        if (!lf)
+            continue;
+        tpk_mesh_arrays m;
+        CHECK(tpk_load_arrays(lf, TPK_LAYOUT_TET32, NULL, 0, &m) == TPK_OK);
+        CHECK_MSG(m.tet_count < before, "level %u: %llu tets, not fewer than %llu", k, (unsigned long long)m.tet_count,
+                  (unsigned long long)before);
+        before = m.tet_count;
+        int negative = 0;
+        int32_t *tets = malloc(sizeof *tets * 4 * (m.tet_count ? m.tet_count : 1));
+        CHECK(tets && tpk_recover_tets(&m, tets) == TPK_OK);
+        for (uint64_t t = 0; tets && t < m.tet_count; t++) {
+            double p[4][3];
+            for (int j = 0; j < 4; j++)
+                for (int a = 0; a < 3; a++)
+                    p[j][a] = m.positions[3 * (size_t)tets[4 * t + j] + a];
+            negative += tpk_orient3d_exact(p[0], p[1], p[2], p[3]) <= 0;
+        }
+        free(tets);
+        CHECK_MSG(negative == 0, "level %u: %d tets not positive", k, negative);
+        CHECK_MSG(m.shell_face_count == full.shell_face_count, "level %u: %llu shell faces, the file %llu", k,
+                  (unsigned long long)m.shell_face_count, (unsigned long long)full.shell_face_count);
+        tri *shell = shell_of(&m);
+        CHECK_MSG(shell && full_shell && m.shell_face_count == full.shell_face_count &&
+                      !memcmp(shell, full_shell, sizeof *shell * m.shell_face_count),
+                  "level %u: its shell is not the file's", k);
+        free(shell);
+        /* the kept vertices keep their positions and values: by VMAP (source point ids) */
+        if (full_vmap && full.scalars && m.scalars && tpk_find_chunk(lf, TPK_TAG_VMAP, 0, 0, &i) == TPK_OK &&
+            tpk_view_chunk(lf, i, &view, &size) == TPK_OK) {
+            const int32_t *vmap = view;
+            int64_t max_src = 0;
+            for (uint64_t v = 0; v < full.vertex_count; v++)
+                max_src = full_vmap[v] > max_src ? full_vmap[v] : max_src;
+            int32_t *by_src = malloc(sizeof *by_src * (size_t)(max_src + 1));
+            for (int64_t sidx = 0; by_src && sidx <= max_src; sidx++)
+                by_src[sidx] = -1;
+            for (uint64_t v = 0; by_src && v < full.vertex_count; v++)
+                if (full_vmap[v] >= 0)
+                    by_src[full_vmap[v]] = (int32_t)v;
+            int differ = 0;
+            for (uint64_t v = 0; by_src && v < m.vertex_count; v++) {
+                if (vmap[v] < 0)
+                    continue;
+                int32_t f = by_src[vmap[v]];
+                differ += f < 0 || m.scalars[v] != full.scalars[f] ||
+                          memcmp(m.positions + 3 * v, full.positions + 3 * (size_t)f, 3 * sizeof(float));
+            }
+            CHECK_MSG(differ == 0, "level %u: %d vertices differ from the file's vertex of their source point", k,
+                      differ);
+            free(by_src);
+        }
+        tpk_close(lf);
+    }
+    free(full_shell);
+    tpk_close(file);
+    /* and the validator: no 6xx finding in the file or any level, and 615 clean */
+    tpk_check_report report;
+    tpk_check_options o;
+    tpk_check_options_default(&o);
+    o.threads = 2;
+    CHECK(tpk_check_report_init(&report, &o) == 0);
+    tpk_diag diag = {0};
+    CHECK(tpk_open_path(&file, path, NULL, NULL, 0) == TPK_OK);
+    CHECK(tpk_check_tpk_file(path, file, &report, &diag) == 0);
+    CHECK(tpk_check_levels(path, file, &report, &diag) == 0);
+    for (int id = 600; id <= 615; id++)
+        CHECK_MSG(tpk_check_finding(&report, id)->count == 0, "%s: check %d: %lld", path, id,
+                  (long long)tpk_check_finding(&report, id)->count);
+    tpk_close(file);
+    tpk_check_report_free(&report);
+}
+
+TPK_TEST(real_meshes_levels_valid)
+{
+    const char *out = tpk_temp_path("cyl.tpk");
+    tpk_convert_report rep;
+    char sample[4096]; /* the bundled sample: a point field, "temperature" */
+    snprintf(sample, sizeof sample, "%s/samples/cylinder.vtk", TPK_SOURCE_DIR);
+    CHECK(convert_levels(sample, out, 3, &rep) == 0);
+    CHECK_MSG(rep.level_count >= 1, "cylinder: %d levels", rep.level_count);
+    CHECK(rep.level[0].error_samples > 0 && rep.level[0].error_max >= rep.level[0].error_rms &&
+          rep.level[0].shell_distance == 0);
+    check_levels_of(out, 1);
+    const char *t5 = tpk_temp_path("t5.tpk");
+    CHECK(convert_levels(tpk_data_path("gmsh/t5_small_tet_ascii22.msh"), t5, 4, &rep) == 0);
+    CHECK_MSG(rep.level_count >= 1, "t5: %d levels", rep.level_count);
+    check_levels_of(t5, 1);
+    const char *blocks = tpk_temp_path("blocks.tpk");
+    CHECK(convert_levels(tpk_data_path("seacas/8-block.g"), blocks, 2, &rep) == 0);
+    check_levels_of(blocks, 1);
+}
+
+/* A copy of `src` (every chunk decoded and written again) with one LEVL chunk of `level` bytes. */
+static int write_with_level(const char *src, const char *dst, const void *level, size_t size, uint32_t index,
+                            int codec)
+{
+    tpk_file *f = NULL;
+    if (tpk_open_path(&f, src, NULL, NULL, 0) != TPK_OK)
+        return -1;
+    tpk_file_info info;
+    tpk_get_info(f, &info);
+    tpk_writer *w = NULL;
+    int rc = tpk_writer_open(&w, dst, NULL, NULL, 0) == TPK_OK ? 0 : -1;
+    for (uint64_t i = 0; rc == 0 && i < info.chunk_count; i++) {
+        tpk_dir_entry e;
+        tpk_get_chunk(f, i, &e);
+        if (e.tag == TPK_TAG_LEVL)
+            continue;
+        void *data = malloc(e.raw_size ? e.raw_size : 1);
+        tpk_chunk_desc d = {.tag = e.tag, .flags = e.flags, .codec = TPK_CODEC_NONE, .elem_type = e.elem_type,
+                            .elem_size = e.elem_size, .index = e.index, .step = e.step, .elem_count = e.elem_count};
+        rc = data && tpk_read_chunk(f, i, data, e.raw_size) == TPK_OK && tpk_writer_add_chunk(w, &d, data) == TPK_OK
+                 ? 0 : -1;
+        free(data);
+    }
+    tpk_chunk_desc l = {.tag = TPK_TAG_LEVL, .codec = (uint8_t)codec, .elem_type = TPK_ELEM_BYTE, .elem_size = 1,
+                        .index = index, .elem_count = size};
+    if (rc == 0 && tpk_writer_add_chunk(w, &l, level) != TPK_OK)
+        rc = -1;
+    tpk_header_fields h = {info.vertex_count, info.tet_count, info.shell_face_count, {0}, {0}, {0}};
+    memcpy(h.origin, info.origin, sizeof h.origin);
+    memcpy(h.bounds_min, info.bounds_min, sizeof h.bounds_min);
+    memcpy(h.bounds_max, info.bounds_max, sizeof h.bounds_max);
+    if (rc == 0)
+        rc = tpk_writer_finish(w, &h) == TPK_OK ? 0 : -1;
+    else if (w)
+        tpk_writer_abort(w);
+    tpk_close(f);
+    return rc;
+}
+
+static void *file_bytes(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    *size = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    void *b = malloc(*size);
+    if (b && fread(b, 1, *size, f) != *size) {
+        free(b);
+        b = NULL;
+    }
+    fclose(f);
+    return b;
+}
+
+TPK_TEST(must_fail_levels)
+{
+    tpk_convert_report rep;
+    const char *plain = tpk_temp_path("plain.tpk");
+    CHECK(convert_levels(tpk_data_path("sfepy/cylinder.vtk"), plain, 0, &rep) == 0);
+    size_t size = 0;
+    void *bytes = file_bytes(plain, &size);
+    CHECK(bytes && size > 0);
+    if (!bytes)
+        return;
+    /* the file itself as its own level 1: not coarser (615) */
+    const char *same = tpk_temp_path("same.tpk");
+    CHECK(write_with_level(plain, same, bytes, size, 1, TPK_CODEC_NONE) == 0);
+    tpk_check_report report;
+    tpk_check_options o;
+    tpk_check_options_default(&o);
+    CHECK(tpk_check_report_init(&report, &o) == 0);
+    tpk_file *file = NULL;
+    tpk_diag diag = {0};
+    CHECK(tpk_open_path(&file, same, NULL, NULL, 0) == TPK_OK);
+    CHECK(file && tpk_check_levels(same, file, &report, &diag) == 0);
+    CHECK_MSG(tpk_check_finding(&report, 615)->count == 1, "615: %lld", (long long)tpk_check_finding(&report, 615)->count);
+    tpk_close(file);
+    tpk_check_report_free(&report);
+    /* a level that is not a tetpack file: 615 (it does not open) */
+    const char *junk = tpk_temp_path("junk.tpk");
+    CHECK(write_with_level(plain, junk, "not a tetpack file", 18, 1, TPK_CODEC_NONE) == 0);
+    CHECK(tpk_check_report_init(&report, &o) == 0);
+    CHECK(tpk_open_path(&file, junk, NULL, NULL, 0) == TPK_OK);
+    tpk_file *lf = NULL;
+    char err[512] = "";
+    CHECK(tpk_open_level(file, 1, NULL, &lf, err, sizeof err) != TPK_OK && !lf && strstr(err, "level 1"));
+    CHECK(tpk_open_level(file, 2, NULL, &lf, err, sizeof err) == TPK_ERR_NOT_FOUND && strstr(err, "no level 2"));
+    CHECK(file && tpk_check_levels(junk, file, &report, &diag) == 0 && tpk_check_finding(&report, 615)->count == 1);
+    tpk_close(file);
+    tpk_check_report_free(&report);
+    /* refused at open (rule 14): a compressed level, a level 0 (the writer refuses to write them) */
+    const char *zstd = tpk_temp_path("zstd.tpk"), *zero = tpk_temp_path("zero.tpk");
+    CHECK(write_with_level(plain, zstd, bytes, size, 1, TPK_CODEC_ZSTD) != 0);
+    CHECK(write_with_level(plain, zero, bytes, size, 0, TPK_CODEC_NONE) != 0);
+    free(bytes);
+}
+
+TPK_TEST(cost_model)
+{
+    tpk_cost_model m = {0};
+    int64_t tets[3] = {1000000, 125000, 8000}; /* cube roots 100, 50, 20 */
+    CHECK_EQ_INT(tpk_cost_model_pick(&m, 1e4, tets, 3, 1.0), 0); /* no frames: predicts 0, the finest */
+    /* frames of 0.1 s + 1e-8 s per pixel and cube root of tets, at two sizes: the fit recovers both */
+    tpk_cost_model_add(&m, 4096, 8000, 0.1 + 1e-8 * 4096 * 20);
+    tpk_cost_model_add(&m, 16384, 8000, 0.1 + 1e-8 * 16384 * 20);
+    double fixed, rate;
+    tpk_cost_model_fit(&m, &fixed, &rate);
+    CHECK_MSG(fabs(fixed - 0.1) < 1e-9 && fabs(rate - 1e-8) < 1e-15, "fixed %g rate %g", fixed, rate);
+    double px = 262144; /* 512^2: 0.1 + 0.262 (level 0), + 0.131 (1), + 0.052 (2) */
+    CHECK(fabs(tpk_cost_model_predict(&m, px, 1000000) - (0.1 + 1e-8 * px * 100)) < 1e-9);
+    CHECK_EQ_INT(tpk_cost_model_pick(&m, px, tets, 3, 0.40), 0);
+    CHECK_EQ_INT(tpk_cost_model_pick(&m, px, tets, 3, 0.30), 1);
+    CHECK_EQ_INT(tpk_cost_model_pick(&m, px, tets, 3, 0.20), 2);
+    CHECK_EQ_INT(tpk_cost_model_pick(&m, px, tets, 3, 0.01), 2); /* none fits: the coarsest */
+    /* one size only: the line through the origin */
+    tpk_cost_model one = {0};
+    tpk_cost_model_add(&one, 1000, 1000, 0.5);
+    tpk_cost_model_fit(&one, &fixed, &rate);
+    CHECK(fixed == 0 && fabs(rate - 0.5 / (1000 * 10)) < 1e-15);
+    /* nonsense frames are not learnt from */
+    tpk_cost_model_add(&one, 0, 1000, 1);
+    tpk_cost_model_add(&one, 1000, 1000, NAN);
+    CHECK(one.n == 1);
+}

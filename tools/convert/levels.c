@@ -1,0 +1,559 @@
+/* Levels of detail by half-edge collapse of interior vertices (levels.h).
+ *
+ * A collapse moves interior vertex u onto a neighbour v: the tets around both u and v vanish, the other
+ * tets around u get v instead of u. It is taken only when every changed tet stays positive, exactly
+ * (tpk_orient3d_exact), and keeps a fair shape (volume over its longest edge cubed at least the smaller of
+ * TPK_LEVEL_QUALITY and half the worst of the tets it replaces): then the changed tets tile what u's tets
+ * tiled, v being in the kernel of that star, so the mesh stays conforming and covers the same domain.
+ * Vertices on the shell never move, so every level has the full mesh's shell, face for face (the shell
+ * distance is 0, and the level is checked for it). Among the valid targets v the one whose field value is
+ * closest to u's is taken (the nearest without a field): the field at the kept vertices is the full
+ * mesh's, exactly, and the error is what interpolation over the coarser tets makes of it at the removed
+ * vertices, which is where it is measured.
+ *
+ * Passes: every interior vertex in id order, skipping those next to a vertex collapsed in this pass (so
+ * the stars one pass reads, and the shapes measured when it began, are those it started with), until the
+ * level has a fifth of the tets of the last (TPK_LEVEL_RATIO: 4 levels then add at most 1/4 to the file)
+ * or a pass removes almost nothing. The result does not depend on the thread count. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "base/clock.h"
+#include "base/predicates.h"
+#include "levels.h"
+#include "pipeline.h"
+#include "tetpack_format.h"
+#include "write_tpk.h"
+
+#define TPK_LEVEL_QUALITY 0.02 /* 6 V / L^3 of a new tet (a regular tet: 0.707) */
+#define TPK_LEVEL_RATIO 5      /* each level aims at a fifth of the tets of the one before */
+#define STAR_MAX 512
+#define NEIGHBOURS_MAX 128
+
+typedef struct simplifier {
+    const tpk_tetmesh *mesh;
+    const float *field;  /* the first point field at its step of widest range (field_step), or NULL */
+    int field_step;
+    uint8_t *boundary;   /* per vertex: on the shell */
+    uint8_t *removed;    /* per vertex */
+    int32_t *tets;       /* 4 per live tet, full mesh vertex ids, positive */
+    int32_t *origin;     /* per live tet: the full mesh tet it descends from */
+    int64_t tet_count;
+    int64_t *star_start; /* vertex -> first of its tets in star (vertex_count + 1) */
+    int32_t *star;
+    uint8_t *locked, *dead;
+    float *tet_quality;  /* per live tet, this pass */
+} simplifier;
+
+static const double *point(const simplifier *s, int32_t v)
+{
+    return s->mesh->points + 3 * (size_t)v;
+}
+
+/* 6 V / L^3 of the tet (a, b, c, d): 0 flat, 0.707 regular; negative when inverted. */
+static double quality(const double *a, const double *b, const double *c, const double *d)
+{
+    double e[6][3], l2 = 0;
+    const double *p[4] = {a, b, c, d};
+    int n = 0;
+    for (int i = 0; i < 4; i++)
+        for (int j = i + 1; j < 4; j++, n++) {
+            double s = 0;
+            for (int k = 0; k < 3; k++) {
+                e[n][k] = p[j][k] - p[i][k];
+                s += e[n][k] * e[n][k];
+            }
+            l2 = s > l2 ? s : l2;
+        }
+    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    return l2 > 0 ? det / (l2 * sqrt(l2)) : 0;
+}
+
+static int build_stars(simplifier *s)
+{
+    int64_t V = s->mesh->vertex_count;
+    memset(s->star_start, 0, sizeof *s->star_start * (size_t)(V + 1));
+    for (int64_t i = 0; i < 4 * s->tet_count; i++)
+        s->star_start[s->tets[i] + 1]++;
+    for (int64_t v = 0; v < V; v++)
+        s->star_start[v + 1] += s->star_start[v];
+    int64_t *fill = malloc(sizeof *fill * (size_t)(V ? V : 1));
+    if (!fill)
+        return -1;
+    memcpy(fill, s->star_start, sizeof *fill * (size_t)V);
+    for (int64_t t = 0; t < s->tet_count; t++) {
+        const int32_t *v = s->tets + 4 * t;
+        for (int k = 0; k < 4; k++)
+            s->star[fill[v[k]]++] = (int32_t)t;
+        s->tet_quality[t] = (float)quality(point(s, v[0]), point(s, v[1]), point(s, v[2]), point(s, v[3]));
+    }
+    free(fill);
+    return 0;
+}
+
+/* The best valid target of interior vertex u, or -1. */
+static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n)
+{
+    int32_t nb[NEIGHBOURS_MAX];
+    double cost[NEIGHBOURS_MAX];
+    int m = 0;
+    double worst = INFINITY;
+    for (int i = 0; i < n; i++) {
+        const int32_t *t = s->tets + 4 * (size_t)star[i];
+        double q = s->tet_quality[star[i]];
+        worst = q < worst ? q : worst;
+        for (int k = 0; k < 4; k++) {
+            int32_t w = t[k], seen = w == u;
+            for (int j = 0; j < m && !seen; j++)
+                seen = nb[j] == w;
+            if (seen)
+                continue;
+            if (m == NEIGHBOURS_MAX)
+                return -1;
+            double c = 0;
+            if (s->field)
+                c = fabs((double)s->field[w] - (double)s->field[u]);
+            else
+                for (int a = 0; a < 3; a++)
+                    c += (point(s, w)[a] - point(s, u)[a]) * (point(s, w)[a] - point(s, u)[a]);
+            int j = m++; /* insertion: ascending cost, then id */
+            while (j > 0 && (cost[j - 1] > c || (cost[j - 1] == c && nb[j - 1] > w))) {
+                nb[j] = nb[j - 1];
+                cost[j] = cost[j - 1];
+                j--;
+            }
+            nb[j] = w;
+            cost[j] = c;
+        }
+    }
+    double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
+    for (int j = 0; j < m; j++) {
+        int32_t v = nb[j];
+        int ok = 1;
+        for (int i = 0; i < n && ok; i++) {
+            const int32_t *t = s->tets + 4 * (size_t)star[i];
+            if (t[0] == v || t[1] == v || t[2] == v || t[3] == v)
+                continue;
+            const double *p[4];
+            for (int k = 0; k < 4; k++)
+                p[k] = point(s, t[k] == u ? v : t[k]);
+            ok = tpk_orient3d_exact(p[0], p[1], p[2], p[3]) > 0 && quality(p[0], p[1], p[2], p[3]) >= floor;
+        }
+        if (ok)
+            return v;
+    }
+    return -1;
+}
+
+/* One pass; the number of collapses. */
+static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
+{
+    int64_t V = s->mesh->vertex_count, done = 0;
+    if (V <= 0 || s->tet_count <= 0)
+        return 0;
+    memset(s->locked, 0, (size_t)V);
+    memset(s->dead, 0, (size_t)s->tet_count);
+    for (int32_t u = 0; u < V && *live > target; u++) {
+        int n = (int)(s->star_start[u + 1] - s->star_start[u]);
+        if (s->boundary[u] || s->removed[u] || s->locked[u] || n == 0 || n > STAR_MAX)
+            continue;
+        const int32_t *star = s->star + s->star_start[u];
+        int32_t v = choose_target(s, u, star, n);
+        if (v < 0)
+            continue;
+        for (int i = 0; i < n; i++) {
+            int32_t *t = s->tets + 4 * (size_t)star[i];
+            if (t[0] == v || t[1] == v || t[2] == v || t[3] == v) {
+                s->dead[star[i]] = 1;
+                (*live)--;
+            } else {
+                for (int k = 0; k < 4; k++)
+                    if (t[k] == u)
+                        t[k] = v;
+            }
+            for (int k = 0; k < 4; k++)
+                s->locked[t[k]] = 1;
+        }
+        s->removed[u] = 1;
+        s->locked[u] = 1;
+        done++;
+    }
+    int64_t w = 0; /* compact, in order */
+    for (int64_t t = 0; t < s->tet_count; t++)
+        if (!s->dead[t]) {
+            memmove(s->tets + 4 * w, s->tets + 4 * t, 4 * sizeof *s->tets);
+            s->origin[w++] = s->origin[t];
+        }
+    s->tet_count = w;
+    return done;
+}
+
+/* Simplify to about `target` live tets (or as far as passes go). */
+static int simplify_to(simplifier *s, int64_t target)
+{
+    int64_t live = s->tet_count;
+    for (;;) {
+        if (build_stars(s) != 0)
+            return -1;
+        int64_t before = live, done = collapse_pass(s, target, &live);
+        if (live <= target || done == 0 || before - live < before / 200)
+            return 0;
+    }
+}
+
+/* ---- one level as a file -------------------------------------------------------------------------- */
+
+/* The level's tetmesh: kept vertices (those its tets use) in their full-mesh order, the tets renumbered,
+ * the fields gathered (tet fields through the tet each level tet descends from), maps through. */
+static int level_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_old, tpk_diag *diag)
+{
+    const tpk_tetmesh *m = s->mesh;
+    memset(out, 0, sizeof *out);
+    int32_t *renum = malloc(sizeof *renum * (size_t)(m->vertex_count ? m->vertex_count : 1));
+    if (!renum)
+        return tpk_diag_fail(diag, "levels: out of memory");
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        renum[v] = -1;
+    for (int64_t i = 0; i < 4 * s->tet_count; i++)
+        renum[s->tets[i]] = 0;
+    int64_t n = 0;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        if (renum[v] == 0)
+            renum[v] = (int32_t)n++;
+    out->vertex_count = n;
+    out->tet_count = s->tet_count;
+    memcpy(out->origin, m->origin, sizeof out->origin);
+    out->points = malloc(sizeof *out->points * 3 * (size_t)(n ? n : 1));
+    out->vertex_source = malloc(sizeof(int32_t) * (size_t)(n ? n : 1));
+    *vertex_old = malloc(sizeof(int32_t) * (size_t)(n ? n : 1));
+    out->tets = malloc(sizeof *out->tets * 4 * (size_t)(s->tet_count ? s->tet_count : 1));
+    out->tet_source = malloc(sizeof *out->tet_source * (size_t)(s->tet_count ? s->tet_count : 1));
+    out->field_count = m->field_count;
+    out->fields = m->field_count ? calloc((size_t)m->field_count, sizeof *out->fields) : NULL;
+    int rc = out->points && out->vertex_source && *vertex_old && out->tets && out->tet_source &&
+                     (!m->field_count || out->fields) ? 0 : -1;
+    for (int64_t v = 0; rc == 0 && v < m->vertex_count; v++)
+        if (renum[v] >= 0) {
+            memcpy(out->points + 3 * (size_t)renum[v], m->points + 3 * (size_t)v, 3 * sizeof(double));
+            out->vertex_source[renum[v]] = m->vertex_source ? m->vertex_source[v] : (int32_t)v;
+            (*vertex_old)[renum[v]] = (int32_t)v;
+        }
+    for (int64_t t = 0; rc == 0 && t < s->tet_count; t++) {
+        for (int k = 0; k < 4; k++)
+            out->tets[4 * t + k] = renum[s->tets[4 * t + k]];
+        out->tet_source[t] = m->tet_source ? m->tet_source[s->origin[t]] : s->origin[t];
+    }
+    for (int f = 0; rc == 0 && f < m->field_count; f++) {
+        const tpk_src_field *src = &m->fields[f];
+        tpk_src_field *dst = &out->fields[f];
+        *dst = *src;
+        int point = src->association == TPK_ASSOC_POINT;
+        size_t per = (size_t)(point ? n : s->tet_count), src_per = (size_t)(point ? m->vertex_count : m->tet_count);
+        dst->values = malloc(sizeof *dst->values * (per ? per : 1) * (size_t)src->step_count);
+        if (!dst->values) {
+            rc = -1;
+            break;
+        }
+        for (int st = 0; st < src->step_count; st++)
+            for (size_t i = 0; i < per; i++)
+                dst->values[st * per + i] = src->values[st * src_per + (size_t)(point ? (*vertex_old)[i] : s->origin[i])];
+    }
+    out->step_count = m->step_count;
+    out->times = m->times; /* borrowed */
+    free(renum);
+    return rc == 0 ? 0 : tpk_diag_fail(diag, "levels: out of memory for a level of %lld tets", (long long)s->tet_count);
+}
+
+static void level_mesh_free(tpk_tetmesh *m)
+{
+    free(m->points);
+    free(m->vertex_source);
+    free(m->tets);
+    free(m->tet_source);
+    for (int f = 0; m->fields && f < m->field_count; f++)
+        free(m->fields[f].values);
+    free(m->fields);
+    memset(m, 0, sizeof *m);
+}
+
+/* The field of the full mesh at the vertices this level removed against the level's value there (linear
+ * in the level tet that holds the point, found by a walk through the level's tets: from the tet found for
+ * the removed vertex before, vertices being in Hilbert order, across the face the point is beyond). A
+ * point the walk does not reach in 4096 steps (or that it leaves the mesh for: a non-convex domain) is
+ * not sampled. */
+static void measure(const simplifier *s, const tpk_tetmesh *lvl, const int32_t *vertex_old, const int32_t *neighbors,
+                    tpk_level *r)
+{
+    const tpk_tetmesh *m = s->mesh;
+    uint8_t *kept = s->field ? calloc((size_t)(m->vertex_count ? m->vertex_count : 1), 1) : NULL;
+    if (!kept)
+        return;
+    for (int64_t v = 0; v < lvl->vertex_count; v++)
+        kept[vertex_old[v]] = 1;
+    double sum = 0, worst = 0;
+    int64_t count = 0, hint = 0;
+    for (int64_t u = 0; u < m->vertex_count; u++) {
+        if (kept[u])
+            continue;
+        const double *p = m->points + 3 * (size_t)u;
+        int64_t t = hint;
+        for (int steps = 0; steps < 4096 && t >= 0; steps++) {
+            const int32_t *v = lvl->tets + 4 * t;
+            double lambda[4], total = 0;
+            int beyond = -1;
+            for (int k = 0; k < 4; k++) {
+                const double *q[4];
+                for (int j = 0; j < 4; j++)
+                    q[j] = j == k ? p : lvl->points + 3 * (size_t)v[j];
+                double e[3][3];
+                for (int i = 0; i < 3; i++)
+                    for (int a = 0; a < 3; a++)
+                        e[i][a] = q[i + 1][a] - q[0][a];
+                lambda[k] = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                            e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                            e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+                total += lambda[k];
+                if (beyond < 0 && lambda[k] < 0 && tpk_orient3d_exact(q[0], q[1], q[2], q[3]) < 0)
+                    beyond = k;
+            }
+            if (beyond < 0) {
+                double value = 0;
+                for (int k = 0; k < 4 && total > 0; k++)
+                    value += lambda[k] / total * (double)s->field[vertex_old[v[k]]];
+                double d = fabs(value - (double)s->field[u]);
+                worst = d > worst ? d : worst;
+                sum += d * d;
+                count++;
+                hint = t;
+                break;
+            }
+            t = neighbors[4 * t + beyond];
+        }
+    }
+    r->error_samples = count;
+    r->error_max = worst;
+    r->error_rms = count ? sqrt(sum / (double)count) : 0;
+    free(kept);
+}
+
+/* The level's shell is the full mesh's, face for face (as sorted triples of full-mesh ids). */
+static int compare_triples(const void *a, const void *b)
+{
+    const int32_t *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k])
+            return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+static int32_t *shell_triples(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, const int32_t *map,
+                              int64_t *count)
+{
+    int64_t n = 0;
+    for (int64_t i = 0; i < 4 * tet_count; i++)
+        n += neighbors[i] < 0;
+    int32_t *f = malloc(sizeof *f * 3 * (size_t)(n ? n : 1));
+    if (!f)
+        return NULL;
+    int64_t w = 0;
+    for (int64_t t = 0; t < tet_count; t++)
+        for (int k = 0; k < 4; k++)
+            if (neighbors[4 * t + k] < 0) {
+                int32_t a[3];
+                for (int j = 0; j < 3; j++)
+                    a[j] = map ? map[tets[4 * t + tpk_tet_faces[k][j]]] : tets[4 * t + tpk_tet_faces[k][j]];
+                for (int i = 0; i < 2; i++) /* sort the three */
+                    for (int j = 0; j < 2 - i; j++)
+                        if (a[j] > a[j + 1]) {
+                            int32_t x = a[j];
+                            a[j] = a[j + 1];
+                            a[j + 1] = x;
+                        }
+                memcpy(f + 3 * w++, a, sizeof a);
+            }
+    qsort(f, (size_t)n, 3 * sizeof *f, compare_triples);
+    *count = n;
+    return f;
+}
+
+static int same_shell(const simplifier *s, const int32_t *full_neighbors, const tpk_tetmesh *lvl,
+                      const int32_t *vertex_old, const int32_t *neighbors)
+{
+    int64_t a = 0, b = 0;
+    int32_t *x = shell_triples(s->mesh->tets, full_neighbors, s->mesh->tet_count, NULL, &a);
+    int32_t *y = shell_triples(lvl->tets, neighbors, lvl->tet_count, vertex_old, &b);
+    int same = x && y && a == b && !memcmp(x, y, sizeof *x * 3 * (size_t)a);
+    free(x);
+    free(y);
+    return same;
+}
+
+/* Write the level through the converter's own writer into an unnamed file, and take its bytes. */
+static int write_level(const tpk_convert_options *o, const simplifier *s, const int32_t *full_neighbors, int k,
+                       const char *source_format, tpk_level *r, tpk_diag *diag)
+{
+    tpk_tetmesh lvl;
+    int32_t *vertex_old = NULL, *neighbors = NULL;
+    int rc = level_mesh(s, &lvl, &vertex_old, diag);
+    if (rc == 0 && !(neighbors = malloc(sizeof *neighbors * 4 * (size_t)(lvl.tet_count ? lvl.tet_count : 1))))
+        rc = tpk_diag_fail(diag, "levels: out of memory");
+    if (rc == 0)
+        rc = tpk_connect(lvl.tets, lvl.tet_count, lvl.vertex_count, neighbors, o->threads, diag);
+    /* The folds the full mesh had cut (--cut-folds: both faces are shell faces there) pair up again in
+     * face matching: cut them again, as extract does. No collapse makes a new one (every changed tet is
+     * positive inside the star it replaces); same_shell below shows the shell is the full mesh's. */
+    int64_t *slots = NULL, folds = 0;
+    if (rc == 0)
+        rc = tpk_find_folds(lvl.tets, neighbors, lvl.tet_count, lvl.points, o->threads, &slots, &folds, diag);
+    if (rc == 0 && folds > 0)
+        tpk_cut_folds(lvl.tets, neighbors, slots, folds);
+    free(slots);
+    if (rc == 0 && !same_shell(s, full_neighbors, &lvl, vertex_old, neighbors))
+        rc = tpk_diag_fail(diag, "level %d: its shell is not the full mesh's (a bug in levels.c)", k);
+    FILE *tmp = rc == 0 ? tmpfile() : NULL;
+    if (rc == 0 && !tmp)
+        rc = tpk_diag_fail(diag, "level %d: cannot make a temporary file", k);
+    if (rc == 0) {
+        tpk_convert_options lo = *o;
+        char name[64];
+        snprintf(name, sizeof name, "level %d", k);
+        lo.output = name;
+        lo.output_fd = fileno(tmp);
+        tpk_header_fields hdr;
+        memset(&hdr, 0, sizeof hdr);
+        memcpy(hdr.origin, lvl.origin, sizeof hdr.origin);
+        for (int a = 0; a < 3; a++) {
+            hdr.bounds_min[a] = INFINITY;
+            hdr.bounds_max[a] = -INFINITY;
+        }
+        for (int64_t v = 0; v < lvl.vertex_count; v++)
+            for (int a = 0; a < 3; a++) {
+                double w = lvl.origin[a] + lvl.points[3 * v + a];
+                hdr.bounds_min[a] = w < hdr.bounds_min[a] ? w : hdr.bounds_min[a];
+                hdr.bounds_max[a] = w > hdr.bounds_max[a] ? w : hdr.bounds_max[a];
+            }
+        tpk_convert_report lrep;
+        memset(&lrep, 0, sizeof lrep);
+        lrep.vertices = lvl.vertex_count;
+        lrep.tets = lvl.tet_count;
+        rc = tpk_write_tpk(&lo, &lvl, neighbors, &hdr, &lrep, source_format, NULL, NULL, diag);
+        struct stat st;
+        if (rc == 0 && fstat(fileno(tmp), &st) != 0)
+            rc = tpk_diag_fail(diag, "level %d: cannot read back its file", k);
+        if (rc == 0) {
+            r->size = (size_t)st.st_size;
+            r->data = malloc(r->size ? r->size : 1);
+            if (!r->data || pread(fileno(tmp), r->data, r->size, 0) != (ssize_t)r->size)
+                rc = tpk_diag_fail(diag, "level %d: cannot read back its %zu bytes", k, r->size);
+        }
+    }
+    if (tmp)
+        fclose(tmp);
+    if (rc == 0) {
+        r->vertices = lvl.vertex_count;
+        r->tets = lvl.tet_count;
+        r->shell_distance = 0;
+        measure(s, &lvl, vertex_old, neighbors, r);
+    }
+    free(neighbors);
+    free(vertex_old);
+    level_mesh_free(&lvl);
+    return rc;
+}
+
+int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
+                    const char *source_format, tpk_levels *out, tpk_diag *diag)
+{
+    memset(out, 0, sizeof *out);
+    count = count > TPK_MAX_LEVELS ? TPK_MAX_LEVELS : count;
+    simplifier s;
+    memset(&s, 0, sizeof s);
+    s.mesh = mesh;
+    int64_t V = mesh->vertex_count, T = mesh->tet_count;
+    /* The field that steers the collapses and measures the error: the first point field, at its step of
+     * widest range (a first step of a transient is often uniform). */
+    const char *field_name = "";
+    for (int f = 0; f < mesh->field_count && !s.field; f++) {
+        const tpk_src_field *src = &mesh->fields[f];
+        if (src->association != TPK_ASSOC_POINT || V == 0)
+            continue;
+        double widest = -1;
+        for (int st = 0; st < src->step_count; st++) {
+            const float *v = src->values + (size_t)st * (size_t)V;
+            float lo = INFINITY, hi = -INFINITY;
+            for (int64_t i = 0; i < V; i++)
+                if (v[i] == v[i])
+                    lo = v[i] < lo ? v[i] : lo, hi = v[i] > hi ? v[i] : hi;
+            if (hi >= lo && hi - lo > widest) {
+                widest = hi - lo;
+                s.field = v;
+                s.field_step = st;
+            }
+        }
+        field_name = src->name;
+    }
+    s.boundary = calloc((size_t)(V ? V : 1), 1);
+    s.removed = calloc((size_t)(V ? V : 1), 1);
+    s.locked = calloc((size_t)(V ? V : 1), 1);
+    s.dead = calloc((size_t)(T ? T : 1), 1);
+    s.tets = malloc(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
+    s.origin = malloc(sizeof *s.origin * (size_t)(T ? T : 1));
+    s.star_start = malloc(sizeof *s.star_start * (size_t)(V + 1));
+    s.star = malloc(sizeof *s.star * 4 * (size_t)(T ? T : 1));
+    s.tet_quality = malloc(sizeof *s.tet_quality * (size_t)(T ? T : 1));
+    int rc = s.boundary && s.removed && s.locked && s.dead && s.tets && s.origin && s.star_start && s.star &&
+                     s.tet_quality
+                 ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
+    if (rc == 0) {
+        memcpy(s.tets, mesh->tets, sizeof *s.tets * 4 * (size_t)T);
+        for (int64_t t = 0; t < T; t++) {
+            s.origin[t] = (int32_t)t;
+            for (int k = 0; k < 4; k++)
+                if (neighbors[4 * t + k] < 0)
+                    for (int j = 0; j < 3; j++)
+                        s.boundary[mesh->tets[4 * t + tpk_tet_faces[k][j]]] = 1;
+        }
+        s.tet_count = T;
+    }
+    for (int k = 1; rc == 0 && k <= count; k++) {
+        double t0 = tpk_now_seconds();
+        int64_t before = s.tet_count;
+        if (simplify_to(&s, before / TPK_LEVEL_RATIO) != 0) {
+            rc = tpk_diag_fail(diag, "levels: out of memory");
+            break;
+        }
+        if (s.tet_count > before - before * 15 / 100) /* not coarser enough to be worth a level */
+            break;
+        tpk_level *r = &out->level[out->count];
+        snprintf(r->field, sizeof r->field, "%s", field_name);
+        r->field_step = s.field_step;
+        rc = write_level(o, &s, neighbors, k, source_format, r, diag);
+        r->seconds = tpk_now_seconds() - t0;
+        if (rc == 0)
+            out->count++;
+    }
+    free(s.boundary);
+    free(s.removed);
+    free(s.locked);
+    free(s.dead);
+    free(s.tets);
+    free(s.origin);
+    free(s.star_start);
+    free(s.star);
+    free(s.tet_quality);
+    if (rc != 0)
+        tpk_levels_free(out);
+    return rc;
+}
+
+void tpk_levels_free(tpk_levels *levels)
+{
+    for (int i = 0; i < levels->count; i++)
+        free(levels->level[i].data);
+    memset(levels, 0, sizeof *levels);
+}

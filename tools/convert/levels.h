@@ -1,0 +1,44 @@
+/* Levels of detail (spec §16, convert --levels N): coarser complete meshes of the same domain, each a
+ * whole .tpk that the file carries in a LEVL chunk. Owner: levels.c. */
+#ifndef TPK_CONVERT_LEVELS_H
+#define TPK_CONVERT_LEVELS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "base/diag.h"
+#include "convert.h"
+#include "mesh/mesh.h"
+
+#define TPK_MAX_LEVELS 8
+
+/* One level: the bytes of its file, and what it is. */
+typedef struct tpk_level {
+    void *data; /* the whole .tpk (malloc'd) */
+    size_t size;
+    int64_t vertices, tets;
+    char field[64];          /* the field the error is measured on ("" without a point field) */
+    int field_step;          /* at this step: the one of widest range */
+    int64_t error_samples;   /* the full mesh's vertices this level removed: the error is sampled there */
+    double error_max, error_rms; /* |level - full| at those points, field units */
+    double shell_distance;   /* of the level's shell from the full mesh's: 0 (the same faces, see levels.c) */
+    double seconds;          /* simplifying and writing it */
+} tpk_level;
+
+typedef struct tpk_levels {
+    int count;
+    tpk_level level[TPK_MAX_LEVELS];
+} tpk_levels;
+
+/* Make up to `count` levels of `mesh` (in the stored frame, tets positive, `neighbors` as connect gave
+ * them), each with about a fifth of the tets of the one before, by half-edge collapses of interior
+ * vertices that keep every tet positive (exact orientation) and of fair shape; the shell is never
+ * touched. Stops early (fewer levels, out->count) when a level would keep more than 85% of the tets of
+ * the one before. Each level is written as a complete file with `o`'s layouts and compression, every
+ * field (point fields at the kept vertices, tet fields of the tet each level tet descends from), TIME,
+ * TMAP and VMAP. 0, or -1 with a message. */
+int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
+                    const char *source_format, tpk_levels *out, tpk_diag *diag);
+void tpk_levels_free(tpk_levels *levels);
+
+#endif
