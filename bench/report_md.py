@@ -459,10 +459,27 @@ def section_gpu(summary):
                   f"max abs {max(abs(x - y) for x, y in zip(a, b))} / 255.\n\n")
 
 
+def section_levels(summary):
+    path = os.path.join(DATA, "levels.md")
+    rows = jsonl("levels.jsonl")
+    if not rows or not os.path.exists(path):
+        return ""
+    conv = [r for r in rows if "convert_s" in r]
+    for c in conv:
+        summary.append(f"Levels of detail ({c['mesh']}): `convert --levels 4` "
+                       f"{c['convert_levels_s'] / c['convert_s']:.2f}x the conversion time, "
+                       f"{c['bytes_levels'] / c['bytes']:.2f}x the file size, {len(c['levels'])} levels")
+    return ("## 1d. Levels of detail\n\n`bench/bench_levels.sh`: per level of `convert --levels 4` (spec §16), the "
+            "CPU frame time (median) and the picture's PSNR against the full mesh's (same camera and range), the "
+            "field error the converter measured (at the full mesh's vertices the level removed), and the level "
+            "`render --max-ms` picks.\n" + open(path).read() + "\n")
+
+
 def main():
     machine = json.load(open(os.path.join(DATA, "machine.json")))
     summary = []
-    body = (section_render(summary) + section_occlusion(summary) + section_iso(summary) + section_storage(summary)
+    body = (section_render(summary) + section_occlusion(summary) + section_iso(summary) + section_levels(summary)
+            + section_storage(summary)
             + section_accuracy(summary)
             + section_scaling(summary) + section_gpu(summary) + section_hard(summary))
     closing = "## Summary\n\n" + "".join(f"- {s}\n" for s in summary)

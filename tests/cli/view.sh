@@ -124,6 +124,20 @@ psnr_at_least "$WORK/probe.png" "$WORK/probe-render.png" "view's probe keys and 
 expect_exit 2 tpk view "$WORK/cyl.tpk" --keys 'O7'
 expect_stderr "--keys expects keys of T F \[ \] L I S C P W Q O K 4 6 8 2 9 3 + -, found 'O7'"
 
+# --max-ms (levels of detail): with a budget nothing fits, the first frame is the coarsest level (the cost
+# model has seen nothing yet) and, the view resting, the second the full mesh; each equals render's
+convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl_l.tpk" --levels 2 > /dev/null
+coarsest=$(tpk info "$WORK/cyl_l.tpk" --json | "$PY" -c 'import json,sys; print(len(json.load(sys.stdin)["levels"]))')
+[ "$coarsest" -ge 1 ] || fail "the sample has no level of detail"
+for frames in 1 2; do
+    tpk view "$WORK/cyl_l.tpk" --size $SIZE --frames $frames --max-ms 0.0001 --screenshot "$WORK/lod$frames.png" \
+        2> "$WORK/err" || { cat "$WORK/err"; fail "view --max-ms"; }
+    want=$([ $frames = 1 ] && echo "$coarsest" || echo 0)
+    grep -q "the last at level $want" "$WORK/err" || fail "view --max-ms, $frames frames: $(cat "$WORK/err")"
+    tpk render "$WORK/cyl_l.tpk" --size $SIZE --backend vulkan --level $want -o "$WORK/lod-render$want.png" > /dev/null
+    psnr_at_least "$WORK/lod$frames.png" "$WORK/lod-render$want.png" "view --max-ms, frame $frames (level $want)"
+done
+
 # no Vulkan device: the CPU reference, with a note
 VK_ICD_FILENAMES="$WORK/no_such_icd.json" TETPACK_RENDER_BACKEND= tpk view "$WORK/cyl.tpk" --size $SIZE --frames 1 \
     --screenshot "$WORK/view-cpu.png" 2> "$WORK/err" || { cat "$WORK/err"; fail "view without Vulkan"; }

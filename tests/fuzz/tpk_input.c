@@ -44,6 +44,29 @@ void tpk_fuzz_use_tpk(tpk_file *file)
         read_chunks(file, info.chunk_count);
 }
 
+/* Levels of detail (spec §16): each opened over the file's bytes and used as a file, then check 615. */
+static void use_levels(tpk_file *file, const tpk_open_options *options)
+{
+    for (uint32_t k = 1; k <= tpk_level_count(file) && k <= 8; k++) {
+        tpk_file *level = NULL;
+        char err[256];
+        if (tpk_open_level(file, k, options, &level, err, sizeof err) == TPK_OK)
+            tpk_fuzz_use_tpk(level);
+        tpk_close(level);
+    }
+    tpk_check_options o;
+    tpk_check_options_default(&o);
+    o.threads = 1;
+    tpk_check_report report;
+    if (tpk_check_report_init(&report, &o) != 0)
+        return;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    diag.warn = tpk_fuzz_ignore;
+    tpk_check_levels("fuzz.tpk", file, &report, &diag);
+    tpk_check_report_free(&report);
+}
+
 /* `tetpack check` on the handle: the 6xx groups, then the mesh groups on the tets they recovered. */
 static void check_file(tpk_file *file)
 {
@@ -84,6 +107,7 @@ void tpk_fuzz_tpk_input(const uint8_t *data, size_t size)
         if (tpk_open_memory(&file, data, size, &options, err, sizeof err) != TPK_OK)
             continue;
         tpk_fuzz_use_tpk(file);
+        use_levels(file, &options);
         if (k == 0)
             check_file(file);
         tpk_close(file);

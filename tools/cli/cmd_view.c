@@ -190,6 +190,7 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
     o.save_scene = a->save_scene;
     o.keys = v->keys;
     o.iso_raster = a->iso_raster;
+    o.max_ms = a->max_ms;
     if (a->iso_raster && cpu)
         return tpk_cli_fail("view", "--iso-raster draws with Vulkan: not with --backend cpu");
     if (a->iso_raster && o.present == TPK_VIEW_PRESENT_VULKAN)

@@ -284,10 +284,11 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
     {TPK_OPT_MAX_MS,
      .flag = "--max-ms", .metavar = "T", .expects = "a time in milliseconds > 0",
      .help = "a time budget: the finest level of detail whose predicted frame\n"
-             "time fits T ms (a cost model fitted on a small frame of the\n"
+             "time fits T ms (a cost model fitted on two small frames of the\n"
              "coarsest level, then on every frame drawn); --json reports the\n"
-             "level, its field error and the prediction",
-     .help_rank = 32, .render_only = 1, .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = INFINITY, .lo_open = 1,
+             "level, its field error and the prediction. view: while the view\n"
+             "moves; at rest it draws the full mesh",
+     .help_rank = 32, .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = INFINITY, .lo_open = 1,
      .hi_open = 1},
 };
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "base/clock.h"
+#include "render/budget.h"
 #include "view_internal.h"
 
 /* A drag shows frames at a fraction of the resolution when full frames take longer than this. */
@@ -27,6 +28,8 @@ typedef struct view_loop {
     double frame_seconds[256]; /* the first full frames' render times, for the summary of --frames */
     double gpu_seconds[256];   /* and their GPU times (-1: none) */
     int timed;
+    tpk_cost_model model;      /* --max-ms: fitted on every frame drawn */
+    int levels_shown[9];       /* frames drawn at each level, for the summary */
 } view_loop;
 
 /* Mouse drags onto the camera: 0.4 degree per pixel, a wheel step zooms by 10%. */
@@ -84,13 +87,36 @@ static int apply_action(view_loop *l, view_action a, tpk_diag *diag)
     return 0;
 }
 
-/* Render and draw one frame; `reduced`: at a fraction of the resolution (a drag on a slow device). */
-static int show_frame(view_loop *l, int reduced, tpk_diag *diag)
+/* --max-ms: the level of the next frame of width x height: the full mesh when the view rests (`resting`),
+ * else the finest the cost model predicts to fit (the coarsest before any frame was drawn). The renderer
+ * is made again for a new level. 0, or -1 with a message. */
+static int pick_level(view_loop *l, int width, int height, int resting, tpk_diag *diag)
+{
+    view_state *s = &l->state;
+    if (!(l->o->max_ms > 0) || s->level_count < 2)
+        return 0;
+    int k = resting ? 0 : l->model.n > 0 ? tpk_cost_model_pick(&l->model, (double)width * height, s->level_tets,
+                                                              s->level_count, l->o->max_ms / 1e3)
+                                         : s->level_count - 1;
+    int changed = view_state_set_level(s, k, diag);
+    if (changed < 0)
+        return -1;
+    if (changed > 0 &&
+        view_renderer_open(&l->renderer, s, l->o->cpu, l->vulkan_window ? l->window : NULL, diag) != 0)
+        return -1;
+    return 0;
+}
+
+/* Render and draw one frame; `reduced`: at a fraction of the resolution (a drag on a slow device);
+ * `resting`: no input since the last frame (--max-ms then draws the full mesh). */
+static int show_frame(view_loop *l, int reduced, int resting, tpk_diag *diag)
 {
     int width, height;
     view_window_size(l->window, &width, &height);
     if (width < 1 || height < 1) /* minimized */
         return 0;
+    if (pick_level(l, width, height, resting && !reduced, diag) != 0)
+        return -1;
     int zoom = 1;
     if (reduced && l->full_seconds > drag_frame_seconds)
         zoom = (int)fmin(8.0, ceil(sqrt(l->full_seconds / drag_frame_seconds)));
@@ -107,6 +133,8 @@ static int show_frame(view_loop *l, int reduced, tpk_diag *diag)
     if (view_renderer_frame(&l->renderer, &l->state, w, h, l->rgba, &stats, diag) != 0)
         return -1;
     double seconds = tpk_now_seconds() - t0;
+    tpk_cost_model_add(&l->model, (double)w * h, (double)l->state.level_tets[l->state.level], seconds);
+    l->levels_shown[l->state.level]++;
     if (zoom == 1) /* the size a scene written now says */
         l->full_seconds = seconds, l->state.opt.width = width, l->state.opt.height = height;
     if (zoom == 1 && l->timed < 256)
@@ -157,6 +185,12 @@ static int finish(view_loop *l, tpk_diag *diag)
         snprintf(gpu, sizeof gpu, ", GPU median %.2f ms", 1e3 * l->gpu_seconds[l->timed / 2]);
     fprintf(stderr, "tetpack view: %d frames of %dx%d on %s, render time median %.1f ms%s (of the first %d)\n",
             l->frame, width, height, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], gpu, l->timed);
+    if (l->o->max_ms > 0) {
+        fprintf(stderr, "tetpack view: --max-ms %g: frames per level", l->o->max_ms);
+        for (int k = 0; k < l->state.level_count; k++)
+            fprintf(stderr, " %d:%d", k, l->levels_shown[k]);
+        fprintf(stderr, " (0: the full mesh); the last at level %d\n", l->state.level);
+    }
     if (l->o->screenshot && save_screenshot(l, l->o->screenshot, width, height, diag) != 0)
         return -1;
     if (l->o->save_scene && apply_action(l, VIEW_WRITE_SCENE, diag) != 0)
@@ -167,7 +201,7 @@ static int finish(view_loop *l, tpk_diag *diag)
 static int run(view_loop *l, tpk_diag *diag)
 {
     const tpk_view_options *o = l->o;
-    int dirty = 1, reduced = 0;
+    int dirty = 1, reduced = 0, moved = 1, refine = 0;
     for (const char *k = o->keys; k && *k; k++) { /* --keys: as if typed before the window showed */
         int rc = apply_action(l, view_key_action((unsigned char)*k), diag);
         if (rc)
@@ -175,8 +209,11 @@ static int run(view_loop *l, tpk_diag *diag)
     }
     while (!view_window_closing(l->window)) {
         view_input in;
-        view_window_poll(l->window, !dirty && o->frames <= 0, &in);
-        dirty |= apply_drags(l, &in) | in.resized;
+        view_window_poll(l->window, !dirty && !refine && o->frames <= 0, &in);
+        moved = apply_drags(l, &in) | in.resized | (in.action_count > 0) | in.dragging;
+        dirty |= moved;
+        if (refine && !moved) /* --max-ms: the view rests after a coarser frame: the full mesh once */
+            dirty = 1;
         reduced = in.dragging;
         if (in.released) /* a drag's reduced frames end with a full one */
             dirty = 1;
@@ -186,10 +223,14 @@ static int run(view_loop *l, tpk_diag *diag)
                 return rc < 0 ? -1 : 0;
             dirty |= in.actions[i] != VIEW_WRITE_SCENE;
         }
-        if (o->frames > 0 && l->frame > 0)
+        if (o->frames > 0 && l->frame > 0 && o->orbit_deg != 0) {
             tpk_view_orbit(&l->state.opt.camera, o->orbit_deg);
-        if ((dirty || o->frames > 0) && show_frame(l, reduced && !l->screenshot_due, diag) != 0)
+            moved = 1;
+        }
+        int resting = refine && !moved;
+        if ((dirty || o->frames > 0) && show_frame(l, reduced && !l->screenshot_due, resting, diag) != 0)
             return -1;
+        refine = o->max_ms > 0 && l->state.level > 0 && !resting;
         dirty = 0; /* wait for the next event (a drag's motion, a key) */
         if (o->frames > 0 && l->frame >= o->frames)
             return finish(l, diag);
@@ -257,6 +298,7 @@ int tpk_view_run(const tpk_view_options *o, tpk_diag *diag)
     if (rc == 0)
         rc = run(l, diag);
     view_renderer_close(&l->renderer);
+    view_state_close(&l->state);
     view_window_close(l->window);
     free(l->rgba);
     free(l);

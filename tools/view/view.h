@@ -34,6 +34,9 @@ typedef struct tpk_view_options {
     const char *keys;             /* keys pressed before the first frame, in order ("LI]"), as typed */
     int iso_raster;               /* the isosurfaces drawn as triangles (render --iso-raster; Vulkan, shown
                                      through OpenGL), each value extracted once, drawn for every camera */
+    double max_ms;                /* > 0: a time budget per frame: while the view moves, the finest level of
+                                     detail (spec §16) the cost model fitted on the frames drawn predicts to
+                                     fit; once it rests, the full mesh */
 } tpk_view_options;
 
 /* Open the window and run until it is closed (or `frames` frames were shown). Returns 0; -1 with a

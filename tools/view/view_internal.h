@@ -29,6 +29,11 @@ typedef struct view_state {
     tpk_mesh_arrays mesh;
     double bounds_min[3], bounds_max[3];
     int iso_raster;                /* tpk_view_options.iso_raster */
+    /* Levels of detail (spec §16): files[0] is the file itself, the others opened over it; `file` is
+     * files[level]. The camera, range and bounds stay the full mesh's whatever the level. */
+    tpk_file *files[9];
+    int64_t level_tets[9];
+    int level_count, level;
 } view_state;
 
 /* What a key asks for. */
@@ -43,6 +48,11 @@ typedef enum view_action {
 
 /* From the options: the field (resolved), step, layout and arrays loaded. 0, or -1 with a message. */
 int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag);
+/* Show level `level` (0: the full mesh). 1 when the arrays changed, 0 when it was shown already, -1 with
+ * a message (the state is then unchanged). */
+int view_state_set_level(view_state *s, int level, tpk_diag *diag);
+/* Close the levels view_state_init opened. */
+void view_state_close(view_state *s);
 /* Apply a key's action. Returns 1 when the arrays changed (the renderer must be made again), 0 when only
  * the options did, -1 with a message when the new arrays do not load (the state is then unchanged). */
 int view_state_apply(view_state *s, view_action action, tpk_diag *diag);
