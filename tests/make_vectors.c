@@ -406,6 +406,111 @@ static int patch_implausible_size(byte_buffer *b)
     return 0;
 }
 
+/* Format 1.3 (spec §16): two_tets_levels.tpk is two_tets_zstd.tpk's mesh, uncompressed, with one level of
+ * detail: tet 0 of the two alone ({3, 0, 4, 1}: old vertices 0, 1, 3, 4 renumbered 0..3 in their order),
+ * its fields gathered (temperature at those vertices, material of tet 0), TIME, TMAP and VMAP mapped.
+ * With `same` the level is the parent's own mesh (level_not_coarser.tpk: check 615). */
+static const float level_positions[4][3] = {{1, 0, 0}, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}};
+static const int32_t level_tets[1][4] = {{2, 0, 3, 1}};
+static const int32_t level_neighbors[1][4] = {{-1, -1, -1, -1}};
+static const float level_temperature[2][4] = {{300, 301, 303, 304}, {310, 311, 313, 314}};
+static const float level_material[1] = {1};
+static const int32_t level_tmap[1] = {7};
+static const int32_t level_vmap[4] = {10, 11, 13, 14};
+
+static tpk_result write_level_one(const char *path)
+{
+    vector_writer w;
+    if (open_writer(&w, path, TPK_CODEC_NONE) != TPK_OK)
+        return w.result;
+    tpk_tet32 t32;
+    tpk_tet20 t20;
+    tpk_tet16 t16;
+    tpk_shell_face shell[4];
+    tpk_field_desc fields[2];
+    spec_tet32(level_tets[0], level_neighbors[0], &t32);
+    spec_tet20(level_tets[0], level_neighbors[0], &t20);
+    spec_tet16(&t20, &t16);
+    size_t shell_count = spec_shell(level_tets, level_neighbors, 1, shell);
+    spec_field(&fields[0], "temperature", "K", TPK_ASSOC_POINT, 2, 300.0f, 314.0f);
+    spec_field(&fields[1], "material", "", TPK_ASSOC_TET, 1, 1.0f, 1.0f);
+    put(&w, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, 4, 0, 0, level_positions);
+    put(&w, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, 1, 0, 0, &t32);
+    put(&w, TPK_TAG_TT20, 1, TPK_ELEM_TET20, 20, 1, 0, 0, &t20);
+    put(&w, TPK_TAG_TT16, 1, TPK_ELEM_TET16, 16, 1, 0, 0, &t16);
+    put(&w, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, shell_count, 0, 0, shell);
+    put(&w, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, 2, 0, 0, fields);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 4, 0, 0, level_temperature[0]);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 4, 0, 1, level_temperature[1]);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 1, 1, 0, level_material);
+    put(&w, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, 2, 0, 0, two_tets_time);
+    put(&w, TPK_TAG_TMAP, 0, TPK_ELEM_I32, 4, 1, 0, 0, level_tmap);
+    put(&w, TPK_TAG_VMAP, 0, TPK_ELEM_I32, 4, 4, 0, 0, level_vmap);
+    tpk_header_fields h = {0};
+    h.vertex_count = 4;
+    h.tet_count = 1;
+    h.shell_face_count = shell_count;
+    bounds_of(level_positions, 4, two_tets_origin, &h);
+    return finish(&w, &h);
+}
+
+/* The two-tet mesh, uncompressed, with `level`'s bytes as LEVL 1. */
+static tpk_result write_two_tets_levels(const char *path, const char *level)
+{
+    byte_buffer lb = {0};
+    if (load_bytes(level, &lb) != 0)
+        return TPK_ERR_IO;
+    vector_writer w;
+    if (open_writer(&w, path, TPK_CODEC_NONE) != TPK_OK) {
+        free(lb.data);
+        return w.result;
+    }
+    tpk_tet32 t32[2];
+    tpk_tet20 t20[2];
+    tpk_tet16 t16[2];
+    tpk_shell_face shell[8];
+    tpk_field_desc fields[2];
+    for (int t = 0; t < 2; t++) {
+        spec_tet32(two_tets_tets[t], two_tets_neighbors[t], &t32[t]);
+        spec_tet20(two_tets_tets[t], two_tets_neighbors[t], &t20[t]);
+        spec_tet16(&t20[t], &t16[t]);
+    }
+    size_t shell_count = spec_shell(two_tets_tets, two_tets_neighbors, 2, shell);
+    spec_field(&fields[0], "temperature", "K", TPK_ASSOC_POINT, 2, 300.0f, 314.0f);
+    spec_field(&fields[1], "material", "", TPK_ASSOC_TET, 1, 1.0f, 2.0f);
+    put(&w, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, 5, 0, 0, two_tets_positions);
+    put(&w, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, 2, 0, 0, t32);
+    put(&w, TPK_TAG_TT20, 1, TPK_ELEM_TET20, 20, 2, 0, 0, t20);
+    put(&w, TPK_TAG_TT16, 1, TPK_ELEM_TET16, 16, 2, 0, 0, t16);
+    put(&w, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, shell_count, 0, 0, shell);
+    put(&w, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, 2, 0, 0, fields);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 5, 0, 0, two_tets_temperature[0]);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 5, 0, 1, two_tets_temperature[1]);
+    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 2, 1, 0, two_tets_material);
+    put(&w, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, 2, 0, 0, two_tets_time);
+    put(&w, TPK_TAG_TMAP, 0, TPK_ELEM_I32, 4, 2, 0, 0, two_tets_tmap);
+    put(&w, TPK_TAG_VMAP, 0, TPK_ELEM_I32, 4, 5, 0, 0, two_tets_vmap);
+    put(&w, TPK_TAG_LEVL, 0, TPK_ELEM_BYTE, 1, lb.size, 1, 0, lb.data);
+    free(lb.data);
+    tpk_header_fields h = {0};
+    h.vertex_count = 5;
+    h.tet_count = 2;
+    h.shell_face_count = shell_count;
+    bounds_of(two_tets_positions, 5, two_tets_origin, &h);
+    return finish(&w, &h);
+}
+
+/* Rule 14 (format 1.3): the LEVL chunk's codec byte says zstd (its bytes are the plain file). */
+static int patch_level_zstd(byte_buffer *b)
+{
+    tpk_dir_entry *e = entry_of(b, TPK_TAG_LEVL);
+    if (!e)
+        return -1;
+    e->codec = TPK_CODEC_ZSTD;
+    reseal(b);
+    return 0;
+}
+
 /* Rule 5 (format 1.1): origin[0] = +infinity. */
 static int patch_nonfinite_origin(byte_buffer *b)
 {
@@ -552,5 +657,20 @@ static int tpk_make_vectors(const char *dir)
     remove(vendor);
     rc |= write_part_set(dir, "two_parts", 0) != TPK_OK;
     rc |= write_part_set(dir, "bad_link", 1) != TPK_OK;
+    /* format 1.3: a file with a level; its level not coarser (615); its level compressed (rule 14) */
+    char level[1024], levels[1024], same[1024];
+    snprintf(level, sizeof level, "%s/level_one.tmp", dir);
+    snprintf(levels, sizeof levels, "%s/two_tets_levels.tpk", dir);
+    snprintf(same, sizeof same, "%s/two_tets_plain.tmp", dir);
+    rc |= write_level_one(level) != TPK_OK;
+    rc |= write_two_tets_levels(levels, level) != TPK_OK;
+    rc |= write_two_tets_levels(same, levels) != TPK_OK; /* LEVL 1: a file of two tets, as many as its parent */
+    if (rc == 0) {
+        char dst[1024];
+        snprintf(dst, sizeof dst, "%s/level_not_coarser.tpk", dir);
+        rc |= rename(same, dst) != 0;
+    }
+    rc |= make_broken(dir, "level_zstd.tpk", levels, patch_level_zstd);
+    remove(level);
     return rc;
 }

@@ -315,3 +315,44 @@ TPK_TEST(cost_model)
     tpk_cost_model_add(&one, 1000, 1000, NAN);
     CHECK(one.n == 1);
 }
+
+/* The committed vectors of spec §13 (format 1.3): two_tets_levels.tpk's level is tet 0 alone, with the
+ * parent's fields; level_not_coarser.tpk is check 615. */
+TPK_TEST(level_vectors)
+{
+    char path[4096], bad[4096];
+    snprintf(path, sizeof path, "%s/samples/vectors/two_tets_levels.tpk", TPK_SOURCE_DIR);
+    snprintf(bad, sizeof bad, "%s/samples/vectors/level_not_coarser.tpk", TPK_SOURCE_DIR);
+    tpk_file *file = NULL, *lf = NULL;
+    CHECK(tpk_open_path(&file, path, NULL, NULL, 0) == TPK_OK);
+    if (!file)
+        return;
+    tpk_file_info info;
+    tpk_get_info(file, &info);
+    CHECK(info.version_minor == 3 && tpk_level_count(file) == 1);
+    char err[256] = "";
+    CHECK(tpk_open_level(file, 1, NULL, &lf, err, sizeof err) == TPK_OK);
+    if (lf) {
+        tpk_mesh_arrays m;
+        CHECK(tpk_load_arrays(lf, TPK_LAYOUT_TET16, "temperature", 1, &m) == TPK_OK);
+        CHECK(m.tet_count == 1 && m.vertex_count == 4 && m.shell_face_count == 4 && m.scalars[3] == 314);
+        CHECK(tpk_verify(lf) == TPK_OK);
+        tpk_close(lf);
+    }
+    tpk_check_report report;
+    tpk_check_options o;
+    tpk_check_options_default(&o);
+    CHECK(tpk_check_report_init(&report, &o) == 0);
+    tpk_diag diag = {0};
+    CHECK(tpk_check_tpk_file(path, file, &report, &diag) == 0 && tpk_check_levels(path, file, &report, &diag) == 0);
+    for (int id = 600; id <= 615; id++)
+        CHECK_MSG(tpk_check_finding(&report, id)->count == 0, "check %d", id);
+    tpk_check_report_free(&report);
+    tpk_close(file);
+    CHECK(tpk_open_path(&file, bad, NULL, NULL, 0) == TPK_OK);
+    CHECK(tpk_check_report_init(&report, &o) == 0);
+    CHECK(file && tpk_check_levels(bad, file, &report, &diag) == 0 && tpk_check_finding(&report, 615)->count == 1);
+    tpk_check_report_free(&report);
+    tpk_close(file);
+}
+

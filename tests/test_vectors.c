@@ -23,7 +23,8 @@ static const char *const vector_names[] = {
     "newer_major.tpk", "unknown_required_chunk.tpk", "chunk_checksum.tpk", "overlap.tpk",
     "nonfinite_origin.tpk", "empty_fdsc.tpk", "tet16_vx.tpk", "zstd_skippable_frame.tpk",
     "zstd_chunk_checksum.tpk", "implausible_zstd_size.tpk", "two_parts.tpkset", "two_parts-0.tpk",
-    "two_parts-1.tpk", "bad_link.tpkset", "bad_link-0.tpk", "bad_link-1.tpk",
+    "two_parts-1.tpk", "bad_link.tpkset", "bad_link-0.tpk", "bad_link-1.tpk", "two_tets_levels.tpk",
+    "level_not_coarser.tpk", "level_zstd.tpk",
 };
 
 static const char *vector_path(const char *name)
@@ -334,6 +335,7 @@ TPK_TEST(vectors_must_fail)
         {"implausible_zstd_size.tpk", 0, TPK_ERR_CORRUPT},
         {"zstd_skippable_frame.tpk", TPK_OPEN_VERIFY_ALL, TPK_ERR_DECOMPRESS},
         {"zstd_chunk_checksum.tpk", TPK_OPEN_VERIFY_ALL, TPK_ERR_CHUNK_CHECKSUM},
+        {"level_zstd.tpk", 0, TPK_ERR_CORRUPT},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         tpk_result r;

@@ -1,6 +1,7 @@
 /* XDMF importer: a DataItem's values. Dimensions give the count; NumberType (XDMF 2) or DataType
  * (XDMF 3) with Precision the kind; Format XML holds the numbers as text, Format HDF names a dataset
  * as file.h5:/path/to/dataset (import_xdmf_hdf.c). Other formats and item types are refused. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -98,7 +99,9 @@ static int read_text(xdmf_reader *r, const xdmf_node *item, int64_t want, xdmf_v
         while (p + n < end && !is_blank(p[n]))
             n++;
         char q[64];
-        if (tpk_parse_double(p, n, &out->v[got]) || (out->integer && out->v[got] != (double)(int64_t)out->v[got]))
+        /* an integer: whole and within 2^53 (exact in a double; a cast beyond int64 is undefined) */
+        if (tpk_parse_double(p, n, &out->v[got]) ||
+            (out->integer && !(fabs(out->v[got]) <= 9007199254740992.0 && out->v[got] == floor(out->v[got]))))
             return xdmf_fail(r, item, "value %lld: expected %s, found '%s'", (long long)got,
                              out->integer ? "an integer" : "a number", tpk_scan_quote(p, n, q, sizeof q));
         p += n;

@@ -235,9 +235,9 @@ static int start_walk(xdmf_reader *r, const xdmf_node *topology, const xdmf_valu
             w->nodes_per = given;
         if (n < 0)
             n = values->count / w->nodes_per;
-        if (n * w->nodes_per != values->count)
-            return xdmf_fail(r, w->item, "%s topology: expected %lld node ids (%lld cells of %lld nodes), found %lld",
-                             w->kind->name, (long long)(n * w->nodes_per), (long long)n, (long long)w->nodes_per,
+        if (n > values->count || n * w->nodes_per != values->count) /* (n <= count: no overflow below) */
+            return xdmf_fail(r, w->item, "%s topology: expected %.0f node ids (%lld cells of %lld nodes), found %lld",
+                             w->kind->name, (double)n * (double)w->nodes_per, (long long)n, (long long)w->nodes_per,
                              (long long)values->count);
     } else if (n < 0)
         return xdmf_fail(r, topology, "Mixed: expected a NumberOfElements attribute, found none");
