@@ -12,7 +12,7 @@
  * vertices, which is where it is measured.
  *
  * Passes: every interior vertex in id order, skipping those next to a vertex collapsed in this pass (so
- * the stars one pass reads, and the shapes measured when it began, are those it started with), until the
+ * the stars one pass reads are those it started with), until the
  * level has a fifth of the tets of the last (TPK_LEVEL_RATIO: 4 levels then add at most 1/4 to the file)
  * or a pass removes almost nothing. The result does not depend on the thread count. */
 #include <math.h>
@@ -46,7 +46,7 @@ typedef struct simplifier {
     int64_t *star_start; /* vertex -> first of its tets in star (vertex_count + 1) */
     int32_t *star;
     uint8_t *locked, *dead;
-    float *tet_quality;  /* per live tet, this pass */
+    float *tet_quality;  /* per live tet: its shape (quality()), kept up to date as tets change */
 } simplifier;
 
 static const double *point(const simplifier *s, int32_t v)
@@ -90,7 +90,6 @@ static int build_stars(simplifier *s)
         const int32_t *v = s->tets + 4 * t;
         for (int k = 0; k < 4; k++)
             s->star[fill[v[k]]++] = (int32_t)t;
-        s->tet_quality[t] = (float)quality(point(s, v[0]), point(s, v[1]), point(s, v[2]), point(s, v[3]));
     }
     free(fill);
     return 0;
@@ -175,6 +174,7 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
                 for (int k = 0; k < 4; k++)
                     if (t[k] == u)
                         t[k] = v;
+                s->tet_quality[star[i]] = (float)quality(point(s, t[0]), point(s, t[1]), point(s, t[2]), point(s, t[3]));
             }
             for (int k = 0; k < 4; k++)
                 s->locked[t[k]] = 1;
@@ -187,6 +187,7 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
     for (int64_t t = 0; t < s->tet_count; t++)
         if (!s->dead[t]) {
             memmove(s->tets + 4 * w, s->tets + 4 * t, 4 * sizeof *s->tets);
+            s->tet_quality[w] = s->tet_quality[t];
             s->origin[w++] = s->origin[t];
         }
     s->tet_count = w;
@@ -512,6 +513,8 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     if (rc == 0) {
         memcpy(s.tets, mesh->tets, sizeof *s.tets * 4 * (size_t)T);
         for (int64_t t = 0; t < T; t++) {
+            const int32_t *v = mesh->tets + 4 * t;
+            s.tet_quality[t] = (float)quality(point(&s, v[0]), point(&s, v[1]), point(&s, v[2]), point(&s, v[3]));
             s.origin[t] = (int32_t)t;
             for (int k = 0; k < 4; k++)
                 if (neighbors[4 * t + k] < 0)
