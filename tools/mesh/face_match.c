@@ -149,7 +149,8 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
             int tag = m->tag(m->user, i);
             if (tag < 0)
                 continue;
-            entry |= (uint32_t)tag << (32 - m->tag_bits);
+            if (m->tag_bits) /* (a shift by 32 is undefined) */
+                entry |= (uint32_t)tag << (32 - m->tag_bits);
         } else if (m->keep && !m->keep(m->user, i)) {
             continue;
         }
