@@ -18,6 +18,7 @@
 int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                  tpk_render_stats *stats, tpk_diag *diag)
 {
+    (void)a; /* without Vulkan, the CPU reference whatever the arguments say */
 #ifdef TPK_WITH_VULKAN
     if (!strcmp(a->backend, "vulkan"))
         return a->iso_raster ? tpk_render_iso_raster(mesh, opt, rgba, stats, diag)
