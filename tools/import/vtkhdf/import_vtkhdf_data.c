@@ -82,9 +82,9 @@ int vh_read_rows(vh_reader *r, const char *path, int64_t first, int64_t count, i
     if (have_cols != cols)
         return vh_fail(r, "/VTKHDF/%s: expected %lld column%s, found %lld", path, (long long)cols,
                        cols == 1 ? "" : "s", (long long)have_cols);
-    if (first < 0 || count < 0 || first > rows || count > rows - first)
-        return vh_fail(r, "/VTKHDF/%s: %s: expected rows %lld to %lld, found %lld rows", path, what,
-                       (long long)first, (long long)(first + count - 1), (long long)rows);
+    if (first < 0 || count < 0 || first > rows || count > rows - first) /* (the end in double: no overflow) */
+        return vh_fail(r, "/VTKHDF/%s: %s: expected rows %lld to %.0f, found %lld rows", path, what,
+                       (long long)first, (double)first + (double)count - 1, (long long)rows);
     if (count == 0)
         return 0;
     hid_t ds = H5Dopen2(r->root, path, H5P_DEFAULT);
