@@ -7,7 +7,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
+#include "base/fd_io.h"
 #include "import/importers.h"
 
 #ifdef TPK_HAVE_HDF5
@@ -240,24 +242,27 @@ int tpk_import_vtkhdf_memory(const char *name, const char *data, size_t size, tp
 {
     if (tpk_import_begin(name, out, diag))
         return -1;
-    /* The bytes go into an unnamed temporary file that HDF5 opens by its /proc path, as the file reader
-     * does: HDF5's core driver over the image in memory allocated 2.3 GB for a damaged 14 kB image
-     * (fuzz_vtkhdf; tests/fuzz/corpus/fuzz_vtkhdf/core_driver_eoa_bomb.vtkhdf), whose bytes the file
-     * driver refuses. */
-    FILE *tmp = tmpfile();
-    char path[64];
-    int written = tmp && fwrite(data, 1, size, tmp) == size && fflush(tmp) == 0;
-    snprintf(path, sizeof path, "/proc/self/fd/%d", tmp ? fileno(tmp) : -1);
+    /* The bytes go into a temporary file that HDF5 opens by name, as the file reader does, and that is
+     * unlinked once open (HDF5 wants a real path: not /proc/self/fd of an unnamed file). HDF5's core
+     * driver over the image in memory allocated 2.3 GB for a damaged 14 kB image (fuzz_vtkhdf;
+     * tests/fuzz/corpus/fuzz_vtkhdf/core_driver_eoa_bomb.vtkhdf), whose bytes the file driver refuses. */
+    const char *dir = getenv("TMPDIR");
+    char path[4096];
+    snprintf(path, sizeof path, "%s/tetpack-vtkhdf-XXXXXX", dir && *dir ? dir : "/tmp");
+    int fd = mkstemp(path);
+    int written = fd >= 0 && tpk_fd_write_all(fd, data, size) == 0;
+    if (fd >= 0)
+        close(fd);
     quiet_hdf5 q = hdf5_quiet();
     hid_t file = written && size > 0 ? H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT) : -1;
+    if (fd >= 0)
+        unlink(path); /* HDF5 keeps its own descriptor */
     int rc = !written ? tpk_diag_fail(diag, "%s: cannot make a temporary file for its %zu bytes", name, size)
              : file < 0 ? tpk_diag_fail(diag, "%s: cannot open it as an HDF5 file (not HDF5, or damaged)", name)
                         : read_file(name, file, out, diag);
     if (file >= 0)
         H5Fclose(file);
     hdf5_restore(q);
-    if (tmp)
-        fclose(tmp);
     return rc;
 }
 
