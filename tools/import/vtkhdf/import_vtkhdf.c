@@ -243,9 +243,8 @@ int tpk_import_vtkhdf_memory(const char *name, const char *data, size_t size, tp
     if (tpk_import_begin(name, out, diag))
         return -1;
     /* The bytes go into a temporary file that HDF5 opens by name, as the file reader does, and that is
-     * unlinked once open (HDF5 wants a real path: not /proc/self/fd of an unnamed file). HDF5's core
-     * driver over the image in memory allocated 2.3 GB for a damaged 14 kB image (fuzz_vtkhdf;
-     * tests/fuzz/corpus/fuzz_vtkhdf/core_driver_eoa_bomb.vtkhdf), whose bytes the file driver refuses. */
+     * unlinked once open (HDF5 wants a real path: not /proc/self/fd of an unnamed file), so that a memory
+     * image meets the same code as a file. */
     const char *dir = getenv("TMPDIR");
     char path[4096];
     snprintf(path, sizeof path, "%s/tetpack-vtkhdf-XXXXXX", dir && *dir ? dir : "/tmp");
