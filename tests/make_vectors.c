@@ -203,10 +203,12 @@ static tpk_result write_one_tet(const char *path, int vendor)
     return finish(&w, &h);
 }
 
-static tpk_result write_two_tets_zstd(const char *path)
+/* The two-tet mesh, its fields, TIME, TMAP and VMAP with `codec`; then the vendor chunk `note` (with
+ * `note`) or a LEVL 1 of `level` bytes (level != NULL). */
+static tpk_result write_two_tets(const char *path, int codec, int note, const void *level, size_t level_size)
 {
     vector_writer w;
-    if (open_writer(&w, path, TPK_CODEC_ZSTD) != TPK_OK)
+    if (open_writer(&w, path, codec) != TPK_OK)
         return w.result;
     tpk_tet32 t32[2];
     tpk_tet20 t20[2];
@@ -234,7 +236,10 @@ static tpk_result write_two_tets_zstd(const char *path)
     put(&w, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, 2, 0, 0, two_tets_time);
     put(&w, TPK_TAG_TMAP, 0, TPK_ELEM_I32, 4, 2, 0, 0, two_tets_tmap);
     put(&w, TPK_TAG_VMAP, 0, TPK_ELEM_I32, 4, 5, 0, 0, two_tets_vmap);
-    put(&w, TPK_FOURCC('n', 'o', 't', 'e'), 0, TPK_ELEM_BYTE, 1, strlen(two_tets_note), 0, 0, two_tets_note);
+    if (note)
+        put(&w, TPK_FOURCC('n', 'o', 't', 'e'), 0, TPK_ELEM_BYTE, 1, strlen(two_tets_note), 0, 0, two_tets_note);
+    if (level)
+        put(&w, TPK_TAG_LEVL, 0, TPK_ELEM_BYTE, 1, level_size, 1, 0, level);
 
     tpk_header_fields h = {0};
     h.vertex_count = 5;
@@ -242,6 +247,11 @@ static tpk_result write_two_tets_zstd(const char *path)
     h.shell_face_count = shell_count;
     bounds_of(two_tets_positions, 5, two_tets_origin, &h);
     return finish(&w, &h);
+}
+
+static tpk_result write_two_tets_zstd(const char *path)
+{
+    return write_two_tets(path, TPK_CODEC_ZSTD, 1, NULL, 0);
 }
 
 /* ---- must-fail files: patched bytes ------------------------------------------------------------ */
@@ -460,44 +470,9 @@ static tpk_result write_two_tets_levels(const char *path, const char *level)
     byte_buffer lb = {0};
     if (load_bytes(level, &lb) != 0)
         return TPK_ERR_IO;
-    vector_writer w;
-    if (open_writer(&w, path, TPK_CODEC_NONE) != TPK_OK) {
-        free(lb.data);
-        return w.result;
-    }
-    tpk_tet32 t32[2];
-    tpk_tet20 t20[2];
-    tpk_tet16 t16[2];
-    tpk_shell_face shell[8];
-    tpk_field_desc fields[2];
-    for (int t = 0; t < 2; t++) {
-        spec_tet32(two_tets_tets[t], two_tets_neighbors[t], &t32[t]);
-        spec_tet20(two_tets_tets[t], two_tets_neighbors[t], &t20[t]);
-        spec_tet16(&t20[t], &t16[t]);
-    }
-    size_t shell_count = spec_shell(two_tets_tets, two_tets_neighbors, 2, shell);
-    spec_field(&fields[0], "temperature", "K", TPK_ASSOC_POINT, 2, 300.0f, 314.0f);
-    spec_field(&fields[1], "material", "", TPK_ASSOC_TET, 1, 1.0f, 2.0f);
-    put(&w, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, 5, 0, 0, two_tets_positions);
-    put(&w, TPK_TAG_TT32, 1, TPK_ELEM_TET32, 32, 2, 0, 0, t32);
-    put(&w, TPK_TAG_TT20, 1, TPK_ELEM_TET20, 20, 2, 0, 0, t20);
-    put(&w, TPK_TAG_TT16, 1, TPK_ELEM_TET16, 16, 2, 0, 0, t16);
-    put(&w, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, shell_count, 0, 0, shell);
-    put(&w, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, 2, 0, 0, fields);
-    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 5, 0, 0, two_tets_temperature[0]);
-    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 5, 0, 1, two_tets_temperature[1]);
-    put(&w, TPK_TAG_FDAT, 1, TPK_ELEM_F32, 4, 2, 1, 0, two_tets_material);
-    put(&w, TPK_TAG_TIME, 0, TPK_ELEM_F64, 8, 2, 0, 0, two_tets_time);
-    put(&w, TPK_TAG_TMAP, 0, TPK_ELEM_I32, 4, 2, 0, 0, two_tets_tmap);
-    put(&w, TPK_TAG_VMAP, 0, TPK_ELEM_I32, 4, 5, 0, 0, two_tets_vmap);
-    put(&w, TPK_TAG_LEVL, 0, TPK_ELEM_BYTE, 1, lb.size, 1, 0, lb.data);
+    tpk_result r = write_two_tets(path, TPK_CODEC_NONE, 0, lb.data, lb.size);
     free(lb.data);
-    tpk_header_fields h = {0};
-    h.vertex_count = 5;
-    h.tet_count = 2;
-    h.shell_face_count = shell_count;
-    bounds_of(two_tets_positions, 5, two_tets_origin, &h);
-    return finish(&w, &h);
+    return r;
 }
 
 /* Rule 14 (format 1.3): the LEVL chunk's codec byte says zstd (its bytes are the plain file). */
