@@ -44,7 +44,8 @@ void tpk_fuzz_use_tpk(tpk_file *file)
         read_chunks(file, info.chunk_count);
 }
 
-/* Levels of detail (spec §16): each opened over the file's bytes and used as a file, then check 615. */
+/* Levels of detail (spec §16): each opened over the file's bytes and used as a file (check_file runs
+ * check 615 on them). */
 static void use_levels(tpk_file *file, const tpk_open_options *options)
 {
     for (uint32_t k = 1; k <= tpk_level_count(file) && k <= 8; k++) {
@@ -54,17 +55,6 @@ static void use_levels(tpk_file *file, const tpk_open_options *options)
             tpk_fuzz_use_tpk(level);
         tpk_close(level);
     }
-    tpk_check_options o;
-    tpk_check_options_default(&o);
-    o.threads = 1;
-    tpk_check_report report;
-    if (tpk_check_report_init(&report, &o) != 0)
-        return;
-    tpk_diag diag;
-    memset(&diag, 0, sizeof diag);
-    diag.warn = tpk_fuzz_ignore;
-    tpk_check_levels("fuzz.tpk", file, &report, &diag);
-    tpk_check_report_free(&report);
 }
 
 /* `tetpack check` on the handle: the 6xx groups, then the mesh groups on the tets they recovered. */
@@ -82,9 +72,12 @@ static void check_file(tpk_file *file)
     int32_t *tets = NULL;
     tpk_mesh mesh;
     memset(&mesh, 0, sizeof mesh);
-    /* as the driver (check.c): the recovered tets are the mesh build's from here, on every path */
-    if (tpk_check_tpk_file_tets("fuzz.tpk", file, &report, &tets, &diag) == 0 &&
-        tpk_check_tpk_mesh_tets(file, tets, &mesh, &diag) == 0) {
+    /* as the driver (check.c): the levels after the 6xx groups; the recovered tets are the mesh build's
+     * from here, on every path */
+    int rc = tpk_check_tpk_file_tets("fuzz.tpk", file, &report, &tets, &diag);
+    if (rc == 0)
+        tpk_check_levels("fuzz.tpk", file, &report, &diag);
+    if (rc == 0 && tpk_check_tpk_mesh_tets(file, tets, &mesh, &diag) == 0) {
         tpk_check_input in = {&mesh, "fuzz.tpk", &diag};
         if (tpk_check_vertices(&in, &report, &diag) == 0 && tpk_check_cells(&in, &report, &diag) == 0 &&
             tpk_check_topology(&in, &report, &diag) == 0)
