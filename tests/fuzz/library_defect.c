@@ -44,7 +44,19 @@ static int names_library(const char *frame, const char *libraries)
     return 0;
 }
 
-/* 1 when the report's first frame that is not machinery names one of the libraries. */
+/* An allocator's entry point as a frame: the sanitizer's "in malloc (...)" form is machinery() already;
+ * glibc's form "fuzz_x(malloc+0x10e)" follows frames of the sanitizer allocator that have no name. */
+static int allocator_entry(const char *frame)
+{
+    static const char *const entries[] = {"(malloc+", "(calloc+", "(realloc+", "(free+", "(posix_memalign+"};
+    for (size_t i = 0; i < sizeof entries / sizeof entries[0]; i++)
+        if (strstr(frame, entries[i]))
+            return 1;
+    return 0;
+}
+
+/* 1 when the report's first frame that is not machinery names one of the libraries. A stack that begins
+ * inside the allocator (the alarm struck there) is read from the allocator's caller on. */
 static int report_blames(FILE *report, const char *libraries)
 {
     regex_t frame;
@@ -52,15 +64,23 @@ static int report_blames(FILE *report, const char *libraries)
      * "/lib/.../libhdf5_serial.so.103(H5F__accum_read+0x1ff)[0x7f..]" */
     if (regcomp(&frame, "^ *#[0-9]+ 0x[0-9a-f]+ |^[^ ]+\\(.*\\) ?\\[0x[0-9a-f]+\\]$", REG_EXTENDED | REG_NOSUB) != 0)
         return 0;
+    enum { most = 64, top = 8 }; /* frames read; how deep an allocator entry may lie to be the stack's start */
+    static char frames[most][512];
+    int n = 0, from = 0, blamed = 0;
     char line[4096];
-    int blamed = 0;
-    while (fgets(line, sizeof line, report)) {
+    while (n < most && fgets(line, sizeof line, report)) {
         line[strcspn(line, "\n")] = 0;
-        if (regexec(&frame, line, 0, NULL, 0) != 0 || machinery(line))
-            continue;
-        blamed = names_library(line, libraries);
-        break;
+        if (regexec(&frame, line, 0, NULL, 0) == 0)
+            snprintf(frames[n++], sizeof frames[0], "%s", line);
     }
+    for (int i = 0; i < n && i < top; i++)
+        if (allocator_entry(frames[i]))
+            from = i + 1;
+    for (int i = from; i < n; i++)
+        if (!machinery(frames[i])) {
+            blamed = names_library(frames[i], libraries);
+            break;
+        }
     regfree(&frame);
     return blamed;
 }
@@ -73,9 +93,12 @@ static void no_artifact(void)
 {
 }
 
-/* A fault in the child: its stack as glibc writes it ("module(symbol+offset) [address]", no allocation),
- * then the end by exit status 99. The two innermost frames are this handler and the kernel's return
- * trampoline. (libFuzzer's and the sanitizers' handlers would save the input as a finding.) */
+/* A fault in the child, or its time running out: its stack as glibc writes it ("module(symbol+offset)
+ * [address]", no allocation), then the end by exit status 99. The two innermost frames are this handler
+ * and the kernel's return trampoline. (libFuzzer's and the sanitizers' handlers would save the input as a
+ * finding.) At the alarm the stack says whose loop the time went to: a library that keeps allocating
+ * small blocks from a damaged file's counts (HDF5's free lists; its allocations past the address-space
+ * bound fail, and it goes on) is blamed like a library crash. */
 static void fault(int sig)
 {
     (void)sig;
@@ -120,10 +143,11 @@ int tpk_fuzz_library_defect(void (*read)(void *user), void *user, const char *li
         dup2(fileno(report), 2);
         if (__sanitizer_set_death_callback)
             __sanitizer_set_death_callback(no_artifact);
-        static const int faults[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
+        static const int faults[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGALRM};
         for (size_t i = 0; i < sizeof faults / sizeof faults[0]; i++)
             signal(faults[i], fault);
-        signal(SIGALRM, SIG_DFL);
+        void *warm[1];
+        backtrace(warm, 1); /* loads libgcc's unwinder now, not in the handler */
         alarm((unsigned)seconds);
         read(user);
         _exit(0);

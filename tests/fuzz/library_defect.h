@@ -2,8 +2,8 @@
  * `isolated`: HDF5, netCDF, CGNS). tetpack reads those in a child process (tools/import/isolate.c), so a
  * crash inside the library is an error, not a tetpack crash; the fuzzer still runs the reader in
  * process, for coverage. Before it does, the input is read once in a child whose sanitizer report is
- * kept: when the first frame of the report that is neither the sanitizer runtime, libFuzzer nor the C
- * library lies in the named library, the defect is the library's and the target skips the input. A fault
+ * kept: when the first frame of the report (or of the stack when its time ran out) that is neither the
+ * sanitizer runtime, libFuzzer nor the C library lies in the named library, the defect is the library's and the target skips the input. A fault
  * anywhere else (in tetpack) is left to the in-process run, where libFuzzer records it. Not a target
  * itself (no fuzz_ prefix). */
 #ifndef TPK_FUZZ_LIBRARY_DEFECT_H
