@@ -10,6 +10,7 @@
 #include "iso/iso.h"
 #include "march_fixtures.h"
 #include "render_vk/render_vk.h"
+#include "render_vk/render_vk_internal.h"
 #include "vk_device.h"
 
 static tpk_iso_input input_of(const fx_mesh *m)
@@ -58,6 +59,9 @@ static void compare(const fx_mesh *m, const double *values, int count, int64_t w
         int64_t tris;
         CHECK_MSG(tpk_iso_vk_emit(vk, values[i], &keys, &pos, &tris, &diag) == 0, "%s", diag.message);
         CHECK(tris == cpu.value_triangles[i]);
+        uint32_t counted = 0; /* the count alone (passes 0..2), as the mesh-shader raster path takes it */
+        CHECK_MSG(tpk_iso_vk_triangles(vk, values[i], &counted, &diag) == 0, "%s", diag.message);
+        CHECK_MSG((int64_t)counted == tris, "counted %u, emitted %lld", counted, (long long)tris);
         for (int64_t c = 0; c < 3 * tris; c++) {
             uint32_t vtx = cpu.tri[3 * first + c];
             uint64_t key = (uint64_t)(uint32_t)cpu.edge[2 * vtx] << 32 | (uint32_t)cpu.edge[2 * vtx + 1];

@@ -98,10 +98,16 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
         if (src->budget > 0)
             printf(",\"max_ms\":%.6g,\"predicted_ms\":%.6g,\"frame_ms\":%.6g", src->budget * 1e3,
                    src->predicted * 1e3, render_frame_seconds(a, &stats) * 1e3);
-        if (a->iso_raster)
-            printf(",\"iso_raster\":{\"triangles\":%llu,\"path\":\"compute extraction + indirect draw\","
-                   "\"mesh_shader\":\"%s\"}", (unsigned long long)stats.iso_triangles,
-                   stats.iso_mesh_shader ? "VK_EXT_mesh_shader present, its path not written yet" : "VK_EXT_mesh_shader absent");
+        if (a->iso_raster) {
+            char why[160];
+            snprintf(why, sizeof why, "VK_EXT_mesh_shader present, not used%s%s",
+                     stats.iso_mesh_reason ? ": " : "", stats.iso_mesh_reason ? stats.iso_mesh_reason : "");
+            printf(",\"iso_raster\":{\"triangles\":%llu,\"path\":\"%s\",\"mesh_shader\":\"%s\"}",
+                   (unsigned long long)stats.iso_triangles,
+                   stats.iso_mesh_shader == 1 ? "task and mesh shaders" : "compute extraction + indirect draw",
+                   stats.iso_mesh_shader == 1 ? "VK_EXT_mesh_shader used" : stats.iso_mesh_shader == 2 ? why
+                                                                                  : "VK_EXT_mesh_shader absent");
+        }
         tpk_strbuf reason = {0};
         tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);
         printf(",\"backend_reason\":%s}\n", reason.data ? reason.data : "\"\"");

@@ -278,7 +278,9 @@ typedef struct tpk_render_stats {
     uint64_t secondary_rays; /* shadow and AO rays */
     int iso_culling;    /* the primary rays were iso-only and range-culled (ISO-ONLY RAYS) */
     uint64_t iso_triangles; /* --iso-raster: the triangles drawn */
-    int iso_mesh_shader;    /* --iso-raster: the device has VK_EXT_mesh_shader (the compute path draws still) */
+    int iso_mesh_shader;    /* --iso-raster: 1 drawn by task and mesh shaders (VK_EXT_mesh_shader); 0 the device
+                               lacks them (compute extraction + indirect draw); 2 it has them, not used */
+    const char *iso_mesh_reason; /* when 2: why (a static string), or NULL */
     double seconds;     /* wall time of the render (marcher creation included) */
     uint64_t device_bytes; /* Vulkan: device memory of the renderer's buffers (mesh arrays, BVH, image
                               band, parameters); 0 for the CPU reference */

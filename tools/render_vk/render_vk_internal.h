@@ -42,6 +42,9 @@ typedef struct tpk_vk_context {
     int creation_feedback;       /* VK_EXT_pipeline_creation_feedback enabled */
     VkSurfaceKHR surface;        /* the window's, the queue can present to it and VK_KHR_swapchain is
                                     enabled; VK_NULL_HANDLE: no window */
+    int mesh_shader;             /* VK_EXT_mesh_shader enabled with its task and mesh shaders (asked for
+                                    by tpk_vk_context_create_mesh, where the device has them) */
+    VkPhysicalDeviceMeshShaderPropertiesEXT mesh; /* its limits, when mesh_shader */
 } tpk_vk_context;
 
 /* Create instance, device and a compute queue. Returns 0, or -1 with a message naming the step and the
@@ -50,6 +53,12 @@ int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag);
 /* The same with the window's surface made on the instance (its extensions enabled), a queue family that
  * has compute and can present to it, and VK_KHR_swapchain; NULL: as tpk_vk_context_create. */
 int tpk_vk_context_create_presenting(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, tpk_diag *diag);
+/* The same with VK_EXT_mesh_shader's task and mesh shaders enabled where the device offers them and
+ * TETPACK_ISO_MESH_SHADER is not 0 (ctx->mesh_shader says whether they are); a device without them is
+ * no error. */
+int tpk_vk_context_create_mesh(tpk_vk_context *ctx, tpk_diag *diag);
+/* Does the device offer VK_EXT_mesh_shader with task and mesh shaders? */
+int tpk_vk_has_mesh_shader(VkPhysicalDevice physical);
 void tpk_vk_context_destroy(tpk_vk_context *ctx);
 const char *tpk_vk_result_name(VkResult r);
 
@@ -161,6 +170,16 @@ void tpk_iso_vk_record(tpk_iso_vk *v, int first, int last, double value);
 /* Passes 0..3 for `value` (submitted, waited for), the triangle count into *total, and the corner
  * buffers grown to hold them. 0 or -1 with a message. */
 int tpk_iso_vk_count(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag);
+/* Passes 0..2 for `value`: the triangle count alone into *total (no buffer grows). 0 or -1. */
+int tpk_iso_vk_triangles(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag);
+/* The smallest float >= x (x finite): a float s is >= x exactly when s >= this. The shaders' threshold. */
+float tpk_iso_vk_threshold(double x);
+/* tpk_iso_vk_create on a context made by tpk_vk_context_create_mesh when mesh_shader is 1 (the
+ * rasterizer's), so that ctx.mesh_shader says whether task and mesh shaders are enabled. */
+int tpk_iso_vk_create_with(tpk_iso_vk **out, const tpk_iso_input *in, int mesh_shader, tpk_diag *diag);
+/* bytes of data into the start of device buffer b on v's device (in place where mapped, else through
+ * a host buffer and a copy). 0 or -1 with a message. */
+int tpk_iso_vk_upload(tpk_iso_vk *v, tpk_vk_buffer *b, const void *data, size_t bytes, tpk_diag *diag);
 /* Submit the commands `record` writes (with `arg`) and wait. 0 or -1 with a message. */
 int tpk_iso_vk_submit(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void *arg), const void *arg, tpk_diag *diag);
 

@@ -164,12 +164,35 @@ static int create_surface(tpk_vk_context *ctx, const tpk_vk_surface_source *surf
     return 0;
 }
 
+int tpk_vk_has_mesh_shader(VkPhysicalDevice physical)
+{
+    if (!has_extension(physical, VK_EXT_MESH_SHADER_EXTENSION_NAME))
+        return 0;
+    VkPhysicalDeviceMeshShaderFeaturesEXT mesh = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MESH_SHADER_FEATURES_EXT};
+    VkPhysicalDeviceFeatures2 features = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, .pNext = &mesh};
+    vkGetPhysicalDeviceFeatures2(physical, &features);
+    return mesh.taskShader == VK_TRUE && mesh.meshShader == VK_TRUE;
+}
+
+static int create(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, int want_mesh_shader, tpk_diag *diag);
+
 int tpk_vk_context_create(tpk_vk_context *ctx, tpk_diag *diag)
 {
-    return tpk_vk_context_create_presenting(ctx, NULL, diag);
+    return create(ctx, NULL, 0, diag);
 }
 
 int tpk_vk_context_create_presenting(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, tpk_diag *diag)
+{
+    return create(ctx, surface, 0, diag);
+}
+
+int tpk_vk_context_create_mesh(tpk_vk_context *ctx, tpk_diag *diag)
+{
+    const char *env = getenv("TETPACK_ISO_MESH_SHADER");
+    return create(ctx, NULL, !(env && !strcmp(env, "0")), diag);
+}
+
+static int create(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, int want_mesh_shader, tpk_diag *diag)
 {
     memset(ctx, 0, sizeof *ctx);
     if (create_instance(ctx, surface, diag) != 0 || (surface && create_surface(ctx, surface, diag) != 0) ||
@@ -196,15 +219,28 @@ int tpk_vk_context_create_presenting(tpk_vk_context *ctx, const tpk_vk_surface_s
     ctx->fp64 = supported.shaderFloat64 == VK_TRUE && !(no_fp64 && !strcmp(no_fp64, "1"));
     enabled.shaderFloat64 = ctx->fp64 ? VK_TRUE : VK_FALSE;
     /* whether a pipeline came from the pipeline cache (render --json says so) */
-    const char *extensions[2];
+    const char *extensions[3];
     uint32_t extension_count = 0;
     ctx->creation_feedback = has_extension(ctx->physical, VK_EXT_PIPELINE_CREATION_FEEDBACK_EXTENSION_NAME);
     if (ctx->creation_feedback)
         extensions[extension_count++] = VK_EXT_PIPELINE_CREATION_FEEDBACK_EXTENSION_NAME;
     if (surface) /* the window's swapchain (vk_present.c) */
         extensions[extension_count++] = VK_KHR_SWAPCHAIN_EXTENSION_NAME;
+    /* render --iso-raster's task and mesh shaders (vk_raster.c), nothing else of the extension */
+    VkPhysicalDeviceMeshShaderFeaturesEXT mesh = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MESH_SHADER_FEATURES_EXT,
+                                                  .taskShader = VK_TRUE, .meshShader = VK_TRUE};
+    ctx->mesh_shader = want_mesh_shader && tpk_vk_has_mesh_shader(ctx->physical);
+    if (ctx->mesh_shader) {
+        extensions[extension_count++] = VK_EXT_MESH_SHADER_EXTENSION_NAME;
+        ctx->mesh = (VkPhysicalDeviceMeshShaderPropertiesEXT){
+            .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MESH_SHADER_PROPERTIES_EXT};
+        VkPhysicalDeviceProperties2 p2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, .pNext = &ctx->mesh};
+        vkGetPhysicalDeviceProperties2(ctx->physical, &p2);
+        ctx->mesh.pNext = NULL;
+    }
     VkDeviceCreateInfo info = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
+        .pNext = ctx->mesh_shader ? &mesh : NULL,
         .queueCreateInfoCount = 1,
         .pQueueCreateInfos = &queue,
         .enabledExtensionCount = extension_count,

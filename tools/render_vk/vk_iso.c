@@ -50,13 +50,13 @@ static int run_commands(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void 
 
 typedef struct copy_arg {
     VkBuffer src, dst;
-    VkDeviceSize bytes;
+    VkDeviceSize bytes, src_offset;
 } copy_arg;
 
 static void record_copy(tpk_iso_vk *v, const void *arg)
 {
     const copy_arg *c = arg;
-    VkBufferCopy region = {0, 0, c->bytes};
+    VkBufferCopy region = {c->src_offset, 0, c->bytes};
     vkCmdCopyBuffer(v->cmd, c->src, c->dst, 1, &region);
 }
 
@@ -75,7 +75,7 @@ static int upload(tpk_iso_vk *v, tpk_vk_buffer *b, const void *data, size_t byte
     int rc = -1;
     if (host.mapped) {
         memcpy(host.mapped, data, bytes);
-        copy_arg c = {host.buffer, b->buffer, bytes ? bytes : 4};
+        copy_arg c = {host.buffer, b->buffer, bytes ? bytes : 4, 0};
         rc = tpk_vk_buffer_flush(&v->ctx, &host, diag) || run_commands(v, record_copy, &c, diag) ? -1 : 0;
     } else {
         tpk_diag_fail(diag, "vulkan iso: no host-visible memory for uploads");
@@ -84,15 +84,16 @@ static int upload(tpk_iso_vk *v, tpk_vk_buffer *b, const void *data, size_t byte
     return rc;
 }
 
-/* bytes from the start of device buffer b into data. */
-static int download(tpk_iso_vk *v, const tpk_vk_buffer *b, void *data, size_t bytes, tpk_diag *diag)
+/* bytes from byte `offset` of device buffer b into data. */
+static int download_at(tpk_iso_vk *v, const tpk_vk_buffer *b, VkDeviceSize offset, void *data, size_t bytes,
+                       tpk_diag *diag)
 {
     if (bytes == 0)
         return 0;
     if (b->mapped) {
         if (tpk_vk_buffer_invalidate(&v->ctx, b, diag))
             return -1;
-        memcpy(data, b->mapped, bytes);
+        memcpy(data, (const char *)b->mapped + offset, bytes);
         return 0;
     }
     tpk_vk_buffer host;
@@ -100,7 +101,7 @@ static int download(tpk_iso_vk *v, const tpk_vk_buffer *b, void *data, size_t by
     if (tpk_vk_buffer_create(&v->ctx, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, TPK_VK_MEMORY_READBACK, "iso readback",
                              &host, diag))
         return -1;
-    copy_arg c = {b->buffer, host.buffer, bytes};
+    copy_arg c = {b->buffer, host.buffer, bytes, offset};
     int rc = -1;
     if (!host.mapped)
         tpk_diag_fail(diag, "vulkan iso: no host-visible memory for the read-back");
@@ -110,6 +111,11 @@ static int download(tpk_iso_vk *v, const tpk_vk_buffer *b, void *data, size_t by
     }
     tpk_vk_buffer_destroy(&v->ctx, &host);
     return rc;
+}
+
+static int download(tpk_iso_vk *v, const tpk_vk_buffer *b, void *data, size_t bytes, tpk_diag *diag)
+{
+    return download_at(v, b, 0, data, bytes, diag);
 }
 
 static int make_buffer(tpk_iso_vk *v, int which, VkDeviceSize bytes, const char *what, tpk_diag *diag)
@@ -193,6 +199,16 @@ static int make_pipeline(tpk_iso_vk *v, tpk_diag *diag)
 
 int tpk_iso_vk_create(tpk_iso_vk **out, const tpk_iso_input *in, tpk_diag *diag)
 {
+    return tpk_iso_vk_create_with(out, in, 0, diag);
+}
+
+int tpk_iso_vk_upload(tpk_iso_vk *v, tpk_vk_buffer *b, const void *data, size_t bytes, tpk_diag *diag)
+{
+    return upload(v, b, data, bytes, diag);
+}
+
+int tpk_iso_vk_create_with(tpk_iso_vk **out, const tpk_iso_input *in, int mesh_shader, tpk_diag *diag)
+{
     *out = NULL;
     if (in->tet_count > UINT32_MAX / 4 || in->vertex_count > INT32_MAX)
         return tpk_diag_fail(diag, "vulkan iso: %lld tets and %lld vertices: at most 2^30 tets", (long long)in->tet_count,
@@ -212,7 +228,7 @@ int tpk_iso_vk_create(tpk_iso_vk **out, const tpk_iso_input *in, tpk_diag *diag)
             cases[8 * c + 1 + k] = edges[k];
     }
     size_t tets = 16 * (size_t)in->tet_count, verts = (size_t)in->vertex_count;
-    int rc = tpk_vk_context_create(&v->ctx, diag);
+    int rc = mesh_shader ? tpk_vk_context_create_mesh(&v->ctx, diag) : tpk_vk_context_create(&v->ctx, diag);
     if (rc == 0)
         rc = make_buffer(v, B_TETS, tets, "tets", diag) || make_buffer(v, B_SCALARS, 4 * verts, "scalars", diag) ||
              make_buffer(v, B_POSITIONS, 12 * verts, "positions", diag) ||
@@ -275,8 +291,7 @@ double tpk_iso_vk_seconds(const tpk_iso_vk *v)
     return v->gpu_seconds;
 }
 
-/* The smallest float >= x (x finite): s >= x exactly when (float)s >= this. */
-static float float_at_or_above(double x)
+float tpk_iso_vk_threshold(double x)
 {
     float f = (float)x;
     if ((double)f < x)
@@ -286,7 +301,7 @@ static float float_at_or_above(double x)
 
 void tpk_iso_vk_record(tpk_iso_vk *v, int first, int last, double value)
 {
-    const float threshold = float_at_or_above(value), fvalue = (float)value;
+    const float threshold = tpk_iso_vk_threshold(value), fvalue = (float)value;
     vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->pipeline);
     vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->layout, 0, 1, &v->set, 0, NULL);
     for (int mode = first; mode <= last; mode++) {
@@ -322,6 +337,19 @@ static void record_passes(tpk_iso_vk *v, const void *arg)
 int tpk_iso_vk_submit(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void *arg), const void *arg, tpk_diag *diag)
 {
     return run_commands(v, record, arg, diag);
+}
+
+int tpk_iso_vk_triangles(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)
+{
+    *total = 0;
+    pass_arg count = {0, 2, value};
+    if (run_commands(v, record_passes, &count, diag))
+        return -1;
+    uint32_t last;
+    if (download_at(v, &v->buf[B_GROUPS], 4 * (VkDeviceSize)v->group_count, &last, 4, diag))
+        return -1;
+    *total = last;
+    return 0;
 }
 
 int tpk_iso_vk_count(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)

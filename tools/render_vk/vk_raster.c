@@ -1,9 +1,15 @@
-/* Isosurfaces drawn directly (render.h: tpk_render_iso_raster; render --iso-raster): the compute extraction
- * of vk_iso.c writes each value's triangle list and its indirect draw arguments on the device, and a
- * graphics pipeline (shaders/iso_raster.vert, .frag) draws it with a depth test into the image, with no
- * pass through the host in between. This is the path for devices without VK_EXT_mesh_shader (lavapipe);
- * the picture is the ray-marched isosurface's up to rasterization (pixel centres, float positions). */
+/* Isosurfaces drawn directly (render.h: tpk_render_iso_raster; render --iso-raster), by one of two paths:
+ * - where the device has VK_EXT_mesh_shader (and TETPACK_ISO_MESH_SHADER is not 0): task shaders
+ *   (shaders/iso_mesh.task) cull clusters of 32 tets by their value range and classify the rest, and mesh
+ *   shaders (iso_mesh.mesh) run marching tets on the active tets and emit their triangles to the
+ *   rasterizer: nothing is stored between frames but a range per cluster;
+ * - elsewhere (lavapipe): the compute extraction of vk_iso.c writes each value's triangle list and its
+ *   indirect draw arguments on the device, and a graphics pipeline (shaders/iso_raster.vert) draws it.
+ * Both draw with a depth test into the image, shaded by shaders/iso_raster.frag, with no pass through the
+ * host in between; the triangles are the same (corners placed alike, in tet order). The picture is the
+ * ray-marched isosurface's up to rasterization (pixel centres, float positions). */
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,11 +20,21 @@
 
 extern const uint32_t tpk_vk_iso_raster_vert_spv[], tpk_vk_iso_raster_frag_spv[];
 extern const size_t tpk_vk_iso_raster_vert_spv_size, tpk_vk_iso_raster_frag_spv_size;
+extern const uint32_t tpk_vk_iso_mesh_task_spv[], tpk_vk_iso_mesh_mesh_spv[];
+extern const size_t tpk_vk_iso_mesh_task_spv_size, tpk_vk_iso_mesh_mesh_spv_size;
 
-/* The shaders' push constants (iso_raster.vert). */
+/* The shaders' push constants (iso_raster.vert; the mesh path's iso_mesh.glsl adds mesh_push's tail). */
 typedef struct raster_push {
     float eye[4], forward[4], right[4], up[4], light[4], color[4], clip_lo[4], clip_hi[4];
 } raster_push;
+
+typedef struct mesh_push {
+    raster_push camera;
+    float threshold, value;
+    uint32_t tet_count, base;
+} mesh_push;
+
+enum { MESH_BINDINGS = 5 }; /* tets, scalars, positions, case table, cluster ranges */
 
 #define RASTER_VALUES TPK_RENDER_MAX_ISO
 
@@ -46,23 +62,20 @@ struct tpk_iso_raster {
     /* one frame's */
     float clear[4];
     raster_push push[RASTER_VALUES];
+    /* the mesh-shader path, when mesh_path */
+    int mesh_path;
+    const char *mesh_reason; /* why not, when the device has the extension */
+    VkDescriptorSetLayout mesh_set_layout;
+    VkPipelineLayout mesh_layout;
+    VkShaderModule mesh_shaders[2]; /* task, mesh */
+    VkPipeline mesh_pipeline;
+    VkDescriptorPool mesh_pool;
+    VkDescriptorSet mesh_set;
+    tpk_vk_buffer ranges; /* per cluster of 32 tets: min and max of its corners' values (floats) */
+    uint32_t clusters;
+    PFN_vkCmdDrawMeshTasksEXT draw_mesh_tasks;
 };
 typedef struct tpk_iso_raster raster;
-
-/* Does the device offer VK_EXT_mesh_shader? (Said in --json; the path that uses it is not written yet.) */
-static int has_mesh_shader(VkPhysicalDevice physical)
-{
-    uint32_t n = 0;
-    if (vkEnumerateDeviceExtensionProperties(physical, NULL, &n, NULL) != VK_SUCCESS || n == 0)
-        return 0;
-    VkExtensionProperties *ext = malloc(sizeof *ext * n);
-    int found = 0;
-    if (ext && vkEnumerateDeviceExtensionProperties(physical, NULL, &n, ext) == VK_SUCCESS)
-        for (uint32_t i = 0; i < n && !found; i++)
-            found = !strcmp(ext[i].extensionName, "VK_EXT_mesh_shader");
-    free(ext);
-    return found;
-}
 
 static int ok(VkResult r, const char *step, tpk_diag *diag)
 {
@@ -106,6 +119,44 @@ static int shader(raster *ra, int i, const uint32_t *code, size_t size, tpk_diag
     return ok(vkCreateShaderModule(ra->iso->ctx.device, &info, NULL, &ra->shaders[i]), "an iso raster shader", diag);
 }
 
+/* A graphics pipeline of `stages` (vertex or task and mesh, then iso_raster.frag) in the render pass,
+ * with the state both paths share: triangles, no culling (both sides shade), reversed depth. */
+static int graphics_pipeline(raster *ra, const VkPipelineShaderStageCreateInfo *stages, uint32_t count,
+                             VkPipelineLayout layout, VkPipeline *out, tpk_diag *diag)
+{
+    int mesh = stages[0].stage != VK_SHADER_STAGE_VERTEX_BIT;
+    VkPipelineVertexInputStateCreateInfo input = {.sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo assembly = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO,
+        .topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST};
+    VkPipelineViewportStateCreateInfo vp = {.sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO,
+                                            .viewportCount = 1, .scissorCount = 1};
+    VkDynamicState dynamic[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dyn = {.sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
+                                            .dynamicStateCount = 2, .pDynamicStates = dynamic};
+    VkPipelineRasterizationStateCreateInfo rs = {.sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO,
+                                                 .polygonMode = VK_POLYGON_MODE_FILL, .cullMode = VK_CULL_MODE_NONE,
+                                                 .frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE, .lineWidth = 1};
+    VkPipelineMultisampleStateCreateInfo ms = {.sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO,
+                                               .rasterizationSamples = VK_SAMPLE_COUNT_1_BIT};
+    VkPipelineDepthStencilStateCreateInfo ds = {.sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
+                                                .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE,
+                                                .depthCompareOp = VK_COMPARE_OP_GREATER}; /* reversed depth */
+    VkPipelineColorBlendAttachmentState blend = {.colorWriteMask = 0xf};
+    VkPipelineColorBlendStateCreateInfo cb = {.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
+                                              .attachmentCount = 1, .pAttachments = &blend};
+    VkGraphicsPipelineCreateInfo info = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
+                                         .stageCount = count, .pStages = stages,
+                                         /* a mesh pipeline has neither (the spec: ignored, may be NULL) */
+                                         .pVertexInputState = mesh ? NULL : &input,
+                                         .pInputAssemblyState = mesh ? NULL : &assembly, .pViewportState = &vp,
+                                         .pRasterizationState = &rs, .pMultisampleState = &ms,
+                                         .pDepthStencilState = &ds, .pColorBlendState = &cb, .pDynamicState = &dyn,
+                                         .layout = layout, .renderPass = ra->pass};
+    return ok(vkCreateGraphicsPipelines(ra->iso->ctx.device, VK_NULL_HANDLE, 1, &info, NULL, out),
+              mesh ? "the iso mesh-shader pipeline" : "the iso raster pipeline", diag);
+}
+
 /* Render pass, pipeline (viewport and scissor dynamic: the size may change between frames), descriptor
  * sets (one per value). Once per rasterizer. */
 static int make_pipeline(raster *ra, tpk_diag *diag)
@@ -123,7 +174,9 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
     VkSubpassDescription sub = {.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS, .colorAttachmentCount = 1,
                                 .pColorAttachments = &color, .pDepthStencilAttachment = &depth};
     VkSubpassDependency dep = {VK_SUBPASS_EXTERNAL, 0, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-                               VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
+                               VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT |
+                                   (ra->iso->ctx.mesh_shader ? VK_PIPELINE_STAGE_TASK_SHADER_BIT_EXT | VK_PIPELINE_STAGE_MESH_SHADER_BIT_EXT
+                                             : 0),
                                VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
                                VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_SHADER_READ_BIT, 0};
     VkRenderPassCreateInfo pass = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO, .attachmentCount = 2,
@@ -149,37 +202,10 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
          .module = ra->shaders[0], .pName = "main"},
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
          .module = ra->shaders[1], .pName = "main"}};
-    VkPipelineVertexInputStateCreateInfo input = {.sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    VkPipelineInputAssemblyStateCreateInfo assembly = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO,
-        .topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST};
-    VkPipelineViewportStateCreateInfo vp = {.sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO,
-                                            .viewportCount = 1, .scissorCount = 1};
-    VkDynamicState dynamic[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-    VkPipelineDynamicStateCreateInfo dyn = {.sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-                                            .dynamicStateCount = 2, .pDynamicStates = dynamic};
-    VkPipelineRasterizationStateCreateInfo rs = {.sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO,
-                                                 .polygonMode = VK_POLYGON_MODE_FILL, .cullMode = VK_CULL_MODE_NONE,
-                                                 .frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE, .lineWidth = 1};
-    VkPipelineMultisampleStateCreateInfo ms = {.sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO,
-                                               .rasterizationSamples = VK_SAMPLE_COUNT_1_BIT};
-    VkPipelineDepthStencilStateCreateInfo ds = {.sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO,
-                                                .depthTestEnable = VK_TRUE, .depthWriteEnable = VK_TRUE,
-                                                .depthCompareOp = VK_COMPARE_OP_GREATER}; /* reversed depth */
-    VkPipelineColorBlendAttachmentState blend = {.colorWriteMask = 0xf};
-    VkPipelineColorBlendStateCreateInfo cb = {.sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO,
-                                              .attachmentCount = 1, .pAttachments = &blend};
-    VkGraphicsPipelineCreateInfo info = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, .stageCount = 2,
-                                         .pStages = stages, .pVertexInputState = &input,
-                                         .pInputAssemblyState = &assembly, .pViewportState = &vp,
-                                         .pRasterizationState = &rs, .pMultisampleState = &ms,
-                                         .pDepthStencilState = &ds, .pColorBlendState = &cb, .pDynamicState = &dyn,
-                                         .layout = ra->layout, .renderPass = ra->pass};
     VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, RASTER_VALUES};
     VkDescriptorPoolCreateInfo pool = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = RASTER_VALUES,
                                        .poolSizeCount = 1, .pPoolSizes = &size};
-    if (ok(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &info, NULL, &ra->pipeline), "the iso raster pipeline",
-           diag) ||
+    if (graphics_pipeline(ra, stages, 2, ra->layout, &ra->pipeline, diag) ||
         ok(vkCreateDescriptorPool(dev, &pool, NULL, &ra->pool), "a descriptor pool", diag))
         return -1;
     VkDescriptorSetLayout layouts[RASTER_VALUES];
@@ -189,6 +215,118 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
                                          .descriptorPool = ra->pool, .descriptorSetCount = RASTER_VALUES,
                                          .pSetLayouts = layouts};
     return ok(vkAllocateDescriptorSets(dev, &alloc, ra->sets), "descriptor sets", diag);
+}
+
+/* The mesh-shader path's pipeline and its one descriptor set (the extractor's tets, scalars, positions and
+ * case table, and the cluster ranges); the fragment shader module is the other path's. */
+static int make_mesh_pipeline(raster *ra, tpk_diag *diag)
+{
+    VkDevice dev = ra->iso->ctx.device;
+    VkDescriptorSetLayoutBinding bindings[MESH_BINDINGS];
+    for (uint32_t i = 0; i < MESH_BINDINGS; i++)
+        bindings[i] = (VkDescriptorSetLayoutBinding){i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
+                                                     VK_SHADER_STAGE_TASK_BIT_EXT | VK_SHADER_STAGE_MESH_BIT_EXT, NULL};
+    VkDescriptorSetLayoutCreateInfo set_info = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+                                                .bindingCount = MESH_BINDINGS, .pBindings = bindings};
+    VkPushConstantRange range = {VK_SHADER_STAGE_TASK_BIT_EXT | VK_SHADER_STAGE_MESH_BIT_EXT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                                 0, sizeof(mesh_push)};
+    if (ok(vkCreateDescriptorSetLayout(dev, &set_info, NULL, &ra->mesh_set_layout), "a descriptor layout", diag))
+        return -1;
+    VkPipelineLayoutCreateInfo layout = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO, .setLayoutCount = 1,
+                                         .pSetLayouts = &ra->mesh_set_layout, .pushConstantRangeCount = 1,
+                                         .pPushConstantRanges = &range};
+    VkShaderModuleCreateInfo task = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
+                                     .codeSize = tpk_vk_iso_mesh_task_spv_size, .pCode = tpk_vk_iso_mesh_task_spv};
+    VkShaderModuleCreateInfo mesh = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
+                                     .codeSize = tpk_vk_iso_mesh_mesh_spv_size, .pCode = tpk_vk_iso_mesh_mesh_spv};
+    if (ok(vkCreatePipelineLayout(dev, &layout, NULL, &ra->mesh_layout), "a pipeline layout", diag) ||
+        ok(vkCreateShaderModule(dev, &task, NULL, &ra->mesh_shaders[0]), "the iso task shader", diag) ||
+        ok(vkCreateShaderModule(dev, &mesh, NULL, &ra->mesh_shaders[1]), "the iso mesh shader", diag))
+        return -1;
+    VkPipelineShaderStageCreateInfo stages[3] = {
+        {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_TASK_BIT_EXT,
+         .module = ra->mesh_shaders[0], .pName = "main"},
+        {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_MESH_BIT_EXT,
+         .module = ra->mesh_shaders[1], .pName = "main"},
+        {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
+         .module = ra->shaders[1], .pName = "main"}};
+    VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, MESH_BINDINGS};
+    VkDescriptorPoolCreateInfo pool = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 1,
+                                       .poolSizeCount = 1, .pPoolSizes = &size};
+    VkDescriptorSetAllocateInfo alloc = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+                                         .descriptorSetCount = 1, .pSetLayouts = &ra->mesh_set_layout};
+    if (graphics_pipeline(ra, stages, 3, ra->mesh_layout, &ra->mesh_pipeline, diag) ||
+        ok(vkCreateDescriptorPool(dev, &pool, NULL, &ra->mesh_pool), "a descriptor pool", diag))
+        return -1;
+    alloc.descriptorPool = ra->mesh_pool;
+    if (ok(vkAllocateDescriptorSets(dev, &alloc, &ra->mesh_set), "a descriptor set", diag))
+        return -1;
+    const tpk_vk_buffer *buffers[MESH_BINDINGS] = {&ra->iso->buf[B_TETS], &ra->iso->buf[B_SCALARS],
+                                                   &ra->iso->buf[B_POSITIONS], &ra->iso->buf[B_CASES], &ra->ranges};
+    VkDescriptorBufferInfo info[MESH_BINDINGS];
+    VkWriteDescriptorSet write[MESH_BINDINGS];
+    for (uint32_t i = 0; i < MESH_BINDINGS; i++) {
+        info[i] = (VkDescriptorBufferInfo){buffers[i]->buffer, 0, VK_WHOLE_SIZE};
+        write[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = ra->mesh_set,
+                                          .dstBinding = i, .descriptorCount = 1,
+                                          .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &info[i]};
+    }
+    vkUpdateDescriptorSets(dev, MESH_BINDINGS, write, 0, NULL);
+    ra->draw_mesh_tasks = (PFN_vkCmdDrawMeshTasksEXT)vkGetDeviceProcAddr(dev, "vkCmdDrawMeshTasksEXT");
+    return ra->draw_mesh_tasks ? 0 : tpk_diag_fail(diag, "vulkan iso raster: the device has no vkCmdDrawMeshTasksEXT");
+}
+
+/* Per cluster of 32 tets (file order), the min and max of its corners' values, NaN left out (a tet with
+ * a NaN corner has no triangles); a cluster of NaNs only gets (+inf, -inf), which no value lies within. */
+static float *cluster_ranges(const int32_t *tets, const float *scalars, uint64_t tet_count, uint32_t clusters)
+{
+    float *r = malloc(8 * (size_t)(clusters ? clusters : 1));
+    if (!r)
+        return NULL;
+    for (uint32_t c = 0; c < clusters; c++) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (uint64_t t = 32 * (uint64_t)c; t < tet_count && t < 32 * (uint64_t)c + 32; t++)
+            for (int k = 0; k < 4; k++) {
+                float x = scalars[tets[4 * t + (uint64_t)k]];
+                if (!isnan(x)) {
+                    lo = x < lo ? x : lo;
+                    hi = x > hi ? x : hi;
+                }
+            }
+        r[2 * c] = lo, r[2 * c + 1] = hi;
+    }
+    return r;
+}
+
+/* The mesh-shader path where the device's context enabled it and its limits allow; else mesh_path stays 0
+ * with the reason. Task and mesh workgroups of 32, a mesh workgroup's output (192 vertices, 64 triangles,
+ * 264 payload bytes) is within every device's guaranteed limits; the push constants (144 bytes) are not. */
+static int setup_mesh_path(raster *ra, const int32_t *tets, tpk_diag *diag)
+{
+    const tpk_vk_context *ctx = &ra->iso->ctx;
+    if (!ctx->mesh_shader) {
+        const char *env = getenv("TETPACK_ISO_MESH_SHADER");
+        ra->mesh_reason = env && !strcmp(env, "0") ? "TETPACK_ISO_MESH_SHADER=0" : NULL;
+        return 0;
+    }
+    if (ctx->props.limits.maxPushConstantsSize < sizeof(mesh_push)) {
+        ra->mesh_reason = "the device's push constants are under 144 bytes";
+        return 0;
+    }
+    ra->clusters = (uint32_t)((ra->mesh->tet_count + 31) / 32);
+    float *ranges = cluster_ranges(tets, ra->mesh->scalars, ra->mesh->tet_count, ra->clusters);
+    if (!ranges)
+        return tpk_diag_fail(diag, "render: out of memory for the cluster ranges");
+    int rc = tpk_vk_buffer_create(ctx, 8 * (VkDeviceSize)(ra->clusters ? ra->clusters : 1),
+                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                  TPK_VK_MEMORY_DEVICE, "iso cluster ranges", &ra->ranges, diag) ||
+                     tpk_iso_vk_upload(ra->iso, &ra->ranges, ranges, 8 * (size_t)ra->clusters, diag) ||
+                     make_mesh_pipeline(ra, diag)
+                 ? -1
+                 : 0;
+    free(ranges);
+    ra->mesh_path = rc == 0;
+    return rc;
 }
 
 static void destroy_targets(raster *ra)
@@ -254,9 +392,21 @@ void tpk_iso_raster_destroy(raster *ra)
         }
         if (ra->pipeline)
             vkDestroyPipeline(dev, ra->pipeline, NULL);
-        for (int i = 0; i < 2; i++)
+        if (ra->mesh_pipeline)
+            vkDestroyPipeline(dev, ra->mesh_pipeline, NULL);
+        for (int i = 0; i < 2; i++) {
             if (ra->shaders[i])
                 vkDestroyShaderModule(dev, ra->shaders[i], NULL);
+            if (ra->mesh_shaders[i])
+                vkDestroyShaderModule(dev, ra->mesh_shaders[i], NULL);
+        }
+        tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->ranges);
+        if (ra->mesh_pool)
+            vkDestroyDescriptorPool(dev, ra->mesh_pool, NULL);
+        if (ra->mesh_layout)
+            vkDestroyPipelineLayout(dev, ra->mesh_layout, NULL);
+        if (ra->mesh_set_layout)
+            vkDestroyDescriptorSetLayout(dev, ra->mesh_set_layout, NULL);
         if (ra->pool)
             vkDestroyDescriptorPool(dev, ra->pool, NULL);
         if (ra->layout)
@@ -292,12 +442,14 @@ int tpk_iso_raster_create(raster **out, const tpk_mesh_arrays *mesh, tpk_diag *d
         return tpk_diag_fail(diag, "render: out of memory");
     }
     ra->mesh = mesh;
-    int rc = tpk_iso_vk_create(&ra->iso, &in, diag); /* the arrays are copied to the device: tets can go */
-    free(tets);
+    int rc = tpk_iso_vk_create_with(&ra->iso, &in, 1, diag); /* the arrays are copied to the device */
     if (rc == 0 && !(ra->iso->ctx.props.limits.maxPushConstantsSize >= sizeof(raster_push)))
         rc = tpk_diag_fail(diag, "render: --iso-raster: the device's push constants are too small");
     if (rc == 0)
         rc = make_pipeline(ra, diag);
+    if (rc == 0)
+        rc = setup_mesh_path(ra, tets, diag);
+    free(tets);
     if (rc != 0) {
         tpk_iso_raster_destroy(ra);
         return -1;
@@ -329,13 +481,23 @@ static void record_keep(tpk_iso_vk *v, const void *arg)
     vkCmdCopyBuffer(v->cmd, v->buf[B_DRAW_ARGS].buffer, k->ra->args[k->i].buffer, 1, &args);
 }
 
-/* The triangle lists of opt's values, extracted again only where a value changed. */
+/* The triangle lists of opt's values, extracted again only where a value changed; on the mesh-shader
+ * path only their triangle counts (for the statistics), since the mesh shaders make the triangles. */
 static int extract_values(raster *ra, const tpk_render_options *opt, tpk_diag *diag)
 {
     for (int i = 0; i < opt->iso_count; i++) {
         if (i < ra->value_count && ra->values[i] == opt->iso[i])
             continue;
         uint32_t total;
+        if (ra->mesh_path) {
+            if (tpk_iso_vk_triangles(ra->iso, opt->iso[i], &total, diag))
+                return -1;
+            ra->values[i] = opt->iso[i];
+            ra->triangles[i] = total;
+            if (ra->value_count <= i)
+                ra->value_count = i + 1;
+            continue;
+        }
         if (tpk_iso_vk_count(ra->iso, opt->iso[i], &total, diag))
             return -1;
         VkDeviceSize bytes = (VkDeviceSize)total * 36;
@@ -368,6 +530,36 @@ static int extract_values(raster *ra, const tpk_render_options *opt, tpk_diag *d
     return 0;
 }
 
+/* The mesh-shader path's draws of `count` values: each value's push constants, then every cluster in
+ * draws of at most the device's task workgroup counts (a grid of x by y groups; the task shader skips
+ * the clusters past the last). */
+static void record_mesh_draws(tpk_iso_vk *v, raster *ra, int count)
+{
+    const VkPhysicalDeviceMeshShaderPropertiesEXT *lim = &ra->iso->ctx.mesh;
+    const VkShaderStageFlags stages = VK_SHADER_STAGE_TASK_BIT_EXT | VK_SHADER_STAGE_MESH_BIT_EXT |
+                                      VK_SHADER_STAGE_FRAGMENT_BIT;
+    vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, ra->mesh_pipeline);
+    vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, ra->mesh_layout, 0, 1, &ra->mesh_set, 0, NULL);
+    uint32_t max_x = lim->maxTaskWorkGroupCount[0] ? lim->maxTaskWorkGroupCount[0] : 65535;
+    uint32_t max_y = lim->maxTaskWorkGroupCount[1] ? lim->maxTaskWorkGroupCount[1] : 65535;
+    uint32_t max_total = lim->maxTaskWorkGroupTotalCount ? lim->maxTaskWorkGroupTotalCount : 1u << 22;
+    for (int i = 0; i < count; i++) {
+        mesh_push p = {ra->push[i], tpk_iso_vk_threshold(ra->values[i]), (float)ra->values[i],
+                       (uint32_t)ra->mesh->tet_count, 0};
+        vkCmdPushConstants(v->cmd, ra->mesh_layout, stages, 0, sizeof p, &p);
+        for (uint32_t base = 0; base < ra->clusters;) {
+            uint32_t left = ra->clusters - base;
+            uint32_t x = left < max_x ? left : max_x;
+            uint32_t y = left / x < max_y ? left / x : max_y;
+            y = y > max_total / x ? max_total / x : y;
+            y = y ? y : 1;
+            vkCmdPushConstants(v->cmd, ra->mesh_layout, stages, offsetof(mesh_push, base), 4, &base);
+            ra->draw_mesh_tasks(v->cmd, x, y, 1);
+            base += x * y;
+        }
+    }
+}
+
 /* Every value's draw in one render pass, then the image out to the read-back buffer. */
 typedef struct draw_arg {
     raster *ra;
@@ -390,7 +582,9 @@ static void record_draw(tpk_iso_vk *v, const void *arg)
     VkRect2D scissor = {{0, 0}, {(uint32_t)ra->width, (uint32_t)ra->height}};
     vkCmdSetViewport(v->cmd, 0, 1, &viewport);
     vkCmdSetScissor(v->cmd, 0, 1, &scissor);
-    for (int i = 0; i < d->count; i++) {
+    if (ra->mesh_path)
+        record_mesh_draws(v, ra, d->count);
+    for (int i = 0; !ra->mesh_path && i < d->count; i++) {
         vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, ra->layout, 0, 1, &ra->sets[i], 0, NULL);
         vkCmdPushConstants(v->cmd, ra->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                            sizeof ra->push[i], &ra->push[i]);
@@ -478,7 +672,8 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
             stats->iso_triangles += ra->triangles[i];
         stats->seconds = tpk_now_seconds() - t0;
         stats->gpu_seconds = tpk_iso_vk_seconds(ra->iso) - gpu0;
-        stats->iso_mesh_shader = has_mesh_shader(ra->iso->ctx.physical);
+        stats->iso_mesh_shader = ra->mesh_path ? 1 : tpk_vk_has_mesh_shader(ra->iso->ctx.physical) ? 2 : 0;
+        stats->iso_mesh_reason = ra->mesh_path ? NULL : ra->mesh_reason;
     }
     return 0;
 }
