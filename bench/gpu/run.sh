@@ -11,7 +11,9 @@
 # Meshes (full form): sfepy/cube_big_tetra.mesh, grids of 1M, 6M and 48M tets (bench/make_grid_vtk.py
 # 55, 100 and 200: python3 with numpy; skipped with a note without), and nasa_refine's ONERA M6 wing
 # (a CFD mesh). TPK_GPU_MESHES (paths, space separated) replaces the list; TPK_GPU_GRIDS the grid sizes;
-# TPK_GPU_SIZE (1024), TPK_GPU_FRAMES (10), TPK_GPU_EFFECTS (ea,shading,shadows,ao4,all),
+# TPK_GPU_SIZE (1024), TPK_GPU_FRAMES (10), TPK_GPU_EFFECTS (ea,shading,shadows,ao4,all,iso_raster: the
+# isosurface drawn as triangles, by task and mesh shaders where the device has them, at TPK_GPU_ISO_SIZE,
+# default 3840x2160),
 # TPK_GPU_PSNR=0 skips the CPU reference. VK_DRIVER_FILES names the vendor's ICD JSON when the loader
 # does not find it; TPK_VK_DEVICE=N picks a device.
 set -euo pipefail
@@ -44,13 +46,14 @@ RESULTS=$OUT/results.jsonl
 if [ $SMALL = 1 ]; then
     SIZE=${TPK_GPU_SIZE:-32} FRAMES=${TPK_GPU_FRAMES:-2} LAYOUTS="tet16"
     MESHES=${TPK_GPU_MESHES:-$ROOT/samples/cylinder.vtk} GRIDS=""
-    EFFECTS=${TPK_GPU_EFFECTS:-ea,all}
+    EFFECTS=${TPK_GPU_EFFECTS:-ea,all,iso_raster}
+    export TPK_GPU_ISO_SIZE=${TPK_GPU_ISO_SIZE:-48x32}
 else
     SIZE=${TPK_GPU_SIZE:-1024} FRAMES=${TPK_GPU_FRAMES:-10} LAYOUTS="tet16 tet20 tet32"
     MESHES=${TPK_GPU_MESHES:-"$DATA/sfepy/cube_big_tetra.mesh $DATA/nasa_refine/om6_om6-curv-no-geom.meshb"}
     GRIDS=${TPK_GPU_GRIDS:-"55 100 200"}
 fi
-EFFECTS=${EFFECTS:-${TPK_GPU_EFFECTS:-ea,shading,shadows,ao4,all}}
+EFFECTS=${EFFECTS:-${TPK_GPU_EFFECTS:-ea,shading,shadows,ao4,all,iso_raster}}
 
 # the grids: made once, kept in $OUT (a 48M-tet grid takes minutes and a few GiB)
 for n in $GRIDS; do
