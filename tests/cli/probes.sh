@@ -3,7 +3,8 @@
 # tutorial mesh): the CPU reference and the Vulkan renderer (lavapipe here) draw the same picture (>= 40
 # dB) for a sphere, a half-space and a box, kept and cut, alone and combined, with shading and shadows;
 # --save-scene writes the probes and --scene replays them byte for byte; extract --scene keeps only the
-# tets that may show, and the small file renders the same picture; bad probes are refused by name.
+# tets that may show, and the small file renders the same picture; --iso-raster cuts its triangles with
+# the same probes; bad probes are refused by name.
 source "$(dirname "$0")/common.sh"
 # Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe) for the tetpack runs only.
 tpk() {
@@ -99,6 +100,23 @@ printf '{"probes": [{"shape": "box", "min": [0, 0, 0], "max": [1, -1, 1]}]}' > "
 expect_exit 2 tpk extract "$WORK/cyl.tpk" "$WORK/x.tpk" --scene "$WORK/bad.json"
 expect_stderr "probe 1: box min 0 above max -1 on axis y"
 [ ! -e "$WORK/x.tpk" ] || fail "extract wrote a file for a bad scene"
-expect_exit 2 tpk render "$WORK/cyl.tpk" -o "$WORK/x.png" --backend vulkan --iso 300 --iso-raster --probe sphere:0,0,0,1
-expect_stderr "--iso-raster cuts isosurfaces with the clip box, not with probes"
+# --iso-raster (isosurfaces drawn as triangles): a fragment the probes leave out is discarded, so the
+# surface behind it shows, as for a ray that passes the cut part: against the CPU's ray-marched surfaces
+# (a TF transparent everywhere), and each probe set must change the picture
+printf '0 0.2 0.4 0.9 0\n1 0.9 0.2 0.1 0\n' > "$WORK/clear.tf"
+tpk render "$WORK/cyl.tpk" -o "$WORK/raster-none.png" --backend vulkan --size 96x96 --tf "$WORK/clear.tf" --iso 320,350 \
+    --shading --iso-raster > /dev/null || fail "--iso-raster without probes"
+for probes in "--probe sphere:0.05,0,0,0.012" "--probe sphere:0.05,0,0,0.012:cut" "--probe plane:0.04,0,0,1,0.3,0" \
+    "--probe box:0.02,-0.02,-0.01,0.08,0.01,0.02:cut --probe plane:0,0,0.005,0,0,1"; do
+    # shellcheck disable=SC2086
+    tpk render "$WORK/cyl.tpk" -o "$WORK/raster.png" --backend vulkan --size 96x96 --tf "$WORK/clear.tf" --iso 320,350 \
+        --shading --iso-raster $probes > /dev/null || fail "--iso-raster $probes"
+    # shellcheck disable=SC2086
+    tpk render "$WORK/cyl.tpk" -o "$WORK/ray.png" --backend cpu --size 96x96 --tf "$WORK/clear.tf" --iso 320,350 \
+        --shading $probes > /dev/null || fail "ray-marched $probes"
+    db=$(psnr "$WORK/ray.png" "$WORK/raster.png")
+    at_least "$db" 40 || fail "--iso-raster $probes: $db dB against the ray-marched surfaces"
+    cmp -s "$WORK/raster.png" "$WORK/raster-none.png" && fail "--iso-raster $probes: the probes change nothing"
+    echo "ok --iso-raster $probes: $db dB against the ray-marched surfaces"
+done
 echo "probes: $n probe sets, CPU and Vulkan agree; scenes replay; extract keeps what shows"

@@ -34,7 +34,16 @@ typedef struct mesh_push {
     uint32_t tet_count, base;
 } mesh_push;
 
-enum { MESH_BINDINGS = 5 }; /* tets, scalars, positions, case table, cluster ranges */
+enum { MESH_BINDINGS = 5 }; /* tets, scalars, positions, case table, cluster ranges; then the probes */
+enum { PROBE_BINDING = 5 };
+
+/* iso_raster.frag's Probes block: tpk_probe_keeps's probes, relative to the mesh's origin. */
+typedef struct probe_block {
+    int32_t count[4];
+    int32_t kind[TPK_RENDER_MAX_PROBES][4]; /* shape, cut */
+    float a[TPK_RENDER_MAX_PROBES][4];      /* xyz; w: radius */
+    float b[TPK_RENDER_MAX_PROBES][4];
+} probe_block;
 
 #define RASTER_VALUES TPK_RENDER_MAX_ISO
 
@@ -53,6 +62,7 @@ struct tpk_iso_raster {
     VkDescriptorPool pool;
     VkDescriptorSet sets[RASTER_VALUES];
     tpk_vk_buffer readback;
+    tpk_vk_buffer probes; /* the frame's probes (probe_block), host-visible, read by the fragment shader */
     int width, height;
     /* the triangle lists drawn, one per value, kept across frames until the values change */
     int value_count;
@@ -184,9 +194,11 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
                                    .dependencyCount = 1, .pDependencies = &dep};
     if (ok(vkCreateRenderPass(dev, &pass, NULL, &ra->pass), "creating the render pass", diag))
         return -1;
-    VkDescriptorSetLayoutBinding binding = {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, NULL};
+    VkDescriptorSetLayoutBinding binding[2] = {
+        {0, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_VERTEX_BIT, NULL},
+        {PROBE_BINDING, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, NULL}};
     VkDescriptorSetLayoutCreateInfo set_info = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-                                                .bindingCount = 1, .pBindings = &binding};
+                                                .bindingCount = 2, .pBindings = binding};
     VkPushConstantRange range = {VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(raster_push)};
     if (ok(vkCreateDescriptorSetLayout(dev, &set_info, NULL, &ra->set_layout), "a descriptor layout", diag))
         return -1;
@@ -202,7 +214,7 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
          .module = ra->shaders[0], .pName = "main"},
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
          .module = ra->shaders[1], .pName = "main"}};
-    VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, RASTER_VALUES};
+    VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 2 * RASTER_VALUES};
     VkDescriptorPoolCreateInfo pool = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = RASTER_VALUES,
                                        .poolSizeCount = 1, .pPoolSizes = &size};
     if (graphics_pipeline(ra, stages, 2, ra->layout, &ra->pipeline, diag) ||
@@ -214,7 +226,16 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
     VkDescriptorSetAllocateInfo alloc = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
                                          .descriptorPool = ra->pool, .descriptorSetCount = RASTER_VALUES,
                                          .pSetLayouts = layouts};
-    return ok(vkAllocateDescriptorSets(dev, &alloc, ra->sets), "descriptor sets", diag);
+    if (ok(vkAllocateDescriptorSets(dev, &alloc, ra->sets), "descriptor sets", diag))
+        return -1;
+    VkDescriptorBufferInfo info = {ra->probes.buffer, 0, VK_WHOLE_SIZE};
+    for (int i = 0; i < RASTER_VALUES; i++) {
+        VkWriteDescriptorSet write = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = ra->sets[i],
+                                      .dstBinding = PROBE_BINDING, .descriptorCount = 1,
+                                      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &info};
+        vkUpdateDescriptorSets(dev, 1, &write, 0, NULL);
+    }
+    return 0;
 }
 
 /* The mesh-shader path's pipeline and its one descriptor set (the extractor's tets, scalars, positions and
@@ -222,12 +243,14 @@ static int make_pipeline(raster *ra, tpk_diag *diag)
 static int make_mesh_pipeline(raster *ra, tpk_diag *diag)
 {
     VkDevice dev = ra->iso->ctx.device;
-    VkDescriptorSetLayoutBinding bindings[MESH_BINDINGS];
+    VkDescriptorSetLayoutBinding bindings[MESH_BINDINGS + 1];
     for (uint32_t i = 0; i < MESH_BINDINGS; i++)
         bindings[i] = (VkDescriptorSetLayoutBinding){i, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
                                                      VK_SHADER_STAGE_TASK_BIT_EXT | VK_SHADER_STAGE_MESH_BIT_EXT, NULL};
+    bindings[MESH_BINDINGS] = (VkDescriptorSetLayoutBinding){PROBE_BINDING, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
+                                                             VK_SHADER_STAGE_FRAGMENT_BIT, NULL};
     VkDescriptorSetLayoutCreateInfo set_info = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-                                                .bindingCount = MESH_BINDINGS, .pBindings = bindings};
+                                                .bindingCount = MESH_BINDINGS + 1, .pBindings = bindings};
     VkPushConstantRange range = {VK_SHADER_STAGE_TASK_BIT_EXT | VK_SHADER_STAGE_MESH_BIT_EXT | VK_SHADER_STAGE_FRAGMENT_BIT,
                                  0, sizeof(mesh_push)};
     if (ok(vkCreateDescriptorSetLayout(dev, &set_info, NULL, &ra->mesh_set_layout), "a descriptor layout", diag))
@@ -250,7 +273,7 @@ static int make_mesh_pipeline(raster *ra, tpk_diag *diag)
          .module = ra->mesh_shaders[1], .pName = "main"},
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .stage = VK_SHADER_STAGE_FRAGMENT_BIT,
          .module = ra->shaders[1], .pName = "main"}};
-    VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, MESH_BINDINGS};
+    VkDescriptorPoolSize size = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, MESH_BINDINGS + 1};
     VkDescriptorPoolCreateInfo pool = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .maxSets = 1,
                                        .poolSizeCount = 1, .pPoolSizes = &size};
     VkDescriptorSetAllocateInfo alloc = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
@@ -261,17 +284,18 @@ static int make_mesh_pipeline(raster *ra, tpk_diag *diag)
     alloc.descriptorPool = ra->mesh_pool;
     if (ok(vkAllocateDescriptorSets(dev, &alloc, &ra->mesh_set), "a descriptor set", diag))
         return -1;
-    const tpk_vk_buffer *buffers[MESH_BINDINGS] = {&ra->iso->buf[B_TETS], &ra->iso->buf[B_SCALARS],
-                                                   &ra->iso->buf[B_POSITIONS], &ra->iso->buf[B_CASES], &ra->ranges};
-    VkDescriptorBufferInfo info[MESH_BINDINGS];
-    VkWriteDescriptorSet write[MESH_BINDINGS];
-    for (uint32_t i = 0; i < MESH_BINDINGS; i++) {
+    const tpk_vk_buffer *buffers[MESH_BINDINGS + 1] = {&ra->iso->buf[B_TETS], &ra->iso->buf[B_SCALARS],
+                                                       &ra->iso->buf[B_POSITIONS], &ra->iso->buf[B_CASES], &ra->ranges,
+                                                       &ra->probes};
+    VkDescriptorBufferInfo info[MESH_BINDINGS + 1];
+    VkWriteDescriptorSet write[MESH_BINDINGS + 1];
+    for (uint32_t i = 0; i <= MESH_BINDINGS; i++) {
         info[i] = (VkDescriptorBufferInfo){buffers[i]->buffer, 0, VK_WHOLE_SIZE};
         write[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = ra->mesh_set,
-                                          .dstBinding = i, .descriptorCount = 1,
+                                          .dstBinding = i < MESH_BINDINGS ? i : PROBE_BINDING, .descriptorCount = 1,
                                           .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &info[i]};
     }
-    vkUpdateDescriptorSets(dev, MESH_BINDINGS, write, 0, NULL);
+    vkUpdateDescriptorSets(dev, MESH_BINDINGS + 1, write, 0, NULL);
     ra->draw_mesh_tasks = (PFN_vkCmdDrawMeshTasksEXT)vkGetDeviceProcAddr(dev, "vkCmdDrawMeshTasksEXT");
     return ra->draw_mesh_tasks ? 0 : tpk_diag_fail(diag, "vulkan iso raster: the device has no vkCmdDrawMeshTasksEXT");
 }
@@ -401,6 +425,7 @@ void tpk_iso_raster_destroy(raster *ra)
                 vkDestroyShaderModule(dev, ra->mesh_shaders[i], NULL);
         }
         tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->ranges);
+        tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->probes);
         if (ra->mesh_pool)
             vkDestroyDescriptorPool(dev, ra->mesh_pool, NULL);
         if (ra->mesh_layout)
@@ -445,6 +470,11 @@ int tpk_iso_raster_create(raster **out, const tpk_mesh_arrays *mesh, tpk_diag *d
     int rc = tpk_iso_vk_create_with(&ra->iso, &in, 1, diag); /* the arrays are copied to the device */
     if (rc == 0 && !(ra->iso->ctx.props.limits.maxPushConstantsSize >= sizeof(raster_push)))
         rc = tpk_diag_fail(diag, "render: --iso-raster: the device's push constants are too small");
+    if (rc == 0)
+        rc = tpk_vk_buffer_create(&ra->iso->ctx, sizeof(probe_block), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                  TPK_VK_MEMORY_UPLOAD, "iso raster probes", &ra->probes, diag);
+    if (rc == 0 && !ra->probes.mapped)
+        rc = tpk_diag_fail(diag, "render: --iso-raster: no host-visible memory for the probes");
     if (rc == 0)
         rc = make_pipeline(ra, diag);
     if (rc == 0)
@@ -610,9 +640,6 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
     if (opt->shadows || opt->ao_rays > 0 || (opt->iso_opacity > 0 && opt->iso_opacity < 1))
         return tpk_diag_fail(diag, "render: --iso-raster draws opaque isosurfaces with shading at most: without "
                                    "--shadows, --ao and --iso-opacity (the ray marcher draws those)");
-    if (opt->probe_count > 0) /* 8 more vec4 than the 128 bytes of push constants every device has */
-        return tpk_diag_fail(diag, "render: --iso-raster cuts isosurfaces with the clip box, not with probes "
-                                   "(the ray marcher draws probes: leave out --iso-raster)");
     tpk_render_setup setup;
     if (tpk_render_setup_of(opt, tpk_positions_diagonal(mesh), &setup, diag) != 0)
         return -1;
@@ -661,6 +688,21 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
     }
     for (int k = 0; k < 4; k++)
         ra->clear[k] = k < 3 ? opt->background[k] * opt->background[3] : opt->background[3];
+    probe_block pb;
+    memset(&pb, 0, sizeof pb);
+    pb.count[0] = opt->probe_count;
+    for (int i = 0; i < opt->probe_count && i < TPK_RENDER_MAX_PROBES; i++) {
+        const tpk_probe *p = &opt->probes[i];
+        pb.kind[i][0] = p->shape, pb.kind[i][1] = p->cut;
+        for (int k = 0; k < 3; k++) { /* a half-space's b is a direction, the others' a point */
+            pb.a[i][k] = (float)(p->a[k] - mesh->origin[k]);
+            pb.b[i][k] = (float)(p->shape == TPK_PROBE_PLANE ? p->b[k] : p->b[k] - mesh->origin[k]);
+        }
+        pb.a[i][3] = (float)p->radius;
+    }
+    memcpy(ra->probes.mapped, &pb, sizeof pb);
+    if (tpk_vk_buffer_flush(&ra->iso->ctx, &ra->probes, diag))
+        return -1;
     draw_arg d = {ra, opt->iso_count};
     if (make_targets(ra, opt->width, opt->height, diag) || extract_values(ra, opt, diag) ||
         tpk_iso_vk_submit(ra->iso, record_draw, &d, diag) || tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
