@@ -170,6 +170,73 @@ TPK_TEST(point_field_effects)
     close_scene(&s);
 }
 
+/* One renderer over several frames with --occlusion vertex (view's case): a half of the cache whose
+ * inputs did not change is kept (A under any camera move, S under a fixed light), the other cast again;
+ * every frame's picture is byte for byte a fresh renderer's, and the kept half casts no rays. */
+static void frame_on(tpk_vk_renderer *r, fx_scene *s, uint8_t *kept, uint8_t *fresh, uint64_t *kept_rays,
+                     uint64_t *fresh_rays)
+{
+    size_t n = (size_t)SIZE * SIZE * 4;
+    tpk_diag diag = {0};
+    tpk_render_stats a, b;
+    CHECK_MSG(tpk_vk_renderer_frame(r, &s->opt, kept, &a, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_render_vulkan(&s->mesh, &s->opt, fresh, &b, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(memcmp(kept, fresh, n) == 0, "the kept cache's picture differs from a fresh renderer's");
+    *kept_rays = a.secondary_rays, *fresh_rays = b.secondary_rays;
+}
+
+TPK_TEST(vertex_cache_kept_across_frames)
+{
+    char why[256];
+    if (!tpk_vulkan_available(why, sizeof why)) {
+        tpk_test_skip(why);
+        return;
+    }
+    fx_scene s;
+    CHECK(open_scene(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder_cache.tpk") == 0);
+    s.opt.occlusion = TPK_OCCLUSION_VERTEX;
+    s.opt.shading = s.opt.shadows = 1;
+    s.opt.ao_rays = 4;
+    s.opt.have_light = 1;
+    for (int k = 0; k < 3; k++)
+        s.opt.light[k] = s.opt.camera.eye[k] + (k == 1 ? 0.05 : 0.0);
+    size_t n = (size_t)SIZE * SIZE * 4;
+    uint8_t *kept = malloc(n), *fresh = malloc(n);
+    tpk_vk_renderer *r = NULL;
+    tpk_diag diag = {0};
+    CHECK(kept && fresh);
+    CHECK_MSG(tpk_vk_renderer_create(&r, &s.mesh, NULL, &diag) == 0, "%s", diag.message);
+    uint64_t kept_rays, fresh_rays;
+    frame_on(r, &s, kept, fresh, &kept_rays, &fresh_rays); /* the whole cache, as a fresh renderer */
+    CHECK_MSG(kept_rays == fresh_rays && fresh_rays > 0, "first frame: %llu rays, fresh %llu",
+              (unsigned long long)kept_rays, (unsigned long long)fresh_rays);
+    const uint64_t full = fresh_rays;
+    s.opt.camera.eye[0] += 0.02; /* the camera moves, the light stays: nothing is cast */
+    frame_on(r, &s, kept, fresh, &kept_rays, &fresh_rays);
+    CHECK_MSG(kept_rays == 0 && fresh_rays == full, "camera move: %llu rays (fresh %llu)", (unsigned long long)kept_rays,
+              (unsigned long long)fresh_rays);
+    s.opt.have_light = 0; /* a headlight: S again at every camera move, A kept */
+    frame_on(r, &s, kept, fresh, &kept_rays, &fresh_rays);
+    CHECK_MSG(kept_rays > 0 && kept_rays < full, "headlight: %llu rays of %llu", (unsigned long long)kept_rays,
+              (unsigned long long)full);
+    s.opt.camera.eye[1] += 0.02;
+    frame_on(r, &s, kept, fresh, &kept_rays, &fresh_rays);
+    CHECK_MSG(kept_rays > 0 && kept_rays < full, "headlight, moved: %llu rays of %llu", (unsigned long long)kept_rays,
+              (unsigned long long)full);
+    s.opt.ao_radius = 0.004; /* A's input: A again, S (same headlight) kept */
+    frame_on(r, &s, kept, fresh, &kept_rays, &fresh_rays);
+    CHECK_MSG(kept_rays > 0 && kept_rays < full, "AO radius: %llu rays of %llu", (unsigned long long)kept_rays,
+              (unsigned long long)full);
+    s.opt.range_max += 1; /* the TF's mapping: both again */
+    frame_on(r, &s, kept, fresh, &kept_rays, &fresh_rays);
+    CHECK_MSG(kept_rays == fresh_rays, "range: %llu rays, fresh %llu", (unsigned long long)kept_rays,
+              (unsigned long long)fresh_rays);
+    tpk_vk_renderer_destroy(r);
+    free(kept);
+    free(fresh);
+    close_scene(&s);
+}
+
 TPK_TEST(tet_field_effects)
 {
     char why[256];
