@@ -71,7 +71,7 @@ static int report_blames(FILE *report, const char *libraries)
     while (n < most && fgets(line, sizeof line, report)) {
         line[strcspn(line, "\n")] = 0;
         if (regexec(&frame, line, 0, NULL, 0) == 0)
-            snprintf(frames[n++], sizeof frames[0], "%s", line);
+            snprintf(frames[n++], sizeof frames[0], "%.*s", (int)sizeof frames[0] - 1, line); /* a frame cut, not an error */
     }
     for (int i = 0; i < n && i < top; i++)
         if (allocator_entry(frames[i]))
