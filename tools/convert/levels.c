@@ -46,6 +46,7 @@ typedef struct simplifier {
     int64_t *star_start; /* vertex -> first of its tets in star (vertex_count + 1) */
     int32_t *star;
     uint8_t *locked, *dead;
+    uint8_t *stuck;      /* per vertex: no valid target, and its star has not changed since */
     float *tet_quality;  /* per live tet: its shape (quality()), kept up to date as tets change */
 } simplifier;
 
@@ -95,53 +96,131 @@ static int build_stars(simplifier *s)
     return 0;
 }
 
-/* The best valid target of interior vertex u, or -1. */
-static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n)
+/* u's neighbours (each once) with their costs: the field difference, or the squared distance without a
+ * field. A small open-addressing table finds the repeats. The count, or -1 past NEIGHBOURS_MAX. */
+static int star_neighbours(const simplifier *s, int32_t u, const int32_t *star, int n, int32_t *nb, double *cost)
 {
-    int32_t nb[NEIGHBOURS_MAX];
-    double cost[NEIGHBOURS_MAX];
+    enum { SLOTS = 2 * NEIGHBOURS_MAX }; /* a power of two; at most half full */
+    int32_t slot[SLOTS];
+    memset(slot, 0xff, sizeof slot);
     int m = 0;
-    double worst = INFINITY;
     for (int i = 0; i < n; i++) {
         const int32_t *t = s->tets + 4 * (size_t)star[i];
-        double q = s->tet_quality[star[i]];
-        worst = q < worst ? q : worst;
         for (int k = 0; k < 4; k++) {
-            int32_t w = t[k], seen = w == u;
-            for (int j = 0; j < m && !seen; j++)
-                seen = nb[j] == w;
-            if (seen)
+            int32_t w = t[k];
+            if (w == u)
+                continue;
+            uint32_t h = ((uint32_t)w * 2654435761u) >> 24; /* 8 bits: SLOTS */
+            while (slot[h] >= 0 && slot[h] != w)
+                h = (h + 1) & (SLOTS - 1);
+            if (slot[h] == w)
                 continue;
             if (m == NEIGHBOURS_MAX)
                 return -1;
+            slot[h] = w;
             double c = 0;
             if (s->field)
                 c = fabs((double)s->field[w] - (double)s->field[u]);
             else
                 for (int a = 0; a < 3; a++)
                     c += (point(s, w)[a] - point(s, u)[a]) * (point(s, w)[a] - point(s, u)[a]);
-            int j = m++; /* insertion: ascending cost, then id */
-            while (j > 0 && (cost[j - 1] > c || (cost[j - 1] == c && nb[j - 1] > w))) {
-                nb[j] = nb[j - 1];
-                cost[j] = cost[j - 1];
-                j--;
-            }
-            nb[j] = w;
-            cost[j] = c;
+            nb[m] = w;
+            cost[m++] = c;
         }
     }
+    return m;
+}
+
+/* A tet of u's star seen from its face opposite u: moving u to v makes the tet (face, v), whose 6V is
+ * normal . (v - a) (the face's inward normal, scaled) and whose longest edge is the face's or one to v. */
+typedef struct star_face {
+    const int32_t *tet; /* its 4 ids (u among them) */
+    const double *a, *b, *c;
+    double normal[3], face_l2;
+} star_face;
+
+static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_face *f)
+{
+    int k = t[0] == u ? 0 : t[1] == u ? 1 : t[2] == u ? 2 : 3;
+    f->tet = t;
+    f->a = point(s, t[tpk_tet_faces[k][0]]);
+    f->b = point(s, t[tpk_tet_faces[k][1]]);
+    f->c = point(s, t[tpk_tet_faces[k][2]]);
+    double ab[3], ac[3], bc[3];
+    for (int i = 0; i < 3; i++)
+        ab[i] = f->b[i] - f->a[i], ac[i] = f->c[i] - f->a[i], bc[i] = f->c[i] - f->b[i];
+    /* tpk_tet_faces turns each face outward, so 6V = -(ab x ac) . (corner - a) */
+    f->normal[0] = ac[1] * ab[2] - ac[2] * ab[1];
+    f->normal[1] = ac[2] * ab[0] - ac[0] * ab[2];
+    f->normal[2] = ac[0] * ab[1] - ac[1] * ab[0];
+    double l[3] = {0, 0, 0};
+    for (int i = 0; i < 3; i++)
+        l[0] += ab[i] * ab[i], l[1] += ac[i] * ac[i], l[2] += bc[i] * bc[i];
+    f->face_l2 = l[0] > l[1] ? (l[0] > l[2] ? l[0] : l[2]) : (l[1] > l[2] ? l[1] : l[2]);
+}
+
+/* Whether the tet of face f with u moved to v (at q) is positive, exactly, and of shape 6V/L^3 >= floor
+ * (floor >= 0). The shape in double first, as 6V^2 >= floor^2 L^6 without a root: it rejects most. */
+static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int32_t v, const double *q,
+                        double floor)
+{
+    double da[3], l2 = f->face_l2, six_v = 0;
+    for (int i = 0; i < 3; i++)
+        da[i] = q[i] - f->a[i], six_v += f->normal[i] * da[i];
+    if (!(six_v > 0))
+        return 0;
+    double la = 0, lb = 0, lc = 0;
+    for (int i = 0; i < 3; i++) {
+        la += da[i] * da[i];
+        lb += (q[i] - f->b[i]) * (q[i] - f->b[i]);
+        lc += (q[i] - f->c[i]) * (q[i] - f->c[i]);
+    }
+    l2 = la > l2 ? la : l2;
+    l2 = lb > l2 ? lb : l2;
+    l2 = lc > l2 ? lc : l2;
+    if (six_v * six_v < floor * floor * l2 * l2 * l2)
+        return 0;
+    const double *p[4];
+    for (int k = 0; k < 4; k++)
+        p[k] = point(s, f->tet[k] == u ? v : f->tet[k]);
+    int sign = tpk_orient3d_filter(p[0], p[1], p[2], p[3]);
+    return (sign ? sign : tpk_orient3d_exact(p[0], p[1], p[2], p[3])) > 0;
+}
+
+/* The best valid target of interior vertex u, or -1: its neighbours by ascending cost (then id), the
+ * first whose moved tets are all positive and of fair shape. */
+static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n)
+{
+    int32_t nb[NEIGHBOURS_MAX];
+    double cost[NEIGHBOURS_MAX];
+    int m = star_neighbours(s, u, star, n, nb, cost);
+    if (m < 0)
+        return -1;
+    star_face faces[STAR_MAX];
+    double worst = INFINITY;
+    for (int i = 0; i < n; i++) {
+        double q = s->tet_quality[star[i]];
+        worst = q < worst ? q : worst;
+        star_face_of(s, s->tets + 4 * (size_t)star[i], u, &faces[i]);
+    }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
-    for (int j = 0; j < m; j++) {
-        int32_t v = nb[j];
+    floor = floor > 0 ? floor : 0;
+    for (int tried = 0; tried < m; tried++) {
+        int best = tried; /* selection: the next by cost, then id */
+        for (int j = tried + 1; j < m; j++)
+            if (cost[j] < cost[best] || (cost[j] == cost[best] && nb[j] < nb[best]))
+                best = j;
+        int32_t v = nb[best];
+        double c = cost[best];
+        nb[best] = nb[tried], cost[best] = cost[tried];
+        nb[tried] = v, cost[tried] = c;
+        const double *q = point(s, v);
         int ok = 1;
         for (int i = 0; i < n && ok; i++) {
-            const int32_t *t = s->tets + 4 * (size_t)star[i];
+            const int32_t *t = faces[i].tet;
             if (t[0] == v || t[1] == v || t[2] == v || t[3] == v)
-                continue;
-            const double *p[4];
-            for (int k = 0; k < 4; k++)
-                p[k] = point(s, t[k] == u ? v : t[k]);
-            ok = tpk_orient3d_exact(p[0], p[1], p[2], p[3]) > 0 && quality(p[0], p[1], p[2], p[3]) >= floor;
+                continue; /* it vanishes */
+            ok = moved_tet_ok(s, &faces[i], u, v, q, floor);
         }
         if (ok)
             return v;
@@ -149,7 +228,6 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
     return -1;
 }
 
-/* One pass; the number of collapses. */
 static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
 {
     int64_t V = s->mesh->vertex_count, done = 0;
@@ -159,12 +237,14 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
     memset(s->dead, 0, (size_t)s->tet_count);
     for (int32_t u = 0; u < V && *live > target; u++) {
         int n = (int)(s->star_start[u + 1] - s->star_start[u]);
-        if (s->boundary[u] || s->removed[u] || s->locked[u] || n == 0 || n > STAR_MAX)
+        if (s->boundary[u] || s->removed[u] || s->locked[u] || s->stuck[u] || n == 0 || n > STAR_MAX)
             continue;
         const int32_t *star = s->star + s->star_start[u];
         int32_t v = choose_target(s, u, star, n);
-        if (v < 0)
+        if (v < 0) {
+            s->stuck[u] = 1; /* until a collapse next to it changes its star */
             continue;
+        }
         for (int i = 0; i < n; i++) {
             int32_t *t = s->tets + 4 * (size_t)star[i];
             if (t[0] == v || t[1] == v || t[2] == v || t[3] == v) {
@@ -177,7 +257,7 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
                 s->tet_quality[star[i]] = (float)quality(point(s, t[0]), point(s, t[1]), point(s, t[2]), point(s, t[3]));
             }
             for (int k = 0; k < 4; k++)
-                s->locked[t[k]] = 1;
+                s->locked[t[k]] = 1, s->stuck[t[k]] = 0;
         }
         s->removed[u] = 1;
         s->locked[u] = 1;
@@ -502,12 +582,13 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     s.removed = calloc((size_t)(V ? V : 1), 1);
     s.locked = calloc((size_t)(V ? V : 1), 1);
     s.dead = calloc((size_t)(T ? T : 1), 1);
+    s.stuck = calloc((size_t)(V ? V : 1), 1);
     s.tets = malloc(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     s.origin = malloc(sizeof *s.origin * (size_t)(T ? T : 1));
     s.star_start = malloc(sizeof *s.star_start * (size_t)(V + 1));
     s.star = malloc(sizeof *s.star * 4 * (size_t)(T ? T : 1));
     s.tet_quality = malloc(sizeof *s.tet_quality * (size_t)(T ? T : 1));
-    int rc = s.boundary && s.removed && s.locked && s.dead && s.tets && s.origin && s.star_start && s.star &&
+    int rc = s.boundary && s.removed && s.locked && s.dead && s.stuck && s.tets && s.origin && s.star_start && s.star &&
                      s.tet_quality
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
@@ -544,6 +625,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     free(s.removed);
     free(s.locked);
     free(s.dead);
+    free(s.stuck);
     free(s.tets);
     free(s.origin);
     free(s.star_start);
