@@ -12,9 +12,9 @@
  * vertices, which is where it is measured.
  *
  * Passes: every interior vertex in id order, skipping those next to a vertex collapsed in this pass (so
- * the stars one pass reads are those it started with), until the
- * level has a fifth of the tets of the last (TPK_LEVEL_RATIO: 4 levels then add at most 1/4 to the file)
- * or a pass removes almost nothing. The result does not depend on the thread count. */
+ * the stars one pass reads are those it started with), inside fixed blocks of ids side by side first,
+ * until the level has a sixth of the tets of the last (TPK_LEVEL_RATIO) or a pass removes almost
+ * nothing. The result does not depend on the thread count. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,7 +31,11 @@
 #include "write_tpk.h"
 
 #define TPK_LEVEL_QUALITY 0.02 /* 6 V / L^3 of a new tet (a regular tet: 0.707) */
-#define TPK_LEVEL_RATIO 5      /* each level aims at a fifth of the tets of the one before */
+/* Each level aims at a sixth of the tets of the one before. A level costs more bytes per tet than its
+ * file (its TMAP and the shell it keeps whole; grid 55: 27 B against 24 B), so a fifth made the levels
+ * 31% of the file; a sixth makes them 28%, for an RMS error 13% higher on level 1 (0.0774 against
+ * 0.0683) and a frame time that tets^(1/3) predicts 6% lower. */
+#define TPK_LEVEL_RATIO 6
 #define STAR_MAX 512
 #define NEIGHBOURS_MAX 128
 
