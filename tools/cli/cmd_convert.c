@@ -26,7 +26,7 @@ static const char convert_help[] =
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
-    "                              the same domain with about a fifth of the tets of the one before\n"
+    "                              the same domain with about a sixth of the tets of the one before\n"
     "                              (interior vertices collapsed, tets kept positive, the shell kept\n"
     "                              exactly), stored in the file; fewer when the mesh stops coarsening.\n"
     "                              render --level K and --max-ms pick one, extract --level K writes one\n"

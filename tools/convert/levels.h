@@ -31,7 +31,7 @@ typedef struct tpk_levels {
 } tpk_levels;
 
 /* Make up to `count` levels of `mesh` (in the stored frame, tets positive, `neighbors` as connect gave
- * them), each with about a fifth of the tets of the one before, by half-edge collapses of interior
+ * them), each with about a sixth of the tets of the one before, by half-edge collapses of interior
  * vertices that keep every tet positive (exact orientation) and of fair shape; the shell is never
  * touched. Stops early (fewer levels, out->count) when a level would keep more than 85% of the tets of
  * the one before. Each level is written as a complete file with `o`'s layouts and compression, every
