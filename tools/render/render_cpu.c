@@ -270,6 +270,10 @@ static int setup_job(render_job *job, int has_point_scalars, double diagonal, co
     job->opt = opt;
     job->tet_scalars = opt->tet_scalars;
     job->has_scalars = has_point_scalars || opt->tet_scalars != NULL;
+    job->clear_volume = opt->tf && opt->integration != TPK_INTEGRATION_SAMPLED &&
+                        opt->integration != TPK_INTEGRATION_MIDPOINT;
+    for (int i = 0; opt->tf && i < opt->tf->count; i++)
+        job->clear_volume &= opt->tf->points[i].a == 0.0;
     job->range_min = setup.range_min;
     job->inv_range = setup.inv_range;
     job->unit = setup.unit;
