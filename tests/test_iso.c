@@ -286,3 +286,54 @@ TPK_TEST(empty_nan_and_bad_values)
     tpk_iso_surface_free(&s);
     free_grid(&g);
 }
+
+/* A vertex that is the lower end of many crossed edges (the centre of a star of 2n tets around a
+ * bipyramid, n = 100): its edges are found through the hub table and numbered by a sort, not its chain.
+ * One vertex per spoke, at its middle, in the order of the spokes' upper ids; a closed surface. */
+TPK_TEST(hub_vertex)
+{
+    enum { N = 100 };
+    float pos[3 * (N + 3)] = {0}, sc[N + 3];
+    int32_t tets[4 * 2 * N];
+    sc[0] = 0;
+    for (int i = 0; i < N; i++) {
+        pos[3 * (1 + i)] = (float)cos(2 * M_PI * i / N);
+        pos[3 * (1 + i) + 1] = (float)sin(2 * M_PI * i / N);
+    }
+    pos[3 * (N + 1) + 2] = 1, pos[3 * (N + 2) + 2] = -1;
+    for (int v = 1; v < N + 3; v++)
+        sc[v] = 1;
+    for (int i = 0; i < N; i++)
+        for (int h = 0; h < 2; h++) {
+            int32_t *t = tets + 4 * (2 * i + h);
+            t[0] = 0, t[1] = 1 + i, t[2] = 1 + (i + 1) % N, t[3] = h ? N + 2 : N + 1;
+            if (det3(pos + 3 * t[0], pos + 3 * t[1], pos + 3 * t[2], pos + 3 * t[3]) < 0) {
+                int32_t x = t[2];
+                t[2] = t[3];
+                t[3] = x;
+            }
+        }
+    tpk_iso_input in = {.vertex_count = N + 3, .tet_count = 2 * N, .positions = pos, .tets = tets, .scalars = sc};
+    double value = 0.5;
+    tpk_iso_surface s;
+    tpk_diag diag = {0};
+    CHECK(tpk_iso_extract(&in, &value, 1, 1, &s, &diag) == 0);
+    CHECK_EQ_INT(s.vertex_count, N + 2);
+    CHECK_EQ_INT(s.triangle_count, 2 * N);
+    int bad = 0;
+    for (int64_t v = 0; v < s.vertex_count; v++) {
+        bad += s.edge[2 * v] != 0 || s.edge[2 * v + 1] != v + 1;
+        for (int k = 0; k < 3; k++)
+            bad += s.xyz[3 * v + k] != 0.5 * pos[3 * (v + 1) + k];
+    }
+    int64_t count;
+    uint64_t *e = surface_edges(&s, &count);
+    for (int64_t i = 0; i < count; i += 2)
+        bad += i + 1 >= count || e[i] != e[i + 1] || (i + 2 < count && e[i + 2] == e[i]);
+    free(e);
+    double area, volume;
+    area_volume(&s, &area, &volume);
+    tpk_iso_surface_free(&s);
+    CHECK_EQ_INT(bad, 0);
+    CHECK(volume > 0);
+}

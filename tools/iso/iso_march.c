@@ -35,35 +35,58 @@ void tpk_iso_case_table(int mask, int *count, int edges[6], int corners[6][2])
     }
 }
 
+/* Edge ids (first-seen order) fit 31 bits: the vertex count is checked against 2^31 - 1 as they grow.
+ * The top bit of a head marks a hub: a mesh vertex that is the lower end of more than HUB_CHAIN
+ * crossed edges, whose edges are then found through a hash table instead of its chain. */
+#define EDGE_NONE UINT32_MAX
+#define HUB_BIT 0x80000000u
+#define HUB_CHAIN 24
+
+typedef struct hub_table {
+    uint64_t *keys; /* 0: empty (no edge key is 0: its upper id is above its lower) */
+    uint32_t *edges;
+    int64_t count, cap;
+} hub_table;
+
+/* A crossed mesh edge: its key, the edge seen before it at the same lower vertex, its vertex. */
+typedef struct edge_link {
+    uint64_t key;
+    uint32_t next, vertex;
+} edge_link;
+
 typedef struct march {
     const tpk_iso_input *in;
     double value;
+    float threshold;                           /* the least float s with (double)s >= value */
     int threads;
+    uint8_t crossed[16];                       /* per case: bit k when tet edge k is crossed */
     int64_t worker_first[TPK_MAX_THREADS + 1]; /* first triangle of each worker's tets */
-    uint64_t *corner_key;                      /* 3 per triangle: (a << 32) | b, a < b */
-    int64_t *order;                            /* corners sorted by key */
-    int64_t *vertex_first;                     /* per vertex + 1: its first corner in `order` */
-    uint32_t *corner_vertex;                   /* per corner: its vertex (this value's numbering) */
-    double *tri_normal;                        /* 3 per triangle, area-weighted */
+    uint8_t *cases;                            /* per tet: its case (count_range), 16 for none (a NaN) */
+    uint32_t *head;                            /* per mesh vertex: its newest edge as lower end, or EDGE_NONE */
+    uint64_t *corner_key;                      /* from tpk_iso_corners: 3 per triangle, (a << 32) | b, a < b */
+    edge_link *edges;                          /* first-seen order */
+    int64_t edge_count, edge_cap;
+    hub_table hubs;
+    uint64_t *vertex_key;                      /* per vertex of this value */
+    double *vertex_p;                          /* 3 per vertex: position relative to the origin */
+    double *normal_sum;                        /* 3 per vertex: its triangles' normals, summed in corner order */
     tpk_iso_surface *out;
     int64_t vertex_base, triangle_base;
-    const tpk_iso_corners *corners;            /* NULL: count_range and emit_range make corner_key */
-    uint8_t *cases;                            /* per tet: its case (count_range), 16 for none (a NaN) */
+    const tpk_iso_corners *corners;            /* NULL: count_range and edges_of_tets find the triangles */
 } march;
 
-/* The case of tet t: bit k when corner k is at or above the value; -1 with a NaN. */
+/* The case of tet t: bit k when corner k is at or above the value; 16 with a NaN. `threshold` is the
+ * value rounded up to float, so comparing the floats decides as comparing them in double with the value
+ * would. */
 static inline int tet_case(const march *m, int64_t t)
 {
     const int32_t *v = m->in->tets + 4 * t;
     const float *s = m->in->scalars;
-    int mask = 0;
-    for (int k = 0; k < 4; k++) {
-        double x = s[v[k]];
-        if (x != x)
-            return -1;
-        mask |= (x >= m->value) << k;
-    }
-    return mask;
+    float thr = m->threshold;
+    float x0 = s[v[0]], x1 = s[v[1]], x2 = s[v[2]], x3 = s[v[3]];
+    int nan = (x0 != x0) | (x1 != x1) | (x2 != x2) | (x3 != x3);
+    int mask = (x0 >= thr) | (x1 >= thr) << 1 | (x2 >= thr) << 2 | (x3 >= thr) << 3;
+    return nan ? 16 : mask;
 }
 
 static void count_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -72,96 +95,190 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
     int64_t n = 0;
     for (int64_t t = begin; t < end; t++) {
         int c = tet_case(m, t);
-        m->cases[t] = (uint8_t)(c < 0 ? 16 : c); /* emit_range reads it, not the scalars again */
-        n += c < 0 ? 0 : iso_cases[c].count;
+        m->cases[t] = (uint8_t)c; /* edges_of_tets reads it, not the scalars again */
+        n += iso_cases[c & 15].count & ((c >> 4) - 1);
     }
     m->worker_first[w + 1] = n;
 }
 
-static void emit_range(void *ctx, int64_t begin, int64_t end, int w)
+/* ---- Vertices shared by edge ---------------------------------------------------------------------- */
+
+static uint64_t hub_slot(const hub_table *h, uint64_t key)
 {
-    march *m = ctx;
-    uint64_t *key = m->corner_key + 3 * m->worker_first[w];
-    for (int64_t t = begin; t < end; t++) {
+    return (key * 0x9E3779B97F4A7C15ull >> 17) & (uint64_t)(h->cap - 1);
+}
+
+static uint32_t hub_find(const hub_table *h, uint64_t key)
+{
+    for (uint64_t i = hub_slot(h, key);; i = (i + 1) & (uint64_t)(h->cap - 1)) {
+        if (h->keys[i] == key)
+            return h->edges[i];
+        if (!h->keys[i])
+            return EDGE_NONE;
+    }
+}
+
+static int hub_insert(hub_table *h, uint64_t key, uint32_t edge)
+{
+    if (2 * (h->count + 1) > h->cap) {
+        hub_table g = {NULL, NULL, 0, h->cap ? 2 * h->cap : 1024};
+        g.keys = calloc((size_t)g.cap, sizeof *g.keys);
+        g.edges = malloc((size_t)g.cap * sizeof *g.edges);
+        if (!g.keys || !g.edges) {
+            free(g.keys);
+            free(g.edges);
+            return -1;
+        }
+        for (int64_t i = 0; i < h->cap; i++)
+            if (h->keys[i])
+                hub_insert(&g, h->keys[i], h->edges[i]);
+        free(h->keys);
+        free(h->edges);
+        *h = g;
+    }
+    uint64_t i = hub_slot(h, key);
+    while (h->keys[i])
+        i = (i + 1) & (uint64_t)(h->cap - 1);
+    h->keys[i] = key;
+    h->edges[i] = edge;
+    h->count++;
+    return 0;
+}
+
+/* Lower vertex a's chain is long: its edges go to the hub table, and its lookups too from now on. */
+static int make_hub(march *m, uint32_t a)
+{
+    for (uint32_t e = m->head[a]; e != EDGE_NONE; e = m->edges[e].next)
+        if (hub_insert(&m->hubs, m->edges[e].key, e))
+            return -1;
+    m->head[a] |= HUB_BIT;
+    return 0;
+}
+
+/* The edge of `key`, made when new. EDGE_NONE when out of memory or at 2^31 - 1 edges. */
+static uint32_t edge_of(march *m, uint64_t key)
+{
+    uint32_t a = (uint32_t)(key >> 32), head = m->head[a];
+    int chain = 0;
+    if (head != EDGE_NONE && (head & HUB_BIT)) {
+        uint32_t e = hub_find(&m->hubs, key);
+        if (e != EDGE_NONE)
+            return e;
+    } else {
+        for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
+            if (m->edges[e].key == key)
+                return e;
+    }
+    if (m->edge_count == m->edge_cap) {
+        int64_t cap = 2 * m->edge_cap < (int64_t)HUB_BIT - 1 ? 2 * m->edge_cap : (int64_t)HUB_BIT - 1;
+        edge_link *grown = m->edge_count < cap ? realloc(m->edges, (size_t)cap * sizeof *grown) : NULL;
+        if (!grown)
+            return EDGE_NONE;
+        m->edges = grown;
+        m->edge_cap = cap;
+    }
+    uint32_t e = (uint32_t)m->edge_count++;
+    int hub = head != EDGE_NONE && (head & HUB_BIT);
+    m->edges[e] = (edge_link){key, head == EDGE_NONE ? EDGE_NONE : head & ~HUB_BIT, 0};
+    m->head[a] = e | (hub ? HUB_BIT : 0);
+    if (hub ? hub_insert(&m->hubs, key, e) : chain >= HUB_CHAIN && make_hub(m, a))
+        return EDGE_NONE;
+    return e;
+}
+
+typedef struct key_edge {
+    uint64_t key;
+    uint32_t edge;
+} key_edge;
+
+static int compare_key_edge(const void *pa, const void *pb)
+{
+    uint64_t a = ((const key_edge *)pa)->key, b = ((const key_edge *)pb)->key;
+    return (a > b) - (a < b);
+}
+
+/* Number the edges by key: every lower vertex in order, its chain's edges sorted by upper vertex. Frees
+ * the heads for the next value. Returns the vertex count, -1 without memory. */
+static int64_t rank_edges(march *m)
+{
+    m->vertex_key = malloc((size_t)(m->edge_count ? m->edge_count : 1) * sizeof *m->vertex_key);
+    key_edge *run = malloc((size_t)(m->edge_count ? m->edge_count : 1) * sizeof *run);
+    if (!m->vertex_key || !run) {
+        free(run);
+        return -1;
+    }
+    int64_t vertices = 0;
+    for (int64_t a = 0; a < m->in->vertex_count && vertices < m->edge_count; a++) {
+        if (m->head[a] == EDGE_NONE)
+            continue;
+        int64_t count = 0;
+        for (uint32_t e = m->head[a] & ~HUB_BIT; e != EDGE_NONE; e = m->edges[e].next)
+            run[count++] = (key_edge){m->edges[e].key, e};
+        m->head[a] = EDGE_NONE;
+        if (count > HUB_CHAIN) {
+            qsort(run, (size_t)count, sizeof *run, compare_key_edge);
+        } else {
+            for (int64_t i = 1; i < count; i++) {
+                key_edge x = run[i];
+                int64_t j = i;
+                for (; j > 0 && run[j - 1].key > x.key; j--)
+                    run[j] = run[j - 1];
+                run[j] = x;
+            }
+        }
+        for (int64_t i = 0; i < count; i++) {
+            m->edges[run[i].edge].vertex = (uint32_t)vertices;
+            m->vertex_key[vertices++] = run[i].key;
+        }
+    }
+    free(run);
+    if (m->hubs.count) {
+        memset(m->hubs.keys, 0, (size_t)m->hubs.cap * sizeof *m->hubs.keys);
+        m->hubs.count = 0;
+    }
+    return vertices;
+}
+
+/* Each corner's edge into `corner` (3 per triangle), from the tets' cases: a tet's crossed edges are
+ * looked up once each (tets near each other in the file share vertices, so the chains are in cache). */
+static int edges_of_tets(march *m, uint32_t *corner)
+{
+    for (int64_t t = 0; t < m->in->tet_count; t++) {
         int c = m->cases[t];
         if (c == 0 || c >= 15)
             continue;
         const int32_t *v = m->in->tets + 4 * t;
-        for (int k = 0; k < 3 * iso_cases[c].count; k++) {
-            const uint8_t *e = tet_edges[iso_cases[c].edge[k]];
-            uint32_t a = (uint32_t)v[e[0]], b = (uint32_t)v[e[1]];
-            *key++ = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+        uint32_t edge[6];
+        for (int k = 0; k < 6; k++) {
+            if (!(m->crossed[c] >> k & 1))
+                continue;
+            uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
+            if ((edge[k] = edge_of(m, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a)) == EDGE_NONE)
+                return -1;
         }
+        for (int k = 0; k < 3 * iso_cases[c].count; k++)
+            *corner++ = edge[iso_cases[c].edge[k]];
     }
+    return 0;
 }
 
-typedef struct key_corner {
-    uint64_t key;
-    int64_t corner;
-} key_corner;
-
-static int compare_key_corner(const void *pa, const void *pb)
+/* Share the corners' vertices: each corner's edge into `corner` (3 per triangle), then the edges
+ * numbered by key. Returns the vertex count, -1 without memory or at 2^31 - 1 edges. */
+static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
 {
-    const key_corner *a = pa, *b = pb;
-    if (a->key != b->key)
-        return a->key < b->key ? -1 : 1;
-    return (a->corner > b->corner) - (a->corner < b->corner);
-}
-
-/* Sort one bucket of (key, corner) pairs by key, keeping corners ascending within a key (they arrive
- * ascending): insertion sort on the contiguous pairs for the usual few dozen, qsort on (key, corner)
- * for a vertex of many tets. */
-static void sort_bucket(key_corner *b, int64_t count)
-{
-    if (count > 48) {
-        qsort(b, (size_t)count, sizeof *b, compare_key_corner);
-        return;
-    }
-    for (int64_t i = 1; i < count; i++) {
-        key_corner x = b[i];
-        int64_t j = i;
-        for (; j > 0 && b[j - 1].key > x.key; j--)
-            b[j] = b[j - 1];
-        b[j] = x;
-    }
-}
-
-/* Sort corners by (edge key, corner): a counting sort of (key, corner) pairs on the lower vertex, then
- * each bucket (the corners at one mesh vertex, a few dozen) by the upper; the pairs carry their keys,
- * so the sort reads no key through an index. Returns the number of distinct edges, -1 without memory. */
-static int64_t number_vertices(march *m, int64_t corners)
-{
-    int64_t n = m->in->vertex_count;
-    int64_t *start = calloc((size_t)n + 1, sizeof *start);
-    key_corner *pairs = malloc(sizeof *pairs * (size_t)(corners ? corners : 1));
-    if (!start || !pairs) {
-        free(start);
-        free(pairs);
+    m->edge_count = 0;
+    m->edge_cap = corners / 4 + 64;
+    if (!(m->edges = tpk_alloc_large((size_t)m->edge_cap * sizeof *m->edges)))
         return -1;
+    int failed = 0;
+    if (m->corners) {
+        for (int64_t c = 0; c < corners && !failed; c++)
+            failed = (corner[c] = edge_of(m, m->corner_key[c])) == EDGE_NONE;
+    } else {
+        failed = edges_of_tets(m, corner);
     }
-    for (int64_t c = 0; c < corners; c++)
-        start[(m->corner_key[c] >> 32) + 1]++;
-    for (int64_t a = 0; a < n; a++)
-        start[a + 1] += start[a];
-    for (int64_t c = 0; c < corners; c++) {
-        uint64_t key = m->corner_key[c];
-        pairs[start[key >> 32]++] = (key_corner){key, c};
-    }
-    /* start[a] is now the end of bucket a, the start of bucket a + 1 */
-    for (int64_t a = 0, begin = 0; a < n; begin = start[a], a++)
-        sort_bucket(pairs + begin, start[a] - begin);
-    free(start);
-    int64_t vertices = 0;
-    for (int64_t i = 0; i < corners; i++) {
-        int64_t c = pairs[i].corner;
-        m->order[i] = c;
-        if (i == 0 || pairs[i].key != pairs[i - 1].key)
-            m->vertex_first[vertices++] = i;
-        m->corner_vertex[c] = (uint32_t)(vertices - 1);
-    }
-    m->vertex_first[vertices] = corners;
-    free(pairs);
-    return vertices;
+    int64_t vertices = rank_edges(m); /* also when failed: it frees the heads */
+    return failed ? -1 : vertices;
 }
 
 static void position_of(const march *m, uint64_t key, double *t_out, double p[3])
@@ -174,51 +291,21 @@ static void position_of(const march *m, uint64_t key, double *t_out, double p[3]
     *t_out = t;
 }
 
-static void triangle_range(void *ctx, int64_t begin, int64_t end, int w)
-{
-    (void)w;
-    march *m = ctx;
-    for (int64_t f = begin; f < end; f++) {
-        double p[3][3], t;
-        for (int k = 0; k < 3; k++)
-            position_of(m, m->corner_key[3 * f + k], &t, p[k]);
-        double e1[3], e2[3], *n = m->tri_normal + 3 * f;
-        for (int k = 0; k < 3; k++)
-            e1[k] = p[1][k] - p[0][k], e2[k] = p[2][k] - p[0][k];
-        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-        uint32_t *tri = m->out->tri + 3 * (m->triangle_base + f);
-        for (int k = 0; k < 3; k++)
-            tri[k] = (uint32_t)(m->vertex_base + m->corner_vertex[3 * f + k]);
-    }
-}
-
+/* Positions, values, colours and edges of the vertices; their normal sums cleared. */
 static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     (void)w;
     march *m = ctx;
     tpk_iso_surface *o = m->out;
-    const float *pos = m->in->positions, *s = m->in->scalars;
     for (int64_t v = begin; v < end; v++) {
         int64_t out = m->vertex_base + v;
-        uint64_t key = m->corner_key[m->order[m->vertex_first[v]]];
+        uint64_t key = m->vertex_key[v];
         uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
-        double p[3], t, n[3] = {0, 0, 0};
+        double *p = m->vertex_p + 3 * v, t;
         position_of(m, key, &t, p);
-        for (int64_t i = m->vertex_first[v]; i < m->vertex_first[v + 1]; i++)
-            for (int k = 0; k < 3; k++)
-                n[k] += m->tri_normal[3 * (m->order[i] / 3) + k];
-        double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        if (!(len > 0) || !isfinite(len)) { /* only zero-area triangles here: the edge, toward higher */
-            double up = s[b] > s[a] ? 1 : -1;
-            for (int k = 0; k < 3; k++)
-                n[k] = up * ((double)pos[3 * b + k] - pos[3 * a + k]);
-            len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        }
         for (int k = 0; k < 3; k++) {
             o->xyz[3 * out + k] = m->in->origin[k] + p[k];
-            o->normal[3 * out + k] = len > 0 ? (float)(n[k] / len) : 0.0f;
+            m->normal_sum[3 * v + k] = 0.0;
         }
         o->value[out] = (float)m->value;
         if (o->color)
@@ -228,9 +315,59 @@ static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
     }
 }
 
+/* The triangles' corners from edges to vertices, and each vertex's sum of its triangles' area-weighted
+ * normals in the order of its corners (triangle order: a vertex is in a triangle once), on one thread,
+ * so the sums do not depend on the thread count. */
+static void sum_normals(march *m, int64_t triangles)
+{
+    uint32_t *tri = m->out->tri + 3 * m->triangle_base;
+    for (int64_t f = 0; f < triangles; f++, tri += 3) {
+        const double *p[3];
+        uint32_t v[3];
+        for (int k = 0; k < 3; k++) {
+            v[k] = m->edges[tri[k]].vertex;
+            tri[k] = (uint32_t)(m->vertex_base + v[k]);
+            p[k] = m->vertex_p + 3 * v[k];
+        }
+        double ax = p[1][0] - p[0][0], ay = p[1][1] - p[0][1], az = p[1][2] - p[0][2];
+        double bx = p[2][0] - p[0][0], by = p[2][1] - p[0][1], bz = p[2][2] - p[0][2];
+        double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+        for (int k = 0; k < 3; k++) {
+            double *sum = m->normal_sum + 3 * v[k];
+            sum[0] += nx;
+            sum[1] += ny;
+            sum[2] += nz;
+        }
+    }
+}
+
+static void normal_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    (void)w;
+    march *m = ctx;
+    const float *pos = m->in->positions, *s = m->in->scalars;
+    for (int64_t v = begin; v < end; v++) {
+        double *n = m->normal_sum + 3 * v;
+        double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(len > 0) || !isfinite(len)) { /* only zero-area triangles here: the edge, toward higher */
+            uint64_t key = m->vertex_key[v];
+            uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
+            double up = s[b] > s[a] ? 1 : -1;
+            for (int k = 0; k < 3; k++)
+                n[k] = up * ((double)pos[3 * b + k] - pos[3 * a + k]);
+            len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        }
+        float *out = m->out->normal + 3 * (m->vertex_base + v);
+        for (int k = 0; k < 3; k++)
+            out[k] = len > 0 ? (float)(n[k] / len) : 0.0f;
+    }
+}
+
+/* Fresh arrays through tpk_alloc_large: on huge pages, their first touch faults far less often. */
 static int grow(void **p, int64_t count, size_t size)
 {
-    void *q = realloc(*p, (size_t)(count ? count : 1) * size);
+    size_t bytes = (size_t)(count ? count : 1) * size;
+    void *q = *p ? realloc(*p, bytes) : tpk_alloc_large(bytes);
     if (!q)
         return -1;
     *p = q;
@@ -248,11 +385,21 @@ static int grow_surface(tpk_iso_surface *o, int64_t vertices, int64_t triangles)
 static void free_scratch(march *m)
 {
     free(m->corner_key);
-    free(m->order);
-    free(m->vertex_first);
-    free(m->corner_vertex);
-    free(m->tri_normal);
-    m->corner_key = NULL, m->order = NULL, m->vertex_first = NULL, m->corner_vertex = NULL, m->tri_normal = NULL;
+    free(m->edges);
+    free(m->vertex_key);
+    free(m->vertex_p);
+    free(m->normal_sum);
+    m->corner_key = NULL, m->edges = NULL, m->vertex_key = NULL, m->vertex_p = NULL, m->normal_sum = NULL;
+}
+
+/* The least float at or above `value` (finite). */
+static float float_at_or_above(double value)
+{
+    float f = (float)value;
+    if ((double)f < value)
+        return nextafterf(f, INFINITY);
+    float below = nextafterf(f, -INFINITY);
+    return (double)below >= value ? below : f;
 }
 
 /* One value's surface, appended to m->out. */
@@ -264,6 +411,7 @@ static int extract_value(march *m, tpk_diag *diag)
         if (m->corners->emit(m->corners->user, m->in, m->value, &m->corner_key, &triangles, diag) != 0)
             return -1;
     } else {
+        m->threshold = float_at_or_above(m->value);
         memset(m->worker_first, 0, sizeof m->worker_first);
         tpk_parallel_for(tets, m->threads, count_range, m);
         for (int w = 0; w < m->threads; w++)
@@ -276,26 +424,21 @@ static int extract_value(march *m, tpk_diag *diag)
         return tpk_diag_fail(diag, "the isosurface of %g has %lld triangles; more than 2^31 - 1 triangles or vertices "
                              "in all do not fit the outputs' 32-bit indices", m->value, (long long)triangles);
     }
-    size_t c1 = (size_t)(corners ? corners : 1);
-    if (!m->corners)
-        m->corner_key = malloc(c1 * sizeof *m->corner_key);
-    m->order = malloc(c1 * sizeof *m->order);
-    m->vertex_first = malloc((c1 + 1) * sizeof *m->vertex_first);
-    m->corner_vertex = malloc(c1 * sizeof *m->corner_vertex);
-    m->tri_normal = malloc(c1 * sizeof *m->tri_normal);
-    if (!m->corner_key || !m->order || !m->vertex_first || !m->corner_vertex || !m->tri_normal)
+    if (grow((void **)&o->tri, 3 * (o->triangle_count + triangles), sizeof(uint32_t)))
         goto fail;
-    if (!m->corners)
-        tpk_parallel_for(tets, m->threads, emit_range, m);
-    int64_t vertices = number_vertices(m, corners);
+    int64_t vertices = number_vertices(m, corners, o->tri + 3 * o->triangle_count);
     if (vertices < 0 || o->vertex_count + vertices > INT32_MAX)
         goto fail;
-    if (grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
+    size_t v1 = (size_t)(vertices ? vertices : 1);
+    m->vertex_p = tpk_alloc_large(3 * v1 * sizeof *m->vertex_p);
+    m->normal_sum = tpk_alloc_large(3 * v1 * sizeof *m->normal_sum);
+    if (!m->vertex_p || !m->normal_sum || grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
         goto fail;
     m->vertex_base = o->vertex_count;
     m->triangle_base = o->triangle_count;
-    tpk_parallel_for(triangles, tpk_threads_for(triangles, m->threads, 4096), triangle_range, m);
     tpk_parallel_for(vertices, tpk_threads_for(vertices, m->threads, 4096), vertex_range, m);
+    sum_normals(m, triangles);
+    tpk_parallel_for(vertices, tpk_threads_for(vertices, m->threads, 4096), normal_range, m);
     o->vertex_count += vertices;
     o->triangle_count += triangles;
     o->value_triangles[o->value_count] = triangles;
@@ -315,6 +458,14 @@ int tpk_iso_extract(const tpk_iso_input *in, const double *values, int value_cou
     return tpk_iso_extract_from(in, values, value_count, threads, NULL, out, diag);
 }
 
+static void free_march(march *m)
+{
+    free(m->cases);
+    free(m->head);
+    free(m->hubs.keys);
+    free(m->hubs.edges);
+}
+
 int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int value_count, int threads,
                          const tpk_iso_corners *corners, tpk_iso_surface *out, tpk_diag *diag)
 {
@@ -323,6 +474,9 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
         return tpk_diag_fail(diag, "iso: %d values given; 1 to %d are allowed", value_count, TPK_ISO_MAX_VALUES);
     if (in->vertex_count > UINT32_MAX)
         return tpk_diag_fail(diag, "iso: %lld vertices; at most 2^32 - 1", (long long)in->vertex_count);
+    for (int i = 0; i < value_count; i++)
+        if (!isfinite(values[i]))
+            return tpk_diag_fail(diag, "iso: value %g is not a finite number", values[i]);
     if (in->colors && !(out->color = malloc(sizeof *out->color)))
         return tpk_diag_fail(diag, "out of memory");
     march m;
@@ -330,25 +484,27 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
     m.in = in;
     m.out = out;
     m.corners = corners;
-    if (!corners && !(m.cases = malloc((size_t)(in->tet_count ? in->tet_count : 1)))) {
+    m.head = tpk_alloc_large(sizeof *m.head * (size_t)(in->vertex_count ? in->vertex_count : 1));
+    if (m.head)
+        memset(m.head, 0xff, sizeof *m.head * (size_t)in->vertex_count); /* EDGE_NONE */
+    if (!m.head || (!corners && !(m.cases = tpk_alloc_large((size_t)(in->tet_count ? in->tet_count : 1))))) {
+        free_march(&m);
         tpk_iso_surface_free(out);
         return tpk_diag_fail(diag, "out of memory for the cases of %lld tets", (long long)in->tet_count);
     }
     m.threads = tpk_threads_for(in->tet_count, tpk_thread_count(threads), 65536);
+    for (int c = 0; c < 16; c++)
+        for (int k = 0; k < 6; k++)
+            m.crossed[c] |= (uint8_t)((((c >> tet_edges[k][0]) ^ (c >> tet_edges[k][1])) & 1) << k);
     for (int i = 0; i < value_count; i++) {
         m.value = values[i];
-        if (!isfinite(values[i])) {
-            free(m.cases);
-            tpk_iso_surface_free(out);
-            return tpk_diag_fail(diag, "iso: value %g is not a finite number", values[i]);
-        }
         if (extract_value(&m, diag) != 0) {
-            free(m.cases);
+            free_march(&m);
             tpk_iso_surface_free(out);
             return -1;
         }
     }
-    free(m.cases);
+    free_march(&m);
     return 0;
 }
 

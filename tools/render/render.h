@@ -194,8 +194,13 @@ typedef struct tpk_render_options {
  * the isosurface is sparse: where more than TPK_RENDER_CULL_ACTIVE of the BVH's leaves hold an iso value,
  * every ray meets the surface a few tets after it enters, and marching is faster (measured on the
  * 998k-tet grid of bench/make_grid_vtk.py 55, 512x512: culling 4.1x faster at 0.5% active leaves,
- * break-even near 10%, 2x slower at 35%), so the renderer marches. The --json output says which
- * (iso_culling). TETPACK_ISO_CULLING in the environment: 0 always marches, 1 always culls (benchmarks
+ * break-even near 10%, 2x slower at 35%), so the renderer marches. Building the BVH to count its
+ * leaves costs more than the frame on a large mesh (10.4M tets: 2.6 CPU-seconds, most of it recovering
+ * the tets' vertices from Tet16), so a glance at the field comes first: where more than
+ * TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices (spatially compact along the file's
+ * Hilbert order) hold an iso value, the surface is dense beyond doubt (on grid 55 such runs hold a value
+ * about 0.8 times as often as leaves do) and the renderer marches without building it. The --json
+ * output says which (iso_culling). TETPACK_ISO_CULLING in the environment: 0 always marches, 1 always culls (benchmarks
  * compare the two), unset decides as above.
  *
  * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
@@ -214,6 +219,7 @@ int tpk_render_iso_only(const tpk_render_options *opt, int has_point_scalars);
 /* TETPACK_ISO_CULLING: -1 unset (decide by TPK_RENDER_CULL_ACTIVE), 0 never, 1 always. */
 int tpk_render_culling_wanted(void);
 #define TPK_RENDER_CULL_ACTIVE 0.1
+#define TPK_RENDER_DENSE_RUNS 0.2
 
 /* width 800, height 600, integration 0, threads all, background opaque dark gray (0.1, 0.1, 0.1, 1);
  * the camera, tf and range are left zero for the caller. */

@@ -270,6 +270,10 @@ static int setup_job(render_job *job, int has_point_scalars, double diagonal, co
     job->opt = opt;
     job->tet_scalars = opt->tet_scalars;
     job->has_scalars = has_point_scalars || opt->tet_scalars != NULL;
+    job->clear_volume = opt->tf && opt->integration != TPK_INTEGRATION_SAMPLED &&
+                        opt->integration != TPK_INTEGRATION_MIDPOINT;
+    for (int i = 0; opt->tf && i < opt->tf->count; i++)
+        job->clear_volume &= opt->tf->points[i].a == 0.0;
     job->range_min = setup.range_min;
     job->inv_range = setup.inv_range;
     job->unit = setup.unit;
@@ -286,6 +290,28 @@ static int setup_job(render_job *job, int has_point_scalars, double diagonal, co
     job->tan_half_y = setup.basis.tan_half_y;
     job->tan_half_x = setup.basis.tan_half_x;
     return 0;
+}
+
+/* ISO-ONLY RAYS' glance (render.h): more than TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices
+ * hold one of the values. */
+static int dense_at_a_glance(const tpk_mesh_arrays *mesh, const double *values, int count)
+{
+    const int64_t n = (int64_t)mesh->vertex_count, run = 8;
+    int64_t runs = 0, holding = 0;
+    for (int64_t first = 0; first < n; first += run, runs++) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (int64_t v = first; v < first + run && v < n; v++) {
+            float s = mesh->scalars[v];
+            lo = s < lo ? s : lo;
+            hi = s > hi ? s : hi;
+        }
+        for (int j = 0; j < count; j++)
+            if (values[j] >= lo && values[j] <= hi) {
+                holding++;
+                break;
+            }
+    }
+    return runs > 0 && (double)holding > TPK_RENDER_DENSE_RUNS * (double)runs;
 }
 
 /* The rows on all threads, once the job's marcher (or part set) and options are in place. */
@@ -369,7 +395,8 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
     }
     tpk_range_bvh *range = NULL;
     int culling = tpk_render_culling_wanted();
-    if (rc == 0 && culling != 0 && tpk_render_iso_only(opt, mesh->scalars != NULL)) {
+    if (rc == 0 && culling != 0 && tpk_render_iso_only(opt, mesh->scalars != NULL) &&
+        (culling > 0 || !dense_at_a_glance(mesh, opt->iso, opt->iso_count))) {
         r = tpk_range_bvh_create(&range, marcher);
         if (r != TPK_OK)
             rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));

@@ -94,7 +94,8 @@ static void integrate_sampled(ray_state *ray, double length, double s0, double s
 
 void ri_integrate(ray_state *ray, double length, double u0, double u1)
 {
-    if (!(length > 0))
+    /* a clear volume: integrate_exact's every stretch has depth 0 (or NaN) and returns untouched */
+    if (!(length > 0) || ray->job->clear_volume)
         return;
     switch (ray->job->opt->integration) {
     case TPK_INTEGRATION_SAMPLED: integrate_sampled(ray, length, u0, u1); break;

@@ -21,6 +21,7 @@ typedef struct render_job {
                                    range culling, not by marching every tet */
     const float *tet_scalars;  /* opt->tet_scalars (a tet field) or NULL */
     int has_scalars;           /* a point or a tet field */
+    int clear_volume;          /* exact integration of a TF with opacity 0 everywhere: a stretch adds nothing */
     double range_min;
     double inv_range;          /* 1 / (range_max - range_min), 0 when the range is empty */
     double unit, inv_unit;     /* unit_distance and its inverse */
