@@ -608,6 +608,66 @@ TPK_TEST(vertex_occlusion_render)
     fx_free(&m);
 }
 
+/* The vertex cache kept across frames (tpk_vertex_cache, view's CPU frames): every frame byte for byte
+ * tpk_render_cpu's, casting nothing when the camera moves under a fixed light, S alone (one ray per
+ * vertex) under a headlight, A alone (ao_rays per vertex) when the AO radius changes, both when the TF
+ * changes; and an update that changes nothing says so. */
+static void cached_frame(const tpk_mesh_arrays *arrays, const tpk_render_options *opt, tpk_vertex_cache *c,
+                         uint64_t want_rays, const char *what)
+{
+    uint8_t *kept = malloc(N), *fresh = malloc(N);
+    tpk_render_stats st;
+    tpk_diag diag = {0};
+    CHECK(kept && fresh);
+    CHECK_MSG(tpk_render_cpu_cached(arrays, opt, kept, c, &st, &diag) == 0, "%s: %s", what, diag.message);
+    CHECK_MSG(tpk_render_cpu(arrays, opt, fresh, NULL, &diag) == 0, "%s: %s", what, diag.message);
+    CHECK_MSG(memcmp(kept, fresh, N) == 0, "%s: the kept cache's picture differs", what);
+    CHECK_MSG(st.secondary_rays == want_rays, "%s: %llu secondary rays, expected %llu", what,
+              (unsigned long long)st.secondary_rays, (unsigned long long)want_rays);
+    free(kept);
+    free(fresh);
+}
+
+TPK_TEST(vertex_cache_kept_across_frames)
+{
+    fx_mesh m;
+    CHECK(fx_render_grid(&m, 1) == 0);
+    tpk_transfer_function tf;
+    tpk_diag diag = {0};
+    CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
+    tpk_render_options opt;
+    const double eye[3] = {17, -5, 12};
+    grid_options(&opt, &tf, eye);
+    opt.unit_distance = 4;
+    opt.occlusion = TPK_OCCLUSION_VERTEX;
+    opt.shading = opt.shadows = 1;
+    opt.ao_rays = 4;
+    opt.ao_radius = 3;
+    opt.have_light = 1;
+    opt.light[0] = 30, opt.light[1] = 1.5, opt.light[2] = 20;
+    tpk_mesh_arrays arrays = fx_arrays(&m, TPK_LAYOUT_TET16);
+    const uint64_t n = arrays.vertex_count;
+    tpk_vertex_cache *c = tpk_vertex_cache_create();
+    CHECK(c != NULL);
+    cached_frame(&arrays, &opt, c, 5 * n, "first frame");
+    opt.camera.eye[0] += 1.5;
+    cached_frame(&arrays, &opt, c, 0, "camera move, fixed light");
+    opt.have_light = 0;
+    cached_frame(&arrays, &opt, c, n, "headlight");
+    opt.camera.eye[2] -= 2;
+    cached_frame(&arrays, &opt, c, n, "headlight, camera move");
+    opt.ao_radius = 2;
+    cached_frame(&arrays, &opt, c, 4 * n, "AO radius");
+    opt.range_max = 9;
+    cached_frame(&arrays, &opt, c, 5 * n, "range");
+    int changed = 1;
+    tpk_render_stats st;
+    CHECK(tpk_vertex_cache_update(c, &arrays, &opt, &changed, &st, &diag) == 0);
+    CHECK(changed == 0 && st.secondary_rays == 0);
+    tpk_vertex_cache_destroy(c);
+    fx_free(&m);
+}
+
 TPK_TEST(effects_bad_options)
 {
     fx_mesh m;

@@ -321,6 +321,26 @@ int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double d
  * compare with. Returns 0, or -1 with a message. */
 int tpk_render_vertex_cache(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, float *s, float *a,
                             tpk_render_stats *stats, tpk_diag *diag);
+/* The vertex cache kept across frames (render_cache.c): each half (S, A) is cast again only when an input
+ * of that half (OCCLUSION AT VERTICES: the mesh and field, TF, range, unit distance, integration, iso
+ * values and opacity, clip box, probes; the light and shadows for S; the AO rays and radius for A)
+ * differs from the last update's, and then alone (S without AO rays, A without shadow rays): a camera
+ * move under a fixed light casts nothing, a headlight S alone. The values are those
+ * tpk_render_vertex_cache gives, bit for bit. Used by the Vulkan renderer and by view's CPU frames. */
+typedef struct tpk_vertex_cache tpk_vertex_cache;
+tpk_vertex_cache *tpk_vertex_cache_create(void); /* NULL: out of memory */
+void tpk_vertex_cache_destroy(tpk_vertex_cache *cache);
+/* Bring the cache up to date for mesh and opt. *changed (may be NULL) = 1 when a half was cast again;
+ * cast (may be NULL) gets this update's tet steps and secondary rays (zeros when nothing was cast). The
+ * arrays stay valid until the next update or destroy. 0, or -1 with a message (the cache is then empty). */
+int tpk_vertex_cache_update(tpk_vertex_cache *cache, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
+                            int *changed, tpk_render_stats *cast, tpk_diag *diag);
+const float *tpk_vertex_cache_s(const tpk_vertex_cache *cache); /* vertex_count floats: S_v */
+const float *tpk_vertex_cache_a(const tpk_vertex_cache *cache); /* A_v */
+/* tpk_render_cpu whose --occlusion vertex takes its cache from `cache` (kept across calls), not one of its
+ * own made for the frame; cache NULL: tpk_render_cpu. stats counts the rays this frame cast. */
+int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                          tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag);
 /* The diagonal of the box of mesh->positions (0 for fewer than two distinct points). */
 double tpk_positions_diagonal(const tpk_mesh_arrays *mesh);
 

@@ -36,18 +36,9 @@ struct tpk_vk_renderer {
     double device_seconds, upload_seconds, pipeline_seconds; /* setup, pipelines compiled so far included */
     double frame_compile_seconds; /* of the last frame, the pipeline compiled in it */
     const tpk_vk_band_target *target; /* during a presenting frame: where the bands go, not the host */
-    /* --occlusion vertex: the cache last uploaded (S_v, A_v interleaved) and what each half depends on,
-     * so that a frame whose options leave a half's inputs unchanged (a camera move under a fixed light,
-     * or any camera move for A) does not cast its rays again */
-    float *cache_sa;
-    int cache_valid[2]; /* S, A */
-    struct cache_key { /* render.h OCCLUSION AT VERTICES: what the cache depends on (zeroed, then filled) */
-        tpk_transfer_function tf;
-        double range[2], unit_distance, iso[TPK_RENDER_MAX_ISO], iso_opacity, clip[6], light[3], ao_radius;
-        int integration, iso_count, clip_on, probe_count, shadows, ao_rays;
-        tpk_probe probes[TPK_RENDER_MAX_PROBES];
-        const float *tet_scalars;
-    } cache_key[2];
+    /* --occlusion vertex: the cache kept across frames (render.h tpk_vertex_cache), uploaded when it changes */
+    tpk_vertex_cache *cache;
+    float *cache_sa; /* S_v, A_v interleaved, as VERTEX_SA holds them */
 };
 typedef struct tpk_vk_renderer vk_render;
 
@@ -77,6 +68,7 @@ void tpk_vk_renderer_destroy(tpk_vk_renderer *v)
     for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++)
         tpk_vk_array_destroy(&v->ctx, &v->arrays[a]);
     tpk_vk_context_destroy(&v->ctx);
+    tpk_vertex_cache_destroy(v->cache);
     free(v->cache_sa);
     free(v);
 }
@@ -515,95 +507,47 @@ static VkPipeline frame_pipeline(vk_render *v, int effects, tpk_diag *diag)
     return pipeline;
 }
 
-/* What half `which` (0: S, 1: A) of the vertex cache depends on, for opt (render.h OCCLUSION AT
- * VERTICES): the light and shadows for S only, the AO rays and radius for A only. */
-static void cache_key_of(const tpk_render_options *opt, int which, struct cache_key *k)
-{
-    memset(k, 0, sizeof *k);
-    if (opt->tf) {
-        k->tf.count = opt->tf->count;
-        memcpy(k->tf.points, opt->tf->points, sizeof k->tf.points[0] * (size_t)opt->tf->count);
-    }
-    k->range[0] = opt->range_min, k->range[1] = opt->range_max;
-    k->unit_distance = opt->unit_distance;
-    k->integration = opt->integration;
-    k->iso_count = opt->iso_count;
-    memcpy(k->iso, opt->iso, sizeof k->iso);
-    k->iso_opacity = opt->iso_opacity;
-    k->clip_on = opt->clip;
-    if (opt->clip)
-        for (int i = 0; i < 3; i++)
-            k->clip[i] = opt->clip_min[i], k->clip[3 + i] = opt->clip_max[i];
-    k->probe_count = opt->probe_count;
-    memcpy(k->probes, opt->probes, sizeof k->probes[0] * (size_t)opt->probe_count);
-    k->tet_scalars = opt->tet_scalars;
-    if (which == 0) {
-        k->shadows = opt->shadows;
-        for (int i = 0; i < 3 && opt->shadows; i++) /* a headlight is the eye: it moves with the camera */
-            k->light[i] = opt->have_light ? opt->light[i] : opt->camera.eye[i];
-    } else {
-        k->ao_rays = opt->ao_rays;
-        k->ao_radius = opt->ao_rays > 0 ? opt->ao_radius : 0;
-    }
-}
-
-/* render.h OCCLUSION AT VERTICES: S_v and A_v of every vertex, computed by the CPU reference's own pass
- * (tpk_render_vertex_cache, on all cores) for this frame's light, TF, field and AO settings, into the
- * VERTEX_SA array; the shader interpolates them at each shade point as render_light.c does. A half whose
- * inputs are the last frame's is kept: S under a fixed light, A whatever the camera does; the other is
- * cast alone. Its rays and steps count into the frame's: those cast in this frame (all of them, the first
- * time, as on the CPU). */
+/* render.h OCCLUSION AT VERTICES: S_v and A_v of every vertex, by the CPU reference's own pass
+ * (tpk_render_vertex_cache, on all cores) through the cache kept across frames (tpk_vertex_cache: a half
+ * whose inputs did not change is not cast again), uploaded into the VERTEX_SA array when it changed; the
+ * shader interpolates them at each shade point as render_light.c does. The rays and steps cast in this
+ * frame count into the frame's (all of them the first time, as on the CPU). */
 static int vertex_cache(vk_render *v, const tpk_render_options *opt, uint64_t counts[2], tpk_diag *diag)
 {
     size_t n = (size_t)v->mesh.vertex_count;
-    struct cache_key key[2];
-    int stale[2];
-    for (int h = 0; h < 2; h++) {
-        cache_key_of(opt, h, &key[h]);
-        stale[h] = !v->cache_valid[h] || memcmp(&key[h], &v->cache_key[h], sizeof key[h]) != 0;
-    }
-    if (!stale[0] && !stale[1])
-        return 0;
-    float *s = malloc(sizeof *s * (n ? n : 1)), *a = malloc(sizeof *a * (n ? n : 1));
-    if (!v->cache_sa)
-        v->cache_sa = malloc(2 * sizeof *v->cache_sa * (n ? n : 1));
-    int rc = !s || !a || !v->cache_sa ? tpk_diag_fail(diag, "render: out of memory for the vertex cache") : 0;
+    if (!v->cache && !(v->cache = tpk_vertex_cache_create()))
+        return tpk_diag_fail(diag, "render: out of memory for the vertex cache");
+    if (!v->cache_sa && !(v->cache_sa = malloc(2 * sizeof *v->cache_sa * (n ? n : 1))))
+        return tpk_diag_fail(diag, "render: out of memory for the vertex cache");
     tpk_render_options cpu = *opt;
     cpu.threads = 0; /* all cores */
-    if (!stale[0])
-        cpu.shadows = 0; /* A alone */
-    if (!stale[1])
-        cpu.ao_rays = 0; /* S alone */
     tpk_render_stats st;
-    v->cache_valid[0] = v->cache_valid[1] = 0; /* until the upload is done */
+    int changed = 0;
+    if (tpk_vertex_cache_update(v->cache, &v->mesh, &cpu, &changed, &st, diag) != 0)
+        return -1;
+    counts[0] += st.tet_steps;
+    counts[1] += st.secondary_rays;
+    if (!changed)
+        return 0;
+    const float *s = tpk_vertex_cache_s(v->cache), *a = tpk_vertex_cache_a(v->cache);
+    for (size_t i = 0; i < n; i++)
+        v->cache_sa[2 * i] = s[i], v->cache_sa[2 * i + 1] = a[i];
+    tpk_vk_source src = {v->cache_sa, 8, NULL, NULL};
+    tpk_vk_stager stager;
+    memset(&stager, 0, sizeof stager);
+    int rc = 0;
+    if (v->ctx.staged && tpk_vk_stager_create(&v->ctx, 8 * (uint64_t)(n ? n : 1), &stager, diag) != 0)
+        rc = -1;
     if (rc == 0)
-        rc = tpk_render_vertex_cache(&v->mesh, &cpu, s, a, &st, diag);
-    if (rc == 0) {
-        for (size_t i = 0; i < n; i++) {
-            if (stale[0])
-                v->cache_sa[2 * i] = s[i];
-            if (stale[1])
-                v->cache_sa[2 * i + 1] = a[i];
-        }
-        counts[0] += st.tet_steps;
-        counts[1] += st.secondary_rays;
-        tpk_vk_source src = {v->cache_sa, 8, NULL, NULL};
-        tpk_vk_stager stager;
-        memset(&stager, 0, sizeof stager);
-        if (v->ctx.staged && tpk_vk_stager_create(&v->ctx, 8 * (uint64_t)(n ? n : 1), &stager, diag) != 0)
-            rc = -1;
-        if (rc == 0)
-            rc = tpk_vk_array_refill(&v->ctx, v->ctx.staged ? &stager : NULL, &src, n, &v->arrays[TPK_VK_ARRAY_VERTEX_SA],
-                                     diag);
-        if (rc == 0 && v->ctx.staged)
-            rc = tpk_vk_stager_finish(&v->ctx, &stager, diag);
-        tpk_vk_stager_destroy(&v->ctx, &stager);
+        rc = tpk_vk_array_refill(&v->ctx, v->ctx.staged ? &stager : NULL, &src, n, &v->arrays[TPK_VK_ARRAY_VERTEX_SA],
+                                 diag);
+    if (rc == 0 && v->ctx.staged)
+        rc = tpk_vk_stager_finish(&v->ctx, &stager, diag);
+    tpk_vk_stager_destroy(&v->ctx, &stager);
+    if (rc != 0) { /* the device holds neither: cast both again next time */
+        tpk_vertex_cache_destroy(v->cache);
+        v->cache = NULL;
     }
-    if (rc == 0)
-        for (int h = 0; h < 2; h++)
-            v->cache_key[h] = key[h], v->cache_valid[h] = 1;
-    free(s);
-    free(a);
     return rc;
 }
 

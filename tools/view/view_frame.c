@@ -81,7 +81,9 @@ int view_renderer_frame(view_renderer *r, const view_state *s, int width, int he
     if (r->raster)
         return tpk_iso_raster_frame(r->raster, &opt, rgba, stats, diag);
 #endif
-    return tpk_render_cpu(&s->mesh, &opt, rgba, stats, diag);
+    if (opt.occlusion == TPK_OCCLUSION_VERTEX && !r->cache && !(r->cache = tpk_vertex_cache_create()))
+        return tpk_diag_fail(diag, "view: out of memory for the vertex cache");
+    return tpk_render_cpu_cached(&s->mesh, &opt, rgba, r->cache, stats, diag);
 }
 
 int view_renderer_read(view_renderer *r, uint8_t *rgba, int width, int height, tpk_diag *diag)
@@ -101,6 +103,8 @@ void view_renderer_close(view_renderer *r)
     tpk_vk_renderer_destroy(r->vk);
     tpk_iso_raster_destroy(r->raster);
 #endif
+    tpk_vertex_cache_destroy(r->cache);
+    r->cache = NULL;
     r->present = NULL;
     r->vk = NULL;
     r->raster = NULL;
