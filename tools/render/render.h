@@ -196,7 +196,8 @@ typedef struct tpk_render_options {
  * 998k-tet grid of bench/make_grid_vtk.py 55, 512x512: culling 4.1x faster at 0.5% active leaves,
  * break-even near 10%, 2x slower at 35%), so the renderer marches. The --json output says which
  * (iso_culling). TETPACK_ISO_CULLING in the environment: 0 always marches, 1 always culls (benchmarks
- * compare the two), unset decides as above.
+ * compare the two), unset decides as above. The Vulkan renderer decides the same way and walks the same
+ * tree in its shader (render.comp's cull_trace), with the same pieces as its own marcher.
  *
  * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
  * the piece's m multiplying its rgb, as `integration` says. Exact: split where u crosses a TF control
