@@ -197,7 +197,8 @@ typedef struct tpk_render_options {
  * break-even near 10%, 2x slower at 35%), so the renderer marches. The --json output says which
  * (iso_culling). TETPACK_ISO_CULLING in the environment: 0 always marches, 1 always culls (benchmarks
  * compare the two), unset decides as above. The Vulkan renderer decides the same way and walks the same
- * tree in its shader (render.comp's cull_trace), with the same pieces as its own marcher.
+ * tree in its shader (render.comp's cull_trace), with the same pieces as its own marcher; on a CPU
+ * device (lavapipe) it marches unless told to cull, as the walk costs more there than it saves.
  *
  * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
  * the piece's m multiplying its rgb, as `integration` says. Exact: split where u crosses a TF control

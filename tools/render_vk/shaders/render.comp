@@ -1349,8 +1349,8 @@ int report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
 // TPK_VK_RANGE_LEAF consecutive tets from node P.shell_info.z on), one query at a time: the first piece
 // after the last one handed on in (t_in, t_out, tet) order, over the nodes whose range holds a value and
 // whose box the ray meets before the best piece found, nearer child first. The walk needs no stack: the
-// parent of n is n / 2 and the nearer child is computed again on the way up, so a query's whole state is
-// a node and where it came from (CullTrace), and a sliced ray stops after any node. Each candidate tet's
+// parent of n is n / 2 and a bit per depth says which child was entered first, so a query's whole state
+// is a node, where it came from and those bits (CullTrace), and a sliced ray stops after any node. Each candidate tet's
 // piece is computed as the marcher computes it (face_weights, hit_t, hit_scalar from each face's
 // smallest id), so report() gets the same pieces, bit for bit, and the picture is the same.
 
@@ -1358,7 +1358,8 @@ struct CullTrace {
     float t_prev, t_out_prev; // the last piece handed on (-inf: none yet)
     int tet_prev;
     uint node;     // the query's node
-    uint from;     // 0: node is entered from above; else the child the walk came up from
+    uint from;     // 0: node was entered from above (the ray meets its box); else the child the walk came up from
+    uint trail;    // bit d: at depth d (node n's depth is findMSB(n)) the walk went right first
     int best;      // the best piece of the query so far (tet), -1: none
     float best_in, best_out;
     bool in_query, have_piece; // have_piece: `best` is to be handed on (again, after a pause)
@@ -1397,14 +1398,6 @@ float cull_node_enter(uint n, float t_low, float t_high)
         tf = min(tf, max(t0, t1));
     }
     return meets && tn <= tf && tf >= t_low ? tn : INF;
-}
-
-// The child of n the walk enters first: the one whose box the ray enters first (the left on a tie).
-// The same numbers on the way down and up, since t_low is fixed for the query.
-uint cull_near_child(uint n, float t_low)
-{
-    const float t0 = cull_node_enter(2u * n, t_low, INF), t1 = cull_node_enter(2u * n + 1u, t_low, INF);
-    return t1 < t0 ? 2u * n + 1u : 2u * n;
 }
 
 // The piece of tet `tet` (corners q, projected p, scalars s) as the marcher computes it (range_bvh.c's
@@ -1535,6 +1528,7 @@ CullTrace cull_start()
     c.tet_prev = -1;
     c.node = 1u;
     c.from = 0u;
+    c.trail = 0u;
     c.best = -1;
     c.best_in = c.best_out = INF;
     c.in_query = false;
@@ -1542,28 +1536,33 @@ CullTrace cull_start()
     return c;
 }
 
-// One node of the query: enter it (a leaf's tets tested, an inner node's nearer child next) or, coming up
-// from a child, go to the other child or further up. Returns false when the query is over.
+// One node of the query, whose box the ray meets: a leaf's tets tested, or the children's boxes tested
+// and the one the ray enters first entered (the left on a tie); coming up from the first child, the
+// other one tested again (the best piece may have moved closer) and entered, else further up. Returns
+// false when the query is over.
 bool cull_query_step(inout CullTrace c)
 {
     const float margin = P.up.w; // boxes against float t: the box padding again
     const float t_low = max(c.t_prev, t_min_clip) - margin;
-    const uint n = c.node, leaf_base = uint(P.shell_info.z);
+    const float t_high = min(t_max_clip, c.best >= 0 ? c.best_in : INF) + margin;
+    const uint n = c.node, leaf_base = uint(P.shell_info.z), depth_bit = 1u << uint(findMSB(n));
     bool up = true;
     if (c.from == 0u) {
-        const float t_high = min(t_max_clip, c.best >= 0 ? c.best_in : INF) + margin;
-        if (cull_node_enter(n, t_low, t_high) != INF) {
-            if (n >= leaf_base)
-                cull_leaf(n, c);
-            else {
-                c.node = cull_near_child(n, t_low);
+        if (n >= leaf_base)
+            cull_leaf(n, c);
+        else {
+            const float t0 = cull_node_enter(2u * n, t_low, t_high), t1 = cull_node_enter(2u * n + 1u, t_low, t_high);
+            if (min(t0, t1) != INF) {
+                const bool right = t1 < t0;
+                c.trail = right ? c.trail | depth_bit : c.trail & ~depth_bit;
+                c.node = right ? 2u * n + 1u : 2u * n;
                 up = false;
             }
         }
-    } else {
-        const uint near = cull_near_child(n, t_low);
-        if (c.from == near) {
-            c.node = near ^ 1u;
+    } else if (((c.from & 1u) != 0u) == ((c.trail & depth_bit) != 0u)) { // came up from the first child
+        const uint other = c.from ^ 1u;
+        if (cull_node_enter(other, t_low, t_high) != INF) {
+            c.node = other;
             c.from = 0u;
             up = false;
         }
@@ -1606,14 +1605,16 @@ bool cull_trace(inout CullTrace c)
                 break;
             continue;
         }
-        if (!c.in_query) {
+        work++;
+        if (!c.in_query) { // the root first (node 0: the ray misses it, the query is over)
             c.in_query = true;
-            c.node = 1u;
             c.from = 0u;
             c.best = -1;
+            c.node = cull_node_enter(1u, max(c.t_prev, t_min_clip) - P.up.w, t_max_clip + P.up.w) != INF ? 1u : 0u;
+            if (c.node != 0u)
+                continue;
         }
-        work++;
-        if (cull_query_step(c))
+        if (c.node != 0u && cull_query_step(c))
             continue;
         c.in_query = false;
         if (c.best < 0)
@@ -1697,7 +1698,7 @@ void save_cull(uint index, CullTrace c)
     const uint at = index * uint(TPK_VK_STATE_VEC4);
     state[at + 0u] = vec4(c.t_prev, c.t_out_prev, c.best_in, c.best_out);
     state[at + 1u] = ibits(c.tet_prev, int(c.node), int(c.from), c.best);
-    state[at + 2u] = ibits((c.in_query ? 1 : 0) | (c.have_piece ? 2 : 0), 0, 0, 0);
+    state[at + 2u] = ibits((c.in_query ? 1 : 0) | (c.have_piece ? 2 : 0), int(c.trail), 0, 0);
 }
 
 CullTrace load_cull(uint index)
@@ -1716,6 +1717,7 @@ CullTrace load_cull(uint index)
     c.best = w1.w;
     c.in_query = (w2.x & 1) != 0;
     c.have_piece = (w2.x & 2) != 0;
+    c.trail = uint(w2.y);
     return c;
 }
 
