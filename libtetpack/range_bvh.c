@@ -24,7 +24,7 @@
 #include "internal_march.h"
 #include "tetpack_format.h"
 
-#define TPK_RANGE_LEAF 8
+#define TPK_RANGE_LEAF TPK_RANGE_BVH_LEAF
 #define HEAP_STACK 64
 
 typedef struct range_node {
@@ -156,6 +156,34 @@ double tpk_range_bvh_active(const tpk_range_bvh *b, const double *values, int co
     for (int64_t i = 0; i < b->level_count[0]; i++)
         active += holds_value(b->nodes[i].smin, b->nodes[i].smax, values, count);
     return (double)active / (double)b->level_count[0];
+}
+
+int64_t tpk_range_bvh_heap(const tpk_range_bvh *b, float *nodes)
+{
+    if (!b)
+        return 0;
+    int64_t leaves = b->levels ? b->level_count[0] : 0, base = 1;
+    while (base < leaves)
+        base *= 2;
+    if (!nodes)
+        return base;
+    static const float empty[8] = {INFINITY, INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    for (int64_t n = 0; n < 2 * base; n++)
+        memcpy(nodes + 8 * n, empty, sizeof empty);
+    /* level l of the implicit tree (leaves l = 0) starts at heap node base >> l: the same pairs */
+    for (int l = 0; l < b->levels; l++)
+        for (int64_t i = 0; i < b->level_count[l]; i++) {
+            const range_node *r = &b->nodes[b->level_start[l] + i];
+            float *d = nodes + 8 * ((base >> l) + i);
+            d[0] = r->lo[0], d[1] = r->lo[1], d[2] = r->lo[2], d[3] = r->smin;
+            d[4] = r->hi[0], d[5] = r->hi[1], d[6] = r->hi[2], d[7] = r->smax;
+        }
+    return base;
+}
+
+const int32_t *tpk_range_bvh_tets(const tpk_range_bvh *b)
+{
+    return b ? b->tets : NULL;
 }
 
 /* ---- One ray ------------------------------------------------------------------------------------- */

@@ -311,6 +311,19 @@ void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
 /* The share (0..1) of its leaves (runs of 8 tets) whose range holds one of values[0 .. count): where it is
  * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */
 double tpk_range_bvh_active(const tpk_range_bvh *bvh, const double *values, int count);
+/* Tets per leaf: leaf j holds tets [TPK_RANGE_BVH_LEAF * j, TPK_RANGE_BVH_LEAF * (j + 1)). */
+#define TPK_RANGE_BVH_LEAF 8
+/* The same tree for a renderer that walks it elsewhere (a GPU), as a complete binary tree in heap order:
+ * node 1 is the root, node n's children are 2n and 2n + 1, leaf j is node L + j, where L, the power of
+ * two returned, is at least the leaf count. Each node is 8 floats: lo[3], the scalar min, hi[3], the
+ * scalar max, as the BVH holds them (boxes and ranges rounded outward; the ray's box test adds 1e-6 of
+ * the mesh's extent, tpk_marcher_shell_bvh's extent, around them); node 0 and the nodes the tree does not
+ * have (past the last leaf) are empty: lo and min +inf, hi and max -inf. nodes: 16 * L floats, or NULL
+ * to ask for L. Returns 0 for NULL bvh. */
+int64_t tpk_range_bvh_heap(const tpk_range_bvh *bvh, float *nodes);
+/* The vertices of every tet, 4 per tet in positive order (tpk_recover_tets), as the BVH's candidate tests
+ * read them; owned by bvh. */
+const int32_t *tpk_range_bvh_tets(const tpk_range_bvh *bvh);
 
 /* The pieces of tpk_march_ray(marcher, org, dir, tmin, tmax) that cross one of values[0 .. count) by
  * the renderers' rule (scalar_in < v <= scalar_out, or scalar_in > v >= scalar_out), in increasing t,

@@ -1046,3 +1046,64 @@ TPK_TEST(culled_iso_refuses_and_stops)
     tpk_marcher_destroy(marcher);
     fx_free(&m);
 }
+
+/* tpk_range_bvh_heap (what the Vulkan renderer uploads): the tree in heap order, each inner node the
+ * union of its two children, each leaf holding its tets' corners and scalar range, the rest empty; the
+ * tets as tpk_range_bvh_tets gives them, positive (the mesh's own tets, in order). */
+TPK_TEST(range_bvh_heap_is_the_tree)
+{
+    fx_mesh m;
+    CHECK(load_real("sfepy/cylinder.vtk", &m) == 0);
+    set_field(&m, 0);
+    tpk_marcher *marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    tpk_range_bvh *bvh = NULL;
+    CHECK(marcher && tpk_range_bvh_create(&bvh, marcher) == TPK_OK);
+    const int64_t leaves = (m.tet_count + TPK_RANGE_BVH_LEAF - 1) / TPK_RANGE_BVH_LEAF;
+    const int64_t base = tpk_range_bvh_heap(bvh, NULL);
+    CHECK_MSG(base >= leaves && base < 2 * leaves && (base & (base - 1)) == 0, "base %lld for %lld leaves",
+              (long long)base, (long long)leaves);
+    float *nodes = malloc(sizeof *nodes * 16 * (size_t)base);
+    CHECK(nodes && tpk_range_bvh_heap(bvh, nodes) == base);
+    const int32_t *tets = tpk_range_bvh_tets(bvh);
+    CHECK(tets != NULL);
+    for (int64_t t = 0; t < m.tet_count; t++) { /* the file's tet t, its corners in an even permutation */
+        int same = 0, parity = 0;
+        for (int i = 0; i < 4; i++)
+            for (int j = 0; j < 4; j++)
+                same += tets[4 * t + i] == m.tets[4 * t + j];
+        int perm[4];
+        for (int i = 0; i < 4; i++)
+            for (int j = 0; j < 4; j++)
+                if (tets[4 * t + i] == m.tets[4 * t + j])
+                    perm[i] = j;
+        for (int i = 0; i < 4; i++)
+            for (int j = i + 1; j < 4; j++)
+                parity ^= perm[i] > perm[j];
+        CHECK_MSG(same == 4 && parity == 0, "tet %lld", (long long)t);
+    }
+    for (int64_t n = 2 * base - 1; n >= 1; n--) {
+        const float *d = nodes + 8 * n;
+        if (n >= base && n - base >= leaves) {
+            CHECK(d[0] == INFINITY && d[3] == INFINITY && d[4] == -INFINITY && d[7] == -INFINITY);
+            continue;
+        }
+        if (n >= base) { /* a leaf: its tets inside */
+            for (int64_t t = (n - base) * TPK_RANGE_BVH_LEAF; t < (n - base + 1) * TPK_RANGE_BVH_LEAF && t < m.tet_count; t++)
+                for (int i = 0; i < 4; i++) {
+                    int32_t v = tets[4 * t + i];
+                    for (int k = 0; k < 3; k++)
+                        CHECK(d[k] <= m.positions[3 * v + k] && m.positions[3 * v + k] <= d[4 + k]);
+                    CHECK(d[3] < m.scalars[v] && m.scalars[v] < d[7]);
+                }
+            continue;
+        }
+        const float *a = nodes + 16 * n, *b = a + 8; /* the children 2n, 2n + 1 */
+        for (int k = 0; k < 4; k++)
+            CHECK_MSG(d[k] == fminf(a[k], b[k]) && d[4 + k] == fmaxf(a[4 + k], b[4 + k]), "node %lld", (long long)n);
+    }
+    CHECK(nodes[0] == INFINITY && nodes[7] == -INFINITY); /* node 0: unused */
+    free(nodes);
+    tpk_range_bvh_destroy(bvh);
+    tpk_marcher_destroy(marcher);
+    fx_free(&m);
+}

@@ -201,7 +201,9 @@ typedef struct tpk_render_options {
  * Hilbert order) hold an iso value, the surface is dense beyond doubt (on grid 55 such runs hold a value
  * about 0.8 times as often as leaves do) and the renderer marches without building it. The --json
  * output says which (iso_culling). TETPACK_ISO_CULLING in the environment: 0 always marches, 1 always culls (benchmarks
- * compare the two), unset decides as above.
+ * compare the two), unset decides as above. The Vulkan renderer decides the same way and walks the same
+ * tree in its shader (render.comp's cull_trace), with the same pieces as its own marcher; on a CPU
+ * device (lavapipe) it marches unless told to cull, as the walk costs more there than it saves.
  *
  * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
  * the piece's m multiplying its rgb, as `integration` says. Exact: split where u crosses a TF control
@@ -218,6 +220,9 @@ typedef struct tpk_render_options {
 int tpk_render_iso_only(const tpk_render_options *opt, int has_point_scalars);
 /* TETPACK_ISO_CULLING: -1 unset (decide by TPK_RENDER_CULL_ACTIVE), 0 never, 1 always. */
 int tpk_render_culling_wanted(void);
+/* The ISO-ONLY RAYS glance: 1 when more than TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices
+ * of mesh's point field hold one of the values (a dense surface: march without building the tree). */
+int tpk_render_iso_dense(const tpk_mesh_arrays *mesh, const double *values, int count);
 #define TPK_RENDER_CULL_ACTIVE 0.1
 #define TPK_RENDER_DENSE_RUNS 0.2
 

@@ -294,7 +294,7 @@ static int setup_job(render_job *job, int has_point_scalars, double diagonal, co
 
 /* ISO-ONLY RAYS' glance (render.h): more than TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices
  * hold one of the values. */
-static int dense_at_a_glance(const tpk_mesh_arrays *mesh, const double *values, int count)
+int tpk_render_iso_dense(const tpk_mesh_arrays *mesh, const double *values, int count)
 {
     const int64_t n = (int64_t)mesh->vertex_count, run = 8;
     int64_t runs = 0, holding = 0;
@@ -408,7 +408,7 @@ int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options 
     tpk_range_bvh *range = NULL;
     int culling = tpk_render_culling_wanted();
     if (rc == 0 && culling != 0 && tpk_render_iso_only(opt, mesh->scalars != NULL) &&
-        (culling > 0 || !dense_at_a_glance(mesh, opt->iso, opt->iso_count))) {
+        (culling > 0 || !tpk_render_iso_dense(mesh, opt->iso, opt->iso_count))) {
         r = tpk_range_bvh_create(&range, marcher);
         if (r != TPK_OK)
             rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));

@@ -120,6 +120,9 @@ typedef struct tpk_vk_array {
     int shift;
 } tpk_vk_array;
 
+/* shaders/vk_layout.h's TPK_VK_TET_FACES is tpk_tet_faces (format/tetpack_format.h): 1, else 0. */
+int tpk_vk_tet_faces_match(void);
+
 /* The largest texel count a binding may hold on this device for texels of `texel_size` bytes: a power
  * of two within maxTexelBufferElements and maxMemoryAllocationSize, lowered by TPK_VK_SPLIT_BYTES. */
 uint64_t tpk_vk_part_texels(const tpk_vk_context *ctx, uint32_t texel_size);
@@ -258,6 +261,12 @@ int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_v
                            const tpk_vk_buffer *counters, const tpk_vk_buffer *state, tpk_vk_pipeline *out,
                            tpk_diag *diag);
 void tpk_vk_pipeline_destroy(const tpk_vk_context *ctx, tpk_vk_pipeline *p);
+/* Bind array `array` (TPK_VK_ARRAY_*) anew, uploaded after the pipeline was created (the range BVH, on
+ * the first frame that culls): its descriptors and its split constants for pipelines made from now on.
+ * Only the TPK_VK_EFFECT_CULL pipelines read the range arrays, so none of those may exist yet (-1 with
+ * a message). The set must not be in use by a pending submission. */
+int tpk_vk_pipeline_rebind(const tpk_vk_context *ctx, tpk_vk_pipeline *p, int array, const tpk_vk_array *a,
+                           tpk_diag *diag);
 /* The edge test of the FP64 variant for this device: TPK_VK_EXACT_FILTER or TPK_VK_EXACT_ALWAYS. */
 int tpk_vk_exact_mode(const tpk_vk_context *ctx);
 /* Whether rays run in slices (vk_layout.h, TPK_VK_SPEC_SLICED): on CPU devices, whose llvmpipe cuts

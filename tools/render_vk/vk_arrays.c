@@ -27,6 +27,18 @@ _Static_assert(TPK_VK_LAYOUT_TET32 == TPK_LAYOUT_TET32 && TPK_VK_LAYOUT_TET20 ==
                    TPK_VK_LAYOUT_TET16 == TPK_LAYOUT_TET16,
                "layout ids as tetpack.h says");
 
+_Static_assert(TPK_VK_RANGE_LEAF == TPK_RANGE_BVH_LEAF, "range BVH leaf as tetpack.h says");
+
+int tpk_vk_tet_faces_match(void)
+{
+    static const int flat[12] = {TPK_VK_TET_FACES};
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < 3; i++)
+            if (flat[3 * k + i] != tpk_tet_faces[k][i])
+                return 0;
+    return 1;
+}
+
 static uint64_t floor_pow2(uint64_t x)
 {
     uint64_t p = 1;

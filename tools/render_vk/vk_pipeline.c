@@ -182,6 +182,28 @@ static int write_set(const tpk_vk_context *ctx, const tpk_vk_array arrays[], con
     return 0;
 }
 
+int tpk_vk_pipeline_rebind(const tpk_vk_context *ctx, tpk_vk_pipeline *p, int array, const tpk_vk_array *a,
+                           tpk_diag *diag)
+{
+    for (int e = 0; e < TPK_VK_EFFECT_MASKS; e++)
+        if (p->pipelines[e] && (e & TPK_VK_EFFECT_CULL))
+            return tpk_diag_fail(diag, "vulkan: array %d replaced after a pipeline that reads it was made", array);
+    VkWriteDescriptorSet w[TPK_VK_MAX_PARTS];
+    memset(w, 0, sizeof w);
+    for (int part = 0; part < TPK_VK_MAX_PARTS; part++) {
+        w[part].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+        w[part].dstSet = p->set;
+        w[part].dstBinding = (uint32_t)(TPK_VK_BIND_ARRAY(array) + part);
+        w[part].descriptorCount = 1;
+        w[part].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+        w[part].pTexelBufferView = &a->views[part < a->part_count ? part : 0];
+    }
+    vkUpdateDescriptorSets(ctx->device, TPK_VK_MAX_PARTS, w, 0, NULL);
+    p->spec[TPK_VK_SPEC_PARTS(array)] = a->part_count;
+    p->spec[TPK_VK_SPEC_SHIFT(array)] = a->shift;
+    return 0;
+}
+
 int tpk_vk_pipeline_create(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[],
                            const tpk_vk_buffer *params, const tpk_vk_buffer *pixels,
                            const tpk_vk_buffer *counters, const tpk_vk_buffer *state, tpk_vk_pipeline *out,

@@ -122,7 +122,7 @@ int MARCH_RUN(inout MarchRun m)
         float piece_in = m.s_in, piece_out = s_out;
         if (P.mode.w == 2) // a tet field: constant in the tet
             piece_in = piece_out = fetch_tet_scalars(uint(tet)).x;
-        const int said = MARCH_REPORT(h.t, t_out, piece_in, piece_out, ivec4(a, b, c, d));
+        const int said = MARCH_REPORT(h.t, t_out, piece_in, piece_out, face_from_first(h, d));
         if (said == MARCH_PAUSE) {
             m.step--; // this tet is stepped again on the next call
             steps_taken--;

@@ -10,6 +10,9 @@
  *   shell faces (BVH order)    RGBA32I, one texel per face: a, b, c, t
  *   shell BVH nodes            RGBA32UI, two texels per node: lo xyz (float bits), first | hi xyz, count
  *   tet scalars (tet field)    R32F, one texel per tet
+ *   range BVH nodes            RGBA32F, two texels per node in heap order: lo xyz, scalar min | hi xyz,
+ *                              scalar max (tpk_range_bvh_heap; iso-only frames that cull, else one texel)
+ *   range BVH tets             RGBA32I, one texel per tet: its vertices in positive order
  * An array larger than one binding is split into TPK_VK_MAX_PARTS bindings at most, each holding
  * 2^shift texels (the shift is a specialization constant), so texel i is texel i & (2^shift - 1) of
  * binding i >> shift. */
@@ -41,7 +44,9 @@
 #define TPK_VK_ARRAY_NODES 3
 #define TPK_VK_ARRAY_TET_SCALARS 4
 #define TPK_VK_ARRAY_VERTEX_SA 5 /* --occlusion vertex: S_v and A_v per vertex (render.h OCCLUSION AT VERTICES) */
-#define TPK_VK_ARRAY_COUNT 6
+#define TPK_VK_ARRAY_RANGE_NODES 6 /* range culling of iso-only rays (render.h ISO-ONLY RAYS) */
+#define TPK_VK_ARRAY_RANGE_TETS 7
+#define TPK_VK_ARRAY_COUNT 8
 
 #define TPK_VK_BIND_PARAMS 0 /* uniform block */
 #define TPK_VK_BIND_PIXELS 1 /* storage buffer: packed RGBA8 per pixel */
@@ -63,7 +68,13 @@
 #define TPK_VK_EFFECT_SHADOWS 4
 #define TPK_VK_EFFECT_AO 8
 #define TPK_VK_EFFECT_VERTEX 16 /* shadows and AO from the per-vertex cache: no secondary rays in the shader */
-#define TPK_VK_EFFECT_MASKS 32 /* pipelines per renderer, one per combination */
+#define TPK_VK_EFFECT_CULL 32 /* iso-only primary rays find their pieces in the range BVH, not by marching */
+#define TPK_VK_EFFECT_MASKS 64 /* pipelines per renderer, one per combination */
+
+/* The faces of a positive tet in outward order (tpk_tet_faces of format/tetpack_format.h, checked in
+ * vk_arrays.c): face k, opposite corner k, is corners [3k, 3k + 3). */
+#define TPK_VK_TET_FACES 1, 2, 3, 0, 3, 2, 0, 1, 3, 0, 2, 1
+#define TPK_VK_RANGE_LEAF 8 /* tets per leaf of the range BVH (TPK_RANGE_BVH_LEAF) */
 
 /* The shader is built twice: with TPK_VK_FP64 1 (for devices with shaderFloat64) and 0. The exact
  * sign of an edge function of float coordinates is the sign of one double expression (the products

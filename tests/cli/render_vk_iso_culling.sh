@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Iso-only renders (a TF transparent everywhere) on Vulkan (lavapipe here): the range culling of
+# render.comp (the range BVH uploaded, candidate tets' pieces computed as the marcher computes them)
+# draws the same picture, byte for byte, as the shader's marcher, on the bundled sample and on a real
+# mesh (SEACAS's exomerge unit test, its z displacement): one and several surfaces, partial opacity,
+# shading, shadows and AO rays (the march pauses for casts), the clip box, a probe, Tet32, rays in slices
+# and in one dispatch; --json says which path ran; each culled picture is the CPU reference's at >= 40 dB.
+source "$(dirname "$0")/common.sh"
+# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe) for the tetpack runs only.
+tpk() {
+    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
+}
+psnr() { "$PY" "$SRC/tests/cli/psnr.py" "$1" "$2" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p'; }
+at_least() { "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= float(sys.argv[2]) else 1)" "$1" "$2"; }
+tpk convert "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --quiet || fail "cannot convert the cylinder"
+tpk convert "$DATA/seacas/exomerge_unit_test.e" "$WORK/m.tpk" --layout tet16 --layout tet32 --quiet \
+    || fail "cannot convert the Exodus file"
+if ! tpk render "$WORK/cyl.tpk" -o "$WORK/v.png" --size 8x8 --backend vulkan > /dev/null 2> "$WORK/err"; then
+    grep -q "built without Vulkan\|vulkan\|Vulkan" "$WORK/err" || fail "render --backend vulkan failed without saying why"
+    skip "no Vulkan device: $(cat "$WORK/err")"
+fi
+printf '0 0.2 0.4 0.9 0\n0.5 0.9 0.9 0.2 0\n1 0.9 0.2 0.1 0\n' > "$WORK/clear.tf"
+
+# both NAME FILE OPTIONS...: culled and marched on Vulkan (identical), culled against the CPU (>= 40 dB)
+both() {
+    local name=$1 file=$2
+    shift 2
+    local base=(--backend vulkan --size 96x72 --tf "$WORK/clear.tf" --json)
+    TETPACK_ISO_CULLING=1 tpk render "$file" -o "$WORK/$name.cull.png" "${base[@]}" "$@" > "$WORK/$name.cull.json" \
+        || fail "$name: culled render failed"
+    TETPACK_ISO_CULLING=0 tpk render "$file" -o "$WORK/$name.march.png" "${base[@]}" "$@" > "$WORK/$name.march.json" \
+        || fail "$name: marched render failed"
+    grep -q '"backend":"vulkan"' "$WORK/$name.cull.json" || fail "$name: not rendered by Vulkan: $(cat "$WORK/$name.cull.json")"
+    grep -q '"iso_culling":true' "$WORK/$name.cull.json" || fail "$name: TETPACK_ISO_CULLING=1 did not cull"
+    grep -q '"iso_culling":false' "$WORK/$name.march.json" || fail "$name: TETPACK_ISO_CULLING=0 culled"
+    cmp -s "$WORK/$name.cull.png" "$WORK/$name.march.png" || fail "$name: culled and marched pictures differ"
+    TETPACK_ISO_CULLING=1 tpk render "$file" -o "$WORK/$name.cpu.png" --backend cpu --size 96x72 --threads 2 \
+        --tf "$WORK/clear.tf" "$@" > /dev/null || fail "$name: CPU render failed"
+    local db
+    db=$(psnr "$WORK/$name.cpu.png" "$WORK/$name.cull.png")
+    at_least "$db" 40 || fail "$name: Vulkan culled against the CPU: $db dB"
+    echo "ok $name: identical; $db dB against the CPU"
+}
+
+both cyl_one "$WORK/cyl.tpk" --iso 330
+both cyl_several "$WORK/cyl.tpk" --iso 300,330,360 --iso-opacity 0.4 --shading
+both one "$WORK/m.tpk" --field disp_z --step 4 --iso -0.012
+both sparse "$WORK/m.tpk" --field disp_z --step 4 --iso -0.0195
+both several "$WORK/m.tpk" --field disp_z --step 4 --iso -0.018,-0.01,-0.002 --iso-opacity 0.4 --shading
+both clipped "$WORK/m.tpk" --field disp_z --step 4 --iso -0.012,-0.005 --clip-box -10,-10,-10,10,10,0.2 --shading
+both probe "$WORK/m.tpk" --field disp_z --step 4 --iso -0.012,-0.005 --probe sphere:0,0,0,0.6:cut
+both tet32 "$WORK/m.tpk" --field disp_z --step 4 --iso -0.012 --layout tet32 --shading
+both occluded "$WORK/m.tpk" --field disp_z --step 4 --iso -0.012 --iso-opacity 0.6 --shading --shadows --ao 2
+TPK_VK_SLICED=0 both one_dispatch "$WORK/m.tpk" --field disp_z --step 4 --iso -0.012,-0.005 --iso-opacity 0.5
+
+# the automatic choice: on a GPU as on the CPU, a sparse surface is culled; on a CPU device (lavapipe,
+# where the tree's walk costs more than it saves) nothing is; with volume opacity nothing is anywhere
+tpk render "$WORK/m.tpk" -o "$WORK/auto.png" --backend vulkan --size 96x72 --tf "$WORK/clear.tf" --field disp_z \
+    --step 4 --iso -0.015 --json > "$WORK/auto.json"
+if grep -q '"device":"llvmpipe' "$WORK/auto.json"; then
+    grep -q '"iso_culling":false' "$WORK/auto.json" || fail "lavapipe culled by default: $(cat "$WORK/auto.json")"
+else
+    grep -q '"iso_culling":true' "$WORK/auto.json" || fail "a sparse iso-only surface was not culled: $(cat "$WORK/auto.json")"
+fi
+tpk render "$WORK/m.tpk" -o "$WORK/vol.png" --backend vulkan --size 96x72 --field disp_z --iso -0.0195 --json > "$WORK/vol.json"
+grep -q '"iso_culling":false' "$WORK/vol.json" || fail "a render with volume opacity was culled"
+echo "render_vk_iso_culling: culled Vulkan pictures identical to marched ones"
