@@ -10,6 +10,7 @@
  * ray-marched isosurface's up to rasterization (pixel centres, float positions). */
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -75,6 +76,7 @@ struct tpk_iso_raster {
     /* the mesh-shader path, when mesh_path */
     int mesh_path;
     const char *mesh_reason; /* why not, when the device has the extension */
+    char mesh_failure[192];  /* mesh_reason when setting the path up failed */
     VkDescriptorSetLayout mesh_set_layout;
     VkPipelineLayout mesh_layout;
     VkShaderModule mesh_shaders[2]; /* task, mesh */
@@ -350,7 +352,12 @@ static int setup_mesh_path(raster *ra, const int32_t *tets, tpk_diag *diag)
                  : 0;
     free(ranges);
     ra->mesh_path = rc == 0;
-    return rc;
+    if (rc != 0) { /* the compute path draws instead, and --json says why */
+        snprintf(ra->mesh_failure, sizeof ra->mesh_failure, "setting it up failed: %.160s", diag->message);
+        ra->mesh_reason = ra->mesh_failure;
+        diag->message[0] = 0;
+    }
+    return 0;
 }
 
 static void destroy_targets(raster *ra)
