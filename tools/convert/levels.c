@@ -195,6 +195,11 @@ static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int3
     l2 = lc > l2 ? lc : l2;
     if (six_v * six_v < floor * floor * l2 * l2 * l2)
         return 0;
+    /* Then 6V >= floor L^3, while the rounding of six_v (the expansion tpk_orient3d_filter bounds: rows
+     * v - a, c - a, b - a) is at most (7 + 56 eps) eps times a permanent <= 6 L^3, 5e-15 L^3: past a floor
+     * of 1e-12 the sign is certain, and the exact test would only say so again. */
+    if (floor >= 1e-12 && l2 > 1e-180 && l2 < 1e180)
+        return 1;
     const double *p[4];
     for (int k = 0; k < 4; k++)
         p[k] = point(s, f->tet[k] == u ? v : f->tet[k]);
@@ -216,7 +221,8 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
     for (int i = 0; i < n; i++) {
         double q = s->tet_quality[star[i]];
         worst = q < worst ? q : worst;
-        star_face_of(s, s->tets + 4 * (size_t)star[i], u, &faces[i]);
+        faces[i].tet = s->tets + 4 * (size_t)star[i];
+        faces[i].a = NULL; /* the rest when first needed: a target that fails tests few */
     }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
     floor = floor > 0 ? floor : 0;
@@ -235,6 +241,8 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
             const int32_t *t = faces[i].tet;
             if (t[0] == v || t[1] == v || t[2] == v || t[3] == v)
                 continue; /* it vanishes */
+            if (!faces[i].a)
+                star_face_of(s, t, u, &faces[i]);
             ok = moved_tet_ok(s, &faces[i], u, v, q, floor);
         }
         if (ok)
