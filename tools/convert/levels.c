@@ -603,7 +603,7 @@ static int same_shell(const simplifier *s, const int32_t *full_neighbors, const 
 
 /* Write the level through the converter's own writer into an unnamed file, and take its bytes. */
 static int write_level(const tpk_convert_options *o, const simplifier *s, const int32_t *full_neighbors, int k,
-                       const char *source_format, tpk_level *r, tpk_diag *diag)
+                       const char *source_format, const tpk_convert_report *source, tpk_level *r, tpk_diag *diag)
 {
     tpk_tetmesh lvl;
     int32_t *vertex_old = NULL, *neighbors = NULL;
@@ -649,6 +649,9 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, const 
         memset(&lrep, 0, sizeof lrep);
         lrep.vertices = lvl.vertex_count;
         lrep.tets = lvl.tet_count;
+        /* Its TMAP and VMAP number the file's source cells and points (spec §16.1): its META names them */
+        lrep.source_cells = source->source_cells;
+        lrep.source_points = source->source_points;
         rc = tpk_write_tpk(&lo, &lvl, neighbors, &hdr, &lrep, source_format, NULL, NULL, diag);
         struct stat st;
         if (rc == 0 && fstat(fileno(tmp), &st) != 0)
@@ -675,7 +678,7 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, const 
 }
 
 int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
-                    const char *source_format, tpk_levels *out, tpk_diag *diag)
+                    const char *source_format, const tpk_convert_report *source, tpk_levels *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
     count = count > TPK_MAX_LEVELS ? TPK_MAX_LEVELS : count;
@@ -745,7 +748,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
         tpk_level *r = &out->level[out->count];
         snprintf(r->field, sizeof r->field, "%s", field_name);
         r->field_step = s.field_step;
-        rc = write_level(o, &s, neighbors, k, source_format, r, diag);
+        rc = write_level(o, &s, neighbors, k, source_format, source, r, diag);
         r->seconds = tpk_now_seconds() - t0;
         if (rc == 0)
             out->count++;
