@@ -11,10 +11,10 @@
  * mesh's, exactly, and the error is what interpolation over the coarser tets makes of it at the removed
  * vertices, which is where it is measured.
  *
- * Passes: every interior vertex in id order, skipping those next to a vertex collapsed in this pass (so
- * the stars one pass reads are those it started with), inside fixed blocks of ids side by side first,
- * until the level has a sixth of the tets of the last (TPK_LEVEL_RATIO) or a pass removes almost
- * nothing. The result does not depend on the thread count. */
+ * Passes: every interior vertex in id order, skipping the targets of this pass's collapses (the only
+ * stars a collapse grows; the others only lose the tets it kills, which a star read leaves out), inside
+ * fixed blocks of ids side by side first, until the level has a sixth of the tets of the last
+ * (TPK_LEVEL_RATIO) or a pass removes almost nothing. The result does not depend on the thread count. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -264,7 +264,18 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     int n = (int)(s->star_start[u + 1] - s->star_start[u]);
     if (s->boundary[u] || s->removed[u] || s->locked[u] || s->stuck[u] || n == 0 || n > STAR_MAX)
         return -1;
-    const int32_t *star = s->star + s->star_start[u];
+    /* Its tets: those of its star that no collapse of this pass killed. A collapse onto v changes the
+     * stars of u's other neighbours only by the tets it kills, so only v (whose star grows) waits for the
+     * next pass. */
+    int32_t star[STAR_MAX];
+    const int32_t *built = s->star + s->star_start[u];
+    int live = 0;
+    for (int i = 0; i < n; i++)
+        if (!s->dead[built[i]])
+            star[live++] = built[i];
+    n = live;
+    if (n == 0)
+        return -1;
     for (int i = 0; lo < hi && i < n; i++) {
         const int32_t *t = s->tets + 4 * (size_t)star[i];
         for (int k = 0; k < 4; k++)
@@ -289,10 +300,11 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
             s->tet_quality[star[i]] = (float)quality(point(s, t[0]), point(s, t[1]), point(s, t[2]), point(s, t[3]));
         }
         for (int k = 0; k < 4; k++)
-            s->locked[t[k]] = 1, s->stuck[t[k]] = 0;
+            s->stuck[t[k]] = 0;
     }
     s->removed[u] = 1;
     s->locked[u] = 1;
+    s->locked[v] = 1;
     return killed;
 }
 
@@ -371,10 +383,10 @@ static int64_t blocks_pass(simplifier *s, int32_t shift, int64_t target, int64_t
     return done;
 }
 
-/* One pass; the number of collapses. Vertices in id order, skipping those next to a collapse of this
- * pass (so the stars a pass reads are those it began with): first inside the blocks, side by side, then
- * inside the blocks shifted by half a block, then one by one the rest, whose stars cross both, which
- * stops at the target exactly. */
+/* One pass; the number of collapses. Vertices in id order, skipping the targets of this pass's
+ * collapses (the stars it began with, less the tets killed since, are the others'): first inside the
+ * blocks, side by side, then inside the blocks shifted by half a block, then one by one the rest, whose
+ * stars cross both, which stops at the target exactly. */
 static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
 {
     int64_t V = s->mesh->vertex_count, done = 0;
