@@ -196,7 +196,8 @@ static int write_output(conversion *c)
     if (c->o->levels > 0 && c->o->parts == 0) {
         announce(c->stage, c->stage_user, "levels");
         double t0 = tpk_now_seconds();
-        if (tpk_make_levels(c->o, &c->mesh, c->neighbors, c->o->levels, c->source_format, &levels, c->diag) != 0)
+        if (tpk_make_levels(c->o, &c->mesh, c->neighbors, c->o->levels, c->source_format, c->rep, &levels,
+                            c->diag) != 0)
             return -1;
         c->rep->t_levels = tpk_now_seconds() - t0;
         c->rep->level_count = levels.count;

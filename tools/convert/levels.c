@@ -11,10 +11,10 @@
  * mesh's, exactly, and the error is what interpolation over the coarser tets makes of it at the removed
  * vertices, which is where it is measured.
  *
- * Passes: every interior vertex in id order, skipping those next to a vertex collapsed in this pass (so
- * the stars one pass reads are those it started with), inside fixed blocks of ids side by side first,
- * until the level has a sixth of the tets of the last (TPK_LEVEL_RATIO) or a pass removes almost
- * nothing. The result does not depend on the thread count. */
+ * Passes: every interior vertex in id order, skipping the targets of this pass's collapses (the only
+ * stars a collapse grows; the others only lose the tets it kills, which a star read leaves out), inside
+ * fixed blocks of ids side by side first, until the level has a sixth of the tets of the last
+ * (TPK_LEVEL_RATIO) or a pass removes almost nothing. The result does not depend on the thread count. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -195,6 +195,11 @@ static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int3
     l2 = lc > l2 ? lc : l2;
     if (six_v * six_v < floor * floor * l2 * l2 * l2)
         return 0;
+    /* Then 6V >= floor L^3, while the rounding of six_v (the expansion tpk_orient3d_filter bounds: rows
+     * v - a, c - a, b - a) is at most (7 + 56 eps) eps times a permanent <= 6 L^3, 5e-15 L^3: past a floor
+     * of 1e-12 the sign is certain, and the exact test would only say so again. */
+    if (floor >= 1e-12 && l2 > 1e-180 && l2 < 1e180)
+        return 1;
     const double *p[4];
     for (int k = 0; k < 4; k++)
         p[k] = point(s, f->tet[k] == u ? v : f->tet[k]);
@@ -216,7 +221,8 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
     for (int i = 0; i < n; i++) {
         double q = s->tet_quality[star[i]];
         worst = q < worst ? q : worst;
-        star_face_of(s, s->tets + 4 * (size_t)star[i], u, &faces[i]);
+        faces[i].tet = s->tets + 4 * (size_t)star[i];
+        faces[i].a = NULL; /* the rest when first needed: a target that fails tests few */
     }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
     floor = floor > 0 ? floor : 0;
@@ -230,15 +236,22 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
         nb[best] = nb[tried], cost[best] = cost[tried];
         nb[tried] = v, cost[tried] = c;
         const double *q = point(s, v);
-        int ok = 1;
-        for (int i = 0; i < n && ok; i++) {
+        int ok = 1, i = 0;
+        for (; i < n && ok; i++) {
             const int32_t *t = faces[i].tet;
             if (t[0] == v || t[1] == v || t[2] == v || t[3] == v)
                 continue; /* it vanishes */
+            if (!faces[i].a)
+                star_face_of(s, t, u, &faces[i]);
             ok = moved_tet_ok(s, &faces[i], u, v, q, floor);
         }
         if (ok)
             return v;
+        /* The face that turned this target down is tried first for the next: targets of close cost often
+         * fail on the same one. All must pass, so the order changes the time, not the answer. */
+        star_face f = faces[i - 1];
+        faces[i - 1] = faces[0];
+        faces[0] = f;
     }
     return -1;
 }
@@ -251,7 +264,18 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     int n = (int)(s->star_start[u + 1] - s->star_start[u]);
     if (s->boundary[u] || s->removed[u] || s->locked[u] || s->stuck[u] || n == 0 || n > STAR_MAX)
         return -1;
-    const int32_t *star = s->star + s->star_start[u];
+    /* Its tets: those of its star that no collapse of this pass killed. A collapse onto v changes the
+     * stars of u's other neighbours only by the tets it kills, so only v (whose star grows) waits for the
+     * next pass. */
+    int32_t star[STAR_MAX];
+    const int32_t *built = s->star + s->star_start[u];
+    int live = 0;
+    for (int i = 0; i < n; i++)
+        if (!s->dead[built[i]])
+            star[live++] = built[i];
+    n = live;
+    if (n == 0)
+        return -1;
     for (int i = 0; lo < hi && i < n; i++) {
         const int32_t *t = s->tets + 4 * (size_t)star[i];
         for (int k = 0; k < 4; k++)
@@ -276,10 +300,11 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
             s->tet_quality[star[i]] = (float)quality(point(s, t[0]), point(s, t[1]), point(s, t[2]), point(s, t[3]));
         }
         for (int k = 0; k < 4; k++)
-            s->locked[t[k]] = 1, s->stuck[t[k]] = 0;
+            s->stuck[t[k]] = 0;
     }
     s->removed[u] = 1;
     s->locked[u] = 1;
+    s->locked[v] = 1;
     return killed;
 }
 
@@ -358,10 +383,10 @@ static int64_t blocks_pass(simplifier *s, int32_t shift, int64_t target, int64_t
     return done;
 }
 
-/* One pass; the number of collapses. Vertices in id order, skipping those next to a collapse of this
- * pass (so the stars a pass reads are those it began with): first inside the blocks, side by side, then
- * inside the blocks shifted by half a block, then one by one the rest, whose stars cross both, which
- * stops at the target exactly. */
+/* One pass; the number of collapses. Vertices in id order, skipping the targets of this pass's
+ * collapses (the stars it began with, less the tets killed since, are the others'): first inside the
+ * blocks, side by side, then inside the blocks shifted by half a block, then one by one the rest, whose
+ * stars cross both, which stops at the target exactly. */
 static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
 {
     int64_t V = s->mesh->vertex_count, done = 0;
@@ -590,7 +615,7 @@ static int same_shell(const simplifier *s, const int32_t *full_neighbors, const 
 
 /* Write the level through the converter's own writer into an unnamed file, and take its bytes. */
 static int write_level(const tpk_convert_options *o, const simplifier *s, const int32_t *full_neighbors, int k,
-                       const char *source_format, tpk_level *r, tpk_diag *diag)
+                       const char *source_format, const tpk_convert_report *source, tpk_level *r, tpk_diag *diag)
 {
     tpk_tetmesh lvl;
     int32_t *vertex_old = NULL, *neighbors = NULL;
@@ -636,6 +661,9 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, const 
         memset(&lrep, 0, sizeof lrep);
         lrep.vertices = lvl.vertex_count;
         lrep.tets = lvl.tet_count;
+        /* Its TMAP and VMAP number the file's source cells and points (spec §16.1): its META names them */
+        lrep.source_cells = source->source_cells;
+        lrep.source_points = source->source_points;
         rc = tpk_write_tpk(&lo, &lvl, neighbors, &hdr, &lrep, source_format, NULL, NULL, diag);
         struct stat st;
         if (rc == 0 && fstat(fileno(tmp), &st) != 0)
@@ -662,7 +690,7 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, const 
 }
 
 int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
-                    const char *source_format, tpk_levels *out, tpk_diag *diag)
+                    const char *source_format, const tpk_convert_report *source, tpk_levels *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
     count = count > TPK_MAX_LEVELS ? TPK_MAX_LEVELS : count;
@@ -732,7 +760,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
         tpk_level *r = &out->level[out->count];
         snprintf(r->field, sizeof r->field, "%s", field_name);
         r->field_step = s.field_step;
-        rc = write_level(o, &s, neighbors, k, source_format, r, diag);
+        rc = write_level(o, &s, neighbors, k, source_format, source, r, diag);
         r->seconds = tpk_now_seconds() - t0;
         if (rc == 0)
             out->count++;

@@ -36,9 +36,10 @@ typedef struct tpk_levels {
  * touched. Stops early (fewer levels, out->count) when a level would keep more than 85% of the tets of
  * the one before. Each level is written as a complete file with `o`'s layouts and compression, every
  * field (point fields at the kept vertices, tet fields of the tet each level tet descends from), TIME,
- * TMAP and VMAP. 0, or -1 with a message. */
+ * TMAP and VMAP, and META with `source` (its source_cells and source_points: the levels' maps number the
+ * same source). 0, or -1 with a message. */
 int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
-                    const char *source_format, tpk_levels *out, tpk_diag *diag);
+                    const char *source_format, const tpk_convert_report *source, tpk_levels *out, tpk_diag *diag);
 void tpk_levels_free(tpk_levels *levels);
 
 #endif
