@@ -342,10 +342,15 @@ int tpk_vertex_cache_update(tpk_vertex_cache *cache, const tpk_mesh_arrays *mesh
                             int *changed, tpk_render_stats *cast, tpk_diag *diag);
 const float *tpk_vertex_cache_s(const tpk_vertex_cache *cache); /* vertex_count floats: S_v */
 const float *tpk_vertex_cache_a(const tpk_vertex_cache *cache); /* A_v */
-/* tpk_render_cpu whose --occlusion vertex takes its cache from `cache` (kept across calls), not one of its
- * own made for the frame; cache NULL: tpk_render_cpu. stats counts the rays this frame cast. */
+/* tpk_render_cpu whose --occlusion vertex takes its cache from `cache` (kept across calls, brought up to
+ * date first), not one of its own made for the frame; cache NULL: tpk_render_cpu. stats counts the rays
+ * this frame cast. (render_cache.c) */
 int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                           tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag);
+/* tpk_render_cpu with --occlusion vertex's S_v and A_v given (vertex_count floats each, as
+ * tpk_render_vertex_cache makes them), not cast; NULL: cast for this frame. */
+int tpk_render_cpu_given_cache(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                               const float *s, const float *a, tpk_render_stats *stats, tpk_diag *diag);
 /* The diagonal of the box of mesh->positions (0 for fewer than two distinct points). */
 double tpk_positions_diagonal(const tpk_mesh_arrays *mesh);
 

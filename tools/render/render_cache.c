@@ -134,3 +134,20 @@ int tpk_vertex_cache_update(tpk_vertex_cache *c, const tpk_mesh_arrays *mesh, co
     free(a);
     return rc;
 }
+
+int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                          tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag)
+{
+    if (!cache || !opt || opt->occlusion != TPK_OCCLUSION_VERTEX || !mesh)
+        return tpk_render_cpu(mesh, opt, rgba, stats, diag);
+    tpk_render_stats cast;
+    if (tpk_render_check_options(opt, diag) != 0 || tpk_vertex_cache_update(cache, mesh, opt, NULL, &cast, diag) != 0)
+        return -1;
+    int rc = tpk_render_cpu_given_cache(mesh, opt, rgba, cache->s, cache->a, stats, diag);
+    if (rc == 0 && stats) { /* the frame's work and time include the cache's */
+        stats->tet_steps += cast.tet_steps;
+        stats->secondary_rays += cast.secondary_rays;
+        stats->seconds += cast.seconds;
+    }
+    return rc;
+}

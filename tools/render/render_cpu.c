@@ -353,11 +353,11 @@ static int run_render(render_job *job, tpk_render_stats *stats, const struct tim
 int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                    tpk_render_stats *stats, tpk_diag *diag)
 {
-    return tpk_render_cpu_cached(mesh, opt, rgba, NULL, stats, diag);
+    return tpk_render_cpu_given_cache(mesh, opt, rgba, NULL, NULL, stats, diag);
 }
 
-int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                          tpk_vertex_cache *kept, tpk_render_stats *stats, tpk_diag *diag)
+int tpk_render_cpu_given_cache(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
+                               const float *given_s, const float *given_a, tpk_render_stats *stats, tpk_diag *diag)
 {
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
@@ -386,12 +386,9 @@ int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options 
     int rc = 0;
     float *cache = NULL;
     uint64_t cache_counts[2] = {0, 0}; /* steps, secondary rays */
-    if (job->cast && opt->occlusion == TPK_OCCLUSION_VERTEX && kept) {
-        tpk_render_stats cast;
-        rc = tpk_vertex_cache_update(kept, mesh, opt, NULL, &cast, diag);
-        job->vertex_s = rc == 0 ? tpk_vertex_cache_s(kept) : NULL;
-        job->vertex_a = rc == 0 ? tpk_vertex_cache_a(kept) : NULL;
-        cache_counts[0] = cast.tet_steps, cache_counts[1] = cast.secondary_rays;
+    if (job->cast && opt->occlusion == TPK_OCCLUSION_VERTEX && given_s && given_a) {
+        job->vertex_s = given_s;
+        job->vertex_a = given_a;
     } else if (job->cast && opt->occlusion == TPK_OCCLUSION_VERTEX) {
         cache = malloc(2 * sizeof *cache * (mesh->vertex_count ? mesh->vertex_count : 1));
         if (!cache) {
