@@ -35,12 +35,13 @@ PYEOF
     "$TPK" extract "$WORK/$name.tpk" "$WORK/$name-1.tpk" --level 1 > /dev/null || fail "$name: extract --level 1"
     check_6xx "$WORK/$name-1.tpk"
     grep -q "format 1.1" <<< "$("$TPK" info "$WORK/$name-1.tpk")" || fail "$name: the extracted level is not plain 1.1"
-    # the level's META names the file's source: its TMAP and VMAP number those cells and points (§16.1)
+    # the level's META names the file's source (its TMAP and VMAP number those cells and points, §16.1),
+    # pipeline and repairs (the Gmsh mesh's cut folds: nonzero), as a part's does
     "$TPK" info "$WORK/$name.tpk" --json > "$WORK/info.json" && "$TPK" info "$WORK/$name-1.tpk" --json > "$WORK/info1.json" ||
         fail "$name: info --json"
     "$PY" -c "import json,sys; a, b = (json.load(open(f))['metadata'] for f in sys.argv[1:]); \
-sys.exit(0 if a['source'] == b['source_meta']['source'] and a['source']['cells'] > 0 else 1)" \
-        "$WORK/info.json" "$WORK/info1.json" || fail "$name: level 1's META source is not the file's"
+sys.exit(0 if all(a[k] == b['source_meta'][k] for k in ('source', 'pipeline', 'repairs')) and a['source']['cells'] > 0 else 1)" \
+        "$WORK/info.json" "$WORK/info1.json" || fail "$name: level 1's META source, pipeline or repairs are not the file's"
 done
 
 # the exodus file: a transient field; the error is measured at its step of widest range, and is nonzero

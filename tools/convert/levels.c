@@ -657,13 +657,12 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, const 
                 hdr.bounds_min[a] = w < hdr.bounds_min[a] ? w : hdr.bounds_min[a];
                 hdr.bounds_max[a] = w > hdr.bounds_max[a] ? w : hdr.bounds_max[a];
             }
-        tpk_convert_report lrep;
-        memset(&lrep, 0, sizeof lrep);
+        /* The file's report: its TMAP and VMAP number the file's source cells and points (spec §16.1),
+         * and the pipeline and repairs that made the file made the mesh it was coarsened from; META
+         * names them all, as a part's does */
+        tpk_convert_report lrep = *source;
         lrep.vertices = lvl.vertex_count;
         lrep.tets = lvl.tet_count;
-        /* Its TMAP and VMAP number the file's source cells and points (spec §16.1): its META names them */
-        lrep.source_cells = source->source_cells;
-        lrep.source_points = source->source_points;
         rc = tpk_write_tpk(&lo, &lvl, neighbors, &hdr, &lrep, source_format, NULL, NULL, diag);
         struct stat st;
         if (rc == 0 && fstat(fileno(tmp), &st) != 0)
