@@ -310,7 +310,7 @@ static int list_times(const char *case_dir, time_dir **out, int *count, tpk_diag
             *out = grown;
         }
         (*out)[*count].time = t;
-        snprintf((*out)[(*count)++].name, sizeof(*out)->name, "%s", e->d_name);
+        memcpy((*out)[(*count)++].name, e->d_name, strlen(e->d_name) + 1); /* fits: checked above */
     }
     closedir(d);
     if (*count > 1) /* qsort must not be given NULL, even for no elements */
