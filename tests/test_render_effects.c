@@ -40,6 +40,17 @@ static uint8_t *render(const fx_mesh *m, const tpk_render_options *opt)
     return img;
 }
 
+/* The set-up most tests share: the grid, the viridis TF, grid_options from the eye (17, -5, 12). 0, or -1. */
+static int viridis_grid(fx_mesh *m, tpk_transfer_function *tf, tpk_render_options *opt)
+{
+    tpk_diag diag = {0};
+    if (fx_render_grid(m, 1) != 0 || tpk_tf_load("viridis", tf, &diag) != 0)
+        return -1;
+    const double eye[3] = {17, -5, 12};
+    grid_options(opt, tf, eye);
+    return 0;
+}
+
 static const uint8_t *pixel(const uint8_t *img, int x, int y)
 {
     return &img[4 * (y * W + x)];
@@ -377,13 +388,10 @@ TPK_TEST(ao_closed_form)
 TPK_TEST(shading_and_darkening)
 {
     fx_mesh m;
-    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
-    tpk_diag diag = {0};
-    CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
     tpk_render_options opt;
-    const double eye[3] = {17, -5, 12};
-    grid_options(&opt, &tf, eye);
+    tpk_diag diag = {0};
+    CHECK(viridis_grid(&m, &tf, &opt) == 0);
     opt.iso_count = 1;
     opt.iso[0] = 5.5;
     uint8_t *plain = render(&m, &opt);
@@ -414,6 +422,7 @@ TPK_TEST(shading_and_darkening)
     CHECK(shaded);
     double d[3];
     pixel_ray(&opt.camera, W / 2, H / 2, d);
+    const double *eye = opt.camera.eye; /* viridis_grid's */
     double t = (5.5 - eye[0]) / d[0], x[3], l[3], len = 0;
     for (int k = 0; k < 3; k++) {
         x[k] = eye[k] + t * d[k];
@@ -436,13 +445,9 @@ TPK_TEST(shading_and_darkening)
 TPK_TEST(effects_deterministic)
 {
     fx_mesh m;
-    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
-    tpk_diag diag = {0};
-    CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
     tpk_render_options opt;
-    const double eye[3] = {17, -5, 12};
-    grid_options(&opt, &tf, eye);
+    CHECK(viridis_grid(&m, &tf, &opt) == 0);
     opt.unit_distance = 4;
     opt.iso_count = 2;
     opt.iso[0] = 2.5;
@@ -565,13 +570,10 @@ TPK_TEST(vertex_cache_closed_form)
 TPK_TEST(vertex_occlusion_render)
 {
     fx_mesh m;
-    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
-    tpk_diag diag = {0};
-    CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
     tpk_render_options opt;
-    const double eye[3] = {17, -5, 12};
-    grid_options(&opt, &tf, eye);
+    tpk_diag diag = {0};
+    CHECK(viridis_grid(&m, &tf, &opt) == 0);
     opt.unit_distance = 4;
     uint8_t *plain = render(&m, &opt);
     opt.occlusion = TPK_OCCLUSION_VERTEX;
@@ -631,13 +633,10 @@ static void cached_frame(const tpk_mesh_arrays *arrays, const tpk_render_options
 TPK_TEST(vertex_cache_kept_across_frames)
 {
     fx_mesh m;
-    CHECK(fx_render_grid(&m, 1) == 0);
     tpk_transfer_function tf;
-    tpk_diag diag = {0};
-    CHECK(tpk_tf_load("viridis", &tf, &diag) == 0);
     tpk_render_options opt;
-    const double eye[3] = {17, -5, 12};
-    grid_options(&opt, &tf, eye);
+    tpk_diag diag = {0};
+    CHECK(viridis_grid(&m, &tf, &opt) == 0);
     opt.unit_distance = 4;
     opt.occlusion = TPK_OCCLUSION_VERTEX;
     opt.shading = opt.shadows = 1;
