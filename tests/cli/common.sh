@@ -8,6 +8,15 @@ trap 'rm -rf "$WORK"' EXIT
 # Debian's python3 (with python3-meshio and numpy), not whatever python3 comes first on PATH.
 PY=/usr/bin/python3
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# tpk ARGS: the tetpack under test; under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe,
+# tests/CMakeLists.txt) for the Vulkan scripts, preloaded for the tetpack runs only (not for bash), so that
+# LeakSanitizer can name the drivers' own leaks.
+tpk() {
+    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
+}
+# psnr A.png B.png: their PSNR in dB ("inf" when equal); at_least X Y: X >= Y, as numbers
+psnr() { "$PY" "$SRC/tests/cli/psnr.py" "$1" "$2" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p'; }
+at_least() { "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= float(sys.argv[2]) else 1)" "$1" "$2"; }
 # skip WHY: this test cannot run here (an optional component is missing): exit 77, ctest's SKIP_RETURN_CODE,
 # so it shows as Skipped; under TETPACK_REQUIRE_ALL=1 (./dev test, CI) a skip is a failure.
 skip() {

@@ -3,10 +3,6 @@
 # files, byte for byte, as the CPU, on a real mesh (SEACAS's exomerge unit test, its z displacement at
 # the last step) for PLY, OBJ and glTF; --json names the backend and the device.
 source "$(dirname "$0")/common.sh"
-# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe) for the tetpack runs only.
-tpk() {
-    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
-}
 tpk convert "$DATA/seacas/exomerge_unit_test.e" "$WORK/m.tpk" --quiet || fail "cannot convert the Exodus file"
 if ! tpk iso "$WORK/m.tpk" "$WORK/probe.ply" --field disp_z --value -0.01 --backend vulkan > /dev/null 2> "$WORK/err"; then
     grep -q "built without Vulkan\|vulkan" "$WORK/err" || fail "iso --backend vulkan failed without saying why: $(cat "$WORK/err")"

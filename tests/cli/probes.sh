@@ -6,12 +6,6 @@
 # tets that may show, and the small file renders the same picture; --iso-raster cuts its triangles with
 # the same probes; bad probes are refused by name.
 source "$(dirname "$0")/common.sh"
-# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe) for the tetpack runs only.
-tpk() {
-    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
-}
-psnr() { "$PY" "$SRC/tests/cli/psnr.py" "$1" "$2" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p'; }
-at_least() { "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= float(sys.argv[2]) else 1)" "$1" "$2"; }
 
 tpk convert "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --quiet || fail "cannot convert the cylinder"
 tpk convert "$DATA/gmsh/t5_small_tet_ascii22.msh" "$WORK/t5.tpk" --quiet || fail "cannot convert t5"

@@ -6,12 +6,6 @@
 # shading, shadows and AO rays (the march pauses for casts), the clip box, a probe, Tet32, rays in slices
 # and in one dispatch; --json says which path ran; each culled picture is the CPU reference's at >= 40 dB.
 source "$(dirname "$0")/common.sh"
-# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe) for the tetpack runs only.
-tpk() {
-    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
-}
-psnr() { "$PY" "$SRC/tests/cli/psnr.py" "$1" "$2" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p'; }
-at_least() { "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= float(sys.argv[2]) else 1)" "$1" "$2"; }
 tpk convert "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --quiet || fail "cannot convert the cylinder"
 tpk convert "$DATA/seacas/exomerge_unit_test.e" "$WORK/m.tpk" --layout tet16 --layout tet32 --quiet \
     || fail "cannot convert the Exodus file"

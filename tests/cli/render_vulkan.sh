@@ -2,11 +2,6 @@
 # with numpy), --json names the backend, the device and why, the default is Vulkan on a hardware device
 # and the CPU otherwise (lavapipe only, as here, or none), and every Vulkan failure is a clear message with exit 2, never a crash.
 source "$(dirname "$0")/common.sh"
-# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe, tests/CMakeLists.txt) for the
-# tetpack runs only, so that LeakSanitizer can name the driver's own leaks.
-tpk() {
-    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
-}
 
 convert_checked "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --layout tet16 --layout tet20 > /dev/null
 tpk render --help > "$WORK/help.txt" # (not piped into grep -q: a help longer than stdio's buffer would get SIGPIPE)

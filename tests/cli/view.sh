@@ -15,11 +15,6 @@ if [ -z "${TPK_VIEW_XVFB:-}" ]; then
     TPK_VIEW_XVFB=1 exec sh "$(dirname "$0")/../with_xvfb.sh" -screen 320x240x24 bash "$0" "$@"
 fi
 source "$(dirname "$0")/common.sh"
-# Under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe, tests/CMakeLists.txt) for the
-# tetpack runs only, so that LeakSanitizer can name the drivers' own leaks.
-tpk() {
-    if [ -n "${TPK_VK_PRELOAD:-}" ]; then LD_PRELOAD="$TPK_VK_PRELOAD" "$TPK" "$@"; else "$TPK" "$@"; fi
-}
 psnr_at_least() { # A.png B.png what
     "$PY" "$SRC/tests/cli/psnr.py" "$1" "$2" --min 40 > "$WORK/psnr" || fail "$3: $(cat "$WORK/psnr")"
     echo "$3: $(cat "$WORK/psnr")"
