@@ -339,32 +339,24 @@ int tpk_iso_vk_submit(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void *a
     return run_commands(v, record, arg, diag);
 }
 
-int tpk_iso_vk_triangles(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)
+/* Passes 0..last for `value`, then the grand total the groups pass left after the group sums. */
+static int run_and_total(tpk_iso_vk *v, double value, int last, uint32_t *total, tpk_diag *diag)
 {
     *total = 0;
-    pass_arg count = {0, 2, value};
-    if (run_commands(v, record_passes, &count, diag))
+    pass_arg passes = {0, last, value};
+    if (run_commands(v, record_passes, &passes, diag))
         return -1;
-    uint32_t last;
-    if (download_at(v, &v->buf[B_GROUPS], 4 * (VkDeviceSize)v->group_count, &last, 4, diag))
-        return -1;
-    *total = last;
-    return 0;
+    return download_at(v, &v->buf[B_GROUPS], 4 * (VkDeviceSize)v->group_count, total, 4, diag);
+}
+
+int tpk_iso_vk_triangles(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)
+{
+    return run_and_total(v, value, 2, total, diag);
 }
 
 int tpk_iso_vk_count(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)
 {
-    *total = 0;
-    pass_arg count = {0, 3, value};
-    if (run_commands(v, record_passes, &count, diag))
-        return -1;
-    uint32_t *groups = malloc(4 * ((size_t)v->group_count + 1));
-    if (!groups)
-        return tpk_diag_fail(diag, "vulkan iso: out of memory");
-    int rc = download(v, &v->buf[B_GROUPS], groups, 4 * ((size_t)v->group_count + 1), diag);
-    *total = groups[v->group_count];
-    free(groups);
-    if (rc)
+    if (run_and_total(v, value, 3, total, diag))
         return -1;
     if ((uint64_t)*total * 3 * 12 > v->ctx.props.limits.maxStorageBufferRange)
         return tpk_diag_fail(diag, "vulkan iso: the surface of %g has %u triangles; their corners do not fit one "

@@ -75,6 +75,7 @@ struct tpk_iso_raster {
     raster_push push[RASTER_VALUES];
     /* the mesh-shader path, when mesh_path */
     int mesh_path;
+    int mesh_state;          /* render.h iso_mesh_shader: 1 used, 0 the device lacks it, 2 it has it, unused */
     const char *mesh_reason; /* why not, when the device has the extension */
     char mesh_failure[192];  /* mesh_reason when setting the path up failed */
     VkDescriptorSetLayout mesh_set_layout;
@@ -330,11 +331,12 @@ static float *cluster_ranges(const int32_t *tets, const float *scalars, uint64_t
 static int setup_mesh_path(raster *ra, const int32_t *tets, tpk_diag *diag)
 {
     const tpk_vk_context *ctx = &ra->iso->ctx;
-    if (!ctx->mesh_shader) {
-        const char *env = getenv("TETPACK_ISO_MESH_SHADER");
-        ra->mesh_reason = env && !strcmp(env, "0") ? "TETPACK_ISO_MESH_SHADER=0" : NULL;
+    if (!ctx->mesh_shader) { /* the device lacks it, or tpk_vk_context_create_mesh was told not to */
+        ra->mesh_state = tpk_vk_has_mesh_shader(ctx->physical) ? 2 : 0;
+        ra->mesh_reason = ra->mesh_state ? "TETPACK_ISO_MESH_SHADER=0" : NULL;
         return 0;
     }
+    ra->mesh_state = 2;
     if (ctx->props.limits.maxPushConstantsSize < sizeof(mesh_push)) {
         ra->mesh_reason = "the device's push constants are under 144 bytes";
         return 0;
@@ -352,6 +354,7 @@ static int setup_mesh_path(raster *ra, const int32_t *tets, tpk_diag *diag)
                  : 0;
     free(ranges);
     ra->mesh_path = rc == 0;
+    ra->mesh_state = rc == 0 ? 1 : 2;
     if (rc != 0) { /* the compute path draws instead, and --json says why */
         snprintf(ra->mesh_failure, sizeof ra->mesh_failure, "setting it up failed: %.160s", diag->message);
         ra->mesh_reason = ra->mesh_failure;
@@ -518,6 +521,36 @@ static void record_keep(tpk_iso_vk *v, const void *arg)
     vkCmdCopyBuffer(v->cmd, v->buf[B_DRAW_ARGS].buffer, k->ra->args[k->i].buffer, 1, &args);
 }
 
+/* Value i's triangle list and draw arguments on the compute path, *total its triangles. 0 or -1. */
+static int extract_value(raster *ra, int i, double value, uint32_t *total, tpk_diag *diag)
+{
+    if (tpk_iso_vk_count(ra->iso, value, total, diag))
+        return -1;
+    VkDeviceSize bytes = (VkDeviceSize)*total * 36;
+    tpk_vk_context *ctx = &ra->iso->ctx;
+    if (ra->corners[i].size < (bytes ? bytes : 16)) {
+        tpk_vk_buffer_destroy(ctx, &ra->corners[i]);
+        memset(&ra->corners[i], 0, sizeof ra->corners[i]);
+        if (tpk_vk_buffer_create(ctx, bytes ? bytes : 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
+                                 VK_BUFFER_USAGE_TRANSFER_DST_BIT, TPK_VK_MEMORY_DEVICE, "iso raster triangles",
+                                 &ra->corners[i], diag))
+            return -1;
+    }
+    if (!ra->args[i].buffer &&
+        tpk_vk_buffer_create(ctx, 16, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                             TPK_VK_MEMORY_DEVICE, "iso raster draw arguments", &ra->args[i], diag))
+        return -1;
+    keep_arg k = {ra, i, value, bytes};
+    if (tpk_iso_vk_submit(ra->iso, record_keep, &k, diag))
+        return -1;
+    VkDescriptorBufferInfo info = {ra->corners[i].buffer, 0, VK_WHOLE_SIZE};
+    VkWriteDescriptorSet write = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = ra->sets[i],
+                                  .dstBinding = 0, .descriptorCount = 1,
+                                  .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &info};
+    vkUpdateDescriptorSets(ctx->device, 1, &write, 0, NULL);
+    return 0;
+}
+
 /* The triangle lists of opt's values, extracted again only where a value changed; on the mesh-shader
  * path only their triangle counts (for the statistics), since the mesh shaders make the triangles. */
 static int extract_values(raster *ra, const tpk_render_options *opt, tpk_diag *diag)
@@ -526,39 +559,9 @@ static int extract_values(raster *ra, const tpk_render_options *opt, tpk_diag *d
         if (i < ra->value_count && ra->values[i] == opt->iso[i])
             continue;
         uint32_t total;
-        if (ra->mesh_path) {
-            if (tpk_iso_vk_triangles(ra->iso, opt->iso[i], &total, diag))
-                return -1;
-            ra->values[i] = opt->iso[i];
-            ra->triangles[i] = total;
-            if (ra->value_count <= i)
-                ra->value_count = i + 1;
-            continue;
-        }
-        if (tpk_iso_vk_count(ra->iso, opt->iso[i], &total, diag))
+        if (ra->mesh_path ? tpk_iso_vk_triangles(ra->iso, opt->iso[i], &total, diag)
+                          : extract_value(ra, i, opt->iso[i], &total, diag))
             return -1;
-        VkDeviceSize bytes = (VkDeviceSize)total * 36;
-        tpk_vk_context *ctx = &ra->iso->ctx;
-        if (ra->corners[i].size < (bytes ? bytes : 16)) {
-            tpk_vk_buffer_destroy(ctx, &ra->corners[i]);
-            memset(&ra->corners[i], 0, sizeof ra->corners[i]);
-            if (tpk_vk_buffer_create(ctx, bytes ? bytes : 16, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
-                                     VK_BUFFER_USAGE_TRANSFER_DST_BIT, TPK_VK_MEMORY_DEVICE, "iso raster triangles",
-                                     &ra->corners[i], diag))
-                return -1;
-        }
-        if (!ra->args[i].buffer &&
-            tpk_vk_buffer_create(ctx, 16, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                                 TPK_VK_MEMORY_DEVICE, "iso raster draw arguments", &ra->args[i], diag))
-            return -1;
-        keep_arg k = {ra, i, opt->iso[i], bytes};
-        if (tpk_iso_vk_submit(ra->iso, record_keep, &k, diag))
-            return -1;
-        VkDescriptorBufferInfo info = {ra->corners[i].buffer, 0, VK_WHOLE_SIZE};
-        VkWriteDescriptorSet write = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .dstSet = ra->sets[i],
-                                      .dstBinding = 0, .descriptorCount = 1,
-                                      .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pBufferInfo = &info};
-        vkUpdateDescriptorSets(ctx->device, 1, &write, 0, NULL);
         ra->values[i] = opt->iso[i];
         ra->triangles[i] = total;
         if (ra->value_count <= i)
@@ -721,7 +724,7 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
             stats->iso_triangles += ra->triangles[i];
         stats->seconds = tpk_now_seconds() - t0;
         stats->gpu_seconds = tpk_iso_vk_seconds(ra->iso) - gpu0;
-        stats->iso_mesh_shader = ra->mesh_path ? 1 : tpk_vk_has_mesh_shader(ra->iso->ctx.physical) ? 2 : 0;
+        stats->iso_mesh_shader = ra->mesh_state;
         stats->iso_mesh_reason = ra->mesh_path ? NULL : ra->mesh_reason;
     }
     return 0;
