@@ -35,13 +35,16 @@ struct tpk_vk_renderer {
     tpk_range_bvh *range; /* iso-only frames (render.h ISO-ONLY RAYS): made on the first one, uploaded on
                              the first that culls (range_leaf_base > 0 from then on) */
     int64_t range_leaf_base;
+    /* the automatic culling choice (frame_culls) for the iso values it was made for: it scans the mesh,
+     * so it is made again only when they change */
+    int auto_valid, auto_culls, auto_count;
+    double auto_iso[TPK_RENDER_MAX_ISO];
     int tet_scalars;      /* tet scalars were uploaded */
     double device_seconds, upload_seconds, pipeline_seconds; /* setup, pipelines compiled so far included */
     double frame_compile_seconds; /* of the last frame, the pipeline compiled in it */
     const tpk_vk_band_target *target; /* during a presenting frame: where the bands go, not the host */
     /* --occlusion vertex: the cache kept across frames (render.h tpk_vertex_cache), uploaded when it changes */
     tpk_vertex_cache *cache;
-    float *cache_sa; /* S_v, A_v interleaved, as VERTEX_SA holds them */
 };
 typedef struct tpk_vk_renderer vk_render;
 
@@ -73,7 +76,6 @@ void tpk_vk_renderer_destroy(tpk_vk_renderer *v)
         tpk_vk_array_destroy(&v->ctx, &v->arrays[a]);
     tpk_vk_context_destroy(&v->ctx);
     tpk_vertex_cache_destroy(v->cache);
-    free(v->cache_sa);
     free(v);
 }
 
@@ -524,8 +526,6 @@ static int vertex_cache(vk_render *v, const tpk_render_options *opt, uint64_t co
     size_t n = (size_t)v->mesh.vertex_count;
     if (!v->cache && !(v->cache = tpk_vertex_cache_create()))
         return tpk_diag_fail(diag, "render: out of memory for the vertex cache");
-    if (!v->cache_sa && !(v->cache_sa = malloc(2 * sizeof *v->cache_sa * (n ? n : 1))))
-        return tpk_diag_fail(diag, "render: out of memory for the vertex cache");
     tpk_render_options cpu = *opt;
     cpu.threads = 0; /* all cores */
     tpk_render_stats st;
@@ -537,9 +537,12 @@ static int vertex_cache(vk_render *v, const tpk_render_options *opt, uint64_t co
     if (!changed)
         return 0;
     const float *s = tpk_vertex_cache_s(v->cache), *a = tpk_vertex_cache_a(v->cache);
+    float *sa = malloc(2 * sizeof *sa * (n ? n : 1)); /* interleaved, as VERTEX_SA holds them */
+    if (!sa)
+        return tpk_diag_fail(diag, "render: out of memory for the vertex cache");
     for (size_t i = 0; i < n; i++)
-        v->cache_sa[2 * i] = s[i], v->cache_sa[2 * i + 1] = a[i];
-    tpk_vk_source src = {v->cache_sa, 8, NULL, NULL};
+        sa[2 * i] = s[i], sa[2 * i + 1] = a[i];
+    tpk_vk_source src = {sa, 8, NULL, NULL};
     tpk_vk_stager stager;
     memset(&stager, 0, sizeof stager);
     int rc = 0;
@@ -551,6 +554,7 @@ static int vertex_cache(vk_render *v, const tpk_render_options *opt, uint64_t co
     if (rc == 0 && v->ctx.staged)
         rc = tpk_vk_stager_finish(&v->ctx, &stager, diag);
     tpk_vk_stager_destroy(&v->ctx, &stager);
+    free(sa);
     if (rc != 0) { /* the device holds neither: cast both again next time */
         tpk_vertex_cache_destroy(v->cache);
         v->cache = NULL;
@@ -598,7 +602,8 @@ static int range_upload(vk_render *v, tpk_diag *diag)
 }
 
 /* Whether this frame's primary rays cull (render.h ISO-ONLY RAYS: the CPU reference's rule and its
- * TETPACK_ISO_CULLING override): 1 with the range BVH uploaded, 0, or -1 with a message. A CPU device
+ * TETPACK_ISO_CULLING override, the rule's answer kept for the values it was found for): 1 with the range
+ * BVH uploaded, 0, or -1 with a message. A CPU device
  * (lavapipe) marches unless told to cull: there the walk of the tree costs more than the marcher's steps
  * it saves (grid 55, 256x256, 2 shared cores: 1.7x slower at the sparse 0.999, whose tets tested are 1/32
  * of the marcher's steps; 16x at 0.3). */
@@ -606,15 +611,28 @@ static int frame_culls(vk_render *v, const tpk_render_options *opt, tpk_diag *di
 {
     int wanted = tpk_render_culling_wanted();
     if (wanted == 0 || !tpk_render_iso_only(opt, v->mesh.scalars != NULL) ||
-        (wanted < 0 && v->ctx.props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) ||
-        (wanted < 0 && tpk_render_iso_dense(&v->mesh, opt->iso, opt->iso_count)))
+        (wanted < 0 && v->ctx.props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU))
         return 0;
+    size_t values = sizeof opt->iso[0] * (size_t)opt->iso_count;
+    int same = v->auto_valid && v->auto_count == opt->iso_count && !memcmp(v->auto_iso, opt->iso, values);
+    if (wanted < 0 && same && !v->auto_culls)
+        return 0; /* a dense isosurface, as found for these values */
+    if (wanted < 0 && !same && tpk_render_iso_dense(&v->mesh, opt->iso, opt->iso_count)) {
+        v->auto_valid = 1, v->auto_culls = 0, v->auto_count = opt->iso_count;
+        memcpy(v->auto_iso, opt->iso, values);
+        return 0;
+    }
     if (!v->range) {
         tpk_result r = tpk_range_bvh_create(&v->range, v->marcher);
         if (r != TPK_OK)
             return tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
     }
-    if (wanted < 0 && tpk_range_bvh_active(v->range, opt->iso, opt->iso_count) > TPK_RENDER_CULL_ACTIVE)
+    if (wanted < 0 && !same) {
+        v->auto_valid = 1, v->auto_count = opt->iso_count;
+        memcpy(v->auto_iso, opt->iso, values);
+        v->auto_culls = tpk_range_bvh_active(v->range, opt->iso, opt->iso_count) <= TPK_RENDER_CULL_ACTIVE;
+    }
+    if (wanted < 0 && !v->auto_culls)
         return 0; /* a dense isosurface: marching finds it sooner */
     if (v->range_leaf_base == 0 && range_upload(v, diag) != 0)
         return -1;
