@@ -6,6 +6,7 @@
  *   march_set.c  tpk_set_marcher_* (public, tetpack.h): rays across the parts of a set, on tpki_march_run
  *   march.c      tpk_marcher_create, tpk_marcher_destroy, tpk_march_ray (public, tetpack.h), tpki_march_run
  *   shell_bvh.c  tpki_shell_bvh_build, tpki_shell_entries, tpki_shell_face_entry
+ *   bvh_build.c  tpki_bvh_build: the binned-SAH builder of both BVHs
  *   ray.c        see internal_ray.h */
 #ifndef TPK_INTERNAL_MARCH_H
 #define TPK_INTERNAL_MARCH_H
@@ -37,6 +38,20 @@ struct tpk_marcher {
  * through it (then *hit is filled with v = (a,b,c) and t), 0 otherwise. */
 int tpki_shell_face_entry(const float *positions, const tpk_ray_frame *frame, const tpk_shell_face *face,
                          tpk_face_hit *hit);
+
+/* An item of tpki_bvh_build: its box (rounded outward, padded as the caller's queries need), the
+ * centroid the splits sort by, and the caller's id. */
+typedef struct tpki_bvh_item {
+    float lo[3], hi[3];
+    float centroid[3];
+    int32_t id;
+} tpki_bvh_item;
+
+/* Binned-SAH BVH over items[0 .. n) into nodes (room for 2n), root first; an inner node has count 0
+ * and children first, first + 1; a leaf holds items [first, first + count), at most leaf_size (>= 1),
+ * and items come back permuted into leaf order. No leaf is deeper than TPK_BVH_SAH_DEPTH + 32.
+ * *node_count gets the nodes used. TPK_ERR_OUT_OF_MEMORY, or TPK_OK. */
+tpk_result tpki_bvh_build(tpki_bvh_item *items, int32_t n, int leaf_size, tpk_bvh_node *nodes, int32_t *node_count);
 
 /* Build the BVH over mesh->shell into marcher->nodes/faces. Shell records must be validated first. */
 tpk_result tpki_shell_bvh_build(tpk_marcher *marcher);

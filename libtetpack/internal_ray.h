@@ -27,17 +27,23 @@ typedef struct tpk_proj {
 int tpki_ray_frame_init(tpk_ray_frame *frame, const double origin[3], const double org[3],
                        const double dir[3]);
 
-/* Project vertex v (a valid id). Every decision about v uses this one function, so the same vertex
- * always gets bit-identical 2-D coordinates whichever tet or shell face asks. */
-static inline tpk_proj tpk_project(const float *positions, const tpk_ray_frame *f, int32_t v)
+/* Project the point p (a vertex's three floats). Every decision about a vertex uses this one function,
+ * so the same vertex always gets bit-identical 2-D coordinates whichever tet or shell face asks, and
+ * from whichever copy of its floats. */
+static inline tpk_proj tpk_project_point(const float *p, const tpk_ray_frame *f)
 {
-    const float *p = positions + 3 * (int64_t)v;
     double q[3] = {(double)p[0] - f->org[0], (double)p[1] - f->org[1], (double)p[2] - f->org[2]};
     tpk_proj r;
     r.x = q[f->kx] - f->sx * q[f->kz];
     r.y = q[f->ky] - f->sy * q[f->kz];
     r.z = f->sz * q[f->kz];
     return r;
+}
+
+/* The same for vertex v (a valid id) of positions. */
+static inline tpk_proj tpk_project(const float *positions, const tpk_ray_frame *f, int32_t v)
+{
+    return tpk_project_point(positions + 3 * (int64_t)v, f);
 }
 
 /* Exact sign (-1, 0, +1) of a*d - b*c for doubles (error-free products and sums; correct unless the

@@ -21,29 +21,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal_march.h"
+#include "internal_range.h"
 #include "tetpack_format.h"
 
 #define TPK_RANGE_LEAF TPK_RANGE_BVH_LEAF
 #define HEAP_STACK 64
-
-typedef struct range_node {
-    float lo[3], hi[3];
-    float smin, smax;
-} range_node;
-
-struct tpk_range_bvh {
-    const tpk_marcher *marcher;
-    int32_t *tets;            /* 4 per tet, positive order (tpk_recover_tets) */
-    float *tet_range;         /* 2 per tet: the vertex scalars' min and max, rounded outward */
-    range_node *nodes;        /* every level, leaves first */
-    int64_t level_start[40];  /* first node of each level */
-    int64_t level_count[40];
-    int levels;
-    double pad;               /* added around boxes in the slab test: 1e-6 of the extent */
-};
-
-static int holds_value(double lo, double hi, const double *values, int count);
 
 static float down(double x)
 {
@@ -80,7 +62,8 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
     b->tets = malloc(sizeof *b->tets * 4 * (size_t)(tet_count ? tet_count : 1));
     b->tet_range = malloc(sizeof *b->tet_range * 2 * (size_t)(tet_count ? tet_count : 1));
     b->nodes = malloc(sizeof *b->nodes * (size_t)(total ? total : 1));
-    if (!b->tets || !b->tet_range || !b->nodes) {
+    b->node_range = malloc(sizeof *b->node_range * 2 * (size_t)(total ? total : 1));
+    if (!b->tets || !b->tet_range || !b->nodes || !b->node_range) {
         tpk_range_bvh_destroy(b);
         return TPK_ERR_OUT_OF_MEMORY;
     }
@@ -91,11 +74,14 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
     }
     const float *pos = mesh->positions, *sc = mesh->scalars;
     for (int64_t leaf = 0; leaf < leaves; leaf++) {
-        range_node *n = &b->nodes[leaf];
+        tpk_bvh_node *n = &b->nodes[leaf];
+        float *range = &b->node_range[2 * leaf];
         for (int k = 0; k < 3; k++)
             n->lo[k] = INFINITY, n->hi[k] = -INFINITY;
-        n->smin = INFINITY, n->smax = -INFINITY;
+        range[0] = INFINITY, range[1] = -INFINITY;
         int64_t end = (leaf + 1) * TPK_RANGE_LEAF < tet_count ? (leaf + 1) * TPK_RANGE_LEAF : tet_count;
+        n->first = (int32_t)(leaf * TPK_RANGE_LEAF);
+        n->count = (int32_t)(end - leaf * TPK_RANGE_LEAF);
         for (int64_t t = leaf * TPK_RANGE_LEAF; t < end; t++) {
             float smin = INFINITY, smax = -INFINITY;
             for (int i = 0; i < 4; i++) {
@@ -112,8 +98,8 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
             /* outward by an ulp: the marcher's interpolated scalars are sums in double of these floats */
             b->tet_range[2 * t] = smin > -INFINITY ? nextafterf(smin, -INFINITY) : smin;
             b->tet_range[2 * t + 1] = smax < INFINITY ? nextafterf(smax, INFINITY) : smax;
-            n->smin = b->tet_range[2 * t] < n->smin ? b->tet_range[2 * t] : n->smin;
-            n->smax = b->tet_range[2 * t + 1] > n->smax ? b->tet_range[2 * t + 1] : n->smax;
+            range[0] = b->tet_range[2 * t] < range[0] ? b->tet_range[2 * t] : range[0];
+            range[1] = b->tet_range[2 * t + 1] > range[1] ? b->tet_range[2 * t + 1] : range[1];
         }
         for (int k = 0; k < 3; k++) {
             n->lo[k] = down((double)n->lo[k] - b->pad);
@@ -122,16 +108,21 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
     }
     for (int l = 1; l < b->levels; l++)
         for (int64_t i = 0; i < b->level_count[l]; i++) {
-            range_node *n = &b->nodes[b->level_start[l] + i];
-            const range_node *c = &b->nodes[b->level_start[l - 1] + 2 * i];
-            *n = c[0];
+            int64_t at = b->level_start[l] + i, c = b->level_start[l - 1] + 2 * i;
+            tpk_bvh_node *n = &b->nodes[at];
+            float *range = &b->node_range[2 * at];
+            *n = b->nodes[c];
+            range[0] = b->node_range[2 * c], range[1] = b->node_range[2 * c + 1];
             if (2 * i + 1 < b->level_count[l - 1]) {
+                const tpk_bvh_node *d = &b->nodes[c + 1];
                 for (int k = 0; k < 3; k++) {
-                    n->lo[k] = c[1].lo[k] < n->lo[k] ? c[1].lo[k] : n->lo[k];
-                    n->hi[k] = c[1].hi[k] > n->hi[k] ? c[1].hi[k] : n->hi[k];
+                    n->lo[k] = d->lo[k] < n->lo[k] ? d->lo[k] : n->lo[k];
+                    n->hi[k] = d->hi[k] > n->hi[k] ? d->hi[k] : n->hi[k];
                 }
-                n->smin = c[1].smin < n->smin ? c[1].smin : n->smin;
-                n->smax = c[1].smax > n->smax ? c[1].smax : n->smax;
+                range[0] = b->node_range[2 * c + 2] < range[0] ? b->node_range[2 * c + 2] : range[0];
+                range[1] = b->node_range[2 * c + 3] > range[1] ? b->node_range[2 * c + 3] : range[1];
+                n->first = (int32_t)c;
+                n->count = 0;
             }
         }
     *out = b;
@@ -145,6 +136,11 @@ void tpk_range_bvh_destroy(tpk_range_bvh *b)
     free(b->tets);
     free(b->tet_range);
     free(b->nodes);
+    free(b->node_range);
+    free(b->wide);
+    free(b->active_tets);
+    free(b->active_slots);
+    free(b->active_values);
     free(b);
 }
 
@@ -154,7 +150,7 @@ double tpk_range_bvh_active(const tpk_range_bvh *b, const double *values, int co
         return 0.0;
     int64_t active = 0;
     for (int64_t i = 0; i < b->level_count[0]; i++)
-        active += holds_value(b->nodes[i].smin, b->nodes[i].smax, values, count);
+        active += tpki_range_holds(b->node_range[2 * i], b->node_range[2 * i + 1], values, count);
     return (double)active / (double)b->level_count[0];
 }
 
@@ -173,10 +169,11 @@ int64_t tpk_range_bvh_heap(const tpk_range_bvh *b, float *nodes)
     /* level l of the implicit tree (leaves l = 0) starts at heap node base >> l: the same pairs */
     for (int l = 0; l < b->levels; l++)
         for (int64_t i = 0; i < b->level_count[l]; i++) {
-            const range_node *r = &b->nodes[b->level_start[l] + i];
+            int64_t at = b->level_start[l] + i;
+            const tpk_bvh_node *r = &b->nodes[at];
             float *d = nodes + 8 * ((base >> l) + i);
-            d[0] = r->lo[0], d[1] = r->lo[1], d[2] = r->lo[2], d[3] = r->smin;
-            d[4] = r->hi[0], d[5] = r->hi[1], d[6] = r->hi[2], d[7] = r->smax;
+            d[0] = r->lo[0], d[1] = r->lo[1], d[2] = r->lo[2], d[3] = b->node_range[2 * at];
+            d[4] = r->hi[0], d[5] = r->hi[1], d[6] = r->hi[2], d[7] = b->node_range[2 * at + 1];
         }
     return base;
 }
@@ -186,10 +183,16 @@ const int32_t *tpk_range_bvh_tets(const tpk_range_bvh *b)
     return b ? b->tets : NULL;
 }
 
+/* Is the selected tree the one for these values? */
+static int selected(const tpk_range_bvh *b, const double *values, int count)
+{
+    return b->active_value_count > 0 && count == b->active_value_count &&
+           !memcmp(values, b->active_values, sizeof *values * (size_t)count);
+}
+
 /* ---- One ray ------------------------------------------------------------------------------------- */
 
-/* A value of `values` in [lo, hi]. */
-static int holds_value(double lo, double hi, const double *values, int count)
+int tpki_range_holds(double lo, double hi, const double *values, int count)
 {
     for (int j = 0; j < count; j++)
         if (values[j] >= lo && values[j] <= hi)
@@ -211,7 +214,7 @@ static int crosses(double s_in, double s_out, const double *values, int count)
 
 typedef struct heap_item {
     double key;
-    int64_t index; /* node: level << 40 | i; piece: index into the pieces */
+    int64_t index; /* node: its index in the tree; piece: index into the pieces */
 } heap_item;
 
 typedef struct heap {
@@ -274,7 +277,7 @@ static void heap_free(heap *h)
 
 /* Where the ray (local origin o, direction d, 1/d) enters a padded box, or +inf when it misses it or
  * enters after tmax. */
-static double box_entry(const range_node *n, const double o[3], const double inv[3], double pad, double tmin,
+static double box_entry(const tpk_bvh_node *n, const double o[3], const double inv[3], double pad, double tmin,
                         double tmax)
 {
     double t0 = -INFINITY, t1 = INFINITY;
@@ -298,15 +301,128 @@ static double box_entry(const range_node *n, const double o[3], const double inv
     return t0;
 }
 
+/* A ray's box test set up once: the near plane of each slab (by the sign of the direction), 1/d, and the
+ * padding in t (pad |1/d|), so that a box costs six multiply-adds. A ray with a direction component 0
+ * (1/d infinite) takes box_entry's general test. */
+typedef struct ray_box {
+    double o[3], inv[3], pad_t[3], pad;
+    int near[3], far[3]; /* offsets into a node's six floats (lo[3], hi[3]) */
+    int general;
+} ray_box;
+
+static void ray_box_init(ray_box *rb, const double o[3], const double inv[3], double pad)
+{
+    rb->general = 0;
+    rb->pad = pad;
+    for (int k = 0; k < 3; k++) {
+        rb->o[k] = o[k];
+        rb->inv[k] = inv[k];
+        rb->pad_t[k] = pad * fabs(inv[k]);
+        rb->near[k] = inv[k] >= 0 ? k : k + 3;
+        rb->far[k] = inv[k] >= 0 ? k + 3 : k;
+        rb->general |= !isfinite(inv[k]) || !isfinite(rb->pad_t[k]);
+    }
+}
+
+/* box_entry, by the ray's set-up test. */
+static inline double ray_box_entry(const tpk_bvh_node *n, const ray_box *rb, double tmin, double tmax)
+{
+    if (rb->general)
+        return box_entry(n, rb->o, rb->inv, rb->pad, tmin, tmax);
+    const float *box = n->lo; /* lo[3] then hi[3] (tpk_shell_bvh_node) */
+    double t0 = -INFINITY, t1 = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        double a = ((double)box[rb->near[k]] - rb->o[k]) * rb->inv[k] - rb->pad_t[k];
+        double c = ((double)box[rb->far[k]] - rb->o[k]) * rb->inv[k] + rb->pad_t[k];
+        t0 = a > t0 ? a : t0;
+        t1 = c < t1 ? c : t1;
+    }
+    return t0 > t1 || t1 < tmin || t0 > tmax ? INFINITY : t0;
+}
+
+/* The same test for the four children of a wide node at once, in float: a lane's entry t, or +inf where
+ * the ray misses that child or meets it outside [tmin, tmax]. Floats round (the box minus the origin,
+ * times 1/d), by at most 2^-21 (|box| + |origin|) |1/d| all told, so each slab is widened by 2^-20
+ * (extent + |origin|) |1/d| on top of the padding: no child that the double test would enter is
+ * missed. A ray whose 1/d or origin floats cannot hold takes box_entry lane by lane. */
+typedef struct wide_ray {
+    tpki_v4f o[3], inv[3], pad_t[3], tmin, tmax;
+    int near[3], far[3]; /* which of a node's six box rows is the near and the far plane per axis */
+    int general;
+} wide_ray;
+
+static void wide_ray_init(wide_ray *wr, const ray_box *rb, double extent, double tmin, double tmax)
+{
+    double o_max = fmax(fabs(rb->o[0]), fmax(fabs(rb->o[1]), fabs(rb->o[2])));
+    double widen = rb->pad + ldexp(extent + o_max, -20);
+    wr->general = rb->general || !(o_max < 1e30);
+    for (int k = 0; k < 3; k++) {
+        double pad_t = widen * fabs(rb->inv[k]);
+        wr->general |= !(fabs(rb->inv[k]) < 1e30) || !(pad_t < 1e30);
+        float o = (float)rb->o[k], inv = (float)rb->inv[k], p = (float)pad_t;
+        wr->o[k] = (tpki_v4f){o, o, o, o};
+        wr->inv[k] = (tpki_v4f){inv, inv, inv, inv};
+        wr->pad_t[k] = (tpki_v4f){p, p, p, p};
+        wr->near[k] = rb->near[k];
+        wr->far[k] = rb->far[k];
+    }
+    float lo = tmin > -1e30 ? down(tmin) : -INFINITY, hi = tmax < 1e30 ? up(tmax) : INFINITY;
+    wr->tmin = (tpki_v4f){lo, lo, lo, lo};
+    wr->tmax = (tpki_v4f){hi, hi, hi, hi};
+}
+
+static inline tpki_v4f v4_max(tpki_v4f a, tpki_v4f b)
+{
+    tpki_v4i m = a > b;
+    return (tpki_v4f)(((tpki_v4i)a & m) | ((tpki_v4i)b & ~m));
+}
+
+static inline tpki_v4f v4_min(tpki_v4f a, tpki_v4f b)
+{
+    tpki_v4i m = a < b;
+    return (tpki_v4f)(((tpki_v4i)a & m) | ((tpki_v4i)b & ~m));
+}
+
+/* Entry t of each lane (+inf: missed) into t0[4]. */
+static inline void wide_entry(const tpki_wide_node *n, const wide_ray *wr, const ray_box *rb, double tmin,
+                              double tmax, double t0[4])
+{
+    if (wr->general) {
+        for (int i = 0; i < 4; i++) {
+            tpk_bvh_node box;
+            for (int k = 0; k < 3; k++)
+                box.lo[k] = n->box[k][i], box.hi[k] = n->box[k + 3][i];
+            t0[i] = n->count[i] < 0 ? INFINITY : box_entry(&box, rb->o, rb->inv, rb->pad, tmin, tmax);
+        }
+        return;
+    }
+    tpki_v4f near = v4_max(v4_max((n->box[wr->near[0]] - wr->o[0]) * wr->inv[0] - wr->pad_t[0],
+                                  (n->box[wr->near[1]] - wr->o[1]) * wr->inv[1] - wr->pad_t[1]),
+                           (n->box[wr->near[2]] - wr->o[2]) * wr->inv[2] - wr->pad_t[2]);
+    tpki_v4f far = v4_min(v4_min((n->box[wr->far[0]] - wr->o[0]) * wr->inv[0] + wr->pad_t[0],
+                                 (n->box[wr->far[1]] - wr->o[1]) * wr->inv[1] + wr->pad_t[1]),
+                          (n->box[wr->far[2]] - wr->o[2]) * wr->inv[2] + wr->pad_t[2]);
+    tpki_v4i hit = (near <= far) & (far >= wr->tmin) & (near <= wr->tmax);
+    for (int i = 0; i < 4; i++)
+        t0[i] = hit[i] ? (double)near[i] : INFINITY;
+}
+
 /* The piece of tet `t` (positive order q) the ray crosses, as the marcher computes it; 0 when the ray
- * misses the tet. */
-static int tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t, tpk_segment *seg)
+ * misses the tet. slot: the tet's copy in the selected tree, or NULL. */
+static int tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t, const tpki_active_slot *slot,
+                     tpk_segment *seg)
 {
     const tpk_mesh_arrays *mesh = &b->marcher->mesh;
-    const int32_t *q = b->tets + 4 * t;
+    const int32_t *q = slot ? slot->v : b->tets + 4 * t;
     tpk_proj p[4];
-    for (int i = 0; i < 4; i++)
-        p[i] = tpk_project(mesh->positions, frame, q[i]);
+    for (int i = 0; i < 4; i++) {
+        if (slot) {
+            const float corner[3] = {slot->pos[0][i], slot->pos[1][i], slot->pos[2][i]};
+            p[i] = tpk_project_point(corner, frame);
+        } else {
+            p[i] = tpk_project(mesh->positions, frame, q[i]);
+        }
+    }
     /* The ray is the point (0,0) of the frame, perturbed to (eps, eps^2) (internal_ray.h): a tet whose
      * corners all lie strictly on one side of x = 0 or of y = 0 cannot hold it, whatever the edge signs
      * say, and most tets of a leaf are such. */
@@ -380,6 +496,185 @@ static int clip_piece(tpk_segment *seg, double tmin, double tmax)
     return 1;
 }
 
+/* One ray's walk: the queued nodes (by entry t) and the pieces found but not yet handed on (by t_in). */
+typedef struct walk {
+    const tpk_range_bvh *b;
+    tpk_ray_frame frame;
+    ray_box rb;
+    double tmin, tmax, slack;
+    const double *values;
+    int value_count;
+    tpk_segment_fn fn;
+    void *user;
+    heap nodes, pieces_heap;
+    heap_item node_stack[HEAP_STACK], piece_stack[HEAP_STACK];
+    tpk_segment piece_buf[HEAP_STACK];
+    tpk_segment *pieces;
+    int64_t piece_count, piece_cap;
+    uint64_t tested;
+    int stop;
+    tpk_result r;
+} walk;
+
+/* Hand on the first piece found if it starts before any node left can hold one; 1 if it did. */
+static int walk_hand(walk *w)
+{
+    if (w->pieces_heap.count == 0 || (w->nodes.count > 0 && w->pieces_heap.items[0].key >= w->nodes.items[0].key))
+        return 0;
+    heap_item it = heap_pop(&w->pieces_heap);
+    tpk_segment seg = w->pieces[it.index];
+    if (w->fn && w->fn(w->user, &seg))
+        w->stop = 1;
+    if (seg.t_out >= w->tmax)
+        w->stop = 1;
+    return 1;
+}
+
+/* Something queued comes before `key`. */
+static int walk_due_before(const walk *w, double key)
+{
+    return (w->nodes.count > 0 && w->nodes.items[0].key < key) ||
+           (w->pieces_heap.count > 0 && w->pieces_heap.items[0].key < key);
+}
+
+static void walk_push_node(walk *w, double key, int64_t index)
+{
+    if (heap_push(&w->nodes, key, index))
+        w->r = TPK_ERR_OUT_OF_MEMORY;
+}
+
+/* Test tet t (slot: its copy in the selected tree, or NULL) and queue its piece if it crosses a value. */
+static void walk_tet(walk *w, int64_t t, const tpki_active_slot *slot)
+{
+    w->tested++;
+    tpk_segment seg;
+    if (!tet_piece(w->b, &w->frame, t, slot, &seg) || !clip_piece(&seg, w->tmin, w->tmax) ||
+        !crosses(seg.scalar_in, seg.scalar_out, w->values, w->value_count))
+        return;
+    if (w->piece_count == w->piece_cap) {
+        tpk_segment *grown = malloc(sizeof *grown * (size_t)(2 * w->piece_cap));
+        if (!grown) {
+            w->r = TPK_ERR_OUT_OF_MEMORY;
+            return;
+        }
+        memcpy(grown, w->pieces, sizeof *grown * (size_t)w->piece_count);
+        if (w->pieces != w->piece_buf)
+            free(w->pieces);
+        w->pieces = grown;
+        w->piece_cap *= 2;
+    }
+    w->pieces[w->piece_count] = seg;
+    if (heap_push(&w->pieces_heap, seg.t_in, w->piece_count++))
+        w->r = TPK_ERR_OUT_OF_MEMORY;
+}
+
+/* The file-order tree: ranges checked at every node and tet. */
+static void walk_file_order(walk *w)
+{
+    const tpk_range_bvh *b = w->b;
+    const tpk_bvh_node *tree = b->nodes;
+    const float *range = b->node_range;
+    int64_t root = b->level_start[b->levels - 1];
+    double t_root = tpki_range_holds(range[2 * root], range[2 * root + 1], w->values, w->value_count)
+                        ? ray_box_entry(&tree[root], &w->rb, w->tmin, w->tmax) : INFINITY;
+    if (t_root < INFINITY)
+        walk_push_node(w, t_root - w->slack, root);
+    while (w->r == TPK_OK && !w->stop && (w->nodes.count > 0 || w->pieces_heap.count > 0)) {
+        if (walk_hand(w))
+            continue;
+        int64_t i = heap_pop(&w->nodes).index;
+        /* down the tree: the nearer child straight on while nothing queued comes before it, the other
+         * child queued */
+        while (tree[i].count == 0 && w->r == TPK_OK) {
+            double key[2] = {INFINITY, INFINITY};
+            int64_t child[2] = {-1, -1};
+            int found = 0;
+            for (int64_t c = tree[i].first; c <= tree[i].first + 1; c++) {
+                if (!tpki_range_holds(range[2 * c], range[2 * c + 1], w->values, w->value_count))
+                    continue;
+                double t0 = ray_box_entry(&tree[c], &w->rb, w->tmin, w->tmax);
+                if (t0 < INFINITY)
+                    key[found] = t0 - w->slack, child[found++] = c;
+            }
+            if (found == 2 && key[1] < key[0]) {
+                double k = key[0];
+                int64_t c = child[0];
+                key[0] = key[1], child[0] = child[1];
+                key[1] = k, child[1] = c;
+            }
+            if (found == 2)
+                walk_push_node(w, key[1], child[1]);
+            if (found == 0)
+                break;
+            if (walk_due_before(w, key[0])) {
+                walk_push_node(w, key[0], child[0]);
+                break;
+            }
+            i = child[0];
+        }
+        if (tree[i].count == 0)
+            continue;
+        for (int64_t t = tree[i].first; t < tree[i].first + tree[i].count && w->r == TPK_OK; t++)
+            if (tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], w->values, w->value_count))
+                walk_tet(w, t, NULL);
+    }
+}
+
+/* A queued child of the selected tree: a wide node (>= 0) or a leaf (first slot and count, negative). */
+static int64_t leaf_ref(int32_t first, int32_t count)
+{
+    return -((int64_t)first * 8 + count) - 1;
+}
+
+/* The selected tree: every tet holds a value, four children tested at once. */
+static void walk_selected(walk *w)
+{
+    const tpk_range_bvh *b = w->b;
+    wide_ray wr;
+    wide_ray_init(&wr, &w->rb, b->marcher->extent, w->tmin, w->tmax);
+    walk_push_node(w, -INFINITY, 0);
+    while (w->r == TPK_OK && !w->stop && (w->nodes.count > 0 || w->pieces_heap.count > 0)) {
+        if (walk_hand(w))
+            continue;
+        int64_t ref = heap_pop(&w->nodes).index;
+        /* down the tree: the nearest child straight on while nothing queued comes before it, the others
+         * queued */
+        while (ref >= 0 && w->r == TPK_OK) {
+            const tpki_wide_node *n = &b->wide[ref];
+            double t0[4], key[4];
+            int64_t child[4];
+            int found = 0;
+            wide_entry(n, &wr, &w->rb, w->tmin, w->tmax, t0);
+            for (int i = 0; i < 4; i++) {
+                if (t0[i] == INFINITY)
+                    continue;
+                int64_t c = n->count[i] == 0 ? n->child[i] : leaf_ref(n->child[i], n->count[i]);
+                int at = found++;
+                for (; at > 0 && key[at - 1] > t0[i] - w->slack; at--) /* nearest first */
+                    key[at] = key[at - 1], child[at] = child[at - 1];
+                key[at] = t0[i] - w->slack, child[at] = c;
+            }
+            for (int i = 1; i < found; i++)
+                walk_push_node(w, key[i], child[i]);
+            if (found == 0) {
+                ref = 0;
+                break;
+            }
+            if (walk_due_before(w, key[0])) {
+                walk_push_node(w, key[0], child[0]);
+                ref = 0;
+                break;
+            }
+            ref = child[0];
+        }
+        if (ref >= 0)
+            continue;
+        int64_t first = (-ref - 1) / 8, count = (-ref - 1) % 8;
+        for (int64_t slot = first; slot < first + count && w->r == TPK_OK; slot++)
+            walk_tet(w, b->active_tets[slot], &b->active_slots[slot]);
+    }
+}
+
 tpk_result tpk_march_ray_values(const tpk_range_bvh *b, const double org[3], const double dir[3], double tmin,
                                 double tmax, const double *values, int value_count, tpk_segment_fn fn,
                                 void *user, tpk_march_stats *stats)
@@ -388,114 +683,36 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *b, const double org[3], con
         memset(stats, 0, sizeof *stats);
     if (!b || !org || !dir || isnan(tmin) || isnan(tmax) || value_count < 0 || (value_count > 0 && !values))
         return TPK_ERR_INVALID_ARGUMENT;
-    tpk_ray_frame frame;
-    if (tpki_ray_frame_init(&frame, b->marcher->mesh.origin, org, dir) != 0)
+    walk walk_state; /* not zeroed: its stack buffers are large and fill as they are used */
+    walk *w = &walk_state;
+    w->b = b, w->tmin = tmin, w->tmax = tmax, w->values = values, w->value_count = value_count;
+    w->fn = fn, w->user = user, w->r = TPK_OK, w->tested = 0, w->stop = 0, w->piece_count = 0;
+    if (tpki_ray_frame_init(&w->frame, b->marcher->mesh.origin, org, dir) != 0)
         return TPK_ERR_INVALID_ARGUMENT;
-    if (tmax < tmin || b->levels == 0 || value_count == 0)
+    int use_selected = selected(b, values, value_count);
+    if (tmax < tmin || b->levels == 0 || value_count == 0 || (use_selected && b->wide_count == 0))
         return TPK_OK;
     double inv[3];
     for (int k = 0; k < 3; k++)
         inv[k] = 1.0 / dir[k];
+    ray_box_init(&w->rb, w->frame.org, inv, b->pad);
     /* t of the box tests and of the pieces differ by rounding: a node is due a little before its box */
     double dir_len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
-    double slack = 1e-9 * (b->marcher->extent + fabs(frame.org[0]) + fabs(frame.org[1]) + fabs(frame.org[2])) / dir_len;
-
-    heap_item node_stack[HEAP_STACK], piece_stack[HEAP_STACK];
-    tpk_segment piece_buf[HEAP_STACK];
-    heap nodes = {node_stack, node_stack, 0, HEAP_STACK}, pieces_heap = {piece_stack, piece_stack, 0, HEAP_STACK};
-    tpk_segment *pieces = piece_buf;
-    int64_t piece_count = 0, piece_cap = HEAP_STACK;
-    tpk_result r = TPK_OK;
-    uint64_t tested = 0;
-    int stop = 0;
-
-    int top = b->levels - 1;
-    const range_node *root = &b->nodes[b->level_start[top]];
-    double t_root = holds_value(root->smin, root->smax, values, value_count)
-                        ? box_entry(root, frame.org, inv, b->pad, tmin, tmax) : INFINITY;
-    if (t_root < INFINITY && heap_push(&nodes, t_root - slack, (int64_t)top << 40))
-        r = TPK_ERR_OUT_OF_MEMORY;
-    while (r == TPK_OK && !stop && (nodes.count > 0 || pieces_heap.count > 0)) {
-        /* hand on every piece that starts before any node left can */
-        if (pieces_heap.count > 0 && (nodes.count == 0 || pieces_heap.items[0].key < nodes.items[0].key)) {
-            heap_item it = heap_pop(&pieces_heap);
-            tpk_segment seg = pieces[it.index];
-            if (fn && fn(user, &seg))
-                stop = 1;
-            if (seg.t_out >= tmax)
-                stop = 1;
-            continue;
-        }
-        heap_item it = heap_pop(&nodes);
-        int level = (int)(it.index >> 40);
-        int64_t i = it.index & (((int64_t)1 << 40) - 1);
-        /* down the tree: the nearer child straight on while nothing queued comes before it, the other
-         * child queued */
-        while (level > 0 && r == TPK_OK) {
-            double key[2] = {INFINITY, INFINITY};
-            int64_t child[2] = {-1, -1};
-            int found = 0;
-            for (int64_t c = 2 * i; c <= 2 * i + 1 && c < b->level_count[level - 1]; c++) {
-                const range_node *n = &b->nodes[b->level_start[level - 1] + c];
-                if (!holds_value(n->smin, n->smax, values, value_count))
-                    continue;
-                double t0 = box_entry(n, frame.org, inv, b->pad, tmin, tmax);
-                if (t0 < INFINITY)
-                    key[found] = t0 - slack, child[found++] = c;
-            }
-            if (found == 2 && key[1] < key[0]) {
-                double k = key[0];
-                int64_t c = child[0];
-                key[0] = key[1], child[0] = child[1];
-                key[1] = k, child[1] = c;
-            }
-            if (found == 2 && heap_push(&nodes, key[1], (int64_t)(level - 1) << 40 | child[1]))
-                r = TPK_ERR_OUT_OF_MEMORY;
-            if (found == 0)
-                break;
-            if ((nodes.count > 0 && nodes.items[0].key < key[0]) ||
-                (pieces_heap.count > 0 && pieces_heap.items[0].key < key[0])) {
-                if (heap_push(&nodes, key[0], (int64_t)(level - 1) << 40 | child[0]))
-                    r = TPK_ERR_OUT_OF_MEMORY;
-                break;
-            }
-            level--;
-            i = child[0];
-        }
-        if (level > 0)
-            continue;
-        int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
-        int64_t end = (i + 1) * TPK_RANGE_LEAF < tet_count ? (i + 1) * TPK_RANGE_LEAF : tet_count;
-        for (int64_t t = i * TPK_RANGE_LEAF; t < end && r == TPK_OK; t++) {
-            if (!holds_value(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, value_count))
-                continue;
-            tested++;
-            tpk_segment seg;
-            if (!tet_piece(b, &frame, t, &seg) || !clip_piece(&seg, tmin, tmax) ||
-                !crosses(seg.scalar_in, seg.scalar_out, values, value_count))
-                continue;
-            if (piece_count == piece_cap) {
-                tpk_segment *grown = malloc(sizeof *grown * (size_t)(2 * piece_cap));
-                if (!grown) {
-                    r = TPK_ERR_OUT_OF_MEMORY;
-                    break;
-                }
-                memcpy(grown, pieces, sizeof *grown * (size_t)piece_count);
-                if (pieces != piece_buf)
-                    free(pieces);
-                pieces = grown;
-                piece_cap *= 2;
-            }
-            pieces[piece_count] = seg;
-            if (heap_push(&pieces_heap, seg.t_in, piece_count++))
-                r = TPK_ERR_OUT_OF_MEMORY;
-        }
-    }
-    if (pieces != piece_buf)
-        free(pieces);
-    heap_free(&nodes);
-    heap_free(&pieces_heap);
+    w->slack = 1e-9 * (b->marcher->extent + fabs(w->frame.org[0]) + fabs(w->frame.org[1]) + fabs(w->frame.org[2])) /
+               dir_len;
+    w->nodes = (heap){w->node_stack, w->node_stack, 0, HEAP_STACK};
+    w->pieces_heap = (heap){w->piece_stack, w->piece_stack, 0, HEAP_STACK};
+    w->pieces = w->piece_buf;
+    w->piece_cap = HEAP_STACK;
+    if (use_selected)
+        walk_selected(w);
+    else
+        walk_file_order(w);
+    if (w->pieces != w->piece_buf)
+        free(w->pieces);
+    heap_free(&w->nodes);
+    heap_free(&w->pieces_heap);
     if (stats)
-        stats->tet_steps = tested;
-    return r;
+        stats->tet_steps = w->tested;
+    return w->r;
 }

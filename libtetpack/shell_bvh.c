@@ -7,8 +7,6 @@
 
 #include "internal_march.h"
 
-#define SAH_BINS 16
-
 int tpki_shell_face_entry(const float *positions, const tpk_ray_frame *frame, const tpk_shell_face *face,
                          tpk_face_hit *hit)
 {
@@ -34,110 +32,8 @@ int tpki_shell_face_entry(const float *positions, const tpk_ray_frame *frame, co
 
 /* ---- Build --------------------------------------------------------------------------------------- */
 
-typedef struct build_item {
-    float lo[3], hi[3];
-    float centroid[3];
-    int32_t face;
-} build_item;
-
-typedef struct build_task {
-    int32_t node, begin, end, depth;
-} build_task;
-
-static void grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
-{
-    for (int k = 0; k < 3; k++) {
-        lo[k] = plo[k] < lo[k] ? plo[k] : lo[k];
-        hi[k] = phi[k] > hi[k] ? phi[k] : hi[k];
-    }
-}
-
-static float half_area(const float lo[3], const float hi[3])
-{
-    float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
-    if (dx < 0)
-        return 0.0f;
-    return dx * dy + dy * dz + dz * dx;
-}
-
-/* Bin of a centroid coordinate; NaN (hostile positions) goes to bin 0, never through an int cast. */
-static inline int bin_of(float x, float lo, float scale)
-{
-    float f = (x - lo) * scale;
-    return f >= 1.0f ? (f < (float)SAH_BINS ? (int)f : SAH_BINS - 1) : 0;
-}
-
-/* Best binned-SAH split of items [begin, end); returns the split position, or -1 when no split
- * separates the centroids. */
-static int32_t sah_split(build_item *items, int32_t begin, int32_t end)
-{
-    float clo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, chi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
-    for (int32_t i = begin; i < end; i++)
-        grow(clo, chi, items[i].centroid, items[i].centroid);
-    int best_axis = -1, best_bin = 0;
-    float best_cost = FLT_MAX;
-    for (int axis = 0; axis < 3; axis++) {
-        float extent = chi[axis] - clo[axis];
-        if (!(extent > 0))
-            continue;
-        float scale = SAH_BINS / extent;
-        int count[SAH_BINS] = {0};
-        float blo[SAH_BINS][3], bhi[SAH_BINS][3];
-        for (int b = 0; b < SAH_BINS; b++)
-            for (int k = 0; k < 3; k++) {
-                blo[b][k] = FLT_MAX;
-                bhi[b][k] = -FLT_MAX;
-            }
-        for (int32_t i = begin; i < end; i++) {
-            int b = bin_of(items[i].centroid[axis], clo[axis], scale);
-            count[b]++;
-            grow(blo[b], bhi[b], items[i].lo, items[i].hi);
-        }
-        /* Sweep from the right to get the right-hand costs, then from the left. */
-        float right_cost[SAH_BINS];
-        float rlo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, rhi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
-        int rcount = 0;
-        for (int b = SAH_BINS - 1; b > 0; b--) {
-            grow(rlo, rhi, blo[b], bhi[b]);
-            rcount += count[b];
-            right_cost[b] = rcount ? half_area(rlo, rhi) * (float)rcount : 0.0f;
-        }
-        float llo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, lhi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
-        int lcount = 0;
-        for (int b = 0; b < SAH_BINS - 1; b++) {
-            grow(llo, lhi, blo[b], bhi[b]);
-            lcount += count[b];
-            if (lcount == 0 || lcount == end - begin)
-                continue;
-            float cost = half_area(llo, lhi) * (float)lcount + right_cost[b + 1];
-            if (cost < best_cost) {
-                best_cost = cost;
-                best_axis = axis;
-                best_bin = b;
-            }
-        }
-    }
-    if (best_axis < 0)
-        return -1;
-    float extent = chi[best_axis] - clo[best_axis];
-    float scale = SAH_BINS / extent;
-    int32_t i = begin, j = end - 1;
-    while (i <= j) {
-        int b = bin_of(items[i].centroid[best_axis], clo[best_axis], scale);
-        if (b <= best_bin) {
-            i++;
-        } else {
-            build_item swap = items[i];
-            items[i] = items[j];
-            items[j] = swap;
-            j--;
-        }
-    }
-    return (i > begin && i < end) ? i : -1;
-}
-
 /* Bounds of a face in float, rounded outward and padded by `pad`. */
-static void face_bounds(const float *pos, const tpk_shell_face *f, double pad, build_item *it)
+static void face_bounds(const float *pos, const tpk_shell_face *f, double pad, tpki_bvh_item *it)
 {
     const int32_t v[3] = {f->a, f->b, f->c};
     for (int k = 0; k < 3; k++) {
@@ -182,55 +78,30 @@ tpk_result tpki_shell_bvh_build(tpk_marcher *m)
     m->face_count = n;
     if (n == 0)
         return TPK_OK;
-    build_item *items = malloc((size_t)n * sizeof *items);
-    build_task *tasks = malloc(((size_t)TPK_BVH_STACK + 64) * sizeof *tasks);
+    tpki_bvh_item *items = malloc((size_t)n * sizeof *items);
     m->nodes = malloc((size_t)(2 * (int64_t)n) * sizeof *m->nodes);
     m->faces = malloc((size_t)n * sizeof *m->faces);
-    if (!items || !tasks || !m->nodes || !m->faces) {
+    if (!items || !m->nodes || !m->faces) {
         free(items);
-        free(tasks);
         return TPK_ERR_OUT_OF_MEMORY;
     }
     m->extent = positions_extent(mesh->positions, (int64_t)mesh->vertex_count);
     const double pad = m->extent > 0 ? m->extent * 1e-6 : 1e-30;
     for (int32_t i = 0; i < n; i++) {
         face_bounds(mesh->positions, &mesh->shell[i], pad, &items[i]);
-        items[i].face = i;
+        items[i].id = i;
     }
 
-    /* Depth-first with an explicit stack: the second child waits on the stack while the first is
-     * built, so the stack holds at most one entry per level. */
-    int32_t task_count = 0, node_count = 1;
-    tasks[task_count++] = (build_task){0, 0, n, 0};
-    while (task_count > 0) {
-        build_task t = tasks[--task_count];
-        tpk_bvh_node *node = &m->nodes[t.node];
-        for (int k = 0; k < 3; k++) {
-            node->lo[k] = FLT_MAX;
-            node->hi[k] = -FLT_MAX;
-        }
-        for (int32_t i = t.begin; i < t.end; i++)
-            grow(node->lo, node->hi, items[i].lo, items[i].hi);
-        int32_t count = t.end - t.begin;
-        if (count <= TPK_BVH_LEAF_SIZE) {
-            node->first = t.begin;
-            node->count = count;
-            continue;
-        }
-        int32_t mid = t.depth < TPK_BVH_SAH_DEPTH ? sah_split(items, t.begin, t.end) : -1;
-        if (mid < 0)
-            mid = t.begin + count / 2; /* coincident centroids, or too deep: balanced by count */
-        node->first = node_count;
-        node->count = 0;
-        tasks[task_count++] = (build_task){node_count + 1, mid, t.end, t.depth + 1};
-        tasks[task_count++] = (build_task){node_count, t.begin, mid, t.depth + 1};
-        node_count += 2;
+    int32_t node_count = 0;
+    tpk_result r = tpki_bvh_build(items, n, TPK_BVH_LEAF_SIZE, m->nodes, &node_count);
+    if (r != TPK_OK) {
+        free(items);
+        return r;
     }
     m->node_count = node_count;
     for (int32_t i = 0; i < n; i++)
-        m->faces[i] = mesh->shell[items[i].face];
+        m->faces[i] = mesh->shell[items[i].id];
     free(items);
-    free(tasks);
     return TPK_OK;
 }
 

@@ -929,11 +929,14 @@ static void sort_equal_t_runs(recording *r)
 static void check_culling_agrees(fx_mesh *m, ray_generator gen, int64_t rays, const double *values, int count)
 {
     static recording marched, culled;
-    for (int l = 0; l < 3; l++) {
+    for (int run = 0; run < 6; run++) {
+        int l = run / 2, sel = run % 2; /* each layout with the file-order tree, then the selected one */
         tpk_marcher *marcher = make_marcher(m, layouts[l]);
         CHECK(marcher != NULL);
         tpk_range_bvh *bvh = NULL;
         CHECK(tpk_range_bvh_create(&bvh, marcher) == TPK_OK);
+        if (sel)
+            CHECK(tpk_range_bvh_select(bvh, values, count) == TPK_OK);
         uint64_t rng = 77 + (uint64_t)l;
         int64_t pieces = 0, rays_with = 0, clamped = 0;
         for (int64_t i = 0; i < rays; i++) {
@@ -946,8 +949,8 @@ static void check_culling_agrees(fx_mesh *m, ray_generator gen, int64_t rays, co
             CHECK(tpk_march_ray(marcher, org, dir, tmin, tmax, record_crossing, &f, NULL) == TPK_OK);
             CHECK(tpk_march_ray_values(bvh, org, dir, tmin, tmax, values, count, record_segment, &culled, &st) ==
                   TPK_OK);
-            CHECK_MSG(marched.count == culled.count, "layout %d ray %lld: %lld crossing pieces marched, %lld culled",
-                      l, (long long)i, (long long)marched.count, (long long)culled.count);
+            CHECK_MSG(marched.count == culled.count, "layout %d%s ray %lld: %lld crossing pieces marched, %lld culled",
+                      l, sel ? " (selected tree)" : "", (long long)i, (long long)marched.count, (long long)culled.count);
             /* pieces of one t (a ray through a vertex or an edge, where several tets have a piece of
              * length 0 or an ulp) come in the order of the marcher's path or of the tet numbers: sort
              * such runs of both by tet */
@@ -1042,6 +1045,27 @@ TPK_TEST(culled_iso_refuses_and_stops)
     CHECK(tpk_range_bvh_active(bvh, (const double[]){100.0}, 1) == 0.0);
     CHECK(tpk_march_ray_values(bvh, org, (const double[3]){0, 0, 0}, 0, 1, values, 2, record_segment, &rec, NULL) ==
           TPK_ERR_INVALID_ARGUMENT);
+    /* the selected tree: the same pieces and stop; other values walk the file-order tree; none held */
+    CHECK(tpk_range_bvh_select(NULL, values, 2) == TPK_ERR_INVALID_ARGUMENT);
+    CHECK(tpk_range_bvh_select(bvh, NULL, 2) == TPK_ERR_INVALID_ARGUMENT);
+    CHECK(tpk_range_bvh_select(bvh, values, 2) == TPK_OK);
+    static recording sel;
+    sel.count = 0;
+    CHECK(tpk_march_ray_values(bvh, org, dir, 0, INFINITY, values, 2, record_segment, &sel, NULL) == TPK_OK);
+    CHECK(sel.count == 2 && sel.tet[0] == rec.tet[0] && sel.tet[1] == rec.tet[1] && sel.t_in[0] == rec.t_in[0] &&
+          sel.t_in[1] == rec.t_in[1]);
+    seen = 0;
+    CHECK(tpk_march_ray_values(bvh, org, dir, 0, INFINITY, values, 2, stop_after_first, &seen, NULL) == TPK_OK);
+    CHECK(seen == 1);
+    sel.count = 0;
+    CHECK(tpk_march_ray_values(bvh, org, dir, 0, INFINITY, values + 1, 1, record_segment, &sel, NULL) == TPK_OK);
+    CHECK(sel.count == 1 && sel.tet[0] == rec.tet[1]);
+    CHECK(tpk_range_bvh_select(bvh, (const double[]){100.0}, 1) == TPK_OK);
+    sel.count = 0;
+    CHECK(tpk_march_ray_values(bvh, org, dir, 0, INFINITY, (const double[]){100.0}, 1, record_segment, &sel, NULL) ==
+          TPK_OK);
+    CHECK(sel.count == 0);
+    CHECK(tpk_range_bvh_select(bvh, NULL, 0) == TPK_OK); /* drops it */
     tpk_range_bvh_destroy(bvh);
     tpk_marcher_destroy(marcher);
     fx_free(&m);

@@ -190,19 +190,24 @@ typedef struct tpk_render_options {
  * ISO-ONLY RAYS. With iso values, a point field and a TF whose opacity is 0 at every control point, the
  * volume adds nothing and only the pieces that hold a crossing matter: the CPU renderer finds those by
  * range culling (libtetpack's tpk_march_ray_values: a BVH over the tets whose nodes carry the field's
- * range), the same pieces, bit for bit, in the same order, so the picture is the same. It pays where
- * the isosurface is sparse: where more than TPK_RENDER_CULL_ACTIVE of the BVH's leaves hold an iso value,
- * every ray meets the surface a few tets after it enters, and marching is faster (measured on the
- * 998k-tet grid of bench/make_grid_vtk.py 55, 512x512: culling 4.1x faster at 0.5% active leaves,
- * break-even near 10%, 2x slower at 35%), so the renderer marches. Building the BVH to count its
- * leaves costs more than the frame on a large mesh (10.4M tets: 2.6 CPU-seconds, most of it recovering
- * the tets' vertices from Tet16), so a glance at the field comes first: where more than
+ * range), the same pieces, bit for bit, in the same order, so the picture is the same. The CPU walks a
+ * second tree made for the frame's iso values (tpk_range_bvh_select: only the tets that hold one, four
+ * children a node), which tests fewer tets per ray than marching steps through on any surface; but its
+ * set-up (recovering the tets' vertices from Tet16, the file-order tree, the selected tree) costs about
+ * 0.35 CPU-microseconds a tet, which only enough rays pay back. Measured on the 998k-tet grid of
+ * bench/make_grid_vtk.py 55, 1024x1024, rays alone, one thread: culling 1.1x faster than marching
+ * where 47% of the file-order tree's leaves hold the value, 1.5x at 35%, 2.1x at 25%, 4.3x at 11%. So
+ * the renderer culls where at most TPK_RENDER_CULL_ACTIVE of those leaves hold a value, or, with at
+ * least as many rays as tets, at most TPK_RENDER_CULL_ACTIVE_MANY; else it marches. Building the trees
+ * to count the leaves costs more than a small frame on a large mesh (10.4M tets: several
+ * CPU-seconds), so with fewer rays than tets a glance at the field comes first: where more than
  * TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices (spatially compact along the file's
  * Hilbert order) hold an iso value, the surface is dense beyond doubt (on grid 55 such runs hold a value
- * about 0.8 times as often as leaves do) and the renderer marches without building it. The --json
+ * about 0.8 times as often as leaves do) and the renderer marches without building them. The --json
  * output says which (iso_culling). TETPACK_ISO_CULLING in the environment: 0 always marches, 1 always culls (benchmarks
- * compare the two), unset decides as above. The Vulkan renderer decides the same way and walks the same
- * tree in its shader (render.comp's cull_trace), with the same pieces as its own marcher; on a CPU
+ * compare the two), unset decides as above. The Vulkan renderer decides by TPK_RENDER_CULL_ACTIVE alone
+ * and walks the file-order tree in its shader (render.comp's cull_trace), with the same pieces as its
+ * own marcher; on a CPU
  * device (lavapipe) it marches unless told to cull, as the walk costs more there than it saves.
  *
  * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
@@ -224,6 +229,7 @@ int tpk_render_culling_wanted(void);
  * of mesh's point field hold one of the values (a dense surface: march without building the tree). */
 int tpk_render_iso_dense(const tpk_mesh_arrays *mesh, const double *values, int count);
 #define TPK_RENDER_CULL_ACTIVE 0.1
+#define TPK_RENDER_CULL_ACTIVE_MANY 0.4
 #define TPK_RENDER_DENSE_RUNS 0.2
 
 /* width 800, height 600, integration 0, threads all, background opaque dark gray (0.1, 0.1, 0.1, 1);
@@ -293,6 +299,11 @@ typedef struct tpk_render_stats {
                                lacks them (compute extraction + indirect draw); 2 it has them, not used */
     const char *iso_mesh_reason; /* when 2: why (a static string), or NULL */
     double seconds;     /* wall time of the render (marcher creation included) */
+    double seconds_rays; /* CPU reference: wall time of the primary rays alone, after the marcher, the range
+                            culling's trees and the vertex cache were set up (what a second frame with them
+                            kept would take); 0 for Vulkan */
+    double cpu_seconds_rays; /* CPU reference: the CPU time of those rays, all threads (rays per core-second
+                                on a shared machine) */
     uint64_t device_bytes; /* Vulkan: device memory of the renderer's buffers (mesh arrays, BVH, image
                               band, parameters); 0 for the CPU reference */
     /* Vulkan only (0 for the CPU reference): */

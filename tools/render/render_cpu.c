@@ -186,31 +186,44 @@ static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t cou
     return r != TPK_OK ? r : ray.error;
 }
 
+/* Pixels go in tiles of TILE x TILE, a band of TILE rows at a time per thread: neighbouring rays meet
+ * the same tets and BVH nodes, so a tile's rays find them in cache (a whole row spans the mesh). */
+#define TILE 8
+
 static void *render_worker(void *arg)
 {
     render_job *job = arg;
+    const int width = job->opt->width, height = job->opt->height;
+    struct timespec c0, c1;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c0);
     uint64_t counts[2] = {0, 0}; /* marcher steps, secondary rays */
     for (;;) {
-        int y = atomic_fetch_add(&job->next_row, 1);
-        if (y >= job->opt->height || atomic_load(&job->failed))
+        int band = atomic_fetch_add(&job->next_row, 1);
+        if (band * TILE >= height || atomic_load(&job->failed))
             break;
-        for (int x = 0; x < job->opt->width; x++) {
-            tpk_result r = render_pixel(job, x, y, counts);
-            if (r != TPK_OK) {
-                pthread_mutex_lock(&job->error_lock);
-                if (!atomic_load(&job->failed)) {
-                    job->error = r;
-                    job->error_x = x;
-                    job->error_y = y;
-                    atomic_store(&job->failed, 1);
+        int failed = 0;
+        for (int x0 = 0; x0 < width && !failed; x0 += TILE)
+            for (int y = band * TILE; y < band * TILE + TILE && y < height && !failed; y++)
+                for (int x = x0; x < x0 + TILE && x < width; x++) {
+                    tpk_result r = render_pixel(job, x, y, counts);
+                    if (r != TPK_OK) {
+                        pthread_mutex_lock(&job->error_lock);
+                        if (!atomic_load(&job->failed)) {
+                            job->error = r;
+                            job->error_x = x;
+                            job->error_y = y;
+                            atomic_store(&job->failed, 1);
+                        }
+                        pthread_mutex_unlock(&job->error_lock);
+                        failed = 1;
+                        break;
+                    }
                 }
-                pthread_mutex_unlock(&job->error_lock);
-                break;
-            }
-        }
     }
     atomic_fetch_add(&job->tet_steps, counts[0]);
     atomic_fetch_add(&job->secondary_rays, counts[1]);
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &c1);
+    atomic_fetch_add(&job->ray_cpu_ns, (uint64_t)((c1.tv_sec - c0.tv_sec) * 1000000000LL + (c1.tv_nsec - c0.tv_nsec)));
     return NULL;
 }
 
@@ -323,8 +336,11 @@ static int run_render(render_job *job, tpk_render_stats *stats, const struct tim
     atomic_init(&job->failed, 0);
     atomic_init(&job->tet_steps, 0);
     atomic_init(&job->secondary_rays, 0);
+    atomic_init(&job->ray_cpu_ns, 0);
     pthread_mutex_init(&job->error_lock, NULL);
 
+    struct timespec t_rays;
+    clock_gettime(CLOCK_MONOTONIC, &t_rays);
     int n = thread_count(opt);
     pthread_t threads[256];
     int started = 0;
@@ -345,6 +361,8 @@ static int run_render(render_job *job, tpk_render_stats *stats, const struct tim
         stats->tet_steps = atomic_load(&job->tet_steps);
         stats->secondary_rays = atomic_load(&job->secondary_rays);
         stats->seconds = (double)(t1.tv_sec - t0->tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0->tv_nsec);
+        stats->seconds_rays = (double)(t1.tv_sec - t_rays.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t_rays.tv_nsec);
+        stats->cpu_seconds_rays = 1e-9 * (double)atomic_load(&job->ray_cpu_ns);
     }
     pthread_mutex_destroy(&job->error_lock);
     return rc;
@@ -404,15 +422,20 @@ int tpk_render_cpu_given_cache(const tpk_mesh_arrays *mesh, const tpk_render_opt
     }
     tpk_range_bvh *range = NULL;
     int culling = tpk_render_culling_wanted();
+    /* ISO-ONLY RAYS (render.h): many rays pay for the trees on any surface, few only on a sparse one */
+    int many_rays = (double)opt->width * (double)opt->height >= (double)mesh->tet_count;
     if (rc == 0 && culling != 0 && tpk_render_iso_only(opt, mesh->scalars != NULL) &&
-        (culling > 0 || !tpk_render_iso_dense(mesh, opt->iso, opt->iso_count))) {
+        (culling > 0 || many_rays || !tpk_render_iso_dense(mesh, opt->iso, opt->iso_count))) {
         r = tpk_range_bvh_create(&range, marcher);
         if (r != TPK_OK)
             rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
-        if (range && culling < 0 && tpk_range_bvh_active(range, opt->iso, opt->iso_count) > TPK_RENDER_CULL_ACTIVE) {
+        double share = range && culling < 0 ? tpk_range_bvh_active(range, opt->iso, opt->iso_count) : 0.0;
+        if (share > (many_rays ? TPK_RENDER_CULL_ACTIVE_MANY : TPK_RENDER_CULL_ACTIVE)) {
             tpk_range_bvh_destroy(range); /* a dense isosurface: marching finds it sooner */
             range = NULL;
         }
+        if (range && (r = tpk_range_bvh_select(range, opt->iso, opt->iso_count)) != TPK_OK)
+            rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
         job->range = range;
     }
     if (rc == 0)

@@ -40,6 +40,7 @@ typedef struct render_job {
     tpk_result error;
     int error_x, error_y;
     atomic_uint_least64_t tet_steps, secondary_rays;
+    atomic_uint_least64_t ray_cpu_ns; /* CPU time of the workers, summed */
 } render_job;
 
 /* The accumulators of one primary ray. */

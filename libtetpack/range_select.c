@@ -1,0 +1,174 @@
+/* The selected tree of the range culling (tpk_range_bvh_select, tetpack.h): the tets whose scalar range
+ * holds one of the iso values, in a binned-SAH BVH (tpki_bvh_build, leaves of up to 4 tets) folded into
+ * a four-wide tree (tpki_wide_node) whose children a ray tests at once, with each tet's vertices and
+ * positions copied into leaf order.
+ *
+ * Measured on the 998k-tet grid of bench/make_grid_vtk.py 55, iso 0.3 (17% of the tets hold it), 1024^2,
+ * one thread: the file-order tree tests 28 tets per ray, this one 7.4. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal_range.h"
+
+#define ACTIVE_LEAF 4
+
+/* The float at or below x, and at or above it. */
+static float round_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+
+static float round_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
+
+static float half_area(const float lo[3], const float hi[3])
+{
+    float d[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+}
+
+/* Fold the binary tree `bin` (root 0) into b->wide, four children a node: each wide node takes its binary
+ * node's children, then splits the largest inner one among them into its two children while it has
+ * fewer than four. Returns TPK_OK or TPK_ERR_OUT_OF_MEMORY. */
+static tpk_result fold_wide(tpk_range_bvh *b, const tpk_bvh_node *bin, int32_t bin_count)
+{
+    b->wide = malloc(sizeof *b->wide * (size_t)bin_count);
+    int32_t *pending = malloc(sizeof *pending * (size_t)bin_count); /* binary node of each wide node */
+    if (!b->wide || !pending) {
+        free(pending);
+        return TPK_ERR_OUT_OF_MEMORY;
+    }
+    int64_t count = 1;
+    pending[0] = 0;
+    for (int64_t w = 0; w < count; w++) {
+        int32_t lane[4], lanes = 0;
+        const tpk_bvh_node *top = &bin[pending[w]];
+        if (top->count > 0) {
+            lane[lanes++] = pending[w]; /* a root that is a leaf */
+        } else {
+            lane[lanes++] = top->first;
+            lane[lanes++] = top->first + 1;
+        }
+        while (lanes < 4) {
+            int best = -1;
+            float best_area = -1.0f;
+            for (int i = 0; i < lanes; i++) {
+                const tpk_bvh_node *n = &bin[lane[i]];
+                if (n->count == 0 && half_area(n->lo, n->hi) > best_area)
+                    best = i, best_area = half_area(n->lo, n->hi);
+            }
+            if (best < 0)
+                break;
+            int32_t split = lane[best];
+            lane[best] = bin[split].first;
+            lane[lanes++] = bin[split].first + 1;
+        }
+        tpki_wide_node *node = &b->wide[w];
+        for (int i = 0; i < 4; i++) {
+            for (int k = 0; k < 3; k++) {
+                node->box[k][i] = i < lanes ? bin[lane[i]].lo[k] : INFINITY;
+                node->box[k + 3][i] = i < lanes ? bin[lane[i]].hi[k] : -INFINITY;
+            }
+            if (i >= lanes) {
+                node->child[i] = 0, node->count[i] = -1;
+            } else if (bin[lane[i]].count > 0) {
+                node->child[i] = bin[lane[i]].first, node->count[i] = bin[lane[i]].count;
+            } else {
+                node->child[i] = (int32_t)count, node->count[i] = 0;
+                pending[count++] = lane[i];
+            }
+        }
+    }
+    b->wide_count = count;
+    free(pending);
+    return TPK_OK;
+}
+
+/* The binary tree's items: the box (rounded outward, padded as the file-order tree's leaves) and
+ * centroid of each tet that holds a value, in file order. */
+static void active_items(const tpk_range_bvh *b, const double *values, int count, tpki_bvh_item *items)
+{
+    const float *pos = b->marcher->mesh.positions;
+    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
+    for (int64_t t = 0, i = 0; t < tet_count; t++) {
+        if (!tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count))
+            continue;
+        tpki_bvh_item *it = &items[i++];
+        it->id = (int32_t)t;
+        for (int k = 0; k < 3; k++) {
+            float lo = INFINITY, hi = -INFINITY;
+            double sum = 0.0;
+            for (int c = 0; c < 4; c++) {
+                float x = pos[3 * (int64_t)b->tets[4 * t + c] + k];
+                lo = x < lo ? x : lo;
+                hi = x > hi ? x : hi;
+                sum += x;
+            }
+            it->lo[k] = round_down((double)lo - b->pad);
+            it->hi[k] = round_up((double)hi + b->pad);
+            it->centroid[k] = (float)(0.25 * sum);
+        }
+    }
+}
+
+static void drop_selection(tpk_range_bvh *b)
+{
+    free(b->wide);
+    free(b->active_tets);
+    free(b->active_slots);
+    free(b->active_values);
+    b->wide = NULL, b->active_tets = NULL, b->active_slots = NULL, b->active_values = NULL;
+    b->active_value_count = 0, b->wide_count = 0;
+}
+
+tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int count)
+{
+    if (!b || count < 0 || (count > 0 && !values))
+        return TPK_ERR_INVALID_ARGUMENT;
+    drop_selection(b);
+    if (count == 0)
+        return TPK_OK;
+    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
+    int64_t n = 0;
+    for (int64_t t = 0; t < tet_count; t++)
+        n += tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count);
+    const size_t room = (size_t)(n ? n : 1);
+    tpki_bvh_item *items = malloc(sizeof *items * room);
+    tpk_bvh_node *bin = malloc(sizeof *bin * 2 * room);
+    b->active_tets = malloc(sizeof *b->active_tets * room);
+    b->active_slots = malloc(sizeof *b->active_slots * room);
+    b->active_values = malloc(sizeof *b->active_values * (size_t)count);
+    tpk_result r = items && bin && b->active_tets && b->active_slots && b->active_values ? TPK_OK : TPK_ERR_OUT_OF_MEMORY;
+    int32_t bin_count = 0;
+    if (r == TPK_OK && n > 0) {
+        active_items(b, values, count, items);
+        r = tpki_bvh_build(items, (int32_t)n, ACTIVE_LEAF, bin, &bin_count);
+    }
+    if (r == TPK_OK && n > 0)
+        r = fold_wide(b, bin, bin_count);
+    if (r == TPK_OK) {
+        const float *pos = b->marcher->mesh.positions;
+        for (int64_t i = 0; i < n; i++) {
+            int32_t t = items[i].id;
+            b->active_tets[i] = t;
+            for (int c = 0; c < 4; c++) {
+                int32_t v = b->tets[4 * (int64_t)t + c];
+                b->active_slots[i].v[c] = v;
+                for (int k = 0; k < 3; k++)
+                    b->active_slots[i].pos[k][c] = pos[3 * (int64_t)v + k];
+            }
+        }
+        memcpy(b->active_values, values, sizeof *values * (size_t)count);
+        b->active_value_count = count;
+    }
+    free(items);
+    free(bin);
+    if (r != TPK_OK)
+        drop_selection(b);
+    return r;
+}
