@@ -187,7 +187,9 @@ def section_iso(summary):
            f"(`TETPACK_ISO_CULLING=0/1`; render.h ISO-ONLY RAYS). The wave field's surfaces at 0.999 are a few "
            f"caps, at 0.3 they fill the volume. Rays per core-second = rays / (seconds × cores); the seconds are the "
            f"render's, set-up included: the shell BVH for both, and for culling the tets' vertex order "
-           f"(`tpk_recover_tets`) and the range BVH, which small images do not amortize.\n\n"]
+           f"(`tpk_recover_tets`) and the range trees, which small images do not amortize. The rays alone "
+           f"(`cpu_seconds_rays` in `render --json`: the workers' CPU time once all that is set up, what a "
+           f"renderer that keeps it pays per frame) give the last two columns.\n\n"]
     table_rows = []
     for v in sorted({r["value"] for r in rows}, reverse=True):
         meds = {}
@@ -195,16 +197,19 @@ def section_iso(summary):
             rs = [r for r in rows if r["value"] == v and r["culling"] == cull]
             if rs:
                 sec = sorted(r["seconds"] for r in rs)[len(rs) // 2]
-                meds[cull] = (sec, rs[0])
+                ray_cpu = sorted(r.get("cpu_seconds_rays", float("nan")) for r in rs)[len(rs) // 2]
+                meds[cull] = (sec, rs[0], ray_cpu)
         if False in meds and True in meds:
-            (s0, r0), (s1, r1) = meds[False], meds[True]
+            (s0, r0, c0), (s1, r1, c1) = meds[False], meds[True]
             table_rows.append([v, r0["tet_steps"], r1["tet_steps"], s0, s1, r0["rays"] / s0 / r0["cores"] / 1e6,
-                               r1["rays"] / s1 / r1["cores"] / 1e6, s0 / s1, "yes" if same.get(v) else "**no**"])
+                               r1["rays"] / s1 / r1["cores"] / 1e6, s0 / s1, r0["rays"] / c0 / 1e6,
+                               r1["rays"] / c1 / 1e6, "yes" if same.get(v) else "**no**"])
             summary.append(f"Iso-only rays, grid 55, value {v}: culling {fmt(s0 / s1)}× the marching speed "
                            f"({fmt(r1['rays'] / s1 / r1['cores'] / 1e6)}M rays per core-second), pictures identical: "
                            f"{'yes' if same.get(v) else 'no'}")
     out.append(table(["value", "tets marched", "tets tested (culled)", "marched s", "culled s", "M rays/core-s marched",
-                      "M rays/core-s culled", "speed-up", "same picture"], table_rows))
+                      "M rays/core-s culled", "speed-up", "rays alone: M/core-s marched", "rays alone: M/core-s culled",
+                      "same picture"], table_rows))
     ext = [r for r in jsonl("iso_extract.jsonl") if "tets" in r]
     if ext:
         out.append("\n`tetpack iso --value 0.3` on grid 55: classification, emission and vertex sharing "
