@@ -54,14 +54,23 @@ typedef struct edge_link {
     uint32_t next, vertex;
 } edge_link;
 
+/* A worker's active tets from count_range, in tet order: (t << 4) | case, cases 1 to 14 only. */
+typedef struct active_list {
+    uint64_t *tets;
+    int64_t count, cap;
+} active_list;
+
 typedef struct march {
     const tpk_iso_input *in;
     double value;
     float threshold;                           /* the least float s with (double)s >= value */
     int threads;
-    uint8_t crossed[16];                       /* per case: bit k when tet edge k is crossed */
+    uint8_t crossed[16][4];                    /* per case: its crossed tet edges (3 or 4), ascending */
+    uint8_t case_triangles[256];               /* per case with its NaN bits: 0 with a NaN, for 0 and 15 */
     int64_t worker_first[TPK_MAX_THREADS + 1]; /* first triangle of each worker's tets */
-    uint8_t *cases;                            /* per tet: its case (count_range), 16 for none (a NaN) */
+    uint8_t *side;                             /* per mesh vertex: 1 at or above the value, 16 for a NaN */
+    active_list active[TPK_MAX_THREADS];       /* per worker; kept across values */
+    int failed;                                /* a worker's active list could not grow */
     uint32_t *head;                            /* per mesh vertex: its newest edge as lower end, or EDGE_NONE */
     uint64_t *corner_key;                      /* from tpk_iso_corners: 3 per triangle, (a << 32) | b, a < b */
     edge_link *edges;                          /* first-seen order */
@@ -75,30 +84,55 @@ typedef struct march {
     const tpk_iso_corners *corners;            /* NULL: count_range and edges_of_tets find the triangles */
 } march;
 
-/* The case of tet t: bit k when corner k is at or above the value; 16 with a NaN. `threshold` is the
+/* Each mesh vertex's side of the value: 1 at or above it, 0 below, 16 for a NaN. `threshold` is the
  * value rounded up to float, so comparing the floats decides as comparing them in double with the value
- * would. */
-static inline int tet_case(const march *m, int64_t t)
+ * would. A tet's case is then its corners' sides shifted into place: bits 4 to 7 are set for a NaN. */
+static void side_range(void *ctx, int64_t begin, int64_t end, int w)
 {
-    const int32_t *v = m->in->tets + 4 * t;
+    (void)w;
+    march *m = ctx;
     const float *s = m->in->scalars;
     float thr = m->threshold;
-    float x0 = s[v[0]], x1 = s[v[1]], x2 = s[v[2]], x3 = s[v[3]];
-    int nan = (x0 != x0) | (x1 != x1) | (x2 != x2) | (x3 != x3);
-    int mask = (x0 >= thr) | (x1 >= thr) << 1 | (x2 >= thr) << 2 | (x3 >= thr) << 3;
-    return nan ? 16 : mask;
+    for (int64_t v = begin; v < end; v++)
+        m->side[v] = (uint8_t)((s[v] >= thr) | (s[v] != s[v]) << 4);
 }
 
+#define COUNT_BLOCK 4096
+
+/* Count the triangles of the tets in [begin, end) and list the tets that make some. Compaction without
+ * branches: every tet is written, the count advances past the active ones only, so inactive tets cost
+ * four byte loads from `side` and no mispredicted branch. */
 static void count_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     march *m = ctx;
-    int64_t n = 0;
-    for (int64_t t = begin; t < end; t++) {
-        int c = tet_case(m, t);
-        m->cases[t] = (uint8_t)c; /* edges_of_tets reads it, not the scalars again */
-        n += iso_cases[c & 15].count & ((c >> 4) - 1);
+    const int32_t *tets = m->in->tets;
+    const uint8_t *side = m->side;
+    active_list *list = &m->active[w];
+    int64_t n = 0, triangles = 0;
+    for (int64_t b = begin; b < end; b += COUNT_BLOCK) {
+        int64_t e = end - b < COUNT_BLOCK ? end : b + COUNT_BLOCK;
+        if (n + COUNT_BLOCK > list->cap) {
+            int64_t cap = 2 * list->cap > n + COUNT_BLOCK ? 2 * list->cap : n + COUNT_BLOCK;
+            uint64_t *grown = realloc(list->tets, (size_t)cap * sizeof *grown);
+            if (!grown) {
+                m->failed = 1;
+                break;
+            }
+            list->tets = grown;
+            list->cap = cap;
+        }
+        uint64_t *out = list->tets;
+        for (int64_t t = b; t < e; t++) {
+            const int32_t *v = tets + 4 * t;
+            unsigned c = side[v[0]] | side[v[1]] << 1 | side[v[2]] << 2 | side[v[3]] << 3;
+            unsigned count = m->case_triangles[c];
+            out[n] = (uint64_t)t << 4 | (c & 15);
+            n += count != 0;
+            triangles += count;
+        }
     }
-    m->worker_first[w + 1] = n;
+    list->count = n;
+    m->worker_first[w + 1] = triangles;
 }
 
 /* ---- Vertices shared by edge ---------------------------------------------------------------------- */
@@ -239,25 +273,28 @@ static int64_t rank_edges(march *m)
     return vertices;
 }
 
-/* Each corner's edge into `corner` (3 per triangle), from the tets' cases: a tet's crossed edges are
- * looked up once each (tets near each other in the file share vertices, so the chains are in cache). */
+/* Each corner's edge into `corner` (3 per triangle), from the workers' active tets in tet order: a tet's
+ * crossed edges are looked up once each (tets near each other in the file share vertices, so the chains
+ * are in cache). */
 static int edges_of_tets(march *m, uint32_t *corner)
 {
-    for (int64_t t = 0; t < m->in->tet_count; t++) {
-        int c = m->cases[t];
-        if (c == 0 || c >= 15)
-            continue;
-        const int32_t *v = m->in->tets + 4 * t;
-        uint32_t edge[6];
-        for (int k = 0; k < 6; k++) {
-            if (!(m->crossed[c] >> k & 1))
-                continue;
-            uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
-            if ((edge[k] = edge_of(m, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a)) == EDGE_NONE)
-                return -1;
+    const int32_t *tets = m->in->tets;
+    for (int w = 0; w < m->threads; w++) {
+        const active_list *list = &m->active[w];
+        for (int64_t i = 0; i < list->count; i++) {
+            int64_t t = (int64_t)(list->tets[i] >> 4);
+            int c = (int)(list->tets[i] & 15), count = iso_cases[c].count;
+            const int32_t *v = tets + 4 * t;
+            uint32_t edge[6];
+            for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
+                int k = m->crossed[c][j];
+                uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
+                if ((edge[k] = edge_of(m, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a)) == EDGE_NONE)
+                    return -1;
+            }
+            for (int k = 0; k < 3 * count; k++)
+                *corner++ = edge[iso_cases[c].edge[k]];
         }
-        for (int k = 0; k < 3 * iso_cases[c].count; k++)
-            *corner++ = edge[iso_cases[c].edge[k]];
     }
     return 0;
 }
@@ -413,7 +450,11 @@ static int extract_value(march *m, tpk_diag *diag)
     } else {
         m->threshold = float_at_or_above(m->value);
         memset(m->worker_first, 0, sizeof m->worker_first);
+        int64_t verts = m->in->vertex_count;
+        tpk_parallel_for(verts, tpk_threads_for(verts, m->threads, 65536), side_range, m);
         tpk_parallel_for(tets, m->threads, count_range, m);
+        if (m->failed)
+            return tpk_diag_fail(diag, "out of memory for the active tets of the isosurface of %g", m->value);
         for (int w = 0; w < m->threads; w++)
             m->worker_first[w + 1] += m->worker_first[w];
         triangles = m->worker_first[m->threads];
@@ -460,7 +501,9 @@ int tpk_iso_extract(const tpk_iso_input *in, const double *values, int value_cou
 
 static void free_march(march *m)
 {
-    free(m->cases);
+    free(m->side);
+    for (int w = 0; w < TPK_MAX_THREADS; w++)
+        free(m->active[w].tets);
     free(m->head);
     free(m->hubs.keys);
     free(m->hubs.edges);
@@ -487,15 +530,18 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
     m.head = tpk_alloc_large(sizeof *m.head * (size_t)(in->vertex_count ? in->vertex_count : 1));
     if (m.head)
         memset(m.head, 0xff, sizeof *m.head * (size_t)in->vertex_count); /* EDGE_NONE */
-    if (!m.head || (!corners && !(m.cases = tpk_alloc_large((size_t)(in->tet_count ? in->tet_count : 1))))) {
+    if (!m.head || (!corners && !(m.side = malloc((size_t)(in->vertex_count ? in->vertex_count : 1))))) {
         free_march(&m);
         tpk_iso_surface_free(out);
-        return tpk_diag_fail(diag, "out of memory for the cases of %lld tets", (long long)in->tet_count);
+        return tpk_diag_fail(diag, "out of memory for the sides of %lld vertices", (long long)in->vertex_count);
     }
     m.threads = tpk_threads_for(in->tet_count, tpk_thread_count(threads), 65536);
     for (int c = 0; c < 16; c++)
-        for (int k = 0; k < 6; k++)
-            m.crossed[c] |= (uint8_t)((((c >> tet_edges[k][0]) ^ (c >> tet_edges[k][1])) & 1) << k);
+        for (int k = 0, j = 0; k < 6; k++)
+            if (((c >> tet_edges[k][0]) ^ (c >> tet_edges[k][1])) & 1)
+                m.crossed[c][j++] = (uint8_t)k;
+    for (int c = 0; c < 256; c++)
+        m.case_triangles[c] = c < 16 ? iso_cases[c].count : 0;
     for (int i = 0; i < value_count; i++) {
         m.value = values[i];
         if (extract_value(&m, diag) != 0) {
