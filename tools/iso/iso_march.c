@@ -54,9 +54,13 @@ typedef struct edge_link {
     uint32_t next, vertex;
 } edge_link;
 
-/* A worker's active tets from count_range, in tet order: (t << 4) | case, cases 1 to 14 only. */
+/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: the four vertex ids, the
+ * top bit of corner k's id its side (ids are below 2^31), so the emission reads them in sequence
+ * instead of fetching the tets again from the whole array. */
+#define SIDE_BIT 0x80000000u
+
 typedef struct active_list {
-    uint64_t *tets;
+    uint32_t (*tets)[4];
     int64_t count, cap;
 } active_list;
 
@@ -113,7 +117,7 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
         int64_t e = end - b < COUNT_BLOCK ? end : b + COUNT_BLOCK;
         if (n + COUNT_BLOCK > list->cap) {
             int64_t cap = 2 * list->cap > n + COUNT_BLOCK ? 2 * list->cap : n + COUNT_BLOCK;
-            uint64_t *grown = realloc(list->tets, (size_t)cap * sizeof *grown);
+            uint32_t(*grown)[4] = realloc(list->tets, (size_t)cap * sizeof *grown);
             if (!grown) {
                 m->failed = 1;
                 break;
@@ -121,12 +125,15 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
             list->tets = grown;
             list->cap = cap;
         }
-        uint64_t *out = list->tets;
+        uint32_t(*out)[4] = list->tets;
         for (int64_t t = b; t < e; t++) {
             const int32_t *v = tets + 4 * t;
-            unsigned c = side[v[0]] | side[v[1]] << 1 | side[v[2]] << 2 | side[v[3]] << 3;
-            unsigned count = m->case_triangles[c];
-            out[n] = (uint64_t)t << 4 | (c & 15);
+            unsigned s0 = side[v[0]], s1 = side[v[1]], s2 = side[v[2]], s3 = side[v[3]];
+            unsigned count = m->case_triangles[s0 | s1 << 1 | s2 << 2 | s3 << 3];
+            out[n][0] = (uint32_t)v[0] | (s0 & 1) << 31;
+            out[n][1] = (uint32_t)v[1] | (s1 & 1) << 31;
+            out[n][2] = (uint32_t)v[2] | (s2 & 1) << 31;
+            out[n][3] = (uint32_t)v[3] | (s3 & 1) << 31;
             n += count != 0;
             triangles += count;
         }
@@ -278,17 +285,16 @@ static int64_t rank_edges(march *m)
  * are in cache). */
 static int edges_of_tets(march *m, uint32_t *corner)
 {
-    const int32_t *tets = m->in->tets;
     for (int w = 0; w < m->threads; w++) {
         const active_list *list = &m->active[w];
         for (int64_t i = 0; i < list->count; i++) {
-            int64_t t = (int64_t)(list->tets[i] >> 4);
-            int c = (int)(list->tets[i] & 15), count = iso_cases[c].count;
-            const int32_t *v = tets + 4 * t;
-            uint32_t edge[6];
+            const uint32_t *tet = list->tets[i];
+            int c = (int)(tet[0] >> 31 | tet[1] >> 31 << 1 | tet[2] >> 31 << 2 | tet[3] >> 31 << 3);
+            int count = iso_cases[c].count;
+            uint32_t v[4] = {tet[0] & ~SIDE_BIT, tet[1] & ~SIDE_BIT, tet[2] & ~SIDE_BIT, tet[3] & ~SIDE_BIT}, edge[6];
             for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
                 int k = m->crossed[c][j];
-                uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
+                uint32_t a = v[tet_edges[k][0]], b = v[tet_edges[k][1]];
                 if ((edge[k] = edge_of(m, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a)) == EDGE_NONE)
                     return -1;
             }
