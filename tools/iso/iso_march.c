@@ -227,6 +227,29 @@ static uint32_t edge_of(march *m, uint64_t key)
     return e;
 }
 
+/* The edges looked up last, by a hash of their key. Every active tet around a crossed edge looks it up
+ * (5 times per edge on grid 55 at 0.3), mostly close together in tet order, so 1024 slots (12 KB, in L1)
+ * answer 97% of the repeated lookups (442,740 of 456,088) without the head and chain reads, which miss
+ * the cache. */
+#define RECENT_BITS 10
+
+typedef struct recent_edges {
+    uint64_t key[1 << RECENT_BITS]; /* 0: empty (no edge key is 0) */
+    uint32_t edge[1 << RECENT_BITS];
+} recent_edges;
+
+/* edge_of through `recent`. */
+static inline uint32_t recent_edge_of(march *m, recent_edges *recent, uint64_t key)
+{
+    unsigned slot = (unsigned)((key * 0x9E3779B97F4A7C15ull) >> (64 - RECENT_BITS));
+    if (recent->key[slot] == key)
+        return recent->edge[slot];
+    uint32_t e = edge_of(m, key);
+    recent->key[slot] = key;
+    recent->edge[slot] = e;
+    return e;
+}
+
 typedef struct key_edge {
     uint64_t key;
     uint32_t edge;
@@ -281,9 +304,9 @@ static int64_t rank_edges(march *m)
 }
 
 /* Each corner's edge into `corner` (3 per triangle), from the workers' active tets in tet order: a tet's
- * crossed edges are looked up once each (tets near each other in the file share vertices, so the chains
- * are in cache). */
-static int edges_of_tets(march *m, uint32_t *corner)
+ * crossed edges are looked up once each, most of them found in `recent` (tets near each other in the file
+ * share edges). */
+static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
 {
     for (int w = 0; w < m->threads; w++) {
         const active_list *list = &m->active[w];
@@ -295,7 +318,8 @@ static int edges_of_tets(march *m, uint32_t *corner)
             for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
                 int k = m->crossed[c][j];
                 uint32_t a = v[tet_edges[k][0]], b = v[tet_edges[k][1]];
-                if ((edge[k] = edge_of(m, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a)) == EDGE_NONE)
+                uint64_t key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+                if ((edge[k] = recent_edge_of(m, recent, key)) == EDGE_NONE)
                     return -1;
             }
             for (int k = 0; k < 3 * count; k++)
@@ -314,11 +338,13 @@ static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
     if (!(m->edges = tpk_alloc_large((size_t)m->edge_cap * sizeof *m->edges)))
         return -1;
     int failed = 0;
+    recent_edges recent;
+    memset(recent.key, 0, sizeof recent.key);
     if (m->corners) {
         for (int64_t c = 0; c < corners && !failed; c++)
-            failed = (corner[c] = edge_of(m, m->corner_key[c])) == EDGE_NONE;
+            failed = (corner[c] = recent_edge_of(m, &recent, m->corner_key[c])) == EDGE_NONE;
     } else {
-        failed = edges_of_tets(m, corner);
+        failed = edges_of_tets(m, &recent, corner);
     }
     int64_t vertices = rank_edges(m); /* also when failed: it frees the heads */
     return failed ? -1 : vertices;
