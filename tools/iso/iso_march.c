@@ -318,8 +318,8 @@ static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
             for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
                 int k = m->crossed[c][j];
                 uint32_t a = v[tet_edges[k][0]], b = v[tet_edges[k][1]];
-                uint64_t key = a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
-                if ((edge[k] = recent_edge_of(m, recent, key)) == EDGE_NONE)
+                uint32_t lo = a < b ? a : b, hi = a < b ? b : a; /* selects, not a mispredicted branch */
+                if ((edge[k] = recent_edge_of(m, recent, (uint64_t)lo << 32 | hi)) == EDGE_NONE)
                     return -1;
             }
             for (int k = 0; k < 3 * count; k++)
