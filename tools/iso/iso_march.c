@@ -77,12 +77,15 @@ typedef struct march {
     int failed;                                /* a worker's active list could not grow */
     uint32_t *head;                            /* per mesh vertex: its newest edge as lower end, or EDGE_NONE */
     uint64_t *corner_key;                      /* from tpk_iso_corners: 3 per triangle, (a << 32) | b, a < b */
-    edge_link *edges;                          /* first-seen order */
+    edge_link *edges;                          /* first-seen order; this and below kept across values */
     int64_t edge_count, edge_cap;
     hub_table hubs;
     uint64_t *vertex_key;                      /* per vertex of this value */
     double *vertex_p;                          /* 3 per vertex: position relative to the origin */
     double *normal_sum;                        /* 3 per vertex: its triangles' normals, summed in corner order */
+    int64_t key_cap, p_cap, normal_cap;        /* their capacities: kept across values, like edges */
+    struct key_edge *run;                      /* rank_edges: one lower vertex's edges */
+    int64_t run_cap;
     tpk_iso_surface *out;
     int64_t vertex_base, triangle_base;
     const tpk_iso_corners *corners;            /* NULL: count_range and edges_of_tets find the triangles */
@@ -255,6 +258,20 @@ typedef struct key_edge {
     uint32_t edge;
 } key_edge;
 
+/* *p holds at least `count` elements of `size` bytes (*cap of them), its contents kept. */
+static int reserve(void **p, int64_t *cap, int64_t count, size_t size)
+{
+    if (*p && count <= *cap)
+        return 0;
+    int64_t want = count > 2 * *cap ? count : 2 * *cap;
+    void *q = *p ? realloc(*p, (size_t)want * size) : tpk_alloc_large((size_t)want * size);
+    if (!q)
+        return -1;
+    *p = q;
+    *cap = want;
+    return 0;
+}
+
 static int compare_key_edge(const void *pa, const void *pb)
 {
     uint64_t a = ((const key_edge *)pa)->key, b = ((const key_edge *)pb)->key;
@@ -262,23 +279,25 @@ static int compare_key_edge(const void *pa, const void *pb)
 }
 
 /* Number the edges by key: every lower vertex in order, its chain's edges sorted by upper vertex. Frees
- * the heads for the next value. Returns the vertex count, -1 without memory. */
+ * the heads for the next value, also when it fails. Returns the vertex count, -1 without memory. */
 static int64_t rank_edges(march *m)
 {
-    m->vertex_key = malloc((size_t)(m->edge_count ? m->edge_count : 1) * sizeof *m->vertex_key);
-    key_edge *run = malloc((size_t)(m->edge_count ? m->edge_count : 1) * sizeof *run);
-    if (!m->vertex_key || !run) {
-        free(run);
-        return -1;
-    }
+    int failed = reserve((void **)&m->vertex_key, &m->key_cap, m->edge_count, sizeof *m->vertex_key);
     int64_t vertices = 0;
     for (int64_t a = 0; a < m->in->vertex_count && vertices < m->edge_count; a++) {
         if (m->head[a] == EDGE_NONE)
             continue;
         int64_t count = 0;
-        for (uint32_t e = m->head[a] & ~HUB_BIT; e != EDGE_NONE; e = m->edges[e].next)
-            run[count++] = (key_edge){m->edges[e].key, e};
+        for (uint32_t e = m->head[a] & ~HUB_BIT; e != EDGE_NONE && !failed; e = m->edges[e].next) {
+            if (count == m->run_cap && reserve((void **)&m->run, &m->run_cap, count + 64, sizeof *m->run))
+                failed = 1;
+            else
+                m->run[count++] = (key_edge){m->edges[e].key, e};
+        }
         m->head[a] = EDGE_NONE;
+        if (failed)
+            continue;
+        key_edge *run = m->run;
         if (count > HUB_CHAIN) {
             qsort(run, (size_t)count, sizeof *run, compare_key_edge);
         } else {
@@ -295,12 +314,11 @@ static int64_t rank_edges(march *m)
             m->vertex_key[vertices++] = run[i].key;
         }
     }
-    free(run);
     if (m->hubs.count) {
         memset(m->hubs.keys, 0, (size_t)m->hubs.cap * sizeof *m->hubs.keys);
         m->hubs.count = 0;
     }
-    return vertices;
+    return failed ? -1 : vertices;
 }
 
 /* Each corner's edge into `corner` (3 per triangle), from the workers' active tets in tet order: a tet's
@@ -334,8 +352,7 @@ static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
 static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
 {
     m->edge_count = 0;
-    m->edge_cap = corners / 4 + 64;
-    if (!(m->edges = tpk_alloc_large((size_t)m->edge_cap * sizeof *m->edges)))
+    if (reserve((void **)&m->edges, &m->edge_cap, corners / 4 + 64, sizeof *m->edges))
         return -1;
     int failed = 0;
     recent_edges recent;
@@ -451,14 +468,11 @@ static int grow_surface(tpk_iso_surface *o, int64_t vertices, int64_t triangles)
            grow((void **)&o->edge, 2 * vertices, sizeof(int32_t)) || grow((void **)&o->tri, 3 * triangles, sizeof(uint32_t));
 }
 
+/* The GPU's corner keys of one value. The rest of the scratch is kept for the next value (free_march). */
 static void free_scratch(march *m)
 {
     free(m->corner_key);
-    free(m->edges);
-    free(m->vertex_key);
-    free(m->vertex_p);
-    free(m->normal_sum);
-    m->corner_key = NULL, m->edges = NULL, m->vertex_key = NULL, m->vertex_p = NULL, m->normal_sum = NULL;
+    m->corner_key = NULL;
 }
 
 /* The least float at or above `value` (finite). */
@@ -502,10 +516,9 @@ static int extract_value(march *m, tpk_diag *diag)
     int64_t vertices = number_vertices(m, corners, o->tri + 3 * o->triangle_count);
     if (vertices < 0 || o->vertex_count + vertices > INT32_MAX)
         goto fail;
-    size_t v1 = (size_t)(vertices ? vertices : 1);
-    m->vertex_p = tpk_alloc_large(3 * v1 * sizeof *m->vertex_p);
-    m->normal_sum = tpk_alloc_large(3 * v1 * sizeof *m->normal_sum);
-    if (!m->vertex_p || !m->normal_sum || grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
+    if (reserve((void **)&m->vertex_p, &m->p_cap, 3 * vertices, sizeof *m->vertex_p) ||
+        reserve((void **)&m->normal_sum, &m->normal_cap, 3 * vertices, sizeof *m->normal_sum) ||
+        grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
         goto fail;
     m->vertex_base = o->vertex_count;
     m->triangle_base = o->triangle_count;
@@ -533,6 +546,12 @@ int tpk_iso_extract(const tpk_iso_input *in, const double *values, int value_cou
 
 static void free_march(march *m)
 {
+    free_scratch(m);
+    free(m->edges);
+    free(m->vertex_key);
+    free(m->vertex_p);
+    free(m->normal_sum);
+    free(m->run);
     free(m->side);
     for (int w = 0; w < TPK_MAX_THREADS; w++)
         free(m->active[w].tets);
