@@ -118,9 +118,10 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
     int64_t n = 0, triangles = 0;
     for (int64_t b = begin; b < end; b += COUNT_BLOCK) {
         int64_t e = end - b < COUNT_BLOCK ? end : b + COUNT_BLOCK;
-        if (n + COUNT_BLOCK > list->cap) {
-            int64_t cap = 2 * list->cap > n + COUNT_BLOCK ? 2 * list->cap : n + COUNT_BLOCK;
-            uint32_t(*grown)[4] = realloc(list->tets, (size_t)cap * sizeof *grown);
+        if (n + COUNT_BLOCK > list->cap) { /* first a quarter of the tets, on huge pages (tpk_alloc_large) */
+            int64_t cap = list->cap ? 2 * list->cap : (end - begin) / 4 + COUNT_BLOCK;
+            uint32_t(*grown)[4] = list->tets ? realloc(list->tets, (size_t)cap * sizeof *grown)
+                                             : tpk_alloc_large((size_t)cap * sizeof *grown);
             if (!grown) {
                 m->failed = 1;
                 break;
