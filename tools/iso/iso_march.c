@@ -54,51 +54,96 @@ typedef struct edge_link {
     uint32_t next, vertex;
 } edge_link;
 
+/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: the four vertex ids, the
+ * top bit of corner k's id its side (ids are below 2^31), so the emission reads them in sequence
+ * instead of fetching the tets again from the whole array. */
+#define SIDE_BIT 0x80000000u
+
+typedef struct active_list {
+    uint32_t (*tets)[4];
+    int64_t count, cap;
+} active_list;
+
 typedef struct march {
     const tpk_iso_input *in;
     double value;
     float threshold;                           /* the least float s with (double)s >= value */
     int threads;
-    uint8_t crossed[16];                       /* per case: bit k when tet edge k is crossed */
+    uint8_t crossed[16][4];                    /* per case: its crossed tet edges (3 or 4), ascending */
+    uint8_t case_triangles[256];               /* per case with its NaN bits: 0 with a NaN, for 0 and 15 */
     int64_t worker_first[TPK_MAX_THREADS + 1]; /* first triangle of each worker's tets */
-    uint8_t *cases;                            /* per tet: its case (count_range), 16 for none (a NaN) */
+    uint8_t *side;                             /* per mesh vertex: 1 at or above the value, 16 for a NaN */
+    active_list active[TPK_MAX_THREADS];       /* per worker; kept across values */
+    int failed;                                /* a worker's active list could not grow */
     uint32_t *head;                            /* per mesh vertex: its newest edge as lower end, or EDGE_NONE */
     uint64_t *corner_key;                      /* from tpk_iso_corners: 3 per triangle, (a << 32) | b, a < b */
-    edge_link *edges;                          /* first-seen order */
+    edge_link *edges;                          /* first-seen order; this and below kept across values */
     int64_t edge_count, edge_cap;
     hub_table hubs;
     uint64_t *vertex_key;                      /* per vertex of this value */
     double *vertex_p;                          /* 3 per vertex: position relative to the origin */
     double *normal_sum;                        /* 3 per vertex: its triangles' normals, summed in corner order */
+    int64_t key_cap, p_cap, normal_cap;        /* their capacities: kept across values, like edges */
+    struct key_edge *run;                      /* rank_edges: one lower vertex's edges */
+    int64_t run_cap;
     tpk_iso_surface *out;
     int64_t vertex_base, triangle_base;
     const tpk_iso_corners *corners;            /* NULL: count_range and edges_of_tets find the triangles */
 } march;
 
-/* The case of tet t: bit k when corner k is at or above the value; 16 with a NaN. `threshold` is the
+/* Each mesh vertex's side of the value: 1 at or above it, 0 below, 16 for a NaN. `threshold` is the
  * value rounded up to float, so comparing the floats decides as comparing them in double with the value
- * would. */
-static inline int tet_case(const march *m, int64_t t)
+ * would. A tet's case is then its corners' sides shifted into place: bits 4 to 7 are set for a NaN. */
+static void side_range(void *ctx, int64_t begin, int64_t end, int w)
 {
-    const int32_t *v = m->in->tets + 4 * t;
+    (void)w;
+    march *m = ctx;
     const float *s = m->in->scalars;
     float thr = m->threshold;
-    float x0 = s[v[0]], x1 = s[v[1]], x2 = s[v[2]], x3 = s[v[3]];
-    int nan = (x0 != x0) | (x1 != x1) | (x2 != x2) | (x3 != x3);
-    int mask = (x0 >= thr) | (x1 >= thr) << 1 | (x2 >= thr) << 2 | (x3 >= thr) << 3;
-    return nan ? 16 : mask;
+    for (int64_t v = begin; v < end; v++)
+        m->side[v] = (uint8_t)((s[v] >= thr) | (s[v] != s[v]) << 4);
 }
 
+#define COUNT_BLOCK 4096
+
+/* Count the triangles of the tets in [begin, end) and list the tets that make some. Compaction without
+ * branches: every tet is written, the count advances past the active ones only, so inactive tets cost
+ * four byte loads from `side` and no mispredicted branch. */
 static void count_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     march *m = ctx;
-    int64_t n = 0;
-    for (int64_t t = begin; t < end; t++) {
-        int c = tet_case(m, t);
-        m->cases[t] = (uint8_t)c; /* edges_of_tets reads it, not the scalars again */
-        n += iso_cases[c & 15].count & ((c >> 4) - 1);
+    const int32_t *tets = m->in->tets;
+    const uint8_t *side = m->side;
+    active_list *list = &m->active[w];
+    int64_t n = 0, triangles = 0;
+    for (int64_t b = begin; b < end; b += COUNT_BLOCK) {
+        int64_t e = end - b < COUNT_BLOCK ? end : b + COUNT_BLOCK;
+        if (n + COUNT_BLOCK > list->cap) { /* first a quarter of the tets, on huge pages (tpk_alloc_large) */
+            int64_t cap = list->cap ? 2 * list->cap : (end - begin) / 4 + COUNT_BLOCK;
+            uint32_t(*grown)[4] = list->tets ? realloc(list->tets, (size_t)cap * sizeof *grown)
+                                             : tpk_alloc_large((size_t)cap * sizeof *grown);
+            if (!grown) {
+                m->failed = 1;
+                break;
+            }
+            list->tets = grown;
+            list->cap = cap;
+        }
+        uint32_t(*out)[4] = list->tets;
+        for (int64_t t = b; t < e; t++) {
+            const int32_t *v = tets + 4 * t;
+            unsigned s0 = side[v[0]], s1 = side[v[1]], s2 = side[v[2]], s3 = side[v[3]];
+            unsigned count = m->case_triangles[s0 | s1 << 1 | s2 << 2 | s3 << 3];
+            out[n][0] = (uint32_t)v[0] | (s0 & 1) << 31;
+            out[n][1] = (uint32_t)v[1] | (s1 & 1) << 31;
+            out[n][2] = (uint32_t)v[2] | (s2 & 1) << 31;
+            out[n][3] = (uint32_t)v[3] | (s3 & 1) << 31;
+            n += count != 0;
+            triangles += count;
+        }
     }
-    m->worker_first[w + 1] = n;
+    list->count = n;
+    m->worker_first[w + 1] = triangles;
 }
 
 /* ---- Vertices shared by edge ---------------------------------------------------------------------- */
@@ -186,10 +231,47 @@ static uint32_t edge_of(march *m, uint64_t key)
     return e;
 }
 
+/* The edges looked up last, by a hash of their key. Every active tet around a crossed edge looks it up
+ * (5 times per edge on grid 55 at 0.3), mostly close together in tet order, so 1024 slots (12 KB, in L1)
+ * answer 97% of the repeated lookups (442,740 of 456,088) without the head and chain reads, which miss
+ * the cache. */
+#define RECENT_BITS 10
+
+typedef struct recent_edges {
+    uint64_t key[1 << RECENT_BITS]; /* 0: empty (no edge key is 0) */
+    uint32_t edge[1 << RECENT_BITS];
+} recent_edges;
+
+/* edge_of through `recent`. */
+static inline uint32_t recent_edge_of(march *m, recent_edges *recent, uint64_t key)
+{
+    unsigned slot = (unsigned)((key * 0x9E3779B97F4A7C15ull) >> (64 - RECENT_BITS));
+    if (recent->key[slot] == key)
+        return recent->edge[slot];
+    uint32_t e = edge_of(m, key);
+    recent->key[slot] = key;
+    recent->edge[slot] = e;
+    return e;
+}
+
 typedef struct key_edge {
     uint64_t key;
     uint32_t edge;
 } key_edge;
+
+/* *p holds at least `count` elements of `size` bytes (*cap of them), its contents kept. */
+static int reserve(void **p, int64_t *cap, int64_t count, size_t size)
+{
+    if (*p && count <= *cap)
+        return 0;
+    int64_t want = count > 2 * *cap ? count : 2 * *cap;
+    void *q = *p ? realloc(*p, (size_t)want * size) : tpk_alloc_large((size_t)want * size);
+    if (!q)
+        return -1;
+    *p = q;
+    *cap = want;
+    return 0;
+}
 
 static int compare_key_edge(const void *pa, const void *pb)
 {
@@ -198,23 +280,25 @@ static int compare_key_edge(const void *pa, const void *pb)
 }
 
 /* Number the edges by key: every lower vertex in order, its chain's edges sorted by upper vertex. Frees
- * the heads for the next value. Returns the vertex count, -1 without memory. */
+ * the heads for the next value, also when it fails. Returns the vertex count, -1 without memory. */
 static int64_t rank_edges(march *m)
 {
-    m->vertex_key = malloc((size_t)(m->edge_count ? m->edge_count : 1) * sizeof *m->vertex_key);
-    key_edge *run = malloc((size_t)(m->edge_count ? m->edge_count : 1) * sizeof *run);
-    if (!m->vertex_key || !run) {
-        free(run);
-        return -1;
-    }
+    int failed = reserve((void **)&m->vertex_key, &m->key_cap, m->edge_count, sizeof *m->vertex_key);
     int64_t vertices = 0;
     for (int64_t a = 0; a < m->in->vertex_count && vertices < m->edge_count; a++) {
         if (m->head[a] == EDGE_NONE)
             continue;
         int64_t count = 0;
-        for (uint32_t e = m->head[a] & ~HUB_BIT; e != EDGE_NONE; e = m->edges[e].next)
-            run[count++] = (key_edge){m->edges[e].key, e};
+        for (uint32_t e = m->head[a] & ~HUB_BIT; e != EDGE_NONE && !failed; e = m->edges[e].next) {
+            if (count == m->run_cap && reserve((void **)&m->run, &m->run_cap, count + 64, sizeof *m->run))
+                failed = 1;
+            else
+                m->run[count++] = (key_edge){m->edges[e].key, e};
+        }
         m->head[a] = EDGE_NONE;
+        if (failed)
+            continue;
+        key_edge *run = m->run;
         if (count > HUB_CHAIN) {
             qsort(run, (size_t)count, sizeof *run, compare_key_edge);
         } else {
@@ -231,33 +315,35 @@ static int64_t rank_edges(march *m)
             m->vertex_key[vertices++] = run[i].key;
         }
     }
-    free(run);
     if (m->hubs.count) {
         memset(m->hubs.keys, 0, (size_t)m->hubs.cap * sizeof *m->hubs.keys);
         m->hubs.count = 0;
     }
-    return vertices;
+    return failed ? -1 : vertices;
 }
 
-/* Each corner's edge into `corner` (3 per triangle), from the tets' cases: a tet's crossed edges are
- * looked up once each (tets near each other in the file share vertices, so the chains are in cache). */
-static int edges_of_tets(march *m, uint32_t *corner)
+/* Each corner's edge into `corner` (3 per triangle), from the workers' active tets in tet order: a tet's
+ * crossed edges are looked up once each, most of them found in `recent` (tets near each other in the file
+ * share edges). */
+static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
 {
-    for (int64_t t = 0; t < m->in->tet_count; t++) {
-        int c = m->cases[t];
-        if (c == 0 || c >= 15)
-            continue;
-        const int32_t *v = m->in->tets + 4 * t;
-        uint32_t edge[6];
-        for (int k = 0; k < 6; k++) {
-            if (!(m->crossed[c] >> k & 1))
-                continue;
-            uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
-            if ((edge[k] = edge_of(m, a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a)) == EDGE_NONE)
-                return -1;
+    for (int w = 0; w < m->threads; w++) {
+        const active_list *list = &m->active[w];
+        for (int64_t i = 0; i < list->count; i++) {
+            const uint32_t *tet = list->tets[i];
+            int c = (int)(tet[0] >> 31 | tet[1] >> 31 << 1 | tet[2] >> 31 << 2 | tet[3] >> 31 << 3);
+            int count = iso_cases[c].count;
+            uint32_t v[4] = {tet[0] & ~SIDE_BIT, tet[1] & ~SIDE_BIT, tet[2] & ~SIDE_BIT, tet[3] & ~SIDE_BIT}, edge[6];
+            for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
+                int k = m->crossed[c][j];
+                uint32_t a = v[tet_edges[k][0]], b = v[tet_edges[k][1]];
+                uint32_t lo = a < b ? a : b, hi = a < b ? b : a; /* selects, not a mispredicted branch */
+                if ((edge[k] = recent_edge_of(m, recent, (uint64_t)lo << 32 | hi)) == EDGE_NONE)
+                    return -1;
+            }
+            for (int k = 0; k < 3 * count; k++)
+                *corner++ = edge[iso_cases[c].edge[k]];
         }
-        for (int k = 0; k < 3 * iso_cases[c].count; k++)
-            *corner++ = edge[iso_cases[c].edge[k]];
     }
     return 0;
 }
@@ -267,15 +353,16 @@ static int edges_of_tets(march *m, uint32_t *corner)
 static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
 {
     m->edge_count = 0;
-    m->edge_cap = corners / 4 + 64;
-    if (!(m->edges = tpk_alloc_large((size_t)m->edge_cap * sizeof *m->edges)))
+    if (reserve((void **)&m->edges, &m->edge_cap, corners / 4 + 64, sizeof *m->edges))
         return -1;
     int failed = 0;
+    recent_edges recent;
+    memset(recent.key, 0, sizeof recent.key);
     if (m->corners) {
         for (int64_t c = 0; c < corners && !failed; c++)
-            failed = (corner[c] = edge_of(m, m->corner_key[c])) == EDGE_NONE;
+            failed = (corner[c] = recent_edge_of(m, &recent, m->corner_key[c])) == EDGE_NONE;
     } else {
-        failed = edges_of_tets(m, corner);
+        failed = edges_of_tets(m, &recent, corner);
     }
     int64_t vertices = rank_edges(m); /* also when failed: it frees the heads */
     return failed ? -1 : vertices;
@@ -382,14 +469,11 @@ static int grow_surface(tpk_iso_surface *o, int64_t vertices, int64_t triangles)
            grow((void **)&o->edge, 2 * vertices, sizeof(int32_t)) || grow((void **)&o->tri, 3 * triangles, sizeof(uint32_t));
 }
 
+/* The GPU's corner keys of one value. The rest of the scratch is kept for the next value (free_march). */
 static void free_scratch(march *m)
 {
     free(m->corner_key);
-    free(m->edges);
-    free(m->vertex_key);
-    free(m->vertex_p);
-    free(m->normal_sum);
-    m->corner_key = NULL, m->edges = NULL, m->vertex_key = NULL, m->vertex_p = NULL, m->normal_sum = NULL;
+    m->corner_key = NULL;
 }
 
 /* The least float at or above `value` (finite). */
@@ -413,7 +497,11 @@ static int extract_value(march *m, tpk_diag *diag)
     } else {
         m->threshold = float_at_or_above(m->value);
         memset(m->worker_first, 0, sizeof m->worker_first);
+        int64_t verts = m->in->vertex_count;
+        tpk_parallel_for(verts, tpk_threads_for(verts, m->threads, 65536), side_range, m);
         tpk_parallel_for(tets, m->threads, count_range, m);
+        if (m->failed)
+            return tpk_diag_fail(diag, "out of memory for the active tets of the isosurface of %g", m->value);
         for (int w = 0; w < m->threads; w++)
             m->worker_first[w + 1] += m->worker_first[w];
         triangles = m->worker_first[m->threads];
@@ -429,10 +517,9 @@ static int extract_value(march *m, tpk_diag *diag)
     int64_t vertices = number_vertices(m, corners, o->tri + 3 * o->triangle_count);
     if (vertices < 0 || o->vertex_count + vertices > INT32_MAX)
         goto fail;
-    size_t v1 = (size_t)(vertices ? vertices : 1);
-    m->vertex_p = tpk_alloc_large(3 * v1 * sizeof *m->vertex_p);
-    m->normal_sum = tpk_alloc_large(3 * v1 * sizeof *m->normal_sum);
-    if (!m->vertex_p || !m->normal_sum || grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
+    if (reserve((void **)&m->vertex_p, &m->p_cap, 3 * vertices, sizeof *m->vertex_p) ||
+        reserve((void **)&m->normal_sum, &m->normal_cap, 3 * vertices, sizeof *m->normal_sum) ||
+        grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
         goto fail;
     m->vertex_base = o->vertex_count;
     m->triangle_base = o->triangle_count;
@@ -460,7 +547,15 @@ int tpk_iso_extract(const tpk_iso_input *in, const double *values, int value_cou
 
 static void free_march(march *m)
 {
-    free(m->cases);
+    free_scratch(m);
+    free(m->edges);
+    free(m->vertex_key);
+    free(m->vertex_p);
+    free(m->normal_sum);
+    free(m->run);
+    free(m->side);
+    for (int w = 0; w < TPK_MAX_THREADS; w++)
+        free(m->active[w].tets);
     free(m->head);
     free(m->hubs.keys);
     free(m->hubs.edges);
@@ -487,15 +582,18 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
     m.head = tpk_alloc_large(sizeof *m.head * (size_t)(in->vertex_count ? in->vertex_count : 1));
     if (m.head)
         memset(m.head, 0xff, sizeof *m.head * (size_t)in->vertex_count); /* EDGE_NONE */
-    if (!m.head || (!corners && !(m.cases = tpk_alloc_large((size_t)(in->tet_count ? in->tet_count : 1))))) {
+    if (!m.head || (!corners && !(m.side = malloc((size_t)(in->vertex_count ? in->vertex_count : 1))))) {
         free_march(&m);
         tpk_iso_surface_free(out);
-        return tpk_diag_fail(diag, "out of memory for the cases of %lld tets", (long long)in->tet_count);
+        return tpk_diag_fail(diag, "out of memory for the sides of %lld vertices", (long long)in->vertex_count);
     }
     m.threads = tpk_threads_for(in->tet_count, tpk_thread_count(threads), 65536);
     for (int c = 0; c < 16; c++)
-        for (int k = 0; k < 6; k++)
-            m.crossed[c] |= (uint8_t)((((c >> tet_edges[k][0]) ^ (c >> tet_edges[k][1])) & 1) << k);
+        for (int k = 0, j = 0; k < 6; k++)
+            if (((c >> tet_edges[k][0]) ^ (c >> tet_edges[k][1])) & 1)
+                m.crossed[c][j++] = (uint8_t)k;
+    for (int c = 0; c < 256; c++)
+        m.case_triangles[c] = c < 16 ? iso_cases[c].count : 0;
     for (int i = 0; i < value_count; i++) {
         m.value = values[i];
         if (extract_value(&m, diag) != 0) {
