@@ -17,7 +17,7 @@ typedef struct walk {
     const tpk_mesh_arrays *mesh;
     int64_t tet_count, vertex_count;
     int32_t *dst;     /* 4 per tet; dst[4t] = -1 while unassigned */
-    int32_t *entered; /* tet we arrived from (-1: the shell) */
+    int32_t *nbr;     /* 4 per assigned tet: its neighbors by rank, decoded and checked once */
     int32_t *queue;
     int64_t head, tail;
 } walk;
@@ -36,8 +36,9 @@ static int rank_of(const int32_t *q, int k)
     return (q[0] < q[k]) + (q[1] < q[k]) + (q[2] < q[k]) + (q[3] < q[k]);
 }
 
-/* Neighbors of assigned tet t by rank (n[r]); each checked in [-1, tet_count). */
-static tpk_result neighbors_of(const walk *w, int64_t t, int32_t n[4])
+/* Neighbors by rank (n[r]) of tet t, just assigned and entered from `from` (Tet16 decodes them from
+ * it); each checked in [-1, tet_count). */
+static tpk_result neighbors_of(const walk *w, int64_t t, int32_t from, int32_t n[4])
 {
     if (w->mesh->layout == TPK_LAYOUT_TET20) {
         memcpy(n, w->mesh->tet20[t].n, 4 * sizeof *n);
@@ -45,7 +46,6 @@ static tpk_result neighbors_of(const walk *w, int64_t t, int32_t n[4])
         const int32_t *q = w->dst + 4 * t;
         const int32_t *nx = w->mesh->tet16[t].nx;
         int entry_rank = rank_of(q, 3); /* the apex we arrived through is stored last */
-        int32_t from = w->entered[t];
         n[3] = entry_rank == 3 ? from : nx[entry_rank] ^ from;
         for (int r = 0; r < 3; r++)
             n[r] = nx[r] ^ n[3];
@@ -69,9 +69,8 @@ static tpk_result assign(walk *w, int64_t u, const int32_t f[3], int32_t from)
     q[1] = f[1];
     q[2] = f[2];
     q[3] = y;
-    w->entered[u] = from;
-    int32_t n[4];
-    tpk_result rc = neighbors_of(w, u, n);
+    int32_t *n = w->nbr + 4 * u;
+    tpk_result rc = neighbors_of(w, u, from, n);
     if (rc)
         return rc;
     if (n[rank_of(q, 3)] != from) /* Tet20: the stored neighbor must be where we came from */
@@ -94,11 +93,7 @@ static tpk_result check_visit(const walk *w, int64_t u, const int32_t f[3], int3
     }
     if (matched != 3 || apex < 0)
         return TPK_ERR_MESH;
-    int32_t n[4];
-    tpk_result rc = neighbors_of(w, u, n);
-    if (rc)
-        return rc;
-    return n[rank_of(q, apex)] == from ? TPK_OK : TPK_ERR_MESH;
+    return w->nbr[4 * u + rank_of(q, apex)] == from ? TPK_OK : TPK_ERR_MESH;
 }
 
 static tpk_result visit(walk *w, int64_t u, const int32_t f[3], int32_t from)
@@ -114,7 +109,8 @@ static tpk_result drain(walk *w)
         int32_t t = w->queue[w->head++];
         int32_t q[4], n[4];
         memcpy(q, w->dst + 4 * (int64_t)t, sizeof q);
-        tpk_result rc = neighbors_of(w, t, n);
+        memcpy(n, w->nbr + 4 * (int64_t)t, sizeof n);
+        tpk_result rc = TPK_OK;
         for (int j = 0; j < 4 && !rc; j++) {
             int32_t u = n[rank_of(q, j)];
             if (u < 0)
@@ -177,15 +173,15 @@ tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst)
     if (mesh->tet_count == 0)
         return TPK_OK;
     walk w = {mesh, (int64_t)mesh->tet_count, (int64_t)mesh->vertex_count, dst, NULL, NULL, 0, 0};
-    w.entered = malloc(sizeof *w.entered * mesh->tet_count);
+    w.nbr = malloc(sizeof *w.nbr * 4 * mesh->tet_count);
     w.queue = malloc(sizeof *w.queue * mesh->tet_count);
     tpk_result rc = TPK_ERR_OUT_OF_MEMORY;
-    if (w.entered && w.queue) {
+    if (w.nbr && w.queue) {
         for (uint64_t i = 0; i < 4 * mesh->tet_count; i++)
             dst[i] = -1;
         rc = walk_from_shell(&w);
     }
-    free(w.entered);
+    free(w.nbr);
     free(w.queue);
     return rc;
 }
