@@ -46,6 +46,7 @@ typedef struct simplifier {
     int field_step;
     uint8_t *boundary;   /* per vertex: on the shell */
     uint8_t *removed;    /* per vertex */
+    int32_t *onto;       /* per removed vertex: the vertex it was moved onto (measure() follows these) */
     int32_t *tets;       /* 4 per live tet, full mesh vertex ids, positive */
     int32_t *origin;     /* per live tet: the full mesh tet it descends from */
     int64_t tet_count;
@@ -303,6 +304,7 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
             s->stuck[t[k]] = 0;
     }
     s->removed[u] = 1;
+    s->onto[u] = v;
     s->locked[u] = 1;
     s->locked[v] = 1;
     return killed;
@@ -501,64 +503,102 @@ static void level_mesh_free(tpk_tetmesh *m)
     memset(m, 0, sizeof *m);
 }
 
+/* The level vertex a removed vertex ended on, at the end of the chain of the vertices it was moved onto. */
+static int32_t survivor(const simplifier *s, int32_t u)
+{
+    while (s->removed[u])
+        u = s->onto[u];
+    return u;
+}
+
+/* The level tet that holds point p, by a walk from tet t across a face p is beyond (exactly; one with a
+ * neighbour first, so that a walk near a non-convex shell stays inside), with p's barycentric weights
+ * (unnormalised: each a 6V, summing to *total); -1 when the walk leaves the mesh or takes 4096 steps. */
+static int64_t locate(const tpk_tetmesh *lvl, const int32_t *neighbors, const double *p, int64_t t, double lambda[4],
+                      double *total)
+{
+    for (int steps = 0; steps < 4096 && t >= 0; steps++) {
+        const int32_t *v = lvl->tets + 4 * t;
+        /* The corners from p: lambda[k] is the 6V of the tet with p in place of corner k, a triple
+         * product of the other three, two cross products for the four */
+        const double *c0 = lvl->points + 3 * (size_t)v[0], *c1 = lvl->points + 3 * (size_t)v[1];
+        const double *c2 = lvl->points + 3 * (size_t)v[2], *c3 = lvl->points + 3 * (size_t)v[3];
+        double x0 = c0[0] - p[0], y0 = c0[1] - p[1], z0 = c0[2] - p[2];
+        double x1 = c1[0] - p[0], y1 = c1[1] - p[1], z1 = c1[2] - p[2];
+        double x2 = c2[0] - p[0], y2 = c2[1] - p[1], z2 = c2[2] - p[2];
+        double x3 = c3[0] - p[0], y3 = c3[1] - p[1], z3 = c3[2] - p[2];
+        double abx = y0 * z1 - z0 * y1, aby = z0 * x1 - x0 * z1, abz = x0 * y1 - y0 * x1;
+        double cdx = y2 * z3 - z2 * y3, cdy = z2 * x3 - x2 * z3, cdz = x2 * y3 - y2 * x3;
+        lambda[0] = x1 * cdx + y1 * cdy + z1 * cdz;
+        lambda[1] = -(x0 * cdx + y0 * cdy + z0 * cdz);
+        lambda[2] = abx * x3 + aby * y3 + abz * z3;
+        lambda[3] = -(abx * x2 + aby * y2 + abz * z2);
+        *total = lambda[0] + lambda[1] + lambda[2] + lambda[3];
+        int beyond = -1, outside = 0;
+        for (int k = 0; k < 4 && beyond < 0; k++) {
+            if (!(lambda[k] < 0))
+                continue;
+            const double *q[4];
+            for (int j = 0; j < 4; j++)
+                q[j] = j == k ? p : lvl->points + 3 * (size_t)v[j];
+            if (tpk_orient3d_exact(q[0], q[1], q[2], q[3]) < 0) {
+                if (neighbors[4 * t + k] >= 0)
+                    beyond = k;
+                else
+                    outside = 1;
+            }
+        }
+        if (beyond < 0)
+            return outside ? -1 : t;
+        t = neighbors[4 * t + beyond];
+    }
+    return -1;
+}
+
 /* The field of the full mesh at the vertices this level removed against the level's value there (linear
- * in the level tet that holds the point, found by a walk through the level's tets: from the tet found for
- * the removed vertex before, vertices being in Hilbert order, across the face the point is beyond). A
- * point the walk does not reach in 4096 steps (or that it leaves the mesh for: a non-convex domain) is
- * not sampled. */
+ * in the level tet that holds the point, found by locate(): from the tet found for the removed vertex
+ * before, vertices being in Hilbert order, else from a tet of the vertex it ended on, which is in the
+ * same part of the mesh: a walk does not cross from one block of a mesh to another that only lies
+ * against it). A point neither walk reaches is not sampled. */
 static void measure(const simplifier *s, const tpk_tetmesh *lvl, const int32_t *vertex_old, const int32_t *neighbors,
                     tpk_level *r)
 {
     const tpk_tetmesh *m = s->mesh;
-    uint8_t *kept = s->field ? calloc((size_t)(m->vertex_count ? m->vertex_count : 1), 1) : NULL;
-    if (!kept)
+    /* per full mesh vertex: a level tet that holds it, or -1 (not kept) */
+    int32_t *tet_of = s->field ? malloc(sizeof *tet_of * (size_t)(m->vertex_count ? m->vertex_count : 1)) : NULL;
+    if (!tet_of)
         return;
-    for (int64_t v = 0; v < lvl->vertex_count; v++)
-        kept[vertex_old[v]] = 1;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        tet_of[v] = -1;
+    for (int64_t i = 0; i < 4 * lvl->tet_count; i++)
+        tet_of[vertex_old[lvl->tets[i]]] = (int32_t)(i / 4);
     double sum = 0, worst = 0;
     int64_t count = 0, hint = 0;
     for (int64_t u = 0; u < m->vertex_count; u++) {
-        if (kept[u])
+        if (tet_of[u] >= 0)
             continue;
         const double *p = m->points + 3 * (size_t)u;
-        int64_t t = hint;
-        for (int steps = 0; steps < 4096 && t >= 0; steps++) {
-            const int32_t *v = lvl->tets + 4 * t;
-            double lambda[4], total = 0;
-            int beyond = -1;
-            for (int k = 0; k < 4; k++) {
-                const double *q[4];
-                for (int j = 0; j < 4; j++)
-                    q[j] = j == k ? p : lvl->points + 3 * (size_t)v[j];
-                double e[3][3];
-                for (int i = 0; i < 3; i++)
-                    for (int a = 0; a < 3; a++)
-                        e[i][a] = q[i + 1][a] - q[0][a];
-                lambda[k] = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
-                            e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                            e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
-                total += lambda[k];
-                if (beyond < 0 && lambda[k] < 0 && tpk_orient3d_exact(q[0], q[1], q[2], q[3]) < 0)
-                    beyond = k;
-            }
-            if (beyond < 0) {
-                double value = 0;
-                for (int k = 0; k < 4 && total > 0; k++)
-                    value += lambda[k] / total * (double)s->field[vertex_old[v[k]]];
-                double d = fabs(value - (double)s->field[u]);
-                worst = d > worst ? d : worst;
-                sum += d * d;
-                count++;
-                hint = t;
-                break;
-            }
-            t = neighbors[4 * t + beyond];
-        }
+        double lambda[4], total = 0;
+        int64_t t = locate(lvl, neighbors, p, hint, lambda, &total);
+        int32_t w = t < 0 && s->removed[u] ? survivor(s, (int32_t)u) : -1;
+        if (w >= 0 && tet_of[w] >= 0 && tet_of[w] != hint)
+            t = locate(lvl, neighbors, p, tet_of[w], lambda, &total);
+        if (t < 0)
+            continue;
+        const int32_t *v = lvl->tets + 4 * t;
+        double value = 0;
+        for (int k = 0; k < 4 && total > 0; k++)
+            value += lambda[k] / total * (double)s->field[vertex_old[v[k]]];
+        double d = fabs(value - (double)s->field[u]);
+        worst = d > worst ? d : worst;
+        sum += d * d;
+        count++;
+        hint = t;
     }
     r->error_samples = count;
     r->error_max = worst;
     r->error_rms = count ? sqrt(sum / (double)count) : 0;
-    free(kept);
+    free(tet_of);
 }
 
 /* The level's shell is the full mesh's, face for face (as sorted triples of full-mesh ids). */
@@ -601,20 +641,24 @@ static int32_t *shell_triples(const int32_t *tets, const int32_t *neighbors, int
     return f;
 }
 
-static int same_shell(const simplifier *s, const int32_t *full_neighbors, const tpk_tetmesh *lvl,
-                      const int32_t *vertex_old, const int32_t *neighbors)
+/* The full mesh's shell, as shell_triples gives it: made once, compared with every level's. */
+typedef struct full_shell {
+    int32_t *triples;
+    int64_t count;
+} full_shell;
+
+static int same_shell(const full_shell *full, const tpk_tetmesh *lvl, const int32_t *vertex_old,
+                      const int32_t *neighbors)
 {
-    int64_t a = 0, b = 0;
-    int32_t *x = shell_triples(s->mesh->tets, full_neighbors, s->mesh->tet_count, NULL, &a);
+    int64_t b = 0;
     int32_t *y = shell_triples(lvl->tets, neighbors, lvl->tet_count, vertex_old, &b);
-    int same = x && y && a == b && !memcmp(x, y, sizeof *x * 3 * (size_t)a);
-    free(x);
+    int same = y && full->count == b && !memcmp(full->triples, y, sizeof *y * 3 * (size_t)b);
     free(y);
     return same;
 }
 
 /* Write the level through the converter's own writer into an unnamed file, and take its bytes. */
-static int write_level(const tpk_convert_options *o, const simplifier *s, const int32_t *full_neighbors, int k,
+static int write_level(const tpk_convert_options *o, const simplifier *s, const full_shell *shell, int k,
                        const char *source_format, const tpk_convert_report *source, tpk_level *r, tpk_diag *diag)
 {
     tpk_tetmesh lvl;
@@ -622,18 +666,18 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, const 
     int rc = level_mesh(s, &lvl, &vertex_old, diag);
     if (rc == 0 && !(neighbors = malloc(sizeof *neighbors * 4 * (size_t)(lvl.tet_count ? lvl.tet_count : 1))))
         rc = tpk_diag_fail(diag, "levels: out of memory");
-    if (rc == 0)
-        rc = tpk_connect(lvl.tets, lvl.tet_count, lvl.vertex_count, neighbors, o->threads, diag);
     /* The folds the full mesh had cut (--cut-folds: both faces are shell faces there) pair up again in
      * face matching: cut them again, as extract does. No collapse makes a new one (every changed tet is
-     * positive inside the star it replaces); same_shell below shows the shell is the full mesh's. */
+     * positive inside the star it replaces); same_shell below shows the shell is the full mesh's. The
+     * face matching finds them as it pairs the faces (only pairs whose orders agree get the exact test). */
     int64_t *slots = NULL, folds = 0;
     if (rc == 0)
-        rc = tpk_find_folds(lvl.tets, neighbors, lvl.tet_count, lvl.points, o->threads, &slots, &folds, diag);
+        rc = tpk_connect_folds(lvl.tets, lvl.tet_count, lvl.vertex_count, lvl.points, neighbors, o->threads, &slots,
+                               &folds, diag);
     if (rc == 0 && folds > 0)
         tpk_cut_folds(lvl.tets, neighbors, slots, folds);
     free(slots);
-    if (rc == 0 && !same_shell(s, full_neighbors, &lvl, vertex_old, neighbors))
+    if (rc == 0 && !same_shell(shell, &lvl, vertex_old, neighbors))
         rc = tpk_diag_fail(diag, "level %d: its shell is not the full mesh's (a bug in levels.c)", k);
     FILE *tmp = rc == 0 ? tmpfile() : NULL;
     if (rc == 0 && !tmp)
@@ -695,6 +739,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     count = count > TPK_MAX_LEVELS ? TPK_MAX_LEVELS : count;
     simplifier s;
     memset(&s, 0, sizeof s);
+    full_shell shell = {NULL, 0};
     s.mesh = mesh;
     s.threads = tpk_thread_count(o->threads);
     int64_t V = mesh->vertex_count, T = mesh->tet_count;
@@ -722,6 +767,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     }
     s.boundary = calloc((size_t)(V ? V : 1), 1);
     s.removed = calloc((size_t)(V ? V : 1), 1);
+    s.onto = malloc(sizeof *s.onto * (size_t)(V ? V : 1));
     s.locked = calloc((size_t)(V ? V : 1), 1);
     s.dead = calloc((size_t)(T ? T : 1), 1);
     s.stuck = calloc((size_t)(V ? V : 1), 1);
@@ -731,7 +777,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     s.star_start = malloc(sizeof *s.star_start * (size_t)(V + 1));
     s.star = malloc(sizeof *s.star * 4 * (size_t)(T ? T : 1));
     s.tet_quality = malloc(sizeof *s.tet_quality * (size_t)(T ? T : 1));
-    int rc = s.boundary && s.removed && s.locked && s.dead && s.stuck && s.active && s.tets && s.origin && s.star_start && s.star &&
+    int rc = s.boundary && s.removed && s.onto && s.locked && s.dead && s.stuck && s.active && s.tets && s.origin && s.star_start && s.star &&
                      s.tet_quality
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
@@ -759,13 +805,18 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
         tpk_level *r = &out->level[out->count];
         snprintf(r->field, sizeof r->field, "%s", field_name);
         r->field_step = s.field_step;
-        rc = write_level(o, &s, neighbors, k, source_format, source, r, diag);
+        if (!shell.triples && !(shell.triples = shell_triples(mesh->tets, neighbors, T, NULL, &shell.count))) {
+            rc = tpk_diag_fail(diag, "levels: out of memory for the shell of %lld tets", (long long)T);
+            break;
+        }
+        rc = write_level(o, &s, &shell, k, source_format, source, r, diag);
         r->seconds = tpk_now_seconds() - t0;
         if (rc == 0)
             out->count++;
     }
     free(s.boundary);
     free(s.removed);
+    free(s.onto);
     free(s.locked);
     free(s.dead);
     free(s.stuck);
@@ -775,6 +826,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     free(s.star_start);
     free(s.star);
     free(s.tet_quality);
+    free(shell.triples);
     if (rc != 0)
         tpk_levels_free(out);
     return rc;
