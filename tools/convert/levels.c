@@ -56,7 +56,7 @@ typedef struct simplifier {
     uint8_t *stuck;      /* per vertex: no valid target, and its star has not changed since */
     int32_t *active;     /* the vertices this pass may collapse, in id order (build_stars) */
     int64_t active_count;
-    float *tet_quality;  /* per live tet: its shape (quality()), kept up to date as tets change */
+    float *tet_quality;  /* per live tet: its shape (quality(); a moved tet's from its test in choose_target) */
 } simplifier;
 
 static const double *point(const simplifier *s, int32_t v)
@@ -64,23 +64,25 @@ static const double *point(const simplifier *s, int32_t v)
     return s->mesh->points + 3 * (size_t)v;
 }
 
+/* The squared length of b - a, and b - a in e. */
+static double edge(const double *a, const double *b, double e[3])
+{
+    e[0] = b[0] - a[0], e[1] = b[1] - a[1], e[2] = b[2] - a[2];
+    return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+}
+
 /* 6 V / L^3 of the tet (a, b, c, d): 0 flat, 0.707 regular; negative when inverted. */
 static double quality(const double *a, const double *b, const double *c, const double *d)
 {
-    double e[6][3], l2 = 0;
-    const double *p[4] = {a, b, c, d};
-    int n = 0;
-    for (int i = 0; i < 4; i++)
-        for (int j = i + 1; j < 4; j++, n++) {
-            double s = 0;
-            for (int k = 0; k < 3; k++) {
-                e[n][k] = p[j][k] - p[i][k];
-                s += e[n][k] * e[n][k];
-            }
-            l2 = s > l2 ? s : l2;
-        }
-    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    double ab[3], ac[3], ad[3], e[3];
+    double l2 = edge(a, b, ab), x;
+    l2 = (x = edge(a, c, ac)) > l2 ? x : l2;
+    l2 = (x = edge(a, d, ad)) > l2 ? x : l2;
+    l2 = (x = edge(b, c, e)) > l2 ? x : l2;
+    l2 = (x = edge(b, d, e)) > l2 ? x : l2;
+    l2 = (x = edge(c, d, e)) > l2 ? x : l2;
+    double det = ab[0] * (ac[1] * ad[2] - ac[2] * ad[1]) - ab[1] * (ac[0] * ad[2] - ac[2] * ad[0]) +
+                 ab[2] * (ac[0] * ad[1] - ac[1] * ad[0]);
     return l2 > 0 ? det / (l2 * sqrt(l2)) : 0;
 }
 
@@ -151,8 +153,10 @@ static int star_neighbours(const simplifier *s, int32_t u, const int32_t *star, 
  * normal . (v - a) (the face's inward normal, scaled) and whose longest edge is the face's or one to v. */
 typedef struct star_face {
     const int32_t *tet; /* its 4 ids (u among them) */
+    int index;          /* in the star */
     const double *a, *b, *c;
     double normal[3], face_l2;
+    double six_v, l2;   /* of the moved tet that last passed moved_tet_ok: its shape is 6V / L^3 */
 } star_face;
 
 static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_face *f)
@@ -177,8 +181,7 @@ static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_
 
 /* Whether the tet of face f with u moved to v (at q) is positive, exactly, and of shape 6V/L^3 >= floor
  * (floor >= 0). The shape in double first, as 6V^2 >= floor^2 L^6 without a root: it rejects most. */
-static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int32_t v, const double *q,
-                        double floor)
+static int moved_tet_ok(const simplifier *s, star_face *f, int32_t u, int32_t v, const double *q, double floor)
 {
     double da[3], l2 = f->face_l2, six_v = 0;
     for (int i = 0; i < 3; i++)
@@ -196,6 +199,8 @@ static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int3
     l2 = lc > l2 ? lc : l2;
     if (six_v * six_v < floor * floor * l2 * l2 * l2)
         return 0;
+    f->six_v = six_v;
+    f->l2 = l2;
     /* Then 6V >= floor L^3, while the rounding of six_v (the expansion tpk_orient3d_filter bounds: rows
      * v - a, c - a, b - a) is at most (7 + 56 eps) eps times a permanent <= 6 L^3, 5e-15 L^3: past a floor
      * of 1e-12 the sign is certain, and the exact test would only say so again. */
@@ -209,8 +214,9 @@ static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int3
 }
 
 /* The best valid target of interior vertex u, or -1: its neighbours by ascending cost (then id), the
- * first whose moved tets are all positive and of fair shape. */
-static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n)
+ * first whose moved tets are all positive and of fair shape. With a target, shape[i] is the shape of
+ * star[i] moved onto it (unset for the tets that vanish). */
+static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n, float *shape)
 {
     int32_t nb[NEIGHBOURS_MAX];
     double cost[NEIGHBOURS_MAX];
@@ -223,6 +229,7 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
         double q = s->tet_quality[star[i]];
         worst = q < worst ? q : worst;
         faces[i].tet = s->tets + 4 * (size_t)star[i];
+        faces[i].index = i;
         faces[i].a = NULL; /* the rest when first needed: a target that fails tests few */
     }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
@@ -246,8 +253,13 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
                 star_face_of(s, t, u, &faces[i]);
             ok = moved_tet_ok(s, &faces[i], u, v, q, floor);
         }
-        if (ok)
+        if (ok) {
+            for (i = 0; i < n; i++)
+                if (faces[i].a && faces[i].tet[0] != v && faces[i].tet[1] != v && faces[i].tet[2] != v &&
+                    faces[i].tet[3] != v)
+                    shape[faces[i].index] = (float)(faces[i].six_v / (faces[i].l2 * sqrt(faces[i].l2)));
             return v;
+        }
         /* The face that turned this target down is tried first for the next: targets of close cost often
          * fail on the same one. All must pass, so the order changes the time, not the answer. */
         star_face f = faces[i - 1];
@@ -283,7 +295,8 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
             if (t[k] < lo || t[k] >= hi)
                 return -1;
     }
-    int32_t v = choose_target(s, u, star, n);
+    float shape[STAR_MAX];
+    int32_t v = choose_target(s, u, star, n, shape);
     if (v < 0) {
         s->stuck[u] = 1; /* until a collapse next to it changes its star */
         return -1;
@@ -298,7 +311,7 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
             for (int k = 0; k < 4; k++)
                 if (t[k] == u)
                     t[k] = v;
-            s->tet_quality[star[i]] = (float)quality(point(s, t[0]), point(s, t[1]), point(s, t[2]), point(s, t[3]));
+            s->tet_quality[star[i]] = shape[i]; /* as quality() measures it, up to rounding */
         }
         for (int k = 0; k < 4; k++)
             s->stuck[t[k]] = 0;
