@@ -54,6 +54,7 @@ typedef struct simplifier {
     int32_t *star;
     uint8_t *locked, *dead;
     uint8_t *stuck;      /* per vertex: no valid target, and its star has not changed since */
+    int32_t *seen;       /* per vertex: -1, or the vertex whose neighbours star_neighbours is listing */
     int32_t *active;     /* the vertices this pass may collapse, in id order (build_stars) */
     int64_t active_count;
     float *tet_quality;  /* per live tet: its shape (quality(); a moved tet's from its test in choose_target) */
@@ -114,28 +115,32 @@ static int build_stars(simplifier *s)
     return 0;
 }
 
-/* u's neighbours (each once) with their costs: the field difference, or the squared distance without a
- * field. A small open-addressing table finds the repeats. The count, or -1 past NEIGHBOURS_MAX. */
-static int star_neighbours(const simplifier *s, int32_t u, const int32_t *star, int n, int32_t *nb, double *cost)
+/* u's neighbours (each once, in the order the star first meets them) with their costs: the field
+ * difference, or the squared distance without a field. s->seen marks the ones met (and is cleared again).
+ * The count; -1 past NEIGHBOURS_MAX; -2 when lo < hi and one lies outside [lo, hi) (then none is marked,
+ * so blocks side by side touch only their own marks). */
+static int star_neighbours(simplifier *s, int32_t u, const int32_t *star, int n, int32_t lo, int32_t hi,
+                           int32_t *nb, double *cost)
 {
-    enum { SLOTS = 2 * NEIGHBOURS_MAX }; /* a power of two; at most half full */
-    int32_t slot[SLOTS];
-    memset(slot, 0xff, sizeof slot);
-    int m = 0;
+    int m = 0, over = 0;
     for (int i = 0; i < n; i++) {
         const int32_t *t = s->tets + 4 * (size_t)star[i];
         for (int k = 0; k < 4; k++) {
             int32_t w = t[k];
             if (w == u)
                 continue;
-            uint32_t h = ((uint32_t)w * 2654435761u) >> 24; /* 8 bits: SLOTS */
-            while (slot[h] >= 0 && slot[h] != w)
-                h = (h + 1) & (SLOTS - 1);
-            if (slot[h] == w)
+            if (lo < hi && (w < lo || w >= hi)) {
+                for (int j = 0; j < m; j++)
+                    s->seen[nb[j]] = -1;
+                return -2;
+            }
+            if (over || s->seen[w] == u)
                 continue;
-            if (m == NEIGHBOURS_MAX)
-                return -1;
-            slot[h] = w;
+            if (m == NEIGHBOURS_MAX) {
+                over = 1;
+                continue;
+            }
+            s->seen[w] = u;
             double c = 0;
             if (s->field)
                 c = fabs((double)s->field[w] - (double)s->field[u]);
@@ -146,7 +151,9 @@ static int star_neighbours(const simplifier *s, int32_t u, const int32_t *star, 
             cost[m++] = c;
         }
     }
-    return m;
+    for (int j = 0; j < m; j++)
+        s->seen[nb[j]] = -1;
+    return over ? -1 : m;
 }
 
 /* A tet of u's star seen from its face opposite u: moving u to v makes the tet (face, v), whose 6V is
@@ -167,33 +174,23 @@ static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_
     f->b = point(s, t[tpk_tet_faces[k][1]]);
     f->c = point(s, t[tpk_tet_faces[k][2]]);
     double ab[3], ac[3], bc[3];
-    for (int i = 0; i < 3; i++)
-        ab[i] = f->b[i] - f->a[i], ac[i] = f->c[i] - f->a[i], bc[i] = f->c[i] - f->b[i];
+    double lab = edge(f->a, f->b, ab), lac = edge(f->a, f->c, ac), lbc = edge(f->b, f->c, bc);
     /* tpk_tet_faces turns each face outward, so 6V = -(ab x ac) . (corner - a) */
     f->normal[0] = ac[1] * ab[2] - ac[2] * ab[1];
     f->normal[1] = ac[2] * ab[0] - ac[0] * ab[2];
     f->normal[2] = ac[0] * ab[1] - ac[1] * ab[0];
-    double l[3] = {0, 0, 0};
-    for (int i = 0; i < 3; i++)
-        l[0] += ab[i] * ab[i], l[1] += ac[i] * ac[i], l[2] += bc[i] * bc[i];
-    f->face_l2 = l[0] > l[1] ? (l[0] > l[2] ? l[0] : l[2]) : (l[1] > l[2] ? l[1] : l[2]);
+    f->face_l2 = lab > lac ? (lab > lbc ? lab : lbc) : (lac > lbc ? lac : lbc);
 }
 
 /* Whether the tet of face f with u moved to v (at q) is positive, exactly, and of shape 6V/L^3 >= floor
  * (floor >= 0). The shape in double first, as 6V^2 >= floor^2 L^6 without a root: it rejects most. */
 static int moved_tet_ok(const simplifier *s, star_face *f, int32_t u, int32_t v, const double *q, double floor)
 {
-    double da[3], l2 = f->face_l2, six_v = 0;
-    for (int i = 0; i < 3; i++)
-        da[i] = q[i] - f->a[i], six_v += f->normal[i] * da[i];
+    double da[3], db[3], dc[3], l2 = f->face_l2;
+    double la = edge(f->a, q, da), six_v = f->normal[0] * da[0] + f->normal[1] * da[1] + f->normal[2] * da[2];
     if (!(six_v > 0))
         return 0;
-    double la = 0, lb = 0, lc = 0;
-    for (int i = 0; i < 3; i++) {
-        la += da[i] * da[i];
-        lb += (q[i] - f->b[i]) * (q[i] - f->b[i]);
-        lc += (q[i] - f->c[i]) * (q[i] - f->c[i]);
-    }
+    double lb = edge(f->b, q, db), lc = edge(f->c, q, dc);
     l2 = la > l2 ? la : l2;
     l2 = lb > l2 ? lb : l2;
     l2 = lc > l2 ? lc : l2;
@@ -213,16 +210,12 @@ static int moved_tet_ok(const simplifier *s, star_face *f, int32_t u, int32_t v,
     return (sign ? sign : tpk_orient3d_exact(p[0], p[1], p[2], p[3])) > 0;
 }
 
-/* The best valid target of interior vertex u, or -1: its neighbours by ascending cost (then id), the
- * first whose moved tets are all positive and of fair shape. With a target, shape[i] is the shape of
- * star[i] moved onto it (unset for the tets that vanish). */
-static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n, float *shape)
+/* The best valid target of interior vertex u among its m neighbours nb (with their costs, reordered
+ * here), or -1: by ascending cost (then id), the first whose moved tets are all positive and of fair
+ * shape. With a target, shape[i] is the shape of star[i] moved onto it (unset for the tets that vanish). */
+static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n, int32_t *nb, double *cost,
+                             int m, float *shape)
 {
-    int32_t nb[NEIGHBOURS_MAX];
-    double cost[NEIGHBOURS_MAX];
-    int m = star_neighbours(s, u, star, n, nb, cost);
-    if (m < 0)
-        return -1;
     star_face faces[STAR_MAX];
     double worst = INFINITY;
     for (int i = 0; i < n; i++) {
@@ -289,14 +282,13 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     n = live;
     if (n == 0)
         return -1;
-    for (int i = 0; lo < hi && i < n; i++) {
-        const int32_t *t = s->tets + 4 * (size_t)star[i];
-        for (int k = 0; k < 4; k++)
-            if (t[k] < lo || t[k] >= hi)
-                return -1;
-    }
+    int32_t nb[NEIGHBOURS_MAX];
+    double cost[NEIGHBOURS_MAX];
+    int m = star_neighbours(s, u, star, n, lo, hi, nb, cost);
+    if (m == -2)
+        return -1; /* not in this block */
     float shape[STAR_MAX];
-    int32_t v = choose_target(s, u, star, n, shape);
+    int32_t v = m < 0 ? -1 : choose_target(s, u, star, n, nb, cost, m, shape);
     if (v < 0) {
         s->stuck[u] = 1; /* until a collapse next to it changes its star */
         return -1;
@@ -784,16 +776,18 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     s.locked = calloc((size_t)(V ? V : 1), 1);
     s.dead = calloc((size_t)(T ? T : 1), 1);
     s.stuck = calloc((size_t)(V ? V : 1), 1);
+    s.seen = malloc(sizeof *s.seen * (size_t)(V ? V : 1));
     s.active = malloc(sizeof *s.active * (size_t)(V ? V : 1));
     s.tets = malloc(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     s.origin = malloc(sizeof *s.origin * (size_t)(T ? T : 1));
     s.star_start = malloc(sizeof *s.star_start * (size_t)(V + 1));
     s.star = malloc(sizeof *s.star * 4 * (size_t)(T ? T : 1));
     s.tet_quality = malloc(sizeof *s.tet_quality * (size_t)(T ? T : 1));
-    int rc = s.boundary && s.removed && s.onto && s.locked && s.dead && s.stuck && s.active && s.tets && s.origin && s.star_start && s.star &&
+    int rc = s.boundary && s.removed && s.onto && s.locked && s.dead && s.stuck && s.seen && s.active && s.tets && s.origin && s.star_start && s.star &&
                      s.tet_quality
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
+        memset(s.seen, 0xff, sizeof *s.seen * (size_t)V);
         memcpy(s.tets, mesh->tets, sizeof *s.tets * 4 * (size_t)T);
         for (int64_t t = 0; t < T; t++) {
             const int32_t *v = mesh->tets + 4 * t;
@@ -833,6 +827,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     free(s.locked);
     free(s.dead);
     free(s.stuck);
+    free(s.seen);
     free(s.active);
     free(s.tets);
     free(s.origin);
