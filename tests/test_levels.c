@@ -189,6 +189,21 @@ TPK_TEST(real_meshes_levels_valid)
     check_levels_of(blocks, 1);
 }
 
+/* The error is measured at every vertex a level removed, in a mesh whose blocks lie against each other
+ * without sharing faces (exomerge: a walk from the last point's tet cannot cross to another block, so
+ * before the walk also started from the vertex the removed one ended on, 69 of 573 were measured). */
+TPK_TEST(levels_error_at_every_removed_vertex)
+{
+    const char *out = tpk_temp_path("exomerge.tpk");
+    tpk_convert_report rep;
+    CHECK(convert_levels(tpk_data_path("seacas/exomerge_unit_test.e"), out, 1, &rep) == 0);
+    CHECK_MSG(rep.level_count == 1, "exomerge: %d levels", rep.level_count);
+    int64_t removed = rep.vertices - rep.level[0].vertices;
+    CHECK_MSG(removed > 0 && rep.level[0].error_samples == removed, "exomerge: error at %lld of %lld removed vertices",
+              (long long)rep.level[0].error_samples, (long long)removed);
+    check_levels_of(out, 1);
+}
+
 /* A copy of `src` (every chunk decoded and written again) with one LEVL chunk of `level` bytes. */
 static int write_with_level(const char *src, const char *dst, const void *level, size_t size, uint32_t index,
                             int codec)

@@ -46,6 +46,7 @@ typedef struct simplifier {
     int field_step;
     uint8_t *boundary;   /* per vertex: on the shell */
     uint8_t *removed;    /* per vertex */
+    int32_t *onto;       /* per removed vertex: the vertex it was moved onto (measure() follows these) */
     int32_t *tets;       /* 4 per live tet, full mesh vertex ids, positive */
     int32_t *origin;     /* per live tet: the full mesh tet it descends from */
     int64_t tet_count;
@@ -53,9 +54,10 @@ typedef struct simplifier {
     int32_t *star;
     uint8_t *locked, *dead;
     uint8_t *stuck;      /* per vertex: no valid target, and its star has not changed since */
+    int32_t *seen;       /* per vertex: -1, or the vertex whose neighbours star_neighbours is listing */
     int32_t *active;     /* the vertices this pass may collapse, in id order (build_stars) */
     int64_t active_count;
-    float *tet_quality;  /* per live tet: its shape (quality()), kept up to date as tets change */
+    float *tet_quality;  /* per live tet: its shape (quality(); a moved tet's from its test in choose_target) */
 } simplifier;
 
 static const double *point(const simplifier *s, int32_t v)
@@ -63,23 +65,25 @@ static const double *point(const simplifier *s, int32_t v)
     return s->mesh->points + 3 * (size_t)v;
 }
 
+/* The squared length of b - a, and b - a in e. */
+static double edge(const double *a, const double *b, double e[3])
+{
+    e[0] = b[0] - a[0], e[1] = b[1] - a[1], e[2] = b[2] - a[2];
+    return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+}
+
 /* 6 V / L^3 of the tet (a, b, c, d): 0 flat, 0.707 regular; negative when inverted. */
 static double quality(const double *a, const double *b, const double *c, const double *d)
 {
-    double e[6][3], l2 = 0;
-    const double *p[4] = {a, b, c, d};
-    int n = 0;
-    for (int i = 0; i < 4; i++)
-        for (int j = i + 1; j < 4; j++, n++) {
-            double s = 0;
-            for (int k = 0; k < 3; k++) {
-                e[n][k] = p[j][k] - p[i][k];
-                s += e[n][k] * e[n][k];
-            }
-            l2 = s > l2 ? s : l2;
-        }
-    double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                 e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+    double ab[3], ac[3], ad[3], e[3];
+    double l2 = edge(a, b, ab), x;
+    l2 = (x = edge(a, c, ac)) > l2 ? x : l2;
+    l2 = (x = edge(a, d, ad)) > l2 ? x : l2;
+    l2 = (x = edge(b, c, e)) > l2 ? x : l2;
+    l2 = (x = edge(b, d, e)) > l2 ? x : l2;
+    l2 = (x = edge(c, d, e)) > l2 ? x : l2;
+    double det = ab[0] * (ac[1] * ad[2] - ac[2] * ad[1]) - ab[1] * (ac[0] * ad[2] - ac[2] * ad[0]) +
+                 ab[2] * (ac[0] * ad[1] - ac[1] * ad[0]);
     return l2 > 0 ? det / (l2 * sqrt(l2)) : 0;
 }
 
@@ -111,28 +115,32 @@ static int build_stars(simplifier *s)
     return 0;
 }
 
-/* u's neighbours (each once) with their costs: the field difference, or the squared distance without a
- * field. A small open-addressing table finds the repeats. The count, or -1 past NEIGHBOURS_MAX. */
-static int star_neighbours(const simplifier *s, int32_t u, const int32_t *star, int n, int32_t *nb, double *cost)
+/* u's neighbours (each once, in the order the star first meets them) with their costs: the field
+ * difference, or the squared distance without a field. s->seen marks the ones met (and is cleared again).
+ * The count; -1 past NEIGHBOURS_MAX; -2 when lo < hi and one lies outside [lo, hi) (then none is marked,
+ * so blocks side by side touch only their own marks). */
+static int star_neighbours(simplifier *s, int32_t u, const int32_t *star, int n, int32_t lo, int32_t hi,
+                           int32_t *nb, double *cost)
 {
-    enum { SLOTS = 2 * NEIGHBOURS_MAX }; /* a power of two; at most half full */
-    int32_t slot[SLOTS];
-    memset(slot, 0xff, sizeof slot);
-    int m = 0;
+    int m = 0, over = 0;
     for (int i = 0; i < n; i++) {
         const int32_t *t = s->tets + 4 * (size_t)star[i];
         for (int k = 0; k < 4; k++) {
             int32_t w = t[k];
             if (w == u)
                 continue;
-            uint32_t h = ((uint32_t)w * 2654435761u) >> 24; /* 8 bits: SLOTS */
-            while (slot[h] >= 0 && slot[h] != w)
-                h = (h + 1) & (SLOTS - 1);
-            if (slot[h] == w)
+            if (lo < hi && (w < lo || w >= hi)) {
+                for (int j = 0; j < m; j++)
+                    s->seen[nb[j]] = -1;
+                return -2;
+            }
+            if (over || s->seen[w] == u)
                 continue;
-            if (m == NEIGHBOURS_MAX)
-                return -1;
-            slot[h] = w;
+            if (m == NEIGHBOURS_MAX) {
+                over = 1;
+                continue;
+            }
+            s->seen[w] = u;
             double c = 0;
             if (s->field)
                 c = fabs((double)s->field[w] - (double)s->field[u]);
@@ -143,15 +151,19 @@ static int star_neighbours(const simplifier *s, int32_t u, const int32_t *star, 
             cost[m++] = c;
         }
     }
-    return m;
+    for (int j = 0; j < m; j++)
+        s->seen[nb[j]] = -1;
+    return over ? -1 : m;
 }
 
 /* A tet of u's star seen from its face opposite u: moving u to v makes the tet (face, v), whose 6V is
  * normal . (v - a) (the face's inward normal, scaled) and whose longest edge is the face's or one to v. */
 typedef struct star_face {
     const int32_t *tet; /* its 4 ids (u among them) */
+    int index;          /* in the star */
     const double *a, *b, *c;
     double normal[3], face_l2;
+    double six_v, l2;   /* of the moved tet that last passed moved_tet_ok: its shape is 6V / L^3 */
 } star_face;
 
 static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_face *f)
@@ -162,39 +174,30 @@ static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_
     f->b = point(s, t[tpk_tet_faces[k][1]]);
     f->c = point(s, t[tpk_tet_faces[k][2]]);
     double ab[3], ac[3], bc[3];
-    for (int i = 0; i < 3; i++)
-        ab[i] = f->b[i] - f->a[i], ac[i] = f->c[i] - f->a[i], bc[i] = f->c[i] - f->b[i];
+    double lab = edge(f->a, f->b, ab), lac = edge(f->a, f->c, ac), lbc = edge(f->b, f->c, bc);
     /* tpk_tet_faces turns each face outward, so 6V = -(ab x ac) . (corner - a) */
     f->normal[0] = ac[1] * ab[2] - ac[2] * ab[1];
     f->normal[1] = ac[2] * ab[0] - ac[0] * ab[2];
     f->normal[2] = ac[0] * ab[1] - ac[1] * ab[0];
-    double l[3] = {0, 0, 0};
-    for (int i = 0; i < 3; i++)
-        l[0] += ab[i] * ab[i], l[1] += ac[i] * ac[i], l[2] += bc[i] * bc[i];
-    f->face_l2 = l[0] > l[1] ? (l[0] > l[2] ? l[0] : l[2]) : (l[1] > l[2] ? l[1] : l[2]);
+    f->face_l2 = lab > lac ? (lab > lbc ? lab : lbc) : (lac > lbc ? lac : lbc);
 }
 
 /* Whether the tet of face f with u moved to v (at q) is positive, exactly, and of shape 6V/L^3 >= floor
  * (floor >= 0). The shape in double first, as 6V^2 >= floor^2 L^6 without a root: it rejects most. */
-static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int32_t v, const double *q,
-                        double floor)
+static int moved_tet_ok(const simplifier *s, star_face *f, int32_t u, int32_t v, const double *q, double floor)
 {
-    double da[3], l2 = f->face_l2, six_v = 0;
-    for (int i = 0; i < 3; i++)
-        da[i] = q[i] - f->a[i], six_v += f->normal[i] * da[i];
+    double da[3], db[3], dc[3], l2 = f->face_l2;
+    double la = edge(f->a, q, da), six_v = f->normal[0] * da[0] + f->normal[1] * da[1] + f->normal[2] * da[2];
     if (!(six_v > 0))
         return 0;
-    double la = 0, lb = 0, lc = 0;
-    for (int i = 0; i < 3; i++) {
-        la += da[i] * da[i];
-        lb += (q[i] - f->b[i]) * (q[i] - f->b[i]);
-        lc += (q[i] - f->c[i]) * (q[i] - f->c[i]);
-    }
+    double lb = edge(f->b, q, db), lc = edge(f->c, q, dc);
     l2 = la > l2 ? la : l2;
     l2 = lb > l2 ? lb : l2;
     l2 = lc > l2 ? lc : l2;
     if (six_v * six_v < floor * floor * l2 * l2 * l2)
         return 0;
+    f->six_v = six_v;
+    f->l2 = l2;
     /* Then 6V >= floor L^3, while the rounding of six_v (the expansion tpk_orient3d_filter bounds: rows
      * v - a, c - a, b - a) is at most (7 + 56 eps) eps times a permanent <= 6 L^3, 5e-15 L^3: past a floor
      * of 1e-12 the sign is certain, and the exact test would only say so again. */
@@ -207,21 +210,19 @@ static int moved_tet_ok(const simplifier *s, const star_face *f, int32_t u, int3
     return (sign ? sign : tpk_orient3d_exact(p[0], p[1], p[2], p[3])) > 0;
 }
 
-/* The best valid target of interior vertex u, or -1: its neighbours by ascending cost (then id), the
- * first whose moved tets are all positive and of fair shape. */
-static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n)
+/* The best valid target of interior vertex u among its m neighbours nb (with their costs, reordered
+ * here), or -1: by ascending cost (then id), the first whose moved tets are all positive and of fair
+ * shape. With a target, shape[i] is the shape of star[i] moved onto it (unset for the tets that vanish). */
+static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n, int32_t *nb, double *cost,
+                             int m, float *shape)
 {
-    int32_t nb[NEIGHBOURS_MAX];
-    double cost[NEIGHBOURS_MAX];
-    int m = star_neighbours(s, u, star, n, nb, cost);
-    if (m < 0)
-        return -1;
     star_face faces[STAR_MAX];
     double worst = INFINITY;
     for (int i = 0; i < n; i++) {
         double q = s->tet_quality[star[i]];
         worst = q < worst ? q : worst;
         faces[i].tet = s->tets + 4 * (size_t)star[i];
+        faces[i].index = i;
         faces[i].a = NULL; /* the rest when first needed: a target that fails tests few */
     }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
@@ -245,8 +246,13 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
                 star_face_of(s, t, u, &faces[i]);
             ok = moved_tet_ok(s, &faces[i], u, v, q, floor);
         }
-        if (ok)
+        if (ok) {
+            for (i = 0; i < n; i++)
+                if (faces[i].a && faces[i].tet[0] != v && faces[i].tet[1] != v && faces[i].tet[2] != v &&
+                    faces[i].tet[3] != v)
+                    shape[faces[i].index] = (float)(faces[i].six_v / (faces[i].l2 * sqrt(faces[i].l2)));
             return v;
+        }
         /* The face that turned this target down is tried first for the next: targets of close cost often
          * fail on the same one. All must pass, so the order changes the time, not the answer. */
         star_face f = faces[i - 1];
@@ -276,13 +282,13 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     n = live;
     if (n == 0)
         return -1;
-    for (int i = 0; lo < hi && i < n; i++) {
-        const int32_t *t = s->tets + 4 * (size_t)star[i];
-        for (int k = 0; k < 4; k++)
-            if (t[k] < lo || t[k] >= hi)
-                return -1;
-    }
-    int32_t v = choose_target(s, u, star, n);
+    int32_t nb[NEIGHBOURS_MAX];
+    double cost[NEIGHBOURS_MAX];
+    int m = star_neighbours(s, u, star, n, lo, hi, nb, cost);
+    if (m == -2)
+        return -1; /* not in this block */
+    float shape[STAR_MAX];
+    int32_t v = m < 0 ? -1 : choose_target(s, u, star, n, nb, cost, m, shape);
     if (v < 0) {
         s->stuck[u] = 1; /* until a collapse next to it changes its star */
         return -1;
@@ -297,12 +303,13 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
             for (int k = 0; k < 4; k++)
                 if (t[k] == u)
                     t[k] = v;
-            s->tet_quality[star[i]] = (float)quality(point(s, t[0]), point(s, t[1]), point(s, t[2]), point(s, t[3]));
+            s->tet_quality[star[i]] = shape[i]; /* as quality() measures it, up to rounding */
         }
         for (int k = 0; k < 4; k++)
             s->stuck[t[k]] = 0;
     }
     s->removed[u] = 1;
+    s->onto[u] = v;
     s->locked[u] = 1;
     s->locked[v] = 1;
     return killed;
@@ -501,64 +508,102 @@ static void level_mesh_free(tpk_tetmesh *m)
     memset(m, 0, sizeof *m);
 }
 
+/* The level vertex a removed vertex ended on, at the end of the chain of the vertices it was moved onto. */
+static int32_t survivor(const simplifier *s, int32_t u)
+{
+    while (s->removed[u])
+        u = s->onto[u];
+    return u;
+}
+
+/* The level tet that holds point p, by a walk from tet t across a face p is beyond (exactly; one with a
+ * neighbour first, so that a walk near a non-convex shell stays inside), with p's barycentric weights
+ * (unnormalised: each a 6V, summing to *total); -1 when the walk leaves the mesh or takes 4096 steps. */
+static int64_t locate(const tpk_tetmesh *lvl, const int32_t *neighbors, const double *p, int64_t t, double lambda[4],
+                      double *total)
+{
+    for (int steps = 0; steps < 4096 && t >= 0; steps++) {
+        const int32_t *v = lvl->tets + 4 * t;
+        /* The corners from p: lambda[k] is the 6V of the tet with p in place of corner k, a triple
+         * product of the other three, two cross products for the four */
+        const double *c0 = lvl->points + 3 * (size_t)v[0], *c1 = lvl->points + 3 * (size_t)v[1];
+        const double *c2 = lvl->points + 3 * (size_t)v[2], *c3 = lvl->points + 3 * (size_t)v[3];
+        double x0 = c0[0] - p[0], y0 = c0[1] - p[1], z0 = c0[2] - p[2];
+        double x1 = c1[0] - p[0], y1 = c1[1] - p[1], z1 = c1[2] - p[2];
+        double x2 = c2[0] - p[0], y2 = c2[1] - p[1], z2 = c2[2] - p[2];
+        double x3 = c3[0] - p[0], y3 = c3[1] - p[1], z3 = c3[2] - p[2];
+        double abx = y0 * z1 - z0 * y1, aby = z0 * x1 - x0 * z1, abz = x0 * y1 - y0 * x1;
+        double cdx = y2 * z3 - z2 * y3, cdy = z2 * x3 - x2 * z3, cdz = x2 * y3 - y2 * x3;
+        lambda[0] = x1 * cdx + y1 * cdy + z1 * cdz;
+        lambda[1] = -(x0 * cdx + y0 * cdy + z0 * cdz);
+        lambda[2] = abx * x3 + aby * y3 + abz * z3;
+        lambda[3] = -(abx * x2 + aby * y2 + abz * z2);
+        *total = lambda[0] + lambda[1] + lambda[2] + lambda[3];
+        int beyond = -1, outside = 0;
+        for (int k = 0; k < 4 && beyond < 0; k++) {
+            if (!(lambda[k] < 0))
+                continue;
+            const double *q[4];
+            for (int j = 0; j < 4; j++)
+                q[j] = j == k ? p : lvl->points + 3 * (size_t)v[j];
+            if (tpk_orient3d_exact(q[0], q[1], q[2], q[3]) < 0) {
+                if (neighbors[4 * t + k] >= 0)
+                    beyond = k;
+                else
+                    outside = 1;
+            }
+        }
+        if (beyond < 0)
+            return outside ? -1 : t;
+        t = neighbors[4 * t + beyond];
+    }
+    return -1;
+}
+
 /* The field of the full mesh at the vertices this level removed against the level's value there (linear
- * in the level tet that holds the point, found by a walk through the level's tets: from the tet found for
- * the removed vertex before, vertices being in Hilbert order, across the face the point is beyond). A
- * point the walk does not reach in 4096 steps (or that it leaves the mesh for: a non-convex domain) is
- * not sampled. */
+ * in the level tet that holds the point, found by locate(): from the tet found for the removed vertex
+ * before, vertices being in Hilbert order, else from a tet of the vertex it ended on, which is in the
+ * same part of the mesh: a walk does not cross from one block of a mesh to another that only lies
+ * against it). A point neither walk reaches is not sampled. */
 static void measure(const simplifier *s, const tpk_tetmesh *lvl, const int32_t *vertex_old, const int32_t *neighbors,
                     tpk_level *r)
 {
     const tpk_tetmesh *m = s->mesh;
-    uint8_t *kept = s->field ? calloc((size_t)(m->vertex_count ? m->vertex_count : 1), 1) : NULL;
-    if (!kept)
+    /* per full mesh vertex: a level tet that holds it, or -1 (not kept) */
+    int32_t *tet_of = s->field ? malloc(sizeof *tet_of * (size_t)(m->vertex_count ? m->vertex_count : 1)) : NULL;
+    if (!tet_of)
         return;
-    for (int64_t v = 0; v < lvl->vertex_count; v++)
-        kept[vertex_old[v]] = 1;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        tet_of[v] = -1;
+    for (int64_t i = 0; i < 4 * lvl->tet_count; i++)
+        tet_of[vertex_old[lvl->tets[i]]] = (int32_t)(i / 4);
     double sum = 0, worst = 0;
     int64_t count = 0, hint = 0;
     for (int64_t u = 0; u < m->vertex_count; u++) {
-        if (kept[u])
+        if (tet_of[u] >= 0)
             continue;
         const double *p = m->points + 3 * (size_t)u;
-        int64_t t = hint;
-        for (int steps = 0; steps < 4096 && t >= 0; steps++) {
-            const int32_t *v = lvl->tets + 4 * t;
-            double lambda[4], total = 0;
-            int beyond = -1;
-            for (int k = 0; k < 4; k++) {
-                const double *q[4];
-                for (int j = 0; j < 4; j++)
-                    q[j] = j == k ? p : lvl->points + 3 * (size_t)v[j];
-                double e[3][3];
-                for (int i = 0; i < 3; i++)
-                    for (int a = 0; a < 3; a++)
-                        e[i][a] = q[i + 1][a] - q[0][a];
-                lambda[k] = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
-                            e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                            e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
-                total += lambda[k];
-                if (beyond < 0 && lambda[k] < 0 && tpk_orient3d_exact(q[0], q[1], q[2], q[3]) < 0)
-                    beyond = k;
-            }
-            if (beyond < 0) {
-                double value = 0;
-                for (int k = 0; k < 4 && total > 0; k++)
-                    value += lambda[k] / total * (double)s->field[vertex_old[v[k]]];
-                double d = fabs(value - (double)s->field[u]);
-                worst = d > worst ? d : worst;
-                sum += d * d;
-                count++;
-                hint = t;
-                break;
-            }
-            t = neighbors[4 * t + beyond];
-        }
+        double lambda[4], total = 0;
+        int64_t t = locate(lvl, neighbors, p, hint, lambda, &total);
+        int32_t w = t < 0 && s->removed[u] ? survivor(s, (int32_t)u) : -1;
+        if (w >= 0 && tet_of[w] >= 0 && tet_of[w] != hint)
+            t = locate(lvl, neighbors, p, tet_of[w], lambda, &total);
+        if (t < 0)
+            continue;
+        const int32_t *v = lvl->tets + 4 * t;
+        double value = 0;
+        for (int k = 0; k < 4 && total > 0; k++)
+            value += lambda[k] / total * (double)s->field[vertex_old[v[k]]];
+        double d = fabs(value - (double)s->field[u]);
+        worst = d > worst ? d : worst;
+        sum += d * d;
+        count++;
+        hint = t;
     }
     r->error_samples = count;
     r->error_max = worst;
     r->error_rms = count ? sqrt(sum / (double)count) : 0;
-    free(kept);
+    free(tet_of);
 }
 
 /* The level's shell is the full mesh's, face for face (as sorted triples of full-mesh ids). */
@@ -601,20 +646,24 @@ static int32_t *shell_triples(const int32_t *tets, const int32_t *neighbors, int
     return f;
 }
 
-static int same_shell(const simplifier *s, const int32_t *full_neighbors, const tpk_tetmesh *lvl,
-                      const int32_t *vertex_old, const int32_t *neighbors)
+/* The full mesh's shell, as shell_triples gives it: made once, compared with every level's. */
+typedef struct full_shell {
+    int32_t *triples;
+    int64_t count;
+} full_shell;
+
+static int same_shell(const full_shell *full, const tpk_tetmesh *lvl, const int32_t *vertex_old,
+                      const int32_t *neighbors)
 {
-    int64_t a = 0, b = 0;
-    int32_t *x = shell_triples(s->mesh->tets, full_neighbors, s->mesh->tet_count, NULL, &a);
+    int64_t b = 0;
     int32_t *y = shell_triples(lvl->tets, neighbors, lvl->tet_count, vertex_old, &b);
-    int same = x && y && a == b && !memcmp(x, y, sizeof *x * 3 * (size_t)a);
-    free(x);
+    int same = y && full->count == b && !memcmp(full->triples, y, sizeof *y * 3 * (size_t)b);
     free(y);
     return same;
 }
 
 /* Write the level through the converter's own writer into an unnamed file, and take its bytes. */
-static int write_level(const tpk_convert_options *o, const simplifier *s, const int32_t *full_neighbors, int k,
+static int write_level(const tpk_convert_options *o, const simplifier *s, const full_shell *shell, int k,
                        const char *source_format, const tpk_convert_report *source, tpk_level *r, tpk_diag *diag)
 {
     tpk_tetmesh lvl;
@@ -622,18 +671,18 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, const 
     int rc = level_mesh(s, &lvl, &vertex_old, diag);
     if (rc == 0 && !(neighbors = malloc(sizeof *neighbors * 4 * (size_t)(lvl.tet_count ? lvl.tet_count : 1))))
         rc = tpk_diag_fail(diag, "levels: out of memory");
-    if (rc == 0)
-        rc = tpk_connect(lvl.tets, lvl.tet_count, lvl.vertex_count, neighbors, o->threads, diag);
     /* The folds the full mesh had cut (--cut-folds: both faces are shell faces there) pair up again in
      * face matching: cut them again, as extract does. No collapse makes a new one (every changed tet is
-     * positive inside the star it replaces); same_shell below shows the shell is the full mesh's. */
+     * positive inside the star it replaces); same_shell below shows the shell is the full mesh's. The
+     * face matching finds them as it pairs the faces (only pairs whose orders agree get the exact test). */
     int64_t *slots = NULL, folds = 0;
     if (rc == 0)
-        rc = tpk_find_folds(lvl.tets, neighbors, lvl.tet_count, lvl.points, o->threads, &slots, &folds, diag);
+        rc = tpk_connect_folds(lvl.tets, lvl.tet_count, lvl.vertex_count, lvl.points, neighbors, o->threads, &slots,
+                               &folds, diag);
     if (rc == 0 && folds > 0)
         tpk_cut_folds(lvl.tets, neighbors, slots, folds);
     free(slots);
-    if (rc == 0 && !same_shell(s, full_neighbors, &lvl, vertex_old, neighbors))
+    if (rc == 0 && !same_shell(shell, &lvl, vertex_old, neighbors))
         rc = tpk_diag_fail(diag, "level %d: its shell is not the full mesh's (a bug in levels.c)", k);
     FILE *tmp = rc == 0 ? tmpfile() : NULL;
     if (rc == 0 && !tmp)
@@ -695,6 +744,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     count = count > TPK_MAX_LEVELS ? TPK_MAX_LEVELS : count;
     simplifier s;
     memset(&s, 0, sizeof s);
+    full_shell shell = {NULL, 0};
     s.mesh = mesh;
     s.threads = tpk_thread_count(o->threads);
     int64_t V = mesh->vertex_count, T = mesh->tet_count;
@@ -722,19 +772,22 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     }
     s.boundary = calloc((size_t)(V ? V : 1), 1);
     s.removed = calloc((size_t)(V ? V : 1), 1);
+    s.onto = malloc(sizeof *s.onto * (size_t)(V ? V : 1));
     s.locked = calloc((size_t)(V ? V : 1), 1);
     s.dead = calloc((size_t)(T ? T : 1), 1);
     s.stuck = calloc((size_t)(V ? V : 1), 1);
+    s.seen = malloc(sizeof *s.seen * (size_t)(V ? V : 1));
     s.active = malloc(sizeof *s.active * (size_t)(V ? V : 1));
     s.tets = malloc(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     s.origin = malloc(sizeof *s.origin * (size_t)(T ? T : 1));
     s.star_start = malloc(sizeof *s.star_start * (size_t)(V + 1));
     s.star = malloc(sizeof *s.star * 4 * (size_t)(T ? T : 1));
     s.tet_quality = malloc(sizeof *s.tet_quality * (size_t)(T ? T : 1));
-    int rc = s.boundary && s.removed && s.locked && s.dead && s.stuck && s.active && s.tets && s.origin && s.star_start && s.star &&
+    int rc = s.boundary && s.removed && s.onto && s.locked && s.dead && s.stuck && s.seen && s.active && s.tets && s.origin && s.star_start && s.star &&
                      s.tet_quality
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
+        memset(s.seen, 0xff, sizeof *s.seen * (size_t)V);
         memcpy(s.tets, mesh->tets, sizeof *s.tets * 4 * (size_t)T);
         for (int64_t t = 0; t < T; t++) {
             const int32_t *v = mesh->tets + 4 * t;
@@ -759,22 +812,29 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
         tpk_level *r = &out->level[out->count];
         snprintf(r->field, sizeof r->field, "%s", field_name);
         r->field_step = s.field_step;
-        rc = write_level(o, &s, neighbors, k, source_format, source, r, diag);
+        if (!shell.triples && !(shell.triples = shell_triples(mesh->tets, neighbors, T, NULL, &shell.count))) {
+            rc = tpk_diag_fail(diag, "levels: out of memory for the shell of %lld tets", (long long)T);
+            break;
+        }
+        rc = write_level(o, &s, &shell, k, source_format, source, r, diag);
         r->seconds = tpk_now_seconds() - t0;
         if (rc == 0)
             out->count++;
     }
     free(s.boundary);
     free(s.removed);
+    free(s.onto);
     free(s.locked);
     free(s.dead);
     free(s.stuck);
+    free(s.seen);
     free(s.active);
     free(s.tets);
     free(s.origin);
     free(s.star_start);
     free(s.star);
     free(s.tet_quality);
+    free(shell.triples);
     if (rc != 0)
         tpk_levels_free(out);
     return rc;
