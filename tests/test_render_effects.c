@@ -615,7 +615,7 @@ TPK_TEST(vertex_occlusion_render)
  * vertex) under a headlight, A alone (ao_rays per vertex) when the AO radius changes, both when the TF
  * changes; and an update that changes nothing says so. */
 static void cached_frame(const tpk_mesh_arrays *arrays, const tpk_render_options *opt, tpk_vertex_cache *c,
-                         uint64_t want_rays, const char *what)
+                         uint64_t want_rays, const char *what, int *culled)
 {
     uint8_t *kept = malloc(N), *fresh = malloc(N);
     tpk_render_stats st;
@@ -628,6 +628,8 @@ static void cached_frame(const tpk_mesh_arrays *arrays, const tpk_render_options
               (unsigned long long)st.secondary_rays, (unsigned long long)want_rays);
     free(kept);
     free(fresh);
+    if (culled)
+        *culled = st.iso_culling;
 }
 
 TPK_TEST(vertex_cache_kept_across_frames)
@@ -648,21 +650,69 @@ TPK_TEST(vertex_cache_kept_across_frames)
     const uint64_t n = arrays.vertex_count;
     tpk_vertex_cache *c = tpk_vertex_cache_create();
     CHECK(c != NULL);
-    cached_frame(&arrays, &opt, c, 5 * n, "first frame");
+    cached_frame(&arrays, &opt, c, 5 * n, "first frame", NULL);
     opt.camera.eye[0] += 1.5;
-    cached_frame(&arrays, &opt, c, 0, "camera move, fixed light");
+    cached_frame(&arrays, &opt, c, 0, "camera move, fixed light", NULL);
     opt.have_light = 0;
-    cached_frame(&arrays, &opt, c, n, "headlight");
+    cached_frame(&arrays, &opt, c, n, "headlight", NULL);
     opt.camera.eye[2] -= 2;
-    cached_frame(&arrays, &opt, c, n, "headlight, camera move");
+    cached_frame(&arrays, &opt, c, n, "headlight, camera move", NULL);
     opt.ao_radius = 2;
-    cached_frame(&arrays, &opt, c, 4 * n, "AO radius");
+    cached_frame(&arrays, &opt, c, 4 * n, "AO radius", NULL);
     opt.range_max = 9;
-    cached_frame(&arrays, &opt, c, 5 * n, "range");
+    cached_frame(&arrays, &opt, c, 5 * n, "range", NULL);
     int changed = 1;
     tpk_render_stats st;
     CHECK(tpk_vertex_cache_update(c, &arrays, &opt, &changed, &st, &diag) == 0);
     CHECK(changed == 0 && st.secondary_rays == 0);
+    tpk_vertex_cache_destroy(c);
+    fx_free(&m);
+}
+
+/* The same cache keeps the marcher and, for iso-only frames, the range culling's trees (render.h
+ * tpk_render_cpu_cached): every frame byte for byte tpk_render_cpu's, culled, through a camera move, new
+ * iso values, a new field (another scalar array) and another layout (other arrays: a new marcher). */
+TPK_TEST(frame_cache_keeps_marcher_and_range_trees)
+{
+    fx_mesh m;
+    tpk_transfer_function tf;
+    tpk_render_options opt;
+    CHECK(viridis_grid(&m, &tf, &opt) == 0); /* scalar = x, 0..8 */
+    for (int i = 0; i < tf.count; i++)
+        tf.points[i].a = 0.0; /* iso-only rays */
+    opt.iso_count = 1;
+    opt.iso[0] = 2.5;
+    tpk_mesh_arrays arrays = fx_arrays(&m, TPK_LAYOUT_TET16);
+    tpk_vertex_cache *c = tpk_vertex_cache_create();
+    CHECK(c != NULL);
+    int culled = 0;
+    cached_frame(&arrays, &opt, c, 0, "first iso frame", &culled);
+    CHECK(culled);
+    opt.camera.eye[0] += 1.5;
+    cached_frame(&arrays, &opt, c, 0, "camera move", &culled);
+    CHECK(culled);
+    opt.iso[0] = 5.5;
+    cached_frame(&arrays, &opt, c, 0, "a new iso value", &culled);
+    CHECK(culled);
+    opt.iso[1] = 1.25, opt.iso_count = 2;
+    cached_frame(&arrays, &opt, c, 0, "two iso values", NULL);
+    opt.iso_count = 1;
+    float *shifted = malloc(sizeof *shifted * (size_t)m.vertex_count);
+    CHECK(shifted != NULL);
+    for (int64_t v = 0; v < m.vertex_count; v++)
+        shifted[v] = m.scalars[v] + 1.0f;
+    tpk_mesh_arrays other_field = arrays;
+    other_field.scalars = shifted;
+    cached_frame(&other_field, &opt, c, 0, "another field", &culled);
+    CHECK(culled);
+    tpk_mesh_arrays tet32 = fx_arrays(&m, TPK_LAYOUT_TET32);
+    cached_frame(&tet32, &opt, c, 0, "another layout", &culled);
+    CHECK(culled);
+    opt.iso_count = 0;
+    tf.points[0].a = 0.5;
+    cached_frame(&tet32, &opt, c, 0, "emission-absorption, the marcher kept", &culled);
+    CHECK(!culled);
+    free(shifted);
     tpk_vertex_cache_destroy(c);
     fx_free(&m);
 }

@@ -342,7 +342,12 @@ int tpk_render_vertex_cache(const tpk_mesh_arrays *mesh, const tpk_render_option
  * values and opacity, clip box, probes; the light and shadows for S; the AO rays and radius for A)
  * differs from the last update's, and then alone (S without AO rays, A without shadow rays): a camera
  * move under a fixed light casts nothing, a headlight S alone. The values are those
- * tpk_render_vertex_cache gives, bit for bit. Used by the Vulkan renderer and by view's CPU frames. */
+ * tpk_render_vertex_cache gives, bit for bit. Used by the Vulkan renderer and by view's CPU frames. For
+ * tpk_render_cpu_cached it also keeps the marcher and, for iso-only frames, the range culling's trees
+ * (ISO-ONLY RAYS), made again only when the mesh's arrays or field change (by pointer: a file's arrays
+ * stay put until it closes). Trees to be kept count the rays of TPK_RENDER_KEPT_FRAMES frames against
+ * their set-up, and kept trees as paid for: such frames cull up to TPK_RENDER_CULL_ACTIVE_MANY. */
+#define TPK_RENDER_KEPT_FRAMES 8
 typedef struct tpk_vertex_cache tpk_vertex_cache;
 tpk_vertex_cache *tpk_vertex_cache_create(void); /* NULL: out of memory */
 void tpk_vertex_cache_destroy(tpk_vertex_cache *cache);
@@ -354,8 +359,9 @@ int tpk_vertex_cache_update(tpk_vertex_cache *cache, const tpk_mesh_arrays *mesh
 const float *tpk_vertex_cache_s(const tpk_vertex_cache *cache); /* vertex_count floats: S_v */
 const float *tpk_vertex_cache_a(const tpk_vertex_cache *cache); /* A_v */
 /* tpk_render_cpu whose --occlusion vertex takes its cache from `cache` (kept across calls, brought up to
- * date first), not one of its own made for the frame; cache NULL: tpk_render_cpu. stats counts the rays
- * this frame cast. (render_cache.c) */
+ * date first), not one of its own made for the frame, and whose marcher and range trees are the ones
+ * `cache` keeps (any occlusion); cache NULL: tpk_render_cpu. stats counts the rays this frame cast, and
+ * its seconds the set-up this frame made. (render_cache.c) */
 int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                           tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag);
 /* tpk_render_cpu with --occlusion vertex's S_v and A_v given (vertex_count floats each, as

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render.h"
+#include "render_internal.h"
 #include "transfer_function.h"
 
 /* What one half depends on, zeroed and then filled, so that equal inputs compare equal bytewise. */
@@ -24,6 +24,7 @@ struct tpk_vertex_cache {
     uint64_t count; /* floats allocated in each */
     int valid[2];   /* S, A */
     cache_key key[2];
+    render_keep keep; /* the marcher and range trees of the frames */
 };
 
 /* Half `which` (0: S, 1: A): the light and shadows for S only, the AO rays and radius for A only. */
@@ -73,6 +74,7 @@ void tpk_vertex_cache_destroy(tpk_vertex_cache *c)
         return;
     free(c->s);
     free(c->a);
+    render_keep_free(&c->keep);
     free(c);
 }
 
@@ -138,12 +140,14 @@ int tpk_vertex_cache_update(tpk_vertex_cache *c, const tpk_mesh_arrays *mesh, co
 int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                           tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag)
 {
-    if (!cache || !opt || opt->occlusion != TPK_OCCLUSION_VERTEX || !mesh)
+    if (!cache || !opt || !mesh)
         return tpk_render_cpu(mesh, opt, rgba, stats, diag);
+    if (opt->occlusion != TPK_OCCLUSION_VERTEX)
+        return render_cpu_keeping(mesh, opt, rgba, NULL, NULL, &cache->keep, stats, diag);
     tpk_render_stats cast;
     if (tpk_render_check_options(opt, diag) != 0 || tpk_vertex_cache_update(cache, mesh, opt, NULL, &cast, diag) != 0)
         return -1;
-    int rc = tpk_render_cpu_given_cache(mesh, opt, rgba, cache->s, cache->a, stats, diag);
+    int rc = render_cpu_keeping(mesh, opt, rgba, cache->s, cache->a, &cache->keep, stats, diag);
     if (rc == 0 && stats) { /* the frame's work and time include the cache's */
         stats->tet_steps += cast.tet_steps;
         stats->secondary_rays += cast.secondary_rays;

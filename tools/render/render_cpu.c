@@ -374,8 +374,70 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
     return tpk_render_cpu_given_cache(mesh, opt, rgba, NULL, NULL, stats, diag);
 }
 
+/* The same arrays and field (by identity). */
+static int same_arrays(const tpk_mesh_arrays *x, const tpk_mesh_arrays *y)
+{
+    return x->vertex_count == y->vertex_count && x->tet_count == y->tet_count &&
+           x->shell_face_count == y->shell_face_count && !memcmp(x->origin, y->origin, sizeof x->origin) &&
+           x->positions == y->positions && x->layout == y->layout && x->tet16 == y->tet16 && x->tet20 == y->tet20 &&
+           x->tet32 == y->tet32 && x->shell == y->shell && x->scalars == y->scalars;
+}
+
+void render_keep_free(render_keep *keep)
+{
+    tpk_range_bvh_destroy(keep->range);
+    tpk_marcher_destroy(keep->marcher);
+    memset(keep, 0, sizeof *keep);
+}
+
+/* The range trees for an iso-only frame (render.h ISO-ONLY RAYS), kept in `keep` or made (own: `keep` is
+ * the frame's own, freed after it): NULL where the frame marches. *rc -1 (with a message) on failure. */
+static tpk_range_bvh *culling_trees(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, render_keep *keep,
+                                    int own, int *rc, tpk_diag *diag)
+{
+    int culling = tpk_render_culling_wanted();
+    if (culling == 0 || !tpk_render_iso_only(opt, mesh->scalars != NULL))
+        return NULL;
+    /* many rays pay for the trees on any surface, few only on a sparse one; trees already kept are paid,
+     * and trees to be kept are paid by TPK_RENDER_KEPT_FRAMES frames */
+    int kept = keep->range != NULL; /* for this marcher, hence these arrays */
+    double rays = (double)opt->width * (double)opt->height * (own ? 1.0 : TPK_RENDER_KEPT_FRAMES);
+    int many_rays = kept || rays >= (double)mesh->tet_count;
+    if (!kept && culling < 0 && !many_rays && tpk_render_iso_dense(mesh, opt->iso, opt->iso_count))
+        return NULL;
+    tpk_result r = TPK_OK;
+    if (!kept) {
+        tpk_range_bvh_destroy(keep->range);
+        keep->range = NULL, keep->value_count = 0;
+        r = tpk_range_bvh_create(&keep->range, keep->marcher);
+    }
+    if (r == TPK_OK) {
+        double share = culling < 0 ? tpk_range_bvh_active(keep->range, opt->iso, opt->iso_count) : 0.0;
+        if (share > (many_rays ? TPK_RENDER_CULL_ACTIVE_MANY : TPK_RENDER_CULL_ACTIVE))
+            return NULL; /* a dense isosurface: marching finds it sooner */
+    }
+    if (r == TPK_OK && (keep->value_count != opt->iso_count ||
+                        memcmp(keep->values, opt->iso, sizeof *opt->iso * (size_t)opt->iso_count) != 0)) {
+        keep->value_count = 0;
+        r = tpk_range_bvh_select(keep->range, opt->iso, opt->iso_count);
+        memcpy(keep->values, opt->iso, sizeof *opt->iso * (size_t)opt->iso_count);
+        keep->value_count = r == TPK_OK ? opt->iso_count : 0;
+    }
+    if (r != TPK_OK) {
+        *rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
+        return NULL;
+    }
+    return keep->range;
+}
+
 int tpk_render_cpu_given_cache(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                                const float *given_s, const float *given_a, tpk_render_stats *stats, tpk_diag *diag)
+{
+    return render_cpu_keeping(mesh, opt, rgba, given_s, given_a, NULL, stats, diag);
+}
+
+int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba, const float *given_s,
+                       const float *given_a, render_keep *keep, tpk_render_stats *stats, tpk_diag *diag)
 {
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
@@ -394,13 +456,16 @@ int tpk_render_cpu_given_cache(const tpk_mesh_arrays *mesh, const tpk_render_opt
         free(job);
         return -1;
     }
-    tpk_marcher *marcher = NULL;
-    tpk_result r = tpk_marcher_create(&marcher, mesh);
-    if (r != TPK_OK) {
+    render_keep own = {0}; /* made for this frame when nothing is kept */
+    render_keep *k = keep ? keep : &own;
+    if (k->marcher && !same_arrays(&k->mesh, mesh)) /* the marcher reads the field too */
+        render_keep_free(k);
+    tpk_result r = TPK_OK;
+    if (!k->marcher && (r = tpk_marcher_create(&k->marcher, mesh)) != TPK_OK) {
         free(job);
         return tpk_diag_fail(diag, "render: cannot set up the marcher: %s", tpk_result_string(r));
     }
-    job->marcher = marcher;
+    job->marcher = k->marcher;
     int rc = 0;
     float *cache = NULL;
     uint64_t cache_counts[2] = {0, 0}; /* steps, secondary rays */
@@ -420,24 +485,9 @@ int tpk_render_cpu_given_cache(const tpk_mesh_arrays *mesh, const tpk_render_opt
                 rc = tpk_diag_fail(diag, "render: vertex cache: %s", tpk_result_string(r));
         }
     }
-    tpk_range_bvh *range = NULL;
-    int culling = tpk_render_culling_wanted();
-    /* ISO-ONLY RAYS (render.h): many rays pay for the trees on any surface, few only on a sparse one */
-    int many_rays = (double)opt->width * (double)opt->height >= (double)mesh->tet_count;
-    if (rc == 0 && culling != 0 && tpk_render_iso_only(opt, mesh->scalars != NULL) &&
-        (culling > 0 || many_rays || !tpk_render_iso_dense(mesh, opt->iso, opt->iso_count))) {
-        r = tpk_range_bvh_create(&range, marcher);
-        if (r != TPK_OK)
-            rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
-        double share = range && culling < 0 ? tpk_range_bvh_active(range, opt->iso, opt->iso_count) : 0.0;
-        if (share > (many_rays ? TPK_RENDER_CULL_ACTIVE_MANY : TPK_RENDER_CULL_ACTIVE)) {
-            tpk_range_bvh_destroy(range); /* a dense isosurface: marching finds it sooner */
-            range = NULL;
-        }
-        if (range && (r = tpk_range_bvh_select(range, opt->iso, opt->iso_count)) != TPK_OK)
-            rc = tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
-        job->range = range;
-    }
+    tpk_range_bvh *range = rc == 0 ? culling_trees(mesh, opt, k, keep == NULL, &rc, diag) : NULL;
+    k->mesh = *mesh;
+    job->range = range;
     if (rc == 0)
         rc = run_render(job, stats, &t0, diag);
     if (rc == 0 && stats) {
@@ -446,8 +496,8 @@ int tpk_render_cpu_given_cache(const tpk_mesh_arrays *mesh, const tpk_render_opt
         stats->secondary_rays += cache_counts[1];
     }
     free(cache);
-    tpk_range_bvh_destroy(range);
-    tpk_marcher_destroy(marcher);
+    if (!keep)
+        render_keep_free(&own);
     free(job);
     return rc;
 }

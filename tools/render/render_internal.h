@@ -12,6 +12,23 @@
 
 #include "render.h"
 
+/* What the CPU reference keeps across frames for one mesh and field (render.h: tpk_vertex_cache holds
+ * one): the marcher and the range culling's trees (made on the marcher), made again only when the
+ * arrays or the field change (by pointer). */
+typedef struct render_keep {
+    tpk_mesh_arrays mesh;   /* the arrays they were made for (a copy of the struct) */
+    tpk_marcher *marcher;
+    tpk_range_bvh *range;   /* NULL: not made */
+    double values[TPK_RENDER_MAX_ISO]; /* the values the range trees were selected for */
+    int value_count;        /* 0: none selected */
+} render_keep;
+
+/* Free what `keep` holds and zero it. */
+void render_keep_free(render_keep *keep);
+/* tpk_render_cpu_given_cache, keeping the marcher and range trees in `keep` (NULL: made for the frame). */
+int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba, const float *s,
+                       const float *a, render_keep *keep, tpk_render_stats *stats, tpk_diag *diag);
+
 typedef struct render_job {
     const tpk_render_options *opt;
     const tpk_mesh_arrays *mesh;

@@ -81,8 +81,8 @@ int view_renderer_frame(view_renderer *r, const view_state *s, int width, int he
     if (r->raster)
         return tpk_iso_raster_frame(r->raster, &opt, rgba, stats, diag);
 #endif
-    if (opt.occlusion == TPK_OCCLUSION_VERTEX && !r->cache && !(r->cache = tpk_vertex_cache_create()))
-        return tpk_diag_fail(diag, "view: out of memory for the vertex cache");
+    if (!r->cache && !(r->cache = tpk_vertex_cache_create())) /* also keeps the marcher across frames */
+        return tpk_diag_fail(diag, "view: out of memory for the frame cache");
     return tpk_render_cpu_cached(&s->mesh, &opt, rgba, r->cache, stats, diag);
 }
 

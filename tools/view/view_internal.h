@@ -72,7 +72,7 @@ typedef struct view_renderer {
     tpk_vk_presenter *present; /* Vulkan frames go to the window's swapchain; NULL: into rgba */
     view_window *window;   /* the window presented to */
     int cpu_only;          /* Vulkan was not found (or not wanted): do not try again */
-    struct tpk_vertex_cache *cache; /* the CPU reference's --occlusion vertex cache, kept across frames */
+    struct tpk_vertex_cache *cache; /* the CPU reference's frame cache (vertex cache, marcher, range trees) */
     char device[256];      /* the device's name and how frames are shown, or "cpu" */
 } view_renderer;
 
