@@ -177,7 +177,7 @@ typedef struct star_face {
 
 static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_face *f)
 {
-    int k = t[0] == u ? 0 : t[1] == u ? 1 : t[2] == u ? 2 : 3;
+    int k = (t[1] == u) + 2 * (t[2] == u) + 3 * (t[3] == u); /* u is one corner: no branch to mispredict */
     f->tet = t;
     f->a = point(s, t[tpk_tet_faces[k][0]]);
     f->b = point(s, t[tpk_tet_faces[k][1]]);
@@ -188,7 +188,8 @@ static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_
     f->normal[0] = ac[1] * ab[2] - ac[2] * ab[1];
     f->normal[1] = ac[2] * ab[0] - ac[0] * ab[2];
     f->normal[2] = ac[0] * ab[1] - ac[1] * ab[0];
-    f->face_l2 = lab > lac ? (lab > lbc ? lab : lbc) : (lac > lbc ? lac : lbc);
+    double l2 = lab > lac ? lab : lac;
+    f->face_l2 = lbc > l2 ? lbc : l2;
 }
 
 /* Whether the tet of face f with u moved to v (at q) is positive, exactly, and of shape 6V/L^3 >= floor
@@ -221,7 +222,7 @@ static int moved_tet_ok(const simplifier *s, star_face *f, int32_t u, int32_t v,
 
 /* The best valid target of interior vertex u among its m neighbours nb (with their costs, reordered
  * here), or -1: by ascending cost (then id), the first whose moved tets are all positive and of fair
- * shape. With a target, shape[i] is the shape of star[i] moved onto it (unset for the tets that vanish). */
+ * shape. With a target, shape[i] is the shape of star[i] moved onto it (0 for the tets that vanish). */
 static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n, int32_t *nb, double *cost,
                              int m, float *shape)
 {
@@ -233,14 +234,16 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
         faces[i].tet = s->tets + 4 * (size_t)star[i];
         faces[i].index = i;
         faces[i].a = NULL; /* the rest when first needed: a target that fails tests few */
+        shape[i] = 0;      /* stays for the tets that vanish: dead, their quality is not read again */
     }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
     floor = floor > 0 ? floor : 0;
     for (int tried = 0; tried < m; tried++) {
         int best = tried; /* selection: the next by cost, then id */
-        for (int j = tried + 1; j < m; j++)
-            if (cost[j] < cost[best] || (cost[j] == cost[best] && nb[j] < nb[best]))
-                best = j;
+        for (int j = tried + 1; j < m; j++) { /* as (cost, id) compare: a select, not a branch */
+            int before = (cost[j] < cost[best]) | ((cost[j] == cost[best]) & (nb[j] < nb[best]));
+            best ^= (best ^ j) & -before;
+        }
         int32_t v = nb[best];
         double c = cost[best];
         nb[best] = nb[tried], cost[best] = cost[tried];
@@ -285,9 +288,10 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     int32_t star[STAR_MAX];
     const int32_t *built = s->star + s->star_start[u];
     int live = 0;
-    for (int i = 0; i < n; i++)
-        if (!s->dead[built[i]])
-            star[live++] = built[i];
+    for (int i = 0; i < n; i++) { /* which are dead is as random as the mesh: no branch on it */
+        star[live] = built[i];
+        live += !s->dead[built[i]];
+    }
     n = live;
     if (n == 0)
         return -1;
@@ -304,18 +308,16 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     }
     int64_t killed = 0;
     for (int i = 0; i < n; i++) {
+        /* without branches on which tets vanish and which corner is u: they mispredict */
         int32_t *t = s->tets + 4 * (size_t)star[i];
-        if (t[0] == v || t[1] == v || t[2] == v || t[3] == v) {
-            s->dead[star[i]] = 1;
-            killed++;
-        } else {
-            for (int k = 0; k < 4; k++)
-                if (t[k] == u)
-                    t[k] = v;
-            s->tet_quality[star[i]] = shape[i]; /* as quality() measures it, up to rounding */
-        }
-        for (int k = 0; k < 4; k++)
+        int gone = (t[0] == v) | (t[1] == v) | (t[2] == v) | (t[3] == v);
+        s->dead[star[i]] = (uint8_t)gone;
+        killed += gone;
+        for (int k = 0; k < 4; k++) {
             s->stuck[t[k]] = 0;
+            t[k] ^= (t[k] ^ v) & -((t[k] == u) & !gone);
+        }
+        s->tet_quality[star[i]] = shape[i]; /* as quality() measures it, up to rounding; 0 if gone */
     }
     s->removed[u] = 1;
     s->onto[u] = v;
@@ -418,13 +420,13 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
             *live -= k, done++;
     }
     int64_t w = 0; /* compact, in order */
-    for (int64_t t = 0; t < s->tet_count; t++)
-        if (!s->dead[t]) {
-            for (int k = 0; k < 4; k++)
-                s->tets[4 * w + k] = s->tets[4 * t + k];
-            s->tet_quality[w] = s->tet_quality[t];
-            s->origin[w++] = s->origin[t];
-        }
+    for (int64_t t = 0; t < s->tet_count; t++) { /* each copied, kept only if live: no branch */
+        for (int k = 0; k < 4; k++)
+            s->tets[4 * w + k] = s->tets[4 * t + k];
+        s->tet_quality[w] = s->tet_quality[t];
+        s->origin[w] = s->origin[t];
+        w += !s->dead[t];
+    }
     s->tet_count = w;
     return done;
 }
