@@ -122,37 +122,46 @@ static int build_stars(simplifier *s)
 static int star_neighbours(simplifier *s, int32_t u, const int32_t *star, int n, int32_t lo, int32_t hi,
                            int32_t *nb, double *cost)
 {
+    /* Every entry is stored at nb[m] and m only grows for a new one (not u, not seen): which corner is u
+     * and whether a vertex is new are as random as the mesh, and branches on them mispredict (this loop
+     * was a fifth of the simplification). u lies in [lo, hi) (run_blocks), and seen[u] is cleared with the others. */
+    const int32_t *tets = s->tets;
+    int32_t *seen = s->seen;
+    const float *field = s->field;
+    uint32_t first = lo < hi ? (uint32_t)lo : 0, span = lo < hi ? (uint32_t)hi - (uint32_t)lo : UINT32_MAX;
+    double field_u = field ? (double)field[u] : 0;
+    const double *p = point(s, u);
     int m = 0, over = 0;
     for (int i = 0; i < n; i++) {
-        const int32_t *t = s->tets + 4 * (size_t)star[i];
+        const int32_t *t = tets + 4 * (size_t)star[i];
         for (int k = 0; k < 4; k++) {
             int32_t w = t[k];
-            if (w == u)
-                continue;
-            if (lo < hi && (w < lo || w >= hi)) {
+            if ((uint32_t)w - first >= span) {
                 for (int j = 0; j < m; j++)
-                    s->seen[nb[j]] = -1;
+                    seen[nb[j]] = -1;
+                seen[u] = -1;
                 return -2;
             }
-            if (over || s->seen[w] == u)
-                continue;
             if (m == NEIGHBOURS_MAX) {
-                over = 1;
+                over |= (seen[w] != u) & (w != u);
                 continue;
             }
-            s->seen[w] = u;
+            int fresh = (seen[w] != u) & (w != u);
+            seen[w] = u;
             double c = 0;
-            if (s->field)
-                c = fabs((double)s->field[w] - (double)s->field[u]);
+            if (field)
+                c = fabs((double)field[w] - field_u);
             else
                 for (int a = 0; a < 3; a++)
-                    c += (point(s, w)[a] - point(s, u)[a]) * (point(s, w)[a] - point(s, u)[a]);
+                    c += (point(s, w)[a] - p[a]) * (point(s, w)[a] - p[a]);
             nb[m] = w;
-            cost[m++] = c;
+            cost[m] = c;
+            m += fresh;
         }
     }
     for (int j = 0; j < m; j++)
-        s->seen[nb[j]] = -1;
+        seen[nb[j]] = -1;
+    seen[u] = -1;
     return over ? -1 : m;
 }
 
@@ -168,7 +177,7 @@ typedef struct star_face {
 
 static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_face *f)
 {
-    int k = t[0] == u ? 0 : t[1] == u ? 1 : t[2] == u ? 2 : 3;
+    int k = (t[1] == u) + 2 * (t[2] == u) + 3 * (t[3] == u); /* u is one corner: no branch to mispredict */
     f->tet = t;
     f->a = point(s, t[tpk_tet_faces[k][0]]);
     f->b = point(s, t[tpk_tet_faces[k][1]]);
@@ -179,7 +188,8 @@ static void star_face_of(const simplifier *s, const int32_t *t, int32_t u, star_
     f->normal[0] = ac[1] * ab[2] - ac[2] * ab[1];
     f->normal[1] = ac[2] * ab[0] - ac[0] * ab[2];
     f->normal[2] = ac[0] * ab[1] - ac[1] * ab[0];
-    f->face_l2 = lab > lac ? (lab > lbc ? lab : lbc) : (lac > lbc ? lac : lbc);
+    double l2 = lab > lac ? lab : lac;
+    f->face_l2 = lbc > l2 ? lbc : l2;
 }
 
 /* Whether the tet of face f with u moved to v (at q) is positive, exactly, and of shape 6V/L^3 >= floor
@@ -212,7 +222,7 @@ static int moved_tet_ok(const simplifier *s, star_face *f, int32_t u, int32_t v,
 
 /* The best valid target of interior vertex u among its m neighbours nb (with their costs, reordered
  * here), or -1: by ascending cost (then id), the first whose moved tets are all positive and of fair
- * shape. With a target, shape[i] is the shape of star[i] moved onto it (unset for the tets that vanish). */
+ * shape. With a target, shape[i] is the shape of star[i] moved onto it (0 for the tets that vanish). */
 static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star, int n, int32_t *nb, double *cost,
                              int m, float *shape)
 {
@@ -224,14 +234,16 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
         faces[i].tet = s->tets + 4 * (size_t)star[i];
         faces[i].index = i;
         faces[i].a = NULL; /* the rest when first needed: a target that fails tests few */
+        shape[i] = 0;      /* stays for the tets that vanish: dead, their quality is not read again */
     }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
     floor = floor > 0 ? floor : 0;
     for (int tried = 0; tried < m; tried++) {
         int best = tried; /* selection: the next by cost, then id */
-        for (int j = tried + 1; j < m; j++)
-            if (cost[j] < cost[best] || (cost[j] == cost[best] && nb[j] < nb[best]))
-                best = j;
+        for (int j = tried + 1; j < m; j++) { /* as (cost, id) compare: a select, not a branch */
+            int before = (cost[j] < cost[best]) | ((cost[j] == cost[best]) & (nb[j] < nb[best]));
+            best ^= (best ^ j) & -before;
+        }
         int32_t v = nb[best];
         double c = cost[best];
         nb[best] = nb[tried], cost[best] = cost[tried];
@@ -276,9 +288,10 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     int32_t star[STAR_MAX];
     const int32_t *built = s->star + s->star_start[u];
     int live = 0;
-    for (int i = 0; i < n; i++)
-        if (!s->dead[built[i]])
-            star[live++] = built[i];
+    for (int i = 0; i < n; i++) { /* which are dead is as random as the mesh: no branch on it */
+        star[live] = built[i];
+        live += !s->dead[built[i]];
+    }
     n = live;
     if (n == 0)
         return -1;
@@ -295,18 +308,16 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     }
     int64_t killed = 0;
     for (int i = 0; i < n; i++) {
+        /* without branches on which tets vanish and which corner is u: they mispredict */
         int32_t *t = s->tets + 4 * (size_t)star[i];
-        if (t[0] == v || t[1] == v || t[2] == v || t[3] == v) {
-            s->dead[star[i]] = 1;
-            killed++;
-        } else {
-            for (int k = 0; k < 4; k++)
-                if (t[k] == u)
-                    t[k] = v;
-            s->tet_quality[star[i]] = shape[i]; /* as quality() measures it, up to rounding */
-        }
-        for (int k = 0; k < 4; k++)
+        int gone = (t[0] == v) | (t[1] == v) | (t[2] == v) | (t[3] == v);
+        s->dead[star[i]] = (uint8_t)gone;
+        killed += gone;
+        for (int k = 0; k < 4; k++) {
             s->stuck[t[k]] = 0;
+            t[k] ^= (t[k] ^ v) & -((t[k] == u) & !gone);
+        }
+        s->tet_quality[star[i]] = shape[i]; /* as quality() measures it, up to rounding; 0 if gone */
     }
     s->removed[u] = 1;
     s->onto[u] = v;
@@ -409,13 +420,13 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
             *live -= k, done++;
     }
     int64_t w = 0; /* compact, in order */
-    for (int64_t t = 0; t < s->tet_count; t++)
-        if (!s->dead[t]) {
-            for (int k = 0; k < 4; k++)
-                s->tets[4 * w + k] = s->tets[4 * t + k];
-            s->tet_quality[w] = s->tet_quality[t];
-            s->origin[w++] = s->origin[t];
-        }
+    for (int64_t t = 0; t < s->tet_count; t++) { /* each copied, kept only if live: no branch */
+        for (int k = 0; k < 4; k++)
+            s->tets[4 * w + k] = s->tets[4 * t + k];
+        s->tet_quality[w] = s->tet_quality[t];
+        s->origin[w] = s->origin[t];
+        w += !s->dead[t];
+    }
     s->tet_count = w;
     return done;
 }
