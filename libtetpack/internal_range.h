@@ -5,6 +5,7 @@
 #ifndef TPK_INTERNAL_RANGE_H
 #define TPK_INTERNAL_RANGE_H
 
+#include <math.h>
 #include <stdint.h>
 
 #include "internal_march.h"
@@ -50,6 +51,19 @@ struct tpk_range_bvh {
     double *active_values;
     int active_value_count;   /* 0: none selected */
 };
+
+/* The float at or below x, and at or above it: the trees' boxes and ranges are rounded outward. */
+static inline float tpki_round_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+
+static inline float tpki_round_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
 
 /* A value of values[0 .. count) in [lo, hi]. */
 int tpki_range_holds(double lo, double hi, const double *values, int count);

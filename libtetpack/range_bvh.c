@@ -27,17 +27,6 @@
 #define TPK_RANGE_LEAF TPK_RANGE_BVH_LEAF
 #define HEAP_STACK 64
 
-static float down(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
-
-static float up(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
-}
 
 tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
 {
@@ -102,8 +91,8 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
             range[1] = b->tet_range[2 * t + 1] > range[1] ? b->tet_range[2 * t + 1] : range[1];
         }
         for (int k = 0; k < 3; k++) {
-            n->lo[k] = down((double)n->lo[k] - b->pad);
-            n->hi[k] = up((double)n->hi[k] + b->pad);
+            n->lo[k] = tpki_round_down((double)n->lo[k] - b->pad);
+            n->hi[k] = tpki_round_up((double)n->hi[k] + b->pad);
         }
     }
     for (int l = 1; l < b->levels; l++)
@@ -366,7 +355,7 @@ static void wide_ray_init(wide_ray *wr, const ray_box *rb, double extent, double
         wr->near[k] = rb->near[k];
         wr->far[k] = rb->far[k];
     }
-    float lo = tmin > -1e30 ? down(tmin) : -INFINITY, hi = tmax < 1e30 ? up(tmax) : INFINITY;
+    float lo = tmin > -1e30 ? tpki_round_down(tmin) : -INFINITY, hi = tmax < 1e30 ? tpki_round_up(tmax) : INFINITY;
     wr->tmin = (tpki_v4f){lo, lo, lo, lo};
     wr->tmax = (tpki_v4f){hi, hi, hi, hi};
 }

@@ -13,19 +13,6 @@
 
 #define ACTIVE_LEAF 4
 
-/* The float at or below x, and at or above it. */
-static float round_down(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
-
-static float round_up(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
-}
-
 static float half_area(const float lo[3], const float hi[3])
 {
     float d[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
@@ -109,8 +96,8 @@ static void active_items(const tpk_range_bvh *b, const double *values, int count
                 hi = x > hi ? x : hi;
                 sum += x;
             }
-            it->lo[k] = round_down((double)lo - b->pad);
-            it->hi[k] = round_up((double)hi + b->pad);
+            it->lo[k] = tpki_round_down((double)lo - b->pad);
+            it->hi[k] = tpki_round_up((double)hi + b->pad);
             it->centroid[k] = (float)(0.25 * sum);
         }
     }
