@@ -1,6 +1,8 @@
 /* Levels of detail (spec §16): the converter's levels of real meshes open as files, each coarser, every
- * tet positive (exactly, on the stored positions), the full mesh's shell face for face, the full mesh's
- * field at every kept vertex, and `check` finds nothing (600..615) in them; must-fail files (a level
+ * tet positive (exactly, on the stored positions), the full mesh's domain (the same volume and shell area
+ * when the shell may not move; else inside it, every shell point of the file within the reported shell
+ * distance of the level's shell, by brute force), the full mesh's field at every kept vertex, and `check`
+ * finds nothing (600..615) in them; must-fail files (a level
  * compressed, index 0, a level not coarser) are refused; the cost model of --max-ms picks
  * deterministically. CLI and more meshes: tests/cli/levels.sh. */
 #include <math.h>
@@ -16,7 +18,8 @@
 #include "tetpack.h"
 #include "tpk_assert.h"
 
-static int convert_levels(const char *input, const char *output, int levels, tpk_convert_report *rep)
+static int convert_levels_within(const char *input, const char *output, int levels, double shell_error,
+                                 tpk_convert_report *rep)
 {
     tpk_convert_options o;
     memset(&o, 0, sizeof o);
@@ -24,6 +27,7 @@ static int convert_levels(const char *input, const char *output, int levels, tpk
     o.output = output;
     o.layouts = TPK_LAYOUT_BIT_TET16 | TPK_LAYOUT_BIT_TET32;
     o.levels = levels;
+    o.level_shell_error = shell_error;
     o.threads = 2;
     tpk_diag diag = {0};
     memset(rep, 0, sizeof *rep);
@@ -31,6 +35,11 @@ static int convert_levels(const char *input, const char *output, int levels, tpk
     if (rc)
         fprintf(stderr, "%s: %s\n", input, diag.message);
     return rc;
+}
+
+static int convert_levels(const char *input, const char *output, int levels, tpk_convert_report *rep)
+{
+    return convert_levels_within(input, output, levels, 0, rep);
 }
 
 /* Shell triangles as sorted world-coordinate triples, sorted: the same set for the same shell. */
@@ -74,9 +83,100 @@ static tri *shell_of(const tpk_mesh_arrays *m)
     return t;
 }
 
-/* Every level of `path`: opens, fewer tets, positive tets, the same shell, the same values at the same
- * source points (VMAP), and check 600..615 find nothing. */
-static void check_levels_of(const char *path, int expect_levels)
+/* The volume of the mesh's tets, in world coordinates. */
+static double volume_of(const tpk_mesh_arrays *m)
+{
+    int32_t *tets = malloc(sizeof *tets * 4 * (m->tet_count ? m->tet_count : 1));
+    double sum = 0;
+    if (tets && tpk_recover_tets(m, tets) == TPK_OK)
+        for (uint64_t t = 0; t < m->tet_count; t++) {
+            double p[4][3];
+            for (int j = 0; j < 4; j++)
+                for (int a = 0; a < 3; a++)
+                    p[j][a] = (double)m->positions[3 * (size_t)tets[4 * t + j] + a];
+            double b[3], c[3], d[3];
+            for (int a = 0; a < 3; a++)
+                b[a] = p[1][a] - p[0][a], c[a] = p[2][a] - p[0][a], d[a] = p[3][a] - p[0][a];
+            sum += (b[0] * (c[1] * d[2] - c[2] * d[1]) - b[1] * (c[0] * d[2] - c[2] * d[0]) +
+                    b[2] * (c[0] * d[1] - c[1] * d[0])) / 6;
+        }
+    free(tets);
+    return sum;
+}
+
+static double area_of(const tri *t, uint64_t count)
+{
+    double sum = 0;
+    for (uint64_t i = 0; t && i < count; i++) {
+        const double *p = t[i].p;
+        double b[3], c[3];
+        for (int a = 0; a < 3; a++)
+            b[a] = p[3 + a] - p[a], c[a] = p[6 + a] - p[a];
+        double x = b[1] * c[2] - b[2] * c[1], y = b[2] * c[0] - b[0] * c[2], z = b[0] * c[1] - b[1] * c[0];
+        sum += sqrt(x * x + y * y + z * z) / 2;
+    }
+    return sum;
+}
+
+/* The distance from p to the triangle t (by projection into its plane, else to its three edges). */
+static double distance_to(const double *p, const double *t)
+{
+    const double *a = t, *b = t + 3, *c = t + 6;
+    double best = INFINITY;
+    for (int e = 0; e < 3; e++) { /* the edges, as segments */
+        const double *x = e == 0 ? a : e == 1 ? b : c, *y = e == 0 ? b : e == 1 ? c : a;
+        double d[3], w[3], dd = 0, dw = 0;
+        for (int k = 0; k < 3; k++)
+            d[k] = y[k] - x[k], w[k] = p[k] - x[k], dd += d[k] * d[k], dw += d[k] * w[k];
+        double s = dd > 0 ? dw / dd : 0, r = 0;
+        s = s < 0 ? 0 : s > 1 ? 1 : s;
+        for (int k = 0; k < 3; k++)
+            r += (w[k] - s * d[k]) * (w[k] - s * d[k]);
+        best = sqrt(r) < best ? sqrt(r) : best;
+    }
+    double ab[3], ac[3], ap[3], n[3];
+    for (int k = 0; k < 3; k++)
+        ab[k] = b[k] - a[k], ac[k] = c[k] - a[k], ap[k] = p[k] - a[k];
+    n[0] = ab[1] * ac[2] - ab[2] * ac[1], n[1] = ab[2] * ac[0] - ab[0] * ac[2], n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+    double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (nn > 0) { /* inside: the three sub-triangles turn the same way as the face */
+        double h = (ap[0] * n[0] + ap[1] * n[1] + ap[2] * n[2]) / nn, q[3];
+        for (int k = 0; k < 3; k++)
+            q[k] = p[k] - h * n[k];
+        int inside = 1;
+        for (int e = 0; e < 3; e++) {
+            const double *x = e == 0 ? a : e == 1 ? b : c, *y = e == 0 ? b : e == 1 ? c : a;
+            double u[3], v[3];
+            for (int k = 0; k < 3; k++)
+                u[k] = y[k] - x[k], v[k] = q[k] - x[k];
+            double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2], cz = u[0] * v[1] - u[1] * v[0];
+            inside &= cx * n[0] + cy * n[1] + cz * n[2] >= 0;
+        }
+        if (inside)
+            best = fabs(h) * sqrt(nn) < best ? fabs(h) * sqrt(nn) : best;
+    }
+    return best;
+}
+
+/* The farthest any corner of the file's shell lies from the level's shell, by brute force. */
+static double farthest_from(const tri *full, uint64_t full_count, const tri *level, uint64_t level_count)
+{
+    double worst = 0;
+    for (uint64_t i = 0; full && level && i < full_count; i++)
+        for (int j = 0; j < 3; j++) {
+            double best = INFINITY;
+            for (uint64_t f = 0; f < level_count && best > 0; f++) {
+                double d = distance_to(full[i].p + 3 * j, level[f].p);
+                best = d < best ? d : best;
+            }
+            worst = best > worst ? best : worst;
+        }
+    return worst;
+}
+
+/* Every level of `path` (as rep reported them): opens, fewer tets, positive tets, the domain (see the
+ * top), the same values at the same source points (VMAP), and check 600..615 find nothing. */
+static void check_levels_of(const char *path, int expect_levels, const tpk_convert_report *rep)
 {
     tpk_file *file = NULL;
     CHECK(tpk_open_path(&file, path, NULL, NULL, 0) == TPK_OK);
@@ -86,6 +186,14 @@ static void check_levels_of(const char *path, int expect_levels)
     tpk_mesh_arrays full;
     CHECK(tpk_load_arrays(file, TPK_LAYOUT_TET32, NULL, 0, &full) == TPK_OK);
     tri *full_shell = shell_of(&full);
+    double full_volume = volume_of(&full), full_area = area_of(full_shell, full.shell_face_count), diagonal = 0;
+    for (int a = 0; a < 3; a++) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (uint64_t v = 0; v < full.vertex_count; v++)
+            lo = fmin(lo, full.positions[3 * v + a]), hi = fmax(hi, full.positions[3 * v + a]);
+        diagonal += full.vertex_count ? (hi - lo) * (hi - lo) : 0;
+    }
+    diagonal = sqrt(diagonal);
     uint64_t i;
     const int32_t *full_vmap = NULL;
     const void *view;
@@ -116,12 +224,23 @@ static void check_levels_of(const char *path, int expect_levels)
         }
         free(tets);
         CHECK_MSG(negative == 0, "level %u: %d tets not positive", k, negative);
-        CHECK_MSG(m.shell_face_count == full.shell_face_count, "level %u: %llu shell faces, the file %llu", k,
+        CHECK_MSG(m.shell_face_count <= full.shell_face_count, "level %u: %llu shell faces, the file %llu", k,
                   (unsigned long long)m.shell_face_count, (unsigned long long)full.shell_face_count);
         tri *shell = shell_of(&m);
-        CHECK_MSG(shell && full_shell && m.shell_face_count == full.shell_face_count &&
-                      !memcmp(shell, full_shell, sizeof *shell * m.shell_face_count),
-                  "level %u: its shell is not the file's", k);
+        double volume = volume_of(&m), area = area_of(shell, m.shell_face_count), moved = rep->level[k - 1].shell_distance;
+        if (rep->level[k - 1].shell_tolerance == 0) /* only flat pieces moved: the same surface */
+            CHECK_MSG(moved == 0 && fabs(volume - full_volume) <= 1e-9 * full_volume &&
+                          fabs(area - full_area) <= 1e-9 * full_area,
+                      "level %u: shell distance %g, volume %.17g and area %.17g against the file's %.17g and %.17g", k,
+                      moved, volume, area, full_volume, full_area);
+        else /* moved inward, within the distance reported (positions are floats: 1e-6 of the diagonal) */
+            CHECK_MSG(moved <= rep->level[k - 1].shell_tolerance * (1 + 1e-9) && volume <= full_volume * (1 + 1e-9) &&
+                          volume >= full_volume - moved * full_area * (1 + 1e-9),
+                      "level %u: shell distance %g (allowed %g), volume %.17g against the file's %.17g", k, moved,
+                      rep->level[k - 1].shell_tolerance, volume, full_volume);
+        double farthest = farthest_from(full_shell, full.shell_face_count, shell, m.shell_face_count);
+        CHECK_MSG(farthest <= moved * (1 + 1e-9) + 1e-6 * diagonal, "level %u: a shell point of the file lies %.17g "
+                  "from the level's shell, which reports %.17g", k, farthest, moved);
         free(shell);
         /* the kept vertices keep their positions and values: by VMAP (source point ids) */
         if (full_vmap && full.scalars && m.scalars && tpk_find_chunk(lf, TPK_TAG_VMAP, 0, 0, &i) == TPK_OK &&
@@ -179,14 +298,22 @@ TPK_TEST(real_meshes_levels_valid)
     CHECK_MSG(rep.level_count >= 1, "cylinder: %d levels", rep.level_count);
     CHECK(rep.level[0].error_samples > 0 && rep.level[0].error_max >= rep.level[0].error_rms &&
           rep.level[0].shell_distance == 0);
-    check_levels_of(out, 1);
+    check_levels_of(out, 1, &rep);
+    /* the shell moved inward too, within a tolerance: fewer shell faces, the distance measured */
+    int64_t exact_tets = rep.level[0].tets;
+    const char *moved = tpk_temp_path("cyl_moved.tpk");
+    CHECK(convert_levels_within(sample, moved, 3, 0.005, &rep) == 0);
+    CHECK_MSG(rep.level_count >= 1 && rep.level[0].shell_tolerance > 0 && rep.level[0].tets <= exact_tets,
+              "cylinder within 0.005: %d levels, %lld tets (%lld exactly)", rep.level_count,
+              rep.level_count ? (long long)rep.level[0].tets : -1LL, (long long)exact_tets);
+    check_levels_of(moved, 1, &rep);
     const char *t5 = tpk_temp_path("t5.tpk");
     CHECK(convert_levels(tpk_data_path("gmsh/t5_small_tet_ascii22.msh"), t5, 4, &rep) == 0);
     CHECK_MSG(rep.level_count >= 1, "t5: %d levels", rep.level_count);
-    check_levels_of(t5, 1);
+    check_levels_of(t5, 1, &rep);
     const char *blocks = tpk_temp_path("blocks.tpk");
     CHECK(convert_levels(tpk_data_path("seacas/8-block.g"), blocks, 2, &rep) == 0);
-    check_levels_of(blocks, 1);
+    check_levels_of(blocks, 1, &rep);
 }
 
 /* The error is measured at every vertex a level removed, in a mesh whose blocks lie against each other
@@ -196,12 +323,12 @@ TPK_TEST(levels_error_at_every_removed_vertex)
 {
     const char *out = tpk_temp_path("exomerge.tpk");
     tpk_convert_report rep;
-    CHECK(convert_levels(tpk_data_path("seacas/exomerge_unit_test.e"), out, 1, &rep) == 0);
+    CHECK(convert_levels_within(tpk_data_path("seacas/exomerge_unit_test.e"), out, 1, TPK_LEVEL_SHELL_ERROR, &rep) == 0);
     CHECK_MSG(rep.level_count == 1, "exomerge: %d levels", rep.level_count);
     int64_t removed = rep.vertices - rep.level[0].vertices;
     CHECK_MSG(removed > 0 && rep.level[0].error_samples == removed, "exomerge: error at %lld of %lld removed vertices",
               (long long)rep.level[0].error_samples, (long long)removed);
-    check_levels_of(out, 1);
+    check_levels_of(out, 1, &rep);
 }
 
 /* A copy of `src` (every chunk decoded and written again) with one LEVL chunk of `level` bytes. */

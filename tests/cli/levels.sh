@@ -24,7 +24,9 @@ assert len(levels) >= 1, levels
 tets = [r["tets"]] + [l["tets"] for l in levels]
 assert all(a > b for a, b in zip(tets, tets[1:])), tets
 for l in levels:
-    assert l["shell_distance"] == 0 and l["error_max"] >= l["error_rms"] >= 0 and l["bytes"] > 0, l
+    # the CLI's default lets the shell move inward, by at most 0.002 of the bounding-box diagonal
+    assert 0 <= l["shell_distance"] <= l["shell_tolerance"] and l["shell_tolerance"] > 0, l
+    assert l["error_max"] >= l["error_rms"] >= 0 and l["bytes"] > 0, l
 print("%s: %s tets; error max/RMS %s" % (sys.argv[2], " > ".join(map(str, tets)),
       ", ".join("%.3g/%.3g" % (l["error_max"], l["error_rms"]) for l in levels)))
 PYEOF
@@ -61,12 +63,16 @@ db=$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/full.png" "$WORK/l1.png" | sed -n 's/
 "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= 20 else 1)" "$db" || fail "level 1 draws another view: $db dB"
 for ms in 0.001 100000; do
     "$TPK" render "$f" -o "$WORK/b.png" --size 64x64 --max-ms "$ms" --json > "$WORK/b.json" || fail "--max-ms $ms"
-    "$PY" - "$WORK/b.json" "$ms" <<'PYEOF' || fail "--max-ms $ms: $(cat "$WORK/b.json")"
+    "$PY" - "$WORK/b.json" "$ms" "$WORK/exomerge.json" <<'PYEOF' || fail "--max-ms $ms: $(cat "$WORK/b.json")"
 import json, sys
 d, ms = json.load(open(sys.argv[1])), float(sys.argv[2])
+coarsest = len(json.load(open(sys.argv[3]))["levels"])
 assert d["max_ms"] == ms and d["predicted_ms"] > 0 and d["frame_ms"] > 0, d
 # a budget no frame fits: the coarsest level; one every frame fits: the full mesh
-assert d["level"] == (0 if ms > 1000 else 1), d
+assert d["level"] == (0 if ms > 1000 else coarsest), d
+# the level's shell distance, as the converter measured it
+level = json.load(open(sys.argv[3]))["levels"][d["level"] - 1] if d["level"] else {"shell_distance": 0}
+assert abs(d["level_error"]["shell_distance"] - level["shell_distance"]) <= 1e-8 * (1 + level["shell_distance"]), d
 PYEOF
 done
 echo "render: level 1 at $db dB against the full mesh; --max-ms picks the coarsest and the full mesh"
@@ -77,7 +83,9 @@ expect_stderr "--levels expects a number of levels from 1 to 8, found '9'"
 expect_exit 2 "$TPK" convert "${input[flange]}" "$WORK/x.tpkset" --levels 2 --parts 2
 expect_stderr "--levels and --parts"
 expect_exit 2 "$TPK" render "$f" -o "$WORK/x.png" --level 5
-expect_stderr "no level 5: the file has 1 level of detail"
+expect_stderr "no level 5: the file has 3 levels of detail"
+expect_exit 2 "$TPK" convert "${input[flange]}" "$WORK/x.tpk" --levels 2 --level-shell-error 0.5
+expect_stderr "--level-shell-error expects a fraction of the bounding-box diagonal from 0 to 0.1, found '0.5'"
 expect_exit 2 "$TPK" extract "$f" "$WORK/x.tpk" --level 5
 expect_stderr "no level 5"
 [ ! -e "$WORK/x.tpk" ] || fail "extract left a file for a level that is not there"

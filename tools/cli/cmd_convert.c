@@ -26,10 +26,13 @@ static const char convert_help[] =
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
-    "                              the same domain with about a sixth of the tets of the one before\n"
-    "                              (interior vertices collapsed, tets kept positive, the shell kept\n"
-    "                              exactly), stored in the file; fewer when the mesh stops coarsening.\n"
-    "                              render --level K and --max-ms pick one, extract --level K writes one\n"
+    "                              the domain with about a sixth of the tets of the one before (vertices\n"
+    "                              collapsed, tets kept positive), stored in the file; fewer when the\n"
+    "                              mesh stops coarsening. render --level K and --max-ms pick one,\n"
+    "                              extract --level K writes one\n"
+    "  --level-shell-error F       how far a level's shell may lie inside the file's, as a fraction of the\n"
+    "                              bounding-box diagonal (0-0.1; default 0.002). 0: shell vertices move\n"
+    "                              only within flat pieces of the shell, which then stays exactly\n"
     "  --parts N                   write a part set instead (spec §15): OUTPUT is its manifest (name it\n"
     "                              .tpkset) and N part files <stem>-<p>.tpk beside it, each a complete\n"
     "                              .tpk; the tets are cut into N runs of equal length along the Hilbert\n"
@@ -206,6 +209,13 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.format = v;
         } else if (!strcmp(arg, "--no-reorder")) {
             a->options.no_reorder = 1;
+        } else if (!strncmp(arg, "--level-shell-error", 19) && (!arg[19] || arg[19] == '=')) {
+            char *end = NULL;
+            double e = (v = tpk_cli_value(argc, argv, &i, "--level-shell-error")) ? strtod(v, &end) : -1;
+            if (!v || !*v || *end || !(e >= 0 && e <= 0.1))
+                return tpk_cli_fail("convert", "--level-shell-error expects a fraction of the bounding-box diagonal "
+                                    "from 0 to 0.1, found '%s'", v ? v : "");
+            a->options.level_shell_error = e;
         } else if (!strncmp(arg, "--levels", 8)) {
             if (!(v = tpk_cli_value(argc, argv, &i, "--levels")) || tpk_cli_parse_int(v, 1, 8, &a->options.levels))
                 return tpk_cli_fail("convert", "--levels expects a number of levels from 1 to 8, found '%s'",
@@ -340,6 +350,8 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
             tpk_strbuf_json_number(&sb, r->level[k].error_rms);
             tpk_strbuf_printf(&sb, ",\"shell_distance\":");
             tpk_strbuf_json_number(&sb, r->level[k].shell_distance);
+            tpk_strbuf_printf(&sb, ",\"shell_tolerance\":");
+            tpk_strbuf_json_number(&sb, r->level[k].shell_tolerance);
             tpk_strbuf_printf(&sb, ",\"seconds\":%.6f}", r->level[k].seconds);
         }
         tpk_strbuf_printf(&sb,
@@ -374,7 +386,10 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                    r->level[k].error_max, r->level[k].error_rms);
         else
             printf("no point field to measure an error on; ");
-        printf("shell distance %g (the same shell)\n", r->level[k].shell_distance);
+        if (r->level[k].shell_distance > 0)
+            printf("shell distance %g (allowed %g)\n", r->level[k].shell_distance, r->level[k].shell_tolerance);
+        else
+            printf("shell distance 0 (the same surface)\n");
     }
     if (a->options.levels > r->level_count)
         printf("  levels: %d of the %d asked (the next would keep more than 85%% of the tets before it)\n",
@@ -390,6 +405,7 @@ int tpk_cmd_convert(int argc, char **argv)
 {
     static convert_args a;
     memset(&a, 0, sizeof a);
+    a.options.level_shell_error = TPK_LEVEL_SHELL_ERROR;
     a.progress = -1;
     int rc = parse_args(argc, argv, &a);
     if (rc == 0)

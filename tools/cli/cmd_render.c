@@ -114,14 +114,14 @@ typedef struct level_set {
     int count;                      /* levels, the full mesh (0) included */
     tpk_file *files[9];             /* [0]: the file itself; the others opened over it */
     int64_t tets[9];
-    double error_max[9], error_rms[9];
+    double error_max[9], error_rms[9], shell_distance[9];
 } level_set;
 
-/* The level figures the converter wrote in META ("levels": [{level, error_max, error_rms}]). */
+/* The level figures the converter wrote in META ("levels": [{level, error_max, error_rms, shell_distance}]). */
 static void level_errors(tpk_file *file, level_set *ls)
 {
     for (int k = 0; k < 9; k++)
-        ls->error_max[k] = ls->error_rms[k] = k == 0 ? 0 : NAN;
+        ls->error_max[k] = ls->error_rms[k] = ls->shell_distance[k] = k == 0 ? 0 : NAN;
     uint64_t i;
     tpk_dir_entry e;
     if (tpk_find_chunk(file, TPK_TAG_META, 0, 0, &i) != TPK_OK || tpk_get_chunk(file, i, &e) != TPK_OK ||
@@ -141,6 +141,8 @@ static void level_errors(tpk_file *file, level_set *ls)
         if (mx && rms) {
             ls->error_max[k] = strtod(mx + 12, NULL);
             ls->error_rms[k] = strtod(rms + 12, NULL);
+            const char *sd = strstr(at, "\"shell_distance\":");
+            ls->shell_distance[k] = sd ? strtod(sd + 17, NULL) : NAN;
         }
     }
     free(text);
@@ -254,6 +256,7 @@ static int render_file(render_args *a, tpk_file *file)
             rc = load_step(a, ls.files[k], association == TPK_ASSOC_TET, step, &mesh, &opt);
         frame_source src = {.mesh = &mesh, .field = have_field ? &field : NULL, .iso_auto = iso_auto, .level = k,
                             .level_tets = ls.tets[k], .error_max = ls.error_max[k], .error_rms = ls.error_rms[k],
+                            .shell_distance = ls.shell_distance[k],
                             .budget = a->max_ms > 0 ? budget : 0,
                             .predicted = tpk_cost_model_predict(&model, pixels, (double)ls.tets[k])};
         if (rc == TPK_EXIT_OK && a->verbose && (a->max_ms > 0 || k > 0))

@@ -93,9 +93,11 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
         if (src->level > 0 || src->budget > 0) {
             printf(",\"level\":%d,\"level_tets\":%lld", src->level, (long long)src->level_tets);
             if (src->level > 0 && !isnan(src->error_max))
-                printf(",\"level_error\":{\"max\":%.9g,\"rms\":%.9g}", src->error_max, src->error_rms);
+                printf(",\"level_error\":{\"max\":%.9g,\"rms\":%.9g,\"shell_distance\":%.9g}", src->error_max,
+                       src->error_rms, isnan(src->shell_distance) ? 0 : src->shell_distance);
             else
-                printf(",\"level_error\":%s", src->level == 0 ? "{\"max\":0,\"rms\":0}" : "null");
+                printf(",\"level_error\":%s",
+                       src->level == 0 ? "{\"max\":0,\"rms\":0,\"shell_distance\":0}" : "null");
         }
         if (src->budget > 0)
             printf(",\"max_ms\":%.6g,\"predicted_ms\":%.6g,\"frame_ms\":%.6g", src->budget * 1e3,

@@ -17,11 +17,12 @@ typedef struct frame_source {
     double diagonal;  /* of the box of all the set's positions */
     const tpk_field_desc *field; /* the field shown (its name and units for --legend) */
     double iso_auto;  /* --iso auto's value (NAN: not asked) */
-    /* Levels of detail (spec §16): the level drawn (0: the full mesh), its tets and field error (from the
+    /* Levels of detail (spec §16): the level drawn (0: the full mesh), its tets, field error and shell
+     * distance (from the
      * file's META; NAN when not given), and with --max-ms the budget and the prediction (seconds). */
     int level;
     int64_t level_tets;
-    double error_max, error_rms, budget, predicted;
+    double error_max, error_rms, shell_distance, budget, predicted;
 } frame_source;
 
 /* The picture of `mesh` by the backend of the arguments (the CPU reference, Vulkan, --iso-raster), no

@@ -206,7 +206,8 @@ static int write_output(conversion *c)
             c->rep->level[i].vertices = l->vertices, c->rep->level[i].tets = l->tets;
             c->rep->level[i].error_samples = l->error_samples;
             c->rep->level[i].error_max = l->error_max, c->rep->level[i].error_rms = l->error_rms;
-            c->rep->level[i].shell_distance = l->shell_distance, c->rep->level[i].seconds = l->seconds;
+            c->rep->level[i].shell_distance = l->shell_distance,
+            c->rep->level[i].shell_tolerance = l->shell_tolerance, c->rep->level[i].seconds = l->seconds;
             c->rep->level[i].bytes = l->size;
         }
         announce(c->stage, c->stage_user, "write");

@@ -39,9 +39,14 @@ typedef struct tpk_convert_options {
     int parts;                    /* 0: one .tpk; >= 1: output is a part set manifest of this many parts
                                      (spec §15), cut along the Hilbert order */
     int levels;                   /* levels of detail to add (spec §16; 0: none; not with parts) */
+    double level_shell_error;     /* how far a level's shell may lie inside the file's, times the bounding
+                                     box diagonal (the CLI's default: TPK_LEVEL_SHELL_ERROR); 0: shell
+                                     vertices move only within flat pieces, so the shell stays exactly */
     const char *command_line;     /* recorded in META; may be NULL */
     const struct tpk_tetgen_options *tetgen; /* surfaces and point clouds (surface.h); NULL: defaults */
 } tpk_convert_options;
+
+#define TPK_LEVEL_SHELL_ERROR 0.002
 
 typedef struct tpk_convert_report {
     int64_t source_points, source_cells;
@@ -59,7 +64,7 @@ typedef struct tpk_convert_report {
     int level_count;              /* levels of detail written (may be fewer than asked: levels.h) */
     struct {
         int64_t vertices, tets, error_samples;
-        double error_max, error_rms, shell_distance, seconds;
+        double error_max, error_rms, shell_distance, shell_tolerance, seconds;
         uint64_t bytes;
     } level[8];                   /* TPK_MAX_LEVELS */
     double t_levels;

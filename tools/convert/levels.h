@@ -21,7 +21,9 @@ typedef struct tpk_level {
     int field_step;          /* at this step: the one of widest range */
     int64_t error_samples;   /* the full mesh's vertices this level removed: the error is sampled there */
     double error_max, error_rms; /* |level - full| at those points, field units */
-    double shell_distance;   /* of the level's shell from the full mesh's: 0 (the same faces, see levels.c) */
+    double shell_distance;   /* of the full mesh's shell from the level's, measured at the shell vertices the
+                                level removed (levels.c): 0 when the shell moved only within flat pieces */
+    double shell_tolerance;  /* what it was allowed (convert's level_shell_error times the bbox diagonal) */
     double seconds;          /* simplifying and writing it */
 } tpk_level;
 
@@ -31,9 +33,10 @@ typedef struct tpk_levels {
 } tpk_levels;
 
 /* Make up to `count` levels of `mesh` (in the stored frame, tets positive, `neighbors` as connect gave
- * them), each with about a sixth of the tets of the one before, by half-edge collapses of interior
- * vertices that keep every tet positive (exact orientation) and of fair shape; the shell is never
- * touched. Stops early (fewer levels, out->count) when a level would keep more than 85% of the tets of
+ * them), each with about a sixth of the tets of the one before, by half-edge collapses that keep every
+ * tet positive (exact orientation) and of fair shape; shell vertices move only within flat pieces of the
+ * shell, or inward within o->level_shell_error times the bounding box diagonal of every shell vertex
+ * removed. Stops early (fewer levels, out->count) when a level would keep more than 85% of the tets of
  * the one before. Each level is written as a complete file with `o`'s layouts and compression, every
  * field (point fields at the kept vertices, tet fields of the tet each level tet descends from), TIME,
  * TMAP and VMAP, and META with `source` (its source_cells and source_points: the levels' maps number the

@@ -277,7 +277,7 @@ static void levels_json(tpk_strbuf *sb, const tpk_levels *levels)
     tpk_strbuf_printf(sb, ",\"levels\":[");
     for (int i = 0; i < levels->count; i++) {
         const tpk_level *l = &levels->level[i];
-        tpk_strbuf_printf(sb, "%s{\"level\":%d,\"vertices\":%lld,\"tets\":%lld,\"method\":\"interior half-edge "
+        tpk_strbuf_printf(sb, "%s{\"level\":%d,\"vertices\":%lld,\"tets\":%lld,\"method\":\"half-edge "
                           "collapse\",\"field\":", i ? "," : "", i + 1, (long long)l->vertices, (long long)l->tets);
         tpk_strbuf_json_string(sb, l->field);
         tpk_strbuf_printf(sb, ",\"step\":%d,\"error_samples\":%lld,\"error_max\":", l->field_step,
@@ -287,6 +287,8 @@ static void levels_json(tpk_strbuf *sb, const tpk_levels *levels)
         tpk_strbuf_json_number(sb, l->error_rms);
         tpk_strbuf_printf(sb, ",\"shell_distance\":");
         tpk_strbuf_json_number(sb, l->shell_distance);
+        tpk_strbuf_printf(sb, ",\"shell_tolerance\":");
+        tpk_strbuf_json_number(sb, l->shell_tolerance);
         tpk_strbuf_printf(sb, "}");
     }
     tpk_strbuf_printf(sb, "]");
