@@ -437,8 +437,7 @@ static void move_chains(simplifier *s, int32_t u, int32_t v, const int32_t ring[
 
 /* Whether shell vertex u may move onto v: v is on u's ring, and the ring's faces (u, a, b), which
  * become (v, a, b), either all lie in a plane through v, exactly (the shell does not move), or (with a
- * tolerance) v is on or inside each face's plane, and every removed shell vertex keeps a witness within
- * the tolerance: u itself in the new fan, and the points owned by u, v and the ring (chain_keeps). */
+ * tolerance) v is on or inside each face's plane; witnesses_kept() then asks the rest. */
 static int shell_move_ok(const simplifier *s, int32_t u, int32_t v, const int32_t ring[][3], int m)
 {
     /* v on the ring, and no face (u, a, b) of it in a tet with v (that tet vanishes, and takes the face
@@ -468,8 +467,17 @@ static int shell_move_ok(const simplifier *s, int32_t u, int32_t v, const int32_
         if (side != (inner ? inner : tpk_orient3d_exact(a, b, pu, c)))
             return 0;
     }
+    return 1;
+}
+
+/* With a tolerance, after shell_move_ok and the moved tets' tests (cheaper, and they reject more): every
+ * removed shell vertex keeps a witness within the tolerance, u itself in the new fan, and the points
+ * owned by u, v and the ring (chain_keeps). */
+static int witnesses_kept(const simplifier *s, int32_t u, int32_t v, const int32_t ring[][3], int m)
+{
     if (!(s->shell_tolerance > 0))
         return 1; /* flat */
+    const double *pu = point(s, u);
     if (fan_distance(s, pu, v, v, ring, m) > s->shell_tolerance || !chain_keeps(s, u, u, v, ring, m))
         return 0;
     int32_t verts[RING_MAX];
@@ -521,6 +529,8 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
                 star_face_of(s, t, u, &faces[i]);
             ok = moved_tet_ok(s, &faces[i], u, v, q, floor);
         }
+        if (ok && ring_count >= 0 && !witnesses_kept(s, u, v, ring, ring_count))
+            continue; /* the shell would move too far: the next target (the moved tets passed) */
         if (ok) {
             for (i = 0; i < n; i++)
                 if (faces[i].a && faces[i].tet[0] != v && faces[i].tet[1] != v && faces[i].tet[2] != v &&
