@@ -1,0 +1,432 @@
+/* Range culling for packets of iso rays from one origin (tpk_march_packet_values, tetpack.h): a camera's
+ * primary rays through neighbouring pixels walk the selected tree together.
+ *
+ * A wide node's four children are tested once for the whole packet, by interval arithmetic over the
+ * rays' 1/d (they share the origin, so only 1/d differs): float rounding is monotone, so the interval's
+ * entry is at or before each ray's own float entry (range_bvh.c's wide_entry) and its exit at or after
+ * each ray's exit; where the interval misses a child, every ray misses it. At a leaf, a tet is tested
+ * for the packet in float (all its corners on one side of every ray, in x or in y of the rays' frames,
+ * by more than the floats' rounding), then ray by ray the same way, then exactly (tpki_tet_piece) for
+ * the rays left: the float tests drop only tets whose exact test would find no piece.
+ *
+ * Each ray keeps its own pieces, in tpki_piece_before's order, and hands the first on once no node left
+ * can hold one that starts before it, as a ray alone does: a node's key is at or before each ray's, so
+ * each ray makes the same calls, in the same order, as alone. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal_range.h"
+
+#define NODE_STACK 64
+#define PIECE_STACK 8
+
+typedef struct packet_ray {
+    tpk_ray_frame frame;
+    double tmin, tmax;
+    tpk_segment_fn fn;
+    void *user;
+    tpk_segment *pieces; /* found and not handed on: [first, count), in tpki_piece_before's order */
+    int64_t first, count, cap;
+    tpk_segment buf[PIECE_STACK];
+    uint64_t tested;
+    int active;
+} packet_ray;
+
+typedef struct node_item {
+    double key;
+    int64_t ref; /* a wide node (>= 0) or a leaf (leaf_ref) */
+} node_item;
+
+typedef struct packet {
+    const tpk_range_bvh *b;
+    const double *values;
+    int value_count;
+    packet_ray *rays;
+    int ray_count, active;
+    int kx, ky, kz; /* every ray's frame has these axes */
+    /* the children test: the origin, 1/d's bounds over the rays, the largest widening, tmin and tmax */
+    tpki_v4f o[3], inv_lo[3], inv_hi[3], pad_t[3], tmin, tmax;
+    int near[3], far[3];
+    double slack; /* the largest of the rays' (range_bvh.c: a node is due a little before its box) */
+    /* the float tet test: the origin, the shear's bounds over the rays, the margin for rounding */
+    tpki_v4f of[3];
+    float sx_lo, sx_hi, sy_lo, sy_hi, margin;
+    tpki_v4f sx[TPK_MARCH_PACKET / 4], sy[TPK_MARCH_PACKET / 4]; /* each ray's shear, four rays a vector */
+    double piece_min; /* at or before the first piece of every ray that has one (+inf: none) */
+    node_item *nodes, node_stack[NODE_STACK]; /* by key, then ref */
+    int64_t node_count, node_cap;
+    tpk_result r;
+} packet;
+
+static int node_before(const node_item *a, const node_item *b)
+{
+    return a->key < b->key || (a->key == b->key && a->ref < b->ref);
+}
+
+static void node_push(packet *p, double key, int64_t ref)
+{
+    if (p->node_count == p->node_cap) {
+        node_item *grown = malloc(sizeof *grown * (size_t)(2 * p->node_cap));
+        if (!grown) {
+            p->r = TPK_ERR_OUT_OF_MEMORY;
+            return;
+        }
+        memcpy(grown, p->nodes, sizeof *grown * (size_t)p->node_count);
+        if (p->nodes != p->node_stack)
+            free(p->nodes);
+        p->nodes = grown;
+        p->node_cap *= 2;
+    }
+    const node_item item = {key, ref};
+    int64_t i = p->node_count++;
+    while (i > 0 && node_before(&item, &p->nodes[(i - 1) / 2])) {
+        p->nodes[i] = p->nodes[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    p->nodes[i] = item;
+}
+
+static int64_t node_pop(packet *p)
+{
+    int64_t top = p->nodes[0].ref, i = 0;
+    node_item last = p->nodes[--p->node_count];
+    for (;;) {
+        int64_t c = 2 * i + 1;
+        if (c >= p->node_count)
+            break;
+        if (c + 1 < p->node_count && node_before(&p->nodes[c + 1], &p->nodes[c]))
+            c++;
+        if (!node_before(&p->nodes[c], &last))
+            break;
+        p->nodes[i] = p->nodes[c];
+        i = c;
+    }
+    p->nodes[i] = last;
+    return top;
+}
+
+/* Hand on each ray's pieces that start before `due`, as a ray alone does (range_bvh.c's walk_hand). */
+static void hand_due(packet *p, double due)
+{
+    if (!(p->piece_min < due))
+        return;
+    p->piece_min = INFINITY;
+    for (int i = 0; i < p->ray_count; i++) {
+        packet_ray *r = &p->rays[i];
+        while (r->active && r->first < r->count && r->pieces[r->first].t_in < due) {
+            tpk_segment seg = r->pieces[r->first++];
+            if ((r->fn && r->fn(r->user, &seg)) || seg.t_out >= r->tmax) {
+                r->active = 0;
+                p->active--;
+            }
+        }
+        if (r->active && r->first < r->count && r->pieces[r->first].t_in < p->piece_min)
+            p->piece_min = r->pieces[r->first].t_in;
+    }
+}
+
+/* Something queued, a node or a ray's piece, comes before `key`. */
+static int due_before(const packet *p, double key)
+{
+    return (p->node_count > 0 && p->nodes[0].key < key) || p->piece_min < key;
+}
+
+/* Tet t (slot: its copy) for ray r, exactly: its piece queued if it crosses a value. */
+static void ray_tet(packet *p, packet_ray *r, int64_t t, const tpki_active_slot *slot)
+{
+    r->tested++;
+    tpk_segment seg;
+    if (!tpki_tet_piece(p->b, &r->frame, t, slot, &seg) || !tpki_clip_piece(&seg, r->tmin, r->tmax) ||
+        !tpki_crosses(seg.scalar_in, seg.scalar_out, p->values, p->value_count))
+        return;
+    if (r->count == r->cap && r->first > 0) {
+        memmove(r->pieces, r->pieces + r->first, sizeof *r->pieces * (size_t)(r->count - r->first));
+        r->count -= r->first;
+        r->first = 0;
+    } else if (r->count == r->cap) {
+        tpk_segment *grown = malloc(sizeof *grown * (size_t)(2 * r->cap));
+        if (!grown) {
+            p->r = TPK_ERR_OUT_OF_MEMORY;
+            return;
+        }
+        memcpy(grown, r->pieces, sizeof *grown * (size_t)r->count);
+        if (r->pieces != r->buf)
+            free(r->pieces);
+        r->pieces = grown;
+        r->cap *= 2;
+    }
+    int64_t at = r->count++;
+    for (; at > r->first && tpki_piece_before(&seg, &r->pieces[at - 1]); at--)
+        r->pieces[at] = r->pieces[at - 1];
+    r->pieces[at] = seg;
+    p->piece_min = seg.t_in < p->piece_min ? seg.t_in : p->piece_min;
+}
+
+static inline int all4(tpki_v4i m)
+{
+    return (m[0] & m[1] & m[2] & m[3]) != 0;
+}
+
+/* The four corners (x or y in a frame) all beyond the margin on one side. */
+static inline int one_side(tpki_v4f lo, tpki_v4f hi, float margin)
+{
+    return all4(lo > margin) || all4(hi < -margin);
+}
+
+static inline tpki_v4f v4_abs(tpki_v4f a)
+{
+    return (tpki_v4f)((tpki_v4i)a & (tpki_v4i){INT32_MAX, INT32_MAX, INT32_MAX, INT32_MAX});
+}
+
+/* Six bits, one per edge 01, 02, 03, 12, 13, 23 of a tet (lanes 0..3 of a, then 0..1 of b). */
+static inline int edge_bits(tpki_v4i a, tpki_v4i b)
+{
+    return (a[0] & 1) | (a[1] & 2) | (a[2] & 4) | (a[3] & 8) | (b[0] & 16) | (b[1] & 32);
+}
+
+/* Can the ray of a frame, the point (0, 0), lie in the projection of a face of the tet whose corners are
+ * at x, y (floats, each off by at most d / 8)? A face (a, b, c), a < b < c, holds it when its edge
+ * functions x_a y_b - y_a x_b, x_b y_c - y_b x_c and -(x_a y_c - y_a x_c) share a sign; it cannot
+ * when two of them are beyond the margin on opposite sides. The margin holds the floats' rounding of
+ * the products and of the corners (four times over), so what this drops the exact test drops too. */
+static inline int may_cross(tpki_v4f x, tpki_v4f y, float d)
+{
+    tpki_v4f a = tpki_v4_max(v4_abs(x), v4_abs(y));
+    float m = a[0] > a[1] ? a[0] : a[1], m2 = a[2] > a[3] ? a[2] : a[3];
+    m = m > m2 ? m : m2;
+    float margin = 2 * d * m + 0x1p-19f * m * m + d * d;
+    tpki_v4f e1 = (tpki_v4f){x[0], x[0], x[0], x[1]} * (tpki_v4f){y[1], y[2], y[3], y[2]} -
+                  (tpki_v4f){y[0], y[0], y[0], y[1]} * (tpki_v4f){x[1], x[2], x[3], x[2]};
+    tpki_v4f e2 = (tpki_v4f){x[1], x[2], x[1], x[2]} * (tpki_v4f){y[3], y[3], y[3], y[3]} -
+                  (tpki_v4f){y[1], y[2], y[1], y[2]} * (tpki_v4f){x[3], x[3], x[3], x[3]};
+    int pos = edge_bits(e1 > margin, e2 > margin), neg = edge_bits(e1 < -margin, e2 < -margin);
+    /* faces 012, 013, 023, 123: their edges, and the one (ac) taken backwards */
+    static const int face_edges[4] = {1 | 2 | 8, 1 | 4 | 16, 2 | 4 | 32, 8 | 16 | 32};
+    static const int face_back[4] = {2, 4, 4, 16};
+    for (int f = 0; f < 4; f++) {
+        int fp = ((pos & ~face_back[f]) | (neg & face_back[f])) & face_edges[f];
+        int fn = ((neg & ~face_back[f]) | (pos & face_back[f])) & face_edges[f];
+        if (!fp || !fn)
+            return 1;
+    }
+    return 0;
+}
+
+/* A leaf's tets: for the packet, then ray by ray in float, then exactly. */
+static void packet_leaf(packet *p, int64_t first, int64_t count)
+{
+    const tpk_range_bvh *b = p->b;
+    const int kx = p->kx, ky = p->ky, kz = p->kz;
+    const float m = p->margin;
+    for (int64_t s = first; s < first + count && p->r == TPK_OK; s++) {
+        const tpki_active_slot *slot = &b->active_slots[s];
+        tpki_v4f qx = slot->pos[kx] - p->of[kx], qy = slot->pos[ky] - p->of[ky], qz = slot->pos[kz] - p->of[kz];
+        /* x = qx - sx qz is linear in sx: between its values at the shear's bounds */
+        tpki_v4f xa = qx - p->sx_lo * qz, xb = qx - p->sx_hi * qz;
+        tpki_v4f ya = qy - p->sy_lo * qz, yb = qy - p->sy_hi * qz;
+        if (one_side(tpki_v4_min(xa, xb), tpki_v4_max(xa, xb), m) ||
+            one_side(tpki_v4_min(ya, yb), tpki_v4_max(ya, yb), m))
+            continue;
+        /* four rays at a time: their x and y at each corner */
+        for (int g = 0; 4 * g < p->ray_count; g++) {
+            tpki_v4f x[4], y[4];
+            for (int c = 0; c < 4; c++)
+                x[c] = qx[c] - p->sx[g] * qz[c], y[c] = qy[c] - p->sy[g] * qz[c];
+            tpki_v4f x_lo = tpki_v4_min(tpki_v4_min(x[0], x[1]), tpki_v4_min(x[2], x[3]));
+            tpki_v4f x_hi = tpki_v4_max(tpki_v4_max(x[0], x[1]), tpki_v4_max(x[2], x[3]));
+            tpki_v4f y_lo = tpki_v4_min(tpki_v4_min(y[0], y[1]), tpki_v4_min(y[2], y[3]));
+            tpki_v4f y_hi = tpki_v4_max(tpki_v4_max(y[0], y[1]), tpki_v4_max(y[2], y[3]));
+            tpki_v4i off = (x_lo > m) | (x_hi < -m) | (y_lo > m) | (y_hi < -m);
+            for (int j = 0; j < 4 && 4 * g + j < p->ray_count; j++) {
+                packet_ray *r = &p->rays[4 * g + j];
+                if (off[j] || !r->active ||
+                    !may_cross((tpki_v4f){x[0][j], x[1][j], x[2][j], x[3][j]},
+                               (tpki_v4f){y[0][j], y[1][j], y[2][j], y[3][j]}, m))
+                    continue;
+                ray_tet(p, r, b->active_tets[s], slot);
+            }
+        }
+    }
+}
+
+/* Entry keys of a wide node's children for the packet (+inf: every ray misses the child). */
+static inline void packet_children(const packet *p, const tpki_wide_node *n, double key[4])
+{
+    tpki_v4f near, far;
+    for (int k = 0; k < 3; k++) {
+        tpki_v4f a = n->box[p->near[k]] - p->o[k], c = n->box[p->far[k]] - p->o[k];
+        tpki_v4f lo = tpki_v4_min(a * p->inv_lo[k], a * p->inv_hi[k]) - p->pad_t[k];
+        tpki_v4f hi = tpki_v4_max(c * p->inv_lo[k], c * p->inv_hi[k]) + p->pad_t[k];
+        near = k ? tpki_v4_max(near, lo) : lo;
+        far = k ? tpki_v4_min(far, hi) : hi;
+    }
+    tpki_v4i hit = (near <= far) & (far >= p->tmin) & (near <= p->tmax);
+    for (int i = 0; i < 4; i++)
+        key[i] = hit[i] ? (double)near[i] - p->slack : INFINITY;
+}
+
+static int64_t leaf_ref(int32_t first, int32_t count)
+{
+    return -((int64_t)first * 8 + count) - 1;
+}
+
+/* The walk: range_bvh.c's walk_selected, for the packet. */
+static void packet_walk(packet *p)
+{
+    const tpk_range_bvh *b = p->b;
+    node_push(p, -INFINITY, 0);
+    while (p->r == TPK_OK && p->active > 0) {
+        hand_due(p, p->node_count > 0 ? p->nodes[0].key : INFINITY);
+        if (p->node_count == 0 || p->active == 0)
+            break;
+        int64_t ref = node_pop(p);
+        while (ref >= 0 && p->r == TPK_OK) {
+            const tpki_wide_node *n = &b->wide[ref];
+            double t0[4], key[4];
+            int64_t child[4];
+            int found = 0;
+            packet_children(p, n, t0);
+            for (int i = 0; i < 4; i++) {
+                if (t0[i] == INFINITY)
+                    continue;
+                int64_t c = n->count[i] == 0 ? n->child[i] : leaf_ref(n->child[i], n->count[i]);
+                int at = found++;
+                for (; at > 0 && key[at - 1] > t0[i]; at--) /* nearest first */
+                    key[at] = key[at - 1], child[at] = child[at - 1];
+                key[at] = t0[i], child[at] = c;
+            }
+            for (int i = 1; i < found; i++)
+                node_push(p, key[i], child[i]);
+            if (found == 0 || due_before(p, key[0])) {
+                if (found > 0)
+                    node_push(p, key[0], child[0]);
+                ref = 0; /* the root is no one's child: nothing to test here */
+                break;
+            }
+            ref = child[0];
+        }
+        if (ref < 0)
+            packet_leaf(p, (-ref - 1) / 8, (-ref - 1) % 8);
+    }
+}
+
+/* Set the packet up; 0 when its rays cannot walk together (axes, signs or magnitudes that differ or
+ * that floats cannot hold, an empty span): then each walks alone. */
+static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], int ray_count,
+                       const double (*dirs)[3], const double *tmin, const double *tmax)
+{
+    const tpk_marcher *marcher = b->marcher;
+    double inv_lo[3], inv_hi[3], sx_lo = INFINITY, sx_hi = -INFINITY, sy_lo = INFINITY, sy_hi = -INFINITY;
+    float t_lo = INFINITY, t_hi = -INFINITY;
+    p->slack = 0;
+    for (int g = 0; g < TPK_MARCH_PACKET / 4; g++)
+        p->sx[g] = p->sy[g] = (tpki_v4f){0, 0, 0, 0};
+    for (int i = 0; i < ray_count; i++) {
+        packet_ray *r = &p->rays[i];
+        if (!(tmin[i] <= tmax[i]) || tpki_ray_frame_init(&r->frame, marcher->mesh.origin, org, dirs[i]) != 0)
+            return 0;
+        if (i == 0)
+            p->kx = r->frame.kx, p->ky = r->frame.ky, p->kz = r->frame.kz;
+        if (r->frame.kx != p->kx || r->frame.ky != p->ky || r->frame.kz != p->kz)
+            return 0;
+        for (int k = 0; k < 3; k++) {
+            double inv = 1.0 / dirs[i][k];
+            if (!(fabs(inv) < 1e30 && fabs(inv) > 1e-30) || (i > 0 && (inv > 0) != (inv_lo[k] > 0)))
+                return 0;
+            inv_lo[k] = i == 0 || inv < inv_lo[k] ? inv : inv_lo[k];
+            inv_hi[k] = i == 0 || inv > inv_hi[k] ? inv : inv_hi[k];
+        }
+        const double *d = dirs[i], *o = r->frame.org;
+        double slack = 1e-9 * (marcher->extent + fabs(o[0]) + fabs(o[1]) + fabs(o[2])) /
+                       sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        p->slack = slack > p->slack ? slack : p->slack;
+        float lo = tmin[i] > -1e30 ? tpki_round_down(tmin[i]) : -INFINITY;
+        float hi = tmax[i] < 1e30 ? tpki_round_up(tmax[i]) : INFINITY;
+        t_lo = lo < t_lo ? lo : t_lo;
+        t_hi = hi > t_hi ? hi : t_hi;
+        sx_lo = fmin(sx_lo, r->frame.sx), sx_hi = fmax(sx_hi, r->frame.sx);
+        sy_lo = fmin(sy_lo, r->frame.sy), sy_hi = fmax(sy_hi, r->frame.sy);
+        p->sx[i / 4][i % 4] = (float)r->frame.sx, p->sy[i / 4][i % 4] = (float)r->frame.sy;
+    }
+    const double *o = p->rays[0].frame.org;
+    double o_max = fmax(fabs(o[0]), fmax(fabs(o[1]), fabs(o[2])));
+    if (!(o_max < 1e30))
+        return 0;
+    double widen = tpki_box_widen(b->pad, marcher->extent, o_max);
+    for (int k = 0; k < 3; k++) {
+        double pad_t = widen * fmax(fabs(inv_lo[k]), fabs(inv_hi[k]));
+        if (!(pad_t < 1e30))
+            return 0;
+        float ok = (float)o[k], lo = (float)inv_lo[k], hi = (float)inv_hi[k], pt = (float)pad_t;
+        p->o[k] = (tpki_v4f){ok, ok, ok, ok};
+        p->inv_lo[k] = (tpki_v4f){lo, lo, lo, lo};
+        p->inv_hi[k] = (tpki_v4f){hi, hi, hi, hi};
+        p->pad_t[k] = (tpki_v4f){pt, pt, pt, pt};
+        p->near[k] = inv_lo[k] > 0 ? k : k + 3;
+        p->far[k] = inv_lo[k] > 0 ? k + 3 : k;
+        p->of[k] = p->o[k];
+    }
+    p->tmin = (tpki_v4f){t_lo, t_lo, t_lo, t_lo};
+    p->tmax = (tpki_v4f){t_hi, t_hi, t_hi, t_hi};
+    /* the float tet test: a corner's x, qx - sx qz with q = corner - origin, is off by at most
+     * 2^-24 (3 + 5 |sx|) S, S the largest |corner| plus the largest |origin|, and |sx| <= 1 (kz is the
+     * direction's largest axis): the margin is 8 times that */
+    double corner_max = 0;
+    for (int k = 0; k < 6; k++)
+        for (int i = 0; i < 4; i++)
+            if (b->wide[0].count[i] >= 0)
+                corner_max = fmax(corner_max, fabs((double)b->wide[0].box[k][i]));
+    double margin = ldexp(corner_max + o_max, -18);
+    if (!(corner_max + o_max < 1e15))
+        return 0; /* may_cross squares the margin in float */
+    p->margin = (float)margin;
+    p->sx_lo = (float)sx_lo, p->sx_hi = (float)sx_hi, p->sy_lo = (float)sy_lo, p->sy_hi = (float)sy_hi;
+    return 1;
+}
+
+tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], int ray_count,
+                                   const double (*dirs)[3], const double *tmin, const double *tmax,
+                                   const double *values, int value_count, const tpk_segment_fn *fns,
+                                   void *const *users, tpk_march_stats *stats)
+{
+    if (!b || !org || !dirs || !tmin || !tmax || !fns || !users || ray_count < 0 ||
+        ray_count > TPK_MARCH_PACKET || value_count < 0 || (value_count > 0 && !values))
+        return TPK_ERR_INVALID_ARGUMENT;
+    packet_ray rays[TPK_MARCH_PACKET];
+    packet state;
+    packet *p = &state;
+    p->b = b, p->values = values, p->value_count = value_count, p->rays = rays, p->ray_count = ray_count;
+    if (ray_count == 0 || b->levels == 0 || value_count == 0 || b->wide_count == 0 ||
+        !tpki_range_selected(b, values, value_count) || !packet_init(p, b, org, ray_count, dirs, tmin, tmax)) {
+        tpk_result first = TPK_OK;
+        for (int i = 0; i < ray_count; i++) {
+            tpk_result r = tpk_march_ray_values(b, org, dirs[i], tmin[i], tmax[i], values, value_count, fns[i],
+                                                users[i], stats ? &stats[i] : NULL);
+            first = first == TPK_OK ? r : first;
+        }
+        return first;
+    }
+    for (int i = 0; i < ray_count; i++) {
+        packet_ray *r = &rays[i];
+        r->tmin = tmin[i], r->tmax = tmax[i], r->fn = fns[i], r->user = users[i];
+        r->pieces = r->buf, r->first = r->count = 0, r->cap = PIECE_STACK;
+        r->tested = 0, r->active = 1;
+    }
+    p->active = ray_count;
+    p->piece_min = INFINITY;
+    p->nodes = p->node_stack, p->node_count = 0, p->node_cap = NODE_STACK;
+    p->r = TPK_OK;
+    packet_walk(p);
+    for (int i = 0; i < ray_count; i++) {
+        if (rays[i].pieces != rays[i].buf)
+            free(rays[i].pieces);
+        if (stats) {
+            memset(&stats[i], 0, sizeof stats[i]);
+            stats[i].tet_steps = rays[i].tested;
+        }
+    }
+    if (p->nodes != p->node_stack)
+        free(p->nodes);
+    return p->r;
+}
