@@ -53,6 +53,7 @@ typedef struct packet {
     tpki_v4f of[3];
     float sx_lo, sx_hi, sy_lo, sy_hi, margin;
     tpki_v4f sx[TPK_MARCH_PACKET / 4], sy[TPK_MARCH_PACKET / 4]; /* each ray's shear, four rays a vector */
+    tpki_v4i live[TPK_MARCH_PACKET / 4]; /* -1 for each ray still walking */
     double piece_min; /* at or before the first piece of every ray that has one (+inf: none) */
     node_item *nodes, node_stack[NODE_STACK]; /* by key, then ref */
     int64_t node_count, node_cap;
@@ -119,6 +120,7 @@ static void hand_due(packet *p, double due)
             if ((r->fn && r->fn(r->user, &seg)) || seg.t_out >= r->tmax) {
                 r->active = 0;
                 p->active--;
+                p->live[i / 4][i % 4] = 0;
             }
         }
         if (r->active && r->first < r->count && r->pieces[r->first].t_in < p->piece_min)
@@ -179,41 +181,96 @@ static inline tpki_v4f v4_abs(tpki_v4f a)
     return (tpki_v4f)((tpki_v4i)a & (tpki_v4i){INT32_MAX, INT32_MAX, INT32_MAX, INT32_MAX});
 }
 
-/* Six bits, one per edge 01, 02, 03, 12, 13, 23 of a tet (lanes 0..3 of a, then 0..1 of b). */
-static inline int edge_bits(tpki_v4i a, tpki_v4i b)
-{
-    return (a[0] & 1) | (a[1] & 2) | (a[2] & 4) | (a[3] & 8) | (b[0] & 16) | (b[1] & 32);
-}
+/* Faces 012, 013, 023, 123 of a tet as (a, b, c), a < b < c: their corners, and their edges ab, bc, ac
+ * (of 01, 02, 03, 12, 13, 23). */
+static const int8_t face_corners[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+static const int8_t face_edge[4][3] = {{0, 3, 1}, {0, 4, 2}, {1, 5, 2}, {3, 5, 4}};
+static const int8_t edge_from[6] = {0, 0, 0, 1, 1, 2}, edge_to[6] = {1, 2, 3, 2, 3, 3};
 
-/* Can the ray of a frame, the point (0, 0), lie in the projection of a face of the tet whose corners are
- * at x, y (floats, each off by at most d / 8)? A face (a, b, c), a < b < c, holds it when its edge
- * functions x_a y_b - y_a x_b, x_b y_c - y_b x_c and -(x_a y_c - y_a x_c) share a sign; it cannot
- * when two of them are beyond the margin on opposite sides. The margin holds the floats' rounding of
- * the products and of the corners (four times over), so what this drops the exact test drops too. */
-static inline int may_cross(tpki_v4f x, tpki_v4f y, float d)
+/* Which side of v the scalar of face f's crossing lies on, 1 or -1; 0 when the floats cannot tell. The
+ * crossing's weights are the face's edge functions e, corner c's weight the function of the edge
+ * opposite it (e ab for c, e bc for a, e ac for b; all of one sign, each off by at most `err`): the
+ * scalar minus v has the sign of the weighted sum of (s_corner - v). The bound holds those errors
+ * twice over and, far beyond the doubles' rounding in the exact test, a 2^-18 share of the sum. */
+static int face_side(int f, const float e[6], float err, const float s[4], double v)
 {
-    tpki_v4f a = tpki_v4_max(v4_abs(x), v4_abs(y));
-    float m = a[0] > a[1] ? a[0] : a[1], m2 = a[2] > a[3] ? a[2] : a[3];
-    m = m > m2 ? m : m2;
-    float margin = 2 * d * m + 0x1p-19f * m * m + d * d;
-    tpki_v4f e1 = (tpki_v4f){x[0], x[0], x[0], x[1]} * (tpki_v4f){y[1], y[2], y[3], y[2]} -
-                  (tpki_v4f){y[0], y[0], y[0], y[1]} * (tpki_v4f){x[1], x[2], x[3], x[2]};
-    tpki_v4f e2 = (tpki_v4f){x[1], x[2], x[1], x[2]} * (tpki_v4f){y[3], y[3], y[3], y[3]} -
-                  (tpki_v4f){y[1], y[2], y[1], y[2]} * (tpki_v4f){x[3], x[3], x[3], x[3]};
-    int pos = edge_bits(e1 > margin, e2 > margin), neg = edge_bits(e1 < -margin, e2 < -margin);
-    /* faces 012, 013, 023, 123: their edges, and the one (ac) taken backwards */
-    static const int face_edges[4] = {1 | 2 | 8, 1 | 4 | 16, 2 | 4 | 32, 8 | 16 | 32};
-    static const int face_back[4] = {2, 4, 4, 16};
-    for (int f = 0; f < 4; f++) {
-        int fp = ((pos & ~face_back[f]) | (neg & face_back[f])) & face_edges[f];
-        int fn = ((neg & ~face_back[f]) | (pos & face_back[f])) & face_edges[f];
-        if (!fp || !fn)
-            return 1;
+    const int8_t *c = face_corners[f], *k = face_edge[f];
+    double w[3] = {fabs((double)e[k[1]]), fabs((double)e[k[2]]), fabs((double)e[k[0]])};
+    double sum = 0, spread = 0, reach = 0, most = 0;
+    for (int i = 0; i < 3; i++) {
+        double ds = (double)s[c[i]] - v;
+        sum += w[i] * ds;
+        spread += fabs(ds);
+        reach += w[i];
+        most = fabs(ds) > most ? fabs(ds) : most;
     }
-    return 0;
+    double bound = 2 * (double)err * spread + 0x1p-18 * reach * most;
+    return sum > bound ? 1 : sum < -bound ? -1 : 0;
 }
 
-/* A leaf's tets: for the packet, then ray by ray in float, then exactly. */
+/* Does the piece through faces f0 and f1 (entry and exit) miss every value for sure: both faces' scalars
+ * on one side of each? */
+static int crosses_none(const packet *p, int f0, int f1, const float e[6], float err, const int32_t v[4])
+{
+    const float *sc = p->b->marcher->mesh.scalars;
+    const float s[4] = {sc[v[0]], sc[v[1]], sc[v[2]], sc[v[3]]};
+    for (int j = 0; j < p->value_count; j++) {
+        int side = face_side(f0, e, err, s, p->values[j]);
+        if (side == 0 || side != face_side(f1, e, err, s, p->values[j]))
+            return 0;
+    }
+    return 1;
+}
+
+/* A tet (slot) for four rays (group g), their corners' x and y in their frames in float, each off by at
+ * most d / 8: queue it for the exact test in the rays for which it may hold a crossing piece.
+ * A face (a, b, c) holds a ray, the point (0, 0), when its edge functions x_a y_b - y_a x_b,
+ * x_b y_c - y_b x_c and -(x_a y_c - y_a x_c) share a sign; it cannot when two of them are beyond the
+ * margin on opposite sides. The margin holds the floats' rounding of the products and of the corners
+ * (four times over), so what this drops the exact test drops too. Where two faces hold the ray for
+ * sure and no other may, they are the piece's entry and exit (crosses_none). */
+static void group_tet(packet *p, int g, const tpki_v4f x[4], const tpki_v4f y[4], tpki_v4i off, float d,
+                      int64_t slot)
+{
+    tpki_v4f big = tpki_v4_max(tpki_v4_max(v4_abs(x[0]), v4_abs(y[0])), tpki_v4_max(v4_abs(x[1]), v4_abs(y[1])));
+    big = tpki_v4_max(big, tpki_v4_max(tpki_v4_max(v4_abs(x[2]), v4_abs(y[2])), tpki_v4_max(v4_abs(x[3]), v4_abs(y[3]))));
+    tpki_v4f margin = 2 * d * big + 0x1p-19f * big * big + d * d;
+    tpki_v4f e[6];
+    tpki_v4i pos[6], neg[6], possible[4], sure[4], any = {0, 0, 0, 0};
+    for (int k = 0; k < 6; k++) {
+        int a = edge_from[k], b = edge_to[k];
+        e[k] = x[a] * y[b] - y[a] * x[b];
+        pos[k] = e[k] > margin;
+        neg[k] = e[k] < -margin;
+    }
+    for (int f = 0; f < 4; f++) {
+        int ab = face_edge[f][0], bc = face_edge[f][1], ac = face_edge[f][2];
+        tpki_v4i up = pos[ab] | pos[bc] | neg[ac], down = neg[ab] | neg[bc] | pos[ac];
+        possible[f] = ~(up & down);
+        sure[f] = (pos[ab] & pos[bc] & neg[ac]) | (neg[ab] & neg[bc] & pos[ac]);
+        any |= possible[f];
+    }
+    tpki_v4i go = any & ~off & p->live[g];
+    if (!(go[0] | go[1] | go[2] | go[3]))
+        return;
+    const tpki_active_slot *s = &p->b->active_slots[slot];
+    for (int j = 0; j < 4; j++) {
+        if (!go[j])
+            continue;
+        int faces = 0, sure_faces = 0, face[4];
+        for (int f = 0; f < 4; f++)
+            if (possible[f][j])
+                face[faces++] = f, sure_faces += sure[f][j] != 0;
+        if (faces == 2 && sure_faces == 2) {
+            const float ej[6] = {e[0][j], e[1][j], e[2][j], e[3][j], e[4][j], e[5][j]};
+            if (crosses_none(p, face[0], face[1], ej, margin[j], s->v))
+                continue;
+        }
+        ray_tet(p, &p->rays[4 * g + j], p->b->active_tets[slot], s);
+    }
+}
+
+/* A leaf's tets: for the packet, then four rays at a time in float, then exactly. */
 static void packet_leaf(packet *p, int64_t first, int64_t count)
 {
     const tpk_range_bvh *b = p->b;
@@ -229,7 +286,7 @@ static void packet_leaf(packet *p, int64_t first, int64_t count)
             one_side(tpki_v4_min(ya, yb), tpki_v4_max(ya, yb), m))
             continue;
         /* four rays at a time: their x and y at each corner */
-        for (int g = 0; 4 * g < p->ray_count; g++) {
+        for (int g = 0; 4 * g < p->ray_count && p->r == TPK_OK; g++) {
             tpki_v4f x[4], y[4];
             for (int c = 0; c < 4; c++)
                 x[c] = qx[c] - p->sx[g] * qz[c], y[c] = qy[c] - p->sy[g] * qz[c];
@@ -238,14 +295,9 @@ static void packet_leaf(packet *p, int64_t first, int64_t count)
             tpki_v4f y_lo = tpki_v4_min(tpki_v4_min(y[0], y[1]), tpki_v4_min(y[2], y[3]));
             tpki_v4f y_hi = tpki_v4_max(tpki_v4_max(y[0], y[1]), tpki_v4_max(y[2], y[3]));
             tpki_v4i off = (x_lo > m) | (x_hi < -m) | (y_lo > m) | (y_hi < -m);
-            for (int j = 0; j < 4 && 4 * g + j < p->ray_count; j++) {
-                packet_ray *r = &p->rays[4 * g + j];
-                if (off[j] || !r->active ||
-                    !may_cross((tpki_v4f){x[0][j], x[1][j], x[2][j], x[3][j]},
-                               (tpki_v4f){y[0][j], y[1][j], y[2][j], y[3][j]}, m))
-                    continue;
-                ray_tet(p, r, b->active_tets[s], slot);
-            }
+            if (off[0] & off[1] & off[2] & off[3])
+                continue;
+            group_tet(p, g, x, y, off, m, s);
         }
     }
 }
@@ -321,7 +373,7 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
     float t_lo = INFINITY, t_hi = -INFINITY;
     p->slack = 0;
     for (int g = 0; g < TPK_MARCH_PACKET / 4; g++)
-        p->sx[g] = p->sy[g] = (tpki_v4f){0, 0, 0, 0};
+        p->sx[g] = p->sy[g] = (tpki_v4f){0, 0, 0, 0}, p->live[g] = (tpki_v4i){0, 0, 0, 0};
     for (int i = 0; i < ray_count; i++) {
         packet_ray *r = &p->rays[i];
         if (!(tmin[i] <= tmax[i]) || tpki_ray_frame_init(&r->frame, marcher->mesh.origin, org, dirs[i]) != 0)
@@ -412,6 +464,7 @@ tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], 
         r->tmin = tmin[i], r->tmax = tmax[i], r->fn = fns[i], r->user = users[i];
         r->pieces = r->buf, r->first = r->count = 0, r->cap = PIECE_STACK;
         r->tested = 0, r->active = 1;
+        p->live[i / 4][i % 4] = -1;
     }
     p->active = ray_count;
     p->piece_min = INFINITY;
