@@ -50,6 +50,7 @@ struct tpk_range_bvh {
     tpki_active_slot *active_slots;
     double *active_values;
     int active_value_count;   /* 0: none selected */
+    double active_corner_max; /* the largest |coordinate| of the selected tree's boxes */
 };
 
 /* The float at or below x, and at or above it: the trees' boxes and ranges are rounded outward. */

@@ -187,39 +187,48 @@ static const int8_t face_corners[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2
 static const int8_t face_edge[4][3] = {{0, 3, 1}, {0, 4, 2}, {1, 5, 2}, {3, 5, 4}};
 static const int8_t edge_from[6] = {0, 0, 0, 1, 1, 2}, edge_to[6] = {1, 2, 3, 2, 3, 3};
 
-/* Which side of v the scalar of face f's crossing lies on, 1 or -1; 0 when the floats cannot tell. The
- * crossing's weights are the face's edge functions e, corner c's weight the function of the edge
- * opposite it (e ab for c, e bc for a, e ac for b; all of one sign, each off by at most `err`): the
- * scalar minus v has the sign of the weighted sum of (s_corner - v). The bound holds those errors
- * twice over and, far beyond the doubles' rounding in the exact test, a 2^-18 share of the sum. */
-static int face_side(int f, const float e[6], float err, const float s[4], double v)
-{
-    const int8_t *c = face_corners[f], *k = face_edge[f];
-    double w[3] = {fabs((double)e[k[1]]), fabs((double)e[k[2]]), fabs((double)e[k[0]])};
-    double sum = 0, spread = 0, reach = 0, most = 0;
-    for (int i = 0; i < 3; i++) {
-        double ds = (double)s[c[i]] - v;
-        sum += w[i] * ds;
-        spread += fabs(ds);
-        reach += w[i];
-        most = fabs(ds) > most ? fabs(ds) : most;
-    }
-    double bound = 2 * (double)err * spread + 0x1p-18 * reach * most;
-    return sum > bound ? 1 : sum < -bound ? -1 : 0;
-}
-
-/* Does the piece through faces f0 and f1 (entry and exit) miss every value for sure: both faces' scalars
- * on one side of each? */
+/* Does the piece through faces f0 and f1 (entry and exit, their edge functions in e, each off by at most
+ * err) cross none of the values for sure: both faces' scalars on one side of each? A face's crossing
+ * has weights its edge functions, corner c's the function of the edge opposite it (e ab for c, e bc for
+ * a, e ac for b; all of one sign): its scalar minus v has the sign of the weighted sum of
+ * (s_corner - v). The bound holds the edges' errors twice over and, far beyond the doubles' rounding in
+ * the exact test, a 2^-18 share of the sum. */
 static int crosses_none(const packet *p, int f0, int f1, const float e[6], float err, const int32_t v[4])
 {
     const float *sc = p->b->marcher->mesh.scalars;
-    const float s[4] = {sc[v[0]], sc[v[1]], sc[v[2]], sc[v[3]]};
+    const double s[4] = {sc[v[0]], sc[v[1]], sc[v[2]], sc[v[3]]};
+    const int face[2] = {f0, f1};
+    double w[2][3], tol[2];
+    for (int i = 0; i < 2; i++) {
+        const int8_t *k = face_edge[face[i]];
+        w[i][0] = fabs((double)e[k[1]]), w[i][1] = fabs((double)e[k[2]]), w[i][2] = fabs((double)e[k[0]]);
+        tol[i] = 2 * (double)err + 0x1p-18 * (w[i][0] + w[i][1] + w[i][2]);
+    }
     for (int j = 0; j < p->value_count; j++) {
-        int side = face_side(f0, e, err, s, p->values[j]);
-        if (side == 0 || side != face_side(f1, e, err, s, p->values[j]))
+        double ds[4], sum[2];
+        for (int c = 0; c < 4; c++)
+            ds[c] = s[c] - p->values[j];
+        for (int i = 0; i < 2; i++) {
+            const int8_t *c = face_corners[face[i]];
+            sum[i] = w[i][0] * ds[c[0]] + w[i][1] * ds[c[1]] + w[i][2] * ds[c[2]];
+            if (!(fabs(sum[i]) > tol[i] * (fabs(ds[c[0]]) + fabs(ds[c[1]]) + fabs(ds[c[2]]))))
+                return 0;
+        }
+        if ((sum[0] > 0) != (sum[1] > 0))
             return 0;
     }
     return 1;
+}
+
+/* A face's edge functions ab, bc (as they are) and ac (backwards), beyond the margin up (p) or down (n),
+ * four rays at once: the face may hold the ray unless two lie on opposite sides; it surely does when
+ * all three lie on one side. */
+static inline void face_test(tpki_v4i p_ab, tpki_v4i p_bc, tpki_v4i p_ac, tpki_v4i n_ab, tpki_v4i n_bc,
+                             tpki_v4i n_ac, tpki_v4i *possible, tpki_v4i *sure)
+{
+    tpki_v4i up = p_ab | p_bc | n_ac, down = n_ab | n_bc | p_ac;
+    *possible = ~(up & down);
+    *sure = (p_ab & p_bc & n_ac) | (n_ab & n_bc & p_ac);
 }
 
 /* A tet (slot) for four rays (group g), their corners' x and y in their frames in float, each off by at
@@ -236,32 +245,33 @@ static void group_tet(packet *p, int g, const tpki_v4f x[4], const tpki_v4f y[4]
     big = tpki_v4_max(big, tpki_v4_max(tpki_v4_max(v4_abs(x[2]), v4_abs(y[2])), tpki_v4_max(v4_abs(x[3]), v4_abs(y[3]))));
     tpki_v4f margin = 2 * d * big + 0x1p-19f * big * big + d * d;
     tpki_v4f e[6];
-    tpki_v4i pos[6], neg[6], possible[4], sure[4], any = {0, 0, 0, 0};
+    tpki_v4i pos[6], neg[6], possible[4], sure[4];
     for (int k = 0; k < 6; k++) {
         int a = edge_from[k], b = edge_to[k];
         e[k] = x[a] * y[b] - y[a] * x[b];
         pos[k] = e[k] > margin;
         neg[k] = e[k] < -margin;
     }
-    for (int f = 0; f < 4; f++) {
-        int ab = face_edge[f][0], bc = face_edge[f][1], ac = face_edge[f][2];
-        tpki_v4i up = pos[ab] | pos[bc] | neg[ac], down = neg[ab] | neg[bc] | pos[ac];
-        possible[f] = ~(up & down);
-        sure[f] = (pos[ab] & pos[bc] & neg[ac]) | (neg[ab] & neg[bc] & pos[ac]);
-        any |= possible[f];
-    }
-    tpki_v4i go = any & ~off & p->live[g];
+    face_test(pos[0], pos[3], pos[1], neg[0], neg[3], neg[1], &possible[0], &sure[0]);
+    face_test(pos[0], pos[4], pos[2], neg[0], neg[4], neg[2], &possible[1], &sure[1]);
+    face_test(pos[1], pos[5], pos[2], neg[1], neg[5], neg[2], &possible[2], &sure[2]);
+    face_test(pos[3], pos[5], pos[4], neg[3], neg[5], neg[4], &possible[3], &sure[3]);
+    tpki_v4i go = (possible[0] | possible[1] | possible[2] | possible[3]) & ~off & p->live[g];
     if (!(go[0] | go[1] | go[2] | go[3]))
         return;
+    /* lanes where exactly two faces may hold the ray, both for sure: the piece's scalars decide */
+    tpki_v4i faces = -(possible[0] + possible[1] + possible[2] + possible[3]);
+    tpki_v4i sure_faces = -(sure[0] + sure[1] + sure[2] + sure[3]);
+    tpki_v4i two = (faces == 2) & (sure_faces == 2);
     const tpki_active_slot *s = &p->b->active_slots[slot];
     for (int j = 0; j < 4; j++) {
         if (!go[j])
             continue;
-        int faces = 0, sure_faces = 0, face[4];
-        for (int f = 0; f < 4; f++)
-            if (possible[f][j])
-                face[faces++] = f, sure_faces += sure[f][j] != 0;
-        if (faces == 2 && sure_faces == 2) {
+        if (two[j]) {
+            int face[2], n = 0;
+            for (int f = 0; f < 4; f++)
+                if (possible[f][j])
+                    face[n++ & 1] = f;
             const float ej[6] = {e[0][j], e[1][j], e[2][j], e[3][j], e[4][j], e[5][j]};
             if (crosses_none(p, face[0], face[1], ej, margin[j], s->v))
                 continue;
@@ -286,10 +296,16 @@ static void packet_leaf(packet *p, int64_t first, int64_t count)
             one_side(tpki_v4_min(ya, yb), tpki_v4_max(ya, yb), m))
             continue;
         /* four rays at a time: their x and y at each corner */
+        tpki_v4f cx[4], cy[4], cz[4];
+        for (int c = 0; c < 4; c++) {
+            cx[c] = (tpki_v4f){qx[c], qx[c], qx[c], qx[c]};
+            cy[c] = (tpki_v4f){qy[c], qy[c], qy[c], qy[c]};
+            cz[c] = (tpki_v4f){qz[c], qz[c], qz[c], qz[c]};
+        }
         for (int g = 0; 4 * g < p->ray_count && p->r == TPK_OK; g++) {
             tpki_v4f x[4], y[4];
             for (int c = 0; c < 4; c++)
-                x[c] = qx[c] - p->sx[g] * qz[c], y[c] = qy[c] - p->sy[g] * qz[c];
+                x[c] = cx[c] - p->sx[g] * cz[c], y[c] = cy[c] - p->sy[g] * cz[c];
             tpki_v4f x_lo = tpki_v4_min(tpki_v4_min(x[0], x[1]), tpki_v4_min(x[2], x[3]));
             tpki_v4f x_hi = tpki_v4_max(tpki_v4_max(x[0], x[1]), tpki_v4_max(x[2], x[3]));
             tpki_v4f y_lo = tpki_v4_min(tpki_v4_min(y[0], y[1]), tpki_v4_min(y[2], y[3]));
@@ -424,11 +440,7 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
     /* the float tet test: a corner's x, qx - sx qz with q = corner - origin, is off by at most
      * 2^-24 (3 + 5 |sx|) S, S the largest |corner| plus the largest |origin|, and |sx| <= 1 (kz is the
      * direction's largest axis): the margin is 8 times that */
-    double corner_max = 0;
-    for (int k = 0; k < 6; k++)
-        for (int i = 0; i < 4; i++)
-            if (b->wide[0].count[i] >= 0)
-                corner_max = fmax(corner_max, fabs((double)b->wide[0].box[k][i]));
+    double corner_max = b->active_corner_max;
     double margin = ldexp(corner_max + o_max, -18);
     if (!(corner_max + o_max < 1e15))
         return 0; /* may_cross squares the margin in float */
