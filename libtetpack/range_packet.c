@@ -181,43 +181,56 @@ static inline tpki_v4f v4_abs(tpki_v4f a)
     return (tpki_v4f)((tpki_v4i)a & (tpki_v4i){INT32_MAX, INT32_MAX, INT32_MAX, INT32_MAX});
 }
 
-/* Faces 012, 013, 023, 123 of a tet as (a, b, c), a < b < c: their corners, and their edges ab, bc, ac
- * (of 01, 02, 03, 12, 13, 23). */
-static const int8_t face_corners[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
-static const int8_t face_edge[4][3] = {{0, 3, 1}, {0, 4, 2}, {1, 5, 2}, {3, 5, 4}};
+/* A tet's edges 01, 02, 03, 12, 13, 23. */
 static const int8_t edge_from[6] = {0, 0, 0, 1, 1, 2}, edge_to[6] = {1, 2, 3, 2, 3, 3};
 
-/* Does the piece through faces f0 and f1 (entry and exit, their edge functions in e, each off by at most
- * err) cross none of the values for sure: both faces' scalars on one side of each? A face's crossing
- * has weights its edge functions, corner c's the function of the edge opposite it (e ab for c, e bc for
- * a, e ac for b; all of one sign): its scalar minus v has the sign of the weighted sum of
- * (s_corner - v). The bound holds the edges' errors twice over and, far beyond the doubles' rounding in
- * the exact test, a 2^-18 share of the sum. */
-static int crosses_none(const packet *p, int f0, int f1, const float e[6], float err, const int32_t v[4])
+/* The scalar of a face's crossing against v, four rays at once: up and down get the lanes where it lies
+ * above or below v for sure. The crossing's weights are the face's edge functions, corner c's the
+ * function of the edge opposite it (|e ab| for c, |e bc| for a, |e ac| for b, all of one sign there and
+ * each off by at most err): the scalar minus v has the sign of sum = the weighted sum of d = s - v at
+ * the corners. Computed in float, sum is off by at most (1.01 err + 2^-21 reach) spread (reach the sum
+ * of the weights, spread that of |d|); the exact test's own scalar, summed in doubles, is off by at
+ * most 2^-49 of the largest |s|. The bound holds each twice over or more. */
+static inline void face_scalar(tpki_v4f w_a, tpki_v4f w_b, tpki_v4f w_c, float d_a, float d_b, float d_c,
+                               tpki_v4f err, float s_max, tpki_v4i *up, tpki_v4i *down)
+{
+    tpki_v4f sum = w_a * d_a + w_b * d_b + w_c * d_c, reach = w_a + w_b + w_c;
+    float spread = fabsf(d_a) + fabsf(d_b) + fabsf(d_c);
+    tpki_v4f bound = (2 * err + 0x1p-17f * reach) * spread + 0x1p-45f * s_max * reach;
+    *up = sum > bound;
+    *down = sum < -bound;
+}
+
+/* Lanes of `two` (exactly two faces, the piece's entry and exit, hold the ray for sure) whose piece
+ * crosses none of the values: both faces' scalars on one side of each. */
+static tpki_v4i crosses_none(const packet *p, tpki_v4i two, const tpki_v4i possible[4], const tpki_v4f e[6],
+                             tpki_v4f err, const int32_t v[4])
 {
     const float *sc = p->b->marcher->mesh.scalars;
     const double s[4] = {sc[v[0]], sc[v[1]], sc[v[2]], sc[v[3]]};
-    const int face[2] = {f0, f1};
-    double w[2][3], tol[2];
-    for (int i = 0; i < 2; i++) {
-        const int8_t *k = face_edge[face[i]];
-        w[i][0] = fabs((double)e[k[1]]), w[i][1] = fabs((double)e[k[2]]), w[i][2] = fabs((double)e[k[0]]);
-        tol[i] = 2 * (double)err + 0x1p-18 * (w[i][0] + w[i][1] + w[i][2]);
-    }
+    float s_max = 0;
+    for (int c = 0; c < 4; c++)
+        s_max = fabsf((float)s[c]) > s_max ? fabsf((float)s[c]) : s_max;
+    tpki_v4f w[6];
+    for (int k = 0; k < 6; k++)
+        w[k] = v4_abs(e[k]);
+    tpki_v4i none = two;
     for (int j = 0; j < p->value_count; j++) {
-        double ds[4], sum[2];
-        for (int c = 0; c < 4; c++)
-            ds[c] = s[c] - p->values[j];
-        for (int i = 0; i < 2; i++) {
-            const int8_t *c = face_corners[face[i]];
-            sum[i] = w[i][0] * ds[c[0]] + w[i][1] * ds[c[1]] + w[i][2] * ds[c[2]];
-            if (!(fabs(sum[i]) > tol[i] * (fabs(ds[c[0]]) + fabs(ds[c[1]]) + fabs(ds[c[2]]))))
-                return 0;
-        }
-        if ((sum[0] > 0) != (sum[1] > 0))
-            return 0;
+        const float d[4] = {(float)(s[0] - p->values[j]), (float)(s[1] - p->values[j]), (float)(s[2] - p->values[j]),
+                            (float)(s[3] - p->values[j])};
+        tpki_v4i up[4], down[4];
+        /* faces 012, 013, 023, 123: corner a weighs |e bc|, b |e ac|, c |e ab| */
+        face_scalar(w[3], w[1], w[0], d[0], d[1], d[2], err, s_max, &up[0], &down[0]);
+        face_scalar(w[4], w[2], w[0], d[0], d[1], d[3], err, s_max, &up[1], &down[1]);
+        face_scalar(w[5], w[2], w[1], d[0], d[2], d[3], err, s_max, &up[2], &down[2]);
+        face_scalar(w[5], w[4], w[3], d[1], d[2], d[3], err, s_max, &up[3], &down[3]);
+        tpki_v4i all_up = (~possible[0] | up[0]) & (~possible[1] | up[1]) & (~possible[2] | up[2]) &
+                          (~possible[3] | up[3]);
+        tpki_v4i all_down = (~possible[0] | down[0]) & (~possible[1] | down[1]) & (~possible[2] | down[2]) &
+                            (~possible[3] | down[3]);
+        none &= all_up | all_down;
     }
-    return 1;
+    return none;
 }
 
 /* A face's edge functions ab, bc (as they are) and ac (backwards), beyond the margin up (p) or down (n),
@@ -264,20 +277,11 @@ static void group_tet(packet *p, int g, const tpki_v4f x[4], const tpki_v4f y[4]
     tpki_v4i sure_faces = -(sure[0] + sure[1] + sure[2] + sure[3]);
     tpki_v4i two = (faces == 2) & (sure_faces == 2);
     const tpki_active_slot *s = &p->b->active_slots[slot];
-    for (int j = 0; j < 4; j++) {
-        if (!go[j])
-            continue;
-        if (two[j]) {
-            int face[2], n = 0;
-            for (int f = 0; f < 4; f++)
-                if (possible[f][j])
-                    face[n++ & 1] = f;
-            const float ej[6] = {e[0][j], e[1][j], e[2][j], e[3][j], e[4][j], e[5][j]};
-            if (crosses_none(p, face[0], face[1], ej, margin[j], s->v))
-                continue;
-        }
-        ray_tet(p, &p->rays[4 * g + j], p->b->active_tets[slot], s);
-    }
+    if (two[0] | two[1] | two[2] | two[3])
+        go &= ~crosses_none(p, two, possible, e, margin, s->v);
+    for (int j = 0; j < 4; j++)
+        if (go[j])
+            ray_tet(p, &p->rays[4 * g + j], p->b->active_tets[slot], s);
 }
 
 /* A leaf's tets: for the packet, then four rays at a time in float, then exactly. */
