@@ -22,7 +22,9 @@
 #define PIECE_STACK 8
 
 typedef struct packet_ray {
-    tpk_ray_frame frame;
+    tpk_ray_frame frame; /* made when the ray first needs it (framed) */
+    const double *dir;
+    int framed;
     double tmin, tmax;
     tpk_segment_fn fn;
     void *user;
@@ -45,6 +47,7 @@ typedef struct packet {
     packet_ray *rays;
     int ray_count, active;
     int kx, ky, kz; /* every ray's frame has these axes */
+    const double *org;
     /* the children test: the origin, 1/d's bounds over the rays, the largest widening, tmin and tmax */
     tpki_v4f o[3], inv_lo[3], inv_hi[3], pad_t[3], tmin, tmax;
     int near[3], far[3];
@@ -138,6 +141,10 @@ static int due_before(const packet *p, double key)
 static void ray_tet(packet *p, packet_ray *r, int64_t t, const tpki_active_slot *slot)
 {
     r->tested++;
+    if (!r->framed) {
+        tpki_ray_frame_init(&r->frame, p->b->marcher->mesh.origin, p->org, r->dir); /* as the first ray's */
+        r->framed = 1;
+    }
     tpk_segment seg;
     if (!tpki_tet_piece(p->b, &r->frame, t, slot, &seg) || !tpki_clip_piece(&seg, r->tmin, r->tmax) ||
         !tpki_crosses(seg.scalar_in, seg.scalar_out, p->values, p->value_count))
@@ -390,38 +397,49 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
 {
     const tpk_marcher *marcher = b->marcher;
     double inv_lo[3], inv_hi[3], sx_lo = INFINITY, sx_hi = -INFINITY, sy_lo = INFINITY, sy_hi = -INFINITY;
+    double d2_min = INFINITY;
     float t_lo = INFINITY, t_hi = -INFINITY;
-    p->slack = 0;
     for (int g = 0; g < TPK_MARCH_PACKET / 4; g++)
         p->sx[g] = p->sy[g] = (tpki_v4f){0, 0, 0, 0}, p->live[g] = (tpki_v4i){0, 0, 0, 0};
+    /* the first ray's frame gives the axes; the others' frames, made when they first need one, must have
+     * the same: kz their largest axis as tpki_ray_frame_init picks it, and the same sign along it */
+    if (tpki_ray_frame_init(&p->rays[0].frame, marcher->mesh.origin, org, dirs[0]) != 0)
+        return 0;
+    p->kx = p->rays[0].frame.kx, p->ky = p->rays[0].frame.ky, p->kz = p->rays[0].frame.kz;
+    const int kx = p->kx, ky = p->ky, kz = p->kz, o1 = (kz + 1) % 3, o2 = (kz + 2) % 3;
     for (int i = 0; i < ray_count; i++) {
         packet_ray *r = &p->rays[i];
-        if (!(tmin[i] <= tmax[i]) || tpki_ray_frame_init(&r->frame, marcher->mesh.origin, org, dirs[i]) != 0)
-            return 0;
-        if (i == 0)
-            p->kx = r->frame.kx, p->ky = r->frame.ky, p->kz = r->frame.kz;
-        if (r->frame.kx != p->kx || r->frame.ky != p->ky || r->frame.kz != p->kz)
-            return 0;
+        const double *d = dirs[i];
+        int bad = !(tmin[i] <= tmax[i]) || (d[kz] < 0) != (dirs[0][kz] < 0);
+        /* tpki_ray_frame_init takes axis 1 over 0 and 2 over both only where strictly larger */
+        bad |= kz == 0 ? !(fabs(d[1]) <= fabs(d[0]) && fabs(d[2]) <= fabs(d[0]))
+                       : kz == 1 ? !(fabs(d[1]) > fabs(d[0]) && fabs(d[2]) <= fabs(d[1]))
+                                 : !(fabs(d[2]) > fabs(d[o1]) && fabs(d[2]) > fabs(d[o2]));
         for (int k = 0; k < 3; k++) {
-            double inv = 1.0 / dirs[i][k];
-            if (!(fabs(inv) < 1e30 && fabs(inv) > 1e-30) || (i > 0 && (inv > 0) != (inv_lo[k] > 0)))
-                return 0;
+            double inv = 1.0 / d[k];
+            bad |= !(fabs(inv) < 1e30 && fabs(inv) > 1e-30) || (inv > 0) != (dirs[0][k] > 0);
             inv_lo[k] = i == 0 || inv < inv_lo[k] ? inv : inv_lo[k];
             inv_hi[k] = i == 0 || inv > inv_hi[k] ? inv : inv_hi[k];
         }
-        const double *d = dirs[i], *o = r->frame.org;
-        double slack = 1e-9 * (marcher->extent + fabs(o[0]) + fabs(o[1]) + fabs(o[2])) /
-                       sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        p->slack = slack > p->slack ? slack : p->slack;
+        if (bad)
+            return 0;
+        double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        d2_min = d2 < d2_min ? d2 : d2_min;
         float lo = tmin[i] > -1e30 ? tpki_round_down(tmin[i]) : -INFINITY;
         float hi = tmax[i] < 1e30 ? tpki_round_up(tmax[i]) : INFINITY;
         t_lo = lo < t_lo ? lo : t_lo;
         t_hi = hi > t_hi ? hi : t_hi;
-        sx_lo = fmin(sx_lo, r->frame.sx), sx_hi = fmax(sx_hi, r->frame.sx);
-        sy_lo = fmin(sy_lo, r->frame.sy), sy_hi = fmax(sy_hi, r->frame.sy);
-        p->sx[i / 4][i % 4] = (float)r->frame.sx, p->sy[i / 4][i % 4] = (float)r->frame.sy;
+        /* the frame's shear, as tpki_ray_frame_init computes it */
+        double sx = d[kx] / d[kz], sy = d[ky] / d[kz];
+        sx_lo = sx < sx_lo ? sx : sx_lo, sx_hi = sx > sx_hi ? sx : sx_hi;
+        sy_lo = sy < sy_lo ? sy : sy_lo, sy_hi = sy > sy_hi ? sy : sy_hi;
+        p->sx[i / 4][i % 4] = (float)sx, p->sy[i / 4][i % 4] = (float)sy;
+        r->dir = d;
+        r->framed = i == 0;
     }
+    p->org = org;
     const double *o = p->rays[0].frame.org;
+    p->slack = 1e-9 * (marcher->extent + fabs(o[0]) + fabs(o[1]) + fabs(o[2])) / sqrt(d2_min);
     double o_max = fmax(fabs(o[0]), fmax(fabs(o[1]), fabs(o[2])));
     if (!(o_max < 1e30))
         return 0;
@@ -447,7 +465,7 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
     double corner_max = b->active_corner_max;
     double margin = ldexp(corner_max + o_max, -18);
     if (!(corner_max + o_max < 1e15))
-        return 0; /* may_cross squares the margin in float */
+        return 0; /* the edge test squares the margin in float */
     p->margin = (float)margin;
     p->sx_lo = (float)sx_lo, p->sx_hi = (float)sx_hi, p->sy_lo = (float)sy_lo, p->sy_hi = (float)sy_hi;
     return 1;
