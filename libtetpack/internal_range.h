@@ -1,7 +1,8 @@
 /* libtetpack private declarations of the range culling of iso rays (tetpack.h: tpk_range_bvh_*,
- * tpk_march_ray_values). Not installed.
+ * tpk_march_ray_values, tpk_march_packet_values). Not installed.
  * Owners: range_select.c builds the selected tree (tpk_range_bvh_select); range_bvh.c creates the
- * file-order tree, walks both trees and holds tpki_range_holds. */
+ * file-order tree, walks both trees one ray at a time and holds tpki_range_holds and tpki_tet_piece;
+ * range_packet.c walks the selected tree with packets of rays. */
 #ifndef TPK_INTERNAL_RANGE_H
 #define TPK_INTERNAL_RANGE_H
 
@@ -18,6 +19,23 @@
  * compiler maps to SSE on x86-64 and NEON on arm64 (and to scalar code elsewhere). */
 typedef float tpki_v4f __attribute__((vector_size(16)));
 typedef int32_t tpki_v4i __attribute__((vector_size(16)));
+
+/* A queued child of the selected tree: a wide node (>= 0) or a leaf (its first slot and count, < 8),
+ * negative. */
+static inline int64_t tpki_leaf_ref(int32_t first, int32_t count)
+{
+    return -((int64_t)first * 8 + count) - 1;
+}
+
+static inline int64_t tpki_leaf_first(int64_t ref)
+{
+    return (-ref - 1) / 8;
+}
+
+static inline int64_t tpki_leaf_count(int64_t ref)
+{
+    return (-ref - 1) % 8;
+}
 
 /* A node of the selected tree, four children wide (a binary SAH tree with every other level folded in):
  * the children's boxes, lane by lane (lo x, y, z, then hi x, y, z; an empty lane has lo +inf, hi -inf),

@@ -10,7 +10,8 @@
  * would report is culled.
  *
  * A ray: nodes in order of where the ray enters their box (a heap), pieces in order of t_in (a second
- * heap); a piece is handed on once no node left can hold one that starts before it. The piece of a tet is
+ * heap; ties by tpki_piece_before); a piece is handed on once no node left can hold one that starts
+ * before it. range_packet.c walks the selected tree the same way for packets of rays. The piece of a tet is
  * what the marcher computes for it (march.c): the same watertight edge signs, the entry face the one
  * whose outward edges all read -1, the exit face the one whose outward edges all read +1, weights, t and
  * scalar summed from each face's smallest id (internal_ray.h: tpk_face_first), the same clipping to
@@ -574,12 +575,6 @@ static void walk_file_order(walk *w)
     }
 }
 
-/* A queued child of the selected tree: a wide node (>= 0) or a leaf (first slot and count, negative). */
-static int64_t leaf_ref(int32_t first, int32_t count)
-{
-    return -((int64_t)first * 8 + count) - 1;
-}
-
 /* The selected tree: every tet holds a value, four children tested at once. */
 static void walk_selected(walk *w)
 {
@@ -602,7 +597,7 @@ static void walk_selected(walk *w)
             for (int i = 0; i < 4; i++) {
                 if (t0[i] == INFINITY)
                     continue;
-                int64_t c = n->count[i] == 0 ? n->child[i] : leaf_ref(n->child[i], n->count[i]);
+                int64_t c = n->count[i] == 0 ? n->child[i] : tpki_leaf_ref(n->child[i], n->count[i]);
                 int at = found++;
                 for (; at > 0 && key[at - 1] > t0[i] - w->slack; at--) /* nearest first */
                     key[at] = key[at - 1], child[at] = child[at - 1];
@@ -623,7 +618,7 @@ static void walk_selected(walk *w)
         }
         if (ref >= 0)
             continue;
-        int64_t first = (-ref - 1) / 8, count = (-ref - 1) % 8;
+        int64_t first = tpki_leaf_first(ref), count = tpki_leaf_count(ref);
         for (int64_t slot = first; slot < first + count && w->r == TPK_OK; slot++)
             walk_tet(w, b->active_tets[slot], &b->active_slots[slot]);
     }

@@ -4,14 +4,20 @@
  * A wide node's four children are tested once for the whole packet, by interval arithmetic over the
  * rays' 1/d (they share the origin, so only 1/d differs): float rounding is monotone, so the interval's
  * entry is at or before each ray's own float entry (range_bvh.c's wide_entry) and its exit at or after
- * each ray's exit; where the interval misses a child, every ray misses it. At a leaf, a tet is tested
- * for the packet in float (all its corners on one side of every ray, in x or in y of the rays' frames,
- * by more than the floats' rounding), then ray by ray the same way, then exactly (tpki_tet_piece) for
- * the rays left: the float tests drop only tets whose exact test would find no piece.
+ * each ray's exit; where the interval misses a child, every ray misses it. At a leaf, each tet is tested
+ * in float, each test dropping only tets whose exact test (tpki_tet_piece) would find no crossing piece:
+ * for the packet (its corners all on one side of every ray, in x or in y of the rays' sheared frames),
+ * then four rays at a time (the same for each ray; then each face's 2-D edge functions, a face holding
+ * a ray only where they share a sign; then, where two faces hold the ray for sure, the scalar at each,
+ * against the values). Every float test keeps a margin well beyond its rounding and the exact test's.
+ * What is left is tested exactly, ray by ray.
  *
  * Each ray keeps its own pieces, in tpki_piece_before's order, and hands the first on once no node left
  * can hold one that starts before it, as a ray alone does: a node's key is at or before each ray's, so
- * each ray makes the same calls, in the same order, as alone. */
+ * each ray makes the same calls, in the same order, as alone.
+ *
+ * Measured on the 998k-tet grid of bench/make_grid_vtk.py 55, iso 0.3, 1024^2, 4x4 packets, one thread:
+ * 0.46M exact tet tests where rays alone make 7.8M, and about 2.5 times the rays per second. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,7 +43,7 @@ typedef struct packet_ray {
 
 typedef struct node_item {
     double key;
-    int64_t ref; /* a wide node (>= 0) or a leaf (leaf_ref) */
+    int64_t ref; /* a wide node (>= 0) or a leaf (tpki_leaf_ref) */
 } node_item;
 
 typedef struct packet {
@@ -345,11 +351,6 @@ static inline void packet_children(const packet *p, const tpki_wide_node *n, dou
         key[i] = hit[i] ? (double)near[i] - p->slack : INFINITY;
 }
 
-static int64_t leaf_ref(int32_t first, int32_t count)
-{
-    return -((int64_t)first * 8 + count) - 1;
-}
-
 /* The walk: range_bvh.c's walk_selected, for the packet. */
 static void packet_walk(packet *p)
 {
@@ -369,7 +370,7 @@ static void packet_walk(packet *p)
             for (int i = 0; i < 4; i++) {
                 if (t0[i] == INFINITY)
                     continue;
-                int64_t c = n->count[i] == 0 ? n->child[i] : leaf_ref(n->child[i], n->count[i]);
+                int64_t c = n->count[i] == 0 ? n->child[i] : tpki_leaf_ref(n->child[i], n->count[i]);
                 int at = found++;
                 for (; at > 0 && key[at - 1] > t0[i]; at--) /* nearest first */
                     key[at] = key[at - 1], child[at] = child[at - 1];
@@ -386,7 +387,7 @@ static void packet_walk(packet *p)
             ref = child[0];
         }
         if (ref < 0)
-            packet_leaf(p, (-ref - 1) / 8, (-ref - 1) % 8);
+            packet_leaf(p, tpki_leaf_first(ref), tpki_leaf_count(ref));
     }
 }
 

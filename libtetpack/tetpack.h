@@ -333,8 +333,8 @@ int64_t tpk_range_bvh_heap(const tpk_range_bvh *bvh, float *nodes);
 const int32_t *tpk_range_bvh_tets(const tpk_range_bvh *bvh);
 
 /* The pieces of tpk_march_ray(marcher, org, dir, tmin, tmax) that cross one of values[0 .. count) by
- * the renderers' rule (scalar_in < v <= scalar_out, or scalar_in > v >= scalar_out), in increasing t,
- * and no others: the same segments, bit for bit (both compute a tet's faces from their smallest ids on),
+ * the renderers' rule (scalar_in < v <= scalar_out, or scalar_in > v >= scalar_out), in increasing t
+ * (pieces of one t_in, where the ray meets a vertex or an edge, by t_out, then by tet), and no others: the same segments, bit for bit (both compute a tet's faces from their smallest ids on),
  * except in a tet where rounding put the exit before the entry, which the marcher resolves along its
  * path. stats->tet_steps counts the tets tested. fn may stop the ray as in tpk_march_ray. */
 tpk_result tpk_march_ray_values(const tpk_range_bvh *bvh, const double org[3], const double dir[3], double tmin,

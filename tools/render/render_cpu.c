@@ -1,5 +1,6 @@
 /* The CPU volume renderer: one primary ray per pixel through the reference marcher, emission-absorption
- * integrated per tet piece, rows shared between pthreads through an atomic counter. */
+ * integrated per tet piece, rows shared between pthreads through an atomic counter. Iso-only rays by
+ * range culling go in packets of 4x4 pixels (tpk_march_packet_values), each pixel the same as alone. */
 #include "render_internal.h"
 
 #include <math.h>
