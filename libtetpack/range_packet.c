@@ -407,23 +407,22 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
     if (tpki_ray_frame_init(&p->rays[0].frame, marcher->mesh.origin, org, dirs[0]) != 0)
         return 0;
     p->kx = p->rays[0].frame.kx, p->ky = p->rays[0].frame.ky, p->kz = p->rays[0].frame.kz;
-    const int kx = p->kx, ky = p->ky, kz = p->kz, o1 = (kz + 1) % 3, o2 = (kz + 2) % 3;
+    const int kx = p->kx, ky = p->ky, kz = p->kz;
+    double d_lo[3], d_hi[3];
+    int bad = 0;
     for (int i = 0; i < ray_count; i++) {
         packet_ray *r = &p->rays[i];
         const double *d = dirs[i];
-        int bad = !(tmin[i] <= tmax[i]) || (d[kz] < 0) != (dirs[0][kz] < 0);
+        double a0 = fabs(d[0]), a1 = fabs(d[1]), a2 = fabs(d[2]);
         /* tpki_ray_frame_init takes axis 1 over 0 and 2 over both only where strictly larger */
-        bad |= kz == 0 ? !(fabs(d[1]) <= fabs(d[0]) && fabs(d[2]) <= fabs(d[0]))
-                       : kz == 1 ? !(fabs(d[1]) > fabs(d[0]) && fabs(d[2]) <= fabs(d[1]))
-                                 : !(fabs(d[2]) > fabs(d[o1]) && fabs(d[2]) > fabs(d[o2]));
+        bad |= !(tmin[i] <= tmax[i]);
+        bad |= kz == 0 ? !(a1 <= a0 && a2 <= a0) : kz == 1 ? !(a1 > a0 && a2 <= a1) : !(a2 > a0 && a2 > a1);
         for (int k = 0; k < 3; k++) {
-            double inv = 1.0 / d[k];
-            bad |= !(fabs(inv) < 1e30 && fabs(inv) > 1e-30) || (inv > 0) != (dirs[0][k] > 0);
-            inv_lo[k] = i == 0 || inv < inv_lo[k] ? inv : inv_lo[k];
-            inv_hi[k] = i == 0 || inv > inv_hi[k] ? inv : inv_hi[k];
+            /* 1/d finite and not 0 in floats, of the first ray's sign */
+            bad |= !(fabs(d[k]) > 1e-30 && fabs(d[k]) < 1e30) | ((d[k] > 0) != (dirs[0][k] > 0));
+            d_lo[k] = i == 0 || d[k] < d_lo[k] ? d[k] : d_lo[k];
+            d_hi[k] = i == 0 || d[k] > d_hi[k] ? d[k] : d_hi[k];
         }
-        if (bad)
-            return 0;
         double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         d2_min = d2 < d2_min ? d2 : d2_min;
         float lo = tmin[i] > -1e30 ? tpki_round_down(tmin[i]) : -INFINITY;
@@ -438,6 +437,12 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
         r->dir = d;
         r->framed = i == 0;
     }
+    if (bad)
+        return 0;
+    /* d of one sign: 1/d falls as d rises, and the divisions round monotonely, so these bound each ray's
+     * 1/d (and its float) */
+    for (int k = 0; k < 3; k++)
+        inv_lo[k] = 1.0 / d_hi[k], inv_hi[k] = 1.0 / d_lo[k];
     p->org = org;
     const double *o = p->rays[0].frame.org;
     p->slack = 1e-9 * (marcher->extent + fabs(o[0]) + fabs(o[1]) + fabs(o[2])) / sqrt(d2_min);
