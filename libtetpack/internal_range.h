@@ -1,7 +1,8 @@
 /* libtetpack private declarations of the range culling of iso rays (tetpack.h: tpk_range_bvh_*,
- * tpk_march_ray_values). Not installed.
+ * tpk_march_ray_values, tpk_march_packet_values). Not installed.
  * Owners: range_select.c builds the selected tree (tpk_range_bvh_select); range_bvh.c creates the
- * file-order tree, walks both trees and holds tpki_range_holds. */
+ * file-order tree, walks both trees one ray at a time and holds tpki_range_holds and tpki_tet_piece;
+ * range_packet.c walks the selected tree with packets of rays. */
 #ifndef TPK_INTERNAL_RANGE_H
 #define TPK_INTERNAL_RANGE_H
 
@@ -10,10 +11,31 @@
 
 #include "internal_march.h"
 
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
 /* Four floats or ints, one per child of a wide node: GCC's and Clang's vector extensions, which the
  * compiler maps to SSE on x86-64 and NEON on arm64 (and to scalar code elsewhere). */
 typedef float tpki_v4f __attribute__((vector_size(16)));
 typedef int32_t tpki_v4i __attribute__((vector_size(16)));
+
+/* A queued child of the selected tree: a wide node (>= 0) or a leaf (its first slot and count, < 8),
+ * negative. */
+static inline int64_t tpki_leaf_ref(int32_t first, int32_t count)
+{
+    return -((int64_t)first * 8 + count) - 1;
+}
+
+static inline int64_t tpki_leaf_first(int64_t ref)
+{
+    return (-ref - 1) / 8;
+}
+
+static inline int64_t tpki_leaf_count(int64_t ref)
+{
+    return (-ref - 1) % 8;
+}
 
 /* A node of the selected tree, four children wide (a binary SAH tree with every other level folded in):
  * the children's boxes, lane by lane (lo x, y, z, then hi x, y, z; an empty lane has lo +inf, hi -inf),
@@ -50,6 +72,7 @@ struct tpk_range_bvh {
     tpki_active_slot *active_slots;
     double *active_values;
     int active_value_count;   /* 0: none selected */
+    double active_corner_max; /* the largest |coordinate| of the selected tree's boxes */
 };
 
 /* The float at or below x, and at or above it: the trees' boxes and ranges are rounded outward. */
@@ -67,5 +90,85 @@ static inline float tpki_round_up(double x)
 
 /* A value of values[0 .. count) in [lo, hi]. */
 int tpki_range_holds(double lo, double hi, const double *values, int count);
+
+/* Is the selected tree the one for these values (tpk_range_bvh_select's)? */
+int tpki_range_selected(const tpk_range_bvh *b, const double *values, int count);
+
+/* a > b ? a : b and a < b ? a : b, lane by lane (a NaN in either gives b): SSE's maxps and minps do just
+ * that in one instruction, which the compilers do not find in the masks of the general form. */
+static inline tpki_v4f tpki_v4_max(tpki_v4f a, tpki_v4f b)
+{
+#if defined(__SSE__)
+    return (tpki_v4f)_mm_max_ps((__m128)a, (__m128)b);
+#else
+    tpki_v4i m = a > b;
+    return (tpki_v4f)(((tpki_v4i)a & m) | ((tpki_v4i)b & ~m));
+#endif
+}
+
+static inline tpki_v4f tpki_v4_min(tpki_v4f a, tpki_v4f b)
+{
+#if defined(__SSE__)
+    return (tpki_v4f)_mm_min_ps((__m128)a, (__m128)b);
+#else
+    tpki_v4i m = a < b;
+    return (tpki_v4f)(((tpki_v4i)a & m) | ((tpki_v4i)b & ~m));
+#endif
+}
+
+/* How much the float box tests of the selected tree widen each slab (in length; times |1/d| in t): the
+ * padding plus the floats' rounding of (box - origin) * 1/d, at most 2^-21 (|box| + |origin|) |1/d| all
+ * told. o_max: the largest |coordinate| of the ray's local origin. */
+static inline double tpki_box_widen(double pad, double extent, double o_max)
+{
+    return pad + ldexp(extent + o_max, -20);
+}
+
+/* The piece of tet t (positive order) that the ray of `frame` crosses, as the marcher computes it; 0
+ * when the ray misses the tet. slot: the tet's copy in the selected tree, or NULL (range_bvh.c). */
+int tpki_tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t, const tpki_active_slot *slot,
+                   tpk_segment *seg);
+
+/* The marcher's clipping of a piece to [tmin, tmax] (march.c's report); 0 when nothing is left. */
+static inline int tpki_clip_piece(tpk_segment *seg, double tmin, double tmax)
+{
+    double t_in = seg->t_in, t_out = seg->t_out, s_in = seg->scalar_in, s_out = seg->scalar_out;
+    if (t_out < tmin || t_in > tmax)
+        return 0;
+    double len = t_out - t_in;
+    if (t_in < tmin) {
+        seg->t_in = tmin;
+        seg->scalar_in = s_in + (s_out - s_in) * ((tmin - t_in) / len);
+    }
+    if (t_out > tmax) {
+        seg->t_out = tmax;
+        seg->scalar_out = s_in + (s_out - s_in) * ((tmax - t_in) / len);
+    }
+    return 1;
+}
+
+/* A crossing by the renderers' rule (render_integrate.c's ri_point_crossings): s_in < v <= s_out or
+ * s_in > v >= s_out. */
+static inline int tpki_crosses(double s_in, double s_out, const double *values, int count)
+{
+    for (int j = 0; j < count; j++) {
+        double v = values[j];
+        if ((s_in < v && v <= s_out) || (s_in > v && v >= s_out))
+            return 1;
+    }
+    return 0;
+}
+
+/* The order in which a ray's pieces are handed on: by t_in, then (pieces of one t, where the ray meets a
+ * vertex or an edge) by t_out, then by tet, so that the order does not hang on the order the tree's walk
+ * found them in: one ray alone and the same ray in a packet hand on the same sequence. */
+static inline int tpki_piece_before(const tpk_segment *a, const tpk_segment *b)
+{
+    if (a->t_in != b->t_in)
+        return a->t_in < b->t_in;
+    if (a->t_out != b->t_out)
+        return a->t_out < b->t_out;
+    return a->tet < b->tet;
+}
 
 #endif

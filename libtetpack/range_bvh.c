@@ -10,7 +10,8 @@
  * would report is culled.
  *
  * A ray: nodes in order of where the ray enters their box (a heap), pieces in order of t_in (a second
- * heap); a piece is handed on once no node left can hold one that starts before it. The piece of a tet is
+ * heap; ties by tpki_piece_before); a piece is handed on once no node left can hold one that starts
+ * before it. range_packet.c walks the selected tree the same way for packets of rays. The piece of a tet is
  * what the marcher computes for it (march.c): the same watertight edge signs, the entry face the one
  * whose outward edges all read -1, the exit face the one whose outward edges all read +1, weights, t and
  * scalar summed from each face's smallest id (internal_ray.h: tpk_face_first), the same clipping to
@@ -172,8 +173,7 @@ const int32_t *tpk_range_bvh_tets(const tpk_range_bvh *b)
     return b ? b->tets : NULL;
 }
 
-/* Is the selected tree the one for these values? */
-static int selected(const tpk_range_bvh *b, const double *values, int count)
+int tpki_range_selected(const tpk_range_bvh *b, const double *values, int count)
 {
     return b->active_value_count > 0 && count == b->active_value_count &&
            !memcmp(values, b->active_values, sizeof *values * (size_t)count);
@@ -189,18 +189,6 @@ int tpki_range_holds(double lo, double hi, const double *values, int count)
     return 0;
 }
 
-/* A crossing by the renderers' rule (render_integrate.c's ri_point_crossings): s_in < v <= s_out or
- * s_in > v >= s_out. */
-static int crosses(double s_in, double s_out, const double *values, int count)
-{
-    for (int j = 0; j < count; j++) {
-        double v = values[j];
-        if ((s_in < v && v <= s_out) || (s_in > v && v >= s_out))
-            return 1;
-    }
-    return 0;
-}
-
 typedef struct heap_item {
     double key;
     int64_t index; /* node: its index in the tree; piece: index into the pieces */
@@ -209,7 +197,16 @@ typedef struct heap_item {
 typedef struct heap {
     heap_item *items, *stack_items;
     int64_t count, cap;
+    tpk_segment *const *pieces; /* a heap of pieces: the pieces its indices point into, for their order */
 } heap;
+
+/* Item a comes out before item b: nodes by key, then index; pieces in tpki_piece_before's order. */
+static inline int heap_before(const heap *h, const heap_item *a, const heap_item *b)
+{
+    if (h->pieces)
+        return tpki_piece_before(&(*h->pieces)[a->index], &(*h->pieces)[b->index]);
+    return a->key < b->key || (a->key == b->key && a->index < b->index);
+}
 
 static int heap_push(heap *h, double key, int64_t index)
 {
@@ -225,15 +222,16 @@ static int heap_push(heap *h, double key, int64_t index)
         h->cap = cap;
     }
     int64_t i = h->count++;
+    const heap_item item = {key, index};
     while (i > 0) {
         int64_t parent = (i - 1) / 2;
         const heap_item *p = &h->items[parent];
-        if (p->key < key || (p->key == key && p->index <= index))
+        if (!heap_before(h, &item, p))
             break;
         h->items[i] = *p;
         i = parent;
     }
-    h->items[i] = (heap_item){key, index};
+    h->items[i] = item;
     return 0;
 }
 
@@ -245,11 +243,9 @@ static heap_item heap_pop(heap *h)
         int64_t c = 2 * i + 1;
         if (c >= h->count)
             break;
-        if (c + 1 < h->count &&
-            (h->items[c + 1].key < h->items[c].key ||
-             (h->items[c + 1].key == h->items[c].key && h->items[c + 1].index < h->items[c].index)))
+        if (c + 1 < h->count && heap_before(h, &h->items[c + 1], &h->items[c]))
             c++;
-        if (last.key < h->items[c].key || (last.key == h->items[c].key && last.index <= h->items[c].index))
+        if (!heap_before(h, &h->items[c], &last))
             break;
         h->items[i] = h->items[c];
         i = c;
@@ -343,7 +339,7 @@ typedef struct wide_ray {
 static void wide_ray_init(wide_ray *wr, const ray_box *rb, double extent, double tmin, double tmax)
 {
     double o_max = fmax(fabs(rb->o[0]), fmax(fabs(rb->o[1]), fabs(rb->o[2])));
-    double widen = rb->pad + ldexp(extent + o_max, -20);
+    double widen = tpki_box_widen(rb->pad, extent, o_max);
     wr->general = rb->general || !(o_max < 1e30);
     for (int k = 0; k < 3; k++) {
         double pad_t = widen * fabs(rb->inv[k]);
@@ -360,18 +356,6 @@ static void wide_ray_init(wide_ray *wr, const ray_box *rb, double extent, double
     wr->tmax = (tpki_v4f){hi, hi, hi, hi};
 }
 
-static inline tpki_v4f v4_max(tpki_v4f a, tpki_v4f b)
-{
-    tpki_v4i m = a > b;
-    return (tpki_v4f)(((tpki_v4i)a & m) | ((tpki_v4i)b & ~m));
-}
-
-static inline tpki_v4f v4_min(tpki_v4f a, tpki_v4f b)
-{
-    tpki_v4i m = a < b;
-    return (tpki_v4f)(((tpki_v4i)a & m) | ((tpki_v4i)b & ~m));
-}
-
 /* Entry t of each lane (+inf: missed) into t0[4]. */
 static inline void wide_entry(const tpki_wide_node *n, const wide_ray *wr, const ray_box *rb, double tmin,
                               double tmax, double t0[4])
@@ -385,10 +369,10 @@ static inline void wide_entry(const tpki_wide_node *n, const wide_ray *wr, const
         }
         return;
     }
-    tpki_v4f near = v4_max(v4_max((n->box[wr->near[0]] - wr->o[0]) * wr->inv[0] - wr->pad_t[0],
+    tpki_v4f near = tpki_v4_max(tpki_v4_max((n->box[wr->near[0]] - wr->o[0]) * wr->inv[0] - wr->pad_t[0],
                                   (n->box[wr->near[1]] - wr->o[1]) * wr->inv[1] - wr->pad_t[1]),
                            (n->box[wr->near[2]] - wr->o[2]) * wr->inv[2] - wr->pad_t[2]);
-    tpki_v4f far = v4_min(v4_min((n->box[wr->far[0]] - wr->o[0]) * wr->inv[0] + wr->pad_t[0],
+    tpki_v4f far = tpki_v4_min(tpki_v4_min((n->box[wr->far[0]] - wr->o[0]) * wr->inv[0] + wr->pad_t[0],
                                  (n->box[wr->far[1]] - wr->o[1]) * wr->inv[1] + wr->pad_t[1]),
                           (n->box[wr->far[2]] - wr->o[2]) * wr->inv[2] + wr->pad_t[2]);
     tpki_v4i hit = (near <= far) & (far >= wr->tmin) & (near <= wr->tmax);
@@ -398,8 +382,8 @@ static inline void wide_entry(const tpki_wide_node *n, const wide_ray *wr, const
 
 /* The piece of tet `t` (positive order q) the ray crosses, as the marcher computes it; 0 when the ray
  * misses the tet. slot: the tet's copy in the selected tree, or NULL. */
-static int tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t, const tpki_active_slot *slot,
-                     tpk_segment *seg)
+int tpki_tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t, const tpki_active_slot *slot,
+                   tpk_segment *seg)
 {
     const tpk_mesh_arrays *mesh = &b->marcher->mesh;
     const int32_t *q = slot ? slot->v : b->tets + 4 * t;
@@ -467,24 +451,6 @@ static int tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t
     return 1;
 }
 
-/* The marcher's clipping of a piece to [tmin, tmax] (march.c's report); 0 when nothing is left. */
-static int clip_piece(tpk_segment *seg, double tmin, double tmax)
-{
-    double t_in = seg->t_in, t_out = seg->t_out, s_in = seg->scalar_in, s_out = seg->scalar_out;
-    if (t_out < tmin || t_in > tmax)
-        return 0;
-    double len = t_out - t_in;
-    if (t_in < tmin) {
-        seg->t_in = tmin;
-        seg->scalar_in = s_in + (s_out - s_in) * ((tmin - t_in) / len);
-    }
-    if (t_out > tmax) {
-        seg->t_out = tmax;
-        seg->scalar_out = s_in + (s_out - s_in) * ((tmax - t_in) / len);
-    }
-    return 1;
-}
-
 /* One ray's walk: the queued nodes (by entry t) and the pieces found but not yet handed on (by t_in). */
 typedef struct walk {
     const tpk_range_bvh *b;
@@ -537,8 +503,8 @@ static void walk_tet(walk *w, int64_t t, const tpki_active_slot *slot)
 {
     w->tested++;
     tpk_segment seg;
-    if (!tet_piece(w->b, &w->frame, t, slot, &seg) || !clip_piece(&seg, w->tmin, w->tmax) ||
-        !crosses(seg.scalar_in, seg.scalar_out, w->values, w->value_count))
+    if (!tpki_tet_piece(w->b, &w->frame, t, slot, &seg) || !tpki_clip_piece(&seg, w->tmin, w->tmax) ||
+        !tpki_crosses(seg.scalar_in, seg.scalar_out, w->values, w->value_count))
         return;
     if (w->piece_count == w->piece_cap) {
         tpk_segment *grown = malloc(sizeof *grown * (size_t)(2 * w->piece_cap));
@@ -609,12 +575,6 @@ static void walk_file_order(walk *w)
     }
 }
 
-/* A queued child of the selected tree: a wide node (>= 0) or a leaf (first slot and count, negative). */
-static int64_t leaf_ref(int32_t first, int32_t count)
-{
-    return -((int64_t)first * 8 + count) - 1;
-}
-
 /* The selected tree: every tet holds a value, four children tested at once. */
 static void walk_selected(walk *w)
 {
@@ -637,7 +597,7 @@ static void walk_selected(walk *w)
             for (int i = 0; i < 4; i++) {
                 if (t0[i] == INFINITY)
                     continue;
-                int64_t c = n->count[i] == 0 ? n->child[i] : leaf_ref(n->child[i], n->count[i]);
+                int64_t c = n->count[i] == 0 ? n->child[i] : tpki_leaf_ref(n->child[i], n->count[i]);
                 int at = found++;
                 for (; at > 0 && key[at - 1] > t0[i] - w->slack; at--) /* nearest first */
                     key[at] = key[at - 1], child[at] = child[at - 1];
@@ -658,7 +618,7 @@ static void walk_selected(walk *w)
         }
         if (ref >= 0)
             continue;
-        int64_t first = (-ref - 1) / 8, count = (-ref - 1) % 8;
+        int64_t first = tpki_leaf_first(ref), count = tpki_leaf_count(ref);
         for (int64_t slot = first; slot < first + count && w->r == TPK_OK; slot++)
             walk_tet(w, b->active_tets[slot], &b->active_slots[slot]);
     }
@@ -678,7 +638,7 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *b, const double org[3], con
     w->fn = fn, w->user = user, w->r = TPK_OK, w->tested = 0, w->stop = 0, w->piece_count = 0;
     if (tpki_ray_frame_init(&w->frame, b->marcher->mesh.origin, org, dir) != 0)
         return TPK_ERR_INVALID_ARGUMENT;
-    int use_selected = selected(b, values, value_count);
+    int use_selected = tpki_range_selected(b, values, value_count);
     if (tmax < tmin || b->levels == 0 || value_count == 0 || (use_selected && b->wide_count == 0))
         return TPK_OK;
     double inv[3];
@@ -689,8 +649,8 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *b, const double org[3], con
     double dir_len = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
     w->slack = 1e-9 * (b->marcher->extent + fabs(w->frame.org[0]) + fabs(w->frame.org[1]) + fabs(w->frame.org[2])) /
                dir_len;
-    w->nodes = (heap){w->node_stack, w->node_stack, 0, HEAP_STACK};
-    w->pieces_heap = (heap){w->piece_stack, w->piece_stack, 0, HEAP_STACK};
+    w->nodes = (heap){w->node_stack, w->node_stack, 0, HEAP_STACK, NULL};
+    w->pieces_heap = (heap){w->piece_stack, w->piece_stack, 0, HEAP_STACK, &w->pieces};
     w->pieces = w->piece_buf;
     w->piece_cap = HEAP_STACK;
     if (use_selected)

@@ -138,6 +138,11 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     }
     if (r == TPK_OK && n > 0)
         r = fold_wide(b, bin, bin_count);
+    b->active_corner_max = 0;
+    for (int k = 0; r == TPK_OK && n > 0 && k < 6; k++)
+        for (int i = 0; i < 4; i++)
+            if (b->wide[0].count[i] >= 0)
+                b->active_corner_max = fmax(b->active_corner_max, fabs((double)b->wide[0].box[k][i]));
     if (r == TPK_OK) {
         const float *pos = b->marcher->mesh.positions;
         for (int64_t i = 0; i < n; i++) {

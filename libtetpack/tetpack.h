@@ -333,13 +333,28 @@ int64_t tpk_range_bvh_heap(const tpk_range_bvh *bvh, float *nodes);
 const int32_t *tpk_range_bvh_tets(const tpk_range_bvh *bvh);
 
 /* The pieces of tpk_march_ray(marcher, org, dir, tmin, tmax) that cross one of values[0 .. count) by
- * the renderers' rule (scalar_in < v <= scalar_out, or scalar_in > v >= scalar_out), in increasing t,
- * and no others: the same segments, bit for bit (both compute a tet's faces from their smallest ids on),
+ * the renderers' rule (scalar_in < v <= scalar_out, or scalar_in > v >= scalar_out), in increasing t
+ * (pieces of one t_in, where the ray meets a vertex or an edge, by t_out, then by tet), and no others: the same segments, bit for bit (both compute a tet's faces from their smallest ids on),
  * except in a tet where rounding put the exit before the entry, which the marcher resolves along its
  * path. stats->tet_steps counts the tets tested. fn may stop the ray as in tpk_march_ray. */
 tpk_result tpk_march_ray_values(const tpk_range_bvh *bvh, const double org[3], const double dir[3], double tmin,
                                 double tmax, const double *values, int count, tpk_segment_fn fn, void *user,
                                 tpk_march_stats *stats);
+
+/* The most rays tpk_march_packet_values takes at once. */
+#define TPK_MARCH_PACKET 16
+/* tpk_march_ray_values for ray_count (<= TPK_MARCH_PACKET) rays from one origin, such as a camera's
+ * primary rays through a few neighbouring pixels: ray i runs along dirs[i] over [tmin[i], tmax[i]] and
+ * gets exactly the calls fns[i](users[i], ...) that tpk_march_ray_values would make for it alone, in the
+ * same order; the calls of different rays interleave. Rays close together walk the selected tree as one
+ * (its nodes tested once for all of them); other values, or rays whose directions differ too much in
+ * kind (dominant axis, signs), walk one by one. stats: ray_count of them, or NULL; tet_steps counts the
+ * tets tested exactly, which here are fewer than alone. Returns TPK_ERR_INVALID_ARGUMENT for a NULL
+ * array or a count out of range, else the first ray's error, as tpk_march_ray_values gives them. */
+tpk_result tpk_march_packet_values(const tpk_range_bvh *bvh, const double org[3], int ray_count,
+                                   const double (*dirs)[3], const double *tmin, const double *tmax,
+                                   const double *values, int count, const tpk_segment_fn *fns, void *const *users,
+                                   tpk_march_stats *stats);
 
 /* ---- Levels of detail (format 1.3, spec §16) ----------------------------------------------------- */
 

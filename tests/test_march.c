@@ -1071,6 +1071,171 @@ TPK_TEST(culled_iso_refuses_and_stops)
     fx_free(&m);
 }
 
+/* ---- Packets of iso rays ------------------------------------------------------------------------ */
+
+#define LOG_MAX 256
+
+/* A ray's pieces, bit for bit, for a ray that stops after stop_after of them (0: never). */
+typedef struct piece_log {
+    int64_t count;
+    int stop_after, overflow;
+    tpk_segment seg[LOG_MAX];
+} piece_log;
+
+static int log_piece(void *user, const tpk_segment *s)
+{
+    piece_log *l = user;
+    if (l->count == LOG_MAX) {
+        l->overflow = 1;
+        return 1;
+    }
+    l->seg[l->count++] = *s;
+    return l->stop_after > 0 && l->count >= l->stop_after;
+}
+
+static piece_log alone_log_for_refusals;
+
+static int same_pieces(const piece_log *a, const piece_log *b)
+{
+    if (a->count != b->count || a->overflow || b->overflow)
+        return 0;
+    for (int64_t k = 0; k < a->count; k++) {
+        const tpk_segment *x = &a->seg[k], *y = &b->seg[k];
+        if (x->tet != y->tet || memcmp(&x->t_in, &y->t_in, sizeof x->t_in) ||
+            memcmp(&x->t_out, &y->t_out, sizeof x->t_out) || memcmp(&x->scalar_in, &y->scalar_in, sizeof x->scalar_in) ||
+            memcmp(&x->scalar_out, &y->scalar_out, sizeof x->scalar_out) || memcmp(x->v, y->v, sizeof x->v))
+            return 0;
+    }
+    return 1;
+}
+
+/* Packets of rays from one origin (a camera outside the mesh or a point inside it), around a random
+ * direction, close together (pixels apart) or far apart: each ray of tpk_march_packet_values must hand
+ * on exactly what tpk_march_ray_values hands on for it alone, with stops, tmin and tmax per ray. */
+static void check_packets_agree(fx_mesh *m, const double *values, int count, int64_t packets)
+{
+    static piece_log alone[TPK_MARCH_PACKET], packed[TPK_MARCH_PACKET];
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], m->points[3 * v + k]);
+            hi[k] = fmax(hi[k], m->points[3 * v + k]);
+        }
+    for (int l = 0; l < 3; l += 2) {
+        tpk_marcher *marcher = make_marcher(m, layouts[l]);
+        tpk_range_bvh *bvh = NULL;
+        CHECK(marcher && tpk_range_bvh_create(&bvh, marcher) == TPK_OK);
+        CHECK(tpk_range_bvh_select(bvh, values, count) == TPK_OK);
+        uint64_t rng = 991 + (uint64_t)l, steps_alone = 0, steps_packed = 0;
+        int64_t rays = 0, rays_with = 0, stopped = 0;
+        for (int64_t pk = 0; pk < packets; pk++) {
+            double org[3], center[3], u[3], w[3], dirs[TPK_MARCH_PACKET][3], tmin[TPK_MARCH_PACKET],
+                tmax[TPK_MARCH_PACKET];
+            const int32_t *t = &m->tets[4 * (int64_t)(fx_rand(&rng) % (uint64_t)m->tet_count)];
+            double aim[3];
+            for (int k = 0; k < 3; k++)
+                aim[k] = 0.25 * (m->points[3 * t[0] + k] + m->points[3 * t[1] + k] + m->points[3 * t[2] + k] +
+                                 m->points[3 * t[3] + k]);
+            int inside = fx_rand(&rng) % 4 == 0;
+            for (int k = 0; k < 3; k++) {
+                double e = hi[k] - lo[k];
+                org[k] = inside ? aim[k] : lo[k] + e * (fx_uniform(&rng) * 3 - 1);
+                center[k] = inside ? fx_uniform(&rng) * 2 - 1 : aim[k] - org[k];
+                u[k] = fx_uniform(&rng) * 2 - 1;
+            }
+            /* w = center x u, u = w x center: the packet's two across-directions */
+            w[0] = center[1] * u[2] - center[2] * u[1], w[1] = center[2] * u[0] - center[0] * u[2];
+            w[2] = center[0] * u[1] - center[1] * u[0];
+            u[0] = w[1] * center[2] - w[2] * center[1], u[1] = w[2] * center[0] - w[0] * center[2];
+            u[2] = w[0] * center[1] - w[1] * center[0];
+            double cl = sqrt(center[0] * center[0] + center[1] * center[1] + center[2] * center[2]);
+            double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), wl = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+            double spread = pk % 3 == 0 ? 0.2 : pk % 3 == 1 ? 2e-3 : 1e-5;
+            int n = 1 + (int)(fx_rand(&rng) % TPK_MARCH_PACKET), side = pk % 2 ? 4 : 2;
+            tpk_segment_fn fns[TPK_MARCH_PACKET];
+            void *users[TPK_MARCH_PACKET];
+            tpk_march_stats st[TPK_MARCH_PACKET];
+            for (int i = 0; i < n; i++) {
+                double a = spread * ((i % side) - 0.5 * (side - 1)), c = spread * ((i / side) - 0.5 * (side - 1));
+                for (int k = 0; k < 3; k++)
+                    dirs[i][k] = center[k] / cl + a * u[k] / ul + c * w[k] / wl;
+                if (i == 0 && pk % 4 == 3 && !inside) /* exactly through a corner of the aimed-at tet */
+                    for (int k = 0; k < 3; k++)
+                        dirs[i][k] = m->points[3 * t[pk % 16 / 4] + k] - org[k];
+                uint64_t z = fx_rand(&rng);
+                tmin[i] = z % 7 == 0 ? -INFINITY : z % 7 == 1 ? 0.3 * cl : 0.0;
+                tmax[i] = z % 5 == 0 ? 0.8 * cl : INFINITY;
+                alone[i].count = packed[i].count = 0;
+                alone[i].overflow = packed[i].overflow = 0;
+                alone[i].stop_after = packed[i].stop_after = (int)(fx_rand(&rng) % 3);
+                fns[i] = log_piece;
+                users[i] = &packed[i];
+                CHECK(tpk_march_ray_values(bvh, org, dirs[i], tmin[i], tmax[i], values, count, log_piece, &alone[i],
+                                           &st[i]) == TPK_OK);
+                steps_alone += st[i].tet_steps;
+            }
+            CHECK(tpk_march_packet_values(bvh, org, n, (const double(*)[3])dirs, tmin, tmax, values, count, fns,
+                                          users, st) == TPK_OK);
+            for (int i = 0; i < n; i++) {
+                steps_packed += st[i].tet_steps;
+                CHECK_MSG(same_pieces(&alone[i], &packed[i]),
+                          "layout %d packet %lld ray %d of %d (spread %g): %lld pieces alone, %lld in the packet", l,
+                          (long long)pk, i, n, spread, (long long)alone[i].count, (long long)packed[i].count);
+                rays_with += alone[i].count > 0;
+                stopped += alone[i].stop_after > 0 && alone[i].count == alone[i].stop_after;
+            }
+            rays += n;
+        }
+        CHECK_MSG(rays_with > rays / 5 && stopped > rays / 20, "layout %d: %lld of %lld rays met a value, %lld stopped",
+                  l, (long long)rays_with, (long long)rays, (long long)stopped);
+        /* the packets did walk together: fewer tets tested exactly */
+        CHECK_MSG(steps_packed < steps_alone, "layout %d: %llu tets tested in packets, %llu alone", l,
+                  (unsigned long long)steps_packed, (unsigned long long)steps_alone);
+        tpk_range_bvh_destroy(bvh);
+        tpk_marcher_destroy(marcher);
+    }
+}
+
+TPK_TEST(culled_iso_packets_equal_single_rays)
+{
+    static const double smooth[] = {0.3, -0.45}, exact[] = {1.0, 2.0}, near_one[] = {1.0 + 0x1p-24};
+    const char *meshes[] = {"sfepy/cylinder.vtk", "tetgen/hinge_small.node"};
+    for (int i = 0; i < 2; i++) {
+        fx_mesh m;
+        CHECK_MSG(load_real(meshes[i], &m) == 0, "cannot load %s", meshes[i]);
+        set_field(&m, 0);
+        check_packets_agree(&m, smooth, 2, 1500);
+        set_field(&m, 1);
+        check_packets_agree(&m, exact, 2, 1500);
+        /* scalars a few ulps around the value: the float tests must not decide what rounding decides */
+        uint64_t rng = 5;
+        for (int64_t v = 0; v < m.vertex_count; v++)
+            m.scalars[v] = nextafterf(1.0f, (float)(fx_rand(&rng) % 2 ? INFINITY : -INFINITY)) + 0x1p-23f * (float)(fx_rand(&rng) % 3);
+        check_packets_agree(&m, near_one, 1, 1500);
+        fx_free(&m);
+    }
+    /* refusals: no arrays, too many rays; 0 rays is nothing to do */
+    fx_mesh m;
+    CHECK(fx_render_grid(&m, 1) == 0);
+    tpk_marcher *marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    tpk_range_bvh *bvh = NULL;
+    CHECK(tpk_range_bvh_create(&bvh, marcher) == TPK_OK);
+    const double org[3] = {-1, 3.3, 4.1}, dirs[1][3] = {{1, 0.01, 0.02}}, tmin[1] = {0}, tmax[1] = {INFINITY};
+    const double values[] = {2.5};
+    tpk_segment_fn fns[1] = {log_piece};
+    void *users[1] = {&alone_log_for_refusals};
+    CHECK(tpk_march_packet_values(bvh, org, 1, NULL, tmin, tmax, values, 1, fns, users, NULL) == TPK_ERR_INVALID_ARGUMENT);
+    CHECK(tpk_march_packet_values(bvh, org, TPK_MARCH_PACKET + 1, dirs, tmin, tmax, values, 1, fns, users, NULL) ==
+          TPK_ERR_INVALID_ARGUMENT);
+    CHECK(tpk_march_packet_values(bvh, org, 0, dirs, tmin, tmax, values, 1, fns, users, NULL) == TPK_OK);
+    alone_log_for_refusals.count = 0;
+    CHECK(tpk_march_packet_values(bvh, org, 1, dirs, tmin, tmax, values, 1, fns, users, NULL) == TPK_OK); /* file-order tree */
+    CHECK(alone_log_for_refusals.count == 1);
+    tpk_range_bvh_destroy(bvh);
+    tpk_marcher_destroy(marcher);
+    fx_free(&m);
+}
+
 /* tpk_range_bvh_heap (what the Vulkan renderer uploads): the tree in heap order, each inner node the
  * union of its two children, each leaf holding its tets' corners and scalar range, the rest empty; the
  * tets as tpk_range_bvh_tets gives them, positive (the mesh's own tets, in order). */

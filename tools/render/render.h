@@ -190,13 +190,15 @@ typedef struct tpk_render_options {
  * ISO-ONLY RAYS. With iso values, a point field and a TF whose opacity is 0 at every control point, the
  * volume adds nothing and only the pieces that hold a crossing matter: the CPU renderer finds those by
  * range culling (libtetpack's tpk_march_ray_values: a BVH over the tets whose nodes carry the field's
- * range), the same pieces, bit for bit, in the same order, so the picture is the same. The CPU walks a
+ * range; 4x4 pixels at a time through tpk_march_packet_values), the same pieces, bit for bit, in the
+ * same order, so the picture is the same. The CPU walks a
  * second tree made for the frame's iso values (tpk_range_bvh_select: only the tets that hold one, four
  * children a node), which tests fewer tets per ray than marching steps through on any surface; but its
  * set-up (recovering the tets' vertices from Tet16, the file-order tree, the selected tree) costs about
  * 0.35 CPU-microseconds a tet, which only enough rays pay back. Measured on the 998k-tet grid of
  * bench/make_grid_vtk.py 55, 1024x1024, rays alone, one thread: culling 1.1x faster than marching
- * where 47% of the file-order tree's leaves hold the value, 1.5x at 35%, 2.1x at 25%, 4.3x at 11%. So
+ * where 47% of the file-order tree's leaves hold the value, 1.5x at 35%, 2.1x at 25%, 4.3x at 11%
+ * (rays one by one; the packets since cull about 2.5 times as many rays a second at iso 0.3). So
  * the renderer culls where at most TPK_RENDER_CULL_ACTIVE of those leaves hold a value, or, with at
  * least as many rays as tets, at most TPK_RENDER_CULL_ACTIVE_MANY; else it marches. Building the trees
  * to count the leaves costs more than a small frame on a large mesh (10.4M tets: several

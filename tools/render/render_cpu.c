@@ -1,5 +1,6 @@
 /* The CPU volume renderer: one primary ray per pixel through the reference marcher, emission-absorption
- * integrated per tet piece, rows shared between pthreads through an atomic counter. */
+ * integrated per tet piece, rows shared between pthreads through an atomic counter. Iso-only rays by
+ * range culling go in packets of 4x4 pixels (tpk_march_packet_values), each pixel the same as alone. */
 #include "render_internal.h"
 
 #include <math.h>
@@ -137,33 +138,62 @@ static uint8_t to_byte(double v)
     return (uint8_t)(v * 255.0 + 0.5);
 }
 
-/* One pixel: returns the marcher's result. */
-static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t counts[2])
+/* A primary ray: its state, the span to march and the callback (render_light.c's rl_ray_spans, which
+ * may wrap the callback in sp); 0 when nothing of it is left to march. */
+static int ray_begin(const render_job *job, int x, int y, ray_state *ray, double *lo, double *hi, rl_spans *sp,
+                     tpk_segment_fn *fn, void **user)
 {
     const tpk_render_options *opt = job->opt;
     double px = (2.0 * (x + 0.5) / opt->width - 1.0) * job->tan_half_x;
     double py = (1.0 - 2.0 * (y + 0.5) / opt->height) * job->tan_half_y;
-    ray_state ray;
-    memset(&ray, 0, sizeof ray);
-    ray.job = job;
-    ray.px = x;
-    ray.py = y;
-    ray.transmittance = 1.0;
-    ray.shade_s = ray.shade_a = 1.0;
+    memset(ray, 0, sizeof *ray);
+    ray->job = job;
+    ray->px = x;
+    ray->py = y;
+    ray->transmittance = 1.0;
+    ray->shade_s = ray->shade_a = 1.0;
     double len2 = 0;
     for (int k = 0; k < 3; k++) {
-        ray.dir[k] = job->forward[k] + px * job->right[k] + py * job->up[k];
-        len2 += ray.dir[k] * ray.dir[k];
+        ray->dir[k] = job->forward[k] + px * job->right[k] + py * job->up[k];
+        len2 += ray->dir[k] * ray->dir[k];
     }
     double inv_len = 1.0 / sqrt(len2);
     for (int k = 0; k < 3; k++)
-        ray.dir[k] *= inv_len; /* unit direction: t is the distance from the eye */
-    tpk_result r = TPK_OK;
-    double lo = 0.0, hi = INFINITY;
+        ray->dir[k] *= inv_len; /* unit direction: t is the distance from the eye */
+    *lo = 0.0, *hi = INFINITY;
+    *fn = on_segment;
+    *user = ray;
+    return rl_ray_spans(opt, job->eye, ray->dir, lo, hi, sp, fn, user);
+}
+
+/* Write the pixel of a marched (or skipped) ray; returns r, else the ray's own error. */
+static tpk_result ray_finish(const render_job *job, const ray_state *ray, tpk_result r, uint64_t counts[2])
+{
+    const tpk_render_options *opt = job->opt;
+    counts[0] += ray->steps;
+    counts[1] += ray->secondary;
+    const float *bg = opt->background;
+    double alpha = (1.0 - ray->transmittance) + ray->transmittance * bg[3];
+    uint8_t *out = &job->rgba[4 * ((size_t)ray->py * (size_t)opt->width + (size_t)ray->px)];
+    for (int k = 0; k < 3; k++) {
+        double premult = ray->color[k] + ray->transmittance * bg[3] * bg[k];
+        out[k] = to_byte(alpha > 0 ? premult / alpha : 0.0);
+    }
+    out[3] = to_byte(alpha);
+    return r != TPK_OK ? r : ray->error;
+}
+
+/* One pixel: returns the marcher's result. */
+static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t counts[2])
+{
+    const tpk_render_options *opt = job->opt;
+    ray_state ray;
+    double lo, hi;
     rl_spans sp;
-    tpk_segment_fn fn = on_segment;
-    void *user = &ray;
-    if (rl_ray_spans(opt, job->eye, ray.dir, &lo, &hi, &sp, &fn, &user)) {
+    tpk_segment_fn fn;
+    void *user;
+    tpk_result r = TPK_OK;
+    if (ray_begin(job, x, y, &ray, &lo, &hi, &sp, &fn, &user)) {
         tpk_march_stats st;
         if (job->set)
             r = tpk_set_march_ray(job->set, job->eye, ray.dir, lo, hi, fn, user, NULL, &st);
@@ -173,22 +203,59 @@ static tpk_result render_pixel(const render_job *job, int x, int y, uint64_t cou
             r = tpk_march_ray(job->marcher, job->eye, ray.dir, lo, hi, fn, user, &st);
         ray.steps += st.tet_steps;
     }
-    counts[0] += ray.steps;
-    counts[1] += ray.secondary;
-    const float *bg = opt->background;
-    double alpha = (1.0 - ray.transmittance) + ray.transmittance * bg[3];
-    uint8_t *out = &job->rgba[4 * ((size_t)y * (size_t)opt->width + (size_t)x)];
-    for (int k = 0; k < 3; k++) {
-        double premult = ray.color[k] + ray.transmittance * bg[3] * bg[k];
-        out[k] = to_byte(alpha > 0 ? premult / alpha : 0.0);
+    return ray_finish(job, &ray, r, counts);
+}
+
+/* Iso-only rays by range culling go PACKET x PACKET pixels at a time (tpk_march_packet_values): neighbours
+ * meet the same nodes and tets, which the packet tests once for all of them. */
+#define PACKET 4
+
+/* The pixels [x0, x0 + PACKET) x [y0, y0 + PACKET) that lie in the picture, as one packet; the first
+ * failure, and its pixel in *fail_x, *fail_y. */
+static tpk_result render_packet(const render_job *job, int x0, int y0, uint64_t counts[2], int *fail_x, int *fail_y)
+{
+    const tpk_render_options *opt = job->opt;
+    ray_state rays[PACKET * PACKET];
+    rl_spans sp[PACKET * PACKET];
+    double dirs[PACKET * PACKET][3], lo[PACKET * PACKET], hi[PACKET * PACKET];
+    tpk_segment_fn fns[PACKET * PACKET];
+    void *users[PACKET * PACKET];
+    tpk_march_stats st[PACKET * PACKET];
+    int walks[PACKET * PACKET], count = 0, marched = 0;
+    for (int y = y0; y < y0 + PACKET && y < opt->height; y++)
+        for (int x = x0; x < x0 + PACKET && x < opt->width; x++, count++)
+            if ((walks[count] = ray_begin(job, x, y, &rays[count], &lo[marched], &hi[marched], &sp[count],
+                                          &fns[marched], &users[marched])))
+                memcpy(dirs[marched++], rays[count].dir, sizeof dirs[0]);
+    tpk_result r = tpk_march_packet_values(job->range, job->eye, marched, (const double(*)[3])dirs, lo, hi, opt->iso,
+                                           opt->iso_count, fns, users, st);
+    tpk_result first = TPK_OK;
+    for (int i = 0, m = 0; i < count; i++) {
+        if (walks[i])
+            rays[i].steps += st[m++].tet_steps;
+        tpk_result ri = ray_finish(job, &rays[i], r, counts);
+        if (ri != TPK_OK && first == TPK_OK)
+            first = ri, *fail_x = rays[i].px, *fail_y = rays[i].py;
     }
-    out[3] = to_byte(alpha);
-    return r != TPK_OK ? r : ray.error;
+    return first;
 }
 
 /* Pixels go in tiles of TILE x TILE, a band of TILE rows at a time per thread: neighbouring rays meet
  * the same tets and BVH nodes, so a tile's rays find them in cache (a whole row spans the mesh). */
 #define TILE 8
+
+/* The frame's first failure, kept with its pixel. */
+static void note_failure(render_job *job, tpk_result r, int x, int y)
+{
+    pthread_mutex_lock(&job->error_lock);
+    if (!atomic_load(&job->failed)) {
+        job->error = r;
+        job->error_x = x;
+        job->error_y = y;
+        atomic_store(&job->failed, 1);
+    }
+    pthread_mutex_unlock(&job->error_lock);
+}
 
 static void *render_worker(void *arg)
 {
@@ -202,23 +269,26 @@ static void *render_worker(void *arg)
         if (band * TILE >= height || atomic_load(&job->failed))
             break;
         int failed = 0;
-        for (int x0 = 0; x0 < width && !failed; x0 += TILE)
+        for (int x0 = 0; x0 < width && !failed; x0 += TILE) {
+            if (job->range && !job->set) {
+                for (int y = band * TILE; y < band * TILE + TILE && y < height && !failed; y += PACKET)
+                    for (int x = x0; x < x0 + TILE && x < width && !failed; x += PACKET) {
+                        int fail_x = x, fail_y = y;
+                        tpk_result r = render_packet(job, x, y, counts, &fail_x, &fail_y);
+                        if (r != TPK_OK)
+                            note_failure(job, r, fail_x, fail_y), failed = 1;
+                    }
+                continue;
+            }
             for (int y = band * TILE; y < band * TILE + TILE && y < height && !failed; y++)
                 for (int x = x0; x < x0 + TILE && x < width; x++) {
                     tpk_result r = render_pixel(job, x, y, counts);
                     if (r != TPK_OK) {
-                        pthread_mutex_lock(&job->error_lock);
-                        if (!atomic_load(&job->failed)) {
-                            job->error = r;
-                            job->error_x = x;
-                            job->error_y = y;
-                            atomic_store(&job->failed, 1);
-                        }
-                        pthread_mutex_unlock(&job->error_lock);
-                        failed = 1;
+                        note_failure(job, r, x, y), failed = 1;
                         break;
                     }
                 }
+        }
     }
     atomic_fetch_add(&job->tet_steps, counts[0]);
     atomic_fetch_add(&job->secondary_rays, counts[1]);
