@@ -217,9 +217,10 @@ static tpk_result render_packet(const render_job *job, int x0, int y0, uint64_t 
     const tpk_render_options *opt = job->opt;
     ray_state rays[PACKET * PACKET];
     rl_spans sp[PACKET * PACKET];
-    double dirs[PACKET * PACKET][3], lo[PACKET * PACKET], hi[PACKET * PACKET];
-    tpk_segment_fn fns[PACKET * PACKET];
-    void *users[PACKET * PACKET];
+    /* zeroed: only the first `marched` are read, which GCC cannot see under the sanitizers */
+    double dirs[PACKET * PACKET][3], lo[PACKET * PACKET] = {0}, hi[PACKET * PACKET] = {0};
+    tpk_segment_fn fns[PACKET * PACKET] = {0};
+    void *users[PACKET * PACKET] = {0};
     tpk_march_stats st[PACKET * PACKET];
     int walks[PACKET * PACKET], count = 0, marched = 0;
     for (int y = y0; y < y0 + PACKET && y < opt->height; y++)
