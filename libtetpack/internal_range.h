@@ -8,6 +8,8 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "internal_march.h"
 
@@ -169,6 +171,22 @@ static inline int tpki_piece_before(const tpk_segment *a, const tpk_segment *b)
     if (a->t_out != b->t_out)
         return a->t_out < b->t_out;
     return a->tet < b->tet;
+}
+
+/* The walks' arrays start in a buffer on the caller's stack and move to the heap when they fill: double
+ * *cap, keeping the first `count` of *items (elem bytes each); the stack buffer is never freed. 0, or
+ * -1 out of memory (then *items and *cap are unchanged). */
+static inline int tpki_grow(void **items, const void *stack, int64_t count, int64_t *cap, size_t elem)
+{
+    void *grown = malloc(elem * (size_t)(2 * *cap));
+    if (!grown)
+        return -1;
+    memcpy(grown, *items, elem * (size_t)count);
+    if (*items != stack)
+        free(*items);
+    *items = grown;
+    *cap *= 2;
+    return 0;
 }
 
 #endif

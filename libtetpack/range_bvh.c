@@ -211,15 +211,10 @@ static inline int heap_before(const heap *h, const heap_item *a, const heap_item
 static int heap_push(heap *h, double key, int64_t index)
 {
     if (h->count == h->cap) {
-        int64_t cap = 2 * h->cap;
-        heap_item *grown = malloc(sizeof *grown * (size_t)cap);
-        if (!grown)
+        void *items = h->items;
+        if (tpki_grow(&items, h->stack_items, h->count, &h->cap, sizeof *h->items) != 0)
             return -1;
-        memcpy(grown, h->items, sizeof *grown * (size_t)h->count);
-        if (h->items != h->stack_items)
-            free(h->items);
-        h->items = grown;
-        h->cap = cap;
+        h->items = items;
     }
     int64_t i = h->count++;
     const heap_item item = {key, index};
@@ -507,16 +502,12 @@ static void walk_tet(walk *w, int64_t t, const tpki_active_slot *slot)
         !tpki_crosses(seg.scalar_in, seg.scalar_out, w->values, w->value_count))
         return;
     if (w->piece_count == w->piece_cap) {
-        tpk_segment *grown = malloc(sizeof *grown * (size_t)(2 * w->piece_cap));
-        if (!grown) {
+        void *pieces = w->pieces;
+        if (tpki_grow(&pieces, w->piece_buf, w->piece_count, &w->piece_cap, sizeof *w->pieces) != 0) {
             w->r = TPK_ERR_OUT_OF_MEMORY;
             return;
         }
-        memcpy(grown, w->pieces, sizeof *grown * (size_t)w->piece_count);
-        if (w->pieces != w->piece_buf)
-            free(w->pieces);
-        w->pieces = grown;
-        w->piece_cap *= 2;
+        w->pieces = pieces;
     }
     w->pieces[w->piece_count] = seg;
     if (heap_push(&w->pieces_heap, seg.t_in, w->piece_count++))

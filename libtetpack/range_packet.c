@@ -77,16 +77,12 @@ static int node_before(const node_item *a, const node_item *b)
 static void node_push(packet *p, double key, int64_t ref)
 {
     if (p->node_count == p->node_cap) {
-        node_item *grown = malloc(sizeof *grown * (size_t)(2 * p->node_cap));
-        if (!grown) {
+        void *nodes = p->nodes;
+        if (tpki_grow(&nodes, p->node_stack, p->node_count, &p->node_cap, sizeof *p->nodes) != 0) {
             p->r = TPK_ERR_OUT_OF_MEMORY;
             return;
         }
-        memcpy(grown, p->nodes, sizeof *grown * (size_t)p->node_count);
-        if (p->nodes != p->node_stack)
-            free(p->nodes);
-        p->nodes = grown;
-        p->node_cap *= 2;
+        p->nodes = nodes;
     }
     const node_item item = {key, ref};
     int64_t i = p->node_count++;
@@ -160,16 +156,12 @@ static void ray_tet(packet *p, packet_ray *r, int64_t t, const tpki_active_slot 
         r->count -= r->first;
         r->first = 0;
     } else if (r->count == r->cap) {
-        tpk_segment *grown = malloc(sizeof *grown * (size_t)(2 * r->cap));
-        if (!grown) {
+        void *pieces = r->pieces;
+        if (tpki_grow(&pieces, r->buf, r->count, &r->cap, sizeof *r->pieces) != 0) {
             p->r = TPK_ERR_OUT_OF_MEMORY;
             return;
         }
-        memcpy(grown, r->pieces, sizeof *grown * (size_t)r->count);
-        if (r->pieces != r->buf)
-            free(r->pieces);
-        r->pieces = grown;
-        r->cap *= 2;
+        r->pieces = pieces;
     }
     int64_t at = r->count++;
     for (; at > r->first && tpki_piece_before(&seg, &r->pieces[at - 1]); at--)
