@@ -911,45 +911,6 @@ static void measure(const simplifier *s, const tpk_tetmesh *lvl, const int32_t *
     free(tet_of);
 }
 
-/* The shell faces as sorted triples of vertex ids, sorted: a cut fold's two faces are the same triple. */
-static int compare_triples(const void *a, const void *b)
-{
-    const int32_t *x = a, *y = b;
-    for (int k = 0; k < 3; k++)
-        if (x[k] != y[k])
-            return x[k] < y[k] ? -1 : 1;
-    return 0;
-}
-
-static int32_t *shell_triples(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, int64_t *count)
-{
-    int64_t n = 0;
-    for (int64_t i = 0; i < 4 * tet_count; i++)
-        n += neighbors[i] < 0;
-    int32_t *f = malloc(sizeof *f * 3 * (size_t)(n ? n : 1));
-    if (!f)
-        return NULL;
-    int64_t w = 0;
-    for (int64_t t = 0; t < tet_count; t++)
-        for (int k = 0; k < 4; k++)
-            if (neighbors[4 * t + k] < 0) {
-                int32_t a[3];
-                for (int j = 0; j < 3; j++)
-                    a[j] = tets[4 * t + tpk_tet_faces[k][j]];
-                for (int i = 0; i < 2; i++) /* sort the three */
-                    for (int j = 0; j < 2 - i; j++)
-                        if (a[j] > a[j + 1]) {
-                            int32_t x = a[j];
-                            a[j] = a[j + 1];
-                            a[j + 1] = x;
-                        }
-                memcpy(f + 3 * w++, a, sizeof a);
-            }
-    qsort(f, (size_t)n, 3 * sizeof *f, compare_triples);
-    *count = n;
-    return f;
-}
-
 /* What a level must keep of the full mesh: its volume and its shell's area (sums of 6V and of twice the
  * face areas, in the stored frame). Equal up to rounding when the domain is the same; a bug that lost
  * or doubled a piece would show. */
@@ -1230,18 +1191,11 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
                         s.boundary[mesh->tets[4 * t + tpk_tet_faces[k][j]]] = 1;
         }
         s.tet_count = T;
-        /* A cut fold's two faces are the same triple. Where a mesh folds, its tets overlap: it tiles no
+        /* Where a mesh folds (connect cut its folds: source->folds_cut), its tets overlap: it tiles no
          * domain, and a shell vertex that moves near the fold can make faces meet that should not (a
          * gmsh boundary-layer mesh did). Then no shell vertex moves. */
-        int64_t faces = 0, folds = 0;
-        int32_t *f = shell_triples(mesh->tets, neighbors, T, &faces);
-        if (!f)
-            rc = tpk_diag_fail(diag, "levels: out of memory for the shell of %lld tets", (long long)T);
-        for (int64_t i = 1; f && i < faces; i++)
-            folds += !memcmp(f + 3 * i, f + 3 * (i - 1), 3 * sizeof *f);
-        if (folds > 0)
+        if (source->folds_cut > 0)
             memcpy(s.pinned, s.boundary, (size_t)V);
-        free(f);
     }
     domain_size full = rc == 0 ? size_of(mesh->points, mesh->tets, neighbors, T) : (domain_size){0, 0};
     if (o->level_shell_error > 0 && V > 0) { /* a fraction of the bounding box diagonal */
