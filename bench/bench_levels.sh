@@ -3,7 +3,8 @@
 # levels cost in conversion time and file size. For each mesh: convert with and without --levels 4
 # (median of RUNS each), then per level a render (CPU, THREADS threads, SIZE², median of RUNS frame
 # times) and its PSNR against the full mesh's picture (same camera and range), then render --max-ms at
-# a few budgets (the level the cost model picks and the frame time it got). One JSON line per
+# a few budgets, RUNS frames each (the level and pixel step the cost model picks, the frame time it got,
+# the PSNR against the full mesh's picture at every pixel). One JSON line per
 # measurement on stdout; a Markdown table on stderr.
 # usage: bench/bench_levels.sh [BUILD_DIR] [WORK_DIR] [GRID] [SIZE] [RUNS] [THREADS]
 #   defaults: build, /tmp/tpk_bench_levels, 121 (make_grid_vtk.py 121: 10.6M tets), 512, 3, 2
@@ -52,10 +53,14 @@ EOF
         db=$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/$name-0.png" "$WORK/$name-$k.png" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p')
         echo "{\"mesh\":\"$name\",\"level\":$k,\"frame_s\":$(median "${secs[@]}"),\"psnr_db\":\"$db\",\"size\":$SIZE,\"threads\":$THREADS}"
     done
-    for ms in 50 100 250 1000; do
-        "$TPK" render "$WORK/${name}_l.tpk" -o "$WORK/$name-b.png" --backend cpu --threads "$THREADS" \
-            --size "${SIZE}x$SIZE" --field "$field" --step "$step" --max-ms "$ms" --json |
-            "$PY" -c 'import json,sys; d=json.load(sys.stdin); print(json.dumps({"mesh":sys.argv[1],"max_ms":d["max_ms"],"level":d["level"],"predicted_ms":d["predicted_ms"],"frame_ms":d["frame_ms"]}))' "$name"
+    for ms in 50 100 250 1000; do # RUNS frames each: the summary takes their median
+        for r in $(seq "$RUNS"); do
+            "$TPK" render "$WORK/${name}_l.tpk" -o "$WORK/$name-b.png" --backend cpu --threads "$THREADS" \
+                --size "${SIZE}x$SIZE" --field "$field" --step "$step" --max-ms "$ms" --json > "$WORK/$name-b.json"
+            "$PY" -c 'import json,sys; d=json.load(open(sys.argv[2])); print(json.dumps({"mesh":sys.argv[1],"max_ms":d["max_ms"],"level":d["level"],"pixel_step":d["pixel_step"],"predicted_ms":d["predicted_ms"],"frame_ms":d["frame_ms"],"psnr_db":sys.argv[3]}))' \
+                "$name" "$WORK/$name-b.json" \
+                "$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/$name-0.png" "$WORK/$name-b.png" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p')"
+        done
     done
 }
 
@@ -65,7 +70,7 @@ EOF
 } | tee "$WORK/levels.jsonl"
 
 "$PY" - "$WORK/levels.jsonl" >&2 <<'EOF'
-import json, sys
+import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1])]
 for c in (r for r in rows if "convert_s" in r):
     print("\n%s: %d tets; convert %.2f s, with --levels 4 %.2f s (%.2fx); %.1f MiB, with levels %.1f MiB (%.2fx)" % (
@@ -77,7 +82,13 @@ for c in (r for r in rows if "convert_s" in r):
         l = lv.get(r["level"])
         err = "%.3g / %.3g" % (l["error_max"], l["error_rms"]) if l else "0 (the full mesh)"
         print("| %d | %s | %s | %.3f | %s |" % (r["level"], l["tets"] if l else c["tets"], err, r["frame_s"], r["psnr_db"]))
-    print("\n| --max-ms | level picked | predicted ms | frame ms |\n|---:|---:|---:|---:|")
-    for r in (r for r in rows if r.get("mesh") == c["mesh"] and "max_ms" in r):
-        print("| %g | %d | %.1f | %.1f |" % (r["max_ms"], r["level"], r["predicted_ms"], r["frame_ms"]))
+    print("\n| --max-ms | levels picked | pixel steps | predicted ms (median) | frame ms (median, max) | PSNR vs full (dB) |"
+          "\n|---:|---:|---:|---:|---:|---:|")
+    runs = [r for r in rows if r.get("mesh") == c["mesh"] and "max_ms" in r]
+    for ms in sorted({r["max_ms"] for r in runs}):
+        g = [r for r in runs if r["max_ms"] == ms]
+        med = lambda k: statistics.median(r[k] for r in g)
+        print("| %g | %s | %s | %.1f | %.1f, %.1f | %s |" % (
+            ms, ",".join(str(r["level"]) for r in g), ",".join(str(r["pixel_step"]) for r in g), med("predicted_ms"),
+            med("frame_ms"), max(r["frame_ms"] for r in g), ",".join(r["psnr_db"] for r in g)))
 EOF

@@ -478,6 +478,83 @@ TPK_TEST(cost_model)
     CHECK(one.n == 1);
 }
 
+/* Past the coarsest level, the pixel step: the smallest that the model predicts to fit, by its closed
+ * form (0.1 s + 1e-8 s per ray and cube root of tets). */
+TPK_TEST(pixel_step)
+{
+    tpk_cost_model m = {0};
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 1e-9, 8), 1); /* no frames: every pixel */
+    tpk_cost_model_add(&m, 4096, 8000, 0.1 + 1e-8 * 4096 * 20);
+    tpk_cost_model_add(&m, 16384, 8000, 0.1 + 1e-8 * 16384 * 20);
+    /* 512^2 on 8000 tets: 0.1 + 0.0524 s; at step d, 0.1 + 0.0524 / d^2 */
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 0.16, 8), 1);
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 0.12, 8), 2);  /* d^2 >= 2.6 */
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 0.104, 8), 4); /* d^2 >= 13.1 */
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 0.101, 16), 8);
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 0.104, 3), 3); /* the cap */
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 0.05, 8), 8);  /* below the fixed cost */
+    CHECK_EQ_INT(tpk_cost_model_pixel_step(&m, 262144, 8000, 0.05, 1), 1);
+    int w, h;
+    tpk_pixel_step_size(512, 512, 3, &w, &h);
+    CHECK(w == 171 && h == 171);
+    tpk_pixel_step_size(1000, 700, 8, &w, &h);
+    CHECK(w == 125 && h == 88);
+    tpk_pixel_step_size(5, 3, 8, &w, &h);
+    CHECK(w == 1 && h == 1);
+}
+
+/* The upscaled picture against closed forms: a picture at its own size comes back as it was; a linear
+ * ramp stays the same ramp, the point of the small picture seen in the same direction as each pixel
+ * (a small picture of another aspect ratio too, its field of view following it); a transparent pixel
+ * lends no color. */
+TPK_TEST(image_upscale)
+{
+    enum { SW = 6, SH = 4 };
+    uint8_t src[SW * SH * 4], same[SW * SH * 4];
+    for (int i = 0; i < SW * SH; i++)
+        for (int k = 0; k < 4; k++)
+            src[4 * i + k] = (uint8_t)(k == 3 ? 1 + (i * 37) % 255 : (i * 11 + k * 50) % 256);
+    CHECK(tpk_image_upscale(src, SW, SH, same, SW, SH) == 0);
+    for (int i = 0; i < SW * SH * 4; i++)
+        if (same[i] != src[i]) {
+            CHECK_MSG(0, "byte %d: %d, expected %d", i, same[i], src[i]);
+            break;
+        }
+    /* red = 40 x + 20 (x the small picture's column), green = 60 y + 10, opaque */
+    for (int y = 0; y < SH; y++)
+        for (int x = 0; x < SW; x++) {
+            uint8_t *p = &src[4 * (y * SW + x)];
+            p[0] = (uint8_t)(40 * x + 20), p[1] = (uint8_t)(60 * y + 10), p[2] = 0, p[3] = 255;
+        }
+    const int sizes[2][2] = {{24, 16}, {30, 16}}; /* 4 times; and wider than 6 x 4 at that height */
+    for (int c = 0; c < 2; c++) {
+        int dw = sizes[c][0], dh = sizes[c][1];
+        uint8_t *dst = malloc((size_t)dw * dh * 4);
+        CHECK(dst && tpk_image_upscale(src, SW, SH, dst, dw, dh) == 0);
+        if (!dst)
+            return;
+        double s = (double)SH / dh;
+        for (int y = 0; y < dh; y++)
+            for (int x = 0; x < dw; x++) {
+                double fx = (x + 0.5 - 0.5 * dw) * s + 0.5 * SW - 0.5, fy = (y + 0.5) * s - 0.5;
+                fx = fx < 0 ? 0 : fx > SW - 1 ? SW - 1 : fx;
+                fy = fy < 0 ? 0 : fy > SH - 1 ? SH - 1 : fy;
+                const uint8_t *p = &dst[4 * (y * dw + x)];
+                CHECK_MSG(fabs(p[0] - (40 * fx + 20)) <= 0.5 + 1e-3 && fabs(p[1] - (60 * fy + 10)) <= 0.5 + 1e-3 &&
+                              p[2] == 0 && p[3] == 255,
+                          "%dx%d pixel (%d, %d): %d %d %d %d", dw, dh, x, y, p[0], p[1], p[2], p[3]);
+            }
+        free(dst);
+    }
+    /* opaque red beside transparent blue: half way, half the alpha and all of it red */
+    const uint8_t two[8] = {255, 0, 0, 255, 0, 0, 255, 0};
+    uint8_t out[4 * 4];
+    CHECK(tpk_image_upscale(two, 2, 1, out, 4, 2) == 0);
+    CHECK(out[0] == 255 && out[2] == 0 && out[3] == 255);              /* clamped at the edge */
+    CHECK(out[4] == 255 && out[5] == 0 && out[6] == 0 && out[7] == 191); /* a quarter of the way */
+    CHECK(out[12 + 3] == 0);
+}
+
 /* The committed vectors of spec §13 (format 1.3): two_tets_levels.tpk's level is tet 0 alone, with the
  * parent's fields; level_not_coarser.tpk is check 615. */
 TPK_TEST(level_vectors)

@@ -61,21 +61,40 @@ assert d["level"] == 1 and d["level_tets"] > 0 and d["level_error"]["max"] >= d[
 PYEOF
 db=$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/full.png" "$WORK/l1.png" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p')
 "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= 20 else 1)" "$db" || fail "level 1 draws another view: $db dB"
-for ms in 0.001 100000; do
-    "$TPK" render "$f" -o "$WORK/b.png" --size 64x64 --max-ms "$ms" --json > "$WORK/b.json" || fail "--max-ms $ms"
-    "$PY" - "$WORK/b.json" "$ms" "$WORK/exomerge.json" <<'PYEOF' || fail "--max-ms $ms: $(cat "$WORK/b.json")"
-import json, sys
+for case in "0.001 8" "100000 8" "0.001 2" "0.001 1"; do
+    set -- $case
+    ms=$1 max_step=$2
+    "$TPK" render "$f" -o "$WORK/b.png" --size 64x48 --max-ms "$ms" --max-pixel-step "$max_step" --json \
+        > "$WORK/b.json" || fail "--max-ms $ms --max-pixel-step $max_step"
+    "$PY" - "$WORK/b.json" "$ms" "$WORK/exomerge.json" "$max_step" "$WORK/b.png" <<'PYEOF' ||
+import json, struct, sys
 d, ms = json.load(open(sys.argv[1])), float(sys.argv[2])
 coarsest = len(json.load(open(sys.argv[3]))["levels"])
 assert d["max_ms"] == ms and d["predicted_ms"] > 0 and d["frame_ms"] > 0, d
-# a budget no frame fits: the coarsest level; one every frame fits: the full mesh
-assert d["level"] == (0 if ms > 1000 else coarsest), d
+# a budget no frame fits: the coarsest level, then the largest pixel step allowed, rays at every
+# max_step-th pixel (64/d x 48/d, rounded); one every frame fits: the full mesh at every pixel
+step = 1 if ms > 1000 else int(sys.argv[4])
+assert d["level"] == (0 if ms > 1000 else coarsest) and d["pixel_step"] == step, d
+assert d["rays"] == max(1, round(64 / step)) * max(1, round(48 / step)), d
+# the picture has the asked size whatever the step (PNG's IHDR)
+png = open(sys.argv[5], "rb").read(24)
+assert struct.unpack(">II", png[16:24]) == (64, 48), png
 # the level's shell distance, as the converter measured it
 level = json.load(open(sys.argv[3]))["levels"][d["level"] - 1] if d["level"] else {"shell_distance": 0}
 assert abs(d["level_error"]["shell_distance"] - level["shell_distance"]) <= 1e-8 * (1 + level["shell_distance"]), d
 PYEOF
+        fail "--max-ms $ms --max-pixel-step $max_step: $(cat "$WORK/b.json")"
 done
-echo "render: level 1 at $db dB against the full mesh; --max-ms picks the coarsest and the full mesh"
+# at pixel step 2, the coarsest level's picture interpolated: near the picture with a ray at every pixel
+coarsest=$("$PY" -c "import json,sys; print(len(json.load(open(sys.argv[1]))['levels']))" "$WORK/exomerge.json")
+"$TPK" render "$f" -o "$WORK/c1.png" --size 128x96 --field disp_z --step 4 --level "$coarsest" > /dev/null
+"$TPK" render "$f" -o "$WORK/c2.png" --size 128x96 --field disp_z --step 4 --max-ms 0.001 --max-pixel-step 2 \
+    > /dev/null || fail "--max-pixel-step 2"
+step_db=$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/c1.png" "$WORK/c2.png" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p')
+"$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) >= 40 else 1)" "$step_db" ||
+    fail "pixel step 2 against every pixel: $step_db dB"
+echo "render: level 1 at $db dB against the full mesh; --max-ms picks the coarsest and the full mesh, and past"
+echo "the coarsest, the largest pixel step --max-pixel-step allows ($step_db dB at step 2 against every pixel)"
 
 # refused by name
 expect_exit 2 "$TPK" convert "${input[flange]}" "$WORK/x.tpk" --levels 9
@@ -86,6 +105,8 @@ expect_exit 2 "$TPK" render "$f" -o "$WORK/x.png" --level 5
 expect_stderr "no level 5: the file has 3 levels of detail"
 expect_exit 2 "$TPK" convert "${input[flange]}" "$WORK/x.tpk" --levels 2 --level-shell-error 0.5
 expect_stderr "--level-shell-error expects a fraction of the bounding-box diagonal from 0 to 0.1, found '0.5'"
+expect_exit 2 "$TPK" render "$f" -o "$WORK/x.png" --max-ms 10 --max-pixel-step 0
+expect_stderr "--max-pixel-step expects a pixel step from 1 to 16, found '0'"
 expect_exit 2 "$TPK" extract "$f" "$WORK/x.tpk" --level 5
 expect_stderr "no level 5"
 [ ! -e "$WORK/x.tpk" ] || fail "extract left a file for a level that is not there"

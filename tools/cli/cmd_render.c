@@ -250,6 +250,10 @@ static int render_file(render_args *a, tpk_file *file)
         double pixels = (double)a->width * a->height, budget = a->max_ms / 1e3;
         /* the camera, range and unit distance are the full mesh's (opt): every level shows the same view */
         int k = a->max_ms > 0 ? tpk_cost_model_pick(&model, pixels, ls.tets, ls.count, budget) : a->level;
+        int d = a->max_ms > 0 ? tpk_cost_model_pixel_step(&model, pixels, (double)ls.tets[k], budget, a->max_pixel_step)
+                              : 1;
+        int drawn_w, drawn_h; /* the rays cast */
+        tpk_pixel_step_size(a->width, a->height, d, &drawn_w, &drawn_h);
         if (frame_path(a, step, path, sizeof path))
             rc = tpk_cli_fail("render", "-o: the image path of step %d is too long", step);
         if (rc == TPK_EXIT_OK)
@@ -258,15 +262,20 @@ static int render_file(render_args *a, tpk_file *file)
                             .level_tets = ls.tets[k], .error_max = ls.error_max[k], .error_rms = ls.error_rms[k],
                             .shell_distance = ls.shell_distance[k],
                             .budget = a->max_ms > 0 ? budget : 0,
-                            .predicted = tpk_cost_model_predict(&model, pixels, (double)ls.tets[k])};
+                            .predicted = tpk_cost_model_predict(&model, (double)drawn_w * drawn_h,
+                                                                (double)ls.tets[k]),
+                            .pixel_step = d};
         if (rc == TPK_EXIT_OK && a->verbose && (a->max_ms > 0 || k > 0))
             fprintf(stderr, "tetpack render: level %d (%lld tets)%s\n", k, (long long)ls.tets[k],
                     a->max_ms > 0 ? ", the finest the cost model fits in --max-ms" : "");
+        if (rc == TPK_EXIT_OK && a->verbose && d > 1)
+            fprintf(stderr, "tetpack render: pixel step %d (%dx%d rays, interpolated to %dx%d): the coarsest level "
+                    "at every pixel does not fit in --max-ms\n", d, drawn_w, drawn_h, a->width, a->height);
         tpk_render_stats stats;
         if (rc == TPK_EXIT_OK)
             rc = render_frame_stats(a, &src, &opt, path, rgba, &stats);
         if (rc == TPK_EXIT_OK && a->max_ms > 0) /* the model learns from every frame drawn */
-            tpk_cost_model_add(&model, pixels, (double)ls.tets[k], render_frame_seconds(a, &stats));
+            tpk_cost_model_add(&model, (double)drawn_w * drawn_h, (double)ls.tets[k], render_frame_seconds(a, &stats));
     }
     free(rgba);
     close_levels(&ls);

@@ -12,6 +12,7 @@ void render_args_default(render_args *a)
 {
     memset(a, 0, sizeof *a);
     a->width = a->height = 512;
+    a->max_pixel_step = 8;
 }
 
 static int parse_size(const char *text, int *w, int *h)
@@ -132,6 +133,10 @@ static int opt_verbose(const char *v, render_args *a) { (void)v; a->verbose = 1;
 static int opt_iso_raster(const char *v, render_args *a) { (void)v; a->iso_raster = 1; return 0; }
 static int opt_level(const char *v, render_args *a) { return int_option(TPK_OPT_LEVEL, v, &a->level); }
 static int opt_max_ms(const char *v, render_args *a) { return number_option(TPK_OPT_MAX_MS, v, &a->max_ms); }
+static int opt_max_pixel_step(const char *v, render_args *a)
+{
+    return int_option(TPK_OPT_MAX_PIXEL_STEP, v, &a->max_pixel_step);
+}
 static int opt_threads(const char *v, render_args *a) { return int_option(TPK_OPT_THREADS, v, &a->threads); }
 static int opt_backend(const char *v, render_args *a)
 {
@@ -230,6 +235,7 @@ static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_ISO_RASTER] = opt_iso_raster,
     [TPK_OPT_LEVEL] = opt_level,
     [TPK_OPT_MAX_MS] = opt_max_ms,
+    [TPK_OPT_MAX_PIXEL_STEP] = opt_max_pixel_step,
 };
 
 const tpk_option_row *render_args_find_option(const char *arg)

@@ -31,6 +31,7 @@ typedef struct render_args {
     int iso_raster;                      /* --iso-raster: the isosurfaces drawn as triangles (Vulkan) */
     int level;                           /* --level K: level of detail K (0: the full mesh) */
     double max_ms;                       /* --max-ms T: the time budget (0: none) */
+    int max_pixel_step;                  /* --max-pixel-step D (default 8) */
     int iso_auto;                        /* --iso auto: one isosurface at the field's median (render_args_iso_auto) */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
     int backend_from_scene;              /* backend is the scene's: without a device, the CPU (same picture) */

@@ -2,10 +2,13 @@
  * cmd_render.c and render_set.c (part sets). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
+#include "base/clock.h"
 #include "base/strbuf.h"
 #include "cli.h"
+#include "render/budget.h"
 #include "render/legend.h"
 #include "render/render.h"
 #include "render_frame.h"
@@ -60,8 +63,30 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
                             ": this tetpack was built without Vulkan (TETPACK_WITH_VULKAN=OFF)"
 #endif
         );
-    if ((src->set ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
-                  : render_image(a, src->mesh, opt, rgba, &stats, &diag)) != 0)
+    /* a pixel step d > 1 (--max-ms): the frame drawn at about 1/d of the size, then brought to it */
+    tpk_render_options small = *opt;
+    uint8_t *drawn = rgba;
+    if (!src->set && src->pixel_step > 1) {
+        tpk_pixel_step_size(opt->width, opt->height, src->pixel_step, &small.width, &small.height);
+        drawn = malloc((size_t)small.width * (size_t)small.height * 4);
+        if (!drawn)
+            return tpk_cli_fail("render", "out of memory for a %dx%d image", small.width, small.height);
+    }
+    int failed = src->set ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
+                          : render_image(a, src->mesh, &small, drawn, &stats, &diag);
+    if (!failed && drawn != rgba) {
+        double t0 = tpk_now_seconds();
+        if (tpk_image_upscale(drawn, small.width, small.height, rgba, opt->width, opt->height) != 0) {
+            free(drawn);
+            return tpk_cli_fail("render", "out of memory for a %dx%d image", opt->width, opt->height);
+        }
+        double upscale = tpk_now_seconds() - t0; /* part of the frame */
+        stats.seconds += upscale;
+        stats.gpu_seconds += stats.gpu_seconds > 0 ? upscale : 0;
+    }
+    if (drawn != rgba)
+        free(drawn);
+    if (failed)
         return tpk_cli_fail_file("render", a->path, diag.message); /* e.g. bounds that are not finite */
     tpk_legend legend = {opt->tf, opt->range_min, opt->range_max, src->field ? src->field->name : NULL,
                          src->field ? src->field->units : NULL};
@@ -100,8 +125,9 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
                        src->level == 0 ? "{\"max\":0,\"rms\":0,\"shell_distance\":0}" : "null");
         }
         if (src->budget > 0)
-            printf(",\"max_ms\":%.6g,\"predicted_ms\":%.6g,\"frame_ms\":%.6g", src->budget * 1e3,
-                   src->predicted * 1e3, render_frame_seconds(a, &stats) * 1e3);
+            printf(",\"max_ms\":%.6g,\"predicted_ms\":%.6g,\"frame_ms\":%.6g,\"pixel_step\":%d", src->budget * 1e3,
+                   src->predicted * 1e3, render_frame_seconds(a, &stats) * 1e3,
+                   src->pixel_step > 1 ? src->pixel_step : 1);
         if (a->iso_raster) {
             char why[160];
             snprintf(why, sizeof why, "VK_EXT_mesh_shader present, not used%s%s",

@@ -23,6 +23,7 @@ typedef struct frame_source {
     int level;
     int64_t level_tets;
     double error_max, error_rms, shell_distance, budget, predicted;
+    int pixel_step; /* rays at every pixel_step-th pixel, the rest interpolated (budget.h; <= 1: every pixel) */
 } frame_source;
 
 /* The picture of `mesh` by the backend of the arguments (the CPU reference, Vulkan, --iso-raster), no

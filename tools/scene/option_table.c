@@ -285,11 +285,19 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .flag = "--max-ms", .metavar = "T", .expects = "a time in milliseconds > 0",
      .help = "a time budget: the finest level of detail whose predicted frame\n"
              "time fits T ms (a cost model fitted on two small frames of the\n"
-             "coarsest level, then on every frame drawn); --json reports the\n"
-             "level, its field error and the prediction. view: while the view\n"
-             "moves; at rest it draws the full mesh",
+             "coarsest level, then on every frame drawn); render: where even\n"
+             "the coarsest does not fit, rays at every d-th pixel only\n"
+             "(--max-pixel-step), the picture between them interpolated;\n"
+             "--json reports the level, its field error, the pixel step and\n"
+             "the prediction. view: while the view moves; at rest it draws\n"
+             "the full mesh",
      .help_rank = 32, .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = INFINITY, .lo_open = 1,
      .hi_open = 1},
+    {TPK_OPT_MAX_PIXEL_STEP,
+     .flag = "--max-pixel-step", .metavar = "D", .expects = "a pixel step from 1 to 16",
+     .help = "with --max-ms, the largest pixel step the budget may take\n"
+             "(default 8; 1: every pixel, whatever the budget)",
+     .help_rank = 33, .render_only = 1, .kind = TPK_OPT_KIND_INT, .lo = 1, .hi = 16},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

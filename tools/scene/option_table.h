@@ -53,6 +53,7 @@ typedef enum tpk_option_id {
     TPK_OPT_ISO_RASTER,
     TPK_OPT_LEVEL,
     TPK_OPT_MAX_MS,
+    TPK_OPT_MAX_PIXEL_STEP,
     TPK_OPT_COUNT
 } tpk_option_id;
 
