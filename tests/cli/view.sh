@@ -132,6 +132,14 @@ for frames in 1 2; do
     tpk render "$WORK/cyl_l.tpk" --size $SIZE --backend vulkan --level $want -o "$WORK/lod-render$want.png" > /dev/null
     psnr_at_least "$WORK/lod$frames.png" "$WORK/lod-render$want.png" "view --max-ms, frame $frames (level $want)"
 done
+# while the view moves (--orbit), the coarsest level, and past it, with a budget nothing fits, rays at
+# every 8th pixel; with one every frame fits, the full mesh at every pixel
+for case in "0.0001 $coarsest 8" "100000 0 1"; do
+    set -- $case
+    tpk view "$WORK/cyl_l.tpk" --size $SIZE --frames 3 --orbit 10 --max-ms "$1" 2> "$WORK/err" ||
+        { cat "$WORK/err"; fail "view --max-ms $1 --orbit"; }
+    grep -q "the last at level $2, pixel step $3" "$WORK/err" || fail "view --max-ms $1 --orbit: $(cat "$WORK/err")"
+done
 
 # no Vulkan device: the CPU reference, with a note
 VK_ICD_FILENAMES="$WORK/no_such_icd.json" TETPACK_RENDER_BACKEND= tpk view "$WORK/cyl.tpk" --size $SIZE --frames 1 \

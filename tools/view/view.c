@@ -30,6 +30,7 @@ typedef struct view_loop {
     int timed;
     tpk_cost_model model;      /* --max-ms: fitted on every frame drawn */
     int levels_shown[9];       /* frames drawn at each level, for the summary */
+    int last_zoom;             /* the last frame's pixel step (a drag's, or --max-ms's) */
 } view_loop;
 
 /* Mouse drags onto the camera: 0.4 degree per pixel, a wheel step zooms by 10%. */
@@ -120,6 +121,13 @@ static int show_frame(view_loop *l, int reduced, int resting, tpk_diag *diag)
     int zoom = 1;
     if (reduced && l->full_seconds > drag_frame_seconds)
         zoom = (int)fmin(8.0, ceil(sqrt(l->full_seconds / drag_frame_seconds)));
+    /* --max-ms past the coarsest level, while the view moves: rays at every d-th pixel (budget.h) */
+    if (l->o->max_ms > 0 && !(resting && !reduced)) {
+        int d = tpk_cost_model_pixel_step(&l->model, (double)width * height,
+                                          (double)l->state.level_tets[l->state.level], l->o->max_ms / 1e3, 8);
+        zoom = d > zoom ? d : zoom;
+    }
+    l->last_zoom = zoom;
     int w = (width + zoom - 1) / zoom, h = (height + zoom - 1) / zoom;
     size_t bytes = (size_t)width * (size_t)height * 4;
     if (bytes > l->rgba_bytes) {
@@ -189,7 +197,7 @@ static int finish(view_loop *l, tpk_diag *diag)
         fprintf(stderr, "tetpack view: --max-ms %g: frames per level", l->o->max_ms);
         for (int k = 0; k < l->state.level_count; k++)
             fprintf(stderr, " %d:%d", k, l->levels_shown[k]);
-        fprintf(stderr, " (0: the full mesh); the last at level %d\n", l->state.level);
+        fprintf(stderr, " (0: the full mesh); the last at level %d, pixel step %d\n", l->state.level, l->last_zoom);
     }
     if (l->o->screenshot && save_screenshot(l, l->o->screenshot, width, height, diag) != 0)
         return -1;
