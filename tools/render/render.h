@@ -198,9 +198,14 @@ typedef struct tpk_render_options {
  * 0.35 CPU-microseconds a tet, which only enough rays pay back. Measured on the 998k-tet grid of
  * bench/make_grid_vtk.py 55, 1024x1024, rays alone, one thread: culling 1.1x faster than marching
  * where 47% of the file-order tree's leaves hold the value, 1.5x at 35%, 2.1x at 25%, 4.3x at 11%
- * (rays one by one; the packets since cull about 2.5 times as many rays a second at iso 0.3). So
- * the renderer culls where at most TPK_RENDER_CULL_ACTIVE of those leaves hold a value, or, with at
- * least as many rays as tets, at most TPK_RENDER_CULL_ACTIVE_MANY; else it marches. Building the trees
+ * (rays one by one). The packets since cull about 2.5 times as many rays a second at iso 0.3; then,
+ * process CPU seconds, median of 3, one thread, forced march / forced cull / the old automatic choice
+ * (culling up to 10% of the leaves with fewer rays than tets, 40% with more): 1024x1024, 47% of the
+ * leaves: 1.49 / 0.92 / 1.68 (it built the trees, then marched), 61%: 1.05 / 1.04 / 1.30, 81%: 0.87 /
+ * 1.10; 512x512, 11%: 0.97 / 0.34 / 1.15, 21%: 0.51 / 0.39 / 0.67; 256x256, 11%: 0.23 / 0.39 / 0.51.
+ * Once the trees are built, culling won up to about half of the leaves. So the CPU renderer culls where
+ * at most TPK_RENDER_CULL_ACTIVE_CPU of those leaves hold a value, or, with at least as many rays as
+ * tets, at most TPK_RENDER_CULL_ACTIVE_MANY; else it marches. Building the trees
  * to count the leaves costs more than a small frame on a large mesh (10.4M tets: several
  * CPU-seconds), so with fewer rays than tets a glance at the field comes first: where more than
  * TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices (spatially compact along the file's
@@ -230,8 +235,9 @@ int tpk_render_culling_wanted(void);
 /* The ISO-ONLY RAYS glance: 1 when more than TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices
  * of mesh's point field hold one of the values (a dense surface: march without building the tree). */
 int tpk_render_iso_dense(const tpk_mesh_arrays *mesh, const double *values, int count);
-#define TPK_RENDER_CULL_ACTIVE 0.1
-#define TPK_RENDER_CULL_ACTIVE_MANY 0.4
+#define TPK_RENDER_CULL_ACTIVE 0.1       /* the Vulkan renderer's */
+#define TPK_RENDER_CULL_ACTIVE_CPU 0.35  /* the CPU's, fewer rays than tets */
+#define TPK_RENDER_CULL_ACTIVE_MANY 0.55
 #define TPK_RENDER_DENSE_RUNS 0.2
 
 /* width 800, height 600, integration 0, threads all, background opaque dark gray (0.1, 0.1, 0.1, 1);
