@@ -54,13 +54,12 @@ typedef struct edge_link {
     uint32_t next, vertex;
 } edge_link;
 
-/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: the four vertex ids, the
- * top bit of corner k's id its side (ids are below 2^31), so the emission reads them in sequence
- * instead of fetching the tets again from the whole array. */
-#define SIDE_BIT 0x80000000u
-
+/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: the four vertex ids, copied
+ * so the emission reads them in sequence instead of fetching the tets again from the whole array, and the
+ * case (bit k: corner k at or above the value). */
 typedef struct active_list {
-    uint32_t (*tets)[4];
+    int32_t (*tets)[4];
+    uint8_t *cases;
     int64_t count, cap;
 } active_list;
 
@@ -80,10 +79,8 @@ typedef struct march {
     edge_link *edges;                          /* first-seen order; this and below kept across values */
     int64_t edge_count, edge_cap;
     hub_table hubs;
-    uint64_t *vertex_key;                      /* per vertex of this value */
-    double *vertex_p;                          /* 3 per vertex: position relative to the origin */
     double *normal_sum;                        /* 3 per vertex: its triangles' normals, summed in corner order */
-    int64_t key_cap, p_cap, normal_cap;        /* their capacities: kept across values, like edges */
+    int64_t normal_cap;                        /* its capacity: kept across values, like edges */
     struct key_edge *run;                      /* rank_edges: one lower vertex's edges */
     int64_t run_cap;
     tpk_iso_surface *out;
@@ -106,9 +103,25 @@ static void side_range(void *ctx, int64_t begin, int64_t end, int w)
 
 #define COUNT_BLOCK 4096
 
+/* Room for `first` tets (first a quarter of the tets, on huge pages: tpk_alloc_large), then twice as many. */
+static int grow_active(active_list *list, int64_t first)
+{
+    int64_t cap = list->cap ? 2 * list->cap : first;
+    int32_t(*tets)[4] = list->tets ? realloc(list->tets, (size_t)cap * sizeof *tets)
+                                   : tpk_alloc_large((size_t)cap * sizeof *tets);
+    if (tets)
+        list->tets = tets;
+    uint8_t *cases = tets ? realloc(list->cases, (size_t)cap) : NULL;
+    if (!cases)
+        return -1;
+    list->cases = cases;
+    list->cap = cap;
+    return 0;
+}
+
 /* Count the triangles of the tets in [begin, end) and list the tets that make some. Compaction without
- * branches: every tet is written, the count advances past the active ones only, so inactive tets cost
- * four byte loads from `side` and no mispredicted branch. */
+ * branches: every tet and case is written, the count advances past the active ones only, so inactive tets
+ * cost four byte loads from `side`, a 16-byte copy and no mispredicted branch. */
 static void count_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     march *m = ctx;
@@ -118,26 +131,18 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
     int64_t n = 0, triangles = 0;
     for (int64_t b = begin; b < end; b += COUNT_BLOCK) {
         int64_t e = end - b < COUNT_BLOCK ? end : b + COUNT_BLOCK;
-        if (n + COUNT_BLOCK > list->cap) { /* first a quarter of the tets, on huge pages (tpk_alloc_large) */
-            int64_t cap = list->cap ? 2 * list->cap : (end - begin) / 4 + COUNT_BLOCK;
-            uint32_t(*grown)[4] = list->tets ? realloc(list->tets, (size_t)cap * sizeof *grown)
-                                             : tpk_alloc_large((size_t)cap * sizeof *grown);
-            if (!grown) {
-                m->failed = 1;
-                break;
-            }
-            list->tets = grown;
-            list->cap = cap;
+        if (n + COUNT_BLOCK > list->cap && grow_active(list, (end - begin) / 4 + COUNT_BLOCK)) {
+            m->failed = 1;
+            break;
         }
-        uint32_t(*out)[4] = list->tets;
+        int32_t(*out)[4] = list->tets;
+        uint8_t *cases = list->cases;
         for (int64_t t = b; t < e; t++) {
             const int32_t *v = tets + 4 * t;
-            unsigned s0 = side[v[0]], s1 = side[v[1]], s2 = side[v[2]], s3 = side[v[3]];
-            unsigned count = m->case_triangles[s0 | s1 << 1 | s2 << 2 | s3 << 3];
-            out[n][0] = (uint32_t)v[0] | (s0 & 1) << 31;
-            out[n][1] = (uint32_t)v[1] | (s1 & 1) << 31;
-            out[n][2] = (uint32_t)v[2] | (s2 & 1) << 31;
-            out[n][3] = (uint32_t)v[3] | (s3 & 1) << 31;
+            unsigned c = side[v[0]] | side[v[1]] << 1 | side[v[2]] << 2 | side[v[3]] << 3;
+            unsigned count = m->case_triangles[c];
+            memcpy(out[n], v, sizeof out[n]);
+            cases[n] = (uint8_t)c;
             n += count != 0;
             triangles += count;
         }
@@ -279,11 +284,12 @@ static int compare_key_edge(const void *pa, const void *pb)
     return (a > b) - (a < b);
 }
 
-/* Number the edges by key: every lower vertex in order, its chain's edges sorted by upper vertex. Frees
- * the heads for the next value, also when it fails. Returns the vertex count, -1 without memory. */
-static int64_t rank_edges(march *m)
+/* Number the edges by key: every lower vertex in order, its chain's edges sorted by upper vertex, their
+ * ids written to the vertices' out->edge. Frees the heads for the next value, also when it fails
+ * (`failed` set). Returns the vertex count, -1 without memory. */
+static int64_t rank_edges(march *m, int failed)
 {
-    int failed = reserve((void **)&m->vertex_key, &m->key_cap, m->edge_count, sizeof *m->vertex_key);
+    int32_t *out_edge = failed ? NULL : m->out->edge + 2 * m->vertex_base;
     int64_t vertices = 0;
     for (int64_t a = 0; a < m->in->vertex_count && vertices < m->edge_count; a++) {
         if (m->head[a] == EDGE_NONE)
@@ -312,7 +318,8 @@ static int64_t rank_edges(march *m)
         }
         for (int64_t i = 0; i < count; i++) {
             m->edges[run[i].edge].vertex = (uint32_t)vertices;
-            m->vertex_key[vertices++] = run[i].key;
+            out_edge[2 * vertices] = (int32_t)a;
+            out_edge[2 * vertices++ + 1] = (int32_t)(uint32_t)run[i].key;
         }
     }
     if (m->hubs.count) {
@@ -330,13 +337,12 @@ static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
     for (int w = 0; w < m->threads; w++) {
         const active_list *list = &m->active[w];
         for (int64_t i = 0; i < list->count; i++) {
-            const uint32_t *tet = list->tets[i];
-            int c = (int)(tet[0] >> 31 | tet[1] >> 31 << 1 | tet[2] >> 31 << 2 | tet[3] >> 31 << 3);
-            int count = iso_cases[c].count;
-            uint32_t v[4] = {tet[0] & ~SIDE_BIT, tet[1] & ~SIDE_BIT, tet[2] & ~SIDE_BIT, tet[3] & ~SIDE_BIT}, edge[6];
+            const int32_t *v = list->tets[i];
+            int c = list->cases[i], count = iso_cases[c].count;
+            uint32_t edge[6];
             for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
                 int k = m->crossed[c][j];
-                uint32_t a = v[tet_edges[k][0]], b = v[tet_edges[k][1]];
+                uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
                 uint32_t lo = a < b ? a : b, hi = a < b ? b : a; /* selects, not a mispredicted branch */
                 if ((edge[k] = recent_edge_of(m, recent, (uint64_t)lo << 32 | hi)) == EDGE_NONE)
                     return -1;
@@ -348,10 +354,14 @@ static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
     return 0;
 }
 
-/* Share the corners' vertices: each corner's edge into `corner` (3 per triangle), then the edges
- * numbered by key. Returns the vertex count, -1 without memory or at 2^31 - 1 edges. */
-static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
+static int grow_surface(tpk_iso_surface *o, int64_t vertices, int64_t triangles);
+
+/* Share the corners' vertices: each corner's edge into `corner` (3 per triangle), the surface's arrays
+ * grown for one vertex per edge, then the edges numbered by key. Returns the vertex count, -1 without
+ * memory or at 2^31 - 1 edges or vertices in all. */
+static int64_t number_vertices(march *m, int64_t triangles, uint32_t *corner)
 {
+    int64_t corners = 3 * triangles;
     m->edge_count = 0;
     if (reserve((void **)&m->edges, &m->edge_cap, corners / 4 + 64, sizeof *m->edges))
         return -1;
@@ -364,21 +374,25 @@ static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
     } else {
         failed = edges_of_tets(m, &recent, corner);
     }
-    int64_t vertices = rank_edges(m); /* also when failed: it frees the heads */
+    tpk_iso_surface *o = m->out;
+    failed = failed || o->vertex_count + m->edge_count > INT32_MAX ||
+             reserve((void **)&m->normal_sum, &m->normal_cap, 3 * m->edge_count, sizeof *m->normal_sum) ||
+             grow_surface(o, o->vertex_count + m->edge_count, o->triangle_count + triangles);
+    int64_t vertices = rank_edges(m, failed); /* also when failed: it frees the heads */
     return failed ? -1 : vertices;
 }
 
-static void position_of(const march *m, uint64_t key, double *t_out, double p[3])
+static void position_of(const march *m, uint32_t a, uint32_t b, double *t_out, double p[3])
 {
     const float *pos = m->in->positions, *s = m->in->scalars;
-    uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
     double t = (m->value - s[a]) / ((double)s[b] - s[a]);
     for (int k = 0; k < 3; k++)
         p[k] = pos[3 * a + k] + t * ((double)pos[3 * b + k] - pos[3 * a + k]);
     *t_out = t;
 }
 
-/* Positions, values, colours and edges of the vertices; their normal sums cleared. */
+/* Positions relative to the origin (in xyz until normal_range adds it: the normals need them), values
+ * and colours of the vertices from their edges; their normal sums cleared. */
 static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     (void)w;
@@ -386,19 +400,14 @@ static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
     tpk_iso_surface *o = m->out;
     for (int64_t v = begin; v < end; v++) {
         int64_t out = m->vertex_base + v;
-        uint64_t key = m->vertex_key[v];
-        uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
-        double *p = m->vertex_p + 3 * v, t;
-        position_of(m, key, &t, p);
-        for (int k = 0; k < 3; k++) {
-            o->xyz[3 * out + k] = m->in->origin[k] + p[k];
+        uint32_t a = (uint32_t)o->edge[2 * out], b = (uint32_t)o->edge[2 * out + 1];
+        double t;
+        position_of(m, a, b, &t, o->xyz + 3 * out);
+        for (int k = 0; k < 3; k++)
             m->normal_sum[3 * v + k] = 0.0;
-        }
         o->value[out] = (float)m->value;
         if (o->color)
             o->color[out] = (float)(m->in->colors[a] + t * ((double)m->in->colors[b] - m->in->colors[a]));
-        o->edge[2 * out] = (int32_t)a;
-        o->edge[2 * out + 1] = (int32_t)b;
     }
 }
 
@@ -408,13 +417,14 @@ static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
 static void sum_normals(march *m, int64_t triangles)
 {
     uint32_t *tri = m->out->tri + 3 * m->triangle_base;
+    const double *rel = m->out->xyz + 3 * m->vertex_base;
     for (int64_t f = 0; f < triangles; f++, tri += 3) {
         const double *p[3];
         uint32_t v[3];
         for (int k = 0; k < 3; k++) {
             v[k] = m->edges[tri[k]].vertex;
             tri[k] = (uint32_t)(m->vertex_base + v[k]);
-            p[k] = m->vertex_p + 3 * v[k];
+            p[k] = rel + 3 * v[k];
         }
         double ax = p[1][0] - p[0][0], ay = p[1][1] - p[0][1], az = p[1][2] - p[0][2];
         double bx = p[2][0] - p[0][0], by = p[2][1] - p[0][1], bz = p[2][2] - p[0][2];
@@ -428,25 +438,28 @@ static void sum_normals(march *m, int64_t triangles)
     }
 }
 
+/* The unit normals, and the origin added to the positions. */
 static void normal_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     (void)w;
     march *m = ctx;
     const float *pos = m->in->positions, *s = m->in->scalars;
     for (int64_t v = begin; v < end; v++) {
-        double *n = m->normal_sum + 3 * v;
+        int64_t out = m->vertex_base + v;
+        double *n = m->normal_sum + 3 * v, *xyz = m->out->xyz + 3 * out;
+        for (int k = 0; k < 3; k++)
+            xyz[k] = m->in->origin[k] + xyz[k];
         double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         if (!(len > 0) || !isfinite(len)) { /* only zero-area triangles here: the edge, toward higher */
-            uint64_t key = m->vertex_key[v];
-            uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
+            uint32_t a = (uint32_t)m->out->edge[2 * out], b = (uint32_t)m->out->edge[2 * out + 1];
             double up = s[b] > s[a] ? 1 : -1;
             for (int k = 0; k < 3; k++)
                 n[k] = up * ((double)pos[3 * b + k] - pos[3 * a + k]);
             len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         }
-        float *out = m->out->normal + 3 * (m->vertex_base + v);
+        float *normal = m->out->normal + 3 * out;
         for (int k = 0; k < 3; k++)
-            out[k] = len > 0 ? (float)(n[k] / len) : 0.0f;
+            normal[k] = len > 0 ? (float)(n[k] / len) : 0.0f;
     }
 }
 
@@ -506,7 +519,6 @@ static int extract_value(march *m, tpk_diag *diag)
             m->worker_first[w + 1] += m->worker_first[w];
         triangles = m->worker_first[m->threads];
     }
-    int64_t corners = 3 * triangles;
     if (o->triangle_count + triangles > INT32_MAX) {
         free_scratch(m);
         return tpk_diag_fail(diag, "the isosurface of %g has %lld triangles; more than 2^31 - 1 triangles or vertices "
@@ -514,15 +526,11 @@ static int extract_value(march *m, tpk_diag *diag)
     }
     if (grow((void **)&o->tri, 3 * (o->triangle_count + triangles), sizeof(uint32_t)))
         goto fail;
-    int64_t vertices = number_vertices(m, corners, o->tri + 3 * o->triangle_count);
-    if (vertices < 0 || o->vertex_count + vertices > INT32_MAX)
-        goto fail;
-    if (reserve((void **)&m->vertex_p, &m->p_cap, 3 * vertices, sizeof *m->vertex_p) ||
-        reserve((void **)&m->normal_sum, &m->normal_cap, 3 * vertices, sizeof *m->normal_sum) ||
-        grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
-        goto fail;
     m->vertex_base = o->vertex_count;
     m->triangle_base = o->triangle_count;
+    int64_t vertices = number_vertices(m, triangles, o->tri + 3 * o->triangle_count);
+    if (vertices < 0)
+        goto fail;
     tpk_parallel_for(vertices, tpk_threads_for(vertices, m->threads, 4096), vertex_range, m);
     sum_normals(m, triangles);
     tpk_parallel_for(vertices, tpk_threads_for(vertices, m->threads, 4096), normal_range, m);
@@ -549,13 +557,13 @@ static void free_march(march *m)
 {
     free_scratch(m);
     free(m->edges);
-    free(m->vertex_key);
-    free(m->vertex_p);
     free(m->normal_sum);
     free(m->run);
     free(m->side);
-    for (int w = 0; w < TPK_MAX_THREADS; w++)
+    for (int w = 0; w < TPK_MAX_THREADS; w++) {
         free(m->active[w].tets);
+        free(m->active[w].cases);
+    }
     free(m->head);
     free(m->hubs.keys);
     free(m->hubs.edges);
