@@ -68,7 +68,10 @@ typedef struct march {
     double value;
     float threshold;                           /* the least float s with (double)s >= value */
     int threads;
-    uint8_t crossed[16][4];                    /* per case: its crossed tet edges (3 or 4), ascending */
+    uint8_t crossed[16][4];                    /* per case: its crossed tet edges, ascending; the third twice
+                                                  where 3 are crossed */
+    uint8_t corner_edge[16][6];                /* per case: iso_cases' edges, the first triangle twice
+                                                  where it makes one */
     uint8_t case_triangles[256];               /* per case with its NaN bits: 0 with a NaN, for 0 and 15 */
     int64_t worker_first[TPK_MAX_THREADS + 1]; /* first triangle of each worker's tets */
     uint8_t *side;                             /* per mesh vertex: 1 at or above the value, 16 for a NaN */
@@ -206,7 +209,7 @@ static int make_hub(march *m, uint32_t a)
 }
 
 /* The edge of `key`, made when new. EDGE_NONE when out of memory or at 2^31 - 1 edges. */
-static uint32_t edge_of(march *m, uint64_t key)
+static __attribute__((noinline)) uint32_t edge_of_slow(march *m, uint64_t key)
 {
     uint32_t a = (uint32_t)(key >> 32), head = m->head[a];
     int chain = 0;
@@ -233,6 +236,24 @@ static uint32_t edge_of(march *m, uint64_t key)
     m->head[a] = e | (hub ? HUB_BIT : 0);
     if (hub ? hub_insert(&m->hubs, key, e) : chain >= HUB_CHAIN && make_hub(m, a))
         return EDGE_NONE;
+    return e;
+}
+
+/* edge_of_slow, its common case inline: a vertex that is no hub, an edge array with room. */
+static inline uint32_t edge_of(march *m, uint64_t key)
+{
+    uint32_t a = (uint32_t)(key >> 32), head = m->head[a];
+    if ((head != EDGE_NONE && (head & HUB_BIT)) || m->edge_count == m->edge_cap)
+        return edge_of_slow(m, key);
+    int chain = 0;
+    for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
+        if (m->edges[e].key == key)
+            return e;
+    if (chain >= HUB_CHAIN)
+        return edge_of_slow(m, key);
+    uint32_t e = (uint32_t)m->edge_count++;
+    m->edges[e] = (edge_link){key, head, 0};
+    m->head[a] = e;
     return e;
 }
 
@@ -338,17 +359,22 @@ static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
         const active_list *list = &m->active[w];
         for (int64_t i = 0; i < list->count; i++) {
             const int32_t *v = list->tets[i];
-            int c = list->cases[i], count = iso_cases[c].count;
+            int c = list->cases[i];
             uint32_t edge[6];
-            for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
+            /* Four lookups and six corners whatever the case, so no branch on it is mispredicted: a tet
+             * with 3 crossed edges looks its third up again (found in `recent`, just put there), one with
+             * one triangle writes it twice (the second copy overwritten by the next tet's, or in the
+             * array's slack at the end). */
+            for (int j = 0; j < 4; j++) {
                 int k = m->crossed[c][j];
                 uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
                 uint32_t lo = a < b ? a : b, hi = a < b ? b : a; /* selects, not a mispredicted branch */
                 if ((edge[k] = recent_edge_of(m, recent, (uint64_t)lo << 32 | hi)) == EDGE_NONE)
                     return -1;
             }
-            for (int k = 0; k < 3 * count; k++)
-                *corner++ = edge[iso_cases[c].edge[k]];
+            for (int k = 0; k < 6; k++)
+                corner[k] = edge[m->corner_edge[c][k]];
+            corner += 3 * iso_cases[c].count;
         }
     }
     return 0;
@@ -479,7 +505,7 @@ static int grow_surface(tpk_iso_surface *o, int64_t vertices, int64_t triangles)
     return grow((void **)&o->xyz, 3 * vertices, sizeof(double)) || grow((void **)&o->normal, 3 * vertices, sizeof(float)) ||
            grow((void **)&o->value, vertices, sizeof(float)) ||
            (o->color && grow((void **)&o->color, vertices, sizeof(float))) ||
-           grow((void **)&o->edge, 2 * vertices, sizeof(int32_t)) || grow((void **)&o->tri, 3 * triangles, sizeof(uint32_t));
+           grow((void **)&o->edge, 2 * vertices, sizeof(int32_t)) || grow((void **)&o->tri, 3 * triangles + 3, sizeof(uint32_t));
 }
 
 /* The GPU's corner keys of one value. The rest of the scratch is kept for the next value (free_march). */
@@ -524,7 +550,7 @@ static int extract_value(march *m, tpk_diag *diag)
         return tpk_diag_fail(diag, "the isosurface of %g has %lld triangles; more than 2^31 - 1 triangles or vertices "
                              "in all do not fit the outputs' 32-bit indices", m->value, (long long)triangles);
     }
-    if (grow((void **)&o->tri, 3 * (o->triangle_count + triangles), sizeof(uint32_t)))
+    if (grow((void **)&o->tri, 3 * (o->triangle_count + triangles) + 3, sizeof(uint32_t))) /* + edges_of_tets' slack */
         goto fail;
     m->vertex_base = o->vertex_count;
     m->triangle_base = o->triangle_count;
@@ -600,6 +626,12 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
         for (int k = 0, j = 0; k < 6; k++)
             if (((c >> tet_edges[k][0]) ^ (c >> tet_edges[k][1])) & 1)
                 m.crossed[c][j++] = (uint8_t)k;
+    for (int c = 0; c < 16; c++) {
+        if (iso_cases[c].count == 1)
+            m.crossed[c][3] = m.crossed[c][2];
+        for (int k = 0; k < 6; k++)
+            m.corner_edge[c][k] = iso_cases[c].edge[iso_cases[c].count == 1 ? k % 3 : k];
+    }
     for (int c = 0; c < 256; c++)
         m.case_triangles[c] = c < 16 ? iso_cases[c].count : 0;
     for (int i = 0; i < value_count; i++) {
