@@ -48,10 +48,13 @@ typedef struct hub_table {
     int64_t count, cap;
 } hub_table;
 
-/* A crossed mesh edge: its key, the edge seen before it at the same lower vertex, its vertex. */
+/* A crossed mesh edge: its upper vertex (the lower one is the chain's: head[a]) and the edge seen before
+ * it at the same lower vertex; once ranked (rank_edges), its vertex instead. */
 typedef struct edge_link {
-    uint64_t key;
-    uint32_t next, vertex;
+    uint32_t upper;
+    union {
+        uint32_t next, vertex;
+    };
 } edge_link;
 
 /* A worker's active tets from count_range, in tet order, cases 1 to 14 only: the four vertex ids, copied
@@ -142,6 +145,7 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
         uint8_t *cases = list->cases;
         for (int64_t t = b; t < e; t++) {
             const int32_t *v = tets + 4 * t;
+            __builtin_prefetch(v + 4 * 64);
             unsigned c = side[v[0]] | side[v[1]] << 1 | side[v[2]] << 2 | side[v[3]] << 3;
             unsigned count = m->case_triangles[c];
             memcpy(out[n], v, sizeof out[n]);
@@ -202,7 +206,7 @@ static int hub_insert(hub_table *h, uint64_t key, uint32_t edge)
 static int make_hub(march *m, uint32_t a)
 {
     for (uint32_t e = m->head[a]; e != EDGE_NONE; e = m->edges[e].next)
-        if (hub_insert(&m->hubs, m->edges[e].key, e))
+        if (hub_insert(&m->hubs, (uint64_t)a << 32 | m->edges[e].upper, e))
             return -1;
     m->head[a] |= HUB_BIT;
     return 0;
@@ -219,7 +223,7 @@ static __attribute__((noinline)) uint32_t edge_of_slow(march *m, uint64_t key)
             return e;
     } else {
         for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
-            if (m->edges[e].key == key)
+            if (m->edges[e].upper == (uint32_t)key)
                 return e;
     }
     if (m->edge_count == m->edge_cap) {
@@ -232,7 +236,7 @@ static __attribute__((noinline)) uint32_t edge_of_slow(march *m, uint64_t key)
     }
     uint32_t e = (uint32_t)m->edge_count++;
     int hub = head != EDGE_NONE && (head & HUB_BIT);
-    m->edges[e] = (edge_link){key, head == EDGE_NONE ? EDGE_NONE : head & ~HUB_BIT, 0};
+    m->edges[e] = (edge_link){(uint32_t)key, {head == EDGE_NONE ? EDGE_NONE : head & ~HUB_BIT}};
     m->head[a] = e | (hub ? HUB_BIT : 0);
     if (hub ? hub_insert(&m->hubs, key, e) : chain >= HUB_CHAIN && make_hub(m, a))
         return EDGE_NONE;
@@ -247,12 +251,12 @@ static inline uint32_t edge_of(march *m, uint64_t key)
         return edge_of_slow(m, key);
     int chain = 0;
     for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
-        if (m->edges[e].key == key)
+        if (m->edges[e].upper == (uint32_t)key)
             return e;
     if (chain >= HUB_CHAIN)
         return edge_of_slow(m, key);
     uint32_t e = (uint32_t)m->edge_count++;
-    m->edges[e] = (edge_link){key, head, 0};
+    m->edges[e] = (edge_link){(uint32_t)key, {head}};
     m->head[a] = e;
     return e;
 }
@@ -281,8 +285,7 @@ static inline uint32_t recent_edge_of(march *m, recent_edges *recent, uint64_t k
 }
 
 typedef struct key_edge {
-    uint64_t key;
-    uint32_t edge;
+    uint32_t key, edge; /* key: the upper vertex */
 } key_edge;
 
 /* *p holds at least `count` elements of `size` bytes (*cap of them), its contents kept. */
@@ -301,7 +304,7 @@ static int reserve(void **p, int64_t *cap, int64_t count, size_t size)
 
 static int compare_key_edge(const void *pa, const void *pb)
 {
-    uint64_t a = ((const key_edge *)pa)->key, b = ((const key_edge *)pb)->key;
+    uint32_t a = ((const key_edge *)pa)->key, b = ((const key_edge *)pb)->key;
     return (a > b) - (a < b);
 }
 
@@ -320,7 +323,7 @@ static int64_t rank_edges(march *m, int failed)
             if (count == m->run_cap && reserve((void **)&m->run, &m->run_cap, count + 64, sizeof *m->run))
                 failed = 1;
             else
-                m->run[count++] = (key_edge){m->edges[e].key, e};
+                m->run[count++] = (key_edge){m->edges[e].upper, e};
         }
         m->head[a] = EDGE_NONE;
         if (failed)
@@ -340,7 +343,7 @@ static int64_t rank_edges(march *m, int failed)
         for (int64_t i = 0; i < count; i++) {
             m->edges[run[i].edge].vertex = (uint32_t)vertices;
             out_edge[2 * vertices] = (int32_t)a;
-            out_edge[2 * vertices++ + 1] = (int32_t)(uint32_t)run[i].key;
+            out_edge[2 * vertices++ + 1] = (int32_t)run[i].key;
         }
     }
     if (m->hubs.count) {
