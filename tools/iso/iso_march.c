@@ -57,12 +57,11 @@ typedef struct edge_link {
     };
 } edge_link;
 
-/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: the four vertex ids, copied
- * so the emission reads them in sequence instead of fetching the tets again from the whole array, and the
- * case (bit k: corner k at or above the value). */
+/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: (tet << 4) | case (bit k:
+ * corner k at or above the value), 8 bytes where a copy of the tet took 17: the emission reads the tets
+ * again, prefetched, and the list's fresh pages cost more than that (grid 120: 1.8M active tets). */
 typedef struct active_list {
-    int32_t (*tets)[4];
-    uint8_t *cases;
+    uint64_t *tets;
     int64_t count, cap;
 } active_list;
 
@@ -113,21 +112,18 @@ static void side_range(void *ctx, int64_t begin, int64_t end, int w)
 static int grow_active(active_list *list, int64_t first)
 {
     int64_t cap = list->cap ? 2 * list->cap : first;
-    int32_t(*tets)[4] = list->tets ? realloc(list->tets, (size_t)cap * sizeof *tets)
-                                   : tpk_alloc_large((size_t)cap * sizeof *tets);
-    if (tets)
-        list->tets = tets;
-    uint8_t *cases = tets ? realloc(list->cases, (size_t)cap) : NULL;
-    if (!cases)
+    uint64_t *tets = list->tets ? realloc(list->tets, (size_t)cap * sizeof *tets)
+                                : tpk_alloc_large((size_t)cap * sizeof *tets);
+    if (!tets)
         return -1;
-    list->cases = cases;
+    list->tets = tets;
     list->cap = cap;
     return 0;
 }
 
 /* Count the triangles of the tets in [begin, end) and list the tets that make some. Compaction without
- * branches: every tet and case is written, the count advances past the active ones only, so inactive tets
- * cost four byte loads from `side`, a 16-byte copy and no mispredicted branch. */
+ * branches: every tet is written, the count advances past the active ones only, so inactive tets cost
+ * four byte loads from `side` and no mispredicted branch. */
 static void count_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     march *m = ctx;
@@ -141,15 +137,13 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
             m->failed = 1;
             break;
         }
-        int32_t(*out)[4] = list->tets;
-        uint8_t *cases = list->cases;
+        uint64_t *out = list->tets;
         for (int64_t t = b; t < e; t++) {
             const int32_t *v = tets + 4 * t;
             __builtin_prefetch(v + 4 * 64);
             unsigned c = side[v[0]] | side[v[1]] << 1 | side[v[2]] << 2 | side[v[3]] << 3;
             unsigned count = m->case_triangles[c];
-            memcpy(out[n], v, sizeof out[n]);
-            cases[n] = (uint8_t)c;
+            out[n] = (uint64_t)t << 4 | (c & 15);
             n += count != 0;
             triangles += count;
         }
@@ -356,13 +350,17 @@ static int64_t rank_edges(march *m, int failed)
 /* Each corner's edge into `corner` (3 per triangle), from the workers' active tets in tet order: a tet's
  * crossed edges are looked up once each, most of them found in `recent` (tets near each other in the file
  * share edges). */
+#define ACTIVE_AHEAD 16
+
 static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
 {
     for (int w = 0; w < m->threads; w++) {
         const active_list *list = &m->active[w];
         for (int64_t i = 0; i < list->count; i++) {
-            const int32_t *v = list->tets[i];
-            int c = list->cases[i];
+            if (i + ACTIVE_AHEAD < list->count)
+                __builtin_prefetch(m->in->tets + 4 * (list->tets[i + ACTIVE_AHEAD] >> 4));
+            const int32_t *v = m->in->tets + 4 * (list->tets[i] >> 4);
+            int c = (int)(list->tets[i] & 15);
             uint32_t edge[6];
             /* Four lookups and six corners whatever the case, so no branch on it is mispredicted: a tet
              * with 3 crossed edges looks its third up again (found in `recent`, just put there), one with
@@ -589,10 +587,8 @@ static void free_march(march *m)
     free(m->normal_sum);
     free(m->run);
     free(m->side);
-    for (int w = 0; w < TPK_MAX_THREADS; w++) {
+    for (int w = 0; w < TPK_MAX_THREADS; w++)
         free(m->active[w].tets);
-        free(m->active[w].cases);
-    }
     free(m->head);
     free(m->hubs.keys);
     free(m->hubs.edges);
