@@ -79,7 +79,7 @@ typedef struct march {
     uint8_t *side;                             /* per mesh vertex: 1 at or above the value, 16 for a NaN */
     active_list active[TPK_MAX_THREADS];       /* per worker; kept across values */
     int failed;                                /* a worker's active list could not grow */
-    uint32_t *head;                            /* per mesh vertex: its newest edge as lower end, or EDGE_NONE */
+    uint64_t *head;                            /* per mesh vertex: its newest edge as lower end (HEAD_EMPTY) */
     uint64_t *corner_key;                      /* from tpk_iso_corners: 3 per triangle, (a << 32) | b, a < b */
     edge_link *edges;                          /* first-seen order; this and below kept across values */
     int64_t edge_count, edge_cap;
@@ -196,10 +196,20 @@ static int hub_insert(hub_table *h, uint64_t key, uint32_t edge)
     return 0;
 }
 
+/* A head: its chain's newest edge (or EDGE_NONE, and HUB_BIT) in the low 32 bits, and above them one bit
+ * per upper vertex of its edges by a hash of its id: a clear bit tells that an edge is new without the
+ * walk down the chain, which the lookup of most new edges then skips. */
+#define HEAD_EMPTY ((uint64_t)EDGE_NONE)
+
+static inline uint64_t upper_bit(uint32_t upper)
+{
+    return (uint64_t)1 << (32 + ((upper * 0x9E3779B1u) >> 27));
+}
+
 /* Lower vertex a's chain is long: its edges go to the hub table, and its lookups too from now on. */
 static int make_hub(march *m, uint32_t a)
 {
-    for (uint32_t e = m->head[a]; e != EDGE_NONE; e = m->edges[e].next)
+    for (uint32_t e = (uint32_t)m->head[a]; e != EDGE_NONE; e = m->edges[e].next)
         if (hub_insert(&m->hubs, (uint64_t)a << 32 | m->edges[e].upper, e))
             return -1;
     m->head[a] |= HUB_BIT;
@@ -209,7 +219,7 @@ static int make_hub(march *m, uint32_t a)
 /* The edge of `key`, made when new. EDGE_NONE when out of memory or at 2^31 - 1 edges. */
 static __attribute__((noinline)) uint32_t edge_of_slow(march *m, uint64_t key)
 {
-    uint32_t a = (uint32_t)(key >> 32), head = m->head[a];
+    uint32_t a = (uint32_t)(key >> 32), head = (uint32_t)m->head[a];
     int chain = 0;
     if (head != EDGE_NONE && (head & HUB_BIT)) {
         uint32_t e = hub_find(&m->hubs, key);
@@ -231,7 +241,7 @@ static __attribute__((noinline)) uint32_t edge_of_slow(march *m, uint64_t key)
     uint32_t e = (uint32_t)m->edge_count++;
     int hub = head != EDGE_NONE && (head & HUB_BIT);
     m->edges[e] = (edge_link){(uint32_t)key, {head == EDGE_NONE ? EDGE_NONE : head & ~HUB_BIT}};
-    m->head[a] = e | (hub ? HUB_BIT : 0);
+    m->head[a] = (m->head[a] >> 32 << 32 | upper_bit((uint32_t)key)) | e | (hub ? HUB_BIT : 0);
     if (hub ? hub_insert(&m->hubs, key, e) : chain >= HUB_CHAIN && make_hub(m, a))
         return EDGE_NONE;
     return e;
@@ -240,18 +250,22 @@ static __attribute__((noinline)) uint32_t edge_of_slow(march *m, uint64_t key)
 /* edge_of_slow, its common case inline: a vertex that is no hub, an edge array with room. */
 static inline uint32_t edge_of(march *m, uint64_t key)
 {
-    uint32_t a = (uint32_t)(key >> 32), head = m->head[a];
+    uint32_t a = (uint32_t)(key >> 32);
+    uint64_t h = m->head[a], bit = upper_bit((uint32_t)key);
+    uint32_t head = (uint32_t)h;
     if ((head != EDGE_NONE && (head & HUB_BIT)) || m->edge_count == m->edge_cap)
         return edge_of_slow(m, key);
-    int chain = 0;
-    for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
-        if (m->edges[e].upper == (uint32_t)key)
-            return e;
-    if (chain >= HUB_CHAIN)
-        return edge_of_slow(m, key);
+    if (h & bit) {
+        int chain = 0;
+        for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
+            if (m->edges[e].upper == (uint32_t)key)
+                return e;
+        if (chain >= HUB_CHAIN)
+            return edge_of_slow(m, key);
+    }
     uint32_t e = (uint32_t)m->edge_count++;
     m->edges[e] = (edge_link){(uint32_t)key, {head}};
-    m->head[a] = e;
+    m->head[a] = (h >> 32 << 32 | bit) | e;
     return e;
 }
 
@@ -310,16 +324,16 @@ static int64_t rank_edges(march *m, int failed)
     int32_t *out_edge = failed ? NULL : m->out->edge + 2 * m->vertex_base;
     int64_t vertices = 0;
     for (int64_t a = 0; a < m->in->vertex_count && vertices < m->edge_count; a++) {
-        if (m->head[a] == EDGE_NONE)
+        if ((uint32_t)m->head[a] == EDGE_NONE)
             continue;
         int64_t count = 0;
-        for (uint32_t e = m->head[a] & ~HUB_BIT; e != EDGE_NONE && !failed; e = m->edges[e].next) {
+        for (uint32_t e = (uint32_t)m->head[a] & ~HUB_BIT; e != EDGE_NONE && !failed; e = m->edges[e].next) {
             if (count == m->run_cap && reserve((void **)&m->run, &m->run_cap, count + 64, sizeof *m->run))
                 failed = 1;
             else
                 m->run[count++] = (key_edge){m->edges[e].upper, e};
         }
-        m->head[a] = EDGE_NONE;
+        m->head[a] = HEAD_EMPTY;
         if (failed)
             continue;
         key_edge *run = m->run;
@@ -613,8 +627,8 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
     m.out = out;
     m.corners = corners;
     m.head = tpk_alloc_large(sizeof *m.head * (size_t)(in->vertex_count ? in->vertex_count : 1));
-    if (m.head)
-        memset(m.head, 0xff, sizeof *m.head * (size_t)in->vertex_count); /* EDGE_NONE */
+    for (int64_t v = 0; m.head && v < in->vertex_count; v++)
+        m.head[v] = HEAD_EMPTY;
     if (!m.head || (!corners && !(m.side = malloc((size_t)(in->vertex_count ? in->vertex_count : 1))))) {
         free_march(&m);
         tpk_iso_surface_free(out);
