@@ -58,8 +58,8 @@ typedef struct edge_link {
 } edge_link;
 
 /* A worker's active tets from count_range, in tet order, cases 1 to 14 only: (tet << 4) | case (bit k:
- * corner k at or above the value), 8 bytes where a copy of the tet took 17: the emission reads the tets
- * again, prefetched, and the list's fresh pages cost more than that (grid 120: 1.8M active tets). */
+ * corner k at or above the value), 8 bytes. The emission reads the tets again, prefetched, which costs
+ * less than the fresh pages of a copy of them (16 bytes a tet; grid 120: 1.8M active tets). */
 typedef struct active_list {
     uint64_t *tets;
     int64_t count, cap;
