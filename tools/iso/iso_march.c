@@ -48,19 +48,20 @@ typedef struct hub_table {
     int64_t count, cap;
 } hub_table;
 
-/* A crossed mesh edge: its key, the edge seen before it at the same lower vertex, its vertex. */
+/* A crossed mesh edge: its upper vertex (the lower one is the chain's: head[a]) and the edge seen before
+ * it at the same lower vertex; once ranked (rank_edges), its vertex instead. */
 typedef struct edge_link {
-    uint64_t key;
-    uint32_t next, vertex;
+    uint32_t upper;
+    union {
+        uint32_t next, vertex;
+    };
 } edge_link;
 
-/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: the four vertex ids, the
- * top bit of corner k's id its side (ids are below 2^31), so the emission reads them in sequence
- * instead of fetching the tets again from the whole array. */
-#define SIDE_BIT 0x80000000u
-
+/* A worker's active tets from count_range, in tet order, cases 1 to 14 only: (tet << 4) | case (bit k:
+ * corner k at or above the value), 8 bytes. The emission reads the tets again, prefetched, which costs
+ * less than the fresh pages of a copy of them (16 bytes a tet; grid 120: 1.8M active tets). */
 typedef struct active_list {
-    uint32_t (*tets)[4];
+    uint64_t *tets;
     int64_t count, cap;
 } active_list;
 
@@ -69,21 +70,22 @@ typedef struct march {
     double value;
     float threshold;                           /* the least float s with (double)s >= value */
     int threads;
-    uint8_t crossed[16][4];                    /* per case: its crossed tet edges (3 or 4), ascending */
+    uint8_t crossed[16][4];                    /* per case: its crossed tet edges, ascending; the third twice
+                                                  where 3 are crossed */
+    uint8_t corner_edge[16][6];                /* per case: iso_cases' edges, the first triangle twice
+                                                  where it makes one */
     uint8_t case_triangles[256];               /* per case with its NaN bits: 0 with a NaN, for 0 and 15 */
     int64_t worker_first[TPK_MAX_THREADS + 1]; /* first triangle of each worker's tets */
     uint8_t *side;                             /* per mesh vertex: 1 at or above the value, 16 for a NaN */
     active_list active[TPK_MAX_THREADS];       /* per worker; kept across values */
     int failed;                                /* a worker's active list could not grow */
-    uint32_t *head;                            /* per mesh vertex: its newest edge as lower end, or EDGE_NONE */
+    uint64_t *head;                            /* per mesh vertex: its newest edge as lower end (HEAD_EMPTY) */
     uint64_t *corner_key;                      /* from tpk_iso_corners: 3 per triangle, (a << 32) | b, a < b */
     edge_link *edges;                          /* first-seen order; this and below kept across values */
     int64_t edge_count, edge_cap;
     hub_table hubs;
-    uint64_t *vertex_key;                      /* per vertex of this value */
-    double *vertex_p;                          /* 3 per vertex: position relative to the origin */
     double *normal_sum;                        /* 3 per vertex: its triangles' normals, summed in corner order */
-    int64_t key_cap, p_cap, normal_cap;        /* their capacities: kept across values, like edges */
+    int64_t normal_cap;                        /* its capacity: kept across values, like edges */
     struct key_edge *run;                      /* rank_edges: one lower vertex's edges */
     int64_t run_cap;
     tpk_iso_surface *out;
@@ -106,6 +108,19 @@ static void side_range(void *ctx, int64_t begin, int64_t end, int w)
 
 #define COUNT_BLOCK 4096
 
+/* Room for `first` tets (first a quarter of the tets, on huge pages: tpk_alloc_large), then twice as many. */
+static int grow_active(active_list *list, int64_t first)
+{
+    int64_t cap = list->cap ? 2 * list->cap : first;
+    uint64_t *tets = list->tets ? realloc(list->tets, (size_t)cap * sizeof *tets)
+                                : tpk_alloc_large((size_t)cap * sizeof *tets);
+    if (!tets)
+        return -1;
+    list->tets = tets;
+    list->cap = cap;
+    return 0;
+}
+
 /* Count the triangles of the tets in [begin, end) and list the tets that make some. Compaction without
  * branches: every tet is written, the count advances past the active ones only, so inactive tets cost
  * four byte loads from `side` and no mispredicted branch. */
@@ -118,26 +133,17 @@ static void count_range(void *ctx, int64_t begin, int64_t end, int w)
     int64_t n = 0, triangles = 0;
     for (int64_t b = begin; b < end; b += COUNT_BLOCK) {
         int64_t e = end - b < COUNT_BLOCK ? end : b + COUNT_BLOCK;
-        if (n + COUNT_BLOCK > list->cap) { /* first a quarter of the tets, on huge pages (tpk_alloc_large) */
-            int64_t cap = list->cap ? 2 * list->cap : (end - begin) / 4 + COUNT_BLOCK;
-            uint32_t(*grown)[4] = list->tets ? realloc(list->tets, (size_t)cap * sizeof *grown)
-                                             : tpk_alloc_large((size_t)cap * sizeof *grown);
-            if (!grown) {
-                m->failed = 1;
-                break;
-            }
-            list->tets = grown;
-            list->cap = cap;
+        if (n + COUNT_BLOCK > list->cap && grow_active(list, (end - begin) / 4 + COUNT_BLOCK)) {
+            m->failed = 1;
+            break;
         }
-        uint32_t(*out)[4] = list->tets;
+        uint64_t *out = list->tets;
         for (int64_t t = b; t < e; t++) {
             const int32_t *v = tets + 4 * t;
-            unsigned s0 = side[v[0]], s1 = side[v[1]], s2 = side[v[2]], s3 = side[v[3]];
-            unsigned count = m->case_triangles[s0 | s1 << 1 | s2 << 2 | s3 << 3];
-            out[n][0] = (uint32_t)v[0] | (s0 & 1) << 31;
-            out[n][1] = (uint32_t)v[1] | (s1 & 1) << 31;
-            out[n][2] = (uint32_t)v[2] | (s2 & 1) << 31;
-            out[n][3] = (uint32_t)v[3] | (s3 & 1) << 31;
+            __builtin_prefetch(v + 4 * 64);
+            unsigned c = side[v[0]] | side[v[1]] << 1 | side[v[2]] << 2 | side[v[3]] << 3;
+            unsigned count = m->case_triangles[c];
+            out[n] = (uint64_t)t << 4 | (c & 15);
             n += count != 0;
             triangles += count;
         }
@@ -190,20 +196,30 @@ static int hub_insert(hub_table *h, uint64_t key, uint32_t edge)
     return 0;
 }
 
+/* A head: its chain's newest edge (or EDGE_NONE, and HUB_BIT) in the low 32 bits, and above them one bit
+ * per upper vertex of its edges by a hash of its id: a clear bit tells that an edge is new without the
+ * walk down the chain, which the lookup of most new edges then skips. */
+#define HEAD_EMPTY ((uint64_t)EDGE_NONE)
+
+static inline uint64_t upper_bit(uint32_t upper)
+{
+    return (uint64_t)1 << (32 + ((upper * 0x9E3779B1u) >> 27));
+}
+
 /* Lower vertex a's chain is long: its edges go to the hub table, and its lookups too from now on. */
 static int make_hub(march *m, uint32_t a)
 {
-    for (uint32_t e = m->head[a]; e != EDGE_NONE; e = m->edges[e].next)
-        if (hub_insert(&m->hubs, m->edges[e].key, e))
+    for (uint32_t e = (uint32_t)m->head[a]; e != EDGE_NONE; e = m->edges[e].next)
+        if (hub_insert(&m->hubs, (uint64_t)a << 32 | m->edges[e].upper, e))
             return -1;
     m->head[a] |= HUB_BIT;
     return 0;
 }
 
 /* The edge of `key`, made when new. EDGE_NONE when out of memory or at 2^31 - 1 edges. */
-static uint32_t edge_of(march *m, uint64_t key)
+static __attribute__((noinline)) uint32_t edge_of_slow(march *m, uint64_t key)
 {
-    uint32_t a = (uint32_t)(key >> 32), head = m->head[a];
+    uint32_t a = (uint32_t)(key >> 32), head = (uint32_t)m->head[a];
     int chain = 0;
     if (head != EDGE_NONE && (head & HUB_BIT)) {
         uint32_t e = hub_find(&m->hubs, key);
@@ -211,7 +227,7 @@ static uint32_t edge_of(march *m, uint64_t key)
             return e;
     } else {
         for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
-            if (m->edges[e].key == key)
+            if (m->edges[e].upper == (uint32_t)key)
                 return e;
     }
     if (m->edge_count == m->edge_cap) {
@@ -224,10 +240,32 @@ static uint32_t edge_of(march *m, uint64_t key)
     }
     uint32_t e = (uint32_t)m->edge_count++;
     int hub = head != EDGE_NONE && (head & HUB_BIT);
-    m->edges[e] = (edge_link){key, head == EDGE_NONE ? EDGE_NONE : head & ~HUB_BIT, 0};
-    m->head[a] = e | (hub ? HUB_BIT : 0);
+    m->edges[e] = (edge_link){(uint32_t)key, {head == EDGE_NONE ? EDGE_NONE : head & ~HUB_BIT}};
+    m->head[a] = (m->head[a] >> 32 << 32 | upper_bit((uint32_t)key)) | e | (hub ? HUB_BIT : 0);
     if (hub ? hub_insert(&m->hubs, key, e) : chain >= HUB_CHAIN && make_hub(m, a))
         return EDGE_NONE;
+    return e;
+}
+
+/* edge_of_slow, its common case inline: a vertex that is no hub, an edge array with room. */
+static inline uint32_t edge_of(march *m, uint64_t key)
+{
+    uint32_t a = (uint32_t)(key >> 32);
+    uint64_t h = m->head[a], bit = upper_bit((uint32_t)key);
+    uint32_t head = (uint32_t)h;
+    if ((head != EDGE_NONE && (head & HUB_BIT)) || m->edge_count == m->edge_cap)
+        return edge_of_slow(m, key);
+    if (h & bit) {
+        int chain = 0;
+        for (uint32_t e = head; e != EDGE_NONE; e = m->edges[e].next, chain++)
+            if (m->edges[e].upper == (uint32_t)key)
+                return e;
+        if (chain >= HUB_CHAIN)
+            return edge_of_slow(m, key);
+    }
+    uint32_t e = (uint32_t)m->edge_count++;
+    m->edges[e] = (edge_link){(uint32_t)key, {head}};
+    m->head[a] = (h >> 32 << 32 | bit) | e;
     return e;
 }
 
@@ -255,8 +293,7 @@ static inline uint32_t recent_edge_of(march *m, recent_edges *recent, uint64_t k
 }
 
 typedef struct key_edge {
-    uint64_t key;
-    uint32_t edge;
+    uint32_t key, edge; /* key: the upper vertex */
 } key_edge;
 
 /* *p holds at least `count` elements of `size` bytes (*cap of them), its contents kept. */
@@ -275,27 +312,28 @@ static int reserve(void **p, int64_t *cap, int64_t count, size_t size)
 
 static int compare_key_edge(const void *pa, const void *pb)
 {
-    uint64_t a = ((const key_edge *)pa)->key, b = ((const key_edge *)pb)->key;
+    uint32_t a = ((const key_edge *)pa)->key, b = ((const key_edge *)pb)->key;
     return (a > b) - (a < b);
 }
 
-/* Number the edges by key: every lower vertex in order, its chain's edges sorted by upper vertex. Frees
- * the heads for the next value, also when it fails. Returns the vertex count, -1 without memory. */
-static int64_t rank_edges(march *m)
+/* Number the edges by key: every lower vertex in order, its chain's edges sorted by upper vertex, their
+ * ids written to the vertices' out->edge. Frees the heads for the next value, also when it fails
+ * (`failed` set). Returns the vertex count, -1 without memory. */
+static int64_t rank_edges(march *m, int failed)
 {
-    int failed = reserve((void **)&m->vertex_key, &m->key_cap, m->edge_count, sizeof *m->vertex_key);
+    int32_t *out_edge = failed ? NULL : m->out->edge + 2 * m->vertex_base;
     int64_t vertices = 0;
     for (int64_t a = 0; a < m->in->vertex_count && vertices < m->edge_count; a++) {
-        if (m->head[a] == EDGE_NONE)
+        if ((uint32_t)m->head[a] == EDGE_NONE)
             continue;
         int64_t count = 0;
-        for (uint32_t e = m->head[a] & ~HUB_BIT; e != EDGE_NONE && !failed; e = m->edges[e].next) {
+        for (uint32_t e = (uint32_t)m->head[a] & ~HUB_BIT; e != EDGE_NONE && !failed; e = m->edges[e].next) {
             if (count == m->run_cap && reserve((void **)&m->run, &m->run_cap, count + 64, sizeof *m->run))
                 failed = 1;
             else
-                m->run[count++] = (key_edge){m->edges[e].key, e};
+                m->run[count++] = (key_edge){m->edges[e].upper, e};
         }
-        m->head[a] = EDGE_NONE;
+        m->head[a] = HEAD_EMPTY;
         if (failed)
             continue;
         key_edge *run = m->run;
@@ -312,7 +350,8 @@ static int64_t rank_edges(march *m)
         }
         for (int64_t i = 0; i < count; i++) {
             m->edges[run[i].edge].vertex = (uint32_t)vertices;
-            m->vertex_key[vertices++] = run[i].key;
+            out_edge[2 * vertices] = (int32_t)a;
+            out_edge[2 * vertices++ + 1] = (int32_t)run[i].key;
         }
     }
     if (m->hubs.count) {
@@ -325,33 +364,45 @@ static int64_t rank_edges(march *m)
 /* Each corner's edge into `corner` (3 per triangle), from the workers' active tets in tet order: a tet's
  * crossed edges are looked up once each, most of them found in `recent` (tets near each other in the file
  * share edges). */
+#define ACTIVE_AHEAD 16
+
 static int edges_of_tets(march *m, recent_edges *recent, uint32_t *corner)
 {
     for (int w = 0; w < m->threads; w++) {
         const active_list *list = &m->active[w];
         for (int64_t i = 0; i < list->count; i++) {
-            const uint32_t *tet = list->tets[i];
-            int c = (int)(tet[0] >> 31 | tet[1] >> 31 << 1 | tet[2] >> 31 << 2 | tet[3] >> 31 << 3);
-            int count = iso_cases[c].count;
-            uint32_t v[4] = {tet[0] & ~SIDE_BIT, tet[1] & ~SIDE_BIT, tet[2] & ~SIDE_BIT, tet[3] & ~SIDE_BIT}, edge[6];
-            for (int j = 0; j < 2 + count; j++) { /* 1 triangle: 3 crossed edges; 2: 4 */
+            if (i + ACTIVE_AHEAD < list->count)
+                __builtin_prefetch(m->in->tets + 4 * (list->tets[i + ACTIVE_AHEAD] >> 4));
+            const int32_t *v = m->in->tets + 4 * (list->tets[i] >> 4);
+            int c = (int)(list->tets[i] & 15);
+            uint32_t edge[6];
+            /* Four lookups and six corners whatever the case, so no branch on it is mispredicted: a tet
+             * with 3 crossed edges looks its third up again (found in `recent`, just put there), one with
+             * one triangle writes it twice (the second copy overwritten by the next tet's, or in the
+             * array's slack at the end). */
+            for (int j = 0; j < 4; j++) {
                 int k = m->crossed[c][j];
-                uint32_t a = v[tet_edges[k][0]], b = v[tet_edges[k][1]];
+                uint32_t a = (uint32_t)v[tet_edges[k][0]], b = (uint32_t)v[tet_edges[k][1]];
                 uint32_t lo = a < b ? a : b, hi = a < b ? b : a; /* selects, not a mispredicted branch */
                 if ((edge[k] = recent_edge_of(m, recent, (uint64_t)lo << 32 | hi)) == EDGE_NONE)
                     return -1;
             }
-            for (int k = 0; k < 3 * count; k++)
-                *corner++ = edge[iso_cases[c].edge[k]];
+            for (int k = 0; k < 6; k++)
+                corner[k] = edge[m->corner_edge[c][k]];
+            corner += 3 * iso_cases[c].count;
         }
     }
     return 0;
 }
 
-/* Share the corners' vertices: each corner's edge into `corner` (3 per triangle), then the edges
- * numbered by key. Returns the vertex count, -1 without memory or at 2^31 - 1 edges. */
-static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
+static int grow_surface(tpk_iso_surface *o, int64_t vertices, int64_t triangles);
+
+/* Share the corners' vertices: each corner's edge into `corner` (3 per triangle), the surface's arrays
+ * grown for one vertex per edge, then the edges numbered by key. Returns the vertex count, -1 without
+ * memory or at 2^31 - 1 edges or vertices in all. */
+static int64_t number_vertices(march *m, int64_t triangles, uint32_t *corner)
 {
+    int64_t corners = 3 * triangles;
     m->edge_count = 0;
     if (reserve((void **)&m->edges, &m->edge_cap, corners / 4 + 64, sizeof *m->edges))
         return -1;
@@ -364,21 +415,25 @@ static int64_t number_vertices(march *m, int64_t corners, uint32_t *corner)
     } else {
         failed = edges_of_tets(m, &recent, corner);
     }
-    int64_t vertices = rank_edges(m); /* also when failed: it frees the heads */
+    tpk_iso_surface *o = m->out;
+    failed = failed || o->vertex_count + m->edge_count > INT32_MAX ||
+             reserve((void **)&m->normal_sum, &m->normal_cap, 3 * m->edge_count, sizeof *m->normal_sum) ||
+             grow_surface(o, o->vertex_count + m->edge_count, o->triangle_count + triangles);
+    int64_t vertices = rank_edges(m, failed); /* also when failed: it frees the heads */
     return failed ? -1 : vertices;
 }
 
-static void position_of(const march *m, uint64_t key, double *t_out, double p[3])
+static void position_of(const march *m, uint32_t a, uint32_t b, double *t_out, double p[3])
 {
     const float *pos = m->in->positions, *s = m->in->scalars;
-    uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
     double t = (m->value - s[a]) / ((double)s[b] - s[a]);
     for (int k = 0; k < 3; k++)
         p[k] = pos[3 * a + k] + t * ((double)pos[3 * b + k] - pos[3 * a + k]);
     *t_out = t;
 }
 
-/* Positions, values, colours and edges of the vertices; their normal sums cleared. */
+/* Positions relative to the origin (in xyz until normal_range adds it: the normals need them), values
+ * and colours of the vertices from their edges; their normal sums cleared. */
 static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     (void)w;
@@ -386,19 +441,14 @@ static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
     tpk_iso_surface *o = m->out;
     for (int64_t v = begin; v < end; v++) {
         int64_t out = m->vertex_base + v;
-        uint64_t key = m->vertex_key[v];
-        uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
-        double *p = m->vertex_p + 3 * v, t;
-        position_of(m, key, &t, p);
-        for (int k = 0; k < 3; k++) {
-            o->xyz[3 * out + k] = m->in->origin[k] + p[k];
+        uint32_t a = (uint32_t)o->edge[2 * out], b = (uint32_t)o->edge[2 * out + 1];
+        double t;
+        position_of(m, a, b, &t, o->xyz + 3 * out);
+        for (int k = 0; k < 3; k++)
             m->normal_sum[3 * v + k] = 0.0;
-        }
         o->value[out] = (float)m->value;
         if (o->color)
             o->color[out] = (float)(m->in->colors[a] + t * ((double)m->in->colors[b] - m->in->colors[a]));
-        o->edge[2 * out] = (int32_t)a;
-        o->edge[2 * out + 1] = (int32_t)b;
     }
 }
 
@@ -408,13 +458,14 @@ static void vertex_range(void *ctx, int64_t begin, int64_t end, int w)
 static void sum_normals(march *m, int64_t triangles)
 {
     uint32_t *tri = m->out->tri + 3 * m->triangle_base;
+    const double *rel = m->out->xyz + 3 * m->vertex_base;
     for (int64_t f = 0; f < triangles; f++, tri += 3) {
         const double *p[3];
         uint32_t v[3];
         for (int k = 0; k < 3; k++) {
             v[k] = m->edges[tri[k]].vertex;
             tri[k] = (uint32_t)(m->vertex_base + v[k]);
-            p[k] = m->vertex_p + 3 * v[k];
+            p[k] = rel + 3 * v[k];
         }
         double ax = p[1][0] - p[0][0], ay = p[1][1] - p[0][1], az = p[1][2] - p[0][2];
         double bx = p[2][0] - p[0][0], by = p[2][1] - p[0][1], bz = p[2][2] - p[0][2];
@@ -428,25 +479,28 @@ static void sum_normals(march *m, int64_t triangles)
     }
 }
 
+/* The unit normals, and the origin added to the positions. */
 static void normal_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     (void)w;
     march *m = ctx;
     const float *pos = m->in->positions, *s = m->in->scalars;
     for (int64_t v = begin; v < end; v++) {
-        double *n = m->normal_sum + 3 * v;
+        int64_t out = m->vertex_base + v;
+        double *n = m->normal_sum + 3 * v, *xyz = m->out->xyz + 3 * out;
+        for (int k = 0; k < 3; k++)
+            xyz[k] = m->in->origin[k] + xyz[k];
         double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         if (!(len > 0) || !isfinite(len)) { /* only zero-area triangles here: the edge, toward higher */
-            uint64_t key = m->vertex_key[v];
-            uint32_t a = (uint32_t)(key >> 32), b = (uint32_t)key;
+            uint32_t a = (uint32_t)m->out->edge[2 * out], b = (uint32_t)m->out->edge[2 * out + 1];
             double up = s[b] > s[a] ? 1 : -1;
             for (int k = 0; k < 3; k++)
                 n[k] = up * ((double)pos[3 * b + k] - pos[3 * a + k]);
             len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         }
-        float *out = m->out->normal + 3 * (m->vertex_base + v);
+        float *normal = m->out->normal + 3 * out;
         for (int k = 0; k < 3; k++)
-            out[k] = len > 0 ? (float)(n[k] / len) : 0.0f;
+            normal[k] = len > 0 ? (float)(n[k] / len) : 0.0f;
     }
 }
 
@@ -466,7 +520,7 @@ static int grow_surface(tpk_iso_surface *o, int64_t vertices, int64_t triangles)
     return grow((void **)&o->xyz, 3 * vertices, sizeof(double)) || grow((void **)&o->normal, 3 * vertices, sizeof(float)) ||
            grow((void **)&o->value, vertices, sizeof(float)) ||
            (o->color && grow((void **)&o->color, vertices, sizeof(float))) ||
-           grow((void **)&o->edge, 2 * vertices, sizeof(int32_t)) || grow((void **)&o->tri, 3 * triangles, sizeof(uint32_t));
+           grow((void **)&o->edge, 2 * vertices, sizeof(int32_t)) || grow((void **)&o->tri, 3 * triangles + 3, sizeof(uint32_t));
 }
 
 /* The GPU's corner keys of one value. The rest of the scratch is kept for the next value (free_march). */
@@ -506,23 +560,18 @@ static int extract_value(march *m, tpk_diag *diag)
             m->worker_first[w + 1] += m->worker_first[w];
         triangles = m->worker_first[m->threads];
     }
-    int64_t corners = 3 * triangles;
     if (o->triangle_count + triangles > INT32_MAX) {
         free_scratch(m);
         return tpk_diag_fail(diag, "the isosurface of %g has %lld triangles; more than 2^31 - 1 triangles or vertices "
                              "in all do not fit the outputs' 32-bit indices", m->value, (long long)triangles);
     }
-    if (grow((void **)&o->tri, 3 * (o->triangle_count + triangles), sizeof(uint32_t)))
-        goto fail;
-    int64_t vertices = number_vertices(m, corners, o->tri + 3 * o->triangle_count);
-    if (vertices < 0 || o->vertex_count + vertices > INT32_MAX)
-        goto fail;
-    if (reserve((void **)&m->vertex_p, &m->p_cap, 3 * vertices, sizeof *m->vertex_p) ||
-        reserve((void **)&m->normal_sum, &m->normal_cap, 3 * vertices, sizeof *m->normal_sum) ||
-        grow_surface(o, o->vertex_count + vertices, o->triangle_count + triangles))
+    if (grow((void **)&o->tri, 3 * (o->triangle_count + triangles) + 3, sizeof(uint32_t))) /* + edges_of_tets' slack */
         goto fail;
     m->vertex_base = o->vertex_count;
     m->triangle_base = o->triangle_count;
+    int64_t vertices = number_vertices(m, triangles, o->tri + 3 * o->triangle_count);
+    if (vertices < 0)
+        goto fail;
     tpk_parallel_for(vertices, tpk_threads_for(vertices, m->threads, 4096), vertex_range, m);
     sum_normals(m, triangles);
     tpk_parallel_for(vertices, tpk_threads_for(vertices, m->threads, 4096), normal_range, m);
@@ -549,8 +598,6 @@ static void free_march(march *m)
 {
     free_scratch(m);
     free(m->edges);
-    free(m->vertex_key);
-    free(m->vertex_p);
     free(m->normal_sum);
     free(m->run);
     free(m->side);
@@ -580,8 +627,8 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
     m.out = out;
     m.corners = corners;
     m.head = tpk_alloc_large(sizeof *m.head * (size_t)(in->vertex_count ? in->vertex_count : 1));
-    if (m.head)
-        memset(m.head, 0xff, sizeof *m.head * (size_t)in->vertex_count); /* EDGE_NONE */
+    for (int64_t v = 0; m.head && v < in->vertex_count; v++)
+        m.head[v] = HEAD_EMPTY;
     if (!m.head || (!corners && !(m.side = malloc((size_t)(in->vertex_count ? in->vertex_count : 1))))) {
         free_march(&m);
         tpk_iso_surface_free(out);
@@ -592,6 +639,12 @@ int tpk_iso_extract_from(const tpk_iso_input *in, const double *values, int valu
         for (int k = 0, j = 0; k < 6; k++)
             if (((c >> tet_edges[k][0]) ^ (c >> tet_edges[k][1])) & 1)
                 m.crossed[c][j++] = (uint8_t)k;
+    for (int c = 0; c < 16; c++) {
+        if (iso_cases[c].count == 1)
+            m.crossed[c][3] = m.crossed[c][2];
+        for (int k = 0; k < 6; k++)
+            m.corner_edge[c][k] = iso_cases[c].edge[iso_cases[c].count == 1 ? k % 3 : k];
+    }
     for (int c = 0; c < 256; c++)
         m.case_triangles[c] = c < 16 ? iso_cases[c].count : 0;
     for (int i = 0; i < value_count; i++) {
