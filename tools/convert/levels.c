@@ -69,7 +69,9 @@ typedef struct simplifier {
     int32_t *tets;       /* 4 per live tet, full mesh vertex ids, positive */
     int32_t *origin;     /* per live tet: the full mesh tet it descends from */
     int64_t tet_count;
-    int64_t *star_start; /* vertex -> first of its tets in star (vertex_count + 1) */
+    int64_t *star_start, *star_end; /* per live vertex: its tets in star, [start, end) (-1, -1: not kept) */
+    int32_t *alive;      /* the vertices not removed, in id order, as of the last build_stars */
+    int64_t alive_count;
     int32_t *star;
     uint8_t *locked, *dead;
     uint8_t *stuck;      /* per vertex: no valid target, and its star has not changed since */
@@ -145,27 +147,36 @@ static double point_triangle(const double *p, const double *a, const double *b, 
  * the tets that hold them (in no particular order: nothing depends on it). */
 static int build_stars(simplifier *s)
 {
-    int64_t V = s->mesh->vertex_count;
+    /* over the vertices still there (the live tets use no other), not all of the full mesh's: a coarse
+     * level's passes would spend most of their time on vertices long gone */
+    int64_t live = 0;
+    for (int64_t i = 0; i < s->alive_count; i++)
+        if (!s->removed[s->alive[i]])
+            s->alive[live++] = s->alive[i];
+    s->alive_count = live;
     s->active_count = 0;
-    for (int64_t v = 0; v < V; v++)
-        if (!(s->pinned[v] | s->removed[v] | s->stuck[v]))
-            s->active[s->active_count++] = (int32_t)v;
-    memset(s->star_start, 0, sizeof *s->star_start * (size_t)(V + 1));
+    for (int64_t i = 0; i < live; i++) {
+        int32_t v = s->alive[i];
+        if (!(s->pinned[v] | s->stuck[v]))
+            s->active[s->active_count++] = v;
+        s->star_end[v] = 0;
+    }
     for (int64_t i = 0; i < 4 * s->tet_count; i++)
-        s->star_start[s->tets[i] + 1]++;
-    for (int64_t v = 0; v < V; v++) /* only the active vertices' stars are kept */
-        s->star_start[v + 1] = s->star_start[v] + (s->pinned[v] | s->stuck[v] ? 0 : s->star_start[v + 1]);
-    int64_t *fill = malloc(sizeof *fill * (size_t)(V ? V : 1));
-    if (!fill)
-        return -1;
-    memcpy(fill, s->star_start, sizeof *fill * (size_t)V);
+        s->star_end[s->tets[i]]++;
+    int64_t at = 0; /* only the active vertices' stars are kept; the others' are empty (-1, -1) */
+    for (int64_t i = 0; i < live; i++) {
+        int32_t v = s->alive[i];
+        int keep = !(s->pinned[v] | s->stuck[v]);
+        s->star_start[v] = keep ? at : -1;
+        at += keep ? s->star_end[v] : 0;
+        s->star_end[v] = s->star_start[v]; /* the fill's cursor, its end once filled */
+    }
     for (int64_t t = 0; t < s->tet_count; t++) {
         const int32_t *v = s->tets + 4 * t;
         for (int k = 0; k < 4; k++)
-            if (fill[v[k]] < s->star_start[v[k] + 1])
-                s->star[fill[v[k]]++] = (int32_t)t;
+            if (s->star_start[v[k]] >= 0)
+                s->star[s->star_end[v[k]]++] = (int32_t)t;
     }
-    free(fill);
     return 0;
 }
 
@@ -552,7 +563,7 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
  * when it stays. */
 static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
 {
-    int n = (int)(s->star_start[u + 1] - s->star_start[u]);
+    int n = (int)(s->star_end[u] - s->star_start[u]);
     if (s->pinned[u] || s->removed[u] || s->locked[u] || s->stuck[u] || n == 0 || n > STAR_MAX)
         return -1;
     /* Its tets: those of its star that no collapse of this pass killed. A collapse onto v changes the
@@ -1126,6 +1137,18 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
     return rc;
 }
 
+/* Each tet's shape and origin, at the start (tpk_parallel_for over the tets). */
+static void set_up_tets(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    simplifier *s = ctx;
+    (void)worker;
+    for (int64_t t = begin; t < end; t++) {
+        const int32_t *v = s->mesh->tets + 4 * t;
+        s->tet_quality[t] = (float)quality(point(s, v[0]), point(s, v[1]), point(s, v[2]), point(s, v[3]));
+        s->origin[t] = (int32_t)t;
+    }
+}
+
 int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
                     const char *source_format, const tpk_convert_report *source, tpk_levels *out, tpk_diag *diag)
 {
@@ -1165,31 +1188,34 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     s.removed = calloc((size_t)(V ? V : 1), 1);
     s.onto = malloc(sizeof *s.onto * (size_t)(V ? V : 1));
     s.locked = calloc((size_t)(V ? V : 1), 1);
-    s.dead = calloc((size_t)(T ? T : 1), 1);
+    s.dead = tpk_calloc_large((size_t)(T ? T : 1), 1);
     s.stuck = calloc((size_t)(V ? V : 1), 1);
     s.seen = malloc(sizeof *s.seen * (size_t)(V ? V : 1));
     s.active = malloc(sizeof *s.active * (size_t)(V ? V : 1));
-    s.tets = malloc(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
-    s.origin = malloc(sizeof *s.origin * (size_t)(T ? T : 1));
-    s.star_start = malloc(sizeof *s.star_start * (size_t)(V + 1));
-    s.star = malloc(sizeof *s.star * 4 * (size_t)(T ? T : 1));
-    s.tet_quality = malloc(sizeof *s.tet_quality * (size_t)(T ? T : 1));
-    int rc = s.boundary && s.pinned && s.chain_head && s.removed && s.onto && s.locked && s.dead && s.stuck && s.seen && s.active && s.tets && s.origin && s.star_start && s.star &&
+    /* the arrays of the tets (a first touch of fresh pages costs about 0.75 ms a MB here) */
+    s.tets = tpk_alloc_large(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
+    s.origin = tpk_alloc_large(sizeof *s.origin * (size_t)(T ? T : 1));
+    s.star_start = tpk_alloc_large(sizeof *s.star_start * 2 * (size_t)(V ? V : 1));
+    s.star_end = s.star_start ? s.star_start + V : NULL;
+    s.alive = malloc(sizeof *s.alive * (size_t)(V ? V : 1));
+    s.star = tpk_alloc_large(sizeof *s.star * 4 * (size_t)(T ? T : 1));
+    s.tet_quality = tpk_alloc_large(sizeof *s.tet_quality * (size_t)(T ? T : 1));
+    int rc = s.boundary && s.pinned && s.chain_head && s.removed && s.onto && s.locked && s.dead && s.stuck && s.seen && s.active && s.tets && s.origin && s.star_start && s.alive && s.star &&
                      s.tet_quality
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
         memset(s.seen, 0xff, sizeof *s.seen * (size_t)V);
         memset(s.chain_head, 0xff, sizeof *s.chain_head * 2 * (size_t)V);
         memcpy(s.tets, mesh->tets, sizeof *s.tets * 4 * (size_t)T);
-        for (int64_t t = 0; t < T; t++) {
-            const int32_t *v = mesh->tets + 4 * t;
-            s.tet_quality[t] = (float)quality(point(&s, v[0]), point(&s, v[1]), point(&s, v[2]), point(&s, v[3]));
-            s.origin[t] = (int32_t)t;
+        for (int64_t v = 0; v < V; v++)
+            s.alive[v] = (int32_t)v;
+        s.alive_count = V;
+        tpk_parallel_for(T, tpk_threads_for(T, s.threads, 1 << 16), set_up_tets, &s);
+        for (int64_t t = 0; t < T; t++)
             for (int k = 0; k < 4; k++)
                 if (neighbors[4 * t + k] < 0)
                     for (int j = 0; j < 3; j++)
                         s.boundary[mesh->tets[4 * t + tpk_tet_faces[k][j]]] = 1;
-        }
         s.tet_count = T;
         /* Where a mesh folds (connect cut its folds: source->folds_cut), its tets overlap: it tiles no
          * domain, and a shell vertex that moves near the fold can make faces meet that should not (a
@@ -1232,15 +1258,16 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     free(s.removed);
     free(s.onto);
     free(s.locked);
-    free(s.dead);
+    tpk_free_large(s.dead, (size_t)(T ? T : 1));
     free(s.stuck);
     free(s.seen);
     free(s.active);
-    free(s.tets);
-    free(s.origin);
-    free(s.star_start);
-    free(s.star);
-    free(s.tet_quality);
+    tpk_free_large(s.tets, sizeof *s.tets * 4 * (size_t)(T ? T : 1));
+    tpk_free_large(s.origin, sizeof *s.origin * (size_t)(T ? T : 1));
+    tpk_free_large(s.star_start, sizeof *s.star_start * 2 * (size_t)(V ? V : 1));
+    free(s.alive);
+    tpk_free_large(s.star, sizeof *s.star * 4 * (size_t)(T ? T : 1));
+    tpk_free_large(s.tet_quality, sizeof *s.tet_quality * (size_t)(T ? T : 1));
     if (rc != 0)
         tpk_levels_free(out);
     return rc;
