@@ -868,58 +868,107 @@ static int64_t locate(const tpk_tetmesh *lvl, const int32_t *neighbors, const do
     return -1;
 }
 
+/* The error sampling's vertices go in chunks of fixed size, side by side, each walk starting from the tet
+ * of the chunk's first kept vertex: the sums do not depend on the thread count. */
+#define MEASURE_CHUNK ((int64_t)1 << 15)
+
+typedef struct measure_job {
+    const simplifier *s;
+    const tpk_tetmesh *lvl;
+    const int32_t *vertex_old, *neighbors, *near_tet, *tet_of;
+    double *sum, *worst; /* per chunk */
+    int64_t *count;
+} measure_job;
+
+static void measure_chunks(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const measure_job *j = ctx;
+    const simplifier *s = j->s;
+    const tpk_tetmesh *m = s->mesh, *lvl = j->lvl;
+    const int32_t *vertex_old = j->vertex_old, *tet_of = j->tet_of, *near_tet = j->near_tet;
+    (void)worker;
+    for (int64_t c = begin; c < end; c++) {
+        int64_t first = c * MEASURE_CHUNK, last = first + MEASURE_CHUNK;
+        last = last < m->vertex_count ? last : m->vertex_count;
+        double sum = 0, worst = 0;
+        int64_t count = 0, hint = 0;
+        for (int64_t u = first; u < last; u++)
+            if (tet_of[u] >= 0) {
+                hint = tet_of[u];
+                break;
+            }
+        for (int64_t u = first; u < last; u++) {
+            if (tet_of[u] >= 0)
+                continue;
+            const double *p = m->points + 3 * (size_t)u;
+            double lambda[4], total = 0;
+            int64_t t = locate(lvl, j->neighbors, p, hint, lambda, &total);
+            int32_t w = t < 0 && s->removed[u] ? survivor(s, (int32_t)u) : -1;
+            if (w >= 0 && tet_of[w] >= 0 && tet_of[w] != hint)
+                t = locate(lvl, j->neighbors, p, tet_of[w], lambda, &total);
+            int outside = t < 0 && near_tet && near_tet[u] >= 0;
+            if (outside) { /* a shell vertex the level's shell moved past: the weights of the nearest shell face's tet */
+                t = near_tet[u];
+                weights(lvl, t, p, lambda, &total);
+            }
+            if (t < 0)
+                continue;
+            const int32_t *v = lvl->tets + 4 * t;
+            double value = 0, sum_w = 0;
+            for (int k = 0; k < 4 && outside; k++) /* clamped to the tet: its nearest value to p, about */
+                sum_w += (lambda[k] = lambda[k] > 0 ? lambda[k] : 0);
+            total = outside ? sum_w : total;
+            for (int k = 0; k < 4 && total > 0; k++)
+                value += lambda[k] / total * (double)s->field[vertex_old[v[k]]];
+            double d = fabs(value - (double)s->field[u]);
+            worst = d > worst ? d : worst;
+            sum += d * d;
+            count++;
+            hint = t;
+        }
+        j->sum[c] = sum, j->worst[c] = worst, j->count[c] = count;
+    }
+}
+
 /* The field of the full mesh at the vertices this level removed against the level's value there (linear
  * in the level tet that holds the point, found by locate(): from the tet found for the removed vertex
  * before, vertices being in Hilbert order, else from a tet of the vertex it ended on, which is in the
  * same part of the mesh: a walk does not cross from one block of a mesh to another that only lies
- * against it). A point neither walk reaches is not sampled. */
+ * against it). A point neither walk reaches is not sampled; a shell vertex the level's shell moved past is
+ * sampled in the tet of its nearest shell face. */
 static void measure(const simplifier *s, const tpk_tetmesh *lvl, const int32_t *vertex_old, const int32_t *neighbors,
                     const int32_t *near_tet, tpk_level *r)
 {
     const tpk_tetmesh *m = s->mesh;
+    int64_t chunks = (m->vertex_count + MEASURE_CHUNK - 1) / MEASURE_CHUNK;
     /* per full mesh vertex: a level tet that holds it, or -1 (not kept) */
     int32_t *tet_of = s->field ? malloc(sizeof *tet_of * (size_t)(m->vertex_count ? m->vertex_count : 1)) : NULL;
-    if (!tet_of)
+    double *sums = tet_of ? malloc(sizeof *sums * 2 * (size_t)(chunks ? chunks : 1)) : NULL;
+    int64_t *counts = sums ? malloc(sizeof *counts * (size_t)(chunks ? chunks : 1)) : NULL;
+    if (!counts) {
+        free(tet_of);
+        free(sums);
         return;
+    }
     for (int64_t v = 0; v < m->vertex_count; v++)
         tet_of[v] = -1;
     for (int64_t i = 0; i < 4 * lvl->tet_count; i++)
         tet_of[vertex_old[lvl->tets[i]]] = (int32_t)(i / 4);
+    measure_job job = {s, lvl, vertex_old, neighbors, near_tet, tet_of, sums, sums + chunks, counts};
+    tpk_parallel_for(chunks, tpk_threads_for(chunks, s->threads, 1), measure_chunks, &job);
     double sum = 0, worst = 0;
-    int64_t count = 0, hint = 0;
-    for (int64_t u = 0; u < m->vertex_count; u++) {
-        if (tet_of[u] >= 0)
-            continue;
-        const double *p = m->points + 3 * (size_t)u;
-        double lambda[4], total = 0;
-        int64_t t = locate(lvl, neighbors, p, hint, lambda, &total);
-        int32_t w = t < 0 && s->removed[u] ? survivor(s, (int32_t)u) : -1;
-        if (w >= 0 && tet_of[w] >= 0 && tet_of[w] != hint)
-            t = locate(lvl, neighbors, p, tet_of[w], lambda, &total);
-        int outside = t < 0 && near_tet && near_tet[u] >= 0;
-        if (outside) { /* a shell vertex the level's shell moved past: the weights of the nearest shell face's tet */
-            t = near_tet[u];
-            weights(lvl, t, p, lambda, &total);
-        }
-        if (t < 0)
-            continue;
-        const int32_t *v = lvl->tets + 4 * t;
-        double value = 0, sum_w = 0;
-        for (int k = 0; k < 4 && outside; k++) /* clamped to the tet: its nearest value to p, about */
-            sum_w += (lambda[k] = lambda[k] > 0 ? lambda[k] : 0);
-        total = outside ? sum_w : total;
-        for (int k = 0; k < 4 && total > 0; k++)
-            value += lambda[k] / total * (double)s->field[vertex_old[v[k]]];
-        double d = fabs(value - (double)s->field[u]);
-        worst = d > worst ? d : worst;
-        sum += d * d;
-        count++;
-        hint = t;
+    int64_t count = 0;
+    for (int64_t c = 0; c < chunks; c++) { /* in chunk order */
+        sum += sums[c];
+        worst = job.worst[c] > worst ? job.worst[c] : worst;
+        count += counts[c];
     }
     r->error_samples = count;
     r->error_max = worst;
     r->error_rms = count ? sqrt(sum / (double)count) : 0;
     free(tet_of);
+    free(sums);
+    free(counts);
 }
 
 /* What a level must keep of the full mesh: its volume and its shell's area (sums of 6V and of twice the
