@@ -1014,6 +1014,54 @@ static int same_size(domain_size full, domain_size level, double tolerance)
            fabs(level.area - full.area) <= 1e-9 * fabs(full.area);
 }
 
+/* shell_distance's search, for the removed shell vertices of [begin, end) (tpk_parallel_for): each
+ * one's distance to its owner's level faces, and the tet of the nearest in near_tet. */
+typedef struct shell_job {
+    const simplifier *s;
+    const tpk_tetmesh *lvl;
+    const int64_t *start;
+    const int32_t *tri, *at, *tet, *level_of, *owner;
+    int32_t *near_tet;
+    double worst[TPK_MAX_THREADS]; /* per worker */
+} shell_job;
+
+static void shell_vertices(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    shell_job *j = ctx;
+    const simplifier *s = j->s;
+    const tpk_tetmesh *lvl = j->lvl;
+    const int64_t *start = j->start;
+    const int32_t *tri = j->tri, *at = j->at, *owner = j->owner;
+    double worst = 0;
+    for (int64_t u = begin; u < end; u++) {
+        if (!(s->boundary[u] && s->removed[u]))
+            continue;
+        const double *p = point(s, (int32_t)u);
+        int32_t from = owner && owner[u] >= 0 ? owner[u] : survivor(s, (int32_t)u);
+        int32_t around[3] = {j->level_of[from], -1, -1}, face = -1;
+        double best = INFINITY;
+        /* the owner's faces hold a witness: they alone give the bound (a descent would make it
+         * tighter, at twice the cost, and the bound is what the tolerance is about) */
+        int rounds = owner && owner[u] >= 0 ? 1 : 256;
+        for (int steps = 0, nearer = 1; nearer && steps < rounds; steps++) {
+            nearer = 0;
+            for (int k = 0; k < 3 && around[k] >= 0; k++)
+                for (int64_t i = start[around[k]]; i < start[around[k] + 1]; i++) {
+                    const int32_t *c = tri + 3 * at[i];
+                    double d = point_triangle(p, lvl->points + 3 * (size_t)c[0], lvl->points + 3 * (size_t)c[1],
+                                              lvl->points + 3 * (size_t)c[2]);
+                    if (d < best)
+                        best = d, face = at[i], nearer = 1;
+                }
+            if (face >= 0)
+                memcpy(around, tri + 3 * face, sizeof around);
+        }
+        j->near_tet[u] = face >= 0 ? j->tet[face] : -1;
+        worst = best > worst ? best : worst;
+    }
+    j->worst[worker] = worst;
+}
+
 /* How far the full mesh's shell lies from the level's, measured at the shell vertices the level removed:
  * each one's distance to the nearest level shell face at its owner (one of them is within the tolerance:
  * needs_witness), or without an owner by a descent from the vertex it ended on (the faces at that
@@ -1062,32 +1110,11 @@ static double shell_distance(const simplifier *s, const tpk_tetmesh *lvl, const 
         for (int64_t x = 0; owner && x < m->vertex_count; x++)
             for (int32_t p = s->removed[x] ? -1 : s->chain_head[x]; p >= 0; p = s->chain_next[p])
                 owner[p] = (int32_t)x;
-        for (int64_t u = 0; u < m->vertex_count; u++) {
-            if (!(s->boundary[u] && s->removed[u]))
-                continue;
-            const double *p = point(s, (int32_t)u);
-            int32_t from = owner && owner[u] >= 0 ? owner[u] : survivor(s, (int32_t)u);
-            int32_t around[3] = {level_of[from], -1, -1}, face = -1;
-            double best = INFINITY;
-            /* the owner's faces hold a witness: they alone give the bound (a descent would make it
-             * tighter, at twice the cost, and the bound is what the tolerance is about) */
-            int rounds = owner && owner[u] >= 0 ? 1 : 256;
-            for (int steps = 0, nearer = 1; nearer && steps < rounds; steps++) {
-                nearer = 0;
-                for (int j = 0; j < 3 && around[j] >= 0; j++)
-                    for (int64_t i = start[around[j]]; i < start[around[j] + 1]; i++) {
-                        const int32_t *c = tri + 3 * at[i];
-                        double d = point_triangle(p, lvl->points + 3 * (size_t)c[0], lvl->points + 3 * (size_t)c[1],
-                                                  lvl->points + 3 * (size_t)c[2]);
-                        if (d < best)
-                            best = d, face = at[i], nearer = 1;
-                    }
-                if (face >= 0)
-                    memcpy(around, tri + 3 * face, sizeof around);
-            }
-            near_tet[u] = face >= 0 ? tet[face] : -1;
-            worst = best > worst ? best : worst;
-        }
+        shell_job job = {s, lvl, start, tri, at, tet, level_of, owner, near_tet, {0}};
+        int threads = tpk_threads_for(m->vertex_count, s->threads, 1 << 14);
+        tpk_parallel_for(m->vertex_count, threads, shell_vertices, &job);
+        for (int w = 0; w < threads; w++) /* a maximum: the same whatever the split */
+            worst = job.worst[w] > worst ? job.worst[w] : worst;
         free(owner);
     }
     free(level_of);
