@@ -107,6 +107,11 @@ expect_exit 2 "$TPK" convert "${input[flange]}" "$WORK/x.tpk" --levels 2 --level
 expect_stderr "--level-shell-error expects a fraction of the bounding-box diagonal from 0 to 0.1, found '0.5'"
 expect_exit 2 "$TPK" render "$f" -o "$WORK/x.png" --max-ms 10 --max-pixel-step 0
 expect_stderr "--max-pixel-step expects a pixel step from 1 to 16, found '0'"
+"$TPK" convert "${input[flange]}" "$WORK/flange.tpkset" --parts 2 --quiet || fail "a part set"
+expect_exit 2 "$TPK" render "$WORK/flange.tpkset" -o "$WORK/x.png" --max-ms 10
+expect_stderr "a part set has no levels of detail: --max-ms draws a single file's"
+expect_exit 2 "$TPK" render "$WORK/flange.tpkset" -o "$WORK/x.png" --level 1
+expect_stderr "a part set has no levels of detail: --level draws a single file's"
 expect_exit 2 "$TPK" extract "$f" "$WORK/x.tpk" --level 5
 expect_stderr "no level 5"
 [ ! -e "$WORK/x.tpk" ] || fail "extract left a file for a level that is not there"

@@ -347,6 +347,9 @@ int tpk_cmd_render(int argc, char **argv)
     uint64_t part_chunk;
     if (tpk_find_chunk(in.file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK) { /* a part set's manifest */
         render_input_close(&in);
+        if (a.level > 0 || a.max_ms > 0) /* convert makes levels of one file only (--levels and --parts) */
+            return tpk_cli_fail("render", "%s: a part set has no levels of detail: %s draws a single file's",
+                                a.path, a.level > 0 ? "--level" : "--max-ms");
         return render_part_set(&a);
     }
     int rc = render_file(&a, in.file);
