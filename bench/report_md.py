@@ -476,8 +476,8 @@ def section_levels(summary):
                        f"{c['bytes_levels'] / c['bytes']:.2f}x the file size, {len(c['levels'])} levels")
     return ("## 1d. Levels of detail\n\n`bench/bench_levels.sh`: per level of `convert --levels 4` (spec §16), the "
             "CPU frame time (median) and the picture's PSNR against the full mesh's (same camera and range), the "
-            "field error the converter measured (at the full mesh's vertices the level removed), and the level "
-            "`render --max-ms` picks.\n" + open(path).read() + "\n")
+            "field error the converter measured (at the full mesh's vertices the level removed), and the level and "
+            "pixel step `render --max-ms` picks, with its frame time and PSNR.\n" + open(path).read() + "\n")
 
 
 def main():
