@@ -7,6 +7,7 @@
 # generator, the sample and the benchmark's meshes from ../shared/data; and OUT_DIR/run-gpu-bench.sh,
 # which unpacks it beside itself and runs bench/gpu/run.sh on the bundle's binaries:
 #   ./run-gpu-bench.sh [run.sh options]       VK_DRIVER_FILES=/usr/share/vulkan/icd.d/nvidia_icd.json ...
+#   ./run-gpu-bench.sh --targets              the open GPU targets of issues 21 and 22 (targets.sh)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 OUT=$(mkdir -p "${1:-$ROOT/bench/gpu/bundle}" && cd "${1:-$ROOT/bench/gpu/bundle}" && pwd)
@@ -30,7 +31,7 @@ done | sort -u | while read -r lib; do
         *) cp -L "$lib" "$STAGE/lib/" ;;
     esac
 done
-cp "$ROOT/bench/gpu/run.sh" "$ROOT/bench/gpu/table.py" "$STAGE/bench/gpu/"
+cp "$ROOT/bench/gpu/run.sh" "$ROOT/bench/gpu/targets.sh" "$ROOT/bench/gpu/table.py" "$STAGE/bench/gpu/"
 cp "$ROOT/bench/make_grid_vtk.py" "$STAGE/bench/"
 cp "$ROOT/samples/cylinder.vtk" "$STAGE/samples/"
 cp "$DATA/sfepy/cube_big_tetra.mesh" "$STAGE/data/sfepy/"

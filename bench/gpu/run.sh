@@ -3,6 +3,8 @@
 # (device, upload, pipeline, first frame), median frame time wall and GPU, tet steps per second, device
 # bytes per tet and PSNR against the CPU reference, for E+A, each effect alone, then all together.
 #   bench/gpu/run.sh [--small] [--bin DIR] [--out DIR]
+#   bench/gpu/run.sh --targets [--small] [--bin DIR] [--out DIR]: instead, the open GPU targets of
+#   issues 21 and 22 (bench/gpu/targets.sh)
 # --bin: where `tetpack` and `bench_gpu` are (default: build-release, configured and built here when it
 # does not exist; the bundle passes its own bin/). --out: results (default bench/gpu/out): results.jsonl
 # (one JSON line per mesh, layout and effect set), results.md (a Markdown table), the .tpk files.
@@ -20,12 +22,19 @@ set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
 SMALL=0 BIN="" OUT="$HERE/out"
+for a in "$@"; do
+    if [ "$a" = --targets ]; then
+        args=()
+        for b in "$@"; do [ "$b" = --targets ] || args+=("$b"); done
+        exec bash "$HERE/targets.sh" "${args[@]}"
+    fi
+done
 while [ $# -gt 0 ]; do
     case "$1" in
         --small) SMALL=1 ;;
         --bin) BIN=$2; shift ;;
         --out) OUT=$2; shift ;;
-        *) echo "usage: bench/gpu/run.sh [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
+        *) echo "usage: bench/gpu/run.sh [--targets] [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
     esac
     shift
 done
