@@ -548,11 +548,12 @@ TPK_TEST(image_upscale)
     }
     /* opaque red beside transparent blue: half way, half the alpha and all of it red */
     const uint8_t two[8] = {255, 0, 0, 255, 0, 0, 255, 0};
-    uint8_t out[4 * 4];
+    uint8_t out[4 * 2 * 4]; /* 4 x 2 pixels */
     CHECK(tpk_image_upscale(two, 2, 1, out, 4, 2) == 0);
     CHECK(out[0] == 255 && out[2] == 0 && out[3] == 255);              /* clamped at the edge */
     CHECK(out[4] == 255 && out[5] == 0 && out[6] == 0 && out[7] == 191); /* a quarter of the way */
     CHECK(out[12 + 3] == 0);
+    CHECK(memcmp(out, out + 16, 16) == 0); /* one row in: both rows out the same */
 }
 
 /* The committed vectors of spec §13 (format 1.3): two_tets_levels.tpk's level is tet 0 alone, with the
