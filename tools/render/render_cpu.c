@@ -484,7 +484,10 @@ static tpk_range_bvh *culling_trees(const tpk_mesh_arrays *mesh, const tpk_rende
     }
     if (r == TPK_OK) {
         double share = culling < 0 ? tpk_range_bvh_active(keep->range, opt->iso, opt->iso_count) : 0.0;
-        if (share > (many_rays ? TPK_RENDER_CULL_ACTIVE_MANY : TPK_RENDER_CULL_ACTIVE_CPU))
+        /* fewer rays than tets: the share culling pays for grows with the rays, up to a quarter as many */
+        double few = TPK_RENDER_CULL_ACTIVE + (TPK_RENDER_CULL_ACTIVE_CPU - TPK_RENDER_CULL_ACTIVE) *
+                                                  fmin(1.0, rays / (0.25 * (double)mesh->tet_count));
+        if (share > (many_rays ? TPK_RENDER_CULL_ACTIVE_MANY : few))
             return NULL; /* a dense isosurface: marching finds it sooner */
     }
     if (r == TPK_OK && (keep->value_count != opt->iso_count ||
