@@ -21,17 +21,11 @@
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
-SMALL=0 BIN="" OUT="$HERE/out"
-for a in "$@"; do
-    if [ "$a" = --targets ]; then
-        args=()
-        for b in "$@"; do [ "$b" = --targets ] || args+=("$b"); done
-        exec bash "$HERE/targets.sh" "${args[@]}"
-    fi
-done
+SMALL=0 TARGETS=0 BIN="" OUT="$HERE/out"
 while [ $# -gt 0 ]; do
     case "$1" in
         --small) SMALL=1 ;;
+        --targets) TARGETS=1 ;;
         --bin) BIN=$2; shift ;;
         --out) OUT=$2; shift ;;
         *) echo "usage: bench/gpu/run.sh [--targets] [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
@@ -45,6 +39,7 @@ if [ -z "$BIN" ]; then
     cmake --build "$BIN" -j"$(nproc)" --target tetpack_cli bench_gpu >/dev/null
 fi
 TPK=$BIN/tetpack
+[ $TARGETS = 0 ] || exec bash "$HERE/targets.sh" "$TPK" "$OUT" "$SMALL"
 GPU=$BIN/bench_gpu
 [ -x "$GPU" ] || GPU=$BIN/bench/bench_gpu
 [ -x "$TPK" ] && [ -x "$GPU" ] || { echo "run.sh: no tetpack and bench_gpu in $BIN" >&2; exit 2; }

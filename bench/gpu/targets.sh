@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The open GPU targets of issues 21 and 22 in one short run (bench/gpu/run.sh --targets; the bundle's
-# run-gpu-bench.sh --targets), on one grid of about 10M tets (bench/make_grid_vtk.py 121: python3 with
-# numpy) converted with --levels 4:
+# The open GPU targets of issues 21 and 22 in one short run (bench/gpu/run.sh --targets, which calls
+# this; the bundle's run-gpu-bench.sh --targets), on one grid of about 10M tets (bench/make_grid_vtk.py
+# 121: python3 with numpy) converted with --levels 4:
 #   1. `tetpack iso --backend vulkan`: extraction, tets per second of the device's time (target 5G);
 #   2. `render --iso-raster` at 3840x2160: the isosurface by task and mesh shaders where the device has
 #      them (target 2 ms of GPU time a frame);
@@ -9,26 +9,15 @@
 #   4. `render --max-ms 8` at 1024x1024: the level and pixel step the budget picks and the frame's
 #      GPU ms (target 8 ms).
 # Each is run RUNS times (3); the medians go to targets.md, every run's JSON to targets.jsonl.
-#   bench/gpu/targets.sh [--small] [--bin DIR] [--out DIR]
-# --small: the test form (ctest bench.gpu_targets_small): grid 6, small pictures, 1 run.
+# Called by run.sh --targets [--small] [--bin DIR] [--out DIR] as targets.sh TETPACK OUT_DIR SMALL (1: the
+# test form, ctest bench.gpu_targets_small: grid 6, small pictures, 1 run).
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
-SMALL=0 BIN="" OUT="$HERE/out"
-while [ $# -gt 0 ]; do
-    case "$1" in
-        --small) SMALL=1 ;;
-        --bin) BIN=$2; shift ;;
-        --out) OUT=$2; shift ;;
-        *) echo "usage: bench/gpu/targets.sh [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
-    esac
-    shift
-done
-BIN=${BIN:-$ROOT/build-release}
-TPK=$BIN/tetpack
-[ -x "$TPK" ] || { echo "targets.sh: no tetpack in $BIN" >&2; exit 2; }
+TPK=$1 OUT=$2 SMALL=$3
+[ -x "$TPK" ] || { echo "targets.sh: no tetpack at $TPK" >&2; exit 2; }
 mkdir -p "$OUT"
-if [ $SMALL = 1 ]; then
+if [ "$SMALL" = 1 ]; then
     GRID=6 RUNS=1 ISO_SIZE=96x54 SIZE=64x64
 else
     GRID=${TPK_GPU_TARGET_GRID:-121} RUNS=${TPK_GPU_TARGET_RUNS:-3} ISO_SIZE=3840x2160 SIZE=1024x1024
