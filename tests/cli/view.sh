@@ -134,11 +134,12 @@ for frames in 1 2; do
 done
 # while the view moves (--orbit), the coarsest level, and past it, with a budget nothing fits, rays at
 # every 8th pixel; with one every frame fits, the full mesh at every pixel
-for case in "0.0001 $coarsest 8" "100000 0 1"; do
+for case in "0.0001 $coarsest 8 8" "0.0001 $coarsest 3 3" "100000 0 8 1"; do
     set -- $case
-    tpk view "$WORK/cyl_l.tpk" --size $SIZE --frames 3 --orbit 10 --max-ms "$1" 2> "$WORK/err" ||
-        { cat "$WORK/err"; fail "view --max-ms $1 --orbit"; }
-    grep -q "the last at level $2, pixel step $3" "$WORK/err" || fail "view --max-ms $1 --orbit: $(cat "$WORK/err")"
+    tpk view "$WORK/cyl_l.tpk" --size $SIZE --frames 3 --orbit 10 --max-ms "$1" --max-pixel-step "$3" 2> "$WORK/err" ||
+        { cat "$WORK/err"; fail "view --max-ms $1 --max-pixel-step $3 --orbit"; }
+    grep -q "the last at level $2, pixel step $4" "$WORK/err" ||
+        fail "view --max-ms $1 --max-pixel-step $3 --orbit: $(cat "$WORK/err")"
 done
 
 # no Vulkan device: the CPU reference, with a note

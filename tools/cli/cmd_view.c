@@ -191,6 +191,7 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
     o.keys = v->keys;
     o.iso_raster = a->iso_raster;
     o.max_ms = a->max_ms;
+    o.max_pixel_step = a->max_pixel_step;
     if (a->iso_raster && cpu)
         return tpk_cli_fail("view", "--iso-raster draws with Vulkan: not with --backend cpu");
     if (a->iso_raster && o.present == TPK_VIEW_PRESENT_VULKAN)

@@ -286,18 +286,18 @@ const tpk_option_row tpk_option_table[TPK_OPT_COUNT] = {
      .help = "a time budget: the finest level of detail whose predicted frame\n"
              "time fits T ms (a cost model fitted on two small frames of the\n"
              "coarsest level, then on every frame drawn); where even the\n"
-             "coarsest does not fit, rays at every d-th pixel only (up to 8,\n"
-             "render: --max-pixel-step), the picture between them\n"
-             "interpolated; --json reports the level, its field error, the\n"
-             "pixel step and the prediction. view: while the view moves; at\n"
-             "rest it draws the full mesh at every pixel",
+             "coarsest does not fit, rays at every d-th pixel only\n"
+             "(--max-pixel-step), the picture between them interpolated;\n"
+             "--json reports the level, its field error, the pixel step and\n"
+             "the prediction. view: while the view moves; at rest it draws\n"
+             "the full mesh at every pixel",
      .help_rank = 32, .kind = TPK_OPT_KIND_NUMBER, .lo = 0, .hi = INFINITY, .lo_open = 1,
      .hi_open = 1},
     {TPK_OPT_MAX_PIXEL_STEP,
      .flag = "--max-pixel-step", .metavar = "D", .expects = "a pixel step from 1 to 16",
      .help = "with --max-ms, the largest pixel step the budget may take\n"
              "(default 8; 1: every pixel, whatever the budget)",
-     .help_rank = 33, .render_only = 1, .kind = TPK_OPT_KIND_INT, .lo = 1, .hi = 16},
+     .help_rank = 33, .kind = TPK_OPT_KIND_INT, .lo = 1, .hi = 16},
 };
 
 const char *tpk_option_scene_leaf(tpk_option_id id)

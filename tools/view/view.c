@@ -124,7 +124,8 @@ static int show_frame(view_loop *l, int reduced, int resting, tpk_diag *diag)
     /* --max-ms past the coarsest level, while the view moves: rays at every d-th pixel (budget.h) */
     if (l->o->max_ms > 0 && !(resting && !reduced)) {
         int d = tpk_cost_model_pixel_step(&l->model, (double)width * height,
-                                          (double)l->state.level_tets[l->state.level], l->o->max_ms / 1e3, 8);
+                                          (double)l->state.level_tets[l->state.level], l->o->max_ms / 1e3,
+                                          l->o->max_pixel_step);
         zoom = d > zoom ? d : zoom;
     }
     l->last_zoom = zoom;

@@ -37,6 +37,8 @@ typedef struct tpk_view_options {
     double max_ms;                /* > 0: a time budget per frame: while the view moves, the finest level of
                                      detail (spec §16) the cost model fitted on the frames drawn predicts to
                                      fit; once it rests, the full mesh */
+    int max_pixel_step;           /* past the coarsest level, rays at every d-th pixel at most (budget.h);
+                                     <= 1: every pixel */
 } tpk_view_options;
 
 /* Open the window and run until it is closed (or `frames` frames were shown). Returns 0; -1 with a
