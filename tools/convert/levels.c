@@ -145,7 +145,7 @@ static double point_triangle(const double *p, const double *a, const double *b, 
 
 /* The vertices a pass may collapse (not pinned, not removed, not stuck), in id order, and their stars:
  * the tets that hold them (in no particular order: nothing depends on it). */
-static int build_stars(simplifier *s)
+static void build_stars(simplifier *s)
 {
     /* over the vertices still there (the live tets use no other), not all of the full mesh's: a coarse
      * level's passes would spend most of their time on vertices long gone */
@@ -177,7 +177,6 @@ static int build_stars(simplifier *s)
             if (s->star_start[v[k]] >= 0)
                 s->star[s->star_end[v[k]]++] = (int32_t)t;
     }
-    return 0;
 }
 
 /* u's neighbours (each once, in the order the star first meets them) with their costs: the field
@@ -722,15 +721,14 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
 }
 
 /* Simplify to about `target` live tets (or as far as passes go). */
-static int simplify_to(simplifier *s, int64_t target)
+static void simplify_to(simplifier *s, int64_t target)
 {
     int64_t live = s->tet_count;
     for (;;) {
-        if (build_stars(s) != 0)
-            return -1;
+        build_stars(s);
         int64_t before = live, done = collapse_pass(s, target, &live);
         if (live <= target || done == 0 || before - live < before / 200)
-            return 0;
+            return;
     }
 }
 
@@ -1314,10 +1312,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     for (int k = 1; rc == 0 && k <= count; k++) {
         double t0 = tpk_now_seconds();
         int64_t before = s.tet_count;
-        if (simplify_to(&s, before / TPK_LEVEL_RATIO) != 0) {
-            rc = tpk_diag_fail(diag, "levels: out of memory");
-            break;
-        }
+        simplify_to(&s, before / TPK_LEVEL_RATIO);
         if (s.tet_count > before - before * 15 / 100) /* not coarser enough to be worth a level */
             break;
         tpk_level *r = &out->level[out->count];
