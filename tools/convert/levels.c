@@ -143,8 +143,42 @@ static double point_triangle(const double *p, const double *a, const double *b, 
     return sqrt(edge(p, q, e));
 }
 
+/* build_stars' counting and filling, side by side: worker w takes the corners whose vertex lies in its
+ * range of ids [cut[w], cut[w + 1]) and reads every tet in order, so each star is filled in tet order, as
+ * one thread would fill it. */
+typedef struct star_job {
+    simplifier *s;
+    int32_t cut[TPK_MAX_THREADS + 1];
+    int fill; /* 0: count, 1: fill */
+} star_job;
+
+static void star_ranges(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    star_job *j = ctx;
+    simplifier *s = j->s;
+    const int32_t *tets = s->tets;
+    int64_t *star_start = s->star_start, *star_end = s->star_end;
+    int32_t *star = s->star;
+    int64_t corners = 4 * s->tet_count;
+    (void)worker;
+    for (int64_t w = begin; w < end; w++) {
+        uint32_t lo = (uint32_t)j->cut[w], span = (uint32_t)j->cut[w + 1] - lo;
+        if (!j->fill) {
+            for (int64_t i = 0; i < corners; i++)
+                if ((uint32_t)tets[i] - lo < span)
+                    star_end[tets[i]]++;
+        } else {
+            for (int64_t i = 0; i < corners; i++) {
+                int32_t v = tets[i];
+                if ((uint32_t)v - lo < span && star_start[v] >= 0)
+                    star[star_end[v]++] = (int32_t)(i / 4);
+            }
+        }
+    }
+}
+
 /* The vertices a pass may collapse (not pinned, not removed, not stuck), in id order, and their stars:
- * the tets that hold them (in no particular order: nothing depends on it). */
+ * the tets that hold them, in tet order. */
 static void build_stars(simplifier *s)
 {
     /* over the vertices still there (the live tets use no other), not all of the full mesh's: a coarse
@@ -161,8 +195,14 @@ static void build_stars(simplifier *s)
             s->active[s->active_count++] = v;
         s->star_end[v] = 0;
     }
-    for (int64_t i = 0; i < 4 * s->tet_count; i++)
-        s->star_end[s->tets[i]]++;
+    /* each worker reads all the corners but writes only its own vertices' counts and stars: the
+     * writes, scattered, are the cost */
+    star_job job = {s, {0}, 0};
+    int parts = tpk_threads_for(4 * s->tet_count, s->threads, 1 << 20);
+    for (int w = 0; w <= parts; w++)
+        job.cut[w] = w == parts ? (int32_t)s->mesh->vertex_count : live ? s->alive[live * w / parts] : 0;
+    job.cut[0] = 0;
+    tpk_parallel_for(parts, parts, star_ranges, &job);
     int64_t at = 0; /* only the active vertices' stars are kept; the others' are empty (-1, -1) */
     for (int64_t i = 0; i < live; i++) {
         int32_t v = s->alive[i];
@@ -171,12 +211,8 @@ static void build_stars(simplifier *s)
         at += keep ? s->star_end[v] : 0;
         s->star_end[v] = s->star_start[v]; /* the fill's cursor, its end once filled */
     }
-    for (int64_t t = 0; t < s->tet_count; t++) {
-        const int32_t *v = s->tets + 4 * t;
-        for (int k = 0; k < 4; k++)
-            if (s->star_start[v[k]] >= 0)
-                s->star[s->star_end[v[k]]++] = (int32_t)t;
-    }
+    job.fill = 1;
+    tpk_parallel_for(parts, parts, star_ranges, &job);
 }
 
 /* u's neighbours (each once, in the order the star first meets them) with their costs: the field
@@ -615,14 +651,16 @@ static int64_t try_collapse(simplifier *s, int32_t u, int32_t lo, int32_t hi)
     return killed;
 }
 
-/* Blocks of vertex ids that a pass works on side by side: of a fixed size, so that the levels do not
- * depend on the thread count. Vertices are in Hilbert order, so a block is a compact region and most
+/* Blocks of vertex ids that a pass works on side by side: each of a fixed number of the vertices still
+ * there (s->alive), so that the levels do not depend on the thread count, and a coarse level's blocks are
+ * as large as the full mesh's (counted in ids, they would hold a sixth as many vertices a level, and
+ * more stars would cross them). Vertices are in Hilbert order, so a block is a compact region and most
  * stars lie inside one. */
-#define BLOCK_IDS ((int32_t)1 << 14)
+#define BLOCK_IDS ((int64_t)1 << 14)
 
 typedef struct block_pass {
     simplifier *s;
-    int32_t shift;          /* block b > 0 starts at shift + (b - (shift > 0)) * BLOCK_IDS, block 0 at 0 */
+    int64_t shift, size;    /* block b > 0 starts at alive[shift + (b - (shift > 0)) * size], block 0 at 0 */
     int64_t blocks;
     int64_t quota;          /* the tets a block may kill: its share of what the level still needs */
     int64_t *killed, *done; /* per block */
@@ -630,10 +668,11 @@ typedef struct block_pass {
 
 static void block_range(const block_pass *p, int64_t b, int32_t *lo, int32_t *hi)
 {
-    int64_t V = p->s->mesh->vertex_count, first = p->shift > 0;
-    int64_t a = b == 0 ? 0 : p->shift + (b - first) * BLOCK_IDS, z = p->shift + (b + 1 - first) * BLOCK_IDS;
-    *lo = (int32_t)(a < V ? a : V);
-    *hi = (int32_t)(z < V ? z : V);
+    const simplifier *s = p->s;
+    int64_t n = s->alive_count, first = p->shift > 0;
+    int64_t a = b == 0 ? 0 : p->shift + (b - first) * p->size, z = p->shift + (b + 1 - first) * p->size;
+    *lo = a == 0 ? 0 : a < n ? s->alive[a] : (int32_t)s->mesh->vertex_count;
+    *hi = z < n ? s->alive[z] : (int32_t)s->mesh->vertex_count;
 }
 
 /* The first active vertex at or after id lo. */
@@ -671,12 +710,13 @@ static void run_blocks(void *ctx, int64_t begin, int64_t end, int worker)
 
 /* The collapses whose stars lie inside one block, the blocks side by side: no two touch the same tet or
  * vertex, and each reads only its own, so the result is that of the blocks one after the other. */
-static int64_t blocks_pass(simplifier *s, int32_t shift, int64_t target, int64_t *live)
+static int64_t blocks_pass(simplifier *s, int64_t shift, int64_t size, int64_t target, int64_t *live)
 {
-    int64_t V = s->mesh->vertex_count, need = *live - target;
+    int64_t n = s->alive_count, need = *live - target;
     if (need <= 0)
         return 0;
-    block_pass p = {s, shift, (V - shift + BLOCK_IDS - 1) / BLOCK_IDS + (shift > 0), 0, NULL, NULL};
+    /* with fewer than shift vertices, one block of them all (first > 0 counts it) */
+    block_pass p = {s, shift, size, (n > shift ? (n - shift + size - 1) / size : 0) + (shift > 0), 0, NULL, NULL};
     p.killed = malloc(sizeof *p.killed * 2 * (size_t)p.blocks);
     if (!p.killed)
         return 0; /* the sweep one by one does it all */
@@ -692,8 +732,10 @@ static int64_t blocks_pass(simplifier *s, int32_t shift, int64_t target, int64_t
 
 /* One pass; the number of collapses. Vertices in id order, skipping the targets of this pass's
  * collapses (the stars it began with, less the tets killed since, are the others'): first inside the
- * blocks, side by side, then inside the blocks shifted by half a block, then one by one the rest, whose
- * stars cross both, which stops at the target exactly. */
+ * blocks, side by side, then inside the blocks shifted by half a block, then inside blocks 16 times as
+ * large, shifted so that no boundary is one of the first two's (a star that crosses both of those spans
+ * thousands of ids, where the Hilbert order jumps: grid 120's first pass left 221k collapses to the
+ * sweep, now 88k), then one by one the rest, which stops at the target exactly. */
 static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
 {
     int64_t V = s->mesh->vertex_count, done = 0;
@@ -701,8 +743,9 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
         return 0;
     memset(s->locked, 0, (size_t)V);
     memset(s->dead, 0, (size_t)s->tet_count);
-    done += blocks_pass(s, 0, target, live);
-    done += blocks_pass(s, BLOCK_IDS / 2, target, live);
+    done += blocks_pass(s, 0, BLOCK_IDS, target, live);
+    done += blocks_pass(s, BLOCK_IDS / 2, BLOCK_IDS, target, live);
+    done += blocks_pass(s, 8 * BLOCK_IDS + BLOCK_IDS / 4, 16 * BLOCK_IDS, target, live);
     for (int64_t i = 0; i < s->active_count && *live > target; i++) {
         int64_t k = try_collapse(s, s->active[i], 0, 0);
         if (k >= 0)
@@ -852,7 +895,8 @@ static int64_t locate(const tpk_tetmesh *lvl, const int32_t *neighbors, const do
             const double *q[4];
             for (int j = 0; j < 4; j++)
                 q[j] = j == k ? p : lvl->points + 3 * (size_t)v[j];
-            if (tpk_orient3d_exact(q[0], q[1], q[2], q[3]) < 0) {
+            int sign = tpk_orient3d_filter(q[0], q[1], q[2], q[3]); /* certain when not 0 */
+            if ((sign ? sign : tpk_orient3d_exact(q[0], q[1], q[2], q[3])) < 0) {
                 if (neighbors[4 * t + k] >= 0)
                     beyond = k;
                 else
@@ -976,34 +1020,64 @@ typedef struct domain_size {
     double volume, area;
 } domain_size;
 
-static domain_size size_of(const double *points, const int32_t *tets, const int32_t *neighbors, int64_t tet_count)
+/* size_of's sums in chunks of a number of tets that depends on the count alone (at least SIZE_CHUNK, at
+ * most SIZE_CHUNKS of them), side by side, added in chunk order: the same sums whatever the thread count. */
+#define SIZE_CHUNK ((int64_t)1 << 16)
+#define SIZE_CHUNKS 2048
+
+typedef struct size_job {
+    const double *points;
+    const int32_t *tets, *neighbors;
+    int64_t tet_count, chunk;
+    domain_size part[SIZE_CHUNKS];
+} size_job;
+
+static void size_chunks(void *ctx, int64_t begin, int64_t end, int worker)
 {
-    domain_size d = {0, 0};
-    for (int64_t t = 0; t < tet_count; t++) {
-        const int32_t *v = tets + 4 * t;
-        const double *a = points + 3 * (size_t)v[0];
-        double ab[3], ac[3], ad[3];
-        edge(a, points + 3 * (size_t)v[1], ab);
-        edge(a, points + 3 * (size_t)v[2], ac);
-        edge(a, points + 3 * (size_t)v[3], ad);
-        d.volume += ab[0] * (ac[1] * ad[2] - ac[2] * ad[1]) - ab[1] * (ac[0] * ad[2] - ac[2] * ad[0]) +
-                    ab[2] * (ac[0] * ad[1] - ac[1] * ad[0]);
-        for (int k = 0; k < 4; k++)
-            if (neighbors[4 * t + k] < 0) {
-                const double *p = points + 3 * (size_t)v[tpk_tet_faces[k][0]];
-                double e1[3], e2[3];
-                edge(p, points + 3 * (size_t)v[tpk_tet_faces[k][1]], e1);
-                edge(p, points + 3 * (size_t)v[tpk_tet_faces[k][2]], e2);
-                double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2],
-                       z = e1[0] * e2[1] - e1[1] * e2[0];
-                d.area += sqrt(x * x + y * y + z * z);
-            }
+    size_job *j = ctx;
+    const double *points = j->points;
+    (void)worker;
+    for (int64_t c = begin; c < end; c++) {
+        domain_size d = {0, 0};
+        int64_t last = (c + 1) * j->chunk < j->tet_count ? (c + 1) * j->chunk : j->tet_count;
+        for (int64_t t = c * j->chunk; t < last; t++) {
+            const int32_t *v = j->tets + 4 * t;
+            const double *a = points + 3 * (size_t)v[0];
+            double ab[3], ac[3], ad[3];
+            edge(a, points + 3 * (size_t)v[1], ab);
+            edge(a, points + 3 * (size_t)v[2], ac);
+            edge(a, points + 3 * (size_t)v[3], ad);
+            d.volume += ab[0] * (ac[1] * ad[2] - ac[2] * ad[1]) - ab[1] * (ac[0] * ad[2] - ac[2] * ad[0]) +
+                        ab[2] * (ac[0] * ad[1] - ac[1] * ad[0]);
+            for (int k = 0; k < 4; k++)
+                if (j->neighbors[4 * t + k] < 0) {
+                    const double *p = points + 3 * (size_t)v[tpk_tet_faces[k][0]];
+                    double e1[3], e2[3];
+                    edge(p, points + 3 * (size_t)v[tpk_tet_faces[k][1]], e1);
+                    edge(p, points + 3 * (size_t)v[tpk_tet_faces[k][2]], e2);
+                    double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2],
+                           z = e1[0] * e2[1] - e1[1] * e2[0];
+                    d.area += sqrt(x * x + y * y + z * z);
+                }
+        }
+        j->part[c] = d;
     }
-    return d;
 }
 
-/* With the shell kept (tolerance 0), the same volume and area up to rounding; else the volume changed by
- * at most the shell's area times how far it moved. */
+static domain_size size_of(const double *points, const int32_t *tets, const int32_t *neighbors, int64_t tet_count,
+                           int threads)
+{
+    static _Thread_local size_job job; /* 32 KB of sums: not on the stack */
+    job = (size_job){points, tets, neighbors, tet_count, SIZE_CHUNK, {{0, 0}}};
+    if (tet_count > SIZE_CHUNK * SIZE_CHUNKS)
+        job.chunk = (tet_count + SIZE_CHUNKS - 1) / SIZE_CHUNKS;
+    int64_t chunks = (tet_count + job.chunk - 1) / job.chunk;
+    tpk_parallel_for(chunks, tpk_threads_for(chunks, threads, 1), size_chunks, &job);
+    domain_size d = {0, 0};
+    for (int64_t c = 0; c < chunks; c++)
+        d.volume += job.part[c].volume, d.area += job.part[c].area;
+    return d;
+}
 static int same_size(domain_size full, domain_size level, double tolerance)
 {
     if (tolerance > 0)
@@ -1146,7 +1220,7 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
         tpk_cut_folds(lvl.tets, neighbors, slots, folds);
     free(slots);
     if (rc == 0) {
-        domain_size d = size_of(lvl.points, lvl.tets, neighbors, lvl.tet_count);
+        domain_size d = size_of(lvl.points, lvl.tets, neighbors, lvl.tet_count, s->threads);
         if (!same_size(full, d, s->shell_tolerance))
             rc = tpk_diag_fail(diag, "level %d: its volume %.17g and shell area %.17g are not the full mesh's %.17g and %.17g "
                                "(a bug in levels.c)", k, d.volume / 6, d.area / 2, full.volume / 6, full.area / 2);
@@ -1211,11 +1285,13 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
     return rc;
 }
 
-/* Each tet's shape and origin, at the start (tpk_parallel_for over the tets). */
+/* Each tet's corners, shape and origin, at the start (tpk_parallel_for over the tets: the first touch of
+ * fresh pages, a third of the set-up on grid 200, goes on all threads too). */
 static void set_up_tets(void *ctx, int64_t begin, int64_t end, int worker)
 {
     simplifier *s = ctx;
     (void)worker;
+    memcpy(s->tets + 4 * begin, s->mesh->tets + 4 * begin, sizeof *s->tets * 4 * (size_t)(end - begin));
     for (int64_t t = begin; t < end; t++) {
         const int32_t *v = s->mesh->tets + 4 * t;
         s->tet_quality[t] = (float)quality(point(s, v[0]), point(s, v[1]), point(s, v[2]), point(s, v[3]));
@@ -1280,7 +1356,6 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     if (rc == 0) {
         memset(s.seen, 0xff, sizeof *s.seen * (size_t)V);
         memset(s.chain_head, 0xff, sizeof *s.chain_head * 2 * (size_t)V);
-        memcpy(s.tets, mesh->tets, sizeof *s.tets * 4 * (size_t)T);
         for (int64_t v = 0; v < V; v++)
             s.alive[v] = (int32_t)v;
         s.alive_count = V;
@@ -1297,7 +1372,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
         if (source->folds_cut > 0)
             memcpy(s.pinned, s.boundary, (size_t)V);
     }
-    domain_size full = rc == 0 ? size_of(mesh->points, mesh->tets, neighbors, T) : (domain_size){0, 0};
+    domain_size full = rc == 0 ? size_of(mesh->points, mesh->tets, neighbors, T, s.threads) : (domain_size){0, 0};
     if (o->level_shell_error > 0 && V > 0) { /* a fraction of the bounding box diagonal */
         double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, diag = 0;
         for (int64_t v = 0; v < V; v++)
