@@ -61,6 +61,14 @@ void tpk_marcher_destroy(tpk_marcher *m)
     free(m);
 }
 
+tpk_result tpk_marcher_set_scalars(tpk_marcher *m, const float *scalars)
+{
+    if (!m)
+        return TPK_ERR_INVALID_ARGUMENT;
+    m->mesh.scalars = scalars; /* the shell BVH and extent depend on positions and shell alone */
+    return TPK_OK;
+}
+
 void tpk_marcher_shell_bvh(const tpk_marcher *m, tpk_shell_bvh *out)
 {
     memset(out, 0, sizeof *out);

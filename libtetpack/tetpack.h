@@ -246,6 +246,12 @@ typedef struct tpk_marcher tpk_marcher;
  * Thread safety: tpk_march_ray may be called from many threads on one marcher. */
 tpk_result tpk_marcher_create(tpk_marcher **out, const tpk_mesh_arrays *mesh);
 void tpk_marcher_destroy(tpk_marcher *marcher);
+/* Another point field for the marcher to read from now on (vertex_count floats, outliving the marcher
+ * like the other arrays; NULL: none), as tpk_marcher_create would give for the same arrays with these
+ * scalars, without building the shell BVH again: for time steps of one mesh. Not while rays are marched
+ * on it; trees made on the marcher (tpk_range_bvh) hold the old field's ranges: make them again.
+ * TPK_ERR_INVALID_ARGUMENT for a NULL marcher. */
+tpk_result tpk_marcher_set_scalars(tpk_marcher *marcher, const float *scalars);
 
 /* A node of the marcher's shell BVH. Leaves (count > 0) hold faces [first, first + count) of the
  * reordered face array; inner nodes (count == 0) have children first and first + 1. Boxes are padded

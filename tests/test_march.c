@@ -169,6 +169,14 @@ TPK_TEST(single_tet)
         /* bad arguments */
         const double zero[3] = {0, 0, 0};
         CHECK_EQ_INT(tpk_march_ray(m, org, zero, 0, 1, record_segment, r, NULL), TPK_ERR_INVALID_ARGUMENT);
+        /* another field (a time step), 10 - (x + 2y + 3z): the same ray reads it */
+        static const float other[4] = {10, 9, 8, 7};
+        CHECK_EQ_INT(tpk_marcher_set_scalars(m, other), TPK_OK);
+        r->count = 0;
+        CHECK_EQ_INT(tpk_march_ray(m, org, dir, 0, INFINITY, record_segment, r, NULL), TPK_OK);
+        CHECK_EQ_INT(r->count, 1);
+        CHECK(fabs(r->s_in[0] - 9.5) < 1e-12 && fabs(r->s_out[0] - (9.5 - 0.7 * 3)) < 1e-12);
+        CHECK_EQ_INT(tpk_marcher_set_scalars(NULL, other), TPK_ERR_INVALID_ARGUMENT);
         free(r);
         tpk_marcher_destroy(m);
     }

@@ -75,6 +75,22 @@ R "$WORK/e.tpk" -o "$WORK/tet_iso.png" --field pressure --step 4 --range 0,1.4e9
 "$TPK" render "$WORK/e.tpk" -o "$WORK/frame_%04d.png" --field pressure --steps 0:4 --range 0,1.4e9 --size 80x60 > "$WORK/steps.out"
 [ "$(grep -c 'frame_000[0-4].png' "$WORK/steps.out")" = 5 ] || fail "--steps 0:4 did not report 5 frames"
 cmp "$WORK/frame_0004.png" "$WORK/tet.png" || fail "frame 4 of --steps differs from --step 4"
+# A point field over steps: one render keeps its marcher (and vertex cache) from step to step and hands
+# it each step's field, so every frame must be that step's picture alone: iso-only at each step's median
+# (the range trees made again for each field, culled, against one step marched) and with vertex AO.
+ISOS=3.343e8,6.702e8,1.0077e9,1.3469e9
+PS=(--field pressure --range 0,1.4e9 --size 80x60)
+TETPACK_ISO_CULLING=1 "$TPK" render "$WORK/ep.tpk" -o "$WORK/pi_%d.png" "${PS[@]}" --tf "$WORK/clear.tf" --iso $ISOS \
+    --steps 0:4 > /dev/null
+"$TPK" render "$WORK/ep.tpk" -o "$WORK/pa_%d.png" "${PS[@]}" --ao 3 --occlusion vertex --steps 0:4 > /dev/null
+for s in 1 2 4; do
+    TETPACK_ISO_CULLING=0 R "$WORK/ep.tpk" -o "$WORK/one_i.png" "${PS[@]}" --tf "$WORK/clear.tf" --iso $ISOS --step $s
+    cmp "$WORK/pi_$s.png" "$WORK/one_i.png" || fail "--steps: frame $s (iso, culled) differs from --step $s alone"
+    R "$WORK/ep.tpk" -o "$WORK/one_a.png" "${PS[@]}" --ao 3 --occlusion vertex --step $s
+    cmp "$WORK/pa_$s.png" "$WORK/one_a.png" || fail "--steps: frame $s (vertex AO) differs from --step $s alone"
+done
+cmp -s "$WORK/pi_1.png" "$WORK/pi_4.png" && fail "--steps: the isosurfaces of steps 1 and 4 look the same"
+cmp -s "$WORK/pa_1.png" "$WORK/pa_4.png" && fail "--steps: steps 1 and 4 look the same with vertex AO"
 "$PY" - "$WORK" "$(dirname "$0")" <<'PY'
 import sys
 import numpy as np

@@ -196,7 +196,7 @@ static int fit_on_probe(const render_args *a, const level_set *ls, int tet_field
         tpk_diag diag;
         memset(&diag, 0, sizeof diag);
         memset(&stats, 0, sizeof stats);
-        int rc = rgba && render_image(a, &mesh, &small, rgba, &stats, &diag) == 0 ? 0 : -1;
+        int rc = rgba && render_image(a, &mesh, &small, rgba, NULL, &stats, &diag) == 0 ? 0 : -1;
         free(rgba);
         if (rc != 0)
             return tpk_cli_fail_file("render", a->path, diag.message[0] ? diag.message : "out of memory");
@@ -244,6 +244,13 @@ static int render_file(render_args *a, tpk_file *file)
     uint8_t *rgba = rc == TPK_EXIT_OK ? malloc((size_t)a->width * (size_t)a->height * 4) : NULL;
     if (rc == TPK_EXIT_OK && !rgba)
         rc = tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
+    /* Several steps on the CPU reference keep its marcher (the shell BVH: 0.16 s a frame on a 10M-tet
+     * grid) and vertex cache from one to the next; each step's field is handed to the marcher. The
+     * pictures are the same as one step at a time (tests/cli/render_effects.sh). */
+    tpk_vertex_cache *cache = NULL;
+    if (rc == TPK_EXIT_OK && a->step_last > a->step && strcmp(a->backend, "vulkan") != 0 &&
+        !(cache = tpk_vertex_cache_create()))
+        rc = tpk_cli_fail("render", "out of memory for the renderer's cache");
     for (int step = a->step; step <= a->step_last && rc == TPK_EXIT_OK; step++) {
         char path[4096];
         tpk_mesh_arrays mesh;
@@ -264,7 +271,7 @@ static int render_file(render_args *a, tpk_file *file)
                             .budget = a->max_ms > 0 ? budget : 0,
                             .predicted = tpk_cost_model_predict(&model, (double)drawn_w * drawn_h,
                                                                 (double)ls.tets[k]),
-                            .pixel_step = d};
+                            .pixel_step = d, .cache = cache};
         if (rc == TPK_EXIT_OK && a->verbose && (a->max_ms > 0 || k > 0))
             fprintf(stderr, "tetpack render: level %d (%lld tets)%s\n", k, (long long)ls.tets[k],
                     a->max_ms > 0 ? ", the finest the cost model fits in --max-ms" : "");
@@ -277,6 +284,7 @@ static int render_file(render_args *a, tpk_file *file)
         if (rc == TPK_EXIT_OK && a->max_ms > 0) /* the model learns from every frame drawn */
             tpk_cost_model_add(&model, (double)drawn_w * drawn_h, (double)ls.tets[k], render_frame_seconds(a, &stats));
     }
+    tpk_vertex_cache_destroy(cache);
     free(rgba);
     close_levels(&ls);
     if (rc == TPK_EXIT_OK && a->save_scene && render_save_scene(a, file, &opt) != 0)

@@ -19,7 +19,7 @@
 #endif
 
 int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                 tpk_render_stats *stats, tpk_diag *diag)
+                 tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag)
 {
     (void)a; /* without Vulkan, the CPU reference whatever the arguments say */
 #ifdef TPK_WITH_VULKAN
@@ -27,7 +27,7 @@ int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_re
         return a->iso_raster ? tpk_render_iso_raster(mesh, opt, rgba, stats, diag)
                              : tpk_render_vulkan(mesh, opt, rgba, stats, diag);
 #endif
-    return tpk_render_cpu(mesh, opt, rgba, stats, diag);
+    return cache ? tpk_render_cpu_cached(mesh, opt, rgba, cache, stats, diag) : tpk_render_cpu(mesh, opt, rgba, stats, diag);
 }
 
 double render_frame_seconds(const render_args *a, const tpk_render_stats *stats)
@@ -73,7 +73,7 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
             return tpk_cli_fail("render", "out of memory for a %dx%d image", small.width, small.height);
     }
     int failed = src->set ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
-                          : render_image(a, src->mesh, &small, drawn, &stats, &diag);
+                          : render_image(a, src->mesh, &small, drawn, src->cache, &stats, &diag);
     if (!failed && drawn != rgba) {
         double t0 = tpk_now_seconds();
         if (tpk_image_upscale(drawn, small.width, small.height, rgba, opt->width, opt->height) != 0) {

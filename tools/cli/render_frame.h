@@ -24,12 +24,13 @@ typedef struct frame_source {
     int64_t level_tets;
     double error_max, error_rms, shell_distance, budget, predicted;
     int pixel_step; /* rays at every pixel_step-th pixel, the rest interpolated (budget.h; <= 1: every pixel) */
+    tpk_vertex_cache *cache; /* the CPU reference's set-up kept from frame to frame (--steps), or NULL */
 } frame_source;
 
 /* The picture of `mesh` by the backend of the arguments (the CPU reference, Vulkan, --iso-raster), no
  * file written. 0, or -1 with diag's message. */
 int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                 tpk_render_stats *stats, tpk_diag *diag);
+                 tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag);
 /* A frame's seconds for the cost model (tools/render/budget.h): the GPU's time where the device gives it,
  * else the wall time of the render. */
 double render_frame_seconds(const render_args *a, const tpk_render_stats *stats);

@@ -532,8 +532,19 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     }
     render_keep own = {0}; /* made for this frame when nothing is kept */
     render_keep *k = keep ? keep : &own;
-    if (k->marcher && !same_arrays(&k->mesh, mesh)) /* the marcher reads the field too */
-        render_keep_free(k);
+    if (k->marcher && !same_arrays(&k->mesh, mesh)) {
+        tpk_mesh_arrays other = *mesh;
+        other.scalars = k->mesh.scalars;
+        if (same_arrays(&k->mesh, &other)) { /* another field of the same mesh (a time step): the marcher
+                                                 reads it from now on, the range trees are made again */
+            tpk_marcher_set_scalars(k->marcher, mesh->scalars);
+            tpk_range_bvh_destroy(k->range);
+            k->range = NULL, k->value_count = 0;
+            k->mesh.scalars = mesh->scalars;
+        } else {
+            render_keep_free(k);
+        }
+    }
     tpk_result r = TPK_OK;
     if (!k->marcher && (r = tpk_marcher_create(&k->marcher, mesh)) != TPK_OK) {
         free(job);
