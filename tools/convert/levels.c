@@ -1067,8 +1067,7 @@ static void size_chunks(void *ctx, int64_t begin, int64_t end, int worker)
 static domain_size size_of(const double *points, const int32_t *tets, const int32_t *neighbors, int64_t tet_count,
                            int threads)
 {
-    static _Thread_local size_job job; /* 32 KB of sums: not on the stack */
-    job = (size_job){points, tets, neighbors, tet_count, SIZE_CHUNK, {{0, 0}}};
+    size_job job = {points, tets, neighbors, tet_count, SIZE_CHUNK, {{0, 0}}}; /* 32 KB */
     if (tet_count > SIZE_CHUNK * SIZE_CHUNKS)
         job.chunk = (tet_count + SIZE_CHUNKS - 1) / SIZE_CHUNKS;
     int64_t chunks = (tet_count + job.chunk - 1) / job.chunk;
