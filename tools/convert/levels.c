@@ -745,7 +745,8 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
     memset(s->dead, 0, (size_t)s->tet_count);
     done += blocks_pass(s, 0, BLOCK_IDS, target, live);
     done += blocks_pass(s, BLOCK_IDS / 2, BLOCK_IDS, target, live);
-    done += blocks_pass(s, 8 * BLOCK_IDS + BLOCK_IDS / 4, 16 * BLOCK_IDS, target, live);
+    if (s->alive_count > 8 * BLOCK_IDS + BLOCK_IDS / 4) /* else one block of them all: the sweep's work, */
+        done += blocks_pass(s, 8 * BLOCK_IDS + BLOCK_IDS / 4, 16 * BLOCK_IDS, target, live); /* on one thread */
     for (int64_t i = 0; i < s->active_count && *live > target; i++) {
         int64_t k = try_collapse(s, s->active[i], 0, 0);
         if (k >= 0)
