@@ -5,6 +5,7 @@
 # mesh (SEACAS's exomerge unit test, its z displacement): one and several surfaces, partial opacity,
 # shading, shadows and AO rays (the march pauses for casts), the clip box, a probe, Tet32, rays in slices
 # and in one dispatch; --json says which path ran; each culled picture is the CPU reference's at >= 40 dB.
+# Then --steps on one kept renderer against each step alone.
 source "$(dirname "$0")/common.sh"
 tpk convert "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpk" --quiet || fail "cannot convert the cylinder"
 tpk convert "$DATA/seacas/exomerge_unit_test.e" "$WORK/m.tpk" --layout tet16 --layout tet32 --quiet \
@@ -59,4 +60,37 @@ else
 fi
 tpk render "$WORK/m.tpk" -o "$WORK/vol.png" --backend vulkan --size 96x72 --field disp_z --iso -0.0195 --json > "$WORK/vol.json"
 grep -q '"iso_culling":false' "$WORK/vol.json" || fail "a render with volume opacity was culled"
-echo "render_vk_iso_culling: culled Vulkan pictures identical to marched ones"
+
+# --steps keeps one Vulkan renderer and hands it each step's field (tpk_vk_renderer_set_field): every
+# frame must be that step rendered alone, culled (the range tree made again for each field; also through
+# the discrete GPU's staging path), with
+# vertex AO (its cache follows the field), and for a tet field; steps must differ.
+tpk render "$WORK/m.tpk" -o "$WORK/vs_%d.png" --backend vulkan --size 96x72 --tf "$WORK/clear.tf" --field disp_z \
+    --iso -0.012,-0.005 --steps 2:4 --json > "$WORK/vs.json" || fail "--steps on Vulkan failed"
+[ "$(grep -c '"backend":"vulkan"' "$WORK/vs.json")" = 3 ] || fail "--steps 2:4 did not draw 3 Vulkan frames: $(cat "$WORK/vs.json")"
+TETPACK_ISO_CULLING=1 tpk render "$WORK/m.tpk" -o "$WORK/vc_%d.png" --backend vulkan --size 96x72 \
+    --tf "$WORK/clear.tf" --field disp_z --iso -0.012,-0.005 --steps 2:4 > /dev/null || fail "--steps, culled, failed"
+TPK_VK_MEMORY=staged TETPACK_ISO_CULLING=1 tpk render "$WORK/m.tpk" -o "$WORK/vm_%d.png" --backend vulkan --size 96x72 \
+    --tf "$WORK/clear.tf" --field disp_z --iso -0.012,-0.005 --steps 2:4 > /dev/null || fail "--steps, staged, failed"
+tpk render "$WORK/m.tpk" -o "$WORK/va_%d.png" --backend vulkan --size 96x72 --field disp_z --ao 2 --occlusion vertex \
+    --steps 2:4 > /dev/null || fail "--steps with vertex AO failed"
+tpk convert "$DATA/seacas/exomerge_unit_test.e" "$WORK/e.tpk" --field pressure --quiet || fail "cannot convert pressure"
+tpk render "$WORK/e.tpk" -o "$WORK/vt_%d.png" --backend vulkan --size 96x72 --field pressure --range 0,1.4e9 \
+    --steps 2:4 > /dev/null || fail "--steps of a tet field failed"
+for s in 2 4; do
+    TETPACK_ISO_CULLING=0 tpk render "$WORK/m.tpk" -o "$WORK/one.png" --backend vulkan --size 96x72 \
+        --tf "$WORK/clear.tf" --field disp_z --iso -0.012,-0.005 --step $s > /dev/null
+    cmp -s "$WORK/vs_$s.png" "$WORK/one.png" || fail "--steps: Vulkan frame $s differs from --step $s alone"
+    cmp -s "$WORK/vc_$s.png" "$WORK/one.png" || fail "--steps: Vulkan frame $s, culled, differs from --step $s alone"
+    cmp -s "$WORK/vm_$s.png" "$WORK/one.png" || fail "--steps: Vulkan frame $s, culled, staged, differs from --step $s"
+    tpk render "$WORK/m.tpk" -o "$WORK/one_a.png" --backend vulkan --size 96x72 --field disp_z --ao 2 \
+        --occlusion vertex --step $s > /dev/null
+    cmp -s "$WORK/va_$s.png" "$WORK/one_a.png" || fail "--steps: Vulkan frame $s with vertex AO differs from --step $s"
+    tpk render "$WORK/e.tpk" -o "$WORK/one_t.png" --backend vulkan --size 96x72 --field pressure --range 0,1.4e9 \
+        --step $s > /dev/null
+    cmp -s "$WORK/vt_$s.png" "$WORK/one_t.png" || fail "--steps: Vulkan frame $s of a tet field differs from --step $s"
+done
+for f in vs va vt; do
+    cmp -s "$WORK/${f}_2.png" "$WORK/${f}_4.png" && fail "--steps: Vulkan frames 2 and 4 ($f) look the same"
+done
+echo "render_vk_iso_culling: culled Vulkan pictures identical to marched ones; --steps frames those of one step"

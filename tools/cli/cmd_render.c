@@ -244,13 +244,11 @@ static int render_file(render_args *a, tpk_file *file)
     uint8_t *rgba = rc == TPK_EXIT_OK ? malloc((size_t)a->width * (size_t)a->height * 4) : NULL;
     if (rc == TPK_EXIT_OK && !rgba)
         rc = tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
-    /* Several steps on the CPU reference keep its marcher (the shell BVH: 0.16 s a frame on a 10M-tet
-     * grid) and vertex cache from one to the next; each step's field is handed to the marcher. The
-     * pictures are the same as one step at a time (tests/cli/render_effects.sh). */
-    tpk_vertex_cache *cache = NULL;
-    if (rc == TPK_EXIT_OK && a->step_last > a->step && strcmp(a->backend, "vulkan") != 0 &&
-        !(cache = tpk_vertex_cache_create()))
-        rc = tpk_cli_fail("render", "out of memory for the renderer's cache");
+    /* Several steps keep the renderer's set-up from one to the next (render_session: the CPU reference's
+     * marcher, whose shell BVH took 0.16 s a frame on a 10M-tet grid, or the Vulkan device and arrays),
+     * and hand it each step's field. The pictures are those of one step at a time
+     * (tests/cli/render_effects.sh, render_vk_steps.sh). */
+    render_session session = {0};
     for (int step = a->step; step <= a->step_last && rc == TPK_EXIT_OK; step++) {
         char path[4096];
         tpk_mesh_arrays mesh;
@@ -271,7 +269,7 @@ static int render_file(render_args *a, tpk_file *file)
                             .budget = a->max_ms > 0 ? budget : 0,
                             .predicted = tpk_cost_model_predict(&model, (double)drawn_w * drawn_h,
                                                                 (double)ls.tets[k]),
-                            .pixel_step = d, .cache = cache};
+                            .pixel_step = d, .session = a->step_last > a->step ? &session : NULL};
         if (rc == TPK_EXIT_OK && a->verbose && (a->max_ms > 0 || k > 0))
             fprintf(stderr, "tetpack render: level %d (%lld tets)%s\n", k, (long long)ls.tets[k],
                     a->max_ms > 0 ? ", the finest the cost model fits in --max-ms" : "");
@@ -284,7 +282,7 @@ static int render_file(render_args *a, tpk_file *file)
         if (rc == TPK_EXIT_OK && a->max_ms > 0) /* the model learns from every frame drawn */
             tpk_cost_model_add(&model, (double)drawn_w * drawn_h, (double)ls.tets[k], render_frame_seconds(a, &stats));
     }
-    tpk_vertex_cache_destroy(cache);
+    render_session_end(&session);
     free(rgba);
     close_levels(&ls);
     if (rc == TPK_EXIT_OK && a->save_scene && render_save_scene(a, file, &opt) != 0)

@@ -18,16 +18,61 @@
 #include "render_vk/render_vk.h"
 #endif
 
+void render_session_end(render_session *session)
+{
+    tpk_vertex_cache_destroy(session->cache);
+#ifdef TPK_WITH_VULKAN
+    tpk_vk_renderer_destroy(session->vk);
+#endif
+    memset(session, 0, sizeof *session);
+}
+
+#ifdef TPK_WITH_VULKAN
+/* A frame on the session's Vulkan renderer: made for these arrays, or handed this frame's field. Its
+ * seconds include what this frame set up, as tpk_render_vulkan's do. */
+static int session_vulkan(render_session *s, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
+                          uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag)
+{
+    double t0 = tpk_now_seconds();
+    if (s->vk && !tpk_render_same_mesh(&s->vk_mesh, mesh)) {
+        tpk_vk_renderer_destroy(s->vk);
+        s->vk = NULL;
+    }
+    if (!s->vk) {
+        if (tpk_vk_renderer_create(&s->vk, mesh, opt->tet_scalars, diag) != 0) {
+            s->vk = NULL;
+            return -1;
+        }
+    } else if ((s->vk_mesh.scalars != mesh->scalars || s->vk_tet_scalars != opt->tet_scalars) &&
+               tpk_vk_renderer_set_field(s->vk, mesh->scalars, opt->tet_scalars, diag) != 0) {
+        tpk_vk_renderer_destroy(s->vk); /* what the device holds is unknown: made again next time */
+        s->vk = NULL;
+        return -1;
+    }
+    s->vk_mesh = *mesh;
+    s->vk_tet_scalars = opt->tet_scalars;
+    int rc = tpk_vk_renderer_frame(s->vk, opt, rgba, stats, diag);
+    if (stats)
+        stats->seconds = tpk_now_seconds() - t0;
+    return rc;
+}
+#endif
+
 int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                 tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag)
+                 render_session *session, tpk_render_stats *stats, tpk_diag *diag)
 {
     (void)a; /* without Vulkan, the CPU reference whatever the arguments say */
 #ifdef TPK_WITH_VULKAN
     if (!strcmp(a->backend, "vulkan"))
         return a->iso_raster ? tpk_render_iso_raster(mesh, opt, rgba, stats, diag)
-                             : tpk_render_vulkan(mesh, opt, rgba, stats, diag);
+               : session    ? session_vulkan(session, mesh, opt, rgba, stats, diag)
+                            : tpk_render_vulkan(mesh, opt, rgba, stats, diag);
 #endif
-    return cache ? tpk_render_cpu_cached(mesh, opt, rgba, cache, stats, diag) : tpk_render_cpu(mesh, opt, rgba, stats, diag);
+    if (!session)
+        return tpk_render_cpu(mesh, opt, rgba, stats, diag);
+    if (!session->cache && !(session->cache = tpk_vertex_cache_create()))
+        return tpk_diag_fail(diag, "render: out of memory for the renderer's cache");
+    return tpk_render_cpu_cached(mesh, opt, rgba, session->cache, stats, diag);
 }
 
 double render_frame_seconds(const render_args *a, const tpk_render_stats *stats)
@@ -73,7 +118,7 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
             return tpk_cli_fail("render", "out of memory for a %dx%d image", small.width, small.height);
     }
     int failed = src->set ? tpk_render_cpu_set(src->set, src->has_scalars, src->diagonal, opt, rgba, &stats, &diag)
-                          : render_image(a, src->mesh, &small, drawn, src->cache, &stats, &diag);
+                          : render_image(a, src->mesh, &small, drawn, src->session, &stats, &diag);
     if (!failed && drawn != rgba) {
         double t0 = tpk_now_seconds();
         if (tpk_image_upscale(drawn, small.width, small.height, rgba, opt->width, opt->height) != 0) {

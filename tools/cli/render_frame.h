@@ -24,13 +24,25 @@ typedef struct frame_source {
     int64_t level_tets;
     double error_max, error_rms, shell_distance, budget, predicted;
     int pixel_step; /* rays at every pixel_step-th pixel, the rest interpolated (budget.h; <= 1: every pixel) */
-    tpk_vertex_cache *cache; /* the CPU reference's set-up kept from frame to frame (--steps), or NULL */
+    struct render_session *session; /* what is kept from frame to frame (--steps), or NULL */
 } frame_source;
+
+/* What render keeps from one frame to the next (--steps), each made by the first frame that needs it:
+ * the CPU reference's marcher, range trees and vertex cache (tpk_render_cpu_cached), or the Vulkan
+ * renderer (its device and uploaded arrays; a step hands it its field: tpk_vk_renderer_set_field). Made
+ * again for other arrays (another level). Start zeroed; render_session_end frees it. */
+typedef struct render_session {
+    tpk_vertex_cache *cache;
+    struct tpk_vk_renderer *vk;
+    tpk_mesh_arrays vk_mesh;    /* the arrays vk was made for, with the field it holds */
+    const float *vk_tet_scalars; /* the tet field it holds */
+} render_session;
+void render_session_end(render_session *session);
 
 /* The picture of `mesh` by the backend of the arguments (the CPU reference, Vulkan, --iso-raster), no
  * file written. 0, or -1 with diag's message. */
 int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
-                 tpk_vertex_cache *cache, tpk_render_stats *stats, tpk_diag *diag);
+                 render_session *session, tpk_render_stats *stats, tpk_diag *diag);
 /* A frame's seconds for the cost model (tools/render/budget.h): the GPU's time where the device gives it,
  * else the wall time of the render. */
 double render_frame_seconds(const render_args *a, const tpk_render_stats *stats);

@@ -233,6 +233,9 @@ typedef struct tpk_render_options {
 /* ISO-ONLY RAYS: iso values, a point field (has_point_scalars, no tet field) and a TF with opacity 0 at
  * every control point. */
 int tpk_render_iso_only(const tpk_render_options *opt, int has_point_scalars);
+/* The same mesh arrays (by identity: counts, origin, positions, layout records, shell), whatever the
+ * point field: what a renderer kept from frame to frame was made for (a time step changes the field only). */
+int tpk_render_same_mesh(const tpk_mesh_arrays *x, const tpk_mesh_arrays *y);
 /* TETPACK_ISO_CULLING: -1 unset (decide by TPK_RENDER_CULL_ACTIVE), 0 never, 1 always. */
 int tpk_render_culling_wanted(void);
 /* The ISO-ONLY RAYS glance: 1 when more than TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices

@@ -445,13 +445,12 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
     return tpk_render_cpu_given_cache(mesh, opt, rgba, NULL, NULL, stats, diag);
 }
 
-/* The same arrays and field (by identity). */
-static int same_arrays(const tpk_mesh_arrays *x, const tpk_mesh_arrays *y)
+int tpk_render_same_mesh(const tpk_mesh_arrays *x, const tpk_mesh_arrays *y)
 {
     return x->vertex_count == y->vertex_count && x->tet_count == y->tet_count &&
            x->shell_face_count == y->shell_face_count && !memcmp(x->origin, y->origin, sizeof x->origin) &&
            x->positions == y->positions && x->layout == y->layout && x->tet16 == y->tet16 && x->tet20 == y->tet20 &&
-           x->tet32 == y->tet32 && x->shell == y->shell && x->scalars == y->scalars;
+           x->tet32 == y->tet32 && x->shell == y->shell;
 }
 
 void render_keep_free(render_keep *keep)
@@ -532,11 +531,9 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     }
     render_keep own = {0}; /* made for this frame when nothing is kept */
     render_keep *k = keep ? keep : &own;
-    if (k->marcher && !same_arrays(&k->mesh, mesh)) {
-        tpk_mesh_arrays other = *mesh;
-        other.scalars = k->mesh.scalars;
-        if (same_arrays(&k->mesh, &other)) { /* another field of the same mesh (a time step): the marcher
-                                                 reads it from now on, the range trees are made again */
+    if (k->marcher && !(tpk_render_same_mesh(&k->mesh, mesh) && k->mesh.scalars == mesh->scalars)) {
+        if (tpk_render_same_mesh(&k->mesh, mesh)) { /* another field of the same mesh (a time step): the
+                                                       marcher reads it from now on, the range trees are made again */
             tpk_marcher_set_scalars(k->marcher, mesh->scalars);
             tpk_range_bvh_destroy(k->range);
             k->range = NULL, k->value_count = 0;

@@ -707,6 +707,58 @@ int tpk_vk_renderer_frame_to(tpk_vk_renderer *v, const tpk_render_options *opt, 
     return render_frame(v, opt, NULL, target, stats, diag);
 }
 
+int tpk_vk_renderer_set_field(tpk_vk_renderer *v, const float *scalars, const float *tet_scalars, tpk_diag *diag)
+{
+    if (!v)
+        return tpk_diag_fail(diag, "render: a renderer is required");
+    if ((scalars != NULL) != (v->mesh.scalars != NULL) || (tet_scalars != NULL) != v->tet_scalars)
+        return tpk_diag_fail(diag, "render: another field must be of the same kind (point or tet) as the renderer's");
+    v->mesh.scalars = scalars;
+    tpk_marcher_set_scalars(v->marcher, scalars);
+    /* The range tree holds the old field's ranges and the culling choice was made on them: the choice is
+     * made again on the next iso-only frame, and the tree too. Once uploaded, a culling pipeline reads it:
+     * the new ranges go into the same array (the tree's shape depends on the tet count alone). */
+    tpk_range_bvh_destroy(v->range);
+    v->range = NULL;
+    v->auto_valid = 0;
+    float *nodes = NULL;
+    int64_t base = 0;
+    if (v->range_leaf_base > 0) {
+        tpk_result r = tpk_range_bvh_create(&v->range, v->marcher);
+        if (r != TPK_OK)
+            return tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
+        base = tpk_range_bvh_heap(v->range, NULL);
+        if (base != v->range_leaf_base)
+            return tpk_diag_fail(diag, "render: the range tree of the new field has %lld leaves' base, the uploaded "
+                                 "one %lld (a bug in render_vk.c)", (long long)base, (long long)v->range_leaf_base);
+        if (!(nodes = malloc(sizeof *nodes * 16 * (size_t)base)))
+            return tpk_diag_fail(diag, "render: out of memory for the range BVH");
+        tpk_range_bvh_heap(v->range, nodes);
+    }
+    const tpk_vk_source verts = {NULL, 16, fill_vertices, &v->mesh}, tets = {tet_scalars, 4, NULL, NULL},
+                        ranges = {nodes, 16, NULL, NULL};
+    uint64_t n = (uint64_t)v->mesh.vertex_count, t = tet_scalars ? (uint64_t)v->mesh.tet_count : 0;
+    tpk_vk_stager stager;
+    memset(&stager, 0, sizeof stager);
+    uint64_t largest = 16 * (n > t ? n : t);
+    largest = 64 * (uint64_t)base > largest ? 64 * (uint64_t)base : largest;
+    int rc = v->ctx.staged ? tpk_vk_stager_create(&v->ctx, largest ? largest : 16, &stager, diag) : 0;
+    if (rc == 0 && nodes) /* 2 texels per node, nodes 0 .. 2 base (range_upload) */
+        rc = tpk_vk_array_refill(&v->ctx, v->ctx.staged ? &stager : NULL, &ranges, 4 * (uint64_t)base,
+                                 &v->arrays[TPK_VK_ARRAY_RANGE_NODES], diag);
+    if (rc == 0 && scalars) /* positions and the point field, interleaved */
+        rc = tpk_vk_array_refill(&v->ctx, v->ctx.staged ? &stager : NULL, &verts, n, &v->arrays[TPK_VK_ARRAY_VERTS],
+                                 diag);
+    if (rc == 0 && tet_scalars)
+        rc = tpk_vk_array_refill(&v->ctx, v->ctx.staged ? &stager : NULL, &tets, t,
+                                 &v->arrays[TPK_VK_ARRAY_TET_SCALARS], diag);
+    if (rc == 0 && v->ctx.staged)
+        rc = tpk_vk_stager_finish(&v->ctx, &stager, diag);
+    tpk_vk_stager_destroy(&v->ctx, &stager);
+    free(nodes);
+    return rc;
+}
+
 int tpk_render_vulkan(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba,
                       tpk_render_stats *stats, tpk_diag *diag)
 {

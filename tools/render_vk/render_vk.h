@@ -43,6 +43,13 @@ int tpk_vk_renderer_frame(tpk_vk_renderer *renderer, const tpk_render_options *o
                           tpk_render_stats *stats, tpk_diag *diag);
 const char *tpk_vk_renderer_device(const tpk_vk_renderer *renderer);
 void tpk_vk_renderer_destroy(tpk_vk_renderer *renderer);
+/* Another field of the same kind for the next frames (a time step): point scalars (vertex_count floats)
+ * or tet scalars (tet_count), each NULL or not as at creation, outliving the renderer like the mesh.
+ * Only the field goes to the device again (the point field with the positions it is interleaved with);
+ * the shell BVH stays, the range culling's tree is made again on the next iso-only frame, and the
+ * vertex occlusion cache follows the field. 0, or -1 with a message. */
+int tpk_vk_renderer_set_field(tpk_vk_renderer *renderer, const float *scalars, const float *tet_scalars,
+                              tpk_diag *diag);
 
 /* Marching tetrahedra in compute (vk_iso.c, shaders/iso.comp), for tetpack iso --backend vulkan: the
  * mesh of `in` (its tets, scalars and positions, copied to the device at creation; `in` need not
