@@ -172,7 +172,7 @@ static void ray_tet(packet *p, packet_ray *r, int64_t t, const tpki_active_slot 
 
 static inline int all4(tpki_v4i m)
 {
-    return (m[0] & m[1] & m[2] & m[3]) != 0;
+    return tpki_v4_bits(m) == 15;
 }
 
 /* The four corners (x or y in a frame) all beyond the margin on one side. */
@@ -209,10 +209,9 @@ static inline void face_scalar(tpki_v4f w_a, tpki_v4f w_b, tpki_v4f w_c, float d
 /* Lanes of `two` (exactly two faces, the piece's entry and exit, hold the ray for sure) whose piece
  * crosses none of the values: both faces' scalars on one side of each. */
 static tpki_v4i crosses_none(const packet *p, tpki_v4i two, const tpki_v4i possible[4], const tpki_v4f e[6],
-                             tpki_v4f err, const int32_t v[4])
+                             tpki_v4f err, tpki_v4f sc)
 {
-    const float *sc = p->b->marcher->mesh.scalars;
-    const double s[4] = {sc[v[0]], sc[v[1]], sc[v[2]], sc[v[3]]};
+    const double s[4] = {sc[0], sc[1], sc[2], sc[3]};
     float s_max = 0;
     for (int c = 0; c < 4; c++)
         s_max = fabsf((float)s[c]) > s_max ? fabsf((float)s[c]) : s_max;
@@ -275,17 +274,18 @@ static void group_tet(packet *p, int g, const tpki_v4f x[4], const tpki_v4f y[4]
     face_test(pos[1], pos[5], pos[2], neg[1], neg[5], neg[2], &possible[2], &sure[2]);
     face_test(pos[3], pos[5], pos[4], neg[3], neg[5], neg[4], &possible[3], &sure[3]);
     tpki_v4i go = (possible[0] | possible[1] | possible[2] | possible[3]) & ~off & p->live[g];
-    if (!(go[0] | go[1] | go[2] | go[3]))
+    int go_bits = tpki_v4_bits(go);
+    if (go_bits == 0)
         return;
     /* lanes where exactly two faces may hold the ray, both for sure: the piece's scalars decide */
     tpki_v4i faces = -(possible[0] + possible[1] + possible[2] + possible[3]);
     tpki_v4i sure_faces = -(sure[0] + sure[1] + sure[2] + sure[3]);
     tpki_v4i two = (faces == 2) & (sure_faces == 2);
     const tpki_active_slot *s = &p->b->active_slots[slot];
-    if (two[0] | two[1] | two[2] | two[3])
-        go &= ~crosses_none(p, two, possible, e, margin, s->v);
+    if (tpki_v4_bits(two) != 0)
+        go_bits &= ~tpki_v4_bits(crosses_none(p, two, possible, e, margin, p->b->active_scalars[slot]));
     for (int j = 0; j < 4; j++)
-        if (go[j])
+        if (go_bits & 1 << j)
             ray_tet(p, &p->rays[4 * g + j], p->b->active_tets[slot], s);
 }
 
@@ -320,15 +320,16 @@ static void packet_leaf(packet *p, int64_t first, int64_t count)
             tpki_v4f y_lo = tpki_v4_min(tpki_v4_min(y[0], y[1]), tpki_v4_min(y[2], y[3]));
             tpki_v4f y_hi = tpki_v4_max(tpki_v4_max(y[0], y[1]), tpki_v4_max(y[2], y[3]));
             tpki_v4i off = (x_lo > m) | (x_hi < -m) | (y_lo > m) | (y_hi < -m);
-            if (off[0] & off[1] & off[2] & off[3])
+            if (all4(off))
                 continue;
             group_tet(p, g, x, y, off, m, s);
         }
     }
 }
 
-/* Entry keys of a wide node's children for the packet (+inf: every ray misses the child). */
-static inline void packet_children(const packet *p, const tpki_wide_node *n, double key[4])
+/* The children of a wide node that some ray of the packet may meet (bit i: child i), and their entries
+ * (near: before each ray's). */
+static inline int packet_children(const packet *p, const tpki_wide_node *n, tpki_v4f *near_out)
 {
     tpki_v4f near, far;
     for (int k = 0; k < 3; k++) {
@@ -338,9 +339,8 @@ static inline void packet_children(const packet *p, const tpki_wide_node *n, dou
         near = k ? tpki_v4_max(near, lo) : lo;
         far = k ? tpki_v4_min(far, hi) : hi;
     }
-    tpki_v4i hit = (near <= far) & (far >= p->tmin) & (near <= p->tmax);
-    for (int i = 0; i < 4; i++)
-        key[i] = hit[i] ? (double)near[i] - p->slack : INFINITY;
+    *near_out = near;
+    return tpki_v4_bits((near <= far) & (far >= p->tmin) & (near <= p->tmax));
 }
 
 /* The walk: range_bvh.c's walk_selected, for the packet. */
@@ -355,18 +355,20 @@ static void packet_walk(packet *p)
         int64_t ref = node_pop(p);
         while (ref >= 0 && p->r == TPK_OK) {
             const tpki_wide_node *n = &b->wide[ref];
-            double t0[4], key[4];
+            double key[4];
             int64_t child[4];
             int found = 0;
-            packet_children(p, n, t0);
+            tpki_v4f near;
+            int hit = packet_children(p, n, &near);
             for (int i = 0; i < 4; i++) {
-                if (t0[i] == INFINITY)
+                const double t0 = (double)near[i] - p->slack;
+                if (!(hit & 1 << i) || t0 == INFINITY)
                     continue;
                 int64_t c = n->count[i] == 0 ? n->child[i] : tpki_leaf_ref(n->child[i], n->count[i]);
                 int at = found++;
-                for (; at > 0 && key[at - 1] > t0[i]; at--) /* nearest first */
+                for (; at > 0 && key[at - 1] > t0; at--) /* nearest first */
                     key[at] = key[at - 1], child[at] = child[at - 1];
-                key[at] = t0[i], child[at] = c;
+                key[at] = t0, child[at] = c;
             }
             for (int i = 1; i < found; i++)
                 node_push(p, key[i], child[i]);
