@@ -72,6 +72,8 @@ struct tpk_range_bvh {
     int64_t wide_count;
     int32_t *active_tets;     /* leaf slot -> tet */
     tpki_active_slot *active_slots;
+    tpki_v4f *active_scalars; /* leaf slot -> the scalars of its vertices, in v's order (the packets'
+                               * float scalar test reads them from one run of memory) */
     double *active_values;
     int active_value_count;   /* 0: none selected */
     double active_corner_max; /* the largest |coordinate| of the selected tree's boxes */
@@ -115,6 +117,17 @@ static inline tpki_v4f tpki_v4_min(tpki_v4f a, tpki_v4f b)
 #else
     tpki_v4i m = a < b;
     return (tpki_v4f)(((tpki_v4i)a & m) | ((tpki_v4i)b & ~m));
+#endif
+}
+
+/* The lanes of a mask (each lane 0 or -1) as bits, lane i bit i: SSE's movmskps in one instruction, where
+ * the compilers reduce the lanes one by one otherwise. */
+static inline int tpki_v4_bits(tpki_v4i m)
+{
+#if defined(__SSE__)
+    return _mm_movemask_ps((__m128)m);
+#else
+    return (m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8);
 #endif
 }
 

@@ -130,6 +130,7 @@ void tpk_range_bvh_destroy(tpk_range_bvh *b)
     free(b->wide);
     free(b->active_tets);
     free(b->active_slots);
+    free(b->active_scalars);
     free(b->active_values);
     free(b);
 }
@@ -407,7 +408,7 @@ int tpki_tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t
             value[j][i] = -value[i][j];
         }
     tpk_face_hit entry, exit;
-    int have_entry = 0, have_exit = 0, opposite = 0;
+    int have_entry = 0, have_exit = 0, opposite = 0, entry_c[3] = {0, 0, 0}, exit_c[3] = {0, 0, 0};
     for (int k = 0; k < 4; k++) {
         const int *f = tpk_tet_faces[k]; /* outward order */
         int s0 = sign[f[0]][f[1]], s1 = sign[f[1]][f[2]], s2 = sign[f[2]][f[0]];
@@ -418,7 +419,9 @@ int tpki_tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t
         if (s0 > 0)
             g[1] = f[2], g[2] = f[1];
         tpk_face_hit *h = s0 < 0 ? &entry : &exit;
+        int *hc = s0 < 0 ? entry_c : exit_c;
         for (int i = 0; i < 3; i++) {
+            hc[i] = g[i];
             h->v[i] = q[g[i]];
             h->p[i] = p[g[i]];
             h->e[i] = value[g[i]][g[(i + 1) % 3]];
@@ -430,19 +433,28 @@ int tpki_tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t
     }
     if (!have_entry || !have_exit)
         return 0;
-    const float *sc = mesh->scalars;
+    /* the corners' scalars: the slot's copy, read from one run of memory, or the mesh's */
+    double s[4];
+    if (slot) {
+        const tpki_v4f copy = b->active_scalars[slot - b->active_slots];
+        for (int c = 0; c < 4; c++)
+            s[c] = copy[c];
+    } else {
+        for (int c = 0; c < 4; c++)
+            s[c] = mesh->scalars[q[c]];
+    }
     double w[3];
     int first = tpk_face_first(&entry);
     tpk_face_weights(&entry, first, w);
     double t_in = tpk_face_sum(first, w, (const double[3]){entry.p[0].z, entry.p[1].z, entry.p[2].z});
-    double s_in = tpk_face_sum(first, w, (const double[3]){sc[entry.v[0]], sc[entry.v[1]], sc[entry.v[2]]});
+    double s_in = tpk_face_sum(first, w, (const double[3]){s[entry_c[0]], s[entry_c[1]], s[entry_c[2]]});
     int c1 = tpk_face_corner[first + 1], c2 = tpk_face_corner[first + 2];
     *seg = (tpk_segment){(int32_t)t, t_in, 0, s_in, 0, {entry.v[first], entry.v[c1], entry.v[c2], q[opposite]}};
     first = tpk_face_first(&exit);
     tpk_face_weights(&exit, first, w);
     double t_out = tpk_face_sum(first, w, (const double[3]){exit.p[0].z, exit.p[1].z, exit.p[2].z});
     seg->t_out = t_out >= t_in ? t_out : t_in;
-    seg->scalar_out = tpk_face_sum(first, w, (const double[3]){sc[exit.v[0]], sc[exit.v[1]], sc[exit.v[2]]});
+    seg->scalar_out = tpk_face_sum(first, w, (const double[3]){s[exit_c[0]], s[exit_c[1]], s[exit_c[2]]});
     return 1;
 }
 

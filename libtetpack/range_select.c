@@ -108,8 +108,9 @@ static void drop_selection(tpk_range_bvh *b)
     free(b->wide);
     free(b->active_tets);
     free(b->active_slots);
+    free(b->active_scalars);
     free(b->active_values);
-    b->wide = NULL, b->active_tets = NULL, b->active_slots = NULL, b->active_values = NULL;
+    b->wide = NULL, b->active_tets = NULL, b->active_slots = NULL, b->active_scalars = NULL, b->active_values = NULL;
     b->active_value_count = 0, b->wide_count = 0;
 }
 
@@ -129,8 +130,11 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     tpk_bvh_node *bin = malloc(sizeof *bin * 2 * room);
     b->active_tets = malloc(sizeof *b->active_tets * room);
     b->active_slots = malloc(sizeof *b->active_slots * room);
+    b->active_scalars = malloc(sizeof *b->active_scalars * room);
     b->active_values = malloc(sizeof *b->active_values * (size_t)count);
-    tpk_result r = items && bin && b->active_tets && b->active_slots && b->active_values ? TPK_OK : TPK_ERR_OUT_OF_MEMORY;
+    tpk_result r = items && bin && b->active_tets && b->active_slots && b->active_scalars && b->active_values
+                       ? TPK_OK
+                       : TPK_ERR_OUT_OF_MEMORY;
     int32_t bin_count = 0;
     if (r == TPK_OK && n > 0) {
         active_items(b, values, count, items);
@@ -144,13 +148,14 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
             if (b->wide[0].count[i] >= 0)
                 b->active_corner_max = fmax(b->active_corner_max, fabs((double)b->wide[0].box[k][i]));
     if (r == TPK_OK) {
-        const float *pos = b->marcher->mesh.positions;
+        const float *pos = b->marcher->mesh.positions, *sc = b->marcher->mesh.scalars;
         for (int64_t i = 0; i < n; i++) {
             int32_t t = items[i].id;
             b->active_tets[i] = t;
             for (int c = 0; c < 4; c++) {
                 int32_t v = b->tets[4 * (int64_t)t + c];
                 b->active_slots[i].v[c] = v;
+                b->active_scalars[i][c] = sc[v];
                 for (int k = 0; k < 3; k++)
                     b->active_slots[i].pos[k][c] = pos[3 * (int64_t)v + k];
             }
