@@ -256,9 +256,11 @@ static void report_euler(shell_graph *g, tpk_check_report *report)
             strcat(values, ", ...");
         }
     }
-    if (finding->count > 0)
+    if (finding->count > 0 &&
         snprintf(finding->summary, sizeof finding->summary, "V-E+F = %s (%lld of %lld shell components; 2 is a "
-                 "closed surface of genus 0)", values, (long long)finding->count, (long long)components);
+                 "closed surface of genus 0)", values, (long long)finding->count, (long long)components) >=
+            (int)sizeof finding->summary)
+        memcpy(finding->summary + sizeof finding->summary - 4, "...", 4); /* cut short: say so */
 }
 
 static void free_graph(shell_graph *g)
