@@ -200,8 +200,7 @@ static void build_stars(simplifier *s)
     star_job job = {s, {0}, 0};
     int parts = tpk_threads_for(4 * s->tet_count, s->threads, 1 << 20);
     for (int w = 0; w <= parts; w++)
-        job.cut[w] = w == parts ? (int32_t)s->mesh->vertex_count : live ? s->alive[live * w / parts] : 0;
-    job.cut[0] = 0;
+        job.cut[w] = w == 0 ? 0 : w == parts ? (int32_t)s->mesh->vertex_count : s->alive[live * w / parts];
     tpk_parallel_for(parts, parts, star_ranges, &job);
     int64_t at = 0; /* only the active vertices' stars are kept; the others' are empty (-1, -1) */
     for (int64_t i = 0; i < live; i++) {
@@ -896,8 +895,7 @@ static int64_t locate(const tpk_tetmesh *lvl, const int32_t *neighbors, const do
             const double *q[4];
             for (int j = 0; j < 4; j++)
                 q[j] = j == k ? p : lvl->points + 3 * (size_t)v[j];
-            int sign = tpk_orient3d_filter(q[0], q[1], q[2], q[3]); /* certain when not 0 */
-            if ((sign ? sign : tpk_orient3d_exact(q[0], q[1], q[2], q[3])) < 0) {
+            if (tpk_orient3d_exact(q[0], q[1], q[2], q[3]) < 0) {
                 if (neighbors[4 * t + k] >= 0)
                     beyond = k;
                 else
@@ -1078,6 +1076,9 @@ static domain_size size_of(const double *points, const int32_t *tets, const int3
         d.volume += job.part[c].volume, d.area += job.part[c].area;
     return d;
 }
+
+/* With the shell kept (tolerance 0), the same volume and area up to rounding; else the volume changed by
+ * at most the shell's area times how far it moved. */
 static int same_size(domain_size full, domain_size level, double tolerance)
 {
     if (tolerance > 0)
