@@ -359,12 +359,16 @@ int tpk_render_vertex_cache(const tpk_mesh_arrays *mesh, const tpk_render_option
  * tpk_render_vertex_cache gives, bit for bit. Used by the Vulkan renderer and by view's CPU frames. For
  * tpk_render_cpu_cached it also keeps the marcher and, for iso-only frames, the range culling's trees
  * (ISO-ONLY RAYS), made again only when the mesh's arrays or field change (by pointer: a file's arrays
- * stay put until it closes). Trees to be kept count the rays of TPK_RENDER_KEPT_FRAMES frames against
- * their set-up, and kept trees as paid for: such frames cull up to TPK_RENDER_CULL_ACTIVE_MANY. */
+ * stay put until it closes). Trees to be kept count the rays of TPK_RENDER_KEPT_FRAMES frames (or
+ * tpk_vertex_cache_frames_per_field's) against their set-up, and kept trees as paid for: such frames
+ * cull up to TPK_RENDER_CULL_ACTIVE_MANY. */
 #define TPK_RENDER_KEPT_FRAMES 8
 typedef struct tpk_vertex_cache tpk_vertex_cache;
 tpk_vertex_cache *tpk_vertex_cache_create(void); /* NULL: out of memory */
 void tpk_vertex_cache_destroy(tpk_vertex_cache *cache);
+/* How many frames each field is drawn with (frames >= 1; TPK_RENDER_KEPT_FRAMES until set): what trees to
+ * be kept are paid by. render --steps draws each field once (1), so its frames choose as one frame alone. */
+void tpk_vertex_cache_frames_per_field(tpk_vertex_cache *cache, int frames);
 /* Bring the cache up to date for mesh and opt. *changed (may be NULL) = 1 when a half was cast again;
  * cast (may be NULL) gets this update's tet steps and secondary rays (zeros when nothing was cast). The
  * arrays stay valid until the next update or destroy. 0, or -1 with a message (the cache is then empty). */

@@ -78,6 +78,12 @@ void tpk_vertex_cache_destroy(tpk_vertex_cache *c)
     free(c);
 }
 
+void tpk_vertex_cache_frames_per_field(tpk_vertex_cache *c, int frames)
+{
+    if (c)
+        c->keep.frames = frames > 0 ? frames : 0;
+}
+
 const float *tpk_vertex_cache_s(const tpk_vertex_cache *c)
 {
     return c->s;

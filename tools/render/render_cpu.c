@@ -457,7 +457,9 @@ void render_keep_free(render_keep *keep)
 {
     tpk_range_bvh_destroy(keep->range);
     tpk_marcher_destroy(keep->marcher);
+    int frames = keep->frames;
     memset(keep, 0, sizeof *keep);
+    keep->frames = frames;
 }
 
 /* The range trees for an iso-only frame (render.h ISO-ONLY RAYS), kept in `keep` or made (own: `keep` is
@@ -469,9 +471,11 @@ static tpk_range_bvh *culling_trees(const tpk_mesh_arrays *mesh, const tpk_rende
     if (culling == 0 || !tpk_render_iso_only(opt, mesh->scalars != NULL))
         return NULL;
     /* many rays pay for the trees on any surface, few only on a sparse one; trees already kept are paid,
-     * and trees to be kept are paid by TPK_RENDER_KEPT_FRAMES frames */
+     * and trees to be kept are paid by the frames each field is drawn with (TPK_RENDER_KEPT_FRAMES, or
+     * tpk_vertex_cache_frames_per_field's) */
     int kept = keep->range != NULL; /* for this marcher, hence these arrays */
-    double rays = (double)opt->width * (double)opt->height * (own ? 1.0 : TPK_RENDER_KEPT_FRAMES);
+    int frames = own ? 1 : keep->frames > 0 ? keep->frames : TPK_RENDER_KEPT_FRAMES;
+    double rays = (double)opt->width * (double)opt->height * frames;
     int many_rays = kept || rays >= (double)mesh->tet_count;
     if (!kept && culling < 0 && !many_rays && tpk_render_iso_dense(mesh, opt->iso, opt->iso_count))
         return NULL;

@@ -21,9 +21,10 @@ typedef struct render_keep {
     tpk_range_bvh *range;   /* NULL: not made */
     double values[TPK_RENDER_MAX_ISO]; /* the values the range trees were selected for */
     int value_count;        /* 0: none selected */
+    int frames;             /* frames a field is drawn with (tpk_vertex_cache_frames_per_field); 0: TPK_RENDER_KEPT_FRAMES */
 } render_keep;
 
-/* Free what `keep` holds and zero it. */
+/* Free what `keep` holds and zero it, but for `frames` (a choice of the caller's, not set-up). */
 void render_keep_free(render_keep *keep);
 /* tpk_render_cpu_given_cache, keeping the marcher and range trees in `keep` (NULL: made for the frame). */
 int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, uint8_t *rgba, const float *s,
