@@ -54,6 +54,14 @@
 #define NEIGHBOURS_MAX 128
 #define RING_MAX 64 /* shell faces around one vertex; past it the vertex stays */
 
+/* What a collapse reads of each vertex it meets, side by side: its position, field value and mark
+ * (star_neighbours), so that a neighbour costs one cache line, not three. */
+typedef struct level_vertex {
+    double p[3];
+    float field;  /* s->field's value, or 0 */
+    int32_t seen; /* -1, or the vertex whose neighbours star_neighbours is listing */
+} level_vertex;
+
 typedef struct simplifier {
     const tpk_tetmesh *mesh;
     int threads;
@@ -75,7 +83,7 @@ typedef struct simplifier {
     int32_t *star;
     uint8_t *locked, *dead;
     uint8_t *stuck;      /* per vertex: no valid target, and its star has not changed since */
-    int32_t *seen;       /* per vertex: -1, or the vertex whose neighbours star_neighbours is listing */
+    level_vertex *vert;  /* per vertex */
     int32_t *active;     /* the vertices this pass may collapse, in id order (build_stars) */
     int64_t active_count;
     float *tet_quality;  /* per live tet: its shape (quality(); a moved tet's from its test in choose_target) */
@@ -83,7 +91,7 @@ typedef struct simplifier {
 
 static const double *point(const simplifier *s, int32_t v)
 {
-    return s->mesh->points + 3 * (size_t)v;
+    return s->vert[v].p;
 }
 
 /* The squared length of b - a, and b - a in e. */
@@ -215,7 +223,8 @@ static void build_stars(simplifier *s)
 }
 
 /* u's neighbours (each once, in the order the star first meets them) with their costs: the field
- * difference, or the squared distance without a field. s->seen marks the ones met (and is cleared again).
+ * difference, or the squared distance without a field. The ones met are marked (s->vert[].seen), and
+ * cleared again.
  * The count; -1 past NEIGHBOURS_MAX; -2 when lo < hi and one lies outside [lo, hi) (then none is marked,
  * so blocks side by side touch only their own marks). */
 static int star_neighbours(simplifier *s, int32_t u, const int32_t *star, int n, int32_t lo, int32_t hi,
@@ -223,12 +232,13 @@ static int star_neighbours(simplifier *s, int32_t u, const int32_t *star, int n,
 {
     /* Every entry is stored at nb[m] and m only grows for a new one (not u, not seen): which corner is u
      * and whether a vertex is new are as random as the mesh, and branches on them mispredict (this loop
-     * was a fifth of the simplification). u lies in [lo, hi) (run_blocks), and seen[u] is cleared with the others. */
+     * was a fifth of the simplification). u lies in [lo, hi) (run_blocks), and its mark is cleared with the
+     * others. */
     const int32_t *tets = s->tets;
-    int32_t *seen = s->seen;
+    level_vertex *vert = s->vert;
     const float *field = s->field;
     uint32_t first = lo < hi ? (uint32_t)lo : 0, span = lo < hi ? (uint32_t)hi - (uint32_t)lo : UINT32_MAX;
-    double field_u = field ? (double)field[u] : 0;
+    double field_u = vert[u].field;
     const double *p = point(s, u);
     int m = 0, over = 0;
     for (int i = 0; i < n; i++) {
@@ -237,19 +247,19 @@ static int star_neighbours(simplifier *s, int32_t u, const int32_t *star, int n,
             int32_t w = t[k];
             if ((uint32_t)w - first >= span) {
                 for (int j = 0; j < m; j++)
-                    seen[nb[j]] = -1;
-                seen[u] = -1;
+                    vert[nb[j]].seen = -1;
+                vert[u].seen = -1;
                 return -2;
             }
             if (m == NEIGHBOURS_MAX) {
-                over |= (seen[w] != u) & (w != u);
+                over |= (vert[w].seen != u) & (w != u);
                 continue;
             }
-            int fresh = (seen[w] != u) & (w != u);
-            seen[w] = u;
+            int fresh = (vert[w].seen != u) & (w != u);
+            vert[w].seen = u;
             double c = 0;
             if (field)
-                c = fabs((double)field[w] - field_u);
+                c = fabs((double)vert[w].field - field_u);
             else
                 for (int a = 0; a < 3; a++)
                     c += (point(s, w)[a] - p[a]) * (point(s, w)[a] - p[a]);
@@ -259,8 +269,8 @@ static int star_neighbours(simplifier *s, int32_t u, const int32_t *star, int n,
         }
     }
     for (int j = 0; j < m; j++)
-        seen[nb[j]] = -1;
-    seen[u] = -1;
+        vert[nb[j]].seen = -1;
+    vert[u].seen = -1;
     return over ? -1 : m;
 }
 
@@ -552,16 +562,16 @@ static int32_t choose_target(const simplifier *s, int32_t u, const int32_t *star
     }
     double floor = worst * 0.5 < TPK_LEVEL_QUALITY ? worst * 0.5 : TPK_LEVEL_QUALITY;
     floor = floor > 0 ? floor : 0;
+    for (int j = 1; j < m; j++) { /* by cost, then id: an insertion sort (m is small) */
+        int32_t v = nb[j];
+        double c = cost[j];
+        int i = j;
+        for (; i > 0 && (cost[i - 1] > c || (cost[i - 1] == c && nb[i - 1] > v)); i--)
+            nb[i] = nb[i - 1], cost[i] = cost[i - 1];
+        nb[i] = v, cost[i] = c;
+    }
     for (int tried = 0; tried < m; tried++) {
-        int best = tried; /* selection: the next by cost, then id */
-        for (int j = tried + 1; j < m; j++) { /* as (cost, id) compare: a select, not a branch */
-            int before = (cost[j] < cost[best]) | ((cost[j] == cost[best]) & (nb[j] < nb[best]));
-            best ^= (best ^ j) & -before;
-        }
-        int32_t v = nb[best];
-        double c = cost[best];
-        nb[best] = nb[tried], cost[best] = cost[tried];
-        nb[tried] = v, cost[tried] = c;
+        int32_t v = nb[tried];
         if (ring_count >= 0 && !shell_move_ok(s, u, v, ring, ring_count))
             continue;
         const double *q = point(s, v);
@@ -1286,6 +1296,19 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
     return rc;
 }
 
+/* Each vertex's level_vertex (tpk_parallel_for: the first touch of fresh pages on all threads too). */
+static void set_up_vertices(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    simplifier *s = ctx;
+    (void)worker;
+    for (int64_t v = begin; v < end; v++) {
+        level_vertex *x = &s->vert[v];
+        memcpy(x->p, s->mesh->points + 3 * (size_t)v, sizeof x->p);
+        x->field = s->field ? s->field[v] : 0;
+        x->seen = -1;
+    }
+}
+
 /* Each tet's corners, shape and origin, at the start (tpk_parallel_for over the tets: the first touch of
  * fresh pages, a third of the set-up on grid 200, goes on all threads too). */
 static void set_up_tets(void *ctx, int64_t begin, int64_t end, int worker)
@@ -1341,7 +1364,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     s.locked = calloc((size_t)(V ? V : 1), 1);
     s.dead = tpk_calloc_large((size_t)(T ? T : 1), 1);
     s.stuck = calloc((size_t)(V ? V : 1), 1);
-    s.seen = malloc(sizeof *s.seen * (size_t)(V ? V : 1));
+    s.vert = tpk_alloc_large(sizeof *s.vert * (size_t)(V ? V : 1));
     s.active = malloc(sizeof *s.active * (size_t)(V ? V : 1));
     /* the arrays of the tets (a first touch of fresh pages costs about 0.75 ms a MB here) */
     s.tets = tpk_alloc_large(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
@@ -1351,11 +1374,11 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     s.alive = malloc(sizeof *s.alive * (size_t)(V ? V : 1));
     s.star = tpk_alloc_large(sizeof *s.star * 4 * (size_t)(T ? T : 1));
     s.tet_quality = tpk_alloc_large(sizeof *s.tet_quality * (size_t)(T ? T : 1));
-    int rc = s.boundary && s.pinned && s.chain_head && s.removed && s.onto && s.locked && s.dead && s.stuck && s.seen && s.active && s.tets && s.origin && s.star_start && s.alive && s.star &&
+    int rc = s.boundary && s.pinned && s.chain_head && s.removed && s.onto && s.locked && s.dead && s.stuck && s.vert && s.active && s.tets && s.origin && s.star_start && s.alive && s.star &&
                      s.tet_quality
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
-        memset(s.seen, 0xff, sizeof *s.seen * (size_t)V);
+        tpk_parallel_for(V, tpk_threads_for(V, s.threads, 1 << 16), set_up_vertices, &s);
         memset(s.chain_head, 0xff, sizeof *s.chain_head * 2 * (size_t)V);
         for (int64_t v = 0; v < V; v++)
             s.alive[v] = (int32_t)v;
@@ -1407,7 +1430,7 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     free(s.locked);
     tpk_free_large(s.dead, (size_t)(T ? T : 1));
     free(s.stuck);
-    free(s.seen);
+    tpk_free_large(s.vert, sizeof *s.vert * (size_t)(V ? V : 1));
     free(s.active);
     tpk_free_large(s.tets, sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     tpk_free_large(s.origin, sizeof *s.origin * (size_t)(T ? T : 1));
