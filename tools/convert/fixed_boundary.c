@@ -2,6 +2,7 @@
  * through TetGen's C interface (tools/mesher/tetgen_shim.h) when the build has it. */
 #include "fixed_boundary.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -9,6 +10,7 @@
 #include "base/predicates.h"
 #include "tetpack_format.h"
 #ifdef TPK_WITH_TETGEN
+#include "mesher/mesher.h"
 #include "mesher/tetgen_guard.h"
 #endif
 
@@ -17,6 +19,73 @@ void tpk_fixed_tets_free(tpk_fixed_tets *tets)
     free(tets->points);
     free(tets->tets);
     memset(tets, 0, sizeof *tets);
+}
+
+/* Does segment pq pass through the interior of triangle abc: p and q strictly on either side of its plane,
+ * and the line pq strictly inside its three edges? */
+static int segment_pierces(const double *p, const double *q, const double *a, const double *b, const double *c)
+{
+    int sp = tpk_orient3d_exact(a, b, c, p), sq = tpk_orient3d_exact(a, b, c, q);
+    if (sp == 0 || sq == 0 || sp == sq)
+        return 0;
+    int s1 = tpk_orient3d_exact(p, q, a, b), s2 = tpk_orient3d_exact(p, q, b, c), s3 = tpk_orient3d_exact(p, q, c, a);
+    return s1 != 0 && s1 == s2 && s2 == s3;
+}
+
+/* Do triangles (u, v, a) and (u, v, b), sharing edge uv, fold onto each other: a and b on one plane
+ * with u and v, on the same side of the line uv? (Then they overlap near the edge.) Sides in the plane
+ * are those of a plane through u, v and a point w off it: one of u moved along an axis. */
+static int edge_folds(const double *u, const double *v, const double *a, const double *b)
+{
+    if (tpk_orient3d_exact(u, v, a, b) != 0)
+        return 0;
+    for (int axis = 0; axis < 3; axis++) {
+        double w[3] = {u[0], u[1], u[2]};
+        w[axis] += 1 + fabs(w[axis]);
+        int sa = tpk_orient3d_exact(u, v, w, a), sb = tpk_orient3d_exact(u, v, w, b);
+        if (tpk_orient3d_exact(u, v, a, w) != 0) /* w off the plane (a, u, v not on one line, then) */
+            return sa != 0 && sa == sb;
+    }
+    return 0;
+}
+
+int tpk_fixed_boundary_surely_crosses(const double *points, int32_t point_count, const int32_t *triangles,
+                                      int32_t triangle_count)
+{
+    for (int64_t i = 0; i < 3 * (int64_t)point_count; i++)
+        if (!(fabs(points[i]) < 1e100))
+            return 0;
+    for (int32_t i = 0; i < triangle_count; i++)
+        for (int32_t j = i + 1; j < triangle_count; j++) {
+            const int32_t *s = triangles + 3 * i, *t = triangles + 3 * j;
+            int shared = 0, corner[2] = {-1, -1}; /* the shared corner's place in s and in t */
+            for (int a = 0; a < 3; a++)
+                for (int b = 0; b < 3; b++)
+                    if (s[a] == t[b])
+                        shared++, corner[0] = a, corner[1] = b;
+            if (shared > 1) { /* an edge in common: they cross only folded onto each other, in one plane */
+                int a = 0, b = 0; /* the corners not shared */
+                while (s[a] == t[0] || s[a] == t[1] || s[a] == t[2])
+                    a++;
+                while (t[b] == s[0] || t[b] == s[1] || t[b] == s[2])
+                    b++;
+                if (shared == 2 && edge_folds(points + 3 * (size_t)s[(a + 1) % 3], points + 3 * (size_t)s[(a + 2) % 3],
+                                              points + 3 * (size_t)s[a], points + 3 * (size_t)t[b]))
+                    return 1;
+                continue;
+            }
+            /* Sharing a corner, two triangles that cross do so along a segment from it, whose far end lies
+             * on the edge opposite it in one of them, inside the other: that edge pierces the other. */
+            for (int pass = 0; pass < 2; pass++, s = triangles + 3 * j, t = triangles + 3 * i) {
+                const double *a = points + 3 * (size_t)t[0], *b = points + 3 * (size_t)t[1];
+                const double *c = points + 3 * (size_t)t[2];
+                for (int e = 0; e < 3; e++)
+                    if ((!shared || e == (corner[pass] + 1) % 3) &&
+                        segment_pierces(points + 3 * (size_t)s[e], points + 3 * (size_t)s[(e + 1) % 3], a, b, c))
+                        return 1;
+            }
+        }
+    return 0;
 }
 
 int tpk_fixed_boundary_available(void)
@@ -124,10 +193,19 @@ static int check_result(const tpk_fixed_tets *r, const double *points, int32_t p
     return boundary_matches(r, triangles, triangle_count, why, cap);
 }
 
-/* TetGen with `switches` on the triangles. Returns 0, 1 with `why`, -1 when out of memory. */
+/* TetGen with `switches` on the triangles. Returns 0, 1 with `why`, -1 when out of memory. Points TetGen
+ * cannot take (tpk_tetgen_check_points: coordinates past its arithmetic, or all on one plane, where it
+ * fails or crashes whatever the cuts) are refused before its child process starts: a search of cuts
+ * asks for up to 3^6 - 1 runs on such a cell. */
 static int run_tetgen(const char *switches, const double *points, int32_t point_count, const int32_t *triangles,
                       int32_t triangle_count, tpk_tetgen_output *t, char *why, size_t why_cap)
 {
+    tpk_diag checked;
+    memset(&checked, 0, sizeof checked);
+    if (tpk_tetgen_check_points("its boundary", points, point_count, &checked) != 0) {
+        snprintf(why, why_cap, "TetGen cannot take %s", checked.message);
+        return 1;
+    }
     int64_t *offsets = malloc(sizeof *offsets * (size_t)(triangle_count + 1));
     if (!offsets)
         return -1;

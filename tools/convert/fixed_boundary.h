@@ -22,6 +22,14 @@ int tpk_fixed_boundary_available(void);
 int tpk_fixed_boundary_crossing(const double *points, int32_t point_count, const int32_t *triangles,
                                 int32_t triangle_count, char *why, size_t why_cap);
 
+/* 1 when two of `triangles` surely cross: an edge of one (the edge opposite the corner they share, if they
+ * share one) passes through the other's interior, every sign of the test nonzero; or, sharing an edge,
+ * they fold onto each other (one plane, the same side of the edge). Decided exactly, in-process: a search
+ * of cuts asks this first, where each TetGen -d runs in a child process. 0 does not mean that none cross
+ * (ask tpk_fixed_boundary_crossing). Coordinates past 1e100 in size give 0 (exact signs could overflow). */
+int tpk_fixed_boundary_surely_crosses(const double *points, int32_t point_count, const int32_t *triangles,
+                                      int32_t triangle_count);
+
 /* Tetrahedralize the region enclosed by `triangles` (3 ids each into points[0 .. point_count), a closed
  * surface, outward: (b-a)x(c-a) points out). The result is checked, not trusted: every tet positive
  * (exact predicate), the input points kept in place, and the faces used by one tet only exactly the input

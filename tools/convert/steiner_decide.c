@@ -530,13 +530,18 @@ int steiner_local_boundary_build(stage *st, int64_t c, int number, local_boundar
     return 0;
 }
 
-/* Do cell c's (loaded, looked up) boundary triangles cross? 0, 1 with w->why, -1 when out of memory. */
-static int boundary_crosses(stage *st, int64_t c)
+/* Do cell c's (loaded, looked up) boundary triangles cross? 0, 1 with w->why, -1 when out of memory. With
+ * `quick`, two that surely cross (tpk_fixed_boundary_surely_crosses, in-process) answer 1 without TetGen's
+ * child process and without a why: for the search of cuts, which only goes on to the next. */
+static int boundary_crosses(stage *st, int64_t c, int quick)
 {
     cell_work *w = &st->w;
     local_boundary b;
     int rc = steiner_local_boundary_build(st, c, 0, &b);
-    if (rc == 0)
+    if (rc == 0 && quick &&
+        tpk_fixed_boundary_surely_crosses(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count))
+        rc = 1;
+    else if (rc == 0)
         rc = tpk_fixed_boundary_crossing(b.points, (int32_t)b.id_count, b.triangles, (int32_t)b.triangle_count,
                                          w->why, sizeof w->why);
     steiner_local_boundary_free(&b);
@@ -600,7 +605,7 @@ static int recut_faces(stage *st, int64_t c, int32_t round, int64_t *added_faces
                 continue;
             for (int i = 0; i < k; i++)
                 set_cut(st, face[i], &st->table.entries[entry[i]], cut[i]);
-            int crossing = boundary_crosses(st, c);
+            int crossing = boundary_crosses(st, c, 1); /* up to 3^6 - 1 of them: TetGen's fork each */
             if (crossing < 0)
                 return -1;
             if (crossing)
@@ -637,10 +642,14 @@ static int fixed_or_bad(stage *st, int64_t c, int32_t round, int may_add, int64_
         return S_BAD;
     }
     steiner_lookup_faces(st); /* drop star_is_valid's NEEDS_CENTRE marks */
-    int rc = boundary_crosses(st, c);
+    int rc = boundary_crosses(st, c, 0);
     if (rc == 1 && may_add) {
+        char why[sizeof w->why]; /* the cell's own crossing, not the last cut's the search tried */
+        memcpy(why, w->why, sizeof why);
         int recut = recut_faces(st, c, round, added_faces);
         rc = recut < 0 ? -1 : !recut;
+        if (rc == 1)
+            memcpy(w->why, why, sizeof why);
     }
     if (rc <= 0)
         return rc < 0 ? -1 : S_FIXED;
