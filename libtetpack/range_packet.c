@@ -430,7 +430,7 @@ static void packet_walk(packet *p)
 }
 
 /* Set the packet up; 0 when its rays cannot walk together (axes, signs or magnitudes that differ or
- * that floats cannot hold, an empty span): then each walks alone. */
+ * that floats cannot hold, an empty span): then they walk in halves (packet_or_halves). */
 static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], int ray_count,
                        const double (*dirs)[3], const double *tmin, const double *tmax)
 {
@@ -503,28 +503,19 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
     return 1;
 }
 
-tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], int ray_count,
-                                   const double (*dirs)[3], const double *tmin, const double *tmax,
-                                   const double *values, int value_count, const tpk_segment_fn *fns,
-                                   void *const *users, tpk_march_stats *stats)
+/* The rays as one packet, its result into *result: 0 when they cannot walk together (packet_init). Not
+ * inlined, so that packet_or_halves's frames stay small (its halves take turns with this one's arrays). */
+__attribute__((noinline)) static int packet_march(const tpk_range_bvh *b, const double org[3], int ray_count,
+                                                  const double (*dirs)[3], const double *tmin, const double *tmax,
+                                                  const double *values, int value_count, const tpk_segment_fn *fns,
+                                                  void *const *users, tpk_march_stats *stats, tpk_result *result)
 {
-    if (!b || !org || !dirs || !tmin || !tmax || !fns || !users || ray_count < 0 ||
-        ray_count > TPK_MARCH_PACKET || value_count < 0 || (value_count > 0 && !values))
-        return TPK_ERR_INVALID_ARGUMENT;
     packet_ray rays[TPK_MARCH_PACKET];
     packet state;
     packet *p = &state;
     p->b = b, p->values = values, p->value_count = value_count, p->rays = rays, p->ray_count = ray_count;
-    if (ray_count == 0 || b->levels == 0 || value_count == 0 || b->wide_count == 0 ||
-        !tpki_range_selected(b, values, value_count) || !packet_init(p, b, org, ray_count, dirs, tmin, tmax)) {
-        tpk_result first = TPK_OK;
-        for (int i = 0; i < ray_count; i++) {
-            tpk_result r = tpk_march_ray_values(b, org, dirs[i], tmin[i], tmax[i], values, value_count, fns[i],
-                                                users[i], stats ? &stats[i] : NULL);
-            first = first == TPK_OK ? r : first;
-        }
-        return first;
-    }
+    if (!packet_init(p, b, org, ray_count, dirs, tmin, tmax))
+        return 0;
     for (int i = 0; i < ray_count; i++) {
         packet_ray *r = &rays[i];
         r->tmin = tmin[i], r->tmax = tmax[i], r->fn = fns[i], r->user = users[i];
@@ -546,5 +537,46 @@ tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], 
     }
     if (p->nodes != p->node_stack)
         free(p->nodes);
-    return p->r;
+    *result = p->r;
+    return 1;
+}
+
+/* The rays as one packet or, where they cannot walk together, as two packets of half of them each, down
+ * to one ray alone: the pixels along the lines where a direction's sign or largest axis changes walk in
+ * smaller packets, not one by one. The first ray's error (in order), as alone. */
+static tpk_result packet_or_halves(const tpk_range_bvh *b, const double org[3], int ray_count,
+                                   const double (*dirs)[3], const double *tmin, const double *tmax,
+                                   const double *values, int value_count, const tpk_segment_fn *fns,
+                                   void *const *users, tpk_march_stats *stats)
+{
+    tpk_result r;
+    if (packet_march(b, org, ray_count, dirs, tmin, tmax, values, value_count, fns, users, stats, &r))
+        return r;
+    if (ray_count == 1)
+        return tpk_march_ray_values(b, org, dirs[0], tmin[0], tmax[0], values, value_count, fns[0], users[0], stats);
+    int half = ray_count / 2;
+    tpk_result first = packet_or_halves(b, org, half, dirs, tmin, tmax, values, value_count, fns, users, stats);
+    tpk_result second = packet_or_halves(b, org, ray_count - half, dirs + half, tmin + half, tmax + half, values,
+                                         value_count, fns + half, users + half, stats ? stats + half : NULL);
+    return first != TPK_OK ? first : second;
+}
+
+tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], int ray_count,
+                                   const double (*dirs)[3], const double *tmin, const double *tmax,
+                                   const double *values, int value_count, const tpk_segment_fn *fns,
+                                   void *const *users, tpk_march_stats *stats)
+{
+    if (!b || !org || !dirs || !tmin || !tmax || !fns || !users || ray_count < 0 ||
+        ray_count > TPK_MARCH_PACKET || value_count < 0 || (value_count > 0 && !values))
+        return TPK_ERR_INVALID_ARGUMENT;
+    if (ray_count > 0 && b->levels > 0 && value_count > 0 && b->wide_count > 0 &&
+        tpki_range_selected(b, values, value_count))
+        return packet_or_halves(b, org, ray_count, dirs, tmin, tmax, values, value_count, fns, users, stats);
+    tpk_result first = TPK_OK;
+    for (int i = 0; i < ray_count; i++) {
+        tpk_result r = tpk_march_ray_values(b, org, dirs[i], tmin[i], tmax[i], values, value_count, fns[i], users[i],
+                                            stats ? &stats[i] : NULL);
+        first = first == TPK_OK ? r : first;
+    }
+    return first;
 }

@@ -353,9 +353,9 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *bvh, const double org[3], c
  * primary rays through a few neighbouring pixels: ray i runs along dirs[i] over [tmin[i], tmax[i]] and
  * gets exactly the calls fns[i](users[i], ...) that tpk_march_ray_values would make for it alone, in the
  * same order; the calls of different rays interleave. Rays close together walk the selected tree as one
- * (its nodes tested once for all of them); other values, or rays whose directions differ too much in
- * kind (dominant axis, signs), walk one by one. stats: ray_count of them, or NULL; tet_steps counts the
- * tets tested exactly, which here are fewer than alone. Returns TPK_ERR_INVALID_ARGUMENT for a NULL
+ * (its nodes tested once for all of them); rays whose directions differ too much in kind (dominant axis,
+ * signs) walk in halves of the packet, down to one by one; other values walk one by one. stats: ray_count
+ * of them, or NULL; tet_steps counts the tets tested exactly, which here are fewer than alone. Returns TPK_ERR_INVALID_ARGUMENT for a NULL
  * array or a count out of range, else the first ray's error, as tpk_march_ray_values gives them. */
 tpk_result tpk_march_packet_values(const tpk_range_bvh *bvh, const double org[3], int ray_count,
                                    const double (*dirs)[3], const double *tmin, const double *tmax,
