@@ -69,6 +69,7 @@ typedef struct packet {
     float sx_lo, sx_hi, sy_lo, sy_hi, margin;
     tpki_v4f sx[TPK_MARCH_PACKET / 4], sy[TPK_MARCH_PACKET / 4]; /* each ray's shear, four rays a vector */
     tpki_v4i live[TPK_MARCH_PACKET / 4]; /* -1 for each ray still walking */
+    unsigned walking;                    /* the same, bit i for ray i */
     double piece_min; /* at or before the first piece of every ray that has one (+inf: none) */
     node_item *nodes, node_stack[NODE_STACK]; /* by key, then ref */
     int64_t node_count, node_cap;
@@ -125,10 +126,8 @@ static void packet_bounds(packet *p)
     double d_lo[3] = {INFINITY, INFINITY, INFINITY}, d_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     double sx_lo = INFINITY, sx_hi = -INFINITY, sy_lo = INFINITY, sy_hi = -INFINITY;
     float t_lo = INFINITY, t_hi = -INFINITY;
-    for (int i = 0; i < p->ray_count; i++) {
-        const packet_ray *r = &p->rays[i];
-        if (!r->active)
-            continue;
+    for (unsigned w = p->walking; w != 0; w &= w - 1) {
+        const packet_ray *r = &p->rays[__builtin_ctz(w)];
         for (int k = 0; k < 3; k++) {
             d_lo[k] = r->dir[k] < d_lo[k] ? r->dir[k] : d_lo[k];
             d_hi[k] = r->dir[k] > d_hi[k] ? r->dir[k] : d_hi[k];
@@ -168,6 +167,7 @@ static void hand_due(packet *p, double due)
                 r->active = 0;
                 p->active--;
                 p->live[i / 4][i % 4] = 0;
+                p->walking &= ~(1u << i);
             }
         }
         if (r->active && r->first < r->count && r->pieces[r->first].t_in < p->piece_min)
@@ -403,10 +403,10 @@ static void packet_walk(packet *p)
             int64_t child[4];
             int found = 0;
             tpki_v4f near;
-            int hit = packet_children(p, n, &near);
-            for (int i = 0; i < 4; i++) {
+            for (int hit = packet_children(p, n, &near); hit != 0; hit &= hit - 1) {
+                const int i = __builtin_ctz((unsigned)hit); /* the children met, in order */
                 const double t0 = (double)near[i] - p->slack;
-                if (!(hit & 1 << i) || t0 == INFINITY)
+                if (t0 == INFINITY)
                     continue;
                 int64_t c = n->count[i] == 0 ? n->child[i] : tpki_leaf_ref(n->child[i], n->count[i]);
                 int at = found++;
@@ -444,20 +444,21 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
         return 0;
     p->kx = p->rays[0].frame.kx, p->ky = p->rays[0].frame.ky, p->kz = p->rays[0].frame.kz;
     const int kx = p->kx, ky = p->ky, kz = p->kz;
-    double d_lo[3], d_hi[3];
-    int bad = 0;
+    double d_lo[3] = {INFINITY, INFINITY, INFINITY}, d_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    int bad = 0; /* bitwise, not short-circuit: one branch for the packet, not several per ray */
     for (int i = 0; i < ray_count; i++) {
         packet_ray *r = &p->rays[i];
         const double *d = dirs[i];
         double a0 = fabs(d[0]), a1 = fabs(d[1]), a2 = fabs(d[2]);
         /* tpki_ray_frame_init takes axis 1 over 0 and 2 over both only where strictly larger */
         bad |= !(tmin[i] <= tmax[i]);
-        bad |= kz == 0 ? !(a1 <= a0 && a2 <= a0) : kz == 1 ? !(a1 > a0 && a2 <= a1) : !(a2 > a0 && a2 > a1);
+        bad |= kz == 0 ? !((a1 <= a0) & (a2 <= a0)) : kz == 1 ? !((a1 > a0) & (a2 <= a1)) : !((a2 > a0) & (a2 > a1));
         for (int k = 0; k < 3; k++) {
-            /* 1/d finite and not 0 in floats, of the first ray's sign */
-            bad |= !(fabs(d[k]) > 1e-30 && fabs(d[k]) < 1e30) | ((d[k] > 0) != (dirs[0][k] > 0));
-            d_lo[k] = i == 0 || d[k] < d_lo[k] ? d[k] : d_lo[k];
-            d_hi[k] = i == 0 || d[k] > d_hi[k] ? d[k] : d_hi[k];
+            /* 1/d finite and not 0 in floats, of the first ray's sign (a NaN is bad: the bounds below
+             * are then unused) */
+            bad |= !((fabs(d[k]) > 1e-30) & (fabs(d[k]) < 1e30)) | ((d[k] > 0) != (dirs[0][k] > 0));
+            d_lo[k] = d[k] < d_lo[k] ? d[k] : d_lo[k];
+            d_hi[k] = d[k] > d_hi[k] ? d[k] : d_hi[k];
         }
         double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         d2_min = d2 < d2_min ? d2 : d2_min;
@@ -499,6 +500,7 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
         return 0; /* the edge test squares the margin in float */
     p->margin = (float)margin;
     p->active = ray_count;
+    p->walking = (1u << ray_count) - 1;
     packet_bounds(p);
     return 1;
 }
