@@ -70,6 +70,7 @@ typedef struct packet {
     tpki_v4f sx[TPK_MARCH_PACKET / 4], sy[TPK_MARCH_PACKET / 4]; /* each ray's shear, four rays a vector */
     tpki_v4i live[TPK_MARCH_PACKET / 4]; /* -1 for each ray still walking */
     unsigned walking;                    /* the same, bit i for ray i */
+    unsigned holding;                    /* bit i: ray i holds pieces not handed on */
     double piece_min; /* at or before the first piece of every ray that has one (+inf: none) */
     node_item *nodes, node_stack[NODE_STACK]; /* by key, then ref */
     int64_t node_count, node_cap;
@@ -159,19 +160,23 @@ static void hand_due(packet *p, double due)
     if (!(p->piece_min < due))
         return;
     p->piece_min = INFINITY;
-    for (int i = 0; i < p->ray_count; i++) {
+    for (unsigned h = p->walking & p->holding; h != 0; h &= h - 1) { /* in ray order */
+        const int i = __builtin_ctz(h);
         packet_ray *r = &p->rays[i];
-        while (r->active && r->first < r->count && r->pieces[r->first].t_in < due) {
+        while (r->first < r->count && r->pieces[r->first].t_in < due) {
             tpk_segment seg = r->pieces[r->first++];
             if ((r->fn && r->fn(r->user, &seg)) || seg.t_out >= r->tmax) {
                 r->active = 0;
                 p->active--;
                 p->live[i / 4][i % 4] = 0;
                 p->walking &= ~(1u << i);
+                break;
             }
         }
         if (r->active && r->first < r->count && r->pieces[r->first].t_in < p->piece_min)
             p->piece_min = r->pieces[r->first].t_in;
+        if (!r->active || r->first == r->count)
+            p->holding &= ~(1u << i);
     }
     if (p->active > 0 && p->active < p->bounded)
         packet_bounds(p);
@@ -211,6 +216,7 @@ static void ray_tet(packet *p, packet_ray *r, int64_t t, const tpki_active_slot 
     for (; at > r->first && tpki_piece_before(&seg, &r->pieces[at - 1]); at--)
         r->pieces[at] = r->pieces[at - 1];
     r->pieces[at] = seg;
+    p->holding |= 1u << (r - p->rays);
     p->piece_min = seg.t_in < p->piece_min ? seg.t_in : p->piece_min;
 }
 
@@ -328,9 +334,8 @@ static void group_tet(packet *p, int g, const tpki_v4f x[4], const tpki_v4f y[4]
     const tpki_active_slot *s = &p->b->active_slots[slot];
     if (tpki_v4_bits(two) != 0)
         go_bits &= ~tpki_v4_bits(crosses_none(p, two, possible, e, margin, p->b->active_scalars[slot]));
-    for (int j = 0; j < 4; j++)
-        if (go_bits & 1 << j)
-            ray_tet(p, &p->rays[4 * g + j], p->b->active_tets[slot], s);
+    for (; go_bits != 0; go_bits &= go_bits - 1)
+        ray_tet(p, &p->rays[4 * g + __builtin_ctz((unsigned)go_bits)], p->b->active_tets[slot], s);
 }
 
 /* A leaf's tets: for the packet, then four rays at a time in float, then exactly. */
@@ -501,6 +506,7 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
     p->margin = (float)margin;
     p->active = ray_count;
     p->walking = (1u << ray_count) - 1;
+    p->holding = 0;
     packet_bounds(p);
     return 1;
 }
