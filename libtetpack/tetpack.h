@@ -318,7 +318,7 @@ void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
  * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */
 double tpk_range_bvh_active(const tpk_range_bvh *bvh, const double *values, int count);
 /* Build a second tree over just the tets whose range holds one of values[0 .. count) (a binned-SAH
- * BVH, leaves of up to 4 tets; about 40 bytes per such tet), which tpk_march_ray_values then walks
+ * BVH, leaves of up to 6 tets; about 100 bytes per such tet), which tpk_march_ray_values then walks
  * whenever it is given the same values (the same count and the same doubles, in the same order), with
  * the same pieces; other values walk the file-order tree. count 0 drops it. Call it before the rays,
  * not while any ray of this bvh runs. TPK_ERR_INVALID_ARGUMENT, TPK_ERR_OUT_OF_MEMORY (then no tree is
