@@ -63,22 +63,16 @@ int tpki_det2_sign_exact(double a, double b, double c, double d);
 static inline int tpk_edge_sign(int32_t i, const tpk_proj *pi, int32_t j, const tpk_proj *pj,
                                 double *value)
 {
-    const tpk_proj *lo = pi, *hi = pj;
-    int flip = 1;
-    if (i > j) {
-        lo = pj;
-        hi = pi;
-        flip = -1;
-    }
+    /* picked by index, not by a branch: a tet's edges take the ids' order at random */
+    const int swap = i > j;
+    const tpk_proj *ends[2] = {pi, pj};
+    const tpk_proj *lo = ends[swap], *hi = ends[1 - swap];
+    const int flip = 1 - 2 * swap;
     double p = lo->x * hi->y, q = lo->y * hi->x;
     double det = p - q;
     double bound = 4.440892098500626e-16 * (fabs(p) + fabs(q));
-    int sign;
-    if (det > bound) {
-        sign = 1;
-    } else if (det < -bound) {
-        sign = -1;
-    } else {
+    int sign = (det > bound) - (det < -bound);
+    if (sign == 0) {
         sign = tpki_det2_sign_exact(lo->x, lo->y, hi->x, hi->y);
         if (sign == 0 || (det > 0 && sign < 0) || (det < 0 && sign > 0) || det != det)
             det = 0.0; /* exactly 0 when the point is exactly on the edge's line */

@@ -395,8 +395,10 @@ int tpki_tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t
     /* The ray is the point (0,0) of the frame, perturbed to (eps, eps^2) (internal_ray.h): a tet whose
      * corners all lie strictly on one side of x = 0 or of y = 0 cannot hold it, whatever the edge signs
      * say, and most tets of a leaf are such. */
-    if ((p[0].x > 0 && p[1].x > 0 && p[2].x > 0 && p[3].x > 0) || (p[0].x < 0 && p[1].x < 0 && p[2].x < 0 && p[3].x < 0) ||
-        (p[0].y > 0 && p[1].y > 0 && p[2].y > 0 && p[3].y > 0) || (p[0].y < 0 && p[1].y < 0 && p[2].y < 0 && p[3].y < 0))
+    int right = 1, left = 1, above = 1, below = 1; /* bitwise: one branch, not sixteen */
+    for (int i = 0; i < 4; i++)
+        right &= p[i].x > 0, left &= p[i].x < 0, above &= p[i].y > 0, below &= p[i].y < 0;
+    if (right | left | above | below)
         return 0;
     /* edge i->j for i < j: its sign and value (j->i: both negated) */
     int sign[4][4];
@@ -407,32 +409,30 @@ int tpki_tet_piece(const tpk_range_bvh *b, const tpk_ray_frame *frame, int64_t t
             sign[j][i] = -sign[i][j];
             value[j][i] = -value[i][j];
         }
-    tpk_face_hit entry, exit;
-    int have_entry = 0, have_exit = 0, opposite = 0, entry_c[3] = {0, 0, 0}, exit_c[3] = {0, 0, 0};
+    /* the entry face: outward edges all -1; the exit face: all +1 (the last such, if more); found by
+     * selects, as the faces' signs come at random, and only then copied out */
+    int opposite = -1, exit_k = -1;
     for (int k = 0; k < 4; k++) {
         const int *f = tpk_tet_faces[k]; /* outward order */
         int s0 = sign[f[0]][f[1]], s1 = sign[f[1]][f[2]], s2 = sign[f[2]][f[0]];
-        if (s0 != s1 || s1 != s2)
-            continue;
-        /* held as the marcher holds the faces it crosses: all edge values <= 0 */
-        int g[3] = {f[0], f[1], f[2]};
-        if (s0 > 0)
-            g[1] = f[2], g[2] = f[1];
-        tpk_face_hit *h = s0 < 0 ? &entry : &exit;
-        int *hc = s0 < 0 ? entry_c : exit_c;
-        for (int i = 0; i < 3; i++) {
-            hc[i] = g[i];
-            h->v[i] = q[g[i]];
-            h->p[i] = p[g[i]];
-            h->e[i] = value[g[i]][g[(i + 1) % 3]];
-        }
-        if (s0 < 0)
-            have_entry = 1, opposite = k;
-        else
-            have_exit = 1;
+        int same = (s0 == s1) & (s1 == s2);
+        opposite ^= (opposite ^ k) & -(same & (s0 < 0));
+        exit_k ^= (exit_k ^ k) & -(same & (s0 > 0));
     }
-    if (!have_entry || !have_exit)
+    if (opposite < 0 || exit_k < 0)
         return 0;
+    /* held as the marcher holds the faces it crosses: all edge values <= 0 */
+    const int *fe = tpk_tet_faces[opposite], *fx = tpk_tet_faces[exit_k];
+    const int entry_c[3] = {fe[0], fe[1], fe[2]}, exit_c[3] = {fx[0], fx[2], fx[1]};
+    tpk_face_hit entry, exit;
+    for (int i = 0; i < 3; i++) {
+        entry.v[i] = q[entry_c[i]];
+        entry.p[i] = p[entry_c[i]];
+        entry.e[i] = value[entry_c[i]][entry_c[(i + 1) % 3]];
+        exit.v[i] = q[exit_c[i]];
+        exit.p[i] = p[exit_c[i]];
+        exit.e[i] = value[exit_c[i]][exit_c[(i + 1) % 3]];
+    }
     /* the corners' scalars: the slot's copy, read from one run of memory, or the mesh's */
     double s[4];
     if (slot) {

@@ -69,6 +69,8 @@ typedef struct packet {
     float sx_lo, sx_hi, sy_lo, sy_hi, margin;
     tpki_v4f sx[TPK_MARCH_PACKET / 4], sy[TPK_MARCH_PACKET / 4]; /* each ray's shear, four rays a vector */
     tpki_v4i live[TPK_MARCH_PACKET / 4]; /* -1 for each ray still walking */
+    unsigned walking;                    /* the same, bit i for ray i */
+    unsigned holding;                    /* bit i: ray i holds pieces not handed on */
     double piece_min; /* at or before the first piece of every ray that has one (+inf: none) */
     node_item *nodes, node_stack[NODE_STACK]; /* by key, then ref */
     int64_t node_count, node_cap;
@@ -125,10 +127,8 @@ static void packet_bounds(packet *p)
     double d_lo[3] = {INFINITY, INFINITY, INFINITY}, d_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     double sx_lo = INFINITY, sx_hi = -INFINITY, sy_lo = INFINITY, sy_hi = -INFINITY;
     float t_lo = INFINITY, t_hi = -INFINITY;
-    for (int i = 0; i < p->ray_count; i++) {
-        const packet_ray *r = &p->rays[i];
-        if (!r->active)
-            continue;
+    for (unsigned w = p->walking; w != 0; w &= w - 1) {
+        const packet_ray *r = &p->rays[__builtin_ctz(w)];
         for (int k = 0; k < 3; k++) {
             d_lo[k] = r->dir[k] < d_lo[k] ? r->dir[k] : d_lo[k];
             d_hi[k] = r->dir[k] > d_hi[k] ? r->dir[k] : d_hi[k];
@@ -160,18 +160,23 @@ static void hand_due(packet *p, double due)
     if (!(p->piece_min < due))
         return;
     p->piece_min = INFINITY;
-    for (int i = 0; i < p->ray_count; i++) {
+    for (unsigned h = p->walking & p->holding; h != 0; h &= h - 1) { /* in ray order */
+        const int i = __builtin_ctz(h);
         packet_ray *r = &p->rays[i];
-        while (r->active && r->first < r->count && r->pieces[r->first].t_in < due) {
+        while (r->first < r->count && r->pieces[r->first].t_in < due) {
             tpk_segment seg = r->pieces[r->first++];
             if ((r->fn && r->fn(r->user, &seg)) || seg.t_out >= r->tmax) {
                 r->active = 0;
                 p->active--;
                 p->live[i / 4][i % 4] = 0;
+                p->walking &= ~(1u << i);
+                break;
             }
         }
         if (r->active && r->first < r->count && r->pieces[r->first].t_in < p->piece_min)
             p->piece_min = r->pieces[r->first].t_in;
+        if (!r->active || r->first == r->count)
+            p->holding &= ~(1u << i);
     }
     if (p->active > 0 && p->active < p->bounded)
         packet_bounds(p);
@@ -211,6 +216,7 @@ static void ray_tet(packet *p, packet_ray *r, int64_t t, const tpki_active_slot 
     for (; at > r->first && tpki_piece_before(&seg, &r->pieces[at - 1]); at--)
         r->pieces[at] = r->pieces[at - 1];
     r->pieces[at] = seg;
+    p->holding |= 1u << (r - p->rays);
     p->piece_min = seg.t_in < p->piece_min ? seg.t_in : p->piece_min;
 }
 
@@ -328,9 +334,8 @@ static void group_tet(packet *p, int g, const tpki_v4f x[4], const tpki_v4f y[4]
     const tpki_active_slot *s = &p->b->active_slots[slot];
     if (tpki_v4_bits(two) != 0)
         go_bits &= ~tpki_v4_bits(crosses_none(p, two, possible, e, margin, p->b->active_scalars[slot]));
-    for (int j = 0; j < 4; j++)
-        if (go_bits & 1 << j)
-            ray_tet(p, &p->rays[4 * g + j], p->b->active_tets[slot], s);
+    for (; go_bits != 0; go_bits &= go_bits - 1)
+        ray_tet(p, &p->rays[4 * g + __builtin_ctz((unsigned)go_bits)], p->b->active_tets[slot], s);
 }
 
 /* A leaf's tets: for the packet, then four rays at a time in float, then exactly. */
@@ -403,10 +408,10 @@ static void packet_walk(packet *p)
             int64_t child[4];
             int found = 0;
             tpki_v4f near;
-            int hit = packet_children(p, n, &near);
-            for (int i = 0; i < 4; i++) {
+            for (int hit = packet_children(p, n, &near); hit != 0; hit &= hit - 1) {
+                const int i = __builtin_ctz((unsigned)hit); /* the children met, in order */
                 const double t0 = (double)near[i] - p->slack;
-                if (!(hit & 1 << i) || t0 == INFINITY)
+                if (t0 == INFINITY)
                     continue;
                 int64_t c = n->count[i] == 0 ? n->child[i] : tpki_leaf_ref(n->child[i], n->count[i]);
                 int at = found++;
@@ -430,7 +435,7 @@ static void packet_walk(packet *p)
 }
 
 /* Set the packet up; 0 when its rays cannot walk together (axes, signs or magnitudes that differ or
- * that floats cannot hold, an empty span): then each walks alone. */
+ * that floats cannot hold, an empty span): then they walk in halves (packet_or_halves). */
 static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], int ray_count,
                        const double (*dirs)[3], const double *tmin, const double *tmax)
 {
@@ -444,20 +449,21 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
         return 0;
     p->kx = p->rays[0].frame.kx, p->ky = p->rays[0].frame.ky, p->kz = p->rays[0].frame.kz;
     const int kx = p->kx, ky = p->ky, kz = p->kz;
-    double d_lo[3], d_hi[3];
-    int bad = 0;
+    double d_lo[3] = {INFINITY, INFINITY, INFINITY}, d_hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    int bad = 0; /* bitwise, not short-circuit: one branch for the packet, not several per ray */
     for (int i = 0; i < ray_count; i++) {
         packet_ray *r = &p->rays[i];
         const double *d = dirs[i];
         double a0 = fabs(d[0]), a1 = fabs(d[1]), a2 = fabs(d[2]);
         /* tpki_ray_frame_init takes axis 1 over 0 and 2 over both only where strictly larger */
         bad |= !(tmin[i] <= tmax[i]);
-        bad |= kz == 0 ? !(a1 <= a0 && a2 <= a0) : kz == 1 ? !(a1 > a0 && a2 <= a1) : !(a2 > a0 && a2 > a1);
+        bad |= kz == 0 ? !((a1 <= a0) & (a2 <= a0)) : kz == 1 ? !((a1 > a0) & (a2 <= a1)) : !((a2 > a0) & (a2 > a1));
         for (int k = 0; k < 3; k++) {
-            /* 1/d finite and not 0 in floats, of the first ray's sign */
-            bad |= !(fabs(d[k]) > 1e-30 && fabs(d[k]) < 1e30) | ((d[k] > 0) != (dirs[0][k] > 0));
-            d_lo[k] = i == 0 || d[k] < d_lo[k] ? d[k] : d_lo[k];
-            d_hi[k] = i == 0 || d[k] > d_hi[k] ? d[k] : d_hi[k];
+            /* 1/d finite and not 0 in floats, of the first ray's sign (a NaN is bad: the bounds below
+             * are then unused) */
+            bad |= !((fabs(d[k]) > 1e-30) & (fabs(d[k]) < 1e30)) | ((d[k] > 0) != (dirs[0][k] > 0));
+            d_lo[k] = d[k] < d_lo[k] ? d[k] : d_lo[k];
+            d_hi[k] = d[k] > d_hi[k] ? d[k] : d_hi[k];
         }
         double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         d2_min = d2 < d2_min ? d2 : d2_min;
@@ -499,32 +505,25 @@ static int packet_init(packet *p, const tpk_range_bvh *b, const double org[3], i
         return 0; /* the edge test squares the margin in float */
     p->margin = (float)margin;
     p->active = ray_count;
+    p->walking = (1u << ray_count) - 1;
+    p->holding = 0;
     packet_bounds(p);
     return 1;
 }
 
-tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], int ray_count,
-                                   const double (*dirs)[3], const double *tmin, const double *tmax,
-                                   const double *values, int value_count, const tpk_segment_fn *fns,
-                                   void *const *users, tpk_march_stats *stats)
+/* The rays as one packet, its result into *result: 0 when they cannot walk together (packet_init). Not
+ * inlined, so that packet_or_halves's frames stay small (its halves take turns with this one's arrays). */
+__attribute__((noinline)) static int packet_march(const tpk_range_bvh *b, const double org[3], int ray_count,
+                                                  const double (*dirs)[3], const double *tmin, const double *tmax,
+                                                  const double *values, int value_count, const tpk_segment_fn *fns,
+                                                  void *const *users, tpk_march_stats *stats, tpk_result *result)
 {
-    if (!b || !org || !dirs || !tmin || !tmax || !fns || !users || ray_count < 0 ||
-        ray_count > TPK_MARCH_PACKET || value_count < 0 || (value_count > 0 && !values))
-        return TPK_ERR_INVALID_ARGUMENT;
     packet_ray rays[TPK_MARCH_PACKET];
     packet state;
     packet *p = &state;
     p->b = b, p->values = values, p->value_count = value_count, p->rays = rays, p->ray_count = ray_count;
-    if (ray_count == 0 || b->levels == 0 || value_count == 0 || b->wide_count == 0 ||
-        !tpki_range_selected(b, values, value_count) || !packet_init(p, b, org, ray_count, dirs, tmin, tmax)) {
-        tpk_result first = TPK_OK;
-        for (int i = 0; i < ray_count; i++) {
-            tpk_result r = tpk_march_ray_values(b, org, dirs[i], tmin[i], tmax[i], values, value_count, fns[i],
-                                                users[i], stats ? &stats[i] : NULL);
-            first = first == TPK_OK ? r : first;
-        }
-        return first;
-    }
+    if (!packet_init(p, b, org, ray_count, dirs, tmin, tmax))
+        return 0;
     for (int i = 0; i < ray_count; i++) {
         packet_ray *r = &rays[i];
         r->tmin = tmin[i], r->tmax = tmax[i], r->fn = fns[i], r->user = users[i];
@@ -546,5 +545,46 @@ tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], 
     }
     if (p->nodes != p->node_stack)
         free(p->nodes);
-    return p->r;
+    *result = p->r;
+    return 1;
+}
+
+/* The rays as one packet or, where they cannot walk together, as two packets of half of them each, down
+ * to one ray alone: the pixels along the lines where a direction's sign or largest axis changes walk in
+ * smaller packets, not one by one. The first ray's error (in order), as alone. */
+static tpk_result packet_or_halves(const tpk_range_bvh *b, const double org[3], int ray_count,
+                                   const double (*dirs)[3], const double *tmin, const double *tmax,
+                                   const double *values, int value_count, const tpk_segment_fn *fns,
+                                   void *const *users, tpk_march_stats *stats)
+{
+    tpk_result r;
+    if (packet_march(b, org, ray_count, dirs, tmin, tmax, values, value_count, fns, users, stats, &r))
+        return r;
+    if (ray_count == 1)
+        return tpk_march_ray_values(b, org, dirs[0], tmin[0], tmax[0], values, value_count, fns[0], users[0], stats);
+    int half = ray_count / 2;
+    tpk_result first = packet_or_halves(b, org, half, dirs, tmin, tmax, values, value_count, fns, users, stats);
+    tpk_result second = packet_or_halves(b, org, ray_count - half, dirs + half, tmin + half, tmax + half, values,
+                                         value_count, fns + half, users + half, stats ? stats + half : NULL);
+    return first != TPK_OK ? first : second;
+}
+
+tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], int ray_count,
+                                   const double (*dirs)[3], const double *tmin, const double *tmax,
+                                   const double *values, int value_count, const tpk_segment_fn *fns,
+                                   void *const *users, tpk_march_stats *stats)
+{
+    if (!b || !org || !dirs || !tmin || !tmax || !fns || !users || ray_count < 0 ||
+        ray_count > TPK_MARCH_PACKET || value_count < 0 || (value_count > 0 && !values))
+        return TPK_ERR_INVALID_ARGUMENT;
+    if (ray_count > 0 && b->levels > 0 && value_count > 0 && b->wide_count > 0 &&
+        tpki_range_selected(b, values, value_count))
+        return packet_or_halves(b, org, ray_count, dirs, tmin, tmax, values, value_count, fns, users, stats);
+    tpk_result first = TPK_OK;
+    for (int i = 0; i < ray_count; i++) {
+        tpk_result r = tpk_march_ray_values(b, org, dirs[i], tmin[i], tmax[i], values, value_count, fns[i], users[i],
+                                            stats ? &stats[i] : NULL);
+        first = first == TPK_OK ? r : first;
+    }
+    return first;
 }

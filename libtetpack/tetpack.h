@@ -318,7 +318,7 @@ void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
  * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */
 double tpk_range_bvh_active(const tpk_range_bvh *bvh, const double *values, int count);
 /* Build a second tree over just the tets whose range holds one of values[0 .. count) (a binned-SAH
- * BVH, leaves of up to 4 tets; about 40 bytes per such tet), which tpk_march_ray_values then walks
+ * BVH, leaves of up to 6 tets; about 100 bytes per such tet), which tpk_march_ray_values then walks
  * whenever it is given the same values (the same count and the same doubles, in the same order), with
  * the same pieces; other values walk the file-order tree. count 0 drops it. Call it before the rays,
  * not while any ray of this bvh runs. TPK_ERR_INVALID_ARGUMENT, TPK_ERR_OUT_OF_MEMORY (then no tree is
@@ -353,9 +353,9 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *bvh, const double org[3], c
  * primary rays through a few neighbouring pixels: ray i runs along dirs[i] over [tmin[i], tmax[i]] and
  * gets exactly the calls fns[i](users[i], ...) that tpk_march_ray_values would make for it alone, in the
  * same order; the calls of different rays interleave. Rays close together walk the selected tree as one
- * (its nodes tested once for all of them); other values, or rays whose directions differ too much in
- * kind (dominant axis, signs), walk one by one. stats: ray_count of them, or NULL; tet_steps counts the
- * tets tested exactly, which here are fewer than alone. Returns TPK_ERR_INVALID_ARGUMENT for a NULL
+ * (its nodes tested once for all of them); rays whose directions differ too much in kind (dominant axis,
+ * signs) walk in halves of the packet, down to one by one; other values walk one by one. stats: ray_count
+ * of them, or NULL; tet_steps counts the tets tested exactly, which here are fewer than alone. Returns TPK_ERR_INVALID_ARGUMENT for a NULL
  * array or a count out of range, else the first ray's error, as tpk_march_ray_values gives them. */
 tpk_result tpk_march_packet_values(const tpk_range_bvh *bvh, const double org[3], int ray_count,
                                    const double (*dirs)[3], const double *tmin, const double *tmax,

@@ -1244,6 +1244,67 @@ TPK_TEST(culled_iso_packets_equal_single_rays)
     fx_free(&m);
 }
 
+/* A 4x4 packet whose directions' y changes sign between its second and third rows (a camera's pixels
+ * along the line where that happens) cannot walk as one; its halves, rows 0-1 and 2-3, can: each ray
+ * hands on what it does alone, and the packet tests fewer tets exactly than its rays alone (one by one,
+ * it would test as many). */
+TPK_TEST(culled_iso_packet_splits_at_a_sign_change)
+{
+    static piece_log alone[TPK_MARCH_PACKET], packed[TPK_MARCH_PACKET];
+    static const double values[] = {0.3, -0.45};
+    fx_mesh m;
+    CHECK_MSG(load_real("sfepy/cylinder.vtk", &m) == 0, "cannot load sfepy/cylinder.vtk");
+    set_field(&m, 0);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = 0; v < m.vertex_count; v++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], m.points[3 * v + k]);
+            hi[k] = fmax(hi[k], m.points[3 * v + k]);
+        }
+    tpk_marcher *marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    tpk_range_bvh *bvh = NULL;
+    CHECK(marcher && tpk_range_bvh_create(&bvh, marcher) == TPK_OK);
+    CHECK(tpk_range_bvh_select(bvh, values, 2) == TPK_OK);
+    uint64_t steps_alone = 0, steps_packed = 0;
+    int64_t pieces = 0;
+    /* eyes on the plane y = centre, looking along +x through the mesh at several heights */
+    for (int e = 0; e < 8; e++) {
+        const double org[3] = {lo[0] - (hi[0] - lo[0]), 0.5 * (lo[1] + hi[1]), lo[2] + (hi[2] - lo[2]) * (e + 0.5) / 8};
+        double dirs[TPK_MARCH_PACKET][3], tmin[TPK_MARCH_PACKET], tmax[TPK_MARCH_PACKET];
+        tpk_segment_fn fns[TPK_MARCH_PACKET];
+        void *users[TPK_MARCH_PACKET];
+        tpk_march_stats st[TPK_MARCH_PACKET];
+        for (int i = 0; i < TPK_MARCH_PACKET; i++) {
+            dirs[i][0] = 1.0;
+            dirs[i][1] = 1e-3 * ((i / 4) - 1.5); /* rows 0-1 below 0, rows 2-3 above */
+            dirs[i][2] = 1e-3 * ((i % 4) + 0.5);
+            tmin[i] = 0, tmax[i] = INFINITY;
+            alone[i].count = packed[i].count = 0;
+            alone[i].overflow = packed[i].overflow = 0;
+            alone[i].stop_after = packed[i].stop_after = 0;
+            fns[i] = log_piece;
+            users[i] = &packed[i];
+            CHECK(tpk_march_ray_values(bvh, org, dirs[i], tmin[i], tmax[i], values, 2, log_piece, &alone[i], &st[i]) ==
+                  TPK_OK);
+            steps_alone += st[i].tet_steps;
+        }
+        CHECK(tpk_march_packet_values(bvh, org, TPK_MARCH_PACKET, (const double(*)[3])dirs, tmin, tmax, values, 2,
+                                      fns, users, st) == TPK_OK);
+        for (int i = 0; i < TPK_MARCH_PACKET; i++) {
+            steps_packed += st[i].tet_steps;
+            pieces += alone[i].count;
+            CHECK_MSG(same_pieces(&alone[i], &packed[i]), "eye %d ray %d: %lld pieces alone, %lld in the packet", e, i,
+                      (long long)alone[i].count, (long long)packed[i].count);
+        }
+    }
+    CHECK_MSG(pieces > 0, "no ray met a value");
+    CHECK_MSG(steps_packed < steps_alone, "%llu tets tested in the packets, %llu alone", (unsigned long long)steps_packed,
+              (unsigned long long)steps_alone);
+    tpk_range_bvh_destroy(bvh);
+    tpk_marcher_destroy(marcher);
+    fx_free(&m);
+}
+
 /* tpk_range_bvh_heap (what the Vulkan renderer uploads): the tree in heap order, each inner node the
  * union of its two children, each leaf holding its tets' corners and scalar range, the rest empty; the
  * tets as tpk_range_bvh_tets gives them, positive (the mesh's own tets, in order). */
