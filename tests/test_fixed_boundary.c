@@ -51,6 +51,10 @@ TPK_TEST(triangles_sharing_a_corner_or_an_edge)
     CHECK_EQ_INT(tpk_fixed_boundary_surely_crosses(flat, 4, edge, 2), 0);
     double bent[12] = {0, 0, 0, 4, 0, 0, 1, 2, 0, 3, 1, 1};
     CHECK_EQ_INT(tpk_fixed_boundary_surely_crosses(bent, 4, edge, 2), 0);
+    /* the same triangle twice, and one with a corner repeated: nothing to tell (and nothing read past) */
+    static const int32_t twice[6] = {0, 1, 2, 2, 0, 1}, repeated[6] = {0, 0, 1, 0, 1, 2};
+    CHECK_EQ_INT(tpk_fixed_boundary_surely_crosses(fold, 4, twice, 2), 0);
+    CHECK_EQ_INT(tpk_fixed_boundary_surely_crosses(fold, 4, repeated, 2), 0);
 }
 
 /* The unit cube's 12 outward triangles: a closed surface whose triangles only meet. */

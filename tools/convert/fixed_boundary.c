@@ -63,14 +63,16 @@ int tpk_fixed_boundary_surely_crosses(const double *points, int32_t point_count,
                 for (int b = 0; b < 3; b++)
                     if (s[a] == t[b])
                         shared++, corner[0] = a, corner[1] = b;
-            if (shared > 1) { /* an edge in common: they cross only folded onto each other, in one plane */
-                int a = 0, b = 0; /* the corners not shared */
+            if (shared > 2) /* the same triangle twice, or ids repeated within one: not a sign to go by */
+                continue;
+            if (shared == 2) { /* an edge in common: they cross only folded onto each other, in one plane */
+                int a = 0, b = 0; /* the corners not shared (each has one: a third match would make 3) */
                 while (s[a] == t[0] || s[a] == t[1] || s[a] == t[2])
                     a++;
                 while (t[b] == s[0] || t[b] == s[1] || t[b] == s[2])
                     b++;
-                if (shared == 2 && edge_folds(points + 3 * (size_t)s[(a + 1) % 3], points + 3 * (size_t)s[(a + 2) % 3],
-                                              points + 3 * (size_t)s[a], points + 3 * (size_t)t[b]))
+                if (edge_folds(points + 3 * (size_t)s[(a + 1) % 3], points + 3 * (size_t)s[(a + 2) % 3],
+                               points + 3 * (size_t)s[a], points + 3 * (size_t)t[b]))
                     return 1;
                 continue;
             }
