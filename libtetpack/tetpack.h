@@ -355,8 +355,9 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *bvh, const double org[3], c
  * same order; the calls of different rays interleave. Rays close together walk the selected tree as one
  * (its nodes tested once for all of them); rays whose directions differ too much in kind (dominant axis,
  * signs) walk in halves of the packet, down to one by one; other values walk one by one. stats: ray_count
- * of them, or NULL; tet_steps counts the tets tested exactly, which here are fewer than alone. Returns TPK_ERR_INVALID_ARGUMENT for a NULL
- * array or a count out of range, else the first ray's error, as tpk_march_ray_values gives them. */
+ * of them, or NULL; tet_steps counts the tets tested exactly, which here are fewer than alone. Returns
+ * TPK_ERR_INVALID_ARGUMENT for a NULL array or a count out of range, else the first ray's error, as
+ * tpk_march_ray_values gives them. */
 tpk_result tpk_march_packet_values(const tpk_range_bvh *bvh, const double org[3], int ray_count,
                                    const double (*dirs)[3], const double *tmin, const double *tmax,
                                    const double *values, int count, const tpk_segment_fn *fns, void *const *users,

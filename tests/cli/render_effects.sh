@@ -93,11 +93,17 @@ done
 # serve one frame, not TPK_RENDER_KEPT_FRAMES (40x30 rays with these values: step 3 marches alone, and
 # with the trees counted as paid by 8 frames it culled).
 FEW=(--field pressure --range 0,1.4e9 --size 40x30 --tf "$WORK/clear.tf" --iso 2e8,6e8,1e9)
-culled() { "$PY" -c 'import json, sys; print("".join("1" if json.loads(l)["iso_culling"] else "0" for l in sys.stdin))'; }
-steps=$(env -u TETPACK_ISO_CULLING "$TPK" render "$WORK/ep.tpk" -o "$WORK/pf_%d.png" "${FEW[@]}" --steps 0:4 --json | culled)
-alone=$(for s in 0 1 2 3 4; do env -u TETPACK_ISO_CULLING "$TPK" render "$WORK/ep.tpk" -o "$WORK/one_f.png" "${FEW[@]}" --step $s --json; done | culled)
+culled() {
+    "$PY" -c 'import json, sys; print("".join("1" if json.loads(l)["iso_culling"] else "0" for l in sys.stdin))'
+}
+auto() { env -u TETPACK_ISO_CULLING "$TPK" render "$WORK/ep.tpk" "${FEW[@]}" --json "$@"; }
+steps=$(auto -o "$WORK/pf_%d.png" --steps 0:4 | culled)
+alone=$(for s in 0 1 2 3 4; do auto -o "$WORK/one_f.png" --step $s; done | culled)
 [ "$steps" = "$alone" ] || fail "--steps: the frames' culling choices $steps are not those of each step alone, $alone"
-case "$alone" in *0*1* | *1*0*) ;; *) fail "the culling choices of the steps alone, $alone, are not mixed: the check above checks nothing" ;; esac
+case "$alone" in
+*0*1* | *1*0*) ;;
+*) fail "the culling choices of the steps alone, $alone, are not mixed: the check above checks nothing" ;;
+esac
 cmp -s "$WORK/pi_1.png" "$WORK/pi_4.png" && fail "--steps: the isosurfaces of steps 1 and 4 look the same"
 cmp -s "$WORK/pa_1.png" "$WORK/pa_4.png" && fail "--steps: steps 1 and 4 look the same with vertex AO"
 "$PY" - "$WORK" "$(dirname "$0")" <<'PY'

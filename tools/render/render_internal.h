@@ -21,7 +21,8 @@ typedef struct render_keep {
     tpk_range_bvh *range;   /* NULL: not made */
     double values[TPK_RENDER_MAX_ISO]; /* the values the range trees were selected for */
     int value_count;        /* 0: none selected */
-    int frames;             /* frames a field is drawn with (tpk_vertex_cache_frames_per_field); 0: TPK_RENDER_KEPT_FRAMES */
+    int frames;             /* the frames a field is drawn with (tpk_vertex_cache_frames_per_field);
+                               0: TPK_RENDER_KEPT_FRAMES */
 } render_keep;
 
 /* Free what `keep` holds and zero it, but for `frames` (a choice of the caller's, not set-up). */
