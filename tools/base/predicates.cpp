@@ -1,4 +1,5 @@
-// The only CGAL translation unit: exact orientation behind a C interface (predicates.h).
+// CGAL's exact orientation behind a C interface (predicates.h); the exact triangle tests are in
+// exact_triangles.cpp.
 // CGAL::orientation(p, q, r, s) is the sign of det[q-p, r-p, s-p] (orientationC3 in
 // CGAL/predicates/kernel_ftC3.h); tests check that convention on constructed cases.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

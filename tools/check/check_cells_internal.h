@@ -3,9 +3,9 @@
  *
  * Who defines what. check_cells.c, the entry (tpk_check_cells, check.h), sits on top and calls down:
  * check_cells_hits.c (tpk_cell_hit, tpk_cell_hits_append, tpk_cell_hits_report, tpk_cell_hits_free,
- * tpk_cell_example_vertices, tpk_cell_centre), check_cells_shape.c (tpk_check_split_cell),
- * check_cells_exact.cpp (tpk_exact_*), check_quality.c (tpk_tet_quality_of), check_cells_dup.c
- * (tpk_check_duplicate_cells). None of these calls back into check_cells.c. */
+ * tpk_cell_example_vertices, tpk_cell_centre), check_cells_shape.c (tpk_check_split_cell, with the
+ * exact triangle tests of base/exact_triangles.h), check_quality.c (tpk_tet_quality_of),
+ * check_cells_dup.c (tpk_check_duplicate_cells). None of these calls back into check_cells.c. */
 #ifndef TPK_CHECK_CELLS_INTERNAL_H
 #define TPK_CHECK_CELLS_INTERNAL_H
 
@@ -47,15 +47,6 @@ void tpk_cell_centre(const tpk_mesh *mesh, int64_t cell, double centre[3]);
  * folds). check_cells_shape.c. */
 void tpk_check_split_cell(const tpk_mesh *mesh, int64_t cell, double warp_deg, tpk_cell_hits *hits);
 
-/* Exact triangle tests (CGAL, check_cells_exact.cpp). Triangles are closed point sets; a degenerate
- * (collinear) triangle never meets anything here: callers report degenerate cells by other checks. */
-int tpk_exact_triangles_meet(const double *a, const double *b, const double *c, const double *d,
-                             const double *e, const double *f);
-int tpk_exact_segment_meets_triangle(const double *p, const double *q, const double *a, const double *b,
-                                     const double *c);
-/* For coplanar u, v, p, q with u, v, p not collinear: +1 when p and q lie on the same side of line uv,
- * -1 on opposite sides, 0 when q is on the line; 2 when the four points are not coplanar. */
-int tpk_exact_coplanar_side(const double *u, const double *v, const double *p, const double *q);
 
 /* Quality of one tet with non-zero volume (check_quality.c). */
 typedef struct tpk_tet_quality {

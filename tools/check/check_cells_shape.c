@@ -23,6 +23,7 @@
 #include "mesh/cell_types.h"
 #include "check_cells_internal.h"
 #include "convert/pipeline.h"
+#include "base/exact_triangles.h"
 #include "base/predicates.h"
 
 /* mesh/cell_types.h: corners, faces (VTK node order, outward on a positively oriented cell) and a valid

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/exact_triangles.h"
 #include "base/predicates.h"
 #include "tetpack_format.h"
 #ifdef TPK_WITH_TETGEN
@@ -32,23 +33,6 @@ static int segment_pierces(const double *p, const double *q, const double *a, co
     return s1 != 0 && s1 == s2 && s2 == s3;
 }
 
-/* Do triangles (u, v, a) and (u, v, b), sharing edge uv, fold onto each other: a and b on one plane
- * with u and v, on the same side of the line uv? (Then they overlap near the edge.) Sides in the plane
- * are those of a plane through u, v and a point w off it: one of u moved along an axis. */
-static int edge_folds(const double *u, const double *v, const double *a, const double *b)
-{
-    if (tpk_orient3d_exact(u, v, a, b) != 0)
-        return 0;
-    for (int axis = 0; axis < 3; axis++) {
-        double w[3] = {u[0], u[1], u[2]};
-        w[axis] += 1 + fabs(w[axis]);
-        int sa = tpk_orient3d_exact(u, v, w, a), sb = tpk_orient3d_exact(u, v, w, b);
-        if (tpk_orient3d_exact(u, v, a, w) != 0) /* w off the plane (a, u, v not on one line, then) */
-            return sa != 0 && sa == sb;
-    }
-    return 0;
-}
-
 int tpk_fixed_boundary_surely_crosses(const double *points, int32_t point_count, const int32_t *triangles,
                                       int32_t triangle_count)
 {
@@ -65,14 +49,15 @@ int tpk_fixed_boundary_surely_crosses(const double *points, int32_t point_count,
                         shared++, corner[0] = a, corner[1] = b;
             if (shared > 2) /* the same triangle twice, or ids repeated within one: not a sign to go by */
                 continue;
-            if (shared == 2) { /* an edge in common: they cross only folded onto each other, in one plane */
+            if (shared == 2) { /* an edge in common: they cross only folded onto each other, in one plane
+                                  (the corners not shared on the same side of it), as check's 207 says */
                 int a = 0, b = 0; /* the corners not shared (each has one: a third match would make 3) */
                 while (s[a] == t[0] || s[a] == t[1] || s[a] == t[2])
                     a++;
                 while (t[b] == s[0] || t[b] == s[1] || t[b] == s[2])
                     b++;
-                if (edge_folds(points + 3 * (size_t)s[(a + 1) % 3], points + 3 * (size_t)s[(a + 2) % 3],
-                               points + 3 * (size_t)s[a], points + 3 * (size_t)t[b]))
+                if (tpk_exact_coplanar_side(points + 3 * (size_t)s[(a + 1) % 3], points + 3 * (size_t)s[(a + 2) % 3],
+                                            points + 3 * (size_t)s[a], points + 3 * (size_t)t[b]) == 1)
                     return 1;
                 continue;
             }

@@ -1,12 +1,10 @@
-// Exact triangle and segment tests for the self-intersection check (207), behind check_cells_internal.h.
-// CGAL's Epick kernel decides every predicate exactly; the degenerate inputs its preconditions exclude
-// are screened out first.
+// Exact triangle and segment tests (exact_triangles.h): check's faces that cross (207) and convert's
+// search of cuts (fixed_boundary.c). CGAL's Epick kernel decides every predicate exactly; the degenerate
+// inputs its preconditions exclude are screened out first.
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/intersections.h>
 
-extern "C" {
-#include "check_cells_internal.h"
-}
+#include "exact_triangles.h"
 
 namespace {
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
