@@ -76,6 +76,10 @@ static void compare(const fx_mesh *m, const double *values, int count, int64_t w
         free(keys);
         free(pos);
     }
+    /* the passes' device time (timestamps) lies within the wall time of the submissions that held them */
+    double timed = tpk_iso_vk_gpu_seconds(vk);
+    CHECK_MSG(timed == -1.0 || (timed > 0 && timed <= tpk_iso_vk_seconds(vk)), "timed %g, wall %g", timed,
+              tpk_iso_vk_seconds(vk));
     tpk_iso_vk_destroy(vk);
     tpk_iso_surface_free(&cpu);
     tpk_iso_surface_free(&gpu);
@@ -105,5 +109,15 @@ TPK_TEST(vulkan_equals_cpu)
         m.scalars[v] = m.positions[3 * v + 1] == 10.0f ? 0.1f : m.positions[3 * v + 1] < 10.0f ? 0.0f : 1.0f;
     const double between[] = {0.1, nextafter(0.1f, 1.0), nextafter(0.1f, 0.0)};
     compare(&m, between, 3, 100);
+    fx_free(&m);
+    /* 288,000 tets: 1125 groups of 256, so the scan of the group totals takes two tiles of 1024 */
+    CHECK(fx_grid(&m, 40, 40, 30, NULL, 1.0, NULL) == 0 && fx_build(&m) == 0);
+    m.scalars = malloc(sizeof *m.scalars * (size_t)m.vertex_count);
+    for (int64_t v = 0; v < m.vertex_count; v++) {
+        const float *p = m.positions + 3 * v;
+        m.scalars[v] = (float)(sin(0.3 * p[0]) * cos(0.25 * p[1]) + 0.02 * p[2]);
+    }
+    const double tiles[] = {0.1, -0.45};
+    compare(&m, tiles, 2, 10000);
     fx_free(&m);
 }

@@ -2,10 +2,13 @@
 # The open GPU targets of issues 21 and 22 in one short run (bench/gpu/run.sh --targets, which calls
 # this; the bundle's run-gpu-bench.sh --targets), on one grid of about 10M tets (bench/make_grid_vtk.py
 # 121: python3 with numpy) converted with --levels 4:
-#   1. `tetpack iso --backend vulkan`: extraction, tets per second of the device's time (target 5G);
+#   1. `tetpack iso --backend vulkan`: extraction, tets per second of the passes' device time (timestamps,
+#      the copies to the host left out; target 5G), and of the wall time of the submissions with them;
 #   2. `render --iso-raster` at 3840x2160: the isosurface by task and mesh shaders where the device has
-#      them (target 2 ms of GPU time a frame);
-#   3. iso-only rays (a clear TF) at 1024x1024, range culling forced on and off: GPU ms a frame;
+#      them, and by the compute extraction and an indirect draw (TETPACK_ISO_MESH_SHADER=0): the draw's
+#      GPU time (target 2 ms a frame);
+#   3. iso-only rays (a clear TF) at 1024x1024, range culling forced on and off, at the dense value 0.3
+#      and the sparse 0.99: GPU ms a frame;
 #   4. `render --max-ms 8` at 1024x1024: the level and pixel step the budget picks and the frame's
 #      GPU ms (target 8 ms).
 # Each is run RUNS times (3); the medians go to targets.md, every run's JSON to targets.jsonl.
@@ -44,10 +47,14 @@ for r in $(seq "$RUNS"); do
     echo "# run $r of $RUNS: grid $GRID" >&2
     run extract vk iso "$tpk" "$OUT/iso.ply" --value 0.3 --backend vulkan --json
     run iso_raster vk render "$tpk" -o "$OUT/raster.png" --backend vulkan --iso-raster --iso 0.3 --size "$ISO_SIZE" --json
-    run rays_culled env TETPACK_ISO_CULLING=1 LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" render "$tpk" \
-        -o "$OUT/rays.png" --backend vulkan --tf "$OUT/clear.tf" --iso 0.3 --size "$SIZE" --json
-    run rays_marched env TETPACK_ISO_CULLING=0 LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" render "$tpk" \
-        -o "$OUT/rays.png" --backend vulkan --tf "$OUT/clear.tf" --iso 0.3 --size "$SIZE" --json
+    run iso_raster_compute env TETPACK_ISO_MESH_SHADER=0 LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" \
+        render "$tpk" -o "$OUT/raster.png" --backend vulkan --iso-raster --iso 0.3 --size "$ISO_SIZE" --json
+    for value in 0.3 0.99; do
+        run rays_culled_$value env TETPACK_ISO_CULLING=1 LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" \
+            render "$tpk" -o "$OUT/rays.png" --backend vulkan --tf "$OUT/clear.tf" --iso $value --size "$SIZE" --json
+        run rays_marched_$value env TETPACK_ISO_CULLING=0 LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" \
+            render "$tpk" -o "$OUT/rays.png" --backend vulkan --tf "$OUT/clear.tf" --iso $value --size "$SIZE" --json
+    done
     run budget vk render "$tpk" -o "$OUT/budget.png" --backend vulkan --max-ms 8 --size "$SIZE" --json
 done
 "$PY" - "$JSONL" > "$OUT/targets.md" <<'EOF'
@@ -63,18 +70,24 @@ def ms(r):
 out = ["| target | measured (median of %d) | goal |" % len(of("extract")), "|---|---|---|"]
 e = of("extract")
 if e:
-    rate = med([r["tets"] / r["device_seconds"] for r in e if r.get("device_seconds")])
-    out.append("| extraction on %s, %d tets | %.3g G tets/s (device time) | >= 5G |" % (e[0]["device"], e[0]["tets"], rate / 1e9))
-i = of("iso_raster")
-if i:
-    out.append("| iso drawn %sx%s, %s | %.3f ms GPU, %d triangles | <= 2 ms |" % (
-        i[0]["width"], i[0]["height"], i[0]["iso_raster"]["path"], med([ms(r) for r in i]),
-        i[0]["iso_raster"]["triangles"]))
-for name, what in (("rays_culled", "culled"), ("rays_marched", "marched")):
-    g = of(name)
-    if g:
-        out.append("| iso-only rays %sx%s, %s | %.3f ms GPU (iso_culling %s) | |" % (
-            g[0]["width"], g[0]["height"], what, med([ms(r) for r in g]), g[0]["iso_culling"]))
+    timed = [r["tets"] / r["gpu_seconds"] for r in e if r.get("gpu_seconds")]
+    wall = [r["tets"] / r["device_seconds"] for r in e if r.get("device_seconds")]
+    out.append("| extraction on %s, %d tets | %.3g G tets/s (passes' device time); %.3g G tets/s (submissions' wall "
+               "time, copies to the host included) | >= 5G |" % (e[0]["device"], e[0]["tets"], med(timed) / 1e9,
+                                                                  med(wall) / 1e9))
+for name in ("iso_raster", "iso_raster_compute"):
+    i = of(name)
+    if i:
+        draw = [1e3 * r["iso_raster"]["draw_gpu_seconds"] for r in i if r["iso_raster"].get("draw_gpu_seconds")]
+        out.append("| iso drawn %sx%s, %s (%s) | draw %.3f ms GPU; frame %.3f ms GPU; %d triangles | <= 2 ms |" % (
+            i[0]["width"], i[0]["height"], i[0]["iso_raster"]["path"], name, med(draw), med([ms(r) for r in i]),
+            i[0]["iso_raster"]["triangles"]))
+for value in ("0.3", "0.99"):
+    for name, what in (("rays_culled_" + value, "culled"), ("rays_marched_" + value, "marched")):
+        g = of(name)
+        if g:
+            out.append("| iso-only rays %sx%s, iso %s, %s | %.3f ms GPU (iso_culling %s) | |" % (
+                g[0]["width"], g[0]["height"], value, what, med([ms(r) for r in g]), g[0]["iso_culling"]))
 b = of("budget")
 if b:
     out.append("| --max-ms 8, %sx%s | level %s, pixel step %s: %.3f ms GPU | <= 8 ms |" % (

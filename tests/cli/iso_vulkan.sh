@@ -34,7 +34,7 @@ for opts in "--iso -0.005" "--iso -0.018,-0.005 --shading" "--iso -0.005 --shadi
     # shellcheck disable=SC2086
     tpk render "$WORK/m.tpk" -o "$WORK/ray.png" --backend cpu --size 128x96 --field disp_z --step 4 --tf "$WORK/clear.tf" \
         $opts > /dev/null || fail "ray-marched $opts"
-    grep -q '"iso_raster":{"triangles":[1-9][0-9]*,"path":"\(compute extraction + indirect draw\|task and mesh shaders\)","mesh_shader":"VK_EXT_mesh_shader' \
+    grep -q '"iso_raster":{"triangles":[1-9][0-9]*,"draw_gpu_seconds":\(null\|[0-9.]*\),"path":"\(compute extraction + indirect draw\|task and mesh shaders\)","mesh_shader":"VK_EXT_mesh_shader' \
         "$WORK/raster.json" || fail "--iso-raster json: $(cat "$WORK/raster.json")"
     db=$("$PY" "$SRC/tests/cli/psnr.py" "$WORK/ray.png" "$WORK/raster.png" | sed -n 's/^psnr \([0-9.inf]*\).*/\1/p')
     "$PY" -c "import sys; d = float(sys.argv[1]); sys.exit(0 if d >= 40 else 1)" "$db" || fail "--iso-raster $opts: PSNR $db dB against the ray-marched picture"

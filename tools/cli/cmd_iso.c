@@ -60,7 +60,7 @@ static int parse_values(const char *text, double *out)
 }
 
 static void print_json(const tpk_iso_options *o, const tpk_iso_report *r, const char *backend, const char *device,
-                       double device_seconds)
+                       double device_seconds, double gpu_seconds)
 {
     tpk_strbuf j = {0};
     double seconds = r->seconds_load + r->seconds_extract + r->seconds_write;
@@ -105,6 +105,11 @@ static void print_json(const tpk_iso_options *o, const tpk_iso_report *r, const 
     tpk_strbuf_json_string(&j, device ? device : "");
     tpk_strbuf_printf(&j, ",\"device_seconds\":");
     tpk_strbuf_json_number(&j, device_seconds);
+    tpk_strbuf_printf(&j, ",\"gpu_seconds\":");
+    if (gpu_seconds >= 0)
+        tpk_strbuf_json_number(&j, gpu_seconds);
+    else
+        tpk_strbuf_printf(&j, "null");
     tpk_strbuf_printf(&j, "}\n");
     if (!j.failed)
         fputs(j.data, stdout);
@@ -211,10 +216,12 @@ int tpk_cmd_iso(int argc, char **argv)
     memset(&diag, 0, sizeof diag);
     tpk_iso_report r;
     int rc = tpk_iso_run(&o, &r, &diag);
-    double gpu_seconds = 0;
+    double device_seconds = 0, gpu_seconds = -1;
 #ifdef TPK_WITH_VULKAN
-    if (source.vk)
-        gpu_seconds = tpk_iso_vk_seconds(source.vk);
+    if (source.vk) {
+        device_seconds = tpk_iso_vk_seconds(source.vk);
+        gpu_seconds = tpk_iso_vk_gpu_seconds(source.vk);
+    }
     char device[256];
     snprintf(device, sizeof device, "%s", source.device ? source.device : "");
     tpk_iso_vk_destroy(source.vk);
@@ -223,7 +230,8 @@ int tpk_cmd_iso(int argc, char **argv)
     if (rc != 0)
         return tpk_cli_fail("iso", "%s", diag.message);
     if (json)
-        print_json(&o, &r, vulkan ? "vulkan" : "cpu", vulkan ? source.device : "cpu", gpu_seconds);
+        print_json(&o, &r, vulkan ? "vulkan" : "cpu", vulkan ? source.device : "cpu", device_seconds,
+                   gpu_seconds);
     else
         printf("%s: %lld triangles, %lld vertices (%d value%s of '%s', step %u) in %.3f s (extraction %.3f s)\n",
                o.output, (long long)r.triangles, (long long)r.vertices, r.value_count, r.value_count == 1 ? "" : "s",

@@ -178,8 +178,13 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
             char why[160];
             snprintf(why, sizeof why, "VK_EXT_mesh_shader present, not used%s%s",
                      stats.iso_mesh_reason ? ": " : "", stats.iso_mesh_reason ? stats.iso_mesh_reason : "");
-            printf(",\"iso_raster\":{\"triangles\":%llu,\"path\":\"%s\",\"mesh_shader\":\"%s\"}",
-                   (unsigned long long)stats.iso_triangles,
+            printf(",\"iso_raster\":{\"triangles\":%llu,\"draw_gpu_seconds\":",
+                   (unsigned long long)stats.iso_triangles);
+            if (stats.iso_draw_gpu_seconds >= 0)
+                printf("%.6f", stats.iso_draw_gpu_seconds);
+            else
+                printf("null");
+            printf(",\"path\":\"%s\",\"mesh_shader\":\"%s\"}",
                    stats.iso_mesh_shader == 1 ? "task and mesh shaders" : "compute extraction + indirect draw",
                    stats.iso_mesh_shader == 1 ? "VK_EXT_mesh_shader used" : stats.iso_mesh_shader == 2 ? why
                                                                                   : "VK_EXT_mesh_shader absent");

@@ -215,10 +215,10 @@ typedef struct tpk_render_options {
  * Hilbert order) hold an iso value, the surface is dense beyond doubt (on grid 55 such runs hold a value
  * about 0.8 times as often as leaves do) and the renderer marches without building them. The --json
  * output says which (iso_culling). TETPACK_ISO_CULLING in the environment: 0 always marches, 1 always culls (benchmarks
- * compare the two), unset decides as above. The Vulkan renderer decides by TPK_RENDER_CULL_ACTIVE alone
- * and walks the file-order tree in its shader (render.comp's cull_trace), with the same pieces as its
- * own marcher; on a CPU
- * device (lavapipe) it marches unless told to cull, as the walk costs more there than it saves.
+ * compare the two), unset decides as above. The Vulkan renderer culls only when TETPACK_ISO_CULLING=1
+ * asks, walking the file-order tree in its shader (render.comp's cull_trace), with the same pieces as its
+ * own marcher; unset, it marches on every device, as the walk cost more than it saved wherever it was
+ * measured (an H200: 17x slower at a dense value, 13x at a sparse one; lavapipe: 1.7x to 16x).
  *
  * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
  * the piece's m multiplying its rgb, as `integration` says. Exact: split where u crosses a TF control
@@ -241,7 +241,7 @@ int tpk_render_culling_wanted(void);
 /* The ISO-ONLY RAYS glance: 1 when more than TPK_RENDER_DENSE_RUNS of the runs of 8 consecutive vertices
  * of mesh's point field hold one of the values (a dense surface: march without building the tree). */
 int tpk_render_iso_dense(const tpk_mesh_arrays *mesh, const double *values, int count);
-#define TPK_RENDER_CULL_ACTIVE 0.1       /* the Vulkan renderer's */
+#define TPK_RENDER_CULL_ACTIVE 0.1       /* the CPU's with no rays */
 #define TPK_RENDER_CULL_ACTIVE_CPU 0.35  /* the CPU's, from a quarter as many rays as tets */
 #define TPK_RENDER_CULL_ACTIVE_MANY 0.55
 #define TPK_RENDER_DENSE_RUNS 0.2
@@ -312,6 +312,8 @@ typedef struct tpk_render_stats {
     int iso_mesh_shader;    /* --iso-raster: 1 drawn by task and mesh shaders (VK_EXT_mesh_shader); 0 the device
                                lacks them (compute extraction + indirect draw); 2 it has them, not used */
     const char *iso_mesh_reason; /* when 2: why (a static string), or NULL */
+    double iso_draw_gpu_seconds; /* --iso-raster: device time of the draw alone (its render pass: on the
+                                    mesh-shader path the tets' classification too); -1: no timestamps */
     double seconds;     /* wall time of the render (marcher creation included) */
     double seconds_rays; /* CPU reference: wall time of the primary rays alone, after the marcher, the range
                             culling's trees and the vertex cache were set up (what a second frame with them

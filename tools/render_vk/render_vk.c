@@ -37,8 +37,6 @@ struct tpk_vk_renderer {
     int64_t range_leaf_base;
     /* the automatic culling choice (frame_culls) for the iso values it was made for: it scans the mesh,
      * so it is made again only when they change */
-    int auto_valid, auto_culls, auto_count;
-    double auto_iso[TPK_RENDER_MAX_ISO];
     int tet_scalars;      /* tet scalars were uploaded */
     double device_seconds, upload_seconds, pipeline_seconds; /* setup, pipelines compiled so far included */
     double frame_compile_seconds; /* of the last frame, the pipeline compiled in it */
@@ -601,39 +599,21 @@ static int range_upload(vk_render *v, tpk_diag *diag)
     return rc;
 }
 
-/* Whether this frame's primary rays cull (render.h ISO-ONLY RAYS: the CPU reference's rule and its
- * TETPACK_ISO_CULLING override, the rule's answer kept for the values it was found for): 1 with the range
- * BVH uploaded, 0, or -1 with a message. A CPU device
- * (lavapipe) marches unless told to cull: there the walk of the tree costs more than the marcher's steps
- * it saves (grid 55, 256x256, 2 shared cores: 1.7x slower at the sparse 0.999, whose tets tested are 1/32
- * of the marcher's steps; 16x at 0.3). */
+/* Whether this frame's primary rays cull (render.h ISO-ONLY RAYS): only when TETPACK_ISO_CULLING=1 asks
+ * (then 1 with the range BVH uploaded, or -1 with a message); else 0, on every device. The walk of the
+ * tree in the shader never paid where it was measured: on an NVIDIA H200 (grid 121, 10.6M tets,
+ * 1024x1024) culled frames took 31.1 ms against 1.79 ms marched at the dense value 0.3 and 59.0 against
+ * 4.42 ms at the sparse 0.99 (bench/README: the first GPU run); on lavapipe (grid 55, 256x256, 2 shared
+ * cores) 1.7x slower at the sparse 0.999 and 16x at 0.3. */
 static int frame_culls(vk_render *v, const tpk_render_options *opt, tpk_diag *diag)
 {
-    int wanted = tpk_render_culling_wanted();
-    if (wanted == 0 || !tpk_render_iso_only(opt, v->mesh.scalars != NULL) ||
-        (wanted < 0 && v->ctx.props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU))
+    if (tpk_render_culling_wanted() != 1 || !tpk_render_iso_only(opt, v->mesh.scalars != NULL))
         return 0;
-    size_t values = sizeof opt->iso[0] * (size_t)opt->iso_count;
-    int same = v->auto_valid && v->auto_count == opt->iso_count && !memcmp(v->auto_iso, opt->iso, values);
-    if (wanted < 0 && same && !v->auto_culls)
-        return 0; /* a dense isosurface, as found for these values */
-    if (wanted < 0 && !same && tpk_render_iso_dense(&v->mesh, opt->iso, opt->iso_count)) {
-        v->auto_valid = 1, v->auto_culls = 0, v->auto_count = opt->iso_count;
-        memcpy(v->auto_iso, opt->iso, values);
-        return 0;
-    }
     if (!v->range) {
         tpk_result r = tpk_range_bvh_create(&v->range, v->marcher);
         if (r != TPK_OK)
             return tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
     }
-    if (wanted < 0 && !same) {
-        v->auto_valid = 1, v->auto_count = opt->iso_count;
-        memcpy(v->auto_iso, opt->iso, values);
-        v->auto_culls = tpk_range_bvh_active(v->range, opt->iso, opt->iso_count) <= TPK_RENDER_CULL_ACTIVE;
-    }
-    if (wanted < 0 && !v->auto_culls)
-        return 0; /* a dense isosurface: marching finds it sooner */
     if (v->range_leaf_base == 0 && range_upload(v, diag) != 0)
         return -1;
     return 1;
@@ -715,12 +695,11 @@ int tpk_vk_renderer_set_field(tpk_vk_renderer *v, const float *scalars, const fl
         return tpk_diag_fail(diag, "render: another field must be of the same kind (point or tet) as the renderer's");
     v->mesh.scalars = scalars;
     tpk_marcher_set_scalars(v->marcher, scalars);
-    /* The range tree holds the old field's ranges and the culling choice was made on them: the choice is
-     * made again on the next iso-only frame, and the tree too. Once uploaded, a culling pipeline reads it:
-     * the new ranges go into the same array (the tree's shape depends on the tet count alone). */
+    /* The range tree holds the old field's ranges: it is made again for the next culled frame. Once
+     * uploaded, a culling pipeline reads it: the new ranges go into the same array (the tree's shape
+     * depends on the tet count alone). */
     tpk_range_bvh_destroy(v->range);
     v->range = NULL;
-    v->auto_valid = 0;
     float *nodes = NULL;
     int64_t base = 0;
     if (v->range_leaf_base > 0) {

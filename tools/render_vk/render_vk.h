@@ -61,6 +61,9 @@ void tpk_iso_vk_destroy(tpk_iso_vk *v);
 const char *tpk_iso_vk_device(const tpk_iso_vk *v);
 /* Wall time of the device's work so far (submit to fence: dispatches and copies). */
 double tpk_iso_vk_seconds(const tpk_iso_vk *v);
+/* Device time of the extraction passes so far (timestamp queries: classify to emit, without the copies
+ * to the host; on the rasterizer's extractor its draws too), or -1 where the device has no timestamps. */
+double tpk_iso_vk_gpu_seconds(const tpk_iso_vk *v);
 /* The triangles of `value` as tpk_iso_corners defines them (keys: malloc'ed, 3 per triangle, tet order),
  * and with `positions` (may be NULL) the float positions the shader computed per corner (3 floats each:
  * the triangle list as a GPU would draw it, relative to the mesh's origin). 0 or -1 with a message. */

@@ -164,16 +164,24 @@ struct tpk_iso_vk {
     int64_t tet_count;
     uint32_t group_count;
     double gpu_seconds; /* wall time of the dispatches and copies, so far */
+    VkQueryPool timestamps; /* two, written by tpk_iso_vk_time; VK_NULL_HANDLE when the queue has none */
+    int timed;              /* this submission wrote both */
+    double timed_seconds;   /* device time between the pairs of timestamps, so far (-1: no timestamps) */
     int64_t triangles;  /* so far */
 };
 
 /* Run the passes `first`..`last` of shaders/iso.comp for `value` into the current command buffer (bound
- * pipeline and set, a barrier after each). */
+ * pipeline and set, a barrier after each): 0 classify and scan per group, 1 scan of the groups, 2 emit,
+ * 3 draw arguments. */
 void tpk_iso_vk_record(tpk_iso_vk *v, int first, int last, double value);
-/* Passes 0..3 for `value` (submitted, waited for), the triangle count into *total, and the corner
+/* A timestamp into the current command buffer: end 0 before the work to time (top of pipe), 1 after it
+ * (bottom of pipe); the submission adds the time between them to timed_seconds (tpk_iso_vk_gpu_seconds).
+ * Nothing without timestamps. */
+void tpk_iso_vk_time(tpk_iso_vk *v, int end);
+/* Passes 0..1 for `value` (submitted, waited for), the triangle count into *total, and the corner
  * buffers grown to hold them. 0 or -1 with a message. */
 int tpk_iso_vk_count(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag);
-/* Passes 0..2 for `value`: the triangle count alone into *total (no buffer grows). 0 or -1. */
+/* Passes 0..1 for `value`: the triangle count alone into *total (no buffer grows). 0 or -1. */
 int tpk_iso_vk_triangles(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag);
 /* The smallest float >= x (x finite): a float s is >= x exactly when s >= this. The shaders' threshold. */
 float tpk_iso_vk_threshold(double x);

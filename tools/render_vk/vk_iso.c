@@ -1,6 +1,6 @@
 /* Marching tetrahedra in Vulkan compute (render_vk.h: tpk_iso_vk_*): the mesh's tets, scalars and
- * positions uploaded once, then per value five dispatches of shaders/iso.comp (classify, scan per group
- * of 256 tets, scan of the groups, offsets, emit) give every tet's triangles as edge keys, in tet order,
+ * positions uploaded once, then per value three passes of shaders/iso.comp (classify and scan per group
+ * of 256 tets, scan of the groups, emit) give every tet's triangles as edge keys, in tet order,
  * and as float positions (a triangle list a GPU can draw as it is). The keys come back to the host,
  * where tools/iso/ shares vertices by edge and computes positions and normals as it does for its own
  * keys: the surface is the CPU's. */
@@ -34,6 +34,9 @@ static int run_commands(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void 
     if (vk_ok(vkResetCommandBuffer(v->cmd, 0), "resetting the command buffer", diag) ||
         vk_ok(vkBeginCommandBuffer(v->cmd, &begin), "beginning commands", diag))
         return -1;
+    v->timed = 0;
+    if (v->timestamps)
+        vkCmdResetQueryPool(v->cmd, v->timestamps, 0, 2);
     record(v, arg);
     VkSubmitInfo submit = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO, .commandBufferCount = 1, .pCommandBuffers = &v->cmd};
     struct timespec t0, t1;
@@ -45,7 +48,27 @@ static int run_commands(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void 
         return -1;
     clock_gettime(CLOCK_MONOTONIC, &t1);
     v->gpu_seconds += (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    uint64_t ticks[2];
+    if (v->timed && vkGetQueryPoolResults(v->ctx.device, v->timestamps, 0, 2, sizeof ticks, ticks, sizeof ticks[0],
+                                          VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
+        uint64_t mask = v->ctx.timestamp_bits >= 64 ? UINT64_MAX : (UINT64_C(1) << v->ctx.timestamp_bits) - 1;
+        v->timed_seconds += 1e-9 * (double)v->ctx.props.limits.timestampPeriod * (double)((ticks[1] - ticks[0]) & mask);
+    }
     return 0;
+}
+
+void tpk_iso_vk_time(tpk_iso_vk *v, int end)
+{
+    if (!v->timestamps)
+        return;
+    vkCmdWriteTimestamp(v->cmd, end ? VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT : VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT,
+                        v->timestamps, end ? 1 : 0);
+    v->timed |= end;
+}
+
+double tpk_iso_vk_gpu_seconds(const tpk_iso_vk *v)
+{
+    return v->timestamps ? v->timed_seconds : -1.0;
 }
 
 typedef struct copy_arg {
@@ -191,10 +214,16 @@ static int make_pipeline(tpk_iso_vk *v, tpk_diag *diag)
                                        .commandPool = v->commands, .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
                                        .commandBufferCount = 1};
     VkFenceCreateInfo fence = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    return vk_ok(vkAllocateCommandBuffers(v->ctx.device, &cmd, &v->cmd), "a command buffer", diag) ||
-                   vk_ok(vkCreateFence(v->ctx.device, &fence, NULL, &v->fence), "a fence", diag)
-               ? -1
-               : 0;
+    if (vk_ok(vkAllocateCommandBuffers(v->ctx.device, &cmd, &v->cmd), "a command buffer", diag) ||
+        vk_ok(vkCreateFence(v->ctx.device, &fence, NULL, &v->fence), "a fence", diag))
+        return -1;
+    if (v->ctx.timestamp_bits > 0 && v->ctx.props.limits.timestampPeriod > 0) {
+        VkQueryPoolCreateInfo query = {.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
+                                       .queryType = VK_QUERY_TYPE_TIMESTAMP, .queryCount = 2};
+        if (vkCreateQueryPool(v->ctx.device, &query, NULL, &v->timestamps) != VK_SUCCESS)
+            v->timestamps = VK_NULL_HANDLE; /* then no device time is reported */
+    }
+    return 0;
 }
 
 int tpk_iso_vk_create(tpk_iso_vk **out, const tpk_iso_input *in, tpk_diag *diag)
@@ -264,6 +293,8 @@ void tpk_iso_vk_destroy(tpk_iso_vk *v)
             tpk_vk_buffer_destroy(&v->ctx, &v->buf[i]);
         if (v->fence)
             vkDestroyFence(v->ctx.device, v->fence, NULL);
+        if (v->timestamps)
+            vkDestroyQueryPool(v->ctx.device, v->timestamps, NULL);
         if (v->commands)
             vkDestroyCommandPool(v->ctx.device, v->commands, NULL);
         if (v->pool)
@@ -305,7 +336,7 @@ void tpk_iso_vk_record(tpk_iso_vk *v, int first, int last, double value)
     vkCmdBindPipeline(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->pipeline);
     vkCmdBindDescriptorSets(v->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, v->layout, 0, 1, &v->set, 0, NULL);
     for (int mode = first; mode <= last; mode++) {
-        uint32_t groups = mode == 2 || mode == 5 ? 1 : v->group_count; /* each pass over every tet, */
+        uint32_t groups = mode == 1 || mode == 3 ? 1 : v->group_count; /* each pass over every tet, */
         for (uint32_t g = 0; g < groups; g += 65535) {                   /* in dispatches of <= 65535 groups */
             uint32_t n = groups - g < 65535 ? groups - g : 65535;
             iso_push p = {(uint32_t)mode, (uint32_t)v->tet_count, v->group_count, threshold, fvalue, g * 256};
@@ -331,7 +362,9 @@ typedef struct pass_arg {
 static void record_passes(tpk_iso_vk *v, const void *arg)
 {
     const pass_arg *a = arg;
+    tpk_iso_vk_time(v, 0);
     tpk_iso_vk_record(v, a->first, a->last, a->value);
+    tpk_iso_vk_time(v, 1);
 }
 
 int tpk_iso_vk_submit(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void *arg), const void *arg, tpk_diag *diag)
@@ -351,12 +384,12 @@ static int run_and_total(tpk_iso_vk *v, double value, int last, uint32_t *total,
 
 int tpk_iso_vk_triangles(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)
 {
-    return run_and_total(v, value, 2, total, diag);
+    return run_and_total(v, value, 1, total, diag);
 }
 
 int tpk_iso_vk_count(tpk_iso_vk *v, double value, uint32_t *total, tpk_diag *diag)
 {
-    if (run_and_total(v, value, 3, total, diag))
+    if (run_and_total(v, value, 1, total, diag))
         return -1;
     if ((uint64_t)*total * 3 * 12 > v->ctx.props.limits.maxStorageBufferRange)
         return tpk_diag_fail(diag, "vulkan iso: the surface of %g has %u triangles; their corners do not fit one "
@@ -383,7 +416,7 @@ int tpk_iso_vk_emit(tpk_iso_vk *v, double value, uint64_t **keys, float **positi
     uint32_t total;
     if (tpk_iso_vk_count(v, value, &total, diag))
         return -1;
-    pass_arg emit = {4, 4, value};
+    pass_arg emit = {2, 2, value};
     size_t corners = 3 * (size_t)total;
     /* each key is the shader's uvec2 (b, a): little-endian, the uint64 (a << 32) | b */
     uint64_t *k = malloc(8 * (corners ? corners : 1));

@@ -514,7 +514,9 @@ typedef struct keep_arg {
 static void record_keep(tpk_iso_vk *v, const void *arg)
 {
     const keep_arg *k = arg;
-    tpk_iso_vk_record(v, 4, 5, k->value);
+    tpk_iso_vk_time(v, 0);
+    tpk_iso_vk_record(v, 2, 3, k->value);
+    tpk_iso_vk_time(v, 1);
     VkBufferCopy corners = {0, 0, k->bytes}, args = {0, 0, 16};
     if (k->bytes)
         vkCmdCopyBuffer(v->cmd, v->buf[B_CORNERS].buffer, k->ra->corners[k->i].buffer, 1, &corners);
@@ -612,6 +614,7 @@ static void record_draw(tpk_iso_vk *v, const void *arg)
     raster *ra = d->ra;
     VkClearValue clears[2] = {{.color = {{ra->clear[0], ra->clear[1], ra->clear[2], ra->clear[3]}}},
                               {.depthStencil = {0.0f, 0}}}; /* reversed depth: 0 is infinitely far */
+    tpk_iso_vk_time(v, 0); /* the draw's device time: the render pass alone, without the image's copy out */
     VkRenderPassBeginInfo begin = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO, .renderPass = ra->pass,
                                    .framebuffer = ra->framebuffer,
                                    .renderArea = {{0, 0}, {(uint32_t)ra->width, (uint32_t)ra->height}},
@@ -631,6 +634,7 @@ static void record_draw(tpk_iso_vk *v, const void *arg)
         vkCmdDrawIndirect(v->cmd, ra->args[i].buffer, 0, 1, 16);
     }
     vkCmdEndRenderPass(v->cmd);
+    tpk_iso_vk_time(v, 1);
     VkBufferImageCopy region = {.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
                                 .imageExtent = {(uint32_t)ra->width, (uint32_t)ra->height, 1}};
     vkCmdCopyImageToBuffer(v->cmd, ra->images[0], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, ra->readback.buffer, 1, &region);
@@ -639,7 +643,7 @@ static void record_draw(tpk_iso_vk *v, const void *arg)
 int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats,
                          tpk_diag *diag)
 {
-    double t0 = tpk_now_seconds(), gpu0 = tpk_iso_vk_seconds(ra->iso);
+    double t0 = tpk_now_seconds(), gpu0 = tpk_iso_vk_gpu_seconds(ra->iso), draw0 = 0;
     const tpk_mesh_arrays *mesh = ra->mesh;
     if (stats)
         memset(stats, 0, sizeof *stats);
@@ -714,8 +718,11 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
     if (tpk_vk_buffer_flush(&ra->iso->ctx, &ra->probes, diag))
         return -1;
     draw_arg d = {ra, opt->iso_count};
-    if (make_targets(ra, opt->width, opt->height, diag) || extract_values(ra, opt, diag) ||
-        tpk_iso_vk_submit(ra->iso, record_draw, &d, diag) || tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
+    if (make_targets(ra, opt->width, opt->height, diag) || extract_values(ra, opt, diag))
+        return -1;
+    draw0 = tpk_iso_vk_gpu_seconds(ra->iso);
+    if (tpk_iso_vk_submit(ra->iso, record_draw, &d, diag) ||
+        tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
         return -1;
     memcpy(rgba, ra->readback.mapped, 4 * (size_t)ra->width * (size_t)ra->height);
     if (stats) {
@@ -723,7 +730,11 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
         for (int i = 0; i < opt->iso_count; i++)
             stats->iso_triangles += ra->triangles[i];
         stats->seconds = tpk_now_seconds() - t0;
-        stats->gpu_seconds = tpk_iso_vk_seconds(ra->iso) - gpu0;
+        /* device time (timestamps): the extraction passes this frame ran (values that changed) and the
+         * draw, without the copies to the host; the draw alone apart */
+        double timed = tpk_iso_vk_gpu_seconds(ra->iso);
+        stats->gpu_seconds = timed < 0 ? -1.0 : timed - gpu0;
+        stats->iso_draw_gpu_seconds = timed < 0 ? -1.0 : timed - draw0;
         stats->iso_mesh_shader = ra->mesh_state;
         stats->iso_mesh_reason = ra->mesh_path ? NULL : ra->mesh_reason;
     }

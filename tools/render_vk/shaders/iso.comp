@@ -1,12 +1,15 @@
 #version 450
 // Marching tetrahedra in compute (tools/render_vk/vk_iso.c, `tetpack iso --backend vulkan`): one value at a
-// time, in five dispatches that push constant `mode` selects:
-//   0 classify   per tet: its case (bit k: corner k at or above the value) and triangle count
-//   1 scan       per group of 256 tets: the exclusive prefix sum of the counts, and the group's total
-//   2 groups     one invocation: the exclusive prefix sum of the group totals, the grand total after them
-//   3 offsets    per tet: its first triangle (group offset + offset in the group)
-//   4 emit       per tet: its triangles' corners as edge keys (a < b) and float positions
-//   5 draw args  one invocation: the VkDrawIndirectCommand of the triangle list (render --iso-raster)
+// time, in four dispatches that push constant `mode` selects:
+//   0 classify   per tet: its case (bit k: corner k at or above the value) and triangle count, and per
+//                group of 256 tets the exclusive prefix sum of the counts: counts[t] = offset << 4 | case,
+//                groups[group] = the group's total
+//   1 groups     one workgroup: the exclusive prefix sum of the group totals, 1024 at a time, and the
+//                grand total after them
+//   2 emit       per tet with triangles: its triangles' corners as edge keys (a < b) and float
+//                positions, from triangle group offset + offset in the group on (the tets without any
+//                read 4 bytes and leave)
+//   3 draw args  one invocation: the VkDrawIndirectCommand of the triangle list (render --iso-raster)
 // The case table comes from the host (tpk_iso_case_table), so the CPU and this shader share one table.
 // "At or above" compares the float scalar with `threshold`, the smallest float >= the double value:
 // for a float s, s >= value exactly when s >= threshold, so the cases are the CPU's.
@@ -50,56 +53,73 @@ int tet_case(uint t)
     return mask;
 }
 
+// Hillis-Steele inclusive scan of scan[0..255] in place (every invocation of the group calls it).
+void scan_group(uint local)
+{
+    for (uint step = 1u; step < 256u; step <<= 1) {
+        uint add = local >= step ? scan[local - step] : 0u;
+        barrier();
+        scan[local] += add;
+        barrier();
+    }
+}
+
 void main()
 {
     uint t = pc.base + gl_GlobalInvocationID.x;
     uint local = gl_LocalInvocationID.x;
     uint group = pc.base / 256u + gl_WorkGroupID.x;
     if (pc.mode == 0u) {
-        if (t < pc.tet_count) {
-            int c = tet_case(t);
-            counts[t] = c < 0 ? 0u : uint(cases[8 * c]);
-        }
-    } else if (pc.mode == 1u) {
-        uint own = t < pc.tet_count ? counts[t] : 0u;
+        int c = t < pc.tet_count ? tet_case(t) : -1;
+        uint own = c < 0 ? 0u : uint(cases[8 * c]);
         scan[local] = own;
         barrier();
-        for (uint step = 1u; step < 256u; step <<= 1) {
-            uint add = local >= step ? scan[local - step] : 0u;
-            barrier();
-            scan[local] += add;
-            barrier();
-        }
+        scan_group(local);
         if (t < pc.tet_count)
-            counts[t] = scan[local] - own;
+            counts[t] = (scan[local] - own) << 4 | (own > 0u ? uint(c) : 0u);
         if (local == 255u)
             groups[group] = scan[255];
-    } else if (pc.mode == 2u) {
-        if (gl_GlobalInvocationID.x == 0u) {
-            uint running = 0u;
-            for (uint g = 0u; g < pc.group_count; g++) {
-                uint n = groups[g];
-                groups[g] = running;
-                running += n;
-            }
-            groups[pc.group_count] = running;
+    } else if (pc.mode == 1u) {
+        // one workgroup: tiles of 1024 group totals, 4 consecutive ones per invocation
+        uint carry = 0u;
+        for (uint tile = 0u; tile < pc.group_count; tile += 1024u) {
+            uint i = tile + 4u * local;
+            uint a = i < pc.group_count ? groups[i] : 0u;
+            uint b = i + 1u < pc.group_count ? groups[i + 1u] : 0u;
+            uint c = i + 2u < pc.group_count ? groups[i + 2u] : 0u;
+            uint d = i + 3u < pc.group_count ? groups[i + 3u] : 0u;
+            uint own = a + b + c + d;
+            scan[local] = own;
+            barrier();
+            scan_group(local);
+            uint first = carry + scan[local] - own;
+            if (i < pc.group_count)
+                groups[i] = first;
+            if (i + 1u < pc.group_count)
+                groups[i + 1u] = first + a;
+            if (i + 2u < pc.group_count)
+                groups[i + 2u] = first + a + b;
+            if (i + 3u < pc.group_count)
+                groups[i + 3u] = first + a + b + c;
+            carry += scan[255];
+            barrier(); // every invocation has read scan[255] before the next tile writes scan
         }
-    } else if (pc.mode == 5u) {
+        if (local == 0u)
+            groups[pc.group_count] = carry;
+    } else if (pc.mode == 3u) {
         if (gl_GlobalInvocationID.x == 0u) {
             draw_args[0] = 3u * groups[pc.group_count];
             draw_args[1] = 1u;
             draw_args[2] = 0u;
             draw_args[3] = 0u;
         }
-    } else if (pc.mode == 3u) {
-        if (t < pc.tet_count)
-            counts[t] += groups[group];
     } else if (t < pc.tet_count) {
-        int c = tet_case(t);
-        if (c <= 0 || c == 15)
+        uint packed = counts[t];
+        int c = int(packed & 15u);
+        if (c == 0 || c == 15)
             return;
         ivec4 v = tets[t];
-        uint first = counts[t];
+        uint first = (packed >> 4) + groups[group];
         int n = cases[8 * c];
         for (int k = 0; k < 3 * n; k++) {
             ivec2 e = EDGES[cases[8 * c + 1 + k]];
