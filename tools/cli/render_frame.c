@@ -70,9 +70,11 @@ int render_image(const render_args *a, const tpk_mesh_arrays *mesh, const tpk_re
 #endif
     if (!session)
         return tpk_render_cpu(mesh, opt, rgba, stats, diag);
-    if (!session->cache && !(session->cache = tpk_vertex_cache_create()))
-        return tpk_diag_fail(diag, "render: out of memory for the renderer's cache");
-    tpk_vertex_cache_frames_per_field(session->cache, 1); /* a session draws each step once */
+    if (!session->cache) {
+        if (!(session->cache = tpk_vertex_cache_create()))
+            return tpk_diag_fail(diag, "render: out of memory for the renderer's cache");
+        tpk_vertex_cache_frames_per_field(session->cache, 1); /* a session draws each step once */
+    }
     return tpk_render_cpu_cached(mesh, opt, rgba, session->cache, stats, diag);
 }
 
