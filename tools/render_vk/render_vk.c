@@ -32,11 +32,9 @@ struct tpk_vk_renderer {
     tpk_marcher *marcher; /* owns the shell BVH that was uploaded */
     tpk_shell_bvh bvh;
     tpk_mesh_arrays mesh; /* the caller's arrays (not copied) */
-    tpk_range_bvh *range; /* iso-only frames (render.h ISO-ONLY RAYS): made on the first one, uploaded on
-                             the first that culls (range_leaf_base > 0 from then on) */
+    tpk_range_bvh *range; /* culled iso-only frames (render.h ISO-ONLY RAYS): made and uploaded on the
+                             first (range_leaf_base > 0 from then on) */
     int64_t range_leaf_base;
-    /* the automatic culling choice (frame_culls) for the iso values it was made for: it scans the mesh,
-     * so it is made again only when they change */
     int tet_scalars;      /* tet scalars were uploaded */
     double device_seconds, upload_seconds, pipeline_seconds; /* setup, pipelines compiled so far included */
     double frame_compile_seconds; /* of the last frame, the pipeline compiled in it */

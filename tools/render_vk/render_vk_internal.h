@@ -166,7 +166,7 @@ struct tpk_iso_vk {
     double gpu_seconds; /* wall time of the dispatches and copies, so far */
     VkQueryPool timestamps; /* two, written by tpk_iso_vk_time; VK_NULL_HANDLE when the queue has none */
     int timed;              /* this submission wrote both */
-    double timed_seconds;   /* device time between the pairs of timestamps, so far (-1: no timestamps) */
+    double timed_seconds;   /* device time between the pairs of timestamps, so far */
     int64_t triangles;  /* so far */
 };
 
