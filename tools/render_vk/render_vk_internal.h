@@ -163,7 +163,7 @@ struct tpk_iso_vk {
     VkFence fence;
     int64_t tet_count;
     uint32_t group_count;
-    double gpu_seconds; /* wall time of the dispatches and copies, so far */
+    double wall_seconds; /* submit to fence: the dispatches and copies, so far (tpk_iso_vk_seconds) */
     VkQueryPool timestamps; /* two, written by tpk_iso_vk_time; VK_NULL_HANDLE when the queue has none */
     int timed;              /* this submission wrote both */
     double timed_seconds;   /* device time between the pairs of timestamps, so far */

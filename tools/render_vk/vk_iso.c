@@ -47,7 +47,7 @@ static int run_commands(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void 
         vk_ok(vkWaitForFences(v->ctx.device, 1, &v->fence, VK_TRUE, UINT64_MAX), "waiting for the device", diag))
         return -1;
     clock_gettime(CLOCK_MONOTONIC, &t1);
-    v->gpu_seconds += (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    v->wall_seconds += (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
     uint64_t ticks[2];
     if (v->timed && vkGetQueryPoolResults(v->ctx.device, v->timestamps, 0, 2, sizeof ticks, ticks, sizeof ticks[0],
                                           VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
@@ -278,7 +278,7 @@ int tpk_iso_vk_create_with(tpk_iso_vk **out, const tpk_iso_input *in, int mesh_s
         return -1;
     }
     write_descriptors(v);
-    v->gpu_seconds = 0;
+    v->wall_seconds = 0;
     *out = v;
     return 0;
 }
@@ -319,7 +319,7 @@ const char *tpk_iso_vk_device(const tpk_iso_vk *v)
 
 double tpk_iso_vk_seconds(const tpk_iso_vk *v)
 {
-    return v->gpu_seconds;
+    return v->wall_seconds;
 }
 
 float tpk_iso_vk_threshold(double x)
