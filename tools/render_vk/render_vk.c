@@ -200,12 +200,7 @@ static int create_commands(vk_render *v, tpk_diag *diag)
     if (vk_check(vkAllocateCommandBuffers(v->ctx.device, &alloc, &v->cmd), "allocating a command buffer", diag) ||
         vk_check(vkCreateFence(v->ctx.device, &fence, NULL, &v->fence), "creating a fence", diag))
         return -1;
-    if (v->ctx.timestamp_bits > 0 && v->ctx.props.limits.timestampPeriod > 0) {
-        VkQueryPoolCreateInfo query = {
-            .sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO, .queryType = VK_QUERY_TYPE_TIMESTAMP, .queryCount = 2};
-        if (vkCreateQueryPool(v->ctx.device, &query, NULL, &v->timestamps) != VK_SUCCESS)
-            v->timestamps = VK_NULL_HANDLE; /* frames then report no GPU time */
-    }
+    v->timestamps = tpk_vk_timestamp_pool(&v->ctx); /* without one, frames report no GPU time */
     return 0;
 }
 
@@ -330,13 +325,10 @@ static int run_slice(vk_render *v, VkPipeline pipeline, tpk_vk_params *params, i
         vk_check(vkQueueSubmit(v->ctx.queue, 1, &submit, v->fence), "submitting the render", diag) ||
         vk_check(vkWaitForFences(v->ctx.device, 1, &v->fence, VK_TRUE, UINT64_MAX), "waiting for the render", diag))
         return -1;
-    uint64_t ticks[2];
-    if (v->timestamps && vkGetQueryPoolResults(v->ctx.device, v->timestamps, 0, 2, sizeof ticks, ticks, sizeof ticks[0],
-                                               VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
-        uint64_t mask = v->ctx.timestamp_bits >= 64 ? ~(uint64_t)0 : ((uint64_t)1 << v->ctx.timestamp_bits) - 1;
-        uint64_t elapsed = ((ticks[1] & mask) - (ticks[0] & mask)) & mask; /* a wrap between the two */
-        *gpu_seconds += 1e-9 * (double)v->ctx.props.limits.timestampPeriod * (double)elapsed;
-    } else
+    double elapsed = tpk_vk_timestamp_seconds(&v->ctx, v->timestamps);
+    if (elapsed >= 0)
+        *gpu_seconds += elapsed;
+    else
         *gpu_seconds = -1.0;
     return 0;
 }

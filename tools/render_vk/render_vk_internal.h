@@ -61,6 +61,12 @@ int tpk_vk_context_create_mesh(tpk_vk_context *ctx, tpk_diag *diag);
 int tpk_vk_has_mesh_shader(VkPhysicalDevice physical);
 void tpk_vk_context_destroy(tpk_vk_context *ctx);
 const char *tpk_vk_result_name(VkResult r);
+/* A pool of two timestamp queries on ctx's device (0 written before the work to time, 1 after), or
+ * VK_NULL_HANDLE where its queue has no timestamps or the pool cannot be made. */
+VkQueryPool tpk_vk_timestamp_pool(const tpk_vk_context *ctx);
+/* The device time between the pool's two timestamps (once the submission that wrote them finished), or
+ * -1 when they cannot be read. A wrap of the counter between them is taken into account. */
+double tpk_vk_timestamp_seconds(const tpk_vk_context *ctx, VkQueryPool pool);
 
 /* A buffer in the memory type tpk_vk_memory_rank puts first for its use (the next when that heap is
  * full), mapped for its lifetime when that type is host-visible. */

@@ -268,6 +268,27 @@ void tpk_vk_context_destroy(tpk_vk_context *ctx)
     memset(ctx, 0, sizeof *ctx);
 }
 
+VkQueryPool tpk_vk_timestamp_pool(const tpk_vk_context *ctx)
+{
+    VkQueryPool pool = VK_NULL_HANDLE;
+    if (ctx->timestamp_bits == 0 || !(ctx->props.limits.timestampPeriod > 0))
+        return VK_NULL_HANDLE;
+    VkQueryPoolCreateInfo query = {
+        .sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO, .queryType = VK_QUERY_TYPE_TIMESTAMP, .queryCount = 2};
+    return vkCreateQueryPool(ctx->device, &query, NULL, &pool) == VK_SUCCESS ? pool : VK_NULL_HANDLE;
+}
+
+double tpk_vk_timestamp_seconds(const tpk_vk_context *ctx, VkQueryPool pool)
+{
+    uint64_t ticks[2];
+    if (!pool || vkGetQueryPoolResults(ctx->device, pool, 0, 2, sizeof ticks, ticks, sizeof ticks[0],
+                                       VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) != VK_SUCCESS)
+        return -1.0;
+    uint64_t mask = ctx->timestamp_bits >= 64 ? ~(uint64_t)0 : ((uint64_t)1 << ctx->timestamp_bits) - 1;
+    uint64_t elapsed = ((ticks[1] & mask) - (ticks[0] & mask)) & mask; /* a wrap between the two */
+    return 1e-9 * (double)ctx->props.limits.timestampPeriod * (double)elapsed;
+}
+
 /* ---- Buffers ------------------------------------------------------------------------------------- */
 
 static VkResult allocate(const tpk_vk_context *ctx, const VkMemoryRequirements *req, tpk_vk_memory_use use,

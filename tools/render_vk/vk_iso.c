@@ -48,12 +48,9 @@ static int run_commands(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void 
         return -1;
     clock_gettime(CLOCK_MONOTONIC, &t1);
     v->wall_seconds += (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
-    uint64_t ticks[2];
-    if (v->timed && vkGetQueryPoolResults(v->ctx.device, v->timestamps, 0, 2, sizeof ticks, ticks, sizeof ticks[0],
-                                          VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
-        uint64_t mask = v->ctx.timestamp_bits >= 64 ? UINT64_MAX : (UINT64_C(1) << v->ctx.timestamp_bits) - 1;
-        v->timed_seconds += 1e-9 * (double)v->ctx.props.limits.timestampPeriod * (double)((ticks[1] - ticks[0]) & mask);
-    }
+    double elapsed = v->timed ? tpk_vk_timestamp_seconds(&v->ctx, v->timestamps) : -1.0;
+    if (elapsed > 0)
+        v->timed_seconds += elapsed;
     return 0;
 }
 
@@ -217,12 +214,7 @@ static int make_pipeline(tpk_iso_vk *v, tpk_diag *diag)
     if (vk_ok(vkAllocateCommandBuffers(v->ctx.device, &cmd, &v->cmd), "a command buffer", diag) ||
         vk_ok(vkCreateFence(v->ctx.device, &fence, NULL, &v->fence), "a fence", diag))
         return -1;
-    if (v->ctx.timestamp_bits > 0 && v->ctx.props.limits.timestampPeriod > 0) {
-        VkQueryPoolCreateInfo query = {.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
-                                       .queryType = VK_QUERY_TYPE_TIMESTAMP, .queryCount = 2};
-        if (vkCreateQueryPool(v->ctx.device, &query, NULL, &v->timestamps) != VK_SUCCESS)
-            v->timestamps = VK_NULL_HANDLE; /* then no device time is reported */
-    }
+    v->timestamps = tpk_vk_timestamp_pool(&v->ctx); /* without one, no device time is reported */
     return 0;
 }
 
