@@ -12,7 +12,7 @@ set -euo pipefail
 # read back exactly).
 if [ -z "${TPK_VIEW_XVFB:-}" ]; then
     command -v Xvfb > /dev/null || { echo "FAIL: Xvfb not installed (xvfb, xauth)" >&2; exit 1; }
-    TPK_VIEW_XVFB=1 exec sh "$(dirname "$0")/../with_xvfb.sh" -screen 320x240x24 bash "$0" "$@"
+    TPK_VIEW_XVFB=1 exec sh "$(dirname "$0")/../with_xvfb.sh" -screen 320x240x24 -audit bash "$0" "$@"
 fi
 source "$(dirname "$0")/common.sh"
 psnr_at_least() { # A.png B.png what
@@ -191,8 +191,16 @@ psnr_at_least "$WORK/vk-shot.png" "$WORK/render-96x64.png" "view presented by Vu
 psnr_at_least "$WORK/grab-96x64.png" "$WORK/render-96x64.png" "the resized window's pixels and render"
 psnr_at_least "$WORK/grab-${SIZE}.png" "$WORK/render-tet16.png" "the window's pixels and render"
 # a device that cannot present: auto shows the frames through OpenGL, with a note; vulkan is an error
+AUDIT_FROM=$(($(wc -l < "$TPK_XVFB_LOG") + 1))
 TPK_VK_NO_PRESENT=1 tpk view "$WORK/cyl.tpk" --size $SIZE --layout tet16 --frames 1 --screenshot "$WORK/vk-fb.png" \
     2> "$WORK/err" || { cat "$WORK/err"; fail "view, auto, without presentation"; }
+# ... on the X connection it opened for Vulkan: had it closed it and opened another, the server (its only
+# client gone) would reset and could refuse the new one, as it did in a CI run (the audit log: clients
+# connected and disconnected, with the view's pid; the count open must reach 0 once, at the end)
+tail -n +"$AUDIT_FROM" "$TPK_XVFB_LOG" > "$WORK/audit"
+awk '/ connected from /{n++} / disconnected$/{if (--n == 0) z++} END{exit !(NR > 0 && z == 1 && n == 0)}' \
+    "$WORK/audit" || { cat "$WORK/audit"; fail "view's fallback to OpenGL closed its X connection before opening one"; }
+echo "view's fallback to OpenGL: $(grep -c " connected from " "$WORK/audit") X connections, never none open"
 expect_stderr "no Vulkan presentation (vulkan: no Vulkan 1.2 device with a compute queue that can present"
 expect_stderr "OpenGL, render time"
 psnr_at_least "$WORK/vk-fb.png" "$WORK/render-tet16.png" "view falling back to OpenGL, and render"

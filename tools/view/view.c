@@ -282,7 +282,7 @@ static int open_output(view_loop *l, tpk_diag *diag)
             return tpk_diag_fail(diag, "--present vulkan: %s", why);
         fprintf(stderr, "tetpack view: note: no Vulkan presentation (%s); showing frames through OpenGL\n", why);
         view_renderer_close(&l->renderer);
-        view_window_close(l->window);
+        view_window_close(l->window, 1); /* the OpenGL window opens on the same connection */
         l->window = NULL;
     }
 #endif
@@ -308,7 +308,7 @@ int tpk_view_run(const tpk_view_options *o, tpk_diag *diag)
         rc = run(l, diag);
     view_renderer_close(&l->renderer);
     view_state_close(&l->state);
-    view_window_close(l->window);
+    view_window_close(l->window, 0);
     free(l->rgba);
     free(l);
     return rc;

@@ -123,6 +123,9 @@ void view_window_draw(view_window *w, const uint8_t *rgba, int width, int height
 void view_window_read(view_window *w, uint8_t *rgba, int width, int height);
 void view_window_swap(view_window *w);
 void view_window_title(view_window *w, const char *title);
-void view_window_close(view_window *w);
+/* Destroy the window; keep_display leaves GLFW and its X connection open for the next window (view's
+ * fallback from Vulkan to OpenGL: closing the server's only connection makes Xvfb reset, and a connection
+ * opened at once can be refused while it does). */
+void view_window_close(view_window *w, int keep_display);
 
 #endif

@@ -136,11 +136,9 @@ int view_window_open(view_window **out, int width, int height, const char *title
                       getenv("DISPLAY") ? getenv("DISPLAY") : "not set");
         return -2;
     }
-    if (vulkan && !glfwVulkanSupported()) {
-        glfwTerminate();
+    if (vulkan && !glfwVulkanSupported()) /* GLFW stays up for the OpenGL window; view_window_close ends it */
         return tpk_diag_fail(diag, "GLFW finds no Vulkan loader with the window system's surface extensions%s%s",
                              glfw_error[0] ? ": " : "", glfw_error);
-    }
     view_window *w = calloc(1, sizeof *w);
     if (!w) {
         glfwTerminate();
@@ -255,11 +253,12 @@ void view_window_title(view_window *w, const char *title)
     glfwSetWindowTitle(w->window, title);
 }
 
-void view_window_close(view_window *w)
+void view_window_close(view_window *w, int keep_display)
 {
-    if (!w)
-        return;
-    glfwDestroyWindow(w->window);
-    free(w);
-    glfwTerminate();
+    if (w) {
+        glfwDestroyWindow(w->window);
+        free(w);
+    }
+    if (!keep_display)
+        glfwTerminate(); /* also after an open that left GLFW up without a window; harmless before glfwInit */
 }
