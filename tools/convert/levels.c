@@ -29,10 +29,12 @@
  * stars a collapse grows; the others only lose the tets it kills, which a star read leaves out), inside
  * fixed blocks of ids side by side first, until the level has a sixth of the tets of the last
  * (TPK_LEVEL_RATIO) or a pass removes almost nothing. The result does not depend on the thread count. */
+#define _GNU_SOURCE /* memfd_create */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -1249,7 +1251,29 @@ static double shell_distance(const simplifier *s, const tpk_tetmesh *lvl, const 
     return worst;
 }
 
-/* Write the level through the converter's own writer into an unnamed file, and take its bytes. */
+/* The level's bytes from the file it was written into: mapped (r->mapped), else read into memory. 0 or -1. */
+static int take_level_bytes(int fd, tpk_level *r)
+{
+    struct stat st;
+    if (fstat(fd, &st) != 0 || st.st_size <= 0)
+        return -1;
+    r->size = (size_t)st.st_size;
+    void *map = mmap(NULL, r->size, PROT_READ, MAP_SHARED, fd, 0);
+    if (map != MAP_FAILED) {
+        r->data = map;
+        r->mapped = 1;
+        return 0;
+    }
+    if ((r->data = malloc(r->size)) && pread(fd, r->data, r->size, 0) == (ssize_t)r->size)
+        return 0;
+    free(r->data);
+    r->data = NULL;
+    return -1;
+}
+
+/* Write the level through the converter's own writer into an unnamed file in memory (a memfd; a
+ * temporary file where there is none), and take its bytes. A file on disk cost grid 200's first level
+ * 0.4-0.65 s: the writer flushes what it writes (fsync), and the bytes were then copied into memory. */
 static int write_level(const tpk_convert_options *o, const simplifier *s, domain_size full, int k,
                        const char *source_format, const tpk_convert_report *source, tpk_level *r, tpk_diag *diag)
 {
@@ -1276,15 +1300,22 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
             rc = tpk_diag_fail(diag, "level %d: its volume %.17g and shell area %.17g are not the full mesh's %.17g and %.17g "
                                "(a bug in levels.c)", k, d.volume / 6, d.area / 2, full.volume / 6, full.area / 2);
     }
-    FILE *tmp = rc == 0 ? tmpfile() : NULL;
-    if (rc == 0 && !tmp)
+    FILE *tmp = NULL;
+    int fd = -1;
+#ifdef MFD_CLOEXEC
+    if (rc == 0)
+        fd = memfd_create("tetpack-level", MFD_CLOEXEC);
+#endif
+    if (rc == 0 && fd < 0 && (tmp = tmpfile()) != NULL)
+        fd = fileno(tmp);
+    if (rc == 0 && fd < 0)
         rc = tpk_diag_fail(diag, "level %d: cannot make a temporary file", k);
     if (rc == 0) {
         tpk_convert_options lo = *o;
         char name[64];
         snprintf(name, sizeof name, "level %d", k);
         lo.output = name;
-        lo.output_fd = fileno(tmp);
+        lo.output_fd = fd;
         tpk_header_fields hdr;
         memset(&hdr, 0, sizeof hdr);
         memcpy(hdr.origin, lvl.origin, sizeof hdr.origin);
@@ -1305,18 +1336,13 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
         lrep.vertices = lvl.vertex_count;
         lrep.tets = lvl.tet_count;
         rc = tpk_write_tpk(&lo, &lvl, neighbors, &hdr, &lrep, source_format, NULL, NULL, diag);
-        struct stat st;
-        if (rc == 0 && fstat(fileno(tmp), &st) != 0)
+        if (rc == 0 && take_level_bytes(fd, r) != 0)
             rc = tpk_diag_fail(diag, "level %d: cannot read back its file", k);
-        if (rc == 0) {
-            r->size = (size_t)st.st_size;
-            r->data = malloc(r->size ? r->size : 1);
-            if (!r->data || pread(fileno(tmp), r->data, r->size, 0) != (ssize_t)r->size)
-                rc = tpk_diag_fail(diag, "level %d: cannot read back its %zu bytes", k, r->size);
-        }
     }
     if (tmp)
         fclose(tmp);
+    else if (fd >= 0)
+        close(fd);
     if (rc == 0) {
         r->vertices = lvl.vertex_count;
         r->tets = lvl.tet_count;
@@ -1486,6 +1512,9 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
 void tpk_levels_free(tpk_levels *levels)
 {
     for (int i = 0; i < levels->count; i++)
-        free(levels->level[i].data);
+        if (levels->level[i].mapped)
+            munmap(levels->level[i].data, levels->level[i].size);
+        else
+            free(levels->level[i].data);
     memset(levels, 0, sizeof *levels);
 }

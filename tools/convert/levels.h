@@ -14,8 +14,9 @@
 
 /* One level: the bytes of its file, and what it is. */
 typedef struct tpk_level {
-    void *data; /* the whole .tpk (malloc'd) */
+    void *data; /* the whole .tpk: mapped from the file it was written into (mapped), or malloc'd */
     size_t size;
+    int mapped;
     int64_t vertices, tets;
     char field[64];          /* the field the error is measured on ("" without a point field) */
     int field_step;          /* at this step: the one of widest range */
