@@ -184,6 +184,36 @@ static int connect_tets(conversion *c)
     return 0;
 }
 
+/* The levels (convert --levels), made by tpk_write_tpk once the file's own chunks are written: the
+ * mesh's tets and the neighbors are then the simplifier's scratch (tpk_make_levels). */
+typedef struct levels_step {
+    conversion *c;
+    double seconds;
+} levels_step;
+
+static int make_levels(void *ctx, tpk_levels *levels, tpk_diag *diag)
+{
+    levels_step *step = ctx;
+    conversion *c = step->c;
+    announce(c->stage, c->stage_user, "levels");
+    double t0 = tpk_now_seconds();
+    if (tpk_make_levels(c->o, &c->mesh, c->neighbors, c->o->levels, c->source_format, c->rep, levels, diag) != 0)
+        return -1;
+    step->seconds = c->rep->t_levels = tpk_now_seconds() - t0;
+    c->rep->level_count = levels->count;
+    for (int i = 0; i < levels->count; i++) {
+        const tpk_level *l = &levels->level[i];
+        c->rep->level[i].vertices = l->vertices, c->rep->level[i].tets = l->tets;
+        c->rep->level[i].error_samples = l->error_samples;
+        c->rep->level[i].error_max = l->error_max, c->rep->level[i].error_rms = l->error_rms;
+        c->rep->level[i].shell_distance = l->shell_distance,
+        c->rep->level[i].shell_tolerance = l->shell_tolerance, c->rep->level[i].seconds = l->seconds;
+        c->rep->level[i].bytes = l->size;
+    }
+    announce(c->stage, c->stage_user, "write");
+    return 0;
+}
+
 static int write_output(conversion *c)
 {
     announce(c->stage, c->stage_user, "write");
@@ -193,33 +223,17 @@ static int write_output(conversion *c)
     c->rep->field_count = c->mesh.field_count;
     c->rep->step_count = c->mesh.step_count > 0 ? c->mesh.step_count : 1;
     tpk_levels levels = {0};
-    if (c->o->levels > 0 && c->o->parts == 0) {
-        announce(c->stage, c->stage_user, "levels");
-        double t0 = tpk_now_seconds();
-        if (tpk_make_levels(c->o, &c->mesh, c->neighbors, c->o->levels, c->source_format, c->rep, &levels,
-                            c->diag) != 0)
-            return -1;
-        c->rep->t_levels = tpk_now_seconds() - t0;
-        c->rep->level_count = levels.count;
-        for (int i = 0; i < levels.count; i++) {
-            const tpk_level *l = &levels.level[i];
-            c->rep->level[i].vertices = l->vertices, c->rep->level[i].tets = l->tets;
-            c->rep->level[i].error_samples = l->error_samples;
-            c->rep->level[i].error_max = l->error_max, c->rep->level[i].error_rms = l->error_rms;
-            c->rep->level[i].shell_distance = l->shell_distance,
-            c->rep->level[i].shell_tolerance = l->shell_tolerance, c->rep->level[i].seconds = l->seconds;
-            c->rep->level[i].bytes = l->size;
-        }
-        announce(c->stage, c->stage_user, "write");
-    }
+    levels_step step = {c, 0};
+    tpk_levels_maker maker = {make_levels, &step, &levels};
+    int with_levels = c->o->levels > 0 && c->o->parts == 0;
     int rc = c->o->parts > 0 ? tpk_write_part_set(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format,
                                                   c->diag)
                              : tpk_write_tpk(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format, NULL,
-                                             &levels, c->diag);
+                                             with_levels ? &maker : NULL, c->diag);
     tpk_levels_free(&levels);
     if (rc != 0)
         return -1;
-    c->rep->t_write = tpk_now_seconds() - t - c->rep->t_levels;
+    c->rep->t_write = tpk_now_seconds() - t - step.seconds;
     return 0;
 }
 

@@ -1381,7 +1381,8 @@ static void set_up_tets(void *ctx, int64_t begin, int64_t end, int worker)
 {
     simplifier *s = ctx;
     (void)worker;
-    memcpy(s->tets + 4 * begin, s->mesh->tets + 4 * begin, sizeof *s->tets * 4 * (size_t)(end - begin));
+    if (s->tets != s->mesh->tets) /* else they are the mesh's own (tpk_make_levels) */
+        memcpy(s->tets + 4 * begin, s->mesh->tets + 4 * begin, sizeof *s->tets * 4 * (size_t)(end - begin));
     for (int64_t t = begin; t < end; t++) {
         const int32_t *v = s->mesh->tets + 4 * t;
         s->tet_quality[t] = (float)quality(point(s, v[0]), point(s, v[1]), point(s, v[2]), point(s, v[3]));
@@ -1389,7 +1390,7 @@ static void set_up_tets(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
-int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
+int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *neighbors, int count,
                     const char *source_format, const tpk_convert_report *source, tpk_levels *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
@@ -1432,13 +1433,15 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     s.stuck = calloc((size_t)(V ? V : 1), 1);
     s.vert = tpk_alloc_large(sizeof *s.vert * (size_t)(V ? V : 1));
     s.active = malloc(sizeof *s.active * (size_t)(V ? V : 1));
-    /* the arrays of the tets (a first touch of fresh pages costs about 0.75 ms a MB here) */
-    s.tets = tpk_alloc_large(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
+    /* the arrays of the tets (a first touch of fresh pages costs about 0.75 ms a MB here): the mesh's
+     * own tets become the working tets, and its neighbors, once read below, the stars (same size) */
+    int scratch = T > 0 && mesh->tets && neighbors;
+    s.tets = scratch ? mesh->tets : tpk_alloc_large(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     s.origin = tpk_alloc_large(sizeof *s.origin * (size_t)(T ? T : 1));
     s.star_start = tpk_alloc_large(sizeof *s.star_start * 2 * (size_t)(V ? V : 1));
     s.star_end = s.star_start ? s.star_start + V : NULL;
     s.alive = malloc(sizeof *s.alive * (size_t)(V ? V : 1));
-    s.star = tpk_alloc_large(sizeof *s.star * 4 * (size_t)(T ? T : 1));
+    s.star = scratch ? neighbors : tpk_alloc_large(sizeof *s.star * 4 * (size_t)(T ? T : 1));
     s.tet_quality = tpk_alloc_large(sizeof *s.tet_quality * (size_t)(T ? T : 1));
     int rc = s.boundary && s.pinned && s.chain_head && s.removed && s.onto && s.locked && s.dead && s.stuck && s.vert && s.active && s.tets && s.origin && s.star_start && s.alive && s.star &&
                      s.tet_quality
@@ -1498,11 +1501,13 @@ int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const
     free(s.stuck);
     tpk_free_large(s.vert, sizeof *s.vert * (size_t)(V ? V : 1));
     free(s.active);
-    tpk_free_large(s.tets, sizeof *s.tets * 4 * (size_t)(T ? T : 1));
+    if (!scratch)
+        tpk_free_large(s.tets, sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     tpk_free_large(s.origin, sizeof *s.origin * (size_t)(T ? T : 1));
     tpk_free_large(s.star_start, sizeof *s.star_start * 2 * (size_t)(V ? V : 1));
     free(s.alive);
-    tpk_free_large(s.star, sizeof *s.star * 4 * (size_t)(T ? T : 1));
+    if (!scratch)
+        tpk_free_large(s.star, sizeof *s.star * 4 * (size_t)(T ? T : 1));
     tpk_free_large(s.tet_quality, sizeof *s.tet_quality * (size_t)(T ? T : 1));
     if (rc != 0)
         tpk_levels_free(out);

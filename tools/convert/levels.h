@@ -41,8 +41,9 @@ typedef struct tpk_levels {
  * the one before. Each level is written as a complete file with `o`'s layouts and compression, every
  * field (point fields at the kept vertices, tet fields of the tet each level tet descends from), TIME,
  * TMAP and VMAP, and META with `source` (its source_cells and source_points: the levels' maps number the
- * same source). 0, or -1 with a message. */
-int tpk_make_levels(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors, int count,
+ * same source). The mesh's tets and the neighbors are its scratch: on return they hold no mesh (the
+ * file's own chunks are written before: tpk_levels_maker). 0, or -1 with a message. */
+int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *neighbors, int count,
                     const char *source_format, const tpk_convert_report *source, tpk_levels *out, tpk_diag *diag);
 void tpk_levels_free(tpk_levels *levels);
 

@@ -361,7 +361,7 @@ static void writer_message(void *user, tpk_result code, const char *text)
 
 int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
                   tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
-                  const tpk_part_extras *part, const tpk_levels *levels, tpk_diag *diag)
+                  const tpk_part_extras *part, const tpk_levels_maker *maker, tpk_diag *diag)
 {
     chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
     char err[512] = "";
@@ -392,6 +392,9 @@ int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const i
         rc = write_fields(&cw, mesh);
     if (rc == 0)
         rc = write_maps(&cw, mesh);
+    if (rc == 0 && maker) /* the mesh's tets and the neighbors may be scratch from here on */
+        rc = maker->make(maker->ctx, maker->levels, diag);
+    const tpk_levels *levels = maker ? maker->levels : NULL;
     if (rc == 0)
         rc = write_meta(&cw, o, rep, source_format, part, levels);
     for (int i = 0; rc == 0 && levels && i < levels->count; i++) { /* spec §16: whole files, uncompressed */

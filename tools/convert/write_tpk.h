@@ -23,12 +23,22 @@ typedef struct tpk_part_extras {
 int tpk_quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *diag);
 
 struct tpk_levels;
+/* The levels of a file (spec §16), made while it is written: once its own chunks are (positions,
+ * layouts, shell, fields, maps), before META, which describes them. make() fills *levels; by then
+ * nothing reads the mesh's tets or the neighbors again, so it may use them as scratch (levels.c does:
+ * its working tets and stars, not 1.5 GB of fresh pages on a 48M-tet mesh). 0, or -1 with a message. */
+typedef struct tpk_levels_maker {
+    int (*make)(void *ctx, struct tpk_levels *levels, tpk_diag *diag);
+    void *ctx;
+    struct tpk_levels *levels;
+} tpk_levels_maker;
+
 /* Write `mesh` (stored frame, positive tets, their neighbors) to o->output atomically, with the layouts
- * o->layouts asks for, the shell, fields, maps and META; part may be NULL; levels (NULL: none) adds a
- * LEVL chunk per level (spec §16) and their figures to META. hdr gives origin and bounds; its counts are
- * filled here, and rep's shell_faces and output_bytes. */
+ * o->layouts asks for, the shell, fields, maps and META; part may be NULL; levels (NULL: none) makes the
+ * levels and adds a LEVL chunk per level (spec §16) and their figures to META. hdr gives origin and
+ * bounds; its counts are filled here, and rep's shell_faces and output_bytes. */
 int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
                   tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
-                  const tpk_part_extras *part, const struct tpk_levels *levels, tpk_diag *diag);
+                  const tpk_part_extras *part, const tpk_levels_maker *levels, tpk_diag *diag);
 
 #endif
