@@ -829,6 +829,50 @@ static void simplify_to(simplifier *s, int64_t target)
 
 /* ---- one level as a file -------------------------------------------------------------------------- */
 
+/* level_mesh's copies, over the level's vertices (one job) or tets (the other), side by side. */
+typedef struct level_fill {
+    const simplifier *s;
+    tpk_tetmesh *out;
+    const int32_t *renum, *vertex_old;
+} level_fill;
+
+static void fill_vertices(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const level_fill *f = ctx;
+    const tpk_tetmesh *m = f->s->mesh;
+    tpk_tetmesh *out = f->out;
+    (void)worker;
+    for (int64_t i = begin; i < end; i++) {
+        int32_t v = f->vertex_old[i];
+        memcpy(out->points + 3 * (size_t)i, m->points + 3 * (size_t)v, 3 * sizeof(double));
+        out->vertex_source[i] = m->vertex_source ? m->vertex_source[v] : v;
+        for (int fi = 0; fi < m->field_count; fi++)
+            if (m->fields[fi].association == TPK_ASSOC_POINT)
+                for (int st = 0; st < m->fields[fi].step_count; st++)
+                    out->fields[fi].values[(size_t)st * (size_t)out->vertex_count + (size_t)i] =
+                        m->fields[fi].values[(size_t)st * (size_t)m->vertex_count + (size_t)v];
+    }
+}
+
+static void fill_tets(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const level_fill *f = ctx;
+    const simplifier *s = f->s;
+    const tpk_tetmesh *m = s->mesh;
+    tpk_tetmesh *out = f->out;
+    (void)worker;
+    for (int64_t t = begin; t < end; t++) {
+        for (int k = 0; k < 4; k++)
+            out->tets[4 * t + k] = f->renum[s->tets[4 * t + k]];
+        out->tet_source[t] = m->tet_source ? m->tet_source[s->origin[t]] : s->origin[t];
+        for (int fi = 0; fi < m->field_count; fi++)
+            if (m->fields[fi].association != TPK_ASSOC_POINT)
+                for (int st = 0; st < m->fields[fi].step_count; st++)
+                    out->fields[fi].values[(size_t)st * (size_t)out->tet_count + (size_t)t] =
+                        m->fields[fi].values[(size_t)st * (size_t)m->tet_count + (size_t)s->origin[t]];
+    }
+}
+
 /* The level's tetmesh: kept vertices (those its tets use) in their full-mesh order, the tets renumbered,
  * the fields gathered (tet fields through the tet each level tet descends from), maps through. */
 static int level_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_old, tpk_diag *diag)
@@ -859,30 +903,20 @@ static int level_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_ol
     int rc = out->points && out->vertex_source && *vertex_old && out->tets && out->tet_source &&
                      (!m->field_count || out->fields) ? 0 : -1;
     for (int64_t v = 0; rc == 0 && v < m->vertex_count; v++)
-        if (renum[v] >= 0) {
-            memcpy(out->points + 3 * (size_t)renum[v], m->points + 3 * (size_t)v, 3 * sizeof(double));
-            out->vertex_source[renum[v]] = m->vertex_source ? m->vertex_source[v] : (int32_t)v;
+        if (renum[v] >= 0)
             (*vertex_old)[renum[v]] = (int32_t)v;
-        }
-    for (int64_t t = 0; rc == 0 && t < s->tet_count; t++) {
-        for (int k = 0; k < 4; k++)
-            out->tets[4 * t + k] = renum[s->tets[4 * t + k]];
-        out->tet_source[t] = m->tet_source ? m->tet_source[s->origin[t]] : s->origin[t];
-    }
     for (int f = 0; rc == 0 && f < m->field_count; f++) {
         const tpk_src_field *src = &m->fields[f];
         tpk_src_field *dst = &out->fields[f];
         *dst = *src;
-        int point = src->association == TPK_ASSOC_POINT;
-        size_t per = (size_t)(point ? n : s->tet_count), src_per = (size_t)(point ? m->vertex_count : m->tet_count);
-        dst->values = malloc(sizeof *dst->values * (per ? per : 1) * (size_t)src->step_count);
-        if (!dst->values) {
+        size_t per = (size_t)(src->association == TPK_ASSOC_POINT ? n : s->tet_count);
+        if (!(dst->values = malloc(sizeof *dst->values * (per ? per : 1) * (size_t)src->step_count)))
             rc = -1;
-            break;
-        }
-        for (int st = 0; st < src->step_count; st++)
-            for (size_t i = 0; i < per; i++)
-                dst->values[st * per + i] = src->values[st * src_per + (size_t)(point ? (*vertex_old)[i] : s->origin[i])];
+    }
+    if (rc == 0) { /* the copies, on all threads: level 1 of grid 200 spent 0.2-0.4 s here on one */
+        level_fill fill = {s, out, renum, *vertex_old};
+        tpk_parallel_for(n, tpk_threads_for(n, s->threads, 1 << 14), fill_vertices, &fill);
+        tpk_parallel_for(s->tet_count, tpk_threads_for(s->tet_count, s->threads, 1 << 16), fill_tets, &fill);
     }
     out->step_count = m->step_count;
     out->times = m->times; /* borrowed */
