@@ -96,6 +96,26 @@ static const double *point(const simplifier *s, int32_t v)
     return s->vert[v].p;
 }
 
+/* a[0..n) = value, on all threads (the per-vertex maps each level sets up: 32 MB each on grid 200). */
+typedef struct fill_job {
+    int32_t *a;
+    int32_t value;
+} fill_job;
+
+static void fill_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const fill_job *j = ctx;
+    (void)worker;
+    for (int64_t i = begin; i < end; i++)
+        j->a[i] = j->value;
+}
+
+static void fill_i32(int32_t *a, int64_t n, int32_t value, int threads)
+{
+    fill_job job = {a, value};
+    tpk_parallel_for(n, tpk_threads_for(n, threads, 1 << 18), fill_range, &job);
+}
+
 /* The squared length of b - a, and b - a in e. */
 static double edge(const double *a, const double *b, double e[3])
 {
@@ -882,8 +902,7 @@ static int level_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_ol
     int32_t *renum = malloc(sizeof *renum * (size_t)(m->vertex_count ? m->vertex_count : 1));
     if (!renum)
         return tpk_diag_fail(diag, "levels: out of memory");
-    for (int64_t v = 0; v < m->vertex_count; v++)
-        renum[v] = -1;
+    fill_i32(renum, m->vertex_count, -1, s->threads);
     for (int64_t i = 0; i < 4 * s->tet_count; i++)
         renum[s->tets[i]] = 0;
     int64_t n = 0;
@@ -1077,8 +1096,7 @@ static void measure(const simplifier *s, const tpk_tetmesh *lvl, const int32_t *
         free(sums);
         return;
     }
-    for (int64_t v = 0; v < m->vertex_count; v++)
-        tet_of[v] = -1;
+    fill_i32(tet_of, m->vertex_count, -1, s->threads);
     for (int64_t i = 0; i < 4 * lvl->tet_count; i++)
         tet_of[vertex_old[lvl->tets[i]]] = (int32_t)(i / 4);
     measure_job job = {s, lvl, vertex_old, neighbors, near_tet, tet_of, sums, sums + chunks, counts};
@@ -1257,15 +1275,14 @@ static double shell_distance(const simplifier *s, const tpk_tetmesh *lvl, const 
         memcpy(fill, start, sizeof *fill * (size_t)n);
         for (int64_t i = 0; i < 3 * faces; i++)
             at[fill[tri[i]]++] = (int32_t)(i / 3);
-        for (int64_t v = 0; v < m->vertex_count; v++)
-            level_of[v] = -1;
+        fill_i32(level_of, m->vertex_count, -1, s->threads);
         for (int64_t v = 0; v < n; v++)
             level_of[vertex_old[v]] = (int32_t)v;
         worst = 0;
         /* from the owner (one of whose faces is p's witness), or without a tolerance the vertex p ended on */
         int32_t *owner = malloc(sizeof *owner * (size_t)m->vertex_count);
-        for (int64_t v = 0; owner && v < m->vertex_count; v++)
-            owner[v] = -1;
+        if (owner)
+            fill_i32(owner, m->vertex_count, -1, s->threads);
         for (int64_t x = 0; owner && x < m->vertex_count; x++)
             for (int32_t p = s->removed[x] ? -1 : s->chain_head[x]; p >= 0; p = s->chain_next[p])
                 owner[p] = (int32_t)x;
@@ -1396,7 +1413,8 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
     return rc;
 }
 
-/* Each vertex's level_vertex (tpk_parallel_for: the first touch of fresh pages on all threads too). */
+/* Each vertex's level_vertex, no chain, and the list of those alive (tpk_parallel_for: the first touch of
+ * fresh pages on all threads too). */
 static void set_up_vertices(void *ctx, int64_t begin, int64_t end, int worker)
 {
     simplifier *s = ctx;
@@ -1406,6 +1424,8 @@ static void set_up_vertices(void *ctx, int64_t begin, int64_t end, int worker)
         memcpy(x->p, s->mesh->points + 3 * (size_t)v, sizeof x->p);
         x->field = s->field ? s->field[v] : 0;
         x->seen = -1;
+        s->chain_head[v] = s->chain_next[v] = -1;
+        s->alive[v] = (int32_t)v;
     }
 }
 
@@ -1482,9 +1502,7 @@ int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *ne
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
         tpk_parallel_for(V, tpk_threads_for(V, s.threads, 1 << 16), set_up_vertices, &s);
-        memset(s.chain_head, 0xff, sizeof *s.chain_head * 2 * (size_t)V);
-        for (int64_t v = 0; v < V; v++)
-            s.alive[v] = (int32_t)v;
+
         s.alive_count = V;
         tpk_parallel_for(T, tpk_threads_for(T, s.threads, 1 << 16), set_up_tets, &s);
         for (int64_t t = 0; t < T; t++)
