@@ -1502,7 +1502,6 @@ int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *ne
                  ? 0 : tpk_diag_fail(diag, "levels: out of memory for %lld tets", (long long)T);
     if (rc == 0) {
         tpk_parallel_for(V, tpk_threads_for(V, s.threads, 1 << 16), set_up_vertices, &s);
-
         s.alive_count = V;
         tpk_parallel_for(T, tpk_threads_for(T, s.threads, 1 << 16), set_up_tets, &s);
         for (int64_t t = 0; t < T; t++)

@@ -34,11 +34,11 @@ typedef struct tpk_levels_maker {
 } tpk_levels_maker;
 
 /* Write `mesh` (stored frame, positive tets, their neighbors) to o->output atomically, with the layouts
- * o->layouts asks for, the shell, fields, maps and META; part may be NULL; levels (NULL: none) makes the
- * levels and adds a LEVL chunk per level (spec §16) and their figures to META. hdr gives origin and
+ * o->layouts asks for, the shell, fields, maps and META; part may be NULL; maker (NULL: no levels) makes
+ * the levels, and a LEVL chunk per level (spec §16) and their figures in META follow. hdr gives origin and
  * bounds; its counts are filled here, and rep's shell_faces and output_bytes. */
 int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
                   tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
-                  const tpk_part_extras *part, const tpk_levels_maker *levels, tpk_diag *diag);
+                  const tpk_part_extras *part, const tpk_levels_maker *maker, tpk_diag *diag);
 
 #endif
