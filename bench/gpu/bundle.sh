@@ -8,6 +8,7 @@
 # which unpacks it beside itself and runs bench/gpu/run.sh on the bundle's binaries:
 #   ./run-gpu-bench.sh [run.sh options]       VK_DRIVER_FILES=/usr/share/vulkan/icd.d/nvidia_icd.json ...
 #   ./run-gpu-bench.sh --targets              the open GPU targets of issues 21 and 22 (targets.sh)
+#   ./run-gpu-bench.sh --convert              issue 22's conversion target on the host's cores (convert_ratio.sh)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 OUT=$(mkdir -p "${1:-$ROOT/bench/gpu/bundle}" && cd "${1:-$ROOT/bench/gpu/bundle}" && pwd)
@@ -31,7 +32,8 @@ done | sort -u | while read -r lib; do
         *) cp -L "$lib" "$STAGE/lib/" ;;
     esac
 done
-cp "$ROOT/bench/gpu/run.sh" "$ROOT/bench/gpu/targets.sh" "$ROOT/bench/gpu/table.py" "$STAGE/bench/gpu/"
+cp "$ROOT/bench/gpu/run.sh" "$ROOT/bench/gpu/targets.sh" "$ROOT/bench/gpu/convert_ratio.sh" "$ROOT/bench/gpu/table.py" \
+    "$STAGE/bench/gpu/"
 cp "$ROOT/bench/make_grid_vtk.py" "$STAGE/bench/"
 cp "$ROOT/samples/cylinder.vtk" "$STAGE/samples/"
 cp "$DATA/sfepy/cube_big_tetra.mesh" "$STAGE/data/sfepy/"

@@ -5,6 +5,9 @@
 #   bench/gpu/run.sh [--small] [--bin DIR] [--out DIR]
 #   bench/gpu/run.sh --targets [--small] [--bin DIR] [--out DIR]: instead, the open GPU targets of
 #   issues 21 and 22 (bench/gpu/targets.sh)
+#   bench/gpu/run.sh --convert [--small] [--bin DIR] [--out DIR]: instead, issue 22's conversion target,
+#   `convert --levels 4` against `convert` and the file sizes, on this machine's cores, no GPU used
+#   (bench/gpu/convert_ratio.sh)
 # --bin: where `tetpack` and `bench_gpu` are (default: build-release, configured and built here when it
 # does not exist; the bundle passes its own bin/). --out: results (default bench/gpu/out): results.jsonl
 # (one JSON line per mesh, layout and effect set), results.md (a Markdown table), the .tpk files.
@@ -21,14 +24,15 @@
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
-SMALL=0 TARGETS=0 BIN="" OUT="$HERE/out"
+SMALL=0 TARGETS=0 CONVERT=0 BIN="" OUT="$HERE/out"
 while [ $# -gt 0 ]; do
     case "$1" in
         --small) SMALL=1 ;;
         --targets) TARGETS=1 ;;
+        --convert) CONVERT=1 ;;
         --bin) BIN=$2; shift ;;
         --out) OUT=$2; shift ;;
-        *) echo "usage: bench/gpu/run.sh [--targets] [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
+        *) echo "usage: bench/gpu/run.sh [--targets | --convert] [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
     esac
     shift
 done
@@ -40,6 +44,7 @@ if [ -z "$BIN" ]; then
 fi
 TPK=$BIN/tetpack
 [ $TARGETS = 0 ] || exec bash "$HERE/targets.sh" "$TPK" "$OUT" "$SMALL"
+[ $CONVERT = 0 ] || exec bash "$HERE/convert_ratio.sh" "$TPK" "$OUT" "$SMALL"
 GPU=$BIN/bench_gpu
 [ -x "$GPU" ] || GPU=$BIN/bench/bench_gpu
 [ -x "$TPK" ] && [ -x "$GPU" ] || { echo "run.sh: no tetpack and bench_gpu in $BIN" >&2; exit 2; }
