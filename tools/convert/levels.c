@@ -82,6 +82,7 @@ typedef struct simplifier {
     int64_t *star_start, *star_end; /* per live vertex: its tets in star, [start, end) (-1, -1: not kept) */
     int32_t *alive;      /* the vertices not removed, in id order, as of the last build_stars */
     int64_t alive_count;
+    int32_t *alive_next; /* build_stars writes the new list here, then swaps it with alive */
     int32_t *star;
     uint8_t *locked, *dead;
     uint8_t *stuck;      /* per vertex: no valid target, and its star has not changed since */
@@ -114,6 +115,54 @@ static void fill_i32(int32_t *a, int64_t n, int32_t value, int threads)
 {
     fill_job job = {a, value};
     tpk_parallel_for(n, tpk_threads_for(n, threads, 1 << 18), fill_range, &job);
+}
+
+/* a[0..n) = 0, bytes, on all threads. */
+static void zero_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    (void)worker;
+    memset((uint8_t *)ctx + begin, 0, (size_t)(end - begin));
+}
+
+static void zero_bytes(uint8_t *a, int64_t n, int threads)
+{
+    tpk_parallel_for(n, tpk_threads_for(n, threads, 1 << 22), zero_range, a);
+}
+
+/* The bounds of n points (each origin + point, origin NULL: 0), on all threads: each worker's, then the
+ * least and greatest of those, which are the ones one thread finds. */
+typedef struct bounds_job {
+    const double *points, *origin;
+    double lo[TPK_MAX_THREADS][3], hi[TPK_MAX_THREADS][3];
+} bounds_job;
+
+static void bounds_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    bounds_job *j = ctx;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = begin; v < end; v++)
+        for (int a = 0; a < 3; a++) {
+            double w = j->origin ? j->origin[a] + j->points[3 * v + a] : j->points[3 * v + a];
+            lo[a] = w < lo[a] ? w : lo[a];
+            hi[a] = w > hi[a] ? w : hi[a];
+        }
+    memcpy(j->lo[worker], lo, sizeof lo);
+    memcpy(j->hi[worker], hi, sizeof hi);
+}
+
+static void bounds_of(const double *points, const double *origin, int64_t n, int threads, double lo[3], double hi[3])
+{
+    bounds_job j; /* 3 KB */
+    j.points = points, j.origin = origin;
+    int parts = tpk_threads_for(n, threads, 1 << 16);
+    tpk_parallel_for(n, parts, bounds_range, &j);
+    for (int a = 0; a < 3; a++) {
+        lo[a] = INFINITY, hi[a] = -INFINITY;
+        for (int w = 0; w < parts; w++) {
+            lo[a] = j.lo[w][a] < lo[a] ? j.lo[w][a] : lo[a];
+            hi[a] = j.hi[w][a] > hi[a] ? j.hi[w][a] : hi[a];
+        }
+    }
 }
 
 /* The squared length of b - a, and b - a in e. */
@@ -207,24 +256,91 @@ static void star_ranges(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
+/* build_stars' lists, on all threads: each worker takes a range of the vertices that were alive and
+ * counts (phase 0), then writes at the offsets the counts before it make (phase 1: the live and the
+ * active vertices; phase 2: the stars' starts, after the counting of the stars). The same lists and
+ * starts as one thread makes. */
+typedef struct list_job {
+    simplifier *s;
+    int phase;
+    int64_t live[TPK_MAX_THREADS + 1], act[TPK_MAX_THREADS + 1], entries[TPK_MAX_THREADS + 1];
+} list_job;
+
+static void list_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    list_job *j = ctx;
+    simplifier *s = j->s;
+    const uint8_t *removed = s->removed, *pinned = s->pinned, *stuck = s->stuck;
+    if (j->phase == 0) { /* over the old list: the live, the active, and each live star's count cleared */
+        int64_t live = 0, act = 0;
+        for (int64_t i = begin; i < end; i++) {
+            int32_t v = s->alive[i];
+            if (removed[v])
+                continue;
+            live++;
+            act += !(pinned[v] | stuck[v]);
+            s->star_end[v] = 0;
+        }
+        j->live[worker] = live, j->act[worker] = act;
+    } else if (j->phase == 1) {
+        int64_t live = j->live[worker], act = j->act[worker];
+        for (int64_t i = begin; i < end; i++) {
+            int32_t v = s->alive[i];
+            if (removed[v])
+                continue;
+            s->alive_next[live++] = v;
+            if (!(pinned[v] | stuck[v]))
+                s->active[act++] = v;
+        }
+    } else if (j->phase == 2) { /* over the new list: the entries of the stars kept */
+        int64_t entries = 0;
+        for (int64_t i = begin; i < end; i++) {
+            int32_t v = s->alive[i];
+            entries += !(pinned[v] | stuck[v]) ? s->star_end[v] : 0;
+        }
+        j->entries[worker] = entries;
+    } else { /* only the active vertices' stars are kept; the others' are empty (-1, -1) */
+        int64_t at = j->entries[worker];
+        for (int64_t i = begin; i < end; i++) {
+            int32_t v = s->alive[i];
+            int keep = !(pinned[v] | stuck[v]);
+            s->star_start[v] = keep ? at : -1;
+            at += keep ? s->star_end[v] : 0;
+            s->star_end[v] = s->star_start[v]; /* the fill's cursor, its end once filled */
+        }
+    }
+}
+
+/* Counts per worker into offsets: c[w] becomes the sum of c[0..w). */
+static void offsets(int64_t *c, int parts)
+{
+    int64_t at = 0;
+    for (int w = 0; w < parts; w++) {
+        int64_t n = c[w];
+        c[w] = at;
+        at += n;
+    }
+    c[parts] = at;
+}
+
 /* The vertices a pass may collapse (not pinned, not removed, not stuck), in id order, and their stars:
  * the tets that hold them, in tet order. */
 static void build_stars(simplifier *s)
 {
     /* over the vertices still there (the live tets use no other), not all of the full mesh's: a coarse
      * level's passes would spend most of their time on vertices long gone */
-    int64_t live = 0;
-    for (int64_t i = 0; i < s->alive_count; i++)
-        if (!s->removed[s->alive[i]])
-            s->alive[live++] = s->alive[i];
-    s->alive_count = live;
-    s->active_count = 0;
-    for (int64_t i = 0; i < live; i++) {
-        int32_t v = s->alive[i];
-        if (!(s->pinned[v] | s->stuck[v]))
-            s->active[s->active_count++] = v;
-        s->star_end[v] = 0;
+    list_job list;
+    list.s = s;
+    int lists = tpk_threads_for(s->alive_count, s->threads, 1 << 16);
+    for (list.phase = 0; list.phase < 2; list.phase++) {
+        tpk_parallel_for(s->alive_count, lists, list_range, &list);
+        if (list.phase == 0)
+            offsets(list.live, lists), offsets(list.act, lists);
     }
+    int32_t *old = s->alive;
+    s->alive = s->alive_next, s->alive_next = old;
+    int64_t live = s->alive_count = list.live[lists];
+    s->active_count = list.act[lists];
     /* each worker reads all the corners but writes only its own vertices' counts and stars: the
      * writes, scattered, are the cost */
     star_job job = {s, {0}, 0};
@@ -232,14 +348,12 @@ static void build_stars(simplifier *s)
     for (int w = 0; w <= parts; w++)
         job.cut[w] = w == 0 ? 0 : w == parts ? (int32_t)s->mesh->vertex_count : s->alive[live * w / parts];
     tpk_parallel_for(parts, parts, star_ranges, &job);
-    int64_t at = 0; /* only the active vertices' stars are kept; the others' are empty (-1, -1) */
-    for (int64_t i = 0; i < live; i++) {
-        int32_t v = s->alive[i];
-        int keep = !(s->pinned[v] | s->stuck[v]);
-        s->star_start[v] = keep ? at : -1;
-        at += keep ? s->star_end[v] : 0;
-        s->star_end[v] = s->star_start[v]; /* the fill's cursor, its end once filled */
-    }
+    lists = tpk_threads_for(live, s->threads, 1 << 16);
+    list.phase = 2;
+    tpk_parallel_for(live, lists, list_range, &list);
+    offsets(list.entries, lists);
+    list.phase = 3;
+    tpk_parallel_for(live, lists, list_range, &list);
     job.fill = 1;
     tpk_parallel_for(parts, parts, star_ranges, &job);
 }
@@ -811,8 +925,8 @@ static int64_t collapse_pass(simplifier *s, int64_t target, int64_t *live)
     int64_t V = s->mesh->vertex_count, done = 0;
     if (V <= 0 || s->tet_count <= 0)
         return 0;
-    memset(s->locked, 0, (size_t)V);
-    memset(s->dead, 0, (size_t)s->tet_count);
+    zero_bytes(s->locked, V, s->threads);
+    zero_bytes(s->dead, s->tet_count, s->threads);
     done += blocks_pass(s, 0, BLOCK_IDS, target, live);
     done += blocks_pass(s, BLOCK_IDS / 2, BLOCK_IDS, target, live);
     if (s->alive_count > 8 * BLOCK_IDS + BLOCK_IDS / 4) /* else one block of them all: the sweep's work, */
@@ -893,6 +1007,39 @@ static void fill_tets(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
+/* level_mesh's numbering on all threads: phase 0 over the live tets marks the vertices they use (renum 0;
+ * two workers may mark one, both with 0: relaxed atomic stores); phase 1 over the full mesh's vertices
+ * counts the marked; phase 2 numbers them from the offsets the counts before make, in id order as one
+ * thread does, and fills vertex_old. */
+typedef struct level_numbers {
+    const simplifier *s;
+    int32_t *renum, *vertex_old;
+    int phase;
+    int64_t count[TPK_MAX_THREADS + 1];
+} level_numbers;
+
+static void number_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    level_numbers *j = ctx;
+    int32_t *renum = j->renum;
+    if (j->phase == 0) {
+        for (int64_t i = 4 * begin; i < 4 * end; i++)
+            __atomic_store_n(&renum[j->s->tets[i]], 0, __ATOMIC_RELAXED);
+    } else if (j->phase == 1) {
+        int64_t n = 0;
+        for (int64_t v = begin; v < end; v++)
+            n += renum[v] == 0;
+        j->count[worker] = n;
+    } else {
+        int64_t n = j->count[worker];
+        for (int64_t v = begin; v < end; v++)
+            if (renum[v] == 0) {
+                j->vertex_old[n] = (int32_t)v;
+                renum[v] = (int32_t)n++;
+            }
+    }
+}
+
 /* The level's tetmesh: kept vertices (those its tets use) in their full-mesh order, the tets renumbered,
  * the fields gathered (tet fields through the tet each level tet descends from), maps through. */
 static int level_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_old, tpk_diag *diag)
@@ -903,12 +1050,13 @@ static int level_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_ol
     if (!renum)
         return tpk_diag_fail(diag, "levels: out of memory");
     fill_i32(renum, m->vertex_count, -1, s->threads);
-    for (int64_t i = 0; i < 4 * s->tet_count; i++)
-        renum[s->tets[i]] = 0;
-    int64_t n = 0;
-    for (int64_t v = 0; v < m->vertex_count; v++)
-        if (renum[v] == 0)
-            renum[v] = (int32_t)n++;
+    level_numbers num = {s, renum, NULL, 0, {0}};
+    tpk_parallel_for(s->tet_count, tpk_threads_for(s->tet_count, s->threads, 1 << 16), number_range, &num);
+    int parts = tpk_threads_for(m->vertex_count, s->threads, 1 << 16);
+    num.phase = 1;
+    tpk_parallel_for(m->vertex_count, parts, number_range, &num);
+    offsets(num.count, parts);
+    int64_t n = num.count[parts];
     out->vertex_count = n;
     out->tet_count = s->tet_count;
     memcpy(out->origin, m->origin, sizeof out->origin);
@@ -921,9 +1069,11 @@ static int level_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_ol
     out->fields = m->field_count ? calloc((size_t)m->field_count, sizeof *out->fields) : NULL;
     int rc = out->points && out->vertex_source && *vertex_old && out->tets && out->tet_source &&
                      (!m->field_count || out->fields) ? 0 : -1;
-    for (int64_t v = 0; rc == 0 && v < m->vertex_count; v++)
-        if (renum[v] >= 0)
-            (*vertex_old)[renum[v]] = (int32_t)v;
+    if (rc == 0) { /* the numbers, and vertex_old */
+        num.vertex_old = *vertex_old;
+        num.phase = 2;
+        tpk_parallel_for(m->vertex_count, parts, number_range, &num);
+    }
     for (int f = 0; rc == 0 && f < m->field_count; f++) {
         const tpk_src_field *src = &m->fields[f];
         tpk_src_field *dst = &out->fields[f];
@@ -1239,6 +1389,61 @@ static void shell_vertices(void *ctx, int64_t begin, int64_t end, int worker)
     j->worst[worker] = worst;
 }
 
+/* shell_distance's preparation on all threads, in phases over ranges that depend on the counts alone:
+ * 0, over the full mesh's vertices: the removed shell vertices, counted; 1, over the level's tets: their
+ * shell faces, counted; 2, the same: the faces written at the offsets the counts before make (in tet
+ * order, as one thread writes them); 3, over the full mesh's vertices: each live one's chain of removed
+ * shell vertices (disjoint chains) gives them their owner; 4, over the level's vertices: level_of. */
+typedef struct shell_prep {
+    const simplifier *s;
+    const tpk_tetmesh *lvl;
+    const int32_t *neighbors, *vertex_old;
+    int32_t *tri, *tet, *owner, *level_of;
+    int phase;
+    int64_t count[TPK_MAX_THREADS + 1];
+} shell_prep;
+
+static void shell_prep_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    shell_prep *j = ctx;
+    const simplifier *s = j->s;
+    const int32_t *neighbors = j->neighbors;
+    int64_t count = 0;
+    if (j->phase == 0) {
+        for (int64_t v = begin; v < end; v++)
+            count += s->boundary[v] & s->removed[v];
+    } else if (j->phase == 1) {
+        for (int64_t i = 4 * begin; i < 4 * end; i++)
+            count += neighbors[i] < 0;
+    } else if (j->phase == 2) {
+        int64_t f = j->count[worker];
+        for (int64_t t = begin; t < end; t++)
+            for (int k = 0; k < 4; k++)
+                if (neighbors[4 * t + k] < 0) {
+                    for (int c = 0; c < 3; c++)
+                        j->tri[3 * f + c] = j->lvl->tets[4 * t + tpk_tet_faces[k][c]];
+                    j->tet[f++] = (int32_t)t;
+                }
+    } else if (j->phase == 3) {
+        for (int64_t x = begin; x < end; x++)
+            for (int32_t p = s->removed[x] ? -1 : s->chain_head[x]; p >= 0; p = s->chain_next[p])
+                j->owner[p] = (int32_t)x;
+    } else {
+        for (int64_t v = begin; v < end; v++)
+            j->level_of[j->vertex_old[v]] = (int32_t)v;
+    }
+    j->count[worker] = count;
+}
+
+static int64_t shell_prep_run(shell_prep *j, int phase, int64_t n)
+{
+    int parts = tpk_threads_for(n, j->s->threads, 1 << 16);
+    j->phase = phase;
+    tpk_parallel_for(n, parts, shell_prep_range, j);
+    offsets(j->count, parts);
+    return j->count[parts];
+}
+
 /* How far the full mesh's shell lies from the level's, measured at the shell vertices the level removed:
  * each one's distance to the nearest level shell face at its owner (one of them is within the tolerance:
  * needs_witness), or without an owner by a descent from the vertex it ended on (the faces at that
@@ -1249,43 +1454,39 @@ static double shell_distance(const simplifier *s, const tpk_tetmesh *lvl, const 
                              const int32_t *neighbors, int32_t *near_tet)
 {
     const tpk_tetmesh *m = s->mesh;
-    int64_t n = lvl->vertex_count, faces = 0, removed = 0;
-    for (int64_t v = 0; v < m->vertex_count; v++)
-        removed += s->boundary[v] && s->removed[v];
-    if (removed == 0)
-        return 0;
-    for (int64_t i = 0; i < 4 * lvl->tet_count; i++)
-        faces += neighbors[i] < 0;
+    shell_prep prep = {s, lvl, neighbors, vertex_old, NULL, NULL, NULL, NULL, 0, {0}};
+    int64_t n = lvl->vertex_count;
+    if (shell_prep_run(&prep, 0, m->vertex_count) == 0)
+        return 0; /* no shell vertex removed */
+    int64_t faces = shell_prep_run(&prep, 1, lvl->tet_count);
     size_t fn = (size_t)(faces ? faces : 1);
     int32_t *level_of = malloc(sizeof *level_of * (size_t)m->vertex_count);
     int64_t *start = calloc((size_t)n + 1, sizeof *start), *fill = malloc(sizeof *fill * (size_t)(n ? n : 1));
     int32_t *tri = malloc(sizeof *tri * 3 * fn), *at = malloc(sizeof *at * 3 * fn), *tet = malloc(sizeof *tet * fn);
     double worst = INFINITY;
     if (level_of && start && fill && tri && at && tet) {
-        int64_t f = 0;
-        for (int64_t t = 0; t < lvl->tet_count; t++)
-            for (int k = 0; k < 4; k++)
-                if (neighbors[4 * t + k] < 0) {
-                    for (int j = 0; j < 3; j++)
-                        start[(tri[3 * f + j] = lvl->tets[4 * t + tpk_tet_faces[k][j]]) + 1]++;
-                    tet[f++] = (int32_t)t;
-                }
+        prep.tri = tri, prep.tet = tet;
+        prep.phase = 2; /* at the offsets phase 1 left */
+        tpk_parallel_for(lvl->tet_count, tpk_threads_for(lvl->tet_count, s->threads, 1 << 16), shell_prep_range,
+                         &prep);
+        for (int64_t i = 0; i < 3 * faces; i++)
+            start[tri[i] + 1]++;
         for (int64_t v = 0; v < n; v++)
             start[v + 1] += start[v];
         memcpy(fill, start, sizeof *fill * (size_t)n);
         for (int64_t i = 0; i < 3 * faces; i++)
             at[fill[tri[i]]++] = (int32_t)(i / 3);
         fill_i32(level_of, m->vertex_count, -1, s->threads);
-        for (int64_t v = 0; v < n; v++)
-            level_of[vertex_old[v]] = (int32_t)v;
+        prep.level_of = level_of;
+        shell_prep_run(&prep, 4, n);
         worst = 0;
         /* from the owner (one of whose faces is p's witness), or without a tolerance the vertex p ended on */
         int32_t *owner = malloc(sizeof *owner * (size_t)m->vertex_count);
-        if (owner)
+        if (owner) {
             fill_i32(owner, m->vertex_count, -1, s->threads);
-        for (int64_t x = 0; owner && x < m->vertex_count; x++)
-            for (int32_t p = s->removed[x] ? -1 : s->chain_head[x]; p >= 0; p = s->chain_next[p])
-                owner[p] = (int32_t)x;
+            prep.owner = owner;
+            shell_prep_run(&prep, 3, m->vertex_count);
+        }
         shell_job job = {s, lvl, start, tri, at, tet, level_of, owner, near_tet, {0}};
         int threads = tpk_threads_for(m->vertex_count, s->threads, 1 << 14);
         tpk_parallel_for(m->vertex_count, threads, shell_vertices, &job);
@@ -1370,16 +1571,7 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
         tpk_header_fields hdr;
         memset(&hdr, 0, sizeof hdr);
         memcpy(hdr.origin, lvl.origin, sizeof hdr.origin);
-        for (int a = 0; a < 3; a++) {
-            hdr.bounds_min[a] = INFINITY;
-            hdr.bounds_max[a] = -INFINITY;
-        }
-        for (int64_t v = 0; v < lvl.vertex_count; v++)
-            for (int a = 0; a < 3; a++) {
-                double w = lvl.origin[a] + lvl.points[3 * v + a];
-                hdr.bounds_min[a] = w < hdr.bounds_min[a] ? w : hdr.bounds_min[a];
-                hdr.bounds_max[a] = w > hdr.bounds_max[a] ? w : hdr.bounds_max[a];
-            }
+        bounds_of(lvl.points, lvl.origin, lvl.vertex_count, s->threads, hdr.bounds_min, hdr.bounds_max);
         /* The file's report: its TMAP and VMAP number the file's source cells and points (spec §16.1),
          * and the pipeline and repairs that made the file made the mesh it was coarsened from; META
          * names them all, as a part's does */
@@ -1398,8 +1590,8 @@ static int write_level(const tpk_convert_options *o, const simplifier *s, domain
         r->vertices = lvl.vertex_count;
         r->tets = lvl.tet_count;
         int32_t *near_tet = malloc(sizeof *near_tet * (size_t)(s->mesh->vertex_count ? s->mesh->vertex_count : 1));
-        for (int64_t v = 0; near_tet && v < s->mesh->vertex_count; v++)
-            near_tet[v] = -1;
+        if (near_tet)
+            fill_i32(near_tet, s->mesh->vertex_count, -1, s->threads);
         r->shell_tolerance = s->shell_tolerance;
         /* Without a tolerance only flat pieces moved: the same surface, and every removed shell vertex on it */
         r->shell_distance = !(s->shell_tolerance > 0) ? 0
@@ -1442,6 +1634,25 @@ static void set_up_tets(void *ctx, int64_t begin, int64_t end, int worker)
         s->tet_quality[t] = (float)quality(point(s, v[0]), point(s, v[1]), point(s, v[2]), point(s, v[3]));
         s->origin[t] = (int32_t)t;
     }
+}
+
+/* The corners of the shell faces marked as on the shell (tpk_parallel_for over the tets; two workers may
+ * mark one vertex, both with 1: relaxed atomic stores). */
+typedef struct shell_marks {
+    simplifier *s;
+    const int32_t *neighbors;
+} shell_marks;
+
+static void mark_shell(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const shell_marks *j = ctx;
+    const int32_t *tets = j->s->mesh->tets;
+    (void)worker;
+    for (int64_t t = begin; t < end; t++)
+        for (int k = 0; k < 4; k++)
+            if (j->neighbors[4 * t + k] < 0)
+                for (int c = 0; c < 3; c++)
+                    __atomic_store_n(&j->s->boundary[tets[4 * t + tpk_tet_faces[k][c]]], 1, __ATOMIC_RELAXED);
 }
 
 int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *neighbors, int count,
@@ -1494,7 +1705,8 @@ int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *ne
     s.origin = tpk_alloc_large(sizeof *s.origin * (size_t)(T ? T : 1));
     s.star_start = tpk_alloc_large(sizeof *s.star_start * 2 * (size_t)(V ? V : 1));
     s.star_end = s.star_start ? s.star_start + V : NULL;
-    s.alive = malloc(sizeof *s.alive * (size_t)(V ? V : 1));
+    s.alive = malloc(sizeof *s.alive * 2 * (size_t)(V ? V : 1));
+    s.alive_next = s.alive ? s.alive + V : NULL;
     s.star = scratch ? neighbors : tpk_alloc_large(sizeof *s.star * 4 * (size_t)(T ? T : 1));
     s.tet_quality = tpk_alloc_large(sizeof *s.tet_quality * (size_t)(T ? T : 1));
     int rc = s.boundary && s.pinned && s.chain_head && s.removed && s.onto && s.locked && s.dead && s.stuck && s.vert && s.active && s.tets && s.origin && s.star_start && s.alive && s.star &&
@@ -1504,11 +1716,8 @@ int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *ne
         tpk_parallel_for(V, tpk_threads_for(V, s.threads, 1 << 16), set_up_vertices, &s);
         s.alive_count = V;
         tpk_parallel_for(T, tpk_threads_for(T, s.threads, 1 << 16), set_up_tets, &s);
-        for (int64_t t = 0; t < T; t++)
-            for (int k = 0; k < 4; k++)
-                if (neighbors[4 * t + k] < 0)
-                    for (int j = 0; j < 3; j++)
-                        s.boundary[mesh->tets[4 * t + tpk_tet_faces[k][j]]] = 1;
+        shell_marks marks = {&s, neighbors};
+        tpk_parallel_for(T, tpk_threads_for(T, s.threads, 1 << 16), mark_shell, &marks);
         s.tet_count = T;
         /* Where a mesh folds (connect cut its folds: source->folds_cut), its tets overlap: it tiles no
          * domain, and a shell vertex that moves near the fold can make faces meet that should not (a
@@ -1518,12 +1727,8 @@ int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *ne
     }
     domain_size full = rc == 0 ? size_of(mesh->points, mesh->tets, neighbors, T, s.threads) : (domain_size){0, 0};
     if (o->level_shell_error > 0 && V > 0) { /* a fraction of the bounding box diagonal */
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, diag = 0;
-        for (int64_t v = 0; v < V; v++)
-            for (int a = 0; a < 3; a++) {
-                lo[a] = mesh->points[3 * v + a] < lo[a] ? mesh->points[3 * v + a] : lo[a];
-                hi[a] = mesh->points[3 * v + a] > hi[a] ? mesh->points[3 * v + a] : hi[a];
-            }
+        double lo[3], hi[3], diag = 0;
+        bounds_of(mesh->points, NULL, V, s.threads, lo, hi);
         for (int a = 0; a < 3; a++)
             diag += (hi[a] - lo[a]) * (hi[a] - lo[a]);
         s.shell_tolerance = o->level_shell_error * sqrt(diag);
@@ -1556,7 +1761,7 @@ int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *ne
         tpk_free_large(s.tets, sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     tpk_free_large(s.origin, sizeof *s.origin * (size_t)(T ? T : 1));
     tpk_free_large(s.star_start, sizeof *s.star_start * 2 * (size_t)(V ? V : 1));
-    free(s.alive);
+    free(s.alive < s.alive_next ? s.alive : s.alive_next); /* the block both halves are in (build_stars swaps them) */
     if (!scratch)
         tpk_free_large(s.star, sizeof *s.star * 4 * (size_t)(T ? T : 1));
     tpk_free_large(s.tet_quality, sizeof *s.tet_quality * (size_t)(T ? T : 1));
