@@ -20,11 +20,8 @@ if [ "$SMALL" = 1 ]; then
 else
     GRID=${TPK_CONVERT_GRID:-200} RUNS=${TPK_CONVERT_RUNS:-3}
 fi
-PY=${PYTHON:-}
-for c in python3 /usr/bin/python3; do # the first with numpy, for make_grid_vtk.py
-    [ -n "$PY" ] || ! "$c" -c "import numpy" 2>/dev/null || PY=$c
-done
-[ -n "$PY" ] || { echo "convert_ratio.sh: make_grid_vtk.py needs python3 with numpy (or set PYTHON)" >&2; exit 2; }
+[ -n "${PYTHON:-}" ] || { echo "convert_ratio.sh: no PYTHON: run it through run.sh --convert, which finds python3 with numpy" >&2; exit 2; }
+PY=$PYTHON
 vtk=$OUT/grid$GRID.vtk
 [ -s "$vtk" ] || "$PY" "$ROOT/bench/make_grid_vtk.py" "$GRID" "$vtk" >&2
 JSONL=$OUT/convert.jsonl

@@ -43,6 +43,14 @@ if [ -z "$BIN" ]; then
     cmake --build "$BIN" -j"$(nproc)" --target tetpack_cli bench_gpu >/dev/null
 fi
 TPK=$BIN/tetpack
+if [ $TARGETS = 1 ] || [ $CONVERT = 1 ]; then # both make a grid: the first python3 with numpy
+    PY=${PYTHON:-}
+    for c in python3 /usr/bin/python3; do
+        [ -n "$PY" ] || ! "$c" -c "import numpy" 2>/dev/null || PY=$c
+    done
+    [ -n "$PY" ] || { echo "run.sh: make_grid_vtk.py needs python3 with numpy (or set PYTHON)" >&2; exit 2; }
+    export PYTHON=$PY
+fi
 [ $TARGETS = 0 ] || exec bash "$HERE/targets.sh" "$TPK" "$OUT" "$SMALL"
 [ $CONVERT = 0 ] || exec bash "$HERE/convert_ratio.sh" "$TPK" "$OUT" "$SMALL"
 GPU=$BIN/bench_gpu

@@ -25,11 +25,8 @@ if [ "$SMALL" = 1 ]; then
 else
     GRID=${TPK_GPU_TARGET_GRID:-121} RUNS=${TPK_GPU_TARGET_RUNS:-3} ISO_SIZE=3840x2160 SIZE=1024x1024
 fi
-PY=${PYTHON:-}
-for c in python3 /usr/bin/python3; do # the first with numpy, for make_grid_vtk.py
-    [ -n "$PY" ] || ! "$c" -c "import numpy" 2>/dev/null || PY=$c
-done
-[ -n "$PY" ] || { echo "targets.sh: make_grid_vtk.py needs python3 with numpy (or set PYTHON)" >&2; exit 2; }
+[ -n "${PYTHON:-}" ] || { echo "targets.sh: no PYTHON: run it through run.sh --targets, which finds python3 with numpy" >&2; exit 2; }
+PY=$PYTHON
 vk() { LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" "$@"; } # the sanitizers' preloads, as run.sh
 vtk=$OUT/grid$GRID.vtk tpk=$OUT/grid${GRID}_levels.tpk
 [ -s "$vtk" ] || "$PY" "$ROOT/bench/make_grid_vtk.py" "$GRID" "$vtk"
