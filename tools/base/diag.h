@@ -22,6 +22,9 @@ typedef struct tpk_diag {
     /* Set by the caller: importers that support it skip a field of the wrong length and record it here
      * instead of failing (tpk_diag_field_problem returns 0 then, -1 otherwise). */
     int lenient_fields;
+    /* Set by the caller (convert --strict-fields): a field an importer cannot read is an error; by default
+     * importers that support it leave the field out with a warning saying where and why. */
+    int strict_fields;
     long long field_problem_count;                       /* all recorded, may exceed the array */
     tpk_field_problem field_problems[TPK_DIAG_MAX_FIELD_PROBLEMS];
 } tpk_diag;

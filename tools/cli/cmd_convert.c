@@ -23,6 +23,8 @@ static const char convert_help[] =
     "                              default: every scalar point field)\n"
     "  --cell-to-point             average cell fields to points (each point: the mean over its cells);\n"
     "                              without --field, scalar cell fields are then kept too\n"
+    "  --strict-fields             a field the importer cannot read (an OpenFOAM field using #calc) is an\n"
+    "                              error; by default it is left out with a warning saying where and why\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
@@ -99,7 +101,7 @@ typedef struct convert_args {
     tpk_convert_options options;
     tpk_tetgen_options tetgen;
     const char *fields[256];
-    int json, quiet;
+    int json, quiet, strict_fields;
     int progress; /* -1: when stderr is a terminal */
 } convert_args;
 
@@ -230,6 +232,8 @@ static int parse_args(int argc, char **argv, convert_args *a)
             /* the default now; old command lines keep working */
         } else if (!strcmp(arg, "--strict-orientation")) {
             a->options.strict_orientation = 1;
+        } else if (!strcmp(arg, "--strict-fields")) {
+            a->strict_fields = 1;
         } else if (!strcmp(arg, "--cut-folds")) {
             a->options.cut_folds = 1;
         } else if (!strncmp(arg, "--merge-duplicates", 18) && (!arg[18] || arg[18] == '=')) {
@@ -416,6 +420,7 @@ int tpk_cmd_convert(int argc, char **argv)
     tpk_convert_report report;
     tpk_diag diag;
     memset(&diag, 0, sizeof diag);
+    diag.strict_fields = a.strict_fields;
     /* Scripts and tests read a quiet stderr: progress only on a terminal, or when asked. */
     int progress = !a.quiet && (a.progress >= 0 ? a.progress : isatty(2));
     a.tetgen.progress = progress;

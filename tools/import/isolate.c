@@ -250,6 +250,7 @@ static int run_child(int (*read)(const char *, tpk_mesh *, tpk_diag *), int (*pr
             tpk_diag mine;
             memset(&mine, 0, sizeof mine);
             mine.lenient_fields = diag ? diag->lenient_fields : 0;
+            mine.strict_fields = diag ? diag->strict_fields : 0;
             mine.warn = child_warn;
             mine.warn_user = &fd;
             rc = read(path, out, &mine);

@@ -171,26 +171,50 @@ static int parse_header(tpk_foam_file *f)
     return 0;
 }
 
-int tpk_foam_open(tpk_foam_file *f, const char *dir, const char *name, tpk_diag *diag)
+/* Read `path` (or path.gz when only that exists) into f. 0, 1 when neither exists, -1 with a message. */
+static int load(tpk_foam_file *f, const char *path, tpk_diag *diag)
 {
     memset(f, 0, sizeof *f);
     f->diag = diag;
     struct stat st;
-    snprintf(f->path, sizeof f->path, "%s/%s", dir, name);
-    int rc;
-    if (stat(f->path, &st) == 0) {
-        rc = read_plain(f);
-    } else {
-        snprintf(f->path, sizeof f->path, "%s/%s.gz", dir, name);
-        if (stat(f->path, &st) != 0)
-            return 1;
-        rc = read_gzip(f);
-    }
+    snprintf(f->path, sizeof f->path, "%s", path);
+    if (stat(f->path, &st) == 0)
+        return read_plain(f);
+    snprintf(f->path, sizeof f->path, "%s.gz", path);
+    if (stat(f->path, &st) != 0)
+        return 1;
+    return read_gzip(f);
+}
+
+int tpk_foam_open(tpk_foam_file *f, const char *dir, const char *name, tpk_diag *diag)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    int rc = load(f, path, diag);
     if (rc == 0)
         rc = parse_header(f);
     if (rc != 0)
         tpk_foam_close(f);
     return rc;
+}
+
+int tpk_foam_read_any(tpk_foam_file *f, const char *path, tpk_diag *diag)
+{
+    int rc = load(f, path, diag);
+    if (rc != 0) {
+        tpk_foam_close(f);
+        return rc;
+    }
+    tpk_foam_skip_space(f);
+    size_t at = f->pos;
+    char word[16];
+    tpk_foam_word(f, word, sizeof word);
+    f->pos = at;
+    if (strcmp(word, "FoamFile") == 0 && parse_header(f) != 0) {
+        tpk_foam_close(f);
+        return -1;
+    }
+    return 0;
 }
 
 void tpk_foam_close(tpk_foam_file *f)

@@ -21,6 +21,9 @@ typedef struct tpk_foam_file {
 /* Read dir/name (or dir/name.gz when that exists instead) and parse its FoamFile header; on success pos
  * is just after the header. 0, 1 when neither file exists (nothing reported), -1 with a message. */
 int tpk_foam_open(tpk_foam_file *f, const char *dir, const char *name, tpk_diag *diag);
+/* Read a file that #include names: `path` (or path.gz), its FoamFile header parsed when it has one (an
+ * included file often has none). 0, 1 when neither file exists, -1 with a message. */
+int tpk_foam_read_any(tpk_foam_file *f, const char *path, tpk_diag *diag);
 void tpk_foam_close(tpk_foam_file *f);
 
 /* Fail with "PATH:LINE: " (ASCII) or "PATH: byte N: " (binary) at the current position. Returns -1. */

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "foam_dict.h"
 #include "foam_file.h"
 #include "import/importers.h"
 #include "mesh/polyhedron.h"
@@ -329,53 +330,93 @@ static int field_kind(const char *class_name, int *components)
     return -1;
 }
 
-/* The internalField entry, uniform or nonuniform, as count * components values into dst. */
-static int read_internal_field(tpk_foam_file *f, int components, int64_t count, float *dst)
+static int is_word(tpk_foam_dict *d, const tpk_foam_token *t, const char *w)
 {
-    char word[128];
-    for (;;) {
-        if (tpk_foam_word(f, word, sizeof word) == 0)
-            return tpk_foam_fail(f, "expected an internalField entry, found %s",
-                                 f->pos < f->size ? "a delimiter" : "end of file");
-        if (strcmp(word, "internalField") == 0)
-            break;
-        /* Another entry (dimensions, ...): skip to its ';'. */
-        while (f->pos < f->size && f->data[f->pos] != ';')
-            f->pos++;
-        f->pos++;
-    }
-    tpk_foam_word(f, word, sizeof word);
-    if (strcmp(word, "uniform") == 0) {
-        double v[3];
-        tpk_foam_skip_space(f);
-        int paren = components > 1;
-        if (paren && f->data[f->pos] == '(')
-            f->pos++;
-        for (int k = 0; k < components; k++) {
-            char *end;
-            tpk_foam_skip_space(f);
-            v[k] = strtod(f->data + f->pos, &end);
-            if (end == f->data + f->pos)
-                return tpk_foam_fail(f, "expected a uniform value, found '%.20s'", f->data + f->pos);
-            f->pos = (size_t)(end - f->data);
-        }
+    return t->kind == TPK_FOAM_WORD && t->len == strlen(w) &&
+           memcmp(tpk_foam_dict_file(d, t)->data + t->pos, w, t->len) == 0;
+}
+
+static int is_paren(tpk_foam_dict *d, const tpk_foam_token *t, char c)
+{
+    return t->kind == TPK_FOAM_PUNCT && tpk_foam_dict_file(d, t)->data[t->pos] == c;
+}
+
+static int token_number(tpk_foam_dict *d, const tpk_foam_token *t, double *v)
+{
+    char buf[64], *end;
+    if (t->kind != TPK_FOAM_WORD || t->len >= sizeof buf)
+        return -1;
+    memcpy(buf, tpk_foam_dict_file(d, t)->data + t->pos, t->len);
+    buf[t->len] = 0;
+    *v = strtod(buf, &end);
+    return end == buf || *end || !isfinite(*v) ? -1 : 0;
+}
+
+/* A uniform value: one number, or "(x y z)" for a vector. */
+static int uniform_value(tpk_foam_dict *d, const tpk_foam_token *t, int n, int components, double *v)
+{
+    int ok = components == 1 ? n == 1 && token_number(d, t, v) == 0
+                             : n == components + 2 && is_paren(d, &t[0], '(') && is_paren(d, &t[n - 1], ')');
+    for (int k = 0; ok && components > 1 && k < components; k++)
+        ok = token_number(d, &t[1 + k], &v[k]) == 0;
+    return ok ? 0 : -1;
+}
+
+/* `nonuniform List<T> N{V}`: OpenFOAM's short form of a list whose N items are all V. */
+static int uniform_list(tpk_foam_dict *d, const tpk_foam_token *list, int components, int64_t count, double *v)
+{
+    const char *s = tpk_foam_dict_file(d, list)->data + list->pos;
+    char *end;
+    long long n = strtoll(s, &end, 10);
+    int ok = components == 1 ? sscanf(end, "{ %lf }", &v[0]) == 1
+                             : sscanf(end, "{ ( %lf %lf %lf ) }", &v[0], &v[1], &v[2]) == 3;
+    if (!ok || !isfinite(v[0]) || (components > 1 && !(isfinite(v[1]) && isfinite(v[2]))))
+        return tpk_foam_dict_fail(d, list, "expected N{value} with a %s value, found '%.*s'",
+                                  components > 1 ? "vector" : "scalar", (int)(list->len > 40 ? 40 : list->len), s);
+    if (n != count)
+        return tpk_foam_dict_fail(d, list, "%lld field values, expected %lld (one per cell or point)", n,
+                                  (long long)count);
+    return 0;
+}
+
+/* The internalField entry, macros expanded: `uniform V`, `nonuniform List<T> N(...)` (read in place, ASCII
+ * or binary) or `nonuniform List<T> N{V}`, as count * components values into dst. */
+static int internal_field(tpk_foam_dict *d, const tpk_foam_token *t, int n, int components, int64_t count,
+                          float *dst)
+{
+    const char *list_type = components > 1 ? "List<vector>" : "List<scalar>";
+    double v[3];
+    if (n >= 1 && is_word(d, &t[0], "uniform")) {
+        if (uniform_value(d, t + 1, n - 1, components, v) != 0)
+            return tpk_foam_dict_fail(d, &t[0], "expected a uniform %s value after 'uniform', found %d tokens",
+                                      components > 1 ? "vector (x y z)" : "scalar", n - 1);
         for (int64_t i = 0; i < count * components; i++)
             dst[i] = (float)v[i % components];
         return 0;
     }
-    if (strcmp(word, "nonuniform") != 0)
-        return tpk_foam_fail(f, "expected 'uniform' or 'nonuniform' after internalField, found '%s'", word);
-    tpk_foam_word(f, word, sizeof word);
-    if (strcmp(word, components > 1 ? "List<vector>" : "List<scalar>") != 0)
-        return tpk_foam_fail(f, "expected %s, found '%s'", components > 1 ? "List<vector>" : "List<scalar>", word);
-    int64_t n;
+    if (n != 3 || !is_word(d, &t[0], "nonuniform") || !is_word(d, &t[1], list_type) || t[2].kind != TPK_FOAM_LIST) {
+        const char *s = tpk_foam_dict_file(d, &t[0])->data + t[0].pos;
+        return tpk_foam_dict_fail(d, &t[0], "expected 'uniform VALUE' or 'nonuniform %s N(...)' for internalField, "
+                                  "found '%.*s'", list_type, (int)(t[0].len > 20 ? 20 : t[0].len), s);
+    }
+    tpk_foam_file *f = tpk_foam_dict_file(d, &t[2]);
+    size_t open = strspn(f->data + t[2].pos, "0123456789 \t\r\n"); /* N, then '(' or '{' */
+    if (f->data[t[2].pos + open] == '{') {
+        if (uniform_list(d, &t[2], components, count, v) != 0)
+            return -1;
+        for (int64_t i = 0; i < count * components; i++)
+            dst[i] = (float)v[i % components];
+        return 0;
+    }
+    int64_t found;
     double *values;
-    if (tpk_foam_scalars(f, components, &n, &values, "field values") != 0)
+    f->pos = t[2].pos;
+    if (tpk_foam_scalars(f, components, &found, &values, "field values") != 0)
         return -1;
-    if (n != count) {
+    if (found != count) {
         free(values);
-        return tpk_foam_fail(f, "%lld field values, expected %lld (one per %s)", (long long)n, (long long)count,
-                             count ? "cell or point" : "cell");
+        return tpk_foam_dict_fail(d, &t[2], "%lld field values, expected %lld (one per %s)", (long long)found,
+                                  (long long)count, count ? "cell or point" : "cell");
     }
     for (int64_t i = 0; i < count * components; i++)
         dst[i] = (float)values[i];
@@ -383,7 +424,25 @@ static int read_internal_field(tpk_foam_file *f, int components, int64_t count, 
     return 0;
 }
 
-/* One field name read from every time directory into a field with one step per directory. */
+/* Parse a field file (which it takes over) and read its internalField. */
+static int read_internal_field(tpk_foam_file *file, const char *case_dir, int components, int64_t count,
+                               float *dst, tpk_diag *diag)
+{
+    tpk_foam_dict *d = tpk_foam_dict_parse(file, case_dir, diag);
+    if (!d)
+        return -1;
+    tpk_foam_token *t;
+    int n;
+    int rc = tpk_foam_dict_value(d, "internalField", &t, &n);
+    if (rc == 0)
+        rc = internal_field(d, t, n, components, count, dst);
+    free(t);
+    tpk_foam_dict_free(d);
+    return rc;
+}
+
+/* One field name read from every time directory into a field with one step per directory. A field that
+ * cannot be read is left out with a warning saying where and why, unless diag->strict_fields. */
 static int read_field(const char *case_dir, const time_dir *times, int steps, const char *name, tpk_mesh *out,
                       tpk_diag *diag)
 {
@@ -402,7 +461,7 @@ static int read_field(const char *case_dir, const time_dir *times, int steps, co
             return 0;
         }
         if (rc != 0)
-            goto fail;
+            goto unreadable;
         int c;
         int a = field_kind(f.class_name, &c);
         if (s == 0) {
@@ -418,17 +477,22 @@ static int read_field(const char *case_dir, const time_dir *times, int steps, co
             free(values);
             return 0; /* a field class not read (surface fields, tensors, uniformDimensionedFields) */
         }
-        rc = read_internal_field(&f, components, count, values + s * count * components);
-        tpk_foam_close(&f);
-        if (rc != 0)
-            goto fail;
+        if (read_internal_field(&f, case_dir, components, count, values + s * count * components, diag) != 0)
+            goto unreadable;
     }
     if (tpk_mesh_add_field(out, name, assoc, components, steps, values) == 0)
         return 0;
-    tpk_diag_fail(diag, "%s: out of memory for field %s", case_dir, name);
-fail:
     free(values);
-    return -1;
+    return tpk_diag_fail(diag, "%s: out of memory for field %s", case_dir, name);
+unreadable:
+    free(values);
+    if (diag && diag->strict_fields)
+        return -1;
+    tpk_diag_warn(diag, "%s; field %s left out (--strict-fields makes this an error)", diag ? diag->message : "",
+                  name);
+    if (diag)
+        diag->message[0] = 0;
+    return 0;
 }
 
 /* Fields: the names in the latest time directory, read from every one (a time step each). */
