@@ -325,6 +325,34 @@ TPK_TEST(clean_real_meshes)
     }
 }
 
+/* snappyHexMesh's flange as OpenFOAM wrote it (tests/data/openfoam/cases/flange_binary): polyhedra whose
+ * faces carry the points of finer neighbours (up to 8 corners) and non-planar snapped faces. checkMesh
+ * says one region and "Mesh OK" (flange.checkMesh.txt). check once dropped the cells with faces of more
+ * than 4 corners (2 components, 34 x 401, 10 x 402, 24 x 303); now every face is matched whole and the
+ * faces of polyhedra are cut about their centre as OpenFOAM cuts them. */
+TPK_TEST(snapped_polyhedra_agree_with_checkmesh)
+{
+    tpk_check_report r;
+    CHECK(run_path(TPK_SOURCE_DIR "/tests/data/openfoam/cases/flange_binary", 2, &r) == 0);
+    int bad = others_zero(&r, (const int[]){304, 405}, 2);
+    CHECK_MSG(bad == 0, "check %d fired (%lld)", bad, (long long)count_of(&r, bad));
+    CHECK_EQ_INT(r.component_count, 1);
+    tpk_check_report_free(&r);
+}
+
+/* Polygons matched whole (their runs cut by the full face) give the same counts on 1 and 2 threads. */
+TPK_TEST(snapped_polyhedra_same_for_any_thread_count)
+{
+    tpk_check_report one, two;
+    const char *path = TPK_SOURCE_DIR "/tests/data/openfoam/cases/flange_binary";
+    CHECK(run_path(path, 1, &one) == 0 && run_path(path, 2, &two) == 0);
+    CHECK_EQ_INT(one.component_count, two.component_count);
+    for (int i = 0; i < TOPO_ID_COUNT; i++)
+        CHECK_EQ_INT(count_of(&one, TOPO_IDS[i]), count_of(&two, TOPO_IDS[i]));
+    tpk_check_report_free(&one);
+    tpk_check_report_free(&two);
+}
+
 /* sfepy/matrix_fiber_rand.vtk has 97 of its 603 hexes in mirrored node order (negative corner
  * Jacobians): where they meet the others, faces are traversed the same way by both. */
 TPK_TEST(mirrored_hexes_real)

@@ -16,16 +16,16 @@
 #include "check_shell_cgal.h"
 #include "tetpack_format.h" /* tpk_tet_faces */
 
-/* Triangles and quads. Polyhedra (type 42) add their explicit faces in check_topo_faces.c (the three
- * functions tpk_topo_face_count, tpk_topo_cell_faces, tpk_topo_cell_face); the matching keys every face
- * by its sorted ids and the shell keeps the face's own order, so triangles and quads need nothing else.
- * Faces of more than 4 vertices also need this raised, a longer key in face_rec (check_topo_match.c)
- * and room in tpk_bface. */
-#define TPK_TOPO_MAX_FACE_VERTS 4
-#define TPK_TOPO_MAX_CELL_FACES 32 /* the local face index is stored in a byte; polyhedra need room */
+/* Faces of up to 32 vertices, cells of up to 64 faces: the polyhedra of snappyHexMesh and foamToVTK
+ * (quads whose edges carry the points of finer neighbours) fit; a cell beyond either is left out of the
+ * checks (the rest of the mesh is still checked). The matching keys a face by its smallest four ids and
+ * a hash of the rest, and compares polygons of more than four vertices in full (check_topo_match.c);
+ * the shell keeps triangles and quads as they are and cuts larger polygons about their centre. */
+#define TPK_TOPO_MAX_FACE_VERTS 32
+#define TPK_TOPO_MAX_CELL_FACES 64 /* the local face index is stored in 16 bits */
 
 typedef struct tpk_topo_face {
-    int n;                                /* 3 or 4 */
+    int n;                                /* 3 to TPK_TOPO_MAX_FACE_VERTS */
     int32_t v[TPK_TOPO_MAX_FACE_VERTS];   /* outward order (VTK cell faces, right-hand rule) */
 } tpk_topo_face;
 
@@ -55,7 +55,7 @@ static inline int tpk_topo_min_index(const tpk_topo_face *f)
 void tpk_topo_face_triangle(const tpk_topo_face *f, int t, int32_t tri[3]);
 
 /* Centre (vertex average) of a face, for example locations. */
-void tpk_topo_face_centre(const tpk_mesh *mesh, const tpk_topo_face *f, double out[3]);
+void tpk_topo_face_centre(const double *points, const tpk_topo_face *f, double out[3]);
 
 /* Union-find over uint32 ids, safe to call concurrently (links the larger root to the smaller with a
  * compare-and-swap, so the partition and each set's smallest-id root do not depend on timing). */
@@ -73,6 +73,12 @@ typedef struct tpk_topo_match {
     uint32_t *parent;        /* union-find over cells: TPK_UF_NONE for cells the checks skip */
     tpk_bface *shell;   /* boundary faces, in the order of their sorted vertex ids */
     int64_t shell_count;
+    /* The points the shell's ids index: the mesh's, then the centres of the boundary polygons of more
+     * than 4 vertices, which the shell cuts into triangles about their centre as OpenFOAM does (a fan
+     * from a corner can fold a non-planar polygon over its neighbour). */
+    const double *points;
+    int64_t point_count;
+    double *own_points;      /* points, when centres were added */
 } tpk_topo_match;
 
 /* Matches the faces of all usable volume cells (sort-based, multithreaded, deterministic), reports
@@ -88,7 +94,7 @@ int tpk_check_shell(const tpk_mesh *mesh, tpk_topo_match *m, tpk_check_report *r
 
 /* 401, 402, 403, 404 and 405 on the shell's polygons (quads as quads: the combinatorial checks do not
  * depend on how a quad would be cut). */
-int tpk_check_shell_edges(const tpk_mesh *mesh, const tpk_topo_match *m, tpk_check_report *report,
+int tpk_check_shell_edges(const tpk_topo_match *m, tpk_check_report *report,
                           tpk_diag *diag);
 
 /* Sign of orient3d (exact: the static filter, then CGAL). */

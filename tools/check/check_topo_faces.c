@@ -15,7 +15,7 @@ static const tpk_cell_shape *table_for(int type, int64_t nodes)
 }
 
 /* A polyhedron's explicit faces (its VTK face stream, which VTK asks to be outward), when it has at most
- * TPK_TOPO_MAX_CELL_FACES faces of 3 or 4 points each; otherwise 0 and the checks leave the cell out
+ * TPK_TOPO_MAX_CELL_FACES faces of 3 to TPK_TOPO_MAX_FACE_VERTS points each; otherwise 0 and the checks leave the cell out
  * (the rest of the mesh is still checked: its boundary against the cell stays closed). The importers
  * checked the stream's structure and ids. */
 static int poly_faces(const tpk_mesh *mesh, int64_t cell, tpk_topo_face *faces)
@@ -104,12 +104,12 @@ void tpk_topo_face_triangle(const tpk_topo_face *f, int t, int32_t tri[3])
     tri[2] = f->v[(m + 2 + t) % n];
 }
 
-void tpk_topo_face_centre(const tpk_mesh *mesh, const tpk_topo_face *f, double out[3])
+void tpk_topo_face_centre(const double *points, const tpk_topo_face *f, double out[3])
 {
     for (int k = 0; k < 3; k++) {
         double sum = 0;
         for (int i = 0; i < f->n; i++)
-            sum += mesh->points[3 * (int64_t)f->v[i] + k];
+            sum += points[3 * (int64_t)f->v[i] + k];
         out[k] = sum / f->n;
     }
 }

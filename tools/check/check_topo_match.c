@@ -9,6 +9,7 @@
 
 #include "check_topo.h"
 #include "base/parallel.h"
+#include "base/predicates.h"
 #include "mesh/face_match.h"
 
 enum { HIT_NONMANIFOLD, HIT_ORIENTATION, HIT_FOLDED, HIT_KINDS };
@@ -20,6 +21,8 @@ typedef struct worker_out {
     tpk_example *examples[HIT_KINDS]; /* max_examples each: the worker's first hits */
     tpk_bface *shell;
     int64_t shell_count, shell_cap;
+    double *centres; /* of the worker's boundary polygons, numbered -2 - k in its shell until merged */
+    int64_t centre_count, centre_cap;
     int failed; /* out of memory */
 } worker_out;
 
@@ -28,6 +31,7 @@ typedef struct match_job {
     int threads, max_examples;
     int tets_only; /* every cell a tet at offset 4 c: the matcher's tet path, each tet's sign in its entries */
     uint32_t *parent;
+    int polygons; /* some face has more than 4 vertices: runs are split by the whole face (match_run) */
     worker_out out[TPK_MAX_THREADS];
 } match_job;
 
@@ -54,6 +58,13 @@ static int keep_cell(void *user, int64_t c)
         return 0;
     }
     job->parent[c] = (uint32_t)c;
+    if (job->mesh->cell_types[c] == TPK_CELL_POLYHEDRON && !__atomic_load_n(&job->polygons, __ATOMIC_RELAXED)) {
+        tpk_topo_face faces[TPK_TOPO_MAX_CELL_FACES];
+        int n = tpk_topo_cell_faces(job->mesh, c, faces);
+        for (int f = 0; f < n; f++)
+            if (faces[f].n > 4)
+                __atomic_store_n(&job->polygons, 1, __ATOMIC_RELAXED);
+    }
     return 1;
 }
 
@@ -91,13 +102,22 @@ static void sort_ids(int32_t *v, int n)
     }
 }
 
+/* The key of a face: its second and third smallest ids, then the fourth of a quad, or for a larger polygon
+ * a hash of its count and its other ids (match_run compares those in full, so a collision costs time,
+ * never a wrong match). */
 static void make_rec(tpk_match_face *r, const tpk_topo_face *f, uint32_t local)
 {
     int32_t s[TPK_TOPO_MAX_FACE_VERTS];
-    memcpy(s, f->v, sizeof s);
+    memcpy(s, f->v, sizeof(int32_t) * (size_t)f->n);
     sort_ids(s, f->n);
     r->key = (uint64_t)(uint32_t)s[1] << 32 | (uint32_t)s[2];
     r->key3 = f->n == 4 ? (uint32_t)s[3] : UINT32_MAX;
+    if (f->n > 4) {
+        uint64_t h = 0x9E3779B97F4A7C15ull * (uint64_t)f->n;
+        for (int i = 3; i < f->n; i++)
+            h = (h ^ (uint32_t)s[i]) * 0x100000001B3ull;
+        r->key3 = (uint32_t)(h ^ h >> 32);
+    }
     r->local = (uint16_t)local;
 }
 
@@ -126,10 +146,10 @@ static int cell_faces(void *user, int64_t c, int32_t v, tpk_match_face *r)
     return n;
 }
 
-/* Side of triangle `tri` that cell `cell` lies on: the sign every vertex of the cell off the face
- * shares, or 0 when they do not agree (a cell that is itself warped or flat: the cell checks say so).
- * With `first_only`, the sign of the first vertex off the face. */
-static int cell_side(const tpk_mesh *mesh, uint32_t cell, const tpk_topo_face *face, const int32_t tri[3],
+/* Side of the triangle (a, b, c) that cell `cell` lies on: the sign every vertex of the cell off the
+ * face shares, or 0 when they do not agree (a cell that is itself warped or flat: the cell checks say
+ * so). With `first_only`, the sign of the first vertex off the face. */
+static int cell_side(const tpk_mesh *mesh, uint32_t cell, const tpk_topo_face *face, const double *tri[3],
                      int first_only)
 {
     int pos = 0, neg = 0;
@@ -139,7 +159,9 @@ static int cell_side(const tpk_mesh *mesh, uint32_t cell, const tpk_topo_face *f
             on_face |= face->v[k] == p;
         if (on_face)
             continue;
-        int s = tpk_topo_orient(mesh->points, tri[0], tri[1], tri[2], p);
+        const double *q = mesh->points + 3 * (int64_t)p;
+        int s = tpk_orient3d_filter(tri[0], tri[1], tri[2], q);
+        s = s ? s : tpk_orient3d_exact(tri[0], tri[1], tri[2], q);
         if (first_only)
             return s;
         pos |= s > 0;
@@ -148,14 +170,36 @@ static int cell_side(const tpk_mesh *mesh, uint32_t cell, const tpk_topo_face *f
     return pos && !neg ? 1 : neg && !pos ? -1 : 0;
 }
 
-/* 305: both cells on the same side of a triangle of the face (quads: the smallest-id diagonal split).
- * One vertex of each strictly on opposite sides already rules it out: the usual case, two tests. */
+/* A polyhedron's face is the surface OpenFOAM makes of it: triangles from its centre to each edge (a
+ * non-planar quad split along a diagonal can fold where the face itself does not); so is every polygon
+ * of more than 4 vertices. The faces of the other cells are cut as the converter cuts them. */
+static int centre_cut(const tpk_mesh *mesh, const tpk_topo_face *f, uint32_t cell)
+{
+    return f->n > 4 || (f->n == 4 && mesh->cell_types[cell] == TPK_CELL_POLYHEDRON);
+}
+
+/* 305: both cells on the same side of a triangle of the face (quads: the smallest-id diagonal split, or
+ * about the centre by centre_cut). One vertex of each strictly on opposite sides already rules it out:
+ * the usual case, two tests. */
 static int folded(const tpk_mesh *mesh, uint32_t cell_a, const tpk_topo_face *fa, uint32_t cell_b)
 {
-    int triangles = fa->n == 4 ? 2 : 1;
+    int centred = centre_cut(mesh, fa, cell_a) || centre_cut(mesh, fa, cell_b);
+    int triangles = centred ? fa->n : fa->n - 2;
+    double centre[3];
+    if (centred)
+        tpk_topo_face_centre(mesh->points, fa, centre);
     for (int t = 0; t < triangles; t++) {
-        int32_t tri[3];
-        tpk_topo_face_triangle(fa, t, tri);
+        const double *tri[3];
+        if (centred) {
+            tri[0] = centre;
+            tri[1] = mesh->points + 3 * (int64_t)fa->v[t];
+            tri[2] = mesh->points + 3 * (int64_t)fa->v[(t + 1) % fa->n];
+        } else {
+            int32_t ids[3];
+            tpk_topo_face_triangle(fa, t, ids);
+            for (int k = 0; k < 3; k++)
+                tri[k] = mesh->points + 3 * (int64_t)ids[k];
+        }
         if (cell_side(mesh, cell_a, fa, tri, 1) * cell_side(mesh, cell_b, fa, tri, 1) < 0)
             continue;
         int sa = cell_side(mesh, cell_a, fa, tri, 0);
@@ -207,15 +251,15 @@ static void face_example(const tpk_mesh *mesh, tpk_example *ex, const tpk_topo_f
     int64_t ids[TPK_CHECK_MAX_IDS];
     int n = 0;
     int32_t s[TPK_TOPO_MAX_FACE_VERTS];
-    memcpy(s, face->v, sizeof s);
+    memcpy(s, face->v, sizeof(int32_t) * (size_t)face->n);
     sort_ids(s, face->n);
-    for (int i = 0; i < face->n; i++)
+    for (int i = 0; i < face->n && n < TPK_CHECK_MAX_IDS; i++)
         ids[n++] = s[i];
     for (int64_t i = 0; i < cells_n && n < TPK_CHECK_MAX_IDS; i++)
         ids[n++] = r[i].item;
     tpk_example_ids(ex, n, ids);
     double centre[3];
-    tpk_topo_face_centre(mesh, face, centre);
+    tpk_topo_face_centre(mesh->points, face, centre);
     tpk_example_point(ex, centre);
 }
 
@@ -258,7 +302,7 @@ static void shared_face(match_job *job, worker_out *o, const tpk_match_face *r)
     }
 }
 
-static int add_shell_face(const match_job *job, worker_out *o, const tpk_match_face *r)
+static int push_shell(worker_out *o, const int32_t *v, int n, const tpk_match_face *r)
 {
     if (o->shell_count == o->shell_cap) {
         int64_t cap = 2 * o->shell_cap + 256;
@@ -268,14 +312,89 @@ static int add_shell_face(const match_job *job, worker_out *o, const tpk_match_f
         o->shell = grown;
         o->shell_cap = cap;
     }
-    tpk_topo_face face;
-    face_of(job, r->item, r->local, &face);
     tpk_bface *s = &o->shell[o->shell_count++];
-    for (int i = 0; i < TPK_TOPO_MAX_FACE_VERTS; i++)
-        s->v[i] = i < face.n ? face.v[i] : -1;
+    for (int i = 0; i < 4; i++)
+        s->v[i] = i < n ? v[i] : -1;
     s->cell = r->item;
     s->local = r->local;
     return 0;
+}
+
+/* A shell face: a triangle or a quad as it is, or by centre_cut the triangles from its centre (the mean
+ * of its corners, OpenFOAM's decomposition) to each of its edges, whose inner edges each two of them
+ * share. */
+static int add_shell_face(const match_job *job, worker_out *o, const tpk_match_face *r)
+{
+    tpk_topo_face face;
+    face_of(job, r->item, r->local, &face);
+    if (job->tets_only || !centre_cut(job->mesh, &face, r->item))
+        return push_shell(o, face.v, face.n, r);
+    if (o->centre_count == o->centre_cap) {
+        int64_t cap = 2 * o->centre_cap + 64;
+        double *grown = realloc(o->centres, sizeof *grown * 3 * (size_t)cap);
+        if (!grown)
+            return -1;
+        o->centres = grown;
+        o->centre_cap = cap;
+    }
+    tpk_topo_face_centre(job->mesh->points, &face, o->centres + 3 * o->centre_count);
+    int32_t centre = (int32_t)(-2 - o->centre_count++);
+    for (int i = 0; i < face.n; i++) {
+        int32_t tri[3] = {centre, face.v[i], face.v[(i + 1) % face.n]};
+        if (push_shell(o, tri, 3, r) != 0)
+            return -1;
+    }
+    return 0;
+}
+
+static void face_run(match_job *job, worker_out *o, const tpk_match_face *faces, int64_t n)
+{
+    if (n == 1)
+        o->failed |= add_shell_face(job, o, faces) != 0;
+    else if (n == 2)
+        shared_face(job, o, faces);
+    else
+        nonmanifold_face(job, o, faces, n);
+}
+
+static int same_face(const tpk_topo_face *a, const tpk_topo_face *b)
+{
+    if (a->n != b->n)
+        return 0;
+    int32_t sa[TPK_TOPO_MAX_FACE_VERTS], sb[TPK_TOPO_MAX_FACE_VERTS];
+    memcpy(sa, a->v, sizeof(int32_t) * (size_t)a->n);
+    memcpy(sb, b->v, sizeof(int32_t) * (size_t)b->n);
+    sort_ids(sa, a->n);
+    sort_ids(sb, b->n);
+    return memcmp(sa, sb, sizeof(int32_t) * (size_t)a->n) == 0;
+}
+
+/* Equal keys of polygons with more than 4 vertices are equal faces only when all their ids are: the run
+ * is cut into groups of equal faces, each matched on its own (in the run's order, so the results do not
+ * depend on the thread count). */
+static void polygon_run(match_job *job, worker_out *o, const tpk_match_face *faces, int64_t n)
+{
+    enum { MOST = 16 };
+    if (n > MOST) { /* more cells on one face than any real mesh has: as one run, a non-manifold face */
+        face_run(job, o, faces, n);
+        return;
+    }
+    tpk_topo_face face[MOST];
+    int done[MOST] = {0};
+    for (int64_t i = 0; i < n; i++)
+        face_of(job, faces[i].item, faces[i].local, &face[i]);
+    for (int64_t i = 0; i < n; i++) {
+        if (done[i])
+            continue;
+        tpk_match_face group[MOST];
+        int64_t g = 0;
+        for (int64_t j = i; j < n; j++)
+            if (!done[j] && same_face(&face[i], &face[j])) {
+                done[j] = 1;
+                group[g++] = faces[j];
+            }
+        face_run(job, o, group, g);
+    }
 }
 
 static void match_run(void *user, int worker, int64_t bucket, const tpk_match_face *faces, int64_t n)
@@ -283,12 +402,10 @@ static void match_run(void *user, int worker, int64_t bucket, const tpk_match_fa
     match_job *job = user;
     worker_out *o = &job->out[worker];
     (void)bucket;
-    if (n == 1)
-        o->failed |= add_shell_face(job, o, faces) != 0;
-    else if (n == 2)
-        shared_face(job, o, faces);
+    if (job->polygons && n > 1)
+        polygon_run(job, o, faces, n);
     else
-        nonmanifold_face(job, o, faces, n);
+        face_run(job, o, faces, n);
 }
 
 /* Worker results in worker order = bucket order: the first examples overall, exact totals. */
@@ -307,19 +424,39 @@ static void merge_hits(match_job *job, tpk_check_report *report)
     }
 }
 
+/* The workers' shells in worker order; their polygon centres numbered after the mesh's points. */
 static int merge_shell(match_job *job, tpk_topo_match *out)
 {
-    int64_t total = 0;
-    for (int w = 0; w < job->threads; w++)
+    int64_t total = 0, centres = 0;
+    for (int w = 0; w < job->threads; w++) {
         total += job->out[w].shell_count;
+        centres += job->out[w].centre_count;
+    }
     out->shell = malloc(sizeof *out->shell * (size_t)(total ? total : 1));
     if (!out->shell)
         return -1;
+    out->points = job->mesh->points;
+    out->point_count = job->mesh->point_count;
+    if (centres) {
+        if (out->point_count + centres > INT32_MAX ||
+            !(out->own_points = malloc(sizeof(double) * 3 * (size_t)(out->point_count + centres))))
+            return -1;
+        memcpy(out->own_points, job->mesh->points, sizeof(double) * 3 * (size_t)out->point_count);
+        out->points = out->own_points;
+    }
     for (int w = 0; w < job->threads; w++) {
-        if (job->out[w].shell_count == 0) /* its list may never have been allocated */
+        worker_out *o = &job->out[w];
+        for (int64_t f = 0; f < o->shell_count; f++)
+            for (int i = 0; i < 4; i++)
+                if (o->shell[f].v[i] <= -2)
+                    o->shell[f].v[i] = (int32_t)(out->point_count - 2 - o->shell[f].v[i]);
+        if (o->centre_count)
+            memcpy(out->own_points + 3 * out->point_count, o->centres, sizeof(double) * 3 * (size_t)o->centre_count);
+        out->point_count += o->centre_count;
+        if (o->shell_count == 0) /* its list may never have been allocated */
             continue;
-        memcpy(out->shell + out->shell_count, job->out[w].shell, sizeof *out->shell * (size_t)job->out[w].shell_count);
-        out->shell_count += job->out[w].shell_count;
+        memcpy(out->shell + out->shell_count, o->shell, sizeof *out->shell * (size_t)o->shell_count);
+        out->shell_count += o->shell_count;
     }
     return 0;
 }
@@ -328,6 +465,7 @@ static void free_job(match_job *job)
 {
     for (int w = 0; w < TPK_MAX_THREADS; w++) {
         free(job->out[w].shell);
+        free(job->out[w].centres);
         for (int k = 0; k < HIT_KINDS; k++)
             free(job->out[w].examples[k]);
     }
@@ -347,6 +485,7 @@ void tpk_topo_match_free(tpk_topo_match *m)
 {
     free(m->parent);
     free(m->shell);
+    free(m->own_points);
     memset(m, 0, sizeof *m);
 }
 

@@ -19,7 +19,8 @@ typedef struct half_edge {
 } half_edge;
 
 typedef struct shell_graph {
-    const tpk_mesh *mesh;
+    const double *points;    /* the shell's (tpk_topo_match.points) */
+    int64_t point_count;
     const tpk_bface *faces;
     int64_t face_count;
     int64_t *start;          /* point_count + 1: half-edges (then corners) of each vertex */
@@ -69,7 +70,7 @@ static void sort_half_edges(half_edge *h, int64_t n)
 /* Counting sort of the half-edges by smaller vertex; start[] ends as the bucket starts. */
 static void bucket_half_edges(shell_graph *g)
 {
-    int64_t vertices = g->mesh->point_count;
+    int64_t vertices = g->point_count;
     memset(g->start, 0, sizeof *g->start * (size_t)(vertices + 1));
     for (int64_t f = 0; f < g->face_count; f++)
         for (int i = 0, n = tpk_bface_n(&g->faces[f]); i < n; i++) {
@@ -102,7 +103,7 @@ static void edge_example(const shell_graph *g, tpk_example *ex, int32_t a, int32
             ids[n++] = cell;
     }
     tpk_example_ids(ex, n, ids);
-    const double *p = g->mesh->points + 3 * (int64_t)a, *q = g->mesh->points + 3 * (int64_t)b;
+    const double *p = g->points + 3 * (int64_t)a, *q = g->points + 3 * (int64_t)b;
     double mid[3] = {(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2};
     tpk_example_point(ex, mid);
 }
@@ -143,7 +144,7 @@ static void visit_edge(shell_graph *g, tpk_check_report *report, int32_t a, int3
 /* Runs of equal `other` within each vertex's bucket are the edges. */
 static void for_each_edge(shell_graph *g, tpk_check_report *report, int count_components)
 {
-    for (int64_t v = 0; v < g->mesh->point_count; v++) {
+    for (int64_t v = 0; v < g->point_count; v++) {
         half_edge *h = g->edges + g->start[v];
         int64_t n = g->start[v + 1] - g->start[v];
         if (!count_components)
@@ -168,7 +169,7 @@ static void for_each_edge(shell_graph *g, tpk_check_report *report, int count_co
 
 static void bucket_corners(shell_graph *g)
 {
-    int64_t vertices = g->mesh->point_count;
+    int64_t vertices = g->point_count;
     memset(g->start, 0, sizeof *g->start * (size_t)(vertices + 1));
     for (int64_t f = 0; f < g->face_count; f++)
         for (int i = 0, n = tpk_bface_n(&g->faces[f]); i < n; i++)
@@ -202,7 +203,7 @@ static int64_t distinct(uint32_t *roots, int64_t n)
 /* 402 per vertex, and V per shell component. `scratch` holds the largest vertex's corners. */
 static void visit_vertices(shell_graph *g, tpk_check_report *report, uint32_t *scratch)
 {
-    for (int64_t v = 0; v < g->mesh->point_count; v++) {
+    for (int64_t v = 0; v < g->point_count; v++) {
         const uint32_t *c = g->corners + g->start[v];
         int64_t n = g->start[v + 1] - g->start[v];
         if (n == 0)
@@ -214,7 +215,7 @@ static void visit_vertices(shell_graph *g, tpk_check_report *report, uint32_t *s
             tpk_example *ex = tpk_check_hit(report, 402, "vertex");
             int64_t id = v;
             tpk_example_ids(ex, 1, &id);
-            tpk_example_point(ex, g->mesh->points + 3 * v);
+            tpk_example_point(ex, g->points + 3 * v);
             tpk_example_note(ex, "the shell faces around this vertex form %lld fans (volumes touching at a "
                              "vertex)", (long long)fans);
         }
@@ -245,7 +246,7 @@ static void report_euler(shell_graph *g, tpk_check_report *report)
         tpk_example *ex = tpk_check_hit(report, 405, "component");
         int64_t id = g->faces[f].cell;
         tpk_example_ids(ex, 1, &id);
-        tpk_example_point(ex, g->mesh->points + 3 * (int64_t)g->faces[f].v[0]);
+        tpk_example_point(ex, g->points + 3 * (int64_t)g->faces[f].v[0]);
         tpk_example_note(ex, "V - E + F = %lld (V %u, E %u, F %u); ids: a cell of this shell component",
                          (long long)chi, g->comp_v[f], g->comp_e[f], g->comp_f[f]);
         if (used >= 0 && used < (int64_t)sizeof values - 48) {
@@ -278,7 +279,7 @@ static void free_graph(shell_graph *g)
 static int alloc_graph(shell_graph *g)
 {
     size_t faces = (size_t)(g->face_count ? g->face_count : 1);
-    g->start = malloc(sizeof *g->start * (size_t)(g->mesh->point_count + 1));
+    g->start = malloc(sizeof *g->start * (size_t)(g->point_count + 1));
     g->edges = malloc(sizeof *g->edges * 4 * faces);
     g->corners = malloc(sizeof *g->corners * 4 * faces);
     g->corner_parent = malloc(sizeof *g->corner_parent * 4 * faces);
@@ -296,13 +297,13 @@ static int alloc_graph(shell_graph *g)
     return 0;
 }
 
-int tpk_check_shell_edges(const tpk_mesh *mesh, const tpk_topo_match *m, tpk_check_report *report,
+int tpk_check_shell_edges(const tpk_topo_match *m, tpk_check_report *report,
                           tpk_diag *diag)
 {
     if (m->shell_count >= ((int64_t)1 << 30))
         return tpk_diag_fail(diag, "check: %lld shell faces exceed the shell checks' limit of 2^30",
                              (long long)m->shell_count);
-    shell_graph g = {mesh, m->shell, m->shell_count, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
+    shell_graph g = {m->points, m->point_count, m->shell, m->shell_count, NULL, NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     if (alloc_graph(&g)) {
         free_graph(&g);
         return tpk_diag_fail(diag, "check: out of memory (shell of %lld faces)", (long long)m->shell_count);
@@ -312,7 +313,7 @@ int tpk_check_shell_edges(const tpk_mesh *mesh, const tpk_topo_match *m, tpk_che
     for_each_edge(&g, report, 1);
     bucket_corners(&g);
     int64_t largest = 1;
-    for (int64_t v = 0; v < mesh->point_count; v++)
+    for (int64_t v = 0; v < g.point_count; v++)
         if (g.start[v + 1] - g.start[v] > largest)
             largest = g.start[v + 1] - g.start[v];
     uint32_t *scratch = malloc(sizeof *scratch * (size_t)largest);
