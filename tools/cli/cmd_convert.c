@@ -336,12 +336,14 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
                           "\"steiner_cells\":%lld,\"face_steiner_points\":%lld,\"polyhedra\":%lld,"
                           "\"fixed_boundary_cells\":%lld,\"bad_cells_skipped\":%lld,\"merged_vertices\":%lld,"
-                          "\"collapsed_cells_dropped\":%lld,\"folds_cut\":%lld,\"repairs\":",
+                          "\"collapsed_cells_dropped\":%lld,\"folds_cut\":%lld,\"thin_faces_recut\":%lld,"
+                          "\"flat_tets\":%lld,\"repairs\":",
                           (long long)r->cells_into[1], (long long)r->cells_into[2], (long long)r->cells_into[3],
                           (long long)r->cells_into[5], (long long)r->cells_into[6], (long long)r->mirrored_cells,
                           (long long)r->steiner_cells, (long long)r->face_steiner_points,
                           (long long)r->polyhedra, (long long)r->fixed_boundary_cells, (long long)r->bad_cells_skipped,
-                          (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped, (long long)r->folds_cut);
+                          (long long)r->merged_vertices, (long long)r->collapsed_cells_dropped, (long long)r->folds_cut,
+                          (long long)r->thin_faces_recut, (long long)r->flat_tets);
         tpk_convert_repairs_json(&sb, &a->options, r);
         tpk_strbuf_printf(&sb, ",\"levels\":[");
         for (int k = 0; k < r->level_count; k++) {

@@ -132,6 +132,8 @@ static int make_tets(conversion *c)
     rep->fixed_boundary_cells = c->mesh.fixed_boundary_cells;
     rep->face_steiner_points = c->mesh.face_steiner_points;
     rep->polyhedra = c->mesh.polyhedra;
+    rep->thin_faces_recut = c->mesh.thin_faces_recut;
+    rep->flat_tets = c->mesh.flat_tets;
     rep->bad_cells_skipped = c->mesh.bad_cells_skipped;
     return tpk_quantize_points(&c->mesh, &c->header, c->diag);
 }

@@ -55,6 +55,8 @@ typedef struct tpk_convert_report {
     int64_t merged_vertices, collapsed_cells_dropped; /* --merge-duplicates; cells it collapsed, dropped */
     int64_t cells_into[7];       /* source cells that gave k tets (1 tetra, 2 pyramid, 3 wedge, 5/6 hex) */
     int64_t face_steiner_points, polyhedra; /* points added at face centres; polyhedra split */
+    int64_t thin_faces_recut, flat_tets;    /* tpk_tetmesh's: faces cut otherwise to avoid a near-flat
+                                               triangle; flat tets of the split cells (TPK_FLAT_TET_DEG) */
     int64_t mirrored_cells, steiner_cells, bad_cells_skipped; /* mirrored: turned over; bad: left out (cells,
                                                                  and inverted tets that would fold) */
     int64_t folds_cut;            /* folded faces whose adjacency was cut (cut_folds) */

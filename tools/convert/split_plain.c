@@ -9,6 +9,7 @@
 
 #include "base/parallel.h"
 #include "cell_split.h"
+#include "mesh/cell_types.h"
 
 static int plain_max_tets(int type)
 {
@@ -72,8 +73,10 @@ static void split_range(void *ctx, int64_t begin, int64_t end, int w)
         if (mirrored && f->mirrored_cells++ == 0)
             f->first_mirrored_cell = c;
         f->cells_into[made]++;
-        for (int i = 0; i < made; i++)
+        for (int i = 0; i < made; i++) {
             job->tet_source[t + i] = (int32_t)c;
+            f->flat_tets += type != TPK_CELL_TETRA && tpk_tet_is_flat(job->points, job->tets + 4 * (t + i));
+        }
         t += made;
     }
     f->tet_count = t - me->start;
@@ -100,6 +103,7 @@ static int merge_workers(split_job *job, int threads, tpk_plain_split *res)
         if (k->found.mirrored_cells && res->mirrored_cells == 0)
             res->first_mirrored_cell = k->found.first_mirrored_cell;
         res->mirrored_cells += k->found.mirrored_cells;
+        res->flat_tets += k->found.flat_tets;
         if (res->hard && k->found.hard_count)
             memcpy(res->hard + res->hard_count, k->found.hard, sizeof *res->hard * (size_t)k->found.hard_count);
         res->hard_count += k->found.hard_count;

@@ -12,6 +12,7 @@ typedef struct tpk_plain_split {
     int64_t tet_count;           /* tets written */
     int64_t cells_into[7];       /* cells that gave k tets */
     int64_t mirrored_cells;      /* cells turned over (their split was all negative) */
+    int64_t flat_tets;           /* tets of split cells that are flat (tpk_tet_is_flat) */
     int64_t first_mirrored_cell; /* the lowest of them (when mirrored_cells > 0) */
     int64_t *hard;               /* cells the plain split refuses, and polyhedra, ascending (malloc'ed) */
     int64_t hard_count;

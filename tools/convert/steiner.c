@@ -38,6 +38,7 @@ static int push_tet(stage *st, int32_t a, int32_t b, int32_t c, int32_t d, int64
     int32_t *t = out->tets + 4 * out->tet_count;
     t[0] = a, t[1] = b, t[2] = c, t[3] = d;
     out->tet_source[out->tet_count++] = (int32_t)cell;
+    out->flat_tets += tpk_tet_is_flat(out->points, t);
     return 0;
 }
 

@@ -663,6 +663,81 @@ static int fixed_or_bad(stage *st, int64_t c, int32_t round, int may_add, int64_
     return added ? S_FIXED : S_BAD;
 }
 
+/* Shape of the triangle (a, b, c): 4 sqrt(3) area over the sum of its squared edges, 1 when equilateral,
+ * 0 when flat. */
+static double triangle_shape(const double *a, const double *b, const double *c)
+{
+    double u[3], v[3], w[3], n[3];
+    for (int k = 0; k < 3; k++)
+        u[k] = b[k] - a[k], v[k] = c[k] - a[k], w[k] = c[k] - b[k];
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+    double edges = 0;
+    for (int k = 0; k < 3; k++)
+        edges += u[k] * u[k] + v[k] * v[k] + w[k] * w[k];
+    return edges > 0 ? 2 * sqrt(3.0) * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / edges : 0;
+}
+
+/* The worst triangle shape of face f cut by `cut`: 0 the fan from its smallest id (a quad: along the
+ * smallest-id diagonal), 1 a quad's other diagonal, 2 at the point place_face_point puts. */
+static double cut_shape(stage *st, int64_t f, int cut)
+{
+    cell_work *w = &st->w;
+    const int32_t *v = w->faces.ids + w->faces.starts[f];
+    int64_t n = steiner_face_size(w, f), m = smallest_at(w, f);
+    double worst = 1;
+    if (cut == 2) {
+        double q[3];
+        int32_t pair[2];
+        place_face_point(st, f, q, pair);
+        for (int64_t i = 0; i < n; i++)
+            worst = fmin(worst, triangle_shape(point_at(st, v[i]), point_at(st, v[(i + 1) % n]), q));
+        return worst;
+    }
+    int64_t from = (m + cut) % n;
+    for (int64_t i = 0; i + 2 < n; i++)
+        worst = fmin(worst, triangle_shape(point_at(st, v[from]), point_at(st, v[(from + i + 1) % n]),
+                                           point_at(st, v[(from + i + 2) % n])));
+    return worst;
+}
+
+/* A face whose plain cut leaves a triangle flatter than this is cut otherwise when that is clearly
+ * better: a corner on a straight edge (a snapped face that kept a point of its finer neighbour) fanned
+ * from the wrong corner gives a zero-area triangle, and near-flat tets on it. */
+#define THIN_SHAPE 0.05
+
+/* Face f (no entry yet) cut along the quad's other diagonal or at a point when its plain cut is thin and
+ * the other is at least twice as good; both cells on the face decide alike (the shapes depend on the face
+ * alone), and the entry tags `round` so the other is decided again. Returns the entry, -1 for none, -2
+ * when out of memory. */
+static int64_t recut_thin(stage *st, int64_t f, int32_t round, int64_t *added_faces)
+{
+    cell_work *w = &st->w;
+    int64_t n = steiner_face_size(w, f);
+    double plain = cut_shape(st, f, 0);
+    if (plain >= THIN_SHAPE)
+        return -1;
+    double other = n == 4 ? cut_shape(st, f, 1) : 0, point = cut_shape(st, f, 2);
+    if (fmax(other, point) < 2 * plain)
+        return -1;
+    st->out->thin_faces_recut++;
+    if (point > other) {
+        int64_t at = add_face_point(st, f, round, added_faces);
+        return at < 0 ? -2 : at;
+    }
+    uint64_t hash = face_key(w, w->faces.ids + w->faces.starts[f], 4);
+    int64_t at = tpk_face_table_find(&st->table, w->key, 4, hash);
+    if (at < 0 && (at = tpk_face_table_add(&st->table, w->key, 4, hash, round)) < 0)
+        return -2;
+    tpk_face_entry *x = &st->table.entries[at];
+    set_cut(st, f, x, 1);
+    x->changed = 1;
+    x->round = round;
+    *added_faces += 1;
+    return at;
+}
+
 /* Decide cell c's split against the face table; with may_add, register the face points it needs
  * (counted in *added_faces, tagged with `round`). A cell that no star fits is tetrahedralized inside its
  * boundary (S_FIXED) when the build can, else it is bad. Returns 0 or -1 (out of memory). */
@@ -679,6 +754,15 @@ static int decide(stage *st, int64_t c, int32_t round, int may_add, int64_t *add
     }
     keep |= w->mirrored ? S_MIRRORED : 0;
     int64_t centred = steiner_lookup_faces(st);
+    for (int64_t f = 0; may_add && f < w->faces.face_count; f++) {
+        if (w->entry[f] >= 0 || steiner_face_size(w, f) < 4)
+            continue;
+        int64_t at = recut_thin(st, f, round, added_faces);
+        if (at < -1)
+            return -1;
+        w->entry[f] = at;
+        centred += at >= 0; /* a recut face, like a point, rules out the cone (it fans from its apex) */
+    }
     for (int64_t f = 0; may_add && f < w->faces.face_count; f++) {
         if (w->entry[f] >= 0 || !face_needs_point(w, f))
             continue;

@@ -400,6 +400,7 @@ static int split_cells(const tpk_mesh *src, int flags, int threads, const tpk_te
     out->positive_known = out->on_grid && plain.hard_count == 0 && plain.cells_into[1] == 0;
     for (int k = 0; k < 7; k++)
         out->cells_into[k] += plain.cells_into[k];
+    out->flat_tets += plain.flat_tets;
     if (plain.mirrored_cells) {
         out->mirrored_cells = plain.mirrored_cells;
         out->first_mirrored_cell = plain.first_mirrored_cell;

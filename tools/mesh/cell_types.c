@@ -1,5 +1,6 @@
 /* The VTK cell type table (VTK's vtkCellType.h codes and node orders; higher-order cells list their
  * corner nodes first, in the order of the linear cell) and the shapes of the linear volume cells. */
+#include <math.h>
 #include "cell_types.h"
 
 #include <stddef.h>
@@ -141,4 +142,29 @@ int tpk_cell_faces(int type, const int32_t *nodes, int32_t *ids, int *starts)
         starts[f + 1] = starts[f] + s->face_size[f];
     }
     return s->face_count;
+}
+
+/* The faces' normals in one winding are all outward or all inward, so the angle at the edge between
+ * faces k and l is acos(-n_k.n_l). */
+int tpk_tet_is_flat(const double *points, const int32_t v[4])
+{
+    static const int face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    double n[4][3], len[4];
+    for (int k = 0; k < 4; k++) {
+        const double *a = points + 3 * (int64_t)v[face[k][0]], *b = points + 3 * (int64_t)v[face[k][1]],
+                     *c = points + 3 * (int64_t)v[face[k][2]];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        n[k][0] = u[1] * w[2] - u[2] * w[1];
+        n[k][1] = u[2] * w[0] - u[0] * w[2];
+        n[k][2] = u[0] * w[1] - u[1] * w[0];
+        len[k] = sqrt(n[k][0] * n[k][0] + n[k][1] * n[k][1] + n[k][2] * n[k][2]);
+        if (!(len[k] > 0))
+            return 1;
+    }
+    double most = cos(TPK_FLAT_TET_DEG * M_PI / 180);
+    for (int k = 0; k < 4; k++)
+        for (int l = k + 1; l < 4; l++)
+            if (-(n[k][0] * n[l][0] + n[k][1] * n[l][1] + n[k][2] * n[l][2]) / (len[k] * len[l]) > most)
+                return 1;
+    return 0;
 }

@@ -57,6 +57,10 @@ const tpk_cell_shape *tpk_cell_shape_of(int type);
  * `ids` holds 24, `starts` 7), or 0 for another type (a tet too: its faces are tpk_tet_faces). */
 int tpk_cell_faces(int type, const int32_t *nodes, int32_t *ids, int *starts);
 
+/* Has tet v (ids into points, x y z each) a dihedral angle under TPK_FLAT_TET_DEG (mesh.h), or no
+ * volume? What convert counts as flat_tets among the tets it splits cells into. */
+int tpk_tet_is_flat(const double *points, const int32_t v[4]);
+
 /* One warning "NAME: WHAT TOTAL cells (n1 type1, n2 type2, ...)" from per-type counts (256 entries). */
 void tpk_warn_cell_counts(tpk_diag *diag, const char *name, const int64_t *by_type, int64_t total,
                           const char *what);

@@ -16,6 +16,8 @@ enum {
 };
 
 #define TPK_NAME_MAX 64
+/* A tet with a dihedral angle under this (degrees) is flat: tetpack check's sliver_tet default. */
+#define TPK_FLAT_TET_DEG 0.1
 
 typedef struct tpk_src_field {
     char name[TPK_NAME_MAX];
@@ -94,6 +96,9 @@ typedef struct tpk_tetmesh {
     int64_t steiner_cells;     /* cells split from a point added at their centre (vertex_source -1) */
     int64_t face_steiner_points; /* points added at the centre of a (non-planar or non-convex) face with 4 or
                                   more corners, shared by the cells on both sides (vertex_source -1) */
+    int64_t thin_faces_recut;  /* faces of 4 or more corners whose plain cut (a fan from the smallest id)
+                                  left a near-flat triangle, cut along the other diagonal or at a point */
+    int64_t flat_tets;         /* tets of split cells with a dihedral angle under TPK_FLAT_TET_DEG */
     int64_t polyhedra;         /* polyhedra (VTK 42) tetrahedralized: as a cone from their smallest vertex
                                   where valid, else from a centre point (counted in steiner_cells too) */
     int64_t fixed_boundary_cells; /* cells no centre or face points fit, tetrahedralized inside their boundary
