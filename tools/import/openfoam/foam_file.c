@@ -161,9 +161,9 @@ static int parse_header(tpk_foam_file *f)
     }
     f->pos++;
     if (strcmp(format, "binary") == 0) {
-        if (strcmp(arch, "\"" FOAM_ARCH "\"") != 0)
-            return tpk_foam_fail(f, "binary file with arch %s: only \"%s\" is read", arch[0] ? arch : "(none)",
-                                 FOAM_ARCH);
+        /* No arch: the writer's own, which OpenFOAM's default build makes this one (tutorials ship so). */
+        if (arch[0] && strcmp(arch, "\"" FOAM_ARCH "\"") != 0)
+            return tpk_foam_fail(f, "binary file with arch %s: only \"%s\" is read", arch, FOAM_ARCH);
         f->binary = 1;
     } else if (strcmp(format, "ascii") != 0) {
         return tpk_foam_fail(f, "expected format ascii or binary in the FoamFile header, found '%s'", format);
