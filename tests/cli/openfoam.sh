@@ -45,3 +45,20 @@ print("%s: source errors %s; converted errors %s" % (name, sorted(errors(src)), 
 sys.exit(1 if new or format_findings else 0)
 PY
 done
+
+# A field the dictionary reader cannot evaluate (#calc needs a compiler) is left out with a warning naming
+# the file and line; the mesh and the other fields convert (exit 0). --strict-fields makes it an error (2).
+cp -r "$SRC/tests/data/openfoam/cases/cavity_ascii" "$WORK/cavity"
+rm -r "$WORK/cavity/0.25" # one time directory: the field is in every one
+cat > "$WORK/cavity/0.5/nut" <<'FOAM'
+FoamFile { version 2.0; format ascii; class volScalarField; object nut; }
+internalField uniform #calc "1.0 + 2.0";
+boundaryField { }
+FOAM
+expect_exit 0 "$TPK" convert "$WORK/cavity" "$WORK/cavity.tpk" --field p
+expect_stderr "cavity/0.5/nut:2: #calc is not evaluated"
+expect_stderr "field nut left out (--strict-fields makes this an error)"
+expect_exit 2 "$TPK" convert "$WORK/cavity" "$WORK/strict.tpk" --field p --strict-fields
+expect_stderr "cavity/0.5/nut:2: #calc is not evaluated"
+[ ! -e "$WORK/strict.tpk" ] || fail "--strict-fields left an output behind"
+echo "4 passed, 0 failed"
