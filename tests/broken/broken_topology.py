@@ -122,8 +122,9 @@ def nonconforming_cases():
            coarse_ids[(0, 2)], coarse_ids[("far", 0, 2)], coarse_ids[("far", 2, 2)], coarse_ids[(2, 2)]]
     small = [hex_at(fid, 0, j, k) for k in range(2) for j in range(2)]
     out.append({"name": "topo_hanging_nodes", "text": vtk_legacy(pts, hexes([big] + small)),
-                "expect": {"nonconforming_face": 5, "nonmanifold_vertex": 4},
-                "absent": without(TOPO_ERRORS, "nonconforming_face", "nonmanifold_vertex") + ["components"]})
+                # components: face-connected, as checkMesh's regions (the big hex and the small ones)
+                "expect": {"nonconforming_face": 5, "nonmanifold_vertex": 4, "components": 2},
+                "absent": without(TOPO_ERRORS, "nonconforming_face", "nonmanifold_vertex")})
     # A quad against two triangles: a hex at x in [0, 1] and the cube x in [1, 2] as six Kuhn tets,
     # sharing the 4 corner ids of the face x = 1. Quad + 2 triangles lie against each other (3 faces);
     # the face's 4 outline edges carry 4 shell faces each (the quad, the hex's side, a triangle, a tet's
@@ -142,8 +143,8 @@ def nonconforming_cases():
                     (c[3], c[6], c[7], c[5]), (c[3], c[7], c[4], c[5]), (c[3], c[4], c[0], c[5])]
         cells = [(12, hexa)] + [(10, list(t)) for t in kuhn]
         out.append({"name": name, "text": vtk_legacy(pts, cells),
-                    "expect": {"nonconforming_face": 3, "nonmanifold_edge": 4},
-                    "absent": ["nonmanifold_vertex", "shell_self_intersection", "components", "open_shell"]})
+                    "expect": {"nonconforming_face": 3, "nonmanifold_edge": 4, "components": 2},
+                    "absent": ["nonmanifold_vertex", "shell_self_intersection", "open_shell"]})
     # Near miss: two tets whose faces on z = 0 touch along the shared edge (0, 1) only, facing
     # opposite ways (one above, one below): not nonconforming; the edge has 4 shell faces.
     pts = [(0, 0, 0), (0, 1, 0), (-1, 0.5, 0), (-0.5, 0.5, 1), (1, 0.5, 0), (0.5, 0.5, -1)]

@@ -61,11 +61,11 @@ static const tpk_check_def registry[] = {
      "mismatched quad split): coplanar, facing each other, overlapping with positive area (exact); "
      "counts faces"},
     {304, "components", I, "connectivity",
-     "number of face-connected components (nonconforming faces join too) and their sizes in cells; "
-     "reported only when there is more than one"},
+     "number of face-connected components (as checkMesh's regions; the summary says how many remain once "
+     "nonconforming faces, 303, join them) and their sizes in cells; reported only when there is more than one"},
     {305, "folded_face", E, "connectivity",
      "two cells that share a face lie on the same side of its plane (fold-over, exact; quads: each "
-     "triangle of the smallest-id diagonal split)"},
+     "triangle of the smallest-id diagonal split; faces of polyhedra: each triangle about their centre)"},
     /* shell */
     {401, "nonmanifold_edge", E, "shell",
      "a shell edge is used by more than two shell faces (the shell: faces of one cell, quads as quads)"},

@@ -7,7 +7,8 @@
  * findings name the source face, and two source faces with a common vertex never make a 406.
  * Combinatorial tests keep quads as quads.
  * A nonconforming interface (hanging nodes, a quad against two triangles) leaves its faces in the shell:
- * they are counted once, as 303, and the cells on either side are joined for the component count. */
+ * they are counted once, as 303; the components (304) stay face-connected, as checkMesh's regions, and
+ * its summary says how many the interface joins. */
 #include <stdlib.h>
 #include <string.h>
 

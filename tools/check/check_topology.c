@@ -1,5 +1,6 @@
 /* The connectivity (3xx) and shell (4xx) groups of `tetpack check`: face matching (301, 302, 305),
- * the shell (303, 401..406) and the face-connected components (304). Cells that are not volume cells,
+ * the shell (303, 401..406) and the face-connected components (304: as checkMesh's regions; cells on
+ * either side of a non-conforming interface are in different components, which 304's summary notes). Cells that are not volume cells,
  * or that tpk_check_cell_usable() rejects, take no part. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -100,14 +101,31 @@ static int report_components(const tpk_mesh *mesh, uint32_t *parent, tpk_check_r
     return 0;
 }
 
+/* Components joined by the shell checks' non-conforming pairs (303): said in 304's summary, the count
+ * itself stays the face-connected one, as checkMesh's regions. */
+static void note_joined(const tpk_mesh *mesh, uint32_t *parent, tpk_check_report *report)
+{
+    int64_t roots = 0;
+    for (int64_t c = 0; c < mesh->cell_count; c++)
+        roots += parent[c] != TPK_UF_NONE && tpk_uf_find(parent, (uint32_t)c) == (uint32_t)c;
+    tpk_finding *finding = tpk_check_finding(report, 304);
+    size_t used = strlen(finding->summary);
+    if (roots < report->component_count && used + 1 < sizeof finding->summary)
+        snprintf(finding->summary + used, sizeof finding->summary - used,
+                 "; %lld once joined across faces that lie against each other (303)", (long long)roots);
+}
+
 int tpk_check_topology(const tpk_check_input *in, tpk_check_report *report, tpk_diag *diag)
 {
     tpk_topo_match m;
     if (tpk_topo_match_faces(in->mesh, report, &m, diag))
         return -1;
-    int rc = tpk_check_shell(in->mesh, &m, report, diag);
+    /* face-connected components first: the shell's 303 pairs union cells across an interface next */
+    int rc = report_components(in->mesh, m.parent, report, diag);
     if (rc == 0)
-        rc = report_components(in->mesh, m.parent, report, diag);
+        rc = tpk_check_shell(in->mesh, &m, report, diag);
+    if (rc == 0 && report->component_count > 1)
+        note_joined(in->mesh, m.parent, report);
     tpk_topo_match_free(&m);
     return rc;
 }
