@@ -63,7 +63,7 @@ int levels_write_file(const tpk_convert_options *o, const tpk_tetmesh *lvl, cons
         tpk_convert_report lrep = *source;
         lrep.vertices = lvl->vertex_count;
         lrep.tets = lvl->tet_count;
-        rc = tpk_write_tpk(&lo, lvl, neighbors, &hdr, &lrep, source_format, NULL, NULL, diag);
+        rc = tpk_write_tpk(&lo, lvl, neighbors, &hdr, &lrep, source_format, NULL, diag);
         if (rc == 0 && take_level_bytes(fd, r) != 0)
             rc = tpk_diag_fail(diag, "level %d: cannot read back its file", k);
     }
