@@ -190,7 +190,7 @@ static int render_file(render_args *a, tpk_file *file)
     if (rc == TPK_EXIT_OK && !rgba)
         rc = tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
     /* Several steps keep the renderer's set-up from one to the next (render_session: the CPU reference's
-     * marcher, whose shell BVH took 0.16 s a frame on a 10M-tet grid, or the Vulkan device and arrays),
+     * marcher, whose shell BVH a frame would otherwise build again, or the Vulkan device and arrays),
      * and hand it each step's field. The pictures are those of one step at a time
      * (tests/cli/render_effects.sh, render_vk_iso_culling.sh). */
     render_session session = {0};

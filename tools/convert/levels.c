@@ -185,8 +185,8 @@ int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *ne
     s.stuck = calloc((size_t)(V ? V : 1), 1);
     s.vert = tpk_alloc_large(sizeof *s.vert * (size_t)(V ? V : 1));
     s.active = malloc(sizeof *s.active * (size_t)(V ? V : 1));
-    /* the arrays of the tets (a first touch of fresh pages costs about 0.75 ms a MB here): the mesh's
-     * own tets become the working tets, and its neighbors, once read below, the stars (same size) */
+    /* the arrays of the tets (fresh pages cost a first touch: bench/README "Figures behind code comments"):
+     * the mesh's own tets become the working tets, and its neighbors, once read below, the stars */
     int scratch = T > 0 && mesh->tets && neighbors;
     s.tets = scratch ? mesh->tets : tpk_alloc_large(sizeof *s.tets * 4 * (size_t)(T ? T : 1));
     s.origin = tpk_alloc_large(sizeof *s.origin * (size_t)(T ? T : 1));

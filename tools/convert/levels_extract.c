@@ -126,7 +126,7 @@ int levels_mesh(const simplifier *s, tpk_tetmesh *out, int32_t **vertex_old, tpk
         if (!(dst->values = malloc(sizeof *dst->values * (per ? per : 1) * (size_t)src->step_count)))
             rc = -1;
     }
-    if (rc == 0) { /* the copies, on all threads: level 1 of grid 200 spent 0.2-0.4 s here on one */
+    if (rc == 0) { /* the copies, on all threads (one took long on grid 200: bench/README) */
         level_fill fill = {s, out, renum, *vertex_old};
         tpk_parallel_for(n, tpk_threads_for(n, s->threads, 1 << 14), fill_vertices, &fill);
         tpk_parallel_for(s->tet_count, tpk_threads_for(s->tet_count, s->threads, 1 << 16), fill_tets, &fill);

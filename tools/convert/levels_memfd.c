@@ -32,8 +32,9 @@ static int take_level_bytes(int fd, tpk_level *r)
 }
 
 /* Write the level through the converter's own writer into an unnamed file in memory (a memfd; a
- * temporary file where there is none), and take its bytes. A file on disk cost grid 200's first level
- * 0.4-0.65 s: the writer flushes what it writes (fsync), and the bytes were then copied into memory. */
+ * temporary file where there is none), and take its bytes. Not a file on disk: the writer flushes what
+ * it writes (fsync), and the bytes were then copied into memory (bench/README "Figures behind code
+ * comments"). */
 int levels_write_file(const tpk_convert_options *o, const tpk_tetmesh *lvl, const int32_t *neighbors, int threads,
                       int k, const char *source_format, const tpk_convert_report *source, tpk_level *r,
                       tpk_diag *diag)
