@@ -78,12 +78,14 @@ static inline const double *point(const simplifier *s, int32_t v)
 {
     return s->vert[v].p;
 }
+
 /* The squared length of b - a, and b - a in e. */
 static inline double edge(const double *a, const double *b, double e[3])
 {
     e[0] = b[0] - a[0], e[1] = b[1] - a[1], e[2] = b[2] - a[2];
     return e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
 }
+
 /* The level vertex a removed vertex ended on, at the end of the chain of the vertices it was moved onto. */
 static inline int32_t survivor(const simplifier *s, int32_t u)
 {
@@ -91,6 +93,7 @@ static inline int32_t survivor(const simplifier *s, int32_t u)
         u = s->onto[u];
     return u;
 }
+
 /* What a level must keep of the full mesh: its volume and its shell's area (sums of 6V and of twice the
  * face areas, in the stored frame). Equal up to rounding when the domain is the same; a bug that lost
  * or doubled a piece would show. */
