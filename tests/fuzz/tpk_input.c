@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "check/check.h"
+#include "render/level_set.h"
 #include "support.h"
 #include "tetpack.h"
 
@@ -45,16 +46,22 @@ void tpk_fuzz_use_tpk(tpk_file *file)
 }
 
 /* Levels of detail (spec §16): each opened over the file's bytes and used as a file (check_file runs
- * check 615 on them). */
+ * check 615 on them); then as render and view open them, with META's level figures (level_set.c). */
 static void use_levels(tpk_file *file, const tpk_open_options *options)
 {
-    for (uint32_t k = 1; k <= tpk_level_count(file) && k <= 8; k++) {
+    for (uint32_t k = 1; k <= tpk_level_count(file) && k <= TPK_MAX_LEVELS; k++) {
         tpk_file *level = NULL;
         char err[256];
         if (tpk_open_level(file, k, options, &level, err, sizeof err) == TPK_OK)
             tpk_fuzz_use_tpk(level);
         tpk_close(level);
     }
+    tpk_level_set levels;
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    diag.warn = tpk_fuzz_ignore;
+    tpk_level_set_open(&levels, file, "fuzz.tpk", &diag);
+    tpk_level_set_close(&levels);
 }
 
 /* `tetpack check` on the handle: the 6xx groups, then the mesh groups on the tets they recovered. */

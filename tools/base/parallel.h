@@ -41,10 +41,11 @@ void *tpk_alloc_large(size_t size);
 
 /* free() for a large array the caller is done with (any malloc'ed block of `size` bytes): blocks of 2 MiB
  * or more are kept, already in memory (the six largest), and the next tpk_alloc_large of between half a
- * block's size and its size gets the smallest that fits instead of fresh pages (a first touch costs
- * 0.4-2 ms per MB here: reorder's old tet array becomes connect's neighbors, its old points the new
- * tet sources). A tpk_alloc_large that no kept block fits frees all but the largest before it maps
- * fresh pages, so keeping adds little to the peak (971k hexahedra: 307 MiB, as before). */
+ * block's size and its size gets the smallest that fits instead of fresh pages (a first touch of fresh
+ * pages costs time, bench/README "Figures behind code comments": reorder's old tet array becomes
+ * connect's neighbors, its old points the new tet sources). A tpk_alloc_large that no kept block fits
+ * frees all but the largest before it maps fresh pages, so keeping adds little to the peak (971k
+ * hexahedra: 307 MiB, as before). */
 void tpk_free_large(void *block, size_t size);
 
 /* Frees the blocks tpk_free_large keeps: for a stage that allocates no more large arrays, so that the

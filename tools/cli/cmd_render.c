@@ -9,6 +9,7 @@
 #include "cli.h"
 #include "render/render.h"
 #include "render/budget.h"
+#include "render/level_set.h"
 #include "render/render_backend.h"
 #include "scene/scene.h"
 #include "tetpack.h"
@@ -110,77 +111,21 @@ static int resolve_backend(render_args *a, tpk_diag *diag)
 
 /* ---- Levels of detail (spec §16): --level K and --max-ms T ------------------------------------------ */
 
-typedef struct level_set {
-    int count;                      /* levels, the full mesh (0) included */
-    tpk_file *files[9];             /* [0]: the file itself; the others opened over it */
-    int64_t tets[9];
-    double error_max[9], error_rms[9], shell_distance[9];
-} level_set;
-
-/* The level figures the converter wrote in META ("levels": [{level, error_max, error_rms, shell_distance}]). */
-static void level_errors(tpk_file *file, level_set *ls)
+static int open_levels(const render_args *a, tpk_file *file, tpk_level_set *ls)
 {
-    for (int k = 0; k < 9; k++)
-        ls->error_max[k] = ls->error_rms[k] = ls->shell_distance[k] = k == 0 ? 0 : NAN;
-    uint64_t i;
-    tpk_dir_entry e;
-    if (tpk_find_chunk(file, TPK_TAG_META, 0, 0, &i) != TPK_OK || tpk_get_chunk(file, i, &e) != TPK_OK ||
-        e.raw_size > (1u << 24))
-        return;
-    char *text = malloc(e.raw_size + 1);
-    if (!text || tpk_read_chunk(file, i, text, e.raw_size) != TPK_OK) {
-        free(text);
-        return;
-    }
-    text[e.raw_size] = 0;
-    for (int k = 1; k < ls->count; k++) { /* the converter's own compact JSON: find {"level":k, */
-        char key[32];
-        snprintf(key, sizeof key, "{\"level\":%d,", k);
-        const char *at = strstr(text, key), *mx = at ? strstr(at, "\"error_max\":") : NULL,
-                   *rms = at ? strstr(at, "\"error_rms\":") : NULL;
-        if (mx && rms) {
-            ls->error_max[k] = strtod(mx + 12, NULL);
-            ls->error_rms[k] = strtod(rms + 12, NULL);
-            const char *sd = strstr(at, "\"shell_distance\":");
-            ls->shell_distance[k] = sd ? strtod(sd + 17, NULL) : NAN;
-        }
-    }
-    free(text);
-}
-
-static int open_levels(const render_args *a, tpk_file *file, level_set *ls)
-{
-    memset(ls, 0, sizeof *ls);
-    ls->files[0] = file;
-    tpk_file_info info;
-    tpk_get_info(file, &info);
-    ls->tets[0] = (int64_t)info.tet_count;
-    ls->count = 1;
-    uint32_t n = tpk_level_count(file);
-    for (uint32_t k = 1; k <= n && k <= 8; k++) {
-        char err[512] = "";
-        if (tpk_open_level(file, k, NULL, &ls->files[k], err, sizeof err) != TPK_OK)
-            return tpk_cli_fail("render", "%s: %s", a->path, err);
-        tpk_get_info(ls->files[k], &info);
-        ls->tets[k] = (int64_t)info.tet_count;
-        ls->count++;
-    }
+    tpk_diag diag;
+    memset(&diag, 0, sizeof diag);
+    if (tpk_level_set_open(ls, file, a->path, &diag) != 0)
+        return tpk_cli_fail("render", "%s", diag.message);
     if (a->level >= ls->count)
         return tpk_cli_fail("render", "%s: no level %d: the file has %d level%s of detail (convert --levels N makes "
                             "them; tetpack info lists them)", a->path, a->level, ls->count - 1, ls->count == 2 ? "" : "s");
-    level_errors(file, ls);
     return 0;
-}
-
-static void close_levels(level_set *ls)
-{
-    for (int k = 1; k < ls->count; k++)
-        tpk_close(ls->files[k]);
 }
 
 /* --max-ms: the cost model's first frames, the coarsest level at an eighth and a quarter of the size (at
  * least 16 pixels a side): two sizes, so the fit tells a frame's fixed cost from its cost per ray. */
-static int fit_on_probe(const render_args *a, const level_set *ls, int tet_field, const tpk_render_options *opt,
+static int fit_on_probe(const render_args *a, const tpk_level_set *ls, int tet_field, const tpk_render_options *opt,
                         tpk_cost_model *model)
 {
     int k = ls->count - 1;
@@ -234,9 +179,9 @@ static int render_file(render_args *a, tpk_file *file)
     if (a->iso_auto && a->verbose)
         fprintf(stderr, "tetpack render: --iso auto: %.9g, the median of '%s' at step %d\n", iso_auto, field.name,
                 a->step);
-    level_set ls;
+    tpk_level_set ls;
     if (open_levels(a, file, &ls)) {
-        close_levels(&ls);
+        tpk_level_set_close(&ls);
         return TPK_EXIT_USAGE;
     }
     tpk_cost_model model = {0};
@@ -245,7 +190,7 @@ static int render_file(render_args *a, tpk_file *file)
     if (rc == TPK_EXIT_OK && !rgba)
         rc = tpk_cli_fail("render", "out of memory for a %dx%d image", a->width, a->height);
     /* Several steps keep the renderer's set-up from one to the next (render_session: the CPU reference's
-     * marcher, whose shell BVH took 0.16 s a frame on a 10M-tet grid, or the Vulkan device and arrays),
+     * marcher, whose shell BVH a frame would otherwise build again, or the Vulkan device and arrays),
      * and hand it each step's field. The pictures are those of one step at a time
      * (tests/cli/render_effects.sh, render_vk_iso_culling.sh). */
     render_session session = {0};
@@ -254,7 +199,7 @@ static int render_file(render_args *a, tpk_file *file)
         tpk_mesh_arrays mesh;
         double pixels = (double)a->width * a->height, budget = a->max_ms / 1e3;
         /* the camera, range and unit distance are the full mesh's (opt): every level shows the same view */
-        int k = a->max_ms > 0 ? tpk_cost_model_pick(&model, pixels, ls.tets, ls.count, budget) : a->level;
+        int k = a->max_ms > 0 ? tpk_level_set_choose(&ls, &model, pixels, budget) : a->level;
         int d = a->max_ms > 0 ? tpk_cost_model_pixel_step(&model, pixels, (double)ls.tets[k], budget, a->max_pixel_step)
                               : 1;
         int drawn_w, drawn_h; /* the rays cast */
@@ -284,7 +229,7 @@ static int render_file(render_args *a, tpk_file *file)
     }
     render_session_end(&session);
     free(rgba);
-    close_levels(&ls);
+    tpk_level_set_close(&ls);
     if (rc == TPK_EXIT_OK && a->save_scene && render_save_scene(a, file, &opt) != 0)
         return TPK_EXIT_USAGE;
     return rc;

@@ -11,12 +11,15 @@ static const struct {
     int (*run)(int argc, char **argv);
     const char *summary;
 } commands[] = {
-    {"convert", tpk_cmd_convert, "turn a simulation mesh (tetpack formats lists them) into a render-ready .tpk"},
-    {"info", tpk_cmd_info, "print a .tpk file's header, chunks, fields and checksum status"},
-    {"render", tpk_cmd_render, "render a .tpk to PNG with the CPU reference marcher"},
-    {"view", tpk_cmd_view, "a window that renders a .tpk as you orbit, zoom and change what it shows"},
+    {"convert", tpk_cmd_convert, "turn a simulation mesh (tetpack formats lists them) into a render-ready .tpk, with\n"
+                                  "           levels of detail (--levels) or as a part set (--parts)"},
+    {"info", tpk_cmd_info, "print a .tpk file's header, chunks, fields, levels and checksum status (--json)"},
+    {"render", tpk_cmd_render, "render a .tpk (or any mesh convert reads) to PNG: Vulkan compute on a GPU, else\n"
+                                "           the CPU reference marcher (--backend); --max-ms picks a level of detail"},
+    {"view", tpk_cmd_view, "a window that renders a .tpk as you orbit, zoom and change what it shows (Vulkan,\n"
+                            "           else the CPU reference)"},
     {"extract", tpk_cmd_extract, "keep only what a scene needs (layout, field, steps, clip box) in a smaller .tpk"},
-    {"export", tpk_cmd_export, "write a .tpk's tets and fields as VTU, or its shell as PLY"},
+    {"export", tpk_cmd_export, "write a .tpk's tets and fields as VTU or VTKHDF, or its shell as PLY, OBJ, OFF or STL"},
     {"iso", tpk_cmd_iso, "extract isosurfaces of a point field as triangles: PLY, OBJ or glTF binary (.glb)"},
     {"check", tpk_cmd_check, "validate a mesh or a .tpk file: connectivity, degeneracies, spec MUSTs"},
     {"formats", tpk_cmd_formats, "list the input formats convert and check read (--json for tools)"},

@@ -165,9 +165,12 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
             printf(",\"seconds_rays\":%.6f,\"cpu_seconds_rays\":%.6f", stats.seconds_rays, stats.cpu_seconds_rays);
         if (src->level > 0 || src->budget > 0) {
             printf(",\"level\":%d,\"level_tets\":%lld", src->level, (long long)src->level_tets);
+            char rms[32] = "null"; /* META's null: the field has NaNs */
+            if (!isnan(src->error_rms))
+                snprintf(rms, sizeof rms, "%.9g", src->error_rms);
             if (src->level > 0 && !isnan(src->error_max))
-                printf(",\"level_error\":{\"max\":%.9g,\"rms\":%.9g,\"shell_distance\":%.9g}", src->error_max,
-                       src->error_rms, isnan(src->shell_distance) ? 0 : src->shell_distance);
+                printf(",\"level_error\":{\"max\":%.9g,\"rms\":%s,\"shell_distance\":%.9g}", src->error_max, rms,
+                       isnan(src->shell_distance) ? 0 : src->shell_distance);
             else
                 printf(",\"level_error\":%s",
                        src->level == 0 ? "{\"max\":0,\"rms\":0,\"shell_distance\":0}" : "null");

@@ -186,22 +186,15 @@ static int connect_tets(conversion *c)
     return 0;
 }
 
-/* The levels (convert --levels), made by tpk_write_tpk once the file's own chunks are written: the
- * mesh's tets and the neighbors are then the simplifier's scratch (tpk_make_levels). */
-typedef struct levels_step {
-    conversion *c;
-    double seconds;
-} levels_step;
-
-static int make_levels(void *ctx, tpk_levels *levels, tpk_diag *diag)
+/* The levels (convert --levels), made between the file's own chunks and its META (tpk_write_begin, end):
+ * the mesh's tets and the neighbors are then the simplifier's scratch (tpk_make_levels). */
+static int make_levels(conversion *c, tpk_levels *levels, tpk_diag *diag)
 {
-    levels_step *step = ctx;
-    conversion *c = step->c;
     announce(c->stage, c->stage_user, "levels");
     double t0 = tpk_now_seconds();
     if (tpk_make_levels(c->o, &c->mesh, c->neighbors, c->o->levels, c->source_format, c->rep, levels, diag) != 0)
         return -1;
-    step->seconds = c->rep->t_levels = tpk_now_seconds() - t0;
+    c->rep->t_levels = tpk_now_seconds() - t0;
     c->rep->level_count = levels->count;
     for (int i = 0; i < levels->count; i++) {
         const tpk_level *l = &levels->level[i];
@@ -216,6 +209,19 @@ static int make_levels(void *ctx, tpk_levels *levels, tpk_diag *diag)
     return 0;
 }
 
+/* One file: its own chunks, the levels (with --levels), then META and the levels' chunks. */
+static int write_file(conversion *c, tpk_levels *levels)
+{
+    tpk_write_session ws;
+    if (tpk_write_begin(&ws, c->o, &c->mesh, c->neighbors, &c->header, c->diag) != 0)
+        return -1;
+    if (c->o->levels > 0 && make_levels(c, levels, c->diag) != 0) {
+        tpk_write_abort(&ws);
+        return -1;
+    }
+    return tpk_write_end(&ws, c->o, &c->header, c->rep, c->source_format, NULL, levels, c->diag);
+}
+
 static int write_output(conversion *c)
 {
     announce(c->stage, c->stage_user, "write");
@@ -225,17 +231,13 @@ static int write_output(conversion *c)
     c->rep->field_count = c->mesh.field_count;
     c->rep->step_count = c->mesh.step_count > 0 ? c->mesh.step_count : 1;
     tpk_levels levels = {0};
-    levels_step step = {c, 0};
-    tpk_levels_maker maker = {make_levels, &step, &levels};
-    int with_levels = c->o->levels > 0 && c->o->parts == 0;
     int rc = c->o->parts > 0 ? tpk_write_part_set(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format,
                                                   c->diag)
-                             : tpk_write_tpk(c->o, &c->mesh, c->neighbors, &c->header, c->rep, c->source_format, NULL,
-                                             with_levels ? &maker : NULL, c->diag);
+                             : write_file(c, &levels);
     tpk_levels_free(&levels);
     if (rc != 0)
         return -1;
-    c->rep->t_write = tpk_now_seconds() - t - step.seconds;
+    c->rep->t_write = tpk_now_seconds() - t - c->rep->t_levels;
     return 0;
 }
 

@@ -7,6 +7,9 @@
 
 #include "base/diag.h"
 
+/* The most levels of detail convert makes (--levels), and render and view open of a file (spec §16). */
+#define TPK_MAX_LEVELS 8
+
 #define TPK_LAYOUT_BIT_TET16 1u
 #define TPK_LAYOUT_BIT_TET20 2u
 #define TPK_LAYOUT_BIT_TET32 4u
@@ -68,7 +71,7 @@ typedef struct tpk_convert_report {
         int64_t vertices, tets, error_samples;
         double error_max, error_rms, shell_distance, shell_tolerance, seconds;
         uint64_t bytes;
-    } level[8];                   /* TPK_MAX_LEVELS */
+    } level[TPK_MAX_LEVELS];
     double t_levels;
     /* seconds per stage */
     double t_import, t_tetrahedralize, t_orient, t_reorder, t_connect, t_write, t_total; /* layouts and shell are built while writing */

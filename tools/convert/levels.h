@@ -9,29 +9,7 @@
 #include "base/diag.h"
 #include "convert.h"
 #include "mesh/mesh.h"
-
-#define TPK_MAX_LEVELS 8
-
-/* One level: the bytes of its file, and what it is. */
-typedef struct tpk_level {
-    void *data; /* the whole .tpk: mapped from the file it was written into (mapped), or malloc'd */
-    size_t size;
-    int mapped;
-    int64_t vertices, tets;
-    char field[64];          /* the field the error is measured on ("" without a point field) */
-    int field_step;          /* at this step: the one of widest range */
-    int64_t error_samples;   /* the full mesh's vertices this level removed: the error is sampled there */
-    double error_max, error_rms; /* |level - full| at those points, field units */
-    double shell_distance;   /* of the full mesh's shell from the level's, measured at the shell vertices the
-                                level removed (levels.c): 0 when the shell moved only within flat pieces */
-    double shell_tolerance;  /* what it was allowed (convert's level_shell_error times the bbox diagonal) */
-    double seconds;          /* simplifying and writing it */
-} tpk_level;
-
-typedef struct tpk_levels {
-    int count;
-    tpk_level level[TPK_MAX_LEVELS];
-} tpk_levels;
+#include "write_tpk.h" /* tpk_level, tpk_levels: what the writer stores of a level */
 
 /* Make up to `count` levels of `mesh` (in the stored frame, tets positive, `neighbors` as connect gave
  * them), each with about a sixth of the tets of the one before, by half-edge collapses that keep every
@@ -42,7 +20,7 @@ typedef struct tpk_levels {
  * field (point fields at the kept vertices, tet fields of the tet each level tet descends from), TIME,
  * TMAP and VMAP, and META with `source` (its source_cells and source_points: the levels' maps number the
  * same source). The mesh's tets and the neighbors are its scratch: on return they hold no mesh (the
- * file's own chunks are written before: tpk_levels_maker). 0, or -1 with a message. */
+ * file's own chunks are written before: tpk_write_begin). 0, or -1 with a message. */
 int tpk_make_levels(const tpk_convert_options *o, tpk_tetmesh *mesh, int32_t *neighbors, int count,
                     const char *source_format, const tpk_convert_report *source, tpk_levels *out, tpk_diag *diag);
 void tpk_levels_free(tpk_levels *levels);

@@ -229,7 +229,7 @@ static int write_part(const part_plan *plan, int p, const tpk_convert_options *o
     tpk_convert_report prep = *rep;
     tpk_part_extras extras = {pm.links, pm.link_count, p, plan->count};
     if (rc == 0)
-        rc = tpk_write_tpk(&po, &pm.mesh, pm.neighbors, &hdr, &prep, source_format, &extras, NULL, diag);
+        rc = tpk_write_tpk(&po, &pm.mesh, pm.neighbors, &hdr, &prep, source_format, &extras, diag);
     if (rc == 0)
         rc = tpk_read_header_checksum(path, &record->header_checksum, diag);
     if (rc == 0) {

@@ -263,7 +263,7 @@ static int hilbert_order(const hilbert_table *table, const double *points, int64
 /* order[new] = old for tets: by their smallest vertex id (the vertices are in curve order by now), ties
  * in input order. One counting sort instead of centroid keys and a 64-bit radix sort: tets that share a
  * vertex end up together and follow the vertex curve, which is the locality marching and face matching
- * need, at a fraction of the cost (10M tets: ~0.1 s instead of ~1 s). */
+ * need, at a fraction of the cost (bench/README "Figures behind code comments"). */
 static int32_t min_vertex(const int32_t *v)
 {
     int32_t a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];

@@ -11,7 +11,6 @@
 #include "base/output_file.h"
 #include "base/parallel.h"
 #include "base/strbuf.h"
-#include "levels.h"
 #include "pipeline.h"
 #include "tetpack.h"
 
@@ -359,9 +358,8 @@ static void writer_message(void *user, tpk_result code, const char *text)
     tpk_diag_fail(user, "%s", text);
 }
 
-int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
-                  tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
-                  const tpk_part_extras *part, const tpk_levels_maker *maker, tpk_diag *diag)
+int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const tpk_tetmesh *mesh,
+                    const int32_t *neighbors, tpk_header_fields *hdr, tpk_diag *diag)
 {
     chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
     char err[512] = "";
@@ -371,15 +369,17 @@ int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const i
     wopt.message = writer_message;
     wopt.message_user = diag;
     /* The file has no name until it is complete (base/output_file.h): a killed conversion leaves nothing. */
-    tpk_output out = {.fd = o->output_fd};
-    int named = o->output_fd <= 0; /* else the caller's file (render's in-memory conversion) */
-    if (named && tpk_output_open(&out, o->output, diag) != 0)
+    memset(ws, 0, sizeof *ws);
+    ws->out.fd = o->output_fd;
+    ws->named = o->output_fd <= 0; /* else the caller's file (render's in-memory conversion) */
+    if (ws->named && tpk_output_open(&ws->out, o->output, diag) != 0)
         return -1;
-    if (tpk_writer_open_fd(&cw.writer, out.fd, o->output, &wopt, err, sizeof err) != TPK_OK) {
-        if (named)
-            tpk_output_abort(&out);
+    if (tpk_writer_open_fd(&cw.writer, ws->out.fd, o->output, &wopt, err, sizeof err) != TPK_OK) {
+        if (ws->named)
+            tpk_output_abort(&ws->out);
         return tpk_diag_fail(diag, "%s", err);
     }
+    ws->writer = cw.writer;
     hdr->vertex_count = (uint64_t)mesh->vertex_count;
     hdr->tet_count = (uint64_t)mesh->tet_count;
     unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
@@ -392,11 +392,25 @@ int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const i
         rc = write_fields(&cw, mesh);
     if (rc == 0)
         rc = write_maps(&cw, mesh);
-    if (rc == 0 && maker) /* the mesh's tets and the neighbors may be scratch from here on */
-        rc = maker->make(maker->ctx, maker->levels, diag);
-    const tpk_levels *levels = maker ? maker->levels : NULL;
-    if (rc == 0)
-        rc = write_meta(&cw, o, rep, source_format, part, levels);
+    if (rc != 0)
+        tpk_write_abort(ws);
+    return rc;
+}
+
+void tpk_write_abort(tpk_write_session *ws)
+{
+    tpk_writer_abort(ws->writer);
+    if (ws->named)
+        tpk_output_abort(&ws->out);
+    ws->writer = NULL;
+}
+
+int tpk_write_end(tpk_write_session *ws, const tpk_convert_options *o, tpk_header_fields *hdr,
+                  tpk_convert_report *rep, const char *source_format, const tpk_part_extras *part,
+                  const tpk_levels *levels, tpk_diag *diag)
+{
+    chunk_writer cw = {ws->writer, o->zstd_level, tpk_thread_count(o->threads), diag};
+    int rc = write_meta(&cw, o, rep, source_format, part, levels);
     for (int i = 0; rc == 0 && levels && i < levels->count; i++) { /* spec §16: whole files, uncompressed */
         tpk_chunk_desc d = {.tag = TPK_TAG_LEVL, .codec = TPK_CODEC_NONE, .elem_type = TPK_ELEM_BYTE, .elem_size = 1,
                             .index = (uint32_t)i + 1, .elem_count = levels->level[i].size};
@@ -406,22 +420,30 @@ int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const i
     if (rc == 0 && part && part->link_count > 0) /* spec §15.3: LINK, optional, 4 I32 per link */
         rc = put_chunk(&cw, TPK_TAG_LINK, 0, TPK_ELEM_I32, 4, 4 * (uint64_t)part->link_count, 0, 0, part->links);
     if (rc != 0) {
-        tpk_writer_abort(cw.writer);
-        if (named)
-            tpk_output_abort(&out);
+        tpk_write_abort(ws);
         return rc;
     }
     rep->shell_faces = (int64_t)hdr->shell_face_count;
+    ws->writer = NULL;
     if (tpk_writer_finish(cw.writer, hdr) != TPK_OK) {
-        if (named)
-            tpk_output_abort(&out);
+        if (ws->named)
+            tpk_output_abort(&ws->out);
         return diag->message[0] ? -1 : tpk_diag_fail(diag, "%s: could not finish the file", o->output);
     }
-    if (named && tpk_output_commit(&out, diag) != 0)
+    if (ws->named && tpk_output_commit(&ws->out, diag) != 0)
         return -1;
     struct stat st;
-    if (named ? stat(o->output, &st) == 0 : fstat(o->output_fd, &st) == 0)
+    if (ws->named ? stat(o->output, &st) == 0 : fstat(o->output_fd, &st) == 0)
         rep->output_bytes = (uint64_t)st.st_size;
     return 0;
 }
 
+int tpk_write_tpk(const tpk_convert_options *o, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                  tpk_header_fields *hdr, tpk_convert_report *rep, const char *source_format,
+                  const tpk_part_extras *part, tpk_diag *diag)
+{
+    tpk_write_session ws;
+    if (tpk_write_begin(&ws, o, mesh, neighbors, hdr, diag) != 0)
+        return -1;
+    return tpk_write_end(&ws, o, hdr, rep, source_format, part, NULL, diag);
+}

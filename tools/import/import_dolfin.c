@@ -49,15 +49,11 @@ static int fail(dolfin_reader *r, const char *fmt, ...) __attribute__((format(pr
 
 static int fail(dolfin_reader *r, const char *fmt, ...)
 {
-    if (!r->failed) {
-        char text[800];
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(text, sizeof text, fmt, ap);
-        va_end(ap);
-        r->failed = 1;
-        tpk_diag_fail(r->diag, "%s: line %ld: %s", r->name, (long)XML_GetCurrentLineNumber(r->parser), text);
-    }
+    va_list ap;
+    va_start(ap, fmt);
+    tpk_import_place at = {r->name, (long)XML_GetCurrentLineNumber(r->parser), -1, NULL};
+    tpk_import_vfail(r->diag, &r->failed, at, fmt, ap);
+    va_end(ap);
     XML_StopParser(r->parser, XML_FALSE);
     return -1;
 }
@@ -371,20 +367,12 @@ int tpk_import_dolfin_memory(const char *name, const char *data, size_t size, tp
     for (int i = 0; i < r.field_count; i++)
         free(r.fields[i].values);
     free(r.fields);
-    if (rc != 0)
-        tpk_mesh_free(out);
-    return rc ? -1 : 0;
-}
-
-static int parse_mapped(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out, tpk_diag *diag)
-{
-    (void)mapped;
-    return tpk_import_dolfin_memory(name, data, size, out, diag);
+    return tpk_import_end(rc, out);
 }
 
 int tpk_import_dolfin(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
-    return tpk_import_mapped(path, parse_mapped, out, diag);
+    return tpk_import_mapped_memory(path, tpk_import_dolfin_memory, out, diag);
 }
 
 int tpk_sniff_dolfin(const char *head, size_t n)

@@ -546,16 +546,7 @@ static int finish(inp_reader *r, const char *name, tpk_mesh *out)
     if (r->dropped)
         tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not solids (surfaces, shells, beams...)", name,
                       (long long)r->dropped);
-    out->point_count = r->node_count;
-    out->points = r->points;
-    r->points = NULL;
-    out->cell_count = r->cell_count;
-    out->cell_types = r->types;
-    out->cell_offsets = r->offsets;
-    out->cell_conn = conn;
-    r->types = NULL;
-    r->offsets = NULL;
-    if (!out->cell_offsets && !(out->cell_offsets = calloc(1, sizeof *out->cell_offsets)))
+    if (tpk_import_take_cells(out, r->node_count, &r->points, r->cell_count, &r->types, &r->offsets, &conn))
         return tpk_diag_fail(r->diag, "%s: out of memory", name);
     if (r->set_count) {
         if (tpk_mesh_add_field(out, "elset", TPK_ASSOC_TET, 1, 1, r->cell_sets))
@@ -599,9 +590,7 @@ static int import_buffer(const char *name, const char *data, size_t size, int ma
         rc = finish(r, name, out);
     reader_free(r);
     free(r);
-    if (rc != 0)
-        tpk_mesh_free(out);
-    return rc ? -1 : 0;
+    return tpk_import_end(rc, out);
 }
 
 int tpk_import_inp_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)

@@ -244,17 +244,7 @@ static int finish(medit_reader *r, tpk_mesh *out)
     if (r->dropped)
         tpk_diag_warn(r->s.diag, "%s: dropped %lld surface and line elements (edges, triangles, quadrilaterals)",
                       r->s.name, (long long)r->dropped);
-    out->point_count = r->point_count;
-    out->points = r->points;
-    out->cell_count = r->cell_count;
-    out->cell_types = r->types;
-    out->cell_offsets = r->offsets;
-    out->cell_conn = r->conn;
-    r->points = NULL;
-    r->types = NULL;
-    r->offsets = NULL;
-    r->conn = NULL;
-    if (!out->cell_offsets && !(out->cell_offsets = calloc(1, sizeof *out->cell_offsets)))
+    if (tpk_import_take_cells(out, r->point_count, &r->points, r->cell_count, &r->types, &r->offsets, &r->conn))
         return tpk_scan_fail(&r->s, "out of memory");
     if (tpk_mesh_add_field(out, "ref", TPK_ASSOC_TET, 1, 1, r->cell_refs))
         return tpk_scan_fail(&r->s, "out of memory");
@@ -302,9 +292,7 @@ static int import_buffer(const char *name, const char *data, size_t size, int ma
     if (rc >= 0)
         rc = finish(&r, out);
     reader_free(&r);
-    if (rc != 0)
-        tpk_mesh_free(out);
-    return rc ? -1 : 0;
+    return tpk_import_end(rc, out);
 }
 
 int tpk_import_medit_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)

@@ -26,16 +26,8 @@ typedef struct meshb_reader {
     tpk_diag *diag;
 } meshb_reader;
 
-static int fail(meshb_reader *r, size_t at, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-static int fail(meshb_reader *r, size_t at, const char *fmt, ...)
-{
-    char text[600];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
-    return tpk_diag_fail(r->diag, "%s: byte %zu: %s", r->name, at, text);
-}
+/* "NAME: byte AT: ..." (import_file.h) */
+#define fail(r, at, ...) tpk_import_fail((r)->diag, NULL, (tpk_import_place){(r)->name, 0, (int64_t)(at), NULL}, __VA_ARGS__)
 
 static uint64_t load(meshb_reader *r, size_t at, int bytes)
 {
@@ -232,12 +224,9 @@ static int import_buffer(const char *name, const char *data, size_t size, int ma
             rc = fail(&r, r.pos, "an element uses vertex %d, but there are only %lld vertices", c.conn[k] + 1,
                       (long long)out->point_count);
     if (rc == 0) {
-        out->cell_count = c.count;
-        out->cell_types = c.types;
-        out->cell_offsets = c.offsets ? c.offsets : calloc(1, sizeof *out->cell_offsets);
-        out->cell_conn = c.conn;
-        c.types = NULL, c.offsets = NULL, c.conn = NULL;
-        if (!out->cell_offsets || tpk_mesh_add_field(out, "ref", TPK_ASSOC_TET, 1, 1, c.refs))
+        double *points = out->points; /* read_keywords set them */
+        if (tpk_import_take_cells(out, out->point_count, &points, c.count, &c.types, &c.offsets, &c.conn) ||
+            tpk_mesh_add_field(out, "ref", TPK_ASSOC_TET, 1, 1, c.refs))
             rc = fail(&r, r.pos, "out of memory");
         else
             c.refs = NULL;
@@ -245,9 +234,7 @@ static int import_buffer(const char *name, const char *data, size_t size, int ma
         snprintf(out->format, sizeof out->format, "medit-binary-v%d", r.version);
     }
     free(c.types), free(c.offsets), free(c.conn), free(c.refs);
-    if (rc)
-        tpk_mesh_free(out);
-    return rc ? -1 : 0;
+    return tpk_import_end(rc, out);
 }
 
 int tpk_import_meshb_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "import_file.h"
 #include "importers.h"
 #include "tetpack_format.h"
 #include "base/text_scan.h"
@@ -203,7 +204,5 @@ int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag)
         snprintf(out->format, sizeof out->format, "pvd");
     }
     free_series(&p);
-    if (rc)
-        tpk_mesh_free(out);
-    return rc ? -1 : 0;
+    return tpk_import_end(rc, out);
 }

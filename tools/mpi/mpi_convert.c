@@ -273,7 +273,7 @@ static int write_part(rank_state *s)
     memset(&cr, 0, sizeof cr);
     cr.source_points = s->rep->points_read;
     tpk_part_extras extras = {s->links, s->link_count, s->rank, s->size};
-    int rc = tpk_write_tpk(&co, &s->mesh, s->neighbors, &s->hdr, &cr, s->list.format, &extras, NULL, s->diag);
+    int rc = tpk_write_tpk(&co, &s->mesh, s->neighbors, &s->hdr, &cr, s->list.format, &extras, s->diag);
     if (rc == 0)
         rc = tpk_read_header_checksum(path, &s->record.header_checksum, s->diag);
     if (rc == 0) {

@@ -591,10 +591,8 @@ static int range_upload(vk_render *v, tpk_diag *diag)
 
 /* Whether this frame's primary rays cull (render.h ISO-ONLY RAYS): only when TETPACK_ISO_CULLING=1 asks
  * (then 1 with the range BVH uploaded, or -1 with a message); else 0, on every device. The walk of the
- * tree in the shader never paid where it was measured: on an NVIDIA H200 (grid 121, 10.6M tets,
- * 1024x1024) culled frames took 31.1 ms against 1.79 ms marched at the dense value 0.3 and 59.0 against
- * 4.42 ms at the sparse 0.99 (bench/README: the first GPU run); on lavapipe (grid 55, 256x256, 2 shared
- * cores) 1.7x slower at the sparse 0.999 and 16x at 0.3. */
+ * tree in the shader never paid where it was measured, on an NVIDIA H200 and on lavapipe, at dense and
+ * sparse values (bench/README "Figures behind code comments", and the first GPU run). */
 static int frame_culls(vk_render *v, const tpk_render_options *opt, tpk_diag *diag)
 {
     if (tpk_render_culling_wanted() != 1 || !tpk_render_iso_only(opt, v->mesh.scalars != NULL))

@@ -29,7 +29,7 @@ typedef struct view_loop {
     double gpu_seconds[256];   /* and their GPU times (-1: none) */
     int timed;
     tpk_cost_model model;      /* --max-ms: fitted on every frame drawn */
-    int levels_shown[9];       /* frames drawn at each level, for the summary */
+    int levels_shown[TPK_MAX_LEVELS + 1]; /* frames drawn at each level, for the summary */
     int last_zoom;             /* the last frame's pixel step (a drag's, or --max-ms's) */
 } view_loop;
 
@@ -94,11 +94,9 @@ static int apply_action(view_loop *l, view_action a, tpk_diag *diag)
 static int pick_level(view_loop *l, int width, int height, int resting, tpk_diag *diag)
 {
     view_state *s = &l->state;
-    if (!(l->o->max_ms > 0) || s->level_count < 2)
+    if (!(l->o->max_ms > 0) || s->levels.count < 2)
         return 0;
-    int k = resting ? 0 : l->model.n > 0 ? tpk_cost_model_pick(&l->model, (double)width * height, s->level_tets,
-                                                              s->level_count, l->o->max_ms / 1e3)
-                                         : s->level_count - 1;
+    int k = resting ? 0 : tpk_level_set_choose(&s->levels, &l->model, (double)width * height, l->o->max_ms / 1e3);
     int changed = view_state_set_level(s, k, diag);
     if (changed < 0)
         return -1;
@@ -124,7 +122,7 @@ static int show_frame(view_loop *l, int reduced, int resting, tpk_diag *diag)
     /* --max-ms past the coarsest level, while the view moves: rays at every d-th pixel (budget.h) */
     if (l->o->max_ms > 0 && !(resting && !reduced)) {
         int d = tpk_cost_model_pixel_step(&l->model, (double)width * height,
-                                          (double)l->state.level_tets[l->state.level], l->o->max_ms / 1e3,
+                                          (double)l->state.levels.tets[l->state.level], l->o->max_ms / 1e3,
                                           l->o->max_pixel_step);
         zoom = d > zoom ? d : zoom;
     }
@@ -142,7 +140,7 @@ static int show_frame(view_loop *l, int reduced, int resting, tpk_diag *diag)
     if (view_renderer_frame(&l->renderer, &l->state, w, h, l->rgba, &stats, diag) != 0)
         return -1;
     double seconds = tpk_now_seconds() - t0;
-    tpk_cost_model_add(&l->model, (double)w * h, (double)l->state.level_tets[l->state.level], seconds);
+    tpk_cost_model_add(&l->model, (double)w * h, (double)l->state.levels.tets[l->state.level], seconds);
     l->levels_shown[l->state.level]++;
     if (zoom == 1) /* the size a scene written now says */
         l->full_seconds = seconds, l->state.opt.width = width, l->state.opt.height = height;
@@ -196,7 +194,7 @@ static int finish(view_loop *l, tpk_diag *diag)
             l->frame, width, height, l->renderer.device, 1e3 * l->frame_seconds[l->timed / 2], gpu, l->timed);
     if (l->o->max_ms > 0) {
         fprintf(stderr, "tetpack view: --max-ms %g: frames per level", l->o->max_ms);
-        for (int k = 0; k < l->state.level_count; k++)
+        for (int k = 0; k < l->state.levels.count; k++)
             fprintf(stderr, " %d:%d", k, l->levels_shown[k]);
         fprintf(stderr, " (0: the full mesh); the last at level %d, pixel step %d\n", l->state.level, l->last_zoom);
     }

@@ -11,6 +11,7 @@
 
 #include "view.h"
 #ifdef TPK_WITH_VULKAN
+#include "render/level_set.h"
 #include "render_vk/render_vk_present.h"
 #endif
 
@@ -29,11 +30,10 @@ typedef struct view_state {
     tpk_mesh_arrays mesh;
     double bounds_min[3], bounds_max[3];
     int iso_raster;                /* tpk_view_options.iso_raster */
-    /* Levels of detail (spec §16): files[0] is the file itself, the others opened over it; `file` is
-     * files[level]. The camera, range and bounds stay the full mesh's whatever the level. */
-    tpk_file *files[9];
-    int64_t level_tets[9];
-    int level_count, level;
+    /* Levels of detail (spec §16): levels.files[0] is the file itself, the others opened over it; `file`
+     * is levels.files[level]. The camera, range and bounds stay the full mesh's whatever the level. */
+    tpk_level_set levels;
+    int level;
 } view_state;
 
 /* What a key asks for. */

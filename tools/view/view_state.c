@@ -71,18 +71,8 @@ int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag)
             break;
         }
     }
-    s->files[0] = o->file;
-    s->level_tets[0] = (int64_t)info.tet_count;
-    s->level_count = 1;
-    for (uint32_t k = 1; k <= tpk_level_count(o->file) && k <= 8; k++) {
-        char err[512] = "";
-        if (tpk_open_level(o->file, k, NULL, &s->files[k], err, sizeof err) != TPK_OK)
-            return tpk_diag_fail(diag, "%s: %s", o->path, err);
-        tpk_file_info li;
-        tpk_get_info(s->files[k], &li);
-        s->level_tets[k] = (int64_t)li.tet_count;
-        s->level_count++;
-    }
+    if (tpk_level_set_open(&s->levels, o->file, o->path, diag) != 0)
+        return -1;
     if (o->field && !s->field[0])
         return tpk_diag_fail(diag, "%s: no field named '%s'", o->path, o->field);
     if (s->step < 0 || (uint32_t)s->step >= s->step_count)
@@ -93,14 +83,14 @@ int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag)
 
 int view_state_set_level(view_state *s, int level, tpk_diag *diag)
 {
-    if (level == s->level || level < 0 || level >= s->level_count)
+    if (level == s->level || level < 0 || level >= s->levels.count)
         return 0;
     int before = s->level;
     s->level = level;
-    s->file = s->files[level];
+    s->file = s->levels.files[level];
     if (load(s, diag) != 0) {
         s->level = before;
-        s->file = s->files[before];
+        s->file = s->levels.files[before];
         return -1;
     }
     return 1;
@@ -108,11 +98,9 @@ int view_state_set_level(view_state *s, int level, tpk_diag *diag)
 
 void view_state_close(view_state *s)
 {
-    for (int k = 1; k < s->level_count; k++)
-        tpk_close(s->files[k]);
-    s->level_count = 1;
+    tpk_level_set_close(&s->levels);
     s->level = 0;
-    s->file = s->files[0];
+    s->file = s->levels.files[0];
 }
 
 static int next_field(view_state *s, tpk_diag *diag)
@@ -308,5 +296,5 @@ void view_state_describe(const view_state *s, char *out, size_t n)
              s->opt.probe_count ? ", probe " : "",
              s->opt.probe_count ? tpk_probe_shape_name(s->opt.probes[0].shape) : "");
     if (s->level > 0 && strlen(out) + 32 < n)
-        snprintf(out + strlen(out), n - strlen(out), ", level %d (%lld tets)", s->level, (long long)s->level_tets[s->level]);
+        snprintf(out + strlen(out), n - strlen(out), ", level %d (%lld tets)", s->level, (long long)s->levels.tets[s->level]);
 }

@@ -12,16 +12,6 @@
 /* zlib's deflate packs at most about this many bytes into one (HDF5's common filter). */
 #define DEFLATE_MAX_RATIO 1032.0
 
-int vh_fail(vh_reader *r, const char *fmt, ...)
-{
-    char text[900];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
-    va_end(ap);
-    return tpk_diag_fail(r->diag, "%s: %s", r->name, text);
-}
-
 int vh_exists(hid_t group, const char *name)
 {
     return H5Lexists(group, name, H5P_DEFAULT) > 0;

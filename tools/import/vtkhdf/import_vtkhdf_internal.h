@@ -10,6 +10,7 @@
 #include <hdf5.h>
 
 #include "base/diag.h"
+#include "import/import_file.h"
 #include "mesh/mesh.h"
 
 #ifndef TPK_HAVE_HDF5
@@ -45,7 +46,8 @@ typedef struct vh_reader {
     uint8_t *kept;
 } vh_reader;
 
-int vh_fail(vh_reader *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* "NAME: ..." (import_file.h) */
+#define vh_fail(r, ...) tpk_import_fail((r)->diag, NULL, (tpk_import_place){(r)->name, 0, -1, NULL}, __VA_ARGS__)
 
 /* Dataset `path` under /VTKHDF: rank 1 (*cols = 1) or 2; checked against the bytes it stores. -1 with a
  * message naming it when missing or otherwise. */

@@ -51,14 +51,7 @@ int tpk_import_vtu_memory(const char *name, const char *data, size_t size, tpk_m
     return rc;
 }
 
-/* tpk_parse_fn: the VTU reader has no use for `mapped` (it reads appended blocks by offset). */
-static int parse_vtu(const char *name, const char *data, size_t size, int mapped, tpk_mesh *out, tpk_diag *diag)
-{
-    (void)mapped;
-    return tpk_import_vtu_memory(name, data, size, out, diag);
-}
-
 int tpk_import_vtu(const char *path, tpk_mesh *out, tpk_diag *diag)
 {
-    return tpk_import_mapped(path, parse_vtu, out, diag);
+    return tpk_import_mapped_memory(path, tpk_import_vtu_memory, out, diag); /* appended blocks read by offset */
 }

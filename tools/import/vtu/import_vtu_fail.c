@@ -4,22 +4,15 @@
 #include <stdarg.h>
 #include <stdio.h>
 
+#include "import/import_file.h"
 #include "import_vtu_internal.h"
 
 int vtu_fail_line(vtu_reader *r, long line, const char *fmt, ...)
 {
-    char text[800];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
+    tpk_import_vfail(r->diag, &r->failed, (tpk_import_place){r->name, line, -1, NULL}, fmt, ap);
     va_end(ap);
-    if (!r->failed) {
-        r->failed = 1;
-        if (line > 0)
-            tpk_diag_fail(r->diag, "%s: line %ld: %s", r->name, line, text);
-        else
-            tpk_diag_fail(r->diag, "%s: %s", r->name, text);
-    }
     if (r->parser)
         XML_StopParser(r->parser, XML_FALSE);
     return -1;
@@ -27,15 +20,12 @@ int vtu_fail_line(vtu_reader *r, long line, const char *fmt, ...)
 
 int vtu_fail_array(vtu_reader *r, const vtu_array *a, const char *fmt, ...)
 {
-    char text[700];
+    char array[160];
+    snprintf(array, sizeof array, "DataArray '%s' (line %ld)", a->name, a->line);
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
+    tpk_import_vfail(r->diag, &r->failed, (tpk_import_place){r->name, 0, -1, array}, fmt, ap);
     va_end(ap);
-    if (!r->failed) {
-        r->failed = 1;
-        tpk_diag_fail(r->diag, "%s: DataArray '%s' (line %ld): %s", r->name, a->name, a->line, text);
-    }
     if (r->parser)
         XML_StopParser(r->parser, XML_FALSE);
     return -1;

@@ -341,9 +341,7 @@ static int parse_xdmf(xdmf_reader *r, tpk_mesh *out)
     int rc = read_document(r, out);
     xdmf_hdf_close(r);
     xdmf_tree_free(r->doc);
-    if (rc)
-        tpk_mesh_free(out), memset(out, 0, sizeof *out);
-    return rc ? -1 : 0;
+    return tpk_import_end(rc, out);
 }
 
 int tpk_import_xdmf_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag)

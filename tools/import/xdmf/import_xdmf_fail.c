@@ -3,23 +3,20 @@
 #include <stdarg.h>
 #include <stdio.h>
 
+#include "import/import_file.h"
 #include "import_xdmf_internal.h"
 
 int xdmf_fail(xdmf_reader *r, const xdmf_node *at, const char *fmt, ...)
 {
-    char text[800];
+    char element[48];
+    tpk_import_place place = {r->name, at && at->line > 0 ? at->line : 0, -1, NULL};
+    if (place.line > 0 && at->name[0]) {
+        snprintf(element, sizeof element, "<%.40s>", at->name);
+        place.context = element;
+    }
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(text, sizeof text, fmt, ap);
+    tpk_import_vfail(r->diag, &r->failed, place, fmt, ap);
     va_end(ap);
-    if (r->failed)
-        return -1;
-    r->failed = 1;
-    if (at && at->line > 0 && at->name[0])
-        tpk_diag_fail(r->diag, "%s: line %ld: <%.40s>: %s", r->name, at->line, at->name, text);
-    else if (at && at->line > 0)
-        tpk_diag_fail(r->diag, "%s: line %ld: %s", r->name, at->line, text);
-    else
-        tpk_diag_fail(r->diag, "%s: %s", r->name, text);
     return -1;
 }
