@@ -23,6 +23,10 @@ static const char convert_help[] =
     "                              default: every scalar point field)\n"
     "  --cell-to-point             average cell fields to points (each point: the mean over its cells);\n"
     "                              without --field, scalar cell fields are then kept too\n"
+    "  --higher-order split|corners  second-order cells (quadratic tetra, hexahedra, wedges, pyramids):\n"
+    "                              split (default) into linear cells at all their nodes, face and cell\n"
+    "                              centres they lack placed and valued by their own shape functions;\n"
+    "                              corners: reduced to their corner nodes (fewer tets, values dropped)\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
@@ -238,6 +242,10 @@ static int parse_args(int argc, char **argv, convert_args *a)
                                     "bounding-box diagonal), found '%s'", TPK_MERGE_MIN_TOLERANCE, arg + 19);
         } else if (!strcmp(arg, "--skip-bad-cells")) {
             a->options.skip_bad_cells = 1;
+        } else if (!strcmp(arg, "--higher-order")) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--higher-order")) || (strcmp(v, "split") && strcmp(v, "corners")))
+                return tpk_cli_fail("convert", "--higher-order expects split or corners, found '%s'", v ? v : "");
+            a->options.higher_order_corners = !strcmp(v, "corners");
         } else if (!strcmp(arg, "--cell-to-point")) {
             a->options.cell_to_point = 1;
         } else if (!strcmp(arg, "--json")) {
