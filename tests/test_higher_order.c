@@ -6,6 +6,7 @@
  * and the points the split adds sit where the cell's map puts them and carry the field's own value (the
  * quadratic cells reproduce quadratic fields). A wrong node order folds the pieces, so the volume or the
  * signs fail. */
+#include <exodusII.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,6 +19,10 @@
 #include "mesh/cell_types.h"
 #include "mesh/higher_order.h"
 #include "tetpack_format.h"
+
+#ifdef TPK_TEST_CGNS
+#include <cgnslib.h>
+#endif
 
 /* A format's node order for one kind: its corners (of `shape`, in VTK's corner order, which every
  * format here shares), then mid-edge nodes on `edges`, then face centres on `faces`, then the centre. */
@@ -507,3 +512,127 @@ TPK_TEST(shared_face_centre)
     tpk_tetmesh_free(&t);
     tpk_mesh_free(&m);
 }
+
+/* ---- Exodus II and CGNS, written with their own libraries ------------------------------------------ */
+
+/* Nodes of cells `orders` (cell c shifted by 3c) into xyz[3][...] (component-major); returns the count. */
+static int gather_nodes(const node_order *const *orders, int count, int curved, double (*xyz)[512], int *ns)
+{
+    int total = 0;
+    for (int c = 0; c < count; c++) {
+        double r[27][3];
+        ns[c] = order_nodes(orders[c], r);
+        for (int k = 0; k < ns[c]; k++, total++) {
+            double x[3];
+            map_point(r[k], 3.0 * c, curved, x);
+            for (int a = 0; a < 3; a++)
+                xyz[a][total] = x[a];
+        }
+    }
+    return total;
+}
+
+/* The point field "f" made from the points read (formats whose fields these files do not carry). */
+static void add_field(tpk_mesh *m)
+{
+    float *f = malloc(sizeof *f * (size_t)m->point_count);
+    for (int64_t p = 0; p < m->point_count; p++)
+        f[p] = (float)field_at(m->points + 3 * p);
+    CHECK(tpk_mesh_add_field(m, "f", TPK_ASSOC_POINT, 1, 1, f) == 0);
+    add_second_step(m);
+}
+
+/* The Exodus II manual's TETRA10, HEX20 (bottom, vertical, then top mid-edges), WEDGE15 (likewise) and
+ * PYRAMID13 (base, then lateral mid-edges). */
+static const node_order exo_tetra10 = {"TETRA10", 0, 10, 6, 0, 0, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
+static const node_order exo_hex20 = {"HEX20", 0, 12, 12, 0, 0,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {4, 5}, {5, 6},
+                                      {6, 7}, {7, 4}}, {{0}}};
+static const node_order exo_wedge15 = {"WEDGE15", 0, 13, 9, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
+static const node_order exo_pyramid13 = {"PYRAMID13", 0, 14, 8, 0, 0,
+                                         {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+
+TPK_TEST(exodus_orders)
+{
+    const node_order *orders[] = {&exo_tetra10, &exo_hex20, &exo_wedge15, &exo_pyramid13};
+    for (int curved = 0; curved < 2; curved++) {
+        static double xyz[3][512];
+        int ns[4], total = gather_nodes(orders, 4, curved, xyz, ns);
+        const char *path = tpk_temp_path("whole.exo");
+        int cpu_ws = 8, io_ws = 8;
+        int exoid = ex_create(path, EX_CLOBBER, &cpu_ws, &io_ws);
+        CHECK(exoid >= 0);
+        CHECK(ex_put_init(exoid, "higher order", 3, total, 4, 4, 0, 0) == 0);
+        CHECK(ex_put_coord(exoid, xyz[0], xyz[1], xyz[2]) == 0);
+        for (int c = 0, first = 1; c < 4; first += ns[c], c++) {
+            int conn[27];
+            for (int k = 0; k < ns[c]; k++)
+                conn[k] = first + k;
+            CHECK(ex_put_elem_block(exoid, c + 1, orders[c]->name, 1, ns[c], 0) == 0);
+            CHECK(ex_put_elem_conn(exoid, c + 1, conn) == 0);
+        }
+        CHECK(ex_close(exoid) == 0);
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_exodus(path, &m, &d) == 0, "%s", d.message);
+        add_field(&m);
+        check_whole(&m, orders, curved, 24);
+        tpk_mesh_free(&m);
+    }
+}
+
+#ifdef TPK_TEST_CGNS
+/* The CGNS SIDS ("Unstructured Grid Element Numbering Conventions"): TETRA_10 and PYRA_13 as VTK,
+ * PENTA_15/18 and HEXA_20/27 with their vertical mid-edges before the top ones, HEXA_27's face centres
+ * bottom, y-, x+, y+, x-, top. */
+static const node_order cgns_tetra10 = {"TETRA_10", CGNS_ENUMV(TETRA_10), 10, 6, 0, 0,
+                                        {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
+static const node_order cgns_pyra13 = {"PYRA_13", CGNS_ENUMV(PYRA_13), 14, 8, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+static const node_order cgns_penta15 = {"PENTA_15", CGNS_ENUMV(PENTA_15), 13, 9, 0, 0,
+                                        {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
+static const node_order cgns_penta18 = {"PENTA_18", CGNS_ENUMV(PENTA_18), 13, 9, 3, 0,
+                                        {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}},
+                                        {{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}};
+static const node_order cgns_hexa20 = {"HEXA_20", CGNS_ENUMV(HEXA_20), 12, 12, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {4, 5}, {5, 6},
+                                        {6, 7}, {7, 4}}, {{0}}};
+static const node_order cgns_hexa27 = {"HEXA_27", CGNS_ENUMV(HEXA_27), 12, 12, 6, 1,
+                                       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {4, 5}, {5, 6},
+                                        {6, 7}, {7, 4}},
+                                       {{0, 1, 2, 3}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {0, 3, 7, 4}, {4, 5, 6, 7}}};
+
+TPK_TEST(cgns_orders)
+{
+    const node_order *orders[] = {&cgns_tetra10, &cgns_pyra13, &cgns_penta15, &cgns_penta18, &cgns_hexa20, &cgns_hexa27};
+    for (int curved = 0; curved < 2; curved++) {
+        static double xyz[3][512];
+        int ns[6], total = gather_nodes(orders, 6, curved, xyz, ns), fn, base, zone, s, c;
+        const char *path = tpk_temp_path("whole.cgns");
+        cgsize_t size[3] = {total, 6, 0};
+        CHECK(cg_open(path, CG_MODE_WRITE, &fn) == 0);
+        CHECK(cg_base_write(fn, "b", 3, 3, &base) == 0);
+        CHECK(cg_zone_write(fn, base, "z", size, CGNS_ENUMV(Unstructured), &zone) == 0);
+        CHECK(cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateX", xyz[0], &c) == 0 &&
+              cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateY", xyz[1], &c) == 0 &&
+              cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateZ", xyz[2], &c) == 0);
+        for (int e = 0, first = 1; e < 6; first += ns[e], e++) {
+            cgsize_t conn[27];
+            for (int k = 0; k < ns[e]; k++)
+                conn[k] = first + k;
+            CHECK(cg_section_write(fn, base, zone, orders[e]->name, (CGNS_ENUMT(ElementType_t))orders[e]->code, e + 1,
+                                   e + 1, 0, conn, &s) == 0);
+        }
+        CHECK(cg_close(fn) == 0);
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_cgns(path, &m, &d) == 0, "%s", d.message);
+        add_field(&m);
+        check_whole(&m, orders, curved, 24);
+        tpk_mesh_free(&m);
+    }
+}
+#endif
