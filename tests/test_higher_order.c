@@ -274,11 +274,13 @@ TPK_TEST(vtk_types)
     }
 }
 
-/* Every shape function table: weights sum to 1, are 1 at their node and 0 at the others. */
+/* Every shape function table: weights sum to 1, are 1 at their node and 0 at the others, and reproduce
+ * quadratic polynomials (the quadratic-linear wedge: those linear in t). */
 TPK_TEST(shape_functions)
 {
-    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12};
-    for (int i = 0; i < 6; i++) {
+    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12,
+                                  &vtk_pyramid13};
+    for (int i = 0; i < 7; i++) {
         double r[27][3], w[TPK_CELL_MAP_MAX_NODES];
         int n = order_nodes(orders[i], r);
         CHECK_EQ_INT(tpk_cell_map_nodes(orders[i]->code), n);
@@ -296,6 +298,24 @@ TPK_TEST(shape_functions)
         for (int j = 0; j < n; j++)
             sum += w[j];
         CHECK_MSG(fabs(sum - 1) < 1e-15, "%s: weights sum to %.17g", orders[i]->name, sum);
+        /* every quadratic polynomial of the parametric coordinates reproduced (points inside every shape) */
+        for (int trial = 0; trial < 20; trial++) {
+            const double at[3] = {0.05 + 0.01 * trial, 0.3 - 0.01 * trial, 0.02 + 0.03 * trial};
+            double c[10], want, got = 0;
+            for (int k = 0; k < 10; k++)
+                c[k] = sin(1.7 * k + trial);
+            if (orders[i]->code == 31)
+                c[6] = 0; /* linear in t */
+#define P2(p) (c[0] + c[1] * (p)[0] + c[2] * (p)[1] + c[3] * (p)[2] + c[4] * (p)[0] * (p)[0] + c[5] * (p)[1] * (p)[1] + \
+               c[6] * (p)[2] * (p)[2] + c[7] * (p)[0] * (p)[1] + c[8] * (p)[1] * (p)[2] + c[9] * (p)[0] * (p)[2])
+            want = P2(at);
+            tpk_cell_map_weights(orders[i]->code, at, w);
+            for (int k = 0; k < n; k++)
+                got += w[k] * P2(r[k]);
+#undef P2
+            CHECK_MSG(fabs(got - want) < 1e-13, "%s at (%g %g %g): %.17g, expected %.17g", orders[i]->name, at[0],
+                      at[1], at[2], got, want);
+        }
     }
 }
 

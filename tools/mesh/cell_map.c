@@ -162,8 +162,10 @@ static int wedge(int type, const double r[3], double *w)
     }
 }
 
-/* The pyramids: the linear one as vtkPyramid; the quadratic one on its base only, where it is the
- * 8-node serendipity quadrilateral (the face it shares with a quadratic hexahedron or pyramid). */
+/* The pyramids: the linear one as vtkPyramid; the quadratic one the rational 13-node pyramid of
+ * Bedrosian (1992), as libMesh and VTK's vtkQuadraticPyramid use it, in x = 2r - 1, y = 2s - 1, z = t (the
+ * cross-section at height z is [-(1 - z), 1 - z]^2): it reproduces quadratic polynomials, is the 8-node
+ * serendipity quadrilateral on its base and the 6-node triangle on its sides (tests/test_higher_order.c). */
 static int pyramid(int type, const double r[3], double *w)
 {
     if (type == 14) {
@@ -171,16 +173,27 @@ static int pyramid(int type, const double r[3], double *w)
         w[2] = r[0] * r[1] * (1 - r[2]), w[3] = (1 - r[0]) * r[1] * (1 - r[2]), w[4] = r[2];
         return 5;
     }
-    if (r[2] != 0)
-        return 0;
-    const double x = 2 * r[0] - 1, y = 2 * r[1] - 1;
-    static const int sx[4] = {-1, 1, 1, -1}, sy[4] = {-1, -1, 1, 1};
+    const double x = 2 * r[0] - 1, y = 2 * r[1] - 1, z = r[2], d = 1 - z;
     memset(w, 0, 13 * sizeof *w);
-    for (int i = 0; i < 4; i++)
-        w[i] = 0.25 * (1 + x * sx[i]) * (1 + y * sy[i]) * (x * sx[i] + y * sy[i] - 1);
-    /* mid-edges 5-8 on edges 01 (y = -1), 12 (x = 1), 23 (y = 1), 30 (x = -1) */
-    w[5] = 0.5 * (1 - x * x) * (1 - y), w[6] = 0.5 * (1 + x) * (1 - y * y);
-    w[7] = 0.5 * (1 - x * x) * (1 + y), w[8] = 0.5 * (1 - x) * (1 - y * y);
+    if (d <= 0) { /* the apex */
+        w[4] = 1;
+        return 13;
+    }
+    const double xy = x * y * z / d;
+    w[0] = 0.25 * (-x - y - 1) * ((1 - x) * (1 - y) - z + xy);
+    w[1] = 0.25 * (x - y - 1) * ((1 + x) * (1 - y) - z - xy);
+    w[2] = 0.25 * (x + y - 1) * ((1 + x) * (1 + y) - z + xy);
+    w[3] = 0.25 * (-x + y - 1) * ((1 - x) * (1 + y) - z - xy);
+    w[4] = z * (2 * z - 1);
+    /* mid-edges 5-8 on the base's edges 01 (y = -1), 12 (x = 1), 23 (y = 1), 30 (x = -1), 9-12 to the apex */
+    w[5] = 0.5 * (1 + x - z) * (1 - x - z) * (1 - y - z) / d;
+    w[6] = 0.5 * (1 + y - z) * (1 - y - z) * (1 + x - z) / d;
+    w[7] = 0.5 * (1 + x - z) * (1 - x - z) * (1 + y - z) / d;
+    w[8] = 0.5 * (1 + y - z) * (1 - y - z) * (1 - x - z) / d;
+    w[9] = z * (1 - x - z) * (1 - y - z) / d;
+    w[10] = z * (1 + x - z) * (1 - y - z) / d;
+    w[11] = z * (1 + x - z) * (1 + y - z) / d;
+    w[12] = z * (1 - x - z) * (1 + y - z) / d;
     return 13;
 }
 

@@ -12,8 +12,8 @@
 
 /* The node count of a type this module maps, or 0: tetra (10), hexahedron (12), wedge (13), pyramid
  * (14), quadratic tetra (24), quadratic hexahedron (25, serendipity), quadratic wedge (26), quadratic
- * pyramid (27, on its base only: see tpk_cell_map_weights), triquadratic hexahedron (29), quadratic
- * linear wedge (31), biquadratic quadratic wedge (32). */
+ * pyramid (27), triquadratic hexahedron (29), quadratic linear wedge (31), biquadratic quadratic wedge
+ * (32). */
 int tpk_cell_map_nodes(int type);
 
 /* VTK parametric coordinates of node k (0 <= k < tpk_cell_map_nodes(type)) into r: corners as
@@ -22,9 +22,9 @@ void tpk_cell_map_node(int type, int k, double r[3]);
 
 /* The shape functions at parametric point r into w (tpk_cell_map_nodes(type) values, summing to 1;
  * w[k] is 1 at node k and 0 at the others). Returns the node count, or 0 for a type this module does not
- * map, or for a quadratic pyramid off its base (r[2] != 0), where only its base's serendipity functions
- * are given. Weights of nodes off a face are exactly 0 on that face for every type here, so a point on
- * a face depends only on the face's nodes. */
+ * map. Weights of nodes off a face are 0 on that face for every type here (exactly, on a quad face at its
+ * centre), so a point on a face depends only on the face's nodes. The quadratic types reproduce every
+ * quadratic polynomial of the parametric coordinates. */
 int tpk_cell_map_weights(int type, const double r[3], double *w);
 
 /* The point the cell with nodes `nodes` (ids into `points`, 3 doubles each) maps r to: sum w[k] x_k in
