@@ -13,12 +13,15 @@
 #include <string.h>
 
 #include "convert/pipeline.h"
+#include "check/check_against.h"
+#include "convert/convert.h"
 #include "harness.h"
 #include "import/importers.h"
 #include "mesh/cell_map.h"
 #include "mesh/cell_types.h"
 #include "mesh/higher_order.h"
 #include "tetpack_format.h"
+#include "tpk_assert.h"
 
 #ifdef TPK_TEST_CGNS
 #include <cgnslib.h>
@@ -81,9 +84,14 @@ static double det_a(void)
            A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
 }
 
-/* The field: a quadratic polynomial of position (step 0), and twice it (step 1). */
+/* The field: a quadratic polynomial of position (step 0), and twice it (step 1); only its linear part
+ * with linear_field set. */
+static int linear_field;
+
 static double field_at(const double x[3])
 {
+    if (linear_field)
+        return 1 + x[0] - 2 * x[1] + 0.5 * x[2];
     return 1 + x[0] - 2 * x[1] + 0.5 * x[2] + x[0] * x[0] - 0.7 * x[0] * x[1] + 0.3 * x[1] * x[2] - 0.4 * x[2] * x[2];
 }
 
@@ -656,3 +664,48 @@ TPK_TEST(cgns_orders)
     }
 }
 #endif
+
+/* check --against on closed-form cells (affine maps: the split fills each cell exactly, so no sample
+ * falls outside): a linear field is reproduced by both conversions; a quadratic one is closer to the
+ * source with the cells split whole than reduced to corners. */
+TPK_TEST(check_against)
+{
+    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12,
+                                  &vtk_pyramid13};
+    double quadratic_error[2] = {0, 0};
+    for (int linear = 1; linear >= 0; linear--) {
+        linear_field = linear;
+        char *text = write_vtk(orders, 7, 0);
+        const char *source = tpk_temp_path("against.vtk");
+        FILE *f = fopen(source, "wb");
+        CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0);
+        free(text);
+        for (int corners = 0; corners < 2; corners++) {
+            tpk_convert_options o;
+            memset(&o, 0, sizeof o);
+            o.input = source;
+            o.output = tpk_temp_path("against.tpk");
+            o.threads = 1;
+            o.higher_order_corners = corners;
+            tpk_convert_report rep;
+            tpk_diag d;
+            quiet(&d);
+            CHECK_MSG(tpk_convert_checked(&o, &rep, &d) == 0, "%s", d.message);
+            tpk_against_report r;
+            CHECK_MSG(tpk_check_against(o.output, source, NULL, 4, &r, &d) == 0, "%s", d.message);
+            CHECK_EQ_INT(r.cells, 7);
+            CHECK_EQ_INT(r.outside, 0);
+            CHECK(r.field_count == 1 && !strcmp(r.fields[0].name, "f") && !r.has_bound && !r.bound_exceeded);
+            if (linear)
+                CHECK_MSG(r.fields[0].max_error < 1e-6, "linear field, %s: max error %g",
+                          corners ? "corners" : "split", r.fields[0].max_error);
+            else
+                quadratic_error[corners] = r.fields[0].max_error;
+        }
+    }
+    linear_field = 0;
+    fprintf(stderr, "quadratic field, max error as a fraction of its range: split %.3g, corners %.3g\n",
+            quadratic_error[0], quadratic_error[1]);
+    CHECK_MSG(quadratic_error[0] > 0 && quadratic_error[0] < 0.5 * quadratic_error[1],
+              "quadratic field: split %g, corners %g", quadratic_error[0], quadratic_error[1]);
+}

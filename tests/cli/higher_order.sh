@@ -8,7 +8,8 @@
 #   18-node prisms) and serendipity (20 and 15 nodes, Mesh.SecondOrderIncomplete): no hanging face (the
 #   shell is exactly 4 times the corners' shell: each boundary quad or triangle in 4, nothing inside), the
 #   serendipity mesh gets the same vertices as the complete one (a face centre made once per face), and
-#   each checks clean but for gmsh's stray geometry points.
+#   each checks clean but for gmsh's stray geometry points; check --against finds every point sampled in
+#   the source cells inside the split file, and some outside the corners' file.
 source "$(dirname "$0")/common.sh" "$@"
 command -v gmsh > /dev/null || fail "gmsh not installed (./dev deps installs it)"
 
@@ -52,6 +53,11 @@ for kind in complete serendipity; do
     [ "$nerrors" -eq 0 ] && [ "$nunused" -le 2 ] || fail "$kind: $nunused unused vertices (gmsh's 2 stray points at most), $nerrors errors"
     echo "$verts" > "$WORK/$kind.vertices"
 done
+# check --against: points sampled in the curved source cells all lie in the split file's tets; some lie
+# outside the corners' flat-faced one (beyond the curved side's chords).
+outside() { "$TPK" check "$1" --against "$2" --samples 8 | sed -n 's/.*), \([0-9]*\) in no tet.*/\1/p'; }
+[ "$(outside "$WORK/complete.tpk" "$WORK/complete.msh")" = 0 ] || fail "complete: samples outside the split file"
+[ "$(outside "$WORK/completec.tpk" "$WORK/complete.msh")" -gt 0 ] || fail "complete: no sample outside the corners' file"
 [ "$(cat "$WORK/complete.vertices")" = "$(cat "$WORK/serendipity.vertices")" ] ||
     fail "serendipity mesh: $(cat "$WORK/serendipity.vertices") vertices, the complete one $(cat "$WORK/complete.vertices")"
 echo "ok"
