@@ -51,6 +51,12 @@ for kind in complete serendipity; do
         fail "$kind: $(summary "$WORK/$kind.json") against corners $(summary "$WORK/${kind}c.json")"
     read -r nunused nerrors < <(unused "$WORK/$kind.tpk")
     [ "$nerrors" -eq 0 ] && [ "$nunused" -le 2 ] || fail "$kind: $nunused unused vertices (gmsh's 2 stray points at most), $nerrors errors"
+    added=$("$PY" -c "import json,sys; h=json.load(open(sys.argv[1]))['higher_order']; print(h['mode'], h['cells'], h['added_points'])" "$WORK/$kind.json")
+    read -r mode hcells hadded <<< "$added"
+    [ "$mode" = split ] && [ "$hcells" -eq "$cells" ] && [ "$verts" -eq $((points + hadded)) ] ||
+        fail "$kind: higher_order $added, $verts vertices from $points points"
+    { [ $kind = complete ] && [ "$hadded" -eq 0 ]; } || { [ $kind = serendipity ] && [ "$hadded" -gt 0 ]; } ||
+        fail "$kind: $hadded points added (the complete cells have every lattice node, the serendipity ones lack some)"
     echo "$verts" > "$WORK/$kind.vertices"
 done
 # check --against: points sampled in the curved source cells all lie in the split file's tets; some lie

@@ -335,6 +335,10 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                           (long long)r->tets, (long long)r->shell_faces, (long long)r->inverted_fixed,
                           (long long)r->degenerate_dropped, r->field_count, r->step_count,
                           (unsigned long long)r->output_bytes);
+        if (r->higher_order_cells > 0) /* only then: other outputs are as they were */
+            tpk_strbuf_printf(&sb, "\"higher_order\":{\"mode\":\"%s\",\"cells\":%lld,\"added_points\":%lld},",
+                              r->higher_order_split ? "split" : "corners", (long long)r->higher_order_cells,
+                              (long long)r->higher_order_points);
         tpk_strbuf_printf(&sb,
                           "\"cells_split\":{\"tetra\":%lld,\"pyramid_into_2\":%lld,\"wedge_into_3\":%lld,"
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
@@ -376,6 +380,13 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
            a->options.output, (long long)r->tets, (long long)r->vertices, (long long)r->shell_faces,
            r->field_count, r->step_count, (double)r->output_bytes / 1048576.0);
     printf("  source: %lld cells, %lld points\n", (long long)r->source_cells, (long long)r->source_points);
+    if (r->higher_order_cells > 0 && r->higher_order_split)
+        printf("  higher-order cells: %lld split whole at all their nodes (%lld face and cell centres added); the "
+               "cell counts below are of their linear pieces\n", (long long)r->higher_order_cells,
+               (long long)r->higher_order_points);
+    else if (r->higher_order_cells > 0)
+        printf("  higher-order cells: %lld reduced to their corners (--higher-order corners)\n",
+               (long long)r->higher_order_cells);
     print_repairs(&a->options, r);
     if (r->cells_into[2] || r->cells_into[3] || r->cells_into[5] || r->cells_into[6] || r->steiner_cells ||
         r->bad_cells_skipped || r->polyhedra)
