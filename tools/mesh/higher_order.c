@@ -256,10 +256,15 @@ typedef struct split_state {
     face_map faces;
     added_point *added;
     int64_t added_count, added_cap;
+    int too_many; /* the added points would pass 2^31-1 points */
 } split_state;
 
 static int32_t add_point(split_state *s, int64_t cell, const double r[3])
 {
+    if (s->m->point_count + s->added_count >= INT32_MAX) {
+        s->too_many = 1;
+        return -1;
+    }
     if (s->added_count == s->added_cap) {
         int64_t cap = s->added_cap ? 2 * s->added_cap : 1024;
         added_point *grown = realloc(s->added, sizeof *grown * (size_t)cap);
@@ -463,7 +468,7 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
     if (cells > INT32_MAX || conn > INT32_MAX)
         return tpk_diag_fail(diag, "%lld cells after splitting the higher-order cells exceed the limit of 2^31-1",
                              (long long)cells);
-    split_state s = {m, {NULL, 0}, NULL, 0, 0};
+    split_state s = {m, {NULL, 0}, NULL, 0, 0, 0};
     size_t cap = 64;
     while (cap < 2 * (size_t)keyed)
         cap *= 2;
@@ -521,7 +526,10 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
     out->reduced_cells = tpk_reduce_higher_order(m, name, diag);
     rc = 0;
 fail:
-    if (rc)
+    if (rc && s.too_many)
+        tpk_diag_fail(diag, "splitting %lld higher-order cells adds points past the limit of 2^31-1 per file; split "
+                      "the mesh into parts", (long long)out->split_cells);
+    else if (rc)
         tpk_diag_fail(diag, "out of memory splitting %lld higher-order cells", (long long)out->split_cells);
     free(s.faces.slots), free(s.added), free(types), free(offsets), free(cconn), free(source);
     return rc;
