@@ -282,6 +282,28 @@ TPK_TEST(vtk_types)
     }
 }
 
+/* VTK's Lagrange cells of order 2 in VTK 9's numbering: the quadratic tetra's, triquadratic hexahedron's
+ * and biquadratic-quadratic wedge's (vtkHigherOrderHexahedron: corners, edges, faces -x +x -y +y -z +z,
+ * body). */
+TPK_TEST(lagrange_types)
+{
+    node_order tet = vtk_tet10, hex = vtk_hex27, wedge = vtk_wedge18;
+    tet.code = 71, hex.code = 72, wedge.code = 73;
+    tet.name = "VTK Lagrange tetra", hex.name = "VTK Lagrange hexahedron", wedge.name = "VTK Lagrange wedge";
+    const node_order *orders[] = {&tet, &hex, &wedge};
+    for (int curved = 0; curved < 2; curved++) {
+        char *text = write_vtk(orders, 3, curved);
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_vtk_legacy_memory("lagrange.vtk", text, strlen(text), &m, &d) == 0, "%s", d.message);
+        free(text);
+        add_second_step(&m);
+        check_whole(&m, orders, curved, 71);
+        tpk_mesh_free(&m);
+    }
+}
+
 /* Every shape function table: weights sum to 1, are 1 at their node and 0 at the others, and reproduce
  * quadratic polynomials (the quadratic-linear wedge: those linear in t). */
 TPK_TEST(shape_functions)

@@ -439,9 +439,24 @@ static int fail_nodes(tpk_diag *diag, int64_t c, int type, int64_t got)
                          tpk_cell_type(type)->name, (long long)got, tpk_cell_type(type)->name, tpk_cell_type(type)->nodes);
 }
 
+/* VTK's Lagrange tetra, hexahedron and wedge of order 2 (10, 27 and 18 nodes) number their nodes as the
+ * quadratic tetra, triquadratic hexahedron and biquadratic-quadratic wedge do (VTK 9's numbering, the
+ * one vtkHigherOrderHexahedron documents; files from VTK 8 list two vertical mid-edges of a hexahedron
+ * the other way, which the split then finds inverted): split as those. */
+static void lagrange_as_quadratic(tpk_mesh *m)
+{
+    for (int64_t c = 0; c < m->cell_count; c++) {
+        int type = m->cell_types[c];
+        int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
+        if ((type == 71 && n == 10) || (type == 72 && n == 27) || (type == 73 && n == 18))
+            m->cell_types[c] = (uint8_t)(type == 71 ? 24 : type == 72 ? 29 : 32);
+    }
+}
+
 int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out, tpk_diag *diag)
 {
     memset(out, 0, sizeof *out);
+    lagrange_as_quadratic(m);
     out->source_points = m->point_count, out->source_cells = m->cell_count;
     int64_t cells = 0, conn = 0, keyed = 0;
     for (int64_t c = 0; c < m->cell_count; c++) {

@@ -21,7 +21,8 @@ int64_t tpk_reduce_higher_order(tpk_mesh *mesh, const char *name, tpk_diag *diag
 typedef struct tpk_higher_split {
     int64_t split_cells;      /* cells split whole */
     int64_t reduced_cells;    /* higher-order cells of a type not split (biquadratic-quadratic hexahedra,
-                                 triquadratic pyramids, Lagrange and Bezier cells): reduced to corners */
+                                 triquadratic pyramids, Lagrange cells of other orders, Bezier cells):
+                                 reduced to corners */
     int64_t added_points;     /* face and cell centres the cells lack, appended after the source points */
     int64_t source_points;    /* the point count before: points from here on are added */
     int64_t source_cells;     /* the cell count before */
@@ -30,7 +31,8 @@ typedef struct tpk_higher_split {
 } tpk_higher_split;
 
 /* Each quadratic tetra (24), quadratic and triquadratic hexahedron (25, 29), quadratic, quadratic-linear
- * and biquadratic-quadratic wedge (26, 31, 32) and quadratic pyramid (27) replaced by the linear cells
+ * and biquadratic-quadratic wedge (26, 31, 32), quadratic pyramid (27), and Lagrange tetra, hexahedron
+ * and wedge of order 2 (71, 72, 73 with 10, 27, 18 nodes: as 24, 29, 32) replaced by the linear cells
  * of its own node lattice: a tetra by 8 tetra (the inner octahedron cut along its shortest diagonal), a
  * hexahedron by 8 hexahedra, a wedge by 8 (31: 4) wedges, a pyramid by 6 pyramids and 4 tetra. Every
  * node is a corner of some linear cell. Points a cell lacks (a 20-node hexahedron's face and cell
