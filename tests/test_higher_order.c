@@ -4,7 +4,8 @@
  * quadratic one) and whose point field is a quadratic polynomial of position. Split and tetrahedralized:
  * every node is a tet vertex with its value, the tets are positive and fill the cell's volume exactly,
  * and the points the split adds sit where the cell's map puts them and carry the field's own value (the
- * quadratic cells reproduce quadratic fields). A wrong node order folds the pieces, so the volume or the
+ * quadratic cells reproduce quadratic fields) at every step; a cell field is its cell's value on each of
+ * the cell's tets. A wrong node order folds the pieces, so the volume or the
  * signs fail. */
 #include <exodusII.h>
 #include <math.h>
@@ -111,6 +112,11 @@ static void check_whole(tpk_mesh *m, const node_order *const *orders, int curved
 {
     CHECK_EQ_INT(m->cell_types[0], expect_type_of_first);
     int64_t cells = m->cell_count, points = m->point_count;
+    /* a cell field: 10 c + 1 in cell c, which each of the cell's tets must carry */
+    float *cell_values = malloc(sizeof *cell_values * (size_t)cells);
+    for (int64_t c = 0; c < cells; c++)
+        cell_values[c] = 10.0f * (float)c + 1;
+    CHECK(tpk_mesh_add_field(m, "cell", TPK_ASSOC_TET, 1, 1, cell_values) == 0);
     tpk_diag d;
     memset(&d, 0, sizeof d);
     tpk_higher_split h;
@@ -124,8 +130,13 @@ static void check_whole(tpk_mesh *m, const node_order *const *orders, int curved
         CHECK_MSG(used[p], "point %lld is no linear cell's corner", (long long)p);
     free(used);
     tpk_tetmesh t;
-    const char *names[] = {"f"};
-    CHECK_MSG(tpk_tetrahedralize(m, names, 1, 0, &t, &d) == 0, "%s", d.message);
+    const char *names[] = {"f", "cell"};
+    CHECK_MSG(tpk_tetrahedralize(m, names, 2, 0, &t, &d) == 0, "%s", d.message);
+    CHECK(t.field_count == 2 && t.fields[1].association == TPK_ASSOC_TET);
+    for (int64_t k = 0; k < t.tet_count; k++)
+        CHECK_MSG(t.fields[1].values[k] == 10.0f * (float)h.cell_source[t.tet_source[k]] + 1,
+                  "tet %lld: cell field %g, its cell %d", (long long)k, t.fields[1].values[k],
+                  h.cell_source[t.tet_source[k]]);
     CHECK_EQ_INT(t.mirrored_cells, 0);
     double *volume = calloc((size_t)cells, sizeof *volume);
     for (int64_t k = 0; k < t.tet_count; k++) {
@@ -140,7 +151,7 @@ static void check_whole(tpk_mesh *m, const node_order *const *orders, int curved
     }
     free(volume);
     /* Values: the field at every vertex, exact at the nodes (as float), reproduced at added points. */
-    CHECK(t.field_count == 1 && t.fields[0].step_count == 2);
+    CHECK(t.fields[0].step_count == 2);
     for (int64_t v = 0; v < t.vertex_count; v++) {
         double want = field_at(t.points + 3 * v);
         for (int s = 0; s < 2; s++) {
