@@ -35,6 +35,12 @@ static void vertex(const against *a, int32_t v, double x[3])
         x[k] = a->info.origin[k] + a->positions[3 * (int64_t)v + k];
 }
 
+static double det3(const double m[3][3])
+{
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
 /* Barycentric coordinates of x in tet t; returns the smallest (>= 0 inside). */
 static double barycentric(const against *a, int64_t t, const double x[3], double lambda[4])
 {
@@ -46,8 +52,7 @@ static double barycentric(const against *a, int64_t t, const double x[3], double
         m[k][0] = p[1][k] - p[0][k], m[k][1] = p[2][k] - p[0][k], m[k][2] = p[3][k] - p[0][k];
         b[k] = x[k] - p[0][k];
     }
-    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    double det = det3(m);
     if (det == 0)
         return -1;
     for (int c = 0; c < 3; c++) { /* Cramer: column c replaced by b */
@@ -55,8 +60,7 @@ static double barycentric(const against *a, int64_t t, const double x[3], double
         memcpy(q, m, sizeof q);
         for (int k = 0; k < 3; k++)
             q[k][c] = b[k];
-        lambda[c + 1] = (q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
-                         q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0])) / det;
+        lambda[c + 1] = det3(q) / det;
     }
     lambda[0] = 1 - lambda[1] - lambda[2] - lambda[3];
     double least = lambda[0];
@@ -155,11 +159,11 @@ static int samples_of(int linear, int k, double (*r)[3], int cap)
     for (int i = 0; i < k; i++)
         for (int j = 0; j < k; j++)
             for (int l = 0; l < k; l++) {
-                double p[3] = {(i + 0.5) / k, (j + 0.5) / k, (l + 0.5) / k};
-                int inside = linear == 12 ? 1
+                double p[3] = {(i + 0.5) / k, (j + 0.5) / k, (l + 0.5) / k}, half = 0.5 * (1 - p[2]);
+                int inside = linear == 12   ? 1
                              : linear == 10 ? p[0] + p[1] + p[2] < 1
                              : linear == 13 ? p[0] + p[1] < 1
-                                            : fabs(p[0] - 0.5) < 0.5 * (1 - p[2]) && fabs(p[1] - 0.5) < 0.5 * (1 - p[2]);
+                                            : fabs(p[0] - 0.5) < half && fabs(p[1] - 0.5) < half; /* pyramid */
                 if (inside && n < cap)
                     memcpy(r[n++], p, sizeof p);
             }
@@ -279,7 +283,8 @@ static void compare(against *a, const tpk_mesh *src, const tpk_src_field *const 
             }
             for (int f = 0, at = 0; f < out->field_count; at += out->fields[f].steps, f++)
                 for (int step = 0; step < out->fields[f].steps; step++) {
-                    const float *src_step = pairs[f]->values + (int64_t)step * src->point_count, *file = values[at + step];
+                    const float *src_step = pairs[f]->values + (int64_t)step * src->point_count;
+                    const float *file = values[at + step];
                     double want = 0, got = 0;
                     for (int k = 0; k < n; k++)
                         want += w[k] * src_step[nodes[k]];

@@ -435,8 +435,9 @@ static int move_face_streams(tpk_mesh *m, const int32_t *cell_source, int64_t ce
 
 static int fail_nodes(tpk_diag *diag, int64_t c, int type, int64_t got)
 {
-    return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d", (long long)c,
-                         tpk_cell_type(type)->name, (long long)got, tpk_cell_type(type)->name, tpk_cell_type(type)->nodes);
+    const tpk_cell_type_info *t = tpk_cell_type(type);
+    return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d", (long long)c, t->name, (long long)got,
+                         t->name, t->nodes);
 }
 
 /* VTK's Lagrange tetra, hexahedron and wedge of order 2 (10, 27 and 18 nodes) number their nodes as the

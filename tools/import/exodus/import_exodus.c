@@ -4,9 +4,9 @@
  * same outward faces as VTK's cells (hexahedra also checked on SEACAS's files). Higher-order blocks are
  * kept whole as VTK's quadratic types (TETRA10, HEX20, WEDGE15, PYRAMID13; TETRA14/15, HEX27, WEDGE18 and
  * PYRAMID14 by those nodes, which come first, their face and centre nodes unused): Exodus lists the
- * vertical mid-edges of hexahedra and wedges before the top ones, VTK after. Blocks of lower dimension (shells, bars, spheres) are dropped with a count. Nodal
- * and element variables become point and cell fields with every time step, and the time values are
- * kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
+ * vertical mid-edges of hexahedra and wedges before the top ones, VTK after. Blocks of lower dimension
+ * (shells, bars, spheres) are dropped with a count. Nodal and element variables become point and cell
+ * fields with every time step, and the time values are kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
  * (tetpack-mpi matches the points of per-processor files by them and numbers the source cells). */
 #include <exodusII.h>
 #include <math.h>
