@@ -13,12 +13,14 @@
 #include "convert/pipeline.h"
 #include "mesh/polyhedron.h"
 
-/* Convert `path` (tpk_convert_checked: the 6xx MUSTs hold) and return the report. */
-static int convert_file(const char *path, int skip_bad_cells, tpk_convert_report *rep, tpk_diag *d)
+/* Convert `path` (tpk_convert_checked: the 6xx MUSTs hold) and return the report; `corners`: higher-order
+ * cells reduced to their corners (--higher-order corners). */
+static int convert_file(const char *path, int skip_bad_cells, int corners, tpk_convert_report *rep, tpk_diag *d)
 {
     tpk_convert_options o;
     memset(&o, 0, sizeof o);
     o.input = path;
+    o.higher_order_corners = corners;
     o.skip_bad_cells = skip_bad_cells;
     o.output = tpk_temp_path("out.tpk");
     o.threads = 1;
@@ -70,7 +72,7 @@ TPK_TEST(seacas_files)
         tpk_mesh_free(&m);
         CHECK_MSG(ok, "%s: counts, fields or steps differ", files[f].path);
         tpk_convert_report rep;
-        CHECK_MSG(convert_file(tpk_data_path(files[f].path), files[f].bad_cells > 0, &rep, &d) == 0, "%s", d.message);
+        CHECK_MSG(convert_file(tpk_data_path(files[f].path), files[f].bad_cells > 0, 0, &rep, &d) == 0, "%s", d.message);
         printf("  tets %lld mirrored %lld inverted %lld bad %lld\n", (long long)rep.tets, (long long)rep.mirrored_cells,
                (long long)rep.inverted_fixed, (long long)rep.bad_cells_skipped);
         CHECK_MSG(rep.mirrored_cells == files[f].mirrored_cells && rep.inverted_fixed == 0 && rep.source_cells == files[f].cells &&
@@ -280,7 +282,7 @@ TPK_TEST(written_file_reads_back)
     CHECK_EQ_INT(m.point_count, points + 12 + 18);
     CHECK_EQ_INT(m.cell_count, sizeof expected_types);
     CHECK(!memcmp(m.cell_types, expected_types, sizeof expected_types));
-    /* Higher-order cells keep their corners, the first ids of each element: the fourth cell (HEXA_8,
+    /* tpk_import_any reduces higher-order cells to their corners, the first ids of each element: the fourth cell (HEXA_8,
      * element 4) uses points 18..25 (after tetra 4, pyra 5, penta 6 and a skipped QUAD_4 of 4 after it). */
     for (int k = 0; k < 8; k++)
         CHECK_EQ_INT(m.cell_conn[m.cell_offsets[3] + k], 15 + k);
@@ -313,9 +315,10 @@ TPK_TEST(written_file_reads_back)
         CHECK_MSG(fabs(volume6 - 6) < 1e-12, "polyhedron %lld: 6 x volume %g, expected 6", (long long)c, volume6);
     }
     tpk_mesh_free(&m);
-    /* Converted: no cell mirrored (SIDS reference cells, a left-handed grid), the 6xx MUSTs hold. */
+    /* Converted: no cell mirrored (SIDS reference cells, a left-handed grid), the 6xx MUSTs hold. The
+     * higher-order cells' other nodes sit at their centroids here: reduced to corners. */
     tpk_convert_report rep;
-    CHECK_MSG(convert_file(path, 0, &rep, &d) == 0, "%s", d.message);
+    CHECK_MSG(convert_file(path, 0, 1, &rep, &d) == 0, "%s", d.message);
     CHECK_MSG(rep.mirrored_cells == 0 && rep.inverted_fixed == 0 && rep.polyhedra == 2 && rep.step_count == 3 &&
                   rep.cells_into[1] == 4 && rep.cells_into[2] == 3 && rep.cells_into[3] == 4 &&
                   rep.cells_into[5] + rep.cells_into[6] == 8,

@@ -444,19 +444,19 @@ TPK_TEST(vtk_ascii_binary_forms_agree)
         quiet_warnings = 0;
         free(b.data);
         CHECK_MSG(rc == 0, "form %d: %s", form, d.message);
-        CHECK_EQ_INT(d.warning_count, 2); /* dropped 2 lower-dimensional cells, reduced 1 quadratic tet */
+        CHECK_EQ_INT(d.warning_count, 1); /* dropped 2 lower-dimensional cells; the quadratic tet kept */
         CHECK(!strcmp(meshes[form].format, (form & 1) ? "vtk-legacy-binary" : "vtk-legacy-ascii"));
     }
     tpk_mesh *m = &meshes[0];
-    /* vertex (1) and triangle (5) dropped; quadratic tetra (24) -> tetra with its first 4 nodes. */
+    /* vertex (1) and triangle (5) dropped; the quadratic tetra (24) kept whole, its 10 nodes as written. */
     CHECK_EQ_INT(m->cell_count, 5);
-    const uint8_t types[5] = {10, 12, 10, 13, 42};
+    const uint8_t types[5] = {10, 12, 24, 13, 42};
     CHECK(!memcmp(m->cell_types, types, 5));
-    const int64_t offsets[6] = {0, 4, 12, 16, 22, 26};
+    const int64_t offsets[6] = {0, 4, 12, 22, 28, 32};
     CHECK(!memcmp(m->cell_offsets, offsets, sizeof offsets));
-    CHECK(!memcmp(m->cell_conn + 12, (const int32_t[]){0, 1, 2, 4}, 16));
+    CHECK(!memcmp(m->cell_conn + 12, (const int32_t[]){0, 1, 2, 4, 8, 9, 10, 11, 8, 9}, 40));
     /* The polyhedron: its distinct points in cell_conn, its face stream in faces. */
-    CHECK(!memcmp(m->cell_conn + 22, (const int32_t[]){0, 1, 2, 4}, 16));
+    CHECK(!memcmp(m->cell_conn + 28, (const int32_t[]){0, 1, 2, 4}, 16));
     CHECK(m->face_offsets && m->face_offsets[4] == 0 && m->face_offsets[5] == 17 && m->faces[0] == 4);
     CHECK(m->points[3 * 7 + 2] == 6.4e6 && m->points[3 * 0 + 1] == 1e-7 && m->points[3 * 3 + 1] == 2.0 / 3.0);
     CHECK_EQ_INT(m->field_count, 4);

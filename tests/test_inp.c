@@ -64,13 +64,14 @@ TPK_TEST(features)
     CHECK_EQ_INT(m.point_count, 8);
     CHECK_EQ_INT(m.cell_count, 4);
     CHECK(!strcmp(m.format, "abaqus-inp"));
-    CHECK(m.cell_types[0] == 12 && m.cell_types[1] == 12 && m.cell_types[2] == 10 && m.cell_types[3] == 13);
-    CHECK(m.cell_offsets[1] == 8 && m.cell_offsets[2] == 16 && m.cell_offsets[3] == 20 && m.cell_offsets[4] == 26);
+    CHECK(m.cell_types[0] == 12 && m.cell_types[1] == 25 && m.cell_types[2] == 24 && m.cell_types[3] == 13);
+    CHECK(m.cell_offsets[1] == 8 && m.cell_offsets[2] == 28 && m.cell_offsets[3] == 38 && m.cell_offsets[4] == 44);
     /* ids to file order: 101 is the second node written, 108 the first */
     CHECK(m.cell_conn[0] == 1 && m.cell_conn[7] == 0 && m.cell_conn[15] == 0);
     CHECK(m.points[3 * 0 + 1] == 1.0 && m.points[3 * 6 + 0] == 1.0);
-    /* element 3's corners (a C3D10 reduced to 4), and the wedge across its continuation line */
-    CHECK(m.cell_conn[16] == 1 && m.cell_conn[18] == 4 && m.cell_conn[25] == 0);
+    /* element 3 (a C3D10, whole: its corners, then its mid-edge nodes), and the wedge across its
+     * continuation line */
+    CHECK(m.cell_conn[28] == 1 && m.cell_conn[30] == 4 && m.cell_conn[32] == 1 && m.cell_conn[43] == 0);
     const float *set = field(&m, "elset");
     /* sets in order of appearance: Hexes 1, Tets 2, Skin 3, Odd 4; the later *ELSET wins */
     CHECK(set && set[0] == 4.0f && set[1] == 4.0f && set[2] == 4.0f && set[3] == 0.0f);

@@ -2,7 +2,9 @@
 # Abaqus .inp files written by real tools. gmsh writes the boundary-layer mesh (tests/cli/sphere_bl.geo)
 # as C3D4/C3D6/C3D8, and as C3D10/C3D15/C3D20 when second order: no cell may come out mirrored (the
 # node-order map is right; gmsh's own .vtk of this mesh has every prism mirrored, tests/cli/folds.sh),
-# the second-order file gives the same tets. meshio writes sfepy's meshes (C3D8RH with an *ELSET, C3D4):
+# the second-order file gives the same tets with --higher-order corners, and by default each cell split
+# whole into 8 (tetra, wedges, hexahedra at their mid-edge nodes and added face and cell centres), none
+# mirrored: the C3D10/C3D15/C3D20 node orders are right. meshio writes sfepy's meshes (C3D8RH with an *ELSET, C3D4):
 # the same tets as converting the .mesh itself; read through an *INCLUDE from another folder too.
 source "$(dirname "$0")/common.sh" "$@"
 command -v gmsh > /dev/null || fail "gmsh not installed (./dev deps installs it)"
@@ -18,13 +20,19 @@ gmsh -3 -nt 1 -order 2 -string "Mesh.SecondOrderIncomplete=1;" "$SRC/tests/cli/s
     -o "$WORK/bl2.inp" > "$WORK/gmsh.log" 2>&1 || { tail "$WORK/gmsh.log"; fail "gmsh failed (order 2)"; }
 grep -q "type=C3D6," "$WORK/bl.inp" && grep -q "type=C3D20," "$WORK/bl2.inp" || fail "gmsh wrote other element types"
 convert_checked "$WORK/bl.inp" "$WORK/bl.tpk" --cut-folds --field elset --json > "$WORK/bl.json" 2> "$WORK/err"
-convert_checked "$WORK/bl2.inp" "$WORK/bl2.tpk" --cut-folds --field elset --json > "$WORK/bl2.json" 2> "$WORK/err"
+convert_checked "$WORK/bl2.inp" "$WORK/bl2.tpk" --cut-folds --field elset --higher-order corners --json \
+    > "$WORK/bl2.json" 2> "$WORK/err"
+convert_checked "$WORK/bl2.inp" "$WORK/bl2s.tpk" --cut-folds --field elset --json > "$WORK/bl2s.json" 2> "$WORK/err"
 read -r tets mirrored tetra wedges hexes fields < <(summary "$WORK/bl.json")
 [ "$mirrored" -eq 0 ] || fail "bl.inp: $mirrored cells mirrored: the C3D4/C3D6/C3D8 node order is wrong"
 [ "$tetra" -gt 0 ] && [ "$wedges" -gt 0 ] && [ "$hexes" -gt 0 ] || fail "bl.inp: not every solid kind read"
 [ "$fields" -eq 1 ] || fail "bl.inp: no elset field"
 [ "$(summary "$WORK/bl2.json")" = "$tets 0 $tetra $wedges $hexes 1" ] ||
     fail "bl2.inp (second order) differs: $(summary "$WORK/bl2.json") vs $tets 0 $tetra $wedges $hexes 1"
+[ "$(summary "$WORK/bl2s.json")" = "$((8 * tets)) 0 $((8 * tetra)) $((8 * wedges)) $((8 * hexes)) 1" ] ||
+    fail "bl2.inp split whole: $(summary "$WORK/bl2s.json"), expected 8 x ($tets 0 $tetra $wedges $hexes 1)"
+"$TPK" info "$WORK/bl2s.tpk" | grep -q '"higher_order":"split"' || fail "bl2s.tpk: META lacks higher_order split"
+"$TPK" info "$WORK/bl2.tpk" | grep -q '"higher_order":"corners"' || fail "bl2.tpk: META lacks higher_order corners"
 grep -q "dropped [0-9]* elements that are not solids" "$WORK/err" || fail "the surface elements were not counted"
 # Gzipped: the same mesh, and the warning names the file read.
 gzip -c "$WORK/bl.inp" > "$WORK/blz.inp.gz"

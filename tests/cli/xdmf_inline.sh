@@ -51,8 +51,8 @@ convert_checked "$WORK/hex2.dat" "$WORK/hex2_dat.tpk" > /dev/null
 cp "$WORK/hex2.xmf" "$WORK/hex2_decl.dat"
 convert_checked "$WORK/hex2_decl.dat" "$WORK/hex2_decl.tpk" > /dev/null
 "$TPK" info "$WORK/hex2_decl.tpk" | grep -q '"format":"xdmf"' || fail "hex2_decl.dat: not read as XDMF"
-# A quadratic tet (Tetrahedron_10) reduced to its corners, a triangle dropped, in a Mixed topology
-# (codes 38 and 4).
+# A quadratic tet (Tetrahedron_10) split whole into 8 at its nodes (with --higher-order corners: one
+# tet, its corners), a triangle dropped, in a Mixed topology (codes 38 and 4).
 cat > "$WORK/tet10.xdmf" <<'XML'
 <Xdmf Version="3.0"><Domain><Grid Name="q">
  <Topology TopologyType="Mixed" NumberOfElements="2">
@@ -65,8 +65,12 @@ cat > "$WORK/tet10.xdmf" <<'XML'
 XML
 "$TPK" convert "$WORK/tet10.xdmf" "$WORK/tet10.tpk" --json > "$WORK/tet10.json" 2> "$WORK/err"
 check_6xx "$WORK/tet10.tpk"
-expect_stderr "reduced higher-order cells to their corner nodes: 1 cells (1 quadratic tetra)"
 expect_stderr "dropped cells that are not volumes: 1 cells (1 triangle)"
+grep -q '"tets":8,' "$WORK/tet10.json" && grep -q '"mirrored_cells":0' "$WORK/tet10.json" &&
+    grep -q '"inverted_tets":0' "$WORK/tet10.json" || fail "tet10: $(cat "$WORK/tet10.json")"
+"$TPK" convert "$WORK/tet10.xdmf" "$WORK/tet10c.tpk" --higher-order corners --json > "$WORK/tet10.json" 2> "$WORK/err"
+check_6xx "$WORK/tet10c.tpk"
+expect_stderr "reduced higher-order cells to their corner nodes: 1 cells (1 quadratic tetra)"
 grep -q '"tets":1,' "$WORK/tet10.json" && grep -q '"mirrored_cells":0' "$WORK/tet10.json" || fail "tet10: $(cat "$WORK/tet10.json")"
 # dolfinx: the mesh Grid first, then one Temporal Collection per function, each step xi:including the
 # mesh; the two functions' steps merge by time (given out of order here).

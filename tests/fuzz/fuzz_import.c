@@ -2,7 +2,8 @@
  * for each row that has a memory reader, as fuzz_<name>, with TPK_FUZZ_FORMAT naming the row. The first
  * input byte picks one of the row's extensions for the name the reader sees (UGRID takes its encoding
  * from it); the rest is the file. Each input is read strictly (convert) and leniently (tetpack check:
- * wrong-length field arrays recorded and dropped). A failure must leave the mesh empty and say why;
+ * wrong-length field arrays recorded and dropped); a strict read's higher-order cells are then split whole
+ * (mesh/higher_order.h) as the converter splits them. A failure must leave the mesh empty and say why;
  * a crash, a sanitizer report or a leak is a bug. */
 #include <stdint.h>
 #include <stdio.h>
@@ -10,6 +11,7 @@
 #include <string.h>
 
 #include "import/importers.h"
+#include "mesh/higher_order.h"
 #include "library_defect.h"
 #include "support.h"
 
@@ -117,8 +119,13 @@ static void read_both_ways(void *user)
         memset(&diag, 0, sizeof diag);
         diag.warn = ignore_warning;
         diag.lenient_fields = lenient;
-        if (row->read_memory(name, (const char *)data + 1, size - 1, &mesh, &diag) == 0)
+        if (row->read_memory(name, (const char *)data + 1, size - 1, &mesh, &diag) == 0) {
+            /* what convert does next with a mesh read whole: its higher-order cells split at their nodes */
+            tpk_higher_split split;
+            if (!lenient && tpk_split_higher_order(&mesh, name, &split, &diag) == 0)
+                free(split.cell_source);
             tpk_mesh_free(&mesh);
+        }
         else if (mesh.points || mesh.cell_conn || mesh.fields || mesh.cell_count || !diag.message[0])
             abort(); /* a failure must leave the mesh empty and say why */
     }

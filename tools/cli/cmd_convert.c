@@ -25,6 +25,10 @@ static const char convert_help[] =
     "                              without --field, scalar cell fields are then kept too\n"
     "  --strict-fields             a field the importer cannot read (an OpenFOAM field using #calc) is an\n"
     "                              error; by default it is left out with a warning saying where and why\n"
+    "  --higher-order split|corners  second-order cells (quadratic tetra, hexahedra, wedges, pyramids):\n"
+    "                              split (default) into linear cells at all their nodes, face and cell\n"
+    "                              centres they lack placed and valued by their own shape functions;\n"
+    "                              corners: reduced to their corner nodes (fewer tets, values dropped)\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
@@ -242,6 +246,10 @@ static int parse_args(int argc, char **argv, convert_args *a)
                                     "bounding-box diagonal), found '%s'", TPK_MERGE_MIN_TOLERANCE, arg + 19);
         } else if (!strcmp(arg, "--skip-bad-cells")) {
             a->options.skip_bad_cells = 1;
+        } else if (!strcmp(arg, "--higher-order")) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--higher-order")) || (strcmp(v, "split") && strcmp(v, "corners")))
+                return tpk_cli_fail("convert", "--higher-order expects split or corners, found '%s'", v ? v : "");
+            a->options.higher_order_corners = !strcmp(v, "corners");
         } else if (!strcmp(arg, "--cell-to-point")) {
             a->options.cell_to_point = 1;
         } else if (!strcmp(arg, "--json")) {
@@ -331,6 +339,10 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
                           (long long)r->tets, (long long)r->shell_faces, (long long)r->inverted_fixed,
                           (long long)r->degenerate_dropped, r->field_count, r->step_count,
                           (unsigned long long)r->output_bytes);
+        if (r->higher_order_cells > 0) /* only then: other outputs are as they were */
+            tpk_strbuf_printf(&sb, "\"higher_order\":{\"mode\":\"%s\",\"cells\":%lld,\"added_points\":%lld},",
+                              r->higher_order_split ? "split" : "corners", (long long)r->higher_order_cells,
+                              (long long)r->higher_order_points);
         tpk_strbuf_printf(&sb,
                           "\"cells_split\":{\"tetra\":%lld,\"pyramid_into_2\":%lld,\"wedge_into_3\":%lld,"
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
@@ -374,6 +386,13 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
            a->options.output, (long long)r->tets, (long long)r->vertices, (long long)r->shell_faces,
            r->field_count, r->step_count, (double)r->output_bytes / 1048576.0);
     printf("  source: %lld cells, %lld points\n", (long long)r->source_cells, (long long)r->source_points);
+    if (r->higher_order_cells > 0 && r->higher_order_split)
+        printf("  higher-order cells: %lld split whole at all their nodes (%lld face and cell centres added); the "
+               "cell counts below are of their linear pieces\n", (long long)r->higher_order_cells,
+               (long long)r->higher_order_points);
+    else if (r->higher_order_cells > 0)
+        printf("  higher-order cells: %lld reduced to their corners (--higher-order corners)\n",
+               (long long)r->higher_order_cells);
     print_repairs(&a->options, r);
     if (r->cells_into[2] || r->cells_into[3] || r->cells_into[5] || r->cells_into[6] || r->steiner_cells ||
         r->bad_cells_skipped || r->polyhedra)

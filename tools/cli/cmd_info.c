@@ -196,6 +196,22 @@ static int print_json(tpk_file *file, const tpk_file_info *info, tpk_result veri
     return 0;
 }
 
+/* META's "higher_order" (written only for sources with higher-order cells): how they were converted. */
+static void print_higher_order(const char *meta)
+{
+    const char *how = strstr(meta, "\"higher_order\":\""), *cells = strstr(meta, "\"higher_order_cells\":"),
+               *points = strstr(meta, "\"higher_order_points\":");
+    long long n = 0, added = 0;
+    if (!how || !cells || !points || sscanf(cells + 21, "%lld", &n) != 1 || sscanf(points + 22, "%lld", &added) != 1)
+        return;
+    how += 16;
+    if (!strncmp(how, "split\"", 6))
+        printf("  higher-order cells: split whole (%lld cells, at all their nodes; %lld face and cell centres "
+               "added)\n", n, added);
+    else if (!strncmp(how, "corners\"", 8))
+        printf("  higher-order cells: reduced to their corners (%lld cells; their other nodes unused)\n", n);
+}
+
 static void print_text(const char *path, tpk_file *file, const tpk_file_info *info, tpk_result verified)
 {
     printf("%s: tetpack format %u.%u, %llu bytes\n", path, info->version_major, info->version_minor,
@@ -241,6 +257,8 @@ static void print_text(const char *path, tpk_file *file, const tpk_file_info *in
     else
         printf("  checksums and ids: FAILED: %s\n", tpk_error_text(file));
     char *meta = read_meta(file);
+    if (meta)
+        print_higher_order(meta);
     if (meta)
         printf("  metadata: %s\n", meta);
     free(meta);

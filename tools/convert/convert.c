@@ -13,6 +13,7 @@
 #include "base/clock.h"
 #include "levels.h"
 #include "merge_vertices.h"
+#include "mesh/higher_order.h"
 #include "base/output_file.h"
 #include "base/parallel.h"
 #include "pipeline.h"
@@ -64,6 +65,7 @@ typedef struct conversion {
     tpk_header_fields header;
     char source_format[32];
     tpk_merge_report merged;
+    tpk_higher_split higher;
 } conversion;
 
 static void import_progress(void *user, double fraction)
@@ -78,7 +80,7 @@ static int read_source(conversion *c)
     announce(c->stage, c->stage_user, "import");
     if (c->stage)
         tpk_scan_watch(import_progress, c);
-    int rc = tpk_import_any_with(c->o->input, c->o->format, c->o->tetgen, &c->src, c->diag);
+    int rc = tpk_import_any_whole(c->o->input, c->o->format, c->o->tetgen, 1, &c->src, c->diag);
     tpk_scan_watch(NULL, NULL);
     if (rc != 0)
         return -1;
@@ -93,6 +95,40 @@ static int read_source(conversion *c)
     c->source_format[sizeof c->source_format - 1] = 0;
     c->rep->t_import = tpk_now_seconds() - t;
     return 0;
+}
+
+/* Higher-order cells split whole into linear cells at their nodes (or, with --higher-order corners,
+ * reduced to their corners) before anything else sees the mesh. */
+static int whole_cells(conversion *c)
+{
+    int64_t count = 0;
+    for (int64_t k = 0; k < c->src.cell_count; k++)
+        count += tpk_is_higher_order_volume(c->src.cell_types[k]);
+    c->rep->higher_order_cells = count;
+    if (count == 0)
+        return 0;
+    if (c->o->higher_order_corners) {
+        tpk_reduce_higher_order(&c->src, c->o->input, c->diag);
+        return 0;
+    }
+    if (tpk_split_higher_order(&c->src, c->o->input, &c->higher, c->diag) != 0)
+        return -1;
+    c->rep->higher_order_split = c->higher.split_cells > 0;
+    c->rep->higher_order_points = c->higher.added_points;
+    return 0;
+}
+
+/* Tets and vertices name the cells and points of the split mesh: lead them back to the source file's
+ * (added points: -1). */
+static void map_whole_cells(tpk_tetmesh *mesh, const tpk_higher_split *higher)
+{
+    if (!higher->cell_source)
+        return;
+    for (int64_t v = 0; v < mesh->vertex_count; v++)
+        if (mesh->vertex_source[v] >= higher->source_points)
+            mesh->vertex_source[v] = -1;
+    for (int64_t t = 0; t < mesh->tet_count; t++)
+        mesh->tet_source[t] = higher->cell_source[mesh->tet_source[t]];
 }
 
 static void tetrahedralize_progress(void *user, double fraction)
@@ -126,6 +162,7 @@ static int make_tets(conversion *c)
     }
     tpk_mesh_free(&c->src);
     map_to_source(&c->mesh, &c->merged);
+    map_whole_cells(&c->mesh, &c->higher);
     memcpy(rep->cells_into, c->mesh.cells_into, sizeof rep->cells_into);
     rep->mirrored_cells = c->mesh.mirrored_cells;
     rep->steiner_cells = c->mesh.steiner_cells;
@@ -252,7 +289,9 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     int rc = read_source(&c);
     if (rc == 0) {
         double t = tpk_now_seconds();
-        rc = make_tets(&c);
+        rc = whole_cells(&c);
+        if (rc == 0)
+            rc = make_tets(&c);
         rep->t_tetrahedralize = tpk_now_seconds() - t;
     }
     /* Reorder before orienting: orientation reads 4 points per tet, which are then near each other. */
@@ -272,6 +311,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     free(c.neighbors);
     free(c.turned_over);
     tpk_merge_report_free(&c.merged);
+    free(c.higher.cell_source);
     tpk_mesh_free(&c.src);
     tpk_tetmesh_free(&c.mesh);
     return rc ? -1 : 0;

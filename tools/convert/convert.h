@@ -38,6 +38,8 @@ typedef struct tpk_convert_options {
     int skip_bad_cells;           /* leave out cells whose split would fold, and inverted tets that would fold
                                      if turned over, instead of failing */
     int cell_to_point;            /* average cell fields to points (and keep them without --field) */
+    int higher_order_corners;     /* reduce higher-order cells to their corners instead of splitting them
+                                     whole (mesh/higher_order.h) */
     int threads;                  /* <= 0: all cores */
     int parts;                    /* 0: one .tpk; >= 1: output is a part set manifest of this many parts
                                      (spec §15), cut along the Hilbert order */
@@ -53,6 +55,9 @@ typedef struct tpk_convert_options {
 
 typedef struct tpk_convert_report {
     int64_t source_points, source_cells;
+    int64_t higher_order_cells;   /* source cells of higher order: split whole, or reduced to corners */
+    int64_t higher_order_points;  /* points added where split cells lack a face or cell centre */
+    int higher_order_split;       /* 1: split whole; 0: reduced to corners (with higher_order_cells > 0) */
     int64_t vertices, tets, shell_faces;
     int64_t inverted_fixed, degenerate_dropped; /* inverted tets turned over; zero-volume tets dropped */
     int64_t merged_vertices, collapsed_cells_dropped; /* --merge-duplicates; cells it collapsed, dropped */

@@ -311,6 +311,10 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
                       o->no_reorder ? "false" : "true", (long long)rep->steiner_cells,
                       (long long)rep->face_steiner_points, (long long)rep->polyhedra,
                       (long long)rep->bad_cells_skipped);
+    if (rep->higher_order_cells > 0) /* only then: the META of a linear mesh stays as it was */
+        tpk_strbuf_printf(&sb, ",\"higher_order\":\"%s\",\"higher_order_cells\":%lld,\"higher_order_points\":%lld",
+                          rep->higher_order_split ? "split" : "corners", (long long)rep->higher_order_cells,
+                          (long long)rep->higher_order_points);
     tpk_strbuf_printf(&sb, ",\"repairs\":");
     tpk_convert_repairs_json(&sb, o, rep);
     if (part)

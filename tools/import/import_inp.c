@@ -1,5 +1,5 @@
 /* Abaqus / CalculiX .inp importer: *NODE and *ELEMENT blocks (solid elements C3D4/6/8/10/15/20/27 and
- * their R/H/I/... variants, higher-order ones reduced to corners), element sets (a cell field "elset")
+ * their R/H/I/... variants, higher-order ones whole), element sets (a cell field "elset")
  * and *INCLUDE. Keywords are case-insensitive, "**" starts a comment, data lines are comma-separated and
  * an element's node list may run over several lines. Node and element ids are arbitrary positive
  * integers, mapped to 0-based indices at the end. Other keywords (materials, steps...) are skipped. */
@@ -146,14 +146,16 @@ static const char *param(const char **field, const size_t *flen, int n, const ch
 /* The VTK type of an Abaqus element type: C3D<n> with any prefix (DC3D: heat transfer) and suffix
  * (R, H, I, T...). Abaqus numbers the corners first, in VTK's order for tets and hexahedra; its wedge
  * (C3D6) has the same corner order too: checked by converting gmsh-written files with no cell turned
- * over (tests/cli/inp.sh). Returns the type (0: not a solid, dropped); *corners its corner count. */
+ * over (tests/cli/inp.sh). Its quadratic solids list their mid-edge nodes as VTK does (C3D10: 01 12 20
+ * 03 13 23; C3D20: bottom, top, then vertical edges; C3D15 likewise), so they are kept whole as VTK's
+ * quadratic types; a C3D27 as a C3D20 (its first 20 nodes), its face and centre nodes unused. Returns
+ * the type (0: not a solid, dropped); *corners the nodes kept. */
 static int solid_type(const char *name, size_t len, int *nodes, int *corners)
 {
     static const struct {
         int nodes, type, corners;
-    } solids[] = {{4, TPK_CELL_TETRA, 4},  {10, TPK_CELL_TETRA, 4},      {6, TPK_CELL_WEDGE, 6},
-                  {15, TPK_CELL_WEDGE, 6}, {8, TPK_CELL_HEXAHEDRON, 8}, {20, TPK_CELL_HEXAHEDRON, 8},
-                  {27, TPK_CELL_HEXAHEDRON, 8}};
+    } solids[] = {{4, TPK_CELL_TETRA, 4}, {10, 24, 10},  {6, TPK_CELL_WEDGE, 6}, {15, 26, 15},
+                  {8, TPK_CELL_HEXAHEDRON, 8}, {20, 25, 20}, {27, 25, 20}};
     size_t at = 0;
     while (at + 3 <= len && strncasecmp(name + at, "C3D", 3) != 0)
         at++;
@@ -231,7 +233,7 @@ static int read_node(inp_reader *r, tpk_scan *s, const char **field, const size_
     return 0;
 }
 
-/* An element record is complete: keep its corners (or count it as dropped). */
+/* An element record is complete: keep its nodes (or count it as dropped). */
 static int add_element(inp_reader *r, tpk_scan *s, inp_block *b)
 {
     if (!b->cell_type) {

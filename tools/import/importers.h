@@ -55,7 +55,7 @@ int tpk_import_pvd(const char *path, tpk_mesh *out, tpk_diag *diag);
 void tpk_import_pvd_files(const char *path, tpk_import_file_fn each, void *user);
 
 /* Gmsh .msh 2.2 and 4.1, ASCII and binary: volume elements (tets, hexes, prisms, pyramids, and their
- * higher-order kinds reduced to corners) in VTK node order, $NodeData/$ElementData as fields. */
+ * higher-order kinds whole) in VTK node order, $NodeData/$ElementData as fields. */
 int tpk_import_gmsh(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_gmsh_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
@@ -66,7 +66,7 @@ int tpk_import_ugrid(const char *path, tpk_mesh *out, tpk_diag *diag);
 int tpk_import_ugrid_memory(const char *name, const char *data, size_t size, tpk_mesh *out, tpk_diag *diag);
 
 /* Abaqus / CalculiX .inp: *NODE, *ELEMENT (solids C3D4/6/8/10/15/20/27 and variants, higher-order ones
- * reduced to corners; surfaces, shells and beams dropped), *ELSET and ELSET= as the cell field "elset"
+ * whole; surfaces, shells and beams dropped), *ELSET and ELSET= as the cell field "elset"
  * (set numbers from 1 in the order the names first appear), *INCLUDE relative to the including file.
  * The memory form resolves includes relative to `name`. */
 int tpk_import_inp(const char *path, tpk_mesh *out, tpk_diag *diag);
@@ -80,20 +80,20 @@ int tpk_import_dolfin_memory(const char *name, const char *data, size_t size, tp
 int tpk_sniff_dolfin(const char *head, size_t n);
 
 /* Exodus II (.exo, .e, .g, .ex2; netCDF classic or netCDF-4) through the Exodus library: tetra, hex,
- * wedge and pyramid blocks (higher-order reduced to corners), nodal and element variables with every
+ * wedge and pyramid blocks (higher-order ones whole), nodal and element variables with every
  * time step. */
 int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag);
 
 /* CGNS (.cgns; HDF5 or ADF) through the CGNS library, file only (the library reads files, so no memory
  * reader and no fuzz target): the first 3-D base, its zones merged (each keeps its vertices);
- * unstructured TETRA, PYRA, PENTA, HEXA (higher-order reduced to corners), MIXED and NGON_n/NFACE_n
+ * unstructured TETRA, PYRA, PENTA, HEXA (higher-order ones whole), MIXED and NGON_n/NFACE_n
  * (polyhedra) sections, structured zones as hexahedra; Vertex and CellCenter FlowSolutions as point and
  * cell fields, with a step per BaseIterativeData step where ZoneIterativeData points at them. Built
  * with TETPACK_WITH_CGNS (TPK_WITH_CGNS). */
 int tpk_import_cgns(const char *path, tpk_mesh *out, tpk_diag *diag);
 /* XDMF (.xdmf, .xmf; Xdmf 2 and 3) as meshio, FEniCS/dolfinx and many solvers write it: the Uniform
- * Grid with volume cells (Tetrahedron, Pyramid, Wedge, Hexahedron, Mixed; higher-order types reduced to
- * corners; surfaces dropped), Geometry XYZ, XY or X_Y_Z, Node and Cell Attributes as fields; a Temporal
+ * Grid with volume cells (Tetrahedron, Pyramid, Wedge, Hexahedron, Mixed; higher-order types whole;
+ * surfaces dropped), Geometry XYZ, XY or X_Y_Z, Node and Cell Attributes as fields; a Temporal
  * Collection's grids as time steps (one mesh, by XInclude or Reference, or identical). DataItems in XML
  * text, or in HDF5 (file.h5:/dataset, relative to the .xdmf file; needs TETPACK_WITH_HDF5). */
 int tpk_import_xdmf(const char *path, tpk_mesh *out, tpk_diag *diag);
@@ -207,9 +207,14 @@ void tpk_import_input_files(const char *path, const char *format, tpk_import_fil
  * the row its inner name or content picks, when that row has TPK_FORMAT_GZIP; messages name the .gz
  * file, with places in the inflated bytes. */
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag);
-/* The same with TetGen's settings for surfaces (NULL: defaults). */
+/* The same with TetGen's settings for surfaces (NULL: defaults). The readers keep higher-order volume
+ * cells whole (all their nodes, in VTK order); these two reduce them to their corners after reading
+ * (mesh/higher_order.h, with a warning), as every tool but the converter wants them. */
 struct tpk_tetgen_options;
 int tpk_import_any_with(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
                         tpk_mesh *out, tpk_diag *diag);
+/* The same, keeping higher-order cells whole when higher_order_whole is set (the converter splits them). */
+int tpk_import_any_whole(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
+                         int higher_order_whole, tpk_mesh *out, tpk_diag *diag);
 
 #endif

@@ -14,6 +14,7 @@
 #include "gzip_input.h"
 #include "importers.h"
 #include "isolate.h"
+#include "mesh/higher_order.h"
 #include "surface/surface.h"
 
 #define VOLUME_CELLS (TPK_FORMAT_TETS | TPK_FORMAT_HEXAHEDRA | TPK_FORMAT_WEDGES | TPK_FORMAT_PYRAMIDS)
@@ -338,6 +339,9 @@ static int import_gzip(const tpk_import_format *row, const char *path, tpk_mesh 
     return rc;
 }
 
+static int import_any(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
+                      tpk_mesh *out, tpk_diag *diag);
+
 int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag *diag)
 {
     return tpk_import_any_with(path, format, NULL, out, diag);
@@ -345,6 +349,21 @@ int tpk_import_any(const char *path, const char *format, tpk_mesh *out, tpk_diag
 
 int tpk_import_any_with(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
                         tpk_mesh *out, tpk_diag *diag)
+{
+    return tpk_import_any_whole(path, format, tetgen, 0, out, diag);
+}
+
+int tpk_import_any_whole(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
+                         int higher_order_whole, tpk_mesh *out, tpk_diag *diag)
+{
+    int rc = import_any(path, format, tetgen, out, diag);
+    if (rc == 0 && !higher_order_whole)
+        tpk_reduce_higher_order(out, path, diag);
+    return rc;
+}
+
+static int import_any(const char *path, const char *format, const struct tpk_tetgen_options *tetgen,
+                      tpk_mesh *out, tpk_diag *diag)
 {
     if (!path || !out)
         return tpk_diag_fail(diag, "tpk_import_any: no path or output mesh given");

@@ -76,12 +76,10 @@ tpk_cell_rule tpk_cell_rule_for(int type)
 {
     const tpk_cell_type_info *t = type == 41 ? NULL : tpk_cell_type(type);
     if (!t)
-        return (tpk_cell_rule){TPK_RULE_UNKNOWN, 0, 0, 0, type == 41 ? "convex point set" : "unknown"};
+        return (tpk_cell_rule){TPK_RULE_UNKNOWN, 0, 0, type == 41 ? "convex point set" : "unknown"};
     if (t->dim < 3)
-        return (tpk_cell_rule){TPK_RULE_DROP, 0, 0, 0, t->name};
-    if (t->linear_type != t->type)
-        return (tpk_cell_rule){TPK_RULE_REDUCE, t->nodes, (unsigned char)t->linear_type, t->corners, t->name};
-    return (tpk_cell_rule){TPK_RULE_KEEP, t->nodes, (unsigned char)t->type, t->nodes, t->name};
+        return (tpk_cell_rule){TPK_RULE_DROP, 0, 0, t->name};
+    return (tpk_cell_rule){TPK_RULE_KEEP, t->nodes, (unsigned char)t->type, t->name};
 }
 
 void tpk_warn_cell_counts(tpk_diag *diag, const char *name, const int64_t *by_type, int64_t total,

@@ -21,16 +21,15 @@ typedef struct tpk_cell_type_info {
 /* The entry for a VTK cell type, or NULL for a type the tools do not know. */
 const tpk_cell_type_info *tpk_cell_type(int type);
 
-/* What an importer does with a cell type: volumes are kept, higher-order volumes reduced to their
- * corners, everything of lower dimension dropped; VTK's convex point set (41) and codes the table does
- * not know are unknown (an error). */
-enum { TPK_RULE_UNKNOWN, TPK_RULE_DROP, TPK_RULE_KEEP, TPK_RULE_REDUCE };
+/* What an importer does with a cell type: volumes are kept (higher-order ones whole, with all their
+ * nodes in VTK order: mesh/higher_order.h splits or reduces them), everything of lower dimension dropped;
+ * VTK's convex point set (41) and codes the table does not know are unknown (an error). */
+enum { TPK_RULE_UNKNOWN, TPK_RULE_DROP, TPK_RULE_KEEP };
 
 typedef struct tpk_cell_rule {
     int kind;          /* TPK_RULE_* */
     int nodes;         /* node count the cell must have when > 0; at least -nodes when < 0; any when 0 */
-    unsigned char out_type;  /* the type it is stored as */
-    int out_nodes;     /* the nodes it keeps (its first ones) */
+    unsigned char out_type;  /* the type it is stored as (its own) */
     const char *name;
 } tpk_cell_rule;
 

@@ -3,8 +3,8 @@
  * for tetra, pyramid, wedge and hexahedron: its face tables give TETRA (1,3,2) (1,2,4) (2,3,4) (3,1,4),
  * PYRA (1,4,3,2) (1,2,5) ..., PENTA (1,2,5,4) (2,3,6,5) (3,1,4,6) (1,3,2) (4,5,6), HEXA (1,4,3,2)
  * (1,2,6,5) ... (5,6,7,8), all outward, which are VTK's faces (tests/test_cgns.c converts the SIDS
- * reference cells and real files and finds none mirrored). Higher-order kinds list their corners first
- * and keep only those. MIXED sections carry a type code before each element; NFACE_n cells list signed
+ * reference cells and real files and finds none mirrored). Higher-order kinds are kept whole, in VTK's
+ * node order (volume_kind). MIXED sections carry a type code before each element; NFACE_n cells list signed
  * NGON_n face numbers (negative: the face's normal points into the cell) and become polyhedra. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -13,20 +13,34 @@
 #include "import_cgns_internal.h"
 #include "mesh/polyhedron.h"
 
-/* A volume element type: its VTK type and corner count. 0 for elements of lower dimension (NODE, BAR,
- * TRI, QUAD), -1 for one this reader does not know. */
-static int volume_kind(CGNS_ENUMT(ElementType_t) type, int *vtk, int *corners)
+/* CGNS node for each VTK node of the quadratic kinds kept whole: the SIDS list a hexahedron's and a
+ * wedge's vertical mid-edges before the top ones (VTK after), and a HEXA_27's face centres bottom, y-,
+ * x+, y+, x-, top (VTK: x-, x+, y-, y+, bottom, top); TETRA_10 and PYRA_13 agree with VTK. */
+static const signed char penta18[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 13, 14, 9, 10, 11, 15, 16, 17};
+static const signed char hexa27[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 16, 17, 18, 19, 12, 13, 14, 15,
+                                     24, 22, 21, 23, 20, 25, 26};
+
+typedef struct volume_kind_row {
+    const char *prefix;        /* the element type's name, or its start */
+    int vtk, nodes;            /* the VTK type kept and its node count */
+    const signed char *order;  /* VTK node k is CGNS node order[k]; NULL: the same */
+} volume_kind_row;
+
+/* A volume element type: its VTK type and the nodes kept (*row). 0 for elements of lower dimension (NODE,
+ * BAR, TRI, QUAD), -1 for one this reader does not know. PYRA_14 is kept as a 13-node pyramid (VTK has
+ * no type with the base centre). */
+static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
 {
-    static const struct {
-        const char *prefix;
-        int vtk, corners;
-    } kinds[] = {{"TETRA_", TPK_CELL_TETRA, 4}, {"PYRA_", TPK_CELL_PYRAMID, 5}, {"PENTA_", TPK_CELL_WEDGE, 6},
-                 {"HEXA_", TPK_CELL_HEXAHEDRON, 8}, {"NODE", 0, 0},  {"BAR_", 0, 0},
-                 {"TRI_", 0, 0},    {"QUAD_", 0, 0}};
+    static const volume_kind_row kinds[] = {
+        {"TETRA_10", 24, 10, NULL},  {"PYRA_13", 27, 13, NULL}, {"PYRA_14", 27, 13, NULL},
+        {"PENTA_15", 26, 15, penta18}, {"PENTA_18", 32, 18, penta18}, {"HEXA_20", 25, 20, hexa27},
+        {"HEXA_27", 29, 27, hexa27}, {"TETRA_", TPK_CELL_TETRA, 4, NULL}, {"PYRA_", TPK_CELL_PYRAMID, 5, NULL},
+        {"PENTA_", TPK_CELL_WEDGE, 6, NULL}, {"HEXA_", TPK_CELL_HEXAHEDRON, 8, NULL}, {"NODE", 0, 0, NULL},
+        {"BAR_", 0, 0, NULL}, {"TRI_", 0, 0, NULL}, {"QUAD_", 0, 0, NULL}};
     const char *name = cg_ElementTypeName(type);
     for (size_t k = 0; name && k < sizeof kinds / sizeof kinds[0]; k++)
         if (!strncmp(name, kinds[k].prefix, strlen(kinds[k].prefix))) {
-            *vtk = kinds[k].vtk, *corners = kinds[k].corners;
+            *row = &kinds[k];
             return kinds[k].vtk ? 1 : 0;
         }
     return -1;
@@ -128,7 +142,8 @@ static int polyhedron_size(const cgns_reader *r, const cgns_zone *zone, const cg
 static int count_element(const cgns_reader *r, cgns_zone *zone, const cgns_section *sec, cgsize_t i,
                          CGNS_ENUMT(ElementType_t) type)
 {
-    int vtk = 0, corners = 0, kind = volume_kind(type, &vtk, &corners);
+    const volume_kind_row *row = NULL;
+    int kind = volume_kind(type, &row);
     if (type == CGNS_ENUMV(NGON_n))
         return 0; /* faces, used by NFACE_n */
     if (type == CGNS_ENUMV(NFACE_n)) {
@@ -145,7 +160,7 @@ static int count_element(const cgns_reader *r, cgns_zone *zone, const cgns_secti
     if (kind == 0)
         zone->dropped++;
     else
-        zone->cells++, zone->conn += corners;
+        zone->cells++, zone->conn += row->nodes;
     return 0;
 }
 
@@ -242,18 +257,18 @@ static int emit_polyhedron(const cgns_reader *r, const cgns_zone *zone, const cg
 static int emit_element(const cgns_reader *r, const cgns_zone *zone, const cgns_section *sec, cgsize_t i,
                         CGNS_ENUMT(ElementType_t) type, const cgsize_t *nodes, tpk_mesh *out, int64_t *at)
 {
-    int vtk = 0, corners = 0;
+    static const volume_kind_row polyhedron = {"NFACE_n", TPK_CELL_POLYHEDRON, 0, NULL};
+    const volume_kind_row *row = &polyhedron;
     int64_t c = out->cell_count;
-    if (type == CGNS_ENUMV(NFACE_n))
-        vtk = TPK_CELL_POLYHEDRON;
-    else if (volume_kind(type, &vtk, &corners) != 1)
+    if (type != CGNS_ENUMV(NFACE_n) && volume_kind(type, &row) != 1)
         return 0;
+    int vtk = row->vtk;
     out->cell_types[c] = (uint8_t)vtk;
     out->cell_offsets[c] = *at;
     if (vtk == TPK_CELL_POLYHEDRON && emit_polyhedron(r, zone, sec, i, out, at))
         return -1;
-    for (int k = 0; k < corners; k++)
-        if (node_id(r, zone, sec, sec->start + i, nodes[k], &out->cell_conn[(*at)++]))
+    for (int k = 0; k < row->nodes; k++)
+        if (node_id(r, zone, sec, sec->start + i, nodes[row->order ? row->order[k] : k], &out->cell_conn[(*at)++]))
             return -1;
     out->cell_count = c + 1;
     out->cell_offsets[c + 1] = *at;

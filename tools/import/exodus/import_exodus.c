@@ -1,10 +1,12 @@
 /* Exodus II importer (.exo, .e, .g, .ex2), through the Exodus library (netCDF classic or netCDF-4):
- * element blocks of tetrahedra, hexahedra, wedges and pyramids (higher-order kinds reduced to their
- * corners) become cells in VTK node order, which Exodus shares for all four: its side tables (SEACAS
- * exodus-element-types.md) list the same outward faces as VTK's cells (hexahedra also checked on
- * SEACAS's files). Blocks of lower dimension (shells, bars, spheres) are dropped with a count. Nodal
- * and element variables become point and cell fields with every time step, and the time values are
- * kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
+ * element blocks of tetrahedra, hexahedra, wedges and pyramids become cells in VTK node order, which
+ * Exodus shares for the corners of all four: its side tables (SEACAS exodus-element-types.md) list the
+ * same outward faces as VTK's cells (hexahedra also checked on SEACAS's files). Higher-order blocks are
+ * kept whole as VTK's quadratic types (TETRA10, HEX20, WEDGE15, PYRAMID13; TETRA14/15, HEX27, WEDGE18 and
+ * PYRAMID14 by those nodes, which come first, their face and centre nodes unused): Exodus lists the
+ * vertical mid-edges of hexahedra and wedges before the top ones, VTK after. Blocks of lower dimension
+ * (shells, bars, spheres) are dropped with a count. Nodal and element variables become point and cell
+ * fields with every time step, and the time values are kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
  * (tetpack-mpi matches the points of per-processor files by them and numbers the source cells). */
 #include <exodusII.h>
 #include <math.h>
@@ -31,6 +33,30 @@ static const block_kind kinds[] = {
     {"BAR", 1, 0, 0},    {"TRUSS", 1, 0, 0},   {"SPHERE", 0, 0, 0},   {"CIRCLE", 0, 0, 0},  {"NULL", 0, 0, 0},
 };
 
+/* A volume block's cells as VTK keeps them: its type and node count, from Exodus's nodes per element. */
+static int kept_type(const block_kind *kind, int64_t per, int *kept)
+{
+    static const struct { int linear, at_least, vtk, kept; } quadratic[] = {
+        {10, 10, 24, 10}, {12, 20, 25, 20}, {13, 15, 26, 15}, {14, 13, 27, 13}};
+    for (size_t i = 0; i < sizeof quadratic / sizeof quadratic[0]; i++)
+        if (quadratic[i].linear == kind->vtk_type && per >= quadratic[i].at_least) {
+            *kept = quadratic[i].kept;
+            return quadratic[i].vtk;
+        }
+    *kept = kind->corners;
+    return kind->vtk_type;
+}
+
+/* The Exodus node that VTK node k of a kept cell of VTK type `vtk` is. */
+static int exodus_node(int vtk, int k)
+{
+    if (vtk == 25 && k >= 12) /* VTK: top mid-edges 12-15, then vertical 16-19; Exodus the other way */
+        return k < 16 ? k + 4 : k - 4;
+    if (vtk == 26 && k >= 9) /* the same for wedges: 9-11 and 12-14 */
+        return k < 12 ? k + 3 : k - 3;
+    return k;
+}
+
 static const block_kind *kind_of(const char *type)
 {
     for (size_t i = 0; i < sizeof kinds / sizeof kinds[0]; i++)
@@ -42,6 +68,7 @@ static const block_kind *kind_of(const char *type)
 typedef struct exo_block {
     int64_t id, count, nodes_per;
     const block_kind *kind;
+    int vtk_type, kept; /* as its cells are kept (kept_type) */
     char type[MAX_STR_LENGTH + 1];
     int64_t first_cell; /* index of its first kept cell, or -1 when dropped */
 } exo_block;
@@ -83,7 +110,7 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         free(ids);
         return tpk_diag_fail(r->diag, "%s: cannot read the element block ids", r->path);
     }
-    int64_t cells = 0, conn = 0, dropped = 0;
+    int64_t cells = 0, conn = 0, dropped = 0, unused = 0;
     for (int64_t b = 0; b < r->block_count; b++) {
         exo_block *blk = &r->blocks[b];
         int count = 0, per = 0, attrs = 0;
@@ -111,12 +138,20 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         }
         blk->first_cell = cells;
         cells += count;
-        conn += (int64_t)count * blk->kind->corners;
+        int kept;
+        blk->vtk_type = kept_type(blk->kind, per, &kept);
+        blk->kept = kept;
+        conn += (int64_t)count * kept;
+        if (kept < per && blk->vtk_type != blk->kind->vtk_type)
+            unused += count;
     }
     free(ids);
     if (dropped)
         tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not volumes (shells, bars, spheres)", r->path,
                       (long long)dropped);
+    if (unused)
+        tpk_diag_warn(r->diag, "%s: %lld higher-order elements read without their face and centre nodes (as TETRA10, "
+                      "HEX20, WEDGE15 or PYRAMID13)", r->path, (long long)unused);
     if (cells == 0)
         return tpk_diag_fail(r->diag, "%s: no volume cells (%lld elements in %lld blocks, none tetra, hex, wedge or "
                              "pyramid)",
@@ -138,10 +173,10 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
             return tpk_diag_fail(r->diag, "%s: cannot read the connectivity of block %lld", r->path, (long long)blk->id);
         }
         for (int64_t e = 0; e < blk->count; e++, c++) {
-            out->cell_types[c] = (uint8_t)blk->kind->vtk_type;
+            out->cell_types[c] = (uint8_t)blk->vtk_type;
             out->cell_offsets[c] = at;
-            for (int k = 0; k < blk->kind->corners; k++) {
-                int id = ids_in[e * blk->nodes_per + k];
+            for (int k = 0; k < blk->kept; k++) {
+                int id = ids_in[e * blk->nodes_per + exodus_node(blk->vtk_type, k)];
                 if (id < 1 || id > r->nodes) {
                     free(ids_in);
                     return tpk_diag_fail(r->diag, "%s: block %lld element %lld uses node %d, expected 1 to %lld",

@@ -1,6 +1,6 @@
 /* Gmsh .msh importer, formats 2.2 and 4.1, ASCII and binary (little-endian, data size 8). A file is a series of sections `$Name ... $EndName`:
  * $MeshFormat first, then $Nodes (node tags may be sparse: they are mapped to 0-based indices),
- * $Elements (volume elements kept in VTK node order, higher-order ones reduced to their corners, points,
+ * $Elements (volume elements kept in VTK node order, higher-order ones whole, points,
  * lines and surfaces dropped with a count), $NodeData/$ElementData (fields; blocks of the same name at
  * several times become one field with several steps), $Entities (4.1: the physical group of each volume
  * entity). Other sections ($PhysicalNames, $Periodic, $PartitionedEntities, unknown ones) are skipped.
@@ -96,8 +96,8 @@ static int finish(gmsh_reader *r, tpk_mesh *out)
         tpk_diag_warn(r->s.diag, "%s: dropped %lld point, line and surface elements", r->s.name,
                       (long long)r->dropped);
     if (r->reduced)
-        tpk_diag_warn(r->s.diag, "%s: reduced %lld higher-order elements to their corner nodes", r->s.name,
-                      (long long)r->reduced);
+        tpk_diag_warn(r->s.diag, "%s: %lld 14-node pyramids read as 13-node ones (VTK has no type with the base "
+                      "centre node)", r->s.name, (long long)r->reduced);
     if (tpk_import_take_cells(out, r->point_count, &r->points, r->cell_count, &r->types, &r->offsets, &r->conn))
         return tpk_scan_fail(&r->s, "out of memory");
     if (!r->physical && !(r->physical = malloc(sizeof *r->physical)))

@@ -1,5 +1,5 @@
 /* Gmsh importer: $Nodes (tags mapped to 0-based indices), $Elements (volume elements kept in VTK node
- * order, higher-order ones reduced to their corners, points, lines and surfaces dropped with a count)
+ * order, higher-order ones whole, points, lines and surfaces dropped with a count)
  * and 4.1 $Entities (the physical group of each volume entity), for formats 2.2 and 4.1. */
 #include <stdint.h>
 #include <stdio.h>
@@ -10,29 +10,50 @@
 #include "base/parallel.h"
 #include "base/text_scan.h"
 
-/* Gmsh element types. vtk 0: dropped (points, lines, surfaces). Higher-order kinds list their corner
- * nodes first, in the order of the linear kind. Node order: Gmsh and VTK agree on tetrahedra,
- * hexahedra and pyramids; for prisms, Gmsh's reference prism has nodes (0,0,-1),(1,0,-1),(0,1,-1),
- * (0,0,1),(1,0,1),(0,1,1): the same corners, in the same order, as VTK's wedge parametric corners, so
- * the mapping is the identity. Checked on t3_hex_prism_ascii41.msh (12,308 prisms): every wedge is
- * positive in VTK order (tpk_tetrahedralize reports no mirrored cells; tests/test_gmsh.c). */
+/* Gmsh element types. vtk 0: dropped (points, lines, surfaces). Node order: Gmsh and VTK agree on the
+ * corners of tetrahedra, hexahedra and pyramids; for prisms, Gmsh's reference prism has nodes
+ * (0,0,-1),(1,0,-1),(0,1,-1),(0,0,1),(1,0,1),(0,1,1): the same corners, in the same order, as VTK's
+ * wedge parametric corners. Checked on t3_hex_prism_ascii41.msh (12,308 prisms): every wedge is
+ * positive in VTK order (tpk_tetrahedralize reports no mirrored cells; tests/test_gmsh.c). Higher-order
+ * kinds are kept whole as VTK's quadratic types: `order` gives, for each VTK node, the Gmsh node
+ * (Gmsh's "Node ordering": its edges run 01 02 03 12 13 23 for the tetrahedron, 01 03 04 12 15 23 26 37
+ * 45 47 56 67 for the hexahedron, then its faces z-, y-, x-, x+, y+, z+; VTK's as mesh/cell_map.c lists
+ * them). The 14-node pyramid keeps 13 (VTK has no type with the base centre: the split places it by the
+ * base's serendipity functions). */
 typedef struct gmsh_type {
-    int type, nodes, vtk, corners;
+    int type, nodes, vtk, kept; /* kept: the nodes kept, in VTK order */
     const char *name;
+    const signed char *order;   /* VTK node k is Gmsh node order[k]; NULL: the same */
 } gmsh_type;
 
+static const signed char tet10[] = {0, 1, 2, 3, 4, 5, 6, 7, 9, 8};
+static const signed char hex27[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15,
+                                    22, 23, 21, 24, 20, 25, 26};
+static const signed char prism18[] = {0, 1, 2, 3, 4, 5, 6, 9, 7, 12, 14, 13, 8, 10, 11, 15, 17, 16};
+static const signed char pyramid13[] = {0, 1, 2, 3, 4, 5, 8, 10, 6, 7, 9, 11, 12};
+
 static const gmsh_type gmsh_types[] = {
-    {1, 2, 0, 0, "line"},           {2, 3, 0, 0, "triangle"},          {3, 4, 0, 0, "quadrangle"},
-    {4, 4, 10, 4, "tetrahedron"},   {5, 8, 12, 8, "hexahedron"},       {6, 6, 13, 6, "prism"},
-    {7, 5, 14, 5, "pyramid"},       {8, 3, 0, 0, "line3"},             {9, 6, 0, 0, "triangle6"},
-    {10, 9, 0, 0, "quadrangle9"},   {11, 10, 10, 4, "tetrahedron10"},  {12, 27, 12, 8, "hexahedron27"},
-    {13, 18, 13, 6, "prism18"},     {14, 14, 14, 5, "pyramid14"},      {15, 1, 0, 0, "point"},
-    {16, 8, 0, 0, "quadrangle8"},   {17, 20, 12, 8, "hexahedron20"},   {18, 15, 13, 6, "prism15"},
-    {19, 13, 14, 5, "pyramid13"},   {20, 9, 0, 0, "triangle9"},        {21, 10, 0, 0, "triangle10"},
-    {22, 12, 0, 0, "triangle12"},   {23, 15, 0, 0, "triangle15"},      {24, 15, 0, 0, "triangle15i"},
-    {25, 21, 0, 0, "triangle21"},   {26, 4, 0, 0, "line4"},            {27, 5, 0, 0, "line5"},
-    {28, 6, 0, 0, "line6"},
+    {1, 2, 0, 0, "line", NULL},              {2, 3, 0, 0, "triangle", NULL},
+    {3, 4, 0, 0, "quadrangle", NULL},        {4, 4, 10, 4, "tetrahedron", NULL},
+    {5, 8, 12, 8, "hexahedron", NULL},       {6, 6, 13, 6, "prism", NULL},
+    {7, 5, 14, 5, "pyramid", NULL},          {8, 3, 0, 0, "line3", NULL},
+    {9, 6, 0, 0, "triangle6", NULL},         {10, 9, 0, 0, "quadrangle9", NULL},
+    {11, 10, 24, 10, "tetrahedron10", tet10}, {12, 27, 29, 27, "hexahedron27", hex27},
+    {13, 18, 32, 18, "prism18", prism18},    {14, 14, 27, 13, "pyramid14", pyramid13},
+    {15, 1, 0, 0, "point", NULL},            {16, 8, 0, 0, "quadrangle8", NULL},
+    {17, 20, 25, 20, "hexahedron20", hex27}, {18, 15, 26, 15, "prism15", prism18},
+    {19, 13, 27, 13, "pyramid13", pyramid13}, {20, 9, 0, 0, "triangle9", NULL},
+    {21, 10, 0, 0, "triangle10", NULL},      {22, 12, 0, 0, "triangle12", NULL},
+    {23, 15, 0, 0, "triangle15", NULL},      {24, 15, 0, 0, "triangle15i", NULL},
+    {25, 21, 0, 0, "triangle21", NULL},      {26, 4, 0, 0, "line4", NULL},
+    {27, 5, 0, 0, "line5", NULL},            {28, 6, 0, 0, "line6", NULL},
 };
+
+/* The Gmsh node that VTK node k of a kept element is. */
+static inline int gmsh_node_of(const gmsh_type *t, int k)
+{
+    return t->order ? t->order[k] : k;
+}
 
 static const gmsh_type *find_type(int64_t type)
 {
@@ -364,10 +385,10 @@ static int32_t element_node_index(gmsh_reader *r, int64_t id, int64_t tag, const
     return gmsh_node_index(r, id, user);
 }
 
-/* The cell whose corners are at r->conn + conn_count: counted, typed, tagged. */
+/* The cell whose nodes are at r->conn + conn_count: counted, typed, tagged. */
 static int finish_cell(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t physical, int64_t entity)
 {
-    if (t->corners != t->nodes)
+    if (t->kept != t->nodes)
         r->reduced++;
     int64_t c = r->cell_count;
     if (add_elem_tag(r, tag, (int32_t)c))
@@ -376,7 +397,7 @@ static int finish_cell(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t 
     r->offsets[c] = r->conn_count;
     r->physical[c] = (float)physical;
     r->entity[c] = (float)entity;
-    r->conn_count += t->corners;
+    r->conn_count += t->kept;
     r->cell_count++;
     r->offsets[r->cell_count] = r->conn_count;
     return 0;
@@ -395,18 +416,18 @@ static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, i
         r->dropped++;
         return add_elem_tag(r, tag, -1);
     }
-    if (reserve_cells(r, 1, t->corners))
+    if (reserve_cells(r, 1, t->nodes))
         return -1;
+    int32_t ids[27];
     for (int k = 0; k < t->nodes; k++) {
         int64_t id;
         if (gmsh_num(r, &id, "an element node tag", width))
             return -1;
-        int32_t i = element_node_index(r, id, tag, t);
-        if (i < 0)
+        if ((ids[k] = element_node_index(r, id, tag, t)) < 0)
             return -1;
-        if (k < t->corners)
-            r->conn[r->conn_count + k] = i; /* identity mapping for all four kinds (see gmsh_types) */
     }
+    for (int k = 0; k < t->kept; k++)
+        r->conn[r->conn_count + k] = ids[gmsh_node_of(t, k)];
     return finish_cell(r, tag, t, physical, entity);
 }
 
@@ -450,9 +471,9 @@ static void run_range(void *ctx, int64_t begin, int64_t end, int w)
         }
         if (!plain)
             break;
-        int64_t c = job->cell0 + e, at = job->conn0 + e * t->corners;
-        for (int k = 0; k < t->corners; k++)
-            r->conn[at + k] = (int32_t)(load_u64(p + sizeof(uint64_t) * (size_t)(1 + k)) - 1);
+        int64_t c = job->cell0 + e, at = job->conn0 + e * t->kept;
+        for (int k = 0; k < t->kept; k++)
+            r->conn[at + k] = (int32_t)(load_u64(p + sizeof(uint64_t) * (size_t)(1 + gmsh_node_of(t, k))) - 1);
         r->types[c] = (uint8_t)t->vtk;
         r->offsets[c] = at;
         r->physical[c] = job->physical;
@@ -466,7 +487,7 @@ static int64_t read_element_run(gmsh_reader *r, const gmsh_type *t, int64_t fit,
 {
     const unsigned char *p = (const unsigned char *)r->s.data + r->s.pos;
     if (fit < 65536 || r->elem_listed || r->cell_count != r->elem_count ||
-        r->cell_count + fit > r->cell_cap || r->conn_count + fit * t->corners > r->conn_cap)
+        r->cell_count + fit > r->cell_cap || r->conn_count + fit * t->kept > r->conn_cap)
         return 0;
     uint64_t first = r->elem_count ? (uint64_t)r->elem_first_tag + (uint64_t)r->elem_count : load_u64(p);
     if (first < 1 || first > (uint64_t)INT64_MAX)
@@ -490,9 +511,9 @@ static int64_t read_element_run(gmsh_reader *r, const gmsh_type *t, int64_t fit,
         r->elem_first_tag = (int64_t)first;
     r->elem_count += taken;
     r->cell_count += taken;
-    r->conn_count += taken * t->corners;
+    r->conn_count += taken * t->kept;
     r->offsets[r->cell_count] = r->conn_count;
-    if (t->corners != t->nodes)
+    if (t->kept != t->nodes)
         r->reduced += taken;
     return taken;
 }
@@ -526,18 +547,18 @@ static int64_t read_plain_elements(gmsh_reader *r, const gmsh_type *t, int64_t c
         }
         if (!plain)
             break;
-        if (r->cell_count + 1 > r->cell_cap || r->conn_count + t->corners > r->conn_cap) {
+        if (r->cell_count + 1 > r->cell_cap || r->conn_count + t->kept > r->conn_cap) {
             /* Grow where the one-by-one reader grows, with the scanner where it has it then (just past
              * the element's tag), so that a failure reads the same. */
             size_t saved = r->s.pos, start = saved + (size_t)e * record;
             r->s.pos = start + sizeof(uint64_t);
             mark_bulk_read(r, sizeof(uint64_t));
-            if (reserve_cells(r, 1, t->corners))
+            if (reserve_cells(r, 1, t->nodes))
                 return -1;
             r->s.pos = saved;
         }
-        for (int k = 0; k < t->corners; k++)
-            r->conn[r->conn_count + k] = (int32_t)(load_u64(p + sizeof(uint64_t) * (size_t)(1 + k)) - 1);
+        for (int k = 0; k < t->kept; k++)
+            r->conn[r->conn_count + k] = (int32_t)(load_u64(p + sizeof(uint64_t) * (size_t)(1 + gmsh_node_of(t, k))) - 1);
         if (finish_cell(r, (int64_t)tag, t, physical, entity))
             return -1;
     }
@@ -653,7 +674,7 @@ static int read_elements_41(gmsh_reader *r, int64_t n, int64_t blocks)
                                  (long long)(n - done), (long long)n);
         int64_t physical = dim == 3 ? volume_physical(r, etag) : 0;
         /* count fits the bytes left (gmsh_read_count): room for the whole block at once */
-        if (t->vtk && reserve_cells(r, count, count * t->corners))
+        if (t->vtk && reserve_cells(r, count, count * t->nodes))
             return -1;
         int64_t plain = read_plain_elements(r, t, count, physical, etag);
         if (plain < 0)

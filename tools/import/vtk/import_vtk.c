@@ -14,7 +14,7 @@
 #include "base/text_scan.h"
 #include "import/import_file.h"
 
-/* ---- Cells: classify, reduce, drop -------------------------------------------------------------- */
+/* ---- Cells: classify, keep, drop ---------------------------------------------------------------- */
 
 /* A polyhedron keeps its face stream (nfaces, then per face npts and npts ids) in place of its point
  * ids, in both CELLS forms (VTK's legacy writers put it there). Errors give the entry's place in the
@@ -75,8 +75,8 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
         return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a CELLS section, found end of file");
     if (r->type_count < 0)
         return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a CELL_TYPES section, found end of file");
-    int64_t dropped[256] = {0}, reduced[256] = {0};
-    int64_t drop_total = 0, reduce_total = 0, kept = 0, conn_size = 0;
+    int64_t dropped[256] = {0};
+    int64_t drop_total = 0, kept = 0, conn_size = 0;
     for (int64_t c = 0; c < r->cell_count; c++) {
         tpk_cell_rule rule = tpk_cell_rule_for(r->types[c]);
         if (check_cell(r, c, &rule))
@@ -86,25 +86,18 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
             drop_total++;
             continue;
         }
-        if (rule.kind == TPK_RULE_REDUCE) {
-            reduced[r->types[c]]++;
-            reduce_total++;
-        }
         kept++;
-        conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : r->offsets[c + 1] - r->offsets[c];
+        conn_size += r->offsets[c + 1] - r->offsets[c];
     }
     if (drop_total)
         tpk_warn_cell_counts(r->s.diag, r->s.name, dropped, drop_total,
                              "dropped cells that are not volumes:");
-    if (reduce_total)
-        tpk_warn_cell_counts(r->s.diag, r->s.name, reduced, reduce_total,
-                             "reduced higher-order cells to their corner nodes:");
 
     out->point_count = r->point_count;
     out->points = r->points;
     r->points = NULL;
     out->cell_count = kept;
-    if (!drop_total && !reduce_total) {
+    if (!drop_total) {
         out->cell_types = r->types;
         out->cell_offsets = r->offsets;
         out->cell_conn = r->conn;
@@ -127,7 +120,7 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
             keep[c] = rule.kind != TPK_RULE_DROP;
             if (!keep[c])
                 continue;
-            int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : r->offsets[c + 1] - r->offsets[c];
+            int64_t n = r->offsets[c + 1] - r->offsets[c];
             memcpy(out->cell_conn + o, r->conn + r->offsets[c], sizeof(int32_t) * (size_t)n);
             o += n;
             out->cell_types[k] = rule.out_type;

@@ -2,7 +2,7 @@
  * of different partitions with the same coordinates (== on each axis) become one point, the first one's,
  * as a partitioned writer repeats the points on the boundaries between partitions. Points repeated
  * inside one partition stay apart (that is the file's own mesh: `convert --merge-duplicates` merges
- * them). Cells are kept, reduced to corners or dropped by tpk_cell_rule_for, as the VTU reader does. */
+ * them). Cells are kept (higher-order ones whole) or dropped by tpk_cell_rule_for, as the VTU reader does. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -303,7 +303,7 @@ static int put_polyhedron(vh_reader *r, cell_out *o, const part_cells *pc, int64
 }
 
 static int add_part_cells(vh_reader *r, cell_out *o, const part_cells *pc, int64_t p, int64_t base,
-                          const int32_t *merged_of, int64_t *dropped, int64_t *reduced)
+                          const int32_t *merged_of, int64_t *dropped)
 {
     for (int64_t c = 0; c < pc->cells; c++) {
         int type = pc->types[c];
@@ -332,12 +332,9 @@ static int add_part_cells(vh_reader *r, cell_out *o, const part_cells *pc, int64
             if (put_polyhedron(r, o, pc, p, c, base, merged_of))
                 return -1;
         } else {
-            int64_t keep_n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : n;
-            if (rule.kind == TPK_RULE_REDUCE)
-                reduced[type]++;
-            if (grow((void **)&o->conn, &o->conn_cap, o->conn_count + keep_n, sizeof *o->conn))
+            if (grow((void **)&o->conn, &o->conn_cap, o->conn_count + n, sizeof *o->conn))
                 return vh_fail(r, "out of memory for the cells");
-            for (int64_t j = 0; j < keep_n; j++)
+            for (int64_t j = 0; j < n; j++)
                 if (put_id(r, o, p, pc->conn[pc->offsets[c] + j], base, merged_of, "Connectivity",
                            pc->offsets[c] + j))
                     return -1;
@@ -357,7 +354,7 @@ int vh_read_geometry(vh_reader *r, int64_t step, int record, tpk_mesh *out)
     cell_out o;
     memset(&o, 0, sizeof o);
     int64_t source_cells = r->cell_start[s->part0 + s->parts] - r->cell_start[s->part0];
-    int64_t dropped[256] = {0}, reduced[256] = {0}, drop_total = 0, reduce_total = 0;
+    int64_t dropped[256] = {0}, drop_total = 0;
     int rc = read_points(r, s, out, &merged_of, &first_raw, &raw);
     if (rc == 0 && (!(o.kept = malloc((size_t)(source_cells ? source_cells : 1))) ||
                     grow((void **)&o.offsets, &o.off_cap, 1, sizeof *o.offsets)))
@@ -368,18 +365,15 @@ int vh_read_geometry(vh_reader *r, int64_t step, int record, tpk_mesh *out)
         part_cells pc;
         rc = read_part_cells(r, p, &pc);
         if (rc == 0)
-            rc = add_part_cells(r, &o, &pc, p, r->point_start[p] - r->point_start[s->part0], merged_of, dropped,
-                                reduced);
+            rc = add_part_cells(r, &o, &pc, p, r->point_start[p] - r->point_start[s->part0], merged_of, dropped);
         part_cells_free(&pc);
     }
     for (int t = 0; t < 256; t++)
-        drop_total += dropped[t], reduce_total += reduced[t];
+        drop_total += dropped[t];
     if (rc == 0 && o.count > INT32_MAX)
         rc = vh_fail(r, "%lld cells in a step, more than tetpack holds (2^31 - 1)", (long long)o.count);
     if (rc == 0 && record && drop_total)
         tpk_warn_cell_counts(r->diag, r->name, dropped, drop_total, "dropped cells that are not volumes:");
-    if (rc == 0 && record && reduce_total)
-        tpk_warn_cell_counts(r->diag, r->name, reduced, reduce_total, "reduced higher-order cells to their corner nodes:");
     if (rc == 0) {
         out->cell_count = o.count;
         out->cell_types = o.types ? o.types : malloc(1);

@@ -134,7 +134,7 @@ uint64_t vtu_src_left(const bsrc *s);
 int vtu_src_fail(bsrc *s, const char *what);
 
 /* ---- The mesh (import_vtu_mesh.c) ----------------------------------------------------------------
- * Check the decoded arrays against each other and fill `out` (cells kept, reduced or dropped by
+ * Check the decoded arrays against each other and fill `out` (cells kept or dropped by
  * cell_types.h, polyhedra by their face streams, point and cell fields). 0 or -1. */
 int vtu_build_mesh(vtu_reader *r, tpk_mesh *out);
 

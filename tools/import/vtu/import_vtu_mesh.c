@@ -1,5 +1,5 @@
 /* VTU importer: the tpk_mesh from the decoded DataArrays. Offsets and cell types are checked, polyhedron
- * face streams too; cells are kept, reduced to their corners or dropped (cell_types.h); fields follow the
+ * face streams too; cells are kept (higher-order ones whole) or dropped (cell_types.h); fields follow the
  * kept cells. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -79,8 +79,8 @@ typedef struct cell_arrays {
 
 /* What the per-cell pass found: kept and dropped cells, the output connectivity size. */
 typedef struct cell_tally {
-    int64_t dropped[256], reduced[256];
-    int64_t drop_total, reduce_total, kept, conn_size;
+    int64_t dropped[256];
+    int64_t drop_total, kept, conn_size;
 } cell_tally;
 
 /* Offsets increasing and ending at the connectivity's size; types in 0..255. */
@@ -152,7 +152,7 @@ static int check_cell_nodes(vtu_reader *r, const cell_arrays *a, int64_t c, int 
     return 0;
 }
 
-/* A checked cell of n nodes counted as kept, reduced or dropped. */
+/* A checked cell of n nodes counted as kept or dropped. */
 static void tally_cell(cell_tally *t, int type, tpk_cell_rule rule, int64_t n)
 {
     if (rule.kind == TPK_RULE_DROP) {
@@ -160,15 +160,11 @@ static void tally_cell(cell_tally *t, int type, tpk_cell_rule rule, int64_t n)
         t->drop_total++;
         return;
     }
-    if (rule.kind == TPK_RULE_REDUCE) {
-        t->reduced[type]++;
-        t->reduce_total++;
-    }
     t->kept++;
-    t->conn_size += rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : n;
+    t->conn_size += n;
 }
 
-/* Checks every cell, finds its span, and counts what is kept, reduced and dropped; rule_of[type]:
+/* Checks every cell, finds its span, and counts what is kept and dropped; rule_of[type]:
  * tpk_cell_rule_for(type), looked up once per type rather than once per cell. */
 static int scan_cells(vtu_reader *r, const cell_arrays *a, const tpk_cell_rule *rule_of, cell_span *span,
                       cell_tally *t)
@@ -243,7 +239,7 @@ static void copy_range(void *ctx, int64_t begin, int64_t end, int w)
         if (!job->keep[c])
             continue;
         int64_t first = c ? (int64_t)a->offs->values[c - 1] : 0; /* as scan_range found it */
-        int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : (int64_t)a->offs->values[c] - first;
+        int64_t n = (int64_t)a->offs->values[c] - first;
         const double *v = a->conn->values + first;
         for (int64_t j = 0; j < n; j++)
             out->cell_conn[o++] = (int32_t)v[j];
@@ -295,12 +291,9 @@ static int build_cells_parallel(vtu_reader *r, const vtu_array *pts, const cell_
         const cell_tally *x = &job->tally[w];
         job->first_cell[w] = t->kept;
         job->first_conn[w] = t->conn_size;
-        for (int type = 0; type < 256; type++) {
+        for (int type = 0; type < 256; type++)
             t->dropped[type] += x->dropped[type];
-            t->reduced[type] += x->reduced[type];
-        }
         t->drop_total += x->drop_total;
-        t->reduce_total += x->reduce_total;
         t->kept += x->kept;
         t->conn_size += x->conn_size;
     }
@@ -323,7 +316,7 @@ static int copy_cells(vtu_reader *r, const vtu_array *pts, const cell_arrays *a,
         keep[c] = rule.kind != TPK_RULE_DROP;
         if (!keep[c])
             continue;
-        int64_t n = rule.kind == TPK_RULE_REDUCE ? rule.out_nodes : span[c].n;
+        int64_t n = span[c].n;
         for (int64_t j = 0; j < n; j++)
             out->cell_conn[o++] = (int32_t)span[c].v[j];
         out->cell_types[k] = rule.out_type;
@@ -403,9 +396,6 @@ int vtu_build_mesh(vtu_reader *r, tpk_mesh *out)
         rc = both ? 0 : scan_cells(r, &a, rule_of, span, &t);
     if (rc == 0 && t.drop_total)
         tpk_warn_cell_counts(r->diag, r->name, t.dropped, t.drop_total, "dropped cells that are not volumes:");
-    if (rc == 0 && t.reduce_total)
-        tpk_warn_cell_counts(r->diag, r->name, t.reduced, t.reduce_total,
-                             "reduced higher-order cells to their corner nodes:");
     if (rc == 0 && !both)
         rc = copy_cells(r, pts, &a, rule_of, span, &t, keep, out);
     free(span);

@@ -1,7 +1,7 @@
 /* XDMF importer: one Uniform Grid. Its Topology becomes cells in VTK node order (XDMF's linear
  * Tetrahedron, Pyramid, Wedge and Hexahedron list their nodes as VTK does: checked on meshio's files,
- * which convert with no mirrored cell; tests/cli/xdmf.sh), higher-order ones are reduced to their
- * corners, which come first; surfaces, lines and points are dropped. Geometry XYZ, XY or X_Y_Z gives
+ * which convert with no mirrored cell; tests/cli/xdmf.sh), higher-order ones are kept whole, in VTK's
+ * node order as meshio writes them; surfaces, lines and points are dropped. Geometry XYZ, XY or X_Y_Z gives
  * the points; Attributes centred on nodes or cells give fields. xi:include elements and References
  * stand for the elements they name. */
 #include <stdio.h>
@@ -15,7 +15,7 @@
 #include "tetpack_format.h"
 
 /* XDMF's topology types: name, code in a Mixed topology, nodes (0: a count follows the code in a Mixed
- * topology), and the VTK type of the same cell (its table says dropped, kept or reduced). */
+ * topology), and the VTK type of the same cell (its table says dropped or kept). */
 typedef struct topology_kind {
     const char *name, *alias;
     int code, nodes, vtk_type;
@@ -248,9 +248,9 @@ static int start_walk(xdmf_reader *r, const xdmf_node *topology, const xdmf_valu
     return 0;
 }
 
-/* Counts per VTK type of dropped and reduced cells, for the warnings. */
+/* Counts per VTK type of dropped cells, for the warning, and of what is kept. */
 typedef struct cell_tally {
-    int64_t dropped[256], reduced[256], drop_total, reduce_total, kept, conn_size;
+    int64_t dropped[256], drop_total, kept, conn_size;
 } cell_tally;
 
 /* First pass: check every cell's node ids and count what is kept. */
@@ -272,10 +272,8 @@ static int scan_cells(xdmf_reader *r, cell_walk *w, int64_t cells, int64_t point
         keep[c] = rule.kind != TPK_RULE_DROP;
         if (rule.kind == TPK_RULE_DROP)
             t->dropped[k->vtk_type]++, t->drop_total++;
-        if (rule.kind == TPK_RULE_REDUCE)
-            t->reduced[k->vtk_type]++, t->reduce_total++;
         if (keep[c])
-            t->kept++, t->conn_size += rule.out_nodes;
+            t->kept++, t->conn_size += n;
     }
     if (w->pos != w->values->count)
         return xdmf_fail(r, w->item, "Mixed topology: expected %lld values for its %lld cells, found %lld",
@@ -283,7 +281,7 @@ static int scan_cells(xdmf_reader *r, cell_walk *w, int64_t cells, int64_t point
     return 0;
 }
 
-/* Second pass: the kept cells (their first out_nodes nodes) into out. */
+/* Second pass: the kept cells into out. */
 static int copy_cells(xdmf_reader *r, cell_walk *w, int64_t cells, const cell_tally *t, tpk_mesh *out)
 {
     out->cell_types = malloc((size_t)(t->kept ? t->kept : 1));
@@ -301,7 +299,7 @@ static int copy_cells(xdmf_reader *r, cell_walk *w, int64_t cells, const cell_ta
         tpk_cell_rule rule = tpk_cell_rule_for(kind->vtk_type);
         if (rule.kind == TPK_RULE_DROP)
             continue;
-        for (int j = 0; j < rule.out_nodes; j++)
+        for (int64_t j = 0; j < n; j++)
             out->cell_conn[o++] = (int32_t)w->values->v[first + j];
         out->cell_types[k] = rule.out_type;
         out->cell_offsets[++k] = o;
@@ -332,9 +330,6 @@ int xdmf_read_cells(xdmf_reader *r, const xdmf_grid *parts, tpk_mesh *out, xdmf_
     snprintf(grid, sizeof grid, "%s: Grid '%.60s'", r->name, name ? name : "");
     if (rc == 0 && t->drop_total)
         tpk_warn_cell_counts(r->diag, grid, t->dropped, t->drop_total, "dropped cells that are not volumes:");
-    if (rc == 0 && t->reduce_total)
-        tpk_warn_cell_counts(r->diag, grid, t->reduced, t->reduce_total,
-                             "reduced higher-order cells to their corner nodes:");
     if (rc == 0)
         rc = copy_cells(r, &w, count, t, out);
     cells->source_count = count;

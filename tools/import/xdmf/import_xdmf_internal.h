@@ -120,7 +120,7 @@ typedef struct xdmf_cells {
 } xdmf_cells;
 
 /* Points and volume cells of a grid into `out` (lower-dimensional cells dropped with a warning,
- * higher-order ones reduced to their corners). 0 or -1; free cells->keep. */
+ * higher-order ones whole). 0 or -1; free cells->keep. */
 int xdmf_read_cells(xdmf_reader *r, const xdmf_grid *parts, tpk_mesh *out, xdmf_cells *cells);
 /* An Attribute of a grid read into `out` as point or cell values of the kept cells: *values (malloc'd,
  * tuples * components floats), *association (TPK_ASSOC_POINT or TPK_ASSOC_TET), *components. Returns 1

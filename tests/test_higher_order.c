@@ -1,0 +1,744 @@
+/* Higher-order cells kept whole (tools/mesh/higher_order.c, tools/mesh/cell_map.c): for each format's
+ * node order, written here from the format's own documentation (not from the readers' tables), one cell
+ * of each kind whose map is known in closed form (an affine map of the reference cell, and a curved
+ * quadratic one) and whose point field is a quadratic polynomial of position. Split and tetrahedralized:
+ * every node is a tet vertex with its value, the tets are positive and fill the cell's volume exactly,
+ * and the points the split adds sit where the cell's map puts them and carry the field's own value (the
+ * quadratic cells reproduce quadratic fields) at every step; a cell field is its cell's value on each of
+ * the cell's tets. A wrong node order folds the pieces, so the volume or the
+ * signs fail. */
+#include <exodusII.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "convert/pipeline.h"
+#include "check/check_against.h"
+#include "convert/convert.h"
+#include "harness.h"
+#include "import/importers.h"
+#include "mesh/cell_map.h"
+#include "mesh/cell_types.h"
+#include "mesh/higher_order.h"
+#include "tetpack_format.h"
+#include "tpk_assert.h"
+
+#ifdef TPK_TEST_CGNS
+#include <cgnslib.h>
+#endif
+
+/* A format's node order for one kind: its corners (of `shape`, in VTK's corner order, which every
+ * format here shares), then mid-edge nodes on `edges`, then face centres on `faces`, then the centre. */
+typedef struct node_order {
+    const char *name;   /* the format's element name */
+    int code;           /* its type code in the format (gmsh element type, VTK cell type, ...) */
+    int shape, edge_count, face_count, centre;
+    int edges[12][2];
+    int faces[6][4];
+} node_order;
+
+static const double corner_ref[15][8][3] = {
+    [10] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
+    [12] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}},
+    [13] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}},
+    [14] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5, 0.5, 1}},
+};
+static const int corner_count[15] = {[10] = 4, [12] = 8, [13] = 6, [14] = 5};
+static const double ref_volume[15] = {[10] = 1.0 / 6, [12] = 1, [13] = 0.5, [14] = 1.0 / 3};
+
+/* Node k's reference coordinates; returns the node count. */
+static int order_nodes(const node_order *o, double r[27][3])
+{
+    int n = corner_count[o->shape];
+    memcpy(r, corner_ref[o->shape], sizeof(double) * 3 * (size_t)n);
+    for (int e = 0; e < o->edge_count; e++, n++)
+        for (int a = 0; a < 3; a++)
+            r[n][a] = 0.5 * (r[o->edges[e][0]][a] + r[o->edges[e][1]][a]);
+    for (int f = 0; f < o->face_count; f++, n++)
+        for (int a = 0; a < 3; a++)
+            r[n][a] = 0.25 * (r[o->faces[f][0]][a] + r[o->faces[f][1]][a] + r[o->faces[f][2]][a] + r[o->faces[f][3]][a]);
+    if (o->centre) {
+        for (int a = 0; a < 3; a++)
+            r[n][a] = 0.5;
+        n++;
+    }
+    return n;
+}
+
+/* The cells' maps: x = A r + shift (+ a quadratic bend when curved). det A = 2.961. */
+static const double A[3][3] = {{1.5, 0.3, 0.1}, {0.2, 1.4, -0.2}, {0.1, 0.4, 1.5}};
+
+static void map_point(const double r[3], double shift, int curved, double x[3])
+{
+    for (int i = 0; i < 3; i++)
+        x[i] = A[i][0] * r[0] + A[i][1] * r[1] + A[i][2] * r[2] + (i == 0 ? shift : 0);
+    if (curved) { /* a bend quadratic in r: the quadratic cells hold it exactly */
+        x[2] += 0.2 * r[0] * (1 - r[0]);
+        x[1] += 0.15 * r[2] * r[2];
+    }
+}
+
+static double det_a(void)
+{
+    return A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) - A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+           A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+}
+
+/* The field: a quadratic polynomial of position (step 0), and twice it (step 1); only its linear part
+ * with linear_field set. */
+static int linear_field;
+
+static double field_at(const double x[3])
+{
+    if (linear_field)
+        return 1 + x[0] - 2 * x[1] + 0.5 * x[2];
+    return 1 + x[0] - 2 * x[1] + 0.5 * x[2] + x[0] * x[0] - 0.7 * x[0] * x[1] + 0.3 * x[1] * x[2] - 0.4 * x[2] * x[2];
+}
+
+static double tet_volume(const double *p, const int32_t *t)
+{
+    const double *a = p + 3 * t[0], *b = p + 3 * t[1], *c = p + 3 * t[2], *d = p + 3 * t[3];
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; k++)
+        u[k] = b[k] - a[k], v[k] = c[k] - a[k], w[k] = d[k] - a[k];
+    return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0])) / 6;
+}
+
+/* The checks, on a mesh of cells of the kinds in `orders` (cell c of kind orders[c], shifted by 3c,
+ * curved or not) as read: every node a tet vertex, tets positive, volumes exact (affine), the field
+ * reproduced at every vertex, added points on the map. */
+static void check_whole(tpk_mesh *m, const node_order *const *orders, int curved, int expect_type_of_first)
+{
+    CHECK_EQ_INT(m->cell_types[0], expect_type_of_first);
+    int64_t cells = m->cell_count, points = m->point_count;
+    /* a cell field: 10 c + 1 in cell c, which each of the cell's tets must carry */
+    float *cell_values = malloc(sizeof *cell_values * (size_t)cells);
+    for (int64_t c = 0; c < cells; c++)
+        cell_values[c] = 10.0f * (float)c + 1;
+    CHECK(tpk_mesh_add_field(m, "cell", TPK_ASSOC_TET, 1, 1, cell_values) == 0);
+    tpk_diag d;
+    memset(&d, 0, sizeof d);
+    tpk_higher_split h;
+    CHECK_MSG(tpk_split_higher_order(m, "test", &h, &d) == 0, "%s", d.message);
+    CHECK_EQ_INT(h.split_cells, cells);
+    CHECK_EQ_INT(h.reduced_cells, 0);
+    uint8_t *used = calloc((size_t)m->point_count, 1);
+    for (int64_t k = 0; k < m->cell_offsets[m->cell_count]; k++)
+        used[m->cell_conn[k]] = 1;
+    for (int64_t p = 0; p < m->point_count; p++)
+        CHECK_MSG(used[p], "point %lld is no linear cell's corner", (long long)p);
+    free(used);
+    tpk_tetmesh t;
+    const char *names[] = {"f", "cell"};
+    CHECK_MSG(tpk_tetrahedralize(m, names, 2, 0, &t, &d) == 0, "%s", d.message);
+    CHECK(t.field_count == 2 && t.fields[1].association == TPK_ASSOC_TET);
+    for (int64_t k = 0; k < t.tet_count; k++)
+        CHECK_MSG(t.fields[1].values[k] == 10.0f * (float)h.cell_source[t.tet_source[k]] + 1,
+                  "tet %lld: cell field %g, its cell %d", (long long)k, t.fields[1].values[k],
+                  h.cell_source[t.tet_source[k]]);
+    CHECK_EQ_INT(t.mirrored_cells, 0);
+    double *volume = calloc((size_t)cells, sizeof *volume);
+    for (int64_t k = 0; k < t.tet_count; k++) {
+        double v = tet_volume(t.points, t.tets + 4 * k);
+        CHECK_MSG(v > 0, "tet %lld of cell %d: volume %g", (long long)k, h.cell_source[t.tet_source[k]], v);
+        volume[h.cell_source[t.tet_source[k]]] += v;
+    }
+    for (int64_t c = 0; c < cells && !curved; c++) {
+        double want = det_a() * ref_volume[orders[c]->shape];
+        CHECK_MSG(fabs(volume[c] - want) < 1e-12 * want, "%s: volume %.17g, expected %.17g", orders[c]->name,
+                  volume[c], want);
+    }
+    free(volume);
+    /* Values: the field at every vertex, exact at the nodes (as float), reproduced at added points. */
+    CHECK(t.fields[0].step_count == 2);
+    for (int64_t v = 0; v < t.vertex_count; v++) {
+        double want = field_at(t.points + 3 * v);
+        for (int s = 0; s < 2; s++) {
+            double got = t.fields[0].values[s * t.vertex_count + v];
+            CHECK_MSG(fabs(got - (s + 1) * want) < 2e-6 * (1 + fabs(want)) || curved,
+                      "vertex %lld (%s) step %d: %.9g, expected %.9g", (long long)v, v < points ? "a node" : "added", s,
+                      got, (s + 1) * want);
+        }
+    }
+    /* Added points on the cell's map: at the map of a face or cell centre of some cell. */
+    for (int64_t v = points; v < t.vertex_count; v++) {
+        double best = 1e300;
+        for (int64_t c = 0; c < cells; c++) {
+            double centres[8][3];
+            int nc = 0, shape = orders[c]->shape;
+            if (shape == 12) {
+                static const double hc[7][3] = {{0, .5, .5}, {1, .5, .5}, {.5, 0, .5}, {.5, 1, .5},
+                                                {.5, .5, 0}, {.5, .5, 1}, {.5, .5, .5}};
+                memcpy(centres, hc, sizeof hc), nc = 7;
+            } else if (shape == 13) {
+                static const double wc[3][3] = {{.5, 0, .5}, {.5, .5, .5}, {0, .5, .5}};
+                memcpy(centres, wc, sizeof wc), nc = 3;
+            } else if (shape == 14) {
+                centres[0][0] = centres[0][1] = 0.5, centres[0][2] = 0, nc = 1;
+            }
+            for (int i = 0; i < nc; i++) {
+                double x[3];
+                map_point(centres[i], 3.0 * (double)c, curved, x);
+                double dist = fabs(x[0] - t.points[3 * v]) + fabs(x[1] - t.points[3 * v + 1]) +
+                              fabs(x[2] - t.points[3 * v + 2]);
+                best = dist < best ? dist : best;
+            }
+        }
+        CHECK_MSG(best < 1e-12, "added point %lld is %g from every face and cell centre", (long long)v, best);
+    }
+    free(h.cell_source);
+    tpk_tetmesh_free(&t);
+}
+
+/* ---- VTK legacy: VTK's own orders (vtkQuadraticTetra, ...: the class comments' edge and face lists) ---- */
+
+static const node_order vtk_tet10 = {"VTK quadratic tetra", 24, 10, 6, 0, 0,
+                                     {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
+static const node_order vtk_hex20 = {"VTK quadratic hexahedron", 25, 12, 12, 0, 0,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5},
+                                      {2, 6}, {3, 7}}, {{0}}};
+static const node_order vtk_hex27 = {"VTK triquadratic hexahedron", 29, 12, 12, 6, 1,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5},
+                                      {2, 6}, {3, 7}},
+                                     {{0, 3, 7, 4}, {1, 2, 6, 5}, {0, 1, 5, 4}, {3, 2, 6, 7}, {0, 1, 2, 3}, {4, 5, 6, 7}}};
+static const node_order vtk_wedge15 = {"VTK quadratic wedge", 26, 13, 9, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}}, {{0}}};
+static const node_order vtk_wedge18 = {"VTK biquadratic quadratic wedge", 32, 13, 9, 3, 0,
+                                       {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}},
+                                       {{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}};
+static const node_order vtk_wedge12 = {"VTK quadratic linear wedge", 31, 13, 6, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
+static const node_order vtk_pyramid13 = {"VTK quadratic pyramid", 27, 14, 8, 0, 0,
+                                         {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+
+/* A legacy VTK file of the cells `orders` (cell c shifted by 3c) with the point field "f" (its second
+ * step is added after reading: add_second_step). */
+static char *write_vtk(const node_order *const *orders, int count, int curved)
+{
+    size_t cap = 1 << 16, at = 0;
+    char *text = malloc(cap);
+    int total = 0, ns[16];
+    double r[16][27][3];
+    for (int c = 0; c < count; c++)
+        total += ns[c] = order_nodes(orders[c], r[c]);
+    at += (size_t)snprintf(text + at, cap - at, "# vtk DataFile Version 3.0\nwhole\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                                                "POINTS %d double\n", total);
+    for (int c = 0; c < count; c++)
+        for (int k = 0; k < ns[c]; k++) {
+            double x[3];
+            map_point(r[c][k], 3.0 * c, curved, x);
+            at += (size_t)snprintf(text + at, cap - at, "%.17g %.17g %.17g\n", x[0], x[1], x[2]);
+        }
+    at += (size_t)snprintf(text + at, cap - at, "CELLS %d %d\n", count, count + total);
+    for (int c = 0, first = 0; c < count; first += ns[c], c++) {
+        at += (size_t)snprintf(text + at, cap - at, "%d", ns[c]);
+        for (int k = 0; k < ns[c]; k++)
+            at += (size_t)snprintf(text + at, cap - at, " %d", first + k);
+        at += (size_t)snprintf(text + at, cap - at, "\n");
+    }
+    at += (size_t)snprintf(text + at, cap - at, "CELL_TYPES %d\n", count);
+    for (int c = 0; c < count; c++)
+        at += (size_t)snprintf(text + at, cap - at, "%d\n", orders[c]->code);
+    at += (size_t)snprintf(text + at, cap - at, "POINT_DATA %d\nSCALARS f double 1\nLOOKUP_TABLE default\n", total);
+    for (int c = 0; c < count; c++)
+        for (int k = 0; k < ns[c]; k++) {
+            double x[3];
+            map_point(r[c][k], 3.0 * c, curved, x);
+            at += (size_t)snprintf(text + at, cap - at, "%.17g\n", field_at(x));
+        }
+    return text;
+}
+
+/* The point field "f" given a second step, twice the first (time steps through the split). */
+static void add_second_step(tpk_mesh *m)
+{
+    for (int i = 0; i < m->field_count; i++) {
+        tpk_src_field *f = &m->fields[i];
+        if (strcmp(f->name, "f") || f->step_count != 1)
+            continue;
+        float *v = realloc(f->values, sizeof *v * 2 * (size_t)m->point_count);
+        for (int64_t p = 0; p < m->point_count; p++)
+            v[m->point_count + p] = 2 * v[p];
+        f->values = v, f->step_count = 2;
+        m->step_count = 2;
+    }
+}
+
+static void quiet_warn(void *user, const char *text)
+{
+    (void)user, (void)text;
+}
+
+static void quiet(tpk_diag *d)
+{
+    memset(d, 0, sizeof *d);
+    d->warn = quiet_warn;
+}
+
+TPK_TEST(vtk_types)
+{
+    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12,
+                                  &vtk_pyramid13};
+    for (int curved = 0; curved < 2; curved++) {
+        char *text = write_vtk(orders, 7, curved);
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_vtk_legacy_memory("whole.vtk", text, strlen(text), &m, &d) == 0, "%s", d.message);
+        free(text);
+        add_second_step(&m);
+        check_whole(&m, orders, curved, 24);
+        tpk_mesh_free(&m);
+    }
+}
+
+/* VTK's Lagrange cells of order 2 in VTK 9's numbering: the quadratic tetra's, triquadratic hexahedron's
+ * and biquadratic-quadratic wedge's (vtkHigherOrderHexahedron: corners, edges, faces -x +x -y +y -z +z,
+ * body). */
+TPK_TEST(lagrange_types)
+{
+    node_order tet = vtk_tet10, hex = vtk_hex27, wedge = vtk_wedge18;
+    tet.code = 71, hex.code = 72, wedge.code = 73;
+    tet.name = "VTK Lagrange tetra", hex.name = "VTK Lagrange hexahedron", wedge.name = "VTK Lagrange wedge";
+    const node_order *orders[] = {&tet, &hex, &wedge};
+    for (int curved = 0; curved < 2; curved++) {
+        char *text = write_vtk(orders, 3, curved);
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_vtk_legacy_memory("lagrange.vtk", text, strlen(text), &m, &d) == 0, "%s", d.message);
+        free(text);
+        add_second_step(&m);
+        check_whole(&m, orders, curved, 71);
+        tpk_mesh_free(&m);
+    }
+}
+
+/* Every shape function table: weights sum to 1, are 1 at their node and 0 at the others, and reproduce
+ * quadratic polynomials (the quadratic-linear wedge: those linear in t). */
+TPK_TEST(shape_functions)
+{
+    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12,
+                                  &vtk_pyramid13};
+    for (int i = 0; i < 7; i++) {
+        double r[27][3], w[TPK_CELL_MAP_MAX_NODES];
+        int n = order_nodes(orders[i], r);
+        CHECK_EQ_INT(tpk_cell_map_nodes(orders[i]->code), n);
+        for (int k = 0; k < n; k++) {
+            double at[3];
+            tpk_cell_map_node(orders[i]->code, k, at);
+            CHECK_MSG(at[0] == r[k][0] && at[1] == r[k][1] && at[2] == r[k][2], "%s node %d", orders[i]->name, k);
+            CHECK_EQ_INT(tpk_cell_map_weights(orders[i]->code, r[k], w), n);
+            for (int j = 0; j < n; j++)
+                CHECK_MSG(fabs(w[j] - (j == k)) < 1e-15, "%s: N%d at node %d = %g", orders[i]->name, j, k, w[j]);
+        }
+        const double inside[3] = {0.21, 0.17, 0.33};
+        double sum = 0;
+        tpk_cell_map_weights(orders[i]->code, inside, w);
+        for (int j = 0; j < n; j++)
+            sum += w[j];
+        CHECK_MSG(fabs(sum - 1) < 1e-15, "%s: weights sum to %.17g", orders[i]->name, sum);
+        /* every quadratic polynomial of the parametric coordinates reproduced (points inside every shape) */
+        for (int trial = 0; trial < 20; trial++) {
+            const double at[3] = {0.05 + 0.01 * trial, 0.3 - 0.01 * trial, 0.02 + 0.03 * trial};
+            double c[10], want, got = 0;
+            for (int k = 0; k < 10; k++)
+                c[k] = sin(1.7 * k + trial);
+            if (orders[i]->code == 31)
+                c[6] = 0; /* linear in t */
+#define P2(p) (c[0] + c[1] * (p)[0] + c[2] * (p)[1] + c[3] * (p)[2] + c[4] * (p)[0] * (p)[0] + c[5] * (p)[1] * (p)[1] + \
+               c[6] * (p)[2] * (p)[2] + c[7] * (p)[0] * (p)[1] + c[8] * (p)[1] * (p)[2] + c[9] * (p)[0] * (p)[2])
+            want = P2(at);
+            tpk_cell_map_weights(orders[i]->code, at, w);
+            for (int k = 0; k < n; k++)
+                got += w[k] * P2(r[k]);
+#undef P2
+            CHECK_MSG(fabs(got - want) < 1e-13, "%s at (%g %g %g): %.17g, expected %.17g", orders[i]->name, at[0],
+                      at[1], at[2], got, want);
+        }
+    }
+}
+
+/* ---- Gmsh: the orders of Gmsh's reference manual ("Node ordering"), MSH 2.2 and 4.1 ---------------- */
+
+static const node_order gmsh_tet10 = {"gmsh tetrahedron10", 11, 10, 6, 0, 0,
+                                      {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}}, {{0}}};
+static const node_order gmsh_hex20 = {"gmsh hexahedron20", 17, 12, 12, 0, 0,
+                                      {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 5}, {2, 3}, {2, 6}, {3, 7}, {4, 5}, {4, 7},
+                                       {5, 6}, {6, 7}}, {{0}}};
+static const node_order gmsh_hex27 = {"gmsh hexahedron27", 12, 12, 12, 6, 1,
+                                      {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 5}, {2, 3}, {2, 6}, {3, 7}, {4, 5}, {4, 7},
+                                       {5, 6}, {6, 7}},
+                                      {{0, 3, 2, 1}, {0, 1, 5, 4}, {0, 4, 7, 3}, {1, 2, 6, 5}, {2, 3, 7, 6}, {4, 5, 6, 7}}};
+static const node_order gmsh_prism15 = {"gmsh prism15", 18, 13, 9, 0, 0,
+                                        {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}}, {{0}}};
+static const node_order gmsh_prism18 = {"gmsh prism18", 13, 13, 9, 3, 0,
+                                        {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}},
+                                        {{0, 1, 4, 3}, {0, 2, 5, 3}, {1, 2, 5, 4}}};
+static const node_order gmsh_pyramid13 = {"gmsh pyramid13", 19, 14, 8, 0, 0,
+                                          {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 4}, {2, 3}, {2, 4}, {3, 4}}, {{0}}};
+
+static char *write_msh(const node_order *const *orders, int count, int curved, int version41)
+{
+    size_t cap = 1 << 16, at = 0;
+    char *text = malloc(cap);
+    int total = 0, ns[16];
+    double r[16][27][3];
+    for (int c = 0; c < count; c++)
+        total += ns[c] = order_nodes(orders[c], r[c]);
+    if (version41) {
+        at += (size_t)snprintf(text + at, cap - at, "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 %d 1 %d\n3 1 0 %d\n",
+                               total, total, total);
+        for (int k = 1; k <= total; k++)
+            at += (size_t)snprintf(text + at, cap - at, "%d\n", k);
+    } else {
+        at += (size_t)snprintf(text + at, cap - at, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n%d\n", total);
+    }
+    for (int c = 0, id = 1; c < count; c++)
+        for (int k = 0; k < ns[c]; k++, id++) {
+            double x[3];
+            map_point(r[c][k], 3.0 * c, curved, x);
+            if (version41)
+                at += (size_t)snprintf(text + at, cap - at, "%.17g %.17g %.17g\n", x[0], x[1], x[2]);
+            else
+                at += (size_t)snprintf(text + at, cap - at, "%d %.17g %.17g %.17g\n", id, x[0], x[1], x[2]);
+        }
+    at += (size_t)snprintf(text + at, cap - at, "$EndNodes\n$Elements\n");
+    if (version41)
+        at += (size_t)snprintf(text + at, cap - at, "%d %d 1 %d\n", count, count, count);
+    else
+        at += (size_t)snprintf(text + at, cap - at, "%d\n", count);
+    for (int c = 0, first = 1; c < count; first += ns[c], c++) {
+        if (version41)
+            at += (size_t)snprintf(text + at, cap - at, "3 1 %d 1\n%d", orders[c]->code, c + 1);
+        else
+            at += (size_t)snprintf(text + at, cap - at, "%d %d 2 0 1", c + 1, orders[c]->code);
+        for (int k = 0; k < ns[c]; k++)
+            at += (size_t)snprintf(text + at, cap - at, " %d", first + k);
+        at += (size_t)snprintf(text + at, cap - at, "\n");
+    }
+    at += (size_t)snprintf(text + at, cap - at, "$EndElements\n$NodeData\n1\n\"f\"\n1\n0\n3\n0\n1\n%d\n", total);
+    for (int c = 0, id = 1; c < count; c++)
+        for (int k = 0; k < ns[c]; k++, id++) {
+            double x[3];
+            map_point(r[c][k], 3.0 * c, curved, x);
+            at += (size_t)snprintf(text + at, cap - at, "%d %.17g\n", id, field_at(x));
+        }
+    at += (size_t)snprintf(text + at, cap - at, "$EndNodeData\n");
+    return text;
+}
+
+TPK_TEST(gmsh_orders)
+{
+    const node_order *orders[] = {&gmsh_tet10, &gmsh_hex20, &gmsh_hex27, &gmsh_prism15, &gmsh_prism18, &gmsh_pyramid13};
+    for (int version = 0; version < 2; version++)
+        for (int curved = 0; curved < 2; curved++) {
+            char *text = write_msh(orders, 6, curved, version);
+            tpk_mesh m;
+            tpk_diag d;
+            quiet(&d);
+            CHECK_MSG(tpk_import_gmsh_memory("whole.msh", text, strlen(text), &m, &d) == 0, "%s", d.message);
+            free(text);
+            add_second_step(&m);
+            /* the field "f" is a point field; physical and entity cell fields come along */
+            check_whole(&m, orders, curved, 24);
+            tpk_mesh_free(&m);
+        }
+}
+
+/* ---- Abaqus / CalculiX: the Abaqus manual's C3D10, C3D15, C3D20 (corners, then edges) ---------------- */
+
+static const node_order inp_c3d10 = {"C3D10", 10, 10, 6, 0, 0, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
+static const node_order inp_c3d15 = {"C3D15", 15, 13, 9, 0, 0,
+                                     {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}}, {{0}}};
+static const node_order inp_c3d20 = {"C3D20R", 20, 12, 12, 0, 0,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5},
+                                      {2, 6}, {3, 7}}, {{0}}};
+
+TPK_TEST(inp_orders)
+{
+    const node_order *orders[] = {&inp_c3d10, &inp_c3d15, &inp_c3d20};
+    for (int curved = 0; curved < 2; curved++) {
+        size_t cap = 1 << 15, at = 0;
+        char *text = malloc(cap);
+        int ns[3], first = 1;
+        double r[3][27][3];
+        at += (size_t)snprintf(text + at, cap - at, "*NODE\n");
+        for (int c = 0, id = 1; c < 3; c++) {
+            ns[c] = order_nodes(orders[c], r[c]);
+            for (int k = 0; k < ns[c]; k++, id++) {
+                double x[3];
+                map_point(r[c][k], 3.0 * c, curved, x);
+                at += (size_t)snprintf(text + at, cap - at, "%d, %.17g, %.17g, %.17g\n", id, x[0], x[1], x[2]);
+            }
+        }
+        for (int c = 0; c < 3; first += ns[c], c++) {
+            at += (size_t)snprintf(text + at, cap - at, "*ELEMENT, TYPE=%s\n%d", orders[c]->name, c + 1);
+            for (int k = 0; k < ns[c]; k++)
+                at += (size_t)snprintf(text + at, cap - at, ",%s%d", k % 10 == 9 ? "\n" : " ", first + k);
+            at += (size_t)snprintf(text + at, cap - at, "\n");
+        }
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_inp_memory("whole.inp", text, at, &m, &d) == 0, "%s", d.message);
+        free(text);
+        /* .inp carries no point field: the field is made here from the points read */
+        float *f = malloc(sizeof *f * (size_t)m.point_count);
+        for (int64_t p = 0; p < m.point_count; p++)
+            f[p] = (float)field_at(m.points + 3 * p);
+        CHECK(tpk_mesh_add_field(&m, "f", TPK_ASSOC_POINT, 1, 1, f) == 0);
+        add_second_step(&m);
+        check_whole(&m, orders, curved, 24);
+        tpk_mesh_free(&m);
+    }
+}
+
+/* Two 20-node hexahedra sharing a face: its centre is made once, and both cells cut the face's four
+ * quads alike (the tets' faces match: no face is used by one tet only but on the outside). */
+TPK_TEST(shared_face_centre)
+{
+    double r[27][3];
+    int n = order_nodes(&vtk_hex20, r);
+    tpk_mesh m;
+    memset(&m, 0, sizeof m);
+    m.point_count = 2 * n; /* the second cell's points: the first's moved by +1 in x; shared ones merged below */
+    m.points = malloc(sizeof *m.points * 3 * (size_t)m.point_count);
+    m.cell_count = 2;
+    m.cell_types = malloc(2);
+    m.cell_offsets = malloc(sizeof *m.cell_offsets * 3);
+    m.cell_conn = malloc(sizeof *m.cell_conn * 40);
+    m.cell_types[0] = m.cell_types[1] = 25;
+    m.cell_offsets[0] = 0, m.cell_offsets[1] = 20, m.cell_offsets[2] = 40;
+    int64_t count = 0;
+    for (int c = 0; c < 2; c++)
+        for (int k = 0; k < n; k++) {
+            double x[3] = {r[k][0] + c, r[k][1], r[k][2]};
+            int64_t found = -1;
+            for (int64_t p = 0; p < count && found < 0; p++)
+                if (!memcmp(m.points + 3 * p, x, sizeof x))
+                    found = p;
+            if (found < 0) {
+                memcpy(m.points + 3 * count, x, sizeof x);
+                found = count++;
+            }
+            m.cell_conn[20 * c + k] = (int32_t)found;
+        }
+    m.point_count = count;
+    CHECK_EQ_INT(count, 2 * 20 - 8);
+    tpk_diag d;
+    quiet(&d);
+    tpk_higher_split h;
+    CHECK_MSG(tpk_split_higher_order(&m, "test", &h, &d) == 0, "%s", d.message);
+    CHECK_EQ_INT(h.added_points, 6 + 6 - 1 + 2); /* face centres, the shared one once, and 2 cell centres */
+    tpk_tetmesh t;
+    CHECK_MSG(tpk_tetrahedralize(&m, NULL, 0, 0, &t, &d) == 0, "%s", d.message);
+    CHECK_EQ_INT(t.tet_count, 2 * 8 * 6);
+    /* every tet face is either on the box's boundary or shared by exactly two tets */
+    int64_t faces = 4 * t.tet_count, boundary = 0;
+    for (int64_t f = 0; f < faces; f++) {
+        int32_t a[3];
+        for (int i = 0, j = 0; i < 4; i++)
+            if (i != f % 4)
+                a[j++] = t.tets[4 * (f / 4) + i];
+        int matches = 0;
+        for (int64_t g = 0; g < faces; g++) {
+            if (g / 4 == f / 4)
+                continue;
+            int32_t b[3];
+            for (int i = 0, j = 0; i < 4; i++)
+                if (i != g % 4)
+                    b[j++] = t.tets[4 * (g / 4) + i];
+            int same = 0;
+            for (int i = 0; i < 3; i++)
+                same += a[i] == b[0] || a[i] == b[1] || a[i] == b[2];
+            matches += same == 3;
+        }
+        CHECK(matches <= 1);
+        if (!matches) {
+            const double *p[3] = {t.points + 3 * a[0], t.points + 3 * a[1], t.points + 3 * a[2]};
+            int on_box = 0;
+            for (int axis = 0; axis < 3; axis++)
+                for (int side = 0; side < 2; side++) {
+                    double at = axis == 0 ? 2.0 * side : side;
+                    on_box |= p[0][axis] == at && p[1][axis] == at && p[2][axis] == at;
+                }
+            CHECK_MSG(on_box, "a hanging face inside the two cells");
+            boundary++;
+        }
+    }
+    CHECK_EQ_INT(boundary, 10 * 4 * 2); /* 10 outer quads, 4 pieces each, 2 triangles each */
+    free(h.cell_source);
+    tpk_tetmesh_free(&t);
+    tpk_mesh_free(&m);
+}
+
+/* ---- Exodus II and CGNS, written with their own libraries ------------------------------------------ */
+
+/* Nodes of cells `orders` (cell c shifted by 3c) into xyz[3][...] (component-major); returns the count. */
+static int gather_nodes(const node_order *const *orders, int count, int curved, double (*xyz)[512], int *ns)
+{
+    int total = 0;
+    for (int c = 0; c < count; c++) {
+        double r[27][3];
+        ns[c] = order_nodes(orders[c], r);
+        for (int k = 0; k < ns[c]; k++, total++) {
+            double x[3];
+            map_point(r[k], 3.0 * c, curved, x);
+            for (int a = 0; a < 3; a++)
+                xyz[a][total] = x[a];
+        }
+    }
+    return total;
+}
+
+/* The point field "f" made from the points read (formats whose fields these files do not carry). */
+static void add_field(tpk_mesh *m)
+{
+    float *f = malloc(sizeof *f * (size_t)m->point_count);
+    for (int64_t p = 0; p < m->point_count; p++)
+        f[p] = (float)field_at(m->points + 3 * p);
+    CHECK(tpk_mesh_add_field(m, "f", TPK_ASSOC_POINT, 1, 1, f) == 0);
+    add_second_step(m);
+}
+
+/* The Exodus II manual's TETRA10, HEX20 (bottom, vertical, then top mid-edges), WEDGE15 (likewise) and
+ * PYRAMID13 (base, then lateral mid-edges). */
+static const node_order exo_tetra10 = {"TETRA10", 0, 10, 6, 0, 0, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
+static const node_order exo_hex20 = {"HEX20", 0, 12, 12, 0, 0,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {4, 5}, {5, 6},
+                                      {6, 7}, {7, 4}}, {{0}}};
+static const node_order exo_wedge15 = {"WEDGE15", 0, 13, 9, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
+static const node_order exo_pyramid13 = {"PYRAMID13", 0, 14, 8, 0, 0,
+                                         {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+
+TPK_TEST(exodus_orders)
+{
+    const node_order *orders[] = {&exo_tetra10, &exo_hex20, &exo_wedge15, &exo_pyramid13};
+    for (int curved = 0; curved < 2; curved++) {
+        static double xyz[3][512];
+        int ns[4], total = gather_nodes(orders, 4, curved, xyz, ns);
+        const char *path = tpk_temp_path("whole.exo");
+        int cpu_ws = 8, io_ws = 8;
+        int exoid = ex_create(path, EX_CLOBBER, &cpu_ws, &io_ws);
+        CHECK(exoid >= 0);
+        CHECK(ex_put_init(exoid, "higher order", 3, total, 4, 4, 0, 0) == 0);
+        CHECK(ex_put_coord(exoid, xyz[0], xyz[1], xyz[2]) == 0);
+        for (int c = 0, first = 1; c < 4; first += ns[c], c++) {
+            int conn[27];
+            for (int k = 0; k < ns[c]; k++)
+                conn[k] = first + k;
+            CHECK(ex_put_elem_block(exoid, c + 1, orders[c]->name, 1, ns[c], 0) == 0);
+            CHECK(ex_put_elem_conn(exoid, c + 1, conn) == 0);
+        }
+        CHECK(ex_close(exoid) == 0);
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_exodus(path, &m, &d) == 0, "%s", d.message);
+        add_field(&m);
+        check_whole(&m, orders, curved, 24);
+        tpk_mesh_free(&m);
+    }
+}
+
+#ifdef TPK_TEST_CGNS
+/* The CGNS SIDS ("Unstructured Grid Element Numbering Conventions"): TETRA_10 and PYRA_13 as VTK,
+ * PENTA_15/18 and HEXA_20/27 with their vertical mid-edges before the top ones, HEXA_27's face centres
+ * bottom, y-, x+, y+, x-, top. */
+static const node_order cgns_tetra10 = {"TETRA_10", CGNS_ENUMV(TETRA_10), 10, 6, 0, 0,
+                                        {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
+static const node_order cgns_pyra13 = {"PYRA_13", CGNS_ENUMV(PYRA_13), 14, 8, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+static const node_order cgns_penta15 = {"PENTA_15", CGNS_ENUMV(PENTA_15), 13, 9, 0, 0,
+                                        {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
+static const node_order cgns_penta18 = {"PENTA_18", CGNS_ENUMV(PENTA_18), 13, 9, 3, 0,
+                                        {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}},
+                                        {{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}};
+static const node_order cgns_hexa20 = {"HEXA_20", CGNS_ENUMV(HEXA_20), 12, 12, 0, 0,
+                                       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {4, 5}, {5, 6},
+                                        {6, 7}, {7, 4}}, {{0}}};
+static const node_order cgns_hexa27 = {"HEXA_27", CGNS_ENUMV(HEXA_27), 12, 12, 6, 1,
+                                       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {4, 5}, {5, 6},
+                                        {6, 7}, {7, 4}},
+                                       {{0, 1, 2, 3}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {0, 3, 7, 4}, {4, 5, 6, 7}}};
+
+TPK_TEST(cgns_orders)
+{
+    const node_order *orders[] = {&cgns_tetra10, &cgns_pyra13, &cgns_penta15, &cgns_penta18, &cgns_hexa20, &cgns_hexa27};
+    for (int curved = 0; curved < 2; curved++) {
+        static double xyz[3][512];
+        int ns[6], total = gather_nodes(orders, 6, curved, xyz, ns), fn, base, zone, s, c;
+        const char *path = tpk_temp_path("whole.cgns");
+        cgsize_t size[3] = {total, 6, 0};
+        CHECK(cg_open(path, CG_MODE_WRITE, &fn) == 0);
+        CHECK(cg_base_write(fn, "b", 3, 3, &base) == 0);
+        CHECK(cg_zone_write(fn, base, "z", size, CGNS_ENUMV(Unstructured), &zone) == 0);
+        CHECK(cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateX", xyz[0], &c) == 0 &&
+              cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateY", xyz[1], &c) == 0 &&
+              cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateZ", xyz[2], &c) == 0);
+        for (int e = 0, first = 1; e < 6; first += ns[e], e++) {
+            cgsize_t conn[27];
+            for (int k = 0; k < ns[e]; k++)
+                conn[k] = first + k;
+            CHECK(cg_section_write(fn, base, zone, orders[e]->name, (CGNS_ENUMT(ElementType_t))orders[e]->code, e + 1,
+                                   e + 1, 0, conn, &s) == 0);
+        }
+        CHECK(cg_close(fn) == 0);
+        tpk_mesh m;
+        tpk_diag d;
+        quiet(&d);
+        CHECK_MSG(tpk_import_cgns(path, &m, &d) == 0, "%s", d.message);
+        add_field(&m);
+        check_whole(&m, orders, curved, 24);
+        tpk_mesh_free(&m);
+    }
+}
+#endif
+
+/* check --against on closed-form cells (affine maps: the split fills each cell exactly, so no sample
+ * falls outside): a linear field is reproduced by both conversions; a quadratic one is closer to the
+ * source with the cells split whole than reduced to corners. */
+TPK_TEST(check_against)
+{
+    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12,
+                                  &vtk_pyramid13};
+    double quadratic_error[2] = {0, 0};
+    for (int linear = 1; linear >= 0; linear--) {
+        linear_field = linear;
+        char *text = write_vtk(orders, 7, 0);
+        const char *source = tpk_temp_path("against.vtk");
+        FILE *f = fopen(source, "wb");
+        CHECK(f && fputs(text, f) >= 0 && fclose(f) == 0);
+        free(text);
+        for (int corners = 0; corners < 2; corners++) {
+            tpk_convert_options o;
+            memset(&o, 0, sizeof o);
+            o.input = source;
+            o.output = tpk_temp_path("against.tpk");
+            o.threads = 1;
+            o.higher_order_corners = corners;
+            tpk_convert_report rep;
+            tpk_diag d;
+            quiet(&d);
+            CHECK_MSG(tpk_convert_checked(&o, &rep, &d) == 0, "%s", d.message);
+            tpk_against_report r;
+            CHECK_MSG(tpk_check_against(o.output, source, NULL, 4, &r, &d) == 0, "%s", d.message);
+            CHECK_EQ_INT(r.cells, 7);
+            CHECK_EQ_INT(r.outside, 0);
+            CHECK(r.field_count == 1 && !strcmp(r.fields[0].name, "f") && !r.has_bound && !r.bound_exceeded);
+            if (linear)
+                CHECK_MSG(r.fields[0].max_error < 1e-6, "linear field, %s: max error %g",
+                          corners ? "corners" : "split", r.fields[0].max_error);
+            else
+                quadratic_error[corners] = r.fields[0].max_error;
+        }
+    }
+    linear_field = 0;
+    fprintf(stderr, "quadratic field, max error as a fraction of its range: split %.3g, corners %.3g\n",
+            quadratic_error[0], quadratic_error[1]);
+    CHECK_MSG(quadratic_error[0] > 0 && quadratic_error[0] < 0.5 * quadratic_error[1],
+              "quadratic field: split %g, corners %g", quadratic_error[0], quadratic_error[1]);
+}

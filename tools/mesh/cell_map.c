@@ -1,0 +1,241 @@
+/* Shape functions of the linear and quadratic volume cells in VTK node order (vtkCellType.h; the node
+ * orders of vtkQuadraticTetra, vtkQuadraticHexahedron, vtkTriQuadraticHexahedron, vtkQuadraticWedge,
+ * vtkQuadraticLinearWedge, vtkBiQuadraticQuadraticWedge and vtkQuadraticPyramid): corners first, then
+ * mid-edge nodes in the order of `edges`, then mid-face nodes in the order of `faces`, then the centre. */
+#include "cell_map.h"
+
+#include <string.h>
+
+#include "cell_types.h"
+#include "mesh.h"
+
+typedef struct node_table {
+    int type, linear, nodes;
+    int edge_count;
+    int edges[12][2];
+    int face_count;  /* mid-face nodes (4 corners each; a triangle's 4th repeats its 3rd) */
+    int faces[6][4];
+    int centre;      /* 1: a mid-cell node last */
+} node_table;
+
+#define HEX_EDGES {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}}
+#define WEDGE_EDGES {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}}
+
+static const node_table tables[] = {
+    {10, 10, 4, 0, {{0}}, 0, {{0}}, 0},
+    {12, 12, 8, 0, {{0}}, 0, {{0}}, 0},
+    {13, 13, 6, 0, {{0}}, 0, {{0}}, 0},
+    {14, 14, 5, 0, {{0}}, 0, {{0}}, 0},
+    {24, 10, 10, 6, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, 0, {{0}}, 0},
+    {25, 12, 20, 12, HEX_EDGES, 0, {{0}}, 0},
+    {26, 13, 15, 9, WEDGE_EDGES, 0, {{0}}, 0},
+    {27, 14, 13, 8, {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, 0, {{0}}, 0},
+    /* faces x = 0, x = 1, y = 0, y = 1, z = 0, z = 1 (vtkTriQuadraticHexahedron's parametric coordinates) */
+    {29, 12, 27, 12, HEX_EDGES, 6,
+     {{0, 3, 7, 4}, {1, 2, 6, 5}, {0, 1, 5, 4}, {3, 2, 6, 7}, {0, 1, 2, 3}, {4, 5, 6, 7}}, 1},
+    {31, 13, 12, 6, {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}}, 0, {{0}}, 0},
+    {32, 13, 18, 9, WEDGE_EDGES, 3, {{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}, 0},
+};
+
+static const node_table *table_of(int type)
+{
+    for (size_t i = 0; i < sizeof tables / sizeof tables[0]; i++)
+        if (tables[i].type == type)
+            return &tables[i];
+    return NULL;
+}
+
+int tpk_cell_map_nodes(int type)
+{
+    const node_table *t = table_of(type);
+    return t ? t->nodes : 0;
+}
+
+/* VTK's parametric corners (the pyramid's apex at (1/2, 1/2, 1), as vtkPyramid has it). */
+static void corner(const node_table *t, int k, double r[3])
+{
+    memcpy(r, tpk_cell_shape_of(t->linear)->ref[k], 3 * sizeof *r);
+    if (t->linear == TPK_CELL_PYRAMID && k == 4)
+        r[0] = r[1] = 0.5;
+}
+
+void tpk_cell_map_node(int type, int k, double r[3])
+{
+    const node_table *t = table_of(type);
+    int corners = tpk_cell_shape_of(t->linear)->corners;
+    double a[3], b[3];
+    if (k < corners) {
+        corner(t, k, r);
+    } else if ((k -= corners) < t->edge_count) {
+        corner(t, t->edges[k][0], a);
+        corner(t, t->edges[k][1], b);
+        for (int i = 0; i < 3; i++)
+            r[i] = 0.5 * (a[i] + b[i]);
+    } else if ((k -= t->edge_count) < t->face_count) {
+        memset(r, 0, 3 * sizeof *r);
+        for (int j = 0; j < 4; j++) {
+            corner(t, t->faces[k][j], a);
+            for (int i = 0; i < 3; i++)
+                r[i] += 0.25 * a[i];
+        }
+    } else {
+        r[0] = r[1] = r[2] = 0.5;
+    }
+}
+
+/* 1-D quadratic Lagrange functions on [-1, 1] at nodes -1, 0, 1; node position given as -1, 0 or 1. */
+static double lagrange2(double x, int at)
+{
+    return at < 0 ? 0.5 * x * (x - 1) : at > 0 ? 0.5 * x * (x + 1) : (1 - x) * (1 + x);
+}
+
+/* Node k's parametric coordinates as -1, 0, 1 per axis (2 r - 1), for the hexahedra. */
+static void hex_signs(int type, int k, int s[3])
+{
+    double r[3];
+    tpk_cell_map_node(type, k, r);
+    for (int i = 0; i < 3; i++)
+        s[i] = r[i] < 0.25 ? -1 : r[i] > 0.75 ? 1 : 0;
+}
+
+static int hexahedron(int type, const double r[3], double *w)
+{
+    const double x[3] = {2 * r[0] - 1, 2 * r[1] - 1, 2 * r[2] - 1};
+    int n = tpk_cell_map_nodes(type);
+    for (int k = 0; k < n; k++) {
+        int s[3];
+        hex_signs(type, k, s);
+        if (type == 29) {
+            w[k] = lagrange2(x[0], s[0]) * lagrange2(x[1], s[1]) * lagrange2(x[2], s[2]);
+        } else if (type == 12) {
+            w[k] = 0.125 * (1 + x[0] * s[0]) * (1 + x[1] * s[1]) * (1 + x[2] * s[2]);
+        } else if (s[0] && s[1] && s[2]) { /* serendipity corner */
+            w[k] = 0.125 * (1 + x[0] * s[0]) * (1 + x[1] * s[1]) * (1 + x[2] * s[2]) *
+                   (x[0] * s[0] + x[1] * s[1] + x[2] * s[2] - 2);
+        } else { /* serendipity mid-edge: the zero axis quadratic, the others linear */
+            double v = 0.25;
+            for (int i = 0; i < 3; i++)
+                v *= s[i] ? 1 + x[i] * s[i] : (1 - x[i]) * (1 + x[i]);
+            w[k] = v;
+        }
+    }
+    return n;
+}
+
+/* Wedges: a triangle's barycentric L (L0 = 1 - r - s, L1 = r, L2 = s) times a function of z = 2 t - 1. */
+static int wedge(int type, const double r[3], double *w)
+{
+    const double L[3] = {1 - r[0] - r[1], r[0], r[1]}, z = 2 * r[2] - 1;
+    static const int tri_edges[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+    double tri[6]; /* quadratic triangle: corners, then mid-edges */
+    for (int i = 0; i < 3; i++) {
+        tri[i] = L[i] * (2 * L[i] - 1);
+        tri[3 + i] = 4 * L[tri_edges[i][0]] * L[tri_edges[i][1]];
+    }
+    switch (type) {
+    case 13:
+        for (int i = 0; i < 6; i++)
+            w[i] = L[i % 3] * (i < 3 ? 1 - r[2] : r[2]);
+        return 6;
+    case 31: /* corners 0-5, then bottom and top mid-edges: quadratic triangle times linear in z */
+        for (int i = 0; i < 3; i++) {
+            w[i] = tri[i] * (1 - r[2]), w[3 + i] = tri[i] * r[2];
+            w[6 + i] = tri[3 + i] * (1 - r[2]), w[9 + i] = tri[3 + i] * r[2];
+        }
+        return 12;
+    case 26: /* serendipity */
+        for (int i = 0; i < 3; i++) {
+            w[i] = 0.5 * L[i] * ((2 * L[i] - 1) * (1 - z) - (1 - z) * (1 + z));
+            w[3 + i] = 0.5 * L[i] * ((2 * L[i] - 1) * (1 + z) - (1 - z) * (1 + z));
+            w[6 + i] = 0.5 * tri[3 + i] * (1 - z);
+            w[9 + i] = 0.5 * tri[3 + i] * (1 + z);
+            w[12 + i] = L[i] * (1 - z) * (1 + z);
+        }
+        return 15;
+    default: /* 32: quadratic triangle times quadratic in z */
+        for (int i = 0; i < 3; i++) {
+            w[i] = tri[i] * lagrange2(z, -1), w[3 + i] = tri[i] * lagrange2(z, 1);
+            w[6 + i] = tri[3 + i] * lagrange2(z, -1), w[9 + i] = tri[3 + i] * lagrange2(z, 1);
+            w[12 + i] = tri[i] * lagrange2(z, 0), w[15 + i] = tri[3 + i] * lagrange2(z, 0);
+        }
+        return 18;
+    }
+}
+
+/* The pyramids: the linear one as vtkPyramid; the quadratic one the rational 13-node pyramid of
+ * Bedrosian (1992), as libMesh and VTK's vtkQuadraticPyramid use it, in x = 2r - 1, y = 2s - 1, z = t (the
+ * cross-section at height z is [-(1 - z), 1 - z]^2): it reproduces quadratic polynomials, is the 8-node
+ * serendipity quadrilateral on its base and the 6-node triangle on its sides (tests/test_higher_order.c). */
+static int pyramid(int type, const double r[3], double *w)
+{
+    if (type == 14) {
+        w[0] = (1 - r[0]) * (1 - r[1]) * (1 - r[2]), w[1] = r[0] * (1 - r[1]) * (1 - r[2]);
+        w[2] = r[0] * r[1] * (1 - r[2]), w[3] = (1 - r[0]) * r[1] * (1 - r[2]), w[4] = r[2];
+        return 5;
+    }
+    const double x = 2 * r[0] - 1, y = 2 * r[1] - 1, z = r[2], d = 1 - z;
+    memset(w, 0, 13 * sizeof *w);
+    if (d <= 0) { /* the apex */
+        w[4] = 1;
+        return 13;
+    }
+    const double xy = x * y * z / d;
+    w[0] = 0.25 * (-x - y - 1) * ((1 - x) * (1 - y) - z + xy);
+    w[1] = 0.25 * (x - y - 1) * ((1 + x) * (1 - y) - z - xy);
+    w[2] = 0.25 * (x + y - 1) * ((1 + x) * (1 + y) - z + xy);
+    w[3] = 0.25 * (-x + y - 1) * ((1 - x) * (1 + y) - z - xy);
+    w[4] = z * (2 * z - 1);
+    /* mid-edges 5-8 on the base's edges 01 (y = -1), 12 (x = 1), 23 (y = 1), 30 (x = -1), 9-12 to the apex */
+    w[5] = 0.5 * (1 + x - z) * (1 - x - z) * (1 - y - z) / d;
+    w[6] = 0.5 * (1 + y - z) * (1 - y - z) * (1 + x - z) / d;
+    w[7] = 0.5 * (1 + x - z) * (1 - x - z) * (1 + y - z) / d;
+    w[8] = 0.5 * (1 + y - z) * (1 - y - z) * (1 - x - z) / d;
+    w[9] = z * (1 - x - z) * (1 - y - z) / d;
+    w[10] = z * (1 + x - z) * (1 - y - z) / d;
+    w[11] = z * (1 + x - z) * (1 + y - z) / d;
+    w[12] = z * (1 - x - z) * (1 + y - z) / d;
+    return 13;
+}
+
+int tpk_cell_map_weights(int type, const double r[3], double *w)
+{
+    switch (type) {
+    case 10:
+    case 24: {
+        const double L[4] = {1 - r[0] - r[1] - r[2], r[0], r[1], r[2]};
+        if (type == 10) {
+            memcpy(w, L, sizeof L);
+            return 4;
+        }
+        const node_table *t = table_of(24);
+        for (int i = 0; i < 4; i++)
+            w[i] = L[i] * (2 * L[i] - 1);
+        for (int e = 0; e < 6; e++)
+            w[4 + e] = 4 * L[t->edges[e][0]] * L[t->edges[e][1]];
+        return 10;
+    }
+    case 12:
+    case 25:
+    case 29: return hexahedron(type, r, w);
+    case 13:
+    case 26:
+    case 31:
+    case 32: return wedge(type, r, w);
+    case 14:
+    case 27: return pyramid(type, r, w);
+    default: return 0;
+    }
+}
+
+int tpk_cell_map_point(int type, const int32_t *nodes, const double *points, const double r[3], double x[3])
+{
+    double w[TPK_CELL_MAP_MAX_NODES];
+    int n = tpk_cell_map_weights(type, r, w);
+    if (n == 0)
+        return -1;
+    x[0] = x[1] = x[2] = 0;
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < 3; i++)
+            x[i] += w[k] * points[3 * (int64_t)nodes[k] + i];
+    return 0;
+}

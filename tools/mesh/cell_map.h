@@ -1,0 +1,34 @@
+/* The map of a volume cell from VTK parametric coordinates: where its nodes sit, and the shape functions
+ * that place a point (the geometry map) and value it (the field interpolant, the same functions: the
+ * cells are isoparametric). The one place the tools evaluate a cell's own functions: the higher-order
+ * split (mesh/higher_order.h) places and values the points it adds with them. */
+#ifndef TPK_CELL_MAP_H
+#define TPK_CELL_MAP_H
+
+#include <stdint.h>
+
+/* Most nodes a cell this module knows has. */
+#define TPK_CELL_MAP_MAX_NODES 27
+
+/* The node count of a type this module maps, or 0: tetra (10), hexahedron (12), wedge (13), pyramid
+ * (14), quadratic tetra (24), quadratic hexahedron (25, serendipity), quadratic wedge (26), quadratic
+ * pyramid (27), triquadratic hexahedron (29), quadratic linear wedge (31), biquadratic quadratic wedge
+ * (32). */
+int tpk_cell_map_nodes(int type);
+
+/* VTK parametric coordinates of node k (0 <= k < tpk_cell_map_nodes(type)) into r: corners as
+ * tpk_cell_shape's ref, mid-edge, mid-face and mid-cell nodes the means of their corners. */
+void tpk_cell_map_node(int type, int k, double r[3]);
+
+/* The shape functions at parametric point r into w (tpk_cell_map_nodes(type) values, summing to 1;
+ * w[k] is 1 at node k and 0 at the others). Returns the node count, or 0 for a type this module does not
+ * map. Weights of nodes off a face are 0 on that face for every type here (exactly, on a quad face at its
+ * centre), so a point on a face depends only on the face's nodes. The quadratic types reproduce every
+ * quadratic polynomial of the parametric coordinates. */
+int tpk_cell_map_weights(int type, const double r[3], double *w);
+
+/* The point the cell with nodes `nodes` (ids into `points`, 3 doubles each) maps r to: sum w[k] x_k in
+ * node order. Returns 0, or -1 as tpk_cell_map_weights. */
+int tpk_cell_map_point(int type, const int32_t *nodes, const double *points, const double r[3], double x[3]);
+
+#endif

@@ -1,0 +1,552 @@
+/* Higher-order volume cells reduced to corners, or split into the linear cells of their node lattice
+ * (higher_order.h). The lattices are written on the fullest node set of each shape (27 for hexahedra,
+ * 18 for wedges, 14 for pyramids: the 13 nodes and the base centre); a cell with fewer nodes gets the
+ * missing ones as added points, listed after its own in the same local order. */
+#include "higher_order.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "cell_map.h"
+#include "cell_types.h"
+#include "tetpack_format.h"
+
+int tpk_is_higher_order_volume(int type)
+{
+    const tpk_cell_type_info *t = tpk_cell_type(type);
+    return t && t->dim == 3 && t->linear_type != t->type;
+}
+
+int64_t tpk_reduce_higher_order(tpk_mesh *mesh, const char *name, tpk_diag *diag)
+{
+    int64_t reduced[256] = {0}, total = 0, at = 0;
+    for (int64_t c = 0; c < mesh->cell_count; c++) {
+        int64_t begin = mesh->cell_offsets[c], end = mesh->cell_offsets[c + 1];
+        int type = mesh->cell_types[c];
+        mesh->cell_offsets[c] = at;
+        if (tpk_is_higher_order_volume(type) && end - begin >= tpk_cell_type(type)->corners) {
+            reduced[type]++, total++;
+            end = begin + tpk_cell_type(type)->corners;
+            mesh->cell_types[c] = (uint8_t)tpk_cell_type(type)->linear_type;
+        }
+        memmove(mesh->cell_conn + at, mesh->cell_conn + begin, sizeof *mesh->cell_conn * (size_t)(end - begin));
+        at += end - begin;
+    }
+    if (mesh->cell_count)
+        mesh->cell_offsets[mesh->cell_count] = at;
+    if (total)
+        tpk_warn_cell_counts(diag, name, reduced, total, "reduced higher-order cells to their corner nodes:");
+    return total;
+}
+
+/* ---- the lattices ------------------------------------------------------------------------------ */
+
+/* A cell's linear pieces in the local numbering of its full lattice. */
+typedef struct piece {
+    int type, nodes[8];
+} piece;
+
+/* Hexahedra on the 27-node lattice: node of lattice point (i, j, k), i, j, k in 0..2. */
+static int lattice27(int i, int j, int k)
+{
+    for (int n = 0; n < 27; n++) {
+        double r[3];
+        tpk_cell_map_node(29, n, r);
+        if ((int)(2 * r[0] + 0.5) == i && (int)(2 * r[1] + 0.5) == j && (int)(2 * r[2] + 0.5) == k)
+            return n;
+    }
+    return -1;
+}
+
+static int hex_pieces(piece *p)
+{
+    static const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                     {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    int n = 0;
+    for (int c = 0; c < 8; c++, n++) {
+        p[n].type = TPK_CELL_HEXAHEDRON;
+        for (int v = 0; v < 8; v++)
+            p[n].nodes[v] = lattice27(corner[c][0] + corner[v][0], corner[c][1] + corner[v][1],
+                                      corner[c][2] + corner[v][2]);
+    }
+    return n;
+}
+
+/* Wedges: per layer the triangle's corners 0, 1, 2 and mid-edges 01, 12, 20 (18-node numbering). */
+static int wedge_pieces(int layers, piece *p)
+{
+    static const int layer[3][6] = {{0, 1, 2, 6, 7, 8}, {12, 13, 14, 15, 16, 17}, {3, 4, 5, 9, 10, 11}};
+    static const int two[2][6] = {{0, 1, 2, 6, 7, 8}, {3, 4, 5, 9, 10, 11}}; /* 31's two layers */
+    static const int tri[4][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}, {3, 4, 5}};
+    int n = 0;
+    for (int l = 0; l + 1 < layers; l++)
+        for (int t = 0; t < 4; t++, n++) {
+            const int *lo = layers == 3 ? layer[l] : two[0], *hi = layers == 3 ? layer[l + 1] : two[1];
+            p[n].type = TPK_CELL_WEDGE;
+            for (int v = 0; v < 3; v++)
+                p[n].nodes[v] = lo[tri[t][v]], p[n].nodes[3 + v] = hi[tri[t][v]];
+        }
+    return n;
+}
+
+/* The pyramid: base corners 0-3, apex 4, base mid-edges 5-8, lateral 9-12, base centre 13. */
+static int pyramid_pieces(piece *p)
+{
+    static const piece pyr[10] = {
+        {TPK_CELL_PYRAMID, {0, 5, 13, 8, 9}},    {TPK_CELL_PYRAMID, {5, 1, 6, 13, 10}},
+        {TPK_CELL_PYRAMID, {13, 6, 2, 7, 11}},   {TPK_CELL_PYRAMID, {8, 13, 7, 3, 12}},
+        {TPK_CELL_PYRAMID, {9, 10, 11, 12, 4}},  {TPK_CELL_PYRAMID, {9, 12, 11, 10, 13}},
+        {TPK_CELL_TETRA, {5, 13, 9, 10}},        {TPK_CELL_TETRA, {6, 13, 10, 11}},
+        {TPK_CELL_TETRA, {7, 13, 11, 12}},       {TPK_CELL_TETRA, {8, 13, 12, 9}},
+    };
+    memcpy(p, pyr, sizeof pyr);
+    return 10;
+}
+
+/* The quadratic tetra: 4 corner tetra and the octahedron of mid-edges cut along `diagonal` (0: 4-9,
+ * 1: 5-7, 2: 6-8; the mid-edges of opposite edges). */
+static int tetra_pieces(int diagonal, piece *p)
+{
+    static const piece corners[4] = {{TPK_CELL_TETRA, {0, 4, 6, 7}}, {TPK_CELL_TETRA, {4, 1, 5, 8}},
+                                     {TPK_CELL_TETRA, {6, 5, 2, 9}}, {TPK_CELL_TETRA, {7, 8, 9, 3}}};
+    static const int axis[3][2] = {{4, 9}, {5, 7}, {6, 8}};
+    memcpy(p, corners, sizeof corners);
+    const int *d = axis[diagonal], *u = axis[(diagonal + 1) % 3], *v = axis[(diagonal + 2) % 3];
+    const int ring[4] = {u[0], v[0], u[1], v[1]}; /* opposite mid-edges are not neighbours on the ring */
+    for (int i = 0; i < 4; i++) {
+        p[4 + i].type = TPK_CELL_TETRA;
+        int t[4] = {d[0], d[1], ring[i], ring[(i + 1) % 4]};
+        memcpy(p[4 + i].nodes, t, sizeof t);
+    }
+    return 8;
+}
+
+/* The full lattice type of a split type (whose pieces are written in its numbering). */
+static int full_type(int type)
+{
+    return type == 25 ? 29 : type == 26 ? 32 : type;
+}
+
+static int split_type(int type)
+{
+    return type == 24 || type == 25 || type == 26 || type == 27 || type == 29 || type == 31 || type == 32;
+}
+
+/* Pieces (linear cells) of a split type; tetra pieces put positive on the parametric cell. */
+static int pieces_of(int type, const int32_t *nodes, const double *points, piece *p)
+{
+    if (type == 24) {
+        /* the shortest of the octahedron's three diagonals (the best-shaped inner tetra) */
+        static const int axis[3][2] = {{4, 9}, {5, 7}, {6, 8}};
+        int best = 0;
+        double best_len = 0;
+        for (int d = 0; d < 3; d++) {
+            const double *a = points + 3 * (int64_t)nodes[axis[d][0]], *b = points + 3 * (int64_t)nodes[axis[d][1]];
+            double len = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+            if (d == 0 || len < best_len)
+                best = d, best_len = len;
+        }
+        return tetra_pieces(best, p);
+    }
+    if (type == 25 || type == 29)
+        return hex_pieces(p);
+    if (type == 26 || type == 32 || type == 31)
+        return wedge_pieces(type == 31 ? 2 : 3, p);
+    return pyramid_pieces(p);
+}
+
+/* Parametric coordinates of local node k of a split type's full lattice (the pyramid's 13: base centre). */
+static void local_node(int type, int k, double r[3])
+{
+    if (type == 27 && k == 13) {
+        r[0] = r[1] = 0.5, r[2] = 0;
+        return;
+    }
+    tpk_cell_map_node(full_type(type), k, r);
+}
+
+/* Orient a tetra piece positive on the parametric cell (exact: coordinates are multiples of 1/4). */
+static void orient_piece(int type, piece *p)
+{
+    double x[4][3];
+    for (int v = 0; v < 4; v++)
+        local_node(type, p->nodes[v], x[v]);
+    double u[3], s[3], w[3];
+    for (int k = 0; k < 3; k++)
+        u[k] = x[1][k] - x[0][k], s[k] = x[2][k] - x[0][k], w[k] = x[3][k] - x[0][k];
+    double det = u[0] * (s[1] * w[2] - s[2] * w[1]) - u[1] * (s[0] * w[2] - s[2] * w[0]) +
+                 u[2] * (s[0] * w[1] - s[1] * w[0]);
+    if (det < 0) {
+        int t = p->nodes[2];
+        p->nodes[2] = p->nodes[3];
+        p->nodes[3] = t;
+    }
+}
+
+/* ---- added points: face centres keyed by their corners ----------------------------------------- */
+
+typedef struct face_key {
+    int32_t ids[4]; /* sorted; ids[0] < 0: empty slot */
+    int32_t point;
+} face_key;
+
+typedef struct face_map {
+    face_key *slots;
+    size_t mask;
+} face_map;
+
+static uint64_t key_hash(const int32_t *ids)
+{
+    uint64_t h = 1469598103934665603ull;
+    for (int i = 0; i < 4; i++)
+        h = (h ^ (uint32_t)ids[i]) * 1099511628211ull;
+    return h ^ (h >> 29);
+}
+
+static void sort4(const int32_t *in, int32_t *out)
+{
+    memcpy(out, in, 4 * sizeof *out);
+    for (int i = 1; i < 4; i++)
+        for (int j = i; j > 0 && out[j - 1] > out[j]; j--) {
+            int32_t t = out[j];
+            out[j] = out[j - 1];
+            out[j - 1] = t;
+        }
+}
+
+/* The slot of a face's sorted corners: its entry, or the empty slot where it would go. */
+static face_key *face_slot(face_map *m, const int32_t *sorted)
+{
+    for (size_t i = key_hash(sorted) & m->mask;; i = (i + 1) & m->mask) {
+        face_key *k = &m->slots[i];
+        if (k->ids[0] < 0 || !memcmp(k->ids, sorted, sizeof k->ids))
+            return k;
+    }
+}
+
+/* A quad face of the full lattice: its local corners and its centre's local node. */
+typedef struct lattice_face {
+    int corners[4], centre;
+} lattice_face;
+
+static int lattice_faces(int type, lattice_face *f)
+{
+    static const lattice_face hex[6] = {{{0, 3, 7, 4}, 20}, {{1, 2, 6, 5}, 21}, {{0, 1, 5, 4}, 22},
+                                        {{3, 2, 6, 7}, 23}, {{0, 1, 2, 3}, 24}, {{4, 5, 6, 7}, 25}};
+    static const lattice_face wedge[3] = {{{0, 1, 4, 3}, 15}, {{1, 2, 5, 4}, 16}, {{2, 0, 3, 5}, 17}};
+    static const lattice_face base = {{0, 1, 2, 3}, 13};
+    switch (type) {
+    case 25:
+    case 29: memcpy(f, hex, sizeof hex); return 6;
+    case 26:
+    case 32: memcpy(f, wedge, sizeof wedge); return 3;
+    case 27: *f = base; return 1;
+    default: return 0;
+    }
+}
+
+/* What an added point is: its cell and its parametric coordinates there. */
+typedef struct added_point {
+    int64_t cell;
+    double r[3];
+} added_point;
+
+typedef struct split_state {
+    tpk_mesh *m;
+    face_map faces;
+    added_point *added;
+    int64_t added_count, added_cap;
+    int too_many; /* the added points would pass 2^31-1 points */
+} split_state;
+
+static int32_t add_point(split_state *s, int64_t cell, const double r[3])
+{
+    if (s->m->point_count + s->added_count >= INT32_MAX) {
+        s->too_many = 1;
+        return -1;
+    }
+    if (s->added_count == s->added_cap) {
+        int64_t cap = s->added_cap ? 2 * s->added_cap : 1024;
+        added_point *grown = realloc(s->added, sizeof *grown * (size_t)cap);
+        if (!grown)
+            return -1;
+        s->added = grown, s->added_cap = cap;
+    }
+    s->added[s->added_count].cell = cell;
+    memcpy(s->added[s->added_count].r, r, sizeof s->added[0].r);
+    return (int32_t)(s->m->point_count + s->added_count++);
+}
+
+/* The global ids of cell c's full lattice into ids: its nodes, then the points it lacks (found or made). */
+static int lattice_ids(split_state *s, int64_t c, int32_t *ids)
+{
+    const tpk_mesh *m = s->m;
+    int type = m->cell_types[c], own = tpk_cell_map_nodes(type);
+    const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
+    memcpy(ids, nodes, sizeof *ids * (size_t)own);
+    if (type == 24 || type == 29 || type == 31 || type == 32)
+        return 0;
+    lattice_face f[6];
+    int nf = lattice_faces(type, f);
+    for (int i = 0; i < nf; i++) {
+        int32_t corner[4], sorted[4];
+        for (int k = 0; k < 4; k++)
+            corner[k] = nodes[f[i].corners[k]];
+        sort4(corner, sorted);
+        face_key *slot = face_slot(&s->faces, sorted);
+        if (slot->ids[0] < 0) {
+            double r[3];
+            local_node(type, f[i].centre, r);
+            memcpy(slot->ids, sorted, sizeof sorted);
+            if ((slot->point = add_point(s, c, r)) < 0)
+                return -1;
+        }
+        ids[f[i].centre] = slot->point;
+    }
+    if (type == 25) {
+        double r[3] = {0.5, 0.5, 0.5};
+        if ((ids[26] = add_point(s, c, r)) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+/* Face centre nodes that cells have (27-node hexahedra, 18-node wedges) entered first, so that a
+ * neighbour lacking one uses that node. */
+static void enter_own_centres(split_state *s)
+{
+    const tpk_mesh *m = s->m;
+    for (int64_t c = 0; c < m->cell_count; c++) {
+        int type = m->cell_types[c];
+        if ((type != 29 && type != 32) || m->cell_offsets[c + 1] - m->cell_offsets[c] != tpk_cell_map_nodes(type))
+            continue;
+        const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
+        lattice_face f[6];
+        int nf = lattice_faces(type, f);
+        for (int i = 0; i < nf; i++) {
+            int32_t corner[4], sorted[4];
+            for (int k = 0; k < 4; k++)
+                corner[k] = nodes[f[i].corners[k]];
+            sort4(corner, sorted);
+            face_key *slot = face_slot(&s->faces, sorted);
+            if (slot->ids[0] < 0) {
+                memcpy(slot->ids, sorted, sizeof sorted);
+                slot->point = nodes[f[i].centre];
+            }
+        }
+    }
+}
+
+/* ---- the mesh rebuilt --------------------------------------------------------------------------- */
+
+/* Points and point fields grown by the added points, placed and valued by their cells' functions. */
+static int append_points(split_state *s)
+{
+    tpk_mesh *m = s->m;
+    int64_t n0 = m->point_count, n = n0 + s->added_count;
+    double *points = realloc(m->points, sizeof *points * 3 * (size_t)(n ? n : 1));
+    if (!points)
+        return -1;
+    m->points = points;
+    for (int64_t i = 0; i < s->added_count; i++) {
+        const added_point *a = &s->added[i];
+        tpk_cell_map_point(m->cell_types[a->cell], m->cell_conn + m->cell_offsets[a->cell], m->points, a->r,
+                           m->points + 3 * (n0 + i));
+    }
+    for (int f = 0; f < m->field_count; f++) {
+        tpk_src_field *field = &m->fields[f];
+        if (field->association != TPK_ASSOC_POINT)
+            continue;
+        int nc = field->components;
+        size_t total = (size_t)(n * nc) * (size_t)field->step_count;
+        float *values = malloc(sizeof *values * (total ? total : 1));
+        if (!values)
+            return -1;
+        for (int st = 0; st < field->step_count; st++) {
+            const float *from = field->values + (size_t)st * (size_t)(n0 * nc);
+            float *to = values + (size_t)st * (size_t)(n * nc);
+            memcpy(to, from, sizeof *to * (size_t)(n0 * nc));
+            for (int64_t i = 0; i < s->added_count; i++) {
+                const added_point *a = &s->added[i];
+                double w[TPK_CELL_MAP_MAX_NODES];
+                int count = tpk_cell_map_weights(m->cell_types[a->cell], a->r, w);
+                const int32_t *nodes = m->cell_conn + m->cell_offsets[a->cell];
+                for (int comp = 0; comp < nc; comp++) {
+                    double v = 0;
+                    for (int k = 0; k < count; k++)
+                        if (w[k] != 0)
+                            v += w[k] * from[(int64_t)nodes[k] * nc + comp];
+                    to[(n0 + i) * nc + comp] = (float)v;
+                }
+            }
+        }
+        free(field->values);
+        field->values = values;
+    }
+    m->point_count = n;
+    return 0;
+}
+
+/* Cell fields copied to every piece of their cell. */
+static int spread_cell_fields(tpk_mesh *m, const int32_t *cell_source, int64_t cells)
+{
+    for (int f = 0; f < m->field_count; f++) {
+        tpk_src_field *field = &m->fields[f];
+        if (field->association == TPK_ASSOC_POINT)
+            continue;
+        int nc = field->components;
+        size_t total = (size_t)(cells * nc) * (size_t)field->step_count;
+        float *values = malloc(sizeof *values * (total ? total : 1));
+        if (!values)
+            return -1;
+        for (int st = 0; st < field->step_count; st++) {
+            const float *from = field->values + (size_t)st * (size_t)(m->cell_count * nc);
+            float *to = values + (size_t)st * (size_t)(cells * nc);
+            for (int64_t c = 0; c < cells; c++)
+                memcpy(to + c * nc, from + (int64_t)cell_source[c] * nc, sizeof *to * (size_t)nc);
+        }
+        free(field->values);
+        field->values = values;
+    }
+    return 0;
+}
+
+/* Polyhedra keep their face streams; the pieces of split cells have none. */
+static int move_face_streams(tpk_mesh *m, const int32_t *cell_source, int64_t cells)
+{
+    if (!m->face_offsets)
+        return 0;
+    int64_t *offsets = malloc(sizeof *offsets * (size_t)(cells + 1));
+    if (!offsets)
+        return -1;
+    offsets[0] = 0;
+    for (int64_t c = 0; c < cells; c++) {
+        int32_t from = cell_source[c];
+        int whole = !split_type(m->cell_types[from]);
+        int64_t begin = m->face_offsets[from], end = m->face_offsets[from + 1];
+        /* the stream stays where it is: a cell's range, or an empty one at the same place */
+        offsets[c] = whole ? begin : end;
+        offsets[c + 1] = end;
+    }
+    free(m->face_offsets);
+    m->face_offsets = offsets;
+    return 0;
+}
+
+static int fail_nodes(tpk_diag *diag, int64_t c, int type, int64_t got)
+{
+    const tpk_cell_type_info *t = tpk_cell_type(type);
+    return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d", (long long)c, t->name, (long long)got,
+                         t->name, t->nodes);
+}
+
+/* VTK's Lagrange tetra, hexahedron and wedge of order 2 (10, 27 and 18 nodes) number their nodes as the
+ * quadratic tetra, triquadratic hexahedron and biquadratic-quadratic wedge do (VTK 9's numbering, the
+ * one vtkHigherOrderHexahedron documents; files from VTK 8 list two vertical mid-edges of a hexahedron
+ * the other way, which the split then finds inverted): split as those. */
+static void lagrange_as_quadratic(tpk_mesh *m)
+{
+    for (int64_t c = 0; c < m->cell_count; c++) {
+        int type = m->cell_types[c];
+        int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
+        if ((type == 71 && n == 10) || (type == 72 && n == 27) || (type == 73 && n == 18))
+            m->cell_types[c] = (uint8_t)(type == 71 ? 24 : type == 72 ? 29 : 32);
+    }
+}
+
+int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out, tpk_diag *diag)
+{
+    memset(out, 0, sizeof *out);
+    lagrange_as_quadratic(m);
+    out->source_points = m->point_count, out->source_cells = m->cell_count;
+    int64_t cells = 0, conn = 0, keyed = 0;
+    for (int64_t c = 0; c < m->cell_count; c++) {
+        int type = m->cell_types[c];
+        int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
+        if (!split_type(type)) {
+            cells++, conn += n;
+            continue;
+        }
+        if (n != tpk_cell_map_nodes(type))
+            return fail_nodes(diag, c, type, n);
+        piece p[10];
+        int np = pieces_of(type, m->cell_conn + m->cell_offsets[c], m->points, p);
+        cells += np;
+        for (int i = 0; i < np; i++)
+            conn += tpk_cell_type(p[i].type)->nodes;
+        keyed += type == 27 ? 1 : type == 26 || type == 32 ? 3 : type == 25 || type == 29 ? 6 : 0;
+        out->split_cells++;
+    }
+    if (out->split_cells == 0) {
+        out->reduced_cells = tpk_reduce_higher_order(m, name, diag);
+        return 0;
+    }
+    if (cells > INT32_MAX || conn > INT32_MAX)
+        return tpk_diag_fail(diag, "%lld cells after splitting the higher-order cells exceed the limit of 2^31-1",
+                             (long long)cells);
+    split_state s = {m, {NULL, 0}, NULL, 0, 0, 0};
+    size_t cap = 64;
+    while (cap < 2 * (size_t)keyed)
+        cap *= 2;
+    s.faces.slots = malloc(sizeof *s.faces.slots * cap);
+    s.faces.mask = cap - 1;
+    uint8_t *types = malloc((size_t)cells);
+    int64_t *offsets = malloc(sizeof *offsets * (size_t)(cells + 1));
+    int32_t *cconn = malloc(sizeof *cconn * (size_t)(conn ? conn : 1));
+    int32_t *source = malloc(sizeof *source * (size_t)cells);
+    int rc = -1;
+    if (!s.faces.slots || !types || !offsets || !cconn || !source)
+        goto fail;
+    for (size_t i = 0; i < cap; i++)
+        s.faces.slots[i].ids[0] = -1;
+    enter_own_centres(&s);
+    int64_t k = 0, at = 0;
+    offsets[0] = 0;
+    for (int64_t c = 0; c < m->cell_count; c++) {
+        int type = m->cell_types[c];
+        const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
+        int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
+        if (!split_type(type)) {
+            types[k] = (uint8_t)type, source[k] = (int32_t)c;
+            memcpy(cconn + at, nodes, sizeof *cconn * (size_t)n);
+            offsets[++k] = at += n;
+            continue;
+        }
+        int32_t ids[TPK_CELL_MAP_MAX_NODES];
+        piece p[10];
+        if (lattice_ids(&s, c, ids))
+            goto fail;
+        int np = pieces_of(type, nodes, m->points, p);
+        for (int i = 0; i < np; i++) {
+            if (p[i].type == TPK_CELL_TETRA)
+                orient_piece(type, &p[i]);
+            int corners = tpk_cell_type(p[i].type)->nodes;
+            types[k] = (uint8_t)p[i].type, source[k] = (int32_t)c;
+            for (int v = 0; v < corners; v++)
+                cconn[at + v] = ids[p[i].nodes[v]];
+            offsets[++k] = at += corners;
+        }
+    }
+    /* Added points are valued from the cells as they were: place them before the cells are replaced. */
+    if (append_points(&s) || spread_cell_fields(m, source, cells) || move_face_streams(m, source, cells))
+        goto fail;
+    out->added_points = s.added_count;
+    free(m->cell_types), free(m->cell_offsets), free(m->cell_conn);
+    m->cell_types = types, m->cell_offsets = offsets, m->cell_conn = cconn;
+    m->cell_count = cells;
+    types = NULL, offsets = NULL, cconn = NULL;
+    free(m->global_point_ids), free(m->global_cell_ids);
+    m->global_point_ids = NULL, m->global_cell_ids = NULL;
+    out->cell_source = source;
+    source = NULL;
+    out->reduced_cells = tpk_reduce_higher_order(m, name, diag);
+    rc = 0;
+fail:
+    if (rc && s.too_many)
+        tpk_diag_fail(diag, "splitting %lld higher-order cells adds points past the limit of 2^31-1 per file; split "
+                      "the mesh into parts", (long long)out->split_cells);
+    else if (rc)
+        tpk_diag_fail(diag, "out of memory splitting %lld higher-order cells", (long long)out->split_cells);
+    free(s.faces.slots), free(s.added), free(types), free(offsets), free(cconn), free(source);
+    return rc;
+}

@@ -1,0 +1,48 @@
+/* Higher-order volume cells (quadratic and triquadratic tetra, hexahedra, wedges, pyramids) as the
+ * importers keep them, in VTK node order: reduced to their corners, or split whole into linear cells at
+ * their own nodes (docs/ARCHITECTURE.md §5). */
+#ifndef TPK_HIGHER_ORDER_H
+#define TPK_HIGHER_ORDER_H
+
+#include <stdint.h>
+
+#include "base/diag.h"
+#include "mesh.h"
+
+/* A volume cell of higher order (any VTK type whose linear cell differs from it, of dimension 3). */
+int tpk_is_higher_order_volume(int type);
+
+/* Every higher-order volume cell reduced to its corners (its first nodes, the linear cell's), in place;
+ * its other nodes stay points that no cell uses. With any reduced, one warning "NAME: reduced
+ * higher-order cells to their corner nodes: N cells (n1 type1, ...)". Returns the count reduced. */
+int64_t tpk_reduce_higher_order(tpk_mesh *mesh, const char *name, tpk_diag *diag);
+
+/* What tpk_split_higher_order did. */
+typedef struct tpk_higher_split {
+    int64_t split_cells;      /* cells split whole */
+    int64_t reduced_cells;    /* higher-order cells of a type not split (biquadratic-quadratic hexahedra,
+                                 triquadratic pyramids, Lagrange cells of other orders, Bezier cells):
+                                 reduced to corners */
+    int64_t added_points;     /* face and cell centres the cells lack, appended after the source points */
+    int64_t source_points;    /* the point count before: points from here on are added */
+    int64_t source_cells;     /* the cell count before */
+    int32_t *cell_source;     /* per cell of the new mesh, its cell in the old one (malloc'ed); NULL
+                                 when no cell was split (the mesh is then unchanged but for reductions) */
+} tpk_higher_split;
+
+/* Each quadratic tetra (24), quadratic and triquadratic hexahedron (25, 29), quadratic, quadratic-linear
+ * and biquadratic-quadratic wedge (26, 31, 32), quadratic pyramid (27), and Lagrange tetra, hexahedron
+ * and wedge of order 2 (71, 72, 73 with 10, 27, 18 nodes: as 24, 29, 32) replaced by the linear cells
+ * of its own node lattice: a tetra by 8 tetra (the inner octahedron cut along its shortest diagonal), a
+ * hexahedron by 8 hexahedra, a wedge by 8 (31: 4) wedges, a pyramid by 6 pyramids and 4 tetra. Every
+ * node is a corner of some linear cell. Points a cell lacks (a 20-node hexahedron's face and cell
+ * centres, a 15-node wedge's quad-face centres, a 13-node pyramid's base centre) are placed and valued
+ * (every point field, every step) by the cell's own shape functions (mesh/cell_map.h); a face centre is
+ * made once per face (keyed by the face's corner ids, or the face's own centre node where a neighbour has
+ * one), so both cells on a face use the same point with the same value. The linear cells' quad faces are
+ * then cut by the converter's smallest-id rule, the same from both sides: the mesh stays conforming.
+ * Cell fields are copied to each linear cell of a cell. Other higher-order cells are reduced to corners
+ * (warned, naming `name`). Returns 0, or -1 with a message (out of memory, a cell with the wrong node count). */
+int tpk_split_higher_order(tpk_mesh *mesh, const char *name, tpk_higher_split *out, tpk_diag *diag);
+
+#endif
