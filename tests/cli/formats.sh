@@ -31,12 +31,12 @@ for r in rows:
 assert {r["name"] for r in rows if "gzip" in r["supports"]} >= {"vtk", "vtu", "gmsh", "medit", "inp"}, rows
 PYEOF
 
-# The README's list of inputs names every extension of the registry (the list is prose, kept by hand).
-"$PY" - "$WORK/formats.json" "$SRC/README.md" <<'PYEOF'
+# The list of inputs in docs/USAGE.md names every extension of the registry (prose, kept by hand).
+"$PY" - "$WORK/formats.json" "$SRC/docs/USAGE.md" <<'PYEOF'
 import json, sys
-readme = open(sys.argv[2]).read().lower()
-missing = [e for r in json.load(open(sys.argv[1]))["formats"] for e in r["extensions"] if e.lower() not in readme]
-assert not missing, "README.md does not name " + ", ".join(missing)
+usage = open(sys.argv[2]).read().lower()
+missing = [e for r in json.load(open(sys.argv[1]))["formats"] for e in r["extensions"] if e.lower() not in usage]
+assert not missing, "docs/USAGE.md does not name " + ", ".join(missing)
 PYEOF
 
 # The help of convert and check lists the same rows.
