@@ -89,23 +89,73 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     return 0;
 }
 
-/* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the origin
- * overflows float32, is an error naming it (also when no cell uses it: the file stores every point). */
-static int check_storable(const tpk_tetmesh *mesh, const double *origin, tpk_diag *diag)
+/* The points' passes on all threads (tpk_thread_count(0): convert's --threads), each worker over a
+ * contiguous range: per worker the first point that is not finite, the first too far from the origin,
+ * and the bounds of its points in the stored frame, merged in worker order by the same strict comparisons
+ * (so the bound kept among equal values, 0.0 or -0.0, is the first in point order, as one pass keeps). */
+typedef struct points_job {
+    double *points;
+    const double *origin;
+    int64_t not_finite[TPK_MAX_THREADS], too_far[TPK_MAX_THREADS];
+    double lo[TPK_MAX_THREADS][3], hi[TPK_MAX_THREADS][3];
+} points_job;
+
+static void storable_range(void *ctx, int64_t begin, int64_t end, int w)
 {
-    for (int pass = 0; pass < 2; pass++) /* non-finite points first: they would make every offset overflow */
-        for (int64_t i = 0; i < mesh->vertex_count; i++) {
-            const double *p = mesh->points + 3 * i;
-            int bad = 0;
-            for (int k = 0; k < 3; k++)
-                bad |= pass == 0 ? !isfinite(p[k]) : !isfinite((float)(p[k] - origin[k]));
-            if (bad)
-                return tpk_diag_fail(diag, "point %d is at (%.17g, %.17g, %.17g): %s",
-                                     mesh->vertex_source ? mesh->vertex_source[i] : (int32_t)i, p[0], p[1], p[2],
-                                     pass == 0 ? "a coordinate is not a finite number"
-                                               : "too far from the origin for float32 positions (the "
-                                                 "format stores them relative to it)");
+    points_job *job = ctx;
+    job->not_finite[w] = job->too_far[w] = INT64_MAX;
+    for (int64_t i = begin; i < end; i++) {
+        const double *p = job->points + 3 * i;
+        int bad_value = 0, bad_offset = 0;
+        for (int k = 0; k < 3; k++) {
+            bad_value |= !isfinite(p[k]);
+            bad_offset |= !isfinite((float)(p[k] - job->origin[k]));
         }
+        if (bad_value && job->not_finite[w] == INT64_MAX)
+            job->not_finite[w] = i;
+        if (bad_offset && job->too_far[w] == INT64_MAX)
+            job->too_far[w] = i;
+    }
+}
+
+static void quantize_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    points_job *job = ctx;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = begin; i < end; i++)
+        for (int k = 0; k < 3; k++) {
+            double rel = (double)(float)(job->points[3 * i + k] - job->origin[k]);
+            double world = job->origin[k] + rel;
+            job->points[3 * i + k] = rel;
+            lo[k] = world < lo[k] ? world : lo[k];
+            hi[k] = world > hi[k] ? world : hi[k];
+        }
+    memcpy(job->lo[w], lo, sizeof lo);
+    memcpy(job->hi[w], hi, sizeof hi);
+}
+
+/* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the origin
+ * overflows float32, is an error naming it (also when no cell uses it: the file stores every point).
+ * Non-finite points are reported first: they would make every offset overflow. */
+static int check_storable(const tpk_tetmesh *mesh, points_job *job, int threads, tpk_diag *diag)
+{
+    tpk_parallel_for(mesh->vertex_count, threads, storable_range, job);
+    int64_t first[2] = {INT64_MAX, INT64_MAX};
+    for (int w = 0; w < threads; w++) {
+        first[0] = job->not_finite[w] < first[0] ? job->not_finite[w] : first[0];
+        first[1] = job->too_far[w] < first[1] ? job->too_far[w] : first[1];
+    }
+    for (int pass = 0; pass < 2; pass++) {
+        int64_t i = first[pass];
+        if (i == INT64_MAX)
+            continue;
+        const double *p = mesh->points + 3 * i;
+        return tpk_diag_fail(diag, "point %d is at (%.17g, %.17g, %.17g): %s",
+                             mesh->vertex_source ? mesh->vertex_source[i] : (int32_t)i, p[0], p[1], p[2],
+                             pass == 0 ? "a coordinate is not a finite number"
+                                       : "too far from the origin for float32 positions (the "
+                                         "format stores them relative to it)");
+    }
     return 0;
 }
 
@@ -123,17 +173,24 @@ int tpk_quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *dia
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }
-    if (check_storable(mesh, hdr->origin, diag) != 0)
+    points_job *job = malloc(sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "out of memory");
+    job->points = mesh->points;
+    job->origin = hdr->origin;
+    int threads = tpk_threads_for(mesh->vertex_count, tpk_thread_count(0), (int64_t)1 << 16);
+    if (check_storable(mesh, job, threads, diag) != 0) {
+        free(job);
         return -1;
+    }
     memcpy(mesh->origin, hdr->origin, sizeof mesh->origin);
-    for (int64_t i = 0; i < mesh->vertex_count; i++)
+    tpk_parallel_for(mesh->vertex_count, threads, quantize_range, job);
+    for (int w = 0; w < threads && mesh->vertex_count; w++)
         for (int k = 0; k < 3; k++) {
-            double rel = (double)(float)(mesh->points[3 * i + k] - hdr->origin[k]);
-            double world = hdr->origin[k] + rel;
-            mesh->points[3 * i + k] = rel;
-            hdr->bounds_min[k] = world < hdr->bounds_min[k] ? world : hdr->bounds_min[k];
-            hdr->bounds_max[k] = world > hdr->bounds_max[k] ? world : hdr->bounds_max[k];
+            hdr->bounds_min[k] = job->lo[w][k] < hdr->bounds_min[k] ? job->lo[w][k] : hdr->bounds_min[k];
+            hdr->bounds_max[k] = job->hi[w][k] > hdr->bounds_max[k] ? job->hi[w][k] : hdr->bounds_max[k];
         }
+    free(job);
     return 0;
 }
 
