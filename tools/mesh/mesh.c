@@ -147,3 +147,40 @@ void tpk_points_origin(const double *points, int64_t count, double origin[3])
 {
     tpk_points_origin_threads(points, count, 0, origin);
 }
+
+typedef struct ids_job {
+    const int32_t *ids;
+    int64_t limit;
+    int64_t first[TPK_MAX_THREADS];
+} ids_job;
+
+static void ids_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    ids_job *job = ctx;
+    job->first[w] = -1;
+    for (int64_t i = begin; i < end; i++)
+        if (job->ids[i] < 0 || job->ids[i] >= job->limit) {
+            job->first[w] = i;
+            return;
+        }
+}
+
+int64_t tpk_first_id_out_of_range(const int32_t *ids, int64_t count, int64_t limit, int threads)
+{
+    ids_job *job = malloc(sizeof *job);
+    if (!job) { /* the same answer on one thread */
+        for (int64_t i = 0; i < count; i++)
+            if (ids[i] < 0 || ids[i] >= limit)
+                return i;
+        return -1;
+    }
+    job->ids = ids;
+    job->limit = limit;
+    threads = tpk_threads_for(count, tpk_thread_count(threads), (int64_t)1 << 16);
+    tpk_parallel_for(count, threads, ids_range, job);
+    int64_t first = -1;
+    for (int w = 0; w < threads && first < 0; w++) /* ranges in order: the first worker's find is the first */
+        first = job->first[w];
+    free(job);
+    return first;
+}
