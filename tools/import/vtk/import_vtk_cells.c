@@ -122,6 +122,20 @@ static void types_range(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
+/* CELL_TYPES in a BINARY file: big-endian int32, each in [0, 255]. */
+static void binary_types_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    for (int64_t c = begin; c < end; c++) {
+        int32_t type = (int32_t)be32(job->p + 4 * c);
+        if (type < 0 || type > 255) {
+            job->first_bad[worker] = c;
+            return;
+        }
+        job->types[c] = (uint8_t)type;
+    }
+}
+
 /* ---- POINTS, CELLS, CELL_TYPES ------------------------------------------------------------------ */
 
 int vtk_read_points(vtk_reader *r)
@@ -364,13 +378,22 @@ int vtk_read_cell_types(vtk_reader *r)
                            (long long)r->cell_count);
     if (vtk_check_room(r, VT_I32, (uint64_t)n, "CELL_TYPES"))
         return -1;
-    int64_t *values = malloc(sizeof(int64_t) * (size_t)(n ? n : 1));
     r->types = malloc((size_t)(n ? n : 1));
-    if (!values || !r->types) {
-        free(values);
+    if (!r->types)
         return vtk_fail_kw(r, "CELL_TYPES: out of memory");
-    }
     r->type_count = n;
+    if (r->binary) { /* straight from the file's big-endian int32, no int64 copy */
+        block_job job = {.p = r->s.data + r->s.pos, .types = r->types};
+        int64_t bad = run_block_job(&job, n, binary_types_range);
+        if (bad != INT64_MAX)
+            return vtk_fail_kw(r, "CELL_TYPES: cell %lld has unsupported cell type %lld", (long long)bad,
+                               (long long)(int32_t)be32(job.p + 4 * bad));
+        r->s.pos += 4 * (size_t)n;
+        return 0;
+    }
+    int64_t *values = malloc(sizeof(int64_t) * (size_t)(n ? n : 1));
+    if (!values)
+        return vtk_fail_kw(r, "CELL_TYPES: out of memory");
     int rc = vtk_read_ints(r, VT_I32, (uint64_t)n, values, "CELL_TYPES");
     block_job job = {.types = r->types, .values = values};
     int64_t bad = rc == 0 ? run_block_job(&job, n, types_range) : n;
