@@ -74,6 +74,44 @@ same_threads pvd "$WORK/series.pvd"
 if "$TPK" export "$WORK/cc.tpk" --vtkhdf "$WORK/cc.vtkhdf" > /dev/null 2>&1; then
     same_threads vtkhdf "$WORK/cc.vtkhdf"
 fi
+# VTK ASCII blocks large enough (64k numbers) to be read on all threads, in both cell forms, and with a
+# bad number in each block: the same files, and the same message as the serial reader's, at any count.
+"$PY" "$SRC/bench/make_grid_vtk.py" 30 "$WORK/g30.vtk" 2> /dev/null
+"$PY" - "$WORK" <<'PYEOF'
+import sys
+import meshio
+import numpy as np
+work = sys.argv[1]
+m = meshio.read(work + "/g30.vtk")
+meshio.write(work + "/g30_51.vtk", m, binary=False)
+pts, tets = m.points, m.cells[0].data
+with open(work + "/g30_old.vtk", "w") as f:
+    f.write("# vtk DataFile Version 3.0\nascii grid\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS %d double\n" % len(pts))
+    np.savetxt(f, pts, fmt="%.17g")
+    f.write("CELLS %d %d\n" % (len(tets), 5 * len(tets)))
+    np.savetxt(f, np.hstack([np.full((len(tets), 1), 4), tets]), fmt="%d")
+    f.write("CELL_TYPES %d\n" % len(tets))
+    np.savetxt(f, np.full(len(tets), 10), fmt="%d")
+for name in ("g30_old", "g30_51"):
+    lines = open("%s/%s.vtk" % (work, name)).read().split("\n")
+    for k, i in [(k, i) for i, l in enumerate(lines) for k in ("POINTS", "CELLS", "CONNECTIVITY", "OFFSETS", "CELL_TYPES")
+                 if l.startswith(k)]:
+        j = i + 1 if name == "g30_51" else i + 20000
+        for n, bad in enumerate(("x1", "-5", "4294967296")):
+            bad_lines = list(lines)
+            toks = bad_lines[j].split(" ")
+            toks[len(toks) // 2] = bad
+            bad_lines[j] = " ".join(toks)
+            open("%s/bad_%s_%s_%d.vtk" % (work, name, k, n), "w").write("\n".join(bad_lines))
+PYEOF
+same_threads vtk_ascii_old "$WORK/g30_old.vtk"
+same_threads vtk_ascii_51 "$WORK/g30_51.vtk"
+for bad in "$WORK"/bad_*.vtk; do
+    expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 1
+    mv "$WORK/err" "$WORK/err1"
+    expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 3
+    cmp -s "$WORK/err1" "$WORK/err" || fail "$(basename "$bad"): the messages of 1 and 3 threads differ"
+done
 # Levels of detail: the collapses run on all threads, the levels must not depend on how many.
 same_threads levels "$DATA/sfepy/cube_cylinder.mesh" --levels 3
 echo "$((passed + 2)) passed, 0 failed"

@@ -2,9 +2,11 @@
  * sections. Point ids are checked to fit an int32 here, against the point count when the mesh is built. */
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "import_vtk_internal.h"
 #include "base/parallel.h"
+#include "base/text_numbers.h"
 #include "base/text_scan.h"
 
 /* Cell index holding connectivity entry k (offsets known and monotone up to there). */
@@ -168,6 +170,41 @@ static int id_range_error(vtk_reader *r, int64_t cell, int64_t id)
                             (long long)id);
 }
 
+/* Old form in ASCII, fast path: all `size` numbers read on all threads (each in [0, 2^31-1]), then the
+ * counts walked and the ids copied. 0 when read (r->offsets and r->conn filled, the position after the
+ * block), 1 with nothing read when any number or count is not what the serial reader accepts: it then
+ * reads the block again for its message. */
+static int ascii_cell_lists(vtk_reader *r, int64_t n, int64_t size)
+{
+    if (size < 65536)
+        return 1;
+    int32_t *numbers = malloc(sizeof *numbers * (size_t)size);
+    tpk_scan saved = r->s;
+    if (!numbers || tpk_scan_numbers(&r->s, (uint64_t)size, TPK_NUMBER_ID32, numbers, 0) != 0) {
+        free(numbers);
+        return 1;
+    }
+    int64_t used = 0, k = 0;
+    for (int64_t c = 0; c < n; c++) {
+        int64_t count = used < size ? numbers[used] : -1;
+        if (count < 0 || count > size - used - 1 - (n - c - 1)) {
+            free(numbers);
+            r->s = saved;
+            return 1;
+        }
+        memcpy(r->conn + k, numbers + used + 1, sizeof *numbers * (size_t)count);
+        used += 1 + count;
+        k += count;
+        r->offsets[c + 1] = k;
+    }
+    free(numbers);
+    if (used != size) {
+        r->s = saved;
+        return 1;
+    }
+    return 0;
+}
+
 /* Old form: per cell a count then that many ids; `size` numbers in all. */
 static int read_cell_lists(vtk_reader *r, int64_t n, int64_t size)
 {
@@ -227,6 +264,8 @@ static int read_cell_lists(vtk_reader *r, int64_t n, int64_t size)
                                     (long long)size, (long long)(size - used - 1 - (n - c - 1)));
         }
         r->s.pos += 4 * (size_t)size;
+    } else if (ascii_cell_lists(r, n, size) == 0) {
+        return 0;
     } else {
         for (int64_t c = 0; c < n; c++) {
             int64_t count;
@@ -322,6 +361,8 @@ static int read_offsets_connectivity(vtk_reader *r, int64_t n_offsets, int64_t m
         r->s.pos += vtk_bytes_for(type, (uint64_t)m);
         return 0;
     }
+    if (tpk_scan_numbers(&r->s, (uint64_t)m, TPK_NUMBER_ID32, r->conn, 0) == 0)
+        return 0;
     for (int64_t k = 0; k < m; k++) {
         int64_t id;
         const char *t;

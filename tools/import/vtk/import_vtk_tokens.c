@@ -6,6 +6,7 @@
 
 #include "import_vtk_internal.h"
 #include "base/parallel.h"
+#include "base/text_numbers.h"
 #include "base/text_scan.h"
 
 static const struct {
@@ -222,6 +223,9 @@ int vtk_read_reals(vtk_reader *r, vtk_type type, uint64_t count, double *d64, fl
         r->s.pos += vtk_bytes_for(type, count);
         return 0;
     }
+    /* ASCII: on all threads where the block reads cleanly, else token by token for the message */
+    if (tpk_scan_numbers(&r->s, count, d64 ? TPK_NUMBER_F64 : TPK_NUMBER_F32, d64 ? (void *)d64 : (void *)f32, 0) == 0)
+        return 0;
     for (uint64_t i = 0; i < count; i++) {
         const char *tok;
         size_t len = tpk_scan_token(&r->s, &tok);
@@ -272,6 +276,8 @@ int vtk_read_ints(vtk_reader *r, vtk_type type, uint64_t count, int64_t *dst, co
         r->s.pos += vtk_bytes_for(type, count);
         return 0;
     }
+    if (tpk_scan_numbers(&r->s, count, TPK_NUMBER_I64, dst, 0) == 0)
+        return 0;
     for (uint64_t i = 0; i < count; i++) {
         const char *tok;
         size_t len = tpk_scan_token(&r->s, &tok);
