@@ -109,8 +109,14 @@ static void parse_piece(void *ctx, int64_t begin, int64_t end, int w)
 
 int tpk_scan_numbers(tpk_scan *s, uint64_t count, tpk_number_kind kind, void *dst, int threads)
 {
+    return tpk_scan_numbers_tuned(s, count, kind, dst, threads, 65536, (int64_t)1 << 20);
+}
+
+int tpk_scan_numbers_tuned(tpk_scan *s, uint64_t count, tpk_number_kind kind, void *dst, int threads,
+                           uint64_t min_count, int64_t grain)
+{
     threads = tpk_thread_count(threads);
-    if (threads < 2 || count < 65536 || s->hash_comments || s->pos >= s->size)
+    if (threads < 2 || count < min_count || count == 0 || s->hash_comments || s->pos >= s->size)
         return 1;
     numbers_job *job = calloc(1, sizeof *job);
     if (!job)
@@ -125,7 +131,7 @@ int tpk_scan_numbers(tpk_scan *s, uint64_t count, tpk_number_kind kind, void *ds
         size_t wend = start + window;
         while (wend < s->size && !is_space(s->data[wend]))
             wend++;
-        pieces = tpk_threads_for((int64_t)(wend - start), threads, (int64_t)1 << 20);
+        pieces = tpk_threads_for((int64_t)(wend - start), threads, grain);
         size_t b = start;
         for (int w = 0; w < pieces; w++) {
             size_t e = w + 1 == pieces ? wend : start + (wend - start) / (size_t)pieces * (size_t)(w + 1);

@@ -22,5 +22,10 @@ typedef enum tpk_number_kind {
  * 0 with s where count tpk_scan_token calls leave it (position, line, last token), or 1 with s unchanged
  * and dst's contents undefined: then read serially. */
 int tpk_scan_numbers(tpk_scan *s, uint64_t count, tpk_number_kind kind, void *dst, int threads);
+/* The same where blocks of min_count numbers or more are read this way (tpk_scan_numbers: 65536) in pieces
+ * of at least grain bytes (tpk_scan_numbers: 1 MiB): for the fuzz target, which compares it with the serial
+ * reading on small inputs (it returns 1 exactly when that fails). */
+int tpk_scan_numbers_tuned(tpk_scan *s, uint64_t count, tpk_number_kind kind, void *dst, int threads,
+                           uint64_t min_count, int64_t grain);
 
 #endif
