@@ -75,7 +75,8 @@ if "$TPK" export "$WORK/cc.tpk" --vtkhdf "$WORK/cc.vtkhdf" > /dev/null 2>&1; the
     same_threads vtkhdf "$WORK/cc.vtkhdf"
 fi
 # VTK ASCII blocks large enough (64k numbers) to be read on all threads, in both cell forms, and with a
-# bad number in each block: the same files, and the same message as the serial reader's, at any count.
+# bad number in each block, and the binary form with bad counts and ids: the same files, and the same
+# message as the serial reader's, at any count.
 "$PY" "$SRC/bench/make_grid_vtk.py" 30 "$WORK/g30.vtk" 2> /dev/null
 "$PY" - "$WORK" <<'PYEOF'
 import sys
@@ -92,6 +93,16 @@ with open(work + "/g30_old.vtk", "w") as f:
     np.savetxt(f, np.hstack([np.full((len(tets), 1), 4), tets]), fmt="%d")
     f.write("CELL_TYPES %d\n" % len(tets))
     np.savetxt(f, np.full(len(tets), 10), fmt="%d")
+# the binary grid's CELLS (old form, 5 numbers a cell) with a bad count or id, or both in either order
+import struct
+binary = open(work + "/g30.vtk", "rb").read()
+at = binary.index(b"\n", binary.index(b"CELLS ")) + 1
+for n, changes in enumerate([[(5000, 0, 3)], [(7000, 2, -1)], [(3000, 1, -7), (5000, 0, 5)],
+                             [(3000, 0, 6), (5000, 3, -2)], [(100, 0, 100000000)], [(len(tets) - 1, 4, -1)]]):
+    bad = bytearray(binary)
+    for cell, k, value in changes:
+        struct.pack_into(">i", bad, at + 4 * (5 * cell + k), value)
+    open("%s/bad_binary_%d.vtk" % (work, n), "wb").write(bad)
 for name in ("g30_old", "g30_51"):
     lines = open("%s/%s.vtk" % (work, name)).read().split("\n")
     for k, i in [(k, i) for i, l in enumerate(lines) for k in ("POINTS", "CELLS", "CONNECTIVITY", "OFFSETS", "CELL_TYPES")

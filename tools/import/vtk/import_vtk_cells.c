@@ -51,16 +51,29 @@ static int64_t run_block_job(block_job *job, int64_t count, tpk_range_fn fn)
     return first;
 }
 
-/* Old CELLS form where every cell has `each` points: the counts checked, the offsets filled. */
-static void uniform_counts_range(void *ctx, int64_t begin, int64_t end, int worker)
+/* Old CELLS form where every cell has `each` points, in one pass: the counts checked, the offsets filled,
+ * the ids copied and checked to be >= 0. A worker stops at its first cell with another count or a
+ * negative id (the caller then reads the block the general way, for the message). */
+static void uniform_lists_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     block_job *job = ctx;
+    int64_t each = job->each;
     for (int64_t c = begin; c < end; c++) {
-        if ((int32_t)be32(job->p + 4 * (size_t)(c * (job->each + 1))) != job->each) {
+        const unsigned char *cell = job->p + 4 * (size_t)(c * (each + 1));
+        if ((int32_t)be32(cell) != each) {
             job->first_bad[worker] = c;
             return;
         }
-        job->offsets[c + 1] = (c + 1) * job->each;
+        int32_t *dst = job->conn + c * each;
+        for (int64_t j = 0; j < each; j++) {
+            int32_t id = (int32_t)be32(cell + 4 + 4 * j);
+            if (id < 0) {
+                job->first_bad[worker] = c;
+                return;
+            }
+            dst[j] = id;
+        }
+        job->offsets[c + 1] = (c + 1) * each;
     }
 }
 
@@ -222,17 +235,18 @@ static int read_cell_lists(vtk_reader *r, int64_t n, int64_t size)
     r->offsets[0] = 0;
     if (r->binary) {
         /* The cell starts follow from the counts, one after the other, unless every cell has the first
-         * cell's count (a mesh of one cell type), which all threads check at once. The ids are then copied
-         * and checked on all threads; a bad count is reported after any bad id of an earlier cell, as the
-         * serial reader found them. */
+         * cell's count (a mesh of one cell type), which all threads check at once as they copy the ids.
+         * Otherwise (or where that pass finds a bad count or id) the counts are walked on one thread and
+         * the ids copied and checked on all; a bad count is reported after any bad id of an earlier
+         * cell, as the serial reader found them. */
         const unsigned char *p = r->s.data + r->s.pos;
         block_job job = {.p = p, .offsets = r->offsets, .conn = r->conn};
         int64_t known = n; /* cells whose counts are good */
         job.each = n > 0 ? (int32_t)be32(p) : -1;
         if (n > 0 && job.each >= 0 && size % n == 0 && size / n - 1 == job.each &&
-            run_block_job(&job, n, uniform_counts_range) == INT64_MAX) {
-            used = size;
-            k = n * job.each;
+            run_block_job(&job, n, uniform_lists_range) == INT64_MAX) {
+            r->s.pos += 4 * (size_t)size; /* every cell read */
+            return 0;
         } else {
             for (int64_t c = 0; c < n; c++) {
                 int64_t count = used < size ? (int32_t)be32(p + 4 * used) : -1;
