@@ -40,6 +40,8 @@ typedef struct cell_pass {
     int64_t first_bad[TPK_MAX_THREADS];     /* INT64_MAX: none */
     int64_t tets[TPK_MAX_THREADS], skipped[TPK_MAX_THREADS], first_skipped[TPK_MAX_THREADS];
     int not_plain[TPK_MAX_THREADS];
+    int64_t type_tets[256];                 /* count_range's fast path: tets of a cell of this type with */
+    int64_t type_nodes[256];                /* this many nodes (0: any); -1: ask cell_tets */
 } cell_pass;
 
 static int pass_threads(int64_t count, int threads)
@@ -87,8 +89,16 @@ static int64_t cell_tets(const tpk_mesh *src, int64_t c, tpk_diag *diag)
 static void count_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     cell_pass *job = ctx;
+    const tpk_mesh *src = job->src;
     for (int64_t c = begin; c < end; c++) {
-        int64_t tets = cell_tets(job->src, c, NULL);
+        int type = src->cell_types[c];
+        int64_t tets = job->type_tets[type];
+        if (tets >= 0 && (job->type_nodes[type] == 0 ||
+                          src->cell_offsets[c + 1] - src->cell_offsets[c] == job->type_nodes[type])) {
+            job->tets[w] += tets;
+            continue;
+        }
+        tets = cell_tets(src, c, NULL);
         if (tets == -1) {
             job->first_bad[w] = c;
             return;
@@ -111,6 +121,12 @@ static int count_tets(const tpk_mesh *src, int threads, int64_t *tet_count, tpk_
     if (!job)
         return tpk_diag_fail(diag, "tetrahedralize: out of memory");
     job->src = src;
+    for (int t = 0; t < 256; t++) { /* what cell_tets says of a cell of type t with the right node count */
+        const tpk_cell_type_info *kind = tpk_cell_type(t);
+        int ok = kind && kind->dim >= 3 && kind->type != TPK_CELL_POLYHEDRON && max_tets(kind->type);
+        job->type_tets[t] = ok ? max_tets(kind->type) : -1;
+        job->type_nodes[t] = ok && kind->nodes > 0 ? kind->nodes : 0;
+    }
     threads = pass_threads(src->cell_count, threads);
     int64_t bad = run_cell_pass(job, src->cell_count, threads, count_range);
     for (int w = 0; w < threads; w++) {
@@ -169,11 +185,18 @@ static int check_cell_connectivity(const tpk_mesh *src, int64_t c, tpk_diag *dia
 static void connectivity_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     cell_pass *job = ctx;
-    for (int64_t c = begin; c < end; c++)
-        if (check_cell_connectivity(job->src, c, NULL)) {
+    const tpk_mesh *src = job->src;
+    uint64_t points = (uint64_t)src->point_count;
+    for (int64_t c = begin; c < end; c++) {
+        int64_t b = src->cell_offsets[c], e = src->cell_offsets[c + 1];
+        int bad = e < b || src->cell_types[c] == TPK_CELL_POLYHEDRON;
+        for (int64_t i = b; i < e; i++) /* a negative id is a huge unsigned one */
+            bad |= (uint64_t)(int64_t)src->cell_conn[i] >= points;
+        if (bad && check_cell_connectivity(src, c, NULL)) {
             job->first_bad[w] = c;
             return;
         }
+    }
 }
 
 static int check_connectivity(const tpk_mesh *src, int threads, tpk_diag *diag)
