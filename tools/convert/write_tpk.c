@@ -97,10 +97,10 @@ static tpk_result wait_append(append_job *a)
     return a->result;
 }
 
-static void start_append(append_job *a, tpk_writer *writer, const void *data, uint64_t size)
+static void start_append(append_job *a, tpk_writer *writer, const void *data, uint64_t size, int threads)
 {
     *a = (append_job){writer, data, size, TPK_OK, 0, 1};
-    if (pthread_create(&a->thread, NULL, append_block, a) != 0) {
+    if (threads < 2 || pthread_create(&a->thread, NULL, append_block, a) != 0) { /* --threads 1: one core */
         a->running = 2;
         append_block(a);
     }
@@ -124,7 +124,7 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
         tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
         r = wait_append(&append);
         if (r == TPK_OK)
-            start_append(&append, cw->writer, job.block, (uint64_t)count * desc->elem_size);
+            start_append(&append, cw->writer, job.block, (uint64_t)count * desc->elem_size, cw->threads);
     }
     tpk_result last = wait_append(&append);
     r = r != TPK_OK ? r : last;
