@@ -2,8 +2,37 @@
 # Benchmarks, run on demand: ./bench/run.sh [build-dir]   (default build-release, built here)
 # Prints JSON lines and a summary; medians of several runs. Needs /usr/bin/time and Debian's python3.
 # Sizes: TPK_BENCH_SIZES="55 119" (grid edge N: 6*N^3 tets; 55 -> ~1M, 119 -> ~10M).
+#   ./bench/run.sh --scaling [--small] [--bin DIR] [--out DIR]: instead, issue 37's scaling table
+#   (bench/scaling.sh): convert of grids 120 and 200 at 1, 2, 4, ... threads up to the cores, per stage the
+#   speed-up and the serial share, and peak RSS per tet. --bin: where tetpack is (default build-release,
+#   built here); --out: results (default $TPK_BENCH_DIR/scaling); --small: the ctest bench.scaling_small.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if [ "${1:-}" = --scaling ]; then
+    shift
+    small=0 bin="" out=${TPK_BENCH_DIR:-/tmp/tpk_bench}/scaling
+    while [ $# -gt 0 ]; do
+        case "$1" in
+            --small) small=1 ;;
+            --bin) bin=$2; shift ;;
+            --out) out=$2; shift ;;
+            *) echo "usage: bench/run.sh --scaling [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
+        esac
+        shift
+    done
+    if [ -z "$bin" ]; then
+        bin=build-release
+        cmake -S . -B "$bin" -DCMAKE_BUILD_TYPE=Release -DTETPACK_WITH_TESTS=OFF >/dev/null
+        cmake --build "$bin" -j"$(nproc)" --target tetpack_cli >/dev/null
+    fi
+    PYTHON=${PYTHON:-}
+    for c in python3 /usr/bin/python3; do
+        [ -n "$PYTHON" ] || ! "$c" -c "import numpy" 2>/dev/null || PYTHON=$c
+    done
+    [ -n "$PYTHON" ] || { echo "run.sh: make_grid_vtk.py needs python3 with numpy (or set PYTHON)" >&2; exit 2; }
+    export PYTHON
+    exec bash bench/scaling.sh "$bin/tetpack" "$out" "$small"
+fi
 BUILD=${1:-build-release}
 RUNS=${TPK_BENCH_RUNS:-3}
 SIZES=${TPK_BENCH_SIZES:-"55 119"}

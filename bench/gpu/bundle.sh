@@ -9,6 +9,7 @@
 #   ./run-gpu-bench.sh [run.sh options]       VK_DRIVER_FILES=/usr/share/vulkan/icd.d/nvidia_icd.json ...
 #   ./run-gpu-bench.sh --targets              the open GPU targets of issues 21 and 22 (targets.sh)
 #   ./run-gpu-bench.sh --convert              issue 22's conversion target on the host's cores (convert_ratio.sh)
+#   ./run-gpu-bench.sh --scaling              issue 37's scaling table on the host's cores (bench/scaling.sh)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 OUT=$(mkdir -p "${1:-$ROOT/bench/gpu/bundle}" && cd "${1:-$ROOT/bench/gpu/bundle}" && pwd)
@@ -34,7 +35,7 @@ done | sort -u | while read -r lib; do
 done
 cp "$ROOT/bench/gpu/run.sh" "$ROOT/bench/gpu/targets.sh" "$ROOT/bench/gpu/convert_ratio.sh" "$ROOT/bench/gpu/table.py" \
     "$STAGE/bench/gpu/"
-cp "$ROOT/bench/make_grid_vtk.py" "$STAGE/bench/"
+cp "$ROOT/bench/make_grid_vtk.py" "$ROOT/bench/scaling.sh" "$ROOT/bench/scaling_table.py" "$STAGE/bench/"
 cp "$ROOT/samples/cylinder.vtk" "$STAGE/samples/"
 cp "$DATA/sfepy/cube_big_tetra.mesh" "$STAGE/data/sfepy/"
 cp "$DATA/nasa_refine/om6_om6-curv-no-geom.meshb" "$STAGE/data/nasa_refine/"

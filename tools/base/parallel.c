@@ -2,14 +2,24 @@
 #include "parallel.h"
 
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
+static _Atomic int default_threads;
+
+int tpk_set_default_threads(int threads)
+{
+    return atomic_exchange(&default_threads, threads > 0 ? threads : 0);
+}
+
 int tpk_thread_count(int requested)
 {
+    if (requested <= 0)
+        requested = atomic_load(&default_threads);
     if (requested <= 0) {
         long online = sysconf(_SC_NPROCESSORS_ONLN);
         requested = online > 0 ? (int)(online < TPK_MAX_THREADS ? online : TPK_MAX_THREADS) : 1;

@@ -8,8 +8,14 @@
 
 #define TPK_MAX_THREADS 64
 
-/* requested <= 0: the number of online CPUs. Clamped to [1, TPK_MAX_THREADS]. */
+/* requested <= 0: the process default (tpk_set_default_threads), else the number of online CPUs. Clamped
+ * to [1, TPK_MAX_THREADS]. */
 int tpk_thread_count(int requested);
+
+/* What tpk_thread_count(0) gives from now on (threads <= 0: the online CPUs again); returns the previous
+ * setting. For stages that take no thread count of their own (the importers): convert sets its --threads
+ * here for the run, so that --threads 1 runs on one core throughout. */
+int tpk_set_default_threads(int threads);
 
 /* Fewer workers for small jobs: at most one per `grain` items (at least 1). */
 int tpk_threads_for(int64_t count, int threads, int64_t grain);

@@ -286,6 +286,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     memset(rep, 0, sizeof *rep);
     c.o = o, c.rep = rep, c.stage = stage, c.stage_user = stage_user, c.diag = diag;
     double t0 = tpk_now_seconds();
+    int default_threads = tpk_set_default_threads(o->threads); /* the importers' threads too */
     int rc = read_source(&c);
     if (rc == 0) {
         double t = tpk_now_seconds();
@@ -308,6 +309,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     if (rc == 0)
         rc = write_output(&c);
     rep->t_total = tpk_now_seconds() - t0;
+    tpk_set_default_threads(default_threads);
     free(c.neighbors);
     free(c.turned_over);
     tpk_merge_report_free(&c.merged);

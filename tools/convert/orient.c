@@ -16,11 +16,20 @@ typedef struct orient_job {
     const double *points;
     int32_t *tets;
     int8_t *kinds;
+    uint8_t *turned_over; /* mark_range: per tet, turned over */
     int swap_inverted;
     int64_t inverted[TPK_MAX_THREADS];
     int64_t flat[TPK_MAX_THREADS];
     int64_t repeated[TPK_MAX_THREADS];
 } orient_job;
+
+static void mark_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const orient_job *job = ctx;
+    (void)worker;
+    for (int64_t t = begin; t < end; t++)
+        job->turned_over[t] = job->kinds[t] == TET_INVERTED;
+}
 
 static int repeats_vertex(const int32_t *v)
 {
@@ -166,10 +175,10 @@ int tpk_orient_marked(tpk_tetmesh *mesh, int flags, int threads_requested, tpk_o
     memset(stats, 0, sizeof *stats);
     if (!mesh || (mesh->tet_count > 0 && (!mesh->tets || !mesh->points)))
         return tpk_diag_fail(diag, "orient: invalid tet mesh");
-    for (int64_t i = 0; i < 4 * mesh->tet_count; i++)
-        if (mesh->tets[i] < 0 || mesh->tets[i] >= mesh->vertex_count)
-            return tpk_diag_fail(diag, "orient: tet %lld names vertex %d; the mesh has %lld vertices",
-                                 (long long)(i / 4), mesh->tets[i], (long long)mesh->vertex_count);
+    int64_t bad = tpk_first_id_out_of_range(mesh->tets, 4 * mesh->tet_count, mesh->vertex_count, threads_requested);
+    if (bad >= 0)
+        return tpk_diag_fail(diag, "orient: tet %lld names vertex %d; the mesh has %lld vertices",
+                             (long long)(bad / 4), mesh->tets[bad], (long long)mesh->vertex_count);
     orient_job *job = calloc(1, sizeof *job);
     int8_t *kinds = tpk_alloc_large((size_t)(mesh->tet_count ? mesh->tet_count : 1));
     if (!job || !kinds) {
@@ -195,9 +204,11 @@ int tpk_orient_marked(tpk_tetmesh *mesh, int flags, int threads_requested, tpk_o
         rc = refuse_inverted(mesh, kinds, stats, diag);
     else if (stats->degenerate > 0)
         drop_degenerate(mesh, kinds, turned_over);
-    else if (turned_over)
-        for (int64_t t = 0; t < mesh->tet_count; t++)
-            turned_over[t] = kinds[t] == TET_INVERTED;
+    else if (turned_over) {
+        job->kinds = kinds;
+        job->turned_over = turned_over;
+        tpk_parallel_for(mesh->tet_count, threads, mark_range, job);
+    }
     free(kinds); /* not kept: connect maps its arrays next, and a kept block would add to its peak */
     free(job);
     return rc;

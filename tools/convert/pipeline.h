@@ -128,5 +128,9 @@ int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count);
 /* Boundary faces as outward int4 records, in tet order then face order. dst holds the count above. */
 void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_count,
                      tpk_shell_face *dst);
+/* Both on `threads` threads (tpk_thread_count's rule), the same records for any count: a malloc'ed array
+ * of *count faces (the caller frees), or NULL when out of memory. */
+tpk_shell_face *tpk_make_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, int threads,
+                               int64_t *count);
 
 #endif

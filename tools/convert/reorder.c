@@ -124,12 +124,21 @@ static uint32_t quantize(double v, double lo, double scale)
     return (uint32_t)q;
 }
 
-static box bounding_box(const double *points, int64_t count)
+/* The bounds of the points that are not NaN, per worker over a contiguous range, merged in worker order
+ * by the same rule (the first value seen, then strictly smaller or larger ones): one pass's bounds. */
+typedef struct bounds_job {
+    const double *points;
+    double lo[TPK_MAX_THREADS][3], hi[TPK_MAX_THREADS][3];
+    int seen[TPK_MAX_THREADS];
+} bounds_job;
+
+static void bounds_range(void *ctx, int64_t begin, int64_t end, int w)
 {
-    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    bounds_job *job = ctx;
+    double *lo = job->lo[w], *hi = job->hi[w];
     int seen = 0;
-    for (int64_t v = 0; v < count; v++) {
-        const double *p = points + 3 * v;
+    for (int64_t v = begin; v < end; v++) {
+        const double *p = job->points + 3 * v;
         if (!(p[0] == p[0] && p[1] == p[1] && p[2] == p[2]))
             continue;
         for (int a = 0; a < 3; a++) {
@@ -140,6 +149,31 @@ static box bounding_box(const double *points, int64_t count)
         }
         seen = 1;
     }
+    job->seen[w] = seen;
+}
+
+static box bounding_box(const double *points, int64_t count, int threads)
+{
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    int seen = 0;
+    bounds_job *job = malloc(sizeof *job);
+    threads = job ? tpk_threads_for(count, threads, 65536) : 1;
+    if (job) {
+        job->points = points;
+        tpk_parallel_for(count, threads, bounds_range, job);
+    }
+    for (int w = 0; job && w < threads; w++) {
+        if (!job->seen[w])
+            continue;
+        for (int a = 0; a < 3; a++) {
+            if (!seen || job->lo[w][a] < lo[a])
+                lo[a] = job->lo[w][a];
+            if (!seen || job->hi[w][a] > hi[a])
+                hi[a] = job->hi[w][a];
+        }
+        seen = 1;
+    }
+    free(job);
     double extent = 0;
     for (int a = 0; a < 3; a++)
         if (hi[a] - lo[a] > extent)
@@ -421,6 +455,20 @@ static void remap_range(void *ctx, int64_t begin, int64_t end, int worker)
         job->tets[i] = job->new_id[job->tets[i]];
 }
 
+/* new_id[order[i]] = i: order is a permutation, so every slot is written once, by one worker. */
+typedef struct invert_job {
+    const uint32_t *order;
+    int32_t *new_id;
+} invert_job;
+
+static void invert_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const invert_job *job = ctx;
+    (void)worker;
+    for (int64_t i = begin; i < end; i++)
+        job->new_id[job->order[i]] = (int32_t)i;
+}
+
 static int apply_vertex_order(tpk_tetmesh *mesh, const uint32_t *order, int threads)
 {
     int64_t n = mesh->vertex_count;
@@ -432,8 +480,8 @@ static int apply_vertex_order(tpk_tetmesh *mesh, const uint32_t *order, int thre
         tpk_free_large(new_id, sizeof *new_id * (size_t)(n ? n : 1));
         return -1;
     }
-    for (int64_t i = 0; i < n; i++)
-        new_id[order[i]] = (int32_t)i;
+    invert_job inv = {order, new_id};
+    tpk_parallel_for(n, tpk_threads_for(n, threads, 65536), invert_range, &inv);
     remap_job job = {mesh->tets, new_id};
     tpk_parallel_for(4 * mesh->tet_count, tpk_threads_for(4 * mesh->tet_count, threads, 65536), remap_range,
                      &job);
@@ -457,15 +505,15 @@ int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
     if (!mesh || mesh->vertex_count > INT32_MAX || mesh->tet_count > INT32_MAX ||
         (mesh->vertex_count > 0 && !mesh->points) || (mesh->tet_count > 0 && !mesh->tets))
         return tpk_diag_fail(diag, "reorder: invalid tet mesh");
-    for (int64_t i = 0; i < 4 * mesh->tet_count; i++)
-        if (mesh->tets[i] < 0 || mesh->tets[i] >= mesh->vertex_count)
-            return tpk_diag_fail(diag, "reorder: tet %lld names vertex %d; the mesh has %lld vertices",
-                                 (long long)(i / 4), mesh->tets[i], (long long)mesh->vertex_count);
     int threads = tpk_thread_count(threads_requested);
+    int64_t bad = tpk_first_id_out_of_range(mesh->tets, 4 * mesh->tet_count, mesh->vertex_count, threads);
+    if (bad >= 0)
+        return tpk_diag_fail(diag, "reorder: tet %lld names vertex %d; the mesh has %lld vertices",
+                             (long long)(bad / 4), mesh->tets[bad], (long long)mesh->vertex_count);
     int64_t nv = mesh->vertex_count, nt = mesh->tet_count;
     hilbert_table table;
     build_hilbert_table(&table);
-    box bounds = bounding_box(mesh->points, nv);
+    box bounds = bounding_box(mesh->points, nv, threads);
     /* Vertices along the curve first; tets then follow their smallest vertex. */
     size_t order_bytes = sizeof(uint32_t) * (size_t)(nv > nt ? (nv ? nv : 1) : nt);
     uint32_t *order = tpk_alloc_large(order_bytes);

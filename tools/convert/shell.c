@@ -3,6 +3,10 @@
  * check it exactly. */
 #include "pipeline.h"
 
+#include <stdlib.h>
+
+#include "base/parallel.h"
+
 int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count)
 {
     int64_t count = 0;
@@ -27,4 +31,54 @@ void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_
             f->t = (int32_t)t;
         }
     }
+}
+
+/* tpk_make_shell: each worker counts the shell faces of its contiguous range of tets, the prefix sums of
+ * the counts place each range's faces, and each worker writes its own: the order of one pass. */
+typedef struct shell_job {
+    const int32_t *tets, *neighbors;
+    tpk_shell_face *dst;
+    int64_t count[TPK_MAX_THREADS];
+} shell_job;
+
+static void count_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    shell_job *job = ctx;
+    job->count[w] = tpk_count_shell_faces(job->neighbors + 4 * begin, end - begin);
+}
+
+static void build_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    shell_job *job = ctx;
+    tpk_build_shell(job->tets + 4 * begin, job->neighbors + 4 * begin, end - begin, job->dst + job->count[w]);
+    for (int64_t i = 0; i < job->count[w + 1] - job->count[w]; i++)
+        job->dst[job->count[w] + i].t += (int32_t)begin;
+}
+
+tpk_shell_face *tpk_make_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, int threads,
+                               int64_t *count)
+{
+    shell_job *job = malloc(sizeof *job);
+    if (!job)
+        return NULL;
+    job->tets = tets;
+    job->neighbors = neighbors;
+    threads = tpk_threads_for(tet_count, tpk_thread_count(threads), (int64_t)1 << 16);
+    if (threads >= TPK_MAX_THREADS)
+        threads = TPK_MAX_THREADS - 1; /* count[threads] holds the total */
+    tpk_parallel_for(tet_count, threads, count_range, job);
+    int64_t total = 0;
+    for (int w = 0; w < threads; w++) {
+        int64_t n = job->count[w];
+        job->count[w] = total;
+        total += n;
+    }
+    job->count[threads] = total;
+    job->dst = malloc(sizeof *job->dst * (size_t)(total ? total : 1));
+    if (job->dst)
+        tpk_parallel_for(tet_count, threads, build_range, job);
+    tpk_shell_face *dst = job->dst;
+    free(job);
+    *count = total;
+    return dst;
 }

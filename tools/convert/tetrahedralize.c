@@ -29,35 +29,115 @@ static int64_t polyhedron_max_tets(const tpk_mesh *src, int64_t c)
     return src->face_offsets[c + 1] - src->face_offsets[c] - 1 - stream[0];
 }
 
+/* The passes over every cell and point below run on all threads, each worker over a contiguous range in
+ * order, stopping at its first bad cell: the smallest of the workers' firsts is the cell the serial loop
+ * stopped at, checked again on the calling thread for the message. Results do not depend on the thread
+ * count. */
+typedef struct cell_pass {
+    const tpk_mesh *src;
+    tpk_tetmesh *out;
+    int plain;                              /* all_plain_tets: stays 1 while every cell is one */
+    int64_t first_bad[TPK_MAX_THREADS];     /* INT64_MAX: none */
+    int64_t tets[TPK_MAX_THREADS], skipped[TPK_MAX_THREADS], first_skipped[TPK_MAX_THREADS];
+    int not_plain[TPK_MAX_THREADS];
+    int64_t type_tets[256];                 /* count_range's fast path: tets of a cell of this type with */
+    int64_t type_nodes[256];                /* this many nodes (0: any); -1: ask cell_tets */
+} cell_pass;
+
+static int pass_threads(int64_t count, int threads)
+{
+    return tpk_threads_for(count, tpk_thread_count(threads), (int64_t)1 << 16);
+}
+
+static int64_t run_cell_pass(cell_pass *job, int64_t count, int threads, tpk_range_fn fn)
+{
+    for (int w = 0; w < TPK_MAX_THREADS; w++) {
+        job->first_bad[w] = job->first_skipped[w] = INT64_MAX;
+        job->tets[w] = job->skipped[w] = 0;
+        job->not_plain[w] = 0;
+    }
+    tpk_parallel_for(count, threads, fn, job);
+    int64_t first = INT64_MAX;
+    for (int w = 0; w < threads; w++)
+        first = job->first_bad[w] < first ? job->first_bad[w] : first;
+    return first;
+}
+
+/* Tets cell c can give, -2 for a cell of dimension < 3 (skipped), or -1 with a message (diag may be
+ * NULL) for a cell the converter refuses. */
+static int64_t cell_tets(const tpk_mesh *src, int64_t c, tpk_diag *diag)
+{
+    const tpk_cell_type_info *kind = tpk_cell_type(src->cell_types[c]);
+    int64_t nodes = src->cell_offsets[c + 1] - src->cell_offsets[c];
+    if (!kind)
+        return tpk_diag_fail(diag, "cell %lld has VTK cell type %d, which this converter does not "
+                             "know", (long long)c, src->cell_types[c]);
+    if (kind->dim < 3)
+        return -2;
+    if (kind->type == TPK_CELL_POLYHEDRON)
+        return polyhedron_max_tets(src, c);
+    if (!max_tets(kind->type))
+        return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter splits tetra, "
+                             "voxels, hexahedra, wedges, pyramids and polyhedra", (long long)c, kind->name,
+                             kind->type);
+    if (kind->nodes > 0 && nodes != kind->nodes)
+        return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d",
+                             (long long)c, kind->name, (long long)nodes, kind->name, kind->nodes);
+    return max_tets(kind->type);
+}
+
+static void count_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    cell_pass *job = ctx;
+    const tpk_mesh *src = job->src;
+    for (int64_t c = begin; c < end; c++) {
+        int type = src->cell_types[c];
+        int64_t tets = job->type_tets[type];
+        if (tets >= 0 && (job->type_nodes[type] == 0 ||
+                          src->cell_offsets[c + 1] - src->cell_offsets[c] == job->type_nodes[type])) {
+            job->tets[w] += tets;
+            continue;
+        }
+        tets = cell_tets(src, c, NULL);
+        if (tets == -1) {
+            job->first_bad[w] = c;
+            return;
+        }
+        if (tets == -2) {
+            if (job->first_skipped[w] == INT64_MAX)
+                job->first_skipped[w] = c;
+            job->skipped[w]++;
+        } else {
+            job->tets[w] += tets;
+        }
+    }
+}
+
 /* Pass 1: check every cell and count tets; refuses unsupported 3-D cells, skips lower-dim ones. */
-static int count_tets(const tpk_mesh *src, int64_t *tet_count, tpk_diag *diag)
+static int count_tets(const tpk_mesh *src, int threads, int64_t *tet_count, tpk_diag *diag)
 {
     int64_t tets = 0, skipped = 0, first_skipped = -1;
-    for (int64_t c = 0; c < src->cell_count; c++) {
-        const tpk_cell_type_info *kind = tpk_cell_type(src->cell_types[c]);
-        int64_t nodes = src->cell_offsets[c + 1] - src->cell_offsets[c];
-        if (!kind)
-            return tpk_diag_fail(diag, "cell %lld has VTK cell type %d, which this converter does not "
-                                 "know", (long long)c, src->cell_types[c]);
-        if (kind->dim < 3) {
-            if (first_skipped < 0)
-                first_skipped = c;
-            skipped++;
-            continue;
-        }
-        if (kind->type == TPK_CELL_POLYHEDRON) {
-            tets += polyhedron_max_tets(src, c);
-            continue;
-        }
-        if (!max_tets(kind->type))
-            return tpk_diag_fail(diag, "cell %lld is a %s (VTK type %d); this converter splits tetra, "
-                                 "voxels, hexahedra, wedges, pyramids and polyhedra", (long long)c, kind->name,
-                                 kind->type);
-        if (kind->nodes > 0 && nodes != kind->nodes)
-            return tpk_diag_fail(diag, "cell %lld is a %s with %lld nodes; a %s has %d",
-                                 (long long)c, kind->name, (long long)nodes, kind->name, kind->nodes);
-        tets += max_tets(kind->type);
+    cell_pass *job = malloc(sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "tetrahedralize: out of memory");
+    job->src = src;
+    for (int t = 0; t < 256; t++) { /* what cell_tets says of a cell of type t with the right node count */
+        const tpk_cell_type_info *kind = tpk_cell_type(t);
+        int ok = kind && kind->dim >= 3 && kind->type != TPK_CELL_POLYHEDRON && max_tets(kind->type);
+        job->type_tets[t] = ok ? max_tets(kind->type) : -1;
+        job->type_nodes[t] = ok && kind->nodes > 0 ? kind->nodes : 0;
     }
+    threads = pass_threads(src->cell_count, threads);
+    int64_t bad = run_cell_pass(job, src->cell_count, threads, count_range);
+    for (int w = 0; w < threads; w++) {
+        tets += job->tets[w];
+        skipped += job->skipped[w];
+        if (first_skipped < 0 && job->first_skipped[w] != INT64_MAX)
+            first_skipped = job->first_skipped[w];
+    }
+    free(job);
+    if (bad != INT64_MAX)
+        return (int)cell_tets(src, bad, diag);
     if (skipped)
         tpk_diag_warn(diag, "skipped %lld cells of dimension < 3 (the first is cell %lld, a %s)",
                       (long long)skipped, (long long)first_skipped,
@@ -88,22 +168,49 @@ static int check_face_stream(const tpk_mesh *src, int64_t c, tpk_diag *diag)
     return 0;
 }
 
-static int check_connectivity(const tpk_mesh *src, tpk_diag *diag)
+/* Cell c's offsets, face stream and point ids: 0, or -1 with a message (diag may be NULL). */
+static int check_cell_connectivity(const tpk_mesh *src, int64_t c, tpk_diag *diag)
+{
+    if (src->cell_offsets[c + 1] < src->cell_offsets[c])
+        return tpk_diag_fail(diag, "cell %lld: offsets decrease", (long long)c);
+    if (src->cell_types[c] == TPK_CELL_POLYHEDRON && check_face_stream(src, c, diag))
+        return -1;
+    for (int64_t i = src->cell_offsets[c]; i < src->cell_offsets[c + 1]; i++)
+        if (src->cell_conn[i] < 0 || src->cell_conn[i] >= src->point_count)
+            return tpk_diag_fail(diag, "cell %lld names point %d; the mesh has %lld points",
+                                 (long long)c, src->cell_conn[i], (long long)src->point_count);
+    return 0;
+}
+
+static void connectivity_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    cell_pass *job = ctx;
+    const tpk_mesh *src = job->src;
+    uint64_t points = (uint64_t)src->point_count;
+    for (int64_t c = begin; c < end; c++) {
+        int64_t b = src->cell_offsets[c], e = src->cell_offsets[c + 1];
+        int bad = e < b || src->cell_types[c] == TPK_CELL_POLYHEDRON;
+        for (int64_t i = b; i < e; i++) /* a negative id is a huge unsigned one */
+            bad |= (uint64_t)(int64_t)src->cell_conn[i] >= points;
+        if (bad && check_cell_connectivity(src, c, NULL)) {
+            job->first_bad[w] = c;
+            return;
+        }
+    }
+}
+
+static int check_connectivity(const tpk_mesh *src, int threads, tpk_diag *diag)
 {
     if (src->point_count > INT32_MAX)
         return tpk_diag_fail(diag, "%lld points exceed the limit of 2^31-1 per file; split the mesh "
                              "into parts", (long long)src->point_count);
-    for (int64_t c = 0; c < src->cell_count; c++) {
-        if (src->cell_offsets[c + 1] < src->cell_offsets[c])
-            return tpk_diag_fail(diag, "cell %lld: offsets decrease", (long long)c);
-        if (src->cell_types[c] == TPK_CELL_POLYHEDRON && check_face_stream(src, c, diag))
-            return -1;
-        for (int64_t i = src->cell_offsets[c]; i < src->cell_offsets[c + 1]; i++)
-            if (src->cell_conn[i] < 0 || src->cell_conn[i] >= src->point_count)
-                return tpk_diag_fail(diag, "cell %lld names point %d; the mesh has %lld points",
-                                     (long long)c, src->cell_conn[i], (long long)src->point_count);
-    }
-    return 0;
+    cell_pass *job = malloc(sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "tetrahedralize: out of memory");
+    job->src = src;
+    int64_t bad = run_cell_pass(job, src->cell_count, pass_threads(src->cell_count, threads), connectivity_range);
+    free(job);
+    return bad == INT64_MAX ? 0 : check_cell_connectivity(src, bad, diag);
 }
 
 /* ---- fields ---------------------------------------------------------------------------------- */
@@ -274,11 +381,12 @@ static float added_cell_value(const tpk_added_points *added, const float *step, 
 /* A cell field averaged to the output vertices: the mean over the kept volume cells around each source
  * point (NaN for points in none), at an added cell centre its own cell's value, at a face centre the mean
  * over the cells on the face. */
-static int cell_to_point(const tpk_mesh *src, const field_request *req, const tpk_added_points *added,
+static int cell_to_point(const tpk_mesh *src, const field_request *req, const tpk_added_points *added, int threads,
                          tpk_tetmesh *out)
 {
     const tpk_src_field *f = req->field;
     int64_t nv = out->vertex_count, np = src->point_count;
+    (void)threads; /* a scatter into the points: serial, so the sums add in one order */
     float *values = malloc(sizeof *values * (size_t)(nv * f->step_count > 0 ? nv * f->step_count : 1));
     double *sum = malloc(sizeof *sum * (size_t)(np ? np : 1));
     int32_t *count = malloc(sizeof *count * (size_t)(np ? np : 1));
@@ -325,7 +433,29 @@ static int cell_to_point(const tpk_mesh *src, const field_request *req, const tp
     return 0;
 }
 
-static int copy_field(const tpk_mesh *src, const field_request *req, const tpk_added_points *added,
+typedef struct copy_job {
+    const tpk_mesh *src;
+    const field_request *req;
+    const tpk_added_points *added;
+    const tpk_tetmesh *out;
+    const float *step;
+    float *dst;
+} copy_job;
+
+static void copy_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    const copy_job *job = ctx;
+    const tpk_src_field *f = job->req->field;
+    int per_point = f->association == TPK_ASSOC_POINT;
+    (void)w;
+    for (int64_t i = begin; i < end; i++) {
+        int64_t from = per_point ? job->out->vertex_source[i] : job->out->tet_source[i];
+        job->dst[i] = from < 0 ? added_value(job->added, job->step, job->req, i - job->src->point_count)
+                               : pick_value(job->step + from * f->components, f->components, job->req->pick);
+    }
+}
+
+static int copy_field(const tpk_mesh *src, const field_request *req, const tpk_added_points *added, int threads,
                       tpk_tetmesh *out)
 {
     const tpk_src_field *f = req->field;
@@ -336,13 +466,9 @@ static int copy_field(const tpk_mesh *src, const field_request *req, const tpk_a
     if (!values)
         return -1;
     for (int s = 0; s < f->step_count; s++) {
-        const float *step = f->values + (size_t)s * (size_t)src_n * (size_t)f->components;
-        for (int64_t i = 0; i < n; i++) {
-            int64_t from = per_point ? out->vertex_source[i] : out->tet_source[i];
-            values[(size_t)s * (size_t)n + (size_t)i] =
-                from < 0 ? added_value(added, step, req, i - src->point_count)
-                         : pick_value(step + from * f->components, f->components, req->pick);
-        }
+        copy_job job = {src, req, added, out, f->values + (size_t)s * (size_t)src_n * (size_t)f->components,
+                        values + (size_t)s * (size_t)n};
+        tpk_parallel_for(n, pass_threads(n, threads), copy_range, &job);
     }
     tpk_src_field *dst = &out->fields[out->field_count++];
     memset(dst, 0, sizeof *dst);
@@ -412,32 +538,78 @@ static int split_cells(const tpk_mesh *src, int flags, int threads, const tpk_te
     return rc;
 }
 
+static void plain_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    cell_pass *job = ctx;
+    const tpk_mesh *src = job->src;
+    for (int64_t c = begin; c < end; c++)
+        if (src->cell_types[c] != TPK_CELL_TETRA || src->cell_offsets[c] != 4 * c) {
+            job->not_plain[w] = 1;
+            return;
+        }
+}
+
 /* Source tets stored as 4 consecutive ids each, in cell order: the connectivity is already the tet array. */
-static int all_plain_tets(const tpk_mesh *src, int64_t tet_count)
+static int all_plain_tets(const tpk_mesh *src, int64_t tet_count, int threads)
 {
     if (tet_count != src->cell_count)
         return 0;
-    for (int64_t c = 0; c < src->cell_count; c++)
-        if (src->cell_types[c] != TPK_CELL_TETRA || src->cell_offsets[c] != 4 * c)
-            return 0;
-    return 1;
+    cell_pass *job = malloc(sizeof *job);
+    if (!job)
+        return 0;
+    job->src = src;
+    threads = pass_threads(src->cell_count, threads);
+    run_cell_pass(job, src->cell_count, threads, plain_range);
+    int plain = 1;
+    for (int w = 0; w < threads; w++)
+        plain &= !job->not_plain[w];
+    free(job);
+    return plain;
+}
+
+/* Identity maps (vertex_source, tet_source) filled on all threads. */
+static void identity_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    int32_t *map = ctx;
+    (void)w;
+    for (int64_t i = begin; i < end; i++)
+        map[i] = (int32_t)i;
+}
+
+static void fill_identity(int32_t *map, int64_t count, int threads)
+{
+    tpk_parallel_for(count, pass_threads(count, threads), identity_range, map);
+}
+
+typedef struct snap_job {
+    double *points;
+    const double *origin;
+} snap_job;
+
+static void snap_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    const snap_job *job = ctx;
+    (void)w;
+    for (int64_t v = begin; v < end; v++)
+        for (int k = 0; k < 3; k++) {
+            double rel = (double)(float)(job->points[3 * v + k] - job->origin[k]);
+            if (isfinite(rel))
+                job->points[3 * v + k] = job->origin[k] + rel;
+        }
 }
 
 /* TPK_TETRA_FILE_GRID: every point moved onto the float32 grid relative to the file's origin
  * (tpk_points_origin), as the file will store it; in world coordinates still (grid_origin + a float32
  * value, exact in double). A coordinate float32 cannot hold is left as it is, for the converter to
  * refuse by name before writing (TPK-M11). */
-static void snap_to_file_grid(const tpk_mesh *src, tpk_tetmesh *out)
+static void snap_to_file_grid(const tpk_mesh *src, int threads, tpk_tetmesh *out)
 {
     if (src->has_grid_origin) /* a piece of a larger mesh: the whole's grid */
         memcpy(out->grid_origin, src->grid_origin, sizeof out->grid_origin);
     else
-        tpk_points_origin(out->points, out->vertex_count, out->grid_origin);
-    for (int64_t i = 0; i < 3 * out->vertex_count; i++) {
-        double rel = (double)(float)(out->points[i] - out->grid_origin[i % 3]);
-        if (isfinite(rel))
-            out->points[i] = out->grid_origin[i % 3] + rel;
-    }
+        tpk_points_origin_threads(out->points, out->vertex_count, threads, out->grid_origin);
+    snap_job job = {out->points, out->grid_origin};
+    tpk_parallel_for(out->vertex_count, pass_threads(out->vertex_count, threads), snap_range, &job);
     out->on_grid = 1;
 }
 
@@ -448,7 +620,7 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
                          tpk_diag *diag)
 {
     size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
-    int plain = donor && all_plain_tets(src, tet_capacity);
+    int plain = donor && all_plain_tets(src, tet_capacity, threads);
     if (donor && donor->points) {
         out->points = donor->points;
         donor->points = NULL;
@@ -459,15 +631,14 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
         memcpy(out->points, src->points, sizeof *out->points * 3 * (size_t)out->vertex_count);
     }
     if (flags & TPK_TETRA_FILE_GRID)
-        snap_to_file_grid(src, out);
+        snap_to_file_grid(src, threads, out);
     if (plain) {
         out->tets = donor->cell_conn;
         donor->cell_conn = NULL;
         out->tet_source = tpk_alloc_large(sizeof *out->tet_source * (size_t)tet_capacity);
         if (!out->tet_source)
             return -1;
-        for (int64_t t = 0; t < tet_capacity; t++)
-            out->tet_source[t] = (int32_t)t;
+        fill_identity(out->tet_source, tet_capacity, threads);
         out->tet_count = tet_capacity;
         out->cells_into[1] = tet_capacity;
         return 0;
@@ -492,7 +663,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     if (!src || (src->cell_count > 0 && (!src->cell_types || !src->cell_offsets || !src->cell_conn)) ||
         (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
         return tpk_diag_fail(diag, "tetrahedralize: invalid source mesh");
-    if (check_connectivity(src, diag) || count_tets(src, &tet_capacity, diag) ||
+    if (check_connectivity(src, threads, diag) || count_tets(src, threads, &tet_capacity, diag) ||
         build_requests(src, field_names, field_name_count, flags, &reqs, &req_count, diag))
         return -1;
 
@@ -501,8 +672,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     out->fields = calloc((size_t)(req_count ? req_count : 1), sizeof *out->fields);
     if (!out->vertex_source || !out->fields)
         goto out_of_memory;
-    for (int64_t v = 0; v < out->vertex_count; v++)
-        out->vertex_source[v] = (int32_t)v;
+    fill_identity(out->vertex_source, out->vertex_count, threads);
 
     out->step_count = src->step_count > 0 ? src->step_count : 1;
     if (src->times && src->step_count > 0) {
@@ -532,7 +702,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     }
     for (int i = 0; i < req_count; i++) {
         int averaged = reqs[i].field->association != TPK_ASSOC_POINT && (flags & TPK_TETRA_CELL_TO_POINT);
-        if ((averaged ? cell_to_point : copy_field)(src, &reqs[i], &added, out))
+        if ((averaged ? cell_to_point : copy_field)(src, &reqs[i], &added, threads, out))
             goto out_of_memory;
     }
     tpk_added_points_free(&added);

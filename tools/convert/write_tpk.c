@@ -3,6 +3,7 @@
 #include "write_tpk.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -68,43 +69,140 @@ static void fill_range(void *ctx, int64_t begin, int64_t end, int worker)
     job->fill(job->user, job->first + begin, end - begin, job->block + (size_t)begin * job->elem_size);
 }
 
+/* One block's append (checksum, compression, write) on a thread of its own, while the next block is
+ * filled: the writer never waits for the records, the records never wait for the disk. The blocks are
+ * appended in order, one at a time, so the bytes are those of appending them one after the other. */
+typedef struct append_job {
+    tpk_writer *writer;
+    const void *data;
+    uint64_t size;
+    tpk_result result;
+    pthread_t thread;
+    int running; /* 1: on its thread; 2: ran on the caller's (the thread could not start) */
+} append_job;
+
+static void *append_block(void *arg)
+{
+    append_job *a = arg;
+    a->result = tpk_writer_append(a->writer, a->data, a->size);
+    return NULL;
+}
+
+static tpk_result wait_append(append_job *a)
+{
+    if (a->running == 1)
+        pthread_join(a->thread, NULL);
+    a->running = 0;
+    return a->result;
+}
+
+static void start_append(append_job *a, tpk_writer *writer, const void *data, uint64_t size, int threads)
+{
+    *a = (append_job){writer, data, size, TPK_OK, 0, 1};
+    if (threads < 2 || pthread_create(&a->thread, NULL, append_block, a) != 0) { /* --threads 1: one core */
+        a->running = 2;
+        append_block(a);
+    }
+}
+
 static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user)
 {
     int64_t total = (int64_t)desc->elem_count;
-    fill_job job = {fill, user, 0, malloc((size_t)STREAM_BLOCK * desc->elem_size), desc->elem_size};
-    if (!job.block)
+    char *blocks[2] = {malloc((size_t)STREAM_BLOCK * desc->elem_size),
+                       total > STREAM_BLOCK ? malloc((size_t)STREAM_BLOCK * desc->elem_size) : NULL};
+    if (!blocks[0] || (total > STREAM_BLOCK && !blocks[1])) {
+        free(blocks[0]), free(blocks[1]);
         return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
-    tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
-    for (job.first = 0; r == TPK_OK && job.first < total; job.first += STREAM_BLOCK) {
-        int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
-        tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
-        r = tpk_writer_append(cw->writer, job.block, (uint64_t)count * desc->elem_size);
     }
+    fill_job job = {fill, user, 0, NULL, desc->elem_size};
+    append_job append = {.running = 0, .result = TPK_OK};
+    tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
+    for (int b = 0; r == TPK_OK && job.first < total; job.first += STREAM_BLOCK, b ^= 1) {
+        int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
+        job.block = blocks[b]; /* the other block may still be being appended */
+        tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
+        r = wait_append(&append);
+        if (r == TPK_OK)
+            start_append(&append, cw->writer, job.block, (uint64_t)count * desc->elem_size, cw->threads);
+    }
+    tpk_result last = wait_append(&append);
+    r = r != TPK_OK ? r : last;
     if (r == TPK_OK)
         r = tpk_writer_end_chunk(cw->writer);
-    free(job.block);
+    free(blocks[0]);
+    free(blocks[1]);
     if (r != TPK_OK)
         return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
     return 0;
 }
 
-/* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the origin
- * overflows float32, is an error naming it (also when no cell uses it: the file stores every point). */
-static int check_storable(const tpk_tetmesh *mesh, const double *origin, tpk_diag *diag)
+/* The points' passes on all threads (tpk_thread_count(0): convert's --threads), each worker over a
+ * contiguous range: per worker the first point that is not finite, the first too far from the origin,
+ * and the bounds of its points in the stored frame, merged in worker order by the same strict comparisons
+ * (so the bound kept among equal values, 0.0 or -0.0, is the first in point order, as one pass keeps). */
+typedef struct points_job {
+    double *points;
+    const double *origin;
+    int64_t not_finite[TPK_MAX_THREADS], too_far[TPK_MAX_THREADS];
+    double lo[TPK_MAX_THREADS][3], hi[TPK_MAX_THREADS][3];
+} points_job;
+
+static void storable_range(void *ctx, int64_t begin, int64_t end, int w)
 {
-    for (int pass = 0; pass < 2; pass++) /* non-finite points first: they would make every offset overflow */
-        for (int64_t i = 0; i < mesh->vertex_count; i++) {
-            const double *p = mesh->points + 3 * i;
-            int bad = 0;
-            for (int k = 0; k < 3; k++)
-                bad |= pass == 0 ? !isfinite(p[k]) : !isfinite((float)(p[k] - origin[k]));
-            if (bad)
-                return tpk_diag_fail(diag, "point %d is at (%.17g, %.17g, %.17g): %s",
-                                     mesh->vertex_source ? mesh->vertex_source[i] : (int32_t)i, p[0], p[1], p[2],
-                                     pass == 0 ? "a coordinate is not a finite number"
-                                               : "too far from the origin for float32 positions (the "
-                                                 "format stores them relative to it)");
+    points_job *job = ctx;
+    job->not_finite[w] = job->too_far[w] = INT64_MAX;
+    for (int64_t i = begin; i < end; i++) {
+        const double *p = job->points + 3 * i;
+        int bad_value = 0, bad_offset = 0;
+        for (int k = 0; k < 3; k++) {
+            bad_value |= !isfinite(p[k]);
+            bad_offset |= !isfinite((float)(p[k] - job->origin[k]));
         }
+        if (bad_value && job->not_finite[w] == INT64_MAX)
+            job->not_finite[w] = i;
+        if (bad_offset && job->too_far[w] == INT64_MAX)
+            job->too_far[w] = i;
+    }
+}
+
+static void quantize_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    points_job *job = ctx;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = begin; i < end; i++)
+        for (int k = 0; k < 3; k++) {
+            double rel = (double)(float)(job->points[3 * i + k] - job->origin[k]);
+            double world = job->origin[k] + rel;
+            job->points[3 * i + k] = rel;
+            lo[k] = world < lo[k] ? world : lo[k];
+            hi[k] = world > hi[k] ? world : hi[k];
+        }
+    memcpy(job->lo[w], lo, sizeof lo);
+    memcpy(job->hi[w], hi, sizeof hi);
+}
+
+/* Stored positions MUST be finite (TPK-M11): a point that is not, or whose offset from the origin
+ * overflows float32, is an error naming it (also when no cell uses it: the file stores every point).
+ * Non-finite points are reported first: they would make every offset overflow. */
+static int check_storable(const tpk_tetmesh *mesh, points_job *job, int threads, tpk_diag *diag)
+{
+    tpk_parallel_for(mesh->vertex_count, threads, storable_range, job);
+    int64_t first[2] = {INT64_MAX, INT64_MAX};
+    for (int w = 0; w < threads; w++) {
+        first[0] = job->not_finite[w] < first[0] ? job->not_finite[w] : first[0];
+        first[1] = job->too_far[w] < first[1] ? job->too_far[w] : first[1];
+    }
+    for (int pass = 0; pass < 2; pass++) {
+        int64_t i = first[pass];
+        if (i == INT64_MAX)
+            continue;
+        const double *p = mesh->points + 3 * i;
+        return tpk_diag_fail(diag, "point %d is at (%.17g, %.17g, %.17g): %s",
+                             mesh->vertex_source ? mesh->vertex_source[i] : (int32_t)i, p[0], p[1], p[2],
+                             pass == 0 ? "a coordinate is not a finite number"
+                                       : "too far from the origin for float32 positions (the "
+                                         "format stores them relative to it)");
+    }
     return 0;
 }
 
@@ -122,17 +220,24 @@ int tpk_quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *dia
         hdr->bounds_min[k] = mesh->vertex_count ? INFINITY : 0.0;
         hdr->bounds_max[k] = mesh->vertex_count ? -INFINITY : 0.0;
     }
-    if (check_storable(mesh, hdr->origin, diag) != 0)
+    points_job *job = malloc(sizeof *job);
+    if (!job)
+        return tpk_diag_fail(diag, "out of memory");
+    job->points = mesh->points;
+    job->origin = hdr->origin;
+    int threads = tpk_threads_for(mesh->vertex_count, tpk_thread_count(0), (int64_t)1 << 16);
+    if (check_storable(mesh, job, threads, diag) != 0) {
+        free(job);
         return -1;
+    }
     memcpy(mesh->origin, hdr->origin, sizeof mesh->origin);
-    for (int64_t i = 0; i < mesh->vertex_count; i++)
+    tpk_parallel_for(mesh->vertex_count, threads, quantize_range, job);
+    for (int w = 0; w < threads && mesh->vertex_count; w++)
         for (int k = 0; k < 3; k++) {
-            double rel = (double)(float)(mesh->points[3 * i + k] - hdr->origin[k]);
-            double world = hdr->origin[k] + rel;
-            mesh->points[3 * i + k] = rel;
-            hdr->bounds_min[k] = world < hdr->bounds_min[k] ? world : hdr->bounds_min[k];
-            hdr->bounds_max[k] = world > hdr->bounds_max[k] ? world : hdr->bounds_max[k];
+            hdr->bounds_min[k] = job->lo[w][k] < hdr->bounds_min[k] ? job->lo[w][k] : hdr->bounds_min[k];
+            hdr->bounds_max[k] = job->hi[w][k] > hdr->bounds_max[k] ? job->hi[w][k] : hdr->bounds_max[k];
         }
+    free(job);
     return 0;
 }
 
@@ -199,26 +304,48 @@ static int write_layouts(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_
 static int write_shell(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
                        uint64_t *shell_count)
 {
-    int64_t count = tpk_count_shell_faces(neighbors, mesh->tet_count);
-    tpk_shell_face *shell = malloc(sizeof *shell * (size_t)(count ? count : 1));
+    int64_t count = 0;
+    tpk_shell_face *shell = tpk_make_shell(mesh->tets, neighbors, mesh->tet_count, cw->threads, &count);
     if (!shell)
         return tpk_diag_fail(cw->diag, "out of memory for %lld shell faces", (long long)count);
-    tpk_build_shell(mesh->tets, neighbors, mesh->tet_count, shell);
     *shell_count = (uint64_t)count;
     int rc = put_chunk(cw, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, (uint64_t)count, 0, 0, shell);
     free(shell);
     return rc;
 }
 
-static void field_range(const tpk_src_field *f, size_t values, float *lo, float *hi)
+/* A field's range, NaN left out, on all threads: per worker over a contiguous range, merged in worker
+ * order by the same strict comparisons (so of -0.0 and 0.0 the first in value order is kept, as one pass
+ * keeps). */
+typedef struct range_job {
+    const float *values;
+    float lo[TPK_MAX_THREADS], hi[TPK_MAX_THREADS];
+} range_job;
+
+static void range_range(void *ctx, int64_t begin, int64_t end, int w)
 {
+    range_job *job = ctx;
     float mn = INFINITY, mx = -INFINITY;
-    for (size_t i = 0; i < values; i++) {
-        float v = f->values[i];
+    for (int64_t i = begin; i < end; i++) {
+        float v = job->values[i];
         if (v == v) {
             mn = v < mn ? v : mn;
             mx = v > mx ? v : mx;
         }
+    }
+    job->lo[w] = mn;
+    job->hi[w] = mx;
+}
+
+static void field_range(const tpk_src_field *f, size_t values, int threads, float *lo, float *hi)
+{
+    range_job job = {.values = f->values};
+    threads = tpk_threads_for((int64_t)values, threads, (int64_t)1 << 16);
+    tpk_parallel_for((int64_t)values, threads, range_range, &job);
+    float mn = INFINITY, mx = -INFINITY;
+    for (int w = 0; w < threads; w++) {
+        mn = job.lo[w] < mn ? job.lo[w] : mn;
+        mx = job.hi[w] > mx ? job.hi[w] : mx;
     }
     if (mn > mx)
         mn = mx = NAN;
@@ -249,7 +376,7 @@ static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
         desc[i].association = (uint32_t)f->association;
         desc[i].step_count = (uint32_t)f->step_count;
         desc[i].components = 1;
-        field_range(f, per_step * (size_t)f->step_count, &desc[i].min_value, &desc[i].max_value);
+        field_range(f, per_step * (size_t)f->step_count, cw->threads, &desc[i].min_value, &desc[i].max_value);
         max_steps = f->step_count > max_steps ? f->step_count : max_steps;
     }
     int rc = put_chunk(cw, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, (uint64_t)mesh->field_count, 0, 0, desc);

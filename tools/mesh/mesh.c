@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
+
 static void free_fields(tpk_src_field *fields, int count)
 {
     for (int i = 0; i < count; i++)
@@ -96,15 +98,89 @@ static double axis_origin(double lo, double hi)
     return lo;
 }
 
-void tpk_points_origin(const double *points, int64_t count, double origin[3])
+typedef struct bounds_job {
+    const double *points;
+    double lo[TPK_MAX_THREADS][3], hi[TPK_MAX_THREADS][3];
+} bounds_job;
+
+static void bounds_range(void *ctx, int64_t begin, int64_t end, int w)
 {
+    bounds_job *job = ctx;
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int64_t i = 0; i < count; i++)
+    for (int64_t i = begin; i < end; i++)
         for (int k = 0; k < 3; k++) {
-            double x = points[3 * i + k];
+            double x = job->points[3 * i + k];
             lo[k] = x < lo[k] ? x : lo[k];
             hi[k] = x > hi[k] ? x : hi[k];
         }
+    memcpy(job->lo[w], lo, sizeof lo);
+    memcpy(job->hi[w], hi, sizeof hi);
+}
+
+void tpk_points_origin_threads(const double *points, int64_t count, int threads, double origin[3])
+{
+    /* Each worker's bounds over its range, merged in worker order by the same strict comparisons: the
+     * bound kept is the first of equal values in point order (0.0 or -0.0), as one pass would keep. */
+    bounds_job *job = malloc(sizeof *job);
+    int n = job ? tpk_threads_for(count, tpk_thread_count(threads), (int64_t)1 << 16) : 1;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    if (job) {
+        job->points = points;
+        tpk_parallel_for(count, n, bounds_range, job);
+        for (int w = 0; w < n; w++)
+            for (int k = 0; k < 3; k++) {
+                lo[k] = job->lo[w][k] < lo[k] ? job->lo[w][k] : lo[k];
+                hi[k] = job->hi[w][k] > hi[k] ? job->hi[w][k] : hi[k];
+            }
+        free(job);
+    } else {
+        bounds_job one = {.points = points};
+        bounds_range(&one, 0, count, 0);
+        memcpy(lo, one.lo[0], sizeof lo);
+        memcpy(hi, one.hi[0], sizeof hi);
+    }
     for (int k = 0; k < 3; k++)
         origin[k] = count ? axis_origin(lo[k], hi[k]) : 0.0;
+}
+
+void tpk_points_origin(const double *points, int64_t count, double origin[3])
+{
+    tpk_points_origin_threads(points, count, 0, origin);
+}
+
+typedef struct ids_job {
+    const int32_t *ids;
+    int64_t limit;
+    int64_t first[TPK_MAX_THREADS];
+} ids_job;
+
+static void ids_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    ids_job *job = ctx;
+    job->first[w] = -1;
+    for (int64_t i = begin; i < end; i++)
+        if (job->ids[i] < 0 || job->ids[i] >= job->limit) {
+            job->first[w] = i;
+            return;
+        }
+}
+
+int64_t tpk_first_id_out_of_range(const int32_t *ids, int64_t count, int64_t limit, int threads)
+{
+    ids_job *job = malloc(sizeof *job);
+    if (!job) { /* the same answer on one thread */
+        for (int64_t i = 0; i < count; i++)
+            if (ids[i] < 0 || ids[i] >= limit)
+                return i;
+        return -1;
+    }
+    job->ids = ids;
+    job->limit = limit;
+    threads = tpk_threads_for(count, tpk_thread_count(threads), (int64_t)1 << 16);
+    tpk_parallel_for(count, threads, ids_range, job);
+    int64_t first = -1;
+    for (int w = 0; w < threads && first < 0; w++) /* ranges in order: the first worker's find is the first */
+        first = job->first[w];
+    free(job);
+    return first;
 }

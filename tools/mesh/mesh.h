@@ -111,5 +111,10 @@ void tpk_tetmesh_free(tpk_tetmesh *mesh);
 /* The file's origin for points[0 .. 3 count) (spec §6.8): per axis 0 when the bounding box straddles
  * 0, else the number in the box with the fewest significant bits (0 for no points). */
 void tpk_points_origin(const double *points, int64_t count, double origin[3]);
+/* The same on `threads` threads (tpk_thread_count's rule); the same origin for any count. */
+/* The first i in [0, count) with ids[i] < 0 or >= limit, or -1; on `threads` threads (tpk_thread_count's
+ * rule), the same answer for any count. */
+int64_t tpk_first_id_out_of_range(const int32_t *ids, int64_t count, int64_t limit, int threads);
+void tpk_points_origin_threads(const double *points, int64_t count, int threads, double origin[3]);
 
 #endif

@@ -10,6 +10,7 @@
 
 #include "mesh/cell_types.h"
 #include "import_vtk_internal.h"
+#include "base/parallel.h"
 #include "mesh/polyhedron.h"
 #include "base/text_scan.h"
 #include "import/import_file.h"
@@ -67,6 +68,59 @@ static void filter_cell_fields(vtk_reader *r, const uint8_t *keep)
     }
 }
 
+/* check_cell without a message, for the workers: 1 when the cell passes. */
+static int cell_ok(const vtk_reader *r, int64_t c, const tpk_cell_rule *rule)
+{
+    int64_t begin = r->offsets[c], n = r->offsets[c + 1] - begin;
+    const int32_t *ids = r->conn + begin;
+    if (rule->kind == TPK_RULE_UNKNOWN)
+        return 0;
+    if (rule->kind != TPK_RULE_DROP && r->types[c] == 42) {
+        int64_t bad_at;
+        char why[200];
+        return tpk_face_stream_check(ids, n, r->point_count, &bad_at, why, sizeof why) == 0;
+    }
+    if ((rule->nodes > 0 && n != rule->nodes) || (rule->nodes < 0 && n < -rule->nodes))
+        return 0;
+    for (int64_t j = 0; j < n; j++)
+        if (ids[j] >= r->point_count)
+            return 0;
+    return 1;
+}
+
+/* The cells checked and counted on all threads: per worker its first bad cell (the smallest of them is
+ * the one the serial loop stopped at), and the counts by type of the cells it drops. */
+typedef struct cell_tally {
+    int64_t dropped[256];
+    int64_t kept, conn_size, first_bad;
+} cell_tally;
+
+typedef struct check_job {
+    const vtk_reader *r;
+    tpk_cell_rule rule[256];
+    cell_tally *tally; /* one per worker */
+} check_job;
+
+static void check_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const check_job *job = ctx;
+    const vtk_reader *r = job->r;
+    cell_tally *t = &job->tally[worker];
+    for (int64_t c = begin; c < end; c++) {
+        const tpk_cell_rule *rule = &job->rule[r->types[c]];
+        if (!cell_ok(r, c, rule)) {
+            t->first_bad = c;
+            return;
+        }
+        if (rule->kind == TPK_RULE_DROP) {
+            t->dropped[r->types[c]]++;
+            continue;
+        }
+        t->kept++;
+        t->conn_size += r->offsets[c + 1] - r->offsets[c];
+    }
+}
+
 static int finish_mesh(vtk_reader *r, tpk_mesh *out)
 {
     if (r->point_count < 0)
@@ -77,18 +131,35 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
         return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a CELL_TYPES section, found end of file");
     int64_t dropped[256] = {0};
     int64_t drop_total = 0, kept = 0, conn_size = 0;
-    for (int64_t c = 0; c < r->cell_count; c++) {
-        tpk_cell_rule rule = tpk_cell_rule_for(r->types[c]);
-        if (check_cell(r, c, &rule))
-            return -1;
-        if (rule.kind == TPK_RULE_DROP) {
-            dropped[r->types[c]]++;
-            drop_total++;
-            continue;
-        }
-        kept++;
-        conn_size += r->offsets[c + 1] - r->offsets[c];
+    int threads = vtk_threads_for((uint64_t)r->cell_count);
+    check_job *job = malloc(sizeof *job);
+    cell_tally *tally = calloc((size_t)threads, sizeof *tally);
+    if (!job || !tally) {
+        free(job), free(tally);
+        return tpk_diag_fail(r->s.diag, "%s: out of memory", r->s.name);
     }
+    job->r = r;
+    job->tally = tally;
+    for (int t = 0; t < 256; t++)
+        job->rule[t] = tpk_cell_rule_for(t);
+    for (int w = 0; w < threads; w++)
+        tally[w].first_bad = INT64_MAX;
+    tpk_parallel_for(r->cell_count, threads, check_range, job);
+    int64_t bad = INT64_MAX;
+    for (int w = 0; w < threads; w++) {
+        bad = tally[w].first_bad < bad ? tally[w].first_bad : bad;
+        kept += tally[w].kept;
+        conn_size += tally[w].conn_size;
+        for (int t = 0; t < 256; t++) {
+            dropped[t] += tally[w].dropped[t];
+            drop_total += tally[w].dropped[t];
+        }
+    }
+    free(tally);
+    int rc = bad != INT64_MAX ? check_cell(r, bad, &job->rule[r->types[bad]]) : 0;
+    free(job);
+    if (rc)
+        return -1;
     if (drop_total)
         tpk_warn_cell_counts(r->s.diag, r->s.name, dropped, drop_total,
                              "dropped cells that are not volumes:");

@@ -2,8 +2,11 @@
  * sections. Point ids are checked to fit an int32 here, against the point count when the mesh is built. */
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "import_vtk_internal.h"
+#include "base/parallel.h"
+#include "base/text_numbers.h"
 #include "base/text_scan.h"
 
 /* Cell index holding connectivity entry k (offsets known and monotone up to there). */
@@ -18,6 +21,134 @@ static int64_t cell_of_entry(const int64_t *offsets, int64_t cells, int64_t k)
             hi = mid;
     }
     return lo;
+}
+
+/* ---- Passes over binary blocks on all threads ---------------------------------------------------- */
+
+/* What the parallel passes below share: each worker scans its contiguous range in order and stops at its
+ * first bad item, so the smallest of the workers' firsts is the item the serial loop stopped at, and the
+ * message stays the same for any thread count. */
+typedef struct block_job {
+    const unsigned char *p; /* the block's first byte */
+    vtk_type type;
+    int64_t *offsets;
+    int32_t *conn;
+    uint8_t *types;
+    const int64_t *values;
+    int64_t each, limit;
+    int64_t first_bad[TPK_MAX_THREADS]; /* per worker; INT64_MAX when none */
+} block_job;
+
+static int64_t run_block_job(block_job *job, int64_t count, tpk_range_fn fn)
+{
+    int threads = vtk_threads_for((uint64_t)count);
+    for (int w = 0; w < threads; w++)
+        job->first_bad[w] = INT64_MAX;
+    tpk_parallel_for(count, threads, fn, job);
+    int64_t first = INT64_MAX;
+    for (int w = 0; w < threads; w++)
+        first = job->first_bad[w] < first ? job->first_bad[w] : first;
+    return first;
+}
+
+/* Old CELLS form where every cell has `each` points, in one pass: the counts checked, the offsets filled,
+ * the ids copied and checked to be >= 0. A worker stops at its first cell with another count or a
+ * negative id (the caller then reads the block the general way, for the message). */
+static void uniform_lists_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    int64_t each = job->each;
+    for (int64_t c = begin; c < end; c++) {
+        const unsigned char *cell = job->p + 4 * (size_t)(c * (each + 1));
+        if ((int32_t)be32(cell) != each) {
+            job->first_bad[worker] = c;
+            return;
+        }
+        int32_t *dst = job->conn + c * each;
+        for (int64_t j = 0; j < each; j++) {
+            int32_t id = (int32_t)be32(cell + 4 + 4 * j);
+            if (id < 0) {
+                job->first_bad[worker] = c;
+                return;
+            }
+            dst[j] = id;
+        }
+        job->offsets[c + 1] = (c + 1) * each;
+    }
+}
+
+/* Old CELLS form, offsets known: each cell's ids (after its count) copied and checked to be >= 0. */
+static void list_ids_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    for (int64_t c = begin; c < end; c++) {
+        const unsigned char *ids = job->p + 4 * (size_t)(job->offsets[c] + c + 1);
+        int32_t *dst = job->conn + job->offsets[c];
+        int64_t count = job->offsets[c + 1] - job->offsets[c];
+        for (int64_t j = 0; j < count; j++) {
+            int32_t id = (int32_t)be32(ids + 4 * j);
+            if (id < 0) {
+                job->first_bad[worker] = c;
+                return;
+            }
+            dst[j] = id;
+        }
+    }
+}
+
+/* CONNECTIVITY (5.1 form): entries converted and checked to lie in [0, INT32_MAX]. */
+static void connectivity_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    const unsigned char *p = job->p;
+    for (int64_t k = begin; k < end; k++) {
+        int64_t id = job->type == VT_I64 ? (int64_t)be64(p + 8 * k)
+                     : job->type == VT_I32 ? (int32_t)be32(p + 4 * k)
+                                           : (int64_t)be_real(p, job->type, (uint64_t)k);
+        if (id < 0 || id > INT32_MAX) {
+            job->first_bad[worker] = k;
+            return;
+        }
+        job->conn[k] = (int32_t)id;
+    }
+}
+
+/* OFFSETS: nondecreasing and at most the CELLS size (job->limit). */
+static void offsets_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    for (int64_t c = begin; c < end; c++)
+        if (job->offsets[c + 1] < job->offsets[c] || job->offsets[c + 1] > job->limit) {
+            job->first_bad[worker] = c;
+            return;
+        }
+}
+
+/* CELL_TYPES: each in [0, 255], kept as a byte. */
+static void types_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    for (int64_t c = begin; c < end; c++) {
+        if (job->values[c] < 0 || job->values[c] > 255) {
+            job->first_bad[worker] = c;
+            return;
+        }
+        job->types[c] = (uint8_t)job->values[c];
+    }
+}
+
+/* CELL_TYPES in a BINARY file: big-endian int32, each in [0, 255]. */
+static void binary_types_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    for (int64_t c = begin; c < end; c++) {
+        int32_t type = (int32_t)be32(job->p + 4 * c);
+        if (type < 0 || type > 255) {
+            job->first_bad[worker] = c;
+            return;
+        }
+        job->types[c] = (uint8_t)type;
+    }
 }
 
 /* ---- POINTS, CELLS, CELL_TYPES ------------------------------------------------------------------ */
@@ -52,6 +183,41 @@ static int id_range_error(vtk_reader *r, int64_t cell, int64_t id)
                             (long long)id);
 }
 
+/* Old form in ASCII, fast path: all `size` numbers read on all threads (each in [0, 2^31-1]), then the
+ * counts walked and the ids copied. 0 when read (r->offsets and r->conn filled, the position after the
+ * block), 1 with nothing read when any number or count is not what the serial reader accepts: it then
+ * reads the block again for its message. */
+static int ascii_cell_lists(vtk_reader *r, int64_t n, int64_t size)
+{
+    if (size < 65536)
+        return 1;
+    int32_t *numbers = malloc(sizeof *numbers * (size_t)size);
+    tpk_scan saved = r->s;
+    if (!numbers || tpk_scan_numbers(&r->s, (uint64_t)size, TPK_NUMBER_ID32, numbers, 0) != 0) {
+        free(numbers);
+        return 1;
+    }
+    int64_t used = 0, k = 0;
+    for (int64_t c = 0; c < n; c++) {
+        int64_t count = used < size ? numbers[used] : -1;
+        if (count < 0 || count > size - used - 1 - (n - c - 1)) {
+            free(numbers);
+            r->s = saved;
+            return 1;
+        }
+        memcpy(r->conn + k, numbers + used + 1, sizeof *numbers * (size_t)count);
+        used += 1 + count;
+        k += count;
+        r->offsets[c + 1] = k;
+    }
+    free(numbers);
+    if (used != size) {
+        r->s = saved;
+        return 1;
+    }
+    return 0;
+}
+
 /* Old form: per cell a count then that many ids; `size` numbers in all. */
 static int read_cell_lists(vtk_reader *r, int64_t n, int64_t size)
 {
@@ -68,27 +234,52 @@ static int read_cell_lists(vtk_reader *r, int64_t n, int64_t size)
     int64_t used = 0, k = 0;
     r->offsets[0] = 0;
     if (r->binary) {
+        /* The cell starts follow from the counts, one after the other, unless every cell has the first
+         * cell's count (a mesh of one cell type), which all threads check at once as they copy the ids.
+         * Otherwise (or where that pass finds a bad count or id) the counts are walked on one thread and
+         * the ids copied and checked on all; a bad count is reported after any bad id of an earlier
+         * cell, as the serial reader found them. */
         const unsigned char *p = r->s.data + r->s.pos;
-        for (int64_t c = 0; c < n; c++) {
+        block_job job = {.p = p, .offsets = r->offsets, .conn = r->conn};
+        int64_t known = n; /* cells whose counts are good */
+        job.each = n > 0 ? (int32_t)be32(p) : -1;
+        if (n > 0 && job.each >= 0 && size % n == 0 && size / n - 1 == job.each &&
+            run_block_job(&job, n, uniform_lists_range) == INT64_MAX) {
+            r->s.pos += 4 * (size_t)size; /* every cell read */
+            return 0;
+        } else {
+            for (int64_t c = 0; c < n; c++) {
+                int64_t count = used < size ? (int32_t)be32(p + 4 * used) : -1;
+                if (count < 0 || count > size - used - 1 - (n - c - 1)) {
+                    known = c;
+                    break;
+                }
+                used += 1 + count;
+                k += count;
+                r->offsets[c + 1] = k;
+            }
+        }
+        int64_t bad = known > 0 ? run_block_job(&job, known, list_ids_range) : INT64_MAX;
+        if (bad != INT64_MAX) {
+            const unsigned char *ids = p + 4 * (size_t)(r->offsets[bad] + bad + 1);
+            for (int64_t j = 0; j < r->offsets[bad + 1] - r->offsets[bad]; j++)
+                if ((int32_t)be32(ids + 4 * j) < 0)
+                    return id_range_error(r, bad, (int32_t)be32(ids + 4 * j));
+        }
+        if (known < n) {
+            int64_t c = known;
             if (used >= size)
                 return vtk_fail_kw(r, "CELLS %lld %lld: the size is used up after %lld of %lld cells", (long long)n,
                                    (long long)size, (long long)c, (long long)n);
             int64_t count = (int32_t)be32(p + 4 * used);
-            if (count < 0 || count > size - used - 1 - (n - c - 1))
-                return tpk_scan_fail_at(&r->s, r->s.pos + 4 * (size_t)used, 0,
-                                        "CELLS: cell %lld has point count %lld, but the CELLS size %lld "
-                                        "leaves room for at most %lld", (long long)c, (long long)count,
-                                        (long long)size, (long long)(size - used - 1 - (n - c - 1)));
-            used++;
-            for (int64_t j = 0; j < count; j++, used++) {
-                int32_t id = (int32_t)be32(p + 4 * used);
-                if (id < 0)
-                    return id_range_error(r, c, id);
-                r->conn[k++] = id;
-            }
-            r->offsets[c + 1] = k;
+            return tpk_scan_fail_at(&r->s, r->s.pos + 4 * (size_t)used, 0,
+                                    "CELLS: cell %lld has point count %lld, but the CELLS size %lld "
+                                    "leaves room for at most %lld", (long long)c, (long long)count,
+                                    (long long)size, (long long)(size - used - 1 - (n - c - 1)));
         }
         r->s.pos += 4 * (size_t)size;
+    } else if (ascii_cell_lists(r, n, size) == 0) {
+        return 0;
     } else {
         for (int64_t c = 0; c < n; c++) {
             int64_t count;
@@ -143,7 +334,9 @@ static int read_offsets_connectivity(vtk_reader *r, int64_t n_offsets, int64_t m
     if (r->offsets[0] != 0)
         return tpk_scan_fail_at(&r->s, offsets_pos, offsets_line, "OFFSETS: expected the first offset 0, found %lld",
                                 (long long)r->offsets[0]);
-    for (int64_t c = 0; c < n; c++)
+    block_job job = {.offsets = r->offsets, .limit = m};
+    int64_t bad = run_block_job(&job, n, offsets_range);
+    for (int64_t c = bad; c < n; c++)
         if (r->offsets[c + 1] < r->offsets[c] || r->offsets[c + 1] > m)
             return tpk_scan_fail_at(&r->s, offsets_pos, offsets_line,
                                     "OFFSETS: cell %lld ends at %lld, expected a value between %lld and %lld",
@@ -172,17 +365,18 @@ static int read_offsets_connectivity(vtk_reader *r, int64_t n_offsets, int64_t m
         return vtk_fail_kw(r, "CONNECTIVITY: out of memory");
     if (r->binary) {
         const unsigned char *p = r->s.data + r->s.pos;
-        for (int64_t k = 0; k < m; k++) {
-            int64_t id = type == VT_I64 ? (int64_t)be64(p + 8 * k)
-                         : type == VT_I32 ? (int32_t)be32(p + 4 * k)
-                                          : (int64_t)be_real(p, type, (uint64_t)k);
-            if (id < 0 || id > INT32_MAX)
-                return id_range_error(r, cell_of_entry(r->offsets, n, k), id);
-            r->conn[k] = (int32_t)id;
-        }
+        block_job cj = {.p = p, .type = type, .conn = r->conn};
+        int64_t k = run_block_job(&cj, m, connectivity_range);
+        if (k != INT64_MAX)
+            return id_range_error(r, cell_of_entry(r->offsets, n, k),
+                                  type == VT_I64 ? (int64_t)be64(p + 8 * k)
+                                  : type == VT_I32 ? (int32_t)be32(p + 4 * k)
+                                                   : (int64_t)be_real(p, type, (uint64_t)k));
         r->s.pos += vtk_bytes_for(type, (uint64_t)m);
         return 0;
     }
+    if (tpk_scan_numbers(&r->s, (uint64_t)m, TPK_NUMBER_ID32, r->conn, 0) == 0)
+        return 0;
     for (int64_t k = 0; k < m; k++) {
         int64_t id;
         const char *t;
@@ -239,15 +433,26 @@ int vtk_read_cell_types(vtk_reader *r)
                            (long long)r->cell_count);
     if (vtk_check_room(r, VT_I32, (uint64_t)n, "CELL_TYPES"))
         return -1;
-    int64_t *values = malloc(sizeof(int64_t) * (size_t)(n ? n : 1));
     r->types = malloc((size_t)(n ? n : 1));
-    if (!values || !r->types) {
-        free(values);
+    if (!r->types)
         return vtk_fail_kw(r, "CELL_TYPES: out of memory");
-    }
     r->type_count = n;
+    if (r->binary) { /* straight from the file's big-endian int32, no int64 copy */
+        block_job job = {.p = r->s.data + r->s.pos, .types = r->types};
+        int64_t bad = run_block_job(&job, n, binary_types_range);
+        if (bad != INT64_MAX)
+            return vtk_fail_kw(r, "CELL_TYPES: cell %lld has unsupported cell type %lld", (long long)bad,
+                               (long long)(int32_t)be32(job.p + 4 * bad));
+        r->s.pos += 4 * (size_t)n;
+        return 0;
+    }
+    int64_t *values = malloc(sizeof(int64_t) * (size_t)(n ? n : 1));
+    if (!values)
+        return vtk_fail_kw(r, "CELL_TYPES: out of memory");
     int rc = vtk_read_ints(r, VT_I32, (uint64_t)n, values, "CELL_TYPES");
-    for (int64_t c = 0; rc == 0 && c < n; c++) {
+    block_job job = {.types = r->types, .values = values};
+    int64_t bad = rc == 0 ? run_block_job(&job, n, types_range) : n;
+    for (int64_t c = bad; rc == 0 && c < n; c++) {
         if (values[c] < 0 || values[c] > 255)
             rc = vtk_fail_kw(r, "CELL_TYPES: cell %lld has unsupported cell type %lld", (long long)c,
                              (long long)values[c]);

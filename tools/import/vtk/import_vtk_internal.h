@@ -107,7 +107,10 @@ int vtk_check_room(vtk_reader *r, vtk_type type, uint64_t count, const char *blo
 /* The message for ASCII value i of count that is missing (len 0) or not a number. */
 int vtk_ascii_value_error(vtk_reader *r, const char *tok, size_t len, const char *block, uint64_t i,
                           uint64_t count);
-/* `count` values of `type` into doubles (d64) or floats (f32); room already checked. */
+/* Threads for a pass over `count` binary values: those of tpk_thread_count(0), one per 64k values at most. */
+int vtk_threads_for(uint64_t count);
+/* `count` values of `type` into doubles (d64) or floats (f32); room already checked. Binary blocks are
+ * converted on vtk_threads_for(count) threads, the same values for any count. */
 int vtk_read_reals(vtk_reader *r, vtk_type type, uint64_t count, double *d64, float *f32, const char *block);
 int vtk_is_integer_type(vtk_type t);
 /* `count` integers into int64 (offsets, cell types); room already checked. */

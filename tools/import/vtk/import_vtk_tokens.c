@@ -5,6 +5,8 @@
 #include <string.h>
 
 #include "import_vtk_internal.h"
+#include "base/parallel.h"
+#include "base/text_numbers.h"
 #include "base/text_scan.h"
 
 static const struct {
@@ -175,29 +177,55 @@ int vtk_ascii_value_error(vtk_reader *r, const char *tok, size_t len, const char
                          (unsigned long long)i + 1, (unsigned long long)count, vtk_quote(tok, len, q, sizeof q));
 }
 
+/* Binary blocks are byte-swapped and converted on all threads (tpk_thread_count(0): convert's --threads),
+ * in contiguous ranges: every value lands where the serial loop put it, whatever the thread count. */
+typedef struct binary_job {
+    const unsigned char *p;
+    vtk_type type;
+    double *d64;
+    float *f32;
+    int64_t *i64;
+} binary_job;
+
+int vtk_threads_for(uint64_t count)
+{
+    return tpk_threads_for((int64_t)count, tpk_thread_count(0), (int64_t)1 << 16);
+}
+
+static void reals_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const binary_job *j = ctx;
+    const unsigned char *p = j->p;
+    (void)worker;
+    if (j->type == VT_F64 && j->d64) {
+        for (int64_t i = begin; i < end; i++)
+            j->d64[i] = be_real(p, VT_F64, (uint64_t)i);
+    } else if (j->type == VT_F32 && j->f32) {
+        for (int64_t i = begin; i < end; i++)
+            j->f32[i] = (float)be_real(p, VT_F32, (uint64_t)i);
+    } else {
+        for (int64_t i = begin; i < end; i++) {
+            double v = be_real(p, j->type, (uint64_t)i);
+            if (j->d64)
+                j->d64[i] = v;
+            else
+                j->f32[i] = (float)v;
+        }
+    }
+}
+
 /* `count` values of `type` into doubles (d64) or floats (f32); room already checked. */
 int vtk_read_reals(vtk_reader *r, vtk_type type, uint64_t count, double *d64, float *f32, const char *block)
 {
     if (r->binary) {
-        const unsigned char *p = r->s.data + r->s.pos;
-        if (type == VT_F64 && d64) {
-            for (uint64_t i = 0; i < count; i++)
-                d64[i] = be_real(p, VT_F64, i);
-        } else if (type == VT_F32 && f32) {
-            for (uint64_t i = 0; i < count; i++)
-                f32[i] = (float)be_real(p, VT_F32, i);
-        } else {
-            for (uint64_t i = 0; i < count; i++) {
-                double v = be_real(p, type, i);
-                if (d64)
-                    d64[i] = v;
-                else
-                    f32[i] = (float)v;
-            }
-        }
+        binary_job job = {r->s.data + r->s.pos, type, d64, f32, NULL};
+        tpk_parallel_for((int64_t)count, vtk_threads_for(count), reals_range, &job);
         r->s.pos += vtk_bytes_for(type, count);
         return 0;
     }
+    /* ASCII: on all threads where the block reads cleanly, else token by token for the message */
+    if (tpk_scan_numbers(&r->s, count, d64 ? TPK_NUMBER_F64 : TPK_NUMBER_F32, d64 ? (void *)d64 : (void *)f32, 0) == 0)
+        return 0;
     for (uint64_t i = 0; i < count; i++) {
         const char *tok;
         size_t len = tpk_scan_token(&r->s, &tok);
@@ -217,28 +245,39 @@ int vtk_is_integer_type(vtk_type t)
     return t != VT_F32 && t != VT_F64;
 }
 
+static void ints_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const binary_job *j = ctx;
+    const unsigned char *p = j->p;
+    int64_t *dst = j->i64;
+    (void)worker;
+    for (int64_t i = begin; i < end; i++) {
+        switch (j->type) {
+        case VT_I32: dst[i] = (int32_t)be32(p + 4 * i); break;
+        case VT_I64: dst[i] = (int64_t)be64(p + 8 * i); break;
+        case VT_U64: {
+            uint64_t u = be64(p + 8 * i);
+            dst[i] = u > INT64_MAX ? -1 : (int64_t)u;
+            break;
+        }
+        default: dst[i] = (int64_t)be_real(p, j->type, (uint64_t)i); break;
+        }
+    }
+}
+
 /* `count` integers into int64 (offsets, cell types); room already checked. */
 int vtk_read_ints(vtk_reader *r, vtk_type type, uint64_t count, int64_t *dst, const char *block)
 {
     if (!vtk_is_integer_type(type))
         return tpk_scan_fail(&r->s, "%s: expected an integer data type, found a floating-point one", block);
     if (r->binary) {
-        const unsigned char *p = r->s.data + r->s.pos;
-        for (uint64_t i = 0; i < count; i++) {
-            switch (type) {
-            case VT_I32: dst[i] = (int32_t)be32(p + 4 * i); break;
-            case VT_I64: dst[i] = (int64_t)be64(p + 8 * i); break;
-            case VT_U64: {
-                uint64_t u = be64(p + 8 * i);
-                dst[i] = u > INT64_MAX ? -1 : (int64_t)u;
-                break;
-            }
-            default: dst[i] = (int64_t)be_real(p, type, i); break;
-            }
-        }
+        binary_job job = {r->s.data + r->s.pos, type, NULL, NULL, dst};
+        tpk_parallel_for((int64_t)count, vtk_threads_for(count), ints_range, &job);
         r->s.pos += vtk_bytes_for(type, count);
         return 0;
     }
+    if (tpk_scan_numbers(&r->s, count, TPK_NUMBER_I64, dst, 0) == 0)
+        return 0;
     for (uint64_t i = 0; i < count; i++) {
         const char *tok;
         size_t len = tpk_scan_token(&r->s, &tok);
