@@ -72,7 +72,7 @@ bool trans_piece(float t_in, float t_out, float s_in, float s_out)
         trans_tau += optical_depth(len, normalized(s_in), normalized(s_out));
     }
     for (int i = 0; i < hits; i++)
-        trans_iso *= 1.0 - P.light.w;
+        trans_iso *= 1.0 - TPK_VK_ISO_OPACITY;
     return exp(-trans_tau) * trans_iso <= OPAQUE_TRANSMITTANCE || status != TPK_VK_STATUS_OK;
 }
 
@@ -171,10 +171,10 @@ vec3 ao_axis(bool has_n, vec3 n)
     return has_n ? (dot(n, ray_dir) > 0.0 ? -n : n) : -ray_dir;
 }
 
-// AO ray i of P.cast_count.x around unit axis a (render.h: AO DIRECTIONS).
+// AO ray i of TPK_VK_AO_RAYS around unit axis a (render.h: AO DIRECTIONS).
 vec3 ao_direction(vec3 x, vec3 a, int i)
 {
-    int count = P.cast_count.x;
+    int count = TPK_VK_AO_RAYS;
     float sgn = a.z >= 0.0 ? 1.0 : -1.0;
     float p = -1.0 / (sgn + a.z), q = a.x * a.y * p;
     vec3 b1 = vec3(1.0 + sgn * a.x * a.x * p, sgn * q, -sgn * a.x), b2 = vec3(q, sgn + a.y * a.y * p, -a.y);
@@ -215,12 +215,12 @@ void ask_cast(vec3 x, bool has_n, vec3 n)
 // k counts the shadow ray (SHADOWS) then the AO rays (AO) of cast 0, then of cast 1, ...
 int cast_ray_count()
 {
-    return cast_asked * ((SHADOWS ? 1 : 0) + (AO ? P.cast_count.x : 0));
+    return cast_asked * ((SHADOWS ? 1 : 0) + (AO ? TPK_VK_AO_RAYS : 0));
 }
 
 void cast_one(int k)
 {
-    const int per = (SHADOWS ? 1 : 0) + (AO ? P.cast_count.x : 0);
+    const int per = (SHADOWS ? 1 : 0) + (AO ? TPK_VK_AO_RAYS : 0);
     const int i = k / per, j = k - i * per;
     if (j == 0) {
         cast_S[i] = 1.0;
@@ -238,7 +238,7 @@ void cast_one(int k)
         w /= len;
     } else {
         w = ao_direction(x, ao_axis(cast_has_n[i], cast_n[i]), j - (SHADOWS ? 1 : 0));
-        len = P.cast_info.x;
+        len = TPK_VK_AO_RADIUS;
     }
     uint rays = secondary_rays, taken = steps_taken;
     float T = 1.0;
@@ -253,7 +253,7 @@ void cast_one(int k)
     else
         cast_A[i] += T;
     if (AO && j == per - 1)
-        cast_A[i] /= float(P.cast_count.x);
+        cast_A[i] /= float(TPK_VK_AO_RAYS);
     if (!AO)
         cast_A[i] = 1.0;
 }
@@ -291,7 +291,7 @@ void composite_iso(float t, float v, bool has_n, vec3 n, ivec4 tet)
         m = lighting_factor(x, has_n, n, S, A);
     }
     vec4 c = tf_eval(normalized(v));
-    float alpha = P.light.w;
+    float alpha = TPK_VK_ISO_OPACITY;
     color += transmittance * alpha * m * c.rgb;
     transmittance *= 1.0 - alpha;
 }

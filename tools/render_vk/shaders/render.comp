@@ -63,15 +63,15 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
     vec4 background; // straight RGBA
     vec4 scalar_map; // x: range_min, y: 1 / (range_max - range_min) or 0, z: 1 / unit_distance
     ivec4 dims;      // width, height, first row of this dispatch, TF point count
-    ivec4 mode;      // x: tet count, y: vertex count, z: integration (0 exact, 1 sampled),
+    ivec4 mode;      // x: tet count, y: vertex count, z: TPK_VK_INTEGRATION (0 exact, 1 sampled, 2 midpoint),
                      // w: scalars (0 none, 1 per point, 2 per tet)
     vec4 clip_lo;    // xyz: clip box (relative to the origin); w: 1 when clipping
     vec4 clip_hi;
     ivec4 shell_info; // x: shell face count, y: iso value count, z: CULL: the range BVH's first leaf node
     vec4 iso;         // iso values (scalar units)
-    vec4 light;       // xyz: point light (relative to the origin; the eye without one); w: iso opacity
-    vec4 cast_info;   // x: AO ray length, y: TPK_RENDER_SELF_EPS * unit distance, z: unit distance
-    ivec4 cast_count; // x: AO rays; y: the row after this dispatch's rows (a band need not be whole groups);
+    vec4 light;       // xyz: point light (relative to the origin; the eye without one); w: TPK_VK_ISO_OPACITY
+    vec4 cast_info;   // x: TPK_VK_AO_RADIUS, y: TPK_RENDER_SELF_EPS * unit distance, z: unit distance
+    ivec4 cast_count; // x: TPK_VK_AO_RAYS; y: the row after this dispatch's rows (a band need not be whole groups);
                       // z: the slice (SLICED: 0 starts the band's rays, later ones resume them)
     ivec4 probe_info;   // x: probe count; y: bit i set when probe i cuts
     vec4 probe_a[TPK_VK_MAX_PROBES]; // xyz: center, point or min (relative to the origin); w: shape
@@ -79,6 +79,8 @@ layout(std140, set = 0, binding = TPK_VK_BIND_PARAMS) uniform Params {
     vec4 tf_s[TPK_VK_TF_MAX / 4];
     vec4 tf_rgba[TPK_VK_TF_MAX];
 } P;
+// TPK_VK_<ID>: where Params holds an option of render/render_options.def (generated at build time).
+#include "render_options.glsl"
 
 layout(std430, set = 0, binding = TPK_VK_BIND_PIXELS) writeonly buffer Pixels { uint pixels[]; };
 layout(std430, set = 0, binding = TPK_VK_BIND_COUNTERS) buffer Counters { uint counters[TPK_VK_COUNT_WORDS]; };

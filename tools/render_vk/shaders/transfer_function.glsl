@@ -165,9 +165,9 @@ void integrate(float len, float u0, float u1)
 {
     if (!(len > 0.0))
         return;
-    if (P.mode.z == 1)
+    if (TPK_VK_INTEGRATION == 1)
         integrate_sampled(len, u0, u1);
-    else if (P.mode.z == 2)
+    else if (TPK_VK_INTEGRATION == 2)
         composite_sample(len, 0.5 * (u0 + u1));
     else
         integrate_exact(len, u0, u1);
