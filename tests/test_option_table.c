@@ -167,6 +167,10 @@ TPK_TEST(value_rules_are_the_table)
                           r->scene_key, v);
             }
             CHECK(!tpk_option_number_ok(r->id, NAN) && !tpk_option_number_ok(r->id, r->lo - 1));
+        } else if (r->kind == TPK_OPT_KIND_BOOL) { /* a switch on the command line, true or false in a scene */
+            CHECK_MSG(r->flag && !r->metavar, "%s: a switch takes no value", r->flag ? r->flag : r->scene_key);
+            CHECK(scene_with(r->scene_key, "true", &d) == 0 && scene_with(r->scene_key, "false", &d) == 0);
+            CHECK(scene_with(r->scene_key, "1", &d) == -1 && strstr(d.message, "expected true or false"));
         } else {
             char name[32];
             int n = 0;

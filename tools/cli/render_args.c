@@ -1,6 +1,7 @@
 /* The options of tetpack render and tetpack view: the option table and its parsers, the scene merge, and
  * render_args_to_options, the one place the parsed arguments become render options (render_args.h). */
 #include <math.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,8 +13,19 @@ void render_args_default(render_args *a)
 {
     memset(a, 0, sizeof *a);
     a->width = a->height = 512;
-    a->max_pixel_step = 8;
+#define TPK_USE(init, ...) init
+#define TPK_OPTION(ID, name, kind, R, A, S, rule, cli, key, use, vk) TPK_IF(A, a->name = use;)
+#include "render/render_options.def"
+#undef TPK_OPTION
+#undef TPK_USE
 }
+
+/* The table's options that are fields of render_args (A = 1): where each one is, by row. */
+#define TPK_OPTION(ID, name, kind, R, A, S, ...) TPK_IF(A, [TPK_OPT_##ID] = offsetof(render_args, name) + 1,)
+static const size_t args_at[TPK_OPT_COUNT] = {
+#include "render/render_options.def"
+};
+#undef TPK_OPTION
 
 static int parse_size(const char *text, int *w, int *h)
 {
@@ -68,9 +80,6 @@ static int opt_output(const char *v, render_args *a) { a->output = v; return 0; 
 static int opt_size(const char *v, render_args *a) { return parse_size(v, &a->width, &a->height); }
 static int opt_tf(const char *v, render_args *a) { a->tf = v; return 0; }
 static int opt_field(const char *v, render_args *a) { a->field = v; return 0; }
-static int opt_json(const char *v, render_args *a) { (void)v; a->json = 1; return 0; }
-static int opt_shading(const char *v, render_args *a) { (void)v; a->shading = 1; return 0; }
-static int opt_shadows(const char *v, render_args *a) { (void)v; a->shadows = 1; return 0; }
 
 static int opt_camera(const char *v, render_args *a)
 {
@@ -114,30 +123,9 @@ static int opt_layout(const char *v, render_args *a)
     return tpk_option_choice(TPK_OPT_LAYOUT, v) < 0 ? -1 : 0;
 }
 
-static int opt_unit(const char *v, render_args *a)
-{
-    return number_option(TPK_OPT_UNIT_DISTANCE, v, &a->unit_distance);
-}
-
-static int opt_integration(const char *v, render_args *a)
-{
-    a->integration = tpk_option_choice(TPK_OPT_INTEGRATION, v); /* TPK_INTEGRATION_* order */
-    return a->integration < 0 ? -1 : 0;
-}
-
 static int opt_scene(const char *v, render_args *a) { (void)v; (void)a; return 0; } /* read by render_args_merge_scene */
 static int opt_save_scene(const char *v, render_args *a) { a->save_scene = v; return 0; }
 static int opt_save_tpk(const char *v, render_args *a) { a->save_tpk = v; return 0; }
-static int opt_legend(const char *v, render_args *a) { (void)v; a->legend = 1; return 0; }
-static int opt_verbose(const char *v, render_args *a) { (void)v; a->verbose = 1; return 0; }
-static int opt_iso_raster(const char *v, render_args *a) { (void)v; a->iso_raster = 1; return 0; }
-static int opt_level(const char *v, render_args *a) { return int_option(TPK_OPT_LEVEL, v, &a->level); }
-static int opt_max_ms(const char *v, render_args *a) { return number_option(TPK_OPT_MAX_MS, v, &a->max_ms); }
-static int opt_max_pixel_step(const char *v, render_args *a)
-{
-    return int_option(TPK_OPT_MAX_PIXEL_STEP, v, &a->max_pixel_step);
-}
-static int opt_threads(const char *v, render_args *a) { return int_option(TPK_OPT_THREADS, v, &a->threads); }
 static int opt_backend(const char *v, render_args *a)
 {
     a->backend = v;
@@ -152,11 +140,6 @@ static int opt_iso(const char *v, render_args *a)
         return 0;
     }
     return parse_list(v, a->iso, TPK_RENDER_MAX_ISO, &a->iso_count);
-}
-
-static int opt_iso_opacity(const char *v, render_args *a)
-{
-    return number_option(TPK_OPT_ISO_OPACITY, v, &a->iso_opacity);
 }
 
 static int opt_clip(const char *v, render_args *a)
@@ -187,20 +170,26 @@ static int opt_light(const char *v, render_args *a)
     return tpk_cli_parse_doubles(v, a->light, 3);
 }
 
-static int opt_ao(const char *v, render_args *a) { return int_option(TPK_OPT_AO_RAYS, v, &a->ao_rays); }
-
-static int opt_ao_radius(const char *v, render_args *a)
+/* A row of the table that is a field of render_args (args_at), by its kind and rule. */
+static int table_option(tpk_option_id id, const char *v, render_args *a)
 {
-    return number_option(TPK_OPT_AO_RADIUS, v, &a->ao_radius);
+    char *field = (char *)a + args_at[id] - 1;
+    switch (tpk_option_table[id].kind) {
+    case TPK_OPT_KIND_INT:
+        return int_option(id, v, (int *)field);
+    case TPK_OPT_KIND_NUMBER:
+        return number_option(id, v, (double *)field);
+    case TPK_OPT_KIND_CHOICE: /* the index of the choice: the order of the values (TPK_INTEGRATION_*, ...) */
+        return (*(int *)field = tpk_option_choice(id, v)) < 0 ? -1 : 0;
+    case TPK_OPT_KIND_BOOL:
+        *(int *)field = 1;
+        return 0;
+    default:
+        return -1;
+    }
 }
 
-static int opt_occlusion(const char *v, render_args *a)
-{
-    a->occlusion = tpk_option_choice(TPK_OPT_OCCLUSION, v); /* TPK_OCCLUSION_* order */
-    return a->occlusion < 0 ? -1 : 0;
-}
-
-/* The parser of each row of the option table (scene/option_table.h) that has a flag. */
+/* The parser of each other row of the option table (scene/option_table.h) that has a flag. */
 typedef int (*option_parser)(const char *value, render_args *a);
 static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_OUTPUT] = opt_output,
@@ -212,30 +201,14 @@ static const option_parser parsers[TPK_OPT_COUNT] = {
     [TPK_OPT_STEPS] = opt_steps,
     [TPK_OPT_RANGE] = opt_range,
     [TPK_OPT_LAYOUT] = opt_layout,
-    [TPK_OPT_UNIT_DISTANCE] = opt_unit,
-    [TPK_OPT_INTEGRATION] = opt_integration,
-    [TPK_OPT_THREADS] = opt_threads,
     [TPK_OPT_BACKEND] = opt_backend,
-    [TPK_OPT_JSON] = opt_json,
     [TPK_OPT_ISO] = opt_iso,
-    [TPK_OPT_ISO_OPACITY] = opt_iso_opacity,
     [TPK_OPT_CLIP_BOX] = opt_clip,
     [TPK_OPT_PROBE] = opt_probe,
-    [TPK_OPT_SHADING] = opt_shading,
-    [TPK_OPT_SHADOWS] = opt_shadows,
     [TPK_OPT_LIGHT] = opt_light,
-    [TPK_OPT_AO_RAYS] = opt_ao,
-    [TPK_OPT_AO_RADIUS] = opt_ao_radius,
-    [TPK_OPT_OCCLUSION] = opt_occlusion,
     [TPK_OPT_SCENE] = opt_scene,
     [TPK_OPT_SAVE_SCENE] = opt_save_scene,
-    [TPK_OPT_LEGEND] = opt_legend,
     [TPK_OPT_SAVE_TPK] = opt_save_tpk,
-    [TPK_OPT_VERBOSE] = opt_verbose,
-    [TPK_OPT_ISO_RASTER] = opt_iso_raster,
-    [TPK_OPT_LEVEL] = opt_level,
-    [TPK_OPT_MAX_MS] = opt_max_ms,
-    [TPK_OPT_MAX_PIXEL_STEP] = opt_max_pixel_step,
 };
 
 const tpk_option_row *render_args_find_option(const char *arg)
@@ -261,9 +234,9 @@ int render_args_parse_option(const char *cmd, int argc, char **argv, int *i, ren
                                    : NULL;
         if (o->metavar && !v)
             return tpk_cli_fail(cmd, "%s expects %s", o->flag, o->expects);
-        if (!parsers[o->id]) /* a row given a flag but no parser here: a bug, said as such */
+        if (!args_at[o->id] && !parsers[o->id]) /* a row given a flag but no parser here: a bug, said as such */
             return tpk_cli_fail(cmd, "%s: no parser for this option (tools/cli/render_args.c)", o->flag);
-        if (parsers[o->id](v, a))
+        if (args_at[o->id] ? table_option(o->id, v, a) : parsers[o->id](v, a))
             return tpk_cli_fail(cmd, "%s expects %s, found '%s'", o->flag, o->expects, v ? v : "");
     } else if (arg[0] == '-' && arg[1]) {
         return tpk_cli_fail(cmd, "unknown option '%s' (see tetpack %s --help)", arg, cmd);
@@ -393,25 +366,20 @@ void render_args_to_options(const render_args *a, tpk_file *file, const tpk_tran
         render_args_field_range(file, a->field, range);
     opt->range_min = range[0];
     opt->range_max = range[1];
-    opt->unit_distance = a->unit_distance > 0 ? a->unit_distance
-                                              : render_args_default_unit(info.bounds_min, info.bounds_max);
-    opt->threads = a->threads;
-    opt->integration = a->integration;
     opt->iso_count = a->iso_count;
     memcpy(opt->iso, a->iso, sizeof opt->iso);
-    opt->iso_opacity = a->iso_opacity;
     opt->clip = a->clip;
     memcpy(opt->clip_min, a->clip_box, sizeof opt->clip_min);
     memcpy(opt->clip_max, a->clip_box + 3, sizeof opt->clip_max);
     opt->probe_count = a->probe_count;
     memcpy(opt->probes, a->probes, sizeof opt->probes);
-    opt->shading = a->shading;
-    opt->shadows = a->shadows;
     opt->have_light = a->have_light;
     memcpy(opt->light, a->light, sizeof opt->light);
-    opt->ao_rays = a->ao_rays;
-    opt->ao_radius = a->ao_radius;
-    opt->occlusion = a->occlusion;
+#define TPK_OPTION(ID, name, kind, R, A, ...) TPK_IF(R, TPK_IF(A, opt->name = a->name;))
+#include "render/render_options.def"
+#undef TPK_OPTION
+    opt->unit_distance = a->unit_distance > 0 ? a->unit_distance
+                                              : render_args_default_unit(info.bounds_min, info.bounds_max);
 }
 
 double render_args_default_unit(const double bounds_min[3], const double bounds_max[3])
@@ -546,8 +514,6 @@ int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args 
     a->have_steps = s->step_range;
     a->layout = !(s->given & TPK_SCENE_LAYOUT) ? NULL : s->layout == TPK_LAYOUT_TET16 ? "tet16"
                                                : s->layout == TPK_LAYOUT_TET20 ? "tet20" : "tet32";
-    a->unit_distance = s->unit_distance;
-    a->integration = s->integration;
     a->clip = (s->given & TPK_SCENE_CLIP) != 0;
     memcpy(a->clip_box, s->clip_min, sizeof s->clip_min);
     memcpy(a->clip_box + 3, s->clip_max, sizeof s->clip_max);
@@ -555,14 +521,11 @@ int render_args_merge_scene(const char *cmd, int argc, char **argv, render_args 
     memcpy(a->probes, s->probes, sizeof a->probes);
     a->iso_count = s->iso_count;
     memcpy(a->iso, s->iso, sizeof a->iso);
-    a->iso_opacity = s->iso_opacity;
-    a->shading = s->shading;
-    a->shadows = s->shadows;
     a->have_light = (s->given & TPK_SCENE_LIGHT) != 0;
     memcpy(a->light, s->light, sizeof a->light);
-    a->ao_rays = s->ao_rays;
-    a->ao_radius = s->ao_radius;
-    a->occlusion = s->occlusion;
+#define TPK_OPTION(ID, name, kind, R, A, S, ...) TPK_IF(A, TPK_IF(S, a->name = s->name;))
+#include "render/render_options.def"
+#undef TPK_OPTION
     return 0;
 }
 

@@ -15,32 +15,33 @@ typedef struct render_args {
     const char *path, *output, *tf, *field, *layout;
     int width, height;
     int step, step_last, have_steps; /* --step N (step_last = step) or --steps A:B */
-    int threads, json, have_camera, have_range, integration;
-    double camera[10], range[2], unit_distance;
+    int have_camera, have_range;
+    double camera[10], range[2];
     int iso_count;
-    double iso[TPK_RENDER_MAX_ISO], iso_opacity;
+    double iso[TPK_RENDER_MAX_ISO];
     int clip;
     double clip_box[6]; /* x0,y0,z0,x1,y1,z1 */
     int probe_count, probes_from_cli; /* the first --probe replaces the scene's probes, later ones add */
     tpk_probe probes[TPK_RENDER_MAX_PROBES];
-    int shading, shadows, have_light, ao_rays, occlusion;
-    double light[3], ao_radius; /* ao_radius 0: the renderer's default */
+    int have_light;
+    double light[3];
     const char *scene_path, *save_scene; /* --scene, --save-scene */
     const char *save_tpk;                /* --save-tpk: keep the conversion of a mesh that is not a .tpk */
-    int legend, verbose;                 /* --legend, -v */
-    int iso_raster;                      /* --iso-raster: the isosurfaces drawn as triangles (Vulkan) */
-    int level;                           /* --level K: level of detail K (0: the full mesh) */
-    double max_ms;                       /* --max-ms T: the time budget (0: none) */
-    int max_pixel_step;                  /* --max-pixel-step D (default 8) */
     int iso_auto;                        /* --iso auto: one isosurface at the field's median (render_args_iso_auto) */
     const char *backend;                 /* --backend vulkan|cpu; NULL: decided per render */
     int backend_from_scene;              /* backend is the scene's: without a device, the CPU (same picture) */
     char device[256];                    /* the Vulkan device's name, or "cpu" */
     char backend_reason[256];            /* why that backend (render/render_backend.h) */
     tpk_scene scene;                     /* what --scene gave (scene.given = 0 without one) */
+    /* The table's options (render/render_options.def, A = 1), parsed by their kind and rule: the render
+     * options (0: the renderer's default), --json, --legend, -v, --iso-raster, --level, --max-ms (0: no
+     * budget), --max-pixel-step (default 8). */
+#define TPK_OPTION TPK_OPTION_FIELD_A
+#include "render/render_options.def"
+#undef TPK_OPTION
 } render_args;
 
-/* Defaults: 512x512, step 0, everything else off. */
+/* Defaults: 512x512, step 0, the table's options their `init`, everything else off. */
 void render_args_default(render_args *a);
 
 /* Fill `opt` (after tpk_render_options_default) from the arguments: size, camera (the default 3/4 view of

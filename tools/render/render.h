@@ -8,6 +8,7 @@
 
 #include "base/diag.h"
 #include "tetpack.h"
+#include "render_options.h"
 #include "transfer_function.h"
 
 typedef struct tpk_camera {
@@ -44,17 +45,21 @@ typedef struct tpk_probe {
 } tpk_probe;
 
 /* Render options. tpk_render_options_default fills friendly defaults; a zero-initialised struct
- * (plus width, height, camera and tf) also works: then the background is transparent black. */
+ * (plus width, height, camera and tf) also works: then the background is transparent black. The fields
+ * of the rows of render_options.def with R = 1 come from that table; for them zero is the default:
+ * unit_distance (TF alpha is opacity per this distance; <= 0: bbox diagonal / 100), threads (<= 0: all
+ * cores), integration (TPK_INTEGRATION_EXACT 0; _SAMPLED 1: samples at the midpoints of equal steps of
+ * at most unit_distance / 2, at least 1 per piece; _MIDPOINT 2: one sample per piece at its midpoint),
+ * iso_opacity (of an isosurface hit; <= 0: 1, opaque), shading (gradient Lambert, two-sided), shadows
+ * (transmittance toward the point light), ao_rays (ambient occlusion with this many hemisphere rays, at
+ * most TPK_RENDER_MAX_AO_RAYS; 0: off), ao_radius (AO ray length; <= 0: bounds diagonal / 10) and
+ * occlusion (where shadow and AO rays start: TPK_OCCLUSION_RAY 0 at the shade points of every primary
+ * ray, TPK_OCCLUSION_VERTEX 1 at the mesh vertices, once per frame, interpolated; below). */
 typedef struct tpk_render_options {
     int width, height;             /* pixels, 1 .. TPK_RENDER_MAX_SIZE each */
     tpk_camera camera;
     const tpk_transfer_function *tf;
     double range_min, range_max;   /* scalar range mapped to TF s in [0,1]; equal: every scalar -> 0.5 */
-    double unit_distance;          /* TF alpha is opacity per this distance; <= 0: bbox diagonal / 100 */
-    int threads;                   /* <= 0: all cores */
-    int integration;               /* TPK_INTEGRATION_EXACT (0, default), _SAMPLED (1: samples at the
-                                      midpoints of equal steps of at most unit_distance / 2, at least 1
-                                      per piece), _MIDPOINT (2: one sample per piece at its midpoint) */
     float background[4];           /* RGBA, straight alpha, composited behind the volume */
     /* ---- Effects (zero: off). Both backends (CPU reference, Vulkan) implement each one with the
      * same definition, so their pictures agree; the definitions live in render.h's comments and in
@@ -63,21 +68,16 @@ typedef struct tpk_render_options {
                                       point scalars of the mesh for colour, opacity and iso */
     int iso_count;                 /* 0..TPK_RENDER_MAX_ISO exact isosurfaces of the linear scalar */
     double iso[4];                 /* iso values (in scalar units, not TF units) */
-    double iso_opacity;            /* opacity of an isosurface hit; <= 0: 1 (opaque) */
     int clip;                      /* nonzero: only the volume inside [clip_min, clip_max] shows */
     double clip_min[3], clip_max[3];
-    int shading;                   /* gradient (Lambert, two-sided) shading of volume and isosurfaces */
-    int shadows;                   /* transmittance toward the point light, marched through the volume */
     int have_light;                /* zero: a headlight at the camera eye */
     double light[3];               /* point light position, world coordinates */
-    int ao_rays;                   /* ambient occlusion with this many hemisphere rays (at most
-                                      TPK_RENDER_MAX_AO_RAYS); 0: off */
-    double ao_radius;              /* AO ray length; <= 0: bounds diagonal / 10 */
-    int occlusion;                 /* where shadow and AO rays start: TPK_OCCLUSION_RAY (0, default: at
-                                      the shade points of every primary ray) or TPK_OCCLUSION_VERTEX (1:
-                                      at the mesh vertices, once per frame, interpolated; below) */
     int probe_count;               /* 0..TPK_RENDER_MAX_PROBES CSG probes (PROBES below) */
     tpk_probe probes[TPK_RENDER_MAX_PROBES_];
+    /* The table's options (render_options.def, R = 1). */
+#define TPK_OPTION TPK_OPTION_FIELD_R
+#include "render_options.def"
+#undef TPK_OPTION
 } tpk_render_options;
 
 #define TPK_RENDER_MAX_ISO 4

@@ -8,14 +8,23 @@
 #include "render_internal.h"
 #include "transfer_function.h"
 
+/* The options of the table (render_options.def) that the vertex cache keys. */
+enum {
+    TABLE_OPTIONS = 0
+#define TPK_OPTION(ID, name, kind, R, ...) +R
+#include "render_options.def"
+#undef TPK_OPTION
+};
+
 /* What one half depends on, zeroed and then filled, so that equal inputs compare equal bytewise. */
 typedef struct cache_key {
     const tpk_mesh_arrays *mesh; /* the arrays' identity: */
     const float *positions, *scalars, *tet_scalars;
     uint64_t vertex_count, tet_count;
     tpk_transfer_function tf;
-    double range[2], unit_distance, iso[TPK_RENDER_MAX_ISO], iso_opacity, clip[6], light[3], ao_radius;
-    int integration, iso_count, clip_on, probe_count, shadows, ao_rays;
+    double range[2], iso[TPK_RENDER_MAX_ISO], clip[6], light[3];
+    double option[TABLE_OPTIONS]; /* each table option's value where half `which` depends on it, else 0 */
+    int iso_count, clip_on, probe_count;
     tpk_probe probes[TPK_RENDER_MAX_PROBES];
 } cache_key;
 
@@ -27,7 +36,19 @@ struct tpk_vertex_cache {
     render_keep keep; /* the marcher and range trees of the frames */
 };
 
-/* Half `which` (0: S, 1: A): the light and shadows for S only, the AO rays and radius for A only. */
+/* The table's options half `which` depends on (TPK_USE's cache column, where its `when` holds). */
+static void key_options(const tpk_render_options *opt, int which, cache_key *k)
+{
+    int n = 0;
+#define TPK_USE(init, when, always, cache, ...) ((TPK_OPTION_CACHE_##cache >> which & 1) && (when))
+#define TPK_OPTION(ID, name, kind, R, A, S, rule, cli, key, use, vk) \
+    TPK_IF(R, k->option[n++] = use ? (double)opt->name : 0;)
+#include "render_options.def"
+#undef TPK_OPTION
+#undef TPK_USE
+}
+
+/* Half `which` (0: S, 1: A): the light for S only (and the table's options of each half). */
 static void key_of(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, int which, cache_key *k)
 {
     memset(k, 0, sizeof *k);
@@ -42,25 +63,17 @@ static void key_of(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, i
         memcpy(k->tf.points, opt->tf->points, sizeof k->tf.points[0] * (size_t)opt->tf->count);
     }
     k->range[0] = opt->range_min, k->range[1] = opt->range_max;
-    k->unit_distance = opt->unit_distance;
-    k->integration = opt->integration;
     k->iso_count = opt->iso_count;
     memcpy(k->iso, opt->iso, sizeof k->iso);
-    k->iso_opacity = opt->iso_opacity;
     k->clip_on = opt->clip;
     if (opt->clip)
         for (int i = 0; i < 3; i++)
             k->clip[i] = opt->clip_min[i], k->clip[3 + i] = opt->clip_max[i];
     k->probe_count = opt->probe_count;
     memcpy(k->probes, opt->probes, sizeof k->probes[0] * (size_t)opt->probe_count);
-    if (which == 0) {
-        k->shadows = opt->shadows;
-        for (int i = 0; i < 3 && opt->shadows; i++) /* a headlight is the eye: it moves with the camera */
-            k->light[i] = opt->have_light ? opt->light[i] : opt->camera.eye[i];
-    } else {
-        k->ao_rays = opt->ao_rays;
-        k->ao_radius = opt->ao_rays > 0 ? opt->ao_radius : 0;
-    }
+    key_options(opt, which, k);
+    for (int i = 0; i < 3 && which == 0 && opt->shadows; i++) /* a headlight is the eye: it moves with the camera */
+        k->light[i] = opt->have_light ? opt->light[i] : opt->camera.eye[i];
 }
 
 tpk_vertex_cache *tpk_vertex_cache_create(void)

@@ -1,6 +1,7 @@
 /* The one check of tpk_render_options that every backend makes before it renders: the values a renderer
  * cannot use are refused, not clamped, with the same message whichever backend is asked. Pure. */
 #include <math.h>
+#include <stddef.h>
 
 #include "render.h"
 
@@ -17,9 +18,6 @@ static int check_image(const tpk_render_options *opt, tpk_diag *diag)
                              opt->width, opt->height);
     if (!opt->tf || opt->tf->count < 1 || opt->tf->count > TPK_TF_MAX_POINTS)
         return tpk_diag_fail(diag, "render: a transfer function with at least one point is required");
-    if (opt->integration < TPK_INTEGRATION_EXACT || opt->integration > TPK_INTEGRATION_MIDPOINT)
-        return tpk_diag_fail(diag, "render: expected integration 0 (exact), 1 (sampled) or 2 (midpoint), found %d",
-                             opt->integration);
     if (!isfinite(opt->range_min) || !isfinite(opt->range_max))
         return tpk_diag_fail(diag, "render: the scalar range must be finite");
     return 0;
@@ -60,8 +58,6 @@ static int check_effects(const tpk_render_options *opt, tpk_diag *diag)
     for (int j = 0; j < opt->iso_count; j++)
         if (!isfinite(opt->iso[j]))
             return tpk_diag_fail(diag, "render: iso value %d is not finite", j + 1);
-    if (!isfinite(opt->iso_opacity) || opt->iso_opacity > 1)
-        return tpk_diag_fail(diag, "render: expected an iso opacity <= 1, found %g", opt->iso_opacity);
     if (opt->clip && (!finite3(opt->clip_min) || !finite3(opt->clip_max)))
         return tpk_diag_fail(diag, "render: the clip box must be finite");
     for (int k = 0; opt->clip && k < 3; k++)
@@ -75,12 +71,44 @@ static int check_effects(const tpk_render_options *opt, tpk_diag *diag)
             return -1;
     if (opt->have_light && !finite3(opt->light))
         return tpk_diag_fail(diag, "render: the light position must be finite");
-    if (opt->ao_rays < 0 || opt->ao_rays > TPK_RENDER_MAX_AO_RAYS)
-        return tpk_diag_fail(diag, "render: expected 0..%d AO rays, found %d", TPK_RENDER_MAX_AO_RAYS, opt->ao_rays);
-    if (opt->occlusion != TPK_OCCLUSION_RAY && opt->occlusion != TPK_OCCLUSION_VERTEX)
-        return tpk_diag_fail(diag, "render: expected occlusion ray (0) or vertex (1), found %d", opt->occlusion);
-    if (!isfinite(opt->ao_radius))
-        return tpk_diag_fail(diag, "render: the AO radius must be finite");
+    return 0;
+}
+
+/* The range every renderer accepts for each option of the table (render_options.def, TPK_USE's check
+ * columns; a double must also be finite), in the table's order. */
+typedef struct table_check {
+    size_t at; /* the field's offset in tpk_render_options */
+    int real;  /* a double, else an int */
+    double lo, hi;
+    const char *message; /* printf form of the value; NULL: no check */
+} table_check;
+
+#define TPK_USE(init, when, always, cache, lo, hi, message) lo, hi, message
+#define TPK_OPTION(ID, name, kind, R, A, S, rule, cli, key, use, vk) \
+    TPK_IF(R, {offsetof(tpk_render_options, name), TPK_OPTION_REAL_##kind, use},)
+static const table_check table_checks[] = {
+#include "render_options.def"
+};
+#undef TPK_OPTION
+#undef TPK_USE
+
+static int check_table(const tpk_render_options *opt, tpk_diag *diag)
+{
+    for (size_t i = 0; i < sizeof table_checks / sizeof table_checks[0]; i++) {
+        const table_check *c = &table_checks[i];
+        const char *field = (const char *)opt + c->at;
+        if (!c->message)
+            continue;
+        if (c->real) {
+            double v = *(const double *)field;
+            if (!isfinite(v) || v < c->lo || v > c->hi)
+                return tpk_diag_fail(diag, c->message, v);
+        } else {
+            int v = *(const int *)field;
+            if (v < c->lo || v > c->hi)
+                return tpk_diag_fail(diag, c->message, v);
+        }
+    }
     return 0;
 }
 
@@ -89,7 +117,7 @@ int tpk_render_check_options(const tpk_render_options *opt, tpk_diag *diag)
     if (!opt)
         return tpk_diag_fail(diag, "render: options are required");
     tpk_camera_basis basis;
-    if (check_image(opt, diag) != 0 || check_effects(opt, diag) != 0)
+    if (check_image(opt, diag) != 0 || check_effects(opt, diag) != 0 || check_table(opt, diag) != 0)
         return -1;
     return tpk_camera_basis_of(&opt->camera, opt->width, opt->height, &basis, diag);
 }

@@ -54,18 +54,18 @@ static void composite_iso(ray_state *ray, const tpk_segment *seg, double t, doub
 {
     const render_job *job = ray->job;
     double m = 1.0;
-    if (job->lighting) {
+    if (job->setup.lighting) {
         double x[3], s = 1.0, a = 1.0;
         point_at(ray, t, x);
         if (job->vertex_s)
             rl_vertex_lookup(job, seg, x, &s, &a);
-        else if (job->cast)
+        else if (job->setup.cast)
             rl_cast(ray, x, n, &s, &a);
         m = rl_factor(ray, x, n, s, a);
     }
     double c[4];
     tpk_tf_eval(job->opt->tf, ri_normalized(job, v), c);
-    double alpha = job->iso_opacity;
+    double alpha = job->setup.iso_opacity;
     for (int k = 0; k < 3; k++)
         ray->color[k] += ray->transmittance * alpha * m * c[k];
     ray->transmittance *= 1.0 - alpha;
@@ -79,7 +79,7 @@ static void light_piece(ray_state *ray, const tpk_segment *seg, const double *n,
     point_at(ray, 0.5 * (seg->t_in + seg->t_out), mid);
     if (job->vertex_s)
         rl_vertex_lookup(job, seg, mid, &ray->shade_s, &ray->shade_a);
-    else if (job->cast && ri_optical_depth(job, length, u_in, u_out) > 0 &&
+    else if (job->setup.cast && ri_optical_depth(job, length, u_in, u_out) > 0 &&
         (!ray->cast_done || ray->t_cast - ray->transmittance >= TPK_RENDER_SHADE_STEP)) {
         rl_cast(ray, mid, n, &ray->shade_s, &ray->shade_a);
         ray->cast_done = 1;
@@ -107,10 +107,10 @@ static int on_segment(void *user, const tpk_segment *seg)
     ray->prev_s = s_in;
 
     double n[3], fn[3];
-    const double *np = job->lighting && rl_tet_normal(job, seg, n) ? n : NULL;
+    const double *np = job->setup.lighting && rl_tet_normal(job, seg, n) ? n : NULL;
     const double u_in = ri_normalized(job, s_in), u_out = ri_normalized(job, s_out);
     ray->m = 1.0;
-    if (job->lighting && seg->t_out > seg->t_in)
+    if (job->setup.lighting && seg->t_out > seg->t_in)
         light_piece(ray, seg, np, u_in, u_out);
     /* the volume up to each hit, the hit, then the rest of the piece */
     double cur_t = seg->t_in, cur_u = u_in;
@@ -120,7 +120,7 @@ static int on_segment(void *user, const tpk_segment *seg)
         ri_integrate(ray, hits[i].t - cur_t, cur_u, hit_u);
         const double *hn = np;
         if (tet_field)
-            hn = job->lighting && rl_face_normal(job, seg, fn) ? fn : NULL;
+            hn = job->setup.lighting && rl_face_normal(job, seg, fn) ? fn : NULL;
         double m = ray->m;
         composite_iso(ray, seg, hits[i].t, v, hn);
         ray->m = m;
@@ -358,15 +358,7 @@ static int setup_job(render_job *job, int has_point_scalars, double diagonal, co
                         opt->integration != TPK_INTEGRATION_MIDPOINT;
     for (int i = 0; opt->tf && i < opt->tf->count; i++)
         job->clear_volume &= opt->tf->points[i].a == 0.0;
-    job->range_min = setup.range_min;
-    job->inv_range = setup.inv_range;
-    job->unit = setup.unit;
-    job->inv_unit = setup.inv_unit;
-    job->ao_radius = setup.ao_radius;
-    job->iso_opacity = setup.iso_opacity;
-    job->cast = setup.cast;
-    job->lighting = setup.lighting;
-    memcpy(job->light, setup.light, sizeof job->light);
+    job->setup = setup;
     memcpy(job->eye, opt->camera.eye, sizeof job->eye);
     memcpy(job->forward, setup.basis.forward, sizeof job->forward);
     memcpy(job->right, setup.basis.right, sizeof job->right);
@@ -555,10 +547,10 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     int rc = 0;
     float *cache = NULL;
     uint64_t cache_counts[2] = {0, 0}; /* steps, secondary rays */
-    if (job->cast && opt->occlusion == TPK_OCCLUSION_VERTEX && given_s && given_a) {
+    if (job->setup.cast && opt->occlusion == TPK_OCCLUSION_VERTEX && given_s && given_a) {
         job->vertex_s = given_s;
         job->vertex_a = given_a;
-    } else if (job->cast && opt->occlusion == TPK_OCCLUSION_VERTEX) {
+    } else if (job->setup.cast && opt->occlusion == TPK_OCCLUSION_VERTEX) {
         cache = malloc(2 * sizeof *cache * (mesh->vertex_count ? mesh->vertex_count : 1));
         if (!cache) {
             rc = tpk_diag_fail(diag, "render: out of memory for the vertex cache");

@@ -10,16 +10,16 @@
 
 double ri_normalized(const render_job *job, double scalar)
 {
-    if (!job->has_scalars || job->inv_range == 0)
+    if (!job->has_scalars || job->setup.inv_range == 0)
         return 0.5;
-    return (scalar - job->range_min) * job->inv_range;
+    return (scalar - job->setup.range_min) * job->setup.inv_range;
 }
 
 /* Add a stretch of length h over which color and extinction go linearly from (c0,k0) to (c1,k1), in
  * steps of optical depth at most MAX_PIECE_DEPTH. */
 static void integrate_linear(ray_state *ray, double h, const double c0[4], const double c1[4])
 {
-    const double inv_unit = ray->job->inv_unit;
+    const double inv_unit = ray->job->setup.inv_unit;
     double depth = h * 0.5 * (c0[3] + c1[3]) * inv_unit;
     if (!(depth > 0))
         return;
@@ -75,7 +75,7 @@ static void composite_sample(ray_state *ray, double step, double u)
 {
     double c[4];
     tpk_tf_eval(ray->job->opt->tf, u, c);
-    double alpha = 1.0 - exp(-step * c[3] * ray->job->inv_unit);
+    double alpha = 1.0 - exp(-step * c[3] * ray->job->setup.inv_unit);
     for (int k = 0; k < 3; k++)
         ray->color[k] += ray->m * ray->transmittance * alpha * c[k];
     ray->transmittance *= 1.0 - alpha;
@@ -84,7 +84,7 @@ static void composite_sample(ray_state *ray, double step, double u)
 /* Sampling: midpoints of equal steps no longer than unit_distance / 2. */
 static void integrate_sampled(ray_state *ray, double length, double s0, double s1)
 {
-    double max_step = 0.5 * ray->job->unit;
+    double max_step = 0.5 * ray->job->setup.unit;
     int n = (int)ceil(length / max_step);
     n = n < 1 ? 1 : n > 4096 ? 4096 : n;
     double step = length / n;
@@ -112,7 +112,7 @@ double ri_optical_depth(const render_job *job, double length, double u0, double 
     double c[4];
     tpk_tf_eval(tf, u0, c);
     if (u0 == u1)
-        return length * c[3] * job->inv_unit;
+        return length * c[3] * job->setup.inv_unit;
     const double du = u1 - u0;
     double prev_u = u0, prev_a = c[3], sum = 0.0; /* integral of alpha over u, trapezoids between points */
     for (int i = 0; i < tf->count; i++) {
@@ -127,7 +127,7 @@ double ri_optical_depth(const render_job *job, double length, double u0, double 
     }
     tpk_tf_eval(tf, u1, c);
     sum += 0.5 * (prev_a + c[3]) * (u1 - prev_u);
-    return length * (sum / du) * job->inv_unit;
+    return length * (sum / du) * job->setup.inv_unit;
 }
 
 /* Insert (t, j) keeping increasing t, then j. */

@@ -41,14 +41,7 @@ typedef struct render_job {
     const float *tet_scalars;  /* opt->tet_scalars (a tet field) or NULL */
     int has_scalars;           /* a point or a tet field */
     int clear_volume;          /* exact integration of a TF with opacity 0 everywhere: a stretch adds nothing */
-    double range_min;
-    double inv_range;          /* 1 / (range_max - range_min), 0 when the range is empty */
-    double unit, inv_unit;     /* unit_distance and its inverse */
-    double iso_opacity;        /* opt->iso_opacity, or 1 where it is <= 0 */
-    double ao_radius;
-    double light[3];           /* the point light, or the eye */
-    int lighting;              /* shading, shadows or AO: m is computed */
-    int cast;                  /* shadows or AO: shade points cast secondary rays */
+    tpk_render_setup setup;    /* what every backend derives from the options (render.h) */
     const float *vertex_s, *vertex_a; /* TPK_OCCLUSION_VERTEX: S_v and A_v per vertex (NULL: ray) */
     double eye[3], forward[3], right[3], up[3];
     double tan_half_y, tan_half_x;

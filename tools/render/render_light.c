@@ -160,7 +160,7 @@ static int on_trans_segment(void *user, const tpk_segment *seg)
         tr->tau += ri_optical_depth(job, len, ri_normalized(job, seg->scalar_in), ri_normalized(job, seg->scalar_out));
     }
     for (int i = 0; i < n; i++)
-        tr->iso *= 1.0 - job->iso_opacity;
+        tr->iso *= 1.0 - job->setup.iso_opacity;
     return exp(-tr->tau) * tr->iso <= TPK_RENDER_OPAQUE_T;
 }
 
@@ -169,7 +169,7 @@ static double transmittance(ray_state *ray, const double x[3], const double w[3]
 {
     const render_job *job = ray->job;
     double lo = 0.0, hi = len;
-    trans_ray tr = {job, 0.0, 1.0, TPK_RENDER_SELF_EPS * job->unit, 0, 0.0, 0.0};
+    trans_ray tr = {job, 0.0, 1.0, TPK_RENDER_SELF_EPS * job->setup.unit, 0, 0.0, 0.0};
     rl_spans sp;
     tpk_segment_fn fn = on_trans_segment;
     void *user = &tr;
@@ -212,7 +212,7 @@ static double ambient(ray_state *ray, const double x[3], const double a[3])
         double w[3];
         for (int k = 0; k < 3; k++)
             w[k] = r * cos(phi) * b1[k] + r * sin(phi) * b2[k] + z * a[k];
-        sum += transmittance(ray, x, w, job->ao_radius);
+        sum += transmittance(ray, x, w, job->setup.ao_radius);
     }
     return sum / count;
 }
@@ -223,7 +223,7 @@ void rl_cast(ray_state *ray, const double x[3], const double *n, double *s, doub
     *s = 1.0;
     *a = 1.0;
     if (job->opt->shadows) {
-        double w[3] = {job->light[0] - x[0], job->light[1] - x[1], job->light[2] - x[2]};
+        double w[3] = {job->setup.light[0] - x[0], job->setup.light[1] - x[1], job->setup.light[2] - x[2]};
         double len = sqrt(dot3(w, w));
         if (len > 0) {
             for (int k = 0; k < 3; k++)
@@ -255,7 +255,7 @@ static void cache_vertex(ray_state *ray, uint32_t v, const double p[3], float *s
     const render_job *job = ray->job;
     double sv = 1.0, av = 1.0;
     if (job->opt->shadows) {
-        double w[3] = {job->light[0] - p[0], job->light[1] - p[1], job->light[2] - p[2]};
+        double w[3] = {job->setup.light[0] - p[0], job->setup.light[1] - p[1], job->setup.light[2] - p[2]};
         double len = sqrt(dot3(w, w));
         if (len > 0) {
             for (int k = 0; k < 3; k++)
@@ -271,7 +271,7 @@ static void cache_vertex(ray_state *ray, uint32_t v, const double p[3], float *s
             double f = i * 0.6180339887498949 + rot;
             double phi = 2.0 * M_PI * (f - floor(f));
             const double w[3] = {r * cos(phi), r * sin(phi), z};
-            sum += transmittance(ray, p, w, job->ao_radius);
+            sum += transmittance(ray, p, w, job->setup.ao_radius);
         }
         av = sum / count;
     }
@@ -348,7 +348,7 @@ double rl_factor(const ray_state *ray, const double x[3], const double *n, doubl
 {
     const render_job *job = ray->job;
     double d = 1.0, l[3];
-    const double to_light[3] = {job->light[0] - x[0], job->light[1] - x[1], job->light[2] - x[2]};
+    const double to_light[3] = {job->setup.light[0] - x[0], job->setup.light[1] - x[1], job->setup.light[2] - x[2]};
     if (job->opt->shading && n && unit_or_none(to_light, l))
         d = fabs(dot3(n, l));
     return a * (TPK_RENDER_AMBIENT + (1.0 - TPK_RENDER_AMBIENT) * d * s);

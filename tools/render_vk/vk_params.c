@@ -60,16 +60,13 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     p->scalar_map[0] = (float)setup.range_min;
     p->scalar_map[1] = (float)setup.inv_range;
     p->scalar_map[2] = (float)setup.inv_unit;
-    p->cast_info[0] = (float)setup.ao_radius;
     p->cast_info[1] = (float)(TPK_RENDER_SELF_EPS * setup.unit);
     p->cast_info[2] = (float)setup.unit;
-    p->cast_count[0] = opt->ao_rays;
     p->dims[0] = opt->width;
     p->dims[1] = opt->height;
     p->dims[3] = opt->tf->count;
     p->mode[0] = (int32_t)mesh->tet_count;
     p->mode[1] = (int32_t)mesh->vertex_count;
-    p->mode[2] = opt->integration;
     p->mode[3] = opt->tet_scalars ? 2 : mesh->scalars ? 1 : 0;
     if (opt->clip) {
         for (int k = 0; k < 3; k++) {
@@ -95,7 +92,15 @@ int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *op
         p->iso[j] = (float)opt->iso[j];
     for (int k = 0; k < 3; k++) /* render.h: LIGHT, the eye without a light */
         p->light[k] = opt->have_light ? (float)(setup.light[k] - mesh->origin[k]) : p->eye[k];
-    p->light[3] = (float)setup.iso_opacity;
+    /* The table's options (render/render_options.def, TPK_VK): the AO rays and length, the iso opacity,
+     * the integration, where the shader reads them (TPK_VK_<ID>, render_options.glsl). */
+#define TPK_VK(member, index, value) p->member[index] = (value);
+#define TPK_VK_NONE
+#define TPK_OPTION(ID, name, kind, R, A, S, rule, cli, key, use, vk) TPK_IF(R, vk)
+#include "render/render_options.def"
+#undef TPK_OPTION
+#undef TPK_VK
+#undef TPK_VK_NONE
     for (int i = 0; i < opt->tf->count; i++) {
         const tpk_tf_point *t = &opt->tf->points[i];
         p->tf_s[i] = (float)t->s;

@@ -1,8 +1,8 @@
-/* The options of a render, one row each: the table that the command line (cli/render_args.c: its option
- * parser, its messages, render's and view's --help), the scene reader and writer (scene_parse.c,
- * scene_write.c: every key, and the ranges and choices of the values, the command line's too) and the
- * scene spec's key table (spec/scene-json.md §2, compared row by row by tests/test_option_table.c) all
- * come from. It lives here, the lowest folder the command line and the
+/* The options of a render, one row each (declared in render/render_options.def): the table that the
+ * command line (cli/render_args.c: its option parser, its messages, render's and view's --help), the scene
+ * reader and writer (scene_parse.c, scene_write.c: every key, and the ranges and choices of the values,
+ * the command line's too) and the scene spec's key table (spec/scene-json.md §2, compared row by row by
+ * tests/test_option_table.c) all come from. It lives here, the lowest folder the command line and the
  * scene files share; which values a renderer accepts is render/'s tpk_render_check_options. */
 #ifndef TPK_SCENE_OPTION_TABLE_H
 #define TPK_SCENE_OPTION_TABLE_H
@@ -12,48 +12,9 @@
 /* One id per row, in the table's order (the scene spec's order, then the options of the command line
  * alone). */
 typedef enum tpk_option_id {
-    TPK_OPT_VERSION,
-    TPK_OPT_CAMERA,
-    TPK_OPT_CAMERA_EYE,
-    TPK_OPT_CAMERA_AT,
-    TPK_OPT_CAMERA_UP,
-    TPK_OPT_CAMERA_FOVY,
-    TPK_OPT_TF,
-    TPK_OPT_TF_PRESET,
-    TPK_OPT_TF_FILE,
-    TPK_OPT_TF_POINTS,
-    TPK_OPT_FIELD,
-    TPK_OPT_STEP,
-    TPK_OPT_STEPS,
-    TPK_OPT_RANGE,
-    TPK_OPT_UNIT_DISTANCE,
-    TPK_OPT_CLIP_BOX,
-    TPK_OPT_PROBE,
-    TPK_OPT_ISO,
-    TPK_OPT_ISO_OPACITY,
-    TPK_OPT_EFFECTS,
-    TPK_OPT_SHADING,
-    TPK_OPT_SHADOWS,
-    TPK_OPT_LIGHT,
-    TPK_OPT_AO_RAYS,
-    TPK_OPT_AO_RADIUS,
-    TPK_OPT_OCCLUSION,
-    TPK_OPT_LAYOUT,
-    TPK_OPT_SIZE,
-    TPK_OPT_BACKEND,
-    TPK_OPT_INTEGRATION,
-    TPK_OPT_OUTPUT,
-    TPK_OPT_THREADS,
-    TPK_OPT_SCENE,
-    TPK_OPT_SAVE_SCENE,
-    TPK_OPT_JSON,
-    TPK_OPT_LEGEND,
-    TPK_OPT_SAVE_TPK,
-    TPK_OPT_VERBOSE,
-    TPK_OPT_ISO_RASTER,
-    TPK_OPT_LEVEL,
-    TPK_OPT_MAX_MS,
-    TPK_OPT_MAX_PIXEL_STEP,
+#define TPK_OPTION(ID, ...) TPK_OPT_##ID,
+#include "render/render_options.def"
+#undef TPK_OPTION
     TPK_OPT_COUNT
 } tpk_option_id;
 
@@ -63,7 +24,8 @@ typedef enum tpk_option_kind {
     TPK_OPT_KIND_OTHER = 0, /* checked by its own parser (lists, files, names) */
     TPK_OPT_KIND_INT,       /* an integer in [lo, hi] */
     TPK_OPT_KIND_NUMBER,    /* a finite number in lo..hi, each end open or closed */
-    TPK_OPT_KIND_CHOICE     /* one of `choices` */
+    TPK_OPT_KIND_CHOICE,    /* one of `choices` */
+    TPK_OPT_KIND_BOOL       /* a switch on the command line, true or false in a scene */
 } tpk_option_kind;
 
 typedef struct tpk_option_row {
@@ -80,11 +42,17 @@ typedef struct tpk_option_row {
     /* Scene file (scene_key NULL: none); the other four are the spec table's columns. */
     const char *scene_key; /* "effects.ao_rays": a key of the object in key "effects" */
     const char *scene_type, *meaning, *scene_default, *constraint;
+    const char *scene_expects; /* a NUMBER's rule in the scene reader's messages ("a positive length") */
     /* The value's rule (both front ends). */
     tpk_option_kind kind;
     double lo, hi;          /* INT and NUMBER */
     int lo_open, hi_open;   /* NUMBER: lo < v (not <=), v < hi */
     const char *choices;    /* CHOICE: space-separated, in the order of the values they stand for */
+    /* Where the value goes: a field of tpk_render_options, render_args (cli/), tpk_scene. */
+    int in_render, in_args, in_scene;
+    int save_always;        /* a saved scene always has it (else when > 0 where it matters) */
+    size_t scene_at;        /* in_scene: its offset in tpk_scene */
+    double init;            /* render_args' default */
 } tpk_option_row;
 
 /* The table: TPK_OPT_COUNT rows, row i has id i. */

@@ -6,43 +6,40 @@
 #ifndef TPK_SCENE_H
 #define TPK_SCENE_H
 
+#include <stdint.h>
+
 #include "base/diag.h"
 #include "render/render.h"
 #include "render/transfer_function.h"
+#include "option_table.h"
 
 #define TPK_SCENE_VERSION 1
 
-/* Which keys a scene gives (tpk_scene.given): a key a scene leaves out leaves the renderer's
- * default, or the command line's value, in place. */
-enum {
-    TPK_SCENE_CAMERA = 1u << 0,
-    TPK_SCENE_TF = 1u << 1,
-    TPK_SCENE_FIELD = 1u << 2,
-    TPK_SCENE_STEP = 1u << 3,  /* "step" or "steps": step_first..step_last */
-    TPK_SCENE_RANGE = 1u << 4,
-    TPK_SCENE_UNIT_DISTANCE = 1u << 5,
-    TPK_SCENE_CLIP = 1u << 6,
-    TPK_SCENE_ISO = 1u << 7,
-    TPK_SCENE_ISO_OPACITY = 1u << 8,
-    TPK_SCENE_SHADING = 1u << 9,
-    TPK_SCENE_SHADOWS = 1u << 10,
-    TPK_SCENE_LIGHT = 1u << 11,
-    TPK_SCENE_AO_RAYS = 1u << 12,
-    TPK_SCENE_AO_RADIUS = 1u << 13,
-    TPK_SCENE_LAYOUT = 1u << 14,
-    TPK_SCENE_SIZE = 1u << 15,
-    TPK_SCENE_BACKEND = 1u << 16,
-    TPK_SCENE_INTEGRATION = 1u << 17,
-    TPK_SCENE_OCCLUSION = 1u << 18,
-    TPK_SCENE_PROBES = 1u << 19,
-};
+/* Which keys a scene gives (tpk_scene.given): one bit per row of the option table, TPK_SCENE_GIVEN(id). A
+ * key a scene leaves out leaves the renderer's default, or the command line's value, in place. */
+#define TPK_SCENE_GIVEN(id) ((uint64_t)1 << (id))
+#define TPK_SCENE_CAMERA TPK_SCENE_GIVEN(TPK_OPT_CAMERA)
+#define TPK_SCENE_TF TPK_SCENE_GIVEN(TPK_OPT_TF)
+#define TPK_SCENE_FIELD TPK_SCENE_GIVEN(TPK_OPT_FIELD)
+#define TPK_SCENE_STEP TPK_SCENE_GIVEN(TPK_OPT_STEP) /* "step" or "steps": step_first..step_last */
+#define TPK_SCENE_RANGE TPK_SCENE_GIVEN(TPK_OPT_RANGE)
+#define TPK_SCENE_UNIT_DISTANCE TPK_SCENE_GIVEN(TPK_OPT_UNIT_DISTANCE)
+#define TPK_SCENE_CLIP TPK_SCENE_GIVEN(TPK_OPT_CLIP_BOX)
+#define TPK_SCENE_PROBES TPK_SCENE_GIVEN(TPK_OPT_PROBE)
+#define TPK_SCENE_ISO TPK_SCENE_GIVEN(TPK_OPT_ISO)
+#define TPK_SCENE_LIGHT TPK_SCENE_GIVEN(TPK_OPT_LIGHT)
+#define TPK_SCENE_LAYOUT TPK_SCENE_GIVEN(TPK_OPT_LAYOUT)
+#define TPK_SCENE_SIZE TPK_SCENE_GIVEN(TPK_OPT_SIZE)
+#define TPK_SCENE_BACKEND TPK_SCENE_GIVEN(TPK_OPT_BACKEND)
+#define TPK_SCENE_AO_RAYS TPK_SCENE_GIVEN(TPK_OPT_AO_RAYS)
+#define TPK_SCENE_AO_RADIUS TPK_SCENE_GIVEN(TPK_OPT_AO_RADIUS)
 
 typedef enum tpk_scene_tf_kind { TPK_SCENE_TF_PRESET = 1, TPK_SCENE_TF_FILE = 2, TPK_SCENE_TF_POINTS = 3 } tpk_scene_tf_kind;
 typedef enum tpk_scene_backend { TPK_SCENE_BACKEND_CPU = 1, TPK_SCENE_BACKEND_VULKAN = 2 } tpk_scene_backend;
 
 /* A parsed scene: plain values, nothing to free. Values whose bit is not in `given` are zero. */
 typedef struct tpk_scene {
-    unsigned given;                /* TPK_SCENE_* bits */
+    uint64_t given;                /* TPK_SCENE_GIVEN bits */
     tpk_camera camera;
     tpk_scene_tf_kind tf_kind;
     char tf_source[1024];          /* preset name, or the file path resolved against the scene's folder */
@@ -51,22 +48,20 @@ typedef struct tpk_scene {
     int step_first, step_last;     /* "step": N gives N..N; "steps": [A, B] gives A..B */
     int step_range;                /* 1 when the scene says "steps" (an animation), 0 for "step" */
     double range[2];
-    double unit_distance;
     double clip_min[3], clip_max[3];
     int probe_count;               /* 1..TPK_RENDER_MAX_PROBES when TPK_SCENE_PROBES is given */
     tpk_probe probes[TPK_RENDER_MAX_PROBES];
     int iso_count;
     double iso[TPK_RENDER_MAX_ISO];
-    double iso_opacity;
-    int shading, shadows;
     double light[3];
-    int ao_rays;
-    double ao_radius;
-    int occlusion;                 /* TPK_OCCLUSION_RAY or _VERTEX (render.h) */
     tpk_layout layout;
     int width, height;
     tpk_scene_backend backend;
-    int integration;               /* TPK_INTEGRATION_EXACT, _SAMPLED or _MIDPOINT (render.h) */
+    /* The table's options (render/render_options.def, S = 1): the unit distance, the iso opacity, the
+     * effects' switches and values, occlusion and integration. */
+#define TPK_OPTION TPK_OPTION_FIELD_S
+#include "render/render_options.def"
+#undef TPK_OPTION
 } tpk_scene;
 
 /* Read and parse the scene file at `path`. Relative "tf": {"file": ...} paths are taken from the

@@ -3,6 +3,33 @@
 
 #include "scene.h"
 
+/* The options of the table (render/render_options.def) that are both render options and scene keys:
+ * applied where the scene gives them; saved always, or where they matter (the row's `when`) and are > 0. */
+static void apply_table(const tpk_scene *s, tpk_render_options *opt)
+{
+#define TPK_OPTION(ID, name, kind, R, A, S, ...)                                                               \
+    TPK_IF(R, TPK_IF(S, if (s->given & TPK_SCENE_GIVEN(TPK_OPT_##ID)) opt->name = s->name;))
+#include "render/render_options.def"
+#undef TPK_OPTION
+}
+
+static void table_from(const tpk_render_options *opt, tpk_scene *out)
+{
+#define TPK_USE(init, when, always, ...) always, when
+#define SAVED(name, ...) SAVED_(name, __VA_ARGS__)
+#define SAVED_(name, always, when) ((always) || ((when) && opt->name > 0))
+#define TPK_OPTION(ID, name, kind, R, A, S, rule, cli, key, use, vk) \
+    TPK_IF(R, TPK_IF(S, if (SAVED(name, use)) {                                                               \
+        out->given |= TPK_SCENE_GIVEN(TPK_OPT_##ID);                                                          \
+        out->name = opt->name;                                                                                \
+    }))
+#include "render/render_options.def"
+#undef TPK_OPTION
+#undef TPK_USE
+#undef SAVED
+#undef SAVED_
+}
+
 static void apply_effects(const tpk_scene *s, tpk_render_options *opt)
 {
     if (s->given & TPK_SCENE_CLIP) {
@@ -18,22 +45,10 @@ static void apply_effects(const tpk_scene *s, tpk_render_options *opt)
         opt->iso_count = s->iso_count;
         memcpy(opt->iso, s->iso, sizeof opt->iso);
     }
-    if (s->given & TPK_SCENE_ISO_OPACITY)
-        opt->iso_opacity = s->iso_opacity;
-    if (s->given & TPK_SCENE_SHADING)
-        opt->shading = s->shading;
-    if (s->given & TPK_SCENE_SHADOWS)
-        opt->shadows = s->shadows;
     if (s->given & TPK_SCENE_LIGHT) {
         opt->have_light = 1;
         memcpy(opt->light, s->light, sizeof opt->light);
     }
-    if (s->given & TPK_SCENE_AO_RAYS)
-        opt->ao_rays = s->ao_rays;
-    if (s->given & TPK_SCENE_AO_RADIUS)
-        opt->ao_radius = s->ao_radius;
-    if (s->given & TPK_SCENE_OCCLUSION)
-        opt->occlusion = s->occlusion;
 }
 
 void tpk_scene_apply(const tpk_scene *s, tpk_render_options *opt)
@@ -46,15 +61,12 @@ void tpk_scene_apply(const tpk_scene *s, tpk_render_options *opt)
         opt->range_min = s->range[0];
         opt->range_max = s->range[1];
     }
-    if (s->given & TPK_SCENE_UNIT_DISTANCE)
-        opt->unit_distance = s->unit_distance;
-    if (s->given & TPK_SCENE_INTEGRATION)
-        opt->integration = s->integration;
     if (s->given & TPK_SCENE_SIZE) {
         opt->width = s->width;
         opt->height = s->height;
     }
     apply_effects(s, opt);
+    apply_table(s, opt);
 }
 
 /* A preset whose points are exactly these is written by name. */
@@ -89,25 +101,9 @@ static void effects_from(const tpk_render_options *opt, tpk_scene *out)
         out->iso_count = opt->iso_count;
         memcpy(out->iso, opt->iso, sizeof out->iso);
     }
-    if (opt->iso_count > 0 && opt->iso_opacity > 0) {
-        out->given |= TPK_SCENE_ISO_OPACITY;
-        out->iso_opacity = opt->iso_opacity;
-    }
-    out->shading = opt->shading != 0;
-    out->shadows = opt->shadows != 0;
-    out->given |= (opt->shading ? TPK_SCENE_SHADING : 0) | (opt->shadows ? TPK_SCENE_SHADOWS : 0);
     if (opt->have_light) {
         out->given |= TPK_SCENE_LIGHT;
         memcpy(out->light, opt->light, sizeof out->light);
-    }
-    if (opt->ao_rays > 0) {
-        out->given |= TPK_SCENE_AO_RAYS | (opt->ao_radius > 0 ? TPK_SCENE_AO_RADIUS : 0);
-        out->ao_rays = opt->ao_rays;
-        out->ao_radius = opt->ao_radius > 0 ? opt->ao_radius : 0;
-    }
-    if (opt->occlusion != TPK_OCCLUSION_RAY) {
-        out->given |= TPK_SCENE_OCCLUSION;
-        out->occlusion = opt->occlusion;
     }
 }
 
@@ -115,8 +111,7 @@ void tpk_scene_from_options(const tpk_render_options *opt, const char *field, in
                             tpk_scene *out)
 {
     memset(out, 0, sizeof *out);
-    out->given = TPK_SCENE_CAMERA | TPK_SCENE_INTEGRATION | TPK_SCENE_SIZE | TPK_SCENE_STEP |
-                 TPK_SCENE_LAYOUT | TPK_SCENE_BACKEND;
+    out->given = TPK_SCENE_CAMERA | TPK_SCENE_SIZE | TPK_SCENE_STEP | TPK_SCENE_LAYOUT | TPK_SCENE_BACKEND;
     out->camera = opt->camera;
     if (opt->tf) {
         out->given |= TPK_SCENE_TF;
@@ -132,14 +127,10 @@ void tpk_scene_from_options(const tpk_render_options *opt, const char *field, in
         out->range[0] = opt->range_min;
         out->range[1] = opt->range_max;
     }
-    if (opt->unit_distance > 0) {
-        out->given |= TPK_SCENE_UNIT_DISTANCE;
-        out->unit_distance = opt->unit_distance;
-    }
-    out->integration = opt->integration;
     out->width = opt->width;
     out->height = opt->height;
     out->layout = layout;
     out->backend = TPK_SCENE_BACKEND_CPU; /* the only renderer this build has */
     effects_from(opt, out);
+    table_from(opt, out);
 }

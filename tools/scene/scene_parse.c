@@ -352,11 +352,6 @@ static int key_range(parser *p, const cJSON *v)
     return 0;
 }
 
-static int key_unit_distance(parser *p, const cJSON *v)
-{
-    return ruled_number(p, v, "unit_distance", TPK_OPT_UNIT_DISTANCE, "a positive number", &p->out->unit_distance);
-}
-
 static int key_clip_box(parser *p, const cJSON *v)
 {
     double b[6];
@@ -436,9 +431,23 @@ static int key_iso(parser *p, const cJSON *v)
     return numbers(p, v, "iso", n, "an array of finite iso values", p->out->iso);
 }
 
-static int key_iso_opacity(parser *p, const cJSON *v)
+/* A key of a row of the table that is a field of tpk_scene (in_scene): read by its kind and rule. */
+static int table_value(parser *p, const cJSON *v, tpk_option_id id)
 {
-    return ruled_number(p, v, "iso_opacity", TPK_OPT_ISO_OPACITY, "a number in (0, 1]", &p->out->iso_opacity);
+    const tpk_option_row *r = &tpk_option_table[id];
+    char *field = (char *)p->out + r->scene_at;
+    switch (r->kind) {
+    case TPK_OPT_KIND_INT:
+        return integer(p, v, r->scene_key, id, (int *)field);
+    case TPK_OPT_KIND_NUMBER:
+        return ruled_number(p, v, r->scene_key, id, r->scene_expects, (double *)field);
+    case TPK_OPT_KIND_BOOL:
+        return boolean(p, v, r->scene_key, (int *)field);
+    case TPK_OPT_KIND_CHOICE: /* the index of the choice: the order of the values (TPK_INTEGRATION_*, ...) */
+        return choice(p, v, r->scene_key, id, (int *)field);
+    default:
+        return fail_key(p, r->scene_key, "no reader for this key (tools/scene/scene_parse.c)");
+    }
 }
 
 /* The keys of "effects", by their rows of the option table. */
@@ -447,33 +456,28 @@ static const cJSON *effect(const cJSON *effects, tpk_option_id id)
     return cJSON_GetObjectItemCaseSensitive(effects, tpk_option_scene_leaf(id));
 }
 
+/* "effects": the table's rows (table_value), and the light. */
 static int key_effects(parser *p, const cJSON *v)
 {
-    const char *keys[8]; /* shading, shadows, light, ao_rays, ao_radius, occlusion */
-    const tpk_option_row *t = tpk_option_table;
-    tpk_scene *s = p->out;
+    const char *keys[TPK_OPT_COUNT];
     if (need_object(p, v, "effects", "an object of effects") ||
-        check_keys(p, v, "effects", keys, tpk_option_scene_keys("effects", keys, 8)))
+        check_keys(p, v, "effects", keys, tpk_option_scene_keys("effects", keys, TPK_OPT_COUNT)))
         return -1;
-    const cJSON *e;
     int rc = 0;
-    if (!rc && (e = effect(v, TPK_OPT_SHADING)) && !(rc = boolean(p, e, t[TPK_OPT_SHADING].scene_key, &s->shading)))
-        s->given |= TPK_SCENE_SHADING;
-    if (!rc && (e = effect(v, TPK_OPT_SHADOWS)) && !(rc = boolean(p, e, t[TPK_OPT_SHADOWS].scene_key, &s->shadows)))
-        s->given |= TPK_SCENE_SHADOWS;
-    if (!rc && (e = effect(v, TPK_OPT_LIGHT)) &&
-        !(rc = numbers(p, e, t[TPK_OPT_LIGHT].scene_key, 3, "a point [x, y, z]", s->light)))
-        s->given |= TPK_SCENE_LIGHT;
-    if (!rc && (e = effect(v, TPK_OPT_AO_RAYS)) &&
-        !(rc = integer(p, e, t[TPK_OPT_AO_RAYS].scene_key, TPK_OPT_AO_RAYS, &s->ao_rays)))
-        s->given |= TPK_SCENE_AO_RAYS;
-    if (!rc && (e = effect(v, TPK_OPT_AO_RADIUS))) {
-        rc = ruled_number(p, e, t[TPK_OPT_AO_RADIUS].scene_key, TPK_OPT_AO_RADIUS, "a positive length", &s->ao_radius);
-        s->given |= TPK_SCENE_AO_RADIUS;
+    for (int i = 0; i < TPK_OPT_COUNT && !rc; i++) {
+        const char *key = tpk_option_table[i].scene_key;
+        const cJSON *e = key && !strncmp(key, "effects.", 8) ? effect(v, (tpk_option_id)i) : NULL;
+        if (!e)
+            continue;
+        if (tpk_option_table[i].in_scene)
+            rc = table_value(p, e, (tpk_option_id)i);
+        else if (i == TPK_OPT_LIGHT)
+            rc = numbers(p, e, key, 3, "a point [x, y, z]", p->out->light);
+        else
+            rc = fail_key(p, key, "no reader for this key (tools/scene/scene_parse.c)");
+        if (!rc)
+            p->out->given |= TPK_SCENE_GIVEN(i);
     }
-    if (!rc && (e = effect(v, TPK_OPT_OCCLUSION)) && /* TPK_OCCLUSION_* order */
-        !(rc = choice(p, e, t[TPK_OPT_OCCLUSION].scene_key, TPK_OPT_OCCLUSION, &s->occlusion)))
-        s->given |= TPK_SCENE_OCCLUSION;
     return rc;
 }
 
@@ -509,18 +513,13 @@ static int key_backend(parser *p, const cJSON *v)
     return 0;
 }
 
-static int key_integration(parser *p, const cJSON *v)
-{
-    return choice(p, v, "integration", TPK_OPT_INTEGRATION, &p->out->integration); /* TPK_INTEGRATION_* order */
-}
-
 typedef int (*key_fn)(parser *p, const cJSON *v);
 
-/* The parser of each top-level key of the option table, and the TPK_SCENE_* bit it sets (0: none of its
- * own; effects sets one per effect). */
+/* The parser of each top-level key of the option table that is not a field of tpk_scene (those are read
+ * by table_value), and the TPK_SCENE_* bit it sets (0: none of its own; effects sets one per effect). */
 static const struct {
     key_fn parse;
-    unsigned bit;
+    uint64_t bit;
 } top_keys[TPK_OPT_COUNT] = {
     [TPK_OPT_VERSION] = {key_version, 0},
     [TPK_OPT_CAMERA] = {key_camera, TPK_SCENE_CAMERA},
@@ -529,16 +528,13 @@ static const struct {
     [TPK_OPT_STEP] = {key_step, TPK_SCENE_STEP},
     [TPK_OPT_STEPS] = {key_steps, TPK_SCENE_STEP},
     [TPK_OPT_RANGE] = {key_range, TPK_SCENE_RANGE},
-    [TPK_OPT_UNIT_DISTANCE] = {key_unit_distance, TPK_SCENE_UNIT_DISTANCE},
     [TPK_OPT_CLIP_BOX] = {key_clip_box, TPK_SCENE_CLIP},
     [TPK_OPT_PROBE] = {key_probes, TPK_SCENE_PROBES},
     [TPK_OPT_ISO] = {key_iso, TPK_SCENE_ISO},
-    [TPK_OPT_ISO_OPACITY] = {key_iso_opacity, TPK_SCENE_ISO_OPACITY},
     [TPK_OPT_EFFECTS] = {key_effects, 0},
     [TPK_OPT_LAYOUT] = {key_layout, TPK_SCENE_LAYOUT},
     [TPK_OPT_SIZE] = {key_size, TPK_SCENE_SIZE},
     [TPK_OPT_BACKEND] = {key_backend, TPK_SCENE_BACKEND},
-    [TPK_OPT_INTEGRATION] = {key_integration, TPK_SCENE_INTEGRATION},
 };
 
 static int parse_root(parser *p, const cJSON *root)
@@ -558,6 +554,12 @@ static int parse_root(parser *p, const cJSON *root)
         const cJSON *v = key && !strchr(key, '.') ? cJSON_GetObjectItemCaseSensitive(root, key) : NULL;
         if (!v)
             continue;
+        if (tpk_option_table[i].in_scene) {
+            if (table_value(p, v, (tpk_option_id)i) != 0)
+                return -1;
+            p->out->given |= TPK_SCENE_GIVEN(i);
+            continue;
+        }
         if (!top_keys[i].parse) /* a key of the table this reader has no parser for: a bug, said as such */
             return fail_key(p, key, "no reader for this key (tools/scene/scene_parse.c)");
         if (top_keys[i].parse(p, v) != 0)

@@ -10,10 +10,6 @@
 #include "scene.h"
 
 #define KEY(id) tpk_option_scene_leaf(id) /* key names from the option table */
-/* The keys of "effects". */
-#define EFFECT_BITS                                                                                            \
-    (TPK_SCENE_SHADING | TPK_SCENE_SHADOWS | TPK_SCENE_LIGHT | TPK_SCENE_AO_RAYS | TPK_SCENE_AO_RADIUS |        \
-     TPK_SCENE_OCCLUSION)
 
 /* A number in the shortest form that reads back exactly. cJSON's own printer accepts a 15-digit form
  * that is only within an epsilon (0.30000000000000004 comes out as 0.3), so the text is made here. */
@@ -79,25 +75,55 @@ static void add_tf(cJSON *root, const tpk_scene *s)
     }
 }
 
+/* A row of the table that is a field of tpk_scene (in_scene), by its kind. */
+static void add_table_value(cJSON *obj, const tpk_scene *s, tpk_option_id id)
+{
+    const tpk_option_row *r = &tpk_option_table[id];
+    const char *field = (const char *)s + r->scene_at;
+    switch (r->kind) {
+    case TPK_OPT_KIND_NUMBER:
+        add_number(obj, KEY(id), *(const double *)field);
+        break;
+    case TPK_OPT_KIND_INT:
+        cJSON_AddNumberToObject(obj, KEY(id), *(const int *)field);
+        break;
+    case TPK_OPT_KIND_BOOL:
+        cJSON_AddBoolToObject(obj, KEY(id), *(const int *)field);
+        break;
+    case TPK_OPT_KIND_CHOICE: /* the index of the choice (TPK_INTEGRATION_*, TPK_OCCLUSION_* order) */
+        add_choice(obj, id, *(const int *)field);
+        break;
+    default:
+        break;
+    }
+}
+
+/* The rows of "effects" (keys "effects.*"), in the table's order. */
+static int is_effect(int id)
+{
+    const char *key = tpk_option_table[id].scene_key;
+    return key && !strncmp(key, "effects.", 8);
+}
+
+static int any_effect(const tpk_scene *s)
+{
+    for (int i = 0; i < TPK_OPT_COUNT; i++)
+        if (is_effect(i) && (s->given & TPK_SCENE_GIVEN(i)))
+            return 1;
+    return 0;
+}
+
 static void add_effects(cJSON *root, const tpk_scene *s)
 {
-    if (!(s->given & EFFECT_BITS))
-        return;
-    cJSON *fx = cJSON_AddObjectToObject(root, KEY(TPK_OPT_EFFECTS));
-    if (!fx)
-        return;
-    if (s->given & TPK_SCENE_SHADING)
-        cJSON_AddBoolToObject(fx, KEY(TPK_OPT_SHADING), s->shading);
-    if (s->given & TPK_SCENE_SHADOWS)
-        cJSON_AddBoolToObject(fx, KEY(TPK_OPT_SHADOWS), s->shadows);
-    if (s->given & TPK_SCENE_LIGHT)
-        add_numbers(fx, KEY(TPK_OPT_LIGHT), s->light, 3);
-    if (s->given & TPK_SCENE_AO_RAYS)
-        cJSON_AddNumberToObject(fx, KEY(TPK_OPT_AO_RAYS), s->ao_rays);
-    if (s->given & TPK_SCENE_AO_RADIUS)
-        add_number(fx, KEY(TPK_OPT_AO_RADIUS), s->ao_radius);
-    if (s->given & TPK_SCENE_OCCLUSION)
-        add_choice(fx, TPK_OPT_OCCLUSION, s->occlusion); /* TPK_OCCLUSION_* order */
+    cJSON *fx = any_effect(s) ? cJSON_AddObjectToObject(root, KEY(TPK_OPT_EFFECTS)) : NULL;
+    for (int i = 0; fx && i < TPK_OPT_COUNT; i++) {
+        if (!is_effect(i) || !(s->given & TPK_SCENE_GIVEN(i)))
+            continue;
+        if (tpk_option_table[i].in_scene)
+            add_table_value(fx, s, (tpk_option_id)i);
+        else if (i == TPK_OPT_LIGHT)
+            add_numbers(fx, KEY(TPK_OPT_LIGHT), s->light, 3);
+    }
 }
 
 /* The layout's place among the table's choices (tet16, tet20, tet32). */
@@ -106,71 +132,94 @@ static int layout_index(tpk_layout layout)
     return layout == TPK_LAYOUT_TET16 ? 0 : layout == TPK_LAYOUT_TET20 ? 1 : 2;
 }
 
-static void add_selection(cJSON *root, const tpk_scene *s)
+static void add_probes(cJSON *root, const tpk_scene *s)
 {
-    if (s->given & TPK_SCENE_FIELD)
-        cJSON_AddStringToObject(root, KEY(TPK_OPT_FIELD), s->field);
-    if ((s->given & TPK_SCENE_STEP) && !s->step_range)
-        cJSON_AddNumberToObject(root, KEY(TPK_OPT_STEP), s->step_first);
-    if ((s->given & TPK_SCENE_STEP) && s->step_range) {
-        double steps[2] = {s->step_first, s->step_last};
-        add_numbers(root, KEY(TPK_OPT_STEPS), steps, 2);
-    }
-    if (s->given & TPK_SCENE_RANGE)
-        add_numbers(root, KEY(TPK_OPT_RANGE), s->range, 2);
-    if (s->given & TPK_SCENE_UNIT_DISTANCE)
-        add_number(root, KEY(TPK_OPT_UNIT_DISTANCE), s->unit_distance);
-    if (s->given & TPK_SCENE_CLIP) {
-        double box[6] = {s->clip_min[0], s->clip_min[1], s->clip_min[2], s->clip_max[0], s->clip_max[1], s->clip_max[2]};
-        add_numbers(root, KEY(TPK_OPT_CLIP_BOX), box, 6);
-    }
-    if (s->given & TPK_SCENE_PROBES) {
-        cJSON *list = cJSON_AddArrayToObject(root, KEY(TPK_OPT_PROBE));
-        for (int i = 0; list && i < s->probe_count; i++) {
-            const tpk_probe *q = &s->probes[i];
-            cJSON *o = cJSON_CreateObject();
-            if (!o || !cJSON_AddItemToArray(list, o)) {
-                cJSON_Delete(o);
-                break;
-            }
-            cJSON_AddStringToObject(o, "shape", tpk_probe_shape_name(q->shape));
-            add_numbers(o, q->shape == TPK_PROBE_SPHERE ? "center" : q->shape == TPK_PROBE_PLANE ? "point" : "min",
-                        q->a, 3);
-            if (q->shape == TPK_PROBE_SPHERE)
-                add_number(o, "radius", q->radius);
-            else
-                add_numbers(o, q->shape == TPK_PROBE_PLANE ? "normal" : "max", q->b, 3);
-            cJSON_AddStringToObject(o, "mode", q->cut ? "cut" : "keep");
+    cJSON *list = cJSON_AddArrayToObject(root, KEY(TPK_OPT_PROBE));
+    for (int i = 0; list && i < s->probe_count; i++) {
+        const tpk_probe *q = &s->probes[i];
+        cJSON *o = cJSON_CreateObject();
+        if (!o || !cJSON_AddItemToArray(list, o)) {
+            cJSON_Delete(o);
+            break;
         }
+        cJSON_AddStringToObject(o, "shape", tpk_probe_shape_name(q->shape));
+        add_numbers(o, q->shape == TPK_PROBE_SPHERE ? "center" : q->shape == TPK_PROBE_PLANE ? "point" : "min", q->a,
+                    3);
+        if (q->shape == TPK_PROBE_SPHERE)
+            add_number(o, "radius", q->radius);
+        else
+            add_numbers(o, q->shape == TPK_PROBE_PLANE ? "normal" : "max", q->b, 3);
+        cJSON_AddStringToObject(o, "mode", q->cut ? "cut" : "keep");
     }
-    if (s->given & TPK_SCENE_ISO)
-        add_numbers(root, KEY(TPK_OPT_ISO), s->iso, s->iso_count);
-    if (s->given & TPK_SCENE_ISO_OPACITY)
-        add_number(root, KEY(TPK_OPT_ISO_OPACITY), s->iso_opacity);
 }
 
-static void add_output(cJSON *root, const tpk_scene *s)
+/* A top-level key that is not a field of tpk_scene, given in s. */
+static void add_key(cJSON *root, const tpk_scene *s, tpk_option_id id)
 {
-    if (s->given & TPK_SCENE_LAYOUT)
-        add_choice(root, TPK_OPT_LAYOUT, layout_index(s->layout));
-    if (s->given & TPK_SCENE_SIZE) {
-        double size[2] = {s->width, s->height};
-        add_numbers(root, KEY(TPK_OPT_SIZE), size, 2);
+    double steps[2] = {s->step_first, s->step_last}, size[2] = {s->width, s->height};
+    double box[6] = {s->clip_min[0], s->clip_min[1], s->clip_min[2], s->clip_max[0], s->clip_max[1], s->clip_max[2]};
+    switch (id) {
+    case TPK_OPT_CAMERA:
+        add_camera(root, &s->camera);
+        break;
+    case TPK_OPT_TF:
+        add_tf(root, s);
+        break;
+    case TPK_OPT_FIELD:
+        cJSON_AddStringToObject(root, KEY(id), s->field);
+        break;
+    case TPK_OPT_STEP: /* "step" or "steps", one bit */
+        if (!s->step_range)
+            cJSON_AddNumberToObject(root, KEY(id), s->step_first);
+        else
+            add_numbers(root, KEY(TPK_OPT_STEPS), steps, 2);
+        break;
+    case TPK_OPT_RANGE:
+        add_numbers(root, KEY(id), s->range, 2);
+        break;
+    case TPK_OPT_CLIP_BOX:
+        add_numbers(root, KEY(id), box, 6);
+        break;
+    case TPK_OPT_PROBE:
+        add_probes(root, s);
+        break;
+    case TPK_OPT_ISO:
+        add_numbers(root, KEY(id), s->iso, s->iso_count);
+        break;
+    case TPK_OPT_LAYOUT:
+        add_choice(root, id, layout_index(s->layout));
+        break;
+    case TPK_OPT_SIZE:
+        add_numbers(root, KEY(id), size, 2);
+        break;
+    case TPK_OPT_BACKEND:
+        add_choice(root, id, s->backend == TPK_SCENE_BACKEND_VULKAN ? 1 : 0); /* cpu, vulkan */
+        break;
+    default:
+        break;
     }
-    if (s->given & TPK_SCENE_BACKEND)
-        add_choice(root, TPK_OPT_BACKEND, s->backend == TPK_SCENE_BACKEND_VULKAN ? 1 : 0); /* cpu, vulkan */
-    if (s->given & TPK_SCENE_INTEGRATION)
-        add_choice(root, TPK_OPT_INTEGRATION, s->integration); /* TPK_INTEGRATION_* order */
 }
 
-/* Top-level keys the text must have: the version, one per given bit, and one "effects" for five bits. */
-static int expected_keys(const tpk_scene *s)
+/* The top-level rows of the table, in its order: the version, then each key the scene gives. */
+static int add_keys(cJSON *root, const tpk_scene *s)
 {
-    const unsigned effects = EFFECT_BITS;
-    int n = 1 + ((s->given & effects) != 0);
-    for (unsigned bit = 1; bit; bit <<= 1)
-        n += (s->given & bit & ~effects) != 0;
-    return n;
+    int keys = 0;
+    for (int i = 0; i < TPK_OPT_COUNT; i++) {
+        const char *key = tpk_option_table[i].scene_key;
+        if (!key || strchr(key, '.') || i == TPK_OPT_STEPS)
+            continue;
+        if (i == TPK_OPT_VERSION)
+            cJSON_AddNumberToObject(root, key, TPK_SCENE_VERSION), keys++;
+        else if (i == TPK_OPT_EFFECTS)
+            add_effects(root, s), keys += any_effect(s);
+        else if (!(s->given & TPK_SCENE_GIVEN(i)))
+            continue;
+        else if (tpk_option_table[i].in_scene)
+            add_table_value(root, s, (tpk_option_id)i), keys++;
+        else
+            add_key(root, s, (tpk_option_id)i), keys++;
+    }
+    return keys;
 }
 
 char *tpk_scene_to_json(const tpk_scene *s)
@@ -178,19 +227,12 @@ char *tpk_scene_to_json(const tpk_scene *s)
     cJSON *root = cJSON_CreateObject();
     if (!root)
         return NULL;
-    cJSON_AddNumberToObject(root, KEY(TPK_OPT_VERSION), TPK_SCENE_VERSION);
-    if (s->given & TPK_SCENE_CAMERA)
-        add_camera(root, &s->camera);
-    if (s->given & TPK_SCENE_TF)
-        add_tf(root, s);
-    add_selection(root, s);
-    add_effects(root, s);
-    add_output(root, s);
+    int keys = add_keys(root, s);
     /* cJSON adds nothing after a failed allocation, so a short tree would print silently: count the
      * keys that should be there, and parse the text back. */
     char *text = cJSON_Print(root);
     cJSON *back = text ? cJSON_Parse(text) : NULL;
-    int same = back && cJSON_GetArraySize(back) == cJSON_GetArraySize(root) && cJSON_GetArraySize(root) == expected_keys(s);
+    int same = back && cJSON_GetArraySize(back) == cJSON_GetArraySize(root) && cJSON_GetArraySize(root) == keys;
     cJSON_Delete(back);
     cJSON_Delete(root);
     if (!same) {
@@ -199,7 +241,6 @@ char *tpk_scene_to_json(const tpk_scene *s)
     }
     return text;
 }
-
 int tpk_scene_write(const char *path, const tpk_scene *scene, tpk_diag *diag)
 {
     char *text = tpk_scene_to_json(scene);
