@@ -25,9 +25,10 @@ static const char render_help[] =
     "usage: tetpack render FILE -o IMAGE.png [options]\n"
     "\n"
     "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
-    "Ray-marches the tets with the reference CPU marcher (shell BVH entry, watertight tet-to-tet\n"
-    "marching) on all cores and writes a PNG. Emission-absorption: within a tet the scalar is linear,\n"
-    "so each piece is split exactly where the scalar crosses a TF control point; color and extinction\n"
+    "Ray-marches the tets (shell BVH entry, watertight tet-to-tet marching) with the Vulkan renderer on\n"
+    "a GPU, else with the CPU reference on all cores (--backend), and writes a PNG. Both draw the same\n"
+    "picture. Emission-absorption: within a tet the scalar is linear, so each piece is split exactly\n"
+    "where the scalar crosses a TF control point; color and extinction\n"
     "are then linear in distance and are integrated in steps of optical depth <= 0.05.\n"
     "\n"; /* then the options, from the option table (render_args_help) */
 
