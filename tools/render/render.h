@@ -195,17 +195,9 @@ typedef struct tpk_render_options {
  * second tree made for the frame's iso values (tpk_range_bvh_select: only the tets that hold one, four
  * children a node), which tests fewer tets per ray than marching steps through on any surface; but its
  * set-up (recovering the tets' vertices from Tet16, the file-order tree, the selected tree) costs about
- * 0.35 CPU-microseconds a tet, which only enough rays pay back. Measured on the 998k-tet grid of
- * bench/make_grid_vtk.py 55, 1024x1024, rays alone, one thread: culling 1.1x faster than marching
- * where 47% of the file-order tree's leaves hold the value, 1.5x at 35%, 2.1x at 25%, 4.3x at 11%
- * (rays one by one). The packets since cull about 2.5 times as many rays a second at iso 0.3; then,
- * process CPU seconds, median of 3, one thread, forced march / forced cull / the old automatic choice
- * (culling up to 10% of the leaves with fewer rays than tets, 40% with more): 1024x1024, 47% of the
- * leaves: 1.49 / 0.92 / 1.68 (it built the trees, then marched), 61%: 1.05 / 1.04 / 1.30, 81%: 0.87 /
- * 1.10; 512x512, 11%: 0.97 / 0.34 / 1.15, 21%: 0.51 / 0.39 / 0.67; 256x256, 11%: 0.23 / 0.39 / 0.51.
- * Once the trees are built, culling won up to about half of the leaves with many rays; with few, less
- * (the old binary and the new alternating, 256x256: 0.52 -> 0.40 at 11%, 0.43 -> 0.48 at 21%). So the
- * CPU renderer culls where at most TPK_RENDER_CULL_ACTIVE_MANY of those leaves hold a value with at
+ * CPU time per tet, which only enough rays pay back. Once the trees are built, culling beats marching
+ * up to about half of the leaves holding a value with many rays, and less with few (the figures behind
+ * this: bench/README, "Figures behind code comments"). So the CPU renderer culls where at most TPK_RENDER_CULL_ACTIVE_MANY of those leaves hold a value with at
  * least as many rays as tets; with fewer, at most TPK_RENDER_CULL_ACTIVE_CPU from a quarter as many
  * rays as tets, less below (linearly down to TPK_RENDER_CULL_ACTIVE with no rays); else it marches.
  * Building the trees
@@ -218,7 +210,7 @@ typedef struct tpk_render_options {
  * compare the two), unset decides as above. The Vulkan renderer culls only when TETPACK_ISO_CULLING=1
  * asks, walking the file-order tree in its shader (render.comp's cull_trace), with the same pieces as its
  * own marcher; unset, it marches on every device, as the walk cost more than it saved wherever it was
- * measured (an H200: 17x slower at a dense value, 13x at a sparse one; lavapipe: 1.7x to 16x).
+ * measured (bench/README).
  *
  * INTEGRATION of each stretch of volume (a piece, or its part before, between or after its iso hits),
  * the piece's m multiplying its rgb, as `integration` says. Exact: split where u crosses a TF control

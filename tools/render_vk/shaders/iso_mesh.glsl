@@ -4,8 +4,7 @@
 // serves both paths; the rest say which clusters of 32 tets (file order) this draw covers.
 // MESH_TETS (a divisor of 32): the live tets one mesh workgroup takes, so that it declares at most
 // 6 MESH_TETS vertices and 2 MESH_TETS triangles; a task launches as many as its cluster needs. 8, not
-// 32: on an NVIDIA H200 (grid 121, 2.4M triangles) the draw took 23.5 ms at 3840x2160 and 19.4 ms at
-// 480x270 with 8, 26.9 and 23.4 ms with 32 (bench/README: the first GPU run).
+// 32: faster on an H200 at both sizes measured (bench/README, "Figures behind code comments").
 #define MESH_TETS 8
 layout(push_constant) uniform Push {
     vec4 eye;       // xyz: the eye relative to the origin; w: the near distance
