@@ -277,6 +277,21 @@ static int32_t add_point(split_state *s, int64_t cell, const double r[3])
     return (int32_t)(s->m->point_count + s->added_count++);
 }
 
+/* The map's slot of lattice face f of a cell with these nodes, keyed by its sorted corners; *fresh when
+ * it was empty (its key is then set, its point left to the caller). */
+static face_key *lattice_face_slot(split_state *s, const int32_t *nodes, const lattice_face *f, int *fresh)
+{
+    int32_t corner[4], sorted[4];
+    for (int k = 0; k < 4; k++)
+        corner[k] = nodes[f->corners[k]];
+    sort4(corner, sorted);
+    face_key *slot = face_slot(&s->faces, sorted);
+    *fresh = slot->ids[0] < 0;
+    if (*fresh)
+        memcpy(slot->ids, sorted, sizeof sorted);
+    return slot;
+}
+
 /* The global ids of cell c's full lattice into ids: its nodes, then the points it lacks (found or made). */
 static int lattice_ids(split_state *s, int64_t c, int32_t *ids)
 {
@@ -289,15 +304,11 @@ static int lattice_ids(split_state *s, int64_t c, int32_t *ids)
     lattice_face f[6];
     int nf = lattice_faces(type, f);
     for (int i = 0; i < nf; i++) {
-        int32_t corner[4], sorted[4];
-        for (int k = 0; k < 4; k++)
-            corner[k] = nodes[f[i].corners[k]];
-        sort4(corner, sorted);
-        face_key *slot = face_slot(&s->faces, sorted);
-        if (slot->ids[0] < 0) {
+        int fresh;
+        face_key *slot = lattice_face_slot(s, nodes, &f[i], &fresh);
+        if (fresh) {
             double r[3];
             local_node(type, f[i].centre, r);
-            memcpy(slot->ids, sorted, sizeof sorted);
             if ((slot->point = add_point(s, c, r)) < 0)
                 return -1;
         }
@@ -324,15 +335,10 @@ static void enter_own_centres(split_state *s)
         lattice_face f[6];
         int nf = lattice_faces(type, f);
         for (int i = 0; i < nf; i++) {
-            int32_t corner[4], sorted[4];
-            for (int k = 0; k < 4; k++)
-                corner[k] = nodes[f[i].corners[k]];
-            sort4(corner, sorted);
-            face_key *slot = face_slot(&s->faces, sorted);
-            if (slot->ids[0] < 0) {
-                memcpy(slot->ids, sorted, sizeof sorted);
+            int fresh;
+            face_key *slot = lattice_face_slot(s, nodes, &f[i], &fresh);
+            if (fresh)
                 slot->point = nodes[f[i].centre];
-            }
         }
     }
 }
