@@ -43,20 +43,12 @@ struct tpk_foam_dict {
     tpk_diag *diag;
 };
 
-static int64_t line_of(const tpk_foam_file *f, size_t pos)
-{
-    int64_t line = 1;
-    for (size_t i = 0; i < pos && i < f->size; i++)
-        line += f->data[i] == '\n';
-    return line;
-}
-
 static int fail_at(tpk_foam_dict *d, int file, size_t pos, const char *fmt, va_list ap)
 {
     char what[768];
     vsnprintf(what, sizeof what, fmt, ap);
     const tpk_foam_file *f = &d->files[file];
-    return tpk_diag_fail(d->diag, "%s:%lld: %s", f->path, (long long)line_of(f, pos), what);
+    return tpk_diag_fail(d->diag, "%s:%lld: %s", f->path, (long long)tpk_foam_line(f, pos), what);
 }
 
 int tpk_foam_dict_fail(tpk_foam_dict *d, const tpk_foam_token *t, const char *fmt, ...)
@@ -89,7 +81,7 @@ static const char *text(tpk_foam_dict *d, const tpk_foam_token *t)
     return d->files[t->file].data + t->pos;
 }
 
-static int token_is(tpk_foam_dict *d, const tpk_foam_token *t, const char *s)
+int tpk_foam_token_is(tpk_foam_dict *d, const tpk_foam_token *t, const char *s)
 {
     return t->len == strlen(s) && memcmp(text(d, t), s, t->len) == 0;
 }
@@ -177,7 +169,7 @@ static size_t binary_item_size(tpk_foam_dict *d, const tpk_foam_token *type)
                  {"List<sphericalTensor>", 8}, {"List<label>", 4}, {"scalarList", 8}, {"vectorList", 24},
                  {"labelList", 4}};
     for (size_t i = 0; i < sizeof sizes / sizeof sizes[0]; i++)
-        if (token_is(d, type, sizes[i].name))
+        if (tpk_foam_token_is(d, type, sizes[i].name))
             return sizes[i].size;
     return 0;
 }
@@ -400,7 +392,7 @@ static const char *missing_note(tpk_foam_dict *d, int scope, char *buf, size_t c
 
 static int refused_directive(tpk_foam_dict *d, const tpk_foam_token *t)
 {
-    if (token_is(d, t, "#calc") || token_is(d, t, "#codeStream") || token_is(d, t, "#eval"))
+    if (tpk_foam_token_is(d, t, "#calc") || tpk_foam_token_is(d, t, "#codeStream") || tpk_foam_token_is(d, t, "#eval"))
         return tpk_foam_dict_fail(d, t, "%.*s is not evaluated: it compiles C++ code (OpenFOAM's dynamic code)",
                                   (int)t->len, text(d, t));
     return tpk_foam_dict_fail(d, t, "unsupported directive %.*s", (int)t->len, text(d, t));
@@ -574,8 +566,8 @@ static int include(tpk_foam_dict *d, int fi, int scope, const tpk_foam_token *di
     char raw[4096], path[8192];
     int quoted = name.kind == TPK_FOAM_STRING;
     snprintf(raw, sizeof raw, "%.*s", (int)(name.len - 2 * quoted), text(d, &name) + quoted);
-    int etc = token_is(d, directive, "#includeEtc"), optional = token_is(d, directive, "#includeIfPresent") ||
-                                                                token_is(d, directive, "#sinclude");
+    int etc = tpk_foam_token_is(d, directive, "#includeEtc"), optional = tpk_foam_token_is(d, directive, "#includeIfPresent") ||
+                                                                tpk_foam_token_is(d, directive, "#sinclude");
     if (etc)
         etc_path(raw, path, sizeof path);
     else
@@ -595,7 +587,7 @@ static int include(tpk_foam_dict *d, int fi, int scope, const tpk_foam_token *di
          * matters when a value looked up needs it. At the top it may define anything: an error. */
         char why[600];
         snprintf(why, sizeof why, "%.*s \"%.160s\" at %.240s:%lld: no such file%s", (int)directive->len,
-                 text(d, directive), raw, d->files[fi].path, (long long)line_of(&d->files[fi], directive->pos),
+                 text(d, directive), raw, d->files[fi].path, (long long)tpk_foam_line(&d->files[fi], directive->pos),
                  etc ? " in the OpenFOAM etc folders (set WM_PROJECT_DIR)" : "");
         if (scope == 0)
             return tpk_diag_fail(d->diag, "%s", why);
@@ -642,21 +634,21 @@ static int merge_scope(tpk_foam_dict *d, int to, int from, int seq)
 
 static int directive(tpk_foam_dict *d, int fi, int scope, const tpk_foam_token *t)
 {
-    if (token_is(d, t, "#include") || token_is(d, t, "#includeEtc") || token_is(d, t, "#includeIfPresent") ||
-        token_is(d, t, "#sinclude"))
+    if (tpk_foam_token_is(d, t, "#include") || tpk_foam_token_is(d, t, "#includeEtc") || tpk_foam_token_is(d, t, "#includeIfPresent") ||
+        tpk_foam_token_is(d, t, "#sinclude"))
         return include(d, fi, scope, t);
-    if (token_is(d, t, "#inputMode")) {
+    if (tpk_foam_token_is(d, t, "#inputMode")) {
         static const char *const modes[] = {"merge", "overwrite", "protect", "warn", "error", "default"};
         tpk_foam_token m;
         if (next_token(d, fi, &m) > 0)
             for (int k = 0; k < 6; k++)
-                if (token_is(d, &m, modes[k])) {
+                if (tpk_foam_token_is(d, &m, modes[k])) {
                     d->mode = k == 5 ? MODE_MERGE : k;
                     return 0;
                 }
         return tpk_foam_dict_fail(d, t, "expected merge, overwrite, protect, warn, error or default after #inputMode");
     }
-    if (token_is(d, t, "#remove")) {
+    if (tpk_foam_token_is(d, t, "#remove")) {
         tpk_foam_token k;
         int rc = next_token(d, fi, &k), list = rc > 0 && is_punct(d, &k, '(');
         for (;;) {
@@ -675,7 +667,7 @@ static int directive(tpk_foam_dict *d, int fi, int scope, const tpk_foam_token *
                 return 0;
         }
     }
-    if (token_is(d, t, "#includeFunc") || token_is(d, t, "#includeFuncIfPresent")) {
+    if (tpk_foam_token_is(d, t, "#includeFunc") || tpk_foam_token_is(d, t, "#includeFuncIfPresent")) {
         /* A function object for controlDict's functions: nothing a mesh or a field needs. */
         tpk_foam_file *f = &d->files[fi];
         while (f->pos < f->size && f->data[f->pos] != '\n')
@@ -700,7 +692,7 @@ static int keyword_entry(tpk_foam_dict *d, int fi, int scope, const tpk_foam_tok
         return tpk_foam_dict_fail(d, key, "'%s' is defined a second time under #inputMode error", name);
     if (old && d->mode == MODE_WARN)
         tpk_diag_warn(d->diag, "%s:%lld: '%s' is defined a second time; the first is kept (#inputMode warn)",
-                      d->files[fi].path, (long long)line_of(&d->files[fi], key->pos), name);
+                      d->files[fi].path, (long long)tpk_foam_line(&d->files[fi], key->pos), name);
     tpk_foam_file *f = &d->files[fi];
     size_t at = f->pos;
     tpk_foam_token next;

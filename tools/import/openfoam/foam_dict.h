@@ -45,6 +45,9 @@ int tpk_foam_dict_value(tpk_foam_dict *d, const char *key, tpk_foam_token **toke
  * set file->pos to token->pos and call the list readers. */
 tpk_foam_file *tpk_foam_dict_file(tpk_foam_dict *d, const tpk_foam_token *t);
 
+/* Are the token's bytes exactly s? */
+int tpk_foam_token_is(tpk_foam_dict *d, const tpk_foam_token *t, const char *s);
+
 /* Fail with "PATH:LINE: " at a token. Returns -1. */
 int tpk_foam_dict_fail(tpk_foam_dict *d, const tpk_foam_token *t, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));

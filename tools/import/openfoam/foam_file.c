@@ -14,6 +14,14 @@
 /* The only binary layout read: 32-bit labels and 64-bit scalars, little-endian (OpenFOAM's default). */
 #define FOAM_ARCH "LSB;label=32;scalar=64"
 
+int64_t tpk_foam_line(const tpk_foam_file *f, size_t pos)
+{
+    int64_t line = 1;
+    for (size_t i = 0; i < pos && i < f->size; i++)
+        line += f->data[i] == '\n';
+    return line;
+}
+
 int tpk_foam_fail(tpk_foam_file *f, const char *fmt, ...)
 {
     char what[768];
@@ -23,10 +31,7 @@ int tpk_foam_fail(tpk_foam_file *f, const char *fmt, ...)
     va_end(ap);
     if (f->binary)
         return tpk_diag_fail(f->diag, "%s: byte %zu: %s", f->path, f->pos, what);
-    int64_t line = 1;
-    for (size_t i = 0; i < f->pos && i < f->size; i++)
-        line += f->data[i] == '\n';
-    return tpk_diag_fail(f->diag, "%s:%lld: %s", f->path, (long long)line, what);
+    return tpk_diag_fail(f->diag, "%s:%lld: %s", f->path, (long long)tpk_foam_line(f, f->pos), what);
 }
 
 static int read_plain(tpk_foam_file *f)

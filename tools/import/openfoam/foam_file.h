@@ -26,6 +26,8 @@ int tpk_foam_open(tpk_foam_file *f, const char *dir, const char *name, tpk_diag 
 int tpk_foam_read_any(tpk_foam_file *f, const char *path, tpk_diag *diag);
 void tpk_foam_close(tpk_foam_file *f);
 
+/* The line (from 1) that byte `pos` of the file lies on. */
+int64_t tpk_foam_line(const tpk_foam_file *f, size_t pos);
 /* Fail with "PATH:LINE: " (ASCII) or "PATH: byte N: " (binary) at the current position. Returns -1. */
 int tpk_foam_fail(tpk_foam_file *f, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 

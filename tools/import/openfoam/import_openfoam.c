@@ -332,13 +332,7 @@ static int field_kind(const char *class_name, int *components)
 
 static int is_word(tpk_foam_dict *d, const tpk_foam_token *t, const char *w)
 {
-    return t->kind == TPK_FOAM_WORD && t->len == strlen(w) &&
-           memcmp(tpk_foam_dict_file(d, t)->data + t->pos, w, t->len) == 0;
-}
-
-static int is_paren(tpk_foam_dict *d, const tpk_foam_token *t, char c)
-{
-    return t->kind == TPK_FOAM_PUNCT && tpk_foam_dict_file(d, t)->data[t->pos] == c;
+    return t->kind == TPK_FOAM_WORD && tpk_foam_token_is(d, t, w);
 }
 
 static int token_number(tpk_foam_dict *d, const tpk_foam_token *t, double *v)
@@ -356,7 +350,8 @@ static int token_number(tpk_foam_dict *d, const tpk_foam_token *t, double *v)
 static int uniform_value(tpk_foam_dict *d, const tpk_foam_token *t, int n, int components, double *v)
 {
     int ok = components == 1 ? n == 1 && token_number(d, t, v) == 0
-                             : n == components + 2 && is_paren(d, &t[0], '(') && is_paren(d, &t[n - 1], ')');
+                             : n == components + 2 && tpk_foam_token_is(d, &t[0], "(") &&
+                                 tpk_foam_token_is(d, &t[n - 1], ")");
     for (int k = 0; ok && components > 1 && k < components; k++)
         ok = token_number(d, &t[1 + k], &v[k]) == 0;
     return ok ? 0 : -1;
