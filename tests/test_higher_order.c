@@ -33,7 +33,7 @@
 typedef struct node_order {
     const char *name;   /* the format's element name */
     int code;           /* its type code in the format (gmsh element type, VTK cell type, ...) */
-    int shape, edge_count, face_count, centre;
+    int shape, edge_count, face_count, centre; /* centre: 1 after the face centres, 2 before them */
     int edges[12][2];
     int faces[6][4];
 } node_order;
@@ -55,10 +55,15 @@ static int order_nodes(const node_order *o, double r[27][3])
     for (int e = 0; e < o->edge_count; e++, n++)
         for (int a = 0; a < 3; a++)
             r[n][a] = 0.5 * (r[o->edges[e][0]][a] + r[o->edges[e][1]][a]);
+    if (o->centre == 2) {
+        for (int a = 0; a < 3; a++)
+            r[n][a] = 0.5;
+        n++;
+    }
     for (int f = 0; f < o->face_count; f++, n++)
         for (int a = 0; a < 3; a++)
             r[n][a] = 0.25 * (r[o->faces[f][0]][a] + r[o->faces[f][1]][a] + r[o->faces[f][2]][a] + r[o->faces[f][3]][a]);
-    if (o->centre) {
+    if (o->centre == 1) {
         for (int a = 0; a < 3; a++)
             r[n][a] = 0.5;
         n++;
@@ -611,22 +616,32 @@ static const node_order exo_hex20 = {"HEX20", 0, 12, 12, 0, 0,
                                       {6, 7}, {7, 4}}, {{0}}};
 static const node_order exo_wedge15 = {"WEDGE15", 0, 13, 9, 0, 0,
                                        {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
+/* HEX27 and WEDGE18 (SEACAS's Hex27 and Wedge18 topologies): HEX20's nodes, then the cell centre, then
+ * the face centres z-, z+, x-, x+, y-, y+; WEDGE15's, then the centres of sides 1, 2 and 3. */
+static const node_order exo_hex27 = {"HEX27", 0, 12, 12, 6, 2,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {4, 5}, {5, 6},
+                                      {6, 7}, {7, 4}},
+                                     {{0, 1, 2, 3}, {4, 5, 6, 7}, {0, 3, 7, 4}, {1, 2, 6, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}}};
+static const node_order exo_wedge18 = {"WEDGE18", 0, 13, 9, 3, 0,
+                                       {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}},
+                                       {{0, 1, 4, 3}, {1, 2, 5, 4}, {0, 3, 5, 2}}};
 static const node_order exo_pyramid13 = {"PYRAMID13", 0, 14, 8, 0, 0,
                                          {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
 
 TPK_TEST(exodus_orders)
 {
-    const node_order *orders[] = {&exo_tetra10, &exo_hex20, &exo_wedge15, &exo_pyramid13};
+    const node_order *orders[] = {&exo_tetra10, &exo_hex20, &exo_wedge15, &exo_pyramid13, &exo_hex27, &exo_wedge18};
+    enum { cells = sizeof orders / sizeof orders[0] };
     for (int curved = 0; curved < 2; curved++) {
         static double xyz[3][512];
-        int ns[4], total = gather_nodes(orders, 4, curved, xyz, ns);
+        int ns[cells], total = gather_nodes(orders, cells, curved, xyz, ns);
         const char *path = tpk_temp_path("whole.exo");
         int cpu_ws = 8, io_ws = 8;
         int exoid = ex_create(path, EX_CLOBBER, &cpu_ws, &io_ws);
         CHECK(exoid >= 0);
-        CHECK(ex_put_init(exoid, "higher order", 3, total, 4, 4, 0, 0) == 0);
+        CHECK(ex_put_init(exoid, "higher order", 3, total, cells, cells, 0, 0) == 0);
         CHECK(ex_put_coord(exoid, xyz[0], xyz[1], xyz[2]) == 0);
-        for (int c = 0, first = 1; c < 4; first += ns[c], c++) {
+        for (int c = 0, first = 1; c < cells; first += ns[c], c++) {
             int conn[27];
             for (int k = 0; k < ns[c]; k++)
                 conn[k] = first + k;

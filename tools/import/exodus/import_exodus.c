@@ -2,8 +2,8 @@
  * element blocks of tetrahedra, hexahedra, wedges and pyramids become cells in VTK node order, which
  * Exodus shares for the corners of all four: its side tables (SEACAS exodus-element-types.md) list the
  * same outward faces as VTK's cells (hexahedra also checked on SEACAS's files). Higher-order blocks are
- * kept whole as VTK's quadratic types (TETRA10, HEX20, WEDGE15, PYRAMID13; TETRA14/15, HEX27, WEDGE18 and
- * PYRAMID14 by those nodes, which come first, their face and centre nodes unused): Exodus lists the
+ * kept whole as VTK's quadratic types (TETRA10, HEX20, HEX27, WEDGE15, WEDGE18, PYRAMID13; TETRA14/15 and
+ * PYRAMID14 by their TETRA10 and PYRAMID13 nodes, which come first, their face and centre nodes unused): Exodus lists the
  * vertical mid-edges of hexahedra and wedges before the top ones, VTK after. Blocks of lower dimension
  * (shells, bars, spheres) are dropped with a count. Nodal and element variables become point and cell
  * fields with every time step, and the time values are kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
@@ -37,7 +37,7 @@ static const block_kind kinds[] = {
 static int kept_type(const block_kind *kind, int64_t per, int *kept)
 {
     static const struct { int linear, at_least, vtk, kept; } quadratic[] = {
-        {10, 10, 24, 10}, {12, 20, 25, 20}, {13, 15, 26, 15}, {14, 13, 27, 13}};
+        {10, 10, 24, 10}, {12, 27, 29, 27}, {12, 20, 25, 20}, {13, 18, 32, 18}, {13, 15, 26, 15}, {14, 13, 27, 13}};
     for (size_t i = 0; i < sizeof quadratic / sizeof quadratic[0]; i++)
         if (quadratic[i].linear == kind->vtk_type && per >= quadratic[i].at_least) {
             *kept = quadratic[i].kept;
@@ -50,9 +50,15 @@ static int kept_type(const block_kind *kind, int64_t per, int *kept)
 /* The Exodus node that VTK node k of a kept cell of VTK type `vtk` is. */
 static int exodus_node(int vtk, int k)
 {
-    if (vtk == 25 && k >= 12) /* VTK: top mid-edges 12-15, then vertical 16-19; Exodus the other way */
+    /* HEX27: VTK's face centres x-, x+, y-, y+, z-, z+ then the cell centre; Exodus has the centre (20)
+     * first, then z-, z+, x-, x+, y-, y+ (SEACAS's Hex27 topology). */
+    static const int hex27_faces[7] = {23, 24, 25, 26, 21, 22, 20};
+    if (vtk == 29 && k >= 20)
+        return hex27_faces[k - 20];
+    if ((vtk == 25 || vtk == 29) && k >= 12) /* VTK: top mid-edges 12-15, then vertical 16-19; Exodus the other way */
         return k < 16 ? k + 4 : k - 4;
-    if (vtk == 26 && k >= 9) /* the same for wedges: 9-11 and 12-14 */
+    if ((vtk == 26 || vtk == 32) && k >= 9 && k < 15) /* the same for wedges: 9-11 and 12-14 (WEDGE18's quad-face
+                                                         centres 15-17 as VTK's) */
         return k < 12 ? k + 3 : k - 3;
     return k;
 }
@@ -150,8 +156,8 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not volumes (shells, bars, spheres)", r->path,
                       (long long)dropped);
     if (unused)
-        tpk_diag_warn(r->diag, "%s: %lld higher-order elements read without their face and centre nodes (as TETRA10, "
-                      "HEX20, WEDGE15 or PYRAMID13)", r->path, (long long)unused);
+        tpk_diag_warn(r->diag, "%s: %lld higher-order elements read without their face and centre nodes (TETRA14/15 as "
+                      "TETRA10, PYRAMID14 as PYRAMID13)", r->path, (long long)unused);
     if (cells == 0)
         return tpk_diag_fail(r->diag, "%s: no volume cells (%lld elements in %lld blocks, none tetra, hex, wedge or "
                              "pyramid)",
