@@ -77,4 +77,19 @@ convert_checked "$DATA/sfepy/cube_medium_hexa.mesh" "$WORK/m.tpk" --json > "$WOR
 printf '*NODE\n1, 0, 0, 0\n*INCLUDE, INPUT=nowhere.inp\n' > "$WORK/model/bad.inp"
 expect_exit 2 "$TPK" convert "$WORK/model/bad.inp" "$WORK/bad.tpk"
 expect_stderr "bad.inp:3: \*INCLUDE: .*nowhere.inp: cannot open"
+# A C3D27 is read as its C3D20 (the order of its face and centre nodes is not documented to us), and
+# says so: a one-element unit cube with its 27 lattice nodes.
+"$PY" - "$WORK/c3d27.inp" <<'PYEOF'
+import sys
+c = [(0,0,0),(1,0,0),(1,1,0),(0,1,0),(0,0,1),(1,0,1),(1,1,1),(0,1,1)]
+e = [(0,1),(1,2),(2,3),(3,0),(4,5),(5,6),(6,7),(7,4),(0,4),(1,5),(2,6),(3,7)]
+p = c + [tuple((c[a][k] + c[b][k]) / 2 for k in range(3)) for a, b in e]
+p += [(0.5,0.5,0),(0.5,0.5,1),(0.5,0,0.5),(1,0.5,0.5),(0.5,1,0.5),(0,0.5,0.5),(0.5,0.5,0.5)]
+with open(sys.argv[1], "w") as f:
+    f.write("*NODE\n" + "".join("%d, %g, %g, %g\n" % ((i + 1,) + q) for i, q in enumerate(p)))
+    ids = [str(i + 1) for i in range(27)]
+    f.write("*ELEMENT, TYPE=C3D27\n1, " + ", ".join(ids[:15]) + ",\n" + ", ".join(ids[15:]) + "\n")
+PYEOF
+convert_checked "$WORK/c3d27.inp" "$WORK/c3d27.tpk" --json > "$WORK/c3d27.json" 2> "$WORK/err"
+grep -q "1 C3D27 elements read as C3D20" "$WORK/err" || fail "c3d27.inp: no warning that C3D27 is read as C3D20"
 echo "1 passed, 0 failed"

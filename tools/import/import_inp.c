@@ -55,6 +55,7 @@ typedef struct inp_reader {
     char (*set_names)[TPK_NAME_MAX];
     int set_count;
     int64_t dropped; /* non-solid elements */
+    int64_t subset_cells; /* C3D27 read as C3D20 (their face and centre nodes unused) */
     int parts;       /* *PART keywords: each part numbers its nodes and elements on its own */
     int64_t dropped_by_type[256];
 } inp_reader;
@@ -267,6 +268,7 @@ static int add_element(inp_reader *r, tpk_scan *s, inp_block *b)
     r->offsets[r->cell_count] = r->conn_count;
     r->conn_count += b->corners;
     r->offsets[++r->cell_count] = r->conn_count;
+    r->subset_cells += b->nodes > b->corners;
     return 0;
 }
 
@@ -548,6 +550,9 @@ static int finish(inp_reader *r, const char *name, tpk_mesh *out)
     if (r->dropped)
         tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not solids (surfaces, shells, beams...)", name,
                       (long long)r->dropped);
+    if (r->subset_cells)
+        tpk_diag_warn(r->diag, "%s: %lld C3D27 elements read as C3D20, without their face and centre nodes", name,
+                      (long long)r->subset_cells);
     if (tpk_import_take_cells(out, r->node_count, &r->points, r->cell_count, &r->types, &r->offsets, &conn))
         return tpk_diag_fail(r->diag, "%s: out of memory", name);
     if (r->set_count) {
