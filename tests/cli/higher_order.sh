@@ -64,6 +64,18 @@ done
 outside() { "$TPK" check "$1" --against "$2" --samples 8 | sed -n 's/.*), \([0-9]*\) in no tet.*/\1/p'; }
 [ "$(outside "$WORK/complete.tpk" "$WORK/complete.msh")" = 0 ] || fail "complete: samples outside the split file"
 [ "$(outside "$WORK/completec.tpk" "$WORK/complete.msh")" -gt 0 ] || fail "complete: no sample outside the corners' file"
+# The same as JSON (no field to compare: the .msh has none).
+"$TPK" check "$WORK/complete.tpk" --against "$WORK/complete.msh" --samples 8 --json > "$WORK/against.json" ||
+    fail "check --against --json: exit $?"
+"$TPK" check "$WORK/completec.tpk" --against "$WORK/complete.msh" --samples 8 --json > "$WORK/againstc.json" ||
+    fail "check --against --json (corners): exit $?"
+"$PY" - "$WORK/against.json" "$WORK/againstc.json" <<'PYEOF' || fail "check --against --json: unexpected report"
+import json, sys
+a, c = (json.load(open(f)) for f in sys.argv[1:3])
+assert a["outside"] == 0 and a["samples"] == c["samples"] > 0 and a["samples_per_axis"] == 8, a
+assert a["bound"] is None and not a["bound_exceeded"] and a["fields"] == [], a
+assert c["outside"] > 0, c
+PYEOF
 [ "$(cat "$WORK/complete.vertices")" = "$(cat "$WORK/serendipity.vertices")" ] ||
     fail "serendipity mesh: $(cat "$WORK/serendipity.vertices") vertices, the complete one $(cat "$WORK/complete.vertices")"
 echo "ok"

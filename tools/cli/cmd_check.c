@@ -37,7 +37,8 @@ static const char check_help[] =
     "                          file's tets (TMAP first); per point field shared by name (scalar): the max\n"
     "                          and RMS difference between the file's linear interpolant and the source\n"
     "                          cell's own, as a fraction of the field's range, and the share of points in\n"
-    "                          no tet. Exit 1 when META records a bound (\"max_error\") that a field exceeds\n"
+    "                          no tet. Exit 1 when META records a bound (\"max_error\") that a field exceeds;\n"
+    "                          --json prints the report as one JSON object\n"
     "  --samples N             with --against: N samples per parametric axis (1-8; default 4)\n"
     "\n"
     "Input formats (--format NAME, or tpk; tetpack formats says what each carries):\n";
@@ -52,13 +53,51 @@ static int parse_double(const char *cmd, const char *opt, const char *text, doub
     return 0;
 }
 
-/* check INPUT.tpk --against SOURCE (check/check_against.h): text report, exit 1 over a recorded bound. */
-static int check_against(const char *cmd, const char *input, const char *source, const char *format, int samples)
+/* The --against report as one JSON object (fractions of each field's range; null where not a number). */
+static void print_against_json(const tpk_against_report *r, const char *input, const char *source, int samples)
+{
+    tpk_strbuf sb = {0};
+    tpk_strbuf_printf(&sb, "{\"file\":");
+    tpk_strbuf_json_string(&sb, input);
+    tpk_strbuf_printf(&sb, ",\"source\":");
+    tpk_strbuf_json_string(&sb, source);
+    tpk_strbuf_printf(&sb, ",\"samples_per_axis\":%d,\"samples\":%lld,\"cells\":%lld,\"cells_skipped\":%lld,"
+                      "\"outside\":%lld,\"fields\":[", samples, (long long)r->samples, (long long)r->cells,
+                      (long long)r->cells_skipped, (long long)r->outside);
+    for (int f = 0; f < r->field_count; f++) {
+        tpk_strbuf_printf(&sb, "%s{\"name\":", f ? "," : "");
+        tpk_strbuf_json_string(&sb, r->fields[f].name);
+        tpk_strbuf_printf(&sb, ",\"steps\":%d,\"range\":", r->fields[f].steps);
+        tpk_strbuf_json_number(&sb, r->fields[f].range);
+        tpk_strbuf_printf(&sb, ",\"max_error\":");
+        tpk_strbuf_json_number(&sb, r->fields[f].max_error);
+        tpk_strbuf_printf(&sb, ",\"rms_error\":");
+        tpk_strbuf_json_number(&sb, r->fields[f].rms_error);
+        tpk_strbuf_printf(&sb, "}");
+    }
+    tpk_strbuf_printf(&sb, "],\"bound\":");
+    if (r->has_bound)
+        tpk_strbuf_json_number(&sb, r->bound);
+    else
+        tpk_strbuf_printf(&sb, "null");
+    tpk_strbuf_printf(&sb, ",\"bound_exceeded\":%s}\n", r->bound_exceeded ? "true" : "false");
+    fputs(sb.data ? sb.data : "{}\n", stdout);
+    tpk_strbuf_free(&sb);
+}
+
+/* check INPUT.tpk --against SOURCE (check/check_against.h): text or JSON report, exit 1 over a recorded
+ * bound. */
+static int check_against(const char *cmd, const char *input, const char *source, const char *format, int samples,
+                         int json)
 {
     tpk_against_report r;
     tpk_diag diag = {0};
     if (tpk_check_against(input, source, format, samples, &r, &diag) != 0)
         return tpk_cli_fail(cmd, "%s", diag.message);
+    if (json) {
+        print_against_json(&r, input, source, samples);
+        return r.bound_exceeded ? TPK_EXIT_PROBLEMS : TPK_EXIT_OK;
+    }
     printf("%s against %s: %lld samples in %lld source cells (%d per axis), %lld in no tet of the file (%.4g%%)\n",
            input, source, (long long)r.samples, (long long)r.cells, samples, (long long)r.outside,
            r.samples ? 100.0 * (double)r.outside / (double)r.samples : 0.0);
@@ -148,7 +187,7 @@ int tpk_cmd_check(int argc, char **argv)
     if (!input)
         return tpk_cli_fail(cmd, "no input given (tetpack check --help)");
     if (against)
-        return check_against(cmd, input, against, format, samples);
+        return check_against(cmd, input, against, format, samples, json);
     opt.progress = progress >= 0 ? progress : isatty(2);
     tpk_check_report report;
     if (tpk_check_report_init(&report, &opt))
