@@ -483,12 +483,55 @@ def section_levels(summary):
             "pixel step `render --max-ms` picks, with its frame time and PSNR.\n" + open(path).read() + "\n")
 
 
+def section_fidelity(summary):
+    rows = jsonl("fidelity.jsonl")
+    if not rows:
+        return ""
+    out = ("## 3b. Fidelity\n\n`bench/bench_fidelity.sh`: each mesh converted plainly, with `convert --max-error` "
+           "(a bound on the difference from each source cell's own interpolant, as a fraction of the field's range), "
+           "and after uniform subdivision of every cell at 1-3 levels (`bench/fidelity.py`, ParaView's \"Nonlinear "
+           "Subdivision Level\" for the volume). Errors are `check --against`'s samples through the source cells' own "
+           "maps (max and RMS, fractions of the field's range); times are medians; render is the CPU reference.\n\n")
+    for mesh in dict.fromkeys(r["mesh"] for r in rows):
+        mine = [r for r in rows if r["mesh"] == mesh]
+        missing = [r for r in mine if "missing" in r]
+        done = [r for r in mine if "missing" not in r]
+        out += f"**{mesh}**\n\n" + table(
+            ["method", "tets", "file bytes", "convert s", "render s", "max error", "RMS error", "outside", "bound",
+             "check exit"],
+            [[r["method"], r["tets"], r["bytes"], r["convert_s"], r["render_s"], r["max_error"], r["rms_error"],
+              r["outside"], r["bound"], r["check_exit"]] for r in done]) + "\n"
+        for r in missing:
+            out += f"- {r['method']}: {r['missing']}\n"
+        plain = next((r for r in done if r["method"] == "none"), None)
+        uniform = sorted((r for r in done if r["method"].startswith("uniform")), key=lambda r: r["tets"])
+        for r in done:
+            if not r["method"].startswith("max-error") or r["max_error"] is None:
+                continue
+            bound = r["bound"] if r["bound"] is not None else float("nan")
+            meets = [u for u in uniform if u["max_error"] is not None and u["max_error"] <= bound]
+            if meets:
+                u = meets[0]
+                line = (f"{mesh}, `--{r['method']}`: {r['tets']:,} tets, {r['tets'] / u['tets']:.2f}x those of "
+                        f"{u['method']} ({u['tets']:,}), the first uniform level whose sampled error "
+                        f"({fmt(u['max_error'])}) meets the bound")
+            else:
+                line = f"{mesh}, `--{r['method']}`: {r['tets']:,} tets; no uniform level tried meets the bound"
+            if plain:
+                line += (f"; conversion {r['convert_s'] / max(r['tets'], 1) * 1e9:.0f} ns per tet against "
+                         f"{plain['convert_s'] / max(plain['tets'], 1) * 1e9:.0f} plain")
+            out += f"- {line}\n"
+            summary.append(line)
+        out += "\n"
+    return out
+
+
 def main():
     machine = json.load(open(os.path.join(DATA, "machine.json")))
     summary = []
     body = (section_render(summary) + section_occlusion(summary) + section_iso(summary) + section_levels(summary)
             + section_storage(summary)
-            + section_accuracy(summary)
+            + section_accuracy(summary) + section_fidelity(summary)
             + section_scaling(summary) + section_gpu(summary) + section_hard(summary))
     closing = "## Summary\n\n" + "".join(f"- {s}\n" for s in summary)
     closing += "\nPlots: " + ", ".join(f"`{p}` ({t})" for p, t in PLOTS) + ".\n"
