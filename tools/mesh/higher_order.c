@@ -121,6 +121,64 @@ static int tetra_pieces(int diagonal, piece *p)
     return 8;
 }
 
+/* ---- Lagrange hexahedra of order 3 and up: every node a corner of a sub-hexahedron ------------ */
+
+#define LAGRANGE_MAX_ORDER 10
+
+/* The order p of a Lagrange hexahedron (72) with n = (p+1)^3 nodes, 3 <= p <= LAGRANGE_MAX_ORDER; else
+ * 0 (order 2 is split as the triquadratic hexahedron; an anisotropic order is not read here). */
+static int lagrange_hex_order(int type, int64_t n)
+{
+    if (type != 72)
+        return 0;
+    for (int p = 3; p <= LAGRANGE_MAX_ORDER; p++)
+        if ((int64_t)(p + 1) * (p + 1) * (p + 1) == n)
+            return p;
+    return 0;
+}
+
+/* The node of lattice point (i, j, k), 0 <= i, j, k <= p, in VTK 9's numbering of the Lagrange
+ * hexahedron (vtkHigherOrderHexahedron::PointIndexFromIJK): the 8 corners; the 12 edges' inner points,
+ * each edge in increasing parametric order, the edges as the triquadratic hexahedron lists its
+ * mid-edges (bottom 01 12 32 03, top likewise, then the vertical edges at corners 0, 1, 2, 3); the
+ * faces' (r = 0, r = 1, s = 0, s = 1, t = 0, t = 1, each with its lower axis fastest); then the body's
+ * (r fastest). For p = 2 this is the 27-node numbering. */
+static int lagrange_hex_node(int p, int i, int j, int k)
+{
+    int ib = i == 0 || i == p, jb = j == 0 || j == p, kb = k == 0 || k == p, m = p - 1;
+    int corner_of_ij = i ? (j ? 2 : 1) : (j ? 3 : 0);
+    if (ib && jb && kb)
+        return corner_of_ij + (k ? 4 : 0);
+    int at = 8;
+    if (ib + jb + kb == 2) {
+        if (!ib) /* along r: bottom edges 01 then 32, then the top's */
+            return at + (i - 1) + (j ? 2 * m : 0) + (k ? 4 * m : 0);
+        if (!jb) /* along s: bottom edges 12 then 03 */
+            return at + (j - 1) + (i ? m : 3 * m) + (k ? 4 * m : 0);
+        return at + 8 * m + (k - 1) + m * corner_of_ij; /* vertical */
+    }
+    at += 12 * m;
+    if (ib + jb + kb == 1) {
+        if (ib)
+            return at + (j - 1) + m * (k - 1) + (i ? m * m : 0);
+        at += 2 * m * m;
+        if (jb)
+            return at + (i - 1) + m * (k - 1) + (j ? m * m : 0);
+        at += 2 * m * m;
+        return at + (i - 1) + m * (j - 1) + (k ? m * m : 0);
+    }
+    return at + 6 * m * m + (i - 1) + m * ((j - 1) + m * (k - 1));
+}
+
+/* Sub-hexahedron (a, b, c) of an order-p Lagrange hexahedron: its 8 nodes, VTK's corner order. */
+static void lagrange_hex_piece(int p, int a, int b, int c, int32_t *local)
+{
+    static const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                     {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    for (int v = 0; v < 8; v++)
+        local[v] = lagrange_hex_node(p, a + corner[v][0], b + corner[v][1], c + corner[v][2]);
+}
+
 /* The full lattice type of a split type (whose pieces are written in its numbering). */
 static int full_type(int type)
 {
@@ -428,7 +486,8 @@ static int move_face_streams(tpk_mesh *m, const int32_t *cell_source, int64_t ce
     offsets[0] = 0;
     for (int64_t c = 0; c < cells; c++) {
         int32_t from = cell_source[c];
-        int whole = !split_type(m->cell_types[from]);
+        int whole = !split_type(m->cell_types[from]) &&
+                    !lagrange_hex_order(m->cell_types[from], m->cell_offsets[from + 1] - m->cell_offsets[from]);
         int64_t begin = m->face_offsets[from], end = m->face_offsets[from + 1];
         /* the stream stays where it is: a cell's range, or an empty one at the same place */
         offsets[c] = whole ? begin : end;
@@ -469,6 +528,12 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
     for (int64_t c = 0; c < m->cell_count; c++) {
         int type = m->cell_types[c];
         int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
+        int order = lagrange_hex_order(type, n);
+        if (order) {
+            cells += (int64_t)order * order * order, conn += 8 * (int64_t)order * order * order;
+            out->split_cells++;
+            continue;
+        }
         if (!split_type(type)) {
             cells++, conn += n;
             continue;
@@ -512,6 +577,19 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
         int type = m->cell_types[c];
         const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
         int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
+        int order = lagrange_hex_order(type, n);
+        for (int a = 0; a < order; a++) /* every node present: sub-hexahedra of the node lattice */
+            for (int b = 0; b < order; b++)
+                for (int d = 0; d < order; d++) {
+                    int32_t local[8];
+                    lagrange_hex_piece(order, a, b, d, local);
+                    types[k] = TPK_CELL_HEXAHEDRON, source[k] = (int32_t)c;
+                    for (int v = 0; v < 8; v++)
+                        cconn[at + v] = nodes[local[v]];
+                    offsets[++k] = at += 8;
+                }
+        if (order)
+            continue;
         if (!split_type(type)) {
             types[k] = (uint8_t)type, source[k] = (int32_t)c;
             memcpy(cconn + at, nodes, sizeof *cconn * (size_t)n);

@@ -32,7 +32,8 @@ typedef struct tpk_higher_split {
 
 /* Each quadratic tetra (24), quadratic and triquadratic hexahedron (25, 29), quadratic, quadratic-linear
  * and biquadratic-quadratic wedge (26, 31, 32), quadratic pyramid (27), and Lagrange tetra, hexahedron
- * and wedge of order 2 (71, 72, 73 with 10, 27, 18 nodes: as 24, 29, 32) replaced by the linear cells
+ * and wedge of order 2 (71, 72, 73 with 10, 27, 18 nodes: as 24, 29, 32), and Lagrange hexahedra of
+ * order p = 3..10 ((p+1)^3 nodes, VTK 9's numbering: into p^3 hexahedra) replaced by the linear cells
  * of its own node lattice: a tetra by 8 tetra (the inner octahedron cut along its shortest diagonal), a
  * hexahedron by 8 hexahedra, a wedge by 8 (31: 4) wedges, a pyramid by 6 pyramids and 4 tetra. Every
  * node is a corner of some linear cell. Points a cell lacks (a 20-node hexahedron's face and cell
