@@ -302,6 +302,10 @@ int tpk_cmd_render(int argc, char **argv)
         if (a.level > 0 || a.max_ms > 0) /* convert makes levels of one file only (--levels and --parts) */
             return tpk_cli_fail("render", "%s: a part set has no levels of detail: %s draws a single file's",
                                 a.path, a.level > 0 ? "--level" : "--max-ms");
+        tpk_diag backend_diag;
+        memset(&backend_diag, 0, sizeof backend_diag);
+        if (resolve_backend(&a, &backend_diag) != 0)
+            return tpk_cli_fail("render", "%s", backend_diag.message);
         return render_part_set(&a);
     }
     int rc = render_file(&a, in.file);
