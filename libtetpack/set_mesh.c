@@ -9,10 +9,13 @@
  *   - Shell: the faces with no link into an open part, with the merged ids.
  * Untrusted input: the parts' arrays are checked by tpk_load_arrays and the walk of recover.c; each link
  * is checked both ways (the other part's record points back, the faces' positions are the same). */
+#include <pthread.h>
 #include <stdarg.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "internal_mesh.h"
 
@@ -334,6 +337,66 @@ static tpk_result merge_part_shell(tpk_set_mesh *m, uint32_t p, const tpk_mesh_a
     return TPK_OK;
 }
 
+/* The parts' tets on up to one thread per core, a part at a time each (they write disjoint ranges; each
+ * holds its part's vertices and neighbors, 32 bytes a tet, while it works): the same arrays for any
+ * thread count. The failure reported is that of the lowest part that failed. */
+typedef struct tets_job {
+    tpk_set_mesh *m;
+    const tpk_mesh_arrays *parts;
+    const tpk_link **links;
+    const uint64_t *link_counts;
+    atomic_uint next;
+    pthread_mutex_t lock;
+    uint32_t failed_part;
+    tpk_result result;
+    char err[512];
+} tets_job;
+
+static void *tets_worker(void *arg)
+{
+    tets_job *job = arg;
+    for (;;) {
+        uint32_t p = atomic_fetch_add(&job->next, 1);
+        if (p >= job->m->part_count)
+            return NULL;
+        if (!open_part(job->m, p))
+            continue;
+        char err[512] = "";
+        tpk_result r = merge_part_tets(job->m, p, &job->parts[p], job->links[p], job->link_counts[p], err, sizeof err);
+        if (r == TPK_OK)
+            continue;
+        pthread_mutex_lock(&job->lock);
+        if (job->result == TPK_OK || p < job->failed_part) {
+            job->result = r;
+            job->failed_part = p;
+            memcpy(job->err, err, sizeof err);
+        }
+        pthread_mutex_unlock(&job->lock);
+    }
+}
+
+static tpk_result merge_tets(tpk_set_mesh *m, const tpk_mesh_arrays *parts, const tpk_link **links,
+                             const uint64_t *link_counts, char *err, size_t cap)
+{
+    tets_job job = {.m = m, .parts = parts, .links = links, .link_counts = link_counts, .result = TPK_OK};
+    atomic_init(&job.next, 0);
+    pthread_mutex_init(&job.lock, NULL);
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    uint32_t n = cores < 1 ? 1 : cores > 64 ? 64 : (uint32_t)cores;
+    n = n > m->part_count ? m->part_count : n;
+    pthread_t threads[64];
+    uint32_t started = 0;
+    while (started + 1 < n && pthread_create(&threads[started], NULL, tets_worker, &job) == 0)
+        started++;
+    tets_worker(&job); /* this thread too; alone when no thread could start */
+    for (uint32_t i = 0; i < started; i++)
+        pthread_join(threads[i], NULL);
+    pthread_mutex_destroy(&job.lock);
+    if (job.result != TPK_OK)
+        fail(err, cap, job.result, "%s", job.err);
+    return job.result;
+}
+
 /* ---- Entry points -------------------------------------------------------------------------------- */
 
 static tpk_result build(tpk_set_mesh *m, tpk_mesh_arrays *parts, const tpk_link **links, uint64_t *link_counts,
@@ -371,12 +434,10 @@ static tpk_result build(tpk_set_mesh *m, tpk_mesh_arrays *parts, const tpk_link 
     m->shell = malloc(sizeof *m->shell * (shell_total ? shell_total : 1));
     if (!m->tets || !m->shell)
         return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu tets", (unsigned long long)tets);
+    r = merge_tets(m, parts, links, link_counts, err, cap);
     for (uint32_t p = 0; p < m->part_count && r == TPK_OK; p++)
-        if (open_part(m, p)) {
-            r = merge_part_tets(m, p, &parts[p], links[p], link_counts[p], err, cap);
-            if (r == TPK_OK && merge_part_shell(m, p, &parts[p], links[p], link_counts[p], &m->shell_count) != TPK_OK)
-                r = fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for part %u's shell", p);
-        }
+        if (open_part(m, p) && merge_part_shell(m, p, &parts[p], links[p], link_counts[p], &m->shell_count) != TPK_OK)
+            r = fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for part %u's shell", p);
     return r;
 }
 
