@@ -19,6 +19,13 @@
 
 #include "internal_mesh.h"
 
+struct set_field {
+    char name[64];         /* "" for tpk_set_mesh_arrays' NULL */
+    uint32_t step;
+    int tet;               /* a tet field (else point) */
+    float *values;         /* NULL: the point field is missing from a part */
+};
+
 struct tpk_set_mesh {
     tpk_partset *set;
     uint32_t part_count;
@@ -32,7 +39,7 @@ struct tpk_set_mesh {
     float *positions;
     void *tets;
     tpk_shell_face *shell;
-    float **fields;        /* every field handed out, freed with the mesh */
+    struct set_field *fields; /* every field handed out, kept (and handed out again) until destroy */
     size_t field_count;
 };
 
@@ -484,7 +491,7 @@ void tpk_set_mesh_destroy(tpk_set_mesh *m)
     if (!m)
         return;
     for (size_t i = 0; i < m->field_count; i++)
-        free(m->fields[i]);
+        free(m->fields[i].values);
     free(m->fields);
     free(m->source);
     free(m->slot_base);
@@ -496,17 +503,55 @@ void tpk_set_mesh_destroy(tpk_set_mesh *m)
     free(m);
 }
 
-/* A new field array of n floats, owned by the mesh. */
-static float *new_field(tpk_set_mesh *m, uint64_t n)
+/* The field kept for (name, step, kind), or NULL. */
+static struct set_field *kept_field(tpk_set_mesh *m, const char *name, uint32_t step, int tet)
 {
-    float **list = realloc(m->fields, (m->field_count + 1) * sizeof *list);
+    for (size_t i = 0; i < m->field_count; i++)
+        if (m->fields[i].step == step && m->fields[i].tet == tet && !strcmp(m->fields[i].name, name ? name : ""))
+            return &m->fields[i];
+    return NULL;
+}
+
+/* A new field entry with room for n floats (values NULL when n is 0), not counted until the caller has
+ * filled it; NULL with nothing allocated when out of memory. */
+static struct set_field *new_field(tpk_set_mesh *m, const char *name, uint32_t step, int tet, uint64_t n)
+{
+    struct set_field *list = realloc(m->fields, (m->field_count + 1) * sizeof *list);
     if (!list)
         return NULL;
     m->fields = list;
-    float *f = malloc(sizeof *f * (n ? n : 1));
-    if (f)
-        m->fields[m->field_count++] = f;
+    struct set_field *f = &list[m->field_count];
+    memset(f, 0, sizeof *f);
+    snprintf(f->name, sizeof f->name, "%s", name ? name : "");
+    f->step = step;
+    f->tet = tet;
+    if (n && !(f->values = malloc(sizeof *f->values * n)))
+        return NULL;
     return f;
+}
+
+/* Every open part's point field into one array by the merged ids; values NULL when a part lacks it. */
+static tpk_result gather_point_field(tpk_set_mesh *m, const char *field_name, uint32_t step, float **out, char *err,
+                                     size_t cap)
+{
+    float *scalars = malloc(sizeof *scalars * (m->vertex_count ? m->vertex_count : 1));
+    if (!scalars)
+        return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's point field");
+    for (uint32_t p = 0; p < m->part_count; p++) {
+        if (!open_part(m, p))
+            continue;
+        tpk_mesh_arrays mp;
+        tpk_result r = part_arrays(m, p, field_name, step, &mp, err, cap);
+        if (r != TPK_OK || !mp.scalars) { /* a part without the field: none */
+            free(scalars);
+            *out = NULL;
+            return r;
+        }
+        for (uint64_t a = 0; a < mp.vertex_count; a++)
+            scalars[m->slot_id[m->slot_base[p] + a]] = mp.scalars[a];
+    }
+    *out = scalars;
+    return TPK_OK;
 }
 
 tpk_result tpk_set_mesh_arrays(tpk_set_mesh *m, const char *field_name, uint32_t step, tpk_mesh_arrays *out,
@@ -517,20 +562,20 @@ tpk_result tpk_set_mesh_arrays(tpk_set_mesh *m, const char *field_name, uint32_t
     if (!m || !out)
         return TPK_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
-    float *scalars = NULL;
-    for (uint32_t p = 0; p < m->part_count; p++) {
-        if (!open_part(m, p))
-            continue;
-        tpk_mesh_arrays mp;
-        tpk_result r = part_arrays(m, p, field_name, step, &mp, err, cap);
+    if (field_name && strlen(field_name) >= sizeof m->fields->name)
+        return fail(err, cap, TPK_ERR_NOT_FOUND, "no field named '%.63s...' (names are shorter, spec §7.1)", field_name);
+    struct set_field *f = kept_field(m, field_name, step, 0);
+    if (!f) {
+        float *scalars = NULL;
+        tpk_result r = gather_point_field(m, field_name, step, &scalars, err, cap);
         if (r != TPK_OK)
             return r;
-        if (!mp.scalars)
-            break; /* a part without the field: none */
-        if (!scalars && !(scalars = new_field(m, m->vertex_count)))
+        if (!(f = new_field(m, field_name, step, 0, 0))) {
+            free(scalars);
             return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's point field");
-        for (uint64_t a = 0; a < mp.vertex_count; a++)
-            scalars[m->slot_id[m->slot_base[p] + a]] = mp.scalars[a];
+        }
+        f->values = scalars;
+        m->field_count++;
     }
     out->vertex_count = m->vertex_count;
     out->tet_count = m->tet_base[m->part_count];
@@ -542,7 +587,7 @@ tpk_result tpk_set_mesh_arrays(tpk_set_mesh *m, const char *field_name, uint32_t
     out->tet20 = m->layout == TPK_LAYOUT_TET20 ? m->tets : NULL;
     out->tet32 = m->layout == TPK_LAYOUT_TET32 ? m->tets : NULL;
     out->shell = m->shell;
-    out->scalars = scalars;
+    out->scalars = f->values;
     return TPK_OK;
 }
 
@@ -554,20 +599,30 @@ tpk_result tpk_set_mesh_tet_field(tpk_set_mesh *m, const char *field_name, uint3
     if (!m || !out || !field_name)
         return TPK_ERR_INVALID_ARGUMENT;
     *out = NULL;
-    float *values = new_field(m, m->tet_base[m->part_count]);
-    if (!values)
-        return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's tet field");
+    if (strlen(field_name) >= sizeof m->fields->name)
+        return fail(err, cap, TPK_ERR_NOT_FOUND, "no field named '%.63s...' (names are shorter, spec §7.1)", field_name);
+    struct set_field *kept = kept_field(m, field_name, step, 1);
+    if (kept) {
+        *out = kept->values;
+        return TPK_OK;
+    }
+    struct set_field *f = new_field(m, field_name, step, 1, m->tet_base[m->part_count] ? m->tet_base[m->part_count] : 1);
+    if (!f)
+        return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's tet field '%.64s'", field_name);
     for (uint32_t p = 0; p < m->part_count; p++) {
         if (!open_part(m, p))
             continue;
         tpk_file *file = tpk_partset_file(m->set, p);
         const float *part = NULL;
         tpk_result r = tpk_load_tet_field(file, field_name, step, &part);
-        if (r != TPK_OK)
+        if (r != TPK_OK) {
+            free(f->values);
             return fail(err, cap, r, "part %u: %s", p, tpk_error_text(file));
-        memcpy(values + m->tet_base[p], part, sizeof *values * (m->tet_base[p + 1] - m->tet_base[p]));
+        }
+        memcpy(f->values + m->tet_base[p], part, sizeof *f->values * (m->tet_base[p + 1] - m->tet_base[p]));
     }
-    *out = values;
+    m->field_count++;
+    *out = f->values;
     return TPK_OK;
 }
 

@@ -24,7 +24,8 @@
 static const char render_help[] =
     "usage: tetpack render FILE -o IMAGE.png [options]\n"
     "\n"
-    "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
+    "FILE is a .tpk, a part set's manifest (.tpkset, convert --parts: its parts drawn as the one mesh\n"
+    "they were cut from), or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
     "Ray-marches the tets (shell BVH entry, watertight tet-to-tet marching) with the Vulkan renderer on\n"
     "a GPU, else with the CPU reference on all cores (--backend), and writes a PNG. Both draw the same\n"
     "picture. Emission-absorption: within a tet the scalar is linear, so each piece is split exactly\n"

@@ -56,6 +56,28 @@ static int load_part(const render_args *a, tpk_partset *set, uint32_t p, tpk_mes
     return 0;
 }
 
+void render_set_extent(const render_args *a, tpk_partset *set, double bounds_min[3], double bounds_max[3],
+                       double range[2])
+{
+    int first = 1;
+    for (uint32_t p = 0; p < tpk_partset_part_count(set); p++) {
+        tpk_file *file = tpk_partset_file(set, p);
+        if (!file)
+            continue;
+        tpk_file_info info;
+        tpk_get_info(file, &info);
+        double r[2];
+        render_args_field_range(file, a->field, r);
+        for (int k = 0; k < 3; k++) {
+            bounds_min[k] = first || info.bounds_min[k] < bounds_min[k] ? info.bounds_min[k] : bounds_min[k];
+            bounds_max[k] = first || info.bounds_max[k] > bounds_max[k] ? info.bounds_max[k] : bounds_max[k];
+        }
+        range[0] = first || r[0] < range[0] ? r[0] : range[0];
+        range[1] = first || r[1] > range[1] ? r[1] : range[1];
+        first = 0;
+    }
+}
+
 /* The parts as one mesh, with the field shown (a point field in mesh, a tet field in opt). */
 static int load_set_mesh(const render_args *a, tpk_partset *set, const set_view *v, tpk_set_mesh **out,
                          tpk_mesh_arrays *mesh, tpk_render_options *opt)
