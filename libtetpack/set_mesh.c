@@ -67,7 +67,7 @@ static tpk_layout source_layout(tpk_file *file)
     return TPK_LAYOUT_TET16;
 }
 
-/* Part p's arrays (positions, tets, shell; the point field asked, or none) and links. */
+/* Part p's arrays (positions, tets, shell; the point field asked, or none) in its source layout. */
 static tpk_result part_arrays(const tpk_set_mesh *m, uint32_t p, const char *field, uint32_t step,
                               tpk_mesh_arrays *out, char *err, size_t cap)
 {
