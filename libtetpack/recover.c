@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "tetpack.h"
+#include "internal_mesh.h"
 
 typedef struct walk {
     const tpk_mesh_arrays *mesh;
@@ -142,29 +142,39 @@ static tpk_result walk_from_shell(walk *w)
     return w->tail == w->tet_count ? TPK_OK : TPK_ERR_MESH; /* a tet the shell does not reach */
 }
 
-static tpk_result recover_tet32(const tpk_mesh_arrays *mesh, int32_t *dst)
+/* Tet32 stores the vertices and the neighbors opposite each: nbr (when asked) gets them by rank. */
+static tpk_result recover_tet32(const tpk_mesh_arrays *mesh, int32_t *dst, int32_t *nbr)
 {
     for (uint64_t t = 0; t < mesh->tet_count; t++) {
         const tpk_tet32 *r = &mesh->tet32[t];
-        dst[4 * t + 0] = r->v[0];
-        dst[4 * t + 1] = r->v[1];
-        dst[4 * t + 2] = r->v[2];
-        dst[4 * t + 3] = r->vx ^ r->v[0] ^ r->v[1] ^ r->v[2];
+        int32_t *q = dst + 4 * t;
+        q[0] = r->v[0];
+        q[1] = r->v[1];
+        q[2] = r->v[2];
+        q[3] = r->vx ^ r->v[0] ^ r->v[1] ^ r->v[2];
         for (int k = 0; k < 4; k++)
-            if (dst[4 * t + k] < 0 || (uint64_t)dst[4 * t + k] >= mesh->vertex_count)
+            if (q[k] < 0 || (uint64_t)q[k] >= mesh->vertex_count)
                 return TPK_ERR_CORRUPT;
+        if (nbr && (q[0] == q[1] || q[0] == q[2] || q[0] == q[3] || q[1] == q[2] || q[1] == q[3] || q[2] == q[3]))
+            return TPK_ERR_CORRUPT; /* the ranks would not tell the faces apart */
+        for (int k = 0; nbr && k < 4; k++) {
+            if (r->n[k] < -1 || (int64_t)r->n[k] >= (int64_t)mesh->tet_count)
+                return TPK_ERR_CORRUPT;
+            nbr[4 * t + rank_of(q, k)] = r->n[k];
+        }
     }
     return TPK_OK;
 }
 
-tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst)
+/* The walk (or Tet32's direct read); nbr: the caller's 4 per tet for the neighbors by rank, or NULL. */
+static tpk_result recover(const tpk_mesh_arrays *mesh, int32_t *dst, int32_t *nbr)
 {
     if (!mesh || (mesh->tet_count > 0 && !dst))
         return TPK_ERR_INVALID_ARGUMENT;
     if (mesh->tet_count > INT32_MAX || mesh->vertex_count > INT32_MAX)
         return TPK_ERR_LIMIT;
     if (mesh->layout == TPK_LAYOUT_TET32)
-        return mesh->tet32 || !mesh->tet_count ? recover_tet32(mesh, dst) : TPK_ERR_INVALID_ARGUMENT;
+        return mesh->tet32 || !mesh->tet_count ? recover_tet32(mesh, dst, nbr) : TPK_ERR_INVALID_ARGUMENT;
     if ((mesh->layout != TPK_LAYOUT_TET20 && mesh->layout != TPK_LAYOUT_TET16) ||
         (mesh->layout == TPK_LAYOUT_TET20 && !mesh->tet20 && mesh->tet_count) ||
         (mesh->layout == TPK_LAYOUT_TET16 && !mesh->tet16 && mesh->tet_count) ||
@@ -173,7 +183,7 @@ tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst)
     if (mesh->tet_count == 0)
         return TPK_OK;
     walk w = {mesh, (int64_t)mesh->tet_count, (int64_t)mesh->vertex_count, dst, NULL, NULL, 0, 0};
-    w.nbr = malloc(sizeof *w.nbr * 4 * mesh->tet_count);
+    w.nbr = nbr ? nbr : malloc(sizeof *w.nbr * 4 * mesh->tet_count);
     w.queue = malloc(sizeof *w.queue * mesh->tet_count);
     tpk_result rc = TPK_ERR_OUT_OF_MEMORY;
     if (w.nbr && w.queue) {
@@ -181,7 +191,18 @@ tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst)
             dst[i] = -1;
         rc = walk_from_shell(&w);
     }
-    free(w.nbr);
+    if (!nbr)
+        free(w.nbr);
     free(w.queue);
     return rc;
+}
+
+tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst)
+{
+    return recover(mesh, dst, NULL);
+}
+
+tpk_result tpki_recover_tets_neighbors(const tpk_mesh_arrays *mesh, int32_t *dst, int32_t *nbr)
+{
+    return nbr ? recover(mesh, dst, nbr) : TPK_ERR_INVALID_ARGUMENT;
 }

@@ -403,6 +403,33 @@ void tpk_partset_origin(const tpk_partset *set, double out[3]);
  * LINK chunk. Not for a part that is not open (TPK_ERR_INVALID_ARGUMENT). */
 tpk_result tpk_partset_links(tpk_partset *set, uint32_t i, const tpk_link **out, uint64_t *out_count);
 
+/* ---- A part set as one mesh ------------------------------------------------------------------------ */
+
+/* The open parts of a set as the arrays of one mesh, for renderers that take one file's (spec §15):
+ * a vertex on a cut stored once, the vertices numbered in an order that keeps every part's own (so the
+ * vertices of each tet and face compare as in the file the set was cut from), the tets part after part
+ * (tet t of part i is tpk_set_mesh_tet_base(i) + t), a linked face made the neighbor across it, and the
+ * shell the outer faces alone. The tets are written in `layout` whatever layouts the parts hold. Every
+ * array is a copy: the set must stay open only for tpk_set_mesh_arrays and tpk_set_mesh_tet_field.
+ * Untrusted input: safe; TPK_ERR_MESH (with a message in err_text) when a link does not join the same
+ * face both ways or the parts order their shared vertices differently, TPK_ERR_LIMIT past 2^31 - 1
+ * vertices, tets or shell faces. */
+typedef struct tpk_set_mesh tpk_set_mesh;
+tpk_result tpk_set_mesh_create(tpk_set_mesh **out, tpk_partset *set, tpk_layout layout, char *err_text,
+                               size_t err_cap);
+void tpk_set_mesh_destroy(tpk_set_mesh *mesh);
+/* The arrays, with point field `field_name` at `step` gathered from every part (NULL: each part's first
+ * point field, as tpk_load_arrays; scalars NULL when a part has none). The arrays live as long as the
+ * set mesh (each call's field too). */
+tpk_result tpk_set_mesh_arrays(tpk_set_mesh *mesh, const char *field_name, uint32_t step, tpk_mesh_arrays *out,
+                               char *err_text, size_t err_cap);
+/* Tet field `field_name` at `step`, part after part as the tets (tet_count floats, living as long as the
+ * set mesh). */
+tpk_result tpk_set_mesh_tet_field(tpk_set_mesh *mesh, const char *field_name, uint32_t step, const float **out,
+                                  char *err_text, size_t err_cap);
+/* The first tet of part i in the arrays (the total tet count for i = the part count). */
+uint64_t tpk_set_mesh_tet_base(const tpk_set_mesh *mesh, uint32_t i);
+
 /* ---- Marching a part set ---------------------------------------------------------------------------- */
 
 typedef struct tpk_set_marcher tpk_set_marcher;

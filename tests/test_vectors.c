@@ -489,6 +489,65 @@ TPK_TEST(vectors_two_parts)
     tpk_partset_close(set);
 }
 
+/* The set as one mesh (libtetpack/set_mesh.c): the single file's tets, positions and pieces, in Tet16
+ * (re-encoded from the parts' Tet32) and Tet32; a link that is not answered is
+ * refused by name. */
+TPK_TEST(vectors_set_mesh)
+{
+    tpk_partset *set = NULL;
+    char err[512] = "";
+    CHECK_EQ_INT(tpk_partset_open(&set, vector_path("two_parts.tpkset"), NULL, NULL, NULL, err, sizeof err), TPK_OK);
+    if (!set)
+        return;
+    tpk_result opened;
+    tpk_file *whole = open_vector("two_tets_zstd.tpk", 0, TPK_OK, &opened);
+    tpk_mesh_arrays w;
+    CHECK_EQ_INT(tpk_load_arrays(whole, TPK_LAYOUT_TET32, NULL, 0, &w), TPK_OK);
+    int32_t wq[8], mq[8];
+    CHECK_EQ_INT(tpk_recover_tets(&w, wq), TPK_OK);
+    tpk_marcher *wm = NULL;
+    CHECK_EQ_INT(tpk_marcher_create(&wm, &w), TPK_OK);
+    const tpk_layout layouts[3] = {TPK_LAYOUT_TET16, TPK_LAYOUT_TET20, TPK_LAYOUT_TET32};
+    for (int l = 0; l < 3; l++) {
+        tpk_set_mesh *sm = NULL;
+        tpk_mesh_arrays m;
+        CHECK_EQ_INT(tpk_set_mesh_create(&sm, set, layouts[l], err, sizeof err), TPK_OK);
+        CHECK_EQ_INT(tpk_set_mesh_arrays(sm, NULL, 0, &m, err, sizeof err), TPK_OK);
+        CHECK_EQ_INT((int)m.vertex_count, (int)w.vertex_count); /* the 3 vertices of the cut once */
+        CHECK_EQ_INT((int)m.tet_count, 2);
+        CHECK_EQ_INT((int)m.shell_face_count, (int)w.shell_face_count); /* the linked faces are not shell */
+        CHECK_EQ_INT((int)tpk_set_mesh_tet_base(sm, 1), 1);
+        CHECK_EQ_INT(tpk_recover_tets(&m, mq), TPK_OK);
+        for (int i = 0; i < 8; i++) { /* the same tets at the same places (Tet16/20 walks may rotate them) */
+            int found = 0;
+            for (int j = 4 * (i / 4); j < 4 * (i / 4) + 4; j++)
+                found += !memcmp(&m.positions[3 * mq[i]], &w.positions[3 * wq[j]], 3 * sizeof(float));
+            CHECK_EQ_INT(found, 1);
+        }
+        tpk_marcher *mm = NULL;
+        CHECK_EQ_INT(tpk_marcher_create(&mm, &m), TPK_OK);
+        const double org[3] = {two_tets_origin[0] + 0.1, two_tets_origin[1] + 0.2, two_tets_origin[2] - 1.0};
+        const double dir[3] = {0.3, 0.25, 1.0};
+        piece_list a = {0}, b = {0};
+        CHECK_EQ_INT(tpk_march_ray(wm, org, dir, 0, INFINITY, collect_piece, &a, NULL), TPK_OK);
+        CHECK_EQ_INT(tpk_march_ray(mm, org, dir, 0, INFINITY, collect_piece, &b, NULL), TPK_OK);
+        CHECK_EQ_INT(b.count, 2);
+        for (int i = 0; i < a.count && i < b.count; i++)
+            CHECK(a.seg[i].tet == b.seg[i].tet && a.seg[i].t_in == b.seg[i].t_in && a.seg[i].t_out == b.seg[i].t_out);
+        tpk_marcher_destroy(mm);
+        tpk_set_mesh_destroy(sm);
+    }
+    tpk_marcher_destroy(wm);
+    tpk_close(whole);
+    tpk_partset_close(set);
+
+    CHECK_EQ_INT(tpk_partset_open(&set, vector_path("bad_link.tpkset"), NULL, NULL, NULL, err, sizeof err), TPK_OK);
+    tpk_set_mesh *bad = NULL;
+    CHECK_EQ_INT(tpk_set_mesh_create(&bad, set, TPK_LAYOUT_TET16, err, sizeof err), TPK_ERR_MESH);
+    CHECK(bad == NULL && strstr(err, "link"));
+    tpk_partset_close(set);
+}
+
 /* A copy of two_parts.tpkset in the temp folder (beside copies of its parts) with `patch` applied to its
  * part records and the checksums recomputed: what tpk_partset_open says. */
 static tpk_result open_patched_set(void (*patch)(tpk_part_record *records), char *err, size_t cap)

@@ -10,6 +10,8 @@
 #   ./run-gpu-bench.sh --targets              the open GPU targets of issues 21 and 22 (targets.sh)
 #   ./run-gpu-bench.sh --convert              issue 22's conversion target on the host's cores (convert_ratio.sh)
 #   ./run-gpu-bench.sh --scaling              issue 37's scaling table on the host's cores (bench/scaling.sh)
+#   ./run-gpu-bench.sh --partset              issue 39's 1G-tet part set on one GPU (partset.sh; in stages:
+#                                             TPK_GPU_PARTSET_STAGE=grid, then convert, then render)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 OUT=$(mkdir -p "${1:-$ROOT/bench/gpu/bundle}" && cd "${1:-$ROOT/bench/gpu/bundle}" && pwd)
@@ -34,7 +36,9 @@ done | sort -u | while read -r lib; do
     esac
 done
 cp "$ROOT/bench/gpu/run.sh" "$ROOT/bench/gpu/targets.sh" "$ROOT/bench/gpu/convert_ratio.sh" "$ROOT/bench/gpu/table.py" \
-    "$STAGE/bench/gpu/"
+    "$ROOT/bench/gpu/partset.sh" "$STAGE/bench/gpu/"
+mkdir -p "$STAGE/tests/cli"
+cp "$ROOT/tests/cli/psnr.py" "$ROOT/tests/cli/png_read.py" "$STAGE/tests/cli/" # partset.sh's PSNR
 cp "$ROOT/bench/make_grid_vtk.py" "$ROOT/bench/scaling.sh" "$ROOT/bench/scaling_table.py" "$STAGE/bench/"
 cp "$ROOT/samples/cylinder.vtk" "$STAGE/samples/"
 cp "$DATA/sfepy/cube_big_tetra.mesh" "$STAGE/data/sfepy/"

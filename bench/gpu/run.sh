@@ -10,6 +10,8 @@
 #   (bench/gpu/convert_ratio.sh)
 #   bench/gpu/run.sh --scaling [--small] [--bin DIR] [--out DIR]: instead, issue 37's scaling table on this
 #   machine's cores, no GPU used (bench/scaling.sh: grids 120 and 200 at 1, 2, 4, ... threads)
+#   bench/gpu/run.sh --partset [--small] [--bin DIR] [--out DIR]: instead, issue 39's 1G-tet part set made,
+#   cut into 16 parts and rendered on one GPU, in stages of under 10 minutes (bench/gpu/partset.sh)
 # --bin: where `tetpack` and `bench_gpu` are (default: build-release, configured and built here when it
 # does not exist; the bundle passes its own bin/). --out: results (default bench/gpu/out): results.jsonl
 # (one JSON line per mesh, layout and effect set), results.md (a Markdown table), the .tpk files.
@@ -26,16 +28,17 @@
 set -euo pipefail
 HERE=$(cd "$(dirname "$0")" && pwd)
 ROOT=$(cd "$HERE/../.." && pwd)
-SMALL=0 TARGETS=0 CONVERT=0 SCALING=0 BIN="" OUT="$HERE/out"
+SMALL=0 TARGETS=0 CONVERT=0 SCALING=0 PARTSET=0 BIN="" OUT="$HERE/out"
 while [ $# -gt 0 ]; do
     case "$1" in
         --small) SMALL=1 ;;
         --targets) TARGETS=1 ;;
         --convert) CONVERT=1 ;;
         --scaling) SCALING=1 ;;
+        --partset) PARTSET=1 ;;
         --bin) BIN=$2; shift ;;
         --out) OUT=$2; shift ;;
-        *) echo "usage: bench/gpu/run.sh [--targets | --convert | --scaling] [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
+        *) echo "usage: bench/gpu/run.sh [--targets | --convert | --scaling | --partset] [--small] [--bin DIR] [--out DIR]" >&2; exit 2 ;;
     esac
     shift
 done
@@ -46,7 +49,7 @@ if [ -z "$BIN" ]; then
     cmake --build "$BIN" -j"$(nproc)" --target tetpack_cli bench_gpu >/dev/null
 fi
 TPK=$BIN/tetpack
-if [ $TARGETS = 1 ] || [ $CONVERT = 1 ] || [ $SCALING = 1 ]; then # all make a grid: the first python3 with numpy
+if [ $TARGETS = 1 ] || [ $CONVERT = 1 ] || [ $SCALING = 1 ] || [ $PARTSET = 1 ]; then # all make a grid: the first python3 with numpy
     PY=${PYTHON:-}
     for c in python3 /usr/bin/python3; do
         [ -n "$PY" ] || ! "$c" -c "import numpy" 2>/dev/null || PY=$c
@@ -57,6 +60,7 @@ fi
 [ $TARGETS = 0 ] || exec bash "$HERE/targets.sh" "$TPK" "$OUT" "$SMALL"
 [ $CONVERT = 0 ] || exec bash "$HERE/convert_ratio.sh" "$TPK" "$OUT" "$SMALL"
 [ $SCALING = 0 ] || exec bash "$HERE/../scaling.sh" "$TPK" "$OUT" "$SMALL"
+[ $PARTSET = 0 ] || exec bash "$HERE/partset.sh" "$TPK" "$OUT" "$SMALL"
 GPU=$BIN/bench_gpu
 [ -x "$GPU" ] || GPU=$BIN/bench/bench_gpu
 [ -x "$TPK" ] && [ -x "$GPU" ] || { echo "run.sh: no tetpack and bench_gpu in $BIN" >&2; exit 2; }

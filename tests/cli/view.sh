@@ -43,6 +43,12 @@ tpk view "$WORK/cyl.tpk" --size $SIZE --frames 2 "${FX[@]}" --screenshot "$WORK/
     { cat "$WORK/err"; fail "view with effects"; }
 tpk render "$WORK/cyl.tpk" --size $SIZE "${FX[@]}" --backend vulkan -o "$WORK/render-fx.png" > /dev/null
 psnr_at_least "$WORK/view-fx.png" "$WORK/render-fx.png" "view and render, effects"
+# a part set (spec §15): its parts as one mesh, the picture render draws of the set
+"$TPK" convert "$SRC/samples/cylinder.vtk" "$WORK/cyl.tpkset" --parts 3 > /dev/null
+tpk view "$WORK/cyl.tpkset" --size $SIZE --frames 2 --shading --screenshot "$WORK/view-set.png" 2> "$WORK/err" ||
+    { cat "$WORK/err"; fail "view of a part set"; }
+tpk render "$WORK/cyl.tpkset" --size $SIZE --shading --backend vulkan -o "$WORK/render-set.png" > /dev/null
+psnr_at_least "$WORK/view-set.png" "$WORK/render-set.png" "view and render, a part set"
 
 # --orbit: 4 frames at 25 degrees, the last one turned by 75 degrees around up (+z) from the first
 tpk view "$WORK/cyl.tpk" --size $SIZE --frames 4 --orbit 25 --screenshot "$WORK/orbit.png" \

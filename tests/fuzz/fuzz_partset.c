@@ -1,7 +1,9 @@
 /* Fuzz target for part sets (libtetpack/partset.c): the input is split into files (support.h: the
  * manifest set.tpkset first, then "@@ NAME" before each part file), written to a fresh folder on tmpfs,
  * and opened as `tetpack info`/`render` open a set: whole and with a box, each part's record, handle and
- * links read. Any result code is fine; a crash, an overread or a leak is a bug. */
+ * links read, and the open parts taken as one mesh (libtetpack/set_mesh.c) in a layout that changes with
+ * the box, with its arrays, a tet field and a marcher over them. Any result code is fine; a crash, an
+ * overread or a leak is a bug. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,7 +11,31 @@
 #include "support.h"
 #include "tetpack.h"
 
-static void use_set(tpk_partset *set)
+/* The parts as one mesh: what the renderers build and march, so its arrays must be safe to march. */
+static void use_set_mesh(tpk_partset *set, tpk_layout layout)
+{
+    tpk_set_mesh *mesh = NULL;
+    char err[256];
+    if (tpk_set_mesh_create(&mesh, set, layout, err, sizeof err) != TPK_OK) {
+        if (mesh)
+            abort(); /* a failure leaves nothing made */
+        return;
+    }
+    tpk_mesh_arrays arrays;
+    const float *tet_values;
+    tpk_set_mesh_tet_field(mesh, "f", 0, &tet_values, err, sizeof err);
+    if (tpk_set_mesh_arrays(mesh, NULL, 0, &arrays, err, sizeof err) == TPK_OK) {
+        tpk_marcher *marcher = NULL;
+        if (tpk_marcher_create(&marcher, &arrays) == TPK_OK) {
+            static const double org[3] = {-3, -2.5, -2}, dir[3] = {1, 0.83, 0.71};
+            tpk_march_ray(marcher, org, dir, 0, 1e30, NULL, NULL, NULL);
+            tpk_marcher_destroy(marcher);
+        }
+    }
+    tpk_set_mesh_destroy(mesh);
+}
+
+static void use_set(tpk_partset *set, tpk_layout layout)
 {
     double origin[3];
     tpk_partset_origin(set, origin);
@@ -24,6 +50,7 @@ static void use_set(tpk_partset *set)
         tpk_partset_links(set, i, &links, &link_count);
         tpk_partset_links(set, i, &links, &link_count); /* the second call hands out what the first decoded */
     }
+    use_set_mesh(set, layout);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -45,7 +72,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 abort(); /* a failure leaves nothing open */
             continue;
         }
-        use_set(set);
+        use_set(set, boxed ? TPK_LAYOUT_TET32 : TPK_LAYOUT_TET16);
         tpk_partset_close(set);
     }
     return 0;

@@ -24,7 +24,8 @@
 static const char render_help[] =
     "usage: tetpack render FILE -o IMAGE.png [options]\n"
     "\n"
-    "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
+    "FILE is a .tpk, a part set's manifest (.tpkset, convert --parts: its parts drawn as the one mesh\n"
+    "they were cut from), or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
     "Ray-marches the tets (shell BVH entry, watertight tet-to-tet marching) with the Vulkan renderer on\n"
     "a GPU, else with the CPU reference on all cores (--backend), and writes a PNG. Both draw the same\n"
     "picture. Emission-absorption: within a tet the scalar is linear, so each piece is split exactly\n"
@@ -302,6 +303,10 @@ int tpk_cmd_render(int argc, char **argv)
         if (a.level > 0 || a.max_ms > 0) /* convert makes levels of one file only (--levels and --parts) */
             return tpk_cli_fail("render", "%s: a part set has no levels of detail: %s draws a single file's",
                                 a.path, a.level > 0 ? "--level" : "--max-ms");
+        tpk_diag backend_diag;
+        memset(&backend_diag, 0, sizeof backend_diag);
+        if (resolve_backend(&a, &backend_diag) != 0)
+            return tpk_cli_fail("render", "%s", backend_diag.message);
         return render_part_set(&a);
     }
     int rc = render_file(&a, in.file);

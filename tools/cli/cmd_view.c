@@ -7,6 +7,7 @@
 #include "base/output_file.h"
 #include "cli.h"
 #include "render_args.h"
+#include "render_frame.h"
 #include "render_input.h"
 #include "render/render_backend.h"
 #include "tetpack.h"
@@ -20,7 +21,8 @@
 static const char view_help[] =
     "usage: tetpack view FILE [--scene scene.json] [options]\n"
     "\n"
-    "FILE is a .tpk, or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
+    "FILE is a .tpk, a part set's manifest (.tpkset, convert --parts: its parts shown as the one mesh\n"
+    "they were cut from), or any mesh tetpack convert reads (tetpack formats), converted in memory first.\n"
     "Opens a window that renders the file with the Vulkan renderer (the CPU reference where there is\n"
     "no Vulkan device) and shows each frame; the title shows what is shown, the device, the frame rate,\n"
     "the frame time and the GPU time. Vulkan frames go straight to the window's swapchain where the\n"
@@ -162,12 +164,42 @@ static int want_present(const view_args *v, tpk_view_present *out)
     return 0;
 }
 
+/* view_file with `set`'s parts as one mesh (spec §15; libtetpack/set_mesh.c): part 0 gives the field
+ * list, the set its box, the field's range and the default camera. */
+static int view_file_of(render_args *a, const view_args *v, tpk_file *file, tpk_set_mesh *set_mesh,
+                        tpk_partset *set);
+
+static int view_part_set(render_args *a, const view_args *v)
+{
+    if (a->level > 0 || a->max_ms > 0)
+        return tpk_cli_fail("view", "%s: a part set has no levels of detail: %s shows a single file's", a->path,
+                            a->level > 0 ? "--level" : "--max-ms");
+    if (a->iso_auto)
+        return tpk_cli_fail("view", "%s: --iso auto takes one file's median; for a part set give --iso V", a->path);
+    tpk_partset *set = NULL;
+    tpk_set_mesh *mesh = NULL;
+    char err[1024] = "";
+    tpk_result r = tpk_partset_open(&set, a->path, NULL, NULL, NULL, err, sizeof err);
+    if (r == TPK_OK)
+        r = tpk_set_mesh_create(&mesh, set, render_args_layout(tpk_partset_file(set, 0), a->layout), err, sizeof err);
+    int rc = r == TPK_OK ? view_file_of(a, v, tpk_partset_file(set, 0), mesh, set)
+                         : tpk_cli_fail("view", "%s: %s", a->path, err[0] ? err : tpk_result_string(r));
+    tpk_set_mesh_destroy(mesh);
+    tpk_partset_close(set);
+    return rc;
+}
+
 static int view_file(render_args *a, const view_args *v, tpk_file *file)
 {
     uint64_t part_chunk;
     if (tpk_find_chunk(file, TPK_TAG_PART, 0, 0, &part_chunk) == TPK_OK)
-        return tpk_cli_fail("view", "%s is a part set's manifest: view shows one file (tetpack render renders "
-                            "part sets)", a->path);
+        return view_part_set(a, v);
+    return view_file_of(a, v, file, NULL, NULL);
+}
+
+static int view_file_of(render_args *a, const view_args *v, tpk_file *file, tpk_set_mesh *set_mesh,
+                        tpk_partset *set)
+{
     tpk_view_options o;
     memset(&o, 0, sizeof o);
     int cpu = want_cpu(a);
@@ -175,6 +207,17 @@ static int view_file(render_args *a, const view_args *v, tpk_file *file)
         return TPK_EXIT_USAGE;
     tpk_render_options_default(&o.render);
     render_args_to_options(a, file, &o.tf, &o.render);
+    if (set) { /* the whole set's box and range, not part 0's (as render_set.c) */
+        double range[2];
+        render_set_extent(a, set, o.set_bounds_min, o.set_bounds_max, range);
+        if (!a->have_camera)
+            tpk_camera_default(o.set_bounds_min, o.set_bounds_max, &o.render.camera);
+        if (!a->have_range)
+            o.render.range_min = range[0], o.render.range_max = range[1];
+        if (!(a->unit_distance > 0))
+            o.render.unit_distance = render_args_default_unit(o.set_bounds_min, o.set_bounds_max);
+        o.set_mesh = set_mesh;
+    }
     double iso_auto;
     if (a->iso_auto && render_args_iso_auto("view", a, file, &o.render, &iso_auto))
         return TPK_EXIT_USAGE;

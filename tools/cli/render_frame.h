@@ -59,5 +59,9 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
 int render_save_scene(const render_args *a, tpk_file *file, const tpk_render_options *opt);
 /* tetpack render of a part set's manifest (render_set.c). A TPK_EXIT_* code. */
 int render_part_set(const render_args *a);
+/* An open set's box (of its parts' headers) and the range of the field of the arguments over its open
+ * parts (render_set.c; for view). */
+void render_set_extent(const render_args *a, tpk_partset *set, double bounds_min[3], double bounds_max[3],
+                       double range[2]);
 
 #endif

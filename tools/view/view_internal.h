@@ -18,6 +18,7 @@
 /* ---- view_state.c ---- */
 typedef struct view_state {
     tpk_file *file;
+    tpk_set_mesh *set_mesh;        /* tpk_view_options.set_mesh: the arrays come from it, layout fixed */
     const char *path;
     tpk_render_options opt;        /* opt.tf points at tf */
     tpk_transfer_function tf;

@@ -34,6 +34,17 @@ static void take_field(view_state *s, const tpk_field_desc *d)
 /* The arrays of the state's layout, field and step. */
 static int load(view_state *s, tpk_diag *diag)
 {
+    if (s->set_mesh) { /* a part set: the parts' fields gathered by the merged ids */
+        char err[512] = "";
+        tpk_result r = tpk_set_mesh_arrays(s->set_mesh, s->field[0] && !s->tet_field ? s->field : NULL,
+                                           (uint32_t)s->step, &s->mesh, err, sizeof err);
+        s->opt.tet_scalars = NULL;
+        if (r == TPK_OK && s->tet_field) {
+            s->mesh.scalars = NULL;
+            r = tpk_set_mesh_tet_field(s->set_mesh, s->field, (uint32_t)s->step, &s->opt.tet_scalars, err, sizeof err);
+        }
+        return r == TPK_OK ? 0 : tpk_diag_fail(diag, "%s: %s", s->path, err[0] ? err : tpk_result_string(r));
+    }
     const char *point_field = s->field[0] && !s->tet_field ? s->field : NULL;
     tpk_result r = tpk_load_arrays(s->file, s->layout, point_field, (uint32_t)s->step, &s->mesh);
     s->opt.tet_scalars = NULL;
@@ -61,6 +72,11 @@ int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag)
     tpk_get_info(o->file, &info);
     memcpy(s->bounds_min, info.bounds_min, sizeof s->bounds_min);
     memcpy(s->bounds_max, info.bounds_max, sizeof s->bounds_max);
+    s->set_mesh = o->set_mesh;
+    if (s->set_mesh) {
+        memcpy(s->bounds_min, o->set_bounds_min, sizeof s->bounds_min);
+        memcpy(s->bounds_max, o->set_bounds_max, sizeof s->bounds_max);
+    }
     for (uint32_t i = 0; i < tpk_field_count(o->file); i++) {
         tpk_field_desc d;
         if (tpk_get_field(o->file, i, &d) == TPK_OK &&
@@ -125,6 +141,8 @@ static int next_field(view_state *s, tpk_diag *diag)
 
 static int next_layout(view_state *s, tpk_diag *diag)
 {
+    if (s->set_mesh)
+        return 0; /* the parts were merged into one layout */
     int at = 0;
     while (at < 3 && layouts[at] != s->layout)
         at++;
