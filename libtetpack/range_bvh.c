@@ -135,6 +135,14 @@ void tpk_range_bvh_destroy(tpk_range_bvh *b)
     free(b);
 }
 
+tpk_result tpk_range_bvh_set_threads(tpk_range_bvh *b, int threads)
+{
+    if (!b)
+        return TPK_ERR_INVALID_ARGUMENT;
+    b->threads = threads > 1 ? threads : 1;
+    return TPK_OK;
+}
+
 double tpk_range_bvh_active(const tpk_range_bvh *b, const double *values, int count)
 {
     if (!b || b->levels == 0 || count <= 0 || !values)

@@ -317,13 +317,17 @@ void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
 /* The share (0..1) of its leaves (runs of 8 tets) whose range holds one of values[0 .. count): where it is
  * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */
 double tpk_range_bvh_active(const tpk_range_bvh *bvh, const double *values, int count);
-/* Build a second tree over just the tets whose range holds one of values[0 .. count) (a binned-SAH
- * BVH, leaves of up to 6 tets; about 100 bytes per such tet), which tpk_march_ray_values then walks
+/* Build a second tree over just the tets whose range holds one of values[0 .. count) (clustered
+ * bottom-up over them in file order, in time linear in their count, leaves of up to 6 tets; about 100
+ * bytes per such tet; the same bytes whatever tpk_range_bvh_set_threads gave), which tpk_march_ray_values then walks
  * whenever it is given the same values (the same count and the same doubles, in the same order), with
  * the same pieces; other values walk the file-order tree. count 0 drops it. Call it before the rays,
  * not while any ray of this bvh runs. TPK_ERR_INVALID_ARGUMENT, TPK_ERR_OUT_OF_MEMORY (then no tree is
  * selected), or TPK_OK. */
 tpk_result tpk_range_bvh_select(tpk_range_bvh *bvh, const double *values, int count);
+/* Threads the builds of this bvh may use (tpk_range_bvh_select; <= 1: the caller's alone). The trees
+ * are the same for any count. TPK_ERR_INVALID_ARGUMENT for a NULL bvh. */
+tpk_result tpk_range_bvh_set_threads(tpk_range_bvh *bvh, int threads);
 /* Tets per leaf: leaf j holds tets [TPK_RANGE_BVH_LEAF * j, TPK_RANGE_BVH_LEAF * (j + 1)). */
 #define TPK_RANGE_BVH_LEAF 8
 /* The same tree for a renderer that walks it elsewhere (a GPU), as a complete binary tree in heap order:

@@ -485,6 +485,8 @@ static tpk_range_bvh *culling_trees(const tpk_mesh_arrays *mesh, const tpk_rende
         if (share > (many_rays ? TPK_RENDER_CULL_ACTIVE_MANY : few))
             return NULL; /* a dense isosurface: marching finds it sooner */
     }
+    if (r == TPK_OK)
+        r = tpk_range_bvh_set_threads(keep->range, thread_count(opt));
     if (r == TPK_OK && (keep->value_count != opt->iso_count ||
                         memcmp(keep->values, opt->iso, sizeof *opt->iso * (size_t)opt->iso_count) != 0)) {
         keep->value_count = 0;
