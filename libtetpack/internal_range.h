@@ -1,8 +1,8 @@
 /* libtetpack private declarations of the range culling of iso rays (tetpack.h: tpk_range_bvh_*,
  * tpk_march_ray_values, tpk_march_packet_values). Not installed.
  * Owners: range_select.c builds the selected tree (tpk_range_bvh_select) on range_build.c's hierarchy
- * (tpki_range_tree_build); range_bvh.c creates the
- * file-order tree, walks both trees one ray at a time and holds tpki_range_holds and tpki_tet_piece;
+ * (tpki_range_tree_build); range_bvh.c creates the file-order tree, reads a new field into it, walks
+ * both trees one ray at a time and holds tpki_range_holds, tpki_range_drop_selection and tpki_tet_piece;
  * range_packet.c walks the selected tree with packets of rays. */
 #ifndef TPK_INTERNAL_RANGE_H
 #define TPK_INTERNAL_RANGE_H
@@ -102,6 +102,9 @@ int tpki_range_holds(double lo, double hi, const double *values, int count);
  * at most leaf_size items, items permuted into leaf order; the same for any thread count. */
 tpk_result tpki_range_tree_build(tpki_bvh_item *items, int32_t n, int leaf_size, int threads, tpk_bvh_node *out,
                                  int32_t *node_count);
+
+/* Free the selected tree (range_bvh.c): none is selected. */
+void tpki_range_drop_selection(tpk_range_bvh *b);
 
 /* Is the selected tree the one for these values (tpk_range_bvh_select's)? */
 int tpki_range_selected(const tpk_range_bvh *b, const double *values, int count);

@@ -108,22 +108,11 @@ static void active_items(const tpk_range_bvh *b, const double *values, int count
     }
 }
 
-static void drop_selection(tpk_range_bvh *b)
-{
-    free(b->wide);
-    free(b->active_tets);
-    free(b->active_slots);
-    free(b->active_scalars);
-    free(b->active_values);
-    b->wide = NULL, b->active_tets = NULL, b->active_slots = NULL, b->active_scalars = NULL, b->active_values = NULL;
-    b->active_value_count = 0, b->wide_count = 0;
-}
-
 tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int count)
 {
     if (!b || count < 0 || (count > 0 && !values))
         return TPK_ERR_INVALID_ARGUMENT;
-    drop_selection(b);
+    tpki_range_drop_selection(b);
     if (count == 0)
         return TPK_OK;
     const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
@@ -171,6 +160,6 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     free(items);
     free(bin);
     if (r != TPK_OK)
-        drop_selection(b);
+        tpki_range_drop_selection(b);
     return r;
 }

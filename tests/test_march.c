@@ -1368,6 +1368,46 @@ TPK_TEST(range_tree_same_for_any_thread_count)
     fx_free(&m);
 }
 
+/* A time step (tpk_marcher_set_scalars, then tpk_range_bvh_set_scalars): the trees read the new field's
+ * ranges and keep the rest, and are then the bytes a fresh tpk_range_bvh_create on the new field gives,
+ * the selected tree included once made; without a field, or without a bvh, refused. */
+TPK_TEST(range_tree_new_field_equals_a_fresh_one)
+{
+    fx_mesh m;
+    CHECK(load_real_in("sfepy/piezo_mesh_micro.vtk", &m, 1) == 0);
+    set_field(&m, 0);
+    float *first = m.scalars;
+    m.scalars = NULL;
+    set_field(&m, 1); /* the second field: floor(4 x) */
+    float *second = m.scalars;
+    m.scalars = first;
+    tpk_marcher *marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    const double values[2] = {0.5, 2.5}, old_values[1] = {0.3};
+    tpk_range_bvh *kept = NULL, *fresh = NULL;
+    CHECK(marcher && tpk_range_bvh_create(&kept, marcher) == TPK_OK);
+    CHECK(tpk_range_bvh_select(kept, old_values, 1) == TPK_OK && kept->wide_count > 0);
+    CHECK(tpk_marcher_set_scalars(marcher, second) == TPK_OK);
+    CHECK(tpk_range_bvh_set_scalars(kept) == TPK_OK);
+    CHECK(kept->wide_count == 0 && kept->active_value_count == 0); /* the old field's selection dropped */
+    CHECK(tpk_range_bvh_create(&fresh, marcher) == TPK_OK);
+    const int64_t nodes = kept->level_start[kept->levels - 1] + 1;
+    CHECK(!memcmp(kept->tets, fresh->tets, sizeof *kept->tets * 4 * (size_t)m.tet_count));
+    CHECK(!memcmp(kept->tet_range, fresh->tet_range, sizeof *kept->tet_range * 2 * (size_t)m.tet_count));
+    CHECK(!memcmp(kept->nodes, fresh->nodes, sizeof *kept->nodes * (size_t)nodes));
+    CHECK(!memcmp(kept->node_range, fresh->node_range, sizeof *kept->node_range * 2 * (size_t)nodes));
+    CHECK(tpk_range_bvh_select(kept, values, 2) == TPK_OK && tpk_range_bvh_select(fresh, values, 2) == TPK_OK);
+    CHECK(kept->wide_count > 0 && kept->wide_count == fresh->wide_count);
+    CHECK(!memcmp(kept->wide, fresh->wide, sizeof *kept->wide * (size_t)kept->wide_count));
+    CHECK(tpk_range_bvh_set_scalars(NULL) == TPK_ERR_INVALID_ARGUMENT);
+    CHECK(tpk_marcher_set_scalars(marcher, NULL) == TPK_OK);
+    CHECK(tpk_range_bvh_set_scalars(kept) == TPK_ERR_INVALID_ARGUMENT);
+    tpk_range_bvh_destroy(kept);
+    tpk_range_bvh_destroy(fresh);
+    tpk_marcher_destroy(marcher);
+    free(second);
+    fx_free(&m);
+}
+
 /* tpk_range_bvh_heap (what the Vulkan renderer uploads): the tree in heap order, each inner node the
  * union of its two children, each leaf holding its tets' corners and scalar range, the rest empty; the
  * tets as tpk_range_bvh_tets gives them, positive (the mesh's own tets, in order). */

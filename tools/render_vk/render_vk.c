@@ -683,15 +683,17 @@ int tpk_vk_renderer_set_field(tpk_vk_renderer *v, const float *scalars, const fl
         return tpk_diag_fail(diag, "render: another field must be of the same kind (point or tet) as the renderer's");
     v->mesh.scalars = scalars;
     tpk_marcher_set_scalars(v->marcher, scalars);
-    /* The range tree holds the old field's ranges: it is made again for the next culled frame. Once
-     * uploaded, a culling pipeline reads it: the new ranges go into the same array (the tree's shape
+    /* The range tree reads the new field's ranges, keeping the tets' vertices and boxes (no walk again).
+     * Once uploaded, a culling pipeline reads it: the new ranges go into the same array (the tree's shape
      * depends on the tet count alone). */
-    tpk_range_bvh_destroy(v->range);
-    v->range = NULL;
     float *nodes = NULL;
     int64_t base = 0;
+    if (v->range && (!scalars || tpk_range_bvh_set_scalars(v->range) != TPK_OK)) {
+        tpk_range_bvh_destroy(v->range);
+        v->range = NULL;
+    }
     if (v->range_leaf_base > 0) {
-        tpk_result r = tpk_range_bvh_create(&v->range, v->marcher);
+        tpk_result r = v->range ? TPK_OK : tpk_range_bvh_create(&v->range, v->marcher);
         if (r != TPK_OK)
             return tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
         base = tpk_range_bvh_heap(v->range, NULL);
