@@ -3,7 +3,7 @@
  * deflated apart on all threads (raw deflate, level 1, run-length strategy; each band ends on a sync
  * flush, the last on the stream's end), joined into one zlib stream whose Adler-32 is combined from
  * the bands'. The bands do not depend on the thread count, so neither do the bytes. libpng's default
- * (level 6, all five filters tried per row) took 0.25-0.36 s for a 1024^2 render, 30 times a GPU frame. */
+ * (level 6, all five filters tried per row) took many times a GPU frame (bench/README, figures). */
 #include "render.h"
 
 #include <stdio.h>

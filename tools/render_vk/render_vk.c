@@ -32,8 +32,8 @@ struct tpk_vk_renderer {
     tpk_marcher *marcher; /* owns the shell BVH that was uploaded */
     tpk_shell_bvh bvh;
     tpk_mesh_arrays mesh; /* the caller's arrays (not copied) */
-    double diagonal;      /* of the positions' box (tpk_positions_diagonal), once: a pass over every vertex,
-                           * 20 ms a frame on grid 200 where the device takes 7.5 */
+    double diagonal;      /* of the positions' box (tpk_positions_diagonal), once: a pass over every vertex
+                           * took most of a frame's host time (bench/README, figures) */
     tpk_range_bvh *range; /* culled iso-only frames (render.h ISO-ONLY RAYS): made and uploaded on the
                              first (range_leaf_base > 0 from then on) */
     int64_t range_leaf_base;
