@@ -1,7 +1,8 @@
 /* libtetpack private declarations of the range culling of iso rays (tetpack.h: tpk_range_bvh_*,
  * tpk_march_ray_values, tpk_march_packet_values). Not installed.
- * Owners: range_select.c builds the selected tree (tpk_range_bvh_select); range_bvh.c creates the
- * file-order tree, walks both trees one ray at a time and holds tpki_range_holds and tpki_tet_piece;
+ * Owners: range_select.c builds the selected tree (tpk_range_bvh_select) on range_build.c's hierarchy
+ * (tpki_range_tree_build); range_bvh.c creates the file-order tree, reads a new field into it, walks
+ * both trees one ray at a time and holds tpki_range_holds, tpki_range_drop_selection and tpki_tet_piece;
  * range_packet.c walks the selected tree with packets of rays. */
 #ifndef TPK_INTERNAL_RANGE_H
 #define TPK_INTERNAL_RANGE_H
@@ -77,6 +78,7 @@ struct tpk_range_bvh {
     double *active_values;
     int active_value_count;   /* 0: none selected */
     double active_corner_max; /* the largest |coordinate| of the selected tree's boxes */
+    int threads;              /* for the builds (tpk_range_bvh_set_threads); the trees never depend on it */
 };
 
 /* The float at or below x, and at or above it: the trees' boxes and ranges are rounded outward. */
@@ -94,6 +96,15 @@ static inline float tpki_round_up(double x)
 
 /* A value of values[0 .. count) in [lo, hi]. */
 int tpki_range_holds(double lo, double hi, const double *values, int count);
+
+/* The selected tree's binary hierarchy over items[0 .. n) in file order (range_build.c), in
+ * tpki_bvh_build's form: nodes root first, an inner node's children at first and first + 1, leaves of
+ * at most leaf_size items, items permuted into leaf order; the same for any thread count. */
+tpk_result tpki_range_tree_build(tpki_bvh_item *items, int32_t n, int leaf_size, int threads, tpk_bvh_node *out,
+                                 int32_t *node_count);
+
+/* Free the selected tree (range_bvh.c): none is selected. */
+void tpki_range_drop_selection(tpk_range_bvh *b);
 
 /* Is the selected tree the one for these values (tpk_range_bvh_select's)? */
 int tpki_range_selected(const tpk_range_bvh *b, const double *values, int count);

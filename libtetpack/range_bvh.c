@@ -29,6 +29,42 @@
 #define HEAP_STACK 64
 
 
+/* The scalar ranges of every tet and node from the marcher's field (the boxes and the tree's shape
+ * depend on the positions alone). */
+static void read_ranges(tpk_range_bvh *b)
+{
+    const float *sc = b->marcher->mesh.scalars;
+    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
+    for (int64_t leaf = 0; b->levels > 0 && leaf < b->level_count[0]; leaf++) {
+        float *range = &b->node_range[2 * leaf];
+        range[0] = INFINITY, range[1] = -INFINITY;
+        int64_t end = (leaf + 1) * TPK_RANGE_LEAF < tet_count ? (leaf + 1) * TPK_RANGE_LEAF : tet_count;
+        for (int64_t t = leaf * TPK_RANGE_LEAF; t < end; t++) {
+            float smin = INFINITY, smax = -INFINITY;
+            for (int i = 0; i < 4; i++) {
+                float s = sc[b->tets[4 * t + i]];
+                smin = s < smin ? s : smin; /* a NaN scalar never joins a range: no crossing tests true */
+                smax = s > smax ? s : smax;
+            }
+            /* outward by an ulp: the marcher's interpolated scalars are sums in double of these floats */
+            b->tet_range[2 * t] = smin > -INFINITY ? nextafterf(smin, -INFINITY) : smin;
+            b->tet_range[2 * t + 1] = smax < INFINITY ? nextafterf(smax, INFINITY) : smax;
+            range[0] = b->tet_range[2 * t] < range[0] ? b->tet_range[2 * t] : range[0];
+            range[1] = b->tet_range[2 * t + 1] > range[1] ? b->tet_range[2 * t + 1] : range[1];
+        }
+    }
+    for (int l = 1; l < b->levels; l++)
+        for (int64_t i = 0; i < b->level_count[l]; i++) {
+            int64_t at = b->level_start[l] + i, c = b->level_start[l - 1] + 2 * i;
+            float *range = &b->node_range[2 * at];
+            range[0] = b->node_range[2 * c], range[1] = b->node_range[2 * c + 1];
+            if (2 * i + 1 < b->level_count[l - 1]) {
+                range[0] = b->node_range[2 * c + 2] < range[0] ? b->node_range[2 * c + 2] : range[0];
+                range[1] = b->node_range[2 * c + 3] > range[1] ? b->node_range[2 * c + 3] : range[1];
+            }
+        }
+}
+
 tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
 {
     if (!out)
@@ -62,18 +98,15 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
         tpk_range_bvh_destroy(b);
         return r;
     }
-    const float *pos = mesh->positions, *sc = mesh->scalars;
+    const float *pos = mesh->positions;
     for (int64_t leaf = 0; leaf < leaves; leaf++) {
         tpk_bvh_node *n = &b->nodes[leaf];
-        float *range = &b->node_range[2 * leaf];
         for (int k = 0; k < 3; k++)
             n->lo[k] = INFINITY, n->hi[k] = -INFINITY;
-        range[0] = INFINITY, range[1] = -INFINITY;
         int64_t end = (leaf + 1) * TPK_RANGE_LEAF < tet_count ? (leaf + 1) * TPK_RANGE_LEAF : tet_count;
         n->first = (int32_t)(leaf * TPK_RANGE_LEAF);
         n->count = (int32_t)(end - leaf * TPK_RANGE_LEAF);
-        for (int64_t t = leaf * TPK_RANGE_LEAF; t < end; t++) {
-            float smin = INFINITY, smax = -INFINITY;
+        for (int64_t t = leaf * TPK_RANGE_LEAF; t < end; t++)
             for (int i = 0; i < 4; i++) {
                 int32_t v = b->tets[4 * t + i];
                 for (int k = 0; k < 3; k++) {
@@ -81,16 +114,7 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
                     n->lo[k] = x < n->lo[k] ? x : n->lo[k];
                     n->hi[k] = x > n->hi[k] ? x : n->hi[k];
                 }
-                float s = sc[v];
-                smin = s < smin ? s : smin; /* a NaN scalar never joins a range: no crossing tests true */
-                smax = s > smax ? s : smax;
             }
-            /* outward by an ulp: the marcher's interpolated scalars are sums in double of these floats */
-            b->tet_range[2 * t] = smin > -INFINITY ? nextafterf(smin, -INFINITY) : smin;
-            b->tet_range[2 * t + 1] = smax < INFINITY ? nextafterf(smax, INFINITY) : smax;
-            range[0] = b->tet_range[2 * t] < range[0] ? b->tet_range[2 * t] : range[0];
-            range[1] = b->tet_range[2 * t + 1] > range[1] ? b->tet_range[2 * t + 1] : range[1];
-        }
         for (int k = 0; k < 3; k++) {
             n->lo[k] = tpki_round_down((double)n->lo[k] - b->pad);
             n->hi[k] = tpki_round_up((double)n->hi[k] + b->pad);
@@ -100,23 +124,31 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
         for (int64_t i = 0; i < b->level_count[l]; i++) {
             int64_t at = b->level_start[l] + i, c = b->level_start[l - 1] + 2 * i;
             tpk_bvh_node *n = &b->nodes[at];
-            float *range = &b->node_range[2 * at];
             *n = b->nodes[c];
-            range[0] = b->node_range[2 * c], range[1] = b->node_range[2 * c + 1];
             if (2 * i + 1 < b->level_count[l - 1]) {
                 const tpk_bvh_node *d = &b->nodes[c + 1];
                 for (int k = 0; k < 3; k++) {
                     n->lo[k] = d->lo[k] < n->lo[k] ? d->lo[k] : n->lo[k];
                     n->hi[k] = d->hi[k] > n->hi[k] ? d->hi[k] : n->hi[k];
                 }
-                range[0] = b->node_range[2 * c + 2] < range[0] ? b->node_range[2 * c + 2] : range[0];
-                range[1] = b->node_range[2 * c + 3] > range[1] ? b->node_range[2 * c + 3] : range[1];
                 n->first = (int32_t)c;
                 n->count = 0;
             }
         }
+    read_ranges(b);
     *out = b;
     return TPK_OK;
+}
+
+void tpki_range_drop_selection(tpk_range_bvh *b)
+{
+    free(b->wide);
+    free(b->active_tets);
+    free(b->active_slots);
+    free(b->active_scalars);
+    free(b->active_values);
+    b->wide = NULL, b->active_tets = NULL, b->active_slots = NULL, b->active_scalars = NULL, b->active_values = NULL;
+    b->active_value_count = 0, b->wide_count = 0;
 }
 
 void tpk_range_bvh_destroy(tpk_range_bvh *b)
@@ -127,12 +159,25 @@ void tpk_range_bvh_destroy(tpk_range_bvh *b)
     free(b->tet_range);
     free(b->nodes);
     free(b->node_range);
-    free(b->wide);
-    free(b->active_tets);
-    free(b->active_slots);
-    free(b->active_scalars);
-    free(b->active_values);
+    tpki_range_drop_selection(b);
     free(b);
+}
+
+tpk_result tpk_range_bvh_set_scalars(tpk_range_bvh *b)
+{
+    if (!b || !b->marcher->mesh.scalars)
+        return TPK_ERR_INVALID_ARGUMENT;
+    tpki_range_drop_selection(b); /* it holds the old field's tets */
+    read_ranges(b);
+    return TPK_OK;
+}
+
+tpk_result tpk_range_bvh_set_threads(tpk_range_bvh *b, int threads)
+{
+    if (!b)
+        return TPK_ERR_INVALID_ARGUMENT;
+    b->threads = threads > 1 ? threads : 1;
+    return TPK_OK;
 }
 
 double tpk_range_bvh_active(const tpk_range_bvh *b, const double *values, int count)

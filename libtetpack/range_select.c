@@ -1,10 +1,11 @@
 /* The selected tree of the range culling (tpk_range_bvh_select, tetpack.h): the tets whose scalar range
- * holds one of the iso values, in a binned-SAH BVH (tpki_bvh_build, leaves of up to ACTIVE_LEAF tets)
- * folded into a four-wide tree (tpki_wide_node) whose children a ray tests at once, with each tet's
- * vertices and positions copied into leaf order.
+ * holds one of the iso values, clustered bottom-up in file order (tpki_range_tree_build, range_build.c;
+ * leaves of up to ACTIVE_LEAF tets), folded into a four-wide tree (tpki_wide_node) whose children a ray
+ * tests at once, with each tet's vertices and positions copied into leaf order.
  *
  * Measured on the 998k-tet grid of bench/make_grid_vtk.py 55, iso 0.3 (17% of the tets hold it), 1024^2,
- * one thread, leaves of up to 4: the file-order tree tests 28 tets per ray, this one 7.4. */
+ * one thread, leaves of up to 4: the file-order tree tests 28 tets per ray, the selected tree (then a
+ * binned-SAH one, whose rays the clustered tree matches) 7.4. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -107,22 +108,11 @@ static void active_items(const tpk_range_bvh *b, const double *values, int count
     }
 }
 
-static void drop_selection(tpk_range_bvh *b)
-{
-    free(b->wide);
-    free(b->active_tets);
-    free(b->active_slots);
-    free(b->active_scalars);
-    free(b->active_values);
-    b->wide = NULL, b->active_tets = NULL, b->active_slots = NULL, b->active_scalars = NULL, b->active_values = NULL;
-    b->active_value_count = 0, b->wide_count = 0;
-}
-
 tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int count)
 {
     if (!b || count < 0 || (count > 0 && !values))
         return TPK_ERR_INVALID_ARGUMENT;
-    drop_selection(b);
+    tpki_range_drop_selection(b);
     if (count == 0)
         return TPK_OK;
     const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
@@ -142,7 +132,7 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     int32_t bin_count = 0;
     if (r == TPK_OK && n > 0) {
         active_items(b, values, count, items);
-        r = tpki_bvh_build(items, (int32_t)n, ACTIVE_LEAF, bin, &bin_count);
+        r = tpki_range_tree_build(items, (int32_t)n, ACTIVE_LEAF, b->threads, bin, &bin_count);
     }
     if (r == TPK_OK && n > 0)
         r = fold_wide(b, bin, bin_count);
@@ -170,6 +160,6 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     free(items);
     free(bin);
     if (r != TPK_OK)
-        drop_selection(b);
+        tpki_range_drop_selection(b);
     return r;
 }

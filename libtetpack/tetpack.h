@@ -249,7 +249,7 @@ void tpk_marcher_destroy(tpk_marcher *marcher);
 /* Another point field for the marcher to read from now on (vertex_count floats, outliving the marcher
  * like the other arrays; NULL: none), as tpk_marcher_create would give for the same arrays with these
  * scalars, without building the shell BVH again: for time steps of one mesh. Not while rays are marched
- * on it; trees made on the marcher (tpk_range_bvh) hold the old field's ranges: make them again.
+ * on it; trees made on the marcher (tpk_range_bvh) hold the old field's ranges: tpk_range_bvh_set_scalars.
  * TPK_ERR_INVALID_ARGUMENT for a NULL marcher. */
 tpk_result tpk_marcher_set_scalars(tpk_marcher *marcher, const float *scalars);
 
@@ -317,13 +317,23 @@ void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
 /* The share (0..1) of its leaves (runs of 8 tets) whose range holds one of values[0 .. count): where it is
  * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */
 double tpk_range_bvh_active(const tpk_range_bvh *bvh, const double *values, int count);
-/* Build a second tree over just the tets whose range holds one of values[0 .. count) (a binned-SAH
- * BVH, leaves of up to 6 tets; about 100 bytes per such tet), which tpk_march_ray_values then walks
+/* Build a second tree over just the tets whose range holds one of values[0 .. count) (clustered
+ * bottom-up over them in file order, in time linear in their count, leaves of up to 6 tets; about 100
+ * bytes per such tet; the same bytes whatever tpk_range_bvh_set_threads gave), which tpk_march_ray_values then walks
  * whenever it is given the same values (the same count and the same doubles, in the same order), with
  * the same pieces; other values walk the file-order tree. count 0 drops it. Call it before the rays,
  * not while any ray of this bvh runs. TPK_ERR_INVALID_ARGUMENT, TPK_ERR_OUT_OF_MEMORY (then no tree is
  * selected), or TPK_OK. */
 tpk_result tpk_range_bvh_select(tpk_range_bvh *bvh, const double *values, int count);
+/* The marcher's field changed (tpk_marcher_set_scalars, a time step): the ranges are read again from
+ * it, what depends on the positions alone (the tets' vertices, the boxes) is kept, and the selected
+ * tree is dropped (tpk_range_bvh_select makes it for the new field). The bvh is then the one
+ * tpk_range_bvh_create would make, for a fraction of its time on a Tet20 or Tet16 file (no walk).
+ * TPK_ERR_INVALID_ARGUMENT for a NULL bvh or a marcher without scalars. Not while rays run on it. */
+tpk_result tpk_range_bvh_set_scalars(tpk_range_bvh *bvh);
+/* Threads the builds of this bvh may use (tpk_range_bvh_select; <= 1: the caller's alone). The trees
+ * are the same for any count. TPK_ERR_INVALID_ARGUMENT for a NULL bvh. */
+tpk_result tpk_range_bvh_set_threads(tpk_range_bvh *bvh, int threads);
 /* Tets per leaf: leaf j holds tets [TPK_RANGE_BVH_LEAF * j, TPK_RANGE_BVH_LEAF * (j + 1)). */
 #define TPK_RANGE_BVH_LEAF 8
 /* The same tree for a renderer that walks it elsewhere (a GPU), as a complete binary tree in heap order:

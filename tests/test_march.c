@@ -8,6 +8,7 @@
 
 #include "harness.h"
 #include "internal_march.h"
+#include "internal_range.h"
 #include "march_fixtures.h"
 #include "tetpack.h"
 
@@ -787,7 +788,9 @@ TPK_TEST(hostile_shell_records)
 /* ---- Real meshes --------------------------------------------------------------------------------- */
 
 /* Import, tetrahedralize, orient, then layouts and shell as the converter does. */
-static int load_real(const char *relative, fx_mesh *m)
+/* A real mesh, tetrahedralized and oriented as the converter does; reorder: in the file's order (Hilbert,
+ * tpk_reorder), else the source's. */
+static int load_real_in(const char *relative, fx_mesh *m, int reorder)
 {
     memset(m, 0, sizeof *m);
     tpk_mesh src;
@@ -798,7 +801,8 @@ static int load_real(const char *relative, fx_mesh *m)
     memset(&diag, 0, sizeof diag);
     tpk_orient_stats ost;
     if (tpk_import_any(tpk_data_path(relative), NULL, &src, &diag) != 0 ||
-        tpk_tetrahedralize(&src, NULL, 0, 0, &tm, &diag) != 0 || tpk_orient(&tm, 0, 0, &ost, &diag) != 0) {
+        tpk_tetrahedralize(&src, NULL, 0, 0, &tm, &diag) != 0 || (reorder && tpk_reorder(&tm, 0, &diag) != 0) ||
+        tpk_orient(&tm, 0, 0, &ost, &diag) != 0) {
         fprintf(stderr, "%s: %s\n", relative, diag.message);
         tpk_mesh_free(&src);
         tpk_tetmesh_free(&tm);
@@ -821,6 +825,11 @@ static int load_real(const char *relative, fx_mesh *m)
     tpk_mesh_free(&src);
     tpk_tetmesh_free(&tm);
     return fx_build(m);
+}
+
+static int load_real(const char *relative, fx_mesh *m)
+{
+    return load_real_in(relative, m, 0);
 }
 
 /* Rays for an arbitrary mesh: random lines through its box, rays from inside (tet centroids), rays
@@ -1302,6 +1311,100 @@ TPK_TEST(culled_iso_packet_splits_at_a_sign_change)
               (unsigned long long)steps_alone);
     tpk_range_bvh_destroy(bvh);
     tpk_marcher_destroy(marcher);
+    fx_free(&m);
+}
+
+/* The range trees on 1, 2 and 3 threads (tpk_range_bvh_set_threads): the same bytes, the file-order tree
+ * and the selected one, on a real mesh in the file's order with several values, enough tets holding one
+ * that every thread gets blocks of the clustering; each such tet in one leaf slot, once. */
+TPK_TEST(range_tree_same_for_any_thread_count)
+{
+    fx_mesh m;
+    CHECK(load_real_in("sfepy/cube_big_tetra.mesh", &m, 1) == 0);
+    set_field(&m, 0);
+    tpk_marcher *marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    const double values[4] = {-0.5, 0.0, 0.3, 0.7};
+    tpk_range_bvh *bvh[3] = {NULL, NULL, NULL};
+    for (int i = 0; i < 3; i++) {
+        CHECK(marcher && tpk_range_bvh_create(&bvh[i], marcher) == TPK_OK);
+        CHECK(tpk_range_bvh_set_threads(bvh[i], i + 1) == TPK_OK);
+        CHECK(tpk_range_bvh_select(bvh[i], values, 4) == TPK_OK);
+    }
+    const tpk_range_bvh *a = bvh[0];
+    int64_t active = 0;
+    for (int64_t t = 0; t < m.tet_count; t++)
+        active += tpki_range_holds(a->tet_range[2 * t], a->tet_range[2 * t + 1], values, 4);
+    CHECK_MSG(active > 3 * 8192 && a->wide_count > 1, "%lld of %lld tets hold a value, %lld wide nodes",
+              (long long)active, (long long)m.tet_count, (long long)a->wide_count);
+    const int64_t nodes = a->level_start[a->levels - 1] + 1;
+    for (int i = 1; i < 3; i++) {
+        const tpk_range_bvh *b = bvh[i];
+        CHECK(b->levels == a->levels && b->wide_count == a->wide_count);
+        CHECK(!memcmp(b->tets, a->tets, sizeof *a->tets * 4 * (size_t)m.tet_count));
+        CHECK(!memcmp(b->tet_range, a->tet_range, sizeof *a->tet_range * 2 * (size_t)m.tet_count));
+        CHECK(!memcmp(b->nodes, a->nodes, sizeof *a->nodes * (size_t)nodes));
+        CHECK(!memcmp(b->node_range, a->node_range, sizeof *a->node_range * 2 * (size_t)nodes));
+        CHECK_MSG(!memcmp(b->wide, a->wide, sizeof *a->wide * (size_t)a->wide_count), "%d threads", i + 1);
+        CHECK(!memcmp(b->active_tets, a->active_tets, sizeof *a->active_tets * (size_t)active));
+        CHECK(!memcmp(b->active_slots, a->active_slots, sizeof *a->active_slots * (size_t)active));
+        CHECK(!memcmp(b->active_scalars, a->active_scalars, sizeof *a->active_scalars * (size_t)active));
+    }
+    uint8_t *seen = calloc((size_t)m.tet_count, 1);
+    CHECK(seen != NULL);
+    int64_t once = 0;
+    for (int64_t i = 0; seen && i < active; i++) {
+        int32_t t = a->active_tets[i];
+        once += t >= 0 && t < m.tet_count && !seen[t] &&
+                tpki_range_holds(a->tet_range[2 * t], a->tet_range[2 * t + 1], values, 4);
+        if (t >= 0 && t < m.tet_count)
+            seen[t] = 1;
+    }
+    CHECK_MSG(once == active, "%lld of %lld slots hold a distinct tet that holds a value", (long long)once,
+              (long long)active);
+    free(seen);
+    for (int i = 0; i < 3; i++)
+        tpk_range_bvh_destroy(bvh[i]);
+    tpk_marcher_destroy(marcher);
+    fx_free(&m);
+}
+
+/* A time step (tpk_marcher_set_scalars, then tpk_range_bvh_set_scalars): the trees read the new field's
+ * ranges and keep the rest, and are then the bytes a fresh tpk_range_bvh_create on the new field gives,
+ * the selected tree included once made; without a field, or without a bvh, refused. */
+TPK_TEST(range_tree_new_field_equals_a_fresh_one)
+{
+    fx_mesh m;
+    CHECK(load_real_in("sfepy/piezo_mesh_micro.vtk", &m, 1) == 0);
+    set_field(&m, 0);
+    float *first = m.scalars;
+    m.scalars = NULL;
+    set_field(&m, 1); /* the second field: floor(4 x) */
+    float *second = m.scalars;
+    m.scalars = first;
+    tpk_marcher *marcher = make_marcher(&m, TPK_LAYOUT_TET16);
+    const double values[2] = {0.5, 2.5}, old_values[1] = {0.3};
+    tpk_range_bvh *kept = NULL, *fresh = NULL;
+    CHECK(marcher && tpk_range_bvh_create(&kept, marcher) == TPK_OK);
+    CHECK(tpk_range_bvh_select(kept, old_values, 1) == TPK_OK && kept->wide_count > 0);
+    CHECK(tpk_marcher_set_scalars(marcher, second) == TPK_OK);
+    CHECK(tpk_range_bvh_set_scalars(kept) == TPK_OK);
+    CHECK(kept->wide_count == 0 && kept->active_value_count == 0); /* the old field's selection dropped */
+    CHECK(tpk_range_bvh_create(&fresh, marcher) == TPK_OK);
+    const int64_t nodes = kept->level_start[kept->levels - 1] + 1;
+    CHECK(!memcmp(kept->tets, fresh->tets, sizeof *kept->tets * 4 * (size_t)m.tet_count));
+    CHECK(!memcmp(kept->tet_range, fresh->tet_range, sizeof *kept->tet_range * 2 * (size_t)m.tet_count));
+    CHECK(!memcmp(kept->nodes, fresh->nodes, sizeof *kept->nodes * (size_t)nodes));
+    CHECK(!memcmp(kept->node_range, fresh->node_range, sizeof *kept->node_range * 2 * (size_t)nodes));
+    CHECK(tpk_range_bvh_select(kept, values, 2) == TPK_OK && tpk_range_bvh_select(fresh, values, 2) == TPK_OK);
+    CHECK(kept->wide_count > 0 && kept->wide_count == fresh->wide_count);
+    CHECK(!memcmp(kept->wide, fresh->wide, sizeof *kept->wide * (size_t)kept->wide_count));
+    CHECK(tpk_range_bvh_set_scalars(NULL) == TPK_ERR_INVALID_ARGUMENT);
+    CHECK(tpk_marcher_set_scalars(marcher, NULL) == TPK_OK);
+    CHECK(tpk_range_bvh_set_scalars(kept) == TPK_ERR_INVALID_ARGUMENT);
+    tpk_range_bvh_destroy(kept);
+    tpk_range_bvh_destroy(fresh);
+    tpk_marcher_destroy(marcher);
+    free(second);
     fx_free(&m);
 }
 

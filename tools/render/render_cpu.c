@@ -465,18 +465,20 @@ static tpk_range_bvh *culling_trees(const tpk_mesh_arrays *mesh, const tpk_rende
     /* many rays pay for the trees on any surface, few only on a sparse one; trees already kept are paid,
      * and trees to be kept are paid by the frames each field is drawn with (TPK_RENDER_KEPT_FRAMES, or
      * tpk_vertex_cache_frames_per_field's) */
-    int kept = keep->range != NULL; /* for this marcher, hence these arrays */
+    /* for this marcher, hence these arrays; a field read into kept trees is not paid for by earlier frames,
+     * so the choice is that field's alone (tests/cli/render_effects.sh), only its set-up shorter */
+    int kept = keep->range != NULL && !keep->range_new_field;
     int frames = own ? 1 : keep->frames > 0 ? keep->frames : TPK_RENDER_KEPT_FRAMES;
     double rays = (double)opt->width * (double)opt->height * frames;
     int many_rays = kept || rays >= (double)mesh->tet_count;
     if (!kept && culling < 0 && !many_rays && tpk_render_iso_dense(mesh, opt->iso, opt->iso_count))
         return NULL;
     tpk_result r = TPK_OK;
-    if (!kept) {
-        tpk_range_bvh_destroy(keep->range);
-        keep->range = NULL, keep->value_count = 0;
+    if (!keep->range) {
+        keep->value_count = 0;
         r = tpk_range_bvh_create(&keep->range, keep->marcher);
     }
+    keep->range_new_field = 0;
     if (r == TPK_OK) {
         double share = culling < 0 ? tpk_range_bvh_active(keep->range, opt->iso, opt->iso_count) : 0.0;
         /* fewer rays than tets: the share culling pays for grows with the rays, up to a quarter as many */
@@ -485,6 +487,8 @@ static tpk_range_bvh *culling_trees(const tpk_mesh_arrays *mesh, const tpk_rende
         if (share > (many_rays ? TPK_RENDER_CULL_ACTIVE_MANY : few))
             return NULL; /* a dense isosurface: marching finds it sooner */
     }
+    if (r == TPK_OK)
+        r = tpk_range_bvh_set_threads(keep->range, thread_count(opt));
     if (r == TPK_OK && (keep->value_count != opt->iso_count ||
                         memcmp(keep->values, opt->iso, sizeof *opt->iso * (size_t)opt->iso_count) != 0)) {
         keep->value_count = 0;
@@ -528,11 +532,17 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     render_keep own = {0}; /* made for this frame when nothing is kept */
     render_keep *k = keep ? keep : &own;
     if (k->marcher && !(tpk_render_same_mesh(&k->mesh, mesh) && k->mesh.scalars == mesh->scalars)) {
-        if (tpk_render_same_mesh(&k->mesh, mesh)) { /* another field of the same mesh (a time step): the
-                                                       marcher reads it from now on, the range trees are made again */
+        /* another field of the same mesh (a time step): the marcher and the range trees read it from now
+         * on, the trees keeping what depends on the positions alone (the tets' vertices, the boxes: the walk
+         * of a Tet16 file is most of their set-up); the selected tree is made again */
+        if (tpk_render_same_mesh(&k->mesh, mesh)) {
             tpk_marcher_set_scalars(k->marcher, mesh->scalars);
-            tpk_range_bvh_destroy(k->range);
-            k->range = NULL, k->value_count = 0;
+            if (k->range && (!mesh->scalars || tpk_range_bvh_set_scalars(k->range) != TPK_OK)) {
+                tpk_range_bvh_destroy(k->range);
+                k->range = NULL;
+            }
+            k->range_new_field = k->range != NULL;
+            k->value_count = 0;
             k->mesh.scalars = mesh->scalars;
         } else {
             render_keep_free(k);

@@ -14,11 +14,13 @@
 
 /* What the CPU reference keeps across frames for one mesh and field (render.h: tpk_vertex_cache holds
  * one): the marcher and the range culling's trees (made on the marcher), made again only when the
- * arrays or the field change (by pointer). */
+ * arrays change (by pointer); another field (by pointer) is read into them, the selected tree made again. */
 typedef struct render_keep {
     tpk_mesh_arrays mesh;   /* the arrays they were made for (a copy of the struct) */
     tpk_marcher *marcher;
     tpk_range_bvh *range;   /* NULL: not made */
+    int range_new_field;    /* range has read a new field since the last frame: the automatic culling
+                               choice counts its set-up as unpaid, as for that field alone */
     double values[TPK_RENDER_MAX_ISO]; /* the values the range trees were selected for */
     int value_count;        /* 0: none selected */
     int frames;             /* the frames a field is drawn with (tpk_vertex_cache_frames_per_field);

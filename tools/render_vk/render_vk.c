@@ -32,6 +32,8 @@ struct tpk_vk_renderer {
     tpk_marcher *marcher; /* owns the shell BVH that was uploaded */
     tpk_shell_bvh bvh;
     tpk_mesh_arrays mesh; /* the caller's arrays (not copied) */
+    double diagonal;      /* of the positions' box (tpk_positions_diagonal), once: a pass over every vertex
+                           * took most of a frame's host time (bench/README, figures) */
     tpk_range_bvh *range; /* culled iso-only frames (render.h ISO-ONLY RAYS): made and uploaded on the
                              first (range_leaf_base > 0 from then on) */
     int64_t range_leaf_base;
@@ -475,6 +477,7 @@ int tpk_vk_renderer_create_presenting(tpk_vk_renderer **out, const tpk_mesh_arra
     }
     tpk_marcher_shell_bvh(v->marcher, &v->bvh);
     v->mesh = *mesh;
+    v->diagonal = tpk_positions_diagonal(mesh);
     v->tet_scalars = tet_scalars != NULL;
     if (device_setup(v, mesh, tet_scalars, surface, diag) != 0) {
         tpk_vk_renderer_destroy(v);
@@ -625,7 +628,7 @@ static int render_frame(vk_render *v, const tpk_render_options *opt, uint8_t *rg
     if (!params)
         return tpk_diag_fail(diag, "render: out of memory");
     uint64_t counts[2] = {0, 0};
-    int rc = tpk_vk_params_fill(&v->mesh, opt, v->bvh.extent, v->bvh.face_count, params, diag);
+    int rc = tpk_vk_params_fill(&v->mesh, opt, v->diagonal, v->bvh.extent, v->bvh.face_count, params, diag);
     int culls = rc == 0 ? frame_culls(v, opt, diag) : 0;
     if (culls < 0)
         rc = -1;
@@ -683,15 +686,17 @@ int tpk_vk_renderer_set_field(tpk_vk_renderer *v, const float *scalars, const fl
         return tpk_diag_fail(diag, "render: another field must be of the same kind (point or tet) as the renderer's");
     v->mesh.scalars = scalars;
     tpk_marcher_set_scalars(v->marcher, scalars);
-    /* The range tree holds the old field's ranges: it is made again for the next culled frame. Once
-     * uploaded, a culling pipeline reads it: the new ranges go into the same array (the tree's shape
+    /* The range tree reads the new field's ranges, keeping the tets' vertices and boxes (no walk again).
+     * Once uploaded, a culling pipeline reads it: the new ranges go into the same array (the tree's shape
      * depends on the tet count alone). */
-    tpk_range_bvh_destroy(v->range);
-    v->range = NULL;
     float *nodes = NULL;
     int64_t base = 0;
+    if (v->range && (!scalars || tpk_range_bvh_set_scalars(v->range) != TPK_OK)) {
+        tpk_range_bvh_destroy(v->range);
+        v->range = NULL;
+    }
     if (v->range_leaf_base > 0) {
-        tpk_result r = tpk_range_bvh_create(&v->range, v->marcher);
+        tpk_result r = v->range ? TPK_OK : tpk_range_bvh_create(&v->range, v->marcher);
         if (r != TPK_OK)
             return tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
         base = tpk_range_bvh_heap(v->range, NULL);

@@ -229,9 +229,10 @@ typedef struct tpk_vk_params {
  * limit"). Returns 0 or -1 with a message. */
 int tpk_vk_check_options(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, const uint8_t *rgba,
                          tpk_diag *diag);
-/* Fill the uniform block for one frame: extent is the marcher's (box padding), face_count the shell's.
+/* Fill the uniform block for one frame: diagonal is the positions' (tpk_positions_diagonal, kept by the
+ * caller: a pass over the vertices), extent the marcher's (box padding), face_count the shell's.
  * Returns 0, or -1 with a message (a bad camera). */
-int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, double extent,
+int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, double diagonal, double extent,
                        int64_t face_count, tpk_vk_params *p, tpk_diag *diag);
 /* The TPK_VK_EFFECT_* bits the options ask for. */
 int tpk_vk_effects(const tpk_render_options *opt);

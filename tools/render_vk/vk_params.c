@@ -44,12 +44,12 @@ static void set_camera(const tpk_render_options *opt, const tpk_camera_basis *ba
     p->right[3] = (float)basis->tan_half_y;
 }
 
-int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, double extent, int64_t face_count,
-                       tpk_vk_params *p, tpk_diag *diag)
+int tpk_vk_params_fill(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, double diagonal, double extent,
+                       int64_t face_count, tpk_vk_params *p, tpk_diag *diag)
 {
     memset(p, 0, sizeof *p);
     tpk_render_setup setup;
-    if (tpk_render_setup_of(opt, tpk_positions_diagonal(mesh), &setup, diag) != 0)
+    if (tpk_render_setup_of(opt, diagonal, &setup, diag) != 0)
         return -1;
     set_camera(opt, &setup.basis, mesh->origin, p);
     /* Boxes get 1e-5 of the reach on top of the builder's 1e-6 of the extent: the float slab test and

@@ -51,6 +51,7 @@ typedef struct probe_block {
 struct tpk_iso_raster {
     tpk_iso_vk *iso;   /* the extractor, on its device; the mesh's tets, scalars, positions uploaded */
     const tpk_mesh_arrays *mesh;
+    double diagonal;   /* of its positions' box (tpk_positions_diagonal), once rather than each frame */
     VkImage images[2]; /* colour, depth: at the last frame's size */
     VkDeviceMemory memory[2];
     VkImageView views[2];
@@ -477,6 +478,7 @@ int tpk_iso_raster_create(raster **out, const tpk_mesh_arrays *mesh, tpk_diag *d
         return tpk_diag_fail(diag, "render: out of memory");
     }
     ra->mesh = mesh;
+    ra->diagonal = tpk_positions_diagonal(mesh);
     int rc = tpk_iso_vk_create_with(&ra->iso, &in, 1, diag); /* the arrays are copied to the device */
     if (rc == 0 && !(ra->iso->ctx.props.limits.maxPushConstantsSize >= sizeof(raster_push)))
         rc = tpk_diag_fail(diag, "render: --iso-raster: the device's push constants are too small");
@@ -655,7 +657,7 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
         return tpk_diag_fail(diag, "render: --iso-raster draws opaque isosurfaces with shading at most: without "
                                    "--shadows, --ao and --iso-opacity (the ray marcher draws those)");
     tpk_render_setup setup;
-    if (tpk_render_setup_of(opt, tpk_positions_diagonal(mesh), &setup, diag) != 0)
+    if (tpk_render_setup_of(opt, ra->diagonal, &setup, diag) != 0)
         return -1;
     /* the near distance: a millionth of the farthest corner of the mesh's box seen from the eye (depth
      * is near / distance, reversed, in float) */
