@@ -210,6 +210,34 @@ for bad in "$WORK"/badmsh_*.msh; do
     expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 3
     cmp -s "$WORK/err1" "$WORK/err" || fail "$(basename "$bad"): the messages of 1 and 3 threads differ"
 done
+# VTKHDF large enough for its cells to be converted on all threads (the 30-grid, 162,000 tets, as
+# tetpack's exporter writes it), with a triangle among the tets (dropped, counted in the warning), and
+# with a point id out of range or an unknown cell type in the middle: the same file, and the serial
+# reader's message, at any thread count.
+"$TPK" convert "$WORK/g30.vtk" "$WORK/g30.tpk" --quiet
+if "$TPK" export "$WORK/g30.tpk" --vtkhdf "$WORK/g30.vtkhdf" > /dev/null 2>&1; then
+    same_threads vtkhdf_g30 "$WORK/g30.vtkhdf"
+    "$PY" - "$WORK" <<'PYEOF'
+import shutil, sys
+import h5py
+work = sys.argv[1]
+for n, (name, at, value) in enumerate([("Connectivity", 300001, 10 ** 7), ("Connectivity", 5, -1),
+                                       ("Types", 100000, 99)]):
+    shutil.copy(work + "/g30.vtkhdf", "%s/badhdf_%d.vtkhdf" % (work, n))
+    with h5py.File("%s/badhdf_%d.vtkhdf" % (work, n), "r+") as f:
+        f["VTKHDF/" + name][at] = value
+shutil.copy(work + "/g30.vtkhdf", work + "/dropped.vtkhdf")
+with h5py.File(work + "/dropped.vtkhdf", "r+") as f:
+    f["VTKHDF/Types"][70000] = 5  # a triangle: dropped with a warning
+PYEOF
+    same_threads vtkhdf_dropped "$WORK/dropped.vtkhdf"
+    for bad in "$WORK"/badhdf_*.vtkhdf; do
+        expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 1
+        mv "$WORK/err" "$WORK/err1"
+        expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 3
+        cmp -s "$WORK/err1" "$WORK/err" || fail "$(basename "$bad"): the messages of 1 and 3 threads differ"
+    done
+fi
 # Levels of detail: the collapses run on all threads, the levels must not depend on how many.
 same_threads levels "$DATA/sfepy/cube_cylinder.mesh" --levels 3
 echo "$((passed + 2)) passed, 0 failed"
