@@ -5,7 +5,7 @@
  *   import_gmsh_mesh.c  gmsh_read_nodes, gmsh_read_elements, gmsh_read_entities, gmsh_sort_tags,
  *                       gmsh_node_index
  *   import_gmsh_bulk.c  gmsh_bulk_node_tags, gmsh_bulk_coords, gmsh_bulk_elements (4.1 blocks on all
- *                       threads), gmsh_lookup
+ *                       threads), gmsh_lookup, gmsh_node_at, gmsh_index_nodes
  *   import_gmsh_scan.c  gmsh_bytes_left, gmsh_bin_bytes, gmsh_num, gmsh_real, gmsh_bin_start,
  *                       gmsh_read_count, gmsh_expect_end, gmsh_skip_section
  * Not installed. Every function returning int that can fail returns 0, or -1 with the message in r->s. */
@@ -58,6 +58,8 @@ typedef struct gmsh_reader {
     double *points;
     tag_index *node_tags; /* sorted by tag */
     int node_dense;       /* tags are 1..point_count in order */
+    int32_t *node_at;     /* not dense, but tags up to 4 a node: node_at[tag] (-1: none) for tag 0..node_at_max */
+    int64_t node_at_max;
     int have_elements;
     int64_t cell_count, conn_count, cell_cap, conn_cap;
     uint8_t *types;
@@ -113,6 +115,10 @@ int gmsh_read_entities(gmsh_reader *r);
 
 /* The index of `tag` in t[0 .. n) sorted by tag; *found says whether it is there (-1 when not). */
 int32_t gmsh_lookup(const tag_index *t, int64_t n, int64_t tag, int *found);
+/* The index of node `tag` (dense, node_at, or looked up in node_tags); *found says whether it is there. */
+int32_t gmsh_node_at(const gmsh_reader *r, int64_t tag, int *found);
+/* After $Nodes, sparse tags sorted: node_at where the largest tag is at most 4 a node (plus 4096). */
+int gmsh_index_nodes(gmsh_reader *r);
 /* The tags of nodes at .. at + count - 1 (of n), binary from the mapping or ASCII in pieces: noted as
  * note-by-note reading would (no table while they run 1, 2, 3, ...). Returns how many it took: the first
  * tag it does not take (below 1, or not a number) and all after it are left to the one-by-one reader,

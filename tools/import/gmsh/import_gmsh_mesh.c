@@ -77,10 +77,8 @@ int gmsh_sort_tags(gmsh_reader *r, tag_index *t, int64_t n, const char *what)
 /* Node index of a tag, or -1 with the message. */
 int32_t gmsh_node_index(gmsh_reader *r, int64_t tag, const char *user)
 {
-    if (r->node_dense && tag >= 1 && tag <= r->point_count)
-        return (int32_t)(tag - 1);
-    int found = 0; /* dense tags have no table: a tag outside 1..point_count is not there */
-    int32_t i = r->node_dense ? -1 : gmsh_lookup(r->node_tags, r->point_count, tag, &found);
+    int found = 0;
+    int32_t i = gmsh_node_at(r, tag, &found);
     if (!found)
         tpk_scan_fail(&r->s, "%s uses node tag %lld, which $Nodes does not define", user, (long long)tag);
     return i;
@@ -193,7 +191,9 @@ int gmsh_read_nodes(gmsh_reader *r)
         return -1;
     r->point_count = n;
     r->node_dense = r->node_tags == NULL; /* no tag broke the run 1, 2, 3, ... (note_node_tag) */
-    return r->node_dense ? 0 : gmsh_sort_tags(r, r->node_tags, n, "node");
+    if (r->node_dense)
+        return 0;
+    return gmsh_sort_tags(r, r->node_tags, n, "node") ? -1 : gmsh_index_nodes(r);
 }
 
 /* ---- $Elements, $Entities ----------------------------------------------------------------------- */
@@ -302,11 +302,13 @@ static int64_t volume_physical(const gmsh_reader *r, int64_t entity)
 
 /* One element's nodes (after its tag, type and tags are read). */
 /* gmsh_node_index for a node of element `tag`; the element is named (snprintf costs more than the rest
- * of reading an element) only when the dense numbering does not give the index at once. */
+ * of reading an element) only when the node is not there. */
 static int32_t element_node_index(gmsh_reader *r, int64_t id, int64_t tag, const gmsh_type *t)
 {
-    if (r->node_dense && id >= 1 && id <= r->point_count)
-        return (int32_t)(id - 1);
+    int found;
+    int32_t i = gmsh_node_at(r, id, &found);
+    if (found)
+        return i;
     char user[96];
     snprintf(user, sizeof user, "element %lld (%s)", (long long)tag, t->name);
     return gmsh_node_index(r, id, user);
