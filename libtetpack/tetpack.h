@@ -186,6 +186,8 @@ typedef struct tpk_write_options {
     tpk_message_fn message; /* called once per error with a detailed text (the only way to see why
                                tpk_writer_finish failed, since it frees the writer); may be NULL */
     void *message_user;
+    int threads; /* 2 or more: a large uncompressed append is hashed on a second thread while the calling
+                    thread writes it (the same bytes; the append returns when both are done); else one */
 } tpk_write_options;
 
 /* Start a file at `path`: data goes to a temporary file in the same directory, which tpk_writer_finish

@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #endif
 #include <errno.h>
+#include <pthread.h>
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,6 +40,7 @@ struct tpk_writer {
     uint64_t chunk_appended;  /* raw bytes so far */
     int chunk_level;
     XXH64_state_t *hash;
+    int threads;              /* tpk_write_options.threads */
     ZSTD_CCtx *zstd;
     void *zstd_out;           /* ZSTD_CStreamOutSize() bytes */
     char error_text[TPK_ERROR_TEXT_SIZE];
@@ -206,7 +208,8 @@ static tpk_writer *writer_new(const tpk_write_options *options, char *err_text, 
             snprintf(err_text, err_cap, "out of memory for the writer");
         return NULL;
     }
-    *w = (tpk_writer){.allocator = allocator, .message = opt.message, .message_user = opt.message_user, .fd = -1};
+    *w = (tpk_writer){.allocator = allocator, .message = opt.message, .message_user = opt.message_user, .fd = -1,
+                        .threads = opt.threads};
     return w;
 }
 
@@ -392,6 +395,24 @@ tpk_result tpk_writer_begin_chunk(tpk_writer *writer, const tpk_chunk_desc *desc
     return TPK_OK;
 }
 
+/* Appends of this many bytes or more, uncompressed, are hashed beside the write (tpk_write_options.threads):
+ * on tmpfs the write is a copy into the page cache, and the hash a second pass over the same bytes (the
+ * maps and fields, written whole at the end of a conversion, each paid both on one core). */
+#define HASH_ASIDE_MIN ((uint64_t)1 << 20)
+
+typedef struct hash_job {
+    XXH64_state_t *hash;
+    const void *data;
+    size_t size;
+} hash_job;
+
+static void *hash_run(void *arg)
+{
+    hash_job *job = arg;
+    XXH64_update(job->hash, job->data, job->size);
+    return NULL;
+}
+
 tpk_result tpk_writer_append(tpk_writer *writer, const void *data, uint64_t size)
 {
     if (!writer || (!data && size > 0))
@@ -403,6 +424,16 @@ tpk_result tpk_writer_append(tpk_writer *writer, const void *data, uint64_t size
                            writer->chunk.raw_size);
     if (size == 0)
         return TPK_OK;
+    if (writer->chunk.codec != TPK_CODEC_ZSTD && writer->threads >= 2 && size >= HASH_ASIDE_MIN) {
+        hash_job job = {writer->hash, data, (size_t)size};
+        pthread_t thread;
+        if (pthread_create(&thread, NULL, hash_run, &job) == 0) {
+            writer->chunk_appended += size;
+            tpk_result r = write_all(writer, data, size);
+            pthread_join(thread, NULL);
+            return r;
+        }
+    }
     XXH64_update(writer->hash, data, (size_t)size);
     writer->chunk_appended += size;
     if (writer->chunk.codec == TPK_CODEC_ZSTD)

@@ -123,6 +123,121 @@ for bad in "$WORK"/bad_*.vtk; do
     expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 3
     cmp -s "$WORK/err1" "$WORK/err" || fail "$(basename "$bad"): the messages of 1 and 3 threads differ"
 done
+# Gmsh 4.1 blocks large enough to be read on all threads (tpk_scan_numbers pieces in ASCII, records in
+# binary): t5.geo meshed by gmsh (volume blocks only), saved ASCII and binary; the 30-grid written here in
+# the layouts a reader has several paths for (surface elements first, so the element tags are listed;
+# node tags 2, 4, 6, ..., so each node is looked up; two volume blocks with a gap between their tags),
+# ASCII and binary; and bad forms, which must give the serial reader's message at any thread count.
+if command -v gmsh > /dev/null; then
+    gmsh "$DATA/gmsh/t5.geo" -3 -clscale 0.5 -format msh41 -o "$WORK/t5.msh" > /dev/null
+    gmsh "$WORK/t5.msh" -0 -format msh41 -bin -o "$WORK/t5_bin.msh" > /dev/null
+    same_threads gmsh41_t5_ascii "$WORK/t5.msh"
+    same_threads gmsh41_t5_binary "$WORK/t5_bin.msh"
+fi
+"$PY" - "$WORK" <<'PYEOF'
+import sys
+import meshio
+import numpy as np
+work = sys.argv[1]
+m = meshio.read(work + "/g30.vtk")
+pts, tets = m.points, m.cells[0].data.astype(np.int64)
+
+def write(name, binary, node_step=1, surfaces=False, gap=False, bad=None):
+    """Gmsh 4.1: one node block (tags 1, 1 + step, ...), then elements: a triangle block first when
+    surfaces, the tets in one block, or two with a gap of 1000 tags between them."""
+    n = len(pts)
+    node_tags = 1 + node_step * np.arange(n, dtype=np.int64)
+    blocks, tag = [], 1
+    if surfaces:
+        tri = tets[:5000, :3]
+        blocks.append((2, 1, 2, np.arange(tag, tag + len(tri)), tri))
+        tag += len(tri)
+    halves = [tets[: len(tets) // 2], tets[len(tets) // 2:]] if gap else [tets]
+    for k, h in enumerate(halves):
+        blocks.append((3, 1 + k, 4, np.arange(tag, tag + len(h)), h))
+        tag += len(h) + (1000 if gap else 0)
+    count = sum(len(b[3]) for b in blocks)
+    max_tag = max(int(b[3][-1]) for b in blocks)
+    with open(work + "/" + name, "wb") as f:
+        w = f.write
+        if binary:
+            w(b"$MeshFormat\n4.1 1 8\n" + np.int32(1).tobytes() + b"\n$EndMeshFormat\n$Nodes\n")
+            w(np.array([1, n, node_tags[0], node_tags[-1]], np.uint64).tobytes())
+            w(np.array([3, 1, 0], np.int32).tobytes() + np.uint64(n).tobytes())
+            w(node_tags.astype(np.uint64).tobytes() + pts.astype(np.float64).tobytes())
+            w(b"\n$EndNodes\n$Elements\n")
+            w(np.array([len(blocks), count, 1, max_tag], np.uint64).tobytes())
+            for dim, ent, typ, tags, conn in blocks:
+                w(np.array([dim, ent, typ], np.int32).tobytes() + np.uint64(len(tags)).tobytes())
+                rows = np.hstack([tags[:, None], node_tags[conn]]).astype(np.uint64)
+                if bad is not None and typ == 4:
+                    rows[bad[0], bad[1]] = np.uint64(bad[2] % (1 << 64))
+                w(rows.tobytes())
+            w(b"\n$EndElements\n")
+        else:
+            w(b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n")
+            w(b"1 %d %d %d\n3 1 0 %d\n" % (n, node_tags[0], node_tags[-1], n))
+            np.savetxt(f, node_tags, fmt="%d")
+            np.savetxt(f, pts, fmt="%.17g")
+            w(b"$EndNodes\n$Elements\n%d %d 1 %d\n" % (len(blocks), count, max_tag))
+            for dim, ent, typ, tags, conn in blocks:
+                w(b"%d %d %d %d\n" % (dim, ent, typ, len(tags)))
+                rows = np.hstack([tags[:, None], node_tags[conn]]).astype(object)
+                if bad is not None and typ == 4:
+                    rows[bad[0], bad[1]] = bad[2]
+                np.savetxt(f, rows, fmt="%s")
+            w(b"$EndElements\n")
+
+for binary, kind in ((False, "ascii"), (True, "binary")):
+    write("g30_%s.msh" % kind, binary)
+    write("g30_%s_listed.msh" % kind, binary, node_step=2, surfaces=True)
+    write("g30_%s_gap.msh" % kind, binary, gap=True)
+    # a tet's node that $Nodes lacks, its tag 0, a node tag too large for int64 (binary) or not a number
+    for n, bad in enumerate([(90000, 2, 10 ** 9), (120000, 0, 0), (150000, 4, -3)]):
+        write("badmsh_%s_%d.msh" % (kind, n), binary, bad=bad)
+    if not binary:
+        write("badmsh_ascii_3.msh", False, bad=(100000, 1, "x7"))
+        write("badmsh_ascii_4.msh", False, node_step=2, surfaces=True, bad=(70000, 3, 4))
+PYEOF
+for kind in ascii binary; do
+    for form in "" _listed _gap; do
+        same_threads "gmsh41_g30_$kind$form" "$WORK/g30_$kind$form.msh"
+    done
+done
+for bad in "$WORK"/badmsh_*.msh; do
+    expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 1
+    mv "$WORK/err" "$WORK/err1"
+    expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 3
+    cmp -s "$WORK/err1" "$WORK/err" || fail "$(basename "$bad"): the messages of 1 and 3 threads differ"
+done
+# VTKHDF large enough for its cells to be converted on all threads (the 30-grid, 162,000 tets, as
+# tetpack's exporter writes it), with a triangle among the tets (dropped, counted in the warning), and
+# with a point id out of range or an unknown cell type in the middle: the same file, and the serial
+# reader's message, at any thread count.
+"$TPK" convert "$WORK/g30.vtk" "$WORK/g30.tpk" --quiet
+if "$TPK" export "$WORK/g30.tpk" --vtkhdf "$WORK/g30.vtkhdf" > /dev/null 2>&1; then
+    same_threads vtkhdf_g30 "$WORK/g30.vtkhdf"
+    "$PY" - "$WORK" <<'PYEOF'
+import shutil, sys
+import h5py
+work = sys.argv[1]
+for n, (name, at, value) in enumerate([("Connectivity", 300001, 10 ** 7), ("Connectivity", 5, -1),
+                                       ("Types", 100000, 99)]):
+    shutil.copy(work + "/g30.vtkhdf", "%s/badhdf_%d.vtkhdf" % (work, n))
+    with h5py.File("%s/badhdf_%d.vtkhdf" % (work, n), "r+") as f:
+        f["VTKHDF/" + name][at] = value
+shutil.copy(work + "/g30.vtkhdf", work + "/dropped.vtkhdf")
+with h5py.File(work + "/dropped.vtkhdf", "r+") as f:
+    f["VTKHDF/Types"][70000] = 5  # a triangle: dropped with a warning
+PYEOF
+    same_threads vtkhdf_dropped "$WORK/dropped.vtkhdf"
+    for bad in "$WORK"/badhdf_*.vtkhdf; do
+        expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 1
+        mv "$WORK/err" "$WORK/err1"
+        expect_exit 2 "$TPK" convert "$bad" "$WORK/bad.tpk" --threads 3
+        cmp -s "$WORK/err1" "$WORK/err" || fail "$(basename "$bad"): the messages of 1 and 3 threads differ"
+    done
+fi
 # Levels of detail: the collapses run on all threads, the levels must not depend on how many.
 same_threads levels "$DATA/sfepy/cube_cylinder.mesh" --levels 3
 echo "$((passed + 2)) passed, 0 failed"

@@ -99,11 +99,33 @@ static int read_source(conversion *c)
 
 /* Higher-order cells split whole into linear cells at their nodes (or, with --higher-order corners,
  * reduced to their corners) before anything else sees the mesh. */
+/* The higher-order cells, counted on all threads by a table of the 256 types (a call per cell, on one
+ * core, was 0.4% of a 2-thread convert of grid 120). */
+typedef struct higher_job {
+    const uint8_t *types;
+    unsigned char higher[256];
+    int64_t count[TPK_MAX_THREADS];
+} higher_job;
+
+static void count_higher(void *ctx, int64_t begin, int64_t end, int w)
+{
+    higher_job *job = ctx;
+    int64_t n = 0;
+    for (int64_t k = begin; k < end; k++)
+        n += job->higher[job->types[k]];
+    job->count[w] = n;
+}
+
 static int whole_cells(conversion *c)
 {
+    higher_job job = {.types = c->src.cell_types};
+    for (int t = 0; t < 256; t++)
+        job.higher[t] = (unsigned char)tpk_is_higher_order_volume(t);
+    int threads = tpk_threads_for(c->src.cell_count, tpk_thread_count(c->o->threads), 1 << 20);
+    tpk_parallel_for(c->src.cell_count, threads, count_higher, &job);
     int64_t count = 0;
-    for (int64_t k = 0; k < c->src.cell_count; k++)
-        count += tpk_is_higher_order_volume(c->src.cell_types[k]);
+    for (int w = 0; w < threads; w++)
+        count += job.count[w];
     c->rep->higher_order_cells = count;
     if (count == 0)
         return 0;

@@ -499,6 +499,7 @@ int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const t
     wopt.size = sizeof wopt;
     wopt.message = writer_message;
     wopt.message_user = diag;
+    wopt.threads = cw.threads;
     /* The file has no name until it is complete (base/output_file.h): a killed conversion leaves nothing. */
     memset(ws, 0, sizeof *ws);
     ws->out.fd = o->output_fd;

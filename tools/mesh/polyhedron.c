@@ -78,6 +78,10 @@ static int64_t stream_points(const int32_t *stream, int64_t n, int32_t *ids)
 
 int tpk_mesh_take_face_streams(tpk_mesh *mesh)
 {
+    /* most meshes have none: one memchr (a loop over every cell's type and offsets was 0.2% of a 2-thread
+     * convert of grid 120, on one core) */
+    if (mesh->cell_count <= 0 || !memchr(mesh->cell_types, TPK_CELL_POLYHEDRON, (size_t)mesh->cell_count))
+        return 0;
     int64_t stream_size = 0;
     for (int64_t c = 0; c < mesh->cell_count; c++)
         if (mesh->cell_types[c] == TPK_CELL_POLYHEDRON)

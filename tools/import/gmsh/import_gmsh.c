@@ -121,6 +121,7 @@ static void reader_free(gmsh_reader *r)
 {
     free(r->points);
     free(r->node_tags);
+    free(r->node_at);
     free(r->types);
     free(r->offsets);
     free(r->conn);

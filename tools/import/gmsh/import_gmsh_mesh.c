@@ -20,12 +20,6 @@
  * 45 47 56 67 for the hexahedron, then its faces z-, y-, x-, x+, y+, z+; VTK's as mesh/cell_map.c lists
  * them). The 14-node pyramid keeps 13 (VTK has no type with the base centre: the split places it by the
  * base's serendipity functions). */
-typedef struct gmsh_type {
-    int type, nodes, vtk, kept; /* kept: the nodes kept, in VTK order */
-    const char *name;
-    const signed char *order;   /* VTK node k is Gmsh node order[k]; NULL: the same */
-} gmsh_type;
-
 static const signed char tet10[] = {0, 1, 2, 3, 4, 5, 6, 7, 9, 8};
 static const signed char hex27[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15,
                                     22, 23, 21, 24, 20, 25, 26};
@@ -48,12 +42,6 @@ static const gmsh_type gmsh_types[] = {
     {25, 21, 0, 0, "triangle21", NULL},      {26, 4, 0, 0, "line4", NULL},
     {27, 5, 0, 0, "line5", NULL},            {28, 6, 0, 0, "line6", NULL},
 };
-
-/* The Gmsh node that VTK node k of a kept element is. */
-static inline int gmsh_node_of(const gmsh_type *t, int k)
-{
-    return t->order ? t->order[k] : k;
-}
 
 static const gmsh_type *find_type(int64_t type)
 {
@@ -86,27 +74,11 @@ int gmsh_sort_tags(gmsh_reader *r, tag_index *t, int64_t n, const char *what)
     return 0;
 }
 
-int32_t gmsh_lookup(const tag_index *t, int64_t n, int64_t tag, int *found)
-{
-    int64_t lo = 0, hi = n;
-    while (lo < hi) {
-        int64_t mid = lo + (hi - lo) / 2;
-        if (t[mid].tag < tag)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    *found = lo < n && t[lo].tag == tag;
-    return *found ? t[lo].index : -1;
-}
-
 /* Node index of a tag, or -1 with the message. */
 int32_t gmsh_node_index(gmsh_reader *r, int64_t tag, const char *user)
 {
-    if (r->node_dense && tag >= 1 && tag <= r->point_count)
-        return (int32_t)(tag - 1);
-    int found = 0; /* dense tags have no table: a tag outside 1..point_count is not there */
-    int32_t i = r->node_dense ? -1 : gmsh_lookup(r->node_tags, r->point_count, tag, &found);
+    int found = 0;
+    int32_t i = gmsh_node_at(r, tag, &found);
     if (!found)
         tpk_scan_fail(&r->s, "%s uses node tag %lld, which $Nodes does not define", user, (long long)tag);
     return i;
@@ -124,27 +96,6 @@ static int read_node_coords(gmsh_reader *r, int64_t at, int extra)
         if (gmsh_real(r, &skip, "a parametric node coordinate"))
             return -1;
     return 0;
-}
-
-/* The last binary read of `n` bytes ending at the current position, as gmsh_bin_bytes leaves the
- * scanner: a later message places itself the same way whether the bytes were read one by one or in bulk. */
-static void mark_bulk_read(gmsh_reader *r, size_t last)
-{
-    r->s.tok_pos = r->s.pos - last;
-    r->s.tok_line = r->s.line;
-}
-
-/* 4.1 binary, no parametric coordinates: a block's coordinates are `count` x 3 doubles in a row, copied
- * at once when the file holds them all (else read one by one, which words the failure). 1 when done. */
-static int bulk_coords(gmsh_reader *r, int64_t at, int64_t count, int64_t param)
-{
-    size_t bytes = sizeof *r->points * 3 * (size_t)count;
-    if (!r->binary || param || count == 0 || gmsh_bytes_left(r) < bytes)
-        return 0;
-    memcpy(&r->points[3 * at], r->s.data + r->s.pos, bytes);
-    r->s.pos += bytes;
-    mark_bulk_read(r, sizeof *r->points);
-    return 1;
 }
 
 static int check_tag(gmsh_reader *r, int64_t tag, const char *what)
@@ -172,29 +123,6 @@ static int note_node_tag(gmsh_reader *r, int64_t at, int64_t tag, int64_t n)
     r->node_tags[at].tag = tag;
     r->node_tags[at].index = (int32_t)at;
     return 0;
-}
-
-/* 4.1 binary: the tags of a node block read straight from the mapping; the first one below 1 (and all
- * after it) is left to the one-by-one reader, which words the failure. Returns how many it took. */
-static int64_t bulk_node_tags(gmsh_reader *r, int64_t at, int64_t count, int64_t n)
-{
-    if (!r->binary || gmsh_bytes_left(r) / sizeof(uint64_t) < (uint64_t)count)
-        return 0;
-    const unsigned char *p = (const unsigned char *)r->s.data + r->s.pos;
-    int64_t i = 0;
-    for (; i < count; i++) {
-        uint64_t tag;
-        memcpy(&tag, p + sizeof tag * (size_t)i, sizeof tag);
-        if (tag < 1 || tag > (uint64_t)INT64_MAX)
-            break;
-        if (note_node_tag(r, at + i, (int64_t)tag, n))
-            return -1;
-    }
-    if (i > 0) {
-        r->s.pos += sizeof(uint64_t) * (size_t)i;
-        mark_bulk_read(r, sizeof(uint64_t));
-    }
-    return i;
 }
 
 int gmsh_read_nodes(gmsh_reader *r)
@@ -239,7 +167,7 @@ int gmsh_read_nodes(gmsh_reader *r)
                 return tpk_scan_fail(&r->s, "node block %lld holds %lld nodes, more than the %lld left of the "
                                             "%lld announced", (long long)b + 1, (long long)count,
                                      (long long)(n - done), (long long)n);
-            int64_t bulk = bulk_node_tags(r, done, count, n);
+            int64_t bulk = gmsh_bulk_node_tags(r, done, count, n);
             if (bulk < 0)
                 return -1;
             for (int64_t i = bulk; i < count; i++) {
@@ -248,10 +176,7 @@ int gmsh_read_nodes(gmsh_reader *r)
                     note_node_tag(r, done + i, tag, n))
                     return -1;
             }
-            if (bulk_coords(r, done, count, param))
-                continue_from = count;
-            else
-                continue_from = 0;
+            continue_from = !param && gmsh_bulk_coords(r, done, count) ? count : 0;
             for (int64_t i = continue_from; i < count; i++)
                 if (read_node_coords(r, done + i, param ? (int)dim : 0))
                     return -1;
@@ -266,7 +191,9 @@ int gmsh_read_nodes(gmsh_reader *r)
         return -1;
     r->point_count = n;
     r->node_dense = r->node_tags == NULL; /* no tag broke the run 1, 2, 3, ... (note_node_tag) */
-    return r->node_dense ? 0 : gmsh_sort_tags(r, r->node_tags, n, "node");
+    if (r->node_dense)
+        return 0;
+    return gmsh_sort_tags(r, r->node_tags, n, "node") ? -1 : gmsh_index_nodes(r);
 }
 
 /* ---- $Elements, $Entities ----------------------------------------------------------------------- */
@@ -375,11 +302,13 @@ static int64_t volume_physical(const gmsh_reader *r, int64_t entity)
 
 /* One element's nodes (after its tag, type and tags are read). */
 /* gmsh_node_index for a node of element `tag`; the element is named (snprintf costs more than the rest
- * of reading an element) only when the dense numbering does not give the index at once. */
+ * of reading an element) only when the node is not there. */
 static int32_t element_node_index(gmsh_reader *r, int64_t id, int64_t tag, const gmsh_type *t)
 {
-    if (r->node_dense && id >= 1 && id <= r->point_count)
-        return (int32_t)(id - 1);
+    int found;
+    int32_t i = gmsh_node_at(r, id, &found);
+    if (found)
+        return i;
     char user[96];
     snprintf(user, sizeof user, "element %lld (%s)", (long long)tag, t->name);
     return gmsh_node_index(r, id, user);
@@ -431,142 +360,13 @@ static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, i
     return finish_cell(r, tag, t, physical, entity);
 }
 
-static inline uint64_t load_u64(const unsigned char *p)
+/* 4.1: one element of a block, its tag and nodes. */
+static int read_one_element(gmsh_reader *r, const gmsh_type *t, int64_t physical, int64_t entity)
 {
-    uint64_t x;
-    memcpy(&x, p, sizeof x);
-    return x;
-}
-
-/* The run of a block's elements that continue the implicit tag run (see elem_tags), on all cores: each
- * worker checks its range and writes its cells where they go (room for the block is reserved, and every
- * element of a block has the same corners), stopping at its first element that is not plain or breaks
- * the run. The cells before the first such element in the block are taken; where that element is, and
- * everything after it, is left to the one-by-one code, which reads the same and words any failure. */
-typedef struct run_job {
-    const unsigned char *data; /* the block's first element */
-    size_t record;
-    const gmsh_type *t;
-    uint64_t first_tag;        /* the tag the block's first element must have */
-    uint64_t points;
-    int64_t cell0, conn0;      /* where the block's cells and corners go */
-    float physical, entity;
-    gmsh_reader *r;
-    int64_t stop[TPK_MAX_THREADS]; /* per worker: its first element that does not continue the run */
-} run_job;
-
-static void run_range(void *ctx, int64_t begin, int64_t end, int w)
-{
-    run_job *job = ctx;
-    gmsh_reader *r = job->r;
-    const gmsh_type *t = job->t;
-    const unsigned char *p = job->data + job->record * (size_t)begin;
-    int64_t e = begin;
-    for (; e < end; e++, p += job->record) {
-        uint64_t tag = load_u64(p);
-        int plain = tag == job->first_tag + (uint64_t)e && tag <= (uint64_t)INT64_MAX;
-        for (int k = 1; k <= t->nodes; k++) {
-            uint64_t node = load_u64(p + sizeof(uint64_t) * (size_t)k);
-            plain &= node >= 1 && node <= job->points;
-        }
-        if (!plain)
-            break;
-        int64_t c = job->cell0 + e, at = job->conn0 + e * t->kept;
-        for (int k = 0; k < t->kept; k++)
-            r->conn[at + k] = (int32_t)(load_u64(p + sizeof(uint64_t) * (size_t)(1 + gmsh_node_of(t, k))) - 1);
-        r->types[c] = (uint8_t)t->vtk;
-        r->offsets[c] = at;
-        r->physical[c] = job->physical;
-        r->entity[c] = job->entity;
-    }
-    job->stop[w] = e;
-}
-
-static int64_t read_element_run(gmsh_reader *r, const gmsh_type *t, int64_t fit, size_t record, int64_t physical,
-                                int64_t entity)
-{
-    const unsigned char *p = (const unsigned char *)r->s.data + r->s.pos;
-    if (fit < 65536 || r->elem_listed || r->cell_count != r->elem_count ||
-        r->cell_count + fit > r->cell_cap || r->conn_count + fit * t->kept > r->conn_cap)
-        return 0;
-    uint64_t first = r->elem_count ? (uint64_t)r->elem_first_tag + (uint64_t)r->elem_count : load_u64(p);
-    if (first < 1 || first > (uint64_t)INT64_MAX)
-        return 0;
-    run_job job = {p, record, t, first, (uint64_t)r->point_count, r->cell_count, r->conn_count,
-                   (float)physical, (float)entity, r, {0}};
-    int threads = tpk_threads_for(fit, tpk_thread_count(0), 65536);
-    tpk_parallel_for(fit, threads, run_range, &job);
-    int64_t taken = fit;
-    for (int w = 0; w < threads; w++) {
-        int64_t begin, end;
-        tpk_parallel_range(fit, threads, w, &begin, &end);
-        if (job.stop[w] < end) {
-            taken = job.stop[w];
-            break;
-        }
-    }
-    if (taken == 0)
-        return 0;
-    if (r->elem_count == 0)
-        r->elem_first_tag = (int64_t)first;
-    r->elem_count += taken;
-    r->cell_count += taken;
-    r->conn_count += taken * t->kept;
-    r->offsets[r->cell_count] = r->conn_count;
-    if (t->kept != t->nodes)
-        r->reduced += taken;
-    return taken;
-}
-
-/* 4.1 binary: the elements of a volume block that need nothing but copying (tag 1 to 2^63-1, node tags
- * numbered densely 1..point_count), straight from the mapped bytes. Returns how many it took (0 to
- * count), or -1; the first element that needs more, and all after it, go through read_element_nodes,
- * which reads them one by one and words any failure. */
-static int64_t read_plain_elements(gmsh_reader *r, const gmsh_type *t, int64_t count, int64_t physical,
-                                   int64_t entity)
-{
-    if (!r->binary || !t->vtk || !r->node_dense)
-        return 0;
-    size_t record = sizeof(uint64_t) * (size_t)(1 + t->nodes);
-    int64_t fit = (int64_t)(gmsh_bytes_left(r) / record), e = 0;
-    if (fit > count)
-        fit = count;
-    const unsigned char *p = (const unsigned char *)r->s.data + r->s.pos;
-    e = read_element_run(r, t, fit, record, physical, entity);
-    if (e < 0)
+    int64_t tag;
+    if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "element"))
         return -1;
-    p += record * (size_t)e;
-    for (; e < fit; e++, p += record) {
-        /* Word by word (fixed-size loads, inlined: one memcpy call of run-time size per element was a
-         * fifth of the import). */
-        uint64_t tag = load_u64(p);
-        int plain = tag >= 1 && tag <= (uint64_t)INT64_MAX;
-        for (int k = 1; k <= t->nodes; k++) {
-            uint64_t node = load_u64(p + sizeof(uint64_t) * (size_t)k);
-            plain &= node >= 1 && node <= (uint64_t)r->point_count;
-        }
-        if (!plain)
-            break;
-        if (r->cell_count + 1 > r->cell_cap || r->conn_count + t->kept > r->conn_cap) {
-            /* Grow where the one-by-one reader grows, with the scanner where it has it then (just past
-             * the element's tag), so that a failure reads the same. */
-            size_t saved = r->s.pos, start = saved + (size_t)e * record;
-            r->s.pos = start + sizeof(uint64_t);
-            mark_bulk_read(r, sizeof(uint64_t));
-            if (reserve_cells(r, 1, t->nodes))
-                return -1;
-            r->s.pos = saved;
-        }
-        for (int k = 0; k < t->kept; k++)
-            r->conn[r->conn_count + k] = (int32_t)(load_u64(p + sizeof(uint64_t) * (size_t)(1 + gmsh_node_of(t, k))) - 1);
-        if (finish_cell(r, (int64_t)tag, t, physical, entity))
-            return -1;
-    }
-    if (e > 0) {
-        r->s.pos += (size_t)e * record;
-        mark_bulk_read(r, sizeof(uint64_t));
-    }
-    return e;
+    return read_element_nodes(r, tag, t, physical, entity);
 }
 
 /* `which` names the element (2.2) or the element block (4.1) in the message. */
@@ -676,15 +476,23 @@ static int read_elements_41(gmsh_reader *r, int64_t n, int64_t blocks)
         /* count fits the bytes left (gmsh_read_count): room for the whole block at once */
         if (t->vtk && reserve_cells(r, count, count * t->nodes))
             return -1;
-        int64_t plain = read_plain_elements(r, t, count, physical, etag);
-        if (plain < 0)
-            return -1;
-        for (int64_t e = plain; e < count; e++) {
-            int64_t tag;
-            if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "element") ||
-                read_element_nodes(r, tag, t, physical, etag))
+        /* On all threads what needs only copying; an element that needs more is read one by one, and
+         * after one that broke the implicit tag run, the rest on all threads again. */
+        int64_t e = 0;
+        for (int again = 1, tries = 0; again && tries < 2 && e < count; tries++) {
+            int64_t plain = gmsh_bulk_elements(r, t, count - e, physical, etag, &again);
+            if (plain < 0)
                 return -1;
+            e += plain;
+            if (again && e < count) {
+                if (read_one_element(r, t, physical, etag))
+                    return -1;
+                e++;
+            }
         }
+        for (; e < count; e++)
+            if (read_one_element(r, t, physical, etag))
+                return -1;
         done += count;
         tpk_scan_release_consumed(&r->s);
     }

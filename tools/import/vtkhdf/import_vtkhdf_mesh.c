@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "import_vtkhdf_internal.h"
+#include "base/parallel.h"
 #include "mesh/cell_types.h"
 #include "mesh/polyhedron.h"
 
@@ -302,9 +303,130 @@ static int put_polyhedron(vh_reader *r, cell_out *o, const part_cells *pc, int64
     return 0;
 }
 
+/* A partition without polyhedra whose every cell reads cleanly, on all threads (HDF5 itself reads one
+ * call at a time: this library build is thread-safe by one global lock, so hyperslabs read on several
+ * threads would wait on each other; the conversion after the read is what runs in parallel). First each
+ * worker checks its cells (rule, point count, ids) and counts what it keeps; then, the offsets known,
+ * each writes its cells where add_part_cells would. Any cell that needs a message leaves the whole
+ * partition to add_part_cells, which words it. */
+typedef struct fast_cells {
+    const part_cells *pc;
+    cell_out *o;
+    const int32_t *merged_of;
+    int64_t base, points;
+    tpk_cell_rule rule[256];
+    int64_t count0, conn0, source0; /* o's counts before the partition */
+    int bad[TPK_MAX_THREADS];
+    int64_t kept[TPK_MAX_THREADS], ids[TPK_MAX_THREADS];
+    int64_t dropped[TPK_MAX_THREADS][256];
+} fast_cells;
+
+static void fast_check(void *ctx, int64_t begin, int64_t end, int w)
+{
+    fast_cells *f = ctx;
+    const part_cells *pc = f->pc;
+    int64_t kept = 0, ids = 0;
+    for (int64_t c = begin; c < end; c++) {
+        int type = pc->types[c];
+        const tpk_cell_rule *rule = &f->rule[type];
+        int64_t n = pc->offsets[c + 1] - pc->offsets[c];
+        if (rule->kind == TPK_RULE_DROP) {
+            f->dropped[w][type]++;
+            continue;
+        }
+        if (rule->kind != TPK_RULE_KEEP || type == TPK_CELL_POLYHEDRON ||
+            (rule->nodes > 0 && n != rule->nodes) || (rule->nodes < 0 && n < -rule->nodes)) {
+            f->bad[w] = 1;
+            return;
+        }
+        const int64_t *id = pc->conn + pc->offsets[c];
+        int ok = 1;
+        for (int64_t j = 0; j < n; j++)
+            ok &= id[j] >= 0 && id[j] < f->points;
+        if (!ok) {
+            f->bad[w] = 1;
+            return;
+        }
+        kept++;
+        ids += n;
+    }
+    f->kept[w] = kept;
+    f->ids[w] = ids;
+}
+
+/* Worker w's cells, its first kept cell and id slot in kept[w] and ids[w] (prefix sums by then). */
+static void fast_fill(void *ctx, int64_t begin, int64_t end, int w)
+{
+    fast_cells *f = ctx;
+    const part_cells *pc = f->pc;
+    cell_out *o = f->o;
+    int64_t k = f->count0 + f->kept[w], at = f->conn0 + f->ids[w];
+    for (int64_t c = begin; c < end; c++) {
+        int type = pc->types[c];
+        const tpk_cell_rule *rule = &f->rule[type];
+        o->kept[f->source0 + c] = rule->kind == TPK_RULE_KEEP;
+        if (rule->kind != TPK_RULE_KEEP)
+            continue;
+        const int64_t *id = pc->conn + pc->offsets[c];
+        int64_t n = pc->offsets[c + 1] - pc->offsets[c];
+        for (int64_t j = 0; j < n; j++)
+            o->conn[at + j] = f->merged_of[f->base + id[j]];
+        at += n;
+        o->types[k] = (uint8_t)rule->out_type;
+        o->offsets[++k] = at;
+    }
+}
+
+/* 1: left to add_part_cells (a cell needs a message, or polyhedra); 0: added; -1: out of memory. */
+static int add_part_cells_fast(vh_reader *r, cell_out *o, const part_cells *pc, int64_t p, int64_t base,
+                               const int32_t *merged_of, int64_t *dropped)
+{
+    /* two passes over the ids cost more than one: on one thread the one-pass loop is quicker */
+    int threads = tpk_threads_for(pc->cells, tpk_thread_count(0), 65536);
+    if (r->polyhedra || threads < 2)
+        return 1;
+    fast_cells *f = calloc(1, sizeof *f);
+    if (!f)
+        return 1;
+    *f = (fast_cells){.pc = pc, .o = o, .merged_of = merged_of, .base = base, .points = r->part_points[p],
+                      .count0 = o->count, .conn0 = o->conn_count, .source0 = o->source_cells};
+    for (int t = 0; t < 256; t++)
+        f->rule[t] = tpk_cell_rule_for(t);
+    tpk_parallel_for(pc->cells, threads, fast_check, f);
+    int64_t kept = 0, ids = 0;
+    int bad = 0;
+    for (int w = 0; w < threads; w++) {
+        bad |= f->bad[w];
+        int64_t k = f->kept[w], n = f->ids[w];
+        f->kept[w] = kept, f->ids[w] = ids;
+        kept += k, ids += n;
+    }
+    int rc = 1;
+    if (!bad) {
+        rc = -1;
+        if (!grow((void **)&o->types, &o->cap, o->count + kept, 1) &&
+            !grow((void **)&o->offsets, &o->off_cap, o->count + kept + 1, sizeof *o->offsets) &&
+            !grow((void **)&o->conn, &o->conn_cap, o->conn_count + ids, sizeof *o->conn)) {
+            tpk_parallel_for(pc->cells, threads, fast_fill, f);
+            for (int w = 0; w < threads; w++)
+                for (int t = 0; t < 256; t++)
+                    dropped[t] += f->dropped[w][t];
+            o->count += kept;
+            o->conn_count += ids;
+            o->source_cells += pc->cells;
+            rc = 0;
+        }
+    }
+    free(f);
+    return rc < 0 ? vh_fail(r, "out of memory for the cells") : rc;
+}
+
 static int add_part_cells(vh_reader *r, cell_out *o, const part_cells *pc, int64_t p, int64_t base,
                           const int32_t *merged_of, int64_t *dropped)
 {
+    int fast = add_part_cells_fast(r, o, pc, p, base, merged_of, dropped);
+    if (fast <= 0)
+        return fast;
     for (int64_t c = 0; c < pc->cells; c++) {
         int type = pc->types[c];
         tpk_cell_rule rule = tpk_cell_rule_for(type);
