@@ -101,7 +101,7 @@ static int read_node_coords(gmsh_reader *r, int64_t at, int extra)
 static int check_tag(gmsh_reader *r, int64_t tag, const char *what)
 {
     if (tag < 1)
-        return tpk_scan_fail(&r->s, "expected a %s tag of 1 or more, found %lld", what, (long long)tag);
+        return tpk_scan_fail(&r->s, "expected %s tag of 1 or more, found %lld", what, (long long)tag);
     return 0;
 }
 
@@ -147,7 +147,7 @@ int gmsh_read_nodes(gmsh_reader *r)
     if (r->version == 22) {
         for (; done < n; done++) {
             int64_t tag;
-            if (gmsh_num(r, &tag, "a node tag", 4) || check_tag(r, tag, "node") || note_node_tag(r, done, tag, n) ||
+            if (gmsh_num(r, &tag, "a node tag", 4) || check_tag(r, tag, "a node") || note_node_tag(r, done, tag, n) ||
                 read_node_coords(r, done, 0))
                 return -1;
         }
@@ -172,7 +172,7 @@ int gmsh_read_nodes(gmsh_reader *r)
                 return -1;
             for (int64_t i = bulk; i < count; i++) {
                 int64_t tag;
-                if (gmsh_num(r, &tag, "a node tag", 8) || check_tag(r, tag, "node") ||
+                if (gmsh_num(r, &tag, "a node tag", 8) || check_tag(r, tag, "a node") ||
                     note_node_tag(r, done + i, tag, n))
                     return -1;
             }
@@ -364,7 +364,7 @@ static int read_element_nodes(gmsh_reader *r, int64_t tag, const gmsh_type *t, i
 static int read_one_element(gmsh_reader *r, const gmsh_type *t, int64_t physical, int64_t entity)
 {
     int64_t tag;
-    if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "element"))
+    if (gmsh_num(r, &tag, "an element tag", 8) || check_tag(r, tag, "an element"))
         return -1;
     return read_element_nodes(r, tag, t, physical, entity);
 }
@@ -424,7 +424,7 @@ static int read_elements_22_binary(gmsh_reader *r, int64_t n)
                                         "(wrong count or truncated file)", (long long)follow,
                                  (long long)(1 + ntags + t->nodes), gmsh_bytes_left(r));
         for (int64_t i = 0; i < follow; i++, e++)
-            if (gmsh_num(r, &tag, "an element tag", 4) || check_tag(r, tag, "element") ||
+            if (gmsh_num(r, &tag, "an element tag", 4) || check_tag(r, tag, "an element") ||
                 read_tags_and_nodes(r, tag, t, ntags))
                 return -1;
         tpk_scan_release_consumed(&r->s);
@@ -437,7 +437,7 @@ static int read_elements_22_text(gmsh_reader *r, int64_t n)
 {
     for (int64_t e = 0; e < n; e++) {
         int64_t tag, type, ntags;
-        if (tpk_scan_int64(&r->s, &tag, "an element tag") || check_tag(r, tag, "element") ||
+        if (tpk_scan_int64(&r->s, &tag, "an element tag") || check_tag(r, tag, "an element") ||
             tpk_scan_int64(&r->s, &type, "an element type"))
             return -1;
         char which[48];
