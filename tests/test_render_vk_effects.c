@@ -1,7 +1,7 @@
 /* The Vulkan renderer's effects against the CPU reference's (render.h, "Effect definitions"), on
  * lavapipe: isosurfaces of a point field and of a tet field, gradient shading, the clip box, a tet
- * field, midpoint integration, shadows, ambient occlusion, and combinations; PSNR >= 40 dB each, max
- * pixel difference printed. Also on a grid of 998,250 tets, where lavapipe's cap on loop iterations
+ * field, midpoint integration, shadows, ambient occlusion, occlusion at vertices and at the surface, and
+ * combinations; PSNR >= 40 dB each, max pixel difference printed. Also on a grid of 998,250 tets, where lavapipe's cap on loop iterations
  * once cut rays short (vk_layout.h, "Slices"). */
 #include <math.h>
 #include <stdio.h>
@@ -167,6 +167,16 @@ TPK_TEST(point_field_effects)
               (unsigned long long)last_secondary[0], (unsigned long long)last_secondary[1]);
     s.opt.iso_count = 2;
     CHECK(agree(&s, "iso + shading + shadows + AO, vertex cache") == 0);
+    /* render.h OCCLUSION AT THE SURFACE: one shade point per pixel, the first iso hit, else the first
+     * volume shade point; the same casts on both backends */
+    s.opt.occlusion = TPK_OCCLUSION_SURFACE;
+    CHECK(agree(&s, "iso + shading + shadows + AO, surface") == 0);
+    CHECK_MSG(last_secondary[0] == last_secondary[1] && last_secondary[0] > 0, "secondary rays: cpu %llu, vulkan %llu",
+              (unsigned long long)last_secondary[0], (unsigned long long)last_secondary[1]);
+    s.opt.iso_count = 0;
+    CHECK(agree(&s, "shading + shadows + AO, surface (shell)") == 0);
+    CHECK_MSG(last_secondary[0] == last_secondary[1] && last_secondary[0] > 0, "secondary rays: cpu %llu, vulkan %llu",
+              (unsigned long long)last_secondary[0], (unsigned long long)last_secondary[1]);
     close_scene(&s);
 }
 
@@ -264,6 +274,8 @@ TPK_TEST(tet_field_effects)
     s.opt.shadows = 1;
     s.opt.ao_rays = 3;
     CHECK(agree(&s, "tet field iso + shadows + AO") == 0);
+    s.opt.occlusion = TPK_OCCLUSION_SURFACE;
+    CHECK(agree(&s, "tet field iso + shadows + AO, surface") == 0);
     close_scene(&s);
 }
 
@@ -313,5 +325,17 @@ TPK_TEST(grid_55_effects)
         CHECK_MSG(cpu > 0 && fabs(vk - cpu) <= 0.005 * cpu, "%s: secondary rays: cpu %.0f, vulkan %.0f", names[c], cpu,
                   vk);
     }
+    /* the seed paper's effects (render.h OCCLUSION AT THE SURFACE): an opaque isosurface, shading,
+     * shadows and AO 4 cast from its first hit alone, the volume in front and behind the occluder */
+    s.opt.shading = s.opt.shadows = 1;
+    s.opt.ao_rays = 4;
+    s.opt.iso_count = 1;
+    s.opt.iso[0] = 0.5 * (lo + hi);
+    s.opt.iso_opacity = 1;
+    s.opt.occlusion = TPK_OCCLUSION_SURFACE;
+    CHECK(agree(&s, "grid 55: iso + shading + shadows + AO 4, surface") == 0);
+    double cpu = (double)last_secondary[0], vk = (double)last_secondary[1];
+    CHECK_MSG(cpu > 0 && cpu <= 5.0 * SIZE * SIZE && fabs(vk - cpu) <= 0.005 * cpu,
+              "surface: secondary rays: cpu %.0f, vulkan %.0f", cpu, vk);
     fx_free(&m);
 }

@@ -54,7 +54,8 @@ typedef struct tpk_probe {
  * (transmittance toward the point light), ao_rays (ambient occlusion with this many hemisphere rays, at
  * most TPK_RENDER_MAX_AO_RAYS; 0: off), ao_radius (AO ray length; <= 0: bounds diagonal / 10) and
  * occlusion (where shadow and AO rays start: TPK_OCCLUSION_RAY 0 at the shade points of every primary
- * ray, TPK_OCCLUSION_VERTEX 1 at the mesh vertices, once per frame, interpolated; below). */
+ * ray, TPK_OCCLUSION_VERTEX 1 at the mesh vertices, once per frame, interpolated, TPK_OCCLUSION_SURFACE 2
+ * at one surface point per primary ray; below). */
 typedef struct tpk_render_options {
     int width, height;             /* pixels, 1 .. TPK_RENDER_MAX_SIZE each */
     tpk_camera camera;
@@ -89,6 +90,7 @@ typedef struct tpk_render_options {
 #define TPK_INTEGRATION_MIDPOINT 2
 #define TPK_OCCLUSION_RAY 0
 #define TPK_OCCLUSION_VERTEX 1
+#define TPK_OCCLUSION_SURFACE 2
 
 /* ---- Effect definitions (the contract between the CPU reference and the Vulkan renderer) ----------
  * Notation. Primary ray x(t) = eye + t d, d unit, t = distance. The marcher reports pieces
@@ -177,6 +179,17 @@ typedef struct tpk_render_options {
  * l_i = (q . c_i) / det (i = 1..3), l_0 = 1 - l_1 - l_2 - l_3; S = clamp(sum l_i S_v[i], 0, 1) and A
  * likewise; where det is 0 or not finite, the mean of the four. m is then as in LIGHTING FACTOR.
  * secondary_rays and tet_steps count the cache's rays.
+ *
+ * OCCLUSION AT THE SURFACE (occlusion == TPK_OCCLUSION_SURFACE: the seed paper's effects, Sahistan et al.
+ * 2021 §6, shadows and AO where a primary ray meets a surface, the volume's opacity the occluder). A
+ * primary ray has at most one shade point, its surface: with iso values its first iso hit (the hit point
+ * and normal, as ISOSURFACES), without them its first volume shade point of SHADE POINTS (the midpoint of
+ * its first piece of optical depth tau > 0, just inside where it enters the shell, the clip box or a
+ * probe; that piece's normal). S and A there are cast as TRANSMITTANCE and AO DIRECTIONS say (the
+ * secondary rays see the volume's opacity and the isosurfaces). Every lighting factor after it takes
+ * them, before it S = A = 1; a volume piece takes S and A as they stand where it starts (its m is made
+ * before its hits). So a pixel casts at most 1 + ao_rays secondary rays, against up to ~32 (1 + ao_rays)
+ * with `ray`.
  *
  * ISOSURFACES (iso_count values v_j, scalar units). Point field: the piece crosses v_j where
  * (s_in < v_j <= s_out) or (s_in > v_j >= s_out), at t = t_in + (v_j - s_in) / (s_out - s_in) * length

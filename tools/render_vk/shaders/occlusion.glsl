@@ -285,6 +285,13 @@ void composite_iso(float t, float v, bool has_n, vec3 n, ivec4 tet)
             vec2 sa = vertex_lookup(tet, x);
             S = sa.x;
             A = sa.y;
+        } else if (SURFACE_OCC) { // the ray's first hit is its surface: it casts, later ones reuse
+            if (!cast_done) {
+                take_cast(shade_s, shade_a);
+                cast_done = true;
+            }
+            S = shade_s;
+            A = shade_a;
         } else if (CAST) {
             take_cast(S, A);
         }

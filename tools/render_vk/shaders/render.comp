@@ -34,6 +34,9 @@ const bool AO = (EFFECTS & TPK_VK_EFFECT_AO) != 0;
 // --occlusion vertex: S and A interpolated from the per-vertex cache (render.h OCCLUSION AT VERTICES)
 const bool VERTEX_OCC = (EFFECTS & TPK_VK_EFFECT_VERTEX) != 0;
 const bool CAST = (SHADOWS || AO) && !VERTEX_OCC;
+// --occlusion surface: one cast per ray, at its first iso hit or first volume shade point (render.h
+// OCCLUSION AT THE SURFACE); set only with CAST (tpk_vk_effects)
+const bool SURFACE_OCC = (EFFECTS & TPK_VK_EFFECT_SURFACE) != 0;
 const bool LIGHTING = SHADING || SHADOWS || AO;
 // iso-only primary rays take their pieces from the range BVH (render.h ISO-ONLY RAYS), not the marcher
 const bool CULL = (EFFECTS & TPK_VK_EFFECT_CULL) != 0;
