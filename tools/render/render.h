@@ -333,6 +333,10 @@ typedef struct tpk_render_stats {
     double setup_upload_seconds;   /* arrays and BVH into device memory, image buffers */
     double setup_pipeline_seconds; /* shader, pipeline cache and the pipelines compiled so far */
     double first_frame_seconds;    /* tpk_render_vulkan: its one frame, without the pipeline it compiled */
+    double vertex_cache_seconds;   /* --occlusion vertex: the time this frame spent casting the vertex cache (a
+                                      part of `seconds`): the CPU's wall time, or Vulkan's device time of its
+                                      casts (also a part of gpu_seconds; the wall time without timestamps); 0
+                                      when nothing was cast */
     uint64_t pipeline_cache_bytes; /* pipeline cache data loaded from disk; 0: none */
     int pipeline_cache_hits;       /* pipelines found in that cache; -1: the driver does not say */
 } tpk_render_stats;
@@ -381,6 +385,16 @@ void tpk_vertex_cache_frames_per_field(tpk_vertex_cache *cache, int frames);
  * arrays stay valid until the next update or destroy. 0, or -1 with a message (the cache is then empty). */
 int tpk_vertex_cache_update(tpk_vertex_cache *cache, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
                             int *changed, tpk_render_stats *cast, tpk_diag *diag);
+/* The same, the stale halves cast by `caster` (the Vulkan renderer's on its device) instead of
+ * tpk_render_vertex_cache: it gets the options with the fresh half's effect off (shadows 0: S alone, ao_rays
+ * 0: A alone), fills s and a (vertex_count floats each, 1 for an effect that is off) and stats (its tet steps,
+ * secondary rays and seconds, as tpk_render_vertex_cache does; zeroed first), and returns 0 or -1 with a
+ * message. */
+typedef int (*tpk_vertex_caster)(void *user, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, float *s,
+                                 float *a, tpk_render_stats *stats, tpk_diag *diag);
+int tpk_vertex_cache_update_with(tpk_vertex_cache *cache, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
+                                 tpk_vertex_caster caster, void *user, int *changed, tpk_render_stats *cast,
+                                 tpk_diag *diag);
 const float *tpk_vertex_cache_s(const tpk_vertex_cache *cache); /* vertex_count floats: S_v */
 const float *tpk_vertex_cache_a(const tpk_vertex_cache *cache); /* A_v */
 /* tpk_render_cpu whose --occlusion vertex takes its cache from `cache` (kept across calls, brought up to

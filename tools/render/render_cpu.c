@@ -556,10 +556,12 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     int rc = 0;
     float *cache = NULL;
     uint64_t cache_counts[2] = {0, 0}; /* steps, secondary rays */
+    struct timespec c0 = {0, 0}, c1 = {0, 0}; /* the cache's casts */
     if (job->setup.cast && opt->occlusion == TPK_OCCLUSION_VERTEX && given_s && given_a) {
         job->vertex_s = given_s;
         job->vertex_a = given_a;
     } else if (job->setup.cast && opt->occlusion == TPK_OCCLUSION_VERTEX) {
+        clock_gettime(CLOCK_MONOTONIC, &c0);
         cache = malloc(2 * sizeof *cache * (mesh->vertex_count ? mesh->vertex_count : 1));
         if (!cache) {
             rc = tpk_diag_fail(diag, "render: out of memory for the vertex cache");
@@ -571,6 +573,7 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
             if (r != TPK_OK)
                 rc = tpk_diag_fail(diag, "render: vertex cache: %s", tpk_result_string(r));
         }
+        clock_gettime(CLOCK_MONOTONIC, &c1);
     }
     tpk_range_bvh *range = rc == 0 ? culling_trees(mesh, opt, k, keep == NULL, &rc, diag) : NULL;
     k->mesh = *mesh;
@@ -581,6 +584,7 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
         stats->iso_culling = range != NULL;
         stats->tet_steps += cache_counts[0];
         stats->secondary_rays += cache_counts[1];
+        stats->vertex_cache_seconds = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
     }
     free(cache);
     if (!keep)
