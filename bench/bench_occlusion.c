@@ -1,6 +1,7 @@
 /* Effects speed against error (bench/report part 1b): shading + shadows + AO with the secondary rays at
- * every pixel's shade points (--occlusion ray, the reference) and at the mesh vertices, interpolated
- * (--occlusion vertex; render.h OCCLUSION AT VERTICES).
+ * every pixel's shade points (--occlusion ray, the reference), at the mesh vertices, interpolated
+ * (--occlusion vertex; render.h OCCLUSION AT VERTICES), and once per pixel at its first shade point
+ * (--occlusion surface; render.h OCCLUSION AT THE SURFACE: the scene has no iso values).
  * usage: bench_occlusion FILE.tpk [size=128] [runs=3] [ao_rays=4] [threads=0 (all cores)]
  * Scene: bench_scene.h's field, TF and default camera (a headlight, so the cache is rebuilt every frame,
  * as it would be while the camera moves). One JSON line per mode: median wall ms per frame over `runs`
@@ -48,9 +49,9 @@ int main(int argc, char **argv)
     float *cache = malloc(2 * sizeof *cache * (size_t)(a.vertex_count ? a.vertex_count : 1));
     if (!ref || !img || !cache)
         return fprintf(stderr, "bench_occlusion: out of memory\n"), 1;
-    const char *names[2] = {"ray", "vertex"};
-    for (int mode = 0; mode < 2; mode++) {
-        opt.occlusion = mode == 0 ? TPK_OCCLUSION_RAY : TPK_OCCLUSION_VERTEX;
+    const char *names[3] = {"ray", "vertex", "surface"};
+    for (int mode = 0; mode < 3; mode++) {
+        opt.occlusion = mode == 0 ? TPK_OCCLUSION_RAY : mode == 1 ? TPK_OCCLUSION_VERTEX : TPK_OCCLUSION_SURFACE;
         double wall[MAX_RUNS];
         tpk_render_stats st;
         tpk_diag diag;

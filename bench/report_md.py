@@ -162,7 +162,8 @@ def section_occlusion(summary):
            f"`bench/bench_occlusion.c`: {r0['tets']:,} tets, {r0['vertices']:,} vertices, shading + shadows + "
            f"AO {r0['ao_rays']} (headlight: the cache is rebuilt every frame), CPU reference on all cores, median of "
            f"{r0['runs']} frames. `ray` (render.h SHADE POINTS) is the reference; `vertex` casts N + 1 rays per mesh "
-           f"vertex and interpolates them in each tet (render.h OCCLUSION AT VERTICES).\n\n"]
+           f"vertex and interpolates them in each tet (render.h OCCLUSION AT VERTICES); `surface` casts once per "
+           f"pixel, at its first volume shade point (render.h OCCLUSION AT THE SURFACE, the seed paper's way).\n\n"]
     out.append(table(["size", "occlusion", "frame ms", "cache ms", "tet steps", "secondary rays", "PSNR vs ray (dB)"],
                      [[f"{r['size']}²", r["occlusion"], r["frame_ms"], r["cache_ms"] or "–", r["tet_steps"],
                        r["secondary_rays"], r["psnr_vs_ray"] if r["occlusion"] != "ray" else "reference"]

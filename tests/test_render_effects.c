@@ -610,6 +610,86 @@ TPK_TEST(vertex_occlusion_render)
     fx_free(&m);
 }
 
+/* render.h OCCLUSION AT THE SURFACE: over a transparent volume with an opaque isosurface the first hit
+ * is every pixel's one shade point either way, so `surface` is `ray` byte for byte; over a volume that
+ * absorbs, a pixel casts at most 1 + ao_rays rays (the ray mode's volume shade points many more), the
+ * same whatever the thread count; without iso values the first volume shade point casts, once. */
+static uint8_t *render_stats(const fx_mesh *m, const tpk_render_options *opt, tpk_render_stats *st)
+{
+    tpk_mesh_arrays arrays = fx_arrays(m, TPK_LAYOUT_TET16);
+    uint8_t *img = malloc(N);
+    tpk_diag diag = {0};
+    if (img && tpk_render_cpu(&arrays, opt, img, st, &diag) != 0) {
+        fprintf(stderr, "render: %s\n", diag.message);
+        free(img);
+        return NULL;
+    }
+    return img;
+}
+
+TPK_TEST(surface_occlusion)
+{
+    fx_mesh m;
+    tpk_transfer_function tf, clear;
+    tpk_render_options opt;
+    tpk_diag diag = {0};
+    CHECK(viridis_grid(&m, &tf, &opt) == 0);
+    CHECK(tpk_tf_parse("clear", "0 1 1 1 0\n1 0.2 0.5 1 0\n", &clear, &diag) == 0);
+    opt.tf = &clear;
+    opt.iso_count = 1;
+    opt.iso[0] = 5.5;
+    opt.iso_opacity = 1;
+    opt.shading = opt.shadows = 1;
+    opt.ao_rays = 4;
+    opt.ao_radius = 3;
+    opt.have_light = 1;
+    const double light[3] = {20, 4, 40};
+    memcpy(opt.light, light, sizeof light);
+    tpk_render_stats a, b;
+    uint8_t *ray = render_stats(&m, &opt, &a);
+    opt.occlusion = TPK_OCCLUSION_SURFACE;
+    uint8_t *surface = render_stats(&m, &opt, &b);
+    CHECK(ray && surface && !memcmp(ray, surface, N));
+    CHECK_MSG(a.secondary_rays == b.secondary_rays && a.secondary_rays > 0, "secondary rays: ray %llu, surface %llu",
+              (unsigned long long)a.secondary_rays, (unsigned long long)b.secondary_rays);
+    free(ray);
+    free(surface);
+    /* an absorbing volume in front of and behind a half-transparent surface */
+    opt.tf = &tf;
+    opt.iso_opacity = 0.6;
+    opt.occlusion = TPK_OCCLUSION_RAY;
+    ray = render_stats(&m, &opt, &a);
+    opt.occlusion = TPK_OCCLUSION_SURFACE;
+    opt.threads = 1;
+    surface = render_stats(&m, &opt, &b);
+    opt.threads = 3;
+    tpk_render_stats c;
+    uint8_t *three = render_stats(&m, &opt, &c);
+    CHECK(ray && surface && three && !memcmp(surface, three, N) && b.secondary_rays == c.secondary_rays);
+    CHECK_MSG(b.secondary_rays > 0 && b.secondary_rays <= (uint64_t)W * H * 5 && 2 * b.secondary_rays < a.secondary_rays,
+              "secondary rays: surface %llu, ray %llu", (unsigned long long)b.secondary_rays,
+              (unsigned long long)a.secondary_rays);
+    int differ = 0;
+    for (int i = 0; i < N; i++)
+        differ += ray[i] != surface[i];
+    CHECK(differ > 0);
+    /* without iso values: the first volume shade point, 5 rays for each pixel that shows the volume (and
+     * for a few at grazing edges whose opacity rounds to 0), none for the others */
+    opt.iso_count = 0;
+    free(surface);
+    surface = render_stats(&m, &opt, &b);
+    int shown = 0;
+    for (int i = 0; surface && i < W * H; i++)
+        shown += surface[4 * i + 3] != 0;
+    CHECK_MSG(surface && shown > 0 && b.secondary_rays % 5 == 0 && b.secondary_rays >= (uint64_t)shown * 5 &&
+                  b.secondary_rays <= (uint64_t)shown * 5 * 21 / 20,
+              "%d pixels, %llu secondary rays", shown, (unsigned long long)b.secondary_rays);
+    free(ray);
+    free(surface);
+    free(three);
+    fx_free(&m);
+}
+
 /* The vertex cache kept across frames (tpk_vertex_cache, view's CPU frames): every frame byte for byte
  * tpk_render_cpu's, casting nothing when the camera moves under a fixed light, S alone (one ray per
  * vertex) under a headlight, A alone (ao_rays per vertex) when the AO radius changes, both when the TF
@@ -742,7 +822,7 @@ TPK_TEST(effects_bad_options)
         case 2: opt.clip = 1; opt.clip_min[1] = 2; opt.clip_max[1] = 1; break;
         case 3: opt.ao_rays = -1; break;
         case 4: opt.integration = 3; break;
-        case 6: opt.occlusion = 2; break;
+        case 6: opt.occlusion = 3; break;
         default: opt.have_light = 1; opt.light[2] = INFINITY; break;
         }
         CHECK_MSG(tpk_render_cpu(&arrays, &opt, img, NULL, &diag) == -1 && strstr(diag.message, cases[c].expect),

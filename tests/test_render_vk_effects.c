@@ -1,7 +1,7 @@
 /* The Vulkan renderer's effects against the CPU reference's (render.h, "Effect definitions"), on
  * lavapipe: isosurfaces of a point field and of a tet field, gradient shading, the clip box, a tet
- * field, midpoint integration, shadows, ambient occlusion, and combinations; PSNR >= 40 dB each, max
- * pixel difference printed. Also on a grid of 998,250 tets, where lavapipe's cap on loop iterations
+ * field, midpoint integration, shadows, ambient occlusion, occlusion at vertices and at the surface, and
+ * combinations; PSNR >= 40 dB each, max pixel difference printed. Also on a grid of 998,250 tets, where lavapipe's cap on loop iterations
  * once cut rays short (vk_layout.h, "Slices"). */
 #include <math.h>
 #include <stdio.h>
@@ -167,6 +167,16 @@ TPK_TEST(point_field_effects)
               (unsigned long long)last_secondary[0], (unsigned long long)last_secondary[1]);
     s.opt.iso_count = 2;
     CHECK(agree(&s, "iso + shading + shadows + AO, vertex cache") == 0);
+    /* render.h OCCLUSION AT THE SURFACE: one shade point per pixel, the first iso hit, else the first
+     * volume shade point; the same casts on both backends */
+    s.opt.occlusion = TPK_OCCLUSION_SURFACE;
+    CHECK(agree(&s, "iso + shading + shadows + AO, surface") == 0);
+    CHECK_MSG(last_secondary[0] == last_secondary[1] && last_secondary[0] > 0, "secondary rays: cpu %llu, vulkan %llu",
+              (unsigned long long)last_secondary[0], (unsigned long long)last_secondary[1]);
+    s.opt.iso_count = 0;
+    CHECK(agree(&s, "shading + shadows + AO, surface (shell)") == 0);
+    CHECK_MSG(last_secondary[0] == last_secondary[1] && last_secondary[0] > 0, "secondary rays: cpu %llu, vulkan %llu",
+              (unsigned long long)last_secondary[0], (unsigned long long)last_secondary[1]);
     close_scene(&s);
 }
 
@@ -237,6 +247,84 @@ TPK_TEST(vertex_cache_kept_across_frames)
     close_scene(&s);
 }
 
+/* render.h OCCLUSION AT VERTICES cast on the device (tpk_vk_renderer_vertex_cache, what a frame with
+ * --occlusion vertex uploads) against the CPU reference's cache (tpk_render_vertex_cache), vertex by
+ * vertex. The device marches in float, the CPU in double: a secondary ray's optical depth differs by a
+ * few float roundings per piece (relative 1e-6 each, a few hundred pieces), so S_v and A_v agree to
+ * about 1e-4. Two things move a vertex further, both at a threshold: a ray whose transmittance crosses
+ * the stop at 0.02 one piece apart on the two (both values then lie in [0, 0.02], so at most 0.02 apart,
+ * and an AO mean moves by at most that), and an iso crossing at the self-shadowing epsilon counted by one
+ * only (a factor 1 - iso_opacity on that ray). Bounds: the mean difference <= 1e-4, at most 0.5% of the
+ * vertices more than 1e-3 off, every one within 0.02 + 1e-4 without iso values; the same ray count. */
+static void compare_casts(fx_scene *s, const char *what, int with_iso)
+{
+    tpk_diag diag = {0};
+    size_t n = (size_t)s->mesh.vertex_count;
+    float *cs = malloc(n * sizeof *cs), *ca = malloc(n * sizeof *ca), *gs = malloc(n * sizeof *gs),
+          *ga = malloc(n * sizeof *ga);
+    CHECK(cs && ca && gs && ga);
+    tpk_render_stats cpu, vk;
+    CHECK_MSG(tpk_render_vertex_cache(&s->mesh, &s->opt, cs, ca, &cpu, &diag) == 0, "%s: cpu: %s", what, diag.message);
+    tpk_vk_renderer *r = NULL;
+    CHECK_MSG(tpk_vk_renderer_create(&r, &s->mesh, s->opt.tet_scalars, &diag) == 0, "%s", diag.message);
+    CHECK_MSG(tpk_vk_renderer_vertex_cache(r, &s->opt, gs, ga, &vk, &diag) == 0, "%s: vulkan: %s", what, diag.message);
+    tpk_vk_renderer_destroy(r);
+    double sum = 0, worst = 0;
+    size_t off = 0, worst_at = 0;
+    for (size_t v = 0; v < n; v++) {
+        double d[2] = {fabs((double)cs[v] - gs[v]), fabs((double)ca[v] - ga[v])};
+        for (int h = 0; h < 2; h++) {
+            sum += d[h];
+            off += d[h] > 1e-3;
+            if (d[h] > worst)
+                worst = d[h], worst_at = v;
+        }
+    }
+    double mean = sum / (2.0 * (double)n);
+    printf("%-40s %zu vertices: mean |difference| %.2e, max %.2e (vertex %zu), %zu values > 1e-3; rays cpu %llu, "
+           "vulkan %llu\n",
+           what, n, mean, worst, worst_at, off, (unsigned long long)cpu.secondary_rays,
+           (unsigned long long)vk.secondary_rays);
+    CHECK_MSG(mean <= 1e-4 && off <= n / 100 && (with_iso || worst <= 0.0201), "%s: mean %.2e, max %.2e, %zu off", what,
+              mean, worst, off);
+    CHECK_MSG(cpu.secondary_rays == vk.secondary_rays && vk.secondary_rays > 0, "%s: rays cpu %llu, vulkan %llu", what,
+              (unsigned long long)cpu.secondary_rays, (unsigned long long)vk.secondary_rays);
+    free(cs);
+    free(ca);
+    free(gs);
+    free(ga);
+}
+
+TPK_TEST(vertex_casts_on_device)
+{
+    char why[256];
+    if (!tpk_vulkan_available(why, sizeof why)) {
+        tpk_test_skip(why);
+        return;
+    }
+    fx_scene s;
+    CHECK(open_scene(&s, TPK_SOURCE_DIR "/samples/cylinder.vtk", "cylinder_casts.tpk") == 0);
+    s.opt.shadows = 1;
+    s.opt.ao_rays = 4;
+    s.opt.have_light = 1;
+    for (int k = 0; k < 3; k++)
+        s.opt.light[k] = s.opt.camera.eye[k] + (k == 1 ? 0.05 : 0.0);
+    compare_casts(&s, "cylinder: shadows + AO 4", 0);
+    double lo = s.opt.range_min, hi = s.opt.range_max;
+    s.opt.iso_count = 2;
+    s.opt.iso[0] = lo + 0.3 * (hi - lo);
+    s.opt.iso[1] = lo + 0.7 * (hi - lo);
+    s.opt.iso_opacity = 0.6;
+    s.opt.ao_radius = 0.5;
+    compare_casts(&s, "cylinder: iso + shadows + AO 4", 1);
+    close_scene(&s);
+    CHECK(open_scene(&s, tpk_data_path("sfepy/elbow.mesh"), "elbow_casts.tpk") == 0);
+    s.opt.shadows = 1;
+    s.opt.ao_rays = 8;
+    compare_casts(&s, "elbow: shadows (headlight) + AO 8", 0);
+    close_scene(&s);
+}
+
 TPK_TEST(tet_field_effects)
 {
     char why[256];
@@ -264,6 +352,8 @@ TPK_TEST(tet_field_effects)
     s.opt.shadows = 1;
     s.opt.ao_rays = 3;
     CHECK(agree(&s, "tet field iso + shadows + AO") == 0);
+    s.opt.occlusion = TPK_OCCLUSION_SURFACE;
+    CHECK(agree(&s, "tet field iso + shadows + AO, surface") == 0);
     close_scene(&s);
 }
 
@@ -313,5 +403,17 @@ TPK_TEST(grid_55_effects)
         CHECK_MSG(cpu > 0 && fabs(vk - cpu) <= 0.005 * cpu, "%s: secondary rays: cpu %.0f, vulkan %.0f", names[c], cpu,
                   vk);
     }
+    /* the seed paper's effects (render.h OCCLUSION AT THE SURFACE): an opaque isosurface, shading,
+     * shadows and AO 4 cast from its first hit alone, the volume in front and behind the occluder */
+    s.opt.shading = s.opt.shadows = 1;
+    s.opt.ao_rays = 4;
+    s.opt.iso_count = 1;
+    s.opt.iso[0] = 0.5 * (lo + hi);
+    s.opt.iso_opacity = 1;
+    s.opt.occlusion = TPK_OCCLUSION_SURFACE;
+    CHECK(agree(&s, "grid 55: iso + shading + shadows + AO 4, surface") == 0);
+    double cpu = (double)last_secondary[0], vk = (double)last_secondary[1];
+    CHECK_MSG(cpu > 0 && cpu <= 5.0 * SIZE * SIZE && fabs(vk - cpu) <= 0.005 * cpu,
+              "surface: secondary rays: cpu %.0f, vulkan %.0f", cpu, vk);
     fx_free(&m);
 }

@@ -42,7 +42,7 @@ static const bad_case bad_cases[] = {
     {"camera eye == at", "the same point"},
     {"camera eye not finite", "must be finite"},
     {"field of view 180", "field of view"},
-    {"occlusion 2", "occlusion ray (0) or vertex (1)"},
+    {"occlusion 3", "occlusion ray (0), vertex (1) or surface (2)"},
 };
 #define BAD_CASES (sizeof bad_cases / sizeof bad_cases[0])
 
@@ -70,7 +70,7 @@ static void break_options(size_t c, tpk_render_options *opt, tpk_transfer_functi
     case 17: memcpy(opt->camera.at, opt->camera.eye, sizeof opt->camera.at); break;
     case 18: opt->camera.eye[1] = NAN; break;
     case 19: opt->camera.fovy_deg = 180; break;
-    default: opt->occlusion = 2; break;
+    default: opt->occlusion = 3; break;
     }
 }
 

@@ -10,7 +10,13 @@
 #   3. iso-only rays (a clear TF) at 1024x1024, range culling forced on and off, at the dense value 0.3
 #      and the sparse 0.99: GPU ms a frame;
 #   4. `render --max-ms 8` at 1024x1024: the level and pixel step the budget picks and the frame's
-#      GPU ms (target 8 ms).
+#      GPU ms (target 8 ms);
+#   5. issue 39's effects the seed paper's way on a grid of about 1M tets (make_grid_vtk.py 55,
+#      TPK_GPU_EFFECTS_GRID): an isosurface (0.3, dense) with shading, shadows and AO 4 cast once per pixel at
+#      its first hit, the volume the occluder (`--occlusion surface`; target 20 ms, the paper's 20.6 ms for
+#      1M tets), and the same with `--occlusion ray` (up to 32 volume shade points a pixel) beside it;
+#   6. `--occlusion vertex`'s first frame on that grid: the device time of the vertex cache's casts
+#      (vertex_cache_seconds; target 100 ms) and of the whole frame.
 # Each is run RUNS times (3); the medians go to targets.md, every run's JSON to targets.jsonl.
 # Called by run.sh --targets [--small] [--bin DIR] [--out DIR] as targets.sh TETPACK OUT_DIR SMALL (1: the
 # test form, ctest bench.gpu_targets_small: grid 6, small pictures, 1 run).
@@ -21,9 +27,10 @@ TPK=$1 OUT=$2 SMALL=$3
 [ -x "$TPK" ] || { echo "targets.sh: no tetpack at $TPK" >&2; exit 2; }
 mkdir -p "$OUT"
 if [ "$SMALL" = 1 ]; then
-    GRID=6 RUNS=1 ISO_SIZE=96x54 SIZE=64x64
+    GRID=6 RUNS=1 ISO_SIZE=96x54 SIZE=64x64 EGRID=5 ESIZE=32x32 EISO=0.6 # grid 5's field: 0.31 .. 1
 else
     GRID=${TPK_GPU_TARGET_GRID:-121} RUNS=${TPK_GPU_TARGET_RUNS:-3} ISO_SIZE=3840x2160 SIZE=1024x1024
+    EGRID=${TPK_GPU_EFFECTS_GRID:-55} ESIZE=$SIZE EISO=0.3
 fi
 [ -n "${PYTHON:-}" ] || { echo "targets.sh: no PYTHON: run it through run.sh --targets, which finds python3 with numpy" >&2; exit 2; }
 PY=$PYTHON
@@ -31,6 +38,9 @@ vk() { LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" "$@"; } # the sani
 vtk=$OUT/grid$GRID.vtk tpk=$OUT/grid${GRID}_levels.tpk
 [ -s "$vtk" ] || "$PY" "$ROOT/bench/make_grid_vtk.py" "$GRID" "$vtk"
 [ -s "$tpk" ] && [ "$tpk" -nt "$vtk" ] || "$TPK" convert "$vtk" "$tpk" --levels 4 --quiet
+evtk=$OUT/grid$EGRID.vtk etpk=$OUT/grid$EGRID.tpk # items 5 and 6
+[ -s "$evtk" ] || "$PY" "$ROOT/bench/make_grid_vtk.py" "$EGRID" "$evtk"
+[ -s "$etpk" ] && [ "$etpk" -nt "$evtk" ] || "$TPK" convert "$evtk" "$etpk" --quiet
 printf '0 0.2 0.4 0.9 0\n1 0.9 0.2 0.1 0\n' > "$OUT/clear.tf" # opacity 0: iso-only rays
 JSONL=$OUT/targets.jsonl
 : > "$JSONL"
@@ -53,8 +63,14 @@ for r in $(seq "$RUNS"); do
             render "$tpk" -o "$OUT/rays.png" --backend vulkan --tf "$OUT/clear.tf" --iso $value --size "$SIZE" --json
     done
     run budget vk render "$tpk" -o "$OUT/budget.png" --backend vulkan --max-ms 8 --size "$SIZE" --json
+    for occlusion in surface ray; do
+        run effects_$occlusion vk render "$etpk" -o "$OUT/effects.png" --backend vulkan --iso $EISO --shading \
+            --shadows --ao 4 --occlusion $occlusion --size "$ESIZE" --json
+    done
+    run vertex_first vk render "$etpk" -o "$OUT/vertex.png" --backend vulkan --shading --shadows --ao 4 \
+        --occlusion vertex --size "$ESIZE" --json
 done
-"$PY" - "$JSONL" > "$OUT/targets.md" <<'EOF'
+"$PY" - "$JSONL" "$EGRID" > "$OUT/targets.md" <<'EOF'
 import json, statistics, sys
 rows = [json.loads(l) for l in open(sys.argv[1])]
 def of(name):
@@ -90,6 +106,19 @@ if b:
     out.append("| --max-ms 8, %sx%s | level %s, pixel step %s: %.3f ms GPU | <= 8 ms |" % (
         b[0]["width"], b[0]["height"], ",".join(str(r["level"]) for r in b),
         ",".join(str(r["pixel_step"]) for r in b), med([r["frame_ms"] for r in b])))
+n = int(sys.argv[2]) # make_grid_vtk.py's grid: 6 n^3 tets, (n + 1)^3 vertices
+for name, what, goal in (("effects_surface", "--occlusion surface: one shade point a pixel", "<= 20 ms"),
+                         ("effects_ray", "--occlusion ray: up to 32 volume shade points a pixel", "")):
+    f = of(name)
+    if f:
+        out.append("| iso + shading + shadows + AO 4, %s, %d tets, %sx%s | %.3f ms GPU; %d secondary rays | %s |" % (
+            what, 6 * n ** 3, f[0]["width"], f[0]["height"], med([ms(r) for r in f]), f[0]["secondary_rays"], goal))
+v = of("vertex_first")
+if v:
+    casts = [1e3 * r.get("vertex_cache_seconds", float("nan")) for r in v]
+    out.append("| --occlusion vertex, first frame, %d tets (%d vertices), shadows + AO 4 | casts %.3f ms GPU (frame "
+               "%.3f ms GPU, %d secondary rays) | <= 100 ms |" % (6 * n ** 3, (n + 1) ** 3, med(casts),
+                                                                 med([ms(r) for r in v]), v[0]["secondary_rays"]))
 print("\n".join(out))
 EOF
 cat "$OUT/targets.md"

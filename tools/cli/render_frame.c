@@ -161,6 +161,8 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
         if (!isnan(src->iso_auto))
             printf(",\"iso_auto\":%.9g", src->iso_auto);
         printf(",\"iso_culling\":%s", stats.iso_culling ? "true" : "false");
+        if (stats.vertex_cache_seconds > 0) /* --occlusion vertex: the casts of this frame */
+            printf(",\"vertex_cache_seconds\":%.6f", stats.vertex_cache_seconds);
         if (!vulkan)
             printf(",\"seconds_rays\":%.6f,\"cpu_seconds_rays\":%.6f", stats.seconds_rays, stats.cpu_seconds_rays);
         if (src->level > 0 || src->budget > 0) {

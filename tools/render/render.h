@@ -54,7 +54,8 @@ typedef struct tpk_probe {
  * (transmittance toward the point light), ao_rays (ambient occlusion with this many hemisphere rays, at
  * most TPK_RENDER_MAX_AO_RAYS; 0: off), ao_radius (AO ray length; <= 0: bounds diagonal / 10) and
  * occlusion (where shadow and AO rays start: TPK_OCCLUSION_RAY 0 at the shade points of every primary
- * ray, TPK_OCCLUSION_VERTEX 1 at the mesh vertices, once per frame, interpolated; below). */
+ * ray, TPK_OCCLUSION_VERTEX 1 at the mesh vertices, once per frame, interpolated, TPK_OCCLUSION_SURFACE 2
+ * at one surface point per primary ray; below). */
 typedef struct tpk_render_options {
     int width, height;             /* pixels, 1 .. TPK_RENDER_MAX_SIZE each */
     tpk_camera camera;
@@ -89,6 +90,7 @@ typedef struct tpk_render_options {
 #define TPK_INTEGRATION_MIDPOINT 2
 #define TPK_OCCLUSION_RAY 0
 #define TPK_OCCLUSION_VERTEX 1
+#define TPK_OCCLUSION_SURFACE 2
 
 /* ---- Effect definitions (the contract between the CPU reference and the Vulkan renderer) ----------
  * Notation. Primary ray x(t) = eye + t d, d unit, t = distance. The marcher reports pieces
@@ -177,6 +179,17 @@ typedef struct tpk_render_options {
  * l_i = (q . c_i) / det (i = 1..3), l_0 = 1 - l_1 - l_2 - l_3; S = clamp(sum l_i S_v[i], 0, 1) and A
  * likewise; where det is 0 or not finite, the mean of the four. m is then as in LIGHTING FACTOR.
  * secondary_rays and tet_steps count the cache's rays.
+ *
+ * OCCLUSION AT THE SURFACE (occlusion == TPK_OCCLUSION_SURFACE: the seed paper's effects, Sahistan et al.
+ * 2021 §6, shadows and AO where a primary ray meets a surface, the volume's opacity the occluder). A
+ * primary ray has at most one shade point, its surface: with iso values its first iso hit (the hit point
+ * and normal, as ISOSURFACES), without them its first volume shade point of SHADE POINTS (the midpoint of
+ * its first piece of optical depth tau > 0, just inside where it enters the shell, the clip box or a
+ * probe; that piece's normal). S and A there are cast as TRANSMITTANCE and AO DIRECTIONS say (the
+ * secondary rays see the volume's opacity and the isosurfaces). Every lighting factor after it takes
+ * them, before it S = A = 1; a volume piece takes S and A as they stand where it starts (its m is made
+ * before its hits). So a pixel casts at most 1 + ao_rays secondary rays, against up to ~32 (1 + ao_rays)
+ * with `ray`.
  *
  * ISOSURFACES (iso_count values v_j, scalar units). Point field: the piece crosses v_j where
  * (s_in < v_j <= s_out) or (s_in > v_j >= s_out), at t = t_in + (v_j - s_in) / (s_out - s_in) * length
@@ -320,6 +333,10 @@ typedef struct tpk_render_stats {
     double setup_upload_seconds;   /* arrays and BVH into device memory, image buffers */
     double setup_pipeline_seconds; /* shader, pipeline cache and the pipelines compiled so far */
     double first_frame_seconds;    /* tpk_render_vulkan: its one frame, without the pipeline it compiled */
+    double vertex_cache_seconds;   /* --occlusion vertex: the time this frame spent casting the vertex cache (a
+                                      part of `seconds`): the CPU's wall time, or Vulkan's device time of its
+                                      casts (also a part of gpu_seconds; the wall time without timestamps); 0
+                                      when nothing was cast */
     uint64_t pipeline_cache_bytes; /* pipeline cache data loaded from disk; 0: none */
     int pipeline_cache_hits;       /* pipelines found in that cache; -1: the driver does not say */
 } tpk_render_stats;
@@ -368,6 +385,16 @@ void tpk_vertex_cache_frames_per_field(tpk_vertex_cache *cache, int frames);
  * arrays stay valid until the next update or destroy. 0, or -1 with a message (the cache is then empty). */
 int tpk_vertex_cache_update(tpk_vertex_cache *cache, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
                             int *changed, tpk_render_stats *cast, tpk_diag *diag);
+/* The same, the stale halves cast by `caster` (the Vulkan renderer's on its device) instead of
+ * tpk_render_vertex_cache: it gets the options with the fresh half's effect off (shadows 0: S alone, ao_rays
+ * 0: A alone), fills s and a (vertex_count floats each, 1 for an effect that is off) and stats (its tet steps,
+ * secondary rays and seconds, as tpk_render_vertex_cache does; zeroed first), and returns 0 or -1 with a
+ * message. */
+typedef int (*tpk_vertex_caster)(void *user, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, float *s,
+                                 float *a, tpk_render_stats *stats, tpk_diag *diag);
+int tpk_vertex_cache_update_with(tpk_vertex_cache *cache, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
+                                 tpk_vertex_caster caster, void *user, int *changed, tpk_render_stats *cast,
+                                 tpk_diag *diag);
 const float *tpk_vertex_cache_s(const tpk_vertex_cache *cache); /* vertex_count floats: S_v */
 const float *tpk_vertex_cache_a(const tpk_vertex_cache *cache); /* A_v */
 /* tpk_render_cpu whose --occlusion vertex takes its cache from `cache` (kept across calls, brought up to

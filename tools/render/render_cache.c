@@ -107,8 +107,22 @@ const float *tpk_vertex_cache_a(const tpk_vertex_cache *c)
     return c->a;
 }
 
+static int cpu_caster(void *user, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, float *s, float *a,
+                      tpk_render_stats *stats, tpk_diag *diag)
+{
+    (void)user;
+    return tpk_render_vertex_cache(mesh, opt, s, a, stats, diag);
+}
+
 int tpk_vertex_cache_update(tpk_vertex_cache *c, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
                             int *changed, tpk_render_stats *cast, tpk_diag *diag)
+{
+    return tpk_vertex_cache_update_with(c, mesh, opt, cpu_caster, NULL, changed, cast, diag);
+}
+
+int tpk_vertex_cache_update_with(tpk_vertex_cache *c, const tpk_mesh_arrays *mesh, const tpk_render_options *opt,
+                                 tpk_vertex_caster caster, void *user, int *changed, tpk_render_stats *cast,
+                                 tpk_diag *diag)
 {
     if (changed)
         *changed = 0;
@@ -140,7 +154,7 @@ int tpk_vertex_cache_update(tpk_vertex_cache *c, const tpk_mesh_arrays *mesh, co
         one.ao_rays = 0; /* S alone */
     c->valid[0] = c->valid[1] = 0; /* until the new halves are in */
     int rc = !s || !a ? tpk_diag_fail(diag, "render: out of memory for the vertex cache")
-                      : tpk_render_vertex_cache(mesh, &one, s, a, cast, diag);
+                      : caster(user, mesh, &one, s, a, cast, diag);
     if (rc == 0) {
         if (stale[0])
             memcpy(c->s, s, sizeof *s * mesh->vertex_count);
@@ -171,6 +185,7 @@ int tpk_render_cpu_cached(const tpk_mesh_arrays *mesh, const tpk_render_options 
         stats->tet_steps += cast.tet_steps;
         stats->secondary_rays += cast.secondary_rays;
         stats->seconds += cast.seconds;
+        stats->vertex_cache_seconds = cast.seconds;
     }
     return rc;
 }

@@ -59,7 +59,13 @@ static void composite_iso(ray_state *ray, const tpk_segment *seg, double t, doub
         point_at(ray, t, x);
         if (job->vertex_s)
             rl_vertex_lookup(job, seg, x, &s, &a);
-        else if (job->setup.cast)
+        else if (job->opt->occlusion == TPK_OCCLUSION_SURFACE) { /* the first hit is the ray's surface */
+            if (job->setup.cast && !ray->cast_done) {
+                rl_cast(ray, x, n, &ray->shade_s, &ray->shade_a);
+                ray->cast_done = 1;
+            }
+            s = ray->shade_s, a = ray->shade_a;
+        } else if (job->setup.cast)
             rl_cast(ray, x, n, &s, &a);
         m = rl_factor(ray, x, n, s, a);
     }
@@ -71,16 +77,19 @@ static void composite_iso(ray_state *ray, const tpk_segment *seg, double t, doub
     ray->transmittance *= 1.0 - alpha;
 }
 
-/* The lighting factor of a volume piece (render.h: SHADE POINTS, LIGHTING FACTOR) into ray->m. */
+/* The lighting factor of a volume piece (render.h: SHADE POINTS, LIGHTING FACTOR; OCCLUSION AT THE
+ * SURFACE: without iso values, the first volume shade point alone) into ray->m. */
 static void light_piece(ray_state *ray, const tpk_segment *seg, const double *n, double u_in, double u_out)
 {
     const render_job *job = ray->job;
     double length = seg->t_out - seg->t_in, mid[3];
+    const int surface = job->opt->occlusion == TPK_OCCLUSION_SURFACE;
     point_at(ray, 0.5 * (seg->t_in + seg->t_out), mid);
     if (job->vertex_s)
         rl_vertex_lookup(job, seg, mid, &ray->shade_s, &ray->shade_a);
-    else if (job->setup.cast && ri_optical_depth(job, length, u_in, u_out) > 0 &&
-        (!ray->cast_done || ray->t_cast - ray->transmittance >= TPK_RENDER_SHADE_STEP)) {
+    else if (job->setup.cast && !(surface && (job->opt->iso_count > 0 || ray->cast_done)) &&
+             ri_optical_depth(job, length, u_in, u_out) > 0 &&
+             (!ray->cast_done || ray->t_cast - ray->transmittance >= TPK_RENDER_SHADE_STEP)) {
         rl_cast(ray, mid, n, &ray->shade_s, &ray->shade_a);
         ray->cast_done = 1;
         ray->t_cast = ray->transmittance;
@@ -557,10 +566,12 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
     int rc = 0;
     float *cache = NULL;
     uint64_t cache_counts[2] = {0, 0}; /* steps, secondary rays */
+    struct timespec c0 = {0, 0}, c1 = {0, 0}; /* the cache's casts */
     if (job->setup.cast && opt->occlusion == TPK_OCCLUSION_VERTEX && given_s && given_a) {
         job->vertex_s = given_s;
         job->vertex_a = given_a;
     } else if (job->setup.cast && opt->occlusion == TPK_OCCLUSION_VERTEX) {
+        clock_gettime(CLOCK_MONOTONIC, &c0);
         cache = malloc(2 * sizeof *cache * (mesh->vertex_count ? mesh->vertex_count : 1));
         if (!cache) {
             rc = tpk_diag_fail(diag, "render: out of memory for the vertex cache");
@@ -572,6 +583,7 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
             if (r != TPK_OK)
                 rc = tpk_diag_fail(diag, "render: vertex cache: %s", tpk_result_string(r));
         }
+        clock_gettime(CLOCK_MONOTONIC, &c1);
     }
     tpk_range_bvh *range = rc == 0 ? culling_trees(mesh, opt, k, keep == NULL, &rc, diag) : NULL;
     k->mesh = *mesh;
@@ -582,6 +594,7 @@ int render_cpu_keeping(const tpk_mesh_arrays *mesh, const tpk_render_options *op
         stats->iso_culling = range != NULL;
         stats->tet_steps += cache_counts[0];
         stats->secondary_rays += cache_counts[1];
+        stats->vertex_cache_seconds = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
     }
     free(cache);
     if (!keep)

@@ -507,24 +507,104 @@ static VkPipeline frame_pipeline(vk_render *v, int effects, tpk_diag *diag)
     return pipeline;
 }
 
-/* render.h OCCLUSION AT VERTICES: S_v and A_v of every vertex, by the CPU reference's own pass
- * (tpk_render_vertex_cache, on all cores) through the cache kept across frames (tpk_vertex_cache: a half
- * whose inputs did not change is not cast again), uploaded into the VERTEX_SA array when it changed; the
- * shader interpolates them at each shade point as render_light.c does. The rays and steps cast in this
- * frame count into the frame's (all of them the first time, as on the CPU). */
-static int vertex_cache(vk_render *v, const tpk_render_options *opt, uint64_t counts[2], tpk_diag *diag)
+#define CAST_ROW 1024 /* vertices per row of the vertex casts' bands (2 words each) */
+
+/* render.h OCCLUSION AT VERTICES on the device (a tpk_vertex_caster): S_v and A_v of every vertex by the
+ * shader's vertex_cast (TPK_VK_EFFECT_CACHE), CAST_ROW vertices a row, in bands (and slices) as a frame's
+ * rows, read back into s and a. The casts are the frame's shade-point casts started at the vertex, in float:
+ * render_vk_effects.vertex_casts_on_device says how near the CPU's double they come. */
+static int device_vertex_casts(void *user, const tpk_mesh_arrays *mesh, const tpk_render_options *opt, float *s,
+                               float *a, tpk_render_stats *stats, tpk_diag *diag)
+{
+    vk_render *v = user;
+    double t0 = tpk_now_seconds();
+    memset(stats, 0, sizeof *stats);
+    const int64_t n = (int64_t)mesh->vertex_count;
+    const int effects = TPK_VK_EFFECT_CACHE | (opt->iso_count > 0 ? TPK_VK_EFFECT_ISO : 0) |
+                        (opt->shadows ? TPK_VK_EFFECT_SHADOWS : 0) | (opt->ao_rays > 0 ? TPK_VK_EFFECT_AO : 0);
+    if (!(effects & (TPK_VK_EFFECT_SHADOWS | TPK_VK_EFFECT_AO))) {
+        for (int64_t i = 0; i < n; i++)
+            s[i] = a[i] = 1.0f;
+        return 0;
+    }
+    tpk_vk_params *params = malloc(sizeof *params);
+    if (!params)
+        return tpk_diag_fail(diag, "render: out of memory");
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    const double compiled = v->frame_compile_seconds; /* the frame's own pipeline, compiled before */
+    int rc = tpk_vk_params_fill(mesh, opt, v->bvh.extent, v->bvh.face_count, params, diag);
+    if (rc == 0 && !(pipeline = frame_pipeline(v, effects, diag)))
+        rc = -1;
+    t0 += v->frame_compile_seconds; /* the compile is the pipeline's setup, not the casts' */
+    v->frame_compile_seconds += compiled;
+    const int width = 2 * CAST_ROW, height = (int)((n + CAST_ROW - 1) / CAST_ROW);
+    int band = (int)(v->band_pixels / (uint32_t)width);
+    band = band < 1 ? 1 : band;
+    double gpu = v->timestamps ? 0.0 : -1.0;
+    uint64_t counts[2] = {0, 0};
+    params->dims[0] = width;
+    params->dims[1] = height;
+    for (int row0 = 0; rc == 0 && row0 < height; row0 += band) {
+        const int rows = height - row0 < band ? height - row0 : band;
+        double g = 0.0;
+        const tpk_vk_buffer *image = v->ctx.staged ? &v->readback : &v->pixels;
+        if (run_band(v, pipeline, params, row0, rows, &g, diag) != 0 ||
+            tpk_vk_buffer_invalidate(&v->ctx, image, diag) != 0 ||
+            (!v->ctx.staged && tpk_vk_buffer_invalidate(&v->ctx, band_counters_buffer(v), diag) != 0)) {
+            rc = -1;
+            break;
+        }
+        gpu = gpu < 0 || g < 0 ? -1.0 : gpu + g;
+        const uint32_t *words = image->mapped, *c = band_counters(v);
+        const int64_t first = (int64_t)row0 * CAST_ROW;
+        const int64_t last = first + (int64_t)rows * CAST_ROW < n ? first + (int64_t)rows * CAST_ROW : n;
+        for (int64_t i = first; i < last; i++) {
+            memcpy(&s[i], &words[2 * (i - first)], 4); /* row r's vertex j at words 2 (r width / 2 + j) */
+            memcpy(&a[i], &words[2 * (i - first) + 1], 4);
+        }
+        counts[0] += (uint64_t)c[TPK_VK_COUNT_STEPS] | (uint64_t)c[TPK_VK_COUNT_STEPS + 1] << 32;
+        counts[1] += (uint64_t)c[TPK_VK_COUNT_SECONDARY] | (uint64_t)c[TPK_VK_COUNT_SECONDARY + 1] << 32;
+        if (c[TPK_VK_COUNT_FAILED] != 0)
+            rc = tpk_diag_fail(diag, "render: vertex cache: a ray from vertex %u: %s", c[TPK_VK_COUNT_FIRST],
+                               tpk_result_string(TPK_ERR_MESH));
+    }
+    free(params);
+    stats->tet_steps = counts[0];
+    stats->secondary_rays = counts[1];
+    stats->seconds = tpk_now_seconds() - t0;
+    stats->gpu_seconds = gpu;
+    return rc;
+}
+
+/* render.h OCCLUSION AT VERTICES: S_v and A_v of every vertex, cast on the device (device_vertex_casts)
+ * through the cache kept across frames (tpk_vertex_cache: a half whose inputs did not change is not cast
+ * again), uploaded into the VERTEX_SA array when it changed; the shader interpolates them at each shade
+ * point as render_light.c does. The rays and steps cast in this frame count into the frame's (all of them
+ * the first time, as on the CPU), their device time into *cast_gpu (-1: no timestamps) and their time
+ * into *cast_seconds. TPK_VK_VERTEX_CASTS=cpu casts them by the CPU reference's pass instead (on all
+ * cores), to compare. */
+static int vertex_cache(vk_render *v, const tpk_render_options *opt, uint64_t counts[2], double *cast_gpu,
+                        double *cast_seconds, tpk_diag *diag)
 {
     size_t n = (size_t)v->mesh.vertex_count;
+    *cast_gpu = 0.0;
+    *cast_seconds = 0.0;
     if (!v->cache && !(v->cache = tpk_vertex_cache_create()))
         return tpk_diag_fail(diag, "render: out of memory for the vertex cache");
     tpk_render_options cpu = *opt;
     cpu.threads = 0; /* all cores */
     tpk_render_stats st;
     int changed = 0;
-    if (tpk_vertex_cache_update(v->cache, &v->mesh, &cpu, &changed, &st, diag) != 0)
+    const char *env = getenv("TPK_VK_VERTEX_CASTS");
+    const int on_cpu = env && !strcmp(env, "cpu");
+    if ((on_cpu ? tpk_vertex_cache_update(v->cache, &v->mesh, &cpu, &changed, &st, diag)
+                : tpk_vertex_cache_update_with(v->cache, &v->mesh, &cpu, device_vertex_casts, v, &changed, &st,
+                                               diag)) != 0)
         return -1;
     counts[0] += st.tet_steps;
     counts[1] += st.secondary_rays;
+    *cast_gpu = on_cpu ? 0.0 : st.gpu_seconds;
+    *cast_seconds = st.seconds;
     if (!changed)
         return 0;
     const float *s = tpk_vertex_cache_s(v->cache), *a = tpk_vertex_cache_a(v->cache);
@@ -638,11 +718,13 @@ static int render_frame(vk_render *v, const tpk_render_options *opt, uint8_t *rg
     if (rc == 0 && !(pipeline = frame_pipeline(v, tpk_vk_effects(opt) | (culls > 0 ? TPK_VK_EFFECT_CULL : 0), diag)))
         rc = -1;
     uint64_t cache_counts[2] = {0, 0};
+    double cast_gpu = 0.0, cast_seconds = 0.0;
     if (rc == 0 && (tpk_vk_effects(opt) & TPK_VK_EFFECT_VERTEX))
-        rc = vertex_cache(v, opt, cache_counts, diag);
+        rc = vertex_cache(v, opt, cache_counts, &cast_gpu, &cast_seconds, diag);
     v->target = target;
     if (rc == 0)
         rc = render_bands(v, pipeline, params, target ? NULL : rgba, counts, &gpu_seconds, diag);
+    gpu_seconds = gpu_seconds < 0 || cast_gpu < 0 ? -1.0 : gpu_seconds + cast_gpu; /* the casts are the frame's */
     counts[0] += cache_counts[0];
     counts[1] += cache_counts[1];
     v->target = NULL;
@@ -654,6 +736,7 @@ static int render_frame(vk_render *v, const tpk_render_options *opt, uint8_t *rg
         stats->iso_culling = culls > 0;
         stats->seconds = tpk_now_seconds() - t0;
         stats->gpu_seconds = gpu_seconds;
+        stats->vertex_cache_seconds = cast_gpu > 0 ? cast_gpu : cast_seconds;
         stats->device_bytes = device_bytes(v);
         stats->setup_device_seconds = v->device_seconds;
         stats->setup_upload_seconds = v->upload_seconds;
@@ -662,6 +745,21 @@ static int render_frame(vk_render *v, const tpk_render_options *opt, uint8_t *rg
         stats->pipeline_cache_hits = v->pipeline.cache.hits;
     }
     return rc;
+}
+
+int tpk_vk_renderer_vertex_cache(tpk_vk_renderer *v, const tpk_render_options *opt, float *s, float *a,
+                                 tpk_render_stats *stats, tpk_diag *diag)
+{
+    static const uint8_t no_image[1]; /* no picture: the check's buffer argument is moot */
+    tpk_render_stats own;
+    if (!v || !s || !a)
+        return tpk_diag_fail(diag, "render: a renderer and the cache's arrays are required");
+    if (tpk_vk_check_options(&v->mesh, opt, no_image, diag) != 0)
+        return -1;
+    if ((opt->tet_scalars != NULL) != v->tet_scalars)
+        return tpk_diag_fail(diag, "render: tet scalars %s at creation but %s for the cache",
+                             v->tet_scalars ? "given" : "not given", opt->tet_scalars ? "given" : "not");
+    return device_vertex_casts(v, &v->mesh, opt, s, a, stats ? stats : &own, diag);
 }
 
 int tpk_vk_renderer_frame(tpk_vk_renderer *v, const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats,

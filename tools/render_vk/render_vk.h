@@ -42,6 +42,12 @@ int tpk_vk_renderer_create(tpk_vk_renderer **out, const tpk_mesh_arrays *mesh, c
 int tpk_vk_renderer_frame(tpk_vk_renderer *renderer, const tpk_render_options *opt, uint8_t *rgba,
                           tpk_render_stats *stats, tpk_diag *diag);
 const char *tpk_vk_renderer_device(const tpk_vk_renderer *renderer);
+/* render.h OCCLUSION AT VERTICES cast on the device, as a frame with --occlusion vertex does (whatever
+ * opt->occlusion says): S_v into s[v], A_v into a[v], vertex_count floats each, what tpk_render_vertex_cache
+ * gives on the CPU up to the device's float marching (render_vk_effects.vertex_casts_on_device). stats
+ * (may be NULL): tet steps, secondary rays, seconds and gpu_seconds of the casts. 0, or -1 with a message. */
+int tpk_vk_renderer_vertex_cache(tpk_vk_renderer *renderer, const tpk_render_options *opt, float *s, float *a,
+                                 tpk_render_stats *stats, tpk_diag *diag);
 void tpk_vk_renderer_destroy(tpk_vk_renderer *renderer);
 /* Another field of the same kind for the next frames (a time step): point scalars (vertex_count floats)
  * or tet scalars (tet_count), each NULL or not as at creation, outliving the renderer like the mesh.

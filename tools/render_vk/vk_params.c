@@ -117,7 +117,8 @@ int tpk_vk_effects(const tpk_render_options *opt)
 {
     return (opt->iso_count > 0 ? TPK_VK_EFFECT_ISO : 0) | (opt->shading ? TPK_VK_EFFECT_SHADING : 0) |
            (opt->shadows ? TPK_VK_EFFECT_SHADOWS : 0) | (opt->ao_rays > 0 ? TPK_VK_EFFECT_AO : 0) |
-           (opt->occlusion == TPK_OCCLUSION_VERTEX && (opt->shadows || opt->ao_rays > 0) ? TPK_VK_EFFECT_VERTEX : 0);
+           (opt->occlusion == TPK_OCCLUSION_VERTEX && (opt->shadows || opt->ao_rays > 0) ? TPK_VK_EFFECT_VERTEX : 0) |
+           (opt->occlusion == TPK_OCCLUSION_SURFACE && (opt->shadows || opt->ao_rays > 0) ? TPK_VK_EFFECT_SURFACE : 0);
 }
 
 /* render.comp's Params block, std140: 16 vec4 rows, the probes' 2 x 4, then the TF's 256 s values and 256

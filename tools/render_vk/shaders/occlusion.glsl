@@ -164,6 +164,7 @@ uint hash32(uint x)
 }
 
 ivec2 pixel; // of this invocation
+uint cache_v; // CACHE_CAST: the vertex whose S_v and A_v this invocation casts
 
 // The AO axis: the normal turned toward the viewer, -d without one (render.h: AO DIRECTIONS).
 vec3 ao_axis(bool has_n, vec3 n)
@@ -175,6 +176,12 @@ vec3 ao_axis(bool has_n, vec3 n)
 vec3 ao_direction(vec3 x, vec3 a, int i)
 {
     int count = TPK_VK_AO_RAYS;
+    if (CACHE_CAST) { // render.h OCCLUSION AT VERTICES: the whole sphere, world axes, hashed by the vertex
+        float rot = float(hash32(cache_v)) * (1.0 / 4294967296.0);
+        float z = 1.0 - 2.0 * (float(i) + 0.5) / float(count), r = sqrt(1.0 - z * z);
+        float phi = 6.283185307179586 * fract(float(i) * 0.6180339887498949 + rot);
+        return vec3(r * cos(phi), r * sin(phi), z);
+    }
     float sgn = a.z >= 0.0 ? 1.0 : -1.0;
     float p = -1.0 / (sgn + a.z), q = a.x * a.y * p;
     vec3 b1 = vec3(1.0 + sgn * a.x * a.x * p, sgn * q, -sgn * a.x), b2 = vec3(q, sgn + a.y * a.y * p, -a.y);
@@ -285,6 +292,13 @@ void composite_iso(float t, float v, bool has_n, vec3 n, ivec4 tet)
             vec2 sa = vertex_lookup(tet, x);
             S = sa.x;
             A = sa.y;
+        } else if (SURFACE_OCC) { // the ray's first hit is its surface: it casts, later ones reuse
+            if (!cast_done) {
+                take_cast(shade_s, shade_a);
+                cast_done = true;
+            }
+            S = shade_s;
+            A = shade_a;
         } else if (CAST) {
             take_cast(S, A);
         }

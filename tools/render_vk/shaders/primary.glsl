@@ -21,15 +21,19 @@ int segment(float t_in, float t_out, float s_in, float s_out, ivec4 v)
     if (LIGHTING) {
         has_n = P.mode.w == 1 && tet_normal(v, n);
         // render.h SHADE POINTS: cast from this piece's middle when the ray has lost 1/32 of
-        // transmittance since the last cast; pieces in between reuse its S and A.
-        volume_cast = CAST && t_out > t_in && optical_depth(t_out - t_in, u_in, u_out) > 0.0 &&
+        // transmittance since the last cast; pieces in between reuse its S and A. OCCLUSION AT THE
+        // SURFACE: without iso values the first such cast alone, with them none (the first hit casts).
+        volume_cast = CAST && !(SURFACE_OCC && (ISO || cast_done)) && t_out > t_in &&
+                      optical_depth(t_out - t_in, u_in, u_out) > 0.0 &&
                       (!cast_done || t_cast - transmittance >= 1.0 / 32.0);
     }
+    // the hits that cast: every one, or (OCCLUSION AT THE SURFACE) the ray's first alone
+    const int nh_cast = SURFACE_OCC ? (cast_done ? 0 : min(nh, 1)) : nh;
     int said = MARCH_GO;
-    if (CAST && !casts_ready && (volume_cast || nh > 0)) {
+    if (CAST && !casts_ready && (volume_cast || nh_cast > 0)) {
         if (volume_cast)
             ask_cast(eye_dir_point(0.5 * (t_in + t_out)), has_n, n);
-        for (int i = 0; i < nh; i++) {
+        for (int i = 0; i < nh_cast; i++) {
             vec3 hn = n;
             bool has_hn = has_n;
             if (tet_field)

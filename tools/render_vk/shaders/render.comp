@@ -34,6 +34,11 @@ const bool AO = (EFFECTS & TPK_VK_EFFECT_AO) != 0;
 // --occlusion vertex: S and A interpolated from the per-vertex cache (render.h OCCLUSION AT VERTICES)
 const bool VERTEX_OCC = (EFFECTS & TPK_VK_EFFECT_VERTEX) != 0;
 const bool CAST = (SHADOWS || AO) && !VERTEX_OCC;
+// --occlusion surface: one cast per ray, at its first iso hit or first volume shade point (render.h
+// OCCLUSION AT THE SURFACE); set only with CAST (tpk_vk_effects)
+const bool SURFACE_OCC = (EFFECTS & TPK_VK_EFFECT_SURFACE) != 0;
+// not a frame: the vertex cache's casts on the device (vertex_cast below)
+const bool CACHE_CAST = (EFFECTS & TPK_VK_EFFECT_CACHE) != 0;
 const bool LIGHTING = SHADING || SHADOWS || AO;
 // iso-only primary rays take their pieces from the range BVH (render.h ISO-ONLY RAYS), not the marcher
 const bool CULL = (EFFECTS & TPK_VK_EFFECT_CULL) != 0;
@@ -180,6 +185,55 @@ void counters_add64(int at)
 
 #include "slices.glsl"
 
+// CACHE_CAST (vk_layout.h TPK_VK_EFFECT_CACHE): S_v and A_v of one vertex (render.h OCCLUSION AT VERTICES,
+// render_light.c's cache_vertex) by the frame's casts of one shade point at the vertex, in slices as a
+// pixel's; written as float bits to words 2i and 2i + 1 of the band, i its place there.
+void vertex_cast(int x, int y)
+{
+    const int per_row = P.dims.x / 2;
+    cache_v = uint(y) * uint(per_row) + uint(x);
+    if (x >= per_row || y >= P.cast_count.y || cache_v >= uint(P.mode.y))
+        return;
+    const uint slot = gl_GlobalInvocationID.y * uint(P.dims.x) + uint(x); // its state between slices
+    MarchTrace none; // no primary ray
+    int k = 0, rays = 0;
+    if (!SLICED || P.cast_count.z == 0) {
+        steps_taken = 0u;
+        secondary_rays = 0u;
+        status = TPK_VK_STATUS_OK;
+        cast_asked = 0;
+        ask_cast(fetch_verts(cache_v).xyz, false, vec3(0.0));
+        rays = cast_ray_count();
+    } else if (!load_state(slot, none, k, rays)) {
+        return;
+    }
+    while (k < rays && !(SLICED && work >= TPK_VK_SLICE_WORK)) {
+        cast_one(k);
+        k++;
+    }
+    if (k < rays) {
+        save_state(slot, none, k, rays, 0);
+        atomicAdd(counters[TPK_VK_COUNT_PENDING], 1u);
+        return;
+    }
+    if (SLICED)
+        state[slot * uint(TPK_VK_STATE_VEC4) + 6u].w = intBitsToFloat(STATE_FINISHED);
+    float S = 1.0, A = 1.0;
+    if (rays > 0) {
+        casts_cast();
+        take_cast(S, A);
+    }
+    const uint word = gl_GlobalInvocationID.y * uint(P.dims.x) + 2u * uint(x);
+    pixels[word] = floatBitsToUint(S);
+    pixels[word + 1u] = floatBitsToUint(A);
+    group_add64(TPK_VK_COUNT_STEPS, steps_taken);
+    group_add64(TPK_VK_COUNT_SECONDARY, secondary_rays);
+    if (status != TPK_VK_STATUS_OK) {
+        atomicAdd(group_counts[TPK_VK_COUNT_FAILED], 1u);
+        atomicMin(group_counts[TPK_VK_COUNT_FIRST], cache_v);
+    }
+}
+
 void main()
 {
     if (gl_LocalInvocationIndex == 0u) {
@@ -191,7 +245,9 @@ void main()
     const int x = int(gl_GlobalInvocationID.x), y = P.dims.z + int(gl_GlobalInvocationID.y);
     pixel = ivec2(x, y);
     // every invocation reaches the barrier below, so pixels outside the image do no work but return late
-    if (x < P.dims.x && y < P.cast_count.y) {
+    if (CACHE_CAST) {
+        vertex_cast(x, y);
+    } else if (x < P.dims.x && y < P.cast_count.y) {
         const float px = (2.0 * (float(x) + 0.5) / float(P.dims.x) - 1.0) * P.forward.w;
         const float py = (1.0 - 2.0 * (float(y) + 0.5) / float(P.dims.y)) * P.right.w;
         ray_dir = normalize(P.forward.xyz + px * P.right.xyz + py * P.up.xyz);

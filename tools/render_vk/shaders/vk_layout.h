@@ -69,7 +69,12 @@
 #define TPK_VK_EFFECT_AO 8
 #define TPK_VK_EFFECT_VERTEX 16 /* shadows and AO from the per-vertex cache: no secondary rays in the shader */
 #define TPK_VK_EFFECT_CULL 32 /* iso-only primary rays find their pieces in the range BVH, not by marching */
-#define TPK_VK_EFFECT_MASKS 64 /* pipelines per renderer, one per combination */
+#define TPK_VK_EFFECT_SURFACE 64 /* shadows and AO cast once per ray, at its surface (render.h OCCLUSION AT THE SURFACE) */
+/* Not a frame: the vertex cache's casts (render.h OCCLUSION AT VERTICES), invocation x < width / 2 of row y
+ * for vertex y * (width / 2) + x, S_v and A_v as float bits into words 2i and 2i + 1 of the band (render.comp
+ * vertex_cast) */
+#define TPK_VK_EFFECT_CACHE 128
+#define TPK_VK_EFFECT_MASKS 256 /* pipelines per renderer, one per combination */
 
 /* The faces of a positive tet in outward order (tpk_tet_faces of format/tetpack_format.h, checked in
  * vk_arrays.c): face k, opposite corner k, is corners [3k, 3k + 3). */
