@@ -532,7 +532,7 @@ static int device_vertex_casts(void *user, const tpk_mesh_arrays *mesh, const tp
         return tpk_diag_fail(diag, "render: out of memory");
     VkPipeline pipeline = VK_NULL_HANDLE;
     const double compiled = v->frame_compile_seconds; /* the frame's own pipeline, compiled before */
-    int rc = tpk_vk_params_fill(mesh, opt, v->bvh.extent, v->bvh.face_count, params, diag);
+    int rc = tpk_vk_params_fill(mesh, opt, v->diagonal, v->bvh.extent, v->bvh.face_count, params, diag);
     if (rc == 0 && !(pipeline = frame_pipeline(v, effects, diag)))
         rc = -1;
     t0 += v->frame_compile_seconds; /* the compile is the pipeline's setup, not the casts' */
