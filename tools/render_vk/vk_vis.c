@@ -201,7 +201,7 @@ static void record_value(tpk_iso_vis *vis, VkCommandBuffer cmd, const tpk_iso_vi
     barrier(cmd);
     p.pass[1] = 0, p.pass[2] = 1;
     vkCmdPushConstants(cmd, vis->layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof p, &p);
-    vkCmdDispatch(cmd, groups < LARGE_GROUPS ? groups : LARGE_GROUPS, 1, 1);
+    vkCmdDispatch(cmd, n < LARGE_GROUPS ? n : LARGE_GROUPS, 1, 1); /* at most a group a triangle */
     barrier(cmd);
 }
 

@@ -15,7 +15,7 @@
 // surface per pixel (the fragment shader's discard).
 // One invocation per triangle (mode 0); a triangle whose box covers more than LARGE pixels is put in a
 // list instead, and mode 1 rasterizes the list with a workgroup of 64 per triangle, each invocation
-// every 64th pixel of its box, so that no invocation walks a huge box alone.
+// pixel of each 8 x 8 tile of its box, so that no invocation walks a huge box alone.
 #if TPK_VIS64
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
@@ -95,54 +95,78 @@ float edge(vec2 u, vec2 d, vec2 p)
     return e;
 }
 
-// The pixels of the screen triangle s (x, y in pixels, z the depth) whose centres it covers, from the
-// lane-th of its box on in steps of lanes; w: its corners in the world, for the clip box and probes.
-void raster(vec3 s[3], vec3 w[3], uint id, uint lane, uint lanes)
-{
+// A screen triangle ready to test pixels against: per edge (k: the one opposite corner k) its lesser end
+// u, its direction d, the side its triangle lies on (sigma) and whether a centre on it is the triangle's.
+struct Setup {
     vec2 u[3], d[3];
     float sigma[3];
     bool own[3];
+    vec3 z;    // the corners' depths
+    vec3 w[3]; // the corners in the world, for the clip box and probes
+    uint id;
+    bool cut;  // a clip box or probes
+};
+
+void pixel(Setup t, uint px, uint py)
+{
+    vec2 c = vec2(float(px) + 0.5, float(py) + 0.5);
+    vec3 e;
+    for (int k = 0; k < 3; k++) {
+        float v = t.sigma[k] * edge(t.u[k], t.d[k], c);
+        if (!(v > 0.0 || (v == 0.0 && t.own[k])))
+            return;
+        e[k] = v;
+    }
+    e /= e.x + e.y + e.z; // screen-space barycentric weights
+    float z = dot(e, t.z);
+    if (t.cut) { // perspective-correct: weights over depth (z is near / d)
+        vec3 q = e * t.z;
+        if (!kept((q.x * t.w[0] + q.y * t.w[1] + q.z * t.w[2]) / (q.x + q.y + q.z)))
+            return;
+    }
+    write_pixel(py * pc.frame.x + px, z, t.id);
+}
+
+// The pixels of the screen triangle s (x, y in pixels, z the depth) whose centres it covers: all of its
+// box (lanes 1), or with lanes 64 the lane-th pixel of each 8 x 8 tile of the box; w: its corners in
+// the world.
+void raster(vec3 s[3], vec3 w[3], uint id, uint lane, uint lanes)
+{
+    Setup t;
     for (int k = 0; k < 3; k++) {
         vec2 a = s[(k + 1) % 3].xy, b = s[(k + 2) % 3].xy;
         bool swap = b.x < a.x || (b.x == a.x && b.y < a.y);
-        u[k] = swap ? b : a;
-        d[k] = (swap ? a : b) - u[k];
-        float opposite = edge(u[k], d[k], s[k].xy);
+        t.u[k] = swap ? b : a;
+        t.d[k] = (swap ? a : b) - t.u[k];
+        float opposite = edge(t.u[k], t.d[k], s[k].xy);
         if (!(opposite != 0.0))
             return; // no area (or NaN)
-        sigma[k] = opposite > 0.0 ? 1.0 : -1.0;
+        t.sigma[k] = opposite > 0.0 ? 1.0 : -1.0;
         // top-left: a pixel centre on the edge belongs to the triangle right of it (left edge) or below
         // it (top edge, y down); the triangle is on the edge function's positive side when sigma > 0
-        own[k] = (sigma[k] > 0.0) == (d[k].y <= 0.0);
+        t.own[k] = (t.sigma[k] > 0.0) == (t.d[k].y <= 0.0);
+        t.w[k] = w[k];
     }
+    t.z = vec3(s[0].z, s[1].z, s[2].z);
+    t.id = id;
+    t.cut = pc.clip_lo.w > 0.5 || probes.probe_count.x > 0;
     float width = float(pc.frame.x), height = float(pc.frame.y);
     vec2 lo = min(min(s[0].xy, s[1].xy), s[2].xy), hi = max(max(s[0].xy, s[1].xy), s[2].xy);
     int x0 = int(clamp(ceil(lo.x - 0.5), 0.0, width)), x1 = int(clamp(floor(hi.x - 0.5), -1.0, width - 1.0));
     int y0 = int(clamp(ceil(lo.y - 0.5), 0.0, height)), y1 = int(clamp(floor(hi.y - 0.5), -1.0, height - 1.0));
     if (x1 < x0 || y1 < y0)
         return;
-    uint bw = uint(x1 - x0 + 1), count = bw * uint(y1 - y0 + 1);
-    bool cut = pc.clip_lo.w > 0.5 || probes.probe_count.x > 0;
-    for (uint i = lane; i < count; i += lanes) {
-        uint px = uint(x0) + i % bw, py = uint(y0) + i / bw;
-        vec2 c = vec2(float(px) + 0.5, float(py) + 0.5);
-        vec3 e;
-        bool inside = true;
-        for (int k = 0; k < 3; k++) {
-            float v = sigma[k] * edge(u[k], d[k], c);
-            inside = inside && (v > 0.0 || (v == 0.0 && own[k]));
-            e[k] = v;
-        }
-        if (!inside)
-            continue;
-        e /= e.x + e.y + e.z; // screen-space barycentric weights
-        float z = e.x * s[0].z + e.y * s[1].z + e.z * s[2].z;
-        if (cut) { // perspective-correct: weights over depth (z is near / d)
-            vec3 q = e * vec3(s[0].z, s[1].z, s[2].z);
-            if (!kept((q.x * w[0] + q.y * w[1] + q.z * w[2]) / (q.x + q.y + q.z)))
-                continue;
-        }
-        write_pixel(py * pc.frame.x + px, z, id);
+    if (lanes == 1u) {
+        for (int py = y0; py <= y1; py++)
+            for (int px = x0; px <= x1; px++)
+                pixel(t, uint(px), uint(py));
+        return;
+    }
+    uint tw = uint(x1 - x0 + 8) / 8u, tiles = tw * (uint(y1 - y0 + 8) / 8u);
+    for (uint k = 0u; k < tiles; k++) {
+        uint px = uint(x0) + k % tw * 8u + lane % 8u, py = uint(y0) + k / tw * 8u + lane / 8u;
+        if (px <= uint(x1) && py <= uint(y1))
+            pixel(t, px, py);
     }
 }
 
