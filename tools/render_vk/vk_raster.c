@@ -10,9 +10,10 @@
  * ray-marched isosurface's up to rasterization (pixel centres, float positions).
  * A third path draws the compute extraction's lists without fixed-function graphics: the compute
  * rasterizer of vk_vis.c (a visibility buffer by atomics, then shaded). --iso-raster-path picks one;
- * auto (the default) draws the first frame at a size with both the graphics path and the compute
- * rasterizer, timed on the device, and keeps the faster: chips with few graphics units (H100/H200)
- * choose compute, those with full graphics keep theirs, by what they measure. */
+ * auto (the default) draws the first MEASURES frames at a size (render draws one) with both the graphics
+ * path and the compute rasterizer, timed on the device, and keeps the one with the least time: what the
+ * device measures decides, not its name (on chips with few graphics units, as the H100/H200, compute is
+ * expected to win; on lavapipe the graphics path does). */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -52,6 +53,7 @@ typedef struct probe_block {
 } probe_block;
 
 #define RASTER_VALUES TPK_RENDER_MAX_ISO
+enum { MEASURES = 2 }; /* frames that draw both paths (auto) */
 
 struct tpk_iso_raster {
     tpk_iso_vk *iso;   /* the extractor, on its device; the mesh's tets, scalars, positions uploaded */
@@ -96,9 +98,11 @@ struct tpk_iso_raster {
     tpk_iso_vis *vis;
     tpk_iso_vis_frame vis_frame;
     int listed[RASTER_VALUES]; /* value i's triangle list is in corners[i] (the mesh path needs none) */
+    int samples;               /* --iso-raster-path auto: frames at this size that drew both paths; the
+                                  first MEASURES do, so that one stall of the device does not decide */
     int choice;                /* --iso-raster-path auto: -1 not measured at this size, else the faster
                                   path, TPK_ISO_RASTER_COMPUTE or _GRAPHICS */
-    double measured[2];        /* the draws' device times when it was measured: graphics, compute */
+    double measured[2];        /* the least device time of each path's draw so far: graphics, compute */
 };
 typedef struct tpk_iso_raster raster;
 
@@ -403,6 +407,7 @@ static int make_targets(raster *ra, int width, int height, tpk_diag *diag)
     vkDeviceWaitIdle(ra->iso->ctx.device);
     destroy_targets(ra);
     ra->choice = -1; /* the paths' speeds depend on the size: measured again */
+    ra->samples = 0;
     ra->width = width;
     ra->height = height;
     VkFramebufferCreateInfo fb = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO, .renderPass = ra->pass,
@@ -790,7 +795,7 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
         return -1;
     /* which path draws: forced, or measured on the first frame at this size (both drawn, timed on the
      * device) and the faster kept */
-    int path = opt->iso_raster_path, measure = path == TPK_ISO_RASTER_AUTO && ra->choice < 0;
+    int path = opt->iso_raster_path, measure = path == TPK_ISO_RASTER_AUTO && ra->samples < MEASURES;
     int compute = path == TPK_ISO_RASTER_COMPUTE || (path == TPK_ISO_RASTER_AUTO && ra->choice == TPK_ISO_RASTER_COMPUTE);
     if ((compute || measure) && !ra->vis && tpk_iso_vis_create(&ra->vis, &ra->iso->ctx, ra->probes.buffer, diag))
         return -1;
@@ -807,8 +812,10 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
         memcpy(rgba, ra->readback.mapped, bytes);
         if (draw_path(ra, 1, opt->iso_count, &t[1], diag))
             return -1;
-        ra->measured[0] = t[0], ra->measured[1] = t[1];
-        compute = t[1] < t[0];
+        for (int k = 0; k < 2; k++)
+            ra->measured[k] = ra->samples == 0 || t[k] < ra->measured[k] ? t[k] : ra->measured[k];
+        ra->samples++;
+        compute = ra->measured[1] < ra->measured[0];
         ra->choice = compute ? TPK_ISO_RASTER_COMPUTE : TPK_ISO_RASTER_GRAPHICS;
         draw = t[compute];
     } else if (draw_path(ra, compute, opt->iso_count, &draw, diag)) {
