@@ -80,6 +80,21 @@ for opts in "--iso -0.005 --size 160x120" "--iso -0.018,-0.012,-0.005 --shading 
     done
     cmp -s "$WORK/compute64.png" "$WORK/compute32.png" || fail "--iso-raster-path compute $opts: 64-bit and 32-bit atomics differ"
 done
+# auto where the compute rasterizer cannot draw (its visibility buffer over the device's
+# maxStorageBufferRange: 7000x5000 needs 280 MB, lavapipe binds 128 MB): the graphics path draws, and
+# --json says why; forced, the same is an error that names the limit
+tpk render "$WORK/m.tpk" -o "$WORK/big.png" --backend vulkan --field disp_z --step 4 --iso -0.005 --iso-raster \
+    --size 7000x5000 --json > "$WORK/big.json" || fail "--iso-raster auto at 7000x5000"
+case "$(cat "$WORK/big.json")" in
+*'"choice":"the compute rasterizer could not draw at this size"'*)
+    grep -q '"path":"\(compute extraction + indirect draw\|task and mesh shaders\)"' "$WORK/big.json" ||
+        fail "auto without the compute rasterizer: $(cat "$WORK/big.json")"
+    expect_exit 2 tpk render "$WORK/m.tpk" -o "$WORK/big.png" --backend vulkan --field disp_z --iso -0.005 --iso-raster \
+        --iso-raster-path compute --size 7000x5000
+    expect_stderr "Vulkan limit maxStorageBufferRange" ;;
+*'"choice":"measured on this frame"'*) echo "iso_vulkan: this device binds a 7000x5000 visibility buffer" ;;
+*) fail "--iso-raster auto at 7000x5000: $(cat "$WORK/big.json")" ;;
+esac
 expect_exit 2 tpk render "$WORK/m.tpk" -o "$WORK/x.png" --backend vulkan --field disp_z --iso -0.005 --iso-raster \
     --iso-raster-path fast
 expect_stderr "--iso-raster-path expects auto, compute or graphics, found 'fast'"

@@ -199,6 +199,7 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
                                                                                   : "VK_EXT_mesh_shader absent");
             /* --iso-raster-path auto: both draws' device times, as measured on this frame or an earlier one */
             printf(",\"choice\":\"%s\"", a->iso_raster_path != TPK_ISO_RASTER_AUTO ? "--iso-raster-path"
+                                           : stats.iso_raster_note                  ? stats.iso_raster_note
                                            : stats.iso_raster_measured             ? "measured on this frame"
                                                                                    : "measured on an earlier frame");
             if (stats.iso_raster_seconds[0] >= 0 && stats.iso_raster_seconds[1] >= 0)

@@ -314,6 +314,7 @@ typedef struct tpk_render_stats {
     int iso_raster_measured;     /* 1: this frame drew both paths and chose (--iso-raster-path auto) */
     double iso_raster_seconds[2]; /* the device time of each path's draw, graphics and compute, as this
                                      raster measured them (auto; -1: not measured) */
+    const char *iso_raster_note; /* auto: why the compute rasterizer did not draw (a static string), or NULL */
     double seconds;     /* wall time of the render (marcher creation included) */
     double seconds_rays; /* CPU reference: wall time of the primary rays alone, after the marcher, the range
                             culling's trees and the vertex cache were set up (what a second frame with them

@@ -103,6 +103,7 @@ struct tpk_iso_raster {
     int choice;                /* --iso-raster-path auto: -1 not measured at this size, else the faster
                                   path, TPK_ISO_RASTER_COMPUTE or _GRAPHICS */
     double measured[2];        /* the least device time of each path's draw so far: graphics, compute */
+    int vis_failed;            /* auto: the compute rasterizer could not draw (at this size): graphics */
 };
 typedef struct tpk_iso_raster raster;
 
@@ -408,6 +409,7 @@ static int make_targets(raster *ra, int width, int height, tpk_diag *diag)
     destroy_targets(ra);
     ra->choice = -1; /* the paths' speeds depend on the size: measured again */
     ra->samples = 0;
+    ra->vis_failed = 0;
     ra->width = width;
     ra->height = height;
     VkFramebufferCreateInfo fb = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO, .renderPass = ra->pass,
@@ -699,6 +701,17 @@ static int draw_path(raster *ra, int compute, int count, double *seconds, tpk_di
     return 0;
 }
 
+/* --iso-raster-path auto where the compute rasterizer cannot draw (its set-up failed, or its buffers
+ * exceed a device limit at this size): the graphics path draws, measured no further. */
+static void vis_unusable(raster *ra, tpk_diag *diag)
+{
+    ra->vis_failed = 1;
+    ra->samples = MEASURES;
+    ra->choice = TPK_ISO_RASTER_GRAPHICS;
+    ra->measured[1] = -1;
+    diag->message[0] = 0;
+}
+
 /* The camera, light and background of the compute rasterizer's frame, from value 0's push constants. */
 static void vis_camera(raster *ra)
 {
@@ -797,8 +810,12 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
      * device) and the faster kept */
     int path = opt->iso_raster_path, measure = path == TPK_ISO_RASTER_AUTO && ra->samples < MEASURES;
     int compute = path == TPK_ISO_RASTER_COMPUTE || (path == TPK_ISO_RASTER_AUTO && ra->choice == TPK_ISO_RASTER_COMPUTE);
-    if ((compute || measure) && !ra->vis && tpk_iso_vis_create(&ra->vis, &ra->iso->ctx, ra->probes.buffer, diag))
-        return -1;
+    if ((compute || measure) && !ra->vis && tpk_iso_vis_create(&ra->vis, &ra->iso->ctx, ra->probes.buffer, diag)) {
+        if (path != TPK_ISO_RASTER_AUTO)
+            return -1;
+        compute = measure = 0;
+        vis_unusable(ra, diag);
+    }
     if (extract_values(ra, opt, compute || measure, diag))
         return -1;
     vis_camera(ra);
@@ -810,12 +827,13 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
             tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
             return -1;
         memcpy(rgba, ra->readback.mapped, bytes);
-        if (draw_path(ra, 1, opt->iso_count, &t[1], diag))
-            return -1;
+        int failed = draw_path(ra, 1, opt->iso_count, &t[1], diag); /* e.g. its buffers over a device limit */
         for (int k = 0; k < 2; k++)
             ra->measured[k] = ra->samples == 0 || t[k] < ra->measured[k] ? t[k] : ra->measured[k];
         ra->samples++;
-        compute = ra->measured[1] < ra->measured[0];
+        if (failed)
+            vis_unusable(ra, diag);
+        compute = !failed && ra->measured[1] < ra->measured[0];
         ra->choice = compute ? TPK_ISO_RASTER_COMPUTE : TPK_ISO_RASTER_GRAPHICS;
         draw = t[compute];
     } else if (draw_path(ra, compute, opt->iso_count, &draw, diag)) {
@@ -846,6 +864,7 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
         stats->iso_raster_atomics = ra->vis ? tpk_iso_vis_atomic_bits(ra->vis) : 0;
         stats->iso_raster_measured = measure;
         stats->iso_raster_seconds[0] = ra->measured[0], stats->iso_raster_seconds[1] = ra->measured[1];
+        stats->iso_raster_note = ra->vis_failed ? "the compute rasterizer could not draw at this size" : NULL;
     }
     return 0;
 }
