@@ -4,9 +4,11 @@
 # 121: python3 with numpy) converted with --levels 4:
 #   1. `tetpack iso --backend vulkan`: extraction, tets per second of the passes' device time (timestamps,
 #      the copies to the host left out; target 5G), and of the wall time of the submissions with them;
-#   2. `render --iso-raster` at 3840x2160: the isosurface by task and mesh shaders where the device has
-#      them, and by the compute extraction and an indirect draw (TETPACK_ISO_MESH_SHADER=0): the draw's
-#      GPU time (target 2 ms a frame);
+#   2. `render --iso-raster` at 3840x2160: the isosurface as --iso-raster-path auto draws it (both paths
+#      timed on the first frame, the faster kept: the row names it and both times), by the compute
+#      extraction and an indirect draw (TETPACK_ISO_MESH_SHADER=0 --iso-raster-path graphics), and by the
+#      compute rasterizer (--iso-raster-path compute: a visibility buffer by 64-bit atomics, then
+#      shaded): the draw's GPU time (target 2 ms a frame);
 #   3. iso-only rays (a clear TF) at 1024x1024, range culling forced on and off, at the dense value 0.3
 #      and the sparse 0.99: GPU ms a frame;
 #   4. `render --max-ms 8` at 1024x1024: the level and pixel step the budget picks and the frame's
@@ -55,7 +57,10 @@ for r in $(seq "$RUNS"); do
     run extract vk iso "$tpk" "$OUT/iso.ply" --value 0.3 --backend vulkan --json
     run iso_raster vk render "$tpk" -o "$OUT/raster.png" --backend vulkan --iso-raster --iso 0.3 --size "$ISO_SIZE" --json
     run iso_raster_compute env TETPACK_ISO_MESH_SHADER=0 LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" \
-        render "$tpk" -o "$OUT/raster.png" --backend vulkan --iso-raster --iso 0.3 --size "$ISO_SIZE" --json
+        render "$tpk" -o "$OUT/raster.png" --backend vulkan --iso-raster --iso-raster-path graphics --iso 0.3 \
+        --size "$ISO_SIZE" --json
+    run iso_raster_vis vk render "$tpk" -o "$OUT/raster.png" --backend vulkan --iso-raster --iso-raster-path compute \
+        --iso 0.3 --size "$ISO_SIZE" --json
     for value in 0.3 0.99; do
         run rays_culled_$value env TETPACK_ISO_CULLING=1 LD_PRELOAD="${TPK_VK_PRELOAD:-${LD_PRELOAD:-}}" "$TPK" \
             render "$tpk" -o "$OUT/rays.png" --backend vulkan --tf "$OUT/clear.tf" --iso $value --size "$SIZE" --json
@@ -88,13 +93,16 @@ if e:
     out.append("| extraction on %s, %d tets | %.3g G tets/s (passes' device time); %.3g G tets/s (submissions' wall "
                "time, copies to the host included) | >= 5G |" % (e[0]["device"], e[0]["tets"], med(timed) / 1e9,
                                                                   med(wall) / 1e9))
-for name in ("iso_raster", "iso_raster_compute"):
+for name in ("iso_raster", "iso_raster_compute", "iso_raster_vis"):
     i = of(name)
     if i:
         draw = [1e3 * r["iso_raster"]["draw_gpu_seconds"] for r in i if r["iso_raster"].get("draw_gpu_seconds")]
-        out.append("| iso drawn %sx%s, %s (%s) | draw %.3f ms GPU; frame %.3f ms GPU; %d triangles | <= 2 ms |" % (
+        both = [r["iso_raster"]["measured_seconds"] for r in i if r["iso_raster"].get("measured_seconds")]
+        measured = "; measured: graphics %.3f ms, compute %.3f ms" % (
+            med([1e3 * b["graphics"] for b in both]), med([1e3 * b["compute"] for b in both])) if both else ""
+        out.append("| iso drawn %sx%s, %s (%s) | draw %.3f ms GPU; frame %.3f ms GPU; %d triangles%s | <= 2 ms |" % (
             i[0]["width"], i[0]["height"], i[0]["iso_raster"]["path"], name, med(draw), med([ms(r) for r in i]),
-            i[0]["iso_raster"]["triangles"]))
+            i[0]["iso_raster"]["triangles"], measured))
 for value in ("0.3", "0.99"):
     for name, what in (("rays_culled_" + value, "culled"), ("rays_marched_" + value, "marched")):
         g = of(name)

@@ -191,10 +191,23 @@ int render_frame_stats(const render_args *a, const frame_source *src, const tpk_
                 printf("%.6f", stats.iso_draw_gpu_seconds);
             else
                 printf("null");
-            printf(",\"path\":\"%s\",\"mesh_shader\":\"%s\"}",
-                   stats.iso_mesh_shader == 1 ? "task and mesh shaders" : "compute extraction + indirect draw",
+            const char *path = stats.iso_raster_compute ? (stats.iso_raster_atomics == 64
+                                                                ? "compute rasterizer, 64-bit atomics"
+                                                                : "compute rasterizer, 32-bit atomics")
+                               : stats.iso_mesh_shader == 1 ? "task and mesh shaders"
+                                                            : "compute extraction + indirect draw";
+            printf(",\"path\":\"%s\",\"mesh_shader\":\"%s\"", path,
                    stats.iso_mesh_shader == 1 ? "VK_EXT_mesh_shader used" : stats.iso_mesh_shader == 2 ? why
                                                                                   : "VK_EXT_mesh_shader absent");
+            /* --iso-raster-path auto: both draws' device times, as measured on this frame or an earlier one */
+            printf(",\"choice\":\"%s\"", a->iso_raster_path != TPK_ISO_RASTER_AUTO ? "--iso-raster-path"
+                                           : stats.iso_raster_note                  ? stats.iso_raster_note
+                                           : stats.iso_raster_measured             ? "measured on this frame"
+                                                                                   : "measured on an earlier frame");
+            if (stats.iso_raster_seconds[0] >= 0 && stats.iso_raster_seconds[1] >= 0)
+                printf(",\"measured_seconds\":{\"graphics\":%.6f,\"compute\":%.6f}", stats.iso_raster_seconds[0],
+                       stats.iso_raster_seconds[1]);
+            printf("}");
         }
         tpk_strbuf reason = {0};
         tpk_strbuf_json_string(&reason, src->set ? "a part set renders with the CPU reference" : a->backend_reason);

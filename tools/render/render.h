@@ -91,6 +91,9 @@ typedef struct tpk_render_options {
 #define TPK_OCCLUSION_RAY 0
 #define TPK_OCCLUSION_VERTEX 1
 #define TPK_OCCLUSION_SURFACE 2
+#define TPK_ISO_RASTER_AUTO 0
+#define TPK_ISO_RASTER_COMPUTE 1
+#define TPK_ISO_RASTER_GRAPHICS 2
 
 /* ---- Effect definitions (the contract between the CPU reference and the Vulkan renderer) ----------
  * Notation. Primary ray x(t) = eye + t d, d unit, t = distance. The marcher reports pieces
@@ -319,6 +322,12 @@ typedef struct tpk_render_stats {
     const char *iso_mesh_reason; /* when 2: why (a static string), or NULL */
     double iso_draw_gpu_seconds; /* --iso-raster: device time of the draw alone (its render pass: on the
                                     mesh-shader path the tets' classification too); -1: no timestamps */
+    int iso_raster_compute;      /* --iso-raster: 1 drawn by the compute rasterizer (visibility buffer) */
+    int iso_raster_atomics;      /* its atomics' width: 64, or 32 where the device lacks 64-bit ones */
+    int iso_raster_measured;     /* 1: this frame drew both paths and chose (--iso-raster-path auto) */
+    double iso_raster_seconds[2]; /* the device time of each path's draw, graphics and compute, as this
+                                     raster measured them (auto; -1: not measured) */
+    const char *iso_raster_note; /* auto: why the compute rasterizer did not draw (a static string), or NULL */
     double seconds;     /* wall time of the render (marcher creation included) */
     double seconds_rays; /* CPU reference: wall time of the primary rays alone, after the marcher, the range
                             culling's trees and the vertex cache were set up (what a second frame with them

@@ -45,6 +45,7 @@ typedef struct tpk_vk_context {
     int mesh_shader;             /* VK_EXT_mesh_shader enabled with its task and mesh shaders (asked for
                                     by tpk_vk_context_create_mesh, where the device has them) */
     VkPhysicalDeviceMeshShaderPropertiesEXT mesh; /* its limits, when mesh_shader */
+    int int64_atomics;           /* shaderBufferInt64Atomics and shaderInt64 enabled (vk_vis.c) */
 } tpk_vk_context;
 
 /* Create instance, device and a compute queue. Returns 0, or -1 with a message naming the step and the
@@ -199,6 +200,42 @@ int tpk_iso_vk_create_with(tpk_iso_vk **out, const tpk_iso_input *in, int mesh_s
 int tpk_iso_vk_upload(tpk_iso_vk *v, tpk_vk_buffer *b, const void *data, size_t bytes, tpk_diag *diag);
 /* Submit the commands `record` writes (with `arg`) and wait. 0 or -1 with a message. */
 int tpk_iso_vk_submit(tpk_iso_vk *v, void (*record)(tpk_iso_vk *v, const void *arg), const void *arg, tpk_diag *diag);
+
+/* render --iso-raster's compute rasterizer (vk_vis.c; shaders/iso_vis.comp, iso_resolve.comp): the
+ * extracted triangle lists rasterized into a visibility buffer by atomics (64-bit where ctx->int64_atomics,
+ * else 32-bit in two passes), then each pixel shaded from its triangle into packed RGBA8, as the graphics
+ * path draws them (vk_raster.c). */
+typedef struct tpk_iso_vis tpk_iso_vis;
+typedef struct tpk_iso_vis_value {
+    VkBuffer corners;   /* iso.comp's triangle list: 9 floats a triangle, relative to the mesh's origin */
+    uint32_t triangles; /* how many */
+    float color[4];     /* rgb: the TF at the value */
+} tpk_iso_vis_value;
+/* One frame: the camera and light relative to the mesh's origin, as shaders/iso_raster.vert takes them. */
+typedef struct tpk_iso_vis_frame {
+    float eye[4];     /* w: the near distance */
+    float forward[4];
+    float right[4];   /* w: tan_half_x */
+    float up[4];      /* w: tan_half_y */
+    float light[4];   /* w: 1 with shading */
+    float clip_lo[4]; /* w: 1 with a clip box */
+    float clip_hi[4];
+    float background[4]; /* premultiplied */
+    int width, height, count;
+    tpk_iso_vis_value values[TPK_RENDER_MAX_ISO];
+} tpk_iso_vis_frame;
+/* Pipelines on ctx's device; `probes` is the buffer of iso_raster.frag's Probes block. 0 or -1. */
+int tpk_iso_vis_create(tpk_iso_vis **out, const tpk_vk_context *ctx, VkBuffer probes, tpk_diag *diag);
+/* The buffers for frame (its size, its triangle counts) and the descriptors of its lists; before
+ * recording it, while the device does not use them. 0 or -1 with a message. */
+int tpk_iso_vis_prepare(tpk_iso_vis *vis, const tpk_iso_vis_frame *frame, tpk_diag *diag);
+/* Clear, rasterize and resolve frame into cmd, ending with a barrier before transfers read the image. */
+void tpk_iso_vis_record(tpk_iso_vis *vis, VkCommandBuffer cmd, const tpk_iso_vis_frame *frame);
+/* The image the last recorded frame writes: width x height packed RGBA8, row by row (a transfer source). */
+VkBuffer tpk_iso_vis_image(const tpk_iso_vis *vis);
+/* 64 or 32: the width of the atomics it rasterizes with. */
+int tpk_iso_vis_atomic_bits(const tpk_iso_vis *vis);
+void tpk_iso_vis_destroy(tpk_iso_vis *vis);
 
 /* The uniform block of the shader (std140; render.comp's Params). */
 typedef struct tpk_vk_params {

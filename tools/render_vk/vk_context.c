@@ -238,9 +238,21 @@ static int create(tpk_vk_context *ctx, const tpk_vk_surface_source *surface, int
         vkGetPhysicalDeviceProperties2(ctx->physical, &p2);
         ctx->mesh.pNext = NULL;
     }
+    /* render --iso-raster's compute rasterizer (vk_vis.c): 64-bit atomics on storage buffers where the device
+     * has them (TPK_VK_NO_INT64_ATOMICS=1: the 32-bit variant on any device, for tests) */
+    const char *no_int64 = getenv("TPK_VK_NO_INT64_ATOMICS");
+    VkPhysicalDeviceVulkan12Features v12 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    VkPhysicalDeviceFeatures2 f2 = {.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, .pNext = &v12};
+    vkGetPhysicalDeviceFeatures2(ctx->physical, &f2);
+    ctx->int64_atomics = v12.shaderBufferInt64Atomics == VK_TRUE && supported.shaderInt64 == VK_TRUE &&
+                         !(no_int64 && !strcmp(no_int64, "1"));
+    v12 = (VkPhysicalDeviceVulkan12Features){.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES,
+                                             .pNext = ctx->mesh_shader ? &mesh : NULL,
+                                             .shaderBufferInt64Atomics = ctx->int64_atomics ? VK_TRUE : VK_FALSE};
+    enabled.shaderInt64 = ctx->int64_atomics ? VK_TRUE : VK_FALSE;
     VkDeviceCreateInfo info = {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
-        .pNext = ctx->mesh_shader ? &mesh : NULL,
+        .pNext = &v12,
         .queueCreateInfoCount = 1,
         .pQueueCreateInfos = &queue,
         .enabledExtensionCount = extension_count,

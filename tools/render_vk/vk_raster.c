@@ -7,7 +7,13 @@
  *   indirect draw arguments on the device, and a graphics pipeline (shaders/iso_raster.vert) draws it.
  * Both draw with a depth test into the image, shaded by shaders/iso_raster.frag, with no pass through the
  * host in between; the triangles are the same (corners placed alike, in tet order). The picture is the
- * ray-marched isosurface's up to rasterization (pixel centres, float positions). */
+ * ray-marched isosurface's up to rasterization (pixel centres, float positions).
+ * A third path draws the compute extraction's lists without fixed-function graphics: the compute
+ * rasterizer of vk_vis.c (a visibility buffer by atomics, then shaded). --iso-raster-path picks one;
+ * auto (the default) draws the first MEASURES frames at a size (render draws one) with both the graphics
+ * path and the compute rasterizer, timed on the device, and keeps the one with the least time: what the
+ * device measures decides, not its name (on chips with few graphics units, as the H100/H200, compute is
+ * expected to win; on lavapipe the graphics path does). */
 #include <math.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -47,6 +53,7 @@ typedef struct probe_block {
 } probe_block;
 
 #define RASTER_VALUES TPK_RENDER_MAX_ISO
+enum { MEASURES = 2 }; /* frames that draw both paths (auto) */
 
 struct tpk_iso_raster {
     tpk_iso_vk *iso;   /* the extractor, on its device; the mesh's tets, scalars, positions uploaded */
@@ -88,6 +95,16 @@ struct tpk_iso_raster {
     tpk_vk_buffer ranges; /* per cluster of 32 tets: min and max of its corners' values (floats) */
     uint32_t clusters;
     PFN_vkCmdDrawMeshTasksEXT draw_mesh_tasks;
+    /* the compute rasterizer (vk_vis.c), made on the first frame that may use it */
+    tpk_iso_vis *vis;
+    tpk_iso_vis_frame vis_frame;
+    int listed[RASTER_VALUES]; /* value i's triangle list is in corners[i] (the mesh path needs none) */
+    int samples;               /* --iso-raster-path auto: frames at this size that drew both paths; the
+                                  first MEASURES do, so that one stall of the device does not decide */
+    int choice;                /* --iso-raster-path auto: -1 not measured at this size, else the faster
+                                  path, TPK_ISO_RASTER_COMPUTE or _GRAPHICS */
+    double measured[2];        /* the least device time of each path's draw so far: graphics, compute */
+    int vis_failed;            /* auto: the compute rasterizer could not draw (at this size): graphics */
 };
 typedef struct tpk_iso_raster raster;
 
@@ -391,6 +408,9 @@ static int make_targets(raster *ra, int width, int height, tpk_diag *diag)
         return 0;
     vkDeviceWaitIdle(ra->iso->ctx.device);
     destroy_targets(ra);
+    ra->choice = -1; /* the paths' speeds depend on the size: measured again */
+    ra->samples = 0;
+    ra->vis_failed = 0;
     ra->width = width;
     ra->height = height;
     VkFramebufferCreateInfo fb = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO, .renderPass = ra->pass,
@@ -436,6 +456,7 @@ void tpk_iso_raster_destroy(raster *ra)
                 vkDestroyShaderModule(dev, ra->mesh_shaders[i], NULL);
         }
         tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->ranges);
+        tpk_iso_vis_destroy(ra->vis);
         tpk_vk_buffer_destroy(&ra->iso->ctx, &ra->probes);
         if (ra->mesh_pool)
             vkDestroyDescriptorPool(dev, ra->mesh_pool, NULL);
@@ -479,6 +500,8 @@ int tpk_iso_raster_create(raster **out, const tpk_mesh_arrays *mesh, tpk_diag *d
     }
     ra->mesh = mesh;
     ra->diagonal = tpk_positions_diagonal(mesh);
+    ra->choice = -1;
+    ra->measured[0] = ra->measured[1] = -1;
     int rc = tpk_iso_vk_create_with(&ra->iso, &in, 1, diag); /* the arrays are copied to the device */
     if (rc == 0 && !(ra->iso->ctx.props.limits.maxPushConstantsSize >= sizeof(raster_push)))
         rc = tpk_diag_fail(diag, "render: --iso-raster: the device's push constants are too small");
@@ -556,16 +579,19 @@ static int extract_value(raster *ra, int i, double value, uint32_t *total, tpk_d
 }
 
 /* The triangle lists of opt's values, extracted again only where a value changed; on the mesh-shader
- * path only their triangle counts (for the statistics), since the mesh shaders make the triangles. */
-static int extract_values(raster *ra, const tpk_render_options *opt, tpk_diag *diag)
+ * path only their triangle counts (for the statistics), since the mesh shaders make the triangles,
+ * unless `lists` (the compute rasterizer draws them). */
+static int extract_values(raster *ra, const tpk_render_options *opt, int lists, tpk_diag *diag)
 {
     for (int i = 0; i < opt->iso_count; i++) {
-        if (i < ra->value_count && ra->values[i] == opt->iso[i])
+        lists |= !ra->mesh_path;
+        if (i < ra->value_count && ra->values[i] == opt->iso[i] && (ra->listed[i] || !lists))
             continue;
         uint32_t total;
-        if (ra->mesh_path ? tpk_iso_vk_triangles(ra->iso, opt->iso[i], &total, diag)
-                          : extract_value(ra, i, opt->iso[i], &total, diag))
+        if (lists ? extract_value(ra, i, opt->iso[i], &total, diag)
+                  : tpk_iso_vk_triangles(ra->iso, opt->iso[i], &total, diag))
             return -1;
+        ra->listed[i] = lists;
         ra->values[i] = opt->iso[i];
         ra->triangles[i] = total;
         if (ra->value_count <= i)
@@ -642,10 +668,71 @@ static void record_draw(tpk_iso_vk *v, const void *arg)
     vkCmdCopyImageToBuffer(v->cmd, ra->images[0], VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, ra->readback.buffer, 1, &region);
 }
 
+/* The compute rasterizer's frame (ra->vis_frame), then its image out to the read-back buffer. */
+static void record_vis(tpk_iso_vk *v, const void *arg)
+{
+    raster *ra = (raster *)arg;
+    tpk_iso_vk_time(v, 0); /* as the graphics draw's: the image's copy out left out */
+    tpk_iso_vis_record(ra->vis, v->cmd, &ra->vis_frame);
+    tpk_iso_vk_time(v, 1);
+    VkBufferCopy region = {0, 0, 4 * (VkDeviceSize)ra->width * (VkDeviceSize)ra->height};
+    vkCmdCopyBuffer(v->cmd, tpk_iso_vis_image(ra->vis), ra->readback.buffer, 1, &region);
+}
+
+/* The frame drawn by one path (compute 1: the compute rasterizer, 0: the graphics pipeline) into the
+ * read-back buffer, *seconds its draw's device time (the submission's wall time without timestamps). */
+static int draw_path(raster *ra, int compute, int count, double *seconds, tpk_diag *diag)
+{
+    double gpu0 = tpk_iso_vk_gpu_seconds(ra->iso), wall0 = tpk_iso_vk_seconds(ra->iso);
+    draw_arg d = {ra, count};
+    if (compute) {
+        tpk_iso_vis_frame *f = &ra->vis_frame;
+        f->width = ra->width, f->height = ra->height, f->count = count;
+        for (int i = 0; i < count; i++) {
+            f->values[i].corners = ra->corners[i].buffer;
+            f->values[i].triangles = (uint32_t)ra->triangles[i];
+            memcpy(f->values[i].color, ra->push[i].color, sizeof f->values[i].color);
+        }
+        if (tpk_iso_vis_prepare(ra->vis, f, diag) || tpk_iso_vk_submit(ra->iso, record_vis, ra, diag))
+            return -1;
+    } else if (tpk_iso_vk_submit(ra->iso, record_draw, &d, diag)) {
+        return -1;
+    }
+    double gpu = tpk_iso_vk_gpu_seconds(ra->iso);
+    *seconds = gpu >= 0 ? gpu - gpu0 : tpk_iso_vk_seconds(ra->iso) - wall0;
+    return 0;
+}
+
+/* --iso-raster-path auto where the compute rasterizer cannot draw (its set-up failed, or its buffers
+ * exceed a device limit at this size): the graphics path draws, measured no further. */
+static void vis_unusable(raster *ra, tpk_diag *diag)
+{
+    ra->vis_failed = 1;
+    ra->samples = MEASURES;
+    ra->choice = TPK_ISO_RASTER_GRAPHICS;
+    ra->measured[1] = -1;
+    diag->message[0] = 0;
+}
+
+/* The camera, light and background of the compute rasterizer's frame, from value 0's push constants. */
+static void vis_camera(raster *ra)
+{
+    tpk_iso_vis_frame *f = &ra->vis_frame;
+    const raster_push *p = &ra->push[0];
+    memcpy(f->eye, p->eye, sizeof f->eye);
+    memcpy(f->forward, p->forward, sizeof f->forward);
+    memcpy(f->right, p->right, sizeof f->right);
+    memcpy(f->up, p->up, sizeof f->up);
+    memcpy(f->light, p->light, sizeof f->light);
+    memcpy(f->clip_lo, p->clip_lo, sizeof f->clip_lo);
+    memcpy(f->clip_hi, p->clip_hi, sizeof f->clip_hi);
+    memcpy(f->background, ra->clear, sizeof f->background);
+}
+
 int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats,
                          tpk_diag *diag)
 {
-    double t0 = tpk_now_seconds(), gpu0 = tpk_iso_vk_gpu_seconds(ra->iso), draw0 = 0;
+    double t0 = tpk_now_seconds(), gpu0 = tpk_iso_vk_gpu_seconds(ra->iso);
     const tpk_mesh_arrays *mesh = ra->mesh;
     if (stats)
         memset(stats, 0, sizeof *stats);
@@ -719,14 +806,46 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
     memcpy(ra->probes.mapped, &pb, sizeof pb);
     if (tpk_vk_buffer_flush(&ra->iso->ctx, &ra->probes, diag))
         return -1;
-    draw_arg d = {ra, opt->iso_count};
-    if (make_targets(ra, opt->width, opt->height, diag) || extract_values(ra, opt, diag))
+    if (make_targets(ra, opt->width, opt->height, diag))
         return -1;
-    draw0 = tpk_iso_vk_gpu_seconds(ra->iso);
-    if (tpk_iso_vk_submit(ra->iso, record_draw, &d, diag) ||
-        tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
+    /* which path draws: forced, or measured on the first frame at this size (both drawn, timed on the
+     * device) and the faster kept */
+    int path = opt->iso_raster_path, measure = path == TPK_ISO_RASTER_AUTO && ra->samples < MEASURES;
+    int compute = path == TPK_ISO_RASTER_COMPUTE || (path == TPK_ISO_RASTER_AUTO && ra->choice == TPK_ISO_RASTER_COMPUTE);
+    if ((compute || measure) && !ra->vis && tpk_iso_vis_create(&ra->vis, &ra->iso->ctx, ra->probes.buffer, diag)) {
+        if (path != TPK_ISO_RASTER_AUTO)
+            return -1;
+        compute = measure = 0;
+        vis_unusable(ra, diag);
+    }
+    if (extract_values(ra, opt, compute || measure, diag))
         return -1;
-    memcpy(rgba, ra->readback.mapped, 4 * (size_t)ra->width * (size_t)ra->height);
+    vis_camera(ra);
+    size_t bytes = 4 * (size_t)ra->width * (size_t)ra->height;
+    double draw = 0;
+    if (measure) {
+        double t[2];
+        if (draw_path(ra, 0, opt->iso_count, &t[0], diag) ||
+            tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
+            return -1;
+        memcpy(rgba, ra->readback.mapped, bytes);
+        int failed = draw_path(ra, 1, opt->iso_count, &t[1], diag); /* e.g. its buffers over a device limit */
+        for (int k = 0; k < 2; k++)
+            ra->measured[k] = ra->samples == 0 || t[k] < ra->measured[k] ? t[k] : ra->measured[k];
+        ra->samples++;
+        if (failed)
+            vis_unusable(ra, diag);
+        compute = !failed && ra->measured[1] < ra->measured[0];
+        ra->choice = compute ? TPK_ISO_RASTER_COMPUTE : TPK_ISO_RASTER_GRAPHICS;
+        draw = t[compute];
+    } else if (draw_path(ra, compute, opt->iso_count, &draw, diag)) {
+        return -1;
+    }
+    if (compute || !measure) { /* else the graphics draw's picture is in rgba already */
+        if (tpk_vk_buffer_invalidate(&ra->iso->ctx, &ra->readback, diag))
+            return -1;
+        memcpy(rgba, ra->readback.mapped, bytes);
+    }
     if (stats) {
         stats->tet_steps = 0;
         for (int i = 0; i < opt->iso_count; i++)
@@ -736,9 +855,18 @@ int tpk_iso_raster_frame(raster *ra, const tpk_render_options *opt, uint8_t *rgb
          * draw, without the copies to the host; the draw alone apart */
         double timed = tpk_iso_vk_gpu_seconds(ra->iso);
         stats->gpu_seconds = timed < 0 ? -1.0 : timed - gpu0;
-        stats->iso_draw_gpu_seconds = timed < 0 ? -1.0 : timed - draw0;
+        stats->iso_draw_gpu_seconds = timed < 0 ? -1.0 : draw;
         stats->iso_mesh_shader = ra->mesh_state;
         stats->iso_mesh_reason = ra->mesh_path ? NULL : ra->mesh_reason;
+        if (compute && ra->mesh_state == 1) { /* the device has the mesh path; the compute rasterizer drew */
+            stats->iso_mesh_shader = 2;
+            stats->iso_mesh_reason = "the compute rasterizer drew";
+        }
+        stats->iso_raster_compute = compute;
+        stats->iso_raster_atomics = ra->vis ? tpk_iso_vis_atomic_bits(ra->vis) : 0;
+        stats->iso_raster_measured = measure;
+        stats->iso_raster_seconds[0] = ra->measured[0], stats->iso_raster_seconds[1] = ra->measured[1];
+        stats->iso_raster_note = ra->vis_failed ? "the compute rasterizer could not draw at this size" : NULL;
     }
     return 0;
 }
