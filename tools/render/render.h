@@ -319,7 +319,8 @@ typedef struct tpk_render_stats {
     uint64_t iso_triangles; /* --iso-raster: the triangles drawn */
     int iso_mesh_shader;    /* --iso-raster: 1 drawn by task and mesh shaders (VK_EXT_mesh_shader); 0 the device
                                lacks them (compute extraction + indirect draw); 2 it has them, not used */
-    const char *iso_mesh_reason; /* when 2: why (a static string), or NULL */
+    const char *iso_mesh_reason; /* when 2: why (a static string, or a copy kept until the thread's next
+                                    tpk_render_iso_raster), or NULL */
     double iso_draw_gpu_seconds; /* --iso-raster: device time of the draw alone (its render pass: on the
                                     mesh-shader path the tets' classification too); -1: no timestamps */
     int iso_raster_compute;      /* --iso-raster: 1 drawn by the compute rasterizer (visibility buffer) */

@@ -887,6 +887,13 @@ int tpk_render_iso_raster(const tpk_mesh_arrays *mesh, const tpk_render_options 
     if (rc == 0 && stats) {
         stats->seconds = tpk_now_seconds() - t0; /* set-up included, as the other renderers' */
         stats->tet_steps = (uint64_t)mesh->tet_count * (uint64_t)opt->iso_count; /* tets classified */
+        /* a failed mesh-path set-up's message lives in the raster freed below: keep a copy for the caller
+         * (valid until this thread's next one-shot frame) */
+        static _Thread_local char reason[sizeof ra->mesh_failure];
+        if (stats->iso_mesh_reason == ra->mesh_failure) {
+            memcpy(reason, ra->mesh_failure, sizeof reason);
+            stats->iso_mesh_reason = reason;
+        }
     }
     tpk_iso_raster_destroy(ra);
     return rc;
