@@ -1,0 +1,781 @@
+/* convert --max-error (refine.h): per tet, the Bernstein bound of its source cell's map and interpolant
+ * against the tet's own linear ones, on the tet's corners' parametric points in the cell; tets over the
+ * bound get their longest edge marked, the marks closed (a tet with a marked edge marks its longest), then
+ * every tet bisects its greatest marked edge, round after round, until none is left (docs/ARCHITECTURE.md
+ * §5). The greatest edge is by a global order (squared length from the two vertices taken in id order,
+ * then the ids), so a face shared by two tets is cut alike from both sides. */
+#include "refine.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/parallel.h"
+#include "base/predicates.h"
+#include "mesh/bernstein.h"
+#include "mesh/cell_map.h"
+#include "mesh/cell_types.h"
+#include "tetpack_format.h"
+
+#define MAX_PASSES 60
+static const int tet_edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+static const int voxel_as_hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+
+/* ---- source cells ------------------------------------------------------------------------------ */
+
+int tpk_refine_cells_copy(const tpk_mesh *mesh, tpk_refine_cells *out)
+{
+    memset(out, 0, sizeof *out);
+    int64_t n = mesh->cell_count, conn = n ? mesh->cell_offsets[n] : 0;
+    out->types = malloc((size_t)(n ? n : 1));
+    out->offsets = malloc(sizeof *out->offsets * (size_t)(n + 1));
+    out->conn = malloc(sizeof *out->conn * (size_t)(conn ? conn : 1));
+    if (!out->types || !out->offsets || !out->conn) {
+        tpk_refine_cells_free(out);
+        return -1;
+    }
+    out->cell_count = n;
+    if (n)
+        memcpy(out->types, mesh->cell_types, (size_t)n);
+    memcpy(out->offsets, mesh->cell_offsets, sizeof *out->offsets * (size_t)(n + 1));
+    if (conn)
+        memcpy(out->conn, mesh->cell_conn, sizeof *out->conn * (size_t)conn);
+    return 0;
+}
+
+void tpk_refine_cells_free(tpk_refine_cells *cells)
+{
+    free(cells->types), free(cells->offsets), free(cells->conn);
+    memset(cells, 0, sizeof *cells);
+}
+
+/* The type whose functions cell c has (voxels as hexahedra, VTK's Lagrange cells of order 2 as the
+ * quadratic ones, which number their nodes alike: mesh/higher_order.c), or 0. */
+static int mapped_type(const tpk_refine_cells *cells, int64_t c)
+{
+    int type = cells->types[c];
+    int64_t n = cells->offsets[c + 1] - cells->offsets[c];
+    if (type == TPK_CELL_VOXEL)
+        type = TPK_CELL_HEXAHEDRON;
+    else if ((type == 71 && n == 10) || (type == 72 && n == 27) || (type == 73 && n == 18))
+        type = type == 71 ? 24 : type == 72 ? 29 : 32;
+    return tpk_cell_map_degree(type) > 0 && tpk_cell_map_nodes(type) == n ? type : 0;
+}
+
+int64_t tpk_refine_unbounded_cell(const tpk_refine_cells *cells)
+{
+    for (int64_t c = 0; c < cells->cell_count; c++) {
+        const tpk_cell_type_info *t = tpk_cell_type(cells->types[c]);
+        if ((!t || t->dim == 3) && !mapped_type(cells, c))
+            return c;
+    }
+    return -1;
+}
+
+/* ---- edges: marks and midpoints, keyed by the vertex pair --------------------------------------- */
+
+typedef struct edge_table {
+    uint64_t *keys; /* 0: empty (a key has b > a >= 0, so never 0) */
+    int32_t *values;
+    int64_t cap, count;
+} edge_table;
+
+static uint64_t edge_key(int32_t a, int32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | (uint32_t)b : (uint64_t)b << 32 | (uint32_t)a;
+}
+
+static int64_t edge_slot(const edge_table *e, uint64_t key)
+{
+    uint64_t mask = (uint64_t)e->cap - 1, i = (key * 0x9E3779B97F4A7C15ull >> 20) & mask;
+    while (e->keys[i] && e->keys[i] != key)
+        i = (i + 1) & mask;
+    return (int64_t)i;
+}
+
+static int edge_find(const edge_table *e, uint64_t key, int32_t *value)
+{
+    if (!e->cap)
+        return 0;
+    int64_t i = edge_slot(e, key);
+    if (!e->keys[i])
+        return 0;
+    if (value)
+        *value = e->values[i];
+    return 1;
+}
+
+static int edge_put(edge_table *e, uint64_t key, int32_t value)
+{
+    if (2 * (e->count + 1) > e->cap) {
+        edge_table grown = {calloc((size_t)(e->cap ? 2 * e->cap : 1024), sizeof *grown.keys),
+                            malloc(sizeof *grown.values * (size_t)(e->cap ? 2 * e->cap : 1024)), e->cap ? 2 * e->cap : 1024,
+                            0};
+        if (!grown.keys || !grown.values) {
+            free(grown.keys), free(grown.values);
+            return -1;
+        }
+        for (int64_t i = 0; i < e->cap; i++)
+            if (e->keys[i]) {
+                int64_t j = edge_slot(&grown, e->keys[i]);
+                grown.keys[j] = e->keys[i], grown.values[j] = e->values[i], grown.count++;
+            }
+        free(e->keys), free(e->values);
+        *e = grown;
+    }
+    int64_t i = edge_slot(e, key);
+    if (!e->keys[i])
+        e->count++;
+    e->keys[i] = key, e->values[i] = value;
+    return 0;
+}
+
+static void edge_clear(edge_table *e)
+{
+    if (e->cap)
+        memset(e->keys, 0, sizeof *e->keys * (size_t)e->cap);
+    e->count = 0;
+}
+
+/* ---- the state --------------------------------------------------------------------------------- */
+
+typedef struct refine {
+    tpk_tetmesh *m;
+    const tpk_refine_cells *cells;
+    const tpk_refine_options *o;
+    tpk_diag *diag;
+    int threads;
+    int32_t *vertex_of;    /* source point id -> vertex */
+    int64_t point_ids;     /* size of vertex_of */
+    int64_t n0;            /* vertices given; those after are added, their values in `added` */
+    int slots;             /* point (field, step) pairs */
+    float **slot_values;   /* per slot: the given vertices' values */
+    int *slot_field;
+    float *added;          /* per added vertex, `slots` values */
+    int64_t added_cap, vertex_cap;
+    int bounded;           /* slots bounded: bound_slot[0 .. bounded) */
+    int *bound_slot;
+    double *bound_range;
+    double diag_length;
+    int64_t count, cap;    /* tets */
+    int32_t *tets, *cell;
+    double *xi;            /* 12 per tet: its corners' parametric points in its cell */
+    int64_t *root;         /* the given tet each comes from (cell fields) */
+    double *field_error, *geometry_error, *criterion;
+    int *worst_slot;
+    tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1];
+    edge_table marks, mids;
+    double **scratch;      /* per worker */
+    int report_fields;     /* fields bounded (not constant) */
+} refine;
+
+static float value_of(const refine *r, int32_t v, int slot)
+{
+    return v < r->n0 ? r->slot_values[slot][v] : r->added[(int64_t)(v - r->n0) * r->slots + slot];
+}
+
+static const double *point_of(const refine *r, int32_t v)
+{
+    return r->m->points + 3 * (int64_t)v;
+}
+
+/* Cell c's type (mapped_type) and its nodes as vertices; 0 when some node is no vertex. */
+static int cell_nodes(const refine *r, int64_t c, int32_t *verts)
+{
+    int type = mapped_type(r->cells, c);
+    int n = tpk_cell_map_nodes(type);
+    const int32_t *conn = r->cells->conn + r->cells->offsets[c];
+    for (int k = 0; k < n; k++) {
+        int32_t id = conn[r->cells->types[c] == TPK_CELL_VOXEL ? voxel_as_hex[k] : k];
+        if (id < 0 || id >= r->point_ids || r->vertex_of[id] < 0)
+            return 0;
+        verts[k] = r->vertex_of[id];
+    }
+    return type;
+}
+
+static void map_point(const refine *r, int type, const int32_t *verts, const double xi[3], double *w, double x[3])
+{
+    int n = tpk_cell_map_weights(type, xi, w);
+    x[0] = x[1] = x[2] = 0;
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < 3; i++)
+            x[i] += w[k] * point_of(r, verts[k])[i];
+}
+
+static double interpolate(const refine *r, int n, const int32_t *verts, const double *w, int slot)
+{
+    double s = 0;
+    for (int k = 0; k < n; k++)
+        s += w[k] * value_of(r, verts[k], slot);
+    return s;
+}
+
+static double dist2(const double *a, const double *b)
+{
+    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
+
+/* The global edge order: squared length (from the two points in id order, so alike from every tet),
+ * then the smaller id, then the larger. */
+static int edge_greater(const refine *r, int32_t a, int32_t b, int32_t c, int32_t d)
+{
+    int32_t lo1 = a < b ? a : b, hi1 = a < b ? b : a, lo2 = c < d ? c : d, hi2 = c < d ? d : c;
+    double l1 = dist2(point_of(r, hi1), point_of(r, lo1)), l2 = dist2(point_of(r, hi2), point_of(r, lo2));
+    if (l1 != l2)
+        return l1 > l2;
+    return lo1 != lo2 ? lo1 > lo2 : hi1 > hi2;
+}
+
+/* Tet t's greatest edge (marked ones only with `marked_only`), as 0..5, or -1. */
+static int greatest_edge(const refine *r, int64_t t, int marked_only)
+{
+    const int32_t *v = r->tets + 4 * t;
+    int best = -1;
+    for (int e = 0; e < 6; e++) {
+        int32_t a = v[tet_edges[e][0]], b = v[tet_edges[e][1]];
+        if (marked_only && !edge_find(&r->marks, edge_key(a, b), NULL))
+            continue;
+        if (best < 0 || edge_greater(r, a, b, v[tet_edges[best][0]], v[tet_edges[best][1]]))
+            best = e;
+    }
+    return best;
+}
+
+/* ---- parametric points of the given tets' corners ------------------------------------------------ */
+
+static void shape_centre(int type, double xi[3])
+{
+    const tpk_cell_type_info *t = tpk_cell_type(type);
+    int linear = t ? t->linear_type : type;
+    xi[0] = xi[1] = xi[2] = linear == TPK_CELL_TETRA ? 0.25 : 0.5;
+    if (linear == TPK_CELL_WEDGE)
+        xi[0] = xi[1] = 1.0 / 3;
+}
+
+static int solve3(double m[3][3], const double b[3], double x[3])
+{
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (!(fabs(det) > 0))
+        return -1;
+    for (int c = 0; c < 3; c++) {
+        double q[3][3];
+        memcpy(q, m, sizeof q);
+        for (int k = 0; k < 3; k++)
+            q[k][c] = b[k];
+        x[c] = (q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
+                q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0])) / det;
+    }
+    return 0;
+}
+
+/* Newton's method from the cell's centre for the parametric point that the cell maps onto `target`. */
+static int invert_map(const refine *r, int type, const int32_t *verts, const double target[3], double xi[3])
+{
+    double w[TPK_CELL_MAP_MAX_NODES], x[3], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    int n = tpk_cell_map_nodes(type);
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < 3; i++)
+            lo[i] = fmin(lo[i], point_of(r, verts[k])[i]), hi[i] = fmax(hi[i], point_of(r, verts[k])[i]);
+    double size = sqrt(dist2(lo, hi)), h = 1e-6;
+    shape_centre(type, xi);
+    for (int it = 0; it < 60; it++) {
+        map_point(r, type, verts, xi, w, x);
+        double res[3] = {x[0] - target[0], x[1] - target[1], x[2] - target[2]};
+        if (sqrt(res[0] * res[0] + res[1] * res[1] + res[2] * res[2]) <= 1e-10 * size)
+            return 0;
+        double jac[3][3], step[3];
+        for (int j = 0; j < 3; j++) {
+            double a[3], b[3], xa[3], xb[3];
+            memcpy(a, xi, sizeof a), memcpy(b, xi, sizeof b);
+            a[j] += h, b[j] -= h;
+            map_point(r, type, verts, a, w, xa);
+            map_point(r, type, verts, b, w, xb);
+            for (int i = 0; i < 3; i++)
+                jac[i][j] = (xa[i] - xb[i]) / (2 * h);
+        }
+        if (solve3(jac, res, step) != 0)
+            return -1;
+        for (int j = 0; j < 3; j++)
+            xi[j] -= step[j];
+    }
+    return -1;
+}
+
+/* Each given tet's corners in its cell's parameter space: nodes by their place in the cell, other points
+ * (face and cell centres, Steiner points) by inverting the map. An added point then takes every point
+ * field's value from the interpolant of the first cell (in tet order) that has it, so that its values
+ * are those the bound measures against. */
+static int place_corners(refine *r)
+{
+    uint8_t *valued = calloc((size_t)(r->n0 ? r->n0 : 1), 1);
+    if (!valued)
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    double w[TPK_CELL_MAP_MAX_NODES];
+    for (int64_t t = 0; t < r->count; t++) {
+        int64_t c = r->cell[t];
+        int type = c >= 0 && c < r->cells->cell_count ? cell_nodes(r, c, verts) : 0;
+        if (!type) {
+            free(valued);
+            return tpk_diag_fail(r->diag, "--max-error: cell %lld has a node that is no vertex of the tets (are its "
+                                 "points merged?)", (long long)c);
+        }
+        int n = tpk_cell_map_nodes(type);
+        for (int k = 0; k < 4; k++) {
+            int32_t v = r->tets[4 * t + k];
+            double *xi = r->xi + 12 * t + 3 * k;
+            int node = -1;
+            for (int j = 0; j < n && node < 0; j++)
+                if (verts[j] == v)
+                    node = j;
+            if (node >= 0) {
+                tpk_cell_map_node(type, node, xi);
+                continue;
+            }
+            if (invert_map(r, type, verts, point_of(r, v), xi) != 0) {
+                free(valued);
+                return tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s): no parametric point maps onto its "
+                                     "added point %lld (the map does not invert there); convert it without "
+                                     "--max-error", (long long)c, tpk_cell_type(r->cells->types[c])->name, (long long)v);
+            }
+            if (valued[v])
+                continue;
+            valued[v] = 1;
+            tpk_cell_map_weights(type, xi, w);
+            for (int s = 0; s < r->slots; s++)
+                r->slot_values[s][v] = (float)interpolate(r, n, verts, w, s);
+        }
+    }
+    free(valued);
+    return 0;
+}
+
+/* ---- the bound --------------------------------------------------------------------------------- */
+
+/* Gradients of the barycentric coordinates 1..3 of tet p (0 when flat). */
+static int barycentric_gradients(const double p[4][3], double g[3][3])
+{
+    double e[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            e[k][i] = p[k + 1][i] - p[0][i];
+    for (int k = 0; k < 3; k++) {
+        const double *a = e[(k + 1) % 3], *b = e[(k + 2) % 3];
+        g[k][0] = a[1] * b[2] - a[2] * b[1], g[k][1] = a[2] * b[0] - a[0] * b[2], g[k][2] = a[0] * b[1] - a[1] * b[0];
+    }
+    double det = e[0][0] * g[0][0] + e[0][1] * g[0][1] + e[0][2] * g[0][2];
+    if (!(fabs(det) > 0))
+        return -1;
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            g[k][i] /= det;
+    return 0;
+}
+
+/* Tet t's bounds: field_error (the largest over bounded slots, as a fraction of the range), geometry
+ * error (a fraction of the diagonal), and the criterion refinement meets: the larger of the geometry
+ * error and, per slot, the field's bound plus its gradient times the geometry's (a point located by
+ * position rather than parameter, as check --against samples, then also stays within E). */
+static void bound_tet(refine *r, int64_t t, double *scratch)
+{
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    double w[TPK_CELL_MAP_MAX_NODES];
+    int type = cell_nodes(r, r->cell[t], verts), degree = tpk_cell_map_degree(type);
+    r->field_error[t] = r->geometry_error[t] = r->criterion[t] = 0;
+    r->worst_slot[t] = -1;
+    if (degree <= 1)
+        return; /* a tet of a tetra: exactly its own interpolant */
+    const tpk_bernstein *b = &r->table[degree];
+    const double *xi = r->xi + 12 * t;
+    const int32_t *tv = r->tets + 4 * t;
+    int n = tpk_cell_map_nodes(type), stride = 3 + r->bounded;
+    for (int i = 0; i < b->points; i++) {
+        double at[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++)
+            for (int j = 0; j < 3; j++)
+                at[j] += b->lambda[i][k] * xi[3 * k + j];
+        map_point(r, type, verts, at, w, scratch + (int64_t)i * stride);
+        for (int s = 0; s < r->bounded; s++)
+            scratch[(int64_t)i * stride + 3 + s] = interpolate(r, n, verts, w, r->bound_slot[s]);
+    }
+    double corner[12], p[4][3], g[3][3];
+    for (int k = 0; k < 4; k++)
+        for (int j = 0; j < 3; j++)
+            corner[3 * k + j] = p[k][j] = point_of(r, tv[k])[j];
+    double geometry = tpk_bernstein_gap(b, scratch, stride, corner, 3);
+    int flat = barycentric_gradients(p, g) != 0;
+    double crit = geometry / r->diag_length, worst = 0;
+    for (int s = 0; s < r->bounded; s++) {
+        double v[4], grad[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++)
+            v[k] = value_of(r, tv[k], r->bound_slot[s]);
+        if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2]) || !isfinite(v[3]))
+            continue; /* no bound for missing values (NaN): nothing to interpolate */
+        double gap = tpk_bernstein_gap(b, scratch + 3 + s, stride, v, 1) / r->bound_range[s];
+        for (int k = 0; k < 3 && !flat; k++)
+            for (int j = 0; j < 3; j++)
+                grad[j] += (v[k + 1] - v[0]) * g[k][j];
+        double located = gap + sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * geometry /
+                                   r->bound_range[s];
+        if (gap > worst || r->worst_slot[t] < 0)
+            worst = gap, r->worst_slot[t] = s;
+        crit = fmax(crit, flat ? gap : located);
+    }
+    r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
+    r->criterion[t] = crit;
+}
+
+static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    refine *r = ctx;
+    for (int64_t t = begin; t < end; t++)
+        bound_tet(r, t, r->scratch[w]);
+}
+
+/* ---- growth ------------------------------------------------------------------------------------ */
+
+static int grow(void **array, size_t item, int64_t count, int64_t cap)
+{
+    void *grown = malloc(item * (size_t)cap);
+    if (!grown)
+        return -1;
+    if (*array && count)
+        memcpy(grown, *array, item * (size_t)count);
+    free(*array);
+    *array = grown;
+    return 0;
+}
+
+static int reserve_tets(refine *r, int64_t need)
+{
+    if (need <= r->cap)
+        return 0;
+    int64_t cap = need + need / 2 + 1024;
+    if (grow((void **)&r->tets, 4 * sizeof *r->tets, r->count, cap) || grow((void **)&r->cell, sizeof *r->cell, r->count, cap) ||
+        grow((void **)&r->xi, 12 * sizeof *r->xi, r->count, cap) || grow((void **)&r->root, sizeof *r->root, r->count, cap) ||
+        grow((void **)&r->field_error, sizeof *r->field_error, r->count, cap) ||
+        grow((void **)&r->geometry_error, sizeof *r->geometry_error, r->count, cap) ||
+        grow((void **)&r->criterion, sizeof *r->criterion, r->count, cap) ||
+        grow((void **)&r->worst_slot, sizeof *r->worst_slot, r->count, cap))
+        return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
+    r->cap = cap;
+    return 0;
+}
+
+/* A new vertex at parametric point xi of tet t's cell: placed by the map (on the file's grid), valued
+ * by the interpolant, every point field and step. */
+static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
+{
+    tpk_tetmesh *m = r->m;
+    if (m->vertex_count >= INT32_MAX - 1) {
+        tpk_diag_fail(r->diag, "--max-error: more than %d vertices", INT32_MAX - 1);
+        return -1;
+    }
+    if (m->vertex_count >= r->vertex_cap) {
+        int64_t cap = m->vertex_count + m->vertex_count / 2 + 1024, added = m->vertex_count - r->n0;
+        if (grow((void **)&m->points, 3 * sizeof *m->points, m->vertex_count, cap) ||
+            grow((void **)&m->vertex_source, sizeof *m->vertex_source, m->vertex_count, cap) ||
+            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), added, cap - r->n0)) {
+            tpk_diag_fail(r->diag, "out of memory for %lld vertices (--max-error)", (long long)cap);
+            return -1;
+        }
+        r->vertex_cap = cap;
+    }
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    double w[TPK_CELL_MAP_MAX_NODES], x[3];
+    int type = cell_nodes(r, r->cell[t], verts), n = tpk_cell_map_nodes(type);
+    map_point(r, type, verts, xi, w, x);
+    for (int a = 0; m->on_grid && a < 3; a++)
+        x[a] = m->grid_origin[a] + (double)(float)(x[a] - m->grid_origin[a]);
+    int32_t v = (int32_t)m->vertex_count++;
+    memcpy(m->points + 3 * (int64_t)v, x, sizeof x);
+    m->vertex_source[v] = -1;
+    for (int s = 0; s < r->slots; s++)
+        r->added[(int64_t)(v - r->n0) * r->slots + s] = (float)interpolate(r, n, verts, w, s);
+    return v;
+}
+
+static int sign_of(const refine *r, const int32_t *v)
+{
+    return tpk_orient3d_exact(point_of(r, v[0]), point_of(r, v[1]), point_of(r, v[2]), point_of(r, v[3]));
+}
+
+/* Tet t bisected at its edge e through vertex mid: t keeps the half of corner i, a new tet the other. */
+static int bisect(refine *r, int64_t t, int e, int32_t mid)
+{
+    int i = tet_edges[e][0], j = tet_edges[e][1];
+    int64_t u = r->count++;
+    int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
+    double *xa = r->xi + 12 * t, *xb = r->xi + 12 * u, half[3];
+    int parent = sign_of(r, a);
+    memcpy(b, a, 4 * sizeof *a);
+    memcpy(xb, xa, 12 * sizeof *xa);
+    r->cell[u] = r->cell[t], r->root[u] = r->root[t];
+    for (int k = 0; k < 3; k++)
+        half[k] = 0.5 * (xa[3 * i + k] + xa[3 * j + k]);
+    a[j] = mid, b[i] = mid;
+    memcpy(xa + 3 * j, half, sizeof half);
+    memcpy(xb + 3 * i, half, sizeof half);
+    if (parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent)) {
+        int64_t c = r->cell[t];
+        return tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its map's "
+                             "midpoint of an edge turns over (the cell is too curved for its tets); convert it "
+                             "without --max-error or with a larger bound", (long long)c,
+                             tpk_cell_type(r->cells->types[c])->name);
+    }
+    return 0;
+}
+
+/* Marks the failing tets' longest edges, closes the marks, then bisects round by round. */
+static int refine_pass(refine *r, double limit)
+{
+    edge_clear(&r->marks);
+    for (int64_t t = 0; t < r->count; t++)
+        if (!(r->criterion[t] <= limit)) {
+            int e = greatest_edge(r, t, 0);
+            if (edge_put(&r->marks, edge_key(r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]), 1))
+                return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        }
+    for (int changed = 1; changed;) {
+        changed = 0;
+        for (int64_t t = 0; t < r->count; t++) {
+            if (greatest_edge(r, t, 1) < 0)
+                continue;
+            int e = greatest_edge(r, t, 0);
+            uint64_t key = edge_key(r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
+            if (!edge_find(&r->marks, key, NULL)) {
+                if (edge_put(&r->marks, key, 1))
+                    return tpk_diag_fail(r->diag, "out of memory for --max-error");
+                changed = 1;
+            }
+        }
+    }
+    int8_t *chosen = NULL;
+    for (;;) {
+        int64_t n = r->count, splits = 0;
+        free(chosen);
+        if (!(chosen = malloc((size_t)(n ? n : 1))))
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        for (int64_t t = 0; t < n; t++)
+            splits += (chosen[t] = (int8_t)greatest_edge(r, t, 1)) >= 0;
+        if (splits == 0)
+            break;
+        int64_t limit_tets = r->o->max_tets;
+        if (r->count + splits > limit_tets) {
+            free(chosen);
+            return tpk_diag_fail(r->diag, "--max-error %g: refinement would pass %lld tets (from %lld) before meeting "
+                                 "the bound; give a larger bound", r->o->max_error, (long long)limit_tets,
+                                 (long long)r->n0);
+        }
+        if (reserve_tets(r, r->count + splits) != 0) {
+            free(chosen);
+            return -1;
+        }
+        for (int64_t t = 0; t < n; t++) {
+            if (chosen[t] < 0)
+                continue;
+            int i = tet_edges[chosen[t]][0], j = tet_edges[chosen[t]][1];
+            uint64_t key = edge_key(r->tets[4 * t + i], r->tets[4 * t + j]);
+            int32_t mid;
+            if (!edge_find(&r->mids, key, &mid)) {
+                double half[3];
+                for (int k = 0; k < 3; k++)
+                    half[k] = 0.5 * (r->xi[12 * t + 3 * i + k] + r->xi[12 * t + 3 * j + k]);
+                if ((mid = add_vertex(r, t, half)) < 0 || edge_put(&r->mids, key, mid) != 0) {
+                    free(chosen);
+                    return tpk_diag_fail(r->diag, "out of memory for --max-error");
+                }
+            }
+            if (bisect(r, t, chosen[t], mid) != 0) {
+                free(chosen);
+                return -1;
+            }
+        }
+    }
+    free(chosen);
+    return 0;
+}
+
+/* ---- set-up and hand-back ---------------------------------------------------------------------- */
+
+static int pick_fields(refine *r)
+{
+    tpk_tetmesh *m = r->m;
+    for (int f = 0; f < m->field_count; f++)
+        if (m->fields[f].association == TPK_ASSOC_POINT)
+            r->slots += m->fields[f].step_count;
+    r->slot_values = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->slot_values);
+    r->slot_field = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->slot_field);
+    r->bound_slot = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->bound_slot);
+    r->bound_range = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->bound_range);
+    if (!r->slot_values || !r->slot_field || !r->bound_slot || !r->bound_range)
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    for (int i = 0; i < r->o->field_count; i++) {
+        int found = 0;
+        for (int f = 0; f < m->field_count; f++)
+            found |= m->fields[f].association == TPK_ASSOC_POINT && !strcmp(m->fields[f].name, r->o->fields[i]);
+        if (!found)
+            return tpk_diag_fail(r->diag, "--max-error-field %s: the converted mesh has no point field of that name",
+                                 r->o->fields[i]);
+    }
+    for (int f = 0, s = 0; f < m->field_count; f++) {
+        tpk_src_field *field = &m->fields[f];
+        if (field->association != TPK_ASSOC_POINT)
+            continue;
+        int chosen = r->o->field_count == 0;
+        for (int i = 0; i < r->o->field_count; i++)
+            chosen |= !strcmp(field->name, r->o->fields[i]);
+        double lo = INFINITY, hi = -INFINITY;
+        for (int64_t k = 0; k < (int64_t)field->step_count * r->n0; k++)
+            if (isfinite(field->values[k]))
+                lo = fmin(lo, field->values[k]), hi = fmax(hi, field->values[k]);
+        r->report_fields += chosen && hi > lo;
+        for (int step = 0; step < field->step_count; step++, s++) {
+            r->slot_values[s] = field->values + (int64_t)step * r->n0;
+            r->slot_field[s] = f;
+            if (chosen && hi > lo) /* a constant field is its own interpolant everywhere */
+                r->bound_slot[r->bounded] = s, r->bound_range[r->bounded++] = hi - lo;
+        }
+    }
+    return 0;
+}
+
+/* The refined tets, their cells and cell fields, and the point fields with the added vertices' values,
+ * into the mesh. */
+static int hand_back(refine *r)
+{
+    tpk_tetmesh *m = r->m;
+    int64_t nv = m->vertex_count, nt = r->count, t0 = m->tet_count;
+    for (int f = 0; f < m->field_count; f++) {
+        tpk_src_field *field = &m->fields[f];
+        int point = field->association == TPK_ASSOC_POINT;
+        int64_t per = point ? nv : nt, old = point ? r->n0 : t0;
+        int64_t total = (int64_t)field->step_count * per;
+        float *values = malloc(sizeof *values * (size_t)(total > 0 ? total : 1));
+        if (!values)
+            return tpk_diag_fail(r->diag, "out of memory for the fields of %lld tets (--max-error)", (long long)nt);
+        for (int step = 0; step < field->step_count; step++) {
+            float *to = values + (int64_t)step * per;
+            const float *from = field->values + (int64_t)step * old;
+            if (point) {
+                memcpy(to, from, sizeof *to * (size_t)r->n0);
+                int s = 0;
+                while (s < r->slots && !(r->slot_field[s] == f && r->slot_values[s] == from))
+                    s++;
+                for (int64_t v = r->n0; v < nv; v++)
+                    to[v] = r->added[(v - r->n0) * r->slots + s];
+            } else {
+                for (int64_t t = 0; t < nt; t++)
+                    to[t] = from[r->root[t]];
+            }
+        }
+        free(field->values);
+        field->values = values;
+    }
+    free(m->tets), free(m->tet_source);
+    m->tets = r->tets, m->tet_source = r->cell, m->tet_count = nt;
+    r->tets = r->cell = NULL;
+    return 0;
+}
+
+static void release(refine *r, int threads)
+{
+    free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
+    free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot);
+    free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
+    for (int w = 0; r->scratch && w < threads; w++)
+        free(r->scratch[w]);
+    free(r->scratch);
+}
+
+static int set_up(refine *r, int threads)
+{
+    tpk_tetmesh *m = r->m;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        r->point_ids = m->vertex_source[v] >= r->point_ids ? m->vertex_source[v] + 1 : r->point_ids;
+    if (!(r->vertex_of = malloc(sizeof *r->vertex_of * (size_t)(r->point_ids ? r->point_ids : 1))))
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    for (int64_t p = 0; p < r->point_ids; p++)
+        r->vertex_of[p] = -1;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        if (m->vertex_source[v] >= 0 && r->vertex_of[m->vertex_source[v]] < 0)
+            r->vertex_of[m->vertex_source[v]] = (int32_t)v;
+    if (pick_fields(r) != 0)
+        return -1;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        for (int i = 0; i < 3; i++)
+            lo[i] = fmin(lo[i], m->points[3 * v + i]), hi[i] = fmax(hi[i], m->points[3 * v + i]);
+    r->diag_length = m->vertex_count ? sqrt(dist2(lo, hi)) : 1;
+    if (!(r->diag_length > 0))
+        r->diag_length = 1;
+    for (int n = 1; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
+        if (tpk_bernstein_make(n, &r->table[n]) != 0)
+            return tpk_diag_fail(r->diag, "--max-error: the Bernstein table of degree %d is singular", n);
+    if (reserve_tets(r, m->tet_count) != 0)
+        return -1;
+    r->count = m->tet_count;
+    memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
+    memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
+    for (int64_t t = 0; t < r->count; t++)
+        r->root[t] = t;
+    if (!(r->scratch = calloc((size_t)threads, sizeof *r->scratch)))
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    for (int w = 0; w < threads; w++)
+        if (!(r->scratch[w] = malloc(sizeof **r->scratch * TPK_BERNSTEIN_MAX_POINTS * (size_t)(3 + r->bounded))))
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    return place_corners(r);
+}
+
+int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const tpk_refine_options *options,
+                         tpk_refine_report *report, tpk_diag *diag)
+{
+    refine r;
+    memset(&r, 0, sizeof r);
+    memset(report, 0, sizeof *report);
+    tpk_refine_options o = *options;
+    if (o.max_tets <= 0)
+        o.max_tets = mesh->tet_count * 64 > (1 << 24) ? mesh->tet_count * 64 : (1 << 24);
+    if (o.max_tets > INT32_MAX)
+        o.max_tets = INT32_MAX;
+    r.m = mesh, r.cells = cells, r.o = &o, r.diag = diag;
+    r.n0 = r.vertex_cap = mesh->vertex_count;
+    report->tets_before = mesh->tet_count;
+    int threads = tpk_thread_count(o.threads), rc = set_up(&r, threads);
+    for (int pass = 0; rc == 0; pass++) {
+        tpk_parallel_for(r.count, tpk_threads_for(r.count, threads, 2048), bound_range, &r);
+        int64_t over = 0;
+        for (int64_t t = 0; t < r.count; t++)
+            over += !(r.criterion[t] <= o.max_error);
+        report->rounds = pass;
+        if (over == 0)
+            break;
+        if (pass == MAX_PASSES) {
+            rc = tpk_diag_fail(diag, "--max-error %g: %lld tets still over the bound after %d passes of refinement",
+                               o.max_error, (long long)over, MAX_PASSES);
+            break;
+        }
+        rc = refine_pass(&r, o.max_error);
+    }
+    if (rc == 0) {
+        int worst = -1;
+        for (int64_t t = 0; t < r.count; t++) {
+            if (r.field_error[t] > report->field_error || (worst < 0 && r.worst_slot[t] >= 0))
+                report->field_error = r.field_error[t], worst = r.worst_slot[t];
+            report->geometry_error = fmax(report->geometry_error, r.geometry_error[t]);
+        }
+        if (worst >= 0)
+            snprintf(report->worst_field, sizeof report->worst_field, "%s",
+                     mesh->fields[r.slot_field[r.bound_slot[worst]]].name);
+        report->fields_bounded = r.report_fields;
+        report->tets_after = r.count;
+        report->vertices_added = mesh->vertex_count - r.n0;
+        rc = hand_back(&r);
+    }
+    release(&r, threads);
+    return rc;
+}
