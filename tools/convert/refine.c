@@ -159,6 +159,7 @@ typedef struct refine {
     double *bound_range;
     double diag_length;
     int64_t count, cap;    /* tets */
+    int64_t tets_given;
     int32_t *tets, *cell;
     double *xi;            /* 12 per tet: its corners' parametric points in its cell */
     int64_t *root;         /* the given tet each comes from (cell fields) */
@@ -168,6 +169,8 @@ typedef struct refine {
     edge_table marks, mids;
     double **scratch;      /* per worker */
     int report_fields;     /* fields bounded (not constant) */
+    int64_t *todo, todo_count, todo_cap; /* tets whose bound is not known yet (new or cut since) */
+    uint8_t *queued;       /* per tet: in todo */
 } refine;
 
 static float value_of(const refine *r, int32_t v, int slot)
@@ -308,20 +311,23 @@ static int invert_map(const refine *r, int type, const int32_t *verts, const dou
  * (face and cell centres, Steiner points) by inverting the map. An added point then takes every point
  * field's value from the interpolant of the first cell (in tet order) that has it, so that its values
  * are those the bound measures against. */
-static int place_corners(refine *r)
+typedef struct corner_job {
+    refine *r;
+    uint8_t *failed; /* per tet: 1 a node is no vertex, 2 the map does not invert */
+} corner_job;
+
+static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
 {
-    uint8_t *valued = calloc((size_t)(r->n0 ? r->n0 : 1), 1);
-    if (!valued)
-        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    corner_job *job = ctx;
+    refine *r = job->r;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
-    double w[TPK_CELL_MAP_MAX_NODES];
-    for (int64_t t = 0; t < r->count; t++) {
+    (void)w;
+    for (int64_t t = begin; t < end; t++) {
         int64_t c = r->cell[t];
         int type = c >= 0 && c < r->cells->cell_count ? cell_nodes(r, c, verts) : 0;
         if (!type) {
-            free(valued);
-            return tpk_diag_fail(r->diag, "--max-error: cell %lld has a node that is no vertex of the tets (are its "
-                                 "points merged?)", (long long)c);
+            job->failed[t] = 1;
+            continue;
         }
         int n = tpk_cell_map_nodes(type);
         for (int k = 0; k < 4; k++) {
@@ -331,26 +337,48 @@ static int place_corners(refine *r)
             for (int j = 0; j < n && node < 0; j++)
                 if (verts[j] == v)
                     node = j;
-            if (node >= 0) {
+            if (node >= 0)
                 tpk_cell_map_node(type, node, xi);
-                continue;
-            }
-            if (invert_map(r, type, verts, point_of(r, v), xi) != 0) {
-                free(valued);
-                return tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s): no parametric point maps onto its "
-                                     "added point %lld (the map does not invert there); convert it without "
-                                     "--max-error", (long long)c, tpk_cell_type(r->cells->types[c])->name, (long long)v);
-            }
-            if (valued[v])
+            else if (invert_map(r, type, verts, point_of(r, v), xi) != 0)
+                job->failed[t] = 2;
+        }
+    }
+}
+
+static int place_corners(refine *r, int threads)
+{
+    corner_job job = {r, calloc((size_t)(r->count ? r->count : 1), 1)};
+    uint8_t *valued = calloc((size_t)(r->n0 ? r->n0 : 1), 1);
+    if (!valued || !job.failed) {
+        free(valued), free(job.failed);
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
+    tpk_parallel_for(r->count, tpk_threads_for(r->count, threads, 1024), corner_range, &job);
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    double w[TPK_CELL_MAP_MAX_NODES];
+    int rc = 0;
+    for (int64_t t = 0; t < r->count && rc == 0; t++) {
+        int64_t c = r->cell[t];
+        if (job.failed[t] == 1) {
+            rc = tpk_diag_fail(r->diag, "--max-error: cell %lld has a node that is no vertex of the tets", (long long)c);
+        } else if (job.failed[t] == 2) {
+            rc = tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s): no parametric point maps onto a point added "
+                               "inside it (the map does not invert there); convert it without --max-error",
+                               (long long)c, tpk_cell_type(r->cells->types[c])->name);
+        }
+        for (int k = 0; rc == 0 && k < 4; k++) {
+            int32_t v = r->tets[4 * t + k];
+            if (r->m->vertex_source[v] >= 0 || valued[v])
                 continue;
             valued[v] = 1;
-            tpk_cell_map_weights(type, xi, w);
+            int type = cell_nodes(r, c, verts), n = tpk_cell_map_nodes(type);
+            tpk_cell_map_weights(type, r->xi + 12 * t + 3 * k, w);
             for (int s = 0; s < r->slots; s++)
                 r->slot_values[s][v] = (float)interpolate(r, n, verts, w, s);
         }
     }
-    free(valued);
-    return 0;
+    free(valued), free(job.failed);
+    return rc;
 }
 
 /* ---- the bound --------------------------------------------------------------------------------- */
@@ -422,7 +450,8 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
                                    r->bound_range[s];
         if (gap > worst || r->worst_slot[t] < 0)
             worst = gap, r->worst_slot[t] = s;
-        crit = fmax(crit, flat ? gap : located);
+        double c = flat ? gap : located;
+        crit = c > crit ? c : crit;
     }
     r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
     r->criterion[t] = crit;
@@ -431,8 +460,8 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
 static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     refine *r = ctx;
-    for (int64_t t = begin; t < end; t++)
-        bound_tet(r, t, r->scratch[w]);
+    for (int64_t i = begin; i < end; i++)
+        bound_tet(r, r->todo[i], r->scratch[w]);
 }
 
 /* ---- growth ------------------------------------------------------------------------------------ */
@@ -459,10 +488,18 @@ static int reserve_tets(refine *r, int64_t need)
         grow((void **)&r->field_error, sizeof *r->field_error, r->count, cap) ||
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, r->count, cap) ||
         grow((void **)&r->criterion, sizeof *r->criterion, r->count, cap) ||
-        grow((void **)&r->worst_slot, sizeof *r->worst_slot, r->count, cap))
+        grow((void **)&r->worst_slot, sizeof *r->worst_slot, r->count, cap) ||
+        grow((void **)&r->queued, sizeof *r->queued, r->count, cap) ||
+        grow((void **)&r->todo, sizeof *r->todo, r->todo_count, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
     return 0;
+}
+
+static void enqueue(refine *r, int64_t t)
+{
+    if (!r->queued[t])
+        r->queued[t] = 1, r->todo[r->todo_count++] = t;
 }
 
 /* A new vertex at parametric point xi of tet t's cell: placed by the map (on the file's grid), valued
@@ -519,6 +556,9 @@ static int bisect(refine *r, int64_t t, int e, int32_t mid)
     a[j] = mid, b[i] = mid;
     memcpy(xa + 3 * j, half, sizeof half);
     memcpy(xb + 3 * i, half, sizeof half);
+    r->queued[u] = 0;
+    enqueue(r, t);
+    enqueue(r, u);
     if (parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent)) {
         int64_t c = r->cell[t];
         return tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its map's "
@@ -529,74 +569,149 @@ static int bisect(refine *r, int64_t t, int e, int32_t mid)
     return 0;
 }
 
-/* Marks the failing tets' longest edges, closes the marks, then bisects round by round. */
+/* Tets by vertex (CSR over the tets there are), for the tets around a marked edge. */
+typedef struct vertex_tets {
+    int64_t *start;
+    int32_t *tets;
+} vertex_tets;
+
+static int vertex_tets_make(const refine *r, vertex_tets *vt)
+{
+    int64_t nv = r->m->vertex_count;
+    vt->start = calloc((size_t)nv + 2, sizeof *vt->start);
+    vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * r->count + 1));
+    if (!vt->start || !vt->tets)
+        return -1;
+    for (int64_t i = 0; i < 4 * r->count; i++)
+        vt->start[r->tets[i] + 2]++;
+    for (int64_t v = 0; v < nv; v++)
+        vt->start[v + 2] += vt->start[v + 1];
+    for (int64_t i = 0; i < 4 * r->count; i++)
+        vt->tets[vt->start[r->tets[i] + 1]++] = (int32_t)(i / 4);
+    return 0;
+}
+
+static int has_vertex(const int32_t *v, int32_t b)
+{
+    return v[0] == b || v[1] == b || v[2] == b || v[3] == b;
+}
+
+/* Marks the failing tets' longest edges, closes the marks (every tet around a marked edge marks its own
+ * longest, through the tets by vertex), then bisects round by round: each tet with a marked edge cuts
+ * its greatest, until none is left. */
+typedef struct edge_queue {
+    uint64_t *keys;
+    int64_t count, cap;
+} edge_queue;
+
+/* Marks edge (a, b) and queues it, when not marked yet. */
+static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
+{
+    uint64_t key = edge_key(a, b);
+    if (edge_find(&r->marks, key, NULL))
+        return 0;
+    if (q->count >= q->cap) {
+        int64_t cap = 2 * q->cap + 1024;
+        uint64_t *grown = realloc(q->keys, sizeof *grown * (size_t)cap);
+        if (!grown)
+            return -1;
+        q->keys = grown, q->cap = cap;
+    }
+    q->keys[q->count++] = key;
+    return edge_put(&r->marks, key, 1);
+}
+
+static int mark_longest(refine *r, edge_queue *q, int64_t t)
+{
+    int e = greatest_edge(r, t, 0);
+    return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
+}
+
 static int refine_pass(refine *r, double limit)
 {
     edge_clear(&r->marks);
-    for (int64_t t = 0; t < r->count; t++)
-        if (!(r->criterion[t] <= limit)) {
-            int e = greatest_edge(r, t, 0);
-            if (edge_put(&r->marks, edge_key(r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]), 1))
-                return tpk_diag_fail(r->diag, "out of memory for --max-error");
-        }
-    for (int changed = 1; changed;) {
-        changed = 0;
-        for (int64_t t = 0; t < r->count; t++) {
-            if (greatest_edge(r, t, 1) < 0)
+    vertex_tets vt = {NULL, NULL};
+    edge_queue queue = {NULL, 0, 0};
+    int64_t *active = NULL, active_count = 0;
+    uint8_t *in_active = calloc((size_t)(r->count ? r->count : 1), 1);
+    int rc = vertex_tets_make(r, &vt) != 0 || !in_active ? -1 : 0;
+    for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
+        if (!(r->criterion[r->todo[i]] <= limit))
+            rc = mark_longest(r, &queue, r->todo[i]);
+    while (rc == 0 && queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
+        uint64_t key = queue.keys[--queue.count];
+        int32_t a = (int32_t)(key >> 32), b = (int32_t)(key & 0xffffffffu);
+        for (int64_t k = vt.start[a]; rc == 0 && k < vt.start[a + 1]; k++) {
+            int64_t u = vt.tets[k];
+            if (!has_vertex(r->tets + 4 * u, b))
                 continue;
-            int e = greatest_edge(r, t, 0);
-            uint64_t key = edge_key(r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
-            if (!edge_find(&r->marks, key, NULL)) {
-                if (edge_put(&r->marks, key, 1))
-                    return tpk_diag_fail(r->diag, "out of memory for --max-error");
-                changed = 1;
-            }
+            if (!in_active[u])
+                in_active[u] = 1, active_count++;
+            rc = mark_longest(r, &queue, u);
         }
     }
-    int8_t *chosen = NULL;
-    for (;;) {
-        int64_t n = r->count, splits = 0;
-        free(chosen);
-        if (!(chosen = malloc((size_t)(n ? n : 1))))
-            return tpk_diag_fail(r->diag, "out of memory for --max-error");
-        for (int64_t t = 0; t < n; t++)
-            splits += (chosen[t] = (int8_t)greatest_edge(r, t, 1)) >= 0;
+    free(queue.keys), free(vt.start), free(vt.tets);
+    if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(active_count ? active_count : 1))))
+        rc = -1;
+    for (int64_t t = 0, n = 0; rc == 0 && t < r->count; t++)
+        if (in_active[t])
+            active[n++] = t;
+    free(in_active);
+    if (rc != 0) {
+        free(active);
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
+    for (int i = 0; i < r->todo_count; i++)
+        r->queued[r->todo[i]] = 0;
+    r->todo_count = 0;
+    int8_t *chosen = malloc((size_t)(active_count ? active_count : 1));
+    while (rc == 0 && active_count > 0 && chosen) {
+        int64_t splits = 0, n = 0;
+        for (int64_t i = 0; i < active_count; i++)
+            if ((chosen[n] = (int8_t)greatest_edge(r, active[i], 1)) >= 0)
+                active[n++] = active[i], splits++;
+        active_count = n;
         if (splits == 0)
             break;
-        int64_t limit_tets = r->o->max_tets;
-        if (r->count + splits > limit_tets) {
-            free(chosen);
-            return tpk_diag_fail(r->diag, "--max-error %g: refinement would pass %lld tets (from %lld) before meeting "
-                                 "the bound; give a larger bound", r->o->max_error, (long long)limit_tets,
-                                 (long long)r->n0);
+        if (r->count + splits > r->o->max_tets) {
+            rc = tpk_diag_fail(r->diag, "--max-error %g: refinement would pass %lld tets (from %lld) before meeting "
+                               "the bound; give a larger bound", r->o->max_error, (long long)r->o->max_tets,
+                               (long long)r->tets_given);
+            break;
         }
+        int64_t first_child = r->count;
         if (reserve_tets(r, r->count + splits) != 0) {
-            free(chosen);
-            return -1;
+            rc = -1;
+            break;
         }
-        for (int64_t t = 0; t < n; t++) {
-            if (chosen[t] < 0)
-                continue;
-            int i = tet_edges[chosen[t]][0], j = tet_edges[chosen[t]][1];
+        int64_t *grown = realloc(active, sizeof *active * (size_t)(2 * active_count));
+        int8_t *grown_chosen = realloc(chosen, (size_t)(2 * active_count));
+        if (!grown || !grown_chosen) {
+            free(grown ? grown : active), free(grown_chosen ? grown_chosen : chosen);
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        }
+        active = grown, chosen = grown_chosen;
+        for (int64_t k = 0; rc == 0 && k < active_count; k++) {
+            int64_t t = active[k];
+            int i = tet_edges[chosen[k]][0], j = tet_edges[chosen[k]][1];
             uint64_t key = edge_key(r->tets[4 * t + i], r->tets[4 * t + j]);
             int32_t mid;
             if (!edge_find(&r->mids, key, &mid)) {
                 double half[3];
-                for (int k = 0; k < 3; k++)
-                    half[k] = 0.5 * (r->xi[12 * t + 3 * i + k] + r->xi[12 * t + 3 * j + k]);
+                for (int c = 0; c < 3; c++)
+                    half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
                 if ((mid = add_vertex(r, t, half)) < 0 || edge_put(&r->mids, key, mid) != 0) {
-                    free(chosen);
-                    return tpk_diag_fail(r->diag, "out of memory for --max-error");
+                    rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+                    break;
                 }
             }
-            if (bisect(r, t, chosen[t], mid) != 0) {
-                free(chosen);
-                return -1;
-            }
+            rc = bisect(r, t, chosen[k], mid);
         }
+        for (int64_t u = first_child; u < r->count; u++) /* the children: the cut tets, then the new ones */
+            active[active_count++] = u;
     }
-    free(chosen);
-    return 0;
+    free(active), free(chosen);
+    return rc;
 }
 
 /* ---- set-up and hand-back ---------------------------------------------------------------------- */
@@ -685,7 +800,7 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
-    free(r->geometry_error), free(r->criterion), free(r->worst_slot);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->queued);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->scratch && w < threads; w++)
         free(r->scratch[w]);
@@ -722,13 +837,14 @@ static int set_up(refine *r, int threads)
     memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
     memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
     for (int64_t t = 0; t < r->count; t++)
-        r->root[t] = t;
+        r->root[t] = t, r->queued[t] = 1, r->todo[t] = t;
+    r->todo_count = r->count;
     if (!(r->scratch = calloc((size_t)threads, sizeof *r->scratch)))
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     for (int w = 0; w < threads; w++)
         if (!(r->scratch[w] = malloc(sizeof **r->scratch * TPK_BERNSTEIN_MAX_POINTS * (size_t)(3 + r->bounded))))
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
-    return place_corners(r);
+    return place_corners(r, threads);
 }
 
 int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const tpk_refine_options *options,
@@ -744,13 +860,14 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
         o.max_tets = INT32_MAX;
     r.m = mesh, r.cells = cells, r.o = &o, r.diag = diag;
     r.n0 = r.vertex_cap = mesh->vertex_count;
+    r.tets_given = mesh->tet_count;
     report->tets_before = mesh->tet_count;
     int threads = tpk_thread_count(o.threads), rc = set_up(&r, threads);
     for (int pass = 0; rc == 0; pass++) {
-        tpk_parallel_for(r.count, tpk_threads_for(r.count, threads, 2048), bound_range, &r);
+        tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
         int64_t over = 0;
-        for (int64_t t = 0; t < r.count; t++)
-            over += !(r.criterion[t] <= o.max_error);
+        for (int64_t i = 0; i < r.todo_count; i++)
+            over += !(r.criterion[r.todo[i]] <= o.max_error);
         report->rounds = pass;
         if (over == 0)
             break;

@@ -90,26 +90,30 @@ double tpk_bernstein_gap(const tpk_bernstein *t, const double *values, int strid
                          int components)
 {
     double d[TPK_BERNSTEIN_MAX_POINTS][3], largest = 0, worst = 0;
-    int m = t->points;
+    int m = t->points, finite = 1;
     for (int i = 0; i < m; i++)
         for (int c = 0; c < components; c++) {
-            double l = 0, v = values[i * stride + c];
-            for (int k = 0; k < 4; k++)
-                l += t->lambda[i][k] * corner[k * components + c];
+            const double *lambda = t->lambda[i];
+            double v = values[i * stride + c], l = lambda[0] * corner[c] + lambda[1] * corner[components + c] +
+                                                    lambda[2] * corner[2 * components + c] +
+                                                    lambda[3] * corner[3 * components + c];
             d[i][c] = v - l;
-            largest = fmax(largest, fmax(fabs(v), fabs(l)));
+            finite &= isfinite(v) && isfinite(l);
+            double a = fabs(v) > fabs(l) ? fabs(v) : fabs(l);
+            largest = a > largest ? a : largest;
         }
+    if (!finite)
+        return INFINITY;
     for (int i = 0; i < m; i++) {
+        const double *row = t->inverse + i * m;
         double sq = 0;
         for (int c = 0; c < components; c++) {
             double coef = 0;
             for (int j = 0; j < m; j++)
-                coef += t->inverse[i * m + j] * d[j][c];
+                coef += row[j] * d[j][c];
             sq += coef * coef;
         }
-        worst = fmax(worst, sqrt(sq));
+        worst = sq > worst ? sq : worst;
     }
-    if (!isfinite(worst) || !isfinite(largest))
-        return INFINITY;
-    return worst + 1e-13 * (t->inverse_norm + 1) * largest;
+    return sqrt(worst) + 1e-13 * (t->inverse_norm + 1) * largest;
 }
