@@ -68,8 +68,9 @@ static int check_against(const char *cmd, const char *input, const char *source,
     if (!r.field_count)
         printf("  no scalar point field in both to compare\n");
     for (int f = 0; f < r.field_count; f++)
-        printf("  field %-24s %d step(s)  max error %.6g  RMS %.6g  (fractions of its range %.6g)\n", r.fields[f].name,
-               r.fields[f].steps, r.fields[f].max_error, r.fields[f].rms_error, r.fields[f].range);
+        printf("  field %-24s %d step(s)  max error %.6g  RMS %.6g  (fractions of its range %.6g)%s\n", r.fields[f].name,
+               r.fields[f].steps, r.fields[f].max_error, r.fields[f].rms_error, r.fields[f].range,
+               r.has_bound && !r.fields[f].bounded ? "  not bounded" : "");
     if (r.has_bound)
         printf("  bound recorded in META: %.6g: %s\n", r.bound, r.bound_exceeded ? "EXCEEDED" : "met");
     else

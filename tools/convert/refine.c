@@ -410,7 +410,6 @@ static int barycentric_gradients(const double p[4][3], double g[3][3])
 static void bound_tet(refine *r, int64_t t, double *scratch)
 {
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
-    double w[TPK_CELL_MAP_MAX_NODES];
     int type = cell_nodes(r, r->cell[t], verts), degree = tpk_cell_map_degree(type);
     r->field_error[t] = r->geometry_error[t] = r->criterion[t] = 0;
     r->worst_slot[t] = -1;
@@ -419,30 +418,58 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
     const tpk_bernstein *b = &r->table[degree];
     const double *xi = r->xi + 12 * t;
     const int32_t *tv = r->tets + 4 * t;
-    int n = tpk_cell_map_nodes(type), stride = 3 + r->bounded;
-    for (int i = 0; i < b->points; i++) {
+    int n = tpk_cell_map_nodes(type), m = b->points;
+    /* the nodes' weights at the domain points, then per node its share of each Bernstein coefficient */
+    double *weights = scratch, *coef = scratch + TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES;
+    for (int i = 0; i < m; i++) {
         double at[3] = {0, 0, 0};
         for (int k = 0; k < 4; k++)
             for (int j = 0; j < 3; j++)
                 at[j] += b->lambda[i][k] * xi[3 * k + j];
-        map_point(r, type, verts, at, w, scratch + (int64_t)i * stride);
-        for (int s = 0; s < r->bounded; s++)
-            scratch[(int64_t)i * stride + 3 + s] = interpolate(r, n, verts, w, r->bound_slot[s]);
+        tpk_cell_map_weights(type, at, weights + i * n);
     }
-    double corner[12], p[4][3], g[3][3];
+    double norm = tpk_bernstein_coefficients(b, weights, n, coef);
+    double p[4][3], g[3][3], node[TPK_CELL_MAP_MAX_NODES][3], geometry = 0, largest = 0;
     for (int k = 0; k < 4; k++)
+        memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
+    for (int k = 0; k < n; k++) {
+        memcpy(node[k], point_of(r, verts[k]), sizeof node[k]);
         for (int j = 0; j < 3; j++)
-            corner[3 * k + j] = p[k][j] = point_of(r, tv[k])[j];
-    double geometry = tpk_bernstein_gap(b, scratch, stride, corner, 3);
+            largest = fabs(node[k][j]) > largest ? fabs(node[k][j]) : largest;
+    }
+    for (int i = 0; i < m; i++) {
+        double sq = 0;
+        for (int j = 0; j < 3; j++) {
+            double c = -(b->lambda[i][0] * p[0][j] + b->lambda[i][1] * p[1][j] + b->lambda[i][2] * p[2][j] +
+                         b->lambda[i][3] * p[3][j]);
+            for (int k = 0; k < n; k++)
+                c += coef[i * n + k] * node[k][j];
+            sq += c * c;
+        }
+        geometry = sq > geometry ? sq : geometry;
+    }
+    geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
+    double crit = geometry / r->diag_length, worst = 0, limit = r->o->max_error;
     int flat = barycentric_gradients(p, g) != 0;
-    double crit = geometry / r->diag_length, worst = 0;
-    for (int s = 0; s < r->bounded; s++) {
-        double v[4], grad[3] = {0, 0, 0};
+    for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
+        int slot = r->bound_slot[s];
+        double v[4], grad[3] = {0, 0, 0}, value[TPK_CELL_MAP_MAX_NODES], gap = 0, big = 0;
+        int finite = 1;
         for (int k = 0; k < 4; k++)
-            v[k] = value_of(r, tv[k], r->bound_slot[s]);
-        if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2]) || !isfinite(v[3]))
+            finite &= isfinite(v[k] = value_of(r, tv[k], slot));
+        for (int k = 0; k < n; k++) {
+            finite &= isfinite(value[k] = value_of(r, verts[k], slot));
+            big = fabs(value[k]) > big ? fabs(value[k]) : big;
+        }
+        if (!finite)
             continue; /* no bound for missing values (NaN): nothing to interpolate */
-        double gap = tpk_bernstein_gap(b, scratch + 3 + s, stride, v, 1) / r->bound_range[s];
+        for (int i = 0; i < m; i++) {
+            double c = -(b->lambda[i][0] * v[0] + b->lambda[i][1] * v[1] + b->lambda[i][2] * v[2] + b->lambda[i][3] * v[3]);
+            for (int k = 0; k < n; k++)
+                c += coef[i * n + k] * value[k];
+            gap = fabs(c) > gap ? fabs(c) : gap;
+        }
+        gap = (gap + 1e-12 * (norm + 1) * big) / r->bound_range[s];
         for (int k = 0; k < 3 && !flat; k++)
             for (int j = 0; j < 3; j++)
                 grad[j] += (v[k + 1] - v[0]) * g[k][j];
@@ -842,7 +869,7 @@ static int set_up(refine *r, int threads)
     if (!(r->scratch = calloc((size_t)threads, sizeof *r->scratch)))
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     for (int w = 0; w < threads; w++)
-        if (!(r->scratch[w] = malloc(sizeof **r->scratch * TPK_BERNSTEIN_MAX_POINTS * (size_t)(3 + r->bounded))))
+        if (!(r->scratch[w] = malloc(sizeof **r->scratch * 2 * TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES)))
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
     return place_corners(r, threads);
 }

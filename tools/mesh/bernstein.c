@@ -117,3 +117,24 @@ double tpk_bernstein_gap(const tpk_bernstein *t, const double *values, int strid
     }
     return sqrt(worst) + 1e-13 * (t->inverse_norm + 1) * largest;
 }
+
+double tpk_bernstein_coefficients(const tpk_bernstein *t, const double *values, int n, double *coef)
+{
+    int m = t->points;
+    double norm = 0;
+    for (int i = 0; i < m; i++) {
+        const double *row = t->inverse + i * m;
+        double *out = coef + i * n, sum = 0;
+        for (int k = 0; k < n; k++)
+            out[k] = 0;
+        for (int j = 0; j < m; j++) {
+            const double a = row[j], *in = values + j * n;
+            for (int k = 0; k < n; k++)
+                out[k] += a * in[k];
+        }
+        for (int k = 0; k < n; k++)
+            sum += fabs(out[k]);
+        norm = sum > norm ? sum : norm;
+    }
+    return norm;
+}

@@ -28,4 +28,9 @@ int tpk_bernstein_make(int n, tpk_bernstein *t);
 double tpk_bernstein_gap(const tpk_bernstein *t, const double *values, int stride, const double *corner,
                          int components);
 
+/* The Bernstein coefficients of each of n functions given by their values at the domain points
+ * (values[i * n + k]: function k at point i) into coef (same layout): coef = inverse x values. Returns the
+ * largest row sum of |coef| (for a margin on what is computed with them). */
+double tpk_bernstein_coefficients(const tpk_bernstein *t, const double *values, int n, double *coef);
+
 #endif
