@@ -37,7 +37,8 @@ static const char check_help[] =
     "                          file's tets (TMAP first); per point field shared by name (scalar): the max\n"
     "                          and RMS difference between the file's linear interpolant and the source\n"
     "                          cell's own, as a fraction of the field's range, and the share of points in\n"
-    "                          no tet. Exit 1 when META records a bound (\"max_error\") that a field exceeds\n"
+    "                          no tet. Exit 1 when META records a bound (\"max_error\", convert --max-error)\n"
+    "                          that a field exceeds (of those \"max_error_fields\" names, if it names any)\n"
     "  --samples N             with --against: N samples per parametric axis (1-8; default 4)\n"
     "\n"
     "Input formats (--format NAME, or tpk; tetpack formats says what each carries):\n";
