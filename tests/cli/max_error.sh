@@ -11,6 +11,7 @@
 #   byte for byte with --threads 1 and 2;
 # - check --against exits 1 on a file that breaks its recorded bound (compared with a source whose field
 #   was changed), and --max-error-field limits the bound to the fields named;
+# - --subdivide L (uniform subdivision, for comparison) proves a bound and promises none;
 # - usage: bad bounds, pyramids, and the options --max-error cannot go with exit 2 naming why.
 source "$(dirname "$0")/common.sh" "$@"
 command -v gmsh > /dev/null || fail "gmsh not installed (./dev deps installs it)"
@@ -72,6 +73,17 @@ done
 # 0.1% needs more tets than 1%, which needs more than none (the hexahedra)
 "$PY" -c "import json,sys; d=json.load(open(sys.argv[1])); m=d['max_error']; sys.exit(0 if d['tets'] > m['tets_before'] and m['vertices_added'] > 0 else 1)" "$WORK/hex.json" ||
     fail "hex at 0.1%: nothing refined: $(cat "$WORK/hex.json")"
+
+# --subdivide 1 (uniform: every tet into 8) proves a bound and promises none; it needs 8x the tets the
+# hexahedra had, where --max-error 1% (above, hex at 0.1% now in hex.json) refines adaptively
+convert_checked "$WORK/hex.msh" "$WORK/uniform.tpk" --subdivide 1 --json > "$WORK/uniform.json" 2> /dev/null
+"$PY" -c "import json,sys; d=json.load(open(sys.argv[1])); m=d['max_error']; sys.exit(0 if d['tets'] == 8 * m['tets_before'] and 0 < m['measured'] < 0.02 and m['subdivide'] == 1 else 1)" "$WORK/uniform.json" ||
+    fail "--subdivide 1: $(cat "$WORK/uniform.json")"
+read -r sampled code < <(against "$WORK/uniform.tpk" "$WORK/hex.msh")
+[ "$code" = 0 ] && grep -q "no bound recorded" "$WORK/against.txt" && le "$sampled" "$(meta "$WORK/uniform.tpk" max_error_measured)" ||
+    fail "--subdivide 1: check --against $(cat "$WORK/against.txt")"
+expect_exit 2 "$TPK" convert "$WORK/hex.msh" "$WORK/bad.tpk" --subdivide 1 --max-error 1%
+expect_stderr "one or the other"
 
 # conformity on real meshes: gmsh t5 at order 2 with a field, and an Exodus hex mesh with 12 fields x 11 steps
 gmsh -3 -nt 1 -order 2 -format msh22 "$DATA/gmsh/t5.geo" -o "$WORK/t50.msh" > "$WORK/gmsh.log" 2>&1 || { tail "$WORK/gmsh.log"; fail "gmsh failed"; }

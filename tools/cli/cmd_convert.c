@@ -40,6 +40,10 @@ static const char convert_help[] =
     "                              quadratic kinds; not with pyramids, polyhedra, --higher-order corners,\n"
     "                              --merge-duplicates or --parts\n"
     "  --max-error-field NAME      bound only this point field (repeatable; default: every point field)\n"
+    "  --subdivide L               for comparison: instead of --max-error, cut every tet into 8 (each edge\n"
+    "                              halved at the cell's own map) L times (1-5), a uniform subdivision as\n"
+    "                              ParaView's levels; the bound proved over the result is reported and in\n"
+    "                              META (max_error_measured), none promised\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
@@ -287,6 +291,10 @@ static int parse_args(int argc, char **argv, convert_args *a)
             if (!(v = tpk_cli_value(argc, argv, &i, "--max-error")) || parse_max_error(v, &a->options.max_error))
                 return tpk_cli_fail("convert", "--max-error expects a fraction (0.01) or a percentage (1%%) above 0 "
                                     "and below 1, found '%s'", v ? v : "");
+        } else if (!strncmp(arg, "--subdivide", 11) && (!arg[11] || arg[11] == '=')) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--subdivide")) || tpk_cli_parse_int(v, 1, 5, &a->options.subdivide))
+                return tpk_cli_fail("convert", "--subdivide expects a number of levels from 1 to 5, found '%s'",
+                                    v ? v : "");
         } else if (!strcmp(arg, "--cell-to-point")) {
             a->options.cell_to_point = 1;
         } else if (!strcmp(arg, "--json")) {
@@ -310,7 +318,11 @@ static int parse_args(int argc, char **argv, convert_args *a)
     }
     if (npos != 2)
         return tpk_cli_fail("convert", "expected INPUT and OUTPUT.tpk (see tetpack convert --help)");
-    if (a->options.max_error_field_count > 0 && !(a->options.max_error > 0))
+    if (a->options.subdivide > 0 && a->options.max_error > 0)
+        return tpk_cli_fail("convert", "--subdivide and --max-error: one or the other");
+    if (a->options.subdivide > 0 && (a->options.higher_order_corners || a->options.merge_duplicates || a->options.parts))
+        return tpk_cli_fail("convert", "--subdivide: not with --higher-order corners, --merge-duplicates or --parts");
+    if (a->options.max_error_field_count > 0 && !(a->options.max_error > 0) && !(a->options.subdivide > 0))
         return tpk_cli_fail("convert", "--max-error-field needs --max-error E");
     if (a->options.max_error > 0 && a->options.higher_order_corners)
         return tpk_cli_fail("convert", "--max-error and --higher-order corners: the bound is against each cell's own "
@@ -391,9 +403,10 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
             tpk_strbuf_printf(&sb, "\"higher_order\":{\"mode\":\"%s\",\"cells\":%lld,\"added_points\":%lld},",
                               r->higher_order_split ? "split" : "corners", (long long)r->higher_order_cells,
                               (long long)r->higher_order_points);
-        if (a->options.max_error > 0) {
-            tpk_strbuf_printf(&sb, "\"max_error\":{\"requested\":%.9g,\"measured\":%.9g,\"geometry\":%.9g,"
-                              "\"worst_field\":", r->max_error.requested, r->max_error.field_error,
+        if (a->options.max_error > 0 || a->options.subdivide > 0) {
+            tpk_strbuf_printf(&sb, "\"max_error\":{\"subdivide\":%d,\"requested\":%.9g,", r->max_error.subdivide,
+                              r->max_error.requested);
+            tpk_strbuf_printf(&sb, "\"measured\":%.9g,\"geometry\":%.9g,\"worst_field\":", r->max_error.field_error,
                               r->max_error.geometry_error);
             tpk_strbuf_json_string(&sb, r->max_error.worst_field);
             tpk_strbuf_printf(&sb, ",\"fields\":%d,\"tets_before\":%lld,\"vertices_added\":%lld,\"passes\":%d,"
@@ -443,7 +456,12 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
            a->options.output, (long long)r->tets, (long long)r->vertices, (long long)r->shell_faces,
            r->field_count, r->step_count, (double)r->output_bytes / 1048576.0);
     printf("  source: %lld cells, %lld points\n", (long long)r->source_cells, (long long)r->source_points);
-    if (a->options.max_error > 0)
+    if (a->options.subdivide > 0)
+        printf("  subdivided %d times: proved %.3g of the range (%s), geometry %.3g of the diagonal; %lld tets into "
+               "%lld (%lld points added)\n", r->max_error.subdivide, r->max_error.field_error,
+               r->max_error.worst_field[0] ? r->max_error.worst_field : "no field", r->max_error.geometry_error,
+               (long long)r->max_error.tets_before, (long long)r->tets, (long long)r->max_error.vertices_added);
+    else if (a->options.max_error > 0)
         printf("  max error: %g requested; proved %.3g of the range (%s), geometry %.3g of the diagonal; %lld tets "
                "refined into %lld (%lld points added, %d passes)\n", r->max_error.requested, r->max_error.field_error,
                r->max_error.worst_field[0] ? r->max_error.worst_field : "no field", r->max_error.geometry_error,

@@ -104,7 +104,7 @@ static int read_source(conversion *c)
  * reduced to their corners) before anything else sees the mesh. */
 static int whole_cells(conversion *c)
 {
-    if (c->o->max_error > 0) {
+    if (c->o->max_error > 0 || c->o->subdivide > 0) {
         if (tpk_refine_cells_copy(&c->src, &c->source_cells) != 0)
             return tpk_diag_fail(c->diag, "out of memory for the cells of %s (--max-error)", c->o->input);
         int64_t bad = tpk_refine_unbounded_cell(&c->source_cells);
@@ -158,7 +158,8 @@ static int refine_tets(conversion *c)
 {
     announce(c->stage, c->stage_user, "refine");
     double t = tpk_now_seconds();
-    tpk_refine_options ro = {c->o->max_error, c->o->max_error_fields, c->o->max_error_field_count, c->o->threads, 0};
+    tpk_refine_options ro = {c->o->max_error, c->o->max_error_fields, c->o->max_error_field_count, c->o->threads, 0,
+                             c->o->subdivide};
     tpk_refine_report rr;
     int rc = tpk_refine_max_error(&c->mesh, &c->source_cells, &ro, &rr, c->diag);
     tpk_refine_cells_free(&c->source_cells);
@@ -172,6 +173,7 @@ static int refine_tets(conversion *c)
     c->rep->max_error.tets_before = rr.tets_before;
     c->rep->max_error.vertices_added = rr.vertices_added;
     c->rep->max_error.passes = rr.rounds;
+    c->rep->max_error.subdivide = c->o->subdivide;
     c->rep->max_error.seconds = tpk_now_seconds() - t;
     return 0;
 }
@@ -211,7 +213,7 @@ static int make_tets(conversion *c)
     rep->thin_faces_recut = c->mesh.thin_faces_recut;
     rep->flat_tets = c->mesh.flat_tets;
     rep->bad_cells_skipped = c->mesh.bad_cells_skipped;
-    if (o->max_error > 0 && refine_tets(c) != 0)
+    if ((o->max_error > 0 || o->subdivide > 0) && refine_tets(c) != 0)
         return -1;
     return tpk_quantize_points(&c->mesh, &c->header, c->diag);
 }

@@ -46,6 +46,9 @@ typedef struct tpk_convert_options {
                                      Not with higher_order_corners, merge_duplicates, parts */
     const char *const *max_error_fields; /* the point fields bounded; NULL: all */
     int max_error_field_count;
+    int subdivide;                /* > 0 (not with max_error): every tet cut into 8 this many times, and the
+                                     bound over the result proved and recorded (uniform subdivision, what
+                                     --max-error is compared with) */
     int threads;                  /* <= 0: all cores */
     int parts;                    /* 0: one .tpk; >= 1: output is a part set manifest of this many parts
                                      (spec §15), cut along the Hilbert order */
@@ -84,6 +87,7 @@ typedef struct tpk_convert_report {
         int fields;               /* point fields bounded */
         int64_t tets_before, vertices_added;
         int passes;
+        int subdivide;            /* the levels of --subdivide, or 0 */
         double seconds;
     } max_error;
     uint64_t output_bytes;

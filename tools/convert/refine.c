@@ -449,7 +449,7 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
         geometry = sq > geometry ? sq : geometry;
     }
     geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
-    double crit = geometry / r->diag_length, worst = 0, limit = r->o->max_error;
+    double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
     int flat = barycentric_gradients(p, g) != 0;
     for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
         int slot = r->bound_slot[s];
@@ -596,6 +596,91 @@ static int bisect(refine *r, int64_t t, int e, int32_t mid)
     return 0;
 }
 
+/* The rounds: every tet of `active` (ascending; malloc'ed, taken over) with a marked edge bisects its
+ * greatest marked one, its pieces keeping its other marks, until none has one. The tets cut become the
+ * tets to bound again. */
+static int cut_marked(refine *r, int64_t *active, int64_t active_count)
+{
+    int rc = 0;
+    for (int64_t i = 0; i < r->todo_count; i++)
+        r->queued[r->todo[i]] = 0;
+    r->todo_count = 0;
+    int8_t *chosen = malloc((size_t)(active_count ? active_count : 1));
+    while (rc == 0 && active_count > 0 && chosen) {
+        int64_t splits = 0, n = 0;
+        for (int64_t i = 0; i < active_count; i++)
+            if ((chosen[n] = (int8_t)greatest_edge(r, active[i], 1)) >= 0)
+                active[n++] = active[i], splits++;
+        active_count = n;
+        if (splits == 0)
+            break;
+        if (r->count + splits > r->o->max_tets) {
+            rc = r->o->uniform_levels > 0
+                     ? tpk_diag_fail(r->diag, "--subdivide %d: more than %lld tets (from %lld)", r->o->uniform_levels,
+                                     (long long)r->o->max_tets, (long long)r->tets_given)
+                     : tpk_diag_fail(r->diag, "--max-error %g: refinement would pass %lld tets (from %lld) before "
+                                     "meeting the bound; give a larger bound", r->o->max_error,
+                                     (long long)r->o->max_tets, (long long)r->tets_given);
+            break;
+        }
+        int64_t first_child = r->count;
+        if (reserve_tets(r, r->count + splits) != 0) {
+            rc = -1;
+            break;
+        }
+        int64_t *grown = realloc(active, sizeof *active * (size_t)(2 * active_count));
+        int8_t *grown_chosen = realloc(chosen, (size_t)(2 * active_count));
+        if (!grown || !grown_chosen) {
+            free(grown ? grown : active), free(grown_chosen ? grown_chosen : chosen);
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        }
+        active = grown, chosen = grown_chosen;
+        for (int64_t k = 0; rc == 0 && k < active_count; k++) {
+            int64_t t = active[k];
+            int i = tet_edges[chosen[k]][0], j = tet_edges[chosen[k]][1];
+            uint64_t key = edge_key(r->tets[4 * t + i], r->tets[4 * t + j]);
+            int32_t mid;
+            if (!edge_find(&r->mids, key, &mid)) {
+                double half[3];
+                for (int c = 0; c < 3; c++)
+                    half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
+                if ((mid = add_vertex(r, t, half)) < 0) {
+                    rc = -1;
+                    break;
+                }
+                if (edge_put(&r->mids, key, mid) != 0) {
+                    rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+                    break;
+                }
+            }
+            rc = bisect(r, t, chosen[k], mid);
+        }
+        for (int64_t u = first_child; u < r->count; u++) /* the children: the cut tets, then the new ones */
+            active[active_count++] = u;
+    }
+    free(active), free(chosen);
+    return rc;
+}
+
+/* --subdivide: every edge of every tet marked and cut: each tet into 8, its edges halved (the uniform
+ * subdivision a bound is compared with). */
+static int cut_all(refine *r)
+{
+    edge_clear(&r->marks);
+    int64_t *active = malloc(sizeof *active * (size_t)(r->count ? r->count : 1));
+    if (!active)
+        return tpk_diag_fail(r->diag, "out of memory for --subdivide");
+    for (int64_t t = 0; t < r->count; t++) {
+        active[t] = t;
+        for (int e = 0; e < 6; e++)
+            if (edge_put(&r->marks, edge_key(r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]), 1)) {
+                free(active);
+                return tpk_diag_fail(r->diag, "out of memory for --subdivide");
+            }
+    }
+    return cut_marked(r, active, r->count);
+}
+
 /* Tets by vertex (CSR over the tets there are), for the tets around a marked edge. */
 typedef struct vertex_tets {
     int64_t *start;
@@ -688,57 +773,7 @@ static int refine_pass(refine *r, double limit)
         free(active);
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     }
-    for (int i = 0; i < r->todo_count; i++)
-        r->queued[r->todo[i]] = 0;
-    r->todo_count = 0;
-    int8_t *chosen = malloc((size_t)(active_count ? active_count : 1));
-    while (rc == 0 && active_count > 0 && chosen) {
-        int64_t splits = 0, n = 0;
-        for (int64_t i = 0; i < active_count; i++)
-            if ((chosen[n] = (int8_t)greatest_edge(r, active[i], 1)) >= 0)
-                active[n++] = active[i], splits++;
-        active_count = n;
-        if (splits == 0)
-            break;
-        if (r->count + splits > r->o->max_tets) {
-            rc = tpk_diag_fail(r->diag, "--max-error %g: refinement would pass %lld tets (from %lld) before meeting "
-                               "the bound; give a larger bound", r->o->max_error, (long long)r->o->max_tets,
-                               (long long)r->tets_given);
-            break;
-        }
-        int64_t first_child = r->count;
-        if (reserve_tets(r, r->count + splits) != 0) {
-            rc = -1;
-            break;
-        }
-        int64_t *grown = realloc(active, sizeof *active * (size_t)(2 * active_count));
-        int8_t *grown_chosen = realloc(chosen, (size_t)(2 * active_count));
-        if (!grown || !grown_chosen) {
-            free(grown ? grown : active), free(grown_chosen ? grown_chosen : chosen);
-            return tpk_diag_fail(r->diag, "out of memory for --max-error");
-        }
-        active = grown, chosen = grown_chosen;
-        for (int64_t k = 0; rc == 0 && k < active_count; k++) {
-            int64_t t = active[k];
-            int i = tet_edges[chosen[k]][0], j = tet_edges[chosen[k]][1];
-            uint64_t key = edge_key(r->tets[4 * t + i], r->tets[4 * t + j]);
-            int32_t mid;
-            if (!edge_find(&r->mids, key, &mid)) {
-                double half[3];
-                for (int c = 0; c < 3; c++)
-                    half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
-                if ((mid = add_vertex(r, t, half)) < 0 || edge_put(&r->mids, key, mid) != 0) {
-                    rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
-                    break;
-                }
-            }
-            rc = bisect(r, t, chosen[k], mid);
-        }
-        for (int64_t u = first_child; u < r->count; u++) /* the children: the cut tets, then the new ones */
-            active[active_count++] = u;
-    }
-    free(active), free(chosen);
-    return rc;
+    return cut_marked(r, active, active_count);
 }
 
 /* ---- set-up and hand-back ---------------------------------------------------------------------- */
@@ -881,6 +916,8 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
     memset(&r, 0, sizeof r);
     memset(report, 0, sizeof *report);
     tpk_refine_options o = *options;
+    if (o.max_tets <= 0 && o.uniform_levels > 0)
+        o.max_tets = INT32_MAX;
     if (o.max_tets <= 0)
         o.max_tets = mesh->tet_count * 64 > (1 << 24) ? mesh->tet_count * 64 : (1 << 24);
     if (o.max_tets > INT32_MAX)
@@ -890,13 +927,17 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
     r.tets_given = mesh->tet_count;
     report->tets_before = mesh->tet_count;
     int threads = tpk_thread_count(o.threads), rc = set_up(&r, threads);
+    for (int level = 0; rc == 0 && level < o.uniform_levels; level++)
+        rc = cut_all(&r);
+    for (int64_t t = 0; rc == 0 && o.uniform_levels > 0 && t < r.count; t++)
+        enqueue(&r, t);
     for (int pass = 0; rc == 0; pass++) {
         tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
         int64_t over = 0;
         for (int64_t i = 0; i < r.todo_count; i++)
             over += !(r.criterion[r.todo[i]] <= o.max_error);
         report->rounds = pass;
-        if (over == 0)
+        if (over == 0 || o.uniform_levels > 0)
             break;
         if (pass == MAX_PASSES) {
             rc = tpk_diag_fail(diag, "--max-error %g: %lld tets still over the bound after %d passes of refinement",
