@@ -429,6 +429,10 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
         tpk_cell_map_weights(type, at, weights + i * n);
     }
     double norm = tpk_bernstein_coefficients(b, weights, n, coef);
+    for (int k = 0; k < n; k++) /* by node, so that each field's sums below run along the domain points */
+        for (int i = 0; i < m; i++)
+            weights[k * m + i] = coef[i * n + k];
+    const double *by_node = weights;
     double p[4][3], g[3][3], node[TPK_CELL_MAP_MAX_NODES][3], geometry = 0, largest = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
@@ -463,12 +467,17 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
         }
         if (!finite)
             continue; /* no bound for missing values (NaN): nothing to interpolate */
-        for (int i = 0; i < m; i++) {
-            double c = -(b->lambda[i][0] * v[0] + b->lambda[i][1] * v[1] + b->lambda[i][2] * v[2] + b->lambda[i][3] * v[3]);
-            for (int k = 0; k < n; k++)
-                c += coef[i * n + k] * value[k];
-            gap = fabs(c) > gap ? fabs(c) : gap;
-        }
+        double acc[TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+        for (int i = 0; i < m; i++)
+            acc[i] = 0;
+        for (int k = 0; k < 4; k++)
+            for (int i = 0; i < m; i++)
+                acc[i] -= v[k] * b->lambda_by_corner[k][i];
+        for (int k = 0; k < n; k++)
+            for (int i = 0; i < m; i++)
+                acc[i] += value[k] * by_node[k * m + i];
+        for (int i = 0; i < m; i++)
+            gap = fabs(acc[i]) > gap ? fabs(acc[i]) : gap;
         gap = (gap + 1e-12 * (norm + 1) * big) / r->bound_range[s];
         for (int k = 0; k < 3 && !flat; k++)
             for (int j = 0; j < 3; j++)

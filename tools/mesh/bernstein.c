@@ -68,7 +68,7 @@ int tpk_bernstein_make(int n, tpk_bernstein *t)
             for (int k = 0; i + j + k <= n; k++, m++) {
                 alpha[m][0] = n - i - j - k, alpha[m][1] = i, alpha[m][2] = j, alpha[m][3] = k;
                 for (int c = 0; c < 4; c++)
-                    t->lambda[m][c] = (double)alpha[m][c] / n;
+                    t->lambda[m][c] = t->lambda_by_corner[c][m] = (double)alpha[m][c] / n;
             }
     t->points = m;
     double *work = a; /* static scratch: callers make their tables before starting threads */

@@ -13,6 +13,7 @@
 typedef struct tpk_bernstein {
     int degree, points;
     double lambda[TPK_BERNSTEIN_MAX_POINTS][4]; /* domain point i: barycentric alpha_i / n */
+    double lambda_by_corner[4][TPK_BERNSTEIN_MAX_POINTS]; /* the same, transposed */
     double inverse[TPK_BERNSTEIN_MAX_POINTS * TPK_BERNSTEIN_MAX_POINTS]; /* coefficients = inverse x values */
     double inverse_norm;                      /* its infinity norm (rows' absolute sums), for the margin */
 } tpk_bernstein;
