@@ -167,7 +167,7 @@ typedef struct refine {
     int *worst_slot;
     tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1];
     edge_table marks, mids;
-    double **scratch;      /* per worker */
+    struct coef_cache *cache; /* per worker */
     int report_fields;     /* fields bounded (not constant) */
     int64_t *todo, todo_count, todo_cap; /* tets whose bound is not known yet (new or cut since) */
     uint8_t *queued;       /* per tet: in todo */
@@ -407,7 +407,48 @@ static int barycentric_gradients(const double p[4][3], double g[3][3])
  * error (a fraction of the diagonal), and the criterion refinement meets: the larger of the geometry
  * error and, per slot, the field's bound plus its gradient times the geometry's (a point located by
  * position rather than parameter, as check --against samples, then also stays within E). */
-static void bound_tet(refine *r, int64_t t, double *scratch)
+/* Per worker, the Bernstein coefficients of the cell's functions on the tets of parameter space met
+ * lately, by node (by_node[k * m + i]: node k's share of coefficient i), keyed by the cell type and the
+ * 4 parametric corners: a pure function of the key, so that a hit gives the very numbers a miss would.
+ * The tets of a regular mesh's cells, and their pieces, repeat the same few parametric tets. */
+typedef struct coef_cache {
+    int entries, size; /* a power of two; doubles per entry */
+    int *type;         /* 0: empty */
+    double *key, *norm, *by_node;
+    double work[2 * TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES];
+} coef_cache;
+
+static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int type, int n, const double *xi,
+                                  double *norm)
+{
+    uint64_t h = 1469598103934665603ull ^ (uint64_t)type;
+    const unsigned char *bytes = (const unsigned char *)xi;
+    for (size_t i = 0; i < 12 * sizeof *xi; i++)
+        h = (h ^ bytes[i]) * 1099511628211ull;
+    int e = (int)(h & (uint64_t)(cc->entries - 1)), m = b->points;
+    double *by_node = cc->by_node + (int64_t)e * cc->size;
+    if (cc->type[e] == type && !memcmp(cc->key + 12 * e, xi, 12 * sizeof *xi)) {
+        *norm = cc->norm[e];
+        return by_node;
+    }
+    double *weights = cc->work, *coef = cc->work + TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES;
+    for (int i = 0; i < m; i++) { /* the nodes' weights at the domain points */
+        double at[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++)
+            for (int j = 0; j < 3; j++)
+                at[j] += b->lambda[i][k] * xi[3 * k + j];
+        tpk_cell_map_weights(type, at, weights + i * n);
+    }
+    *norm = cc->norm[e] = tpk_bernstein_coefficients(b, weights, n, coef);
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < m; i++)
+            by_node[k * m + i] = coef[i * n + k];
+    cc->type[e] = type;
+    memcpy(cc->key + 12 * e, xi, 12 * sizeof *xi);
+    return by_node;
+}
+
+static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 {
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     int type = cell_nodes(r, r->cell[t], verts), degree = tpk_cell_map_degree(type);
@@ -419,20 +460,8 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
     const double *xi = r->xi + 12 * t;
     const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(type), m = b->points;
-    /* the nodes' weights at the domain points, then per node its share of each Bernstein coefficient */
-    double *weights = scratch, *coef = scratch + TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES;
-    for (int i = 0; i < m; i++) {
-        double at[3] = {0, 0, 0};
-        for (int k = 0; k < 4; k++)
-            for (int j = 0; j < 3; j++)
-                at[j] += b->lambda[i][k] * xi[3 * k + j];
-        tpk_cell_map_weights(type, at, weights + i * n);
-    }
-    double norm = tpk_bernstein_coefficients(b, weights, n, coef);
-    for (int k = 0; k < n; k++) /* by node, so that each field's sums below run along the domain points */
-        for (int i = 0; i < m; i++)
-            weights[k * m + i] = coef[i * n + k];
-    const double *by_node = weights;
+    double norm;
+    const double *by_node = coefficients(cache, b, type, n, xi, &norm);
     double p[4][3], g[3][3], node[TPK_CELL_MAP_MAX_NODES][3], geometry = 0, largest = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
@@ -441,15 +470,19 @@ static void bound_tet(refine *r, int64_t t, double *scratch)
         for (int j = 0; j < 3; j++)
             largest = fabs(node[k][j]) > largest ? fabs(node[k][j]) : largest;
     }
+    double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
+    for (int j = 0; j < 3; j++) {
+        for (int i = 0; i < m; i++)
+            gx[j][i] = 0;
+        for (int k = 0; k < 4; k++)
+            for (int i = 0; i < m; i++)
+                gx[j][i] -= p[k][j] * b->lambda_by_corner[k][i];
+        for (int k = 0; k < n; k++)
+            for (int i = 0; i < m; i++)
+                gx[j][i] += node[k][j] * by_node[k * m + i];
+    }
     for (int i = 0; i < m; i++) {
-        double sq = 0;
-        for (int j = 0; j < 3; j++) {
-            double c = -(b->lambda[i][0] * p[0][j] + b->lambda[i][1] * p[1][j] + b->lambda[i][2] * p[2][j] +
-                         b->lambda[i][3] * p[3][j]);
-            for (int k = 0; k < n; k++)
-                c += coef[i * n + k] * node[k][j];
-            sq += c * c;
-        }
+        double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
         geometry = sq > geometry ? sq : geometry;
     }
     geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
@@ -497,7 +530,7 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     refine *r = ctx;
     for (int64_t i = begin; i < end; i++)
-        bound_tet(r, r->todo[i], r->scratch[w]);
+        bound_tet(r, r->todo[i], &r->cache[w]);
 }
 
 /* ---- growth ------------------------------------------------------------------------------------ */
@@ -873,9 +906,9 @@ static void release(refine *r, int threads)
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->queued);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
-    for (int w = 0; r->scratch && w < threads; w++)
-        free(r->scratch[w]);
-    free(r->scratch);
+    for (int w = 0; r->cache && w < threads; w++)
+        free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
+    free(r->cache);
 }
 
 static int set_up(refine *r, int threads)
@@ -910,11 +943,27 @@ static int set_up(refine *r, int threads)
     for (int64_t t = 0; t < r->count; t++)
         r->root[t] = t, r->queued[t] = 1, r->todo[t] = t;
     r->todo_count = r->count;
-    if (!(r->scratch = calloc((size_t)threads, sizeof *r->scratch)))
+    int size = 1; /* doubles per cached entry: the most any cell here needs */
+    for (int64_t c = 0; c < r->cells->cell_count; c++) {
+        int type = mapped_type(r->cells, c), degree = tpk_cell_map_degree(type);
+        if (degree > 1 && r->table[degree].points * tpk_cell_map_nodes(type) > size)
+            size = r->table[degree].points * tpk_cell_map_nodes(type);
+    }
+    int entries = 4096;
+    while (entries > 64 && (int64_t)entries * size * (int64_t)sizeof(double) > (8 << 20))
+        entries /= 2; /* at most 8 MiB a worker */
+    if (!(r->cache = calloc((size_t)threads, sizeof *r->cache)))
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
-    for (int w = 0; w < threads; w++)
-        if (!(r->scratch[w] = malloc(sizeof **r->scratch * 2 * TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES)))
+    for (int w = 0; w < threads; w++) {
+        coef_cache *cc = &r->cache[w];
+        cc->entries = entries, cc->size = size;
+        cc->type = calloc((size_t)entries, sizeof *cc->type);
+        cc->key = malloc(sizeof *cc->key * 12 * (size_t)entries);
+        cc->norm = malloc(sizeof *cc->norm * (size_t)entries);
+        cc->by_node = malloc(sizeof *cc->by_node * (size_t)size * (size_t)entries);
+        if (!cc->type || !cc->key || !cc->norm || !cc->by_node)
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
     return place_corners(r, threads);
 }
 
