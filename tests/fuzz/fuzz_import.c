@@ -127,7 +127,7 @@ static void refine_small(tpk_mesh *mesh, const char *name, tpk_diag *diag)
                 tets.vertex_source[v] = -1;
         for (int64_t t = 0; split.cell_source && t < tets.tet_count; t++)
             tets.tet_source[t] = split.cell_source[tets.tet_source[t]];
-        tpk_refine_options options = {0.05, NULL, 0, 1, 4096};
+        tpk_refine_options options = {.max_error = 0.05, .threads = 1, .max_tets = 4096};
         tpk_refine_report report;
         tpk_refine_max_error(&tets, &cells, &options, &report, diag);
     }
