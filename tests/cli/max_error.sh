@@ -12,7 +12,8 @@
 # - check --against exits 1 on a file that breaks its recorded bound (compared with a source whose field
 #   was changed), and --max-error-field limits the bound to the fields named;
 # - --subdivide L (uniform subdivision, for comparison) proves a bound and promises none;
-# - usage: bad bounds, pyramids, and the options --max-error cannot go with exit 2 naming why.
+# - usage: bad bounds, pyramids, a tangled cell, and the options --max-error cannot go with exit 2
+#   naming why.
 source "$(dirname "$0")/common.sh" "$@"
 command -v gmsh > /dev/null || fail "gmsh not installed (./dev deps installs it)"
 
@@ -137,5 +138,11 @@ CELL_TYPES 1
 VTK
 expect_exit 2 "$TPK" convert "$WORK/pyramid.vtk" "$WORK/bad.tpk" --max-error 1%
 expect_stderr "cell 0 is a pyramid"
+# a quadratic tetra whose mid-edge nodes sit on the wrong edges (tangled): its pieces turn over when
+# bisected at the map's midpoints, named, and nothing is written
+tail -c +2 "$SRC/tests/fuzz/corpus/fuzz_gmsh/max_error22.msh" |
+    sed 's/^1 11 2 0 1 1 2 3 4 5 6 7 8 9 10$/1 11 2 0 1 1 2 3 4 5 6 7 8 10 9/' > "$WORK/tangled.msh"
+expect_exit 2 "$TPK" convert "$WORK/tangled.msh" "$WORK/bad.tpk" --max-error 1%
+expect_stderr "cell 0 (a quadratic tetra) folds when refined"
 [ ! -e "$WORK/bad.tpk" ] || fail "a refused conversion left $WORK/bad.tpk"
 echo "ok"
