@@ -46,7 +46,8 @@ typedef struct tpk_convert_options {
                                      Not with higher_order_corners, merge_duplicates, parts */
     const char *const *max_error_fields; /* the point fields bounded; NULL: all */
     int max_error_field_count;
-    int subdivide;                /* > 0 (not with max_error): every tet cut into 8 this many times, and the
+    int subdivide;                /* > 0 (not with max_error): every tet cut into 8 at its edges' midpoints
+                                     (every edge halved) this many times, and the
                                      bound over the result proved and recorded (uniform subdivision, what
                                      --max-error is compared with) */
     int threads;                  /* <= 0: all cores */

@@ -704,23 +704,73 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
     return rc;
 }
 
-/* --subdivide: every edge of every tet marked and cut: each tet into 8, its edges halved (the uniform
- * subdivision a bound is compared with). */
+/* --subdivide: each tet cut into 8 at its edges' midpoints (red refinement: the 4 corner tets and the inner
+ * octahedron cut along its shortest diagonal), so every edge is halved, as a lattice subdivision halves a
+ * cell's; a face is cut into the same 4 triangles from both sides. A piece's vertex order is the one
+ * whose parametric orientation is its parent's; its exact sign must then be its parent's too. */
 static int cut_all(refine *r)
 {
-    edge_clear(&r->marks);
-    int64_t *active = malloc(sizeof *active * (size_t)(r->count ? r->count : 1));
-    if (!active)
-        return tpk_diag_fail(r->diag, "out of memory for --subdivide");
-    for (int64_t t = 0; t < r->count; t++) {
-        active[t] = t;
-        for (int e = 0; e < 6; e++)
-            if (edge_put(&r->marks, edge_key(r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]), 1)) {
-                free(active);
-                return tpk_diag_fail(r->diag, "out of memory for --subdivide");
+    static const int corner_tets[4][4] = {{0, 4, 5, 6}, {4, 1, 7, 8}, {5, 7, 2, 9}, {6, 8, 9, 3}};
+    static const int diagonal[3][2] = {{4, 9}, {5, 8}, {6, 7}}; /* mid-edges of opposite edges */
+    static const int ring[3][4] = {{5, 6, 8, 7}, {4, 6, 9, 7}, {4, 5, 9, 8}};
+    int64_t n = r->count;
+    if (8 * n > r->o->max_tets)
+        return tpk_diag_fail(r->diag, "--subdivide %d: more than %lld tets (from %lld)", r->o->uniform_levels,
+                             (long long)r->o->max_tets, (long long)r->tets_given);
+    if (reserve_tets(r, 8 * n) != 0)
+        return -1;
+    for (int64_t i = 0; i < r->todo_count; i++)
+        r->queued[r->todo[i]] = 0;
+    r->todo_count = 0;
+    for (int64_t t = 0; t < n; t++) {
+        int32_t v[10];
+        double x[10][3];
+        for (int k = 0; k < 4; k++)
+            v[k] = r->tets[4 * t + k], memcpy(x[k], r->xi + 12 * t + 3 * k, sizeof x[k]);
+        for (int e = 0; e < 6; e++) {
+            int i = tet_edges[e][0], j = tet_edges[e][1];
+            for (int c = 0; c < 3; c++)
+                x[4 + e][c] = 0.5 * (x[i][c] + x[j][c]);
+            uint64_t key = edge_key(v[i], v[j]);
+            if (!edge_find(&r->mids, key, &v[4 + e])) {
+                if ((v[4 + e] = add_vertex(r, t, x[4 + e])) < 0)
+                    return -1;
+                if (edge_put(&r->mids, key, v[4 + e]) != 0)
+                    return tpk_diag_fail(r->diag, "out of memory for --subdivide");
             }
+        }
+        int parent = sign_of(r, v), parent_xi = tpk_orient3d_exact(x[0], x[1], x[2], x[3]), d = 0;
+        for (int k = 1; k < 3; k++)
+            if (dist2(point_of(r, v[diagonal[k][0]]), point_of(r, v[diagonal[k][1]])) <
+                dist2(point_of(r, v[diagonal[d][0]]), point_of(r, v[diagonal[d][1]])))
+                d = k;
+        int local[8][4];
+        memcpy(local, corner_tets, sizeof corner_tets);
+        for (int k = 0; k < 4; k++) {
+            int l[4] = {diagonal[d][0], diagonal[d][1], ring[d][k], ring[d][(k + 1) % 4]};
+            memcpy(local[4 + k], l, sizeof l);
+        }
+        int64_t cell = r->cell[t], root = r->root[t];
+        for (int c = 0; c < 8; c++) {
+            int *l = local[c];
+            if (tpk_orient3d_exact(x[l[0]], x[l[1]], x[l[2]], x[l[3]]) != parent_xi) {
+                int swap = l[2];
+                l[2] = l[3], l[3] = swap;
+            }
+            int64_t u = c == 0 ? t : r->count++;
+            for (int k = 0; k < 4; k++)
+                r->tets[4 * u + k] = v[l[k]], memcpy(r->xi + 12 * u + 3 * k, x[l[k]], sizeof x[0]);
+            r->cell[u] = (int32_t)cell, r->root[u] = root;
+            if (c > 0)
+                r->queued[u] = 0;
+            enqueue(r, u);
+            if (parent != 0 && sign_of(r, r->tets + 4 * u) != parent)
+                return tpk_diag_fail(r->diag, "--subdivide: cell %lld (a %s) folds when subdivided: a piece cut at its "
+                                     "map's edge midpoints turns over", (long long)cell,
+                                     tpk_cell_type(r->cells->types[cell])->name);
+        }
     }
-    return cut_marked(r, active, r->count);
+    return 0;
 }
 
 /* Tets by vertex (CSR over the tets there are), for the tets around a marked edge. */

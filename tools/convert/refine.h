@@ -30,8 +30,9 @@ typedef struct tpk_refine_options {
     int field_count;
     int threads;                /* <= 0: all cores; the result does not depend on it */
     int64_t max_tets;           /* refuse to grow past this many tets (0: 64 x the tets given, at least 2^24) */
-    int uniform_levels;         /* > 0: instead, every tet cut into 8 (every edge halved) this many times, and
-                                   the bound over the result measured, not enforced (convert --subdivide) */
+    int uniform_levels;         /* > 0: instead, every tet cut into 8 at its edges' midpoints (red refinement:
+                                   every edge halved) this many times, and the bound over the result
+                                   measured, not enforced (convert --subdivide) */
 } tpk_refine_options;
 
 typedef struct tpk_refine_report {
