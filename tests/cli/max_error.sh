@@ -104,6 +104,12 @@ read -r sampled code < <(against "$WORK/block.tpk" "$DATA/seacas/8-block.g")
 # a file against a source it does not follow: the recorded bound is broken, check --against says so
 read -r sampled code < <(against "$WORK/hex.tpk" "$WORK/hex_other.msh")
 [ "$code" = 1 ] && grep -q "EXCEEDED" "$WORK/against.txt" || fail "check --against a changed source: exit $code, $(cat "$WORK/against.txt")"
+# the same with META compressed (--zstd) and levels of detail beside the file's mesh
+convert_checked "$WORK/hex.msh" "$WORK/hex_zstd.tpk" --max-error 1% --zstd 3 --levels 1 > /dev/null 2>&1
+read -r sampled code < <(against "$WORK/hex_zstd.tpk" "$WORK/hex.msh")
+[ "$code" = 0 ] && grep -q "bound recorded in META: 0.01: met" "$WORK/against.txt" || fail "--zstd: $(cat "$WORK/against.txt")"
+read -r sampled code < <(against "$WORK/hex_zstd.tpk" "$WORK/hex_other.msh")
+[ "$code" = 1 ] || fail "--zstd, check --against a changed source: exit $code, $(cat "$WORK/against.txt")"
 # --max-error-field: only that field is held to the bound
 convert_checked "$DATA/seacas/8-block.g" "$WORK/one.tpk" --max-error 1% --max-error-field force_z --json > "$WORK/one.json" 2> /dev/null
 "$PY" -c "import json,sys; a=json.load(open(sys.argv[1])); b=json.load(open(sys.argv[2])); sys.exit(0 if a['max_error']['fields'] == 1 and a['tets'] < b['tets'] else 1)" "$WORK/one.json" "$WORK/block.json" ||

@@ -175,15 +175,16 @@ static int samples_of(int linear, int k, double (*r)[3], int cap)
 static char *read_bound(against *a, tpk_against_report *out)
 {
     uint64_t i;
-    const void *data;
-    uint64_t size;
-    if (tpk_find_chunk(a->file, TPK_TAG_META, 0, 0, &i) != TPK_OK || tpk_view_chunk(a->file, i, &data, &size) != TPK_OK)
+    tpk_dir_entry e;
+    if (tpk_find_chunk(a->file, TPK_TAG_META, 0, 0, &i) != TPK_OK || tpk_get_chunk(a->file, i, &e) != TPK_OK ||
+        e.raw_size > (1u << 24))
         return NULL;
-    char *text = malloc(size + 1), *list = NULL;
-    if (!text)
+    char *text = malloc(e.raw_size + 1), *list = NULL; /* read, not viewed: META may be compressed (--zstd) */
+    if (!text || tpk_read_chunk(a->file, i, text, e.raw_size) != TPK_OK) {
+        free(text);
         return NULL;
-    memcpy(text, data, size);
-    text[size] = 0;
+    }
+    text[e.raw_size] = 0;
     const char *at = strstr(text, "\"max_error\":"), *fields = strstr(text, "\"max_error_fields\":[");
     if (at && sscanf(at + 12, "%lf", &out->bound) == 1)
         out->has_bound = 1;
