@@ -3,13 +3,16 @@
  * input byte picks one of the row's extensions for the name the reader sees (UGRID takes its encoding
  * from it); the rest is the file. Each input is read strictly (convert) and leniently (tetpack check:
  * wrong-length field arrays recorded and dropped); a strict read's higher-order cells are then split whole
- * (mesh/higher_order.h) as the converter splits them. A failure must leave the mesh empty and say why;
+ * (mesh/higher_order.h) as the converter splits them, and a small mesh (up to 32 cells) is then split
+ * into tets and refined to a bound as convert --max-error does (convert/refine.h). A failure must leave the mesh empty and say why;
  * a crash, a sanitizer report or a leak is a bug. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "convert/pipeline.h"
+#include "convert/refine.h"
 #include "import/importers.h"
 #include "mesh/higher_order.h"
 #include "library_defect.h"
@@ -106,6 +109,33 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     return 0;
 }
 
+/* What convert --max-error does with a small mesh: cells kept, higher-order ones split, tets on the file
+ * grid, ids led back to the source's, refined (a coarse bound and few tets, for the fuzzer's pace). */
+static void refine_small(tpk_mesh *mesh, const char *name, tpk_diag *diag)
+{
+    tpk_refine_cells cells;
+    tpk_higher_split split;
+    memset(&split, 0, sizeof split);
+    if (mesh->cell_count > 32 || tpk_refine_cells_copy(mesh, &cells) != 0)
+        return;
+    tpk_tetmesh tets;
+    memset(&tets, 0, sizeof tets);
+    if (tpk_refine_unbounded_cell(&cells) < 0 && tpk_split_higher_order(mesh, name, &split, diag) == 0 &&
+        tpk_tetrahedralize(mesh, NULL, 0, TPK_TETRA_FILE_GRID, &tets, diag) == 0) {
+        for (int64_t v = 0; split.cell_source && v < tets.vertex_count; v++)
+            if (tets.vertex_source[v] >= split.source_points)
+                tets.vertex_source[v] = -1;
+        for (int64_t t = 0; split.cell_source && t < tets.tet_count; t++)
+            tets.tet_source[t] = split.cell_source[tets.tet_source[t]];
+        tpk_refine_options options = {.max_error = 0.05, .threads = 1, .max_tets = 4096};
+        tpk_refine_report report;
+        tpk_refine_max_error(&tets, &cells, &options, &report, diag);
+    }
+    tpk_tetmesh_free(&tets);
+    free(split.cell_source);
+    tpk_refine_cells_free(&cells);
+}
+
 static void read_both_ways(void *user)
 {
     const read_job *job = user;
@@ -122,7 +152,9 @@ static void read_both_ways(void *user)
         if (row->read_memory(name, (const char *)data + 1, size - 1, &mesh, &diag) == 0) {
             /* what convert does next with a mesh read whole: its higher-order cells split at their nodes */
             tpk_higher_split split;
-            if (!lenient && tpk_split_higher_order(&mesh, name, &split, &diag) == 0)
+            if (!lenient && mesh.cell_count <= 32)
+                refine_small(&mesh, name, &diag);
+            else if (!lenient && tpk_split_higher_order(&mesh, name, &split, &diag) == 0)
                 free(split.cell_source);
             tpk_mesh_free(&mesh);
         }

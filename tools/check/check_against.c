@@ -170,23 +170,48 @@ static int samples_of(int linear, int k, double (*r)[3], int cap)
     return n;
 }
 
-/* The META bound, if the converter recorded one ("max_error": a fraction of each field's range). */
-static void read_bound(against *a, tpk_against_report *out)
+/* The META bound, if the converter recorded one ("max_error": a fraction of each field's range), and the
+ * fields it holds for ("max_error_fields", the text of its list, malloc'ed; NULL: every field). */
+static char *read_bound(against *a, tpk_against_report *out)
 {
     uint64_t i;
-    const void *data;
-    uint64_t size;
-    if (tpk_find_chunk(a->file, TPK_TAG_META, 0, 0, &i) != TPK_OK || tpk_view_chunk(a->file, i, &data, &size) != TPK_OK)
-        return;
-    char *text = malloc(size + 1);
-    if (!text)
-        return;
-    memcpy(text, data, size);
-    text[size] = 0;
-    const char *at = strstr(text, "\"max_error\":");
+    tpk_dir_entry e;
+    if (tpk_find_chunk(a->file, TPK_TAG_META, 0, 0, &i) != TPK_OK || tpk_get_chunk(a->file, i, &e) != TPK_OK ||
+        e.raw_size > (1u << 24))
+        return NULL;
+    char *text = malloc(e.raw_size + 1), *list = NULL; /* read, not viewed: META may be compressed (--zstd) */
+    if (!text || tpk_read_chunk(a->file, i, text, e.raw_size) != TPK_OK) {
+        free(text);
+        return NULL;
+    }
+    text[e.raw_size] = 0;
+    const char *at = strstr(text, "\"max_error\":"), *fields = strstr(text, "\"max_error_fields\":[");
     if (at && sscanf(at + 12, "%lf", &out->bound) == 1)
         out->has_bound = 1;
+    const char *end = fields ? strchr(fields, ']') : NULL;
+    if (end && (list = malloc((size_t)(end - fields) + 1))) {
+        memcpy(list, fields, (size_t)(end - fields));
+        list[end - fields] = 0;
+    }
     free(text);
+    return list;
+}
+
+/* Is field `name` held to the bound: every field without a list, else those it names. */
+static int bounded(const char *list, const char *name)
+{
+    if (!list)
+        return 1;
+    size_t n = strlen(name);
+    for (const char *at = strchr(list, '['); at && (at = strchr(at, '"'));) {
+        const char *close = strchr(at + 1, '"');
+        if (!close)
+            return 0;
+        if ((size_t)(close - at - 1) == n && !strncmp(at + 1, name, n))
+            return 1;
+        at = close + 1;
+    }
+    return 0;
 }
 
 static int load_file(against *a, const char *path, tpk_diag *diag)
@@ -333,13 +358,14 @@ int tpk_check_against(const char *tpk_path, const char *source, const char *form
     memset(&src, 0, sizeof src);
     const tpk_src_field *pairs[TPK_AGAINST_MAX_FIELDS];
     double sum_sq[TPK_AGAINST_MAX_FIELDS] = {0};
+    char *list = NULL;
     int rc = load_file(&a, tpk_path, diag);
     if (rc == 0)
         rc = tpk_import_any_whole(source, format, NULL, 1, &src, diag);
     if (rc == 0 && (group_by_cell(&a, src.cell_count) || build_grid(&a)))
         rc = tpk_diag_fail(diag, "out of memory for the tets of %s", tpk_path);
     if (rc == 0) {
-        read_bound(&a, out);
+        list = read_bound(&a, out);
         pick_fields(&a, &src, pairs, out);
         const float **values = load_values(&a, out, diag);
         if (!values)
@@ -351,12 +377,14 @@ int tpk_check_against(const char *tpk_path, const char *source, const char *form
         for (int f = 0; f < out->field_count; f++) {
             tpk_against_field *o = &out->fields[f];
             o->rms_error = inside > 0 ? sqrt(sum_sq[f] / ((double)inside * o->steps)) : 0;
-            out->bound_exceeded |= out->has_bound && o->max_error > out->bound;
+            o->bounded = out->has_bound && bounded(list, o->name);
+            out->bound_exceeded |= o->bounded && o->max_error > out->bound;
         }
     }
     if (a.file)
         tpk_close(a.file);
     free(a.tets), free(a.tmap), free(a.cell_start), free(a.by_cell), free(a.bin_start), free(a.bin_tets);
     tpk_mesh_free(&src);
+    free(list);
     return rc;
 }

@@ -16,6 +16,7 @@ typedef struct tpk_against_field {
     int steps;                 /* steps compared (the fewer of the two) */
     double range;              /* max - min over the source's nodes, every step compared */
     double max_error, rms_error; /* |source - file| / range, over every sample and step */
+    int bounded;               /* META's bound holds for it (every field, or one max_error_fields names) */
 } tpk_against_field;
 
 typedef struct tpk_against_report {

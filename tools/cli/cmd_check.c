@@ -37,7 +37,8 @@ static const char check_help[] =
     "                          file's tets (TMAP first); per point field shared by name (scalar): the max\n"
     "                          and RMS difference between the file's linear interpolant and the source\n"
     "                          cell's own, as a fraction of the field's range, and the share of points in\n"
-    "                          no tet. Exit 1 when META records a bound (\"max_error\") that a field exceeds;\n"
+    "                          no tet. Exit 1 when META records a bound (\"max_error\", convert --max-error)\n"
+    "                          that a field exceeds (of those \"max_error_fields\" names, if it names any);\n"
     "                          --json prints the report as one JSON object\n"
     "  --samples N             with --against: N samples per parametric axis (1-8; default 4)\n"
     "\n"
@@ -107,8 +108,9 @@ static int check_against(const char *cmd, const char *input, const char *source,
     if (!r.field_count)
         printf("  no scalar point field in both to compare\n");
     for (int f = 0; f < r.field_count; f++)
-        printf("  field %-24s %d step(s)  max error %.6g  RMS %.6g  (fractions of its range %.6g)\n", r.fields[f].name,
-               r.fields[f].steps, r.fields[f].max_error, r.fields[f].rms_error, r.fields[f].range);
+        printf("  field %-24s %d step(s)  max error %.6g  RMS %.6g  (fractions of its range %.6g)%s\n", r.fields[f].name,
+               r.fields[f].steps, r.fields[f].max_error, r.fields[f].rms_error, r.fields[f].range,
+               r.has_bound && !r.fields[f].bounded ? "  not bounded" : "");
     if (r.has_bound)
         printf("  bound recorded in META: %.6g: %s\n", r.bound, r.bound_exceeded ? "EXCEEDED" : "met");
     else

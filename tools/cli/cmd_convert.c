@@ -29,6 +29,22 @@ static const char convert_help[] =
     "                              split (default) into linear cells at all their nodes, face and cell\n"
     "                              centres they lack placed and valued by their own shape functions;\n"
     "                              corners: reduced to their corner nodes (fewer tets, values dropped)\n"
+    "  --max-error E               refine the tets (conformingly, by edge bisection) until, inside every\n"
+    "                              source cell, each point field at every step is within E of the cell's\n"
+    "                              own interpolant (trilinear for a hexahedron, the quadratic functions of\n"
+    "                              a second-order cell), as a fraction of the field's range, and the tets\n"
+    "                              within E of the cell's map, as a fraction of the bounds diagonal. E is\n"
+    "                              a fraction (0.01) or a percentage (1%%), 0 < E < 1. The bound is proved\n"
+    "                              per tet (Bernstein coefficients), not sampled; META records it and the\n"
+    "                              largest error proved. Tetrahedra, voxels, hexahedra, wedges and their\n"
+    "                              quadratic kinds; not with pyramids, polyhedra, --higher-order corners,\n"
+    "                              --merge-duplicates or --parts\n"
+    "  --max-error-field NAME      bound only this point field (repeatable; default: every point field)\n"
+    "  --subdivide L               for comparison: instead of --max-error, cut every tet into 8 at its\n"
+    "                              edges' midpoints (placed by the cell's own map; every edge halved) L\n"
+    "                              times (1-5), a uniform subdivision as ParaView's levels; the bound proved\n"
+    "                              over the result is reported and in META (max_error_measured), none\n"
+    "                              promised\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
@@ -105,6 +121,7 @@ typedef struct convert_args {
     tpk_convert_options options;
     tpk_tetgen_options tetgen;
     const char *fields[256];
+    const char *error_fields[256];
     int json, quiet, strict_fields;
     int progress; /* -1: when stderr is a terminal */
 } convert_args;
@@ -134,6 +151,21 @@ static int parse_tolerance(const char *text, tpk_convert_options *o)
     if (!*text || *end || !(tolerance >= TPK_MERGE_MIN_TOLERANCE && tolerance <= 1.0))
         return -1;
     o->merge_tolerance = tolerance;
+    return 0;
+}
+
+/* E as a fraction (0.01) or a percentage (1%), 0 < E < 1. */
+static int parse_max_error(const char *text, double *out)
+{
+    char *end = NULL;
+    double e = strtod(text, &end);
+    if (end == text)
+        return -1;
+    if (*end == '%')
+        e /= 100, end++;
+    if (*end || !(e > 0 && e < 1))
+        return -1;
+    *out = e;
     return 0;
 }
 
@@ -250,6 +282,20 @@ static int parse_args(int argc, char **argv, convert_args *a)
             if (!(v = tpk_cli_value(argc, argv, &i, "--higher-order")) || (strcmp(v, "split") && strcmp(v, "corners")))
                 return tpk_cli_fail("convert", "--higher-order expects split or corners, found '%s'", v ? v : "");
             a->options.higher_order_corners = !strcmp(v, "corners");
+        } else if (!strncmp(arg, "--max-error-field", 17) && (!arg[17] || arg[17] == '=')) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--max-error-field")) || !*v)
+                return tpk_cli_fail("convert", "--max-error-field expects a point field's name");
+            if (a->options.max_error_field_count >= 256)
+                return tpk_cli_fail("convert", "too many --max-error-field options (at most 256)");
+            a->error_fields[a->options.max_error_field_count++] = v;
+        } else if (!strncmp(arg, "--max-error", 11) && (!arg[11] || arg[11] == '=')) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--max-error")) || parse_max_error(v, &a->options.max_error))
+                return tpk_cli_fail("convert", "--max-error expects a fraction (0.01) or a percentage (1%%) above 0 "
+                                    "and below 1, found '%s'", v ? v : "");
+        } else if (!strncmp(arg, "--subdivide", 11) && (!arg[11] || arg[11] == '=')) {
+            if (!(v = tpk_cli_value(argc, argv, &i, "--subdivide")) || tpk_cli_parse_int(v, 1, 5, &a->options.subdivide))
+                return tpk_cli_fail("convert", "--subdivide expects a number of levels from 1 to 5, found '%s'",
+                                    v ? v : "");
         } else if (!strcmp(arg, "--cell-to-point")) {
             a->options.cell_to_point = 1;
         } else if (!strcmp(arg, "--json")) {
@@ -273,6 +319,21 @@ static int parse_args(int argc, char **argv, convert_args *a)
     }
     if (npos != 2)
         return tpk_cli_fail("convert", "expected INPUT and OUTPUT.tpk (see tetpack convert --help)");
+    if (a->options.subdivide > 0 && a->options.max_error > 0)
+        return tpk_cli_fail("convert", "--subdivide and --max-error: one or the other");
+    if (a->options.subdivide > 0 && (a->options.higher_order_corners || a->options.merge_duplicates || a->options.parts))
+        return tpk_cli_fail("convert", "--subdivide: not with --higher-order corners, --merge-duplicates or --parts");
+    if (a->options.max_error_field_count > 0 && !(a->options.max_error > 0) && !(a->options.subdivide > 0))
+        return tpk_cli_fail("convert", "--max-error-field needs --max-error E");
+    if (a->options.max_error > 0 && a->options.higher_order_corners)
+        return tpk_cli_fail("convert", "--max-error and --higher-order corners: the bound is against each cell's own "
+                            "functions, which reducing to corners drops");
+    if (a->options.max_error > 0 && a->options.merge_duplicates)
+        return tpk_cli_fail("convert", "--max-error and --merge-duplicates: the bound holds each cell to its own "
+                            "nodes, which merging renumbers; merge the source first");
+    if (a->options.max_error > 0 && a->options.parts > 0)
+        return tpk_cli_fail("convert", "--max-error and --parts: a part set does not record the bound");
+    a->options.max_error_fields = a->options.max_error_field_count ? a->error_fields : NULL;
     if (a->options.levels > 0 && a->options.parts > 0)
         return tpk_cli_fail("convert", "--levels and --parts: levels of detail are for one file, not a part set");
     a->options.input = positional[0];
@@ -343,6 +404,16 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
             tpk_strbuf_printf(&sb, "\"higher_order\":{\"mode\":\"%s\",\"cells\":%lld,\"added_points\":%lld},",
                               r->higher_order_split ? "split" : "corners", (long long)r->higher_order_cells,
                               (long long)r->higher_order_points);
+        if (a->options.max_error > 0 || a->options.subdivide > 0) {
+            tpk_strbuf_printf(&sb, "\"max_error\":{\"subdivide\":%d,\"requested\":%.9g,", r->max_error.subdivide,
+                              r->max_error.requested);
+            tpk_strbuf_printf(&sb, "\"measured\":%.9g,\"geometry\":%.9g,\"worst_field\":", r->max_error.field_error,
+                              r->max_error.geometry_error);
+            tpk_strbuf_json_string(&sb, r->max_error.worst_field);
+            tpk_strbuf_printf(&sb, ",\"fields\":%d,\"tets_before\":%lld,\"vertices_added\":%lld,\"passes\":%d,"
+                              "\"seconds\":%.6f},", r->max_error.fields, (long long)r->max_error.tets_before,
+                              (long long)r->max_error.vertices_added, r->max_error.passes, r->max_error.seconds);
+        }
         tpk_strbuf_printf(&sb,
                           "\"cells_split\":{\"tetra\":%lld,\"pyramid_into_2\":%lld,\"wedge_into_3\":%lld,"
                           "\"hexahedron_into_5\":%lld,\"hexahedron_into_6\":%lld},\"mirrored_cells\":%lld,"
@@ -386,6 +457,17 @@ static void print_summary(const convert_args *a, const tpk_convert_report *r)
            a->options.output, (long long)r->tets, (long long)r->vertices, (long long)r->shell_faces,
            r->field_count, r->step_count, (double)r->output_bytes / 1048576.0);
     printf("  source: %lld cells, %lld points\n", (long long)r->source_cells, (long long)r->source_points);
+    if (a->options.subdivide > 0)
+        printf("  subdivided %d times: proved %.3g of the range (%s), geometry %.3g of the diagonal; %lld tets into "
+               "%lld (%lld points added)\n", r->max_error.subdivide, r->max_error.field_error,
+               r->max_error.worst_field[0] ? r->max_error.worst_field : "no field", r->max_error.geometry_error,
+               (long long)r->max_error.tets_before, (long long)r->tets, (long long)r->max_error.vertices_added);
+    else if (a->options.max_error > 0)
+        printf("  max error: %g requested; proved %.3g of the range (%s), geometry %.3g of the diagonal; %lld tets "
+               "refined into %lld (%lld points added, %d passes)\n", r->max_error.requested, r->max_error.field_error,
+               r->max_error.worst_field[0] ? r->max_error.worst_field : "no field", r->max_error.geometry_error,
+               (long long)r->max_error.tets_before, (long long)r->tets, (long long)r->max_error.vertices_added,
+               r->max_error.passes);
     if (r->higher_order_cells > 0 && r->higher_order_split)
         printf("  higher-order cells: %lld split whole at all their nodes (%lld face and cell centres added); the "
                "cell counts below are of their linear pieces\n", (long long)r->higher_order_cells,

@@ -212,6 +212,20 @@ static void print_higher_order(const char *meta)
         printf("  higher-order cells: reduced to their corners (%lld cells; their other nodes unused)\n", n);
 }
 
+/* META's "max_error" (convert --max-error): the bound promised and the largest error the converter proved. */
+static void print_max_error(const char *meta)
+{
+    const char *bound = strstr(meta, "\"max_error\":"), *measured = strstr(meta, "\"max_error_measured\":"),
+               *geometry = strstr(meta, "\"max_error_geometry\":");
+    double e = 0, m = 0, g = 0;
+    if (!bound || !measured || !geometry || sscanf(bound + 12, "%lf", &e) != 1 || sscanf(measured + 21, "%lf", &m) != 1 ||
+        sscanf(geometry + 21, "%lf", &g) != 1)
+        return;
+    printf("  max error: %g requested (convert --max-error), %.3g proved (fields, of their range), %.3g "
+           "(geometry, of the bounds diagonal)%s\n", e, m, g,
+           strstr(meta, "\"max_error_fields\":") ? "; bounded fields in metadata" : "");
+}
+
 static void print_text(const char *path, tpk_file *file, const tpk_file_info *info, tpk_result verified)
 {
     printf("%s: tetpack format %u.%u, %llu bytes\n", path, info->version_major, info->version_minor,
@@ -259,6 +273,8 @@ static void print_text(const char *path, tpk_file *file, const tpk_file_info *in
     char *meta = read_meta(file);
     if (meta)
         print_higher_order(meta);
+    if (meta)
+        print_max_error(meta);
     if (meta)
         printf("  metadata: %s\n", meta);
     free(meta);

@@ -13,11 +13,13 @@
 #include "base/clock.h"
 #include "levels.h"
 #include "merge_vertices.h"
+#include "mesh/cell_types.h"
 #include "mesh/higher_order.h"
 #include "base/output_file.h"
 #include "base/parallel.h"
 #include "pipeline.h"
 #include "parts.h"
+#include "refine.h"
 #include "write_tpk.h"
 #include "base/strbuf.h"
 #include "base/text_scan.h"
@@ -66,6 +68,7 @@ typedef struct conversion {
     char source_format[32];
     tpk_merge_report merged;
     tpk_higher_split higher;
+    tpk_refine_cells source_cells; /* --max-error: the cells as imported, which tet_source names */
 } conversion;
 
 static void import_progress(void *user, double fraction)
@@ -118,6 +121,19 @@ static void count_higher(void *ctx, int64_t begin, int64_t end, int w)
 
 static int whole_cells(conversion *c)
 {
+    if (c->o->max_error > 0 || c->o->subdivide > 0) {
+        if (tpk_refine_cells_copy(&c->src, &c->source_cells) != 0)
+            return tpk_diag_fail(c->diag, "out of memory for the cells of %s (--max-error)", c->o->input);
+        int64_t bad = tpk_refine_unbounded_cell(&c->source_cells);
+        if (bad >= 0) {
+            const tpk_cell_type_info *t = tpk_cell_type(c->source_cells.types[bad]);
+            return tpk_diag_fail(c->diag, "%s: cell %lld is a %s (VTK type %d), whose own functions --max-error cannot "
+                                 "bound (it bounds tetrahedra, voxels, hexahedra, wedges and their quadratic kinds; "
+                                 "pyramids and polyhedra are not polynomials on their tets); convert without "
+                                 "--max-error", c->o->input, (long long)bad, t ? t->name : "cell of unknown type",
+                                 c->source_cells.types[bad]);
+        }
+    }
     higher_job job = {.types = c->src.cell_types};
     for (int t = 0; t < 256; t++)
         job.higher[t] = (unsigned char)tpk_is_higher_order_volume(t);
@@ -159,6 +175,31 @@ static void tetrahedralize_progress(void *user, double fraction)
     c->stage(c->stage_user, "tetrahedralize", fraction);
 }
 
+/* --max-error: the tets refined until the bound holds in every cell (refine.h), on the file's grid. */
+static int refine_tets(conversion *c)
+{
+    announce(c->stage, c->stage_user, "refine");
+    double t = tpk_now_seconds();
+    tpk_refine_options ro = {c->o->max_error, c->o->max_error_fields, c->o->max_error_field_count, c->o->threads, 0,
+                             c->o->subdivide};
+    tpk_refine_report rr;
+    int rc = tpk_refine_max_error(&c->mesh, &c->source_cells, &ro, &rr, c->diag);
+    tpk_refine_cells_free(&c->source_cells);
+    if (rc != 0)
+        return -1;
+    c->rep->max_error.requested = c->o->max_error;
+    c->rep->max_error.field_error = rr.field_error;
+    c->rep->max_error.geometry_error = rr.geometry_error;
+    memcpy(c->rep->max_error.worst_field, rr.worst_field, sizeof rr.worst_field);
+    c->rep->max_error.fields = rr.fields_bounded;
+    c->rep->max_error.tets_before = rr.tets_before;
+    c->rep->max_error.vertices_added = rr.vertices_added;
+    c->rep->max_error.passes = rr.rounds;
+    c->rep->max_error.subdivide = c->o->subdivide;
+    c->rep->max_error.seconds = tpk_now_seconds() - t;
+    return 0;
+}
+
 /* Duplicate points merged when asked, source cells into tets on the file's float32 grid, then the
  * points into the stored frame. */
 static int make_tets(conversion *c)
@@ -194,6 +235,8 @@ static int make_tets(conversion *c)
     rep->thin_faces_recut = c->mesh.thin_faces_recut;
     rep->flat_tets = c->mesh.flat_tets;
     rep->bad_cells_skipped = c->mesh.bad_cells_skipped;
+    if ((o->max_error > 0 || o->subdivide > 0) && refine_tets(c) != 0)
+        return -1;
     return tpk_quantize_points(&c->mesh, &c->header, c->diag);
 }
 
@@ -336,6 +379,7 @@ int tpk_convert(const tpk_convert_options *o, tpk_convert_report *rep, tpk_stage
     free(c.turned_over);
     tpk_merge_report_free(&c.merged);
     free(c.higher.cell_source);
+    tpk_refine_cells_free(&c.source_cells);
     tpk_mesh_free(&c.src);
     tpk_tetmesh_free(&c.mesh);
     return rc ? -1 : 0;

@@ -40,6 +40,16 @@ typedef struct tpk_convert_options {
     int cell_to_point;            /* average cell fields to points (and keep them without --field) */
     int higher_order_corners;     /* reduce higher-order cells to their corners instead of splitting them
                                      whole (mesh/higher_order.h) */
+    double max_error;             /* > 0 (below 1): refine until every bounded point field is within this
+                                     fraction of its range of each source cell's own interpolant, and the
+                                     geometry within it of the bounds diagonal (convert/refine.h); 0: off.
+                                     Not with higher_order_corners, merge_duplicates, parts */
+    const char *const *max_error_fields; /* the point fields bounded; NULL: all */
+    int max_error_field_count;
+    int subdivide;                /* > 0 (not with max_error): every tet cut into 8 at its edges' midpoints
+                                     (every edge halved) this many times, and the
+                                     bound over the result proved and recorded (uniform subdivision, what
+                                     --max-error is compared with) */
     int threads;                  /* <= 0: all cores */
     int parts;                    /* 0: one .tpk; >= 1: output is a part set manifest of this many parts
                                      (spec §15), cut along the Hilbert order */
@@ -70,6 +80,17 @@ typedef struct tpk_convert_report {
     int64_t folds_cut;            /* folded faces whose adjacency was cut (cut_folds) */
     int64_t fixed_boundary_cells; /* tetrahedralized inside their boundary triangles (TetGen) */
     int field_count, step_count;
+    struct {                      /* --max-error (max_error > 0) */
+        double requested;         /* the bound asked for */
+        double field_error;       /* the largest proven bound over the tets, a fraction of the field's range */
+        double geometry_error;    /* the same for the geometry, a fraction of the bounds diagonal */
+        char worst_field[64];
+        int fields;               /* point fields bounded */
+        int64_t tets_before, vertices_added;
+        int passes;
+        int subdivide;            /* the levels of --subdivide, or 0 */
+        double seconds;
+    } max_error;
     uint64_t output_bytes;
     int level_count;              /* levels of detail written (may be fewer than asked: levels.h) */
     struct {

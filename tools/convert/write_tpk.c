@@ -442,6 +442,23 @@ static int write_meta(chunk_writer *cw, const tpk_convert_options *o, const tpk_
         tpk_strbuf_printf(&sb, ",\"higher_order\":\"%s\",\"higher_order_cells\":%lld,\"higher_order_points\":%lld",
                           rep->higher_order_split ? "split" : "corners", (long long)rep->higher_order_cells,
                           (long long)rep->higher_order_points);
+    if (o->max_error > 0 || o->subdivide > 0) { /* the bound promised (check --against holds the file to it,
+                                                   not with --subdivide: none promised) and the one proved */
+        if (o->subdivide > 0)
+            tpk_strbuf_printf(&sb, ",\"subdivide\":%d", o->subdivide);
+        else
+            tpk_strbuf_printf(&sb, ",\"max_error\":%.9g", o->max_error);
+        tpk_strbuf_printf(&sb, ",\"max_error_measured\":%.9g,\"max_error_geometry\":%.9g", rep->max_error.field_error,
+                          rep->max_error.geometry_error);
+        if (o->max_error_field_count > 0) {
+            tpk_strbuf_printf(&sb, ",\"max_error_fields\":[");
+            for (int i = 0; i < o->max_error_field_count; i++) {
+                tpk_strbuf_printf(&sb, i ? "," : "");
+                tpk_strbuf_json_string(&sb, o->max_error_fields[i]);
+            }
+            tpk_strbuf_printf(&sb, "]");
+        }
+    }
     tpk_strbuf_printf(&sb, ",\"repairs\":");
     tpk_convert_repairs_json(&sb, o, rep);
     if (part)

@@ -51,6 +51,22 @@ int tpk_cell_map_nodes(int type)
     return t ? t->nodes : 0;
 }
 
+int tpk_cell_map_degree(int type)
+{
+    switch (type) {
+    case 10: return 1;
+    case 13:
+    case 24: return 2;
+    case 12:
+    case 26:
+    case 31: return 3;
+    case 25:
+    case 32: return 4;
+    case 29: return 6;
+    default: return 0;
+    }
+}
+
 /* VTK's parametric corners (the pyramid's apex at (1/2, 1/2, 1), as vtkPyramid has it). */
 static void corner(const node_table *t, int k, double r[3])
 {

@@ -16,6 +16,13 @@
  * (32). */
 int tpk_cell_map_nodes(int type);
 
+/* The total degree of the type's shape functions as polynomials of the parametric coordinates (so on
+ * any tet of its parameter space, in the tet's barycentric coordinates): tetra 1, wedge 2, hexahedron 3,
+ * quadratic tetra 2, quadratic (26) and quadratic-linear (31) wedge 3, serendipity hexahedron and
+ * biquadratic wedge 4, triquadratic hexahedron 6; 0 for the pyramids (a collapsed hexahedron and a
+ * rational function, neither a polynomial on the pyramid's tets) and types this module does not map. */
+int tpk_cell_map_degree(int type);
+
 /* VTK parametric coordinates of node k (0 <= k < tpk_cell_map_nodes(type)) into r: corners as
  * tpk_cell_shape's ref, mid-edge, mid-face and mid-cell nodes the means of their corners. */
 void tpk_cell_map_node(int type, int k, double r[3]);

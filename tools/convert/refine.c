@@ -1,0 +1,1074 @@
+/* convert --max-error (refine.h): per tet, the Bernstein bound of its source cell's map and interpolant
+ * against the tet's own linear ones, on the tet's corners' parametric points in the cell; tets over the
+ * bound get their longest edge marked, the marks closed (a tet with a marked edge marks its longest), then
+ * every tet bisects its greatest marked edge, round after round, until none is left (docs/ARCHITECTURE.md
+ * §5). The greatest edge is by a global order (squared length from the two vertices taken in id order,
+ * then the ids), so a face shared by two tets is cut alike from both sides. */
+#include "refine.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/parallel.h"
+#include "base/predicates.h"
+#include "mesh/bernstein.h"
+#include "mesh/cell_map.h"
+#include "mesh/cell_types.h"
+#include "tetpack_format.h"
+
+#define MAX_PASSES 60
+static const int tet_edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+static const int voxel_as_hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+
+/* ---- source cells ------------------------------------------------------------------------------ */
+
+int tpk_refine_cells_copy(const tpk_mesh *mesh, tpk_refine_cells *out)
+{
+    memset(out, 0, sizeof *out);
+    int64_t n = mesh->cell_count, conn = n ? mesh->cell_offsets[n] : 0;
+    out->types = malloc((size_t)(n ? n : 1));
+    out->offsets = malloc(sizeof *out->offsets * (size_t)(n + 1));
+    out->conn = malloc(sizeof *out->conn * (size_t)(conn ? conn : 1));
+    if (!out->types || !out->offsets || !out->conn) {
+        tpk_refine_cells_free(out);
+        return -1;
+    }
+    out->cell_count = n;
+    if (n)
+        memcpy(out->types, mesh->cell_types, (size_t)n);
+    memcpy(out->offsets, mesh->cell_offsets, sizeof *out->offsets * (size_t)(n + 1));
+    if (conn)
+        memcpy(out->conn, mesh->cell_conn, sizeof *out->conn * (size_t)conn);
+    return 0;
+}
+
+void tpk_refine_cells_free(tpk_refine_cells *cells)
+{
+    free(cells->types), free(cells->offsets), free(cells->conn);
+    memset(cells, 0, sizeof *cells);
+}
+
+/* The type whose functions cell c has (voxels as hexahedra, VTK's Lagrange cells of order 2 as the
+ * quadratic ones, which number their nodes alike: mesh/higher_order.c), or 0. */
+static int mapped_type(const tpk_refine_cells *cells, int64_t c)
+{
+    int type = cells->types[c];
+    int64_t n = cells->offsets[c + 1] - cells->offsets[c];
+    if (type == TPK_CELL_VOXEL)
+        type = TPK_CELL_HEXAHEDRON;
+    else if ((type == 71 && n == 10) || (type == 72 && n == 27) || (type == 73 && n == 18))
+        type = type == 71 ? 24 : type == 72 ? 29 : 32;
+    return tpk_cell_map_degree(type) > 0 && tpk_cell_map_nodes(type) == n ? type : 0;
+}
+
+int64_t tpk_refine_unbounded_cell(const tpk_refine_cells *cells)
+{
+    for (int64_t c = 0; c < cells->cell_count; c++) {
+        const tpk_cell_type_info *t = tpk_cell_type(cells->types[c]);
+        if ((!t || t->dim == 3) && !mapped_type(cells, c))
+            return c;
+    }
+    return -1;
+}
+
+/* ---- edges: marks and midpoints, keyed by the vertex pair --------------------------------------- */
+
+typedef struct edge_table {
+    uint64_t *keys; /* 0: empty (a key has b > a >= 0, so never 0) */
+    int32_t *values;
+    int64_t cap, count;
+} edge_table;
+
+static uint64_t edge_key(int32_t a, int32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | (uint32_t)b : (uint64_t)b << 32 | (uint32_t)a;
+}
+
+static int64_t edge_slot(const edge_table *e, uint64_t key)
+{
+    uint64_t mask = (uint64_t)e->cap - 1, i = (key * 0x9E3779B97F4A7C15ull >> 20) & mask;
+    while (e->keys[i] && e->keys[i] != key)
+        i = (i + 1) & mask;
+    return (int64_t)i;
+}
+
+static int edge_find(const edge_table *e, uint64_t key, int32_t *value)
+{
+    if (!e->cap)
+        return 0;
+    int64_t i = edge_slot(e, key);
+    if (!e->keys[i])
+        return 0;
+    if (value)
+        *value = e->values[i];
+    return 1;
+}
+
+static int edge_put(edge_table *e, uint64_t key, int32_t value)
+{
+    if (2 * (e->count + 1) > e->cap) {
+        edge_table grown = {calloc((size_t)(e->cap ? 2 * e->cap : 1024), sizeof *grown.keys),
+                            malloc(sizeof *grown.values * (size_t)(e->cap ? 2 * e->cap : 1024)), e->cap ? 2 * e->cap : 1024,
+                            0};
+        if (!grown.keys || !grown.values) {
+            free(grown.keys), free(grown.values);
+            return -1;
+        }
+        for (int64_t i = 0; i < e->cap; i++)
+            if (e->keys[i]) {
+                int64_t j = edge_slot(&grown, e->keys[i]);
+                grown.keys[j] = e->keys[i], grown.values[j] = e->values[i], grown.count++;
+            }
+        free(e->keys), free(e->values);
+        *e = grown;
+    }
+    int64_t i = edge_slot(e, key);
+    if (!e->keys[i])
+        e->count++;
+    e->keys[i] = key, e->values[i] = value;
+    return 0;
+}
+
+static void edge_clear(edge_table *e)
+{
+    if (e->cap)
+        memset(e->keys, 0, sizeof *e->keys * (size_t)e->cap);
+    e->count = 0;
+}
+
+/* ---- the state --------------------------------------------------------------------------------- */
+
+typedef struct refine {
+    tpk_tetmesh *m;
+    const tpk_refine_cells *cells;
+    const tpk_refine_options *o;
+    tpk_diag *diag;
+    int threads;
+    int32_t *vertex_of;    /* source point id -> vertex */
+    int64_t point_ids;     /* size of vertex_of */
+    int64_t n0;            /* vertices given; those after are added, their values in `added` */
+    int slots;             /* point (field, step) pairs */
+    float **slot_values;   /* per slot: the given vertices' values */
+    int *slot_field;
+    float *added;          /* per added vertex, `slots` values */
+    int64_t added_cap, vertex_cap;
+    int bounded;           /* slots bounded: bound_slot[0 .. bounded) */
+    int *bound_slot;
+    double *bound_range;
+    double diag_length;
+    int64_t count, cap;    /* tets */
+    int64_t tets_given;
+    int32_t *tets, *cell;
+    double *xi;            /* 12 per tet: its corners' parametric points in its cell */
+    int64_t *root;         /* the given tet each comes from (cell fields) */
+    double *field_error, *geometry_error, *criterion;
+    int *worst_slot;
+    tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1];
+    edge_table marks, mids;
+    struct coef_cache *cache; /* per worker */
+    int report_fields;     /* fields bounded (not constant) */
+    int64_t *todo, todo_count, todo_cap; /* tets whose bound is not known yet (new or cut since) */
+    uint8_t *queued;       /* per tet: in todo */
+} refine;
+
+static float value_of(const refine *r, int32_t v, int slot)
+{
+    return v < r->n0 ? r->slot_values[slot][v] : r->added[(int64_t)(v - r->n0) * r->slots + slot];
+}
+
+static const double *point_of(const refine *r, int32_t v)
+{
+    return r->m->points + 3 * (int64_t)v;
+}
+
+/* Cell c's type (mapped_type) and its nodes as vertices; 0 when some node is no vertex. */
+static int cell_nodes(const refine *r, int64_t c, int32_t *verts)
+{
+    int type = mapped_type(r->cells, c);
+    int n = tpk_cell_map_nodes(type);
+    const int32_t *conn = r->cells->conn + r->cells->offsets[c];
+    for (int k = 0; k < n; k++) {
+        int32_t id = conn[r->cells->types[c] == TPK_CELL_VOXEL ? voxel_as_hex[k] : k];
+        if (id < 0 || id >= r->point_ids || r->vertex_of[id] < 0)
+            return 0;
+        verts[k] = r->vertex_of[id];
+    }
+    return type;
+}
+
+static void map_point(const refine *r, int type, const int32_t *verts, const double xi[3], double *w, double x[3])
+{
+    int n = tpk_cell_map_weights(type, xi, w);
+    x[0] = x[1] = x[2] = 0;
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < 3; i++)
+            x[i] += w[k] * point_of(r, verts[k])[i];
+}
+
+static double interpolate(const refine *r, int n, const int32_t *verts, const double *w, int slot)
+{
+    double s = 0;
+    for (int k = 0; k < n; k++)
+        s += w[k] * value_of(r, verts[k], slot);
+    return s;
+}
+
+static double dist2(const double *a, const double *b)
+{
+    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
+
+/* The global edge order: squared length (from the two points in id order, so alike from every tet),
+ * then the smaller id, then the larger. */
+static int edge_greater(const refine *r, int32_t a, int32_t b, int32_t c, int32_t d)
+{
+    int32_t lo1 = a < b ? a : b, hi1 = a < b ? b : a, lo2 = c < d ? c : d, hi2 = c < d ? d : c;
+    double l1 = dist2(point_of(r, hi1), point_of(r, lo1)), l2 = dist2(point_of(r, hi2), point_of(r, lo2));
+    if (l1 != l2)
+        return l1 > l2;
+    return lo1 != lo2 ? lo1 > lo2 : hi1 > hi2;
+}
+
+/* Tet t's greatest edge (marked ones only with `marked_only`), as 0..5, or -1. */
+static int greatest_edge(const refine *r, int64_t t, int marked_only)
+{
+    const int32_t *v = r->tets + 4 * t;
+    int best = -1;
+    for (int e = 0; e < 6; e++) {
+        int32_t a = v[tet_edges[e][0]], b = v[tet_edges[e][1]];
+        if (marked_only && !edge_find(&r->marks, edge_key(a, b), NULL))
+            continue;
+        if (best < 0 || edge_greater(r, a, b, v[tet_edges[best][0]], v[tet_edges[best][1]]))
+            best = e;
+    }
+    return best;
+}
+
+/* ---- parametric points of the given tets' corners ------------------------------------------------ */
+
+static void shape_centre(int type, double xi[3])
+{
+    const tpk_cell_type_info *t = tpk_cell_type(type);
+    int linear = t ? t->linear_type : type;
+    xi[0] = xi[1] = xi[2] = linear == TPK_CELL_TETRA ? 0.25 : 0.5;
+    if (linear == TPK_CELL_WEDGE)
+        xi[0] = xi[1] = 1.0 / 3;
+}
+
+static int solve3(double m[3][3], const double b[3], double x[3])
+{
+    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (!(fabs(det) > 0))
+        return -1;
+    for (int c = 0; c < 3; c++) {
+        double q[3][3];
+        memcpy(q, m, sizeof q);
+        for (int k = 0; k < 3; k++)
+            q[k][c] = b[k];
+        x[c] = (q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
+                q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0])) / det;
+    }
+    return 0;
+}
+
+/* Newton's method from the cell's centre for the parametric point that the cell maps onto `target`. */
+static int invert_map(const refine *r, int type, const int32_t *verts, const double target[3], double xi[3])
+{
+    double w[TPK_CELL_MAP_MAX_NODES], x[3], lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    int n = tpk_cell_map_nodes(type);
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < 3; i++)
+            lo[i] = fmin(lo[i], point_of(r, verts[k])[i]), hi[i] = fmax(hi[i], point_of(r, verts[k])[i]);
+    double size = sqrt(dist2(lo, hi)), h = 1e-6;
+    shape_centre(type, xi);
+    for (int it = 0; it < 60; it++) {
+        map_point(r, type, verts, xi, w, x);
+        double res[3] = {x[0] - target[0], x[1] - target[1], x[2] - target[2]};
+        if (sqrt(res[0] * res[0] + res[1] * res[1] + res[2] * res[2]) <= 1e-10 * size)
+            return 0;
+        double jac[3][3], step[3];
+        for (int j = 0; j < 3; j++) {
+            double a[3], b[3], xa[3], xb[3];
+            memcpy(a, xi, sizeof a), memcpy(b, xi, sizeof b);
+            a[j] += h, b[j] -= h;
+            map_point(r, type, verts, a, w, xa);
+            map_point(r, type, verts, b, w, xb);
+            for (int i = 0; i < 3; i++)
+                jac[i][j] = (xa[i] - xb[i]) / (2 * h);
+        }
+        if (solve3(jac, res, step) != 0)
+            return -1;
+        for (int j = 0; j < 3; j++)
+            xi[j] -= step[j];
+    }
+    return -1;
+}
+
+/* Each given tet's corners in its cell's parameter space: nodes by their place in the cell, other points
+ * (face and cell centres, Steiner points) by inverting the map. An added point then takes every point
+ * field's value from the interpolant of the first cell (in tet order) that has it, so that its values
+ * are those the bound measures against. */
+typedef struct corner_job {
+    refine *r;
+    uint8_t *failed; /* per tet: 1 a node is no vertex, 2 the map does not invert */
+} corner_job;
+
+static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    corner_job *job = ctx;
+    refine *r = job->r;
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    (void)w;
+    for (int64_t t = begin; t < end; t++) {
+        int64_t c = r->cell[t];
+        int type = c >= 0 && c < r->cells->cell_count ? cell_nodes(r, c, verts) : 0;
+        if (!type) {
+            job->failed[t] = 1;
+            continue;
+        }
+        int n = tpk_cell_map_nodes(type);
+        for (int k = 0; k < 4; k++) {
+            int32_t v = r->tets[4 * t + k];
+            double *xi = r->xi + 12 * t + 3 * k;
+            int node = -1;
+            for (int j = 0; j < n && node < 0; j++)
+                if (verts[j] == v)
+                    node = j;
+            if (node >= 0)
+                tpk_cell_map_node(type, node, xi);
+            else if (invert_map(r, type, verts, point_of(r, v), xi) != 0)
+                job->failed[t] = 2;
+        }
+    }
+}
+
+static int place_corners(refine *r, int threads)
+{
+    corner_job job = {r, calloc((size_t)(r->count ? r->count : 1), 1)};
+    uint8_t *valued = calloc((size_t)(r->n0 ? r->n0 : 1), 1);
+    if (!valued || !job.failed) {
+        free(valued), free(job.failed);
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
+    tpk_parallel_for(r->count, tpk_threads_for(r->count, threads, 1024), corner_range, &job);
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    double w[TPK_CELL_MAP_MAX_NODES];
+    int rc = 0;
+    for (int64_t t = 0; t < r->count && rc == 0; t++) {
+        int64_t c = r->cell[t];
+        if (job.failed[t] == 1) {
+            rc = tpk_diag_fail(r->diag, "--max-error: cell %lld has a node that is no vertex of the tets", (long long)c);
+        } else if (job.failed[t] == 2) {
+            rc = tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s): no parametric point maps onto a point added "
+                               "inside it (the map does not invert there); convert it without --max-error",
+                               (long long)c, tpk_cell_type(r->cells->types[c])->name);
+        }
+        for (int k = 0; rc == 0 && k < 4; k++) {
+            int32_t v = r->tets[4 * t + k];
+            if (r->m->vertex_source[v] >= 0 || valued[v])
+                continue;
+            valued[v] = 1;
+            int type = cell_nodes(r, c, verts), n = tpk_cell_map_nodes(type);
+            tpk_cell_map_weights(type, r->xi + 12 * t + 3 * k, w);
+            for (int s = 0; s < r->slots; s++)
+                r->slot_values[s][v] = (float)interpolate(r, n, verts, w, s);
+        }
+    }
+    free(valued), free(job.failed);
+    return rc;
+}
+
+/* ---- the bound --------------------------------------------------------------------------------- */
+
+/* Gradients of the barycentric coordinates 1..3 of tet p (0 when flat). */
+static int barycentric_gradients(const double p[4][3], double g[3][3])
+{
+    double e[3][3];
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            e[k][i] = p[k + 1][i] - p[0][i];
+    for (int k = 0; k < 3; k++) {
+        const double *a = e[(k + 1) % 3], *b = e[(k + 2) % 3];
+        g[k][0] = a[1] * b[2] - a[2] * b[1], g[k][1] = a[2] * b[0] - a[0] * b[2], g[k][2] = a[0] * b[1] - a[1] * b[0];
+    }
+    double det = e[0][0] * g[0][0] + e[0][1] * g[0][1] + e[0][2] * g[0][2];
+    if (!(fabs(det) > 0))
+        return -1;
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            g[k][i] /= det;
+    return 0;
+}
+
+/* Tet t's bounds: field_error (the largest over bounded slots, as a fraction of the range), geometry
+ * error (a fraction of the diagonal), and the criterion refinement meets: the larger of the geometry
+ * error and, per slot, the field's bound plus its gradient times the geometry's (a point located by
+ * position rather than parameter, as check --against samples, then also stays within E). */
+/* Per worker, the Bernstein coefficients of the cell's functions on the tets of parameter space met
+ * lately, by node (by_node[k * m + i]: node k's share of coefficient i), keyed by the cell type and the
+ * 4 parametric corners: a pure function of the key, so that a hit gives the very numbers a miss would.
+ * The tets of a regular mesh's cells, and their pieces, repeat the same few parametric tets. */
+typedef struct coef_cache {
+    int entries, size; /* a power of two; doubles per entry */
+    int *type;         /* 0: empty */
+    double *key, *norm, *by_node;
+    double work[2 * TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES];
+} coef_cache;
+
+static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int type, int n, const double *xi,
+                                  double *norm)
+{
+    uint64_t h = 1469598103934665603ull ^ (uint64_t)type;
+    const unsigned char *bytes = (const unsigned char *)xi;
+    for (size_t i = 0; i < 12 * sizeof *xi; i++)
+        h = (h ^ bytes[i]) * 1099511628211ull;
+    int e = (int)(h & (uint64_t)(cc->entries - 1)), m = b->points;
+    double *by_node = cc->by_node + (int64_t)e * cc->size;
+    if (cc->type[e] == type && !memcmp(cc->key + 12 * e, xi, 12 * sizeof *xi)) {
+        *norm = cc->norm[e];
+        return by_node;
+    }
+    double *weights = cc->work, *coef = cc->work + TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES;
+    for (int i = 0; i < m; i++) { /* the nodes' weights at the domain points */
+        double at[3] = {0, 0, 0};
+        for (int k = 0; k < 4; k++)
+            for (int j = 0; j < 3; j++)
+                at[j] += b->lambda[i][k] * xi[3 * k + j];
+        tpk_cell_map_weights(type, at, weights + i * n);
+    }
+    *norm = cc->norm[e] = tpk_bernstein_coefficients(b, weights, n, coef);
+    for (int k = 0; k < n; k++)
+        for (int i = 0; i < m; i++)
+            by_node[k * m + i] = coef[i * n + k];
+    cc->type[e] = type;
+    memcpy(cc->key + 12 * e, xi, 12 * sizeof *xi);
+    return by_node;
+}
+
+static void bound_tet(refine *r, int64_t t, coef_cache *cache)
+{
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    int type = cell_nodes(r, r->cell[t], verts), degree = tpk_cell_map_degree(type);
+    r->field_error[t] = r->geometry_error[t] = r->criterion[t] = 0;
+    r->worst_slot[t] = -1;
+    if (degree <= 1)
+        return; /* a tet of a tetra: exactly its own interpolant */
+    const tpk_bernstein *b = &r->table[degree];
+    const double *xi = r->xi + 12 * t;
+    const int32_t *tv = r->tets + 4 * t;
+    int n = tpk_cell_map_nodes(type), m = b->points;
+    double norm;
+    const double *by_node = coefficients(cache, b, type, n, xi, &norm);
+    double p[4][3], g[3][3], node[TPK_CELL_MAP_MAX_NODES][3], geometry = 0, largest = 0;
+    for (int k = 0; k < 4; k++)
+        memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
+    for (int k = 0; k < n; k++) {
+        memcpy(node[k], point_of(r, verts[k]), sizeof node[k]);
+        for (int j = 0; j < 3; j++)
+            largest = fabs(node[k][j]) > largest ? fabs(node[k][j]) : largest;
+    }
+    double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
+    for (int j = 0; j < 3; j++) {
+        for (int i = 0; i < m; i++)
+            gx[j][i] = 0;
+        for (int k = 0; k < 4; k++)
+            for (int i = 0; i < m; i++)
+                gx[j][i] -= p[k][j] * b->lambda_by_corner[k][i];
+        for (int k = 0; k < n; k++)
+            for (int i = 0; i < m; i++)
+                gx[j][i] += node[k][j] * by_node[k * m + i];
+    }
+    for (int i = 0; i < m; i++) {
+        double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
+        geometry = sq > geometry ? sq : geometry;
+    }
+    geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
+    double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
+    int flat = barycentric_gradients(p, g) != 0;
+    for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
+        int slot = r->bound_slot[s];
+        double v[4], grad[3] = {0, 0, 0}, value[TPK_CELL_MAP_MAX_NODES], gap = 0, big = 0;
+        int finite = 1;
+        for (int k = 0; k < 4; k++)
+            finite &= isfinite(v[k] = value_of(r, tv[k], slot));
+        for (int k = 0; k < n; k++) {
+            finite &= isfinite(value[k] = value_of(r, verts[k], slot));
+            big = fabs(value[k]) > big ? fabs(value[k]) : big;
+        }
+        if (!finite)
+            continue; /* no bound for missing values (NaN): nothing to interpolate */
+        double acc[TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+        for (int i = 0; i < m; i++)
+            acc[i] = 0;
+        for (int k = 0; k < 4; k++)
+            for (int i = 0; i < m; i++)
+                acc[i] -= v[k] * b->lambda_by_corner[k][i];
+        for (int k = 0; k < n; k++)
+            for (int i = 0; i < m; i++)
+                acc[i] += value[k] * by_node[k * m + i];
+        for (int i = 0; i < m; i++)
+            gap = fabs(acc[i]) > gap ? fabs(acc[i]) : gap;
+        gap = (gap + 1e-12 * (norm + 1) * big) / r->bound_range[s];
+        for (int k = 0; k < 3 && !flat; k++)
+            for (int j = 0; j < 3; j++)
+                grad[j] += (v[k + 1] - v[0]) * g[k][j];
+        double located = gap + sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * geometry /
+                                   r->bound_range[s];
+        if (gap > worst || r->worst_slot[t] < 0)
+            worst = gap, r->worst_slot[t] = s;
+        double c = flat ? gap : located;
+        crit = c > crit ? c : crit;
+    }
+    r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
+    r->criterion[t] = crit;
+}
+
+static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    refine *r = ctx;
+    for (int64_t i = begin; i < end; i++)
+        bound_tet(r, r->todo[i], &r->cache[w]);
+}
+
+/* ---- growth ------------------------------------------------------------------------------------ */
+
+static int grow(void **array, size_t item, int64_t count, int64_t cap)
+{
+    void *grown = malloc(item * (size_t)cap);
+    if (!grown)
+        return -1;
+    if (*array && count)
+        memcpy(grown, *array, item * (size_t)count);
+    free(*array);
+    *array = grown;
+    return 0;
+}
+
+static int reserve_tets(refine *r, int64_t need)
+{
+    if (need <= r->cap)
+        return 0;
+    int64_t cap = need + need / 2 + 1024;
+    if (grow((void **)&r->tets, 4 * sizeof *r->tets, r->count, cap) || grow((void **)&r->cell, sizeof *r->cell, r->count, cap) ||
+        grow((void **)&r->xi, 12 * sizeof *r->xi, r->count, cap) || grow((void **)&r->root, sizeof *r->root, r->count, cap) ||
+        grow((void **)&r->field_error, sizeof *r->field_error, r->count, cap) ||
+        grow((void **)&r->geometry_error, sizeof *r->geometry_error, r->count, cap) ||
+        grow((void **)&r->criterion, sizeof *r->criterion, r->count, cap) ||
+        grow((void **)&r->worst_slot, sizeof *r->worst_slot, r->count, cap) ||
+        grow((void **)&r->queued, sizeof *r->queued, r->count, cap) ||
+        grow((void **)&r->todo, sizeof *r->todo, r->todo_count, cap))
+        return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
+    r->cap = cap;
+    return 0;
+}
+
+static void enqueue(refine *r, int64_t t)
+{
+    if (!r->queued[t])
+        r->queued[t] = 1, r->todo[r->todo_count++] = t;
+}
+
+/* A new vertex at parametric point xi of tet t's cell: placed by the map (on the file's grid), valued
+ * by the interpolant, every point field and step. */
+static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
+{
+    tpk_tetmesh *m = r->m;
+    if (m->vertex_count >= INT32_MAX - 1) {
+        tpk_diag_fail(r->diag, "--max-error: more than %d vertices", INT32_MAX - 1);
+        return -1;
+    }
+    if (m->vertex_count >= r->vertex_cap) {
+        int64_t cap = m->vertex_count + m->vertex_count / 2 + 1024, added = m->vertex_count - r->n0;
+        if (grow((void **)&m->points, 3 * sizeof *m->points, m->vertex_count, cap) ||
+            grow((void **)&m->vertex_source, sizeof *m->vertex_source, m->vertex_count, cap) ||
+            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), added, cap - r->n0)) {
+            tpk_diag_fail(r->diag, "out of memory for %lld vertices (--max-error)", (long long)cap);
+            return -1;
+        }
+        r->vertex_cap = cap;
+    }
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    double w[TPK_CELL_MAP_MAX_NODES], x[3];
+    int type = cell_nodes(r, r->cell[t], verts), n = tpk_cell_map_nodes(type);
+    map_point(r, type, verts, xi, w, x);
+    for (int a = 0; m->on_grid && a < 3; a++)
+        x[a] = m->grid_origin[a] + (double)(float)(x[a] - m->grid_origin[a]);
+    int32_t v = (int32_t)m->vertex_count++;
+    memcpy(m->points + 3 * (int64_t)v, x, sizeof x);
+    m->vertex_source[v] = -1;
+    for (int s = 0; s < r->slots; s++)
+        r->added[(int64_t)(v - r->n0) * r->slots + s] = (float)interpolate(r, n, verts, w, s);
+    return v;
+}
+
+static int sign_of(const refine *r, const int32_t *v)
+{
+    return tpk_orient3d_exact(point_of(r, v[0]), point_of(r, v[1]), point_of(r, v[2]), point_of(r, v[3]));
+}
+
+/* Tet t bisected at its edge e through vertex mid: t keeps the half of corner i, a new tet the other. */
+static int bisect(refine *r, int64_t t, int e, int32_t mid)
+{
+    int i = tet_edges[e][0], j = tet_edges[e][1];
+    int64_t u = r->count++;
+    int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
+    double *xa = r->xi + 12 * t, *xb = r->xi + 12 * u, half[3];
+    int parent = sign_of(r, a);
+    memcpy(b, a, 4 * sizeof *a);
+    memcpy(xb, xa, 12 * sizeof *xa);
+    r->cell[u] = r->cell[t], r->root[u] = r->root[t];
+    for (int k = 0; k < 3; k++)
+        half[k] = 0.5 * (xa[3 * i + k] + xa[3 * j + k]);
+    a[j] = mid, b[i] = mid;
+    memcpy(xa + 3 * j, half, sizeof half);
+    memcpy(xb + 3 * i, half, sizeof half);
+    r->queued[u] = 0;
+    enqueue(r, t);
+    enqueue(r, u);
+    if (parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent)) {
+        int64_t c = r->cell[t];
+        return tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its map's "
+                             "midpoint of an edge turns over (the cell is too curved for its tets); convert it "
+                             "without --max-error or with a larger bound", (long long)c,
+                             tpk_cell_type(r->cells->types[c])->name);
+    }
+    return 0;
+}
+
+/* The rounds: every tet of `active` (ascending; malloc'ed, taken over) with a marked edge bisects its
+ * greatest marked one, its pieces keeping its other marks, until none has one. The tets cut become the
+ * tets to bound again. */
+static int cut_marked(refine *r, int64_t *active, int64_t active_count)
+{
+    int rc = 0;
+    for (int64_t i = 0; i < r->todo_count; i++)
+        r->queued[r->todo[i]] = 0;
+    r->todo_count = 0;
+    int8_t *chosen = malloc((size_t)(active_count ? active_count : 1));
+    while (rc == 0 && active_count > 0 && chosen) {
+        int64_t splits = 0, n = 0;
+        for (int64_t i = 0; i < active_count; i++)
+            if ((chosen[n] = (int8_t)greatest_edge(r, active[i], 1)) >= 0)
+                active[n++] = active[i], splits++;
+        active_count = n;
+        if (splits == 0)
+            break;
+        if (r->count + splits > r->o->max_tets) {
+            rc = r->o->uniform_levels > 0
+                     ? tpk_diag_fail(r->diag, "--subdivide %d: more than %lld tets (from %lld)", r->o->uniform_levels,
+                                     (long long)r->o->max_tets, (long long)r->tets_given)
+                     : tpk_diag_fail(r->diag, "--max-error %g: refinement would pass %lld tets (from %lld) before "
+                                     "meeting the bound; give a larger bound", r->o->max_error,
+                                     (long long)r->o->max_tets, (long long)r->tets_given);
+            break;
+        }
+        int64_t first_child = r->count;
+        if (reserve_tets(r, r->count + splits) != 0) {
+            rc = -1;
+            break;
+        }
+        int64_t *grown = realloc(active, sizeof *active * (size_t)(2 * active_count));
+        int8_t *grown_chosen = realloc(chosen, (size_t)(2 * active_count));
+        if (!grown || !grown_chosen) {
+            free(grown ? grown : active), free(grown_chosen ? grown_chosen : chosen);
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        }
+        active = grown, chosen = grown_chosen;
+        for (int64_t k = 0; rc == 0 && k < active_count; k++) {
+            int64_t t = active[k];
+            int i = tet_edges[chosen[k]][0], j = tet_edges[chosen[k]][1];
+            uint64_t key = edge_key(r->tets[4 * t + i], r->tets[4 * t + j]);
+            int32_t mid;
+            if (!edge_find(&r->mids, key, &mid)) {
+                double half[3];
+                for (int c = 0; c < 3; c++)
+                    half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
+                if ((mid = add_vertex(r, t, half)) < 0) {
+                    rc = -1;
+                    break;
+                }
+                if (edge_put(&r->mids, key, mid) != 0) {
+                    rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+                    break;
+                }
+            }
+            rc = bisect(r, t, chosen[k], mid);
+        }
+        for (int64_t u = first_child; u < r->count; u++) /* the children: the cut tets, then the new ones */
+            active[active_count++] = u;
+    }
+    free(active), free(chosen);
+    return rc;
+}
+
+/* --subdivide: each tet cut into 8 at its edges' midpoints (red refinement: the 4 corner tets and the inner
+ * octahedron cut along its shortest diagonal), so every edge is halved, as a lattice subdivision halves a
+ * cell's; a face is cut into the same 4 triangles from both sides. A piece's vertex order is the one
+ * whose parametric orientation is its parent's; its exact sign must then be its parent's too. */
+static int cut_all(refine *r)
+{
+    static const int corner_tets[4][4] = {{0, 4, 5, 6}, {4, 1, 7, 8}, {5, 7, 2, 9}, {6, 8, 9, 3}};
+    static const int diagonal[3][2] = {{4, 9}, {5, 8}, {6, 7}}; /* mid-edges of opposite edges */
+    static const int ring[3][4] = {{5, 6, 8, 7}, {4, 6, 9, 7}, {4, 5, 9, 8}};
+    int64_t n = r->count;
+    if (8 * n > r->o->max_tets)
+        return tpk_diag_fail(r->diag, "--subdivide %d: more than %lld tets (from %lld)", r->o->uniform_levels,
+                             (long long)r->o->max_tets, (long long)r->tets_given);
+    if (reserve_tets(r, 8 * n) != 0)
+        return -1;
+    for (int64_t i = 0; i < r->todo_count; i++)
+        r->queued[r->todo[i]] = 0;
+    r->todo_count = 0;
+    for (int64_t t = 0; t < n; t++) {
+        int32_t v[10];
+        double x[10][3];
+        for (int k = 0; k < 4; k++)
+            v[k] = r->tets[4 * t + k], memcpy(x[k], r->xi + 12 * t + 3 * k, sizeof x[k]);
+        for (int e = 0; e < 6; e++) {
+            int i = tet_edges[e][0], j = tet_edges[e][1];
+            for (int c = 0; c < 3; c++)
+                x[4 + e][c] = 0.5 * (x[i][c] + x[j][c]);
+            uint64_t key = edge_key(v[i], v[j]);
+            if (!edge_find(&r->mids, key, &v[4 + e])) {
+                if ((v[4 + e] = add_vertex(r, t, x[4 + e])) < 0)
+                    return -1;
+                if (edge_put(&r->mids, key, v[4 + e]) != 0)
+                    return tpk_diag_fail(r->diag, "out of memory for --subdivide");
+            }
+        }
+        int parent = sign_of(r, v), parent_xi = tpk_orient3d_exact(x[0], x[1], x[2], x[3]), d = 0;
+        for (int k = 1; k < 3; k++)
+            if (dist2(point_of(r, v[diagonal[k][0]]), point_of(r, v[diagonal[k][1]])) <
+                dist2(point_of(r, v[diagonal[d][0]]), point_of(r, v[diagonal[d][1]])))
+                d = k;
+        int local[8][4];
+        memcpy(local, corner_tets, sizeof corner_tets);
+        for (int k = 0; k < 4; k++) {
+            int l[4] = {diagonal[d][0], diagonal[d][1], ring[d][k], ring[d][(k + 1) % 4]};
+            memcpy(local[4 + k], l, sizeof l);
+        }
+        int64_t cell = r->cell[t], root = r->root[t];
+        for (int c = 0; c < 8; c++) {
+            int *l = local[c];
+            if (tpk_orient3d_exact(x[l[0]], x[l[1]], x[l[2]], x[l[3]]) != parent_xi) {
+                int swap = l[2];
+                l[2] = l[3], l[3] = swap;
+            }
+            int64_t u = c == 0 ? t : r->count++;
+            for (int k = 0; k < 4; k++)
+                r->tets[4 * u + k] = v[l[k]], memcpy(r->xi + 12 * u + 3 * k, x[l[k]], sizeof x[0]);
+            r->cell[u] = (int32_t)cell, r->root[u] = root;
+            if (c > 0)
+                r->queued[u] = 0;
+            enqueue(r, u);
+            if (parent != 0 && sign_of(r, r->tets + 4 * u) != parent)
+                return tpk_diag_fail(r->diag, "--subdivide: cell %lld (a %s) folds when subdivided: a piece cut at its "
+                                     "map's edge midpoints turns over", (long long)cell,
+                                     tpk_cell_type(r->cells->types[cell])->name);
+        }
+    }
+    return 0;
+}
+
+/* Tets by vertex (CSR over the tets there are), for the tets around a marked edge. */
+typedef struct vertex_tets {
+    int64_t *start;
+    int32_t *tets;
+} vertex_tets;
+
+static int vertex_tets_make(const refine *r, vertex_tets *vt)
+{
+    int64_t nv = r->m->vertex_count;
+    vt->start = calloc((size_t)nv + 2, sizeof *vt->start);
+    vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * r->count + 1));
+    if (!vt->start || !vt->tets)
+        return -1;
+    for (int64_t i = 0; i < 4 * r->count; i++)
+        vt->start[r->tets[i] + 2]++;
+    for (int64_t v = 0; v < nv; v++)
+        vt->start[v + 2] += vt->start[v + 1];
+    for (int64_t i = 0; i < 4 * r->count; i++)
+        vt->tets[vt->start[r->tets[i] + 1]++] = (int32_t)(i / 4);
+    return 0;
+}
+
+static int has_vertex(const int32_t *v, int32_t b)
+{
+    return v[0] == b || v[1] == b || v[2] == b || v[3] == b;
+}
+
+/* Marks the failing tets' longest edges, closes the marks (every tet around a marked edge marks its own
+ * longest, through the tets by vertex), then bisects round by round: each tet with a marked edge cuts
+ * its greatest, until none is left. */
+typedef struct edge_queue {
+    uint64_t *keys;
+    int64_t count, cap;
+} edge_queue;
+
+/* Marks edge (a, b) and queues it, when not marked yet. */
+static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
+{
+    uint64_t key = edge_key(a, b);
+    if (edge_find(&r->marks, key, NULL))
+        return 0;
+    if (q->count >= q->cap) {
+        int64_t cap = 2 * q->cap + 1024;
+        uint64_t *grown = realloc(q->keys, sizeof *grown * (size_t)cap);
+        if (!grown)
+            return -1;
+        q->keys = grown, q->cap = cap;
+    }
+    q->keys[q->count++] = key;
+    return edge_put(&r->marks, key, 1);
+}
+
+static int mark_longest(refine *r, edge_queue *q, int64_t t)
+{
+    int e = greatest_edge(r, t, 0);
+    return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
+}
+
+static int refine_pass(refine *r, double limit)
+{
+    edge_clear(&r->marks);
+    vertex_tets vt = {NULL, NULL};
+    edge_queue queue = {NULL, 0, 0};
+    int64_t *active = NULL, active_count = 0;
+    uint8_t *in_active = calloc((size_t)(r->count ? r->count : 1), 1);
+    int rc = vertex_tets_make(r, &vt) != 0 || !in_active ? -1 : 0;
+    for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
+        if (!(r->criterion[r->todo[i]] <= limit))
+            rc = mark_longest(r, &queue, r->todo[i]);
+    while (rc == 0 && queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
+        uint64_t key = queue.keys[--queue.count];
+        int32_t a = (int32_t)(key >> 32), b = (int32_t)(key & 0xffffffffu);
+        for (int64_t k = vt.start[a]; rc == 0 && k < vt.start[a + 1]; k++) {
+            int64_t u = vt.tets[k];
+            if (!has_vertex(r->tets + 4 * u, b))
+                continue;
+            if (!in_active[u])
+                in_active[u] = 1, active_count++;
+            rc = mark_longest(r, &queue, u);
+        }
+    }
+    free(queue.keys), free(vt.start), free(vt.tets);
+    if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(active_count ? active_count : 1))))
+        rc = -1;
+    for (int64_t t = 0, n = 0; rc == 0 && t < r->count; t++)
+        if (in_active[t])
+            active[n++] = t;
+    free(in_active);
+    if (rc != 0) {
+        free(active);
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
+    return cut_marked(r, active, active_count);
+}
+
+/* ---- set-up and hand-back ---------------------------------------------------------------------- */
+
+static int pick_fields(refine *r)
+{
+    tpk_tetmesh *m = r->m;
+    for (int f = 0; f < m->field_count; f++)
+        if (m->fields[f].association == TPK_ASSOC_POINT)
+            r->slots += m->fields[f].step_count;
+    r->slot_values = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->slot_values);
+    r->slot_field = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->slot_field);
+    r->bound_slot = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->bound_slot);
+    r->bound_range = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->bound_range);
+    if (!r->slot_values || !r->slot_field || !r->bound_slot || !r->bound_range)
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    for (int i = 0; i < r->o->field_count; i++) {
+        int found = 0;
+        for (int f = 0; f < m->field_count; f++)
+            found |= m->fields[f].association == TPK_ASSOC_POINT && !strcmp(m->fields[f].name, r->o->fields[i]);
+        if (!found)
+            return tpk_diag_fail(r->diag, "--max-error-field %s: the converted mesh has no point field of that name",
+                                 r->o->fields[i]);
+    }
+    for (int f = 0, s = 0; f < m->field_count; f++) {
+        tpk_src_field *field = &m->fields[f];
+        if (field->association != TPK_ASSOC_POINT)
+            continue;
+        int chosen = r->o->field_count == 0;
+        for (int i = 0; i < r->o->field_count; i++)
+            chosen |= !strcmp(field->name, r->o->fields[i]);
+        double lo = INFINITY, hi = -INFINITY;
+        for (int64_t k = 0; k < (int64_t)field->step_count * r->n0; k++)
+            if (isfinite(field->values[k]))
+                lo = fmin(lo, field->values[k]), hi = fmax(hi, field->values[k]);
+        r->report_fields += chosen && hi > lo;
+        for (int step = 0; step < field->step_count; step++, s++) {
+            r->slot_values[s] = field->values + (int64_t)step * r->n0;
+            r->slot_field[s] = f;
+            if (chosen && hi > lo) /* a constant field is its own interpolant everywhere */
+                r->bound_slot[r->bounded] = s, r->bound_range[r->bounded++] = hi - lo;
+        }
+    }
+    return 0;
+}
+
+/* The refined tets, their cells and cell fields, and the point fields with the added vertices' values,
+ * into the mesh. */
+static int hand_back(refine *r)
+{
+    tpk_tetmesh *m = r->m;
+    int64_t nv = m->vertex_count, nt = r->count, t0 = m->tet_count;
+    for (int f = 0; f < m->field_count; f++) {
+        tpk_src_field *field = &m->fields[f];
+        int point = field->association == TPK_ASSOC_POINT;
+        int64_t per = point ? nv : nt, old = point ? r->n0 : t0;
+        int64_t total = (int64_t)field->step_count * per;
+        float *values = malloc(sizeof *values * (size_t)(total > 0 ? total : 1));
+        if (!values)
+            return tpk_diag_fail(r->diag, "out of memory for the fields of %lld tets (--max-error)", (long long)nt);
+        for (int step = 0; step < field->step_count; step++) {
+            float *to = values + (int64_t)step * per;
+            const float *from = field->values + (int64_t)step * old;
+            if (point) {
+                memcpy(to, from, sizeof *to * (size_t)r->n0);
+                int s = 0;
+                while (s < r->slots && !(r->slot_field[s] == f && r->slot_values[s] == from))
+                    s++;
+                for (int64_t v = r->n0; v < nv; v++)
+                    to[v] = r->added[(v - r->n0) * r->slots + s];
+            } else {
+                for (int64_t t = 0; t < nt; t++)
+                    to[t] = from[r->root[t]];
+            }
+        }
+        free(field->values);
+        field->values = values;
+    }
+    free(m->tets), free(m->tet_source);
+    m->tets = r->tets, m->tet_source = r->cell, m->tet_count = nt;
+    r->tets = r->cell = NULL;
+    return 0;
+}
+
+static void release(refine *r, int threads)
+{
+    free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
+    free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->queued);
+    free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
+    for (int w = 0; r->cache && w < threads; w++)
+        free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
+    free(r->cache);
+}
+
+static int set_up(refine *r, int threads)
+{
+    tpk_tetmesh *m = r->m;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        r->point_ids = m->vertex_source[v] >= r->point_ids ? m->vertex_source[v] + 1 : r->point_ids;
+    if (!(r->vertex_of = malloc(sizeof *r->vertex_of * (size_t)(r->point_ids ? r->point_ids : 1))))
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    for (int64_t p = 0; p < r->point_ids; p++)
+        r->vertex_of[p] = -1;
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        if (m->vertex_source[v] >= 0 && r->vertex_of[m->vertex_source[v]] < 0)
+            r->vertex_of[m->vertex_source[v]] = (int32_t)v;
+    if (pick_fields(r) != 0)
+        return -1;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t v = 0; v < m->vertex_count; v++)
+        for (int i = 0; i < 3; i++)
+            lo[i] = fmin(lo[i], m->points[3 * v + i]), hi[i] = fmax(hi[i], m->points[3 * v + i]);
+    r->diag_length = m->vertex_count ? sqrt(dist2(lo, hi)) : 1;
+    if (!(r->diag_length > 0))
+        r->diag_length = 1;
+    for (int n = 1; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
+        if (tpk_bernstein_make(n, &r->table[n]) != 0)
+            return tpk_diag_fail(r->diag, "--max-error: the Bernstein table of degree %d is singular", n);
+    if (reserve_tets(r, m->tet_count) != 0)
+        return -1;
+    r->count = m->tet_count;
+    memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
+    memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
+    for (int64_t t = 0; t < r->count; t++)
+        r->root[t] = t, r->queued[t] = 1, r->todo[t] = t;
+    r->todo_count = r->count;
+    int size = 1; /* doubles per cached entry: the most any cell here needs */
+    for (int64_t c = 0; c < r->cells->cell_count; c++) {
+        int type = mapped_type(r->cells, c), degree = tpk_cell_map_degree(type);
+        if (degree > 1 && r->table[degree].points * tpk_cell_map_nodes(type) > size)
+            size = r->table[degree].points * tpk_cell_map_nodes(type);
+    }
+    int entries = 4096;
+    while (entries > 64 && (int64_t)entries * size * (int64_t)sizeof(double) > (8 << 20))
+        entries /= 2; /* at most 8 MiB a worker */
+    if (!(r->cache = calloc((size_t)threads, sizeof *r->cache)))
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    for (int w = 0; w < threads; w++) {
+        coef_cache *cc = &r->cache[w];
+        cc->entries = entries, cc->size = size;
+        cc->type = calloc((size_t)entries, sizeof *cc->type);
+        cc->key = malloc(sizeof *cc->key * 12 * (size_t)entries);
+        cc->norm = malloc(sizeof *cc->norm * (size_t)entries);
+        cc->by_node = malloc(sizeof *cc->by_node * (size_t)size * (size_t)entries);
+        if (!cc->type || !cc->key || !cc->norm || !cc->by_node)
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
+    return place_corners(r, threads);
+}
+
+int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const tpk_refine_options *options,
+                         tpk_refine_report *report, tpk_diag *diag)
+{
+    refine r;
+    memset(&r, 0, sizeof r);
+    memset(report, 0, sizeof *report);
+    tpk_refine_options o = *options;
+    if (o.max_tets <= 0 && o.uniform_levels > 0)
+        o.max_tets = INT32_MAX;
+    if (o.max_tets <= 0)
+        o.max_tets = mesh->tet_count * 64 > (1 << 24) ? mesh->tet_count * 64 : (1 << 24);
+    if (o.max_tets > INT32_MAX)
+        o.max_tets = INT32_MAX;
+    r.m = mesh, r.cells = cells, r.o = &o, r.diag = diag;
+    r.n0 = r.vertex_cap = mesh->vertex_count;
+    r.tets_given = mesh->tet_count;
+    report->tets_before = mesh->tet_count;
+    int threads = tpk_thread_count(o.threads), rc = set_up(&r, threads);
+    for (int level = 0; rc == 0 && level < o.uniform_levels; level++)
+        rc = cut_all(&r);
+    for (int64_t t = 0; rc == 0 && o.uniform_levels > 0 && t < r.count; t++)
+        enqueue(&r, t);
+    for (int pass = 0; rc == 0; pass++) {
+        tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
+        int64_t over = 0;
+        for (int64_t i = 0; i < r.todo_count; i++)
+            over += !(r.criterion[r.todo[i]] <= o.max_error);
+        report->rounds = pass;
+        if (over == 0 || o.uniform_levels > 0)
+            break;
+        if (pass == MAX_PASSES) {
+            rc = tpk_diag_fail(diag, "--max-error %g: %lld tets still over the bound after %d passes of refinement",
+                               o.max_error, (long long)over, MAX_PASSES);
+            break;
+        }
+        rc = refine_pass(&r, o.max_error);
+    }
+    if (rc == 0) {
+        int worst = -1;
+        for (int64_t t = 0; t < r.count; t++) {
+            if (r.field_error[t] > report->field_error || (worst < 0 && r.worst_slot[t] >= 0))
+                report->field_error = r.field_error[t], worst = r.worst_slot[t];
+            report->geometry_error = fmax(report->geometry_error, r.geometry_error[t]);
+        }
+        if (worst >= 0)
+            snprintf(report->worst_field, sizeof report->worst_field, "%s",
+                     mesh->fields[r.slot_field[r.bound_slot[worst]]].name);
+        report->fields_bounded = r.report_fields;
+        report->tets_after = r.count;
+        report->vertices_added = mesh->vertex_count - r.n0;
+        rc = hand_back(&r);
+    }
+    release(&r, threads);
+    return rc;
+}
