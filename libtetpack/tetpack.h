@@ -19,7 +19,7 @@ extern "C" {
 #pragma GCC visibility push(default)
 #endif
 
-#define TPK_LIBRARY_VERSION "1.1.0"
+#define TPK_LIBRARY_VERSION "1.2.0"
 
 typedef enum tpk_result {
     TPK_OK = 0,
