@@ -9,7 +9,7 @@
  *              tpki_file_check_ids, tpki_file_verify_chunk
  *   handle.c   tpki_file_alloc, tpki_file_free, tpki_file_report, tpki_file_refuse, tpki_file_fail,
  *              tpki_file_usable, tpk_error_text (public: the message is the handle's, under its lock)
- *   rules.c    tpki_fail, tpki_tag_name, tpki_entry_name and every pure rule below (tpki_resolve_*,
+ *   rules.c    tpki_fail, tpki_text_fail, tpki_tag_name, tpki_entry_name and every pure rule below (tpki_resolve_*,
  *              tpki_elem_type_size, tpki_known_tag, tpki_check_*) */
 #ifndef TPK_INTERNAL_FILE_H
 #define TPK_INTERNAL_FILE_H
@@ -71,6 +71,10 @@ struct tpk_file {
 /* ---- diagnostics (rules.c) ---- */
 tpk_result tpki_fail(tpki_diag *diag, tpk_result code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
+/* The same into a caller's buffer err of cap bytes (none when err is NULL or cap 0): the part-set calls'
+ * error text. Returns code. */
+tpk_result tpki_text_fail(char *err, size_t cap, tpk_result code, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
 /* "'TT16'" when the four bytes are printable ASCII, else "0x........". */
 void tpki_tag_name(uint32_t tag, char out[16]);
 /* "chunk 3 'TT16' at offset 4096", the prefix of every per-chunk message. */

@@ -21,20 +21,6 @@ struct tpk_partset {
     double origin[3];
 };
 
-static tpk_result set_fail(char *err, size_t cap, tpk_result code, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-
-static tpk_result set_fail(char *err, size_t cap, tpk_result code, const char *fmt, ...)
-{
-    if (err && cap) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, cap, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-
 /* §15.2: a plain file name beside the manifest: 1-127 bytes then NULs, no separator, not . or .. */
 static int valid_part_name(const tpk_part_record *r)
 {
@@ -81,7 +67,7 @@ static tpk_result check_part(const tpk_partset *set, uint32_t i, const char *pat
     else if (memcmp(h->origin, set->origin, sizeof h->origin))
         what = "origin (the manifest's)";
     if (what)
-        return set_fail(err, cap, TPK_ERR_CORRUPT, "%s: part %" PRIu32 " ('%s') does not match its record in the "
+        return tpki_text_fail(err, cap, TPK_ERR_CORRUPT, "%s: part %" PRIu32 " ('%s') does not match its record in the "
                         "manifest: %s differ (spec §15.2)", path, i, r->file, what);
     return TPK_OK;
 }
@@ -90,33 +76,33 @@ static tpk_result read_table(tpk_partset *set, tpk_file *manifest, const char *p
 {
     uint64_t i;
     if (tpk_find_chunk(manifest, TPK_TAG_PART, 0, 0, &i) != TPK_OK)
-        return set_fail(err, cap, TPK_ERR_NOT_FOUND, "%s: a .tpk file but not a part set (no 'PART' chunk)", path);
+        return tpki_text_fail(err, cap, TPK_ERR_NOT_FOUND, "%s: a .tpk file but not a part set (no 'PART' chunk)", path);
     const tpk_dir_entry *e = &manifest->entries[i];
     uint64_t n = e->elem_count / sizeof(tpk_part_record);
     if (n == 0 || n > TPK_MAX_ID)
-        return set_fail(err, cap, TPK_ERR_CORRUPT, "%s: 'PART' lists %" PRIu64 " parts; expected 1 to 2^31-1",
+        return tpki_text_fail(err, cap, TPK_ERR_CORRUPT, "%s: 'PART' lists %" PRIu64 " parts; expected 1 to 2^31-1",
                         path, n);
     if (manifest->header.vertex_count || manifest->header.tet_count || manifest->header.shell_face_count)
-        return set_fail(err, cap, TPK_ERR_CORRUPT, "%s: a manifest holds no mesh of its own; found %" PRIu64
+        return tpki_text_fail(err, cap, TPK_ERR_CORRUPT, "%s: a manifest holds no mesh of its own; found %" PRIu64
                         " vertices and %" PRIu64 " tets", path, manifest->header.vertex_count,
                         manifest->header.tet_count);
     set->parts = calloc((size_t)n, sizeof *set->parts);
     tpk_part_record *records = malloc((size_t)e->raw_size);
     if (!set->parts || !records) {
         free(records);
-        return set_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "%s: out of memory for %" PRIu64 " parts", path, n);
+        return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "%s: out of memory for %" PRIu64 " parts", path, n);
     }
     set->part_count = (uint32_t)n;
     tpk_result r = tpk_read_chunk(manifest, i, records, e->raw_size);
     if (r != TPK_OK) {
         free(records);
-        return set_fail(err, cap, r, "%s", tpk_error_text(manifest));
+        return tpki_text_fail(err, cap, r, "%s", tpk_error_text(manifest));
     }
     for (uint32_t p = 0; p < set->part_count; p++) {
         set->parts[p].record = records[p];
         if (!valid_part_name(&records[p])) {
             free(records);
-            return set_fail(err, cap, TPK_ERR_CORRUPT, "%s: part %" PRIu32 ": the file name is not a plain name of "
+            return tpki_text_fail(err, cap, TPK_ERR_CORRUPT, "%s: part %" PRIu32 ": the file name is not a plain name of "
                             "1 to 127 bytes followed by NULs, or the reserved bytes are not 0 (spec §15.2)", path, p);
         }
     }
@@ -135,12 +121,12 @@ static tpk_result open_parts(tpk_partset *set, const char *path, const tpk_open_
         size_t need = dir_length + sizeof set->parts[p].record.file + 1;
         char *part_path = malloc(need);
         if (!part_path)
-            return set_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+            return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
         snprintf(part_path, need, "%.*s%s", (int)dir_length, path, set->parts[p].record.file);
         char part_err[TPK_ERROR_TEXT_SIZE] = "";
         tpk_result r = tpk_open_path(&set->parts[p].file, part_path, options, part_err, sizeof part_err);
         if (r != TPK_OK)
-            set_fail(err, cap, r, "%s: part %" PRIu32 ": %s", path, p, part_err);
+            tpki_text_fail(err, cap, r, "%s: part %" PRIu32 ": %s", path, p, part_err);
         else
             r = check_part(set, p, path, err, cap);
         free(part_path);
@@ -167,7 +153,7 @@ tpk_result tpk_partset_open(tpk_partset **out, const char *path, const tpk_open_
     tpk_partset *set = calloc(1, sizeof *set);
     if (!set) {
         tpk_close(manifest);
-        return set_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
+        return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "%s: out of memory", path);
     }
     memcpy(set->origin, manifest->header.origin, sizeof set->origin);
     r = read_table(set, manifest, path, err, cap);

@@ -19,6 +19,17 @@ tpk_result tpki_fail(tpki_diag *diag, tpk_result code, const char *fmt, ...)
     return code;
 }
 
+tpk_result tpki_text_fail(char *err, size_t cap, tpk_result code, const char *fmt, ...)
+{
+    if (err && cap) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(err, cap, fmt, ap);
+        va_end(ap);
+    }
+    return code;
+}
+
 void tpki_tag_name(uint32_t tag, char out[16])
 {
     unsigned char c[4];

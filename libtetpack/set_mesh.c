@@ -10,13 +10,13 @@
  * Untrusted input: the parts' arrays are checked by tpk_load_arrays and the walk of recover.c; each link
  * is checked both ways (the other part's record points back, the faces' positions are the same). */
 #include <pthread.h>
-#include <stdarg.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
+#include "internal_file.h"
 #include "internal_mesh.h"
 
 struct set_field {
@@ -43,20 +43,6 @@ struct tpk_set_mesh {
     size_t field_count;
 };
 
-static tpk_result fail(char *err, size_t cap, tpk_result code, const char *fmt, ...)
-    __attribute__((format(printf, 4, 5)));
-
-static tpk_result fail(char *err, size_t cap, tpk_result code, const char *fmt, ...)
-{
-    if (err && cap) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, cap, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-
 static tpk_layout source_layout(tpk_file *file)
 {
     uint64_t i;
@@ -73,7 +59,7 @@ static tpk_result part_arrays(const tpk_set_mesh *m, uint32_t p, const char *fie
 {
     tpk_file *file = tpk_partset_file(m->set, p);
     tpk_result r = tpk_load_arrays(file, m->source[p], field, step, out);
-    return r == TPK_OK ? r : fail(err, cap, r, "part %u: %s", p, tpk_error_text(file));
+    return r == TPK_OK ? r : tpki_text_fail(err, cap, r, "part %u: %s", p, tpk_error_text(file));
 }
 
 static int open_part(const tpk_set_mesh *m, uint32_t p)
@@ -106,12 +92,12 @@ static tpk_result join_link(const tpk_set_mesh *m, uint32_t p, const tpk_mesh_ar
     uint32_t q = (uint32_t)l->part;
     if (l->face < 0 || (uint64_t)l->face >= mp->shell_face_count || l->other_face < 0 ||
         (uint64_t)l->other_face >= mq->shell_face_count || mq->shell[l->other_face].t != l->other_tet)
-        return fail(err, cap, TPK_ERR_MESH, "part %u: the link of shell face %d names face %d of part %u, which is "
+        return tpki_text_fail(err, cap, TPK_ERR_MESH, "part %u: the link of shell face %d names face %d of part %u, which is "
                     "not that part's shell face of tet %d (spec §15.5)", p, l->face, l->other_face, q, l->other_tet);
     const tpk_link *back = bsearch(&l->other_face, q_links, (size_t)q_count, sizeof *q_links, compare_link_face);
     if (!back || (uint32_t)back->part != p || back->other_face != l->face ||
         back->other_tet != mp->shell[l->face].t)
-        return fail(err, cap, TPK_ERR_MESH, "part %u: shell face %d links to face %d of part %u, which does not link "
+        return tpki_text_fail(err, cap, TPK_ERR_MESH, "part %u: shell face %d links to face %d of part %u, which does not link "
                     "back to it (spec §15.4)", p, l->face, l->other_face, q);
     const tpk_shell_face *f = &mp->shell[l->face], *g = &mq->shell[l->other_face];
     const int32_t fv[3] = {f->a, f->b, f->c}, gv[3] = {g->a, g->b, g->c};
@@ -122,7 +108,7 @@ static tpk_result join_link(const tpk_set_mesh *m, uint32_t p, const tpk_mesh_ar
                          memcmp(&mp->positions[3 * (int64_t)fv[i]], &mq->positions[3 * (int64_t)gv[j]], 12) != 0))
             j++;
         if (j == 3)
-            return fail(err, cap, TPK_ERR_MESH, "part %u: shell face %d and face %d of part %u, linked, do not have the "
+            return tpki_text_fail(err, cap, TPK_ERR_MESH, "part %u: shell face %d and face %d of part %u, linked, do not have the "
                         "same three positions (spec §15.4)", p, l->face, l->other_face, q);
         used |= 1 << j;
         int32_t a = find(parent, (int32_t)(m->slot_base[p] + (uint64_t)fv[i]));
@@ -172,7 +158,7 @@ static tpk_result number_classes(tpk_set_mesh *m, int32_t *parent, char *err, si
                    calloc(np, sizeof(uint64_t)), 0};
     tpk_result r = TPK_OK;
     if (!n.need || !n.at || !n.waiting || !n.next_waiting || !n.ready || !n.head)
-        r = fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu vertices", (unsigned long long)slots);
+        r = tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu vertices", (unsigned long long)slots);
     for (uint64_t s = 0; r == TPK_OK && s < slots; s++) {
         parent[s] = find(parent, (int32_t)s);
         n.need[parent[s]]++;
@@ -195,7 +181,7 @@ static tpk_result number_classes(tpk_set_mesh *m, int32_t *parent, char *err, si
     }
     for (uint32_t p = 0; r == TPK_OK && p < np; p++)
         if (joined || n.head[p] != m->slot_base[p + 1] - m->slot_base[p])
-            r = fail(err, cap, TPK_ERR_MESH, "%s (spec §15.4)", joined ? "the links join two vertices of one part"
+            r = tpki_text_fail(err, cap, TPK_ERR_MESH, "%s (spec §15.4)", joined ? "the links join two vertices of one part"
                      : "the parts order the vertices they share differently");
     for (uint64_t s = 0; r == TPK_OK && s < slots; s++)
         parent[s] = n.need[parent[s]];
@@ -217,7 +203,7 @@ static tpk_result merge_vertices(tpk_set_mesh *m, const tpk_mesh_arrays *parts, 
     uint64_t slots = m->slot_base[m->part_count];
     int32_t *parent = malloc((slots ? slots : 1) * sizeof *parent);
     if (!parent)
-        return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu vertices", (unsigned long long)slots);
+        return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu vertices", (unsigned long long)slots);
     for (uint64_t s = 0; s < slots; s++)
         parent[s] = (int32_t)s;
     tpk_result r = TPK_OK;
@@ -231,7 +217,7 @@ static tpk_result merge_vertices(tpk_set_mesh *m, const tpk_mesh_arrays *parts, 
     if (r == TPK_OK)
         r = number_classes(m, parent, err, cap);
     if (r == TPK_OK && !(m->positions = malloc(3 * sizeof *m->positions * (m->vertex_count ? m->vertex_count : 1))))
-        r = fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu vertices",
+        r = tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu vertices",
                  (unsigned long long)m->vertex_count);
     for (uint32_t p = 0; p < m->part_count && r == TPK_OK; p++)
         for (uint64_t a = 0; a < m->slot_base[p + 1] - m->slot_base[p]; a++)
@@ -284,7 +270,7 @@ static tpk_result merge_part_tets(tpk_set_mesh *m, uint32_t p, const tpk_mesh_ar
     if (r != TPK_OK) {
         free(quad);
         free(nbr);
-        return fail(err, cap, r, "part %u: cannot recover its tets' vertices and neighbors: %s", p, tpk_result_string(r));
+        return tpki_text_fail(err, cap, r, "part %u: cannot recover its tets' vertices and neighbors: %s", p, tpk_result_string(r));
     }
     const int64_t base = (int64_t)m->tet_base[p];
     for (uint64_t i = 0; i < 4 * n; i++)
@@ -303,7 +289,7 @@ static tpk_result merge_part_tets(tpk_set_mesh *m, uint32_t p, const tpk_mesh_ar
         }
         int32_t *slot = matched == 3 ? &nbr[4 * (int64_t)f->t + rank_in(q, apex)] : NULL;
         if (!slot || *slot != -1)
-            r = fail(err, cap, TPK_ERR_MESH, "part %u: linked shell face %d is not a face of tet %d without a "
+            r = tpki_text_fail(err, cap, TPK_ERR_MESH, "part %u: linked shell face %d is not a face of tet %d without a "
                      "neighbor", p, l->face, f->t);
         else
             *slot = (int32_t)(m->tet_base[l->part] + (uint64_t)l->other_tet);
@@ -400,7 +386,7 @@ static tpk_result merge_tets(tpk_set_mesh *m, const tpk_mesh_arrays *parts, cons
         pthread_join(threads[i], NULL);
     pthread_mutex_destroy(&job.lock);
     if (job.result != TPK_OK)
-        fail(err, cap, job.result, "%s", job.err);
+        tpki_text_fail(err, cap, job.result, "%s", job.err);
     return job.result;
 }
 
@@ -420,7 +406,7 @@ static tpk_result build(tpk_set_mesh *m, tpk_mesh_arrays *parts, const tpk_link 
         if (r != TPK_OK)
             return r;
         if ((r = tpk_partset_links(m->set, p, &links[p], &link_counts[p])) != TPK_OK)
-            return fail(err, cap, r, "part %u: %s", p, tpk_error_text(tpk_partset_file(m->set, p)));
+            return tpki_text_fail(err, cap, r, "part %u: %s", p, tpk_error_text(tpk_partset_file(m->set, p)));
         m->slot_base[p + 1] += parts[p].vertex_count;
         m->tet_base[p + 1] += parts[p].tet_count;
         shell_total += parts[p].shell_face_count;
@@ -428,7 +414,7 @@ static tpk_result build(tpk_set_mesh *m, tpk_mesh_arrays *parts, const tpk_link 
     }
     if (m->slot_base[m->part_count] > INT32_MAX || m->tet_base[m->part_count] > INT32_MAX ||
         shell_total > INT32_MAX)
-        return fail(err, cap, TPK_ERR_LIMIT, "the set's parts hold %llu vertices, %llu tets and %llu shell faces: one "
+        return tpki_text_fail(err, cap, TPK_ERR_LIMIT, "the set's parts hold %llu vertices, %llu tets and %llu shell faces: one "
                     "mesh of them holds at most 2^31 - 1 of each", (unsigned long long)m->slot_base[m->part_count],
                     (unsigned long long)m->tet_base[m->part_count], (unsigned long long)shell_total);
     tpk_result r = merge_vertices(m, parts, links, link_counts, err, cap);
@@ -440,11 +426,11 @@ static tpk_result build(tpk_set_mesh *m, tpk_mesh_arrays *parts, const tpk_link 
     m->tets = malloc(record * (tets ? tets : 1));
     m->shell = malloc(sizeof *m->shell * (shell_total ? shell_total : 1));
     if (!m->tets || !m->shell)
-        return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu tets", (unsigned long long)tets);
+        return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for %llu tets", (unsigned long long)tets);
     r = merge_tets(m, parts, links, link_counts, err, cap);
     for (uint32_t p = 0; p < m->part_count && r == TPK_OK; p++)
         if (open_part(m, p) && merge_part_shell(m, p, &parts[p], links[p], link_counts[p], &m->shell_count) != TPK_OK)
-            r = fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for part %u's shell", p);
+            r = tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for part %u's shell", p);
     return r;
 }
 
@@ -477,7 +463,7 @@ tpk_result tpk_set_mesh_create(tpk_set_mesh **out, tpk_partset *set, tpk_layout 
     free(links);
     free(link_counts);
     if (r == TPK_ERR_OUT_OF_MEMORY && err && cap && !err[0])
-        fail(err, cap, r, "out of memory for the set's arrays");
+        tpki_text_fail(err, cap, r, "out of memory for the set's arrays");
     if (r != TPK_OK) {
         tpk_set_mesh_destroy(m);
         return r;
@@ -536,7 +522,7 @@ static tpk_result gather_point_field(tpk_set_mesh *m, const char *field_name, ui
 {
     float *scalars = malloc(sizeof *scalars * (m->vertex_count ? m->vertex_count : 1));
     if (!scalars)
-        return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's point field");
+        return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's point field");
     for (uint32_t p = 0; p < m->part_count; p++) {
         if (!open_part(m, p))
             continue;
@@ -563,7 +549,7 @@ tpk_result tpk_set_mesh_arrays(tpk_set_mesh *m, const char *field_name, uint32_t
         return TPK_ERR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     if (field_name && strlen(field_name) >= sizeof m->fields->name)
-        return fail(err, cap, TPK_ERR_NOT_FOUND, "no field named '%.63s...' (names are shorter, spec §7.1)", field_name);
+        return tpki_text_fail(err, cap, TPK_ERR_NOT_FOUND, "no field named '%.63s...' (names are shorter, spec §7.1)", field_name);
     struct set_field *f = kept_field(m, field_name, step, 0);
     if (!f) {
         float *scalars = NULL;
@@ -572,7 +558,7 @@ tpk_result tpk_set_mesh_arrays(tpk_set_mesh *m, const char *field_name, uint32_t
             return r;
         if (!(f = new_field(m, field_name, step, 0, 0))) {
             free(scalars);
-            return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's point field");
+            return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's point field");
         }
         f->values = scalars;
         m->field_count++;
@@ -600,7 +586,7 @@ tpk_result tpk_set_mesh_tet_field(tpk_set_mesh *m, const char *field_name, uint3
         return TPK_ERR_INVALID_ARGUMENT;
     *out = NULL;
     if (strlen(field_name) >= sizeof m->fields->name)
-        return fail(err, cap, TPK_ERR_NOT_FOUND, "no field named '%.63s...' (names are shorter, spec §7.1)", field_name);
+        return tpki_text_fail(err, cap, TPK_ERR_NOT_FOUND, "no field named '%.63s...' (names are shorter, spec §7.1)", field_name);
     struct set_field *kept = kept_field(m, field_name, step, 1);
     if (kept) {
         *out = kept->values;
@@ -608,7 +594,7 @@ tpk_result tpk_set_mesh_tet_field(tpk_set_mesh *m, const char *field_name, uint3
     }
     struct set_field *f = new_field(m, field_name, step, 1, m->tet_base[m->part_count] ? m->tet_base[m->part_count] : 1);
     if (!f)
-        return fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's tet field '%.64s'", field_name);
+        return tpki_text_fail(err, cap, TPK_ERR_OUT_OF_MEMORY, "out of memory for the set's tet field '%.64s'", field_name);
     for (uint32_t p = 0; p < m->part_count; p++) {
         if (!open_part(m, p))
             continue;
@@ -617,7 +603,7 @@ tpk_result tpk_set_mesh_tet_field(tpk_set_mesh *m, const char *field_name, uint3
         tpk_result r = tpk_load_tet_field(file, field_name, step, &part);
         if (r != TPK_OK) {
             free(f->values);
-            return fail(err, cap, r, "part %u: %s", p, tpk_error_text(file));
+            return tpki_text_fail(err, cap, r, "part %u: %s", p, tpk_error_text(file));
         }
         memcpy(f->values + m->tet_base[p], part, sizeof *f->values * (m->tet_base[p + 1] - m->tet_base[p]));
     }
