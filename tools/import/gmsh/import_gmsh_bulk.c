@@ -139,18 +139,23 @@ static int64_t note_tags(gmsh_reader *r, const unsigned char *src, int64_t at, i
             break;
         }
     }
-    if (!r->node_tags && broken) { /* as note_node_tag: the run so far written out, the rest listed */
-        r->node_tags = malloc(sizeof *r->node_tags * (size_t)(n ? n : 1));
-        if (!r->node_tags)
-            return tpk_scan_fail(&r->s, "%lld nodes: out of memory", (long long)n);
-        for (int64_t i = 0; i < at; i++) {
-            r->node_tags[i].tag = i + 1;
-            r->node_tags[i].index = (int32_t)i;
-        }
-    }
+    if (!r->node_tags && broken && gmsh_list_node_run(r, at, n)) /* the run so far written out, the rest listed */
+        return -1;
     if (r->node_tags)
         tpk_parallel_for(taken, threads_for(taken), list_tags, &job);
     return taken;
+}
+
+int gmsh_list_node_run(gmsh_reader *r, int64_t at, int64_t n)
+{
+    r->node_tags = malloc(sizeof *r->node_tags * (size_t)(n ? n : 1));
+    if (!r->node_tags)
+        return tpk_scan_fail(&r->s, "%lld nodes: out of memory", (long long)n);
+    for (int64_t i = 0; i < at; i++) {
+        r->node_tags[i].tag = i + 1;
+        r->node_tags[i].index = (int32_t)i;
+    }
+    return 0;
 }
 
 int64_t gmsh_bulk_node_tags(gmsh_reader *r, int64_t at, int64_t count, int64_t n)

@@ -5,7 +5,7 @@
  *   import_gmsh_mesh.c  gmsh_read_nodes, gmsh_read_elements, gmsh_read_entities, gmsh_sort_tags,
  *                       gmsh_node_index
  *   import_gmsh_bulk.c  gmsh_bulk_node_tags, gmsh_bulk_coords, gmsh_bulk_elements (4.1 blocks on all
- *                       threads), gmsh_lookup, gmsh_node_at, gmsh_index_nodes
+ *                       threads), gmsh_lookup, gmsh_node_at, gmsh_index_nodes, gmsh_list_node_run
  *   import_gmsh_scan.c  gmsh_bytes_left, gmsh_bin_bytes, gmsh_num, gmsh_real, gmsh_bin_start,
  *                       gmsh_read_count, gmsh_expect_end, gmsh_skip_section
  * Not installed. Every function returning int that can fail returns 0, or -1 with the message in r->s. */
@@ -119,6 +119,9 @@ int32_t gmsh_lookup(const tag_index *t, int64_t n, int64_t tag, int *found);
 int32_t gmsh_node_at(const gmsh_reader *r, int64_t tag, int *found);
 /* After $Nodes, sparse tags sorted: node_at where the largest tag is at most 4 a node (plus 4096). */
 int gmsh_index_nodes(gmsh_reader *r);
+/* The first tag that breaks the run 1, 2, 3, ...: node_tags made for n nodes, the `at` nodes before it
+ * written out as (i + 1, i). 0, or -1 with the message (out of memory). */
+int gmsh_list_node_run(gmsh_reader *r, int64_t at, int64_t n);
 /* The tags of nodes at .. at + count - 1 (of n), binary from the mapping or ASCII in pieces: noted as
  * note-by-note reading would (no table while they run 1, 2, 3, ...). Returns how many it took: the first
  * tag it does not take (below 1, or not a number) and all after it are left to the one-by-one reader,

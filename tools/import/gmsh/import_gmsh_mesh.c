@@ -112,13 +112,8 @@ static int note_node_tag(gmsh_reader *r, int64_t at, int64_t tag, int64_t n)
     if (!r->node_tags) {
         if (tag == at + 1)
             return 0;
-        r->node_tags = malloc(sizeof *r->node_tags * (size_t)(n ? n : 1));
-        if (!r->node_tags)
-            return tpk_scan_fail(&r->s, "%lld nodes: out of memory", (long long)n);
-        for (int64_t i = 0; i < at; i++) {
-            r->node_tags[i].tag = i + 1;
-            r->node_tags[i].index = (int32_t)i;
-        }
+        if (gmsh_list_node_run(r, at, n))
+            return -1;
     }
     r->node_tags[at].tag = tag;
     r->node_tags[at].index = (int32_t)at;
