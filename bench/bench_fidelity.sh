@@ -22,7 +22,8 @@ PY=/usr/bin/python3
 mkdir -p "$WORK"
 median() { "$PY" -c 'import statistics,sys; print(statistics.median(float(x) for x in sys.argv[1:]))' "$@"; }
 has_max_error=0
-"$TPK" convert --help 2>&1 | grep -q -- "--max-error" && has_max_error=1
+help=$("$TPK" convert --help 2>&1) # not piped into grep -q: under pipefail an early exit fails the pipe
+grep -q -- "--max-error" <<< "$help" && has_max_error=1
 
 gmsh -3 -nt 1 -order 2 "$SHARED/gmsh/t5.geo" -format vtk -o "$WORK/t5_order2.vtk" > "$WORK/gmsh.log" 2>&1 ||
     { tail "$WORK/gmsh.log" >&2; exit 1; }
