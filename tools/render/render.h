@@ -363,7 +363,9 @@ int tpk_render_cpu(const tpk_mesh_arrays *mesh, const tpk_render_options *opt, u
 
 /* The same over a part set (spec §15) through its link-following marcher: the picture of the one file
  * the parts were cut from. has_scalars: the parts' arrays carry a point field; diagonal: of the box of
- * all parts' positions (tpk_positions_diagonal), for the default unit distance. */
+ * all parts' positions (tpk_positions_diagonal), for the default unit distance. Emission-absorption,
+ * isosurfaces, the clip box and probes; shading, shadows, AO and tet fields are refused here (the CLI
+ * renders those frames through the set as one mesh, tpk_set_mesh, with tpk_render_cpu). */
 int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double diagonal,
                        const tpk_render_options *opt, uint8_t *rgba, tpk_render_stats *stats, tpk_diag *diag);
 /* The vertex cache of render.h's OCCLUSION AT VERTICES for `mesh` and `opt` (whatever opt->occlusion

@@ -652,10 +652,12 @@ int tpk_render_cpu_set(const tpk_set_marcher *marcher, int has_scalars, double d
         return tpk_diag_fail(diag, "render: part set, options and image buffer are required");
     if (tpk_render_check_options(opt, diag))
         return -1;
-    /* Normals and tet fields index one file's vertices and tets; a set's segments name a part's. */
+    /* Normals and tet fields index one mesh's vertices and tets; a set's segments name a part's: those
+     * frames go through the set as one mesh (tpk_set_mesh), as render and view do. */
     if (opt->shading || opt->shadows || opt->ao_rays > 0 || opt->tet_scalars)
-        return tpk_diag_fail(diag, "render: a part set renders emission-absorption, isosurfaces, a clip box and probes; "
-                                   "shading, shadows, ambient occlusion and tet fields need the single file");
+        return tpk_diag_fail(diag, "render: the link-following marcher of a part set renders emission-absorption, "
+                                   "isosurfaces, a clip box and probes; shading, shadows, ambient occlusion and "
+                                   "tet fields render the set as one mesh (tpk_set_mesh)");
     render_job *job = calloc(1, sizeof *job);
     if (!job)
         return tpk_diag_fail(diag, "render: out of memory");
