@@ -106,6 +106,19 @@ PYEOF
 tpk render "$WORK/blocks.tpk" --scene "$WORK/keys.json" --backend vulkan -o "$WORK/keys-render.png" > /dev/null
 psnr_at_least "$WORK/keys.png" "$WORK/keys-render.png" "view --keys and render of its scene"
 
+# a part set's next field (F): its colour range spans every part's, as render's of the set does
+"$TPK" convert "$DATA/seacas/8-block.g" "$WORK/blocks.tpkset" --parts 3 > /dev/null
+tpk view "$WORK/blocks.tpkset" --size $SIZE --frames 1 --keys FF --save-scene "$WORK/set-keys.json" \
+    --screenshot "$WORK/set-keys.png" 2> "$WORK/err" || { cat "$WORK/err"; fail "view --keys on a part set"; }
+field=$("$PY" -c 'import json,sys; print(json.load(open(sys.argv[1]))["field"])' "$WORK/set-keys.json")
+tpk render "$WORK/blocks.tpkset" --field "$field" --size $SIZE --backend vulkan -o "$WORK/set-field.png" \
+    --save-scene "$WORK/set-field.json" > /dev/null
+"$PY" - "$WORK/set-keys.json" "$WORK/set-field.json" <<'PYEOF' || fail "a part set's next field: its range"
+import json, sys
+a, b = (json.load(open(p))["range"] for p in sys.argv[1:3])
+assert max(abs(x - y) for x, y in zip(a, b)) <= 1e-6 * max(1.0, abs(b[1] - b[0])), (a, b)
+PYEOF
+
 # the probe keys: O twice (a sphere, then a plane facing the camera), K (cut, not keep), 6 and 9 (moved
 # right and away), then O again (a box), ++ and 8: the scene view saves has the box, moved and grown,
 # and render draws it the same

@@ -208,6 +208,7 @@ static int view_file_of(render_args *a, const view_args *v, tpk_file *file, tpk_
     tpk_render_options_default(&o.render);
     render_args_to_options(a, file, &o.tf, &o.render);
     if (set) { /* the whole set's box and range, not part 0's (as render_set.c) */
+        o.set = set;
         double range[2];
         render_set_extent(a, set, o.set_bounds_min, o.set_bounds_max, range);
         if (!a->have_camera)

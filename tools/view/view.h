@@ -21,6 +21,7 @@ typedef struct tpk_view_options {
     tpk_file *file;               /* open, owned by the caller; must outlive tpk_view_run */
     tpk_set_mesh *set_mesh;       /* a part set (spec §15): its parts as one mesh, shown in its own layout
                                      (file is then part 0, for the field list; bounds the set's), or NULL */
+    tpk_partset *set;             /* with set_mesh: the set, whose parts' ranges a field's colour range spans */
     double set_bounds_min[3], set_bounds_max[3];
     const char *path;             /* for the title and messages */
     tpk_render_options render;    /* the first frame's options (size: the window's) */

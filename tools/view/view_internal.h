@@ -19,6 +19,7 @@
 typedef struct view_state {
     tpk_file *file;
     tpk_set_mesh *set_mesh;        /* tpk_view_options.set_mesh: the arrays come from it, layout fixed */
+    tpk_partset *set;              /* tpk_view_options.set: a field's range spans every part's */
     const char *path;
     tpk_render_options opt;        /* opt.tf points at tf */
     tpk_transfer_function tf;

@@ -24,9 +24,18 @@ static void take_field(view_state *s, const tpk_field_desc *d)
     snprintf(s->field, sizeof s->field, "%s", d->name);
     s->tet_field = d->association == TPK_ASSOC_TET;
     s->step_count = d->step_count;
+    double lo = d->min_value, hi = d->max_value;
+    for (uint32_t p = 1; s->set && p < tpk_partset_part_count(s->set); p++) { /* a set: every part's range */
+        tpk_file *part = tpk_partset_file(s->set, p);
+        for (uint32_t i = 0; part && i < tpk_field_count(part); i++) {
+            tpk_field_desc e;
+            if (tpk_get_field(part, i, &e) == TPK_OK && !strcmp(e.name, d->name) && e.min_value <= e.max_value)
+                lo = e.min_value < lo ? e.min_value : lo, hi = e.max_value > hi ? e.max_value : hi;
+        }
+    }
     s->opt.range_min = 0.0, s->opt.range_max = 1.0; /* as render: an empty range maps onto [0, 1] */
-    if (d->min_value < d->max_value)
-        s->opt.range_min = d->min_value, s->opt.range_max = d->max_value;
+    if (lo < hi)
+        s->opt.range_min = lo, s->opt.range_max = hi;
     if (s->opt.iso_count)
         s->opt.iso[0] = 0.5 * (s->opt.range_min + s->opt.range_max);
 }
@@ -73,6 +82,7 @@ int view_state_init(view_state *s, const tpk_view_options *o, tpk_diag *diag)
     memcpy(s->bounds_min, info.bounds_min, sizeof s->bounds_min);
     memcpy(s->bounds_max, info.bounds_max, sizeof s->bounds_max);
     s->set_mesh = o->set_mesh;
+    s->set = o->set_mesh ? o->set : NULL;
     if (s->set_mesh) {
         memcpy(s->bounds_min, o->set_bounds_min, sizeof s->bounds_min);
         memcpy(s->bounds_max, o->set_bounds_max, sizeof s->bounds_max);
