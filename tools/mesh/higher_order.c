@@ -121,20 +121,46 @@ static int tetra_pieces(int diagonal, piece *p)
     return 8;
 }
 
-/* ---- Lagrange hexahedra of order 3 and up: every node a corner of a sub-hexahedron ------------ */
+/* ---- Lagrange cells of order 3 and up: every node a corner of a cell of the node lattice ------- */
 
 #define LAGRANGE_MAX_ORDER 10
 
-/* The order p of a Lagrange hexahedron (72) with n = (p+1)^3 nodes, 3 <= p <= LAGRANGE_MAX_ORDER; else
- * 0 (order 2 is split as the triquadratic hexahedron; an anisotropic order is not read here). */
-static int lagrange_hex_order(int type, int64_t n)
+/* The node count of a Lagrange tetra (71), hexahedron (72) or wedge (73) of order p. */
+static int64_t lagrange_nodes(int type, int p)
 {
-    if (type != 72)
+    if (type == 71)
+        return (int64_t)(p + 1) * (p + 2) * (p + 3) / 6;
+    if (type == 72)
+        return (int64_t)(p + 1) * (p + 1) * (p + 1);
+    return (int64_t)(p + 1) * (p + 1) * (p + 2) / 2;
+}
+
+/* The order p of a Lagrange tetra, hexahedron or wedge with n nodes, 3 <= p <= LAGRANGE_MAX_ORDER; else
+ * 0 (order 2 is split as the quadratic types; an anisotropic order is not read here). */
+static int lagrange_order(int type, int64_t n)
+{
+    if (type != 71 && type != 72 && type != 73)
         return 0;
     for (int p = 3; p <= LAGRANGE_MAX_ORDER; p++)
-        if ((int64_t)(p + 1) * (p + 1) * (p + 1) == n)
+        if (lagrange_nodes(type, p) == n)
             return p;
     return 0;
+}
+
+/* The linear cells of an order-p Lagrange cell, and their nodes in all into *conn: a tetra's lattice
+ * has C(p+2,3) upright tetra, C(p+1,3) octahedra (4 tetra each) and C(p,3) upside-down tetra; a
+ * hexahedron's p^3 hexahedra, a wedge's p^3 wedges (p^2 triangles in each of p layers). */
+static int64_t lagrange_cells(int type, int p, int64_t *conn)
+{
+    if (type == 71) {
+        int64_t up = (int64_t)(p + 2) * (p + 1) * p / 6, oct = (int64_t)(p + 1) * p * (p - 1) / 6,
+                down = (int64_t)p * (p - 1) * (p - 2) / 6;
+        *conn = 4 * (up + 4 * oct + down);
+        return up + 4 * oct + down;
+    }
+    int64_t cells = (int64_t)p * p * p;
+    *conn = cells * (type == 72 ? 8 : 6);
+    return cells;
 }
 
 /* The node of lattice point (i, j, k), 0 <= i, j, k <= p, in VTK 9's numbering of the Lagrange
@@ -170,6 +196,173 @@ static int lagrange_hex_node(int p, int i, int j, int k)
     return at + 6 * m * m + (i - 1) + m * ((j - 1) + m * (k - 1));
 }
 
+/* The node at barycentric lattice point (a, b, c), a + b + c = q, of an order-q Lagrange triangle in
+ * VTK 9's numbering (vtkHigherOrderTriangle): rings from the outside in, each its 3 corners (a = q,
+ * b = q, c = q), then its edges ab, bc, ca, each from its first corner; the innermost ring a single
+ * point when q is a multiple of 3. */
+static int lagrange_tri_node(int q, int a, int b, int c)
+{
+    int at = 0;
+    for (; a > 0 && b > 0 && c > 0; a--, b--, c--, q -= 3)
+        at += 3 * q;
+    if (q == 0 || a == q)
+        return at;
+    if (b == q || c == q)
+        return at + (b == q ? 1 : 2);
+    if (c == 0)
+        return at + 3 + (b - 1);
+    if (a == 0)
+        return at + 3 + (q - 1) + (c - 1);
+    return at + 3 + 2 * (q - 1) + (a - 1);
+}
+
+/* The node of lattice point (i, j, k), i + j + k <= p, of an order-p Lagrange tetra in VTK 9's numbering
+ * (vtkHigherOrderTetra; corners 0-3 at weights w = (p - i - j - k, i, j, k)): shells from the outside in,
+ * each a tetra of order m = p - 4 L: its 4 corners; its edges 01, 12, 20, 03, 13, 23, each from its
+ * first corner; its faces' inner points, the faces (0 1 3), (2 3 1), (0 3 2), (0 2 1) each numbered as a
+ * triangle with the corners in that order (less its boundary ring); then the next shell, offset by
+ * (1, 1, 1). */
+static int lagrange_tet_node(int p, int i, int j, int k)
+{
+    static const int edge[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
+    static const int face[4][3] = {{0, 1, 3}, {2, 3, 1}, {0, 3, 2}, {0, 2, 1}};
+    int w[4] = {p - i - j - k, i, j, k}, m = p, at = 0;
+    for (; w[0] > 0 && w[1] > 0 && w[2] > 0 && w[3] > 0; m -= 4) {
+        at += 2 * m * m + 2; /* the points on the surface of an order-m tetra (m >= 4 here) */
+        for (int v = 0; v < 4; v++)
+            w[v]--;
+    }
+    if (m == 0)
+        return at;
+    for (int v = 0; v < 4; v++)
+        if (w[v] == m)
+            return at + v;
+    at += 4;
+    for (int e = 0; e < 6; e++)
+        if (w[edge[e][0]] + w[edge[e][1]] == m)
+            return at + e * (m - 1) + w[edge[e][1]] - 1;
+    at += 6 * (m - 1);
+    int f = 0;
+    while (f < 3 && w[face[f][0]] + w[face[f][1]] + w[face[f][2]] != m)
+        f++;
+    return at + f * ((m - 1) * (m - 2) / 2) + lagrange_tri_node(m, w[face[f][0]], w[face[f][1]], w[face[f][2]]) - 3 * m;
+}
+
+/* The node of lattice point (i, j, k), i + j <= p, 0 <= k <= p, of an order-p Lagrange wedge in VTK 9's
+ * numbering (vtkHigherOrderWedge::PointIndexFromIJK): the 6 corners; the bottom triangle's edges 01, 12,
+ * 20, the top's, then the vertical edges at corners 0, 1, 2, each from its first corner; the bottom and
+ * top triangles' inner points (by rows: i fastest, then j); the quad faces j = 0, i + j = p, i = 0, each
+ * along its bottom edge's direction fastest, then up; then the body, by layers of the triangle's inner
+ * points. */
+static int lagrange_wedge_node(int p, int i, int j, int k)
+{
+    int m = p - 1, tri = (p - 1) * (p - 2) / 2, top = k == p, layer = k == 0 || k == p;
+    int corner = i == p ? 1 : j == p ? 2 : i == 0 && j == 0 ? 0 : -1;
+    if (corner >= 0)
+        return layer ? corner + 3 * top : 6 + 6 * m + corner * m + (k - 1);
+    int side = j == 0 ? 0 : i + j == p ? 1 : i == 0 ? 2 : -1;
+    int along = side == 0 ? i - 1 : side == 1 ? j - 1 : p - j - 1;
+    if (layer && side >= 0)
+        return 6 + 3 * m * top + side * m + along;
+    int inner = (j - 1) * (p - 1) - (j - 1) * j / 2 + (i - 1);
+    int at = 6 + 9 * m;
+    if (layer)
+        return at + tri * top + inner;
+    at += 2 * tri;
+    if (side >= 0)
+        return at + side * m * m + along + m * (k - 1);
+    return at + 3 * m * m + tri * (k - 1) + inner;
+}
+
+/* Orientation of tetra (a, b, c, d) of lattice points: the sign of det(b - a, c - a, d - a). */
+static int lattice_orientation(const int x[4][3])
+{
+    int u[3], s[3], w[3];
+    for (int k = 0; k < 3; k++)
+        u[k] = x[1][k] - x[0][k], s[k] = x[2][k] - x[0][k], w[k] = x[3][k] - x[0][k];
+    int det = u[0] * (s[1] * w[2] - s[2] * w[1]) - u[1] * (s[0] * w[2] - s[2] * w[0]) + u[2] * (s[0] * w[1] - s[1] * w[0]);
+    return det > 0 ? 1 : det < 0 ? -1 : 0;
+}
+
+/* A tetra of an order-p Lagrange tetra's lattice at lattice points x, positive. */
+static piece lattice_tet(int p, int x[4][3])
+{
+    if (lattice_orientation((const int(*)[3])x) < 0)
+        for (int k = 0; k < 3; k++) {
+            int t = x[2][k];
+            x[2][k] = x[3][k], x[3][k] = t;
+        }
+    piece q = {TPK_CELL_TETRA, {0}};
+    for (int v = 0; v < 4; v++)
+        q.nodes[v] = lagrange_tet_node(p, x[v][0], x[v][1], x[v][2]);
+    return q;
+}
+
+/* The pieces of an order-p Lagrange tetra or wedge in its local numbering, into out (NULL: counted only).
+ * A tetra's octahedron is an entry of type 0 with its 3 pairs of opposite corners in nodes[0..5], then
+ * 12 tetra: 4 for the cut along each pair. Returns the entry count. */
+static int lagrange_layout(int type, int p, piece *out)
+{
+    int n = 0;
+    if (type == 73) {
+        for (int k = 0; k < p; k++)
+            for (int j = 0; j < p; j++)
+                for (int i = 0; i + j < p; i++)
+                    for (int down = 0; down < 2 && (down == 0 || i + j + 2 <= p); down++, n++) {
+                        /* the triangle (i, j) (i+1, j) (i, j+1), or (i+1, j) (i+1, j+1) (i, j+1) */
+                        const int tri[2][3][2] = {{{i, j}, {i + 1, j}, {i, j + 1}}, {{i + 1, j}, {i + 1, j + 1}, {i, j + 1}}};
+                        if (!out)
+                            continue;
+                        out[n].type = TPK_CELL_WEDGE;
+                        for (int v = 0; v < 3; v++) {
+                            out[n].nodes[v] = lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k);
+                            out[n].nodes[3 + v] = lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k + 1);
+                        }
+                    }
+        return n;
+    }
+    for (int k = 0; k < p; k++)
+        for (int j = 0; j + k < p; j++)
+            for (int i = 0; i + j + k < p; i++) {
+                int up[4][3] = {{i, j, k}, {i + 1, j, k}, {i, j + 1, k}, {i, j, k + 1}};
+                if (out)
+                    out[n] = lattice_tet(p, up);
+                n++;
+                if (i + j + k + 2 > p)
+                    continue;
+                /* the octahedron: opposite corners (i+1, j, k)-(i, j+1, k+1), (i, j+1, k)-(i+1, j, k+1),
+                 * (i, j, k+1)-(i+1, j+1, k) */
+                int pair[3][2][3] = {{{i + 1, j, k}, {i, j + 1, k + 1}},
+                                     {{i, j + 1, k}, {i + 1, j, k + 1}},
+                                     {{i, j, k + 1}, {i + 1, j + 1, k}}};
+                if (out) {
+                    out[n].type = 0;
+                    for (int a = 0; a < 3; a++)
+                        for (int b = 0; b < 2; b++)
+                            out[n].nodes[2 * a + b] = lagrange_tet_node(p, pair[a][b][0], pair[a][b][1], pair[a][b][2]);
+                    for (int d = 0; d < 3; d++) {
+                        const int *u0 = pair[(d + 1) % 3][0], *u1 = pair[(d + 1) % 3][1];
+                        const int *v0 = pair[(d + 2) % 3][0], *v1 = pair[(d + 2) % 3][1];
+                        const int *ring[4] = {u0, v0, u1, v1}; /* opposite corners are not neighbours on it */
+                        for (int r = 0; r < 4; r++) {
+                            int t[4][3];
+                            memcpy(t[0], pair[d][0], sizeof t[0]), memcpy(t[1], pair[d][1], sizeof t[1]);
+                            memcpy(t[2], ring[r], sizeof t[2]), memcpy(t[3], ring[(r + 1) % 4], sizeof t[3]);
+                            out[n + 1 + 4 * d + r] = lattice_tet(p, t);
+                        }
+                    }
+                }
+                n += 13;
+                if (i + j + k + 3 > p)
+                    continue;
+                int down[4][3] = {{i + 1, j + 1, k}, {i + 1, j, k + 1}, {i, j + 1, k + 1}, {i + 1, j + 1, k + 1}};
+                if (out)
+                    out[n] = lattice_tet(p, down);
+                n++;
+            }
+    return n;
+}
+
 /* Sub-hexahedron (a, b, c) of an order-p Lagrange hexahedron: its 8 nodes, VTK's corner order. */
 static void lagrange_hex_piece(int p, int a, int b, int c, int32_t *local)
 {
@@ -190,9 +383,72 @@ static int split_type(int type)
     return type == 24 || type == 25 || type == 26 || type == 27 || type == 29 || type == 31 || type == 32;
 }
 
-/* Pieces (linear cells) of a split type; tetra pieces put positive on the parametric cell. */
-static int pieces_of(int type, const int32_t *nodes, const double *points, piece *p)
+/* A cell split by a fixed table: a split type with its node count; a quadratic tetra or pyramid with
+ * face centres, as the importers keep Exodus's TETRA14 (24, 14 nodes: the 10, then the centres of
+ * faces 012, 013, 123, 023) and PYRAMID14 (27, 14 nodes: the 13, then the base centre); VTK's 15-node
+ * Lagrange tetra (71: those 14, then the body centre; Exodus's TETRA15). */
+static int fixed_split(int type, int64_t n)
 {
+    return split_type(type) || (type == 71 && n == 15);
+}
+
+static int fixed_nodes_ok(int type, int64_t n)
+{
+    return n == tpk_cell_map_nodes(type) || ((type == 24 || type == 27) && n == 14) || (type == 71 && n == 15);
+}
+
+/* The tetra's faces: their mid-edge nodes and their centre in the 15-node numbering. */
+static const int tet_face_nodes[4][4] = {{4, 5, 6, 10}, {4, 7, 8, 11}, {5, 8, 9, 12}, {6, 7, 9, 13}};
+
+/* Tetra pieces with a face on one of the cell's faces whose middle quarter (its mid-edges' triangle) they
+ * are: fanned into 3 about that face's centre, as the other cell on the face does. Returns the count. */
+static int fan_face_centres(const piece *in, int count, piece *out)
+{
+    int n = 0;
+    for (int i = 0; i < count; i++) {
+        int centre = -1, off = -1;
+        for (int o = 0; o < 4 && centre < 0; o++) /* the face without corner o */
+            for (int f = 0; f < 4 && centre < 0; f++) {
+                int hits = 0;
+                for (int v = 0; v < 4; v++)
+                    for (int e = 0; e < 3; e++)
+                        hits += v != o && in[i].nodes[v] == tet_face_nodes[f][e];
+                if (hits == 3)
+                    centre = tet_face_nodes[f][3], off = o;
+            }
+        if (centre < 0) {
+            out[n++] = in[i];
+            continue;
+        }
+        for (int v = 0; v < 4; v++)
+            if (v != off) {
+                out[n] = in[i];
+                out[n++].nodes[v] = centre;
+            }
+    }
+    return n;
+}
+
+/* The 15-node tetra: the 4 corner tetra, and a cone from the body centre over the octahedron's 8 faces,
+ * the 4 on the cell's faces fanned about their centres (20 tetra). */
+static int tetra15_pieces(piece *p)
+{
+    static const int inner[4][3] = {{4, 6, 7}, {4, 5, 8}, {5, 6, 9}, {7, 8, 9}}; /* faces of the corner tetra */
+    piece cone[12];
+    tetra_pieces(0, cone);
+    for (int f = 0; f < 8; f++) {
+        const int *tri = f < 4 ? inner[f] : tet_face_nodes[f - 4];
+        piece t = {TPK_CELL_TETRA, {tri[0], tri[1], tri[2], 14}};
+        cone[4 + f] = t;
+    }
+    return fan_face_centres(cone, 12, p);
+}
+
+/* Pieces (linear cells) of a split type; tetra pieces put positive on the parametric cell. */
+static int pieces_of(int type, int64_t n, const int32_t *nodes, const double *points, piece *p)
+{
+    if (type == 71)
+        return tetra15_pieces(p);
     if (type == 24) {
         /* the shortest of the octahedron's three diagonals (the best-shaped inner tetra) */
         static const int axis[3][2] = {{4, 9}, {5, 7}, {6, 8}};
@@ -204,7 +460,11 @@ static int pieces_of(int type, const int32_t *nodes, const double *points, piece
             if (d == 0 || len < best_len)
                 best = d, best_len = len;
         }
-        return tetra_pieces(best, p);
+        if (n == 10)
+            return tetra_pieces(best, p);
+        piece cut[8];
+        tetra_pieces(best, cut);
+        return fan_face_centres(cut, 8, p);
     }
     if (type == 25 || type == 29)
         return hex_pieces(p);
@@ -213,17 +473,31 @@ static int pieces_of(int type, const int32_t *nodes, const double *points, piece
     return pyramid_pieces(p);
 }
 
-/* Parametric coordinates of local node k of a split type's full lattice (the pyramid's 13: base centre). */
+/* Parametric coordinates of local node k of a split type's full lattice (the pyramid's 13: base centre;
+ * the tetra's 10-13 its face centres, 14 its body centre). */
 static void local_node(int type, int k, double r[3])
 {
     if (type == 27 && k == 13) {
         r[0] = r[1] = 0.5, r[2] = 0;
         return;
     }
-    tpk_cell_map_node(full_type(type), k, r);
+    if ((type == 24 || type == 71) && k >= 10) {
+        memset(r, 0, 3 * sizeof *r);
+        for (int e = 0; e < 3 && k < 14; e++) {
+            double m[3];
+            tpk_cell_map_node(24, tet_face_nodes[k - 10][e], m);
+            for (int i = 0; i < 3; i++)
+                r[i] += m[i] / 3;
+        }
+        if (k == 14)
+            r[0] = r[1] = r[2] = 0.25;
+        return;
+    }
+    tpk_cell_map_node(full_type(type == 71 ? 24 : type), k, r);
 }
 
-/* Orient a tetra piece positive on the parametric cell (exact: coordinates are multiples of 1/4). */
+/* Orient a tetra piece positive on the parametric cell (exact in sign: coordinates are multiples of 1/12,
+ * the pieces' volumes far from 0). */
 static void orient_piece(int type, piece *p)
 {
     double x[4][3];
@@ -315,7 +589,54 @@ typedef struct split_state {
     added_point *added;
     int64_t added_count, added_cap;
     int too_many; /* the added points would pass 2^31-1 points */
+    piece *layout[2][LAGRANGE_MAX_ORDER + 1]; /* Lagrange tetra (0) and wedge (1) pieces by order, made once */
 } split_state;
+
+/* The pieces of an order-p Lagrange tetra or wedge (lagrange_layout), made on first use; NULL: out of
+ * memory. */
+static const piece *layout_of(split_state *s, int type, int p)
+{
+    piece **slot = &s->layout[type == 73][p];
+    if (!*slot && (*slot = malloc(sizeof **slot * (size_t)lagrange_layout(type, p, NULL))) != NULL)
+        lagrange_layout(type, p, *slot);
+    return *slot;
+}
+
+/* Cell c's pieces from its layout into the new cells at k (advanced), its connectivity at `at`; an
+ * octahedron cut along its shortest diagonal. Returns the new connectivity end. */
+static int64_t emit_lagrange(const piece *lay, int count, int64_t c, const int32_t *nodes, const double *points,
+                             uint8_t *types, int64_t *offsets, int32_t *conn, int32_t *source, int64_t *k, int64_t at)
+{
+    for (int i = 0; i < count; i++) {
+        const piece *q = &lay[i];
+        if (q->type == 0) {
+            int best = 0;
+            double best_len = 0;
+            for (int d = 0; d < 3; d++) {
+                const double *a = points + 3 * (int64_t)nodes[q->nodes[2 * d]];
+                const double *b = points + 3 * (int64_t)nodes[q->nodes[2 * d + 1]];
+                double len = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+                if (d == 0 || len < best_len)
+                    best = d, best_len = len;
+            }
+            for (int t = 0; t < 4; t++) {
+                const piece *tet = &lay[i + 1 + 4 * best + t];
+                types[*k] = TPK_CELL_TETRA, source[*k] = (int32_t)c;
+                for (int v = 0; v < 4; v++)
+                    conn[at + v] = nodes[tet->nodes[v]];
+                offsets[++*k] = at += 4;
+            }
+            i += 12;
+            continue;
+        }
+        int corners = q->type == TPK_CELL_TETRA ? 4 : 6;
+        types[*k] = (uint8_t)q->type, source[*k] = (int32_t)c;
+        for (int v = 0; v < corners; v++)
+            conn[at + v] = nodes[q->nodes[v]];
+        offsets[++*k] = at += corners;
+    }
+    return at;
+}
 
 static int32_t add_point(split_state *s, int64_t cell, const double r[3])
 {
@@ -354,10 +675,10 @@ static face_key *lattice_face_slot(split_state *s, const int32_t *nodes, const l
 static int lattice_ids(split_state *s, int64_t c, int32_t *ids)
 {
     const tpk_mesh *m = s->m;
-    int type = m->cell_types[c], own = tpk_cell_map_nodes(type);
+    int type = m->cell_types[c], own = (int)(m->cell_offsets[c + 1] - m->cell_offsets[c]);
     const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
     memcpy(ids, nodes, sizeof *ids * (size_t)own);
-    if (type == 24 || type == 29 || type == 31 || type == 32)
+    if (type == 24 || type == 29 || type == 31 || type == 32 || type == 71 || (type == 27 && own == 14))
         return 0;
     lattice_face f[6];
     int nf = lattice_faces(type, f);
@@ -380,14 +701,15 @@ static int lattice_ids(split_state *s, int64_t c, int32_t *ids)
     return 0;
 }
 
-/* Face centre nodes that cells have (27-node hexahedra, 18-node wedges) entered first, so that a
- * neighbour lacking one uses that node. */
+/* Face centre nodes that cells have (27-node hexahedra, 18-node wedges, 14-node pyramids) entered first,
+ * so that a neighbour lacking one uses that node. */
 static void enter_own_centres(split_state *s)
 {
     const tpk_mesh *m = s->m;
     for (int64_t c = 0; c < m->cell_count; c++) {
         int type = m->cell_types[c];
-        if ((type != 29 && type != 32) || m->cell_offsets[c + 1] - m->cell_offsets[c] != tpk_cell_map_nodes(type))
+        int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
+        if (!((type == 29 || type == 32) && n == tpk_cell_map_nodes(type)) && !(type == 27 && n == 14))
             continue;
         const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
         lattice_face f[6];
@@ -486,8 +808,8 @@ static int move_face_streams(tpk_mesh *m, const int32_t *cell_source, int64_t ce
     offsets[0] = 0;
     for (int64_t c = 0; c < cells; c++) {
         int32_t from = cell_source[c];
-        int whole = !split_type(m->cell_types[from]) &&
-                    !lagrange_hex_order(m->cell_types[from], m->cell_offsets[from + 1] - m->cell_offsets[from]);
+        int64_t n = m->cell_offsets[from + 1] - m->cell_offsets[from];
+        int whole = !fixed_split(m->cell_types[from], n) && !lagrange_order(m->cell_types[from], n);
         int64_t begin = m->face_offsets[from], end = m->face_offsets[from + 1];
         /* the stream stays where it is: a cell's range, or an empty one at the same place */
         offsets[c] = whole ? begin : end;
@@ -528,20 +850,21 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
     for (int64_t c = 0; c < m->cell_count; c++) {
         int type = m->cell_types[c];
         int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
-        int order = lagrange_hex_order(type, n);
+        int order = lagrange_order(type, n);
         if (order) {
-            cells += (int64_t)order * order * order, conn += 8 * (int64_t)order * order * order;
+            int64_t piece_conn;
+            cells += lagrange_cells(type, order, &piece_conn), conn += piece_conn;
             out->split_cells++;
             continue;
         }
-        if (!split_type(type)) {
+        if (!fixed_split(type, n)) {
             cells++, conn += n;
             continue;
         }
-        if (n != tpk_cell_map_nodes(type))
+        if (!fixed_nodes_ok(type, n))
             return fail_nodes(diag, c, type, n);
-        piece p[10];
-        int np = pieces_of(type, m->cell_conn + m->cell_offsets[c], m->points, p);
+        piece p[20];
+        int np = pieces_of(type, n, m->cell_conn + m->cell_offsets[c], m->points, p);
         cells += np;
         for (int i = 0; i < np; i++)
             conn += tpk_cell_type(p[i].type)->nodes;
@@ -555,7 +878,7 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
     if (cells > INT32_MAX || conn > INT32_MAX)
         return tpk_diag_fail(diag, "%lld cells after splitting the higher-order cells exceed the limit of 2^31-1",
                              (long long)cells);
-    split_state s = {m, {NULL, 0}, NULL, 0, 0, 0};
+    split_state s = {m, {NULL, 0}, NULL, 0, 0, 0, {{NULL}}};
     size_t cap = 64;
     while (cap < 2 * (size_t)keyed)
         cap *= 2;
@@ -577,7 +900,15 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
         int type = m->cell_types[c];
         const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
         int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
-        int order = lagrange_hex_order(type, n);
+        int order = lagrange_order(type, n);
+        if (order && type != 72) { /* every node present: the cells of the node lattice */
+            const piece *lay = layout_of(&s, type, order);
+            if (!lay)
+                goto fail;
+            at = emit_lagrange(lay, lagrange_layout(type, order, NULL), c, nodes, m->points, types, offsets, cconn,
+                               source, &k, at);
+            continue;
+        }
         for (int a = 0; a < order; a++) /* every node present: sub-hexahedra of the node lattice */
             for (int b = 0; b < order; b++)
                 for (int d = 0; d < order; d++) {
@@ -590,17 +921,17 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
                 }
         if (order)
             continue;
-        if (!split_type(type)) {
+        if (!fixed_split(type, n)) {
             types[k] = (uint8_t)type, source[k] = (int32_t)c;
             memcpy(cconn + at, nodes, sizeof *cconn * (size_t)n);
             offsets[++k] = at += n;
             continue;
         }
         int32_t ids[TPK_CELL_MAP_MAX_NODES];
-        piece p[10];
+        piece p[20];
         if (lattice_ids(&s, c, ids))
             goto fail;
-        int np = pieces_of(type, nodes, m->points, p);
+        int np = pieces_of(type, n, nodes, m->points, p);
         for (int i = 0; i < np; i++) {
             if (p[i].type == TPK_CELL_TETRA)
                 orient_piece(type, &p[i]);
@@ -632,5 +963,8 @@ fail:
     else if (rc)
         tpk_diag_fail(diag, "out of memory splitting %lld higher-order cells", (long long)out->split_cells);
     free(s.faces.slots), free(s.added), free(types), free(offsets), free(cconn), free(source);
+    for (int i = 0; i < 2; i++)
+        for (int p = 0; p <= LAGRANGE_MAX_ORDER; p++)
+            free(s.layout[i][p]);
     return rc;
 }
