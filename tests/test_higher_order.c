@@ -29,7 +29,8 @@
 #endif
 
 /* A format's node order for one kind: its corners (of `shape`, in VTK's corner order, which every
- * format here shares), then mid-edge nodes on `edges`, then face centres on `faces`, then the centre. */
+ * format here shares), then mid-edge nodes on `edges`, then face centres on `faces` (a triangle's 4th
+ * corner repeats its 3rd), then the centre (the mean of the corners). */
 typedef struct node_order {
     const char *name;   /* the format's element name */
     int code;           /* its type code in the format (gmsh element type, VTK cell type, ...) */
@@ -55,19 +56,22 @@ static int order_nodes(const node_order *o, double r[27][3])
     for (int e = 0; e < o->edge_count; e++, n++)
         for (int a = 0; a < 3; a++)
             r[n][a] = 0.5 * (r[o->edges[e][0]][a] + r[o->edges[e][1]][a]);
-    if (o->centre == 2) {
+    int corners = corner_count[o->shape];
+    double centre[3] = {0, 0, 0};
+    for (int k = 0; k < corners; k++)
         for (int a = 0; a < 3; a++)
-            r[n][a] = 0.5;
-        n++;
+            centre[a] += r[k][a] / corners;
+    if (o->centre == 2)
+        memcpy(r[n++], centre, sizeof centre);
+    for (int f = 0; f < o->face_count; f++, n++) {
+        const int *q = o->faces[f];
+        int tri = q[3] == q[2];
+        for (int a = 0; a < 3; a++)
+            r[n][a] = tri ? (r[q[0]][a] + r[q[1]][a] + r[q[2]][a]) / 3
+                          : 0.25 * (r[q[0]][a] + r[q[1]][a] + r[q[2]][a] + r[q[3]][a]);
     }
-    for (int f = 0; f < o->face_count; f++, n++)
-        for (int a = 0; a < 3; a++)
-            r[n][a] = 0.25 * (r[o->faces[f][0]][a] + r[o->faces[f][1]][a] + r[o->faces[f][2]][a] + r[o->faces[f][3]][a]);
-    if (o->centre == 1) {
-        for (int a = 0; a < 3; a++)
-            r[n][a] = 0.5;
-        n++;
-    }
+    if (o->centre == 1)
+        memcpy(r[n++], centre, sizeof centre);
     return n;
 }
 
@@ -300,15 +304,20 @@ TPK_TEST(vtk_types)
 
 /* VTK's Lagrange cells of order 2 in VTK 9's numbering: the quadratic tetra's, triquadratic hexahedron's
  * and biquadratic-quadratic wedge's (vtkHigherOrderHexahedron: corners, edges, faces -x +x -y +y -z +z,
- * body). */
+ * body); and the 15-node tetra (vtkHigherOrderTetra's special case: the 10, the centres of faces 012,
+ * 013, 123, 023, the body centre). */
+static const node_order vtk_tet15 = {"VTK Lagrange tetra of 15 nodes", 71, 10, 6, 4, 1,
+                                     {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
+                                     {{0, 1, 2, 2}, {0, 1, 3, 3}, {1, 2, 3, 3}, {0, 2, 3, 3}}};
+
 TPK_TEST(lagrange_types)
 {
     node_order tet = vtk_tet10, hex = vtk_hex27, wedge = vtk_wedge18;
     tet.code = 71, hex.code = 72, wedge.code = 73;
     tet.name = "VTK Lagrange tetra", hex.name = "VTK Lagrange hexahedron", wedge.name = "VTK Lagrange wedge";
-    const node_order *orders[] = {&tet, &hex, &wedge};
+    const node_order *orders[] = {&tet, &hex, &wedge, &vtk_tet15};
     for (int curved = 0; curved < 2; curved++) {
-        char *text = write_vtk(orders, 3, curved);
+        char *text = write_vtk(orders, 4, curved);
         tpk_mesh m;
         tpk_diag d;
         quiet(&d);
@@ -383,6 +392,9 @@ static const node_order gmsh_prism18 = {"gmsh prism18", 13, 13, 9, 3, 0,
                                         {{0, 1, 4, 3}, {0, 2, 5, 3}, {1, 2, 5, 4}}};
 static const node_order gmsh_pyramid13 = {"gmsh pyramid13", 19, 14, 8, 0, 0,
                                           {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 4}, {2, 3}, {2, 4}, {3, 4}}, {{0}}};
+static const node_order gmsh_pyramid14 = {"gmsh pyramid14", 14, 14, 8, 1, 0,
+                                          {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 4}, {2, 3}, {2, 4}, {3, 4}},
+                                          {{0, 1, 2, 3}}};
 
 static char *write_msh(const node_order *const *orders, int count, int curved, int version41)
 {
@@ -436,10 +448,11 @@ static char *write_msh(const node_order *const *orders, int count, int curved, i
 
 TPK_TEST(gmsh_orders)
 {
-    const node_order *orders[] = {&gmsh_tet10, &gmsh_hex20, &gmsh_hex27, &gmsh_prism15, &gmsh_prism18, &gmsh_pyramid13};
+    const node_order *orders[] = {&gmsh_tet10,   &gmsh_hex20,     &gmsh_hex27,    &gmsh_prism15,
+                                  &gmsh_prism18, &gmsh_pyramid13, &gmsh_pyramid14};
     for (int version = 0; version < 2; version++)
         for (int curved = 0; curved < 2; curved++) {
-            char *text = write_msh(orders, 6, curved, version);
+            char *text = write_msh(orders, 7, curved, version);
             tpk_mesh m;
             tpk_diag d;
             quiet(&d);
@@ -627,10 +640,21 @@ static const node_order exo_wedge18 = {"WEDGE18", 0, 13, 9, 3, 0,
                                        {{0, 1, 4, 3}, {1, 2, 5, 4}, {0, 3, 5, 2}}};
 static const node_order exo_pyramid13 = {"PYRAMID13", 0, 14, 8, 0, 0,
                                          {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+/* TETRA14 and TETRA15 (SEACAS's Tet14/Tet15 topologies): TETRA10's nodes, then the centres of sides 4
+ * (1 3 2), 2 (2 3 4), 3 (1 4 3) and 1 (1 2 4), then (TETRA15) the body centre; PYRAMID14: PYRAMID13's,
+ * then the centre of the base (side 5). */
+static const node_order exo_tetra14 = {"TETRA14", 0, 10, 6, 4, 0, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
+                                       {{0, 2, 1, 1}, {1, 2, 3, 3}, {0, 3, 2, 2}, {0, 1, 3, 3}}};
+static const node_order exo_tetra15 = {"TETRA15", 0, 10, 6, 4, 1, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}},
+                                       {{0, 2, 1, 1}, {1, 2, 3, 3}, {0, 3, 2, 2}, {0, 1, 3, 3}}};
+static const node_order exo_pyramid14 = {"PYRAMID14", 0, 14, 8, 1, 0,
+                                         {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}},
+                                         {{0, 3, 2, 1}}};
 
 TPK_TEST(exodus_orders)
 {
-    const node_order *orders[] = {&exo_tetra10, &exo_hex20, &exo_wedge15, &exo_pyramid13, &exo_hex27, &exo_wedge18};
+    const node_order *orders[] = {&exo_tetra10, &exo_hex20,   &exo_wedge15, &exo_pyramid13, &exo_hex27,
+                                  &exo_wedge18, &exo_tetra14, &exo_tetra15, &exo_pyramid14};
     enum { cells = sizeof orders / sizeof orders[0] };
     for (int curved = 0; curved < 2; curved++) {
         static double xyz[3][512];
@@ -667,6 +691,8 @@ static const node_order cgns_tetra10 = {"TETRA_10", CGNS_ENUMV(TETRA_10), 10, 6,
                                         {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
 static const node_order cgns_pyra13 = {"PYRA_13", CGNS_ENUMV(PYRA_13), 14, 8, 0, 0,
                                        {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+static const node_order cgns_pyra14 = {"PYRA_14", CGNS_ENUMV(PYRA_14), 14, 8, 1, 0,
+                                       {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0, 1, 2, 3}}};
 static const node_order cgns_penta15 = {"PENTA_15", CGNS_ENUMV(PENTA_15), 13, 9, 0, 0,
                                         {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 4}, {2, 5}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
 static const node_order cgns_penta18 = {"PENTA_18", CGNS_ENUMV(PENTA_18), 13, 9, 3, 0,
@@ -682,19 +708,21 @@ static const node_order cgns_hexa27 = {"HEXA_27", CGNS_ENUMV(HEXA_27), 12, 12, 6
 
 TPK_TEST(cgns_orders)
 {
-    const node_order *orders[] = {&cgns_tetra10, &cgns_pyra13, &cgns_penta15, &cgns_penta18, &cgns_hexa20, &cgns_hexa27};
+    const node_order *orders[] = {&cgns_tetra10, &cgns_pyra13, &cgns_penta15, &cgns_penta18,
+                                  &cgns_hexa20,  &cgns_hexa27, &cgns_pyra14};
+    enum { cells = sizeof orders / sizeof orders[0] };
     for (int curved = 0; curved < 2; curved++) {
         static double xyz[3][512];
-        int ns[6], total = gather_nodes(orders, 6, curved, xyz, ns), fn, base, zone, s, c;
+        int ns[cells], total = gather_nodes(orders, cells, curved, xyz, ns), fn, base, zone, s, c;
         const char *path = tpk_temp_path("whole.cgns");
-        cgsize_t size[3] = {total, 6, 0};
+        cgsize_t size[3] = {total, cells, 0};
         CHECK(cg_open(path, CG_MODE_WRITE, &fn) == 0);
         CHECK(cg_base_write(fn, "b", 3, 3, &base) == 0);
         CHECK(cg_zone_write(fn, base, "z", size, CGNS_ENUMV(Unstructured), &zone) == 0);
         CHECK(cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateX", xyz[0], &c) == 0 &&
               cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateY", xyz[1], &c) == 0 &&
               cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateZ", xyz[2], &c) == 0);
-        for (int e = 0, first = 1; e < 6; first += ns[e], e++) {
+        for (int e = 0, first = 1; e < cells; first += ns[e], e++) {
             cgsize_t conn[27];
             for (int k = 0; k < ns[e]; k++)
                 conn[k] = first + k;

@@ -27,12 +27,12 @@ typedef struct volume_kind_row {
 } volume_kind_row;
 
 /* A volume element type: its VTK type and the nodes kept (*row). 0 for elements of lower dimension (NODE,
- * BAR, TRI, QUAD), -1 for one this reader does not know. PYRA_14 is kept as a 13-node pyramid (VTK has
- * no type with the base centre). */
+ * BAR, TRI, QUAD), -1 for one this reader does not know. PYRA_14 is kept as a quadratic pyramid with its
+ * base centre after the 13 nodes (mesh/higher_order.h), as the SIDS lists it. */
 static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
 {
     static const volume_kind_row kinds[] = {
-        {"TETRA_10", 24, 10, NULL},  {"PYRA_13", 27, 13, NULL}, {"PYRA_14", 27, 13, NULL},
+        {"TETRA_10", 24, 10, NULL},  {"PYRA_13", 27, 13, NULL}, {"PYRA_14", 27, 14, NULL},
         {"PENTA_15", 26, 15, penta18}, {"PENTA_18", 32, 18, penta18}, {"HEXA_20", 25, 20, hexa27},
         {"HEXA_27", 29, 27, hexa27}, {"TETRA_", TPK_CELL_TETRA, 4, NULL}, {"PYRA_", TPK_CELL_PYRAMID, 5, NULL},
         {"PENTA_", TPK_CELL_WEDGE, 6, NULL}, {"HEXA_", TPK_CELL_HEXAHEDRON, 8, NULL}, {"NODE", 0, 0, NULL},

@@ -2,8 +2,9 @@
  * element blocks of tetrahedra, hexahedra, wedges and pyramids become cells in VTK node order, which
  * Exodus shares for the corners of all four: its side tables (SEACAS exodus-element-types.md) list the
  * same outward faces as VTK's cells (hexahedra also checked on SEACAS's files). Higher-order blocks are
- * kept whole as VTK's quadratic types (TETRA10, HEX20, HEX27, WEDGE15, WEDGE18, PYRAMID13; TETRA14/15 and
- * PYRAMID14 by their TETRA10 and PYRAMID13 nodes, which come first, their face and centre nodes unused): Exodus lists the
+ * kept whole as VTK's quadratic types (TETRA10, HEX20, HEX27, WEDGE15, WEDGE18, PYRAMID13; TETRA14 as a
+ * quadratic tetra with its 4 face centres after the 10, TETRA15 as VTK's 15-node Lagrange tetra, PYRAMID14
+ * as a quadratic pyramid with its base centre after the 13: mesh/higher_order.h): Exodus lists the
  * vertical mid-edges of hexahedra and wedges before the top ones, VTK after. Blocks of lower dimension
  * (shells, bars, spheres) are dropped with a count. Nodal and element variables become point and cell
  * fields with every time step, and the time values are kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
@@ -37,7 +38,8 @@ static const block_kind kinds[] = {
 static int kept_type(const block_kind *kind, int64_t per, int *kept)
 {
     static const struct { int linear, at_least, vtk, kept; } quadratic[] = {
-        {10, 10, 24, 10}, {12, 27, 29, 27}, {12, 20, 25, 20}, {13, 18, 32, 18}, {13, 15, 26, 15}, {14, 13, 27, 13}};
+        {10, 15, 71, 15}, {10, 14, 24, 14}, {10, 10, 24, 10}, {12, 27, 29, 27}, {12, 20, 25, 20},
+        {13, 18, 32, 18}, {13, 15, 26, 15}, {14, 14, 27, 14}, {14, 13, 27, 13}};
     for (size_t i = 0; i < sizeof quadratic / sizeof quadratic[0]; i++)
         if (quadratic[i].linear == kind->vtk_type && per >= quadratic[i].at_least) {
             *kept = quadratic[i].kept;
@@ -50,6 +52,12 @@ static int kept_type(const block_kind *kind, int64_t per, int *kept)
 /* The Exodus node that VTK node k of a kept cell of VTK type `vtk` is. */
 static int exodus_node(int vtk, int k)
 {
+    /* TETRA14/15: VTK's face centres 012, 013, 123, 023 (vtkLagrangeTetra's 15 nodes), then the body
+     * centre; Exodus's 012, 123, 023, 013 (SEACAS's Tet14/Tet15 topologies: faces 4, 2, 3, 1), then the
+     * body centre. */
+    static const int tet15_faces[5] = {10, 13, 11, 12, 14};
+    if ((vtk == 24 || vtk == 71) && k >= 10)
+        return tet15_faces[k - 10];
     /* HEX27: VTK's face centres x-, x+, y-, y+, z-, z+ then the cell centre; Exodus has the centre (20)
      * first, then z-, z+, x-, x+, y-, y+ (SEACAS's Hex27 topology). */
     static const int hex27_faces[7] = {23, 24, 25, 26, 21, 22, 20};
@@ -156,8 +164,9 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not volumes (shells, bars, spheres)", r->path,
                       (long long)dropped);
     if (unused)
-        tpk_diag_warn(r->diag, "%s: %lld higher-order elements read without their face and centre nodes (TETRA14/15 as "
-                      "TETRA10, PYRAMID14 as PYRAMID13)", r->path, (long long)unused);
+        tpk_diag_warn(r->diag, "%s: %lld higher-order elements read without some of their nodes (each as the fullest "
+                      "kind its first nodes make: HEX27, WEDGE18, TETRA15, TETRA14, PYRAMID14 or the quadratic ones)",
+                      r->path, (long long)unused);
     if (cells == 0)
         return tpk_diag_fail(r->diag, "%s: no volume cells (%lld elements in %lld blocks, none tetra, hex, wedge or "
                              "pyramid)",

@@ -95,9 +95,6 @@ static int finish(gmsh_reader *r, tpk_mesh *out)
     if (r->dropped)
         tpk_diag_warn(r->s.diag, "%s: dropped %lld point, line and surface elements", r->s.name,
                       (long long)r->dropped);
-    if (r->reduced)
-        tpk_diag_warn(r->s.diag, "%s: %lld 14-node pyramids read as 13-node ones (VTK has no type with the base "
-                      "centre node)", r->s.name, (long long)r->reduced);
     if (tpk_import_take_cells(out, r->point_count, &r->points, r->cell_count, &r->types, &r->offsets, &r->conn))
         return tpk_scan_fail(&r->s, "out of memory");
     if (!r->physical && !(r->physical = malloc(sizeof *r->physical)))

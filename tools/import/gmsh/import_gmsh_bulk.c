@@ -338,8 +338,6 @@ static int64_t take_elements(gmsh_reader *r, const gmsh_type *t, const unsigned 
     r->cell_count += taken;
     r->conn_count += taken * t->kept;
     r->offsets[r->cell_count] = r->conn_count;
-    if (t->kept != t->nodes)
-        r->reduced += taken;
     return taken;
 }
 

@@ -74,7 +74,7 @@ typedef struct gmsh_reader {
     int64_t elem_count, elem_cap, elem_first_tag;
     int elem_listed;
     int elem_sorted;
-    int64_t dropped, reduced; /* reduced: 14-node pyramids read as 13-node ones */
+    int64_t dropped;
     entity_phys *volumes; /* 4.1 $Entities: volume tag -> first physical tag */
     int64_t volume_count;
     data_block *blocks;

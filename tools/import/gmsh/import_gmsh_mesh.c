@@ -18,13 +18,13 @@
  * kinds are kept whole as VTK's quadratic types: `order` gives, for each VTK node, the Gmsh node
  * (Gmsh's "Node ordering": its edges run 01 02 03 12 13 23 for the tetrahedron, 01 03 04 12 15 23 26 37
  * 45 47 56 67 for the hexahedron, then its faces z-, y-, x-, x+, y+, z+; VTK's as mesh/cell_map.c lists
- * them). The 14-node pyramid keeps 13 (VTK has no type with the base centre: the split places it by the
- * base's serendipity functions). */
+ * them). The 14-node pyramid keeps its base centre (Gmsh's node 13) after the 13 nodes, as the split
+ * takes it (mesh/higher_order.h). */
 static const signed char tet10[] = {0, 1, 2, 3, 4, 5, 6, 7, 9, 8};
 static const signed char hex27[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15,
                                     22, 23, 21, 24, 20, 25, 26};
 static const signed char prism18[] = {0, 1, 2, 3, 4, 5, 6, 9, 7, 12, 14, 13, 8, 10, 11, 15, 17, 16};
-static const signed char pyramid13[] = {0, 1, 2, 3, 4, 5, 8, 10, 6, 7, 9, 11, 12};
+static const signed char pyramid14[] = {0, 1, 2, 3, 4, 5, 8, 10, 6, 7, 9, 11, 12, 13};
 
 static const gmsh_type gmsh_types[] = {
     {1, 2, 0, 0, "line", NULL},              {2, 3, 0, 0, "triangle", NULL},
@@ -33,10 +33,10 @@ static const gmsh_type gmsh_types[] = {
     {7, 5, 14, 5, "pyramid", NULL},          {8, 3, 0, 0, "line3", NULL},
     {9, 6, 0, 0, "triangle6", NULL},         {10, 9, 0, 0, "quadrangle9", NULL},
     {11, 10, 24, 10, "tetrahedron10", tet10}, {12, 27, 29, 27, "hexahedron27", hex27},
-    {13, 18, 32, 18, "prism18", prism18},    {14, 14, 27, 13, "pyramid14", pyramid13},
+    {13, 18, 32, 18, "prism18", prism18},    {14, 14, 27, 14, "pyramid14", pyramid14},
     {15, 1, 0, 0, "point", NULL},            {16, 8, 0, 0, "quadrangle8", NULL},
     {17, 20, 25, 20, "hexahedron20", hex27}, {18, 15, 26, 15, "prism15", prism18},
-    {19, 13, 27, 13, "pyramid13", pyramid13}, {20, 9, 0, 0, "triangle9", NULL},
+    {19, 13, 27, 13, "pyramid13", pyramid14}, {20, 9, 0, 0, "triangle9", NULL},
     {21, 10, 0, 0, "triangle10", NULL},      {22, 12, 0, 0, "triangle12", NULL},
     {23, 15, 0, 0, "triangle15", NULL},      {24, 15, 0, 0, "triangle15i", NULL},
     {25, 21, 0, 0, "triangle21", NULL},      {26, 4, 0, 0, "line4", NULL},
@@ -312,8 +312,6 @@ static int32_t element_node_index(gmsh_reader *r, int64_t id, int64_t tag, const
 /* The cell whose nodes are at r->conn + conn_count: counted, typed, tagged. */
 static int finish_cell(gmsh_reader *r, int64_t tag, const gmsh_type *t, int64_t physical, int64_t entity)
 {
-    if (t->kept != t->nodes)
-        r->reduced++;
     int64_t c = r->cell_count;
     if (add_elem_tag(r, tag, (int32_t)c))
         return -1;
