@@ -1,24 +1,25 @@
 #!/usr/bin/env bash
-# Lagrange tetra (VTK type 71) and wedges (73) of order 3 and 4, written by VTK itself (python3-paraview's
-# VTK): each node is placed where VTK's own cell says it sits (vtkLagrangeTetra/vtkLagrangeWedge
+# Lagrange tetra (VTK type 71) and wedges (73) of order 3 and 4, and the 15-node Lagrange tetra (order 2
+# with face and body centres), written by VTK itself (python3-paraview's VTK): each node is placed where VTK's own cell says it sits (vtkLagrangeTetra/vtkLagrangeWedge
 # GetParametricCoords), so the reader's numbering is checked against an independent one. Two cells of each
 # kind share a face under a curved map (a tetra pair across a triangle, a wedge pair across a quad). Each is
-# split whole: every node a vertex (no point added or unused), p^3 tetra per tetra and p^3 wedges (3 tets
-# each) per wedge, none mirrored, the field at every vertex its node's value, and the file checks clean (a
+# split whole: every node a vertex (no point added or unused), p^3 tetra per tetra (20 per 15-node one)
+# and p^3 wedges (3 tets each) per wedge, none mirrored, the field at every vertex its node's value, and the file checks clean (a
 # wrong numbering folds pieces over each other).
 source "$(dirname "$0")/common.sh" "$@"
 
-for kind in tetra wedge; do
-    for order in 3 4; do
-        "$PY" - "$WORK/$kind$order.vtu" "$kind" "$order" <<'EOF2' || fail "VTK could not write the Lagrange ${kind}s"
+for case in tetra:3 tetra:4 wedge:3 wedge:4 tetra15:2; do
+    kind=${case%:*} order=${case#*:}
+    "$PY" - "$WORK/$kind$order.vtu" "$kind" "$order" <<'EOF2' || fail "VTK could not write the Lagrange ${kind}s"
 import sys
 from vtkmodules.vtkCommonCore import vtkPoints, vtkDoubleArray
 from vtkmodules.vtkCommonDataModel import (vtkUnstructuredGrid, vtkLagrangeTetra, vtkLagrangeWedge,
                                            VTK_LAGRANGE_TETRAHEDRON, VTK_LAGRANGE_WEDGE)
 from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
 path, kind, p = sys.argv[1], sys.argv[2], int(sys.argv[3])
-if kind == "tetra":
+if kind.startswith("tetra"):
     n, vtk_type, cell = (p + 1) * (p + 2) * (p + 3) // 6, VTK_LAGRANGE_TETRAHEDRON, vtkLagrangeTetra()
+    n = 15 if kind == "tetra15" else n
     # two tetra sharing the face (1,0,0) (0,1,0) (0,0,1); x = P0 + r (P1 - P0) + s (P2 - P0) + t (P3 - P0)
     cells = [((0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)), ((1, 1, 1), (0, 1, 0), (1, 0, 0), (0, 0, 1))]
     def place(c, r, s, t):
@@ -39,8 +40,8 @@ cell.Initialize()
 pc = cell.GetParametricCoords()
 grid, points, field, ids = vtkUnstructuredGrid(), vtkPoints(), vtkDoubleArray(), {}
 field.SetName("f")
-def point(X):  # one point per position on the lattice (multiples of 1/p): the shared face's points once
-    key = tuple(round(v * p) for v in X)
+def point(X):  # one point per position (multiples of 1/p, 1/3 or 1/4): the shared face's points once
+    key = tuple(round(v * 12) for v in X)
     if key not in ids:
         x, y, z = X
         x = (1.5 * x + 0.3 * y + 0.1 * z, 0.2 * x + 1.4 * y - 0.2 * z + 0.1 * x * x, 0.1 * x + 0.4 * y + 1.5 * z)
@@ -51,7 +52,7 @@ grid.Allocate(2)
 for c in range(2):
     conn = [point(place(c, pc[3 * k], pc[3 * k + 1], pc[3 * k + 2])) for k in range(n)]
     grid.InsertNextCell(vtk_type, n, conn)
-shared = (p + 1) * (p + 2) // 2 if kind == "tetra" else (p + 1) ** 2
+shared = {"tetra": (p + 1) * (p + 2) // 2, "tetra15": 7, "wedge": (p + 1) ** 2}[kind]
 assert points.GetNumberOfPoints() == 2 * n - shared, (points.GetNumberOfPoints(), 2 * n - shared)
 grid.SetPoints(points)
 grid.GetPointData().AddArray(field)
@@ -61,19 +62,22 @@ w.SetInputData(grid)
 w.SetDataModeToAscii()
 assert w.Write() == 1
 EOF2
-        convert_checked "$WORK/$kind$order.vtu" "$WORK/$kind$order.tpk" --json > "$WORK/l.json" 2> "$WORK/err" ||
-            fail "$kind order $order: convert: $(cat "$WORK/err")"
-        "$PY" - "$WORK/l.json" "$kind" "$order" <<'EOF2' || fail "$kind order $order: $(cat "$WORK/l.json")"
+    convert_checked "$WORK/$kind$order.vtu" "$WORK/$kind$order.tpk" --json > "$WORK/l.json" 2> "$WORK/err" ||
+        fail "$kind order $order: convert: $(cat "$WORK/err")"
+    "$PY" - "$WORK/l.json" "$kind" "$order" <<'EOF2' || fail "$kind order $order: $(cat "$WORK/l.json")"
 import json, sys
 d, kind, p = json.load(open(sys.argv[1])), sys.argv[2], int(sys.argv[3])
-n = (p + 1) * (p + 2) * (p + 3) // 6 if kind == "tetra" else (p + 1) ** 2 * (p + 2) // 2
-points = 2 * n - ((p + 1) * (p + 2) // 2 if kind == "tetra" else (p + 1) ** 2)
+n = {"tetra": (p + 1) * (p + 2) * (p + 3) // 6, "tetra15": 15, "wedge": (p + 1) ** 2 * (p + 2) // 2}[kind]
+points = 2 * n - {"tetra": (p + 1) * (p + 2) // 2, "tetra15": 7, "wedge": (p + 1) ** 2}[kind]
 assert d["source_points"] == points and d["vertices"] == points, (d["source_points"], d["vertices"], points)
 assert d["mirrored_cells"] == 0 and d["higher_order"] == {"mode": "split", "cells": 2, "added_points": 0}, d
-assert d["tets"] == 2 * p ** 3 * (1 if kind == "tetra" else 3), (d["tets"], p)
+assert d["tets"] == 2 * {"tetra": p ** 3, "tetra15": 20, "wedge": 3 * p ** 3}[kind], (d["tets"], p)
 EOF2
-        ! grep -q "reduced" "$WORK/err" || fail "$kind order $order: cells reduced to corners: $(cat "$WORK/err")"
-        "$TPK" check "$WORK/$kind$order.tpk" > "$WORK/check.txt" || fail "$kind order $order: check: $(cat "$WORK/check.txt")"
-    done
+    ! grep -q "reduced" "$WORK/err" || fail "$kind order $order: cells reduced to corners: $(cat "$WORK/err")"
+    "$TPK" check "$WORK/$kind$order.tpk" > "$WORK/check.txt" || fail "$kind order $order: check: $(cat "$WORK/check.txt")"
+    # --max-error has no bound for these cells' functions: refused by name, nothing written
+    expect_exit 2 "$TPK" convert "$WORK/$kind$order.vtu" "$WORK/bad.tpk" --max-error 1%
+    expect_stderr "cell 0 is a Lagrange ${kind%15} (VTK type 7"
+    [ ! -e "$WORK/bad.tpk" ] || fail "$kind order $order: a refused conversion left $WORK/bad.tpk"
 done
 echo "ok"

@@ -127,11 +127,13 @@ static int whole_cells(conversion *c)
         int64_t bad = tpk_refine_unbounded_cell(&c->source_cells);
         if (bad >= 0) {
             const tpk_cell_type_info *t = tpk_cell_type(c->source_cells.types[bad]);
-            return tpk_diag_fail(c->diag, "%s: cell %lld is a %s (VTK type %d), whose own functions --max-error cannot "
-                                 "bound (it bounds tetrahedra, voxels, hexahedra, wedges and their quadratic kinds; "
-                                 "pyramids and polyhedra are not polynomials on their tets); convert without "
+            return tpk_diag_fail(c->diag, "%s: cell %lld is a %s (VTK type %d, %lld nodes), whose own functions "
+                                 "--max-error cannot bound (it bounds tetrahedra, voxels, hexahedra, wedges and their "
+                                 "quadratic kinds; pyramids and polyhedra are not polynomials on their tets, and "
+                                 "higher orders and face-centred kinds are not bounded yet); convert without "
                                  "--max-error", c->o->input, (long long)bad, t ? t->name : "cell of unknown type",
-                                 c->source_cells.types[bad]);
+                                 c->source_cells.types[bad],
+                                 (long long)(c->source_cells.offsets[bad + 1] - c->source_cells.offsets[bad]));
         }
     }
     higher_job job = {.types = c->src.cell_types};
