@@ -110,7 +110,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 }
 
 /* What convert --max-error does with a small mesh: cells kept, higher-order ones split, tets on the file
- * grid, ids led back to the source's, refined (a coarse bound and few tets, for the fuzzer's pace). */
+ * grid, ids led back to the source's, refined (a coarse bound and few tets, for the fuzzer's pace). Cells
+ * the bound cannot cover (pyramids, Lagrange cells past order 2, ...) are split and tetrahedralized as a
+ * plain convert does, not refined. */
 static void refine_small(tpk_mesh *mesh, const char *name, tpk_diag *diag)
 {
     tpk_refine_cells cells;
@@ -120,8 +122,9 @@ static void refine_small(tpk_mesh *mesh, const char *name, tpk_diag *diag)
         return;
     tpk_tetmesh tets;
     memset(&tets, 0, sizeof tets);
-    if (tpk_refine_unbounded_cell(&cells) < 0 && tpk_split_higher_order(mesh, name, &split, diag) == 0 &&
-        tpk_tetrahedralize(mesh, NULL, 0, TPK_TETRA_FILE_GRID, &tets, diag) == 0) {
+    int bounded = tpk_refine_unbounded_cell(&cells) < 0;
+    if (tpk_split_higher_order(mesh, name, &split, diag) == 0 &&
+        tpk_tetrahedralize(mesh, NULL, 0, TPK_TETRA_FILE_GRID, &tets, diag) == 0 && bounded) {
         for (int64_t v = 0; split.cell_source && v < tets.vertex_count; v++)
             if (tets.vertex_source[v] >= split.source_points)
                 tets.vertex_source[v] = -1;
