@@ -30,7 +30,7 @@
 
 /* A format's node order for one kind: its corners (of `shape`, in VTK's corner order, which every
  * format here shares), then mid-edge nodes on `edges`, then face centres on `faces` (a triangle's 4th
- * corner repeats its 3rd), then the centre (the mean of the corners). */
+ * corner repeats its 3rd), then the centre (the centroid: a pyramid's at a quarter of its height). */
 typedef struct node_order {
     const char *name;   /* the format's element name */
     int code;           /* its type code in the format (gmsh element type, VTK cell type, ...) */
@@ -61,6 +61,8 @@ static int order_nodes(const node_order *o, double r[27][3])
     for (int k = 0; k < corners; k++)
         for (int a = 0; a < 3; a++)
             centre[a] += r[k][a] / corners;
+    if (o->shape == 14)
+        centre[2] = 0.25;
     if (o->centre == 2)
         memcpy(r[n++], centre, sizeof centre);
     for (int f = 0; f < o->face_count; f++, n++) {
@@ -220,6 +222,16 @@ static const node_order vtk_wedge12 = {"VTK quadratic linear wedge", 31, 13, 6, 
                                        {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}}, {{0}}};
 static const node_order vtk_pyramid13 = {"VTK quadratic pyramid", 27, 14, 8, 0, 0,
                                          {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}}, {{0}}};
+/* vtkBiQuadraticQuadraticHexahedron: the 20 nodes, then the centres of faces x-, x+, y-, y+ (none on z-,
+ * z+, nor the cell's); vtkTriQuadraticPyramid: the 13, then the centres of the base and of sides 014,
+ * 124, 234, 304, then the centroid. */
+static const node_order vtk_hex24 = {"VTK biquadratic-quadratic hexahedron", 33, 12, 12, 4, 0,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5},
+                                      {2, 6}, {3, 7}},
+                                     {{0, 3, 7, 4}, {1, 2, 6, 5}, {0, 1, 5, 4}, {3, 2, 6, 7}}};
+static const node_order vtk_pyramid19 = {"VTK triquadratic pyramid", 37, 14, 8, 5, 1,
+                                         {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 4}, {1, 4}, {2, 4}, {3, 4}},
+                                         {{0, 3, 2, 1}, {0, 1, 4, 4}, {1, 2, 4, 4}, {2, 3, 4, 4}, {3, 0, 4, 4}}};
 
 /* A legacy VTK file of the cells `orders` (cell c shifted by 3c) with the point field "f" (its second
  * step is added after reading: add_second_step). */
@@ -287,10 +299,10 @@ static void quiet(tpk_diag *d)
 
 TPK_TEST(vtk_types)
 {
-    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12,
-                                  &vtk_pyramid13};
+    const node_order *orders[] = {&vtk_tet10,    &vtk_hex20,     &vtk_hex27, &vtk_wedge15,  &vtk_wedge18,
+                                  &vtk_wedge12,  &vtk_pyramid13, &vtk_hex24, &vtk_pyramid19};
     for (int curved = 0; curved < 2; curved++) {
-        char *text = write_vtk(orders, 7, curved);
+        char *text = write_vtk(orders, 9, curved);
         tpk_mesh m;
         tpk_diag d;
         quiet(&d);
@@ -333,9 +345,9 @@ TPK_TEST(lagrange_types)
  * quadratic polynomials (the quadratic-linear wedge: those linear in t). */
 TPK_TEST(shape_functions)
 {
-    const node_order *orders[] = {&vtk_tet10, &vtk_hex20, &vtk_hex27, &vtk_wedge15, &vtk_wedge18, &vtk_wedge12,
-                                  &vtk_pyramid13};
-    for (int i = 0; i < 7; i++) {
+    const node_order *orders[] = {&vtk_tet10,   &vtk_hex20,     &vtk_hex27, &vtk_wedge15,
+                                  &vtk_wedge18, &vtk_wedge12,   &vtk_pyramid13, &vtk_hex24};
+    for (int i = 0; i < 8; i++) {
         double r[27][3], w[TPK_CELL_MAP_MAX_NODES];
         int n = order_nodes(orders[i], r);
         CHECK_EQ_INT(tpk_cell_map_nodes(orders[i]->code), n);

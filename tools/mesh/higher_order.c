@@ -1,7 +1,8 @@
 /* Higher-order volume cells reduced to corners, or split into the linear cells of their node lattice
  * (higher_order.h). The lattices are written on the fullest node set of each shape (27 for hexahedra,
- * 18 for wedges, 14 for pyramids: the 13 nodes and the base centre); a cell with fewer nodes gets the
- * missing ones as added points, listed after its own in the same local order. */
+ * 18 for wedges, 14 for pyramids: the 13 nodes and the base centre; 19 for the triquadratic pyramid, 15
+ * for tetra with face centres); a cell with fewer nodes gets the missing ones as added points, listed
+ * after its own in the same local order. Lagrange cells of order 3 and more have their own lattices. */
 #include "higher_order.h"
 
 #include <stdlib.h>
@@ -375,12 +376,13 @@ static void lagrange_hex_piece(int p, int a, int b, int c, int32_t *local)
 /* The full lattice type of a split type (whose pieces are written in its numbering). */
 static int full_type(int type)
 {
-    return type == 25 ? 29 : type == 26 ? 32 : type;
+    return type == 25 || type == 33 ? 29 : type == 26 ? 32 : type;
 }
 
 static int split_type(int type)
 {
-    return type == 24 || type == 25 || type == 26 || type == 27 || type == 29 || type == 31 || type == 32;
+    return type == 24 || type == 25 || type == 26 || type == 27 || type == 29 || type == 31 || type == 32 ||
+           type == 33 || type == 37;
 }
 
 /* A cell split by a fixed table: a split type with its node count; a quadratic tetra or pyramid with
@@ -394,27 +396,29 @@ static int fixed_split(int type, int64_t n)
 
 static int fixed_nodes_ok(int type, int64_t n)
 {
-    return n == tpk_cell_map_nodes(type) || ((type == 24 || type == 27) && n == 14) || (type == 71 && n == 15);
+    return n == tpk_cell_map_nodes(type) || ((type == 24 || type == 27) && n == 14) || (type == 71 && n == 15) ||
+           (type == 37 && n == 19);
 }
 
 /* The tetra's faces: their mid-edge nodes and their centre in the 15-node numbering. */
 static const int tet_face_nodes[4][4] = {{4, 5, 6, 10}, {4, 7, 8, 11}, {5, 8, 9, 12}, {6, 7, 9, 13}};
 
-/* Tetra pieces with a face on one of the cell's faces whose middle quarter (its mid-edges' triangle) they
- * are: fanned into 3 about that face's centre, as the other cell on the face does. Returns the count. */
-static int fan_face_centres(const piece *in, int count, piece *out)
+/* Tetra pieces with a face on one of the cell's triangles whose middle quarter (its mid-edges' triangle,
+ * faces[f][0..2]) they are: fanned into 3 about that triangle's centre (faces[f][3]), as the other cell
+ * on it does. Other pieces copied. Returns the count. */
+static int fan_sides(const piece *in, int count, const int (*faces)[4], piece *out)
 {
     int n = 0;
     for (int i = 0; i < count; i++) {
         int centre = -1, off = -1;
-        for (int o = 0; o < 4 && centre < 0; o++) /* the face without corner o */
+        for (int o = 0; o < 4 && centre < 0 && in[i].type == TPK_CELL_TETRA; o++) /* the face without corner o */
             for (int f = 0; f < 4 && centre < 0; f++) {
                 int hits = 0;
                 for (int v = 0; v < 4; v++)
                     for (int e = 0; e < 3; e++)
-                        hits += v != o && in[i].nodes[v] == tet_face_nodes[f][e];
+                        hits += v != o && in[i].nodes[v] == faces[f][e];
                 if (hits == 3)
-                    centre = tet_face_nodes[f][3], off = o;
+                    centre = faces[f][3], off = o;
             }
         if (centre < 0) {
             out[n++] = in[i];
@@ -429,6 +433,26 @@ static int fan_face_centres(const piece *in, int count, piece *out)
     return n;
 }
 
+/* The triquadratic pyramid (37; vtkTriQuadraticPyramid: the 14-node pyramid's nodes, then the centres of
+ * the sides 014, 124, 234, 304, then the centroid at a quarter of the height): as the 14-node pyramid,
+ * its inner upside-down pyramid coned from the centroid (a pyramid on its square and 4 tetra), and the
+ * 4 tetra on the sides' middle quarters fanned about their centres (22 pieces). */
+static const int pyramid_side_nodes[4][4] = {{5, 9, 10, 14}, {6, 10, 11, 15}, {7, 11, 12, 16}, {8, 12, 9, 17}};
+
+static int fan_sides(const piece *in, int count, const int (*faces)[4], piece *out);
+
+static int pyramid19_pieces(piece *p)
+{
+    piece cut[14];
+    int n = pyramid_pieces(cut); /* 0-3 base pyramids, 4 the top one, 5 the upside-down one, 6-9 tetra */
+    static const piece cone[5] = {{TPK_CELL_PYRAMID, {9, 12, 11, 10, 18}}, {TPK_CELL_TETRA, {13, 9, 10, 18}},
+                                  {TPK_CELL_TETRA, {13, 10, 11, 18}},      {TPK_CELL_TETRA, {13, 11, 12, 18}},
+                                  {TPK_CELL_TETRA, {13, 12, 9, 18}}};
+    cut[5] = cone[0];
+    memcpy(cut + n, cone + 1, 4 * sizeof *cut);
+    return fan_sides(cut, n + 4, pyramid_side_nodes, p);
+}
+
 /* The 15-node tetra: the 4 corner tetra, and a cone from the body centre over the octahedron's 8 faces,
  * the 4 on the cell's faces fanned about their centres (20 tetra). */
 static int tetra15_pieces(piece *p)
@@ -441,7 +465,7 @@ static int tetra15_pieces(piece *p)
         piece t = {TPK_CELL_TETRA, {tri[0], tri[1], tri[2], 14}};
         cone[4 + f] = t;
     }
-    return fan_face_centres(cone, 12, p);
+    return fan_sides(cone, 12, tet_face_nodes, p);
 }
 
 /* Pieces (linear cells) of a split type; tetra pieces put positive on the parametric cell. */
@@ -464,10 +488,12 @@ static int pieces_of(int type, int64_t n, const int32_t *nodes, const double *po
             return tetra_pieces(best, p);
         piece cut[8];
         tetra_pieces(best, cut);
-        return fan_face_centres(cut, 8, p);
+        return fan_sides(cut, 8, tet_face_nodes, p);
     }
-    if (type == 25 || type == 29)
+    if (type == 25 || type == 29 || type == 33)
         return hex_pieces(p);
+    if (type == 37)
+        return pyramid19_pieces(p);
     if (type == 26 || type == 32 || type == 31)
         return wedge_pieces(type == 31 ? 2 : 3, p);
     return pyramid_pieces(p);
@@ -477,8 +503,15 @@ static int pieces_of(int type, int64_t n, const int32_t *nodes, const double *po
  * the tetra's 10-13 its face centres, 14 its body centre). */
 static void local_node(int type, int k, double r[3])
 {
-    if (type == 27 && k == 13) {
-        r[0] = r[1] = 0.5, r[2] = 0;
+    if ((type == 27 || type == 37) && k >= 13) {
+        double apex[3] = {0.5, 0.5, 1}, c[5][3];
+        for (int i = 0; i < 4; i++)
+            tpk_cell_map_node(27, i, c[i]);
+        memcpy(c[4], apex, sizeof apex);
+        r[0] = r[1] = 0.5, r[2] = k == 18 ? 0.25 : 0; /* base centre, centroid */
+        if (k >= 14 && k < 18) /* a side's centre: the mean of its corners */
+            for (int i = 0; i < 3; i++)
+                r[i] = (c[k - 14][i] + c[(k - 13) % 4][i] + c[4][i]) / 3;
         return;
     }
     if ((type == 24 || type == 71) && k >= 10) {
@@ -493,7 +526,7 @@ static void local_node(int type, int k, double r[3])
             r[0] = r[1] = r[2] = 0.25;
         return;
     }
-    tpk_cell_map_node(full_type(type == 71 ? 24 : type), k, r);
+    tpk_cell_map_node(full_type(type == 71 ? 24 : type == 37 ? 27 : type), k, r);
 }
 
 /* Orient a tetra piece positive on the parametric cell (exact in sign: coordinates are multiples of 1/12,
@@ -569,10 +602,12 @@ static int lattice_faces(int type, lattice_face *f)
     static const lattice_face base = {{0, 1, 2, 3}, 13};
     switch (type) {
     case 25:
-    case 29: memcpy(f, hex, sizeof hex); return 6;
+    case 29:
+    case 33: memcpy(f, hex, sizeof hex); return 6;
     case 26:
     case 32: memcpy(f, wedge, sizeof wedge); return 3;
-    case 27: *f = base; return 1;
+    case 27:
+    case 37: *f = base; return 1;
     default: return 0;
     }
 }
@@ -678,7 +713,7 @@ static int lattice_ids(split_state *s, int64_t c, int32_t *ids)
     int type = m->cell_types[c], own = (int)(m->cell_offsets[c + 1] - m->cell_offsets[c]);
     const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
     memcpy(ids, nodes, sizeof *ids * (size_t)own);
-    if (type == 24 || type == 29 || type == 31 || type == 32 || type == 71 || (type == 27 && own == 14))
+    if (type == 24 || type == 29 || type == 31 || type == 32 || type == 71 || type == 37 || (type == 27 && own == 14))
         return 0;
     lattice_face f[6];
     int nf = lattice_faces(type, f);
@@ -693,7 +728,7 @@ static int lattice_ids(split_state *s, int64_t c, int32_t *ids)
         }
         ids[f[i].centre] = slot->point;
     }
-    if (type == 25) {
+    if (type == 25 || type == 33) {
         double r[3] = {0.5, 0.5, 0.5};
         if ((ids[26] = add_point(s, c, r)) < 0)
             return -1;
@@ -709,11 +744,14 @@ static void enter_own_centres(split_state *s)
     for (int64_t c = 0; c < m->cell_count; c++) {
         int type = m->cell_types[c];
         int64_t n = m->cell_offsets[c + 1] - m->cell_offsets[c];
-        if (!((type == 29 || type == 32) && n == tpk_cell_map_nodes(type)) && !(type == 27 && n == 14))
+        if (!((type == 29 || type == 32 || type == 33) && n == tpk_cell_map_nodes(type)) &&
+            !((type == 27 || type == 37) && n == 14 + 5 * (type == 37)))
             continue;
         const int32_t *nodes = m->cell_conn + m->cell_offsets[c];
         lattice_face f[6];
-        int nf = lattice_faces(type, f);
+        int nf = type == 33 ? 4 : lattice_faces(type, f); /* 33: its x and y faces' centres */
+        if (type == 33)
+            lattice_faces(29, f);
         for (int i = 0; i < nf; i++) {
             int fresh;
             face_key *slot = lattice_face_slot(s, nodes, &f[i], &fresh);
@@ -863,12 +901,12 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
         }
         if (!fixed_nodes_ok(type, n))
             return fail_nodes(diag, c, type, n);
-        piece p[20];
+        piece p[24];
         int np = pieces_of(type, n, m->cell_conn + m->cell_offsets[c], m->points, p);
         cells += np;
         for (int i = 0; i < np; i++)
             conn += tpk_cell_type(p[i].type)->nodes;
-        keyed += type == 27 ? 1 : type == 26 || type == 32 ? 3 : type == 25 || type == 29 ? 6 : 0;
+        keyed += type == 27 || type == 37 ? 1 : type == 26 || type == 32 ? 3 : type == 25 || type == 29 || type == 33 ? 6 : 0;
         out->split_cells++;
     }
     if (out->split_cells == 0) {
@@ -928,7 +966,7 @@ int tpk_split_higher_order(tpk_mesh *m, const char *name, tpk_higher_split *out,
             continue;
         }
         int32_t ids[TPK_CELL_MAP_MAX_NODES];
-        piece p[20];
+        piece p[24];
         if (lattice_ids(&s, c, ids))
             goto fail;
         int np = pieces_of(type, n, nodes, m->points, p);
