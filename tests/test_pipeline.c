@@ -341,6 +341,12 @@ TPK_TEST(grid_multithreaded)
         CHECK(tpk_connect(m.tets, m.tet_count, m.vertex_count, other, threads, &diag) == 0);
         CHECK(!memcmp(one, other, bytes));
     }
+    /* In windows of vertex ids (connect's way from 2^20 tets on): the same neighbors. */
+    for (int windows = 2; windows <= 5; windows += 3) {
+        memset(other, 0x55, bytes);
+        CHECK(tpk_connect_windows(m.tets, m.tet_count, m.vertex_count, other, windows, 2, &diag) == 0);
+        CHECK(!memcmp(one, other, bytes));
+    }
     CHECK_EQ_INT(tpk_count_shell_faces(one, m.tet_count), 12 * 30 * 30);
     CHECK_MSG(tpk_check_invariants(&m, one, msg, sizeof msg) == 0, "%s", msg);
     CHECK_MSG(tpk_check_layouts(&m, one, msg, sizeof msg) == 0, "%s", msg);

@@ -81,6 +81,11 @@ int tpk_reorder(tpk_tetmesh *mesh, int threads, tpk_diag *diag);
 int tpk_connect(const int32_t *tets, int64_t tet_count, int64_t vertex_count, int32_t *neighbors,
                 int threads, tpk_diag *diag);
 
+/* tpk_connect in `windows` passes over ranges of vertex ids (tpk_connect takes 2 from 2^20 tets on, 1
+ * below): less scratch at once, the same neighbors. */
+int tpk_connect_windows(const int32_t *tets, int64_t tet_count, int64_t vertex_count, int32_t *neighbors,
+                        int windows, int threads, tpk_diag *diag);
+
 /* Layouts from positively oriented tets and their neighbors (as tpk_connect gives them). */
 void tpk_build_tet32(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet32 *dst);
 void tpk_build_tet20(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, tpk_tet20 *dst);

@@ -22,8 +22,8 @@ typedef struct match_job {
     const tpk_face_matcher *m;
     int64_t lo, hi;                   /* the bucket window */
     int64_t first_item;               /* the workers' item ranges start here */
-    int plain;                        /* tets from the array, every one kept, untagged, all buckets: the
-                                       * tight loops below (connect's case) */
+    int plain;                        /* tets from the array, every one kept, untagged, from item 0: the
+                                       * tight loops below (connect's case; a window costs a compare) */
     int64_t buckets;                  /* hi - lo */
     uint32_t item_mask;
     uint32_t *starts[TPK_MAX_THREADS]; /* per worker, per bucket: count, then next slot (< 2^32 entries;
@@ -98,8 +98,11 @@ static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *co
             job->bad_item[worker] = t;
             return;
         }
-        count[s.id[0]]++;
-        count[s.id[1]]++;
+        uint64_t b0 = (uint64_t)((int64_t)s.id[0] - job->lo), b1 = (uint64_t)((int64_t)s.id[1] - job->lo);
+        if (b0 < (uint64_t)job->buckets)
+            count[b0]++;
+        if (b1 < (uint64_t)job->buckets)
+            count[b1]++;
     }
 }
 
@@ -138,8 +141,11 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
         for (int64_t t = begin; t < end; t++) {
             tpk_sorted_tet s;
             tpk_sort_tet(m->tets + 4 * t, &s);
-            job->entries[next[s.id[0]]++] = (uint32_t)t;
-            job->entries[next[s.id[1]]++] = (uint32_t)t;
+            uint64_t b0 = (uint64_t)((int64_t)s.id[0] - job->lo), b1 = (uint64_t)((int64_t)s.id[1] - job->lo);
+            if (b0 < (uint64_t)job->buckets)
+                job->entries[next[b0]++] = (uint32_t)t;
+            if (b1 < (uint64_t)job->buckets)
+                job->entries[next[b1]++] = (uint32_t)t;
         }
         return;
     }
@@ -451,7 +457,7 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
     job->lo = m->window_hi > 0 ? m->window_lo : 0;
     job->hi = m->window_hi > 0 ? m->window_hi : m->vertex_count;
     job->buckets = job->hi - job->lo;
-    job->plain = m->tets && !m->keep && !m->tag && job->lo == 0 && job->hi == m->vertex_count && items_begin == 0;
+    job->plain = m->tets && !m->keep && !m->tag && items_begin == 0;
     job->item_mask = m->tag_bits ? UINT32_MAX >> m->tag_bits : UINT32_MAX;
     int threads = m->threads;
     for (int w = 0; w < threads; w++)

@@ -36,6 +36,7 @@ typedef struct block_job {
     uint8_t *types;
     const int64_t *values;
     int64_t each, limit;
+    int64_t base;           /* uniform lists: the conn index of the block's first cell */
     int64_t first_bad[TPK_MAX_THREADS]; /* per worker; INT64_MAX when none */
 } block_job;
 
@@ -73,7 +74,7 @@ static void uniform_lists_range(void *ctx, int64_t begin, int64_t end, int worke
             }
             dst[j] = id;
         }
-        job->offsets[c + 1] = (c + 1) * each;
+        job->offsets[c + 1] = job->base + (c + 1) * each;
     }
 }
 
@@ -183,6 +184,34 @@ static int id_range_error(vtk_reader *r, int64_t cell, int64_t id)
                             (long long)id);
 }
 
+/* The old form's fast path (every cell has job->each points) in slabs of cells, each read on all threads
+ * and then its pages of the mapped input let go: the whole input is mapped and read ahead, so without
+ * that the CELLS block (most of a big file) and the arrays made from it would be in memory together, the
+ * converter's peak on grid 120. 1 when every cell was read (r->s after the block), 0 when a cell is not
+ * what the fast path takes (r->s as it was; its pages are read again from the file). */
+static int uniform_lists(vtk_reader *r, block_job *job, int64_t n)
+{
+    size_t start = r->s.pos, cell_bytes = 4 * (size_t)(job->each + 1);
+    /* 1/16 of the block, at least 2 MiB (tests/cli/deterministic.sh's grid 30 in 2): few starts of the
+     * threads, and pages let go early enough (the most is kept at the start, where the arrays are empty) */
+    int64_t slab = n / 16 > (int64_t)((2u << 20) / cell_bytes) ? n / 16 + 1 : (int64_t)((2u << 20) / cell_bytes) + 1;
+    for (int64_t c = 0; c < n; c += slab) {
+        int64_t count = n - c < slab ? n - c : slab;
+        block_job part = *job;
+        part.p = job->p + cell_bytes * (size_t)c;
+        part.offsets = job->offsets + c;
+        part.conn = job->conn + c * job->each;
+        part.base = c * job->each;
+        if (run_block_job(&part, count, uniform_lists_range) != INT64_MAX) {
+            r->s.pos = start;
+            return 0;
+        }
+        r->s.pos = start + cell_bytes * (size_t)(c + count);
+        tpk_scan_release_consumed(&r->s);
+    }
+    return 1;
+}
+
 /* Old form in ASCII, fast path: all `size` numbers read on all threads (each in [0, 2^31-1]), then the
  * counts walked and the ids copied. 0 when read (r->offsets and r->conn filled, the position after the
  * block), 1 with nothing read when any number or count is not what the serial reader accepts: it then
@@ -243,9 +272,7 @@ static int read_cell_lists(vtk_reader *r, int64_t n, int64_t size)
         block_job job = {.p = p, .offsets = r->offsets, .conn = r->conn};
         int64_t known = n; /* cells whose counts are good */
         job.each = n > 0 ? (int32_t)be32(p) : -1;
-        if (n > 0 && job.each >= 0 && size % n == 0 && size / n - 1 == job.each &&
-            run_block_job(&job, n, uniform_lists_range) == INT64_MAX) {
-            r->s.pos += 4 * (size_t)size; /* every cell read */
+        if (n > 0 && job.each >= 0 && size % n == 0 && size / n - 1 == job.each && uniform_lists(r, &job, n)) {
             return 0;
         } else {
             for (int64_t c = 0; c < n; c++) {

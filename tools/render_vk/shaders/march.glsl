@@ -33,6 +33,27 @@ int rank4(int x, int a, int b, int c, int d)
     return int(a < x) + int(b < x) + int(c < x) + int(d < x);
 }
 
+// A piece [t_in, t_out] with scalars s_in, s_out, cut to [lo, hi] (primary rays: the clip box's range;
+// secondary rays: the cast's): false when it ends before lo; else the cut piece in a, b, sa, sb, the
+// scalars interpolated along t as the CPU's march does.
+bool clip_piece(float t_in, float t_out, float s_in, float s_out, float lo, float hi, out float a, out float b,
+                out float sa, out float sb)
+{
+    a = t_in, b = t_out, sa = s_in, sb = s_out;
+    if (t_out < lo)
+        return false;
+    const float len = t_out - t_in;
+    if (t_in < lo) {
+        a = lo;
+        sa = s_in + (s_out - s_in) * ((lo - t_in) / len);
+    }
+    if (t_out > hi) {
+        b = hi;
+        sb = s_in + (s_out - s_in) * ((hi - t_in) / len);
+    }
+    return true;
+}
+
 float hit_scalar(Hit h, vec3 w)
 {
     return face_sum(face_first(h), w, h.s);

@@ -90,18 +90,9 @@ int trans_report(float t_in, float t_out, float s_in, float s_out)
         }
         return t_out >= trans_hi ? MARCH_STOP : MARCH_GO;
     }
-    if (t_out >= trans_lo) {
-        float len = t_out - t_in, a = t_in, b = t_out, sa = s_in, sb = s_out;
-        if (t_in < trans_lo) {
-            a = trans_lo;
-            sa = s_in + (s_out - s_in) * ((trans_lo - t_in) / len);
-        }
-        if (t_out > trans_hi) {
-            b = trans_hi;
-            sb = s_in + (s_out - s_in) * ((trans_hi - t_in) / len);
-        }
+    float a, b, sa, sb;
+    if (clip_piece(t_in, t_out, s_in, s_out, trans_lo, trans_hi, a, b, sa, sb))
         said = trans_piece(a, b, sa, sb) || t_out >= trans_hi ? MARCH_STOP : MARCH_GO;
-    }
     return said;
 }
 

@@ -135,17 +135,8 @@ int report(float t_in, float t_out, float s_in, float s_out, ivec4 v)
     if (P.probe_info.x > 0)
         return report_spans(t_in, t_out, s_in, s_out, v);
     int said = MARCH_GO;
-    if (t_out >= t_min_clip) {
-        float len = t_out - t_in;
-        float a = t_in, b = t_out, sa = s_in, sb = s_out;
-        if (t_in < t_min_clip) {
-            a = t_min_clip;
-            sa = s_in + (s_out - s_in) * ((t_min_clip - t_in) / len);
-        }
-        if (t_out > t_max_clip) {
-            b = t_max_clip;
-            sb = s_in + (s_out - s_in) * ((t_max_clip - t_in) / len);
-        }
+    float a, b, sa, sb;
+    if (clip_piece(t_in, t_out, s_in, s_out, t_min_clip, t_max_clip, a, b, sa, sb)) {
         said = segment(a, b, sa, sb, v);
         if (said == MARCH_GO && t_out >= t_max_clip)
             said = MARCH_STOP;
