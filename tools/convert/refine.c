@@ -166,11 +166,12 @@ typedef struct refine {
     double *field_error, *geometry_error, *criterion;
     int *worst_slot;
     tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1];
-    edge_table marks, mids;
+    edge_table marks;      /* this pass's marked edges: their midpoint vertex once made, else -1 */
+    edge_table mids;       /* --subdivide: the edges cut at this level, their midpoint vertex */
     struct coef_cache *cache; /* per worker */
     int report_fields;     /* fields bounded (not constant) */
-    int64_t *todo, todo_count, todo_cap; /* tets whose bound is not known yet (new or cut since) */
-    uint8_t *queued;       /* per tet: in todo */
+    int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
+    uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
 } refine;
 
 static float value_of(const refine *r, int32_t v, int slot)
@@ -231,14 +232,14 @@ static int edge_greater(const refine *r, int32_t a, int32_t b, int32_t c, int32_
     return lo1 != lo2 ? lo1 > lo2 : hi1 > hi2;
 }
 
-/* Tet t's greatest edge (marked ones only with `marked_only`), as 0..5, or -1. */
-static int greatest_edge(const refine *r, int64_t t, int marked_only)
+/* Tet t's greatest edge among those of `edges` (bits by tet_edges), as 0..5, or -1. */
+static int greatest_edge(const refine *r, int64_t t, unsigned edges)
 {
     const int32_t *v = r->tets + 4 * t;
     int best = -1;
     for (int e = 0; e < 6; e++) {
         int32_t a = v[tet_edges[e][0]], b = v[tet_edges[e][1]];
-        if (marked_only && !edge_find(&r->marks, edge_key(a, b), NULL))
+        if (!(edges >> e & 1))
             continue;
         if (best < 0 || edge_greater(r, a, b, v[tet_edges[best][0]], v[tet_edges[best][1]]))
             best = e;
@@ -422,9 +423,12 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int ty
                                   double *norm)
 {
     uint64_t h = 1469598103934665603ull ^ (uint64_t)type;
-    const unsigned char *bytes = (const unsigned char *)xi;
-    for (size_t i = 0; i < 12 * sizeof *xi; i++)
-        h = (h ^ bytes[i]) * 1099511628211ull;
+    for (int i = 0; i < 12; i++) { /* the 12 numbers' bits, a word at a time */
+        uint64_t bits;
+        memcpy(&bits, xi + i, sizeof bits);
+        h = (h ^ bits) * 0x9E3779B97F4A7C15ull;
+        h ^= h >> 29;
+    }
     int e = (int)(h & (uint64_t)(cc->entries - 1)), m = b->points;
     double *by_node = cc->by_node + (int64_t)e * cc->size;
     if (cc->type[e] == type && !memcmp(cc->key + 12 * e, xi, 12 * sizeof *xi)) {
@@ -471,15 +475,17 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             largest = fabs(node[k][j]) > largest ? fabs(node[k][j]) : largest;
     }
     double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
-    for (int j = 0; j < 3; j++) {
+    for (int i = 0; i < m; i++)
+        gx[0][i] = gx[1][i] = gx[2][i] = 0;
+    for (int k = 0; k < 4; k++) /* the 3 axes at once, each coefficient summed in the same order */
+        for (int i = 0; i < m; i++) {
+            double l = b->lambda_by_corner[k][i];
+            gx[0][i] -= p[k][0] * l, gx[1][i] -= p[k][1] * l, gx[2][i] -= p[k][2] * l;
+        }
+    for (int k = 0; k < n; k++) {
+        const double *row = by_node + k * m, x0 = node[k][0], x1 = node[k][1], x2 = node[k][2];
         for (int i = 0; i < m; i++)
-            gx[j][i] = 0;
-        for (int k = 0; k < 4; k++)
-            for (int i = 0; i < m; i++)
-                gx[j][i] -= p[k][j] * b->lambda_by_corner[k][i];
-        for (int k = 0; k < n; k++)
-            for (int i = 0; i < m; i++)
-                gx[j][i] += node[k][j] * by_node[k * m + i];
+            gx[0][i] += x0 * row[i], gx[1][i] += x1 * row[i], gx[2][i] += x2 * row[i];
     }
     for (int i = 0; i < m; i++) {
         double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
@@ -529,8 +535,18 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     refine *r = ctx;
-    for (int64_t i = begin; i < end; i++)
+    for (int64_t i = begin; i < end; i++) {
+        if (i + 16 < end) /* the tets and their corners are scattered: fetch them ahead */
+            __builtin_prefetch(r->tets + 4 * r->todo[i + 16]);
+        if (i + 8 < end)
+            for (int k = 0; k < 4; k++) {
+                int32_t v = r->tets[4 * r->todo[i + 8] + k];
+                __builtin_prefetch(point_of(r, v));
+                if (v >= r->n0)
+                    __builtin_prefetch(r->added + (int64_t)(v - r->n0) * r->slots);
+            }
         bound_tet(r, r->todo[i], &r->cache[w]);
+    }
 }
 
 /* ---- growth ------------------------------------------------------------------------------------ */
@@ -558,49 +574,61 @@ static int reserve_tets(refine *r, int64_t need)
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, r->count, cap) ||
         grow((void **)&r->criterion, sizeof *r->criterion, r->count, cap) ||
         grow((void **)&r->worst_slot, sizeof *r->worst_slot, r->count, cap) ||
-        grow((void **)&r->queued, sizeof *r->queued, r->count, cap) ||
+        grow((void **)&r->marked, sizeof *r->marked, r->count, cap) ||
         grow((void **)&r->todo, sizeof *r->todo, r->todo_count, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
     return 0;
 }
 
-static void enqueue(refine *r, int64_t t)
+/* Every tet to be bounded again (after --subdivide cut them all). */
+static void todo_all(refine *r)
 {
-    if (!r->queued[t])
-        r->queued[t] = 1, r->todo[r->todo_count++] = t;
+    for (int64_t t = 0; t < r->count; t++)
+        r->todo[t] = t;
+    r->todo_count = r->count;
 }
 
-/* A new vertex at parametric point xi of tet t's cell: placed by the map (on the file's grid), valued
- * by the interpolant, every point field and step. */
-static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
+/* Room for `more` vertices. */
+static int reserve_vertices(refine *r, int64_t more)
 {
     tpk_tetmesh *m = r->m;
-    if (m->vertex_count >= INT32_MAX - 1) {
-        tpk_diag_fail(r->diag, "--max-error: more than %d vertices", INT32_MAX - 1);
-        return -1;
-    }
-    if (m->vertex_count >= r->vertex_cap) {
-        int64_t cap = m->vertex_count + m->vertex_count / 2 + 1024, added = m->vertex_count - r->n0;
+    if (m->vertex_count + more > INT32_MAX - 1)
+        return tpk_diag_fail(r->diag, "--max-error: more than %d vertices", INT32_MAX - 1);
+    if (m->vertex_count + more > r->vertex_cap) {
+        int64_t need = m->vertex_count + more, cap = need + need / 2 + 1024, added = m->vertex_count - r->n0;
         if (grow((void **)&m->points, 3 * sizeof *m->points, m->vertex_count, cap) ||
             grow((void **)&m->vertex_source, sizeof *m->vertex_source, m->vertex_count, cap) ||
-            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), added, cap - r->n0)) {
-            tpk_diag_fail(r->diag, "out of memory for %lld vertices (--max-error)", (long long)cap);
-            return -1;
-        }
+            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), added, cap - r->n0))
+            return tpk_diag_fail(r->diag, "out of memory for %lld vertices (--max-error)", (long long)cap);
         r->vertex_cap = cap;
     }
+    return 0;
+}
+
+/* Vertex v (room made) at parametric point xi of tet t's cell: placed by the map (on the file's grid),
+ * valued by the interpolant, every point field and step. */
+static void place_vertex(refine *r, int32_t v, int64_t t, const double xi[3])
+{
+    tpk_tetmesh *m = r->m;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     double w[TPK_CELL_MAP_MAX_NODES], x[3];
     int type = cell_nodes(r, r->cell[t], verts), n = tpk_cell_map_nodes(type);
     map_point(r, type, verts, xi, w, x);
     for (int a = 0; m->on_grid && a < 3; a++)
         x[a] = m->grid_origin[a] + (double)(float)(x[a] - m->grid_origin[a]);
-    int32_t v = (int32_t)m->vertex_count++;
     memcpy(m->points + 3 * (int64_t)v, x, sizeof x);
     m->vertex_source[v] = -1;
     for (int s = 0; s < r->slots; s++)
         r->added[(int64_t)(v - r->n0) * r->slots + s] = (float)interpolate(r, n, verts, w, s);
+}
+
+static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
+{
+    if (reserve_vertices(r, 1) != 0)
+        return -1;
+    int32_t v = (int32_t)r->m->vertex_count++;
+    place_vertex(r, v, t, xi);
     return v;
 }
 
@@ -609,54 +637,116 @@ static int sign_of(const refine *r, const int32_t *v)
     return tpk_orient3d_exact(point_of(r, v[0]), point_of(r, v[1]), point_of(r, v[2]), point_of(r, v[3]));
 }
 
-/* Tet t bisected at its edge e through vertex mid: t keeps the half of corner i, a new tet the other. */
-static int bisect(refine *r, int64_t t, int e, int32_t mid)
+/* The edges (tet_edges) at each corner, and the edge between two corners. */
+static const unsigned edges_at[4] = {0x07, 0x19, 0x2a, 0x34};
+static const int edge_of[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+
+/* Tet t bisected at its edge e through vertex mid: t keeps the half of corner i, tet u (new) the other;
+ * each keeps the marks of the edges it still has (not those at the corner it gave up, now at mid, new).
+ * 1 when a piece turns over (a sign other than the parent's), else 0. */
+static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
 {
     int i = tet_edges[e][0], j = tet_edges[e][1];
-    int64_t u = r->count++;
     int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
     double *xa = r->xi + 12 * t, *xb = r->xi + 12 * u, half[3];
     int parent = sign_of(r, a);
     memcpy(b, a, 4 * sizeof *a);
     memcpy(xb, xa, 12 * sizeof *xa);
     r->cell[u] = r->cell[t], r->root[u] = r->root[t];
+    r->marked[u] = (uint8_t)(r->marked[t] & ~edges_at[i]);
+    r->marked[t] = (uint8_t)(r->marked[t] & ~edges_at[j]);
     for (int k = 0; k < 3; k++)
         half[k] = 0.5 * (xa[3 * i + k] + xa[3 * j + k]);
     a[j] = mid, b[i] = mid;
     memcpy(xa + 3 * j, half, sizeof half);
     memcpy(xb + 3 * i, half, sizeof half);
-    r->queued[u] = 0;
-    enqueue(r, t);
-    enqueue(r, u);
-    if (parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent)) {
-        int64_t c = r->cell[t];
-        return tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its map's "
-                             "midpoint of an edge turns over (the cell is too curved for its tets); convert it "
-                             "without --max-error or with a larger bound", (long long)c,
-                             tpk_cell_type(r->cells->types[c])->name);
+    return parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent);
+}
+
+/* One round on all threads: each tet of `active` chooses its greatest marked edge; the midpoints not made
+ * yet are numbered in the order of the tets (serial: the first tet in `active` that cuts an edge makes
+ * its midpoint, in its cell); they are placed and valued, and the tets bisected, on all threads. The
+ * result does not depend on the thread count. */
+typedef struct round_job {
+    refine *r;
+    int64_t *active;
+    int8_t *chosen;   /* per tet of active: the edge it cuts */
+    int32_t *mid;     /* per tet of active: the vertex at that edge's midpoint */
+    int64_t *maker;   /* per vertex made this round: the place in active of the tet that makes it */
+    uint8_t *folded;  /* per tet of active: a piece turned over */
+    int64_t first_child;
+    int32_t first_vertex;
+} round_job;
+
+static void choose_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    round_job *job = ctx;
+    (void)w;
+    for (int64_t k = begin; k < end; k++)
+        job->chosen[k] = (int8_t)greatest_edge(job->r, job->active[k], job->r->marked[job->active[k]]);
+}
+
+static void place_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    round_job *job = ctx;
+    refine *r = job->r;
+    (void)w;
+    for (int64_t n = begin; n < end; n++) {
+        int64_t k = job->maker[n], t = job->active[k];
+        int i = tet_edges[job->chosen[k]][0], j = tet_edges[job->chosen[k]][1];
+        double half[3];
+        for (int c = 0; c < 3; c++)
+            half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
+        place_vertex(r, job->first_vertex + (int32_t)n, t, half);
     }
-    return 0;
+}
+
+static void bisect_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    round_job *job = ctx;
+    (void)w;
+    for (int64_t k = begin; k < end; k++)
+        job->folded[k] = (uint8_t)bisect(job->r, job->active[k], job->first_child + k, job->chosen[k], job->mid[k]);
+}
+
+static int round_grow(round_job *job, int64_t cap)
+{
+    void *p[5] = {realloc(job->active, sizeof *job->active * (size_t)cap), NULL, NULL, NULL, NULL};
+    if (p[0])
+        job->active = p[0];
+    if (p[0] && (p[1] = realloc(job->chosen, (size_t)cap)))
+        job->chosen = p[1];
+    if (p[1] && (p[2] = realloc(job->mid, sizeof *job->mid * (size_t)cap)))
+        job->mid = p[2];
+    if (p[2] && (p[3] = realloc(job->maker, sizeof *job->maker * (size_t)cap)))
+        job->maker = p[3];
+    if (p[3] && (p[4] = realloc(job->folded, (size_t)cap)))
+        job->folded = p[4];
+    return p[4] ? 0 : -1;
 }
 
 /* The rounds: every tet of `active` (ascending; malloc'ed, taken over) with a marked edge bisects its
- * greatest marked one, its pieces keeping its other marks, until none has one. The tets cut become the
- * tets to bound again. */
+ * greatest marked one, its pieces keeping its other marks, until none has one. The tets cut, then their
+ * pieces, become the tets to bound again. */
 static int cut_marked(refine *r, int64_t *active, int64_t active_count)
 {
     int rc = 0;
-    for (int64_t i = 0; i < r->todo_count; i++)
-        r->queued[r->todo[i]] = 0;
-    r->todo_count = 0;
-    int8_t *chosen = malloc((size_t)(active_count ? active_count : 1));
-    while (rc == 0 && active_count > 0 && chosen) {
-        int64_t splits = 0, n = 0;
-        for (int64_t i = 0; i < active_count; i++)
-            if ((chosen[n] = (int8_t)greatest_edge(r, active[i], 1)) >= 0)
-                active[n++] = active[i], splits++;
+    round_job job = {r, active, NULL, NULL, NULL, NULL, 0, 0};
+    memcpy(r->todo, active, sizeof *active * (size_t)active_count);
+    r->todo_count = active_count;
+    int64_t first_new = r->count;
+    if (round_grow(&job, active_count + 1) != 0)
+        rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+    while (rc == 0 && active_count > 0) {
+        tpk_parallel_for(active_count, tpk_threads_for(active_count, r->threads, 1024), choose_range, &job);
+        int64_t n = 0;
+        for (int64_t k = 0; k < active_count; k++)
+            if (job.chosen[k] >= 0)
+                job.active[n] = job.active[k], job.chosen[n++] = job.chosen[k];
         active_count = n;
-        if (splits == 0)
+        if (n == 0)
             break;
-        if (r->count + splits > r->o->max_tets) {
+        if (r->count + n > r->o->max_tets) {
             rc = r->o->uniform_levels > 0
                      ? tpk_diag_fail(r->diag, "--subdivide %d: more than %lld tets (from %lld)", r->o->uniform_levels,
                                      (long long)r->o->max_tets, (long long)r->tets_given)
@@ -665,42 +755,45 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
                                      (long long)r->o->max_tets, (long long)r->tets_given);
             break;
         }
-        int64_t first_child = r->count;
-        if (reserve_tets(r, r->count + splits) != 0) {
+        if (reserve_tets(r, r->count + n) != 0 || reserve_vertices(r, n) != 0) {
             rc = -1;
             break;
         }
-        int64_t *grown = realloc(active, sizeof *active * (size_t)(2 * active_count));
-        int8_t *grown_chosen = realloc(chosen, (size_t)(2 * active_count));
-        if (!grown || !grown_chosen) {
-            free(grown ? grown : active), free(grown_chosen ? grown_chosen : chosen);
-            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        if (round_grow(&job, 2 * n) != 0) {
+            rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+            break;
         }
-        active = grown, chosen = grown_chosen;
-        for (int64_t k = 0; rc == 0 && k < active_count; k++) {
-            int64_t t = active[k];
-            int i = tet_edges[chosen[k]][0], j = tet_edges[chosen[k]][1];
-            uint64_t key = edge_key(r->tets[4 * t + i], r->tets[4 * t + j]);
-            int32_t mid;
-            if (!edge_find(&r->mids, key, &mid)) {
-                double half[3];
-                for (int c = 0; c < 3; c++)
-                    half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
-                if ((mid = add_vertex(r, t, half)) < 0) {
-                    rc = -1;
-                    break;
-                }
-                if (edge_put(&r->mids, key, mid) != 0) {
-                    rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
-                    break;
-                }
+        int64_t made = 0;
+        job.first_vertex = (int32_t)r->m->vertex_count;
+        for (int64_t k = 0; k < n; k++) {
+            const int32_t *v = r->tets + 4 * job.active[k];
+            uint64_t key = edge_key(v[tet_edges[job.chosen[k]][0]], v[tet_edges[job.chosen[k]][1]]);
+            int64_t slot = edge_slot(&r->marks, key); /* a marked edge: in the table */
+            if (r->marks.values[slot] < 0)
+                r->marks.values[slot] = job.first_vertex + (int32_t)made, job.maker[made++] = k;
+            job.mid[k] = r->marks.values[slot];
+        }
+        r->m->vertex_count += made;
+        tpk_parallel_for(made, tpk_threads_for(made, r->threads, 256), place_range, &job);
+        job.first_child = r->count;
+        r->count += n;
+        tpk_parallel_for(n, tpk_threads_for(n, r->threads, 1024), bisect_range, &job);
+        for (int64_t k = 0; k < n; k++)
+            if (job.folded[k]) {
+                int64_t c = r->cell[job.active[k]];
+                rc = tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its "
+                                   "map's midpoint of an edge turns over (the cell is too curved for its tets); "
+                                   "convert it without --max-error or with a larger bound", (long long)c,
+                                   tpk_cell_type(r->cells->types[c])->name);
+                break;
             }
-            rc = bisect(r, t, chosen[k], mid);
-        }
-        for (int64_t u = first_child; u < r->count; u++) /* the children: the cut tets, then the new ones */
-            active[active_count++] = u;
+        for (int64_t k = 0; k < n; k++) /* the children: the cut tets, then the new ones */
+            job.active[n + k] = job.first_child + k;
+        active_count = 2 * n;
     }
-    free(active), free(chosen);
+    for (int64_t u = first_new; rc == 0 && u < r->count; u++)
+        r->todo[r->todo_count++] = u;
+    free(job.active), free(job.chosen), free(job.mid), free(job.maker), free(job.folded);
     return rc;
 }
 
@@ -719,9 +812,7 @@ static int cut_all(refine *r)
                              (long long)r->o->max_tets, (long long)r->tets_given);
     if (reserve_tets(r, 8 * n) != 0)
         return -1;
-    for (int64_t i = 0; i < r->todo_count; i++)
-        r->queued[r->todo[i]] = 0;
-    r->todo_count = 0;
+    edge_clear(&r->mids); /* the edges of the last level are all cut: no tet has one */
     for (int64_t t = 0; t < n; t++) {
         int32_t v[10];
         double x[10][3];
@@ -760,16 +851,14 @@ static int cut_all(refine *r)
             int64_t u = c == 0 ? t : r->count++;
             for (int k = 0; k < 4; k++)
                 r->tets[4 * u + k] = v[l[k]], memcpy(r->xi + 12 * u + 3 * k, x[l[k]], sizeof x[0]);
-            r->cell[u] = (int32_t)cell, r->root[u] = root;
-            if (c > 0)
-                r->queued[u] = 0;
-            enqueue(r, u);
+            r->cell[u] = (int32_t)cell, r->root[u] = root, r->marked[u] = 0;
             if (parent != 0 && sign_of(r, r->tets + 4 * u) != parent)
                 return tpk_diag_fail(r->diag, "--subdivide: cell %lld (a %s) folds when subdivided: a piece cut at its "
                                      "map's edge midpoints turns over", (long long)cell,
                                      tpk_cell_type(r->cells->types[cell])->name);
         }
     }
+    todo_all(r);
     return 0;
 }
 
@@ -779,6 +868,31 @@ typedef struct vertex_tets {
     int32_t *tets;
 } vertex_tets;
 
+/* Each worker takes a range of vertices and reads every tet for them: the lists are in tet order, whatever
+ * the thread count. */
+typedef struct vertex_tets_job {
+    const refine *r;
+    vertex_tets *vt;
+    int scatter; /* 0: count, 1: fill */
+} vertex_tets_job;
+
+static void vertex_tets_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    vertex_tets_job *job = ctx;
+    const int32_t *tets = job->r->tets;
+    int64_t *start = job->vt->start, n = 4 * job->r->count;
+    (void)w;
+    if (!job->scatter) {
+        for (int64_t i = 0; i < n; i++)
+            if (tets[i] >= begin && tets[i] < end)
+                start[tets[i] + 2]++;
+    } else {
+        for (int64_t i = 0; i < n; i++)
+            if (tets[i] >= begin && tets[i] < end)
+                job->vt->tets[start[tets[i] + 1]++] = (int32_t)(i / 4);
+    }
+}
+
 static int vertex_tets_make(const refine *r, vertex_tets *vt)
 {
     int64_t nv = r->m->vertex_count;
@@ -786,18 +900,14 @@ static int vertex_tets_make(const refine *r, vertex_tets *vt)
     vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * r->count + 1));
     if (!vt->start || !vt->tets)
         return -1;
-    for (int64_t i = 0; i < 4 * r->count; i++)
-        vt->start[r->tets[i] + 2]++;
+    vertex_tets_job job = {r, vt, 0};
+    int threads = tpk_threads_for(4 * r->count, r->threads, 1 << 18);
+    tpk_parallel_for(nv, threads, vertex_tets_range, &job);
     for (int64_t v = 0; v < nv; v++)
         vt->start[v + 2] += vt->start[v + 1];
-    for (int64_t i = 0; i < 4 * r->count; i++)
-        vt->tets[vt->start[r->tets[i] + 1]++] = (int32_t)(i / 4);
+    job.scatter = 1;
+    tpk_parallel_for(nv, threads, vertex_tets_range, &job);
     return 0;
-}
-
-static int has_vertex(const int32_t *v, int32_t b)
-{
-    return v[0] == b || v[1] == b || v[2] == b || v[3] == b;
 }
 
 /* Marks the failing tets' longest edges, closes the marks (every tet around a marked edge marks its own
@@ -822,12 +932,12 @@ static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
         q->keys = grown, q->cap = cap;
     }
     q->keys[q->count++] = key;
-    return edge_put(&r->marks, key, 1);
+    return edge_put(&r->marks, key, -1);
 }
 
 static int mark_longest(refine *r, edge_queue *q, int64_t t)
 {
-    int e = greatest_edge(r, t, 0);
+    int e = greatest_edge(r, t, 0x3f);
     return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
 }
 
@@ -847,11 +957,17 @@ static int refine_pass(refine *r, double limit)
         int32_t a = (int32_t)(key >> 32), b = (int32_t)(key & 0xffffffffu);
         for (int64_t k = vt.start[a]; rc == 0 && k < vt.start[a + 1]; k++) {
             int64_t u = vt.tets[k];
-            if (!has_vertex(r->tets + 4 * u, b))
+            const int32_t *v = r->tets + 4 * u;
+            int ia = 0, ib = 0;
+            while (ib < 4 && v[ib] != b)
+                ib++;
+            if (ib == 4)
                 continue;
-            if (!in_active[u])
-                in_active[u] = 1, active_count++;
-            rc = mark_longest(r, &queue, u);
+            while (v[ia] != a)
+                ia++;
+            r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
+            if (!in_active[u]) /* once is enough: its longest is marked for good */
+                in_active[u] = 1, active_count++, rc = mark_longest(r, &queue, u);
         }
     }
     free(queue.keys), free(vt.start), free(vt.tets);
@@ -954,7 +1070,7 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
-    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->queued);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
@@ -991,7 +1107,7 @@ static int set_up(refine *r, int threads)
     memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
     memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
     for (int64_t t = 0; t < r->count; t++)
-        r->root[t] = t, r->queued[t] = 1, r->todo[t] = t;
+        r->root[t] = t, r->marked[t] = 0, r->todo[t] = t;
     r->todo_count = r->count;
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
@@ -1035,10 +1151,9 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
     r.tets_given = mesh->tet_count;
     report->tets_before = mesh->tet_count;
     int threads = tpk_thread_count(o.threads), rc = set_up(&r, threads);
+    r.threads = threads;
     for (int level = 0; rc == 0 && level < o.uniform_levels; level++)
         rc = cut_all(&r);
-    for (int64_t t = 0; rc == 0 && o.uniform_levels > 0 && t < r.count; t++)
-        enqueue(&r, t);
     for (int pass = 0; rc == 0; pass++) {
         tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
         int64_t over = 0;
