@@ -165,7 +165,8 @@ typedef struct refine {
     int64_t *root;         /* the given tet each comes from (cell fields) */
     double *field_error, *geometry_error, *criterion;
     int *worst_slot;
-    tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1];
+    tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1]; /* made for the degrees the cells have */
+    double *inverse_t[TPK_BERNSTEIN_MAX_DEGREE + 1];  /* their inverses transposed */
     edge_table marks;      /* this pass's marked edges: their midpoint vertex once made, else -1 */
     edge_table mids;       /* --subdivide: the edges cut at this level, their midpoint vertex */
     struct coef_cache *cache; /* per worker */
@@ -412,15 +413,17 @@ static int barycentric_gradients(const double p[4][3], double g[3][3])
  * lately, by node (by_node[k * m + i]: node k's share of coefficient i), keyed by the cell type and the
  * 4 parametric corners: a pure function of the key, so that a hit gives the very numbers a miss would.
  * The tets of a regular mesh's cells, and their pieces, repeat the same few parametric tets. */
+typedef double pair __attribute__((vector_size(2 * sizeof(double)))); /* two numbers side by side */
+
 typedef struct coef_cache {
     int entries, size; /* a power of two; doubles per entry */
     int *type;         /* 0: empty */
     double *key, *norm, *by_node;
-    double work[2 * TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES];
+    double work[TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES];
 } coef_cache;
 
-static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int type, int n, const double *xi,
-                                  double *norm)
+static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const double *inverse_t, int type,
+                                  int n, const double *xi, double *norm)
 {
     uint64_t h = 1469598103934665603ull ^ (uint64_t)type;
     for (int i = 0; i < 12; i++) { /* the 12 numbers' bits, a word at a time */
@@ -435,7 +438,7 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int ty
         *norm = cc->norm[e];
         return by_node;
     }
-    double *weights = cc->work, *coef = cc->work + TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES;
+    double *weights = cc->work;
     for (int i = 0; i < m; i++) { /* the nodes' weights at the domain points */
         double at[3] = {0, 0, 0};
         for (int k = 0; k < 4; k++)
@@ -443,13 +446,71 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int ty
                 at[j] += b->lambda[i][k] * xi[3 * k + j];
         tpk_cell_map_weights(type, at, weights + i * n);
     }
-    *norm = cc->norm[e] = tpk_bernstein_coefficients(b, weights, n, coef);
-    for (int k = 0; k < n; k++)
-        for (int i = 0; i < m; i++)
-            by_node[k * m + i] = coef[i * n + k];
+    /* by_node = inverse x weights, node by node (the products and sums of tpk_bernstein_coefficients, in
+     * its order), two domain points side by side through the transposed inverse */
+    int even = m & ~1;
+    for (int k = 0; k < n; k++) {
+        double *out = by_node + k * m;
+        for (int i = 0; i < even; i += 2) {
+            pair acc = {0, 0}, a, w;
+            for (int j = 0; j < m; j++) {
+                memcpy(&a, inverse_t + j * m + i, sizeof a);
+                w = (pair){weights[j * n + k], weights[j * n + k]};
+                acc += a * w;
+            }
+            memcpy(out + i, &acc, sizeof acc);
+        }
+        for (int i = even; i < m; i++) {
+            double acc = 0;
+            for (int j = 0; j < m; j++)
+                acc += inverse_t[j * m + i] * weights[j * n + k];
+            out[i] = acc;
+        }
+    }
+    double largest = 0; /* tpk_bernstein_coefficients' norm: the largest row sum of |coefficients| */
+    for (int i = 0; i < m; i++) {
+        double sum = 0;
+        for (int k = 0; k < n; k++)
+            sum += fabs(by_node[k * m + i]);
+        largest = sum > largest ? sum : largest;
+    }
+    *norm = cc->norm[e] = largest;
     cc->type[e] = type;
     memcpy(cc->key + 12 * e, xi, 12 * sizeof *xi);
     return by_node;
+}
+
+/* The Bernstein coefficients of f - L for `axes` (1 or 3) components: out[c][i] = -sum_k corner[k][c] lambda_k(i)
+ * + sum_k node[k][c] by_node[k m + i], each summed in that order (k ascending), two domain points side by
+ * side (the numbers are those of one at a time). */
+static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const double (*corner)[3],
+                         const double (*node)[3], const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
+{
+    int even = m & ~1;
+    for (int c = 0; c < axes; c++) {
+        for (int i = 0; i < even; i += 2) {
+            pair acc = {0, 0}, x, y;
+            for (int k = 0; k < 4; k++) {
+                memcpy(&y, b->lambda_by_corner[k] + i, sizeof y);
+                x = (pair){corner[k][c], corner[k][c]};
+                acc -= x * y;
+            }
+            for (int k = 0; k < n; k++) {
+                memcpy(&y, by_node + k * m + i, sizeof y);
+                x = (pair){node[k][c], node[k][c]};
+                acc += x * y;
+            }
+            memcpy(out[c] + i, &acc, sizeof acc);
+        }
+        for (int i = even; i < m; i++) {
+            double acc = 0;
+            for (int k = 0; k < 4; k++)
+                acc -= corner[k][c] * b->lambda_by_corner[k][i];
+            for (int k = 0; k < n; k++)
+                acc += node[k][c] * by_node[k * m + i];
+            out[c][i] = acc;
+        }
+    }
 }
 
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
@@ -465,7 +526,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(type), m = b->points;
     double norm;
-    const double *by_node = coefficients(cache, b, type, n, xi, &norm);
+    const double *by_node = coefficients(cache, b, r->inverse_t[degree], type, n, xi, &norm);
     double p[4][3], g[3][3], node[TPK_CELL_MAP_MAX_NODES][3], geometry = 0, largest = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
@@ -475,18 +536,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             largest = fabs(node[k][j]) > largest ? fabs(node[k][j]) : largest;
     }
     double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
-    for (int i = 0; i < m; i++)
-        gx[0][i] = gx[1][i] = gx[2][i] = 0;
-    for (int k = 0; k < 4; k++) /* the 3 axes at once, each coefficient summed in the same order */
-        for (int i = 0; i < m; i++) {
-            double l = b->lambda_by_corner[k][i];
-            gx[0][i] -= p[k][0] * l, gx[1][i] -= p[k][1] * l, gx[2][i] -= p[k][2] * l;
-        }
-    for (int k = 0; k < n; k++) {
-        const double *row = by_node + k * m, x0 = node[k][0], x1 = node[k][1], x2 = node[k][2];
-        for (int i = 0; i < m; i++)
-            gx[0][i] += x0 * row[i], gx[1][i] += x1 * row[i], gx[2][i] += x2 * row[i];
-    }
+    minus_linear(m, n, 3, b, (const double (*)[3])p, (const double (*)[3])node, by_node, gx);
     for (int i = 0; i < m; i++) {
         double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
         geometry = sq > geometry ? sq : geometry;
@@ -496,27 +546,20 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     int flat = barycentric_gradients(p, g) != 0;
     for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
         int slot = r->bound_slot[s];
-        double v[4], grad[3] = {0, 0, 0}, value[TPK_CELL_MAP_MAX_NODES], gap = 0, big = 0;
+        double v[4], grad[3] = {0, 0, 0}, value[TPK_CELL_MAP_MAX_NODES][3], gap = 0, big = 0, cv[4][3];
         int finite = 1;
         for (int k = 0; k < 4; k++)
-            finite &= isfinite(v[k] = value_of(r, tv[k], slot));
+            finite &= isfinite(v[k] = cv[k][0] = value_of(r, tv[k], slot));
         for (int k = 0; k < n; k++) {
-            finite &= isfinite(value[k] = value_of(r, verts[k], slot));
-            big = fabs(value[k]) > big ? fabs(value[k]) : big;
+            finite &= isfinite(value[k][0] = value_of(r, verts[k], slot));
+            big = fabs(value[k][0]) > big ? fabs(value[k][0]) : big;
         }
         if (!finite)
             continue; /* no bound for missing values (NaN): nothing to interpolate */
-        double acc[TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+        double acc[1][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+        minus_linear(m, n, 1, b, (const double (*)[3])cv, (const double (*)[3])value, by_node, acc);
         for (int i = 0; i < m; i++)
-            acc[i] = 0;
-        for (int k = 0; k < 4; k++)
-            for (int i = 0; i < m; i++)
-                acc[i] -= v[k] * b->lambda_by_corner[k][i];
-        for (int k = 0; k < n; k++)
-            for (int i = 0; i < m; i++)
-                acc[i] += value[k] * by_node[k * m + i];
-        for (int i = 0; i < m; i++)
-            gap = fabs(acc[i]) > gap ? fabs(acc[i]) : gap;
+            gap = fabs(acc[0][i]) > gap ? fabs(acc[0][i]) : gap;
         gap = (gap + 1e-12 * (norm + 1) * big) / r->bound_range[s];
         for (int k = 0; k < 3 && !flat; k++)
             for (int j = 0; j < 3; j++)
@@ -536,8 +579,11 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     refine *r = ctx;
     for (int64_t i = begin; i < end; i++) {
-        if (i + 16 < end) /* the tets and their corners are scattered: fetch them ahead */
+        if (i + 16 < end) { /* the tets and their corners are scattered: fetch them ahead */
             __builtin_prefetch(r->tets + 4 * r->todo[i + 16]);
+            __builtin_prefetch(r->xi + 12 * r->todo[i + 16]);
+            __builtin_prefetch(r->xi + 12 * r->todo[i + 16] + 8);
+        }
         if (i + 8 < end)
             for (int k = 0; k < 4; k++) {
                 int32_t v = r->tets[4 * r->todo[i + 8] + k];
@@ -955,16 +1001,24 @@ static int refine_pass(refine *r, double limit)
     while (rc == 0 && queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
         uint64_t key = queue.keys[--queue.count];
         int32_t a = (int32_t)(key >> 32), b = (int32_t)(key & 0xffffffffu);
-        for (int64_t k = vt.start[a]; rc == 0 && k < vt.start[a + 1]; k++) {
-            int64_t u = vt.tets[k];
+        /* the tets around the edge: those in both a's and b's lists (each in tet order) */
+        for (int64_t i = vt.start[a], j = vt.start[b]; rc == 0 && i < vt.start[a + 1] && j < vt.start[b + 1];) {
+            if (vt.tets[i] < vt.tets[j]) {
+                i++;
+                continue;
+            }
+            if (vt.tets[j] < vt.tets[i]) {
+                j++;
+                continue;
+            }
+            int64_t u = vt.tets[i];
+            i++, j++;
             const int32_t *v = r->tets + 4 * u;
             int ia = 0, ib = 0;
-            while (ib < 4 && v[ib] != b)
-                ib++;
-            if (ib == 4)
-                continue;
             while (v[ia] != a)
                 ia++;
+            while (v[ib] != b)
+                ib++;
             r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
             if (!in_active[u]) /* once is enough: its longest is marked for good */
                 in_active[u] = 1, active_count++, rc = mark_longest(r, &queue, u);
@@ -1075,6 +1129,8 @@ static void release(refine *r, int threads)
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
     free(r->cache);
+    for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
+        free(r->inverse_t[n]);
 }
 
 static int set_up(refine *r, int threads)
@@ -1098,9 +1154,24 @@ static int set_up(refine *r, int threads)
     r->diag_length = m->vertex_count ? sqrt(dist2(lo, hi)) : 1;
     if (!(r->diag_length > 0))
         r->diag_length = 1;
-    for (int n = 1; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
+    int used[TPK_BERNSTEIN_MAX_DEGREE + 1] = {0}; /* the degrees of the cells here (a table of 6 takes ms) */
+    for (int64_t c = 0; c < r->cells->cell_count; c++) {
+        int degree = tpk_cell_map_degree(mapped_type(r->cells, c));
+        if (degree > 1 && degree <= TPK_BERNSTEIN_MAX_DEGREE)
+            used[degree] = 1;
+    }
+    for (int n = 2; n <= TPK_BERNSTEIN_MAX_DEGREE; n++) {
+        if (!used[n])
+            continue;
         if (tpk_bernstein_make(n, &r->table[n]) != 0)
             return tpk_diag_fail(r->diag, "--max-error: the Bernstein table of degree %d is singular", n);
+        int p = r->table[n].points;
+        if (!(r->inverse_t[n] = malloc(sizeof *r->inverse_t[n] * (size_t)(p * p))))
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        for (int i = 0; i < p; i++)
+            for (int j = 0; j < p; j++)
+                r->inverse_t[n][j * p + i] = r->table[n].inverse[i * p + j];
+    }
     if (reserve_tets(r, m->tet_count) != 0)
         return -1;
     r->count = m->tet_count;
