@@ -173,6 +173,7 @@ typedef struct refine {
     int report_fields;     /* fields bounded (not constant) */
     int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
+    int8_t *longest;       /* per tet: its greatest edge (tet_edges), found when it was last bounded */
 } refine;
 
 static float value_of(const refine *r, int32_t v, int slot)
@@ -592,19 +593,18 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
                     __builtin_prefetch(r->added + (int64_t)(v - r->n0) * r->slots);
             }
         bound_tet(r, r->todo[i], &r->cache[w]);
+        r->longest[r->todo[i]] = (int8_t)greatest_edge(r, r->todo[i], 0x3f); /* its corners are at hand */
     }
 }
 
 /* ---- growth ------------------------------------------------------------------------------------ */
 
-static int grow(void **array, size_t item, int64_t count, int64_t cap)
+/* realloc: a large block grows in place or is moved by its pages, neither copied nor touched afresh */
+static int grow(void **array, size_t item, int64_t cap)
 {
-    void *grown = malloc(item * (size_t)cap);
+    void *grown = realloc(*array, item * (size_t)cap);
     if (!grown)
         return -1;
-    if (*array && count)
-        memcpy(grown, *array, item * (size_t)count);
-    free(*array);
     *array = grown;
     return 0;
 }
@@ -614,14 +614,14 @@ static int reserve_tets(refine *r, int64_t need)
     if (need <= r->cap)
         return 0;
     int64_t cap = need + need / 2 + 1024;
-    if (grow((void **)&r->tets, 4 * sizeof *r->tets, r->count, cap) || grow((void **)&r->cell, sizeof *r->cell, r->count, cap) ||
-        grow((void **)&r->xi, 12 * sizeof *r->xi, r->count, cap) || grow((void **)&r->root, sizeof *r->root, r->count, cap) ||
-        grow((void **)&r->field_error, sizeof *r->field_error, r->count, cap) ||
-        grow((void **)&r->geometry_error, sizeof *r->geometry_error, r->count, cap) ||
-        grow((void **)&r->criterion, sizeof *r->criterion, r->count, cap) ||
-        grow((void **)&r->worst_slot, sizeof *r->worst_slot, r->count, cap) ||
-        grow((void **)&r->marked, sizeof *r->marked, r->count, cap) ||
-        grow((void **)&r->todo, sizeof *r->todo, r->todo_count, cap))
+    if (grow((void **)&r->tets, 4 * sizeof *r->tets, cap) || grow((void **)&r->cell, sizeof *r->cell, cap) ||
+        grow((void **)&r->xi, 12 * sizeof *r->xi, cap) || grow((void **)&r->root, sizeof *r->root, cap) ||
+        grow((void **)&r->field_error, sizeof *r->field_error, cap) ||
+        grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
+        grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
+        grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
+        grow((void **)&r->marked, sizeof *r->marked, cap) || grow((void **)&r->longest, sizeof *r->longest, cap) ||
+        grow((void **)&r->todo, sizeof *r->todo, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
     return 0;
@@ -642,10 +642,10 @@ static int reserve_vertices(refine *r, int64_t more)
     if (m->vertex_count + more > INT32_MAX - 1)
         return tpk_diag_fail(r->diag, "--max-error: more than %d vertices", INT32_MAX - 1);
     if (m->vertex_count + more > r->vertex_cap) {
-        int64_t need = m->vertex_count + more, cap = need + need / 2 + 1024, added = m->vertex_count - r->n0;
-        if (grow((void **)&m->points, 3 * sizeof *m->points, m->vertex_count, cap) ||
-            grow((void **)&m->vertex_source, sizeof *m->vertex_source, m->vertex_count, cap) ||
-            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), added, cap - r->n0))
+        int64_t need = m->vertex_count + more, cap = need + need / 2 + 1024;
+        if (grow((void **)&m->points, 3 * sizeof *m->points, cap) ||
+            grow((void **)&m->vertex_source, sizeof *m->vertex_source, cap) ||
+            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), cap - r->n0))
             return tpk_diag_fail(r->diag, "out of memory for %lld vertices (--max-error)", (long long)cap);
         r->vertex_cap = cap;
     }
@@ -983,7 +983,7 @@ static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
 
 static int mark_longest(refine *r, edge_queue *q, int64_t t)
 {
-    int e = greatest_edge(r, t, 0x3f);
+    int e = r->longest[t]; /* a tet is bounded after each change: still its greatest */
     return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
 }
 
@@ -1124,7 +1124,7 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
-    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked), free(r->longest);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
