@@ -487,9 +487,26 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const 
 static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const double (*corner)[3],
                          const double (*node)[3], const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
 {
-    int even = m & ~1;
+    int even = m & ~1, quads = m & ~3;
     for (int c = 0; c < axes; c++) {
-        for (int i = 0; i < even; i += 2) {
+        for (int i = 0; i < quads; i += 4) { /* two pairs at once: two sums in flight */
+            pair acc = {0, 0}, acc2 = {0, 0}, x, y, y2;
+            for (int k = 0; k < 4; k++) {
+                memcpy(&y, b->lambda_by_corner[k] + i, sizeof y);
+                memcpy(&y2, b->lambda_by_corner[k] + i + 2, sizeof y2);
+                x = (pair){corner[k][c], corner[k][c]};
+                acc -= x * y, acc2 -= x * y2;
+            }
+            for (int k = 0; k < n; k++) {
+                memcpy(&y, by_node + k * m + i, sizeof y);
+                memcpy(&y2, by_node + k * m + i + 2, sizeof y2);
+                x = (pair){node[k][c], node[k][c]};
+                acc += x * y, acc2 += x * y2;
+            }
+            memcpy(out[c] + i, &acc, sizeof acc);
+            memcpy(out[c] + i + 2, &acc2, sizeof acc2);
+        }
+        for (int i = quads; i < even; i += 2) {
             pair acc = {0, 0}, x, y;
             for (int k = 0; k < 4; k++) {
                 memcpy(&y, b->lambda_by_corner[k] + i, sizeof y);
