@@ -174,6 +174,10 @@ typedef struct refine {
     int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
     int8_t *longest;       /* per tet: its greatest edge (tet_edges), found when it was last bounded */
+    uint8_t *changed;      /* per tet: cut or made since the tets by vertex (`base`) were built */
+    int64_t changed_count;
+    struct vertex_tets *base; /* the tets by vertex as they were when built (refine_pass) */
+    int64_t base_vertices;    /* the vertices there were then */
 } refine;
 
 static float value_of(const refine *r, int32_t v, int slot)
@@ -638,6 +642,7 @@ static int reserve_tets(refine *r, int64_t need)
         grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
         grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
         grow((void **)&r->marked, sizeof *r->marked, cap) || grow((void **)&r->longest, sizeof *r->longest, cap) ||
+        grow((void **)&r->changed, sizeof *r->changed, cap) ||
         grow((void **)&r->todo, sizeof *r->todo, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
@@ -936,7 +941,8 @@ typedef struct vertex_tets {
 typedef struct vertex_tets_job {
     const refine *r;
     vertex_tets *vt;
-    int scatter; /* 0: count, 1: fill */
+    int scatter;      /* 0: count, 1: fill */
+    int changed_only; /* only the tets changed since `base` */
 } vertex_tets_job;
 
 static void vertex_tets_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -945,25 +951,27 @@ static void vertex_tets_range(void *ctx, int64_t begin, int64_t end, int w)
     const int32_t *tets = job->r->tets;
     int64_t *start = job->vt->start, n = 4 * job->r->count;
     (void)w;
+    const uint8_t *changed = job->changed_only ? job->r->changed : NULL;
     if (!job->scatter) {
         for (int64_t i = 0; i < n; i++)
-            if (tets[i] >= begin && tets[i] < end)
+            if (tets[i] >= begin && tets[i] < end && (!changed || changed[i / 4]))
                 start[tets[i] + 2]++;
     } else {
         for (int64_t i = 0; i < n; i++)
-            if (tets[i] >= begin && tets[i] < end)
+            if (tets[i] >= begin && tets[i] < end && (!changed || changed[i / 4]))
                 job->vt->tets[start[tets[i] + 1]++] = (int32_t)(i / 4);
     }
 }
 
-static int vertex_tets_make(const refine *r, vertex_tets *vt)
+/* The tets by vertex: of every tet, or (changed_only) of those changed since `base` was built. */
+static int vertex_tets_make(const refine *r, vertex_tets *vt, int changed_only)
 {
     int64_t nv = r->m->vertex_count;
     vt->start = calloc((size_t)nv + 2, sizeof *vt->start);
-    vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * r->count + 1));
+    vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * (changed_only ? r->changed_count : r->count) + 1));
     if (!vt->start || !vt->tets)
         return -1;
-    vertex_tets_job job = {r, vt, 0};
+    vertex_tets_job job = {r, vt, 0, changed_only};
     int threads = tpk_threads_for(4 * r->count, r->threads, 1 << 18);
     tpk_parallel_for(nv, threads, vertex_tets_range, &job);
     for (int64_t v = 0; v < nv; v++)
@@ -1004,55 +1012,101 @@ static int mark_longest(refine *r, edge_queue *q, int64_t t)
     return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
 }
 
+/* The closure's state: tets found around marked edges mark the edge, and their longest once. */
+typedef struct closure {
+    edge_queue queue;
+    uint8_t *in_active;
+    int64_t active_count;
+} closure;
+
+/* The tets of `vt` around edge (a, b) (in both vertices' lists, each in tet order; with `skip_changed`,
+ * not those changed since `base`, listed elsewhere): each marks the edge, and its longest the first time. */
+static int visit_edge(refine *r, closure *cl, const vertex_tets *vt, int64_t vertices, int skip_changed, int32_t a,
+                      int32_t b)
+{
+    if (a >= vertices || b >= vertices)
+        return 0;
+    int rc = 0;
+    for (int64_t i = vt->start[a], j = vt->start[b]; rc == 0 && i < vt->start[a + 1] && j < vt->start[b + 1];) {
+        if (vt->tets[i] < vt->tets[j]) {
+            i++;
+            continue;
+        }
+        if (vt->tets[j] < vt->tets[i]) {
+            j++;
+            continue;
+        }
+        int64_t u = vt->tets[i];
+        i++, j++;
+        if (skip_changed && r->changed[u])
+            continue;
+        const int32_t *v = r->tets + 4 * u;
+        int ia = 0, ib = 0;
+        while (v[ia] != a)
+            ia++;
+        while (v[ib] != b)
+            ib++;
+        r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
+        if (!cl->in_active[u]) /* once is enough: its longest is marked for good */
+            cl->in_active[u] = 1, cl->active_count++, rc = mark_longest(r, &cl->queue, u);
+    }
+    return rc;
+}
+
+/* The tets around an edge come from the tets by vertex built in some earlier pass (`base`), less the tets
+ * changed since, and from an index of those changed tets; `base` is built again when more than half the
+ * tets have changed. The late passes, which cut few tets, then no longer read every tet. */
 static int refine_pass(refine *r, double limit)
 {
     edge_clear(&r->marks);
-    vertex_tets vt = {NULL, NULL};
-    edge_queue queue = {NULL, 0, 0};
-    int64_t *active = NULL, active_count = 0;
-    uint8_t *in_active = calloc((size_t)(r->count ? r->count : 1), 1);
-    int rc = vertex_tets_make(r, &vt) != 0 || !in_active ? -1 : 0;
+    vertex_tets delta = {NULL, NULL};
+    closure cl = {{NULL, 0, 0}, calloc((size_t)(r->count ? r->count : 1), 1), 0};
+    int64_t *active = NULL, count_before = r->count;
+    int full = !r->base || 2 * r->changed_count > r->count, rc = cl.in_active ? 0 : -1;
+    if (rc == 0 && full) {
+        if (r->base)
+            free(r->base->start), free(r->base->tets);
+        else if (!(r->base = calloc(1, sizeof *r->base)))
+            rc = -1;
+        if (rc == 0) {
+            r->base->start = NULL, r->base->tets = NULL;
+            rc = vertex_tets_make(r, r->base, 0);
+            r->base_vertices = r->m->vertex_count;
+            memset(r->changed, 0, (size_t)r->count);
+            r->changed_count = 0;
+        }
+    } else if (rc == 0) {
+        rc = vertex_tets_make(r, &delta, 1);
+    }
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
         if (!(r->criterion[r->todo[i]] <= limit))
-            rc = mark_longest(r, &queue, r->todo[i]);
-    while (rc == 0 && queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
-        uint64_t key = queue.keys[--queue.count];
+            rc = mark_longest(r, &cl.queue, r->todo[i]);
+    while (rc == 0 && cl.queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
+        uint64_t key = cl.queue.keys[--cl.queue.count];
         int32_t a = (int32_t)(key >> 32), b = (int32_t)(key & 0xffffffffu);
-        /* the tets around the edge: those in both a's and b's lists (each in tet order) */
-        for (int64_t i = vt.start[a], j = vt.start[b]; rc == 0 && i < vt.start[a + 1] && j < vt.start[b + 1];) {
-            if (vt.tets[i] < vt.tets[j]) {
-                i++;
-                continue;
-            }
-            if (vt.tets[j] < vt.tets[i]) {
-                j++;
-                continue;
-            }
-            int64_t u = vt.tets[i];
-            i++, j++;
-            const int32_t *v = r->tets + 4 * u;
-            int ia = 0, ib = 0;
-            while (v[ia] != a)
-                ia++;
-            while (v[ib] != b)
-                ib++;
-            r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
-            if (!in_active[u]) /* once is enough: its longest is marked for good */
-                in_active[u] = 1, active_count++, rc = mark_longest(r, &queue, u);
-        }
+        rc = visit_edge(r, &cl, r->base, r->base_vertices, !full, a, b);
+        if (rc == 0 && !full)
+            rc = visit_edge(r, &cl, &delta, r->m->vertex_count, 0, a, b);
     }
-    free(queue.keys), free(vt.start), free(vt.tets);
-    if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(active_count ? active_count : 1))))
+    free(cl.queue.keys), free(delta.start), free(delta.tets);
+    if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(cl.active_count ? cl.active_count : 1))))
         rc = -1;
     for (int64_t t = 0, n = 0; rc == 0 && t < r->count; t++)
-        if (in_active[t])
+        if (cl.in_active[t])
             active[n++] = t;
-    free(in_active);
+    free(cl.in_active);
     if (rc != 0) {
         free(active);
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     }
-    return cut_marked(r, active, active_count);
+    if ((rc = cut_marked(r, active, cl.active_count)) != 0)
+        return rc;
+    for (int64_t i = 0; i < r->todo_count; i++) { /* the tets cut and their pieces have changed */
+        int64_t t = r->todo[i];
+        if (t >= count_before || !r->changed[t])
+            r->changed[t] = 1, r->changed_count++;
+    }
+    return 0;
 }
 
 /* ---- set-up and hand-back ---------------------------------------------------------------------- */
@@ -1141,7 +1195,9 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
-    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked), free(r->longest);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked), free(r->longest), free(r->changed);
+    if (r->base)
+        free(r->base->start), free(r->base->tets), free(r->base);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
@@ -1195,7 +1251,7 @@ static int set_up(refine *r, int threads)
     memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
     memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
     for (int64_t t = 0; t < r->count; t++)
-        r->root[t] = t, r->marked[t] = 0, r->todo[t] = t;
+        r->root[t] = t, r->marked[t] = 0, r->changed[t] = 0, r->todo[t] = t;
     r->todo_count = r->count;
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
