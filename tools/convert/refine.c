@@ -328,6 +328,8 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
     corner_job *job = ctx;
     refine *r = job->r;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    int nodes_of = 0; /* the type whose nodes' parametric points `nodes` holds (the cells are mostly alike) */
+    double nodes[TPK_CELL_MAP_MAX_NODES][3];
     (void)w;
     for (int64_t t = begin; t < end; t++) {
         int64_t c = r->cell[t];
@@ -337,6 +339,11 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
             continue;
         }
         int n = tpk_cell_map_nodes(type);
+        if (type != nodes_of) {
+            for (int j = 0; j < n; j++)
+                tpk_cell_map_node(type, j, nodes[j]);
+            nodes_of = type;
+        }
         for (int k = 0; k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
             double *xi = r->xi + 12 * t + 3 * k;
@@ -345,7 +352,7 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
                 if (verts[j] == v)
                     node = j;
             if (node >= 0)
-                tpk_cell_map_node(type, node, xi);
+                memcpy(xi, nodes[node], sizeof nodes[node]);
             else if (invert_map(r, type, verts, point_of(r, v), xi) != 0)
                 job->failed[t] = 2;
         }
