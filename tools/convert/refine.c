@@ -1202,7 +1202,8 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
-    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked), free(r->longest), free(r->changed);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
+    free(r->longest), free(r->changed);
     if (r->base)
         free(r->base->start), free(r->base->tets), free(r->base);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
