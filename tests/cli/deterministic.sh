@@ -1,6 +1,7 @@
 # Same input and options give byte-identical files, whatever the output name and thread count: every
 # importer's real sample (and the forms a reader has several paths for: VTK ASCII and binary, old and 5.1
-# cells; VTU raw, zlib, appended) converted at 1, 2 and 3 threads, and --levels and --zstd likewise.
+# cells; VTU raw, zlib, appended) converted at 1, 2 and 3 threads, and --levels, --zstd and --max-error
+# likewise.
 source "$(dirname "$0")/common.sh"
 passed=0
 # same_threads NAME INPUT [options]: converted at 1, 2 and 3 threads (the first checked against the
@@ -240,4 +241,22 @@ PYEOF
 fi
 # Levels of detail: the collapses run on all threads, the levels must not depend on how many.
 same_threads levels "$DATA/sfepy/cube_cylinder.mesh" --levels 3
+# convert --max-error: the bound, the tets by vertex, the midpoints and the bisection rounds run on all
+# threads. Exodus hexahedra with 8 fields x 5 steps (222k tets at 1%), and gmsh t5 at order 2 with a
+# point field (685k tets at 0.3%: the tets by vertex are split between workers too).
+same_threads max_error_exodus "$DATA/seacas/exomerge_unit_test.e" --max-error 1%
+if command -v gmsh > /dev/null; then
+    gmsh -3 -nt 1 -order 2 -format msh22 "$DATA/gmsh/t5.geo" -o "$WORK/t5_p2.msh" > /dev/null
+    "$PY" - "$WORK/t5_p2.msh" "$WORK/t5_p2_field.msh" <<'PYEOF'
+import math, sys
+lines = open(sys.argv[1]).read().split("\n")
+i = lines.index("$Nodes"); n = int(lines[i + 1]); vals = []
+for line in lines[i + 2:i + 2 + n]:
+    k, x, y, z = line.split()[:4]
+    vals.append("%s %.17g" % (k, math.sin(3 * float(x)) * math.cos(2 * float(y)) + float(z) ** 2))
+open(sys.argv[2], "w").write("\n".join(lines).rstrip("\n") + "\n" +
+    '$NodeData\n1\n"f"\n1\n0.0\n3\n0\n1\n%d\n%s\n$EndNodeData\n' % (n, "\n".join(vals)))
+PYEOF
+    same_threads max_error_t5 "$WORK/t5_p2_field.msh" --max-error 0.3%
+fi
 echo "$((passed + 2)) passed, 0 failed"

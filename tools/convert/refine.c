@@ -165,12 +165,19 @@ typedef struct refine {
     int64_t *root;         /* the given tet each comes from (cell fields) */
     double *field_error, *geometry_error, *criterion;
     int *worst_slot;
-    tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1];
-    edge_table marks, mids;
+    tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1]; /* made for the degrees the cells have */
+    double *inverse_t[TPK_BERNSTEIN_MAX_DEGREE + 1];  /* their inverses transposed */
+    edge_table marks;      /* this pass's marked edges: their midpoint vertex once made, else -1 */
+    edge_table mids;       /* --subdivide: the edges cut at this level, their midpoint vertex */
     struct coef_cache *cache; /* per worker */
     int report_fields;     /* fields bounded (not constant) */
-    int64_t *todo, todo_count, todo_cap; /* tets whose bound is not known yet (new or cut since) */
-    uint8_t *queued;       /* per tet: in todo */
+    int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
+    uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
+    int8_t *longest;       /* per tet: its greatest edge (tet_edges), found when it was last bounded */
+    uint8_t *changed;      /* per tet: cut or made since the tets by vertex (`base`) were built */
+    int64_t changed_count;
+    struct vertex_tets *base; /* the tets by vertex as they were when built (refine_pass) */
+    int64_t base_vertices;    /* the vertices there were then */
 } refine;
 
 static float value_of(const refine *r, int32_t v, int slot)
@@ -231,14 +238,14 @@ static int edge_greater(const refine *r, int32_t a, int32_t b, int32_t c, int32_
     return lo1 != lo2 ? lo1 > lo2 : hi1 > hi2;
 }
 
-/* Tet t's greatest edge (marked ones only with `marked_only`), as 0..5, or -1. */
-static int greatest_edge(const refine *r, int64_t t, int marked_only)
+/* Tet t's greatest edge among those of `edges` (bits by tet_edges), as 0..5, or -1. */
+static int greatest_edge(const refine *r, int64_t t, unsigned edges)
 {
     const int32_t *v = r->tets + 4 * t;
     int best = -1;
     for (int e = 0; e < 6; e++) {
         int32_t a = v[tet_edges[e][0]], b = v[tet_edges[e][1]];
-        if (marked_only && !edge_find(&r->marks, edge_key(a, b), NULL))
+        if (!(edges >> e & 1))
             continue;
         if (best < 0 || edge_greater(r, a, b, v[tet_edges[best][0]], v[tet_edges[best][1]]))
             best = e;
@@ -321,6 +328,8 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
     corner_job *job = ctx;
     refine *r = job->r;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    int nodes_of = 0; /* the type whose nodes' parametric points `nodes` holds (the cells are mostly alike) */
+    double nodes[TPK_CELL_MAP_MAX_NODES][3];
     (void)w;
     for (int64_t t = begin; t < end; t++) {
         int64_t c = r->cell[t];
@@ -330,6 +339,11 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
             continue;
         }
         int n = tpk_cell_map_nodes(type);
+        if (type != nodes_of) {
+            for (int j = 0; j < n; j++)
+                tpk_cell_map_node(type, j, nodes[j]);
+            nodes_of = type;
+        }
         for (int k = 0; k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
             double *xi = r->xi + 12 * t + 3 * k;
@@ -338,7 +352,7 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
                 if (verts[j] == v)
                     node = j;
             if (node >= 0)
-                tpk_cell_map_node(type, node, xi);
+                memcpy(xi, nodes[node], sizeof nodes[node]);
             else if (invert_map(r, type, verts, point_of(r, v), xi) != 0)
                 job->failed[t] = 2;
         }
@@ -411,27 +425,32 @@ static int barycentric_gradients(const double p[4][3], double g[3][3])
  * lately, by node (by_node[k * m + i]: node k's share of coefficient i), keyed by the cell type and the
  * 4 parametric corners: a pure function of the key, so that a hit gives the very numbers a miss would.
  * The tets of a regular mesh's cells, and their pieces, repeat the same few parametric tets. */
+typedef double pair __attribute__((vector_size(2 * sizeof(double)))); /* two numbers side by side */
+
 typedef struct coef_cache {
     int entries, size; /* a power of two; doubles per entry */
     int *type;         /* 0: empty */
     double *key, *norm, *by_node;
-    double work[2 * TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES];
+    double work[TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES];
 } coef_cache;
 
-static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int type, int n, const double *xi,
-                                  double *norm)
+static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const double *inverse_t, int type,
+                                  int n, const double *xi, double *norm)
 {
     uint64_t h = 1469598103934665603ull ^ (uint64_t)type;
-    const unsigned char *bytes = (const unsigned char *)xi;
-    for (size_t i = 0; i < 12 * sizeof *xi; i++)
-        h = (h ^ bytes[i]) * 1099511628211ull;
+    for (int i = 0; i < 12; i++) { /* the 12 numbers' bits, a word at a time */
+        uint64_t bits;
+        memcpy(&bits, xi + i, sizeof bits);
+        h = (h ^ bits) * 0x9E3779B97F4A7C15ull;
+        h ^= h >> 29;
+    }
     int e = (int)(h & (uint64_t)(cc->entries - 1)), m = b->points;
     double *by_node = cc->by_node + (int64_t)e * cc->size;
     if (cc->type[e] == type && !memcmp(cc->key + 12 * e, xi, 12 * sizeof *xi)) {
         *norm = cc->norm[e];
         return by_node;
     }
-    double *weights = cc->work, *coef = cc->work + TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES;
+    double *weights = cc->work;
     for (int i = 0; i < m; i++) { /* the nodes' weights at the domain points */
         double at[3] = {0, 0, 0};
         for (int k = 0; k < 4; k++)
@@ -439,13 +458,88 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, int ty
                 at[j] += b->lambda[i][k] * xi[3 * k + j];
         tpk_cell_map_weights(type, at, weights + i * n);
     }
-    *norm = cc->norm[e] = tpk_bernstein_coefficients(b, weights, n, coef);
-    for (int k = 0; k < n; k++)
-        for (int i = 0; i < m; i++)
-            by_node[k * m + i] = coef[i * n + k];
+    /* by_node = inverse x weights, node by node (the products and sums of tpk_bernstein_coefficients, in
+     * its order), two domain points side by side through the transposed inverse */
+    int even = m & ~1;
+    for (int k = 0; k < n; k++) {
+        double *out = by_node + k * m;
+        for (int i = 0; i < even; i += 2) {
+            pair acc = {0, 0}, a, w;
+            for (int j = 0; j < m; j++) {
+                memcpy(&a, inverse_t + j * m + i, sizeof a);
+                w = (pair){weights[j * n + k], weights[j * n + k]};
+                acc += a * w;
+            }
+            memcpy(out + i, &acc, sizeof acc);
+        }
+        for (int i = even; i < m; i++) {
+            double acc = 0;
+            for (int j = 0; j < m; j++)
+                acc += inverse_t[j * m + i] * weights[j * n + k];
+            out[i] = acc;
+        }
+    }
+    double largest = 0; /* tpk_bernstein_coefficients' norm: the largest row sum of |coefficients| */
+    for (int i = 0; i < m; i++) {
+        double sum = 0;
+        for (int k = 0; k < n; k++)
+            sum += fabs(by_node[k * m + i]);
+        largest = sum > largest ? sum : largest;
+    }
+    *norm = cc->norm[e] = largest;
     cc->type[e] = type;
     memcpy(cc->key + 12 * e, xi, 12 * sizeof *xi);
     return by_node;
+}
+
+/* The Bernstein coefficients of f - L for `axes` (1 or 3) components: out[c][i] = -sum_k corner[k][c] lambda_k(i)
+ * + sum_k node[k][c] by_node[k m + i], each summed in that order (k ascending), two domain points side by
+ * side (the numbers are those of one at a time). */
+static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const double (*corner)[3],
+                         const double (*node)[3], const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
+{
+    int even = m & ~1, quads = m & ~3;
+    for (int c = 0; c < axes; c++) {
+        for (int i = 0; i < quads; i += 4) { /* two pairs at once: two sums in flight */
+            pair acc = {0, 0}, acc2 = {0, 0}, x, y, y2;
+            for (int k = 0; k < 4; k++) {
+                memcpy(&y, b->lambda_by_corner[k] + i, sizeof y);
+                memcpy(&y2, b->lambda_by_corner[k] + i + 2, sizeof y2);
+                x = (pair){corner[k][c], corner[k][c]};
+                acc -= x * y, acc2 -= x * y2;
+            }
+            for (int k = 0; k < n; k++) {
+                memcpy(&y, by_node + k * m + i, sizeof y);
+                memcpy(&y2, by_node + k * m + i + 2, sizeof y2);
+                x = (pair){node[k][c], node[k][c]};
+                acc += x * y, acc2 += x * y2;
+            }
+            memcpy(out[c] + i, &acc, sizeof acc);
+            memcpy(out[c] + i + 2, &acc2, sizeof acc2);
+        }
+        for (int i = quads; i < even; i += 2) {
+            pair acc = {0, 0}, x, y;
+            for (int k = 0; k < 4; k++) {
+                memcpy(&y, b->lambda_by_corner[k] + i, sizeof y);
+                x = (pair){corner[k][c], corner[k][c]};
+                acc -= x * y;
+            }
+            for (int k = 0; k < n; k++) {
+                memcpy(&y, by_node + k * m + i, sizeof y);
+                x = (pair){node[k][c], node[k][c]};
+                acc += x * y;
+            }
+            memcpy(out[c] + i, &acc, sizeof acc);
+        }
+        for (int i = even; i < m; i++) {
+            double acc = 0;
+            for (int k = 0; k < 4; k++)
+                acc -= corner[k][c] * b->lambda_by_corner[k][i];
+            for (int k = 0; k < n; k++)
+                acc += node[k][c] * by_node[k * m + i];
+            out[c][i] = acc;
+        }
+    }
 }
 
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
@@ -461,7 +555,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(type), m = b->points;
     double norm;
-    const double *by_node = coefficients(cache, b, type, n, xi, &norm);
+    const double *by_node = coefficients(cache, b, r->inverse_t[degree], type, n, xi, &norm);
     double p[4][3], g[3][3], node[TPK_CELL_MAP_MAX_NODES][3], geometry = 0, largest = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
@@ -471,16 +565,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             largest = fabs(node[k][j]) > largest ? fabs(node[k][j]) : largest;
     }
     double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
-    for (int j = 0; j < 3; j++) {
-        for (int i = 0; i < m; i++)
-            gx[j][i] = 0;
-        for (int k = 0; k < 4; k++)
-            for (int i = 0; i < m; i++)
-                gx[j][i] -= p[k][j] * b->lambda_by_corner[k][i];
-        for (int k = 0; k < n; k++)
-            for (int i = 0; i < m; i++)
-                gx[j][i] += node[k][j] * by_node[k * m + i];
-    }
+    minus_linear(m, n, 3, b, (const double (*)[3])p, (const double (*)[3])node, by_node, gx);
     for (int i = 0; i < m; i++) {
         double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
         geometry = sq > geometry ? sq : geometry;
@@ -490,27 +575,20 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     int flat = barycentric_gradients(p, g) != 0;
     for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
         int slot = r->bound_slot[s];
-        double v[4], grad[3] = {0, 0, 0}, value[TPK_CELL_MAP_MAX_NODES], gap = 0, big = 0;
+        double v[4], grad[3] = {0, 0, 0}, value[TPK_CELL_MAP_MAX_NODES][3], gap = 0, big = 0, cv[4][3];
         int finite = 1;
         for (int k = 0; k < 4; k++)
-            finite &= isfinite(v[k] = value_of(r, tv[k], slot));
+            finite &= isfinite(v[k] = cv[k][0] = value_of(r, tv[k], slot));
         for (int k = 0; k < n; k++) {
-            finite &= isfinite(value[k] = value_of(r, verts[k], slot));
-            big = fabs(value[k]) > big ? fabs(value[k]) : big;
+            finite &= isfinite(value[k][0] = value_of(r, verts[k], slot));
+            big = fabs(value[k][0]) > big ? fabs(value[k][0]) : big;
         }
         if (!finite)
             continue; /* no bound for missing values (NaN): nothing to interpolate */
-        double acc[TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+        double acc[1][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+        minus_linear(m, n, 1, b, (const double (*)[3])cv, (const double (*)[3])value, by_node, acc);
         for (int i = 0; i < m; i++)
-            acc[i] = 0;
-        for (int k = 0; k < 4; k++)
-            for (int i = 0; i < m; i++)
-                acc[i] -= v[k] * b->lambda_by_corner[k][i];
-        for (int k = 0; k < n; k++)
-            for (int i = 0; i < m; i++)
-                acc[i] += value[k] * by_node[k * m + i];
-        for (int i = 0; i < m; i++)
-            gap = fabs(acc[i]) > gap ? fabs(acc[i]) : gap;
+            gap = fabs(acc[0][i]) > gap ? fabs(acc[0][i]) : gap;
         gap = (gap + 1e-12 * (norm + 1) * big) / r->bound_range[s];
         for (int k = 0; k < 3 && !flat; k++)
             for (int j = 0; j < 3; j++)
@@ -529,20 +607,32 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     refine *r = ctx;
-    for (int64_t i = begin; i < end; i++)
+    for (int64_t i = begin; i < end; i++) {
+        if (i + 16 < end) { /* the tets and their corners are scattered: fetch them ahead */
+            __builtin_prefetch(r->tets + 4 * r->todo[i + 16]);
+            __builtin_prefetch(r->xi + 12 * r->todo[i + 16]);
+            __builtin_prefetch(r->xi + 12 * r->todo[i + 16] + 8);
+        }
+        if (i + 8 < end)
+            for (int k = 0; k < 4; k++) {
+                int32_t v = r->tets[4 * r->todo[i + 8] + k];
+                __builtin_prefetch(point_of(r, v));
+                if (v >= r->n0)
+                    __builtin_prefetch(r->added + (int64_t)(v - r->n0) * r->slots);
+            }
         bound_tet(r, r->todo[i], &r->cache[w]);
+        r->longest[r->todo[i]] = (int8_t)greatest_edge(r, r->todo[i], 0x3f); /* its corners are at hand */
+    }
 }
 
 /* ---- growth ------------------------------------------------------------------------------------ */
 
-static int grow(void **array, size_t item, int64_t count, int64_t cap)
+/* realloc: a large block grows in place or is moved by its pages, neither copied nor touched afresh */
+static int grow(void **array, size_t item, int64_t cap)
 {
-    void *grown = malloc(item * (size_t)cap);
+    void *grown = realloc(*array, item * (size_t)cap);
     if (!grown)
         return -1;
-    if (*array && count)
-        memcpy(grown, *array, item * (size_t)count);
-    free(*array);
     *array = grown;
     return 0;
 }
@@ -552,55 +642,68 @@ static int reserve_tets(refine *r, int64_t need)
     if (need <= r->cap)
         return 0;
     int64_t cap = need + need / 2 + 1024;
-    if (grow((void **)&r->tets, 4 * sizeof *r->tets, r->count, cap) || grow((void **)&r->cell, sizeof *r->cell, r->count, cap) ||
-        grow((void **)&r->xi, 12 * sizeof *r->xi, r->count, cap) || grow((void **)&r->root, sizeof *r->root, r->count, cap) ||
-        grow((void **)&r->field_error, sizeof *r->field_error, r->count, cap) ||
-        grow((void **)&r->geometry_error, sizeof *r->geometry_error, r->count, cap) ||
-        grow((void **)&r->criterion, sizeof *r->criterion, r->count, cap) ||
-        grow((void **)&r->worst_slot, sizeof *r->worst_slot, r->count, cap) ||
-        grow((void **)&r->queued, sizeof *r->queued, r->count, cap) ||
-        grow((void **)&r->todo, sizeof *r->todo, r->todo_count, cap))
+    if (grow((void **)&r->tets, 4 * sizeof *r->tets, cap) || grow((void **)&r->cell, sizeof *r->cell, cap) ||
+        grow((void **)&r->xi, 12 * sizeof *r->xi, cap) || grow((void **)&r->root, sizeof *r->root, cap) ||
+        grow((void **)&r->field_error, sizeof *r->field_error, cap) ||
+        grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
+        grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
+        grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
+        grow((void **)&r->marked, sizeof *r->marked, cap) || grow((void **)&r->longest, sizeof *r->longest, cap) ||
+        grow((void **)&r->changed, sizeof *r->changed, cap) ||
+        grow((void **)&r->todo, sizeof *r->todo, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
     return 0;
 }
 
-static void enqueue(refine *r, int64_t t)
+/* Every tet to be bounded again (after --subdivide cut them all). */
+static void todo_all(refine *r)
 {
-    if (!r->queued[t])
-        r->queued[t] = 1, r->todo[r->todo_count++] = t;
+    for (int64_t t = 0; t < r->count; t++)
+        r->todo[t] = t;
+    r->todo_count = r->count;
 }
 
-/* A new vertex at parametric point xi of tet t's cell: placed by the map (on the file's grid), valued
- * by the interpolant, every point field and step. */
-static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
+/* Room for `more` vertices. */
+static int reserve_vertices(refine *r, int64_t more)
 {
     tpk_tetmesh *m = r->m;
-    if (m->vertex_count >= INT32_MAX - 1) {
-        tpk_diag_fail(r->diag, "--max-error: more than %d vertices", INT32_MAX - 1);
-        return -1;
-    }
-    if (m->vertex_count >= r->vertex_cap) {
-        int64_t cap = m->vertex_count + m->vertex_count / 2 + 1024, added = m->vertex_count - r->n0;
-        if (grow((void **)&m->points, 3 * sizeof *m->points, m->vertex_count, cap) ||
-            grow((void **)&m->vertex_source, sizeof *m->vertex_source, m->vertex_count, cap) ||
-            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), added, cap - r->n0)) {
-            tpk_diag_fail(r->diag, "out of memory for %lld vertices (--max-error)", (long long)cap);
-            return -1;
-        }
+    if (m->vertex_count + more > INT32_MAX - 1)
+        return tpk_diag_fail(r->diag, "--max-error: more than %d vertices", INT32_MAX - 1);
+    if (m->vertex_count + more > r->vertex_cap) {
+        int64_t need = m->vertex_count + more, cap = need + need / 2 + 1024;
+        if (grow((void **)&m->points, 3 * sizeof *m->points, cap) ||
+            grow((void **)&m->vertex_source, sizeof *m->vertex_source, cap) ||
+            grow((void **)&r->added, sizeof *r->added * (size_t)(r->slots ? r->slots : 1), cap - r->n0))
+            return tpk_diag_fail(r->diag, "out of memory for %lld vertices (--max-error)", (long long)cap);
         r->vertex_cap = cap;
     }
+    return 0;
+}
+
+/* Vertex v (room made) at parametric point xi of tet t's cell: placed by the map (on the file's grid),
+ * valued by the interpolant, every point field and step. */
+static void place_vertex(refine *r, int32_t v, int64_t t, const double xi[3])
+{
+    tpk_tetmesh *m = r->m;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     double w[TPK_CELL_MAP_MAX_NODES], x[3];
     int type = cell_nodes(r, r->cell[t], verts), n = tpk_cell_map_nodes(type);
     map_point(r, type, verts, xi, w, x);
     for (int a = 0; m->on_grid && a < 3; a++)
         x[a] = m->grid_origin[a] + (double)(float)(x[a] - m->grid_origin[a]);
-    int32_t v = (int32_t)m->vertex_count++;
     memcpy(m->points + 3 * (int64_t)v, x, sizeof x);
     m->vertex_source[v] = -1;
     for (int s = 0; s < r->slots; s++)
         r->added[(int64_t)(v - r->n0) * r->slots + s] = (float)interpolate(r, n, verts, w, s);
+}
+
+static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
+{
+    if (reserve_vertices(r, 1) != 0)
+        return -1;
+    int32_t v = (int32_t)r->m->vertex_count++;
+    place_vertex(r, v, t, xi);
     return v;
 }
 
@@ -609,54 +712,116 @@ static int sign_of(const refine *r, const int32_t *v)
     return tpk_orient3d_exact(point_of(r, v[0]), point_of(r, v[1]), point_of(r, v[2]), point_of(r, v[3]));
 }
 
-/* Tet t bisected at its edge e through vertex mid: t keeps the half of corner i, a new tet the other. */
-static int bisect(refine *r, int64_t t, int e, int32_t mid)
+/* The edges (tet_edges) at each corner, and the edge between two corners. */
+static const unsigned edges_at[4] = {0x07, 0x19, 0x2a, 0x34};
+static const int edge_of[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {2, 4, 5, -1}};
+
+/* Tet t bisected at its edge e through vertex mid: t keeps the half of corner i, tet u (new) the other;
+ * each keeps the marks of the edges it still has (not those at the corner it gave up, now at mid, new).
+ * 1 when a piece turns over (a sign other than the parent's), else 0. */
+static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
 {
     int i = tet_edges[e][0], j = tet_edges[e][1];
-    int64_t u = r->count++;
     int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
     double *xa = r->xi + 12 * t, *xb = r->xi + 12 * u, half[3];
     int parent = sign_of(r, a);
     memcpy(b, a, 4 * sizeof *a);
     memcpy(xb, xa, 12 * sizeof *xa);
     r->cell[u] = r->cell[t], r->root[u] = r->root[t];
+    r->marked[u] = (uint8_t)(r->marked[t] & ~edges_at[i]);
+    r->marked[t] = (uint8_t)(r->marked[t] & ~edges_at[j]);
     for (int k = 0; k < 3; k++)
         half[k] = 0.5 * (xa[3 * i + k] + xa[3 * j + k]);
     a[j] = mid, b[i] = mid;
     memcpy(xa + 3 * j, half, sizeof half);
     memcpy(xb + 3 * i, half, sizeof half);
-    r->queued[u] = 0;
-    enqueue(r, t);
-    enqueue(r, u);
-    if (parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent)) {
-        int64_t c = r->cell[t];
-        return tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its map's "
-                             "midpoint of an edge turns over (the cell is too curved for its tets); convert it "
-                             "without --max-error or with a larger bound", (long long)c,
-                             tpk_cell_type(r->cells->types[c])->name);
+    return parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent);
+}
+
+/* One round on all threads: each tet of `active` chooses its greatest marked edge; the midpoints not made
+ * yet are numbered in the order of the tets (serial: the first tet in `active` that cuts an edge makes
+ * its midpoint, in its cell); they are placed and valued, and the tets bisected, on all threads. The
+ * result does not depend on the thread count. */
+typedef struct round_job {
+    refine *r;
+    int64_t *active;
+    int8_t *chosen;   /* per tet of active: the edge it cuts */
+    int32_t *mid;     /* per tet of active: the vertex at that edge's midpoint */
+    int64_t *maker;   /* per vertex made this round: the place in active of the tet that makes it */
+    uint8_t *folded;  /* per tet of active: a piece turned over */
+    int64_t first_child;
+    int32_t first_vertex;
+} round_job;
+
+static void choose_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    round_job *job = ctx;
+    (void)w;
+    for (int64_t k = begin; k < end; k++)
+        job->chosen[k] = (int8_t)greatest_edge(job->r, job->active[k], job->r->marked[job->active[k]]);
+}
+
+static void place_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    round_job *job = ctx;
+    refine *r = job->r;
+    (void)w;
+    for (int64_t n = begin; n < end; n++) {
+        int64_t k = job->maker[n], t = job->active[k];
+        int i = tet_edges[job->chosen[k]][0], j = tet_edges[job->chosen[k]][1];
+        double half[3];
+        for (int c = 0; c < 3; c++)
+            half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
+        place_vertex(r, job->first_vertex + (int32_t)n, t, half);
     }
-    return 0;
+}
+
+static void bisect_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    round_job *job = ctx;
+    (void)w;
+    for (int64_t k = begin; k < end; k++)
+        job->folded[k] = (uint8_t)bisect(job->r, job->active[k], job->first_child + k, job->chosen[k], job->mid[k]);
+}
+
+static int round_grow(round_job *job, int64_t cap)
+{
+    void *p[5] = {realloc(job->active, sizeof *job->active * (size_t)cap), NULL, NULL, NULL, NULL};
+    if (p[0])
+        job->active = p[0];
+    if (p[0] && (p[1] = realloc(job->chosen, (size_t)cap)))
+        job->chosen = p[1];
+    if (p[1] && (p[2] = realloc(job->mid, sizeof *job->mid * (size_t)cap)))
+        job->mid = p[2];
+    if (p[2] && (p[3] = realloc(job->maker, sizeof *job->maker * (size_t)cap)))
+        job->maker = p[3];
+    if (p[3] && (p[4] = realloc(job->folded, (size_t)cap)))
+        job->folded = p[4];
+    return p[4] ? 0 : -1;
 }
 
 /* The rounds: every tet of `active` (ascending; malloc'ed, taken over) with a marked edge bisects its
- * greatest marked one, its pieces keeping its other marks, until none has one. The tets cut become the
- * tets to bound again. */
+ * greatest marked one, its pieces keeping its other marks, until none has one. The tets cut, then their
+ * pieces, become the tets to bound again. */
 static int cut_marked(refine *r, int64_t *active, int64_t active_count)
 {
     int rc = 0;
-    for (int64_t i = 0; i < r->todo_count; i++)
-        r->queued[r->todo[i]] = 0;
-    r->todo_count = 0;
-    int8_t *chosen = malloc((size_t)(active_count ? active_count : 1));
-    while (rc == 0 && active_count > 0 && chosen) {
-        int64_t splits = 0, n = 0;
-        for (int64_t i = 0; i < active_count; i++)
-            if ((chosen[n] = (int8_t)greatest_edge(r, active[i], 1)) >= 0)
-                active[n++] = active[i], splits++;
+    round_job job = {r, active, NULL, NULL, NULL, NULL, 0, 0};
+    memcpy(r->todo, active, sizeof *active * (size_t)active_count);
+    r->todo_count = active_count;
+    int64_t first_new = r->count;
+    if (round_grow(&job, active_count + 1) != 0)
+        rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+    while (rc == 0 && active_count > 0) {
+        tpk_parallel_for(active_count, tpk_threads_for(active_count, r->threads, 1024), choose_range, &job);
+        int64_t n = 0;
+        for (int64_t k = 0; k < active_count; k++)
+            if (job.chosen[k] >= 0)
+                job.active[n] = job.active[k], job.chosen[n++] = job.chosen[k];
         active_count = n;
-        if (splits == 0)
+        if (n == 0)
             break;
-        if (r->count + splits > r->o->max_tets) {
+        if (r->count + n > r->o->max_tets) {
             rc = r->o->uniform_levels > 0
                      ? tpk_diag_fail(r->diag, "--subdivide %d: more than %lld tets (from %lld)", r->o->uniform_levels,
                                      (long long)r->o->max_tets, (long long)r->tets_given)
@@ -665,42 +830,45 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
                                      (long long)r->o->max_tets, (long long)r->tets_given);
             break;
         }
-        int64_t first_child = r->count;
-        if (reserve_tets(r, r->count + splits) != 0) {
+        if (reserve_tets(r, r->count + n) != 0 || reserve_vertices(r, n) != 0) {
             rc = -1;
             break;
         }
-        int64_t *grown = realloc(active, sizeof *active * (size_t)(2 * active_count));
-        int8_t *grown_chosen = realloc(chosen, (size_t)(2 * active_count));
-        if (!grown || !grown_chosen) {
-            free(grown ? grown : active), free(grown_chosen ? grown_chosen : chosen);
-            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        if (round_grow(&job, 2 * n) != 0) {
+            rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+            break;
         }
-        active = grown, chosen = grown_chosen;
-        for (int64_t k = 0; rc == 0 && k < active_count; k++) {
-            int64_t t = active[k];
-            int i = tet_edges[chosen[k]][0], j = tet_edges[chosen[k]][1];
-            uint64_t key = edge_key(r->tets[4 * t + i], r->tets[4 * t + j]);
-            int32_t mid;
-            if (!edge_find(&r->mids, key, &mid)) {
-                double half[3];
-                for (int c = 0; c < 3; c++)
-                    half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
-                if ((mid = add_vertex(r, t, half)) < 0) {
-                    rc = -1;
-                    break;
-                }
-                if (edge_put(&r->mids, key, mid) != 0) {
-                    rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
-                    break;
-                }
+        int64_t made = 0;
+        job.first_vertex = (int32_t)r->m->vertex_count;
+        for (int64_t k = 0; k < n; k++) {
+            const int32_t *v = r->tets + 4 * job.active[k];
+            uint64_t key = edge_key(v[tet_edges[job.chosen[k]][0]], v[tet_edges[job.chosen[k]][1]]);
+            int64_t slot = edge_slot(&r->marks, key); /* a marked edge: in the table */
+            if (r->marks.values[slot] < 0)
+                r->marks.values[slot] = job.first_vertex + (int32_t)made, job.maker[made++] = k;
+            job.mid[k] = r->marks.values[slot];
+        }
+        r->m->vertex_count += made;
+        tpk_parallel_for(made, tpk_threads_for(made, r->threads, 256), place_range, &job);
+        job.first_child = r->count;
+        r->count += n;
+        tpk_parallel_for(n, tpk_threads_for(n, r->threads, 1024), bisect_range, &job);
+        for (int64_t k = 0; k < n; k++)
+            if (job.folded[k]) {
+                int64_t c = r->cell[job.active[k]];
+                rc = tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its "
+                                   "map's midpoint of an edge turns over (the cell is too curved for its tets); "
+                                   "convert it without --max-error or with a larger bound", (long long)c,
+                                   tpk_cell_type(r->cells->types[c])->name);
+                break;
             }
-            rc = bisect(r, t, chosen[k], mid);
-        }
-        for (int64_t u = first_child; u < r->count; u++) /* the children: the cut tets, then the new ones */
-            active[active_count++] = u;
+        for (int64_t k = 0; k < n; k++) /* the children: the cut tets, then the new ones */
+            job.active[n + k] = job.first_child + k;
+        active_count = 2 * n;
     }
-    free(active), free(chosen);
+    for (int64_t u = first_new; rc == 0 && u < r->count; u++)
+        r->todo[r->todo_count++] = u;
+    free(job.active), free(job.chosen), free(job.mid), free(job.maker), free(job.folded);
     return rc;
 }
 
@@ -719,9 +887,7 @@ static int cut_all(refine *r)
                              (long long)r->o->max_tets, (long long)r->tets_given);
     if (reserve_tets(r, 8 * n) != 0)
         return -1;
-    for (int64_t i = 0; i < r->todo_count; i++)
-        r->queued[r->todo[i]] = 0;
-    r->todo_count = 0;
+    edge_clear(&r->mids); /* the edges of the last level are all cut: no tet has one */
     for (int64_t t = 0; t < n; t++) {
         int32_t v[10];
         double x[10][3];
@@ -760,16 +926,14 @@ static int cut_all(refine *r)
             int64_t u = c == 0 ? t : r->count++;
             for (int k = 0; k < 4; k++)
                 r->tets[4 * u + k] = v[l[k]], memcpy(r->xi + 12 * u + 3 * k, x[l[k]], sizeof x[0]);
-            r->cell[u] = (int32_t)cell, r->root[u] = root;
-            if (c > 0)
-                r->queued[u] = 0;
-            enqueue(r, u);
+            r->cell[u] = (int32_t)cell, r->root[u] = root, r->marked[u] = 0;
             if (parent != 0 && sign_of(r, r->tets + 4 * u) != parent)
                 return tpk_diag_fail(r->diag, "--subdivide: cell %lld (a %s) folds when subdivided: a piece cut at its "
                                      "map's edge midpoints turns over", (long long)cell,
                                      tpk_cell_type(r->cells->types[cell])->name);
         }
     }
+    todo_all(r);
     return 0;
 }
 
@@ -779,25 +943,49 @@ typedef struct vertex_tets {
     int32_t *tets;
 } vertex_tets;
 
-static int vertex_tets_make(const refine *r, vertex_tets *vt)
+/* Each worker takes a range of vertices and reads every tet for them: the lists are in tet order, whatever
+ * the thread count. */
+typedef struct vertex_tets_job {
+    const refine *r;
+    vertex_tets *vt;
+    int scatter;      /* 0: count, 1: fill */
+    int changed_only; /* only the tets changed since `base` */
+} vertex_tets_job;
+
+static void vertex_tets_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    vertex_tets_job *job = ctx;
+    const int32_t *tets = job->r->tets;
+    int64_t *start = job->vt->start, n = 4 * job->r->count;
+    (void)w;
+    const uint8_t *changed = job->changed_only ? job->r->changed : NULL;
+    if (!job->scatter) {
+        for (int64_t i = 0; i < n; i++)
+            if (tets[i] >= begin && tets[i] < end && (!changed || changed[i / 4]))
+                start[tets[i] + 2]++;
+    } else {
+        for (int64_t i = 0; i < n; i++)
+            if (tets[i] >= begin && tets[i] < end && (!changed || changed[i / 4]))
+                job->vt->tets[start[tets[i] + 1]++] = (int32_t)(i / 4);
+    }
+}
+
+/* The tets by vertex: of every tet, or (changed_only) of those changed since `base` was built. */
+static int vertex_tets_make(const refine *r, vertex_tets *vt, int changed_only)
 {
     int64_t nv = r->m->vertex_count;
     vt->start = calloc((size_t)nv + 2, sizeof *vt->start);
-    vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * r->count + 1));
+    vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * (changed_only ? r->changed_count : r->count) + 1));
     if (!vt->start || !vt->tets)
         return -1;
-    for (int64_t i = 0; i < 4 * r->count; i++)
-        vt->start[r->tets[i] + 2]++;
+    vertex_tets_job job = {r, vt, 0, changed_only};
+    int threads = tpk_threads_for(4 * r->count, r->threads, 1 << 18);
+    tpk_parallel_for(nv, threads, vertex_tets_range, &job);
     for (int64_t v = 0; v < nv; v++)
         vt->start[v + 2] += vt->start[v + 1];
-    for (int64_t i = 0; i < 4 * r->count; i++)
-        vt->tets[vt->start[r->tets[i] + 1]++] = (int32_t)(i / 4);
+    job.scatter = 1;
+    tpk_parallel_for(nv, threads, vertex_tets_range, &job);
     return 0;
-}
-
-static int has_vertex(const int32_t *v, int32_t b)
-{
-    return v[0] == b || v[1] == b || v[2] == b || v[3] == b;
 }
 
 /* Marks the failing tets' longest edges, closes the marks (every tet around a marked edge marks its own
@@ -822,50 +1010,110 @@ static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
         q->keys = grown, q->cap = cap;
     }
     q->keys[q->count++] = key;
-    return edge_put(&r->marks, key, 1);
+    return edge_put(&r->marks, key, -1);
 }
 
 static int mark_longest(refine *r, edge_queue *q, int64_t t)
 {
-    int e = greatest_edge(r, t, 0);
+    int e = r->longest[t]; /* a tet is bounded after each change: still its greatest */
     return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
 }
 
+/* The closure's state: tets found around marked edges mark the edge, and their longest once. */
+typedef struct closure {
+    edge_queue queue;
+    uint8_t *in_active;
+    int64_t active_count;
+} closure;
+
+/* The tets of `vt` around edge (a, b) (in both vertices' lists, each in tet order; with `skip_changed`,
+ * not those changed since `base`, listed elsewhere): each marks the edge, and its longest the first time. */
+static int visit_edge(refine *r, closure *cl, const vertex_tets *vt, int64_t vertices, int skip_changed, int32_t a,
+                      int32_t b)
+{
+    if (a >= vertices || b >= vertices)
+        return 0;
+    int rc = 0;
+    for (int64_t i = vt->start[a], j = vt->start[b]; rc == 0 && i < vt->start[a + 1] && j < vt->start[b + 1];) {
+        if (vt->tets[i] < vt->tets[j]) {
+            i++;
+            continue;
+        }
+        if (vt->tets[j] < vt->tets[i]) {
+            j++;
+            continue;
+        }
+        int64_t u = vt->tets[i];
+        i++, j++;
+        if (skip_changed && r->changed[u])
+            continue;
+        const int32_t *v = r->tets + 4 * u;
+        int ia = 0, ib = 0;
+        while (v[ia] != a)
+            ia++;
+        while (v[ib] != b)
+            ib++;
+        r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
+        if (!cl->in_active[u]) /* once is enough: its longest is marked for good */
+            cl->in_active[u] = 1, cl->active_count++, rc = mark_longest(r, &cl->queue, u);
+    }
+    return rc;
+}
+
+/* The tets around an edge come from the tets by vertex built in some earlier pass (`base`), less the tets
+ * changed since, and from an index of those changed tets; `base` is built again when more than half the
+ * tets have changed. The late passes, which cut few tets, then no longer read every tet. */
 static int refine_pass(refine *r, double limit)
 {
     edge_clear(&r->marks);
-    vertex_tets vt = {NULL, NULL};
-    edge_queue queue = {NULL, 0, 0};
-    int64_t *active = NULL, active_count = 0;
-    uint8_t *in_active = calloc((size_t)(r->count ? r->count : 1), 1);
-    int rc = vertex_tets_make(r, &vt) != 0 || !in_active ? -1 : 0;
+    vertex_tets delta = {NULL, NULL};
+    closure cl = {{NULL, 0, 0}, calloc((size_t)(r->count ? r->count : 1), 1), 0};
+    int64_t *active = NULL, count_before = r->count;
+    int full = !r->base || 2 * r->changed_count > r->count, rc = cl.in_active ? 0 : -1;
+    if (rc == 0 && full) {
+        if (r->base)
+            free(r->base->start), free(r->base->tets);
+        else if (!(r->base = calloc(1, sizeof *r->base)))
+            rc = -1;
+        if (rc == 0) {
+            r->base->start = NULL, r->base->tets = NULL;
+            rc = vertex_tets_make(r, r->base, 0);
+            r->base_vertices = r->m->vertex_count;
+            memset(r->changed, 0, (size_t)r->count);
+            r->changed_count = 0;
+        }
+    } else if (rc == 0) {
+        rc = vertex_tets_make(r, &delta, 1);
+    }
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
         if (!(r->criterion[r->todo[i]] <= limit))
-            rc = mark_longest(r, &queue, r->todo[i]);
-    while (rc == 0 && queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
-        uint64_t key = queue.keys[--queue.count];
+            rc = mark_longest(r, &cl.queue, r->todo[i]);
+    while (rc == 0 && cl.queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
+        uint64_t key = cl.queue.keys[--cl.queue.count];
         int32_t a = (int32_t)(key >> 32), b = (int32_t)(key & 0xffffffffu);
-        for (int64_t k = vt.start[a]; rc == 0 && k < vt.start[a + 1]; k++) {
-            int64_t u = vt.tets[k];
-            if (!has_vertex(r->tets + 4 * u, b))
-                continue;
-            if (!in_active[u])
-                in_active[u] = 1, active_count++;
-            rc = mark_longest(r, &queue, u);
-        }
+        rc = visit_edge(r, &cl, r->base, r->base_vertices, !full, a, b);
+        if (rc == 0 && !full)
+            rc = visit_edge(r, &cl, &delta, r->m->vertex_count, 0, a, b);
     }
-    free(queue.keys), free(vt.start), free(vt.tets);
-    if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(active_count ? active_count : 1))))
+    free(cl.queue.keys), free(delta.start), free(delta.tets);
+    if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(cl.active_count ? cl.active_count : 1))))
         rc = -1;
     for (int64_t t = 0, n = 0; rc == 0 && t < r->count; t++)
-        if (in_active[t])
+        if (cl.in_active[t])
             active[n++] = t;
-    free(in_active);
+    free(cl.in_active);
     if (rc != 0) {
         free(active);
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     }
-    return cut_marked(r, active, active_count);
+    if ((rc = cut_marked(r, active, cl.active_count)) != 0)
+        return rc;
+    for (int64_t i = 0; i < r->todo_count; i++) { /* the tets cut and their pieces have changed */
+        int64_t t = r->todo[i];
+        if (t >= count_before || !r->changed[t])
+            r->changed[t] = 1, r->changed_count++;
+    }
+    return 0;
 }
 
 /* ---- set-up and hand-back ---------------------------------------------------------------------- */
@@ -954,11 +1202,16 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
-    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->queued);
+    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
+    free(r->longest), free(r->changed);
+    if (r->base)
+        free(r->base->start), free(r->base->tets), free(r->base);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
     free(r->cache);
+    for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
+        free(r->inverse_t[n]);
 }
 
 static int set_up(refine *r, int threads)
@@ -982,16 +1235,31 @@ static int set_up(refine *r, int threads)
     r->diag_length = m->vertex_count ? sqrt(dist2(lo, hi)) : 1;
     if (!(r->diag_length > 0))
         r->diag_length = 1;
-    for (int n = 1; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
+    int used[TPK_BERNSTEIN_MAX_DEGREE + 1] = {0}; /* the degrees of the cells here (a table of 6 takes ms) */
+    for (int64_t c = 0; c < r->cells->cell_count; c++) {
+        int degree = tpk_cell_map_degree(mapped_type(r->cells, c));
+        if (degree > 1 && degree <= TPK_BERNSTEIN_MAX_DEGREE)
+            used[degree] = 1;
+    }
+    for (int n = 2; n <= TPK_BERNSTEIN_MAX_DEGREE; n++) {
+        if (!used[n])
+            continue;
         if (tpk_bernstein_make(n, &r->table[n]) != 0)
             return tpk_diag_fail(r->diag, "--max-error: the Bernstein table of degree %d is singular", n);
+        int p = r->table[n].points;
+        if (!(r->inverse_t[n] = malloc(sizeof *r->inverse_t[n] * (size_t)(p * p))))
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        for (int i = 0; i < p; i++)
+            for (int j = 0; j < p; j++)
+                r->inverse_t[n][j * p + i] = r->table[n].inverse[i * p + j];
+    }
     if (reserve_tets(r, m->tet_count) != 0)
         return -1;
     r->count = m->tet_count;
     memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
     memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
     for (int64_t t = 0; t < r->count; t++)
-        r->root[t] = t, r->queued[t] = 1, r->todo[t] = t;
+        r->root[t] = t, r->marked[t] = 0, r->changed[t] = 0, r->todo[t] = t;
     r->todo_count = r->count;
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
@@ -1035,10 +1303,9 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
     r.tets_given = mesh->tet_count;
     report->tets_before = mesh->tet_count;
     int threads = tpk_thread_count(o.threads), rc = set_up(&r, threads);
+    r.threads = threads;
     for (int level = 0; rc == 0 && level < o.uniform_levels; level++)
         rc = cut_all(&r);
-    for (int64_t t = 0; rc == 0 && o.uniform_levels > 0 && t < r.count; t++)
-        enqueue(&r, t);
     for (int pass = 0; rc == 0; pass++) {
         tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
         int64_t over = 0;
