@@ -202,7 +202,7 @@ static tpk_result walk_seeds(walk *w, queue *qu, uint64_t s0, uint64_t s1)
             int32_t t = qu->ids[qu->head++];
             int32_t q[4], n[4];
             memcpy(q, w->dst + 4 * (int64_t)t, sizeof q);
-            int32_t n3 = w->n3[t]; /* this thread wrote it */
+            int32_t n3 = __atomic_load_n(w->n3 + t, __ATOMIC_RELAXED); /* this thread wrote it; others may CAS */
             for (int r = 0; r < 4; r++) {
                 n[r] = neighbor(w, t, n3, r);
                 if (n[r] >= 0) { /* the four neighbors' lines are fetched side by side */
