@@ -270,7 +270,8 @@ static tpk_result walk_parallel(walk *w, int threads)
     uint64_t S = w->mesh->shell_face_count;
     int started = 0;
     for (int i = 0; i < threads; i++)
-        k[i] = (worker){w, S * (uint64_t)i / (uint64_t)threads, S * (uint64_t)(i + 1) / (uint64_t)threads, 0, TPK_OK, 0};
+        k[i] = (worker){w, S * (uint64_t)i / (uint64_t)threads, S * (uint64_t)(i + 1) / (uint64_t)threads, 0,
+                        TPK_OK, 0};
     for (int i = 1; i < threads; i++) {
         if (pthread_create(&k[i].thread, NULL, worker_run, &k[i]) != 0)
             break;
