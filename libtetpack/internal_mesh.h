@@ -1,7 +1,7 @@
 /* libtetpack private declarations for whole meshes built from the layouts. Not installed.
  * Owners, top to bottom (a file calls only files below it):
  *   set_mesh.c  tpk_set_mesh_* (public, tetpack.h): the parts of a set as the arrays of one mesh
- *   recover.c   tpk_recover_tets (public), tpki_recover_tets_neighbors */
+ *   recover.c   tpk_recover_tets, tpk_recover_tets_threads (public), tpki_recover_tets_neighbors */
 #ifndef TPK_INTERNAL_MESH_H
 #define TPK_INTERNAL_MESH_H
 

@@ -19,7 +19,7 @@ extern "C" {
 #pragma GCC visibility push(default)
 #endif
 
-#define TPK_LIBRARY_VERSION "1.2.0"
+#define TPK_LIBRARY_VERSION "1.3.0"
 
 typedef enum tpk_result {
     TPK_OK = 0,
@@ -173,8 +173,14 @@ tpk_result tpk_load_arrays(tpk_file *file, tpk_layout layout, const char *field_
 tpk_result tpk_load_tet_field(tpk_file *file, const char *field_name, uint32_t step, const float **out);
 
 /* Recover positively oriented vertex quadruples (4 per tet) from any layout: direct for Tet32, by a
- * walk from the shell through neighbors for Tet20/Tet16. dst holds 4 * tet_count int32. */
+ * walk from the shell through neighbors for Tet20/Tet16. dst holds 4 * tet_count int32. Tet20/Tet16
+ * give each tet as the even permutation of its vertices with the smallest id first, then the smallest
+ * of the other three (spec §6.6). One thread. */
 tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst);
+
+/* tpk_recover_tets on `threads` threads for Tet20/Tet16 (threads <= 0: all cores); the same bytes and
+ * the same result code whatever the thread count (on an error the one-thread walk is rerun). Since 1.3.0. */
+tpk_result tpk_recover_tets_threads(const tpk_mesh_arrays *mesh, int32_t *dst, int threads);
 
 /* ---- Writer ------------------------------------------------------------------------------------- */
 

@@ -371,6 +371,104 @@ TPK_TEST(connect_face_shared_by_three)
     CHECK_MSG(strstr(diag.message, "repeated"), "%s", diag.message);
 }
 
+/* ---- recovery: one order whatever the walk's order and thread count ---------------------------- */
+
+/* The even permutation of positive tet t with the smallest id first, then the smallest of the other
+ * three: found among all 24 orders, independently of recover.c's turns. */
+static void canonical_ref(const int32_t t[4], int32_t q[4])
+{
+    static const int perms[24][4] = {
+        {0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 1, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {0, 3, 2, 1},
+        {1, 0, 2, 3}, {1, 0, 3, 2}, {1, 2, 0, 3}, {1, 2, 3, 0}, {1, 3, 0, 2}, {1, 3, 2, 0},
+        {2, 0, 1, 3}, {2, 0, 3, 1}, {2, 1, 0, 3}, {2, 1, 3, 0}, {2, 3, 0, 1}, {2, 3, 1, 0},
+        {3, 0, 1, 2}, {3, 0, 2, 1}, {3, 1, 0, 2}, {3, 1, 2, 0}, {3, 2, 0, 1}, {3, 2, 1, 0}};
+    for (int p = 0; p < 24; p++) {
+        const int *k = perms[p];
+        int inversions = 0;
+        for (int i = 0; i < 4; i++)
+            for (int j = i + 1; j < 4; j++)
+                inversions += k[i] > k[j];
+        int32_t c[4] = {t[k[0]], t[k[1]], t[k[2]], t[k[3]]};
+        if (inversions % 2 == 0 && c[0] < c[1] && c[0] < c[2] && c[0] < c[3] && c[1] < c[2] && c[1] < c[3]) {
+            memcpy(q, c, sizeof c);
+            return;
+        }
+    }
+}
+
+TPK_TEST(recover_canonical_any_order_and_threads)
+{
+    tpk_gen_options opt = {1, {0, 0, 0}, 1, 1, 1, 5};
+    tpk_tetmesh m;
+    tpk_diag diag = {0};
+    tpk_orient_stats stats;
+    CHECK(tpk_gen_kuhn_grid(8, &opt, &m) == 0);
+    int32_t *nb = orient_connect(&m, 1, &stats, &diag);
+    CHECK(nb);
+    int64_t T = m.tet_count;
+    size_t q4 = sizeof(int32_t) * 4 * (size_t)T;
+    int32_t *perm = malloc(sizeof *perm * (size_t)T), *inv = malloc(sizeof *inv * (size_t)T);
+    int32_t *tp = malloc(q4), *np = malloc(q4), *want = malloc(q4), *rec = malloc(q4), *first = malloc(q4);
+    tpk_tet20 *t20 = malloc(sizeof *t20 * (size_t)T);
+    tpk_tet16 *t16 = malloc(sizeof *t16 * (size_t)T);
+    uint64_t state = 5;
+    for (int order = 0; order < 3; order++) { /* file order, reversed, shuffled */
+        for (int64_t i = 0; i < T; i++)
+            perm[i] = (int32_t)(order == 1 ? T - 1 - i : i);
+        for (int64_t i = T - 1; order == 2 && i > 0; i--) {
+            int64_t j = (int64_t)(tpk_gen_next(&state) % (uint64_t)(i + 1));
+            int32_t s = perm[i];
+            perm[i] = perm[j], perm[j] = s;
+        }
+        for (int64_t i = 0; i < T; i++)
+            inv[perm[i]] = (int32_t)i;
+        for (int64_t i = 0; i < T; i++)
+            for (int k = 0; k < 4; k++) {
+                tp[4 * i + k] = m.tets[4 * (int64_t)perm[i] + k];
+                int32_t u = nb[4 * (int64_t)perm[i] + k];
+                np[4 * i + k] = u < 0 ? u : inv[u];
+            }
+        int64_t S = tpk_count_shell_faces(np, T);
+        tpk_shell_face *shell = malloc(sizeof *shell * (size_t)S);
+        tpk_build_tet20(tp, np, T, t20);
+        tpk_build_tet16(tp, np, T, t16);
+        tpk_build_shell(tp, np, T, shell);
+        for (int64_t i = 0; i < T; i++)
+            canonical_ref(tp + 4 * i, want + 4 * i);
+        tpk_mesh_arrays arrays = {0};
+        arrays.vertex_count = (uint64_t)m.vertex_count;
+        arrays.tet_count = (uint64_t)T;
+        arrays.shell_face_count = (uint64_t)S;
+        arrays.shell = shell;
+        arrays.tet20 = t20;
+        arrays.tet16 = t16;
+        static const int thread_counts[] = {1, 2, 3, 8, 0};
+        for (int layout = 16; layout <= 20; layout += 4) {
+            arrays.layout = (tpk_layout)layout;
+            CHECK(tpk_recover_tets(&arrays, first) == TPK_OK);
+            CHECK_MSG(!memcmp(first, want, q4), "order %d Tet%d: not the canonical rotation", order, layout);
+            for (int c = 0; c < 5; c++) {
+                memset(rec, 0x5a, q4);
+                CHECK(tpk_recover_tets_threads(&arrays, rec, thread_counts[c]) == TPK_OK);
+                CHECK_MSG(!memcmp(rec, first, q4), "order %d Tet%d, %d threads: other bytes", order, layout,
+                          thread_counts[c]);
+            }
+        }
+        free(shell);
+    }
+    free(perm);
+    free(inv);
+    free(tp);
+    free(np);
+    free(want);
+    free(rec);
+    free(first);
+    free(t20);
+    free(t16);
+    free(nb);
+    tpk_tetmesh_free(&m);
+}
+
 /* ---- recovery on hostile input -------------------------------------------------------------------- */
 
 TPK_TEST(recover_rejects_damage)
@@ -386,7 +484,7 @@ TPK_TEST(recover_rejects_damage)
     tpk_tet20 *t20 = malloc(sizeof *t20 * (size_t)T);
     tpk_tet16 *t16 = malloc(sizeof *t16 * (size_t)T);
     tpk_shell_face *shell = malloc(sizeof *shell * (size_t)S);
-    int32_t *rec = malloc(sizeof *rec * 4 * (size_t)T);
+    int32_t *rec = malloc(sizeof *rec * 4 * (size_t)T), *rec3 = malloc(sizeof *rec3 * 4 * (size_t)T);
     tpk_build_tet20(m.tets, nb, T, t20);
     tpk_build_tet16(m.tets, nb, T, t16);
     tpk_build_shell(m.tets, nb, T, shell);
@@ -425,13 +523,21 @@ TPK_TEST(recover_rejects_damage)
         words[at] = r % 4 == 0 ? (int32_t)(r >> 32) : r % 4 == 1 ? -1 : r % 4 == 2 ? saved ^ 1 : (int32_t)(T + 3);
         if (words[at] != saved) {
             trials++;
-            caught += tpk_recover_tets(&arrays, rec) != TPK_OK;
+            tpk_result serial = tpk_recover_tets(&arrays, rec);
+            caught += serial != TPK_OK;
+            /* Three threads: the same result code (an error reruns the one-thread walk), the same bytes. */
+            tpk_result three = tpk_recover_tets_threads(&arrays, rec3, 3);
+            CHECK_MSG(three == serial, "damage %d: %s with 3 threads, %s with one", i, tpk_result_string(three),
+                      tpk_result_string(serial));
+            if (three == TPK_OK && serial == TPK_OK)
+                CHECK(!memcmp(rec, rec3, sizeof *rec * 4 * (size_t)T));
         }
         words[at] = saved;
     }
     arrays.layout = TPK_LAYOUT_TET16;
     CHECK(tpk_recover_tets(&arrays, rec) == TPK_OK);
     CHECK_MSG(caught > trials / 2, "caught %d of %d", caught, trials);
+    free(rec3);
     free(t20);
     free(t16);
     free(shell);

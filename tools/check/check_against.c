@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "import/importers.h"
 #include "mesh/cell_map.h"
 #include "mesh/cell_types.h"
@@ -234,7 +235,7 @@ static int load_file(against *a, const char *path, tpk_diag *diag)
     uint64_t i;
     if (!a->tets || !a->tmap)
         return tpk_diag_fail(diag, "out of memory for %llu tets", (unsigned long long)a->info.tet_count);
-    if (tpk_recover_tets(&arrays, a->tets) != TPK_OK)
+    if (tpk_recover_tets_threads(&arrays, a->tets, tpk_thread_count(0)) != TPK_OK)
         return tpk_diag_fail(diag, "%s: cannot recover its tets: %s", path, tpk_error_text(a->file));
     if (tpk_find_chunk(a->file, TPK_TAG_TMAP, 0, 0, &i) != TPK_OK ||
         tpk_read_chunk(a->file, i, a->tmap, sizeof *a->tmap * a->info.tet_count) != TPK_OK)

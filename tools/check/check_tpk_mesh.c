@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "check.h"
 #include "tetpack.h"
 
@@ -44,7 +45,7 @@ static int load_cells(tpk_file *file, int32_t *tets, tpk_mesh *out, tpk_diag *di
         out->cell_offsets[c] = 4 * c;
     if (tets)
         return 0;
-    tpk_result r = tpk_recover_tets(&m, out->cell_conn);
+    tpk_result r = tpk_recover_tets_threads(&m, out->cell_conn, tpk_thread_count(0));
     if (r != TPK_OK)
         return tpk_diag_fail(diag, "the tets cannot be recovered from the Tet%d layout (%s); the 6xx findings "
                              "say why", (int)order[k].layout, tpk_result_string(r));

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "export_io.h"
 #include "exporters.h"
 
@@ -303,7 +304,7 @@ static int load(vh_export *x)
     x->tets = malloc(sizeof(int32_t) * 4 * (size_t)(x->info.tet_count ? x->info.tet_count : 1));
     if (!x->tets)
         return tpk_diag_fail(x->diag, "%s: out of memory for %llu tets", x->path, (unsigned long long)x->info.tet_count);
-    r = tpk_recover_tets(&x->mesh, x->tets);
+    r = tpk_recover_tets_threads(&x->mesh, x->tets, tpk_thread_count(0));
     if (r != TPK_OK)
         return lib_fail(x, r, "recovering the tets' vertices");
     x->steps = 1;

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "export_io.h"
 #include "exporters.h"
 
@@ -279,7 +280,7 @@ int tpk_export_vtu(tpk_file *file, const char *path, tpk_diag *diag)
         tpk_diag_fail(diag, "%s: out of memory for %llu tets", path, (unsigned long long)x.info.tet_count);
         goto done;
     }
-    r = tpk_recover_tets(&x.mesh, x.tets);
+    r = tpk_recover_tets_threads(&x.mesh, x.tets, tpk_thread_count(0));
     if (r != TPK_OK) {
         lib_fail(&x, r, "recovering the tets' vertices");
         goto done;

@@ -7,6 +7,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "base/parallel.h"
 #include "base/output_file.h"
 #include "convert/pipeline.h"
 #include "render/render.h"
@@ -98,7 +99,7 @@ static int load_mesh(extraction *x)
     x->tets = malloc(sizeof *x->tets * 4 * (size_t)(x->mesh.tet_count ? x->mesh.tet_count : 1));
     if (!x->tets)
         return tpk_diag_fail(x->diag, "out of memory for %llu tets", (unsigned long long)x->mesh.tet_count);
-    if (tpk_recover_tets(&x->mesh, x->tets) != TPK_OK)
+    if (tpk_recover_tets_threads(&x->mesh, x->tets, tpk_thread_count(x->o->threads)) != TPK_OK)
         return fail_file(x);
     return 0;
 }

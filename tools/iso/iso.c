@@ -73,7 +73,7 @@ static int load_mesh(iso_job *j)
     j->tets = malloc(sizeof *j->tets * 4 * (size_t)(j->mesh.tet_count ? j->mesh.tet_count : 1));
     if (!j->tets)
         return tpk_diag_fail(j->diag, "out of memory for %llu tets", (unsigned long long)j->mesh.tet_count);
-    if (tpk_recover_tets(&j->mesh, j->tets) != TPK_OK)
+    if (tpk_recover_tets_threads(&j->mesh, j->tets, tpk_thread_count(j->o->threads)) != TPK_OK)
         return fail_file(j);
     return 0;
 }

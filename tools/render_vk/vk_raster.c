@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "base/clock.h"
 #include "render/transfer_function.h"
 #include "render_vk.h"
@@ -485,7 +486,7 @@ int tpk_iso_raster_create(raster **out, const tpk_mesh_arrays *mesh, tpk_diag *d
     int32_t *tets = malloc(16 * (size_t)(mesh->tet_count ? mesh->tet_count : 1));
     if (!tets)
         return tpk_diag_fail(diag, "render: out of memory for the tets");
-    tpk_result r = tpk_recover_tets(mesh, tets);
+    tpk_result r = tpk_recover_tets_threads(mesh, tets, tpk_thread_count(0));
     if (r != TPK_OK) {
         free(tets);
         return tpk_diag_fail(diag, "render: --iso-raster: the tets' vertex order: %s", tpk_result_string(r));
