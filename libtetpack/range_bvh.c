@@ -67,6 +67,11 @@ static void read_ranges(tpk_range_bvh *b)
 
 tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
 {
+    return tpk_range_bvh_create_threads(out, marcher, 1);
+}
+
+tpk_result tpk_range_bvh_create_threads(tpk_range_bvh **out, const tpk_marcher *marcher, int threads)
+{
     if (!out)
         return TPK_ERR_INVALID_ARGUMENT;
     *out = NULL;
@@ -93,7 +98,8 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
         tpk_range_bvh_destroy(b);
         return TPK_ERR_OUT_OF_MEMORY;
     }
-    tpk_result r = tpk_recover_tets(mesh, b->tets);
+    b->threads = threads > 1 ? threads : 1;
+    tpk_result r = tpk_recover_tets_threads(mesh, b->tets, b->threads);
     if (r != TPK_OK) {
         tpk_range_bvh_destroy(b);
         return r;

@@ -321,6 +321,9 @@ tpk_result tpk_march_ray(const tpk_marcher *marcher, const double org[3], const 
  * the marcher's. TPK_ERR_INVALID_ARGUMENT without scalars; the errors of tpk_recover_tets. */
 typedef struct tpk_range_bvh tpk_range_bvh;
 tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher);
+/* tpk_range_bvh_create with the walk of a Tet20 or Tet16 file on `threads` (tpk_recover_tets_threads;
+ * <= 1: the caller's alone), then as tpk_range_bvh_set_threads(bvh, threads). The same bvh for any count. */
+tpk_result tpk_range_bvh_create_threads(tpk_range_bvh **out, const tpk_marcher *marcher, int threads);
 void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
 /* The share (0..1) of its leaves (runs of 8 tets) whose range holds one of values[0 .. count): where it is
  * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */

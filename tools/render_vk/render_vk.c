@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "base/clock.h"
+#include "base/parallel.h"
 #include "render/render_backend.h"
 #include "render_vk.h"
 #include "render_vk_internal.h"
@@ -681,7 +682,7 @@ static int frame_culls(vk_render *v, const tpk_render_options *opt, tpk_diag *di
     if (tpk_render_culling_wanted() != 1 || !tpk_render_iso_only(opt, v->mesh.scalars != NULL))
         return 0;
     if (!v->range) {
-        tpk_result r = tpk_range_bvh_create(&v->range, v->marcher);
+        tpk_result r = tpk_range_bvh_create_threads(&v->range, v->marcher, tpk_thread_count(0));
         if (r != TPK_OK)
             return tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
     }
@@ -794,7 +795,7 @@ int tpk_vk_renderer_set_field(tpk_vk_renderer *v, const float *scalars, const fl
         v->range = NULL;
     }
     if (v->range_leaf_base > 0) {
-        tpk_result r = v->range ? TPK_OK : tpk_range_bvh_create(&v->range, v->marcher);
+        tpk_result r = v->range ? TPK_OK : tpk_range_bvh_create_threads(&v->range, v->marcher, tpk_thread_count(0));
         if (r != TPK_OK)
             return tpk_diag_fail(diag, "render: cannot set up the range culling of iso rays: %s", tpk_result_string(r));
         base = tpk_range_bvh_heap(v->range, NULL);
