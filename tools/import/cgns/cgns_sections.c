@@ -10,8 +10,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "import_cgns_internal.h"
 #include "mesh/polyhedron.h"
+
+int cgns_threads(int64_t items)
+{
+    return tpk_threads_for(items, tpk_thread_count(0), CGNS_GRAIN);
+}
 
 /* CGNS node for each VTK node of the quadratic kinds kept whole: the SIDS list a hexahedron's and a
  * wedge's vertical mid-edges before the top ones (VTK after), and a HEXA_27's face centres bottom, y-,
@@ -182,6 +188,15 @@ static int mixed_type(const cgns_reader *r, const cgns_zone *zone, const cgns_se
 static int count_section(const cgns_reader *r, cgns_zone *zone, const cgns_section *sec)
 {
     cgsize_t count = sec->end - sec->start + 1;
+    const volume_kind_row *row = NULL;
+    int kind = is_poly_storage(sec->type) ? -1 : volume_kind(sec->type, &row);
+    if (kind >= 0) { /* one type for the whole section: its counts at once */
+        if (kind == 0)
+            zone->dropped += count;
+        else
+            zone->cells += count, zone->conn += (int64_t)count * row->nodes;
+        return 0;
+    }
     for (cgsize_t i = 0; i < count; i++) {
         CGNS_ENUMT(ElementType_t) type = sec->type;
         if (sec->type == CGNS_ENUMV(MIXED) && mixed_type(r, zone, sec, i, &type))
@@ -275,6 +290,62 @@ static int emit_element(const cgns_reader *r, const cgns_zone *zone, const cgns_
     return 0;
 }
 
+/* A section of one volume type, on all threads: element i is cell c0 + i, its ids at at0 + i * nodes. */
+typedef struct fixed_job {
+    const cgns_section *sec;
+    const volume_kind_row *row;
+    int npe;
+    int64_t c0, at0, first_point, vertices;
+    tpk_mesh *out;
+    int bad[TPK_MAX_THREADS];
+} fixed_job;
+
+static void fixed_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    fixed_job *job = ctx;
+    const volume_kind_row *row = job->row;
+    int bad = 0;
+    for (int64_t i = begin; i < end; i++) {
+        const cgsize_t *nodes = job->sec->elements + i * job->npe;
+        int64_t c = job->c0 + i, at = job->at0 + i * row->nodes;
+        job->out->cell_types[c] = (uint8_t)row->vtk;
+        job->out->cell_offsets[c] = at;
+        for (int k = 0; k < row->nodes; k++) {
+            cgsize_t id = nodes[row->order ? row->order[k] : k];
+            bad |= id < 1 || id > job->vertices;
+            job->out->cell_conn[at + k] = (int32_t)(job->first_point + id - 1);
+        }
+    }
+    job->bad[worker] |= bad;
+}
+
+/* A section of one element type other than NGON_n: 0 when emitted (or, for faces, edges and nodes, left
+ * out), 1 when a node id is out of range, for the serial loop to name the first (out's counts as they
+ * were). */
+static int emit_fixed(const cgns_zone *zone, const cgns_section *sec, tpk_mesh *out, int64_t *at)
+{
+    const volume_kind_row *row = NULL;
+    int npe = 0;
+    int kind = volume_kind(sec->type, &row);
+    if (kind == 0)
+        return 0;
+    if (kind < 0 || cg_npe(sec->type, &npe) || npe < row->nodes)
+        return 1;
+    int64_t count = (int64_t)sec->end - sec->start + 1;
+    fixed_job job = {.sec = sec, .row = row, .npe = npe, .c0 = out->cell_count, .at0 = *at,
+                     .first_point = zone->first_point, .vertices = zone->vertices, .out = out};
+    int threads = cgns_threads(count), bad = 0;
+    tpk_parallel_for(count, threads, fixed_range, &job);
+    for (int w = 0; w < threads; w++)
+        bad |= job.bad[w];
+    if (bad)
+        return 1;
+    out->cell_count += count;
+    *at += count * row->nodes;
+    out->cell_offsets[out->cell_count] = *at;
+    return 0;
+}
+
 int cgns_sections_emit(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *out)
 {
     int64_t at = out->cell_offsets[out->cell_count];
@@ -284,6 +355,8 @@ int cgns_sections_emit(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *ou
         int npe = 0;
         if (sec->type == CGNS_ENUMV(NGON_n))
             continue; /* faces, used through NFACE_n */
+        if (!is_poly_storage(sec->type) && emit_fixed(zone, sec, out, &at) == 0)
+            continue;
         if (!is_poly_storage(sec->type))
             cg_npe(sec->type, &npe);
         for (cgsize_t i = 0; i < count; i++) {
