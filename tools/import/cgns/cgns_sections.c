@@ -6,6 +6,7 @@
  * reference cells and real files and finds none mirrored). Higher-order kinds are kept whole, in VTK's
  * node order (volume_kind). MIXED sections carry a type code before each element; NFACE_n cells list signed
  * NGON_n face numbers (negative: the face's normal points into the cell) and become polyhedra. */
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,7 +36,7 @@ typedef struct volume_kind_row {
 /* A volume element type: its VTK type and the nodes kept (*row). 0 for elements of lower dimension (NODE,
  * BAR, TRI, QUAD), -1 for one this reader does not know. PYRA_14 is kept as a 13-node pyramid (VTK has
  * no type with the base centre). */
-static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
+static int volume_kind_by_name(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
 {
     static const volume_kind_row kinds[] = {
         {"TETRA_10", 24, 10, NULL},  {"PYRA_13", 27, 13, NULL}, {"PYRA_14", 27, 13, NULL},
@@ -50,6 +51,27 @@ static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **r
             return kinds[k].vtk ? 1 : 0;
         }
     return -1;
+}
+
+/* volume_kind_by_name of every valid type code, found once: a MIXED section asks for each element's. */
+static signed char kind_of_code[NofValidElementTypes];
+static const volume_kind_row *row_of_code[NofValidElementTypes];
+static pthread_once_t codes_once = PTHREAD_ONCE_INIT;
+
+static void find_codes(void)
+{
+    for (int t = 0; t < NofValidElementTypes; t++)
+        kind_of_code[t] = (signed char)volume_kind_by_name((CGNS_ENUMT(ElementType_t))t, &row_of_code[t]);
+}
+
+static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
+{
+    if ((int)type < 0 || (int)type >= NofValidElementTypes)
+        return volume_kind_by_name(type, row);
+    pthread_once(&codes_once, find_codes);
+    if (kind_of_code[type] >= 0)
+        *row = row_of_code[type];
+    return kind_of_code[type];
 }
 
 static int is_poly_storage(CGNS_ENUMT(ElementType_t) type)
