@@ -608,10 +608,11 @@ TPK_TEST(static_solutions_and_unresolved_pointers)
 }
 
 /* A grid of n^3 hexahedra written with the CGNS library, large enough for the importer's passes to run on
- * several threads (64k items a worker): section "lower" the first n/4 layers, "upper" the rest (HEXA_8),
- * wavy coordinates, a Vertex and a CellCenter solution. bad > 0: element `bad` of "upper" (counted from
- * 1 within it) and the one 80000 further get a vertex id of 0 and one past the end. */
-static void write_hex_grid(const char *path, int n, int64_t bad)
+ * several threads (64k items a worker): section "lower" the first n/4 layers, "upper" the rest (HEXA_8,
+ * or with `mixed` a MIXED section of HEXA_8 elements), wavy coordinates, a Vertex and a CellCenter
+ * solution. bad > 0: element `bad` of "upper" (counted from 1 within it) and the one 80000 further get a
+ * vertex id of 0 and one past the end. */
+static void write_hex_grid(const char *path, int n, int64_t bad, int mixed)
 {
     int64_t nv = (int64_t)(n + 1) * (n + 1) * (n + 1), nc = (int64_t)n * n * n, first = (int64_t)n * n * (n / 4);
     double *x = malloc(sizeof *x * 3 * (size_t)nv), *val = malloc(sizeof *val * (size_t)(nv > nc ? nv : nc));
@@ -637,7 +638,18 @@ static void write_hex_grid(const char *path, int n, int64_t bad)
     CHECK(cg_zone_write(fn, base, "grid", size, Unstructured, &zone) == 0);
     CHECK(write_coords(fn, base, zone, x, y, z) == 0);
     CHECK(cg_section_write(fn, base, zone, "lower", HEXA_8, 1, (cgsize_t)first, 0, conn, &s) == 0);
-    CHECK(cg_section_write(fn, base, zone, "upper", HEXA_8, (cgsize_t)first + 1, (cgsize_t)nc, 0, conn + 8 * first, &s) == 0);
+    if (mixed) {
+        cgsize_t *data = malloc(sizeof *data * 9 * (size_t)(nc - first)), *offsets = malloc(sizeof *offsets * (size_t)(nc - first + 1));
+        for (int64_t c = 0; c < nc - first; c++) {
+            offsets[c] = (cgsize_t)(9 * c), data[9 * c] = HEXA_8;
+            memcpy(data + 9 * c + 1, conn + 8 * (first + c), 8 * sizeof *conn);
+        }
+        offsets[nc - first] = (cgsize_t)(9 * (nc - first));
+        CHECK(cg_poly_section_write(fn, base, zone, "upper", MIXED, (cgsize_t)first + 1, (cgsize_t)nc, 0, data, offsets, &s) == 0);
+        free(data), free(offsets);
+    } else {
+        CHECK(cg_section_write(fn, base, zone, "upper", HEXA_8, (cgsize_t)first + 1, (cgsize_t)nc, 0, conn + 8 * first, &s) == 0);
+    }
     for (int64_t v = 0; v < nv; v++)
         val[v] = sin(1e-3 * (double)v);
     CHECK(write_field(fn, base, zone, "nodes", Vertex, "temperature", val) == 0);
@@ -658,17 +670,25 @@ static int import_on(const char *path, int threads, tpk_mesh *m, tpk_diag *d)
 }
 
 /* The passes after the library's reads run on all threads: the same mesh, bit for bit, on 1 and 3
- * threads (and the cells written), and the same message naming the first bad id where two are bad. */
+ * threads, from a MIXED section as from a HEXA_8 one (and the cells written), and the same message
+ * naming the first bad id where two are bad. */
 TPK_TEST(same_mesh_on_any_thread_count)
 {
     const int n = 64; /* "upper": 196,608 hexes, 3 workers */
     const int64_t nv = 65 * 65 * 65, nc = 64 * 64 * 64, first = 64 * 64 * 16;
     const char *path = tpk_temp_path("hex_grid.cgns");
-    write_hex_grid(path, n, 0);
+    write_hex_grid(path, n, 0, 1);
     tpk_mesh one, three;
     tpk_diag d;
     CHECK_MSG(import_on(path, 1, &one, &d) == 0, "%s", d.message);
     CHECK_MSG(import_on(path, 3, &three, &d) == 0, "%s", d.message);
+    CHECK(tpk_same_mesh(&one, &three));
+    tpk_mesh_free(&one);
+    write_hex_grid(path, n, 0, 0); /* the same cells in a HEXA_8 section: the same mesh */
+    CHECK_MSG(import_on(path, 1, &one, &d) == 0, "%s", d.message);
+    CHECK(tpk_same_mesh(&one, &three));
+    tpk_mesh_free(&one);
+    CHECK_MSG(import_on(path, 3, &one, &d) == 0, "%s", d.message);
     CHECK(tpk_same_mesh(&one, &three));
     int64_t c = first + 100000, b = c % n + 65 * (c / n % n) + 65 * 65 * (c / n / n);
     CHECK(three.point_count == nv && three.cell_count == nc && three.field_count == 2);
@@ -678,16 +698,17 @@ TPK_TEST(same_mesh_on_any_thread_count)
     tpk_mesh_free(&one);
     tpk_mesh_free(&three);
 
-    char message[2][sizeof d.message];
-    write_hex_grid(path, n, 70000);
-    for (int k = 0; k < 2; k++) {
-        CHECK(import_on(path, k ? 3 : 1, &one, &d) != 0);
-        snprintf(message[k], sizeof message[k], "%s", d.message);
-    }
-    char expected[128];
+    char message[2][sizeof d.message], expected[128];
     snprintf(expected, sizeof expected, "section 'upper' element %lld uses vertex 0, expected 1 to %lld",
              (long long)(first + 70000), (long long)nv);
-    CHECK_MSG(!strcmp(message[0], message[1]) && strstr(message[0], expected), "'%s' against '%s'", message[0],
-              message[1]);
+    for (int mixed = 0; mixed < 2; mixed++) {
+        write_hex_grid(path, n, 70000, mixed);
+        for (int k = 0; k < 2; k++) {
+            CHECK(import_on(path, k ? 3 : 1, &one, &d) != 0);
+            snprintf(message[k], sizeof message[k], "%s", d.message);
+        }
+        CHECK_MSG(!strcmp(message[0], message[1]) && strstr(message[0], expected), "mixed %d: '%s' against '%s'",
+                  mixed, message[0], message[1]);
+    }
     remove(path);
 }

@@ -368,6 +368,88 @@ static int emit_fixed(const cgns_zone *zone, const cgns_section *sec, tpk_mesh *
     return 0;
 }
 
+/* A MIXED section on all threads, in two passes over the same ranges: the volume cells and ids of each
+ * range, then (from their prefix sums) the cells themselves. Every element's type and size were checked
+ * when the section was counted (mixed_type). */
+typedef struct mixed_job {
+    const cgns_section *sec;
+    int64_t first_point, vertices;
+    int64_t cells[TPK_MAX_THREADS], ids[TPK_MAX_THREADS]; /* a range's counts, then its first cell and id */
+    tpk_mesh *out;
+    int bad[TPK_MAX_THREADS];
+} mixed_job;
+
+/* Element i's row when it is a volume (NULL: a face, edge or node), and its nodes. */
+static const volume_kind_row *mixed_row(const cgns_section *sec, int64_t i, const cgsize_t **nodes)
+{
+    const volume_kind_row *row = NULL;
+    CGNS_ENUMT(ElementType_t) type = (CGNS_ENUMT(ElementType_t))sec->elements[sec->offsets[i]];
+    *nodes = sec->elements + sec->offsets[i] + 1;
+    return volume_kind(type, &row) == 1 ? row : NULL;
+}
+
+static void mixed_count(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    mixed_job *job = ctx;
+    int64_t cells = 0, ids = 0;
+    for (int64_t i = begin; i < end; i++) {
+        const cgsize_t *nodes;
+        const volume_kind_row *row = mixed_row(job->sec, i, &nodes);
+        if (row)
+            cells++, ids += row->nodes;
+    }
+    job->cells[worker] = cells, job->ids[worker] = ids;
+}
+
+static void mixed_fill(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    mixed_job *job = ctx;
+    int64_t c = job->cells[worker], at = job->ids[worker];
+    int bad = 0;
+    for (int64_t i = begin; i < end; i++) {
+        const cgsize_t *nodes;
+        const volume_kind_row *row = mixed_row(job->sec, i, &nodes);
+        if (!row)
+            continue;
+        job->out->cell_types[c] = (uint8_t)row->vtk;
+        job->out->cell_offsets[c++] = at;
+        for (int k = 0; k < row->nodes; k++) {
+            cgsize_t id = nodes[row->order ? row->order[k] : k];
+            bad |= id < 1 || id > job->vertices;
+            job->out->cell_conn[at++] = (int32_t)(job->first_point + id - 1);
+        }
+    }
+    job->bad[worker] |= bad;
+}
+
+/* As emit_fixed, for a MIXED section. */
+static int emit_mixed(const cgns_zone *zone, const cgns_section *sec, tpk_mesh *out, int64_t *at)
+{
+    int64_t count = (int64_t)sec->end - sec->start + 1;
+    mixed_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return 1;
+    *job = (mixed_job){.sec = sec, .first_point = zone->first_point, .vertices = zone->vertices, .out = out};
+    int threads = cgns_threads(count), bad = 0;
+    tpk_parallel_for(count, threads, mixed_count, job);
+    int64_t cells = out->cell_count, ids = *at;
+    for (int w = 0; w < threads; w++) {
+        int64_t c = job->cells[w], n = job->ids[w];
+        job->cells[w] = cells, job->ids[w] = ids;
+        cells += c, ids += n;
+    }
+    tpk_parallel_for(count, threads, mixed_fill, job);
+    for (int w = 0; w < threads; w++)
+        bad |= job->bad[w];
+    free(job);
+    if (bad)
+        return 1;
+    out->cell_count = cells;
+    *at = ids;
+    out->cell_offsets[cells] = ids;
+    return 0;
+}
+
 int cgns_sections_emit(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *out)
 {
     int64_t at = out->cell_offsets[out->cell_count];
@@ -378,6 +460,8 @@ int cgns_sections_emit(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *ou
         if (sec->type == CGNS_ENUMV(NGON_n))
             continue; /* faces, used through NFACE_n */
         if (!is_poly_storage(sec->type) && emit_fixed(zone, sec, out, &at) == 0)
+            continue;
+        if (sec->type == CGNS_ENUMV(MIXED) && emit_mixed(zone, sec, out, &at) == 0)
             continue;
         if (!is_poly_storage(sec->type))
             cg_npe(sec->type, &npe);
