@@ -193,7 +193,9 @@ typedef struct tpk_write_options {
                                tpk_writer_finish failed, since it frees the writer); may be NULL */
     void *message_user;
     int threads; /* 2 or more: a large uncompressed append is hashed on a second thread while the calling
-                    thread writes it (the same bytes; the append returns when both are done); else one */
+                    thread writes it (the same bytes; the append returns when both are done); else one.
+                    A zstd chunk over 8 MiB is compressed on up to this many of zstd's worker threads
+                    (at least one, beside the calling thread): the bytes are the same for any value */
 } tpk_write_options;
 
 /* Start a file at `path`: data goes to a temporary file in the same directory, which tpk_writer_finish

@@ -8,6 +8,8 @@
 #include <string.h>
 
 #include "harness.h"
+#include "same_mesh.h"
+#include "base/parallel.h"
 #include "tpk_assert.h"
 #include "import/importers.h"
 #include "convert/pipeline.h"
@@ -603,4 +605,110 @@ TPK_TEST(static_solutions_and_unresolved_pointers)
     tpk_mesh_free(&m);
     CHECK_MSG(ok, "fields or steps differ");
     CHECK_MSG(strstr(w.text, "pointers.cgns: zone 'z': its ZoneIterativeData points at no FlowSolution"), "%s", w.text);
+}
+
+/* A grid of n^3 hexahedra written with the CGNS library, large enough for the importer's passes to run on
+ * several threads (64k items a worker): section "lower" the first n/4 layers, "upper" the rest (HEXA_8,
+ * or with `mixed` a MIXED section of HEXA_8 elements), wavy coordinates, a Vertex and a CellCenter
+ * solution. bad > 0: element `bad` of "upper" (counted from 1 within it) and the one 80000 further get a
+ * vertex id of 0 and one past the end. */
+static void write_hex_grid(const char *path, int n, int64_t bad, int mixed)
+{
+    int64_t nv = (int64_t)(n + 1) * (n + 1) * (n + 1), nc = (int64_t)n * n * n, first = (int64_t)n * n * (n / 4);
+    double *x = malloc(sizeof *x * 3 * (size_t)nv), *val = malloc(sizeof *val * (size_t)(nv > nc ? nv : nc));
+    double *y = x + nv, *z = x + 2 * nv;
+    cgsize_t *conn = malloc(sizeof *conn * 8 * (size_t)nc);
+    for (int64_t v = 0; v < nv; v++) {
+        int64_t i = v % (n + 1), j = v / (n + 1) % (n + 1), k = v / (n + 1) / (n + 1);
+        x[v] = (double)i + 0.1 * sin((double)j), y[v] = (double)j + 0.1 * sin((double)k), z[v] = (double)k + 0.1 * sin((double)i);
+    }
+    const int64_t row = n + 1, layer = row * row;
+    for (int64_t c = 0; c < nc; c++) {
+        int64_t b = c % n + row * (c / n % n) + layer * (c / n / n);
+        const int64_t q[8] = {b, b + 1, b + 1 + row, b + row, b + layer, b + 1 + layer, b + 1 + row + layer, b + row + layer};
+        for (int h = 0; h < 8; h++)
+            conn[8 * c + h] = (cgsize_t)q[h] + 1;
+    }
+    if (bad > 0)
+        conn[8 * (first + bad - 1) + 2] = 0, conn[8 * (first + bad + 80000 - 1) + 2] = (cgsize_t)nv + 1;
+    int fn, base, zone, s;
+    cgsize_t size[3] = {(cgsize_t)nv, (cgsize_t)nc, 0};
+    CHECK(cg_open(path, CG_MODE_WRITE, &fn) == 0);
+    CHECK(cg_base_write(fn, "base", 3, 3, &base) == 0);
+    CHECK(cg_zone_write(fn, base, "grid", size, Unstructured, &zone) == 0);
+    CHECK(write_coords(fn, base, zone, x, y, z) == 0);
+    CHECK(cg_section_write(fn, base, zone, "lower", HEXA_8, 1, (cgsize_t)first, 0, conn, &s) == 0);
+    if (mixed) {
+        cgsize_t *data = malloc(sizeof *data * 9 * (size_t)(nc - first)), *offsets = malloc(sizeof *offsets * (size_t)(nc - first + 1));
+        for (int64_t c = 0; c < nc - first; c++) {
+            offsets[c] = (cgsize_t)(9 * c), data[9 * c] = HEXA_8;
+            memcpy(data + 9 * c + 1, conn + 8 * (first + c), 8 * sizeof *conn);
+        }
+        offsets[nc - first] = (cgsize_t)(9 * (nc - first));
+        CHECK(cg_poly_section_write(fn, base, zone, "upper", MIXED, (cgsize_t)first + 1, (cgsize_t)nc, 0, data, offsets, &s) == 0);
+        free(data), free(offsets);
+    } else {
+        CHECK(cg_section_write(fn, base, zone, "upper", HEXA_8, (cgsize_t)first + 1, (cgsize_t)nc, 0, conn + 8 * first, &s) == 0);
+    }
+    for (int64_t v = 0; v < nv; v++)
+        val[v] = sin(1e-3 * (double)v);
+    CHECK(write_field(fn, base, zone, "nodes", Vertex, "temperature", val) == 0);
+    for (int64_t c = 0; c < nc; c++)
+        val[c] = cos(1e-3 * (double)c);
+    CHECK(write_field(fn, base, zone, "cells", CellCenter, "stress", val) == 0);
+    CHECK(cg_close(fn) == 0);
+    free(x), free(val), free(conn);
+}
+
+static int import_on(const char *path, int threads, tpk_mesh *m, tpk_diag *d)
+{
+    int previous = tpk_set_default_threads(threads);
+    memset(d, 0, sizeof *d);
+    int rc = tpk_import_cgns(path, m, d);
+    tpk_set_default_threads(previous);
+    return rc;
+}
+
+/* The passes after the library's reads run on all threads: the same mesh, bit for bit, on 1 and 3
+ * threads, from a MIXED section as from a HEXA_8 one (and the cells written), and the same message
+ * naming the first bad id where two are bad. */
+TPK_TEST(same_mesh_on_any_thread_count)
+{
+    const int n = 64; /* "upper": 196,608 hexes, 3 workers */
+    const int64_t nv = 65 * 65 * 65, nc = 64 * 64 * 64, first = 64 * 64 * 16;
+    const char *path = tpk_temp_path("hex_grid.cgns");
+    write_hex_grid(path, n, 0, 1);
+    tpk_mesh one, three;
+    tpk_diag d;
+    CHECK_MSG(import_on(path, 1, &one, &d) == 0, "%s", d.message);
+    CHECK_MSG(import_on(path, 3, &three, &d) == 0, "%s", d.message);
+    CHECK(tpk_same_mesh(&one, &three));
+    tpk_mesh_free(&one);
+    write_hex_grid(path, n, 0, 0); /* the same cells in a HEXA_8 section: the same mesh */
+    CHECK_MSG(import_on(path, 1, &one, &d) == 0, "%s", d.message);
+    CHECK(tpk_same_mesh(&one, &three));
+    tpk_mesh_free(&one);
+    CHECK_MSG(import_on(path, 3, &one, &d) == 0, "%s", d.message);
+    CHECK(tpk_same_mesh(&one, &three));
+    int64_t c = first + 100000, b = c % n + 65 * (c / n % n) + 65 * 65 * (c / n / n);
+    CHECK(three.point_count == nv && three.cell_count == nc && three.field_count == 2);
+    CHECK(three.cell_types[c] == TPK_CELL_HEXAHEDRON && three.cell_offsets[c] == 8 * c &&
+          three.cell_conn[8 * c] == b && three.cell_conn[8 * c + 6] == b + 1 + 65 + 65 * 65);
+    CHECK(three.points[3 * 4000 + 1] == (double)(4000 / 65 % 65) + 0.1 * sin((double)(4000 / 65 / 65)));
+    tpk_mesh_free(&one);
+    tpk_mesh_free(&three);
+
+    char message[2][sizeof d.message], expected[128];
+    snprintf(expected, sizeof expected, "section 'upper' element %lld uses vertex 0, expected 1 to %lld",
+             (long long)(first + 70000), (long long)nv);
+    for (int mixed = 0; mixed < 2; mixed++) {
+        write_hex_grid(path, n, 70000, mixed);
+        for (int k = 0; k < 2; k++) {
+            CHECK(import_on(path, k ? 3 : 1, &one, &d) != 0);
+            snprintf(message[k], sizeof message[k], "%s", d.message);
+        }
+        CHECK_MSG(!strcmp(message[0], message[1]) && strstr(message[0], expected), "mixed %d: '%s' against '%s'",
+                  mixed, message[0], message[1]);
+    }
+    remove(path);
 }

@@ -8,6 +8,8 @@
 
 #include "harness.h"
 #include "meshgen.h"
+#include "same_mesh.h"
+#include "base/parallel.h"
 #include "import/importers.h"
 #include "import/exodus/netcdf_size.h"
 #include "convert/pipeline.h"
@@ -263,5 +265,119 @@ TPK_TEST(number_maps)
     write_mapped_hex(path, bad, 1);
     CHECK(tpk_import_any(path, NULL, &m, &d) != 0);
     CHECK_MSG(strstr(d.message, "node number map: node 4 has id 0") != NULL, "%s", d.message);
+    remove(path);
+}
+
+/* A grid of n^3 hexahedra written with the Exodus library, large enough for the importer's passes to run
+ * on several threads (64k items a worker): block 1 the first n/4 layers, block 2 the rest; wavy
+ * coordinates; node and element number maps (ids reversed, so none equals its index); a nodal and an
+ * element variable over 2 steps. bad_node (1-based within block 2) > 0: that element's third node, and
+ * the one of element 80000 more, set to 0 and past the end; bad_map > 0: that node's map entry, and the
+ * one of node 90000 more, set to 0 and -5. */
+static void write_hex_grid(const char *path, int n, int64_t bad_node, int64_t bad_map)
+{
+    int64_t nv = (int64_t)(n + 1) * (n + 1) * (n + 1), nc = (int64_t)n * n * n, first = (int64_t)n * n * (n / 4);
+    double *xyz = malloc(sizeof *xyz * 3 * (size_t)nv), *val = malloc(sizeof *val * (size_t)(nv > nc ? nv : nc));
+    int *conn = malloc(sizeof *conn * 8 * (size_t)nc), *map = malloc(sizeof *map * (size_t)(nv > nc ? nv : nc));
+    for (int64_t v = 0; v < nv; v++) {
+        int64_t i = v % (n + 1), j = v / (n + 1) % (n + 1), k = v / (n + 1) / (n + 1);
+        xyz[v] = (double)i + 0.1 * sin((double)j), xyz[nv + v] = (double)j + 0.1 * sin((double)k);
+        xyz[2 * nv + v] = (double)k + 0.1 * sin((double)i);
+    }
+    const int64_t row = n + 1, layer = row * row;
+    for (int64_t c = 0; c < nc; c++) {
+        int64_t b = c % n + row * (c / n % n) + layer * (c / n / n);
+        const int64_t q[8] = {b, b + 1, b + 1 + row, b + row, b + layer, b + 1 + layer, b + 1 + row + layer, b + row + layer};
+        for (int h = 0; h < 8; h++)
+            conn[8 * c + h] = (int)q[h] + 1;
+    }
+    if (bad_node > 0) {
+        conn[8 * (first + bad_node - 1) + 2] = 0;
+        conn[8 * (first + bad_node + 80000 - 1) + 2] = (int)nv + 1;
+    }
+    int cpu_ws = 8, io_ws = 8;
+    int exoid = ex_create(path, EX_CLOBBER, &cpu_ws, &io_ws);
+    CHECK(exoid >= 0);
+    CHECK(ex_put_init(exoid, "hex grid", 3, nv, nc, 2, 0, 0) == 0);
+    CHECK(ex_put_coord(exoid, xyz, xyz + nv, xyz + 2 * nv) == 0);
+    CHECK(ex_put_block(exoid, EX_ELEM_BLOCK, 1, "HEX8", first, 8, 0, 0, 0) == 0);
+    CHECK(ex_put_block(exoid, EX_ELEM_BLOCK, 2, "HEX8", nc - first, 8, 0, 0, 0) == 0);
+    CHECK(ex_put_conn(exoid, EX_ELEM_BLOCK, 1, conn, NULL, NULL) == 0);
+    CHECK(ex_put_conn(exoid, EX_ELEM_BLOCK, 2, conn + 8 * first, NULL, NULL) == 0);
+    for (int64_t v = 0; v < nv; v++)
+        map[v] = (int)(nv - v);
+    if (bad_map > 0)
+        map[bad_map - 1] = 0, map[bad_map + 90000 - 1] = -5;
+    CHECK(ex_put_id_map(exoid, EX_NODE_MAP, map) == 0);
+    for (int64_t c = 0; c < nc; c++)
+        map[c] = (int)(nc - c);
+    CHECK(ex_put_id_map(exoid, EX_ELEM_MAP, map) == 0);
+    CHECK(ex_put_variable_param(exoid, EX_NODAL, 1) == 0 && ex_put_variable_param(exoid, EX_ELEM_BLOCK, 1) == 0);
+    CHECK(ex_put_variable_name(exoid, EX_NODAL, 1, "temperature") == 0);
+    CHECK(ex_put_variable_name(exoid, EX_ELEM_BLOCK, 1, "stress") == 0);
+    for (int s = 1; s <= 2; s++) {
+        double t = 0.5 * s;
+        CHECK(ex_put_time(exoid, s, &t) == 0);
+        for (int64_t v = 0; v < nv; v++)
+            val[v] = sin(1e-3 * (double)v + s);
+        CHECK(ex_put_var(exoid, s, EX_NODAL, 1, 1, nv, val) == 0);
+        for (int64_t c = 0; c < nc; c++)
+            val[c] = cos(1e-3 * (double)c + s);
+        CHECK(ex_put_var(exoid, s, EX_ELEM_BLOCK, 1, 1, first, val) == 0);
+        CHECK(ex_put_var(exoid, s, EX_ELEM_BLOCK, 1, 2, nc - first, val + first) == 0);
+    }
+    CHECK(ex_close(exoid) == 0);
+    free(xyz), free(val), free(conn), free(map);
+}
+
+/* Import `path` on `threads` threads; its return, the mesh and the message. */
+static int import_on(const char *path, int threads, tpk_mesh *m, tpk_diag *d)
+{
+    int previous = tpk_set_default_threads(threads);
+    memset(d, 0, sizeof *d);
+    int rc = tpk_import_exodus(path, m, d);
+    tpk_set_default_threads(previous);
+    return rc;
+}
+
+/* The passes after the library's reads run on all threads: the same mesh, bit for bit, on 1 and 3
+ * threads (and the values written), and the same message naming the first bad id where two are bad. */
+TPK_TEST(same_mesh_on_any_thread_count)
+{
+    const int n = 64; /* block 2: 196,608 hexes, 3 workers */
+    const int64_t nv = 65 * 65 * 65, nc = 64 * 64 * 64, first = 64 * 64 * 16;
+    const char *path = tpk_temp_path("hex_grid.e");
+    write_hex_grid(path, n, 0, 0);
+    tpk_mesh one, three;
+    tpk_diag d;
+    CHECK_MSG(import_on(path, 1, &one, &d) == 0, "%s", d.message);
+    CHECK_MSG(import_on(path, 3, &three, &d) == 0, "%s", d.message);
+    CHECK(tpk_same_mesh(&one, &three));
+    /* what was written: hex c's corners, the reversed maps, the values of step 2 */
+    int64_t c = first + 100000, b = c % n + 65 * (c / n % n) + 65 * 65 * (c / n / n);
+    CHECK(three.point_count == nv && three.cell_count == nc && three.field_count == 2 && three.step_count == 2);
+    CHECK(three.cell_types[c] == TPK_CELL_HEXAHEDRON && three.cell_offsets[c] == 8 * c &&
+          three.cell_conn[8 * c] == b && three.cell_conn[8 * c + 6] == b + 1 + 65 + 65 * 65);
+    CHECK(three.points[3 * 4000 + 1] == (double)(4000 / 65 % 65) + 0.1 * sin((double)(4000 / 65 / 65)));
+    CHECK(three.global_point_ids[5] == nv - 5 - 1 && three.global_cell_ids[c] == nc - c - 1);
+    CHECK(three.fields[1].values[nc + c] == (float)cos(1e-3 * (double)c + 2));
+    tpk_mesh_free(&one);
+    tpk_mesh_free(&three);
+
+    char message[2][sizeof d.message];
+    write_hex_grid(path, n, 70000, 0);
+    for (int k = 0; k < 2; k++) {
+        CHECK(import_on(path, k ? 3 : 1, &one, &d) != 0);
+        snprintf(message[k], sizeof message[k], "%s", d.message);
+    }
+    CHECK_MSG(!strcmp(message[0], message[1]) && strstr(message[0], "block 2 element 70000 uses node 0, expected 1"),
+              "'%s' against '%s'", message[0], message[1]);
+    write_hex_grid(path, n, 0, 100000);
+    for (int k = 0; k < 2; k++) {
+        CHECK(import_on(path, k ? 3 : 1, &one, &d) != 0);
+        snprintf(message[k], sizeof message[k], "%s", d.message);
+    }
+    CHECK_MSG(!strcmp(message[0], message[1]) && strstr(message[0], "node number map: node 100000 has id 0"),
+              "'%s' against '%s'", message[0], message[1]);
     remove(path);
 }

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "harness.h"
+#include "same_mesh.h"
 #include "import/importers.h"
 #include "import/isolate.h"
 #include "tetpack_format.h"
@@ -57,40 +58,6 @@ static int full_reader(const char *path, tpk_mesh *out, tpk_diag *diag)
     return 0;
 }
 
-static int same_array(const void *a, const void *b, size_t bytes)
-{
-    return (!a && !b) || (a && b && memcmp(a, b, bytes) == 0);
-}
-
-/* Bit for bit the same mesh: counts, arrays, fields, steps, format, grid origin, global ids. */
-static int same_mesh(const tpk_mesh *a, const tpk_mesh *b)
-{
-    if (a->point_count != b->point_count || a->cell_count != b->cell_count || a->field_count != b->field_count ||
-        a->step_count != b->step_count || strcmp(a->format, b->format) != 0 ||
-        a->has_grid_origin != b->has_grid_origin || memcmp(a->grid_origin, b->grid_origin, sizeof a->grid_origin))
-        return 0;
-    size_t p = (size_t)a->point_count, c = (size_t)a->cell_count;
-    if (!same_array(a->points, b->points, 3 * p * sizeof(double)) || !same_array(a->cell_types, b->cell_types, c) ||
-        !same_array(a->cell_offsets, b->cell_offsets, (c + 1) * sizeof(int64_t)) ||
-        !same_array(a->face_offsets, b->face_offsets, (c + 1) * sizeof(int64_t)) ||
-        !same_array(a->times, b->times, (size_t)a->step_count * sizeof(double)) ||
-        !same_array(a->global_point_ids, b->global_point_ids, p * sizeof(int64_t)) ||
-        !same_array(a->global_cell_ids, b->global_cell_ids, c * sizeof(int64_t)))
-        return 0;
-    if (a->cell_offsets && !same_array(a->cell_conn, b->cell_conn, (size_t)a->cell_offsets[c] * sizeof(int32_t)))
-        return 0;
-    if (a->face_offsets && !same_array(a->faces, b->faces, (size_t)a->face_offsets[c] * sizeof(int32_t)))
-        return 0;
-    for (int i = 0; i < a->field_count; i++) {
-        const tpk_src_field *f = &a->fields[i], *g = &b->fields[i];
-        size_t n = (size_t)f->step_count * (f->association == TPK_ASSOC_POINT ? p : c) * (size_t)f->components;
-        if (strcmp(f->name, g->name) || f->association != g->association || f->components != g->components ||
-            f->step_count != g->step_count || !same_array(f->values, g->values, n * sizeof(float)))
-            return 0;
-    }
-    return 1;
-}
-
 typedef struct warnings {
     int count;
     char last[256];
@@ -114,7 +81,7 @@ TPK_TEST(every_array_comes_back)
     dh.warn_user = &wh, dt.warn_user = &wt;
     CHECK(full_reader("made.up", &here, &dh) == 0);
     CHECK_MSG(tpk_isolated_read(full_reader, "made-up", "made.up", &there, &dt) == 0, "%s", dt.message);
-    CHECK(same_mesh(&here, &there));
+    CHECK(tpk_same_mesh(&here, &there));
     CHECK_MSG(wt.count == 2 && dt.warning_count == 2 && strcmp(wt.last, "made.up: second warning") == 0,
               "%d warnings, last '%s'", wt.count, wt.last);
     CHECK(dt.field_problem_count == 1 && strcmp(dt.field_problems[0].name, "short") == 0 &&
@@ -203,7 +170,7 @@ TPK_TEST(exodus_through_the_registry)
         CHECK_MSG(tpk_import_any(tpk_data_path(files[f]), NULL, &here, &dh) == 0, "%s", dh.message);
         unsetenv("TETPACK_ISOLATE");
         CHECK_MSG(tpk_import_any(tpk_data_path(files[f]), NULL, &there, &dt) == 0, "%s", dt.message);
-        CHECK_MSG(same_mesh(&here, &there), "%s: the isolated read differs", files[f]);
+        CHECK_MSG(tpk_same_mesh(&here, &there), "%s: the isolated read differs", files[f]);
         CHECK(there.field_count > 0 && there.global_point_ids && dh.warning_count == dt.warning_count);
         tpk_mesh_free(&here);
         tpk_mesh_free(&there);

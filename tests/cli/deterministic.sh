@@ -28,6 +28,37 @@ for threads in 2 3 8; do
         --threads $threads --quiet
     cmp "$WORK/z1.tpk" "$WORK/z$threads.tpk" || fail "zstd outputs differ between 1 and $threads threads"
 done
+# Chunks over zstd's 8 MiB job (the 40-grid's TT32: 12 MB, TT16: 6 MB, in one file) are compressed by as
+# many of zstd's workers as threads, into one frame each (check_6xx: rule 16): the same bytes at 1, 2 and
+# 3 threads, and they decode to the chunks of the uncompressed file (each entry's checksum is over the raw
+# bytes, and check_6xx checks it against the decoded ones).
+"$PY" "$SRC/bench/make_grid_vtk.py" 40 "$WORK/g40.vtk" 2> /dev/null
+"$TPK" convert "$WORK/g40.vtk" "$WORK/g40_raw.tpk" --layout tet32 --layout tet16 --quiet
+same_threads zstd_jobs "$WORK/g40.vtk" --zstd 3 --layout tet32 --layout tet16
+"$TPK" convert "$WORK/g40.vtk" "$WORK/g40_zstd.tpk" --zstd 3 --layout tet32 --layout tet16 --threads 2 --quiet
+"$PY" - "$WORK/g40_raw.tpk" "$WORK/g40_zstd.tpk" <<'PYEOF'
+import struct, sys
+def entries(path):
+    data = open(path, "rb").read()
+    offset, count = struct.unpack_from("<QQ", data, 32)
+    out = {}
+    for i in range(count):
+        e = data[offset + 64 * i: offset + 64 * (i + 1)]
+        tag, codec, index, raw, checksum, step = e[:4], e[6], *struct.unpack_from("<I", e, 12), \
+            *struct.unpack_from("<QQ", e, 40), *struct.unpack_from("<I", e, 56)
+        out[(tag, index, step)] = (codec, raw, checksum)
+    return out
+raw, packed = entries(sys.argv[1]), entries(sys.argv[2])
+assert raw.keys() == packed.keys(), (raw.keys(), packed.keys())
+big = 0
+for key, (codec, size, checksum) in raw.items():
+    assert codec == 0 and packed[key][0] == 1, (key, codec, packed[key][0])
+    if key[0] != b"META":  # it holds the command line
+        assert packed[key][1:] == (size, checksum), (key, packed[key], size, checksum)
+        big += size > 8 << 20
+assert big >= 1, "no chunk over one zstd job"
+PYEOF
+rm -f "$WORK"/g40*.tpk
 
 # Every importer's real sample.
 same_threads vtk_ascii_hex "$DATA/sfepy/acoustic_wg.vtk" --cell-to-point

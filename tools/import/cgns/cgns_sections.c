@@ -6,12 +6,19 @@
  * reference cells and real files and finds none mirrored). Higher-order kinds are kept whole, in VTK's
  * node order (volume_kind). MIXED sections carry a type code before each element; NFACE_n cells list signed
  * NGON_n face numbers (negative: the face's normal points into the cell) and become polyhedra. */
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/parallel.h"
 #include "import_cgns_internal.h"
 #include "mesh/polyhedron.h"
+
+int cgns_threads(int64_t items)
+{
+    return tpk_threads_for(items, tpk_thread_count(0), CGNS_GRAIN);
+}
 
 /* CGNS node for each VTK node of the quadratic kinds kept whole: the SIDS list a hexahedron's and a
  * wedge's vertical mid-edges before the top ones (VTK after), and a HEXA_27's face centres bottom, y-,
@@ -29,7 +36,7 @@ typedef struct volume_kind_row {
 /* A volume element type: its VTK type and the nodes kept (*row). 0 for elements of lower dimension (NODE,
  * BAR, TRI, QUAD), -1 for one this reader does not know. PYRA_14 is kept as a quadratic pyramid with its
  * base centre after the 13 nodes (mesh/higher_order.h), as the SIDS lists it. */
-static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
+static int volume_kind_by_name(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
 {
     static const volume_kind_row kinds[] = {
         {"TETRA_10", 24, 10, NULL},  {"PYRA_13", 27, 13, NULL}, {"PYRA_14", 27, 14, NULL},
@@ -44,6 +51,27 @@ static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **r
             return kinds[k].vtk ? 1 : 0;
         }
     return -1;
+}
+
+/* volume_kind_by_name of every valid type code, found once: a MIXED section asks for each element's. */
+static signed char kind_of_code[NofValidElementTypes];
+static const volume_kind_row *row_of_code[NofValidElementTypes];
+static pthread_once_t codes_once = PTHREAD_ONCE_INIT;
+
+static void find_codes(void)
+{
+    for (int t = 0; t < NofValidElementTypes; t++)
+        kind_of_code[t] = (signed char)volume_kind_by_name((CGNS_ENUMT(ElementType_t))t, &row_of_code[t]);
+}
+
+static int volume_kind(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
+{
+    if ((int)type < 0 || (int)type >= NofValidElementTypes)
+        return volume_kind_by_name(type, row);
+    pthread_once(&codes_once, find_codes);
+    if (kind_of_code[type] >= 0)
+        *row = row_of_code[type];
+    return kind_of_code[type];
 }
 
 static int is_poly_storage(CGNS_ENUMT(ElementType_t) type)
@@ -182,6 +210,15 @@ static int mixed_type(const cgns_reader *r, const cgns_zone *zone, const cgns_se
 static int count_section(const cgns_reader *r, cgns_zone *zone, const cgns_section *sec)
 {
     cgsize_t count = sec->end - sec->start + 1;
+    const volume_kind_row *row = NULL;
+    int kind = is_poly_storage(sec->type) ? -1 : volume_kind(sec->type, &row);
+    if (kind >= 0) { /* one type for the whole section: its counts at once */
+        if (kind == 0)
+            zone->dropped += count;
+        else
+            zone->cells += count, zone->conn += (int64_t)count * row->nodes;
+        return 0;
+    }
     for (cgsize_t i = 0; i < count; i++) {
         CGNS_ENUMT(ElementType_t) type = sec->type;
         if (sec->type == CGNS_ENUMV(MIXED) && mixed_type(r, zone, sec, i, &type))
@@ -275,6 +312,144 @@ static int emit_element(const cgns_reader *r, const cgns_zone *zone, const cgns_
     return 0;
 }
 
+/* A section of one volume type, on all threads: element i is cell c0 + i, its ids at at0 + i * nodes. */
+typedef struct fixed_job {
+    const cgns_section *sec;
+    const volume_kind_row *row;
+    int npe;
+    int64_t c0, at0, first_point, vertices;
+    tpk_mesh *out;
+    int bad[TPK_MAX_THREADS];
+} fixed_job;
+
+static void fixed_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    fixed_job *job = ctx;
+    const volume_kind_row *row = job->row;
+    int bad = 0;
+    for (int64_t i = begin; i < end; i++) {
+        const cgsize_t *nodes = job->sec->elements + i * job->npe;
+        int64_t c = job->c0 + i, at = job->at0 + i * row->nodes;
+        job->out->cell_types[c] = (uint8_t)row->vtk;
+        job->out->cell_offsets[c] = at;
+        for (int k = 0; k < row->nodes; k++) {
+            cgsize_t id = nodes[row->order ? row->order[k] : k];
+            bad |= id < 1 || id > job->vertices;
+            job->out->cell_conn[at + k] = (int32_t)(job->first_point + id - 1);
+        }
+    }
+    job->bad[worker] |= bad;
+}
+
+/* A section of one element type other than NGON_n: 0 when emitted (or, for faces, edges and nodes, left
+ * out), 1 when a node id is out of range, for the serial loop to name the first (out's counts as they
+ * were). */
+static int emit_fixed(const cgns_zone *zone, const cgns_section *sec, tpk_mesh *out, int64_t *at)
+{
+    const volume_kind_row *row = NULL;
+    int npe = 0;
+    int kind = volume_kind(sec->type, &row);
+    if (kind == 0)
+        return 0;
+    if (kind < 0 || cg_npe(sec->type, &npe) || npe < row->nodes)
+        return 1;
+    int64_t count = (int64_t)sec->end - sec->start + 1;
+    fixed_job job = {.sec = sec, .row = row, .npe = npe, .c0 = out->cell_count, .at0 = *at,
+                     .first_point = zone->first_point, .vertices = zone->vertices, .out = out};
+    int threads = cgns_threads(count), bad = 0;
+    tpk_parallel_for(count, threads, fixed_range, &job);
+    for (int w = 0; w < threads; w++)
+        bad |= job.bad[w];
+    if (bad)
+        return 1;
+    out->cell_count += count;
+    *at += count * row->nodes;
+    out->cell_offsets[out->cell_count] = *at;
+    return 0;
+}
+
+/* A MIXED section on all threads, in two passes over the same ranges: the volume cells and ids of each
+ * range, then (from their prefix sums) the cells themselves. Every element's type and size were checked
+ * when the section was counted (mixed_type). */
+typedef struct mixed_job {
+    const cgns_section *sec;
+    int64_t first_point, vertices;
+    int64_t cells[TPK_MAX_THREADS], ids[TPK_MAX_THREADS]; /* a range's counts, then its first cell and id */
+    tpk_mesh *out;
+    int bad[TPK_MAX_THREADS];
+} mixed_job;
+
+/* Element i's row when it is a volume (NULL: a face, edge or node), and its nodes. */
+static const volume_kind_row *mixed_row(const cgns_section *sec, int64_t i, const cgsize_t **nodes)
+{
+    const volume_kind_row *row = NULL;
+    CGNS_ENUMT(ElementType_t) type = (CGNS_ENUMT(ElementType_t))sec->elements[sec->offsets[i]];
+    *nodes = sec->elements + sec->offsets[i] + 1;
+    return volume_kind(type, &row) == 1 ? row : NULL;
+}
+
+static void mixed_count(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    mixed_job *job = ctx;
+    int64_t cells = 0, ids = 0;
+    for (int64_t i = begin; i < end; i++) {
+        const cgsize_t *nodes;
+        const volume_kind_row *row = mixed_row(job->sec, i, &nodes);
+        if (row)
+            cells++, ids += row->nodes;
+    }
+    job->cells[worker] = cells, job->ids[worker] = ids;
+}
+
+static void mixed_fill(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    mixed_job *job = ctx;
+    int64_t c = job->cells[worker], at = job->ids[worker];
+    int bad = 0;
+    for (int64_t i = begin; i < end; i++) {
+        const cgsize_t *nodes;
+        const volume_kind_row *row = mixed_row(job->sec, i, &nodes);
+        if (!row)
+            continue;
+        job->out->cell_types[c] = (uint8_t)row->vtk;
+        job->out->cell_offsets[c++] = at;
+        for (int k = 0; k < row->nodes; k++) {
+            cgsize_t id = nodes[row->order ? row->order[k] : k];
+            bad |= id < 1 || id > job->vertices;
+            job->out->cell_conn[at++] = (int32_t)(job->first_point + id - 1);
+        }
+    }
+    job->bad[worker] |= bad;
+}
+
+/* As emit_fixed, for a MIXED section. */
+static int emit_mixed(const cgns_zone *zone, const cgns_section *sec, tpk_mesh *out, int64_t *at)
+{
+    int64_t count = (int64_t)sec->end - sec->start + 1;
+    mixed_job *job = calloc(1, sizeof *job);
+    if (!job)
+        return 1;
+    *job = (mixed_job){.sec = sec, .first_point = zone->first_point, .vertices = zone->vertices, .out = out};
+    int threads = cgns_threads(count), bad = 0;
+    tpk_parallel_for(count, threads, mixed_count, job);
+    int64_t cells = out->cell_count, ids = *at;
+    for (int w = 0; w < threads; w++) {
+        int64_t c = job->cells[w], n = job->ids[w];
+        job->cells[w] = cells, job->ids[w] = ids;
+        cells += c, ids += n;
+    }
+    tpk_parallel_for(count, threads, mixed_fill, job);
+    for (int w = 0; w < threads; w++)
+        bad |= job->bad[w];
+    free(job);
+    if (bad)
+        return 1;
+    out->cell_count = cells;
+    *at = ids;
+    out->cell_offsets[cells] = ids;
+    return 0;
+}
+
 int cgns_sections_emit(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *out)
 {
     int64_t at = out->cell_offsets[out->cell_count];
@@ -284,6 +459,10 @@ int cgns_sections_emit(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *ou
         int npe = 0;
         if (sec->type == CGNS_ENUMV(NGON_n))
             continue; /* faces, used through NFACE_n */
+        if (!is_poly_storage(sec->type) && emit_fixed(zone, sec, out, &at) == 0)
+            continue;
+        if (sec->type == CGNS_ENUMV(MIXED) && emit_mixed(zone, sec, out, &at) == 0)
+            continue;
         if (!is_poly_storage(sec->type))
             cg_npe(sec->type, &npe);
         for (cgsize_t i = 0; i < count; i++) {

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "base/parallel.h"
 #include "import/importers.h"
 #include "import_cgns_internal.h"
 #include "mesh/polyhedron.h"
@@ -56,6 +57,21 @@ static int scan_zone(const cgns_reader *r, cgns_zone *zone)
     return rc;
 }
 
+/* One axis of a zone's coordinates into the mesh's points, on all threads (the library reads serially). */
+typedef struct axis_job {
+    double *points; /* the zone's first point */
+    const double *values;
+    int axis;
+} axis_job;
+
+static void axis_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const axis_job *job = ctx;
+    (void)worker;
+    for (int64_t v = begin; v < end; v++)
+        job->points[3 * v + job->axis] = job->values[v];
+}
+
 /* The zone's CoordinateX/Y/Z (Cartesian only) into out->points from zone->first_point. */
 static int read_coordinates(const cgns_reader *r, const cgns_zone *zone, tpk_mesh *out)
 {
@@ -72,8 +88,8 @@ static int read_coordinates(const cgns_reader *r, const cgns_zone *zone, tpk_mes
             return CGNS_FAIL(r, "zone '%s': cannot read %s, expected %lld values (Cartesian coordinates)",
                              zone->name, names[a], (long long)zone->vertices);
         }
-        for (int64_t v = 0; v < zone->vertices; v++)
-            out->points[3 * (zone->first_point + v) + a] = xyz[v];
+        axis_job job = {out->points + 3 * zone->first_point, xyz, a};
+        tpk_parallel_for(zone->vertices, cgns_threads(zone->vertices), axis_range, &job);
     }
     free(xyz);
     return 0;

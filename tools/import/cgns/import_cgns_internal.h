@@ -47,6 +47,11 @@ typedef struct cgns_zone {
     cgns_section *sections;        /* sorted by start */
 } cgns_zone;
 
+/* The passes over what the library read run on all threads (convert's --threads) in contiguous ranges
+ * of at least this many items, each item written by one worker: the mesh is the same for any count. */
+#define CGNS_GRAIN ((int64_t)1 << 16)
+int cgns_threads(int64_t items);
+
 /* Unstructured zones: read every section (sorted by element number), count the volume cells they keep
  * and their connectivity entries into zone->cells and zone->conn. Returns 0 or -1 (diag set). */
 int cgns_sections_load(const cgns_reader *r, cgns_zone *zone);

@@ -19,6 +19,7 @@
 #include "import/importers.h"
 #include "netcdf_size.h"
 #include "tetpack_format.h"
+#include "base/parallel.h"
 #include "base/text_scan.h"
 
 typedef struct block_kind {
@@ -95,6 +96,52 @@ typedef struct exo_reader {
     tpk_diag *diag;
 } exo_reader;
 
+/* The passes over what the library read (points interleaved, ids made 0-based and checked, values to
+ * float) run on all threads (convert's --threads) in contiguous ranges, each item written by one worker
+ * alone: the mesh is the same for any count. The library's own reads stay serial (netCDF is not
+ * thread-safe). A pass that finds a bad id only flags it; the serial loop behind it then finds the
+ * first one and words the message, so that too is the same for any count. */
+#define EXO_GRAIN ((int64_t)1 << 16)
+
+static int exo_threads(int64_t count)
+{
+    return tpk_threads_for(count, tpk_thread_count(0), EXO_GRAIN);
+}
+
+typedef struct interleave_job {
+    double *points;
+    double *const *xyz;
+} interleave_job;
+
+static void interleave_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const interleave_job *job = ctx;
+    (void)worker;
+    for (int64_t v = begin; v < end; v++)
+        for (int k = 0; k < 3; k++)
+            job->points[3 * v + k] = job->xyz[k][v];
+}
+
+/* Values of one step (double, as the library gives them) to float; NaN where the block lacks them. */
+typedef struct to_float_job {
+    float *dst;
+    const double *src; /* NULL: NaN */
+} to_float_job;
+
+static void to_float_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const to_float_job *job = ctx;
+    (void)worker;
+    for (int64_t i = begin; i < end; i++)
+        job->dst[i] = job->src ? (float)job->src[i] : NAN;
+}
+
+static void to_float(float *dst, const double *src, int64_t n)
+{
+    to_float_job job = {dst, src};
+    tpk_parallel_for(n, exo_threads(n), to_float_range, &job);
+}
+
 static int read_points(exo_reader *r, tpk_mesh *out, int dim)
 {
     double *xyz[3];
@@ -106,13 +153,64 @@ static int read_points(exo_reader *r, tpk_mesh *out, int dim)
              : ex_get_coord(r->exoid, xyz[0], xyz[1], dim == 3 ? xyz[2] : NULL) < 0
                  ? tpk_diag_fail(r->diag, "%s: cannot read the node coordinates", r->path)
                  : 0;
-    for (int64_t v = 0; rc == 0 && v < r->nodes; v++)
-        for (int k = 0; k < 3; k++)
-            out->points[3 * v + k] = xyz[k][v];
+    interleave_job job = {out->points, xyz};
+    if (rc == 0)
+        tpk_parallel_for(r->nodes, exo_threads(r->nodes), interleave_range, &job);
     for (int k = 0; k < 3; k++)
         free(xyz[k]);
     out->point_count = r->nodes;
     return rc;
+}
+
+/* One block's kept cells from the library's connectivity: types, offsets and 0-based ids, in parallel;
+ * bad[worker] set where an id is out of range (block_cells_checked then words the message). */
+typedef struct block_job {
+    const exo_block *blk;
+    const int *ids_in;
+    int64_t nodes, c0, at0;
+    tpk_mesh *out;
+    int bad[TPK_MAX_THREADS];
+} block_job;
+
+static void block_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    block_job *job = ctx;
+    const exo_block *blk = job->blk;
+    int node[32];
+    for (int k = 0; k < blk->kept; k++)
+        node[k] = exodus_node(blk->vtk_type, k);
+    int bad = 0;
+    for (int64_t e = begin; e < end; e++) {
+        int64_t c = job->c0 + e, at = job->at0 + e * blk->kept;
+        const int *in = job->ids_in + e * blk->nodes_per;
+        job->out->cell_types[c] = (uint8_t)blk->vtk_type;
+        job->out->cell_offsets[c] = at;
+        for (int k = 0; k < blk->kept; k++) {
+            int id = in[node[k]];
+            bad |= id < 1 || id > job->nodes;
+            job->out->cell_conn[at + k] = id - 1;
+        }
+    }
+    job->bad[worker] |= bad;
+}
+
+/* The block's cells at out cell c0, connectivity entry at0: on all threads, then, if an id was out of
+ * range, the serial loop for the first one. */
+static int block_cells(exo_reader *r, const exo_block *blk, const int *ids_in, int64_t c0, int64_t at0, tpk_mesh *out)
+{
+    block_job job = {.blk = blk, .ids_in = ids_in, .nodes = r->nodes, .c0 = c0, .at0 = at0, .out = out};
+    int threads = exo_threads(blk->count), bad = 0;
+    tpk_parallel_for(blk->count, threads, block_range, &job);
+    for (int w = 0; w < threads; w++)
+        bad |= job.bad[w];
+    for (int64_t e = 0; bad && e < blk->count; e++)
+        for (int k = 0; k < blk->kept; k++) {
+            int id = ids_in[e * blk->nodes_per + exodus_node(blk->vtk_type, k)];
+            if (id < 1 || id > r->nodes)
+                return tpk_diag_fail(r->diag, "%s: block %lld element %lld uses node %d, expected 1 to %lld",
+                                     r->path, (long long)blk->id, (long long)e + 1, id, (long long)r->nodes);
+        }
+    return 0;
 }
 
 /* Block ids, kinds and counts; the kept cells' connectivity into out (1-based ids checked). */
@@ -187,20 +285,12 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
             free(ids_in);
             return tpk_diag_fail(r->diag, "%s: cannot read the connectivity of block %lld", r->path, (long long)blk->id);
         }
-        for (int64_t e = 0; e < blk->count; e++, c++) {
-            out->cell_types[c] = (uint8_t)blk->vtk_type;
-            out->cell_offsets[c] = at;
-            for (int k = 0; k < blk->kept; k++) {
-                int id = ids_in[e * blk->nodes_per + exodus_node(blk->vtk_type, k)];
-                if (id < 1 || id > r->nodes) {
-                    free(ids_in);
-                    return tpk_diag_fail(r->diag, "%s: block %lld element %lld uses node %d, expected 1 to %lld",
-                                         r->path, (long long)blk->id, (long long)e + 1, id, (long long)r->nodes);
-                }
-                out->cell_conn[at++] = id - 1;
-            }
-        }
+        int rc = block_cells(r, blk, ids_in, c, at, out);
         free(ids_in);
+        if (rc)
+            return rc;
+        c += blk->count;
+        at += blk->count * blk->kept;
     }
     out->cell_offsets[c] = at;
     return 0;
@@ -232,8 +322,8 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
                 if (ex_get_var(r->exoid, (int)s + 1, EX_NODAL, v, 1, r->nodes, buf) < 0)
                     rc = tpk_diag_fail(r->diag, "%s: cannot read nodal variable '%s' at step %lld", r->path, name,
                                        (long long)s + 1);
-                for (int64_t i = 0; rc == 0 && i < r->nodes; i++)
-                    dst[i] = (float)buf[i];
+                if (rc == 0)
+                    to_float(dst, buf, r->nodes);
                 continue;
             }
             for (int64_t b = 0; rc == 0 && b < r->block_count; b++) {
@@ -244,8 +334,7 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
                               truth[v - 1];
                 if (present && ex_get_var(r->exoid, (int)s + 1, EX_ELEM_BLOCK, v, blk->id, blk->count, buf) < 0)
                     present = 0;
-                for (int64_t e = 0; e < blk->count; e++)
-                    dst[blk->first_cell + e] = present ? (float)buf[e] : NAN;
+                to_float(dst + blk->first_cell, present ? buf : NULL, blk->count);
             }
         }
         if (rc == 0 && tpk_mesh_add_field(out, name, type == EX_NODAL ? TPK_ASSOC_POINT : TPK_ASSOC_TET, 1,
@@ -259,6 +348,41 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
     return rc;
 }
 
+/* dst[i] = src[i] - 1 for 1-based ids, in parallel (dst may be src); first[worker] = 1 + the index of
+ * the first id below 1 in its range (that id left as it was), or 0. */
+typedef struct ids_job {
+    int64_t *dst;
+    const int64_t *src;
+    int64_t first[TPK_MAX_THREADS];
+} ids_job;
+
+static void ids_range(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    ids_job *job = ctx;
+    for (int64_t i = begin; i < end; i++) {
+        int64_t id = job->src[i];
+        if (id < 1) {
+            job->first[worker] = i + 1;
+            return;
+        }
+        job->dst[i] = id - 1;
+    }
+}
+
+/* 0 when every id of src[0, n) is at least 1 (dst then holds them 0-based); else 1 + the index of the
+ * first that is not (the ranges are in order: the first worker that found one found it), where dst
+ * still holds it. */
+static int64_t ids_to_zero_based(int64_t *dst, const int64_t *src, int64_t n)
+{
+    ids_job job = {.dst = dst, .src = src};
+    int threads = exo_threads(n);
+    tpk_parallel_for(n, threads, ids_range, &job);
+    for (int w = 0; w < threads; w++)
+        if (job.first[w])
+            return job.first[w];
+    return 0;
+}
+
 /* The node number map (global node ids, 1-based, as a decomposer such as nem_slice writes in each
  * processor's file; 1..nodes when the file stores none) into out->global_point_ids, 0-based. Read as
  * int64 so that ids past 2^31 stay exact. */
@@ -270,10 +394,10 @@ static int read_node_map(exo_reader *r, tpk_mesh *out)
     ex_set_int64_status(r->exoid, EX_MAPS_INT64_API);
     if (ex_get_id_map(r->exoid, EX_NODE_MAP, out->global_point_ids) < 0)
         return tpk_diag_fail(r->diag, "%s: cannot read the node number map", r->path);
-    for (int64_t v = 0; v < r->nodes; v++)
-        if (out->global_point_ids[v]-- < 1)
-            return tpk_diag_fail(r->diag, "%s: node number map: node %lld has id %lld, expected an id >= 1", r->path,
-                                 (long long)v + 1, (long long)out->global_point_ids[v] + 1);
+    int64_t bad = ids_to_zero_based(out->global_point_ids, out->global_point_ids, r->nodes);
+    if (bad)
+        return tpk_diag_fail(r->diag, "%s: node number map: node %lld has id %lld, expected an id >= 1", r->path,
+                             (long long)bad, (long long)out->global_point_ids[bad - 1]);
     return 0;
 }
 
@@ -295,10 +419,11 @@ static int read_element_map(exo_reader *r, tpk_mesh *out)
         if (element + blk->count > r->elems)
             rc = tpk_diag_fail(r->diag, "%s: element blocks hold more than the %lld elements of the header", r->path,
                                (long long)r->elems);
-        for (int64_t e = 0; rc == 0 && blk->first_cell >= 0 && e < blk->count; e++)
-            if ((out->global_cell_ids[blk->first_cell + e] = map[element + e] - 1) < 0)
-                rc = tpk_diag_fail(r->diag, "%s: element number map: element %lld has id %lld, expected an id >= 1",
-                                   r->path, (long long)(element + e + 1), (long long)map[element + e]);
+        int64_t bad = rc == 0 && blk->first_cell >= 0
+                          ? ids_to_zero_based(out->global_cell_ids + blk->first_cell, map + element, blk->count) : 0;
+        if (bad)
+            rc = tpk_diag_fail(r->diag, "%s: element number map: element %lld has id %lld, expected an id >= 1",
+                               r->path, (long long)(element + bad), (long long)map[element + bad - 1]);
     }
     free(map);
     return rc;
