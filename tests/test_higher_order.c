@@ -751,6 +751,43 @@ TPK_TEST(cgns_orders)
         tpk_mesh_free(&m);
     }
 }
+
+static void keep_warning(void *user, const char *text)
+{
+    snprintf((char *)user, 512, "%s", text);
+}
+
+/* A cubic tetra (TETRA_20), which this reader does not keep whole, is read by its corners with a warning
+ * that says so; TETRA_4 and PYRA_5 are not taken for the quartic PYRA_55 or the like. */
+TPK_TEST(cgns_cubic_reduced_with_a_warning)
+{
+    static double xyz[3][24];
+    for (int k = 0; k < 24; k++) /* a unit tetra's corners, then 16 more points inside it */
+        xyz[0][k] = k == 1 ? 1.0 : k >= 4 ? 0.1 + 0.01 * k : 0.0, xyz[1][k] = k == 2 ? 1.0 : k >= 4 ? 0.1 : 0.0,
+        xyz[2][k] = k == 3 ? 1.0 : k >= 4 ? 0.1 : 0.0;
+    const char *path = tpk_temp_path("cubic.cgns");
+    int fn, base, zone, s, c;
+    cgsize_t size[3] = {20, 1, 0}, conn[20];
+    for (int k = 0; k < 20; k++)
+        conn[k] = k + 1;
+    CHECK(cg_open(path, CG_MODE_WRITE, &fn) == 0);
+    CHECK(cg_base_write(fn, "b", 3, 3, &base) == 0);
+    CHECK(cg_zone_write(fn, base, "z", size, CGNS_ENUMV(Unstructured), &zone) == 0);
+    CHECK(cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateX", xyz[0], &c) == 0 &&
+          cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateY", xyz[1], &c) == 0 &&
+          cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateZ", xyz[2], &c) == 0);
+    CHECK(cg_section_write(fn, base, zone, "cubic", CGNS_ENUMV(TETRA_20), 1, 1, 0, conn, &s) == 0);
+    CHECK(cg_close(fn) == 0);
+    tpk_mesh m;
+    tpk_diag d;
+    char warning[512] = "";
+    memset(&d, 0, sizeof d);
+    d.warn = keep_warning, d.warn_user = warning;
+    CHECK_MSG(tpk_import_cgns(path, &m, &d) == 0, "%s", d.message);
+    CHECK_MSG(strstr(warning, "reduced 1 volume elements to their corner nodes") != NULL, "%s", warning);
+    CHECK(m.cell_count == 1 && m.cell_types[0] == TPK_CELL_TETRA && m.cell_offsets[1] == 4);
+    tpk_mesh_free(&m);
+}
 #endif
 
 /* check --against on closed-form cells (affine maps: the split fills each cell exactly, so no sample

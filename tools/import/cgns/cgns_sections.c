@@ -31,6 +31,7 @@ typedef struct volume_kind_row {
     const char *prefix;        /* the element type's name, or its start */
     int vtk, nodes;            /* the VTK type kept and its node count */
     const signed char *order;  /* VTK node k is CGNS node order[k]; NULL: the same */
+    int reduced;               /* an element of higher order read by its corners alone (TETRA_20, HEXA_64...) */
 } volume_kind_row;
 
 /* A volume element type: its VTK type and the nodes kept (*row). 0 for elements of lower dimension (NODE,
@@ -39,17 +40,22 @@ typedef struct volume_kind_row {
 static int volume_kind_by_name(CGNS_ENUMT(ElementType_t) type, const volume_kind_row **row)
 {
     static const volume_kind_row kinds[] = {
-        {"TETRA_10", 24, 10, NULL},  {"PYRA_13", 27, 13, NULL}, {"PYRA_14", 27, 14, NULL},
-        {"PENTA_15", 26, 15, penta18}, {"PENTA_18", 32, 18, penta18}, {"HEXA_20", 25, 20, hexa27},
-        {"HEXA_27", 29, 27, hexa27}, {"TETRA_", TPK_CELL_TETRA, 4, NULL}, {"PYRA_", TPK_CELL_PYRAMID, 5, NULL},
-        {"PENTA_", TPK_CELL_WEDGE, 6, NULL}, {"HEXA_", TPK_CELL_HEXAHEDRON, 8, NULL}, {"NODE", 0, 0, NULL},
-        {"BAR_", 0, 0, NULL}, {"TRI_", 0, 0, NULL}, {"QUAD_", 0, 0, NULL}};
+        {"TETRA_10", 24, 10, NULL, 0},  {"PYRA_13", 27, 13, NULL, 0}, {"PYRA_14", 27, 14, NULL, 0},
+        {"PENTA_15", 26, 15, penta18, 0}, {"PENTA_18", 32, 18, penta18, 0}, {"HEXA_20", 25, 20, hexa27, 0},
+        {"HEXA_27", 29, 27, hexa27, 0}, {"TETRA_4", TPK_CELL_TETRA, 4, NULL, 0},
+        {"PYRA_5", TPK_CELL_PYRAMID, 5, NULL, 0}, {"PENTA_6", TPK_CELL_WEDGE, 6, NULL, 0},
+        {"HEXA_8", TPK_CELL_HEXAHEDRON, 8, NULL, 0},
+        {"TETRA_", TPK_CELL_TETRA, 4, NULL, 1}, {"PYRA_", TPK_CELL_PYRAMID, 5, NULL, 1},
+        {"PENTA_", TPK_CELL_WEDGE, 6, NULL, 1}, {"HEXA_", TPK_CELL_HEXAHEDRON, 8, NULL, 1}, {"NODE", 0, 0, NULL, 0},
+        {"BAR_", 0, 0, NULL, 0}, {"TRI_", 0, 0, NULL, 0}, {"QUAD_", 0, 0, NULL, 0}};
     const char *name = cg_ElementTypeName(type);
-    for (size_t k = 0; name && k < sizeof kinds / sizeof kinds[0]; k++)
-        if (!strncmp(name, kinds[k].prefix, strlen(kinds[k].prefix))) {
+    for (size_t k = 0; name && k < sizeof kinds / sizeof kinds[0]; k++) {
+        size_t n = strlen(kinds[k].prefix); /* a name, or with '_' last the start of one (PYRA_5 is not PYRA_55) */
+        if (kinds[k].prefix[n - 1] == '_' ? !strncmp(name, kinds[k].prefix, n) : !strcmp(name, kinds[k].prefix)) {
             *row = &kinds[k];
             return kinds[k].vtk ? 1 : 0;
         }
+    }
     return -1;
 }
 
@@ -188,7 +194,7 @@ static int count_element(const cgns_reader *r, cgns_zone *zone, const cgns_secti
     if (kind == 0)
         zone->dropped++;
     else
-        zone->cells++, zone->conn += row->nodes;
+        zone->cells++, zone->conn += row->nodes, zone->reduced += row->reduced;
     return 0;
 }
 
@@ -216,7 +222,7 @@ static int count_section(const cgns_reader *r, cgns_zone *zone, const cgns_secti
         if (kind == 0)
             zone->dropped += count;
         else
-            zone->cells += count, zone->conn += (int64_t)count * row->nodes;
+            zone->cells += count, zone->conn += (int64_t)count * row->nodes, zone->reduced += count * row->reduced;
         return 0;
     }
     for (cgsize_t i = 0; i < count; i++) {
@@ -294,7 +300,7 @@ static int emit_polyhedron(const cgns_reader *r, const cgns_zone *zone, const cg
 static int emit_element(const cgns_reader *r, const cgns_zone *zone, const cgns_section *sec, cgsize_t i,
                         CGNS_ENUMT(ElementType_t) type, const cgsize_t *nodes, tpk_mesh *out, int64_t *at)
 {
-    static const volume_kind_row polyhedron = {"NFACE_n", TPK_CELL_POLYHEDRON, 0, NULL};
+    static const volume_kind_row polyhedron = {"NFACE_n", TPK_CELL_POLYHEDRON, 0, NULL, 0};
     const volume_kind_row *row = &polyhedron;
     int64_t c = out->cell_count;
     if (type != CGNS_ENUMV(NFACE_n) && volume_kind(type, &row) != 1)

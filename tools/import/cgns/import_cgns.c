@@ -179,14 +179,14 @@ static int alloc_mesh(const cgns_reader *r, tpk_mesh *out, int64_t points, int64
 /* Every zone scanned, then points and cells in zone order. */
 static int read_zones(cgns_reader *r, cgns_zone *zones, int zone_count, tpk_mesh *out)
 {
-    int64_t points = 0, cells = 0, conn = 0, dropped = 0;
+    int64_t points = 0, cells = 0, conn = 0, dropped = 0, reduced = 0;
     for (int z = 0; z < zone_count; z++) {
         zones[z].index = z + 1;
         if (scan_zone(r, &zones[z]))
             return -1;
         zones[z].first_point = points, zones[z].first_cell = cells;
         points += zones[z].vertices, cells += zones[z].cells, conn += zones[z].conn;
-        dropped += zones[z].dropped;
+        dropped += zones[z].dropped, reduced += zones[z].reduced;
     }
     if (points > INT32_MAX || conn > INT32_MAX)
         return tpk_diag_fail(r->diag, "%s: %lld points and %lld connectivity entries, expected at most %d of each",
@@ -198,6 +198,10 @@ static int read_zones(cgns_reader *r, cgns_zone *zones, int zone_count, tpk_mesh
     if (dropped)
         tpk_diag_warn(r->diag, "%s: left out %lld elements that are not volumes (faces, edges, nodes)", r->path,
                       (long long)dropped);
+    if (reduced)
+        tpk_diag_warn(r->diag, "%s: reduced %lld volume elements to their corner nodes: kept whole are orders 1 "
+                      "and 2 (TETRA_10, PYRA_13/14, PENTA_15/18, HEXA_20/27), not TETRA_16/20, PYRA_21 and up, "
+                      "PENTA_24 and up, HEXA_32 and up", r->path, (long long)reduced);
     if (zone_count > 1)
         tpk_diag_warn(r->diag, "%s: %d zones merged, each with its own vertices (points on zone interfaces are "
                       "not joined; --merge-duplicates welds them)", r->path, zone_count);

@@ -43,6 +43,7 @@ typedef struct cgns_zone {
     int64_t vertices, cells, conn; /* volume cells kept and their cell_conn entries (face streams included) */
     int64_t first_point, first_cell;
     int64_t polyhedra, dropped;    /* NFACE_n cells; elements of lower dimension left out */
+    int64_t reduced;               /* volume elements of an order not kept whole, read by their corners */
     int section_count;
     cgns_section *sections;        /* sorted by start */
 } cgns_zone;
