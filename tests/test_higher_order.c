@@ -718,6 +718,21 @@ static const node_order cgns_hexa27 = {"HEXA_27", CGNS_ENUMV(HEXA_27), 12, 12, 6
                                         {6, 7}, {7, 4}},
                                        {{0, 1, 2, 3}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {0, 3, 7, 4}, {4, 5, 6, 7}}};
 
+/* A CGNS file at `path` with one unstructured zone of `points` points (xyz, coordinates by axis) and
+ * `cells` cells, open for its sections: the file and the ids cg_section_write needs. */
+static void cgns_zone_begin(const char *path, int points, int cells, const double *xyz, int stride, int *fn,
+                            int *base, int *zone)
+{
+    cgsize_t size[3] = {points, cells, 0};
+    int c;
+    CHECK(cg_open(path, CG_MODE_WRITE, fn) == 0);
+    CHECK(cg_base_write(*fn, "b", 3, 3, base) == 0);
+    CHECK(cg_zone_write(*fn, *base, "z", size, CGNS_ENUMV(Unstructured), zone) == 0);
+    CHECK(cg_coord_write(*fn, *base, *zone, CGNS_ENUMV(RealDouble), "CoordinateX", xyz, &c) == 0 &&
+          cg_coord_write(*fn, *base, *zone, CGNS_ENUMV(RealDouble), "CoordinateY", xyz + stride, &c) == 0 &&
+          cg_coord_write(*fn, *base, *zone, CGNS_ENUMV(RealDouble), "CoordinateZ", xyz + 2 * stride, &c) == 0);
+}
+
 TPK_TEST(cgns_orders)
 {
     const node_order *orders[] = {&cgns_tetra10, &cgns_pyra13, &cgns_penta15, &cgns_penta18,
@@ -725,15 +740,9 @@ TPK_TEST(cgns_orders)
     enum { cells = sizeof orders / sizeof orders[0] };
     for (int curved = 0; curved < 2; curved++) {
         static double xyz[3][512];
-        int ns[cells], total = gather_nodes(orders, cells, curved, xyz, ns), fn, base, zone, s, c;
+        int ns[cells], total = gather_nodes(orders, cells, curved, xyz, ns), fn, base, zone, s;
         const char *path = tpk_temp_path("whole.cgns");
-        cgsize_t size[3] = {total, cells, 0};
-        CHECK(cg_open(path, CG_MODE_WRITE, &fn) == 0);
-        CHECK(cg_base_write(fn, "b", 3, 3, &base) == 0);
-        CHECK(cg_zone_write(fn, base, "z", size, CGNS_ENUMV(Unstructured), &zone) == 0);
-        CHECK(cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateX", xyz[0], &c) == 0 &&
-              cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateY", xyz[1], &c) == 0 &&
-              cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateZ", xyz[2], &c) == 0);
+        cgns_zone_begin(path, total, cells, xyz[0], 512, &fn, &base, &zone);
         for (int e = 0, first = 1; e < cells; first += ns[e], e++) {
             cgsize_t conn[27];
             for (int k = 0; k < ns[e]; k++)
@@ -766,16 +775,11 @@ TPK_TEST(cgns_cubic_reduced_with_a_warning)
         xyz[0][k] = k == 1 ? 1.0 : k >= 4 ? 0.1 + 0.01 * k : 0.0, xyz[1][k] = k == 2 ? 1.0 : k >= 4 ? 0.1 : 0.0,
         xyz[2][k] = k == 3 ? 1.0 : k >= 4 ? 0.1 : 0.0;
     const char *path = tpk_temp_path("cubic.cgns");
-    int fn, base, zone, s, c;
-    cgsize_t size[3] = {20, 1, 0}, conn[20];
+    int fn, base, zone, s;
+    cgsize_t conn[20];
     for (int k = 0; k < 20; k++)
         conn[k] = k + 1;
-    CHECK(cg_open(path, CG_MODE_WRITE, &fn) == 0);
-    CHECK(cg_base_write(fn, "b", 3, 3, &base) == 0);
-    CHECK(cg_zone_write(fn, base, "z", size, CGNS_ENUMV(Unstructured), &zone) == 0);
-    CHECK(cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateX", xyz[0], &c) == 0 &&
-          cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateY", xyz[1], &c) == 0 &&
-          cg_coord_write(fn, base, zone, CGNS_ENUMV(RealDouble), "CoordinateZ", xyz[2], &c) == 0);
+    cgns_zone_begin(path, 20, 1, xyz[0], 24, &fn, &base, &zone);
     CHECK(cg_section_write(fn, base, zone, "cubic", CGNS_ENUMV(TETRA_20), 1, 1, 0, conn, &s) == 0);
     CHECK(cg_close(fn) == 0);
     tpk_mesh m;
