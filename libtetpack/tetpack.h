@@ -324,7 +324,8 @@ tpk_result tpk_march_ray(const tpk_marcher *marcher, const double org[3], const 
 typedef struct tpk_range_bvh tpk_range_bvh;
 tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher);
 /* tpk_range_bvh_create with the walk of a Tet20 or Tet16 file on `threads` (tpk_recover_tets_threads;
- * <= 1: the caller's alone), then as tpk_range_bvh_set_threads(bvh, threads). The same bvh for any count. */
+ * <= 1: the caller's alone), then as tpk_range_bvh_set_threads(bvh, threads). The same bvh for any count.
+ * Since 1.3.0. */
 tpk_result tpk_range_bvh_create_threads(tpk_range_bvh **out, const tpk_marcher *marcher, int threads);
 void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
 /* The share (0..1) of its leaves (runs of 8 tets) whose range holds one of values[0 .. count): where it is
