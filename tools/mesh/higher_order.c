@@ -197,32 +197,6 @@ static int lagrange_hex_node(int p, int i, int j, int k)
     return at + 6 * m * m + (i - 1) + m * ((j - 1) + m * (k - 1));
 }
 
-/* The node of lattice point (i, j, k), i + j <= p, 0 <= k <= p, of an order-p Lagrange wedge in VTK 9's
- * numbering (vtkHigherOrderWedge::PointIndexFromIJK): the 6 corners; the bottom triangle's edges 01, 12,
- * 20, the top's, then the vertical edges at corners 0, 1, 2, each from its first corner; the bottom and
- * top triangles' inner points (by rows: i fastest, then j); the quad faces j = 0, i + j = p, i = 0, each
- * along its bottom edge's direction fastest, then up; then the body, by layers of the triangle's inner
- * points. */
-static int lagrange_wedge_node(int p, int i, int j, int k)
-{
-    int m = p - 1, tri = (p - 1) * (p - 2) / 2, top = k == p, layer = k == 0 || k == p;
-    int corner = i == p ? 1 : j == p ? 2 : i == 0 && j == 0 ? 0 : -1;
-    if (corner >= 0)
-        return layer ? corner + 3 * top : 6 + 6 * m + corner * m + (k - 1);
-    int side = j == 0 ? 0 : i + j == p ? 1 : i == 0 ? 2 : -1;
-    int along = side == 0 ? i - 1 : side == 1 ? j - 1 : p - j - 1;
-    if (layer && side >= 0)
-        return 6 + 3 * m * top + side * m + along;
-    int inner = (j - 1) * (p - 1) - (j - 1) * j / 2 + (i - 1);
-    int at = 6 + 9 * m;
-    if (layer)
-        return at + tri * top + inner;
-    at += 2 * tri;
-    if (side >= 0)
-        return at + side * m * m + along + m * (k - 1);
-    return at + 3 * m * m + tri * (k - 1) + inner;
-}
-
 /* Orientation of tetra (a, b, c, d) of lattice points: the sign of det(b - a, c - a, d - a). */
 static int lattice_orientation(const int x[4][3])
 {
@@ -264,8 +238,8 @@ static int lagrange_layout(int type, int p, piece *out)
                             continue;
                         out[n].type = TPK_CELL_WEDGE;
                         for (int v = 0; v < 3; v++) {
-                            out[n].nodes[v] = lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k);
-                            out[n].nodes[3 + v] = lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k + 1);
+                            out[n].nodes[v] = tpk_cell_map_lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k);
+                            out[n].nodes[3 + v] = tpk_cell_map_lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k + 1);
                         }
                     }
         return n;
