@@ -29,7 +29,8 @@ static void reference_point(int type, unsigned *seed, double xi[3])
     if ((type == 24 || (type > TPK_CELL_MAP_LAGRANGE_TETRA && type < TPK_CELL_MAP_LAGRANGE_WEDGE)) &&
         xi[0] + xi[1] + xi[2] > 1)
         xi[0] *= 0.3, xi[1] *= 0.3, xi[2] *= 0.3;
-    if ((type == 13 || type == 26 || type == 31 || type == 32 || type > TPK_CELL_MAP_LAGRANGE_WEDGE) && xi[0] + xi[1] > 1)
+    if ((type == 13 || type == 26 || type == 31 || type == 32 || type > TPK_CELL_MAP_LAGRANGE_WEDGE) &&
+        xi[0] + xi[1] > 1)
         xi[0] = 1 - xi[0], xi[1] = 1 - xi[1];
 }
 

@@ -61,10 +61,10 @@ static int lagrange_tri_node(int q, int a, int b, int c)
 }
 
 /* VTK 9's numbering of the Lagrange tetra (vtkHigherOrderTetra; corners 0-3 at weights
- * w = (p - i - j - k, i, j, k)): shells from the outside in, each a tetra of order m = p - 4 L: its 4 corners; its edges 01, 12, 20, 03, 13, 23, each from its
- * first corner; its faces' inner points, the faces (0 1 3), (2 3 1), (0 3 2), (0 2 1) each numbered as a
- * triangle with the corners in that order (less its boundary ring); then the next shell, offset by
- * (1, 1, 1). */
+ * w = (p - i - j - k, i, j, k)): shells from the outside in, each a tetra of order m = p - 4 L: its 4
+ * corners; its edges 01, 12, 20, 03, 13, 23, each from its first corner; its faces' inner points, the
+ * faces (0 1 3), (2 3 1), (0 3 2), (0 2 1) each numbered as a triangle with the corners in that order
+ * (less its boundary ring); then the next shell, offset by (1, 1, 1). */
 int tpk_cell_map_lagrange_tet_node(int p, int i, int j, int k)
 {
     static const int edge[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
@@ -92,10 +92,10 @@ int tpk_cell_map_lagrange_tet_node(int p, int i, int j, int k)
 }
 
 /* VTK 9's numbering of the Lagrange wedge (vtkHigherOrderWedge::PointIndexFromIJK): the 6 corners; the
- * bottom triangle's edges 01, 12, 20, the top's, then the vertical edges at corners 0, 1, 2, each from its first corner; the bottom and
- * top triangles' inner points (by rows: i fastest, then j); the quad faces j = 0, i + j = p, i = 0, each
- * along its bottom edge's direction fastest, then up; then the body, by layers of the triangle's inner
- * points. */
+ * bottom triangle's edges 01, 12, 20, the top's, then the vertical edges at corners 0, 1, 2, each from
+ * its first corner; the bottom and top triangles' inner points (by rows: i fastest, then j); the quad
+ * faces j = 0, i + j = p, i = 0, each along its bottom edge's direction fastest, then up; then the
+ * body, by layers of the triangle's inner points. */
 int tpk_cell_map_lagrange_wedge_node(int p, int i, int j, int k)
 {
     int m = p - 1, tri = (p - 1) * (p - 2) / 2, top = k == p, layer = k == 0 || k == p;

@@ -36,14 +36,16 @@ int tpk_cell_map_lagrange_wedge_node(int p, int i, int j, int k);
 /* The node count of a type this module maps, or 0: tetra (10), hexahedron (12), wedge (13), pyramid
  * (14), quadratic tetra (24), quadratic hexahedron (25, serendipity), quadratic wedge (26), quadratic
  * pyramid (27), triquadratic hexahedron (29), quadratic linear wedge (31), biquadratic quadratic wedge
- * (32), biquadratic quadratic hexahedron (33), Lagrange tetra and wedge of order p (TPK_CELL_MAP_LAGRANGE_TETRA or _WEDGE + p). */
+ * (32), biquadratic quadratic hexahedron (33), Lagrange tetra and wedge of order p
+ * (TPK_CELL_MAP_LAGRANGE_TETRA or _WEDGE + p). */
 int tpk_cell_map_nodes(int type);
 
 /* The total degree of the type's shape functions as polynomials of the parametric coordinates (so on
- * any tet of its parameter space, in the tet's barycentric coordinates): tetra 1, wedge 2, hexahedron 3,
- * quadratic tetra 2, quadratic (26) and quadratic-linear (31) wedge 3, serendipity hexahedron and
- * biquadratic wedge 4, biquadratic-quadratic hexahedron 5, triquadratic hexahedron 6, Lagrange tetra of order p p, Lagrange wedge of order p 2 p; 0 for the pyramids (a collapsed hexahedron and a
- * rational function, neither a polynomial on the pyramid's tets) and types this module does not map. */
+ * any tet of its parameter space, in the tet's barycentric coordinates): tetra 1, wedge 2, hexahedron
+ * 3, quadratic tetra 2, quadratic (26) and quadratic-linear (31) wedge 3, serendipity hexahedron and
+ * biquadratic wedge 4, biquadratic-quadratic hexahedron 5, triquadratic hexahedron 6, Lagrange tetra of
+ * order p p, Lagrange wedge of order p 2 p; 0 for the pyramids (a collapsed hexahedron and a rational
+ * function, neither a polynomial on the pyramid's tets) and types this module does not map. */
 int tpk_cell_map_degree(int type);
 
 /* VTK parametric coordinates of node k (0 <= k < tpk_cell_map_nodes(type)) into r: corners as
