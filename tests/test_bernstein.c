@@ -11,7 +11,9 @@
 #include "mesh/bernstein.h"
 #include "mesh/cell_map.h"
 
-static const int mapped[] = {12, 13, 24, 25, 26, 29, 31, 32, 33};
+static const int mapped[] = {12, 13, 24, 25, 26, 29, 31, 32, 33, TPK_CELL_MAP_LAGRANGE_TETRA + 3,
+                             TPK_CELL_MAP_LAGRANGE_TETRA + 4, TPK_CELL_MAP_LAGRANGE_TETRA + 5,
+                             TPK_CELL_MAP_LAGRANGE_TETRA + 6, TPK_CELL_MAP_LAGRANGE_WEDGE + 3};
 
 static double uniform(unsigned *seed)
 {
@@ -24,9 +26,11 @@ static void reference_point(int type, unsigned *seed, double xi[3])
 {
     for (int i = 0; i < 3; i++)
         xi[i] = uniform(seed);
-    if (type == 24 && xi[0] + xi[1] + xi[2] > 1)
+    if ((type == 24 || (type > TPK_CELL_MAP_LAGRANGE_TETRA && type < TPK_CELL_MAP_LAGRANGE_WEDGE)) &&
+        xi[0] + xi[1] + xi[2] > 1)
         xi[0] *= 0.3, xi[1] *= 0.3, xi[2] *= 0.3;
-    if ((type == 13 || type == 26 || type == 31 || type == 32) && xi[0] + xi[1] > 1)
+    if ((type == 13 || type == 26 || type == 31 || type == 32 || type > TPK_CELL_MAP_LAGRANGE_WEDGE) &&
+        xi[0] + xi[1] > 1)
         xi[0] = 1 - xi[0], xi[1] = 1 - xi[1];
 }
 

@@ -289,14 +289,16 @@ static void compare(against *a, const tpk_mesh *src, const tpk_src_field *const 
 {
     double r[512][3], w[TPK_CELL_MAP_MAX_NODES], lambda[4];
     for (int64_t c = 0; c < src->cell_count; c++) {
-        int type = src->cell_types[c], n = tpk_cell_map_nodes(type);
+        int type = tpk_cell_map_type(src->cell_types[c], src->cell_offsets[c + 1] - src->cell_offsets[c]);
+        int n = tpk_cell_map_nodes(type);
         const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
         if (!n || src->cell_offsets[c + 1] - src->cell_offsets[c] != n) {
+            type = src->cell_types[c];
             out->cells_skipped += tpk_cell_type(type) && tpk_cell_type(type)->dim == 3;
             continue;
         }
         out->cells++;
-        int ns = samples_of(tpk_cell_type(type)->linear_type, per_axis, r, 512);
+        int ns = samples_of(tpk_cell_type(src->cell_types[c])->linear_type, per_axis, r, 512);
         for (int s = 0; s < ns; s++) {
             double x[3];
             tpk_cell_map_point(type, nodes, src->points, r[s], x);

@@ -51,7 +51,8 @@ void tpk_refine_cells_free(tpk_refine_cells *cells)
 }
 
 /* The type whose functions cell c has (voxels as hexahedra, VTK's Lagrange cells of order 2 as the
- * quadratic ones, which number their nodes alike: mesh/higher_order.c), or 0. */
+ * quadratic ones, which number their nodes alike: mesh/higher_order.c; Lagrange tetra of order 3-6 as
+ * tpk_cell_map_type says), or 0. */
 static int mapped_type(const tpk_refine_cells *cells, int64_t c)
 {
     int type = cells->types[c];
@@ -60,6 +61,8 @@ static int mapped_type(const tpk_refine_cells *cells, int64_t c)
         type = TPK_CELL_HEXAHEDRON;
     else if ((type == 71 && n == 10) || (type == 72 && n == 27) || (type == 73 && n == 18))
         type = type == 71 ? 24 : type == 72 ? 29 : 32;
+    else
+        type = tpk_cell_map_type(type, n);
     return tpk_cell_map_degree(type) > 0 && tpk_cell_map_nodes(type) == n ? type : 0;
 }
 

@@ -1,6 +1,6 @@
-/* Shape functions of the linear and quadratic volume cells in VTK node order (vtkCellType.h; the node
- * orders of vtkQuadraticTetra, vtkQuadraticHexahedron, vtkTriQuadraticHexahedron,
- * vtkBiQuadraticQuadraticHexahedron, vtkQuadraticWedge, vtkQuadraticLinearWedge,
+/* Shape functions of the linear and quadratic volume cells, VTK's Lagrange tetra of orders 3-6 and
+ * wedge of order 3, in VTK node order (vtkCellType.h; the node orders of vtkQuadraticTetra, vtkQuadraticHexahedron,
+ * vtkTriQuadraticHexahedron, vtkBiQuadraticQuadraticHexahedron, vtkQuadraticWedge, vtkQuadraticLinearWedge,
  * vtkBiQuadraticQuadraticWedge and vtkQuadraticPyramid): corners first, then mid-edge nodes in the order
  * of `edges`, then mid-face nodes in the order of `faces`, then the centre. */
 #include "cell_map.h"
@@ -40,6 +40,158 @@ static const node_table tables[] = {
     {32, 13, 18, 9, WEDGE_EDGES, 3, {{0, 1, 4, 3}, {1, 2, 5, 4}, {2, 0, 3, 5}}, 0},
 };
 
+/* The node at barycentric lattice point (a, b, c), a + b + c = q, of an order-q Lagrange triangle in
+ * VTK 9's numbering (vtkHigherOrderTriangle): rings from the outside in, each its 3 corners (a = q,
+ * b = q, c = q), then its edges ab, bc, ca, each from its first corner; the innermost ring a single
+ * point when q is a multiple of 3. */
+static int lagrange_tri_node(int q, int a, int b, int c)
+{
+    int at = 0;
+    for (; a > 0 && b > 0 && c > 0; a--, b--, c--, q -= 3)
+        at += 3 * q;
+    if (q == 0 || a == q)
+        return at;
+    if (b == q || c == q)
+        return at + (b == q ? 1 : 2);
+    if (c == 0)
+        return at + 3 + (b - 1);
+    if (a == 0)
+        return at + 3 + (q - 1) + (c - 1);
+    return at + 3 + 2 * (q - 1) + (a - 1);
+}
+
+/* VTK 9's numbering of the Lagrange tetra (vtkHigherOrderTetra; corners 0-3 at weights
+ * w = (p - i - j - k, i, j, k)): shells from the outside in, each a tetra of order m = p - 4 L: its 4
+ * corners; its edges 01, 12, 20, 03, 13, 23, each from its first corner; its faces' inner points, the
+ * faces (0 1 3), (2 3 1), (0 3 2), (0 2 1) each numbered as a triangle with the corners in that order
+ * (less its boundary ring); then the next shell, offset by (1, 1, 1). */
+int tpk_cell_map_lagrange_tet_node(int p, int i, int j, int k)
+{
+    static const int edge[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
+    static const int face[4][3] = {{0, 1, 3}, {2, 3, 1}, {0, 3, 2}, {0, 2, 1}};
+    int w[4] = {p - i - j - k, i, j, k}, m = p, at = 0;
+    for (; w[0] > 0 && w[1] > 0 && w[2] > 0 && w[3] > 0; m -= 4) {
+        at += 2 * m * m + 2; /* the points on the surface of an order-m tetra (m >= 4 here) */
+        for (int v = 0; v < 4; v++)
+            w[v]--;
+    }
+    if (m == 0)
+        return at;
+    for (int v = 0; v < 4; v++)
+        if (w[v] == m)
+            return at + v;
+    at += 4;
+    for (int e = 0; e < 6; e++)
+        if (w[edge[e][0]] + w[edge[e][1]] == m)
+            return at + e * (m - 1) + w[edge[e][1]] - 1;
+    at += 6 * (m - 1);
+    int f = 0;
+    while (f < 3 && w[face[f][0]] + w[face[f][1]] + w[face[f][2]] != m)
+        f++;
+    return at + f * ((m - 1) * (m - 2) / 2) + lagrange_tri_node(m, w[face[f][0]], w[face[f][1]], w[face[f][2]]) - 3 * m;
+}
+
+/* VTK 9's numbering of the Lagrange wedge (vtkHigherOrderWedge::PointIndexFromIJK): the 6 corners; the
+ * bottom triangle's edges 01, 12, 20, the top's, then the vertical edges at corners 0, 1, 2, each from
+ * its first corner; the bottom and top triangles' inner points (by rows: i fastest, then j); the quad
+ * faces j = 0, i + j = p, i = 0, each along its bottom edge's direction fastest, then up; then the
+ * body, by layers of the triangle's inner points. */
+int tpk_cell_map_lagrange_wedge_node(int p, int i, int j, int k)
+{
+    int m = p - 1, tri = (p - 1) * (p - 2) / 2, top = k == p, layer = k == 0 || k == p;
+    int corner = i == p ? 1 : j == p ? 2 : i == 0 && j == 0 ? 0 : -1;
+    if (corner >= 0)
+        return layer ? corner + 3 * top : 6 + 6 * m + corner * m + (k - 1);
+    int side = j == 0 ? 0 : i + j == p ? 1 : i == 0 ? 2 : -1;
+    int along = side == 0 ? i - 1 : side == 1 ? j - 1 : p - j - 1;
+    if (layer && side >= 0)
+        return 6 + 3 * m * top + side * m + along;
+    int inner = (j - 1) * (p - 1) - (j - 1) * j / 2 + (i - 1);
+    int at = 6 + 9 * m;
+    if (layer)
+        return at + tri * top + inner;
+    at += 2 * tri;
+    if (side >= 0)
+        return at + side * m * m + along + m * (k - 1);
+    return at + 3 * m * m + tri * (k - 1) + inner;
+}
+
+/* The order p of a mapped Lagrange tetra or wedge type, else 0. */
+static int lagrange_order(int type)
+{
+    int p = type - TPK_CELL_MAP_LAGRANGE_TETRA, q = type - TPK_CELL_MAP_LAGRANGE_WEDGE;
+    return p >= 3 && p <= TPK_CELL_MAP_LAGRANGE_MAX_ORDER           ? p
+           : q >= 3 && q <= TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER ? q
+                                                                    : 0;
+}
+
+static int is_wedge(int type)
+{
+    return type > TPK_CELL_MAP_LAGRANGE_WEDGE;
+}
+
+/* The node count of a Lagrange tetra or wedge (is_wedge) of order p. */
+static int lagrange_count(int wedge, int p)
+{
+    return wedge ? (p + 1) * (p + 1) * (p + 2) / 2 : (p + 1) * (p + 2) * (p + 3) / 6;
+}
+
+int tpk_cell_map_type(int type, int64_t n)
+{
+    for (int p = 3; p <= TPK_CELL_MAP_LAGRANGE_MAX_ORDER; p++) {
+        if (type == 71 && lagrange_count(0, p) == n)
+            return TPK_CELL_MAP_LAGRANGE_TETRA + p;
+        if (type == 73 && p <= TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER && lagrange_count(1, p) == n)
+            return TPK_CELL_MAP_LAGRANGE_WEDGE + p;
+    }
+    return type;
+}
+
+/* l_m(L) = prod_{q<m} (p L - q) / (q + 1): 1 at L = m / p, 0 at L = 0, 1/p, ..., (m - 1) / p. */
+static double lagrange_1d(int p, int m, double L)
+{
+    double v = 1;
+    for (int q = 0; q < m; q++)
+        v *= (p * L - q) / (q + 1);
+    return v;
+}
+
+static int lagrange_tetra(int p, const double r[3], double *w)
+{
+    const double L[4] = {1 - r[0] - r[1] - r[2], r[0], r[1], r[2]};
+    double l[4][TPK_CELL_MAP_LAGRANGE_MAX_ORDER + 1];
+    for (int v = 0; v < 4; v++)
+        for (int m = 0; m <= p; m++)
+            l[v][m] = lagrange_1d(p, m, L[v]);
+    for (int i = 0; i <= p; i++)
+        for (int j = 0; i + j <= p; j++)
+            for (int k = 0; i + j + k <= p; k++)
+                w[tpk_cell_map_lagrange_tet_node(p, i, j, k)] = l[0][p - i - j - k] * l[1][i] * l[2][j] * l[3][k];
+    return lagrange_count(0, p);
+}
+
+/* The order-p triangle's Lagrange basis in (L0, L1, L2) = (1 - r - s, r, s) times the 1-D order-p one in
+ * t (nodes at t = k / p). */
+static int lagrange_wedge(int p, const double r[3], double *w)
+{
+    const double L[3] = {1 - r[0] - r[1], r[0], r[1]};
+    double l[3][TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER + 1], h[TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER + 1];
+    for (int v = 0; v < 3; v++)
+        for (int m = 0; m <= p; m++)
+            l[v][m] = lagrange_1d(p, m, L[v]);
+    for (int k = 0; k <= p; k++) {
+        h[k] = 1;
+        for (int q = 0; q <= p; q++)
+            if (q != k)
+                h[k] *= (p * r[2] - q) / (k - q);
+    }
+    for (int i = 0; i <= p; i++)
+        for (int j = 0; i + j <= p; j++)
+            for (int k = 0; k <= p; k++)
+                w[tpk_cell_map_lagrange_wedge_node(p, i, j, k)] = l[0][p - i - j] * l[1][i] * l[2][j] * h[k];
+    return lagrange_count(1, p);
+}
+
 static const node_table *table_of(int type)
 {
     for (size_t i = 0; i < sizeof tables / sizeof tables[0]; i++)
@@ -50,6 +202,8 @@ static const node_table *table_of(int type)
 
 int tpk_cell_map_nodes(int type)
 {
+    if (lagrange_order(type))
+        return lagrange_count(is_wedge(type), lagrange_order(type));
     const node_table *t = table_of(type);
     return t ? t->nodes : 0;
 }
@@ -67,7 +221,7 @@ int tpk_cell_map_degree(int type)
     case 32: return 4;
     case 33: return 5;
     case 29: return 6;
-    default: return 0;
+    default: return is_wedge(type) ? 2 * lagrange_order(type) : lagrange_order(type);
     }
 }
 
@@ -81,6 +235,23 @@ static void corner(const node_table *t, int k, double r[3])
 
 void tpk_cell_map_node(int type, int k, double r[3])
 {
+    int p = lagrange_order(type);
+    if (p && is_wedge(type)) {
+        for (int i = 0; i <= p; i++)
+            for (int j = 0; i + j <= p; j++)
+                for (int l = 0; l <= p; l++)
+                    if (tpk_cell_map_lagrange_wedge_node(p, i, j, l) == k)
+                        r[0] = (double)i / p, r[1] = (double)j / p, r[2] = (double)l / p;
+        return;
+    }
+    if (p) {
+        for (int i = 0; i <= p; i++)
+            for (int j = 0; i + j <= p; j++)
+                for (int l = 0; i + j + l <= p; l++)
+                    if (tpk_cell_map_lagrange_tet_node(p, i, j, l) == k)
+                        r[0] = (double)i / p, r[1] = (double)j / p, r[2] = (double)l / p;
+        return;
+    }
     const node_table *t = table_of(type);
     int corners = tpk_cell_shape_of(t->linear)->corners;
     double a[3], b[3];
@@ -262,7 +433,10 @@ int tpk_cell_map_weights(int type, const double r[3], double *w)
     case 32: return wedge(type, r, w);
     case 14:
     case 27: return pyramid(type, r, w);
-    default: return 0;
+    default:
+        if (!lagrange_order(type))
+            return 0;
+        return is_wedge(type) ? lagrange_wedge(lagrange_order(type), r, w) : lagrange_tetra(lagrange_order(type), r, w);
     }
 }
 

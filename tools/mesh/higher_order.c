@@ -197,84 +197,6 @@ static int lagrange_hex_node(int p, int i, int j, int k)
     return at + 6 * m * m + (i - 1) + m * ((j - 1) + m * (k - 1));
 }
 
-/* The node at barycentric lattice point (a, b, c), a + b + c = q, of an order-q Lagrange triangle in
- * VTK 9's numbering (vtkHigherOrderTriangle): rings from the outside in, each its 3 corners (a = q,
- * b = q, c = q), then its edges ab, bc, ca, each from its first corner; the innermost ring a single
- * point when q is a multiple of 3. */
-static int lagrange_tri_node(int q, int a, int b, int c)
-{
-    int at = 0;
-    for (; a > 0 && b > 0 && c > 0; a--, b--, c--, q -= 3)
-        at += 3 * q;
-    if (q == 0 || a == q)
-        return at;
-    if (b == q || c == q)
-        return at + (b == q ? 1 : 2);
-    if (c == 0)
-        return at + 3 + (b - 1);
-    if (a == 0)
-        return at + 3 + (q - 1) + (c - 1);
-    return at + 3 + 2 * (q - 1) + (a - 1);
-}
-
-/* The node of lattice point (i, j, k), i + j + k <= p, of an order-p Lagrange tetra in VTK 9's numbering
- * (vtkHigherOrderTetra; corners 0-3 at weights w = (p - i - j - k, i, j, k)): shells from the outside in,
- * each a tetra of order m = p - 4 L: its 4 corners; its edges 01, 12, 20, 03, 13, 23, each from its
- * first corner; its faces' inner points, the faces (0 1 3), (2 3 1), (0 3 2), (0 2 1) each numbered as a
- * triangle with the corners in that order (less its boundary ring); then the next shell, offset by
- * (1, 1, 1). */
-static int lagrange_tet_node(int p, int i, int j, int k)
-{
-    static const int edge[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
-    static const int face[4][3] = {{0, 1, 3}, {2, 3, 1}, {0, 3, 2}, {0, 2, 1}};
-    int w[4] = {p - i - j - k, i, j, k}, m = p, at = 0;
-    for (; w[0] > 0 && w[1] > 0 && w[2] > 0 && w[3] > 0; m -= 4) {
-        at += 2 * m * m + 2; /* the points on the surface of an order-m tetra (m >= 4 here) */
-        for (int v = 0; v < 4; v++)
-            w[v]--;
-    }
-    if (m == 0)
-        return at;
-    for (int v = 0; v < 4; v++)
-        if (w[v] == m)
-            return at + v;
-    at += 4;
-    for (int e = 0; e < 6; e++)
-        if (w[edge[e][0]] + w[edge[e][1]] == m)
-            return at + e * (m - 1) + w[edge[e][1]] - 1;
-    at += 6 * (m - 1);
-    int f = 0;
-    while (f < 3 && w[face[f][0]] + w[face[f][1]] + w[face[f][2]] != m)
-        f++;
-    return at + f * ((m - 1) * (m - 2) / 2) + lagrange_tri_node(m, w[face[f][0]], w[face[f][1]], w[face[f][2]]) - 3 * m;
-}
-
-/* The node of lattice point (i, j, k), i + j <= p, 0 <= k <= p, of an order-p Lagrange wedge in VTK 9's
- * numbering (vtkHigherOrderWedge::PointIndexFromIJK): the 6 corners; the bottom triangle's edges 01, 12,
- * 20, the top's, then the vertical edges at corners 0, 1, 2, each from its first corner; the bottom and
- * top triangles' inner points (by rows: i fastest, then j); the quad faces j = 0, i + j = p, i = 0, each
- * along its bottom edge's direction fastest, then up; then the body, by layers of the triangle's inner
- * points. */
-static int lagrange_wedge_node(int p, int i, int j, int k)
-{
-    int m = p - 1, tri = (p - 1) * (p - 2) / 2, top = k == p, layer = k == 0 || k == p;
-    int corner = i == p ? 1 : j == p ? 2 : i == 0 && j == 0 ? 0 : -1;
-    if (corner >= 0)
-        return layer ? corner + 3 * top : 6 + 6 * m + corner * m + (k - 1);
-    int side = j == 0 ? 0 : i + j == p ? 1 : i == 0 ? 2 : -1;
-    int along = side == 0 ? i - 1 : side == 1 ? j - 1 : p - j - 1;
-    if (layer && side >= 0)
-        return 6 + 3 * m * top + side * m + along;
-    int inner = (j - 1) * (p - 1) - (j - 1) * j / 2 + (i - 1);
-    int at = 6 + 9 * m;
-    if (layer)
-        return at + tri * top + inner;
-    at += 2 * tri;
-    if (side >= 0)
-        return at + side * m * m + along + m * (k - 1);
-    return at + 3 * m * m + tri * (k - 1) + inner;
-}
-
 /* Orientation of tetra (a, b, c, d) of lattice points: the sign of det(b - a, c - a, d - a). */
 static int lattice_orientation(const int x[4][3])
 {
@@ -295,7 +217,7 @@ static piece lattice_tet(int p, int x[4][3])
         }
     piece q = {TPK_CELL_TETRA, {0}};
     for (int v = 0; v < 4; v++)
-        q.nodes[v] = lagrange_tet_node(p, x[v][0], x[v][1], x[v][2]);
+        q.nodes[v] = tpk_cell_map_lagrange_tet_node(p, x[v][0], x[v][1], x[v][2]);
     return q;
 }
 
@@ -316,8 +238,8 @@ static int lagrange_layout(int type, int p, piece *out)
                             continue;
                         out[n].type = TPK_CELL_WEDGE;
                         for (int v = 0; v < 3; v++) {
-                            out[n].nodes[v] = lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k);
-                            out[n].nodes[3 + v] = lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k + 1);
+                            out[n].nodes[v] = tpk_cell_map_lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k);
+                            out[n].nodes[3 + v] = tpk_cell_map_lagrange_wedge_node(p, tri[down][v][0], tri[down][v][1], k + 1);
                         }
                     }
         return n;
@@ -340,7 +262,8 @@ static int lagrange_layout(int type, int p, piece *out)
                     out[n].type = 0;
                     for (int a = 0; a < 3; a++)
                         for (int b = 0; b < 2; b++)
-                            out[n].nodes[2 * a + b] = lagrange_tet_node(p, pair[a][b][0], pair[a][b][1], pair[a][b][2]);
+                            out[n].nodes[2 * a + b] =
+                                tpk_cell_map_lagrange_tet_node(p, pair[a][b][0], pair[a][b][1], pair[a][b][2]);
                     for (int d = 0; d < 3; d++) {
                         const int *u0 = pair[(d + 1) % 3][0], *u1 = pair[(d + 1) % 3][1];
                         const int *v0 = pair[(d + 2) % 3][0], *v1 = pair[(d + 2) % 3][1];
