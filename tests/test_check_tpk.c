@@ -80,7 +80,7 @@ static int64_t total_6xx(tpk_check_report *r, const char *label)
 
 /* ---- files -------------------------------------------------------------------------------------- */
 
-static int convert(const char *data, const char *out, unsigned layouts, int zstd)
+static int convert_with(const char *data, const char *out, unsigned layouts, int zstd, int cull)
 {
     tpk_convert_options o;
     memset(&o, 0, sizeof o);
@@ -88,6 +88,7 @@ static int convert(const char *data, const char *out, unsigned layouts, int zstd
     o.output = out;
     o.layouts = layouts;
     o.zstd_level = zstd;
+    o.cull = cull;
     o.threads = 2;
     tpk_convert_report report;
     tpk_diag diag;
@@ -97,6 +98,11 @@ static int convert(const char *data, const char *out, unsigned layouts, int zstd
         return -1;
     }
     return 0;
+}
+
+static int convert(const char *data, const char *out, unsigned layouts, int zstd)
+{
+    return convert_with(data, out, layouts, zstd, 0);
 }
 
 /* A file as a list of chunks in memory, to change and write back with the library's writer (which
@@ -1262,4 +1268,48 @@ TPK_TEST(b01_broken_blocks)
     cull_words_free(&c);
     free(b.tets);
     parts_free(&b.ps);
+}
+
+/* convert --cull: its CULL is the words spec §17.4 gives for its block size (built here from the file's
+ * own tets), and the file checks clean, in Tet16 alone (compressed) and all layouts, on real meshes of
+ * 1348 and 202596 tets. */
+TPK_TEST(b01_converted_blocks)
+{
+    static const char *const meshes[2] = {"sfepy/cylinder.vtk", "sfepy/cube_big_tetra.mesh"};
+    static const unsigned layouts[2] = {TPK_LAYOUT_BIT_TET16, ALL_LAYOUTS};
+    for (int m = 0; m < 2; m++)
+        for (int l = 0; l < 2; l++) {
+            const char *path = tpk_temp_path("converted_cull.tpk");
+            CHECK(convert_with(meshes[m], path, layouts[l] | TPK_LAYOUT_BIT_TET20, l == 0 ? 3 : 0, 1) == 0);
+            tpk_check_report report;
+            CHECK_EQ_INT(run_6xx(path, &report), 0);
+            int64_t total = total_6xx(&report, meshes[m]);
+            tpk_check_report_free(&report);
+            CHECK_MSG(total == 0, "%s, layouts %u: %lld findings", meshes[m], layouts[l], (long long)total);
+            parts ps;
+            tpk_file *file = NULL;
+            tpk_mesh_arrays arrays;
+            CHECK(parts_read(path, &ps) == 0 && tpk_open_path(&file, path, NULL, NULL, 0) == TPK_OK);
+            if (!file)
+                return;
+            int64_t T = (int64_t)ps.header.tet_count;
+            int32_t *tets = malloc(sizeof *tets * (size_t)(4 * T));
+            CHECK(tets && tpk_load_arrays(file, TPK_LAYOUT_TET20, NULL, 0, &arrays) == TPK_OK &&
+                  tpk_recover_tets(&arrays, tets) == TPK_OK);
+            tpk_file_info info;
+            tpk_get_info(file, &info);
+            tpk_close(file);
+            part *written = parts_get(&ps, TPK_TAG_CULL, 0, 0);
+            int32_t B = written && written->desc.elem_count ? *(const int32_t *)written->data : 0;
+            cull_words c = {0};
+            CHECK(B >= 16 && build_cull(tets, parts_data(&ps, TPK_TAG_TT20), T, B, 32, &c) == 0);
+            CHECK_MSG(info.version_minor == 4 && written && written->desc.elem_count == c.count &&
+                          written->desc.flags == 0 && !memcmp(written->data, c.w, sizeof *c.w * c.count),
+                      "%s: CULL of %llu words, %zu by spec §17.4 (%lld blocks, %lld seeds, %lld intervals)", meshes[m],
+                      written ? (unsigned long long)written->desc.elem_count : 0ULL, c.count, (long long)c.K,
+                      (long long)c.S, (long long)c.I);
+            cull_words_free(&c);
+            free(tets);
+            parts_free(&ps);
+        }
 }
