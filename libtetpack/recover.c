@@ -402,3 +402,114 @@ tpk_result tpki_recover_tets_neighbors(const tpk_mesh_arrays *mesh, int32_t *dst
 {
     return nbr ? recover(mesh, dst, nbr, 1) : TPK_ERR_INVALID_ARGUMENT;
 }
+
+/* ---- One block of a CULL chunk (spec §17) --------------------------------------------------------- */
+
+/* Is v in one of the sorted intervals [first, end) of iv[0 .. count)? */
+static int in_intervals(const int32_t *iv, int64_t count, int32_t v)
+{
+    int64_t lo = 0, hi = count; /* the first interval whose end is above v */
+    while (lo < hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (iv[2 * mid + 1] <= v)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < count && iv[2 * lo] <= v;
+}
+
+/* The walk inside block [t0, t1) from its seeds; tets stored at dst[4 * (t - t0)], n3 at n3[t - t0]. */
+static tpk_result walk_block(const walk *w, const tpk_cull *cull, uint64_t block, int64_t t0, int64_t t1,
+                             int32_t *dst, int32_t *n3, int32_t *queue)
+{
+    int64_t count = t1 - t0, head = 0, tail = 0;
+    for (int64_t i = 0; i < count; i++)
+        n3[i] = UNSET;
+    for (int32_t s = cull->seed_start[block]; s < cull->seed_start[block + 1]; s++) {
+        const int32_t *seed = cull->seeds + (int64_t)TPK_CULL_SEED_WORDS * s;
+        int64_t t = seed[0]; /* in [t0, t1), its ids in range and distinct: rule 17 (rules.c check_cull) */
+        int32_t q[4] = {seed[1], seed[2], seed[3], seed[4]};
+        if (vx_of(w, t) != (q[0] ^ q[1] ^ q[2] ^ q[3]))
+            return TPK_ERR_MESH; /* not this tet's vertices */
+        if (w->mesh->layout == TPK_LAYOUT_TET20 && w->mesh->tet20[t].n[3] != seed[5])
+            return TPK_ERR_MESH;
+        for (int r = 0; r < 4; r++) {
+            int32_t u = neighbor(w, t, seed[5], r);
+            if (u < -1 || u >= w->tet_count)
+                return TPK_ERR_CORRUPT;
+        }
+        if (n3[t - t0] != UNSET) { /* reached from a seed before: it must agree */
+            int32_t a[4], b[4];
+            memcpy(a, q, sizeof a), memcpy(b, dst + 4 * (t - t0), sizeof b);
+            canon(a), canon(b);
+            if (memcmp(a, b, sizeof a) || n3[t - t0] != seed[5])
+                return TPK_ERR_MESH;
+            continue;
+        }
+        memcpy(dst + 4 * (t - t0), q, sizeof q);
+        n3[t - t0] = seed[5];
+        queue[tail++] = (int32_t)t;
+        while (head < tail) {
+            int32_t c = queue[head++], cq[4];
+            memcpy(cq, dst + 4 * ((int64_t)c - t0), sizeof cq);
+            int32_t cn3 = n3[c - t0];
+            for (int j = 0; j < 4; j++) {
+                int32_t u = neighbor(w, c, cn3, rank_of(cq, j));
+                if (u < t0 || u >= t1)
+                    continue; /* the shell, or another block */
+                int32_t f[3] = {cq[tpk_tet_faces[j][0]], cq[tpk_tet_faces[j][1]], cq[tpk_tet_faces[j][2]]};
+                tpk_result rc;
+                if (n3[u - t0] == UNSET) {
+                    rc = decode(w, u, f, c, dst + 4 * ((int64_t)u - t0), &n3[u - t0]);
+                    if (rc == TPK_OK)
+                        queue[tail++] = u;
+                } else {
+                    rc = check_visit(w, u, dst + 4 * ((int64_t)u - t0), n3[u - t0], f, c);
+                }
+                if (rc)
+                    return rc;
+            }
+        }
+    }
+    return tail == count ? TPK_OK : TPK_ERR_MESH; /* a tet the seeds do not reach inside the block */
+}
+
+tpk_result tpk_recover_block(const tpk_mesh_arrays *mesh, const tpk_cull *cull, uint64_t block, int32_t *dst)
+{
+    if (!mesh || !cull || !dst || block >= cull->block_count || cull->block_tets == 0)
+        return TPK_ERR_INVALID_ARGUMENT;
+    if (mesh->tet_count > INT32_MAX || mesh->vertex_count > INT32_MAX)
+        return TPK_ERR_LIMIT;
+    const int64_t B = cull->block_tets, T = (int64_t)mesh->tet_count;
+    if (cull->block_count != (uint64_t)((T + B - 1) / B))
+        return TPK_ERR_INVALID_ARGUMENT; /* another file's blocks */
+    const int64_t t0 = (int64_t)block * B, t1 = t0 + B < T ? t0 + B : T;
+    tpk_result rc = TPK_OK;
+    if (mesh->layout == TPK_LAYOUT_TET32) {
+        if (!mesh->tet32)
+            return TPK_ERR_INVALID_ARGUMENT;
+        tpk_mesh_arrays part = *mesh; /* recover_tet32 reads tets [0, tet_count) of the view */
+        part.tet32 = mesh->tet32 + t0;
+        part.tet_count = (uint64_t)(t1 - t0);
+        rc = recover_tet32(&part, dst, NULL);
+    } else {
+        if ((mesh->layout != TPK_LAYOUT_TET20 && mesh->layout != TPK_LAYOUT_TET16) ||
+            (mesh->layout == TPK_LAYOUT_TET20 && !mesh->tet20) || (mesh->layout == TPK_LAYOUT_TET16 && !mesh->tet16))
+            return TPK_ERR_INVALID_ARGUMENT;
+        walk w = {mesh, T, (int64_t)mesh->vertex_count, NULL, NULL, 1, 0};
+        int32_t *scratch = malloc(sizeof *scratch * 2 * (size_t)(t1 - t0));
+        if (!scratch)
+            return TPK_ERR_OUT_OF_MEMORY;
+        rc = walk_block(&w, cull, block, t0, t1, dst, scratch, scratch + (t1 - t0));
+        free(scratch);
+        for (int64_t i = 0; rc == TPK_OK && i < t1 - t0; i++)
+            canon(dst + 4 * i);
+    }
+    const int32_t *iv = cull->intervals + 2 * (int64_t)cull->interval_start[block];
+    const int64_t iv_count = cull->interval_start[block + 1] - cull->interval_start[block];
+    for (int64_t i = 0; rc == TPK_OK && i < 4 * (t1 - t0); i++)
+        if (!in_intervals(iv, iv_count, dst[i]))
+            rc = TPK_ERR_MESH; /* the block's scalars would not bound this vertex's */
+    return rc;
+}
