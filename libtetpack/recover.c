@@ -44,13 +44,10 @@ typedef struct queue {
     int64_t head, tail, cap;
 } queue;
 
+/* The walk runs on Tet20 and Tet16 only (recover reads Tet32 directly), as vx_ptr and neighbor assume. */
 static int32_t vx_of(const walk *w, int64_t t)
 {
-    switch (w->mesh->layout) {
-    case TPK_LAYOUT_TET20: return w->mesh->tet20[t].vx;
-    case TPK_LAYOUT_TET16: return w->mesh->tet16[t].vx;
-    default: return w->mesh->tet32[t].vx;
-    }
+    return w->mesh->layout == TPK_LAYOUT_TET20 ? w->mesh->tet20[t].vx : w->mesh->tet16[t].vx;
 }
 
 static const void *vx_ptr(const walk *w, int64_t t)
