@@ -23,13 +23,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <pthread.h>
-#include <unistd.h>
 
 #include "internal_mesh.h"
+#include "internal_threads.h"
 
 #define UNSET INT32_MIN
 #define BUSY (INT32_MIN + 1)
-#define MAX_THREADS 64
 
 typedef struct walk {
     const tpk_mesh_arrays *mesh;
@@ -45,13 +44,10 @@ typedef struct queue {
     int64_t head, tail, cap;
 } queue;
 
+/* The walk runs on Tet20 and Tet16 only (recover reads Tet32 directly), as vx_ptr and neighbor assume. */
 static int32_t vx_of(const walk *w, int64_t t)
 {
-    switch (w->mesh->layout) {
-    case TPK_LAYOUT_TET20: return w->mesh->tet20[t].vx;
-    case TPK_LAYOUT_TET16: return w->mesh->tet16[t].vx;
-    default: return w->mesh->tet32[t].vx;
-    }
+    return w->mesh->layout == TPK_LAYOUT_TET20 ? w->mesh->tet20[t].vx : w->mesh->tet16[t].vx;
 }
 
 static const void *vx_ptr(const walk *w, int64_t t)
@@ -266,7 +262,7 @@ static tpk_result walk_parallel(walk *w, int threads)
         w->n3[t] = UNSET;
     w->threads = threads;
     w->stop = 0;
-    worker k[MAX_THREADS];
+    worker k[TPKI_THREADS_MAX];
     uint64_t S = w->mesh->shell_face_count;
     int started = 0;
     for (int i = 0; i < threads; i++)
@@ -296,31 +292,21 @@ static tpk_result walk_parallel(walk *w, int threads)
 /* Every quadruple into its canonical rotation, on `threads` threads by slices of the tets. */
 typedef struct canon_job {
     int32_t *dst;
-    int64_t t0, t1;
-    pthread_t thread;
+    int64_t tet_count;
 } canon_job;
 
-static void *canon_run(void *arg)
+static void canon_run(void *arg, int share, int shares)
 {
-    canon_job *c = arg;
-    for (int64_t t = c->t0; t < c->t1; t++)
+    const canon_job *c = arg;
+    int64_t t0 = c->tet_count * share / shares, t1 = c->tet_count * (share + 1) / shares;
+    for (int64_t t = t0; t < t1; t++)
         canon(c->dst + 4 * t);
-    return NULL;
 }
 
 static void canon_all(int32_t *dst, int64_t tet_count, int threads)
 {
-    canon_job c[MAX_THREADS];
-    int started = 0;
-    for (int i = 0; i < threads; i++)
-        c[i] = (canon_job){dst, tet_count * i / threads, tet_count * (i + 1) / threads, 0};
-    while (started + 1 < threads && pthread_create(&c[started + 1].thread, NULL, canon_run, &c[started + 1]) == 0)
-        started++;
-    for (int i = started + 1; i < threads; i++)
-        canon_run(&c[i]); /* the slices of threads that could not start */
-    canon_run(&c[0]);
-    for (int i = 1; i <= started; i++)
-        pthread_join(c[i].thread, NULL);
+    canon_job c = {dst, tet_count};
+    tpki_run_threads(threads, canon_run, &c);
 }
 
 /* Tet32 stores the vertices and the neighbors opposite each: nbr (when asked) gets them by rank. */
@@ -363,11 +349,9 @@ static tpk_result recover(const tpk_mesh_arrays *mesh, int32_t *dst, int32_t *nb
         return TPK_ERR_INVALID_ARGUMENT;
     if (mesh->tet_count == 0)
         return TPK_OK;
-    if (threads <= 0) {
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = cores < 1 ? 1 : cores > MAX_THREADS ? MAX_THREADS : (int)cores;
-    }
-    threads = threads > MAX_THREADS ? MAX_THREADS : threads;
+    if (threads <= 0)
+        threads = tpki_cores();
+    threads = threads > TPKI_THREADS_MAX ? TPKI_THREADS_MAX : threads;
     int64_t most = 1 + (int64_t)mesh->tet_count / 64; /* a few dozen tets each at least */
     threads = threads > most ? (int)most : threads;
     if ((uint64_t)threads > mesh->shell_face_count)
