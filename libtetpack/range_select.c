@@ -81,13 +81,45 @@ static tpk_result fold_wide(tpk_range_bvh *b, const tpk_bvh_node *bin, int32_t b
     return TPK_OK;
 }
 
+/* The runs of tets [span[2i], span[2i + 1]) that may hold a value, in file order: all tets, or with
+ * culling blocks the blocks whose range holds one, each walked and its tets' ranges read (the tets
+ * outside them hold none). *spans malloc'd. */
+static tpk_result candidate_spans(tpk_range_bvh *b, const double *values, int count, int64_t **spans, int64_t *n)
+{
+    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
+    const uint64_t blocks = b->culled ? b->cull.block_count : 1;
+    *n = 0;
+    *spans = malloc(sizeof **spans * 2 * (size_t)(blocks ? blocks : 1));
+    if (!*spans)
+        return TPK_ERR_OUT_OF_MEMORY;
+    if (!b->culled) {
+        (*spans)[0] = 0, (*spans)[1] = tet_count, *n = 1;
+        return TPK_OK;
+    }
+    const int64_t B = b->cull.block_tets;
+    for (uint64_t k = 0; k < blocks; k++) {
+        if (!tpki_range_block_holds(b, k, values, count))
+            continue;
+        tpk_result r = tpki_range_ready_block(b, k);
+        if (r != TPK_OK)
+            return r;
+        int64_t t0 = (int64_t)k * B, t1 = t0 + B < tet_count ? t0 + B : tet_count;
+        if (*n > 0 && (*spans)[2 * *n - 1] == t0)
+            (*spans)[2 * *n - 1] = t1; /* joined to the run before */
+        else
+            (*spans)[2 * *n] = t0, (*spans)[2 * *n + 1] = t1, ++*n;
+    }
+    return TPK_OK;
+}
+
 /* The binary tree's items: the box (rounded outward, padded as the file-order tree's leaves) and
  * centroid of each tet that holds a value, in file order. */
-static void active_items(const tpk_range_bvh *b, const double *values, int count, tpki_bvh_item *items)
+static void active_items(const tpk_range_bvh *b, const double *values, int count, const int64_t *spans,
+                         int64_t span_count, tpki_bvh_item *items)
 {
     const float *pos = b->marcher->mesh.positions;
-    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
-    for (int64_t t = 0, i = 0; t < tet_count; t++) {
+    for (int64_t sp = 0, i = 0; sp < span_count; sp++)
+    for (int64_t t = spans[2 * sp]; t < spans[2 * sp + 1]; t++) {
         if (!tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count))
             continue;
         tpki_bvh_item *it = &items[i++];
@@ -115,10 +147,15 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     tpki_range_drop_selection(b);
     if (count == 0)
         return TPK_OK;
-    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
-    int64_t n = 0;
-    for (int64_t t = 0; t < tet_count; t++)
-        n += tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count);
+    int64_t *spans = NULL, span_count = 0, n = 0;
+    tpk_result sr = candidate_spans(b, values, count, &spans, &span_count);
+    if (sr != TPK_OK) {
+        free(spans);
+        return sr;
+    }
+    for (int64_t sp = 0; sp < span_count; sp++)
+        for (int64_t t = spans[2 * sp]; t < spans[2 * sp + 1]; t++)
+            n += tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count);
     const size_t room = (size_t)(n ? n : 1);
     tpki_bvh_item *items = malloc(sizeof *items * room);
     tpk_bvh_node *bin = malloc(sizeof *bin * 2 * room);
@@ -131,7 +168,7 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
                        : TPK_ERR_OUT_OF_MEMORY;
     int32_t bin_count = 0;
     if (r == TPK_OK && n > 0) {
-        active_items(b, values, count, items);
+        active_items(b, values, count, spans, span_count, items);
         r = tpki_range_tree_build(items, (int32_t)n, ACTIVE_LEAF, b->threads, bin, &bin_count);
     }
     if (r == TPK_OK && n > 0)
@@ -159,6 +196,7 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     }
     free(items);
     free(bin);
+    free(spans);
     if (r != TPK_OK)
         tpki_range_drop_selection(b);
     return r;

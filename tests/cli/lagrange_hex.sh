@@ -7,36 +7,24 @@
 source "$(dirname "$0")/common.sh" "$@"
 
 for order in 3 4; do
-    "$PY" - "$WORK/lagrange$order.vtu" "$order" <<'EOF' || fail "VTK could not write the Lagrange hexahedra"
+    cli_py - "$WORK/lagrange$order.vtu" "$order" <<'EOF' || fail "VTK could not write the Lagrange hexahedra"
 import sys
-from vtkmodules.vtkCommonCore import vtkPoints, vtkDoubleArray
-from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid, vtkHigherOrderHexahedron, VTK_LAGRANGE_HEXAHEDRON
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+import vtk_write
+from vtkmodules.vtkCommonDataModel import vtkHigherOrderHexahedron, VTK_LAGRANGE_HEXAHEDRON
 path, p = sys.argv[1], int(sys.argv[2])
-grid, points, field, ids = vtkUnstructuredGrid(), vtkPoints(), vtkDoubleArray(), {}
-field.SetName("f")
+g = vtk_write.Grid(2, lambda x: x[0] + 2 * x[1] + 3 * x[2])
 def point(gi, j, k):  # one point per global lattice position: the shared face's points once
-    if (gi, j, k) not in ids:
-        r, s, t = gi / p, j / p, k / p
-        x = (1.5 * r + 0.3 * s + 0.1 * t, 0.2 * r + 1.4 * s - 0.2 * t + 0.1 * r * r, 0.1 * r + 0.4 * s + 1.5 * t)
-        ids[gi, j, k] = points.InsertNextPoint(*x)
-        field.InsertNextValue(x[0] + 2 * x[1] + 3 * x[2])
-    return ids[gi, j, k]
-grid.Allocate(2)
+    r, s, t = gi / p, j / p, k / p
+    x = (1.5 * r + 0.3 * s + 0.1 * t, 0.2 * r + 1.4 * s - 0.2 * t + 0.1 * r * r, 0.1 * r + 0.4 * s + 1.5 * t)
+    return g.point((gi, j, k), x)
 for cell in range(2):
     conn = [0] * (p + 1) ** 3
     for i in range(p + 1):
         for j in range(p + 1):
             for k in range(p + 1):
                 conn[vtkHigherOrderHexahedron.PointIndexFromIJK(i, j, k, [p, p, p])] = point(cell * p + i, j, k)
-    grid.InsertNextCell(VTK_LAGRANGE_HEXAHEDRON, len(conn), conn)
-grid.SetPoints(points)
-grid.GetPointData().AddArray(field)
-w = vtkXMLUnstructuredGridWriter()
-w.SetFileName(path)
-w.SetInputData(grid)
-w.SetDataModeToAscii()
-assert w.Write() == 1
+    g.cell(VTK_LAGRANGE_HEXAHEDRON, conn)
+g.write(path)
 EOF
     convert_checked "$WORK/lagrange$order.vtu" "$WORK/lagrange$order.tpk" --json > "$WORK/l.json" 2> "$WORK/err"
     "$PY" - "$WORK/l.json" "$order" <<'EOF' || fail "order $order: $(cat "$WORK/l.json")"

@@ -11,12 +11,11 @@ source "$(dirname "$0")/common.sh" "$@"
 
 for case in tetra:3 tetra:4 wedge:3 wedge:4 tetra15:2; do
     kind=${case%:*} order=${case#*:}
-    "$PY" - "$WORK/$kind$order.vtu" "$kind" "$order" <<'EOF2' || fail "VTK could not write the Lagrange ${kind}s"
+    cli_py - "$WORK/$kind$order.vtu" "$kind" "$order" <<'EOF2' || fail "VTK could not write the Lagrange ${kind}s"
 import sys
-from vtkmodules.vtkCommonCore import vtkPoints, vtkDoubleArray
-from vtkmodules.vtkCommonDataModel import (vtkUnstructuredGrid, vtkLagrangeTetra, vtkLagrangeWedge,
-                                           VTK_LAGRANGE_TETRAHEDRON, VTK_LAGRANGE_WEDGE)
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+import vtk_write
+from vtkmodules.vtkCommonDataModel import (vtkLagrangeTetra, vtkLagrangeWedge, VTK_LAGRANGE_TETRAHEDRON,
+                                           VTK_LAGRANGE_WEDGE)
 path, kind, p = sys.argv[1], sys.argv[2], int(sys.argv[3])
 if kind.startswith("tetra"):
     n, vtk_type, cell = (p + 1) * (p + 2) * (p + 3) // 6, VTK_LAGRANGE_TETRAHEDRON, vtkLagrangeTetra()
@@ -39,29 +38,16 @@ if kind == "wedge":
     cell.SetOrder(p, p, p, n)
 cell.Initialize()
 pc = cell.GetParametricCoords()
-grid, points, field, ids = vtkUnstructuredGrid(), vtkPoints(), vtkDoubleArray(), {}
-field.SetName("f")
+g = vtk_write.Grid(2, lambda x: x[0] + 2 * x[1] + 3 * x[2] + x[0] * x[1])
 def point(X):  # one point per position (multiples of 1/p, 1/3 or 1/4): the shared face's points once
-    key = tuple(round(v * 12) for v in X)
-    if key not in ids:
-        x, y, z = X
-        x = (1.5 * x + 0.3 * y + 0.1 * z, 0.2 * x + 1.4 * y - 0.2 * z + 0.1 * x * x, 0.1 * x + 0.4 * y + 1.5 * z)
-        ids[key] = points.InsertNextPoint(*x)
-        field.InsertNextValue(x[0] + 2 * x[1] + 3 * x[2] + x[0] * x[1])
-    return ids[key]
-grid.Allocate(2)
+    x, y, z = X
+    x = (1.5 * x + 0.3 * y + 0.1 * z, 0.2 * x + 1.4 * y - 0.2 * z + 0.1 * x * x, 0.1 * x + 0.4 * y + 1.5 * z)
+    return g.point(tuple(round(v * 12) for v in X), x)
 for c in range(2):
-    conn = [point(place(c, pc[3 * k], pc[3 * k + 1], pc[3 * k + 2])) for k in range(n)]
-    grid.InsertNextCell(vtk_type, n, conn)
+    g.cell(vtk_type, [point(place(c, pc[3 * k], pc[3 * k + 1], pc[3 * k + 2])) for k in range(n)])
 shared = {"tetra": (p + 1) * (p + 2) // 2, "tetra15": 7, "wedge": (p + 1) ** 2}[kind]
-assert points.GetNumberOfPoints() == 2 * n - shared, (points.GetNumberOfPoints(), 2 * n - shared)
-grid.SetPoints(points)
-grid.GetPointData().AddArray(field)
-w = vtkXMLUnstructuredGridWriter()
-w.SetFileName(path)
-w.SetInputData(grid)
-w.SetDataModeToAscii()
-assert w.Write() == 1
+assert g.points.GetNumberOfPoints() == 2 * n - shared, (g.points.GetNumberOfPoints(), 2 * n - shared)
+g.write(path)
 EOF2
     convert_checked "$WORK/$kind$order.vtu" "$WORK/$kind$order.tpk" --json > "$WORK/l.json" 2> "$WORK/err" ||
         fail "$kind order $order: convert: $(cat "$WORK/err")"

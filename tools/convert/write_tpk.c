@@ -500,6 +500,20 @@ static int write_maps(chunk_writer *cw, const tpk_tetmesh *mesh)
     return rc;
 }
 
+/* convert --cull: the CULL chunk (spec §17), built here while the tets and neighbors are intact. */
+static int write_cull(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors)
+{
+    if (mesh->tet_count == 0)
+        return 0; /* no blocks: a file of no tets has nothing to cull */
+    uint64_t count = 0;
+    int32_t *words = tpk_build_cull(mesh->tets, neighbors, mesh->tet_count, cw->threads, &count);
+    if (!words)
+        return tpk_diag_fail(cw->diag, "convert: out of memory building the culling blocks (--cull)");
+    int rc = put_chunk(cw, TPK_TAG_CULL, 0, TPK_ELEM_I32, 4, count, 0, 0, words);
+    free(words);
+    return rc;
+}
+
 static void writer_message(void *user, tpk_result code, const char *text)
 {
     (void)code;
@@ -541,6 +555,8 @@ int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const t
         rc = write_fields(&cw, mesh);
     if (rc == 0)
         rc = write_maps(&cw, mesh);
+    if (rc == 0 && o->cull)
+        rc = write_cull(&cw, mesh, neighbors);
     if (rc != 0)
         tpk_write_abort(ws);
     return rc;
