@@ -79,18 +79,19 @@ static void check_seed(const tpkc *c, tpkc_sink *sink, int64_t block, int64_t s,
                          "is %d", s, w[0], w[5], q[largest], n[largest]);
 }
 
-/* The interval of `intervals[0..count)` (sorted, disjoint) that holds v, or -1. */
-static int64_t interval_of(const int32_t *intervals, int64_t count, int32_t v)
+/* Whether one of `intervals[0..count)` (sorted, disjoint, count >= 1) holds v: the first interval whose
+ * end is above v, found without branches on the data (a branchy search spent most of this pass in
+ * mispredictions), must start at or below v. */
+static int in_intervals(const int32_t *intervals, int64_t count, int32_t v)
 {
-    int64_t lo = 0, hi = count; /* the first interval whose end is above v */
-    while (lo < hi) {
-        int64_t mid = lo + (hi - lo) / 2;
-        if (intervals[2 * mid + 1] <= v)
-            lo = mid + 1;
-        else
-            hi = mid;
+    int64_t lo = 0, n = count;
+    while (n > 1) {
+        int64_t half = n / 2;
+        lo = intervals[2 * (lo + half) + 1] <= v ? lo + half : lo;
+        n -= half;
     }
-    return lo < count && intervals[2 * lo] <= v ? lo : -1;
+    lo += intervals[2 * lo + 1] <= v;
+    return lo < count && intervals[2 * lo] <= v;
 }
 
 /* Block k: its seeds, then a walk from them across faces inside the block (reached[] and queue[] hold
@@ -132,7 +133,7 @@ static void check_block(const tpkc *c, const tpk_cull *cull, tpkc_sink *sink, in
         if (!tpkc_usable(c, t, q))
             continue;
         for (int j = 0; j < 4; j++)
-            if (interval_of(intervals, interval_count, q[j]) < 0) {
+            if (!in_intervals(intervals, interval_count, q[j])) {
                 tpk_example_note(block_hit(sink, k, t, -1),
                                  "tet %" PRId64 ": vertex %d lies in none of block %" PRId64 "'s %" PRId64
                                  " intervals (ids %d to %d)", t, q[j], k, interval_count, intervals[0],
