@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "internal_range.h"
+#include "internal_threads.h"
 
 /* Up to 6 tets a leaf, not 4: the packets' float tests sift a leaf's tets cheaply, and fewer nodes mean
  * fewer node tests and queue steps (grid 120, iso 0.3: 181k wide nodes, not 297k); grid 55 512^2 under
@@ -81,6 +82,21 @@ static tpk_result fold_wide(tpk_range_bvh *b, const tpk_bvh_node *bin, int32_t b
     return TPK_OK;
 }
 
+/* Blocks to walk, shared out in contiguous slices; each share stops at its first error. */
+typedef struct ready_job {
+    tpk_range_bvh *b;
+    int64_t *blocks, count;
+    tpk_result result[TPKI_THREADS_MAX];
+} ready_job;
+
+static void ready_share(void *arg, int share, int shares)
+{
+    ready_job *j = arg;
+    int64_t i0 = j->count * share / shares, i1 = j->count * (share + 1) / shares;
+    for (int64_t i = i0; i < i1 && j->result[share] == TPK_OK; i++)
+        j->result[share] = tpki_range_ready_block(j->b, (uint64_t)j->blocks[i]);
+}
+
 /* The runs of tets [span[2i], span[2i + 1]) that may hold a value, in file order: all tets, or with
  * culling blocks the blocks whose range holds one, each walked and its tets' ranges read (the tets
  * outside them hold none). *spans malloc'd. */
@@ -97,19 +113,25 @@ static tpk_result candidate_spans(tpk_range_bvh *b, const double *values, int co
         return TPK_OK;
     }
     const int64_t B = b->cull.block_tets;
-    for (uint64_t k = 0; k < blocks; k++) {
-        if (!tpki_range_block_holds(b, k, values, count))
-            continue;
-        tpk_result r = tpki_range_ready_block(b, k);
-        if (r != TPK_OK)
-            return r;
-        int64_t t0 = (int64_t)k * B, t1 = t0 + B < tet_count ? t0 + B : tet_count;
+    ready_job job = {b, malloc(sizeof *job.blocks * (size_t)(blocks ? blocks : 1)), 0, {0}};
+    if (!job.blocks)
+        return TPK_ERR_OUT_OF_MEMORY;
+    for (uint64_t k = 0; k < blocks; k++)
+        if (tpki_range_block_holds(b, k, values, count))
+            job.blocks[job.count++] = (int64_t)k;
+    tpki_run_threads(job.count >= 64 ? b->threads : 1, ready_share, &job);
+    tpk_result r = TPK_OK;
+    for (int i = 0; i < TPKI_THREADS_MAX && r == TPK_OK; i++)
+        r = job.result[i]; /* the first share's error: the lowest block's, for any thread count */
+    for (int64_t i = 0; r == TPK_OK && i < job.count; i++) {
+        int64_t t0 = job.blocks[i] * B, t1 = t0 + B < tet_count ? t0 + B : tet_count;
         if (*n > 0 && (*spans)[2 * *n - 1] == t0)
             (*spans)[2 * *n - 1] = t1; /* joined to the run before */
         else
             (*spans)[2 * *n] = t0, (*spans)[2 * *n + 1] = t1, ++*n;
     }
-    return TPK_OK;
+    free(job.blocks);
+    return r;
 }
 
 /* The binary tree's items: the box (rounded outward, padded as the file-order tree's leaves) and

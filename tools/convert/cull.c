@@ -1,6 +1,6 @@
 /* The CULL chunk (spec §17, format 1.4) from the converter's positive tets and their neighbors: per block
  * of TPK_CONVERT_CULL_BLOCK tets in file order, seeds of a walk inside the block and the intervals of
- * vertex ids its tets use. Blocks are independent, so workers take contiguous runs of them and the runs
+ * vertex ids its tets use (exactly: the maximal runs of consecutive ids among them). Blocks are independent, so workers take contiguous runs of them and the runs
  * are joined in order: the same words for any thread count. */
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +18,7 @@ typedef struct run {
 
 typedef struct cull_job {
     const int32_t *tets, *neighbors;
-    int64_t tet_count, block_tets, block_count;
+    int64_t tet_count, vertex_count, block_tets, block_count;
     run runs[TPK_MAX_THREADS];
 } cull_job;
 
@@ -36,31 +36,25 @@ static int grow(int32_t **items, int64_t *cap, int64_t need)
     return 1;
 }
 
-/* ids[0 .. n) (non-negative) in ascending order, by 11-bit digits of id - smallest, as many passes as the
- * span needs (a block's ids lie close together along the Hilbert curve: one or two passes); tmp holds n. */
-static void sort_ids(int32_t *ids, int32_t *tmp, int64_t n)
+/* Bit v of a worker's vertex bitmap. */
+static inline int bit(const uint64_t *bits, int64_t v)
 {
-    int32_t lo = INT32_MAX, hi = 0;
-    for (int64_t i = 0; i < n; i++)
-        lo = ids[i] < lo ? ids[i] : lo, hi = ids[i] > hi ? ids[i] : hi;
-    uint32_t span = n ? (uint32_t)(hi - lo) : 0;
-    int32_t *from = ids, *to = tmp;
-    for (int shift = 0; shift == 0 || (shift < 32 && (span >> shift) != 0); shift += 11) {
-        int64_t count[2049] = {0};
-        for (int64_t i = 0; i < n; i++)
-            count[(((uint32_t)(from[i] - lo) >> shift) & 2047u) + 1]++;
-        for (int d = 0; d < 2048; d++)
-            count[d + 1] += count[d];
-        for (int64_t i = 0; i < n; i++)
-            to[count[((uint32_t)(from[i] - lo) >> shift) & 2047u]++] = from[i];
-        int32_t *swap = from;
-        from = to, to = swap;
-    }
-    if (from != ids)
-        memcpy(ids, from, sizeof *ids * (size_t)n);
+    return (int)(bits[v >> 6] >> (v & 63)) & 1;
 }
 
-/* The even permutation of q with the smallest id first, then the smallest of the other three. */
+/* runs[0 .. n) (first, end pairs, disjoint) by first, ascending: a block has a few dozen. */
+static void sort_runs(int32_t *runs, int64_t n)
+{
+    for (int64_t i = 1; i < n; i++) {
+        int32_t a = runs[2 * i], e = runs[2 * i + 1];
+        int64_t k = i;
+        for (; k > 0 && runs[2 * k - 2] > a; k--)
+            runs[2 * k] = runs[2 * k - 2], runs[2 * k + 1] = runs[2 * k - 1];
+        runs[2 * k] = a, runs[2 * k + 1] = e;
+    }
+}
+
+/* The even permutation of v with the smallest id first, then the smallest of the other three. */
 static void canonical(const int32_t v[4], int32_t q[4])
 {
     int r[4], odd = 0;
@@ -80,10 +74,11 @@ static void cull_blocks(void *ctx, int64_t begin, int64_t end, int worker)
     cull_job *j = ctx;
     run *ru = &j->runs[worker];
     const int64_t B = j->block_tets;
-    int32_t *queue = malloc(sizeof *queue * (size_t)B), *ids = malloc(sizeof *ids * 8 * (size_t)B);
+    int32_t *queue = malloc(sizeof *queue * (size_t)B);
+    uint64_t *bits = calloc((size_t)(j->vertex_count / 64 + 1), sizeof *bits); /* all clear between blocks */
     unsigned char *reached = malloc((size_t)B);
     ru->per_block = malloc(sizeof *ru->per_block * 2 * (size_t)(end - begin > 0 ? end - begin : 1));
-    if (!queue || !ids || !reached || !ru->per_block) {
+    if (!queue || !bits || !reached || !ru->per_block) {
         ru->failed = 1;
         goto done;
     }
@@ -118,35 +113,45 @@ static void cull_blocks(void *ctx, int64_t begin, int64_t end, int worker)
                 }
             }
         }
-        memcpy(ids, j->tets + 4 * t0, sizeof *ids * 4 * (size_t)n);
-        sort_ids(ids, ids + 4 * B, 4 * n);
-        for (int64_t i = 0; i < 4 * n;) {
-            int32_t first = ids[i], last = ids[i];
-            while (i < 4 * n && ids[i] <= last + 1 + TPK_CONVERT_CULL_GAP)
-                last = ids[i++];
+        /* the maximal runs of consecutive ids among the block's vertices: each id's bit set, then from
+         * each id still set its run found by walking its neighbours' bits, which are cleared (no sort) */
+        const int32_t *ids = j->tets + 4 * t0;
+        for (int64_t i = 0; i < 4 * n; i++)
+            bits[ids[i] >> 6] |= 1ull << (ids[i] & 63);
+        for (int64_t i = 0; i < 4 * n; i++) {
+            int64_t first = ids[i], end = ids[i] + 1;
+            if (!bit(bits, first))
+                continue; /* in a run already found */
+            while (first > 0 && bit(bits, first - 1))
+                first--;
+            while (end < j->vertex_count && bit(bits, end))
+                end++;
+            for (int64_t v = first; v < end; v++)
+                bits[v >> 6] &= ~(1ull << (v & 63));
             if (!grow(&ru->intervals, &ru->interval_cap, 2 * (ru->interval_count + 1))) {
                 ru->failed = 1;
                 goto done;
             }
-            ru->intervals[2 * ru->interval_count] = first;
-            ru->intervals[2 * ru->interval_count++ + 1] = last + 1;
+            ru->intervals[2 * ru->interval_count] = (int32_t)first;
+            ru->intervals[2 * ru->interval_count++ + 1] = (int32_t)end;
         }
+        sort_runs(ru->intervals + 2 * intervals_before, ru->interval_count - intervals_before);
         ru->per_block[2 * (k - begin)] = (int32_t)(ru->seed_count - seeds_before);
         ru->per_block[2 * (k - begin) + 1] = (int32_t)(ru->interval_count - intervals_before);
     }
 done:
     free(queue);
-    free(ids);
+    free(bits);
     free(reached);
 }
 
-int32_t *tpk_build_cull(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, int threads,
-                        uint64_t *word_count)
+int32_t *tpk_build_cull(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, int64_t vertex_count,
+                        int threads, uint64_t *word_count)
 {
     cull_job *j = calloc(1, sizeof *j);
     if (!j)
         return NULL;
-    j->tets = tets, j->neighbors = neighbors, j->tet_count = tet_count;
+    j->tets = tets, j->neighbors = neighbors, j->tet_count = tet_count, j->vertex_count = vertex_count;
     j->block_tets = TPK_CONVERT_CULL_BLOCK;
     j->block_count = (tet_count + j->block_tets - 1) / j->block_tets;
     threads = tpk_threads_for(j->block_count, tpk_thread_count(threads), 64);

@@ -506,7 +506,7 @@ static int write_cull(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *
     if (mesh->tet_count == 0)
         return 0; /* no blocks: a file of no tets has nothing to cull */
     uint64_t count = 0;
-    int32_t *words = tpk_build_cull(mesh->tets, neighbors, mesh->tet_count, cw->threads, &count);
+    int32_t *words = tpk_build_cull(mesh->tets, neighbors, mesh->tet_count, mesh->vertex_count, cw->threads, &count);
     if (!words)
         return tpk_diag_fail(cw->diag, "convert: out of memory building the culling blocks (--cull)");
     int rc = put_chunk(cw, TPK_TAG_CULL, 0, TPK_ELEM_I32, 4, count, 0, 0, words);
