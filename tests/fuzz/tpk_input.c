@@ -52,25 +52,6 @@ void tpk_fuzz_use_tpk(tpk_file *file)
         read_chunks(file, info.chunk_count);
 }
 
-/* Culling blocks (spec §17): the chunk's structure (rule 17), then every block walked from its seeds in
- * each layout the file has, as an iso render walks the blocks it keeps. */
-static void use_cull(tpk_file *file)
-{
-    static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
-    tpk_cull cull;
-    if (tpk_load_cull(file, &cull) != TPK_OK)
-        return;
-    int32_t *tets = malloc(sizeof *tets * 4 * (size_t)cull.block_tets);
-    for (int k = 0; tets && k < 3; k++) {
-        tpk_mesh_arrays arrays;
-        if (tpk_load_arrays(file, layouts[k], NULL, 0, &arrays) != TPK_OK)
-            continue;
-        for (uint64_t b = 0; b < cull.block_count; b++)
-            tpk_recover_block(&arrays, &cull, b, tets);
-    }
-    free(tets);
-}
-
 /* Levels of detail (spec §16): each opened over the file's bytes and used as a file (check_file runs
  * check 615 on them); then as render and view open them, with META's level figures (level_set.c). */
 static void use_levels(tpk_file *file, const tpk_open_options *options)
@@ -133,7 +114,6 @@ void tpk_fuzz_tpk_input(const uint8_t *data, size_t size)
         if (tpk_open_memory(&file, data, size, &options, err, sizeof err) != TPK_OK)
             continue;
         tpk_fuzz_use_tpk(file);
-        use_cull(file);
         use_levels(file, &options);
         if (k == 0)
             check_file(file);
