@@ -278,7 +278,8 @@ const char *tpk_writer_error_text(const tpk_writer *writer);
 
 typedef struct tpk_marcher tpk_marcher;
 
-/* Build the marcher (a BVH over shell faces). `mesh` arrays must outlive the marcher.
+/* Build the marcher (a BVH over shell faces, made on its first use: rays that never enter from the
+ * shell, as range-culled iso rays, pay for none; since 1.4.0). `mesh` arrays must outlive the marcher.
  * Thread safety: tpk_march_ray may be called from many threads on one marcher. */
 tpk_result tpk_marcher_create(tpk_marcher **out, const tpk_mesh_arrays *mesh);
 void tpk_marcher_destroy(tpk_marcher *marcher);
@@ -298,10 +299,11 @@ typedef struct tpk_shell_bvh_node {
     int32_t count;
 } tpk_shell_bvh_node;
 
-/* The shell BVH tpk_marcher_create built, for renderers that upload it instead of building their own
- * (the Vulkan renderer): nodes (root first), the shell records in leaf order (copies of the file's
- * records), and the largest extent or coordinate magnitude of the positions. Owned by the marcher,
- * valid while it lives. A traversal stack of TPK_SHELL_BVH_STACK entries always suffices. */
+/* The marcher's shell BVH (built here when no ray has built it yet), for renderers that upload it
+ * instead of building their own (the Vulkan renderer): nodes (root first), the shell records in leaf
+ * order (copies of the file's records), and the largest extent or coordinate magnitude of the positions.
+ * Owned by the marcher, valid while it lives. A traversal stack of TPK_SHELL_BVH_STACK entries always
+ * suffices. All zero when the BVH could not be built (out of memory). */
 typedef struct tpk_shell_bvh {
     const tpk_shell_bvh_node *nodes;
     int64_t node_count;

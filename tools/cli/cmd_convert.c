@@ -49,7 +49,7 @@ static const char convert_help[] =
     "                              promised\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
-    "  --cull                      store culling blocks (spec §17, format 1.4; about 0.3 bytes a tet): an\n"
+    "  --cull                      store culling blocks (spec §17, format 1.4; about 1 byte a tet): an\n"
     "                              iso render then decodes only the blocks of tets that may hold the surface\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
     "                              the domain with about a sixth of the tets of the one before (vertices\n"

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "base/diag.h"
+#include "base/parallel.h" /* TPK_MAX_THREADS */
 #include "base/predicates.h" /* tpk_orient3d_exact, for the stages' users */
 #include "mesh/face_buckets.h" /* tpk_face_parity */
 #include "mesh/mesh.h"
@@ -148,5 +149,28 @@ void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_
  * of *count faces (the caller frees), or NULL when out of memory. */
 tpk_shell_face *tpk_make_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_count, int threads,
                                int64_t *count);
+
+/* The same records gathered beside another pass over the tets in blocks (the writer's first layout), so
+ * the tets and neighbours are read once: tpk_shell_gather_range from each worker on its contiguous range
+ * of a block (ranges in worker order, as tpk_parallel_for gives them), then tpk_shell_gather_block once
+ * the block's workers are done, which appends their faces in worker order: the order of
+ * tpk_build_shell, for any thread count. Zero-initialise the struct first; faces/count are the result
+ * (malloc'ed: the caller frees faces); failed is set when out of memory (by tpk_shell_gather_block). */
+typedef struct tpk_shell_gather_worker {
+    tpk_shell_face *faces; /* this block's, in tet order */
+    int64_t count, capacity;
+    int failed;
+} tpk_shell_gather_worker;
+typedef struct tpk_shell_gather {
+    tpk_shell_face *faces;
+    int64_t count, capacity;
+    tpk_shell_gather_worker worker[TPK_MAX_THREADS];
+    int failed;
+} tpk_shell_gather;
+void tpk_shell_gather_range(tpk_shell_gather *g, const int32_t *tets, const int32_t *neighbors, int64_t first,
+                            int64_t count, int worker);
+void tpk_shell_gather_block(tpk_shell_gather *g);
+/* Frees the workers' buffers (not faces). */
+void tpk_shell_gather_done(tpk_shell_gather *g);
 
 #endif
