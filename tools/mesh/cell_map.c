@@ -280,22 +280,21 @@ static double lagrange2(double x, int at)
     return at < 0 ? 0.5 * x * (x - 1) : at > 0 ? 0.5 * x * (x + 1) : (1 - x) * (1 + x);
 }
 
-/* Node k's parametric coordinates as -1, 0, 1 per axis (2 r - 1), for the hexahedra. */
-static void hex_signs(int type, int k, int s[3])
-{
-    double r[3];
-    tpk_cell_map_node(type, k, r);
-    for (int i = 0; i < 3; i++)
-        s[i] = r[i] < 0.25 ? -1 : r[i] > 0.75 ? 1 : 0;
-}
+/* Node k's parametric coordinates as -1, 0, 1 per axis (2 r - 1), for the hexahedra: the triquadratic
+ * one's 27 nodes (tpk_cell_map_node), of which the linear one has the first 8 and the serendipity one the
+ * first 20 (higher_order.shape_functions: each weight 1 at its node, 0 at the others). */
+static const signed char hex_signs[27][3] = {
+    {-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1},
+    {0, -1, -1},  {1, 0, -1},  {0, 1, -1}, {-1, 0, -1}, {0, -1, 1},  {1, 0, 1},  {0, 1, 1}, {-1, 0, 1},
+    {-1, -1, 0},  {1, -1, 0},  {1, 1, 0},  {-1, 1, 0},  {-1, 0, 0},  {1, 0, 0},  {0, -1, 0}, {0, 1, 0},
+    {0, 0, -1},   {0, 0, 1},   {0, 0, 0}};
 
 static int hexahedron(int type, const double r[3], double *w)
 {
     const double x[3] = {2 * r[0] - 1, 2 * r[1] - 1, 2 * r[2] - 1};
-    int n = tpk_cell_map_nodes(type);
+    int n = type == 12 ? 8 : type == 25 ? 20 : 27;
     for (int k = 0; k < n; k++) {
-        int s[3];
-        hex_signs(type, k, s);
+        const int s[3] = {hex_signs[k][0], hex_signs[k][1], hex_signs[k][2]};
         if (type == 29) {
             w[k] = lagrange2(x[0], s[0]) * lagrange2(x[1], s[1]) * lagrange2(x[2], s[2]);
         } else if (type == 12) {
