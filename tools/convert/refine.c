@@ -6,6 +6,7 @@
  * then the ids), so a face shared by two tets is cut alike from both sides. */
 #include "refine.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -428,6 +429,19 @@ static int barycentric_gradients(const double p[4][3], double g[3][3])
  * The tets of a regular mesh's cells, and their pieces, repeat the same few parametric tets. */
 typedef double pair __attribute__((vector_size(2 * sizeof(double)))); /* two numbers side by side */
 
+/* Cells of degree above DIRECT_DEGREE (Lagrange tetra of order 7-10, hexahedra of order 3-4, wedges of
+ * order 4-6) are bounded from their values at the tet's domain points through the inverse
+ * (tpk_bernstein_gap: m^2 a component, m = 120 .. 455 domain points), not through cached coefficients of
+ * every node's function (m^2 n per tet of parameter space: too much at these sizes, where the parametric
+ * tets seldom repeat). The values carry the rounding of their sums, gamma_n sum_k |w_k| |x_k| (the
+ * Lebesgue sum sum_k |w_k| measured at the points), and of the weights, each within WEIGHT_ERROR
+ * (higher_order.lagrange_high_order_shape_functions checks them against a long double evaluation),
+ * both through the inverse's norm. Cost a tet: about m (7 n + 3 m) multiply-adds for the map (its
+ * weights included) and m (n + m) per field: 0.8M and 0.16M at m = n = 286 (tetra of order 10), 1.2M and
+ * 0.3M at m = 455, n = 196 (wedge of order 6). */
+#define DIRECT_DEGREE 6
+#define WEIGHT_ERROR 1e-13
+
 typedef struct coef_cache {
     int entries, size; /* a power of two; doubles per entry */
     int *type;         /* 0: empty */
@@ -570,20 +584,41 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     const tpk_bernstein *b = &r->table[degree];
     const double *xi = r->xi + 12 * t;
     const int32_t *tv = r->tets + 4 * t, *verts = cache->verts;
-    int n = tpk_cell_map_nodes(type), m = b->points;
-    double norm;
-    const double *by_node = coefficients(cache, b, r->inverse_t[degree], type, n, xi, &norm);
-    double p[4][3], g[3][3], geometry = 0, largest = cache->largest;
+    int n = tpk_cell_map_nodes(type), m = b->points, direct = degree > DIRECT_DEGREE;
+    double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
-    /* the largest Bernstein coefficient of x - L */
-    double gx[3][TPK_BERNSTEIN_MAX_POINTS];
-    minus_linear(m, n, 3, b, (const double (*)[3])p, cache->node[0], 3, by_node, gx);
-    for (int i = 0; i < m; i++) {
-        double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
-        geometry = sq > geometry ? sq : geometry;
+    const double *by_node = NULL;
+    double value_margin = 0; /* direct: the rounding of the values at the domain points, through the inverse */
+    if (direct) { /* the cell's map at the domain points, then the inverse */
+        double x[TPK_BERNSTEIN_MAX_POINTS * 3];
+        for (int i = 0; i < m; i++) {
+            double at[3] = {0, 0, 0}, *w = weights + (int64_t)i * n, sum = 0;
+            for (int k = 0; k < 4; k++)
+                for (int j = 0; j < 3; j++)
+                    at[j] += b->lambda[i][k] * xi[3 * k + j];
+            tpk_cell_map_weights(type, at, w);
+            x[3 * i] = x[3 * i + 1] = x[3 * i + 2] = 0;
+            for (int k = 0; k < n; k++) {
+                sum += fabs(w[k]);
+                for (int j = 0; j < 3; j++)
+                    x[3 * i + j] += w[k] * cache->node[k][j];
+            }
+            lebesgue = sum > lebesgue ? sum : lebesgue;
+        }
+        const double u = DBL_EPSILON / 2, gamma = n * u / (1 - n * u);
+        value_margin = 2 * b->inverse_norm * (gamma * lebesgue + n * WEIGHT_ERROR);
+        geometry = tpk_bernstein_gap(b, x, 3, p[0], 3) + sqrt(3.0) * value_margin * largest;
+    } else {
+        by_node = coefficients(cache, b, r->inverse_t[degree], type, n, xi, &norm);
+        double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
+        minus_linear(m, n, 3, b, (const double (*)[3])p, cache->node[0], 3, by_node, gx);
+        for (int i = 0; i < m; i++) {
+            double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
+            geometry = sq > geometry ? sq : geometry;
+        }
+        geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
     }
-    geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
     double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
     int flat = barycentric_gradients(p, g) != 0;
     for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
@@ -604,11 +639,22 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             finite &= isfinite(v[k] = cv[k][0] = value_of(r, tv[k], slot));
         if (!finite)
             continue; /* no bound for missing values (NaN): nothing to interpolate */
-        double acc[1][TPK_BERNSTEIN_MAX_POINTS];
-        minus_linear(m, n, 1, b, (const double (*)[3])cv, value, 1, by_node, acc);
-        for (int i = 0; i < m; i++)
-            gap = fabs(acc[0][i]) > gap ? fabs(acc[0][i]) : gap;
-        gap = (gap + 1e-12 * (norm + 1) * cache->big[s]) / r->bound_range[s];
+        if (direct) {
+            double f[TPK_BERNSTEIN_MAX_POINTS], corner[4] = {v[0], v[1], v[2], v[3]};
+            for (int i = 0; i < m; i++) {
+                const double *w = weights + (int64_t)i * n;
+                f[i] = 0;
+                for (int k = 0; k < n; k++)
+                    f[i] += w[k] * value[k];
+            }
+            gap = (tpk_bernstein_gap(b, f, 1, corner, 1) + value_margin * cache->big[s]) / r->bound_range[s];
+        } else {
+            double acc[1][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+            minus_linear(m, n, 1, b, (const double (*)[3])cv, value, 1, by_node, acc);
+            for (int i = 0; i < m; i++)
+                gap = fabs(acc[0][i]) > gap ? fabs(acc[0][i]) : gap;
+            gap = (gap + 1e-12 * (norm + 1) * cache->big[s]) / r->bound_range[s];
+        }
         for (int k = 0; k < 3 && !flat; k++)
             for (int j = 0; j < 3; j++)
                 grad[j] += (v[k + 1] - v[0]) * g[k][j];
@@ -1231,7 +1277,7 @@ static void release(refine *r, int threads)
             free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite);
     free(r->cache);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
-        free(r->inverse_t[n]);
+        free(r->inverse_t[n]), tpk_bernstein_free(&r->table[n]);
 }
 
 static int set_up(refine *r, int threads)
@@ -1288,7 +1334,7 @@ static int set_up(refine *r, int threads)
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
         int type = r->cell_type[c], degree = tpk_cell_map_degree(type);
-        if (degree > 1 && r->table[degree].points * tpk_cell_map_nodes(type) > size)
+        if (degree > 1 && degree <= DIRECT_DEGREE && r->table[degree].points * tpk_cell_map_nodes(type) > size)
             size = r->table[degree].points * tpk_cell_map_nodes(type);
     }
     int entries = 4096;
