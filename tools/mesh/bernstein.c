@@ -1,6 +1,8 @@
 /* Bernstein-Bezier coefficients from values at the domain points (bernstein.h). */
 #include "bernstein.h"
 
+typedef double pair __attribute__((vector_size(2 * sizeof(double)))); /* two numbers side by side */
+
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -113,7 +115,7 @@ static int invert(long double *a, long double *inv, int m)
 
 void tpk_bernstein_free(tpk_bernstein *t)
 {
-    free(t->lambda), free(t->lambda_by_corner[0]), free(t->inverse);
+    free(t->lambda), free(t->lambda_by_corner[0]), free(t->inverse), free(t->inverse_t);
     memset(t, 0, sizeof *t);
 }
 
@@ -129,7 +131,8 @@ int tpk_bernstein_make(int n, tpk_bernstein *t)
     t->lambda = malloc(sizeof *t->lambda * (size_t)m);
     t->lambda_by_corner[0] = malloc(sizeof *t->lambda_by_corner[0] * 4 * (size_t)m);
     t->inverse = malloc(sizeof *t->inverse * (size_t)m * (size_t)m);
-    int rc = alpha && work && inv && t->lambda && t->lambda_by_corner[0] && t->inverse ? 0 : -1;
+    t->inverse_t = malloc(sizeof *t->inverse_t * (size_t)m * (size_t)m);
+    int rc = alpha && work && inv && t->lambda && t->lambda_by_corner[0] && t->inverse && t->inverse_t ? 0 : -1;
     if (rc == 0) {
         t->degree = n, t->points = m;
         for (int c = 1; c < 4; c++)
@@ -160,7 +163,7 @@ int tpk_bernstein_make(int n, tpk_bernstein *t)
     for (int r = 0; rc == 0 && r < m; r++) {
         double row = 0;
         for (int j = 0; j < m; j++)
-            row += fabs(t->inverse[(size_t)r * m + j]);
+            row += fabs(t->inverse_t[(size_t)j * m + r] = t->inverse[(size_t)r * m + j]);
         t->inverse_norm = row > t->inverse_norm ? row : t->inverse_norm;
     }
     free(alpha), free(work), free(inv);
@@ -196,27 +199,40 @@ double tpk_bernstein_gap(const tpk_bernstein *t, const double *values, int strid
         }
     if (!finite)
         return INFINITY;
-    for (int i = 0; i < m; i++) { /* sums in 2 x components independent parts (the margin holds for any order) */
-        const double *row = t->inverse + (size_t)i * m;
-        double part[2][3] = {{0, 0, 0}, {0, 0, 0}}, sq = 0;
-        int j = 0;
-        if (components == 1) { /* 4 parts of one component */
-            double q[4] = {0, 0, 0, 0};
-            for (; j + 4 <= m; j += 4)
-                for (int k = 0; k < 4; k++)
-                    q[k] += row[j + k] * d[j + k][0];
-            for (; j < m; j++)
-                q[0] += row[j] * d[j][0];
-            part[0][0] = q[0] + q[1], part[1][0] = q[2] + q[3];
+    /* coef_i = sum_j inverse_ij d_j, four rows at once (two pairs) through the transposed inverse: any
+     * order of the sums is within the margin */
+    int i = 0;
+    for (; i + 4 <= m; i += 4) {
+        pair a0, a1, x0, x1, x2, s0 = {0, 0}, s1 = {0, 0}, s2 = {0, 0}, u0 = {0, 0}, u1 = {0, 0}, u2 = {0, 0};
+        if (components == 1) {
+            for (int j = 0; j < m; j++) {
+                memcpy(&a0, t->inverse_t + (size_t)j * m + i, sizeof a0);
+                memcpy(&a1, t->inverse_t + (size_t)j * m + i + 2, sizeof a1);
+                x0 = (pair){d[j][0], d[j][0]};
+                s0 += a0 * x0, u0 += a1 * x0;
+            }
+        } else { /* the absent components are 0 */
+            for (int j = 0; j < m; j++) {
+                memcpy(&a0, t->inverse_t + (size_t)j * m + i, sizeof a0);
+                memcpy(&a1, t->inverse_t + (size_t)j * m + i + 2, sizeof a1);
+                x0 = (pair){d[j][0], d[j][0]}, x1 = (pair){d[j][1], d[j][1]}, x2 = (pair){d[j][2], d[j][2]};
+                s0 += a0 * x0, s1 += a0 * x1, s2 += a0 * x2;
+                u0 += a1 * x0, u1 += a1 * x1, u2 += a1 * x2;
+            }
         }
-        for (; j + 2 <= m; j += 2)
-            for (int c = 0; c < 3; c++)
-                part[0][c] += row[j] * d[j][c], part[1][c] += row[j + 1] * d[j + 1][c];
-        for (; j < m; j++)
-            for (int c = 0; c < 3; c++)
-                part[0][c] += row[j] * d[j][c];
-        for (int c = 0; c < components; c++)
-            sq += (part[0][c] + part[1][c]) * (part[0][c] + part[1][c]);
+        pair sq[2] = {s0 * s0 + s1 * s1 + s2 * s2, u0 * u0 + u1 * u1 + u2 * u2};
+        for (int q = 0; q < 2; q++)
+            for (int l = 0; l < 2; l++)
+                worst = sq[q][l] > worst ? sq[q][l] : worst;
+    }
+    for (; i < m; i++) {
+        double sq = 0;
+        for (int c = 0; c < components; c++) {
+            double coef = 0;
+            for (int j = 0; j < m; j++)
+                coef += t->inverse_t[(size_t)j * m + i] * d[j][c];
+            sq += coef * coef;
+        }
         worst = sq > worst ? sq : worst;
     }
     /* per component within the margin; the Euclidean norm of up to 3: sqrt(3) times */

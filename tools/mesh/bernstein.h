@@ -26,6 +26,7 @@ typedef struct tpk_bernstein {
     double (*lambda)[4];          /* domain point i: barycentric alpha_i / n (points rows) */
     double *lambda_by_corner[4];  /* the same, transposed */
     double *inverse;              /* points x points: coefficients = inverse x values */
+    double *inverse_t;            /* the same transposed (inverse_t[j * points + i] = inverse[i * points + j]) */
     double inverse_norm;          /* its infinity norm (rows' absolute sums), for the margin */
 } tpk_bernstein;
 
