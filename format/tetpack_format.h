@@ -17,12 +17,13 @@ extern "C" {
 #define TPK_MAGIC_SIZE 8
 
 #define TPK_VERSION_MAJOR 1
-#define TPK_VERSION_MINOR 3
-/* A file without a chunk of 1.2 (PART, LINK) or 1.3 (LEVL) is written as 1.1: its bytes stay those of
- * 1.1 writers; one with PART or LINK as 1.2, one with LEVL as 1.3. */
+#define TPK_VERSION_MINOR 4
+/* A file without a chunk of 1.2 (PART, LINK), 1.3 (LEVL) or 1.4 (CULL) is written as 1.1: its bytes stay
+ * those of 1.1 writers; one with PART or LINK as 1.2, one with LEVL as 1.3, one with CULL as 1.4. */
 #define TPK_VERSION_MINOR_PLAIN 1
 #define TPK_VERSION_MINOR_PARTS 2
 #define TPK_VERSION_MINOR_LEVELS 3
+#define TPK_VERSION_MINOR_CULL 4
 
 #define TPK_HEADER_SIZE 192u
 #define TPK_DIR_ENTRY_SIZE 64u
@@ -51,6 +52,13 @@ extern "C" {
 #define TPK_TAG_LINK TPK_FOURCC('L', 'I', 'N', 'K') /* part: tpk_link per cut shell face, as 4 I32 */
 /* Format 1.3, levels of detail (spec §16): */
 #define TPK_TAG_LEVL TPK_FOURCC('L', 'E', 'V', 'L') /* a complete .tpk of level `index` (1..), as BYTE, codec none */
+/* Format 1.4, culling blocks (spec §17): per block of tets in file order, seeds of a walk inside the block
+ * and the vertex id intervals its tets use, as I32 (tpk_cull_* below). */
+#define TPK_TAG_CULL TPK_FOURCC('C', 'U', 'L', 'L')
+#define TPK_CULL_HEADER_WORDS 4 /* block_tets, block_count, seed_count, interval_count */
+#define TPK_CULL_SEED_WORDS 6   /* tet, its vertices a, b, c, d in positive order, n3 */
+#define TPK_CULL_MIN_BLOCK 16
+#define TPK_CULL_MAX_BLOCK 65536
 
 /* Directory entry flags. Bits other than these are reserved and must be zero. */
 #define TPK_CHUNK_REQUIRED 0x0001u

@@ -152,3 +152,28 @@ tpk_result tpk_load_tet_field(tpk_file *file, const char *field_name, uint32_t s
         *out = values;
     return r;
 }
+
+tpk_result tpk_load_cull(tpk_file *file, tpk_cull *out)
+{
+    if (!file || !out)
+        return TPK_ERR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    tpk_result r = tpki_file_usable(file);
+    if (r != TPK_OK)
+        return r;
+    uint64_t i;
+    if (tpk_find_chunk(file, TPK_TAG_CULL, 0, 0, &i) != TPK_OK)
+        return TPK_ERR_NOT_FOUND;
+    const void *raw;
+    r = load_chunk(file, TPK_TAG_CULL, 0, 0, &raw); /* rule 17 checks the structure (rules.c check_cull) */
+    if (r != TPK_OK)
+        return r;
+    const int32_t *w = raw;
+    out->block_tets = (uint32_t)w[0];
+    out->block_count = (uint64_t)w[1], out->seed_count = (uint64_t)w[2], out->interval_count = (uint64_t)w[3];
+    out->seed_start = w + TPK_CULL_HEADER_WORDS;
+    out->interval_start = out->seed_start + out->block_count + 1;
+    out->seeds = out->interval_start + out->block_count + 1;
+    out->intervals = out->seeds + TPK_CULL_SEED_WORDS * out->seed_count;
+    return TPK_OK;
+}

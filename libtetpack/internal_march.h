@@ -11,6 +11,7 @@
 #ifndef TPK_INTERNAL_MARCH_H
 #define TPK_INTERNAL_MARCH_H
 
+#include <pthread.h>
 #include <stdint.h>
 
 #include "internal_ray.h"
@@ -27,11 +28,14 @@ typedef tpk_shell_bvh_node tpk_bvh_node;
 
 struct tpk_marcher {
     tpk_mesh_arrays mesh;        /* a copy of the caller's struct; the arrays stay the caller's */
-    tpk_bvh_node *nodes;
-    int64_t node_count;
+    tpk_bvh_node *nodes;         /* the shell BVH: built on its first use (tpki_shell_ready), since rays */
+    int64_t node_count;          /* that never enter from the shell (range-culled iso rays) need none */
     tpk_shell_face *faces;       /* shell faces in BVH leaf order */
     int64_t face_count;
     double extent;               /* largest extent or coordinate magnitude of the positions */
+    pthread_mutex_t shell_lock;  /* held while the BVH is built */
+    int shell_built;             /* atomic: 1 once the build finished, with shell_result */
+    tpk_result shell_result;
 };
 
 /* Test shell face (a,b,c) (outward winding) against the line: returns 1 if the line enters the volume
@@ -53,8 +57,12 @@ typedef struct tpki_bvh_item {
  * *node_count gets the nodes used. TPK_ERR_OUT_OF_MEMORY, or TPK_OK. */
 tpk_result tpki_bvh_build(tpki_bvh_item *items, int32_t n, int leaf_size, tpk_bvh_node *nodes, int32_t *node_count);
 
-/* Build the BVH over mesh->shell into marcher->nodes/faces. Shell records must be validated first. */
-tpk_result tpki_shell_bvh_build(tpk_marcher *marcher);
+/* The extent and face count of a new marcher (its shell records validated), the BVH not yet built. */
+void tpki_shell_prepare(tpk_marcher *marcher);
+
+/* The BVH over mesh->shell into marcher->nodes/faces, built by the first caller (others wait for it);
+ * its result (TPK_OUT_OF_MEMORY when the build failed) to every caller. */
+tpk_result tpki_shell_ready(const tpk_marcher *marcher);
 
 /* An entry crossing found by the BVH: its t and its index in marcher->faces. */
 typedef struct tpk_entry {

@@ -79,6 +79,12 @@ struct tpk_range_bvh {
     int active_value_count;   /* 0: none selected */
     double active_corner_max; /* the largest |coordinate| of the selected tree's boxes */
     int threads;              /* for the builds (tpk_range_bvh_set_threads); the trees never depend on it */
+    /* tpk_range_bvh_create_cull: no file-order tree (levels 0); the blocks of the file's CULL chunk, each
+     * walked (tets and tet_range filled for it) only when tpk_range_bvh_select needs it */
+    int culled;
+    tpk_cull cull;
+    float *block_range;       /* 2 per block: the scalars' min and max over its intervals, outward */
+    unsigned char *block_state; /* per block: BLOCK_WALKED (its tets known), BLOCK_RANGED (their ranges) */
 };
 
 /* The float at or below x, and at or above it: the trees' boxes and ranges are rounded outward. */
@@ -102,6 +108,11 @@ int tpki_range_holds(double lo, double hi, const double *values, int count);
  * at most leaf_size items, items permuted into leaf order; the same for any thread count. */
 tpk_result tpki_range_tree_build(tpki_bvh_item *items, int32_t n, int leaf_size, int threads, tpk_bvh_node *out,
                                  int32_t *node_count);
+
+/* Culling blocks (range_bvh.c): does block k's range over its intervals hold a value? Block k walked
+ * and its tets' ranges read for the current field (tpk_recover_block's errors). */
+int tpki_range_block_holds(const tpk_range_bvh *b, uint64_t k, const double *values, int count);
+tpk_result tpki_range_ready_block(tpk_range_bvh *b, uint64_t k);
 
 /* Free the selected tree (range_bvh.c): none is selected. */
 void tpki_range_drop_selection(tpk_range_bvh *b);

@@ -43,11 +43,11 @@ tpk_result tpk_marcher_create(tpk_marcher **out, const tpk_mesh_arrays *mesh)
     if (!m)
         return TPK_ERR_OUT_OF_MEMORY;
     m->mesh = *mesh;
-    tpk_result r = tpki_shell_bvh_build(m);
-    if (r != TPK_OK) {
-        tpk_marcher_destroy(m);
-        return r;
+    if (pthread_mutex_init(&m->shell_lock, NULL) != 0) {
+        free(m);
+        return TPK_ERR_OUT_OF_MEMORY;
     }
+    tpki_shell_prepare(m); /* the BVH itself on its first use */
     *out = m;
     return TPK_OK;
 }
@@ -58,6 +58,7 @@ void tpk_marcher_destroy(tpk_marcher *m)
         return;
     free(m->nodes);
     free(m->faces);
+    pthread_mutex_destroy(&m->shell_lock);
     free(m);
 }
 
@@ -72,7 +73,7 @@ tpk_result tpk_marcher_set_scalars(tpk_marcher *m, const float *scalars)
 void tpk_marcher_shell_bvh(const tpk_marcher *m, tpk_shell_bvh *out)
 {
     memset(out, 0, sizeof *out);
-    if (!m)
+    if (!m || tpki_shell_ready(m) != TPK_OK)
         return;
     out->nodes = m->nodes;
     out->node_count = m->node_count;

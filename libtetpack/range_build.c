@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "internal_range.h"
+#include "internal_threads.h"
 
 /* Clusters compared on each side: 8, two vectors of 4 in areas_of (which assumes it). The rays on these
  * trees are within 2% of those on the binned-SAH tree (bench/README, issue 39 item 4); other radii were
@@ -23,7 +24,6 @@
 #define PLOC_RADIUS 8
 /* Clusters per block of the area pass, fixed so that the blocks never depend on the thread count. */
 #define PLOC_BLOCK 4096
-#define PLOC_THREADS_MAX 64
 
 typedef struct ploc_node {
     float lo[3], hi[3];
@@ -91,8 +91,11 @@ static void nearest_of(ploc_job *job, int64_t begin, int64_t end)
     }
 }
 
-static void *ploc_worker(void *arg)
+/* Blocks taken in turn until none is left: any share may do any block (the areas and partners are the
+ * same whoever computes them). */
+static void ploc_worker(void *arg, int share, int shares)
 {
+    (void)share, (void)shares;
     ploc_job *job = arg;
     for (;;) {
         pthread_mutex_lock(&job->lock);
@@ -100,7 +103,7 @@ static void *ploc_worker(void *arg)
         pthread_mutex_unlock(&job->lock);
         int64_t begin = block * PLOC_BLOCK;
         if (begin >= job->count)
-            return NULL;
+            return;
         int64_t end = begin + PLOC_BLOCK < job->count ? begin + PLOC_BLOCK : job->count;
         if (job->pass == 0)
             areas_of(job, begin, end);
@@ -109,21 +112,14 @@ static void *ploc_worker(void *arg)
     }
 }
 
-/* One pass over all clusters, on up to `threads` threads (the calling one among them). */
+/* One pass over all clusters, on up to `threads` threads (the calling one among them), no more than
+ * there are blocks. */
 static void run_pass(ploc_job *job, int pass, int threads)
 {
     job->pass = pass;
     job->next_block = 0;
     int64_t blocks = (job->count + PLOC_BLOCK - 1) / PLOC_BLOCK;
-    int extra = threads - 1 < blocks - 1 ? threads - 1 : (int)(blocks - 1);
-    extra = extra < 0 ? 0 : extra > PLOC_THREADS_MAX ? PLOC_THREADS_MAX : extra;
-    pthread_t tid[PLOC_THREADS_MAX];
-    int started = 0;
-    while (started < extra && pthread_create(&tid[started], NULL, ploc_worker, job) == 0)
-        started++;
-    ploc_worker(job); /* fewer threads than asked: the blocks all get done */
-    for (int i = 0; i < started; i++)
-        pthread_join(tid[i], NULL);
+    tpki_run_threads(threads < blocks ? threads : (int)blocks, ploc_worker, job);
 }
 
 /* Cluster j into cluster i as tree node `at`, the union kept at position `to` (<= i). */

@@ -29,6 +29,20 @@
 #define HEAP_STACK 64
 
 
+/* The range of tet t from its vertices' scalars, outward by an ulp (the marcher's interpolated scalars
+ * are sums in double of these floats). */
+static void tet_range(tpk_range_bvh *b, const float *sc, int64_t t)
+{
+    float smin = INFINITY, smax = -INFINITY;
+    for (int i = 0; i < 4; i++) {
+        float s = sc[b->tets[4 * t + i]];
+        smin = s < smin ? s : smin; /* a NaN scalar never joins a range: no crossing tests true */
+        smax = s > smax ? s : smax;
+    }
+    b->tet_range[2 * t] = smin > -INFINITY ? nextafterf(smin, -INFINITY) : smin;
+    b->tet_range[2 * t + 1] = smax < INFINITY ? nextafterf(smax, INFINITY) : smax;
+}
+
 /* The scalar ranges of every tet and node from the marcher's field (the boxes and the tree's shape
  * depend on the positions alone). */
 static void read_ranges(tpk_range_bvh *b)
@@ -40,15 +54,7 @@ static void read_ranges(tpk_range_bvh *b)
         range[0] = INFINITY, range[1] = -INFINITY;
         int64_t end = (leaf + 1) * TPK_RANGE_LEAF < tet_count ? (leaf + 1) * TPK_RANGE_LEAF : tet_count;
         for (int64_t t = leaf * TPK_RANGE_LEAF; t < end; t++) {
-            float smin = INFINITY, smax = -INFINITY;
-            for (int i = 0; i < 4; i++) {
-                float s = sc[b->tets[4 * t + i]];
-                smin = s < smin ? s : smin; /* a NaN scalar never joins a range: no crossing tests true */
-                smax = s > smax ? s : smax;
-            }
-            /* outward by an ulp: the marcher's interpolated scalars are sums in double of these floats */
-            b->tet_range[2 * t] = smin > -INFINITY ? nextafterf(smin, -INFINITY) : smin;
-            b->tet_range[2 * t + 1] = smax < INFINITY ? nextafterf(smax, INFINITY) : smax;
+            tet_range(b, sc, t);
             range[0] = b->tet_range[2 * t] < range[0] ? b->tet_range[2 * t] : range[0];
             range[1] = b->tet_range[2 * t + 1] > range[1] ? b->tet_range[2 * t + 1] : range[1];
         }
@@ -146,6 +152,88 @@ tpk_result tpk_range_bvh_create_threads(tpk_range_bvh **out, const tpk_marcher *
     return TPK_OK;
 }
 
+/* ---- Culling blocks (spec §17) ------------------------------------------------------------------ */
+
+#define BLOCK_WALKED 1
+#define BLOCK_RANGED 2
+
+/* Each block's scalar range over its intervals (a superset of its tets' vertices), outward as a tet's. */
+static void read_block_ranges(tpk_range_bvh *b)
+{
+    const float *sc = b->marcher->mesh.scalars;
+    const tpk_cull *c = &b->cull;
+    for (uint64_t k = 0; k < c->block_count; k++) {
+        float smin = INFINITY, smax = -INFINITY;
+        for (int32_t i = c->interval_start[k]; i < c->interval_start[k + 1]; i++)
+            for (int32_t v = c->intervals[2 * (int64_t)i]; v < c->intervals[2 * (int64_t)i + 1]; v++) {
+                float x = sc[v];
+                smin = x < smin ? x : smin;
+                smax = x > smax ? x : smax;
+            }
+        b->block_range[2 * k] = smin > -INFINITY ? nextafterf(smin, -INFINITY) : smin;
+        b->block_range[2 * k + 1] = smax < INFINITY ? nextafterf(smax, INFINITY) : smax;
+        b->block_state[k] &= (unsigned char)~BLOCK_RANGED;
+    }
+}
+
+tpk_result tpk_range_bvh_create_cull(tpk_range_bvh **out, const tpk_marcher *marcher, const tpk_cull *cull,
+                                     int threads)
+{
+    if (!out)
+        return TPK_ERR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!marcher || !marcher->mesh.scalars || !cull || cull->block_tets == 0)
+        return TPK_ERR_INVALID_ARGUMENT;
+    const tpk_mesh_arrays *mesh = &marcher->mesh;
+    int64_t tet_count = (int64_t)mesh->tet_count;
+    if (cull->block_count != (uint64_t)((tet_count + cull->block_tets - 1) / cull->block_tets))
+        return TPK_ERR_INVALID_ARGUMENT; /* another mesh's blocks */
+    tpk_range_bvh *b = calloc(1, sizeof *b);
+    if (!b)
+        return TPK_ERR_OUT_OF_MEMORY;
+    b->marcher = marcher;
+    b->pad = 1e-6 * marcher->extent;
+    b->culled = 1;
+    b->cull = *cull;
+    /* filled block by block as blocks are walked: pages never touched cost nothing */
+    b->tets = malloc(sizeof *b->tets * 4 * (size_t)(tet_count ? tet_count : 1));
+    b->tet_range = malloc(sizeof *b->tet_range * 2 * (size_t)(tet_count ? tet_count : 1));
+    b->block_range = malloc(sizeof *b->block_range * 2 * (size_t)(cull->block_count ? cull->block_count : 1));
+    b->block_state = calloc((size_t)(cull->block_count ? cull->block_count : 1), 1);
+    if (!b->tets || !b->tet_range || !b->block_range || !b->block_state) {
+        tpk_range_bvh_destroy(b);
+        return TPK_ERR_OUT_OF_MEMORY;
+    }
+    b->threads = threads > 1 ? threads : 1;
+    read_block_ranges(b);
+    *out = b;
+    return TPK_OK;
+}
+
+int tpki_range_block_holds(const tpk_range_bvh *b, uint64_t k, const double *values, int count)
+{
+    return tpki_range_holds(b->block_range[2 * k], b->block_range[2 * k + 1], values, count);
+}
+
+tpk_result tpki_range_ready_block(tpk_range_bvh *b, uint64_t k)
+{
+    const int64_t B = b->cull.block_tets, t0 = (int64_t)k * B;
+    const int64_t t1 = t0 + B < (int64_t)b->marcher->mesh.tet_count ? t0 + B : (int64_t)b->marcher->mesh.tet_count;
+    if (!(b->block_state[k] & BLOCK_WALKED)) {
+        tpk_result r = tpk_recover_block(&b->marcher->mesh, &b->cull, k, b->tets + 4 * t0);
+        if (r != TPK_OK)
+            return r;
+        b->block_state[k] |= BLOCK_WALKED;
+    }
+    if (!(b->block_state[k] & BLOCK_RANGED)) {
+        const float *sc = b->marcher->mesh.scalars;
+        for (int64_t t = t0; t < t1; t++)
+            tet_range(b, sc, t);
+        b->block_state[k] |= BLOCK_RANGED;
+    }
+    return TPK_OK;
+}
+
 void tpki_range_drop_selection(tpk_range_bvh *b)
 {
     free(b->wide);
@@ -165,6 +253,8 @@ void tpk_range_bvh_destroy(tpk_range_bvh *b)
     free(b->tet_range);
     free(b->nodes);
     free(b->node_range);
+    free(b->block_range);
+    free(b->block_state);
     tpki_range_drop_selection(b);
     free(b);
 }
@@ -174,7 +264,10 @@ tpk_result tpk_range_bvh_set_scalars(tpk_range_bvh *b)
     if (!b || !b->marcher->mesh.scalars)
         return TPK_ERR_INVALID_ARGUMENT;
     tpki_range_drop_selection(b); /* it holds the old field's tets */
-    read_ranges(b);
+    if (b->culled)
+        read_block_ranges(b); /* the walked blocks keep their tets; their ranges are read again */
+    else
+        read_ranges(b);
     return TPK_OK;
 }
 
@@ -188,6 +281,12 @@ tpk_result tpk_range_bvh_set_threads(tpk_range_bvh *b, int threads)
 
 double tpk_range_bvh_active(const tpk_range_bvh *b, const double *values, int count)
 {
+    if (b && b->culled && b->cull.block_count > 0 && count > 0 && values) {
+        int64_t active = 0;
+        for (uint64_t k = 0; k < b->cull.block_count; k++)
+            active += tpki_range_block_holds(b, k, values, count);
+        return (double)active / (double)b->cull.block_count;
+    }
     if (!b || b->levels == 0 || count <= 0 || !values)
         return 0.0;
     int64_t active = 0;
@@ -198,7 +297,7 @@ double tpk_range_bvh_active(const tpk_range_bvh *b, const double *values, int co
 
 int64_t tpk_range_bvh_heap(const tpk_range_bvh *b, float *nodes)
 {
-    if (!b)
+    if (!b || b->culled)
         return 0;
     int64_t leaves = b->levels ? b->level_count[0] : 0, base = 1;
     while (base < leaves)
@@ -222,7 +321,7 @@ int64_t tpk_range_bvh_heap(const tpk_range_bvh *b, float *nodes)
 
 const int32_t *tpk_range_bvh_tets(const tpk_range_bvh *b)
 {
-    return b ? b->tets : NULL;
+    return b && !b->culled ? b->tets : NULL;
 }
 
 int tpki_range_selected(const tpk_range_bvh *b, const double *values, int count)
@@ -693,7 +792,9 @@ tpk_result tpk_march_ray_values(const tpk_range_bvh *b, const double org[3], con
     if (tpki_ray_frame_init(&w->frame, b->marcher->mesh.origin, org, dir) != 0)
         return TPK_ERR_INVALID_ARGUMENT;
     int use_selected = tpki_range_selected(b, values, value_count);
-    if (tmax < tmin || b->levels == 0 || value_count == 0 || (use_selected && b->wide_count == 0))
+    if (b->culled && value_count > 0 && !use_selected)
+        return TPK_ERR_INVALID_ARGUMENT; /* culling blocks hold no file-order tree: select the values first */
+    if (tmax < tmin || (b->levels == 0 && !b->culled) || value_count == 0 || (use_selected && b->wide_count == 0))
         return TPK_OK;
     double inv[3];
     for (int k = 0; k < 3; k++)

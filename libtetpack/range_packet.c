@@ -577,7 +577,7 @@ tpk_result tpk_march_packet_values(const tpk_range_bvh *b, const double org[3], 
     if (!b || !org || !dirs || !tmin || !tmax || !fns || !users || ray_count < 0 ||
         ray_count > TPK_MARCH_PACKET || value_count < 0 || (value_count > 0 && !values))
         return TPK_ERR_INVALID_ARGUMENT;
-    if (ray_count > 0 && b->levels > 0 && value_count > 0 && b->wide_count > 0 &&
+    if (ray_count > 0 && (b->levels > 0 || b->culled) && value_count > 0 && b->wide_count > 0 &&
         tpki_range_selected(b, values, value_count))
         return packet_or_halves(b, org, ray_count, dirs, tmin, tmax, values, value_count, fns, users, stats);
     tpk_result first = TPK_OK;

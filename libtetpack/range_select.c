@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "internal_range.h"
+#include "internal_threads.h"
 
 /* Up to 6 tets a leaf, not 4: the packets' float tests sift a leaf's tets cheaply, and fewer nodes mean
  * fewer node tests and queue steps (grid 120, iso 0.3: 181k wide nodes, not 297k); grid 55 512^2 under
@@ -81,13 +82,66 @@ static tpk_result fold_wide(tpk_range_bvh *b, const tpk_bvh_node *bin, int32_t b
     return TPK_OK;
 }
 
+/* Blocks to walk, shared out in contiguous slices; each share stops at its first error. */
+typedef struct ready_job {
+    tpk_range_bvh *b;
+    int64_t *blocks, count;
+    tpk_result result[TPKI_THREADS_MAX];
+} ready_job;
+
+static void ready_share(void *arg, int share, int shares)
+{
+    ready_job *j = arg;
+    int64_t i0 = j->count * share / shares, i1 = j->count * (share + 1) / shares;
+    for (int64_t i = i0; i < i1 && j->result[share] == TPK_OK; i++)
+        j->result[share] = tpki_range_ready_block(j->b, (uint64_t)j->blocks[i]);
+}
+
+/* The runs of tets [span[2i], span[2i + 1]) that may hold a value, in file order: all tets, or with
+ * culling blocks the blocks whose range holds one, each walked and its tets' ranges read (the tets
+ * outside them hold none). *spans malloc'd. */
+static tpk_result candidate_spans(tpk_range_bvh *b, const double *values, int count, int64_t **spans, int64_t *n)
+{
+    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
+    const uint64_t blocks = b->culled ? b->cull.block_count : 1;
+    *n = 0;
+    *spans = malloc(sizeof **spans * 2 * (size_t)(blocks ? blocks : 1));
+    if (!*spans)
+        return TPK_ERR_OUT_OF_MEMORY;
+    if (!b->culled) {
+        (*spans)[0] = 0, (*spans)[1] = tet_count, *n = 1;
+        return TPK_OK;
+    }
+    const int64_t B = b->cull.block_tets;
+    ready_job job = {b, malloc(sizeof *job.blocks * (size_t)(blocks ? blocks : 1)), 0, {0}};
+    if (!job.blocks)
+        return TPK_ERR_OUT_OF_MEMORY;
+    for (uint64_t k = 0; k < blocks; k++)
+        if (tpki_range_block_holds(b, k, values, count))
+            job.blocks[job.count++] = (int64_t)k;
+    tpki_run_threads(job.count >= 64 ? b->threads : 1, ready_share, &job);
+    tpk_result r = TPK_OK;
+    for (int i = 0; i < TPKI_THREADS_MAX && r == TPK_OK; i++)
+        r = job.result[i]; /* the first share's error: the lowest block's, for any thread count */
+    for (int64_t i = 0; r == TPK_OK && i < job.count; i++) {
+        int64_t t0 = job.blocks[i] * B, t1 = t0 + B < tet_count ? t0 + B : tet_count;
+        if (*n > 0 && (*spans)[2 * *n - 1] == t0)
+            (*spans)[2 * *n - 1] = t1; /* joined to the run before */
+        else
+            (*spans)[2 * *n] = t0, (*spans)[2 * *n + 1] = t1, ++*n;
+    }
+    free(job.blocks);
+    return r;
+}
+
 /* The binary tree's items: the box (rounded outward, padded as the file-order tree's leaves) and
  * centroid of each tet that holds a value, in file order. */
-static void active_items(const tpk_range_bvh *b, const double *values, int count, tpki_bvh_item *items)
+static void active_items(const tpk_range_bvh *b, const double *values, int count, const int64_t *spans,
+                         int64_t span_count, tpki_bvh_item *items)
 {
     const float *pos = b->marcher->mesh.positions;
-    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
-    for (int64_t t = 0, i = 0; t < tet_count; t++) {
+    for (int64_t sp = 0, i = 0; sp < span_count; sp++)
+    for (int64_t t = spans[2 * sp]; t < spans[2 * sp + 1]; t++) {
         if (!tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count))
             continue;
         tpki_bvh_item *it = &items[i++];
@@ -115,10 +169,15 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     tpki_range_drop_selection(b);
     if (count == 0)
         return TPK_OK;
-    const int64_t tet_count = (int64_t)b->marcher->mesh.tet_count;
-    int64_t n = 0;
-    for (int64_t t = 0; t < tet_count; t++)
-        n += tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count);
+    int64_t *spans = NULL, span_count = 0, n = 0;
+    tpk_result sr = candidate_spans(b, values, count, &spans, &span_count);
+    if (sr != TPK_OK) {
+        free(spans);
+        return sr;
+    }
+    for (int64_t sp = 0; sp < span_count; sp++)
+        for (int64_t t = spans[2 * sp]; t < spans[2 * sp + 1]; t++)
+            n += tpki_range_holds(b->tet_range[2 * t], b->tet_range[2 * t + 1], values, count);
     const size_t room = (size_t)(n ? n : 1);
     tpki_bvh_item *items = malloc(sizeof *items * room);
     tpk_bvh_node *bin = malloc(sizeof *bin * 2 * room);
@@ -131,7 +190,7 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
                        : TPK_ERR_OUT_OF_MEMORY;
     int32_t bin_count = 0;
     if (r == TPK_OK && n > 0) {
-        active_items(b, values, count, items);
+        active_items(b, values, count, spans, span_count, items);
         r = tpki_range_tree_build(items, (int32_t)n, ACTIVE_LEAF, b->threads, bin, &bin_count);
     }
     if (r == TPK_OK && n > 0)
@@ -159,6 +218,7 @@ tpk_result tpk_range_bvh_select(tpk_range_bvh *b, const double *values, int coun
     }
     free(items);
     free(bin);
+    free(spans);
     if (r != TPK_OK)
         tpki_range_drop_selection(b);
     return r;

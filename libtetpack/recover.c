@@ -23,13 +23,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <pthread.h>
-#include <unistd.h>
 
 #include "internal_mesh.h"
+#include "internal_threads.h"
 
 #define UNSET INT32_MIN
 #define BUSY (INT32_MIN + 1)
-#define MAX_THREADS 64
 
 typedef struct walk {
     const tpk_mesh_arrays *mesh;
@@ -45,13 +44,10 @@ typedef struct queue {
     int64_t head, tail, cap;
 } queue;
 
+/* The walk runs on Tet20 and Tet16 only (recover reads Tet32 directly), as vx_ptr and neighbor assume. */
 static int32_t vx_of(const walk *w, int64_t t)
 {
-    switch (w->mesh->layout) {
-    case TPK_LAYOUT_TET20: return w->mesh->tet20[t].vx;
-    case TPK_LAYOUT_TET16: return w->mesh->tet16[t].vx;
-    default: return w->mesh->tet32[t].vx;
-    }
+    return w->mesh->layout == TPK_LAYOUT_TET20 ? w->mesh->tet20[t].vx : w->mesh->tet16[t].vx;
 }
 
 static const void *vx_ptr(const walk *w, int64_t t)
@@ -266,7 +262,7 @@ static tpk_result walk_parallel(walk *w, int threads)
         w->n3[t] = UNSET;
     w->threads = threads;
     w->stop = 0;
-    worker k[MAX_THREADS];
+    worker k[TPKI_THREADS_MAX];
     uint64_t S = w->mesh->shell_face_count;
     int started = 0;
     for (int i = 0; i < threads; i++)
@@ -296,31 +292,21 @@ static tpk_result walk_parallel(walk *w, int threads)
 /* Every quadruple into its canonical rotation, on `threads` threads by slices of the tets. */
 typedef struct canon_job {
     int32_t *dst;
-    int64_t t0, t1;
-    pthread_t thread;
+    int64_t tet_count;
 } canon_job;
 
-static void *canon_run(void *arg)
+static void canon_run(void *arg, int share, int shares)
 {
-    canon_job *c = arg;
-    for (int64_t t = c->t0; t < c->t1; t++)
+    const canon_job *c = arg;
+    int64_t t0 = c->tet_count * share / shares, t1 = c->tet_count * (share + 1) / shares;
+    for (int64_t t = t0; t < t1; t++)
         canon(c->dst + 4 * t);
-    return NULL;
 }
 
 static void canon_all(int32_t *dst, int64_t tet_count, int threads)
 {
-    canon_job c[MAX_THREADS];
-    int started = 0;
-    for (int i = 0; i < threads; i++)
-        c[i] = (canon_job){dst, tet_count * i / threads, tet_count * (i + 1) / threads, 0};
-    while (started + 1 < threads && pthread_create(&c[started + 1].thread, NULL, canon_run, &c[started + 1]) == 0)
-        started++;
-    for (int i = started + 1; i < threads; i++)
-        canon_run(&c[i]); /* the slices of threads that could not start */
-    canon_run(&c[0]);
-    for (int i = 1; i <= started; i++)
-        pthread_join(c[i].thread, NULL);
+    canon_job c = {dst, tet_count};
+    tpki_run_threads(threads, canon_run, &c);
 }
 
 /* Tet32 stores the vertices and the neighbors opposite each: nbr (when asked) gets them by rank. */
@@ -363,11 +349,9 @@ static tpk_result recover(const tpk_mesh_arrays *mesh, int32_t *dst, int32_t *nb
         return TPK_ERR_INVALID_ARGUMENT;
     if (mesh->tet_count == 0)
         return TPK_OK;
-    if (threads <= 0) {
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = cores < 1 ? 1 : cores > MAX_THREADS ? MAX_THREADS : (int)cores;
-    }
-    threads = threads > MAX_THREADS ? MAX_THREADS : threads;
+    if (threads <= 0)
+        threads = tpki_cores();
+    threads = threads > TPKI_THREADS_MAX ? TPKI_THREADS_MAX : threads;
     int64_t most = 1 + (int64_t)mesh->tet_count / 64; /* a few dozen tets each at least */
     threads = threads > most ? (int)most : threads;
     if ((uint64_t)threads > mesh->shell_face_count)
@@ -401,4 +385,138 @@ tpk_result tpk_recover_tets_threads(const tpk_mesh_arrays *mesh, int32_t *dst, i
 tpk_result tpki_recover_tets_neighbors(const tpk_mesh_arrays *mesh, int32_t *dst, int32_t *nbr)
 {
     return nbr ? recover(mesh, dst, nbr, 1) : TPK_ERR_INVALID_ARGUMENT;
+}
+
+/* ---- One block of a CULL chunk (spec §17) --------------------------------------------------------- */
+
+#define SPAN_BITS 65536 /* blocks whose intervals span at most this many ids check their vertices by bits */
+
+/* Is v in one of the sorted intervals [first, end) of iv[0 .. count)? *hint: the interval the last id was
+ * in, tried first (a tet's ids and the next tet's mostly share a few runs: half the binary searches). */
+static int in_intervals(const int32_t *iv, int64_t count, int32_t v, int64_t *hint)
+{
+    if (*hint < count && iv[2 * *hint] <= v && v < iv[2 * *hint + 1])
+        return 1;
+    int64_t lo = 0, hi = count; /* the first interval whose end is above v */
+    while (lo < hi) {
+        int64_t mid = lo + (hi - lo) / 2;
+        if (iv[2 * mid + 1] <= v)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    *hint = lo;
+    return lo < count && iv[2 * lo] <= v;
+}
+
+/* The walk inside block [t0, t1) from its seeds; tets stored at dst[4 * (t - t0)], n3 at n3[t - t0]. */
+static tpk_result walk_block(const walk *w, const tpk_cull *cull, uint64_t block, int64_t t0, int64_t t1,
+                             int32_t *dst, int32_t *n3, int32_t *queue)
+{
+    int64_t count = t1 - t0, head = 0, tail = 0;
+    for (int64_t i = 0; i < count; i++)
+        n3[i] = UNSET;
+    for (int32_t s = cull->seed_start[block]; s < cull->seed_start[block + 1]; s++) {
+        const int32_t *seed = cull->seeds + (int64_t)TPK_CULL_SEED_WORDS * s;
+        int64_t t = seed[0]; /* in [t0, t1), its ids in range and distinct: rule 17 (rules.c check_cull) */
+        int32_t q[4] = {seed[1], seed[2], seed[3], seed[4]};
+        if (vx_of(w, t) != (q[0] ^ q[1] ^ q[2] ^ q[3]))
+            return TPK_ERR_MESH; /* not this tet's vertices */
+        if (w->mesh->layout == TPK_LAYOUT_TET20 && w->mesh->tet20[t].n[3] != seed[5])
+            return TPK_ERR_MESH;
+        for (int r = 0; r < 4; r++) {
+            int32_t u = neighbor(w, t, seed[5], r);
+            if (u < -1 || u >= w->tet_count)
+                return TPK_ERR_CORRUPT;
+        }
+        if (n3[t - t0] != UNSET) { /* reached from a seed before: it must agree */
+            int32_t a[4], b[4];
+            memcpy(a, q, sizeof a), memcpy(b, dst + 4 * (t - t0), sizeof b);
+            canon(a), canon(b);
+            if (memcmp(a, b, sizeof a) || n3[t - t0] != seed[5])
+                return TPK_ERR_MESH;
+            continue;
+        }
+        memcpy(dst + 4 * (t - t0), q, sizeof q);
+        n3[t - t0] = seed[5];
+        queue[tail++] = (int32_t)t;
+        while (head < tail) {
+            int32_t c = queue[head++], cq[4];
+            memcpy(cq, dst + 4 * ((int64_t)c - t0), sizeof cq);
+            int32_t cn3 = n3[c - t0];
+            for (int j = 0; j < 4; j++) {
+                int32_t u = neighbor(w, c, cn3, rank_of(cq, j));
+                if (u < t0 || u >= t1)
+                    continue; /* the shell, or another block */
+                int32_t f[3] = {cq[tpk_tet_faces[j][0]], cq[tpk_tet_faces[j][1]], cq[tpk_tet_faces[j][2]]};
+                tpk_result rc;
+                if (n3[u - t0] == UNSET) {
+                    rc = decode(w, u, f, c, dst + 4 * ((int64_t)u - t0), &n3[u - t0]);
+                    if (rc == TPK_OK)
+                        queue[tail++] = u;
+                } else {
+                    rc = check_visit(w, u, dst + 4 * ((int64_t)u - t0), n3[u - t0], f, c);
+                }
+                if (rc)
+                    return rc;
+            }
+        }
+    }
+    return tail == count ? TPK_OK : TPK_ERR_MESH; /* a tet the seeds do not reach inside the block */
+}
+
+tpk_result tpk_recover_block(const tpk_mesh_arrays *mesh, const tpk_cull *cull, uint64_t block, int32_t *dst)
+{
+    if (!mesh || !cull || !dst || block >= cull->block_count || cull->block_tets == 0)
+        return TPK_ERR_INVALID_ARGUMENT;
+    if (mesh->tet_count > INT32_MAX || mesh->vertex_count > INT32_MAX)
+        return TPK_ERR_LIMIT;
+    const int64_t B = cull->block_tets, T = (int64_t)mesh->tet_count;
+    if (cull->block_count != (uint64_t)((T + B - 1) / B))
+        return TPK_ERR_INVALID_ARGUMENT; /* another file's blocks */
+    const int64_t t0 = (int64_t)block * B, t1 = t0 + B < T ? t0 + B : T;
+    tpk_result rc = TPK_OK;
+    if (mesh->layout == TPK_LAYOUT_TET32) {
+        if (!mesh->tet32)
+            return TPK_ERR_INVALID_ARGUMENT;
+        tpk_mesh_arrays part = *mesh; /* recover_tet32 reads tets [0, tet_count) of the view */
+        part.tet32 = mesh->tet32 + t0;
+        part.tet_count = (uint64_t)(t1 - t0);
+        rc = recover_tet32(&part, dst, NULL);
+    } else {
+        if ((mesh->layout != TPK_LAYOUT_TET20 && mesh->layout != TPK_LAYOUT_TET16) ||
+            (mesh->layout == TPK_LAYOUT_TET20 && !mesh->tet20) || (mesh->layout == TPK_LAYOUT_TET16 && !mesh->tet16))
+            return TPK_ERR_INVALID_ARGUMENT;
+        walk w = {mesh, T, (int64_t)mesh->vertex_count, NULL, NULL, 1, 0};
+        int32_t *scratch = malloc(sizeof *scratch * 2 * (size_t)(t1 - t0));
+        if (!scratch)
+            return TPK_ERR_OUT_OF_MEMORY;
+        rc = walk_block(&w, cull, block, t0, t1, dst, scratch, scratch + (t1 - t0));
+        free(scratch);
+        for (int64_t i = 0; rc == TPK_OK && i < t1 - t0; i++)
+            canon(dst + 4 * i);
+    }
+    const int32_t *iv = cull->intervals + 2 * (int64_t)cull->interval_start[block];
+    const int64_t iv_count = cull->interval_start[block + 1] - cull->interval_start[block];
+    const int64_t base = iv_count ? iv[0] : 0, span = iv_count ? iv[2 * iv_count - 1] - base : 0;
+    if (rc == TPK_OK && span <= SPAN_BITS) {
+        /* the intervals' ids as bits, each vertex one test (a binary search a vertex cost a tenth of a
+         * culled render of grid 120) */
+        uint64_t bits[SPAN_BITS / 64 + 1];
+        memset(bits, 0, sizeof *bits * (size_t)(span / 64 + 1)); /* the span's words alone */
+        for (int64_t k = 0; k < iv_count; k++)
+            for (int64_t v = iv[2 * k] - base; v < iv[2 * k + 1] - base; v++)
+                bits[v >> 6] |= 1ull << (v & 63);
+        for (int64_t i = 0; rc == TPK_OK && i < 4 * (t1 - t0); i++) {
+            int64_t v = (int64_t)dst[i] - base;
+            if (v < 0 || v >= span || !((bits[v >> 6] >> (v & 63)) & 1))
+                rc = TPK_ERR_MESH; /* the block's scalars would not bound this vertex's */
+        }
+        return rc;
+    }
+    int64_t hint = 0;
+    for (int64_t i = 0; rc == TPK_OK && i < 4 * (t1 - t0); i++)
+        if (!in_intervals(iv, iv_count, dst[i], &hint))
+            rc = TPK_ERR_MESH;
+    return rc;
 }

@@ -14,10 +14,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "internal_file.h"
 #include "internal_mesh.h"
+#include "internal_threads.h"
 
 struct set_field {
     char name[64];         /* "" for tpk_set_mesh_arrays' NULL */
@@ -345,13 +345,14 @@ typedef struct tets_job {
     char err[512];
 } tets_job;
 
-static void *tets_worker(void *arg)
+static void tets_worker(void *arg, int share, int shares)
 {
+    (void)share, (void)shares; /* parts are taken in turn, by whichever share is free */
     tets_job *job = arg;
     for (;;) {
         uint32_t p = atomic_fetch_add(&job->next, 1);
         if (p >= job->m->part_count)
-            return NULL;
+            return;
         if (!open_part(job->m, p))
             continue;
         char err[512] = "";
@@ -374,16 +375,8 @@ static tpk_result merge_tets(tpk_set_mesh *m, const tpk_mesh_arrays *parts, cons
     tets_job job = {.m = m, .parts = parts, .links = links, .link_counts = link_counts, .result = TPK_OK};
     atomic_init(&job.next, 0);
     pthread_mutex_init(&job.lock, NULL);
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    uint32_t n = cores < 1 ? 1 : cores > 64 ? 64 : (uint32_t)cores;
-    n = n > m->part_count ? m->part_count : n;
-    pthread_t threads[64];
-    uint32_t started = 0;
-    while (started + 1 < n && pthread_create(&threads[started], NULL, tets_worker, &job) == 0)
-        started++;
-    tets_worker(&job); /* this thread too; alone when no thread could start */
-    for (uint32_t i = 0; i < started; i++)
-        pthread_join(threads[i], NULL);
+    int cores = tpki_cores();
+    tpki_run_threads((uint32_t)cores > m->part_count ? (int)m->part_count : cores, tets_worker, &job);
     pthread_mutex_destroy(&job.lock);
     if (job.result != TPK_OK)
         tpki_text_fail(err, cap, job.result, "%s", job.err);

@@ -71,11 +71,16 @@ static double positions_extent(const float *pos, int64_t vertex_count)
     return size;
 }
 
-tpk_result tpki_shell_bvh_build(tpk_marcher *m)
+void tpki_shell_prepare(tpk_marcher *m)
+{
+    m->face_count = (int64_t)m->mesh.shell_face_count;
+    m->extent = positions_extent(m->mesh.positions, (int64_t)m->mesh.vertex_count);
+}
+
+static tpk_result shell_bvh_build(tpk_marcher *m)
 {
     const tpk_mesh_arrays *mesh = &m->mesh;
     const int32_t n = (int32_t)mesh->shell_face_count;
-    m->face_count = n;
     if (n == 0)
         return TPK_OK;
     tpki_bvh_item *items = malloc((size_t)n * sizeof *items);
@@ -85,7 +90,6 @@ tpk_result tpki_shell_bvh_build(tpk_marcher *m)
         free(items);
         return TPK_ERR_OUT_OF_MEMORY;
     }
-    m->extent = positions_extent(mesh->positions, (int64_t)mesh->vertex_count);
     const double pad = m->extent > 0 ? m->extent * 1e-6 : 1e-30;
     for (int32_t i = 0; i < n; i++) {
         face_bounds(mesh->positions, &mesh->shell[i], pad, &items[i]);
@@ -103,6 +107,20 @@ tpk_result tpki_shell_bvh_build(tpk_marcher *m)
         m->faces[i] = mesh->shell[items[i].id];
     free(items);
     return TPK_OK;
+}
+
+tpk_result tpki_shell_ready(const tpk_marcher *marcher)
+{
+    tpk_marcher *m = (tpk_marcher *)marcher; /* the BVH is a cache of what the shell holds */
+    if (__atomic_load_n(&m->shell_built, __ATOMIC_ACQUIRE))
+        return m->shell_result;
+    pthread_mutex_lock(&m->shell_lock);
+    if (!m->shell_built) {
+        m->shell_result = shell_bvh_build(m);
+        __atomic_store_n(&m->shell_built, 1, __ATOMIC_RELEASE);
+    }
+    pthread_mutex_unlock(&m->shell_lock);
+    return m->shell_result;
 }
 
 /* ---- Query --------------------------------------------------------------------------------------- */
@@ -149,6 +167,9 @@ tpk_result tpki_shell_entries(const tpk_marcher *m, const tpk_ray_frame *frame, 
     *out_count = 0;
     if (m->face_count == 0)
         return TPK_OK;
+    tpk_result ready = tpki_shell_ready(m);
+    if (ready != TPK_OK)
+        return ready;
     const double inv[3] = {1.0 / dir[0], 1.0 / dir[1], 1.0 / dir[2]};
     tpk_entry *list = stack_buf;
     int64_t count = 0, cap = stack_cap;

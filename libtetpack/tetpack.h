@@ -19,7 +19,7 @@ extern "C" {
 #pragma GCC visibility push(default)
 #endif
 
-#define TPK_LIBRARY_VERSION "1.3.0"
+#define TPK_LIBRARY_VERSION "1.4.0"
 
 typedef enum tpk_result {
     TPK_OK = 0,
@@ -182,6 +182,32 @@ tpk_result tpk_recover_tets(const tpk_mesh_arrays *mesh, int32_t *dst);
  * the same result code whatever the thread count (on an error the one-thread walk is rerun). Since 1.3.0. */
 tpk_result tpk_recover_tets_threads(const tpk_mesh_arrays *mesh, int32_t *dst, int threads);
 
+/* ---- Culling blocks (format 1.4, spec §17) -------------------------------------------------------- */
+
+/* A file's CULL chunk: its tets in file order cut into blocks of block_tets; per block, seeds from which a
+ * walk inside the block reaches all its tets, and intervals of vertex ids that hold every vertex of its
+ * tets (so the scalars over the intervals bound the block's). Views into the file handle. Since 1.4.0. */
+typedef struct tpk_cull {
+    uint32_t block_tets;
+    uint64_t block_count, seed_count, interval_count;
+    const int32_t *seed_start;     /* block_count + 1: block k's seeds are [seed_start[k], seed_start[k + 1]) */
+    const int32_t *interval_start; /* block_count + 1, likewise for its intervals */
+    const int32_t *seeds;          /* TPK_CULL_SEED_WORDS per seed: tet, its vertices in positive order, n3 */
+    const int32_t *intervals;      /* 2 per interval: first id, end id (exclusive) */
+} tpk_cull;
+
+/* The file's CULL chunk into out, its structure checked (spec rule 17: CORRUPT with a message);
+ * TPK_ERR_NOT_FOUND when the file has none. */
+tpk_result tpk_load_cull(tpk_file *file, tpk_cull *out);
+
+/* The tets of block `block` of `cull` by a walk from its seeds inside the block: 4 per tet into
+ * dst[4 * (t - block * block_tets) ...], each in the canonical rotation tpk_recover_tets gives, so the
+ * same ids as tpk_recover_tets returns for them. Every decoded id and visit is checked as the walk from
+ * the shell checks them, and every vertex against the block's intervals: TPK_ERR_CORRUPT or TPK_ERR_MESH
+ * (a tet not reached, a vertex outside the intervals). Any layout (Tet32: read directly, then checked
+ * against the intervals). Safe to call for different blocks from several threads. */
+tpk_result tpk_recover_block(const tpk_mesh_arrays *mesh, const tpk_cull *cull, uint64_t block, int32_t *dst);
+
 /* ---- Writer ------------------------------------------------------------------------------------- */
 
 typedef struct tpk_writer tpk_writer;
@@ -252,7 +278,8 @@ const char *tpk_writer_error_text(const tpk_writer *writer);
 
 typedef struct tpk_marcher tpk_marcher;
 
-/* Build the marcher (a BVH over shell faces). `mesh` arrays must outlive the marcher.
+/* Build the marcher (a BVH over shell faces, made on its first use: rays that never enter from the
+ * shell, as range-culled iso rays, pay for none; since 1.4.0). `mesh` arrays must outlive the marcher.
  * Thread safety: tpk_march_ray may be called from many threads on one marcher. */
 tpk_result tpk_marcher_create(tpk_marcher **out, const tpk_mesh_arrays *mesh);
 void tpk_marcher_destroy(tpk_marcher *marcher);
@@ -272,10 +299,11 @@ typedef struct tpk_shell_bvh_node {
     int32_t count;
 } tpk_shell_bvh_node;
 
-/* The shell BVH tpk_marcher_create built, for renderers that upload it instead of building their own
- * (the Vulkan renderer): nodes (root first), the shell records in leaf order (copies of the file's
- * records), and the largest extent or coordinate magnitude of the positions. Owned by the marcher,
- * valid while it lives. A traversal stack of TPK_SHELL_BVH_STACK entries always suffices. */
+/* The marcher's shell BVH (built here when no ray has built it yet), for renderers that upload it
+ * instead of building their own (the Vulkan renderer): nodes (root first), the shell records in leaf
+ * order (copies of the file's records), and the largest extent or coordinate magnitude of the positions.
+ * Owned by the marcher, valid while it lives. A traversal stack of TPK_SHELL_BVH_STACK entries always
+ * suffices. All zero when the BVH could not be built (out of memory). */
 typedef struct tpk_shell_bvh {
     const tpk_shell_bvh_node *nodes;
     int64_t node_count;
@@ -327,6 +355,15 @@ tpk_result tpk_range_bvh_create(tpk_range_bvh **out, const tpk_marcher *marcher)
  * <= 1: the caller's alone), then as tpk_range_bvh_set_threads(bvh, threads). The same bvh for any count.
  * Since 1.3.0. */
 tpk_result tpk_range_bvh_create_threads(tpk_range_bvh **out, const tpk_marcher *marcher, int threads);
+/* A bvh over a file's culling blocks (tpk_load_cull, spec §17) instead of all its tets: each block's
+ * scalar range is read over its vertex intervals, and tpk_range_bvh_select walks only the blocks whose
+ * range holds a value (tpk_recover_block: its errors). The selected tree is the one
+ * tpk_range_bvh_create_threads would select, so rays give the same pieces. It has no file-order tree:
+ * tpk_march_ray_values answers only the selected values (TPK_ERR_INVALID_ARGUMENT otherwise),
+ * tpk_range_bvh_heap gives 0 and tpk_range_bvh_tets NULL; tpk_range_bvh_active gives the share of blocks.
+ * `cull` must stay valid while the bvh lives. Since 1.4.0. */
+tpk_result tpk_range_bvh_create_cull(tpk_range_bvh **out, const tpk_marcher *marcher, const tpk_cull *cull,
+                                     int threads);
 void tpk_range_bvh_destroy(tpk_range_bvh *bvh);
 /* The share (0..1) of its leaves (runs of 8 tets) whose range holds one of values[0 .. count): where it is
  * large, the isosurface is near every ray's entry and marching finds it sooner than culling does. */

@@ -512,12 +512,14 @@ static void build_header(const tpk_writer *w, const tpk_header_fields *fields, u
     memcpy(h->magic, TPK_MAGIC, TPK_MAGIC_SIZE);
     h->version_major = TPK_VERSION_MAJOR;
     h->version_minor = TPK_VERSION_MINOR_PLAIN;
-    for (uint64_t i = 0; i < w->count; i++) /* writer rule 1: 1.2 or 1.3 only where their chunks are used */
+    for (uint64_t i = 0; i < w->count; i++) /* writer rule 1: 1.2, 1.3 or 1.4 only where their chunks are used */
         if ((w->entries[i].tag == TPK_TAG_PART || w->entries[i].tag == TPK_TAG_LINK) &&
             h->version_minor < TPK_VERSION_MINOR_PARTS)
             h->version_minor = TPK_VERSION_MINOR_PARTS;
-        else if (w->entries[i].tag == TPK_TAG_LEVL)
+        else if (w->entries[i].tag == TPK_TAG_LEVL && h->version_minor < TPK_VERSION_MINOR_LEVELS)
             h->version_minor = TPK_VERSION_MINOR_LEVELS;
+        else if (w->entries[i].tag == TPK_TAG_CULL)
+            h->version_minor = TPK_VERSION_MINOR_CULL;
     h->header_size = TPK_HEADER_SIZE;
     h->dir_entry_size = TPK_DIR_ENTRY_SIZE;
     h->directory_offset = directory_offset;

@@ -203,9 +203,24 @@ static tpk_result write_one_tet(const char *path, int vendor)
     return finish(&w, &h);
 }
 
+/* Format 1.4 (spec §17, §13.6): the culling blocks of the two-tet mesh, written out by hand. B = 16, so
+ * ceil(2 / 16) = 1 block; tet 0 = (3, 0, 4, 1) reaches tet 1 across their face {0, 4, 1}, so one seed:
+ * tet 0 as (0, 1, 4, 3), an even permutation (smallest first, then the smallest of the other three),
+ * with n3 = -1, the face opposite 4 (its largest id) being the shell face {3, 0, 1}; one interval, ids
+ * 0 to 4. */
+#define TWO_TETS_CULL_N3_WORD 13
+static const int32_t two_tets_cull[16] = {
+    16, 1, 1, 1, /* block_tets, block_count, seed_count, interval_count */
+    0,  1,       /* seed_start */
+    0,  1,       /* interval_start */
+    0,  0, 1, 4, 3, -1, /* seed: tet, a, b, c, d, n3 */
+    0,  5,       /* interval: first, end */
+};
+
 /* The two-tet mesh, its fields, TIME, TMAP and VMAP with `codec`; then the vendor chunk `note` (with
- * `note`) or a LEVL 1 of `level` bytes (level != NULL). */
-static tpk_result write_two_tets(const char *path, int codec, int note, const void *level, size_t level_size)
+ * `note`), a LEVL 1 of `level` bytes (level != NULL) or the CULL chunk of `cull_words` words. */
+static tpk_result write_two_tets(const char *path, int codec, int note, const void *level, size_t level_size,
+                                 const int32_t *cull, size_t cull_words)
 {
     vector_writer w;
     if (open_writer(&w, path, codec) != TPK_OK)
@@ -240,6 +255,8 @@ static tpk_result write_two_tets(const char *path, int codec, int note, const vo
         put(&w, TPK_FOURCC('n', 'o', 't', 'e'), 0, TPK_ELEM_BYTE, 1, strlen(two_tets_note), 0, 0, two_tets_note);
     if (level)
         put(&w, TPK_TAG_LEVL, 0, TPK_ELEM_BYTE, 1, level_size, 1, 0, level);
+    if (cull)
+        put(&w, TPK_TAG_CULL, 0, TPK_ELEM_I32, 4, cull_words, 0, 0, cull);
 
     tpk_header_fields h = {0};
     h.vertex_count = 5;
@@ -251,7 +268,7 @@ static tpk_result write_two_tets(const char *path, int codec, int note, const vo
 
 static tpk_result write_two_tets_zstd(const char *path)
 {
-    return write_two_tets(path, TPK_CODEC_ZSTD, 1, NULL, 0);
+    return write_two_tets(path, TPK_CODEC_ZSTD, 1, NULL, 0, NULL, 0);
 }
 
 /* ---- must-fail files: patched bytes ------------------------------------------------------------ */
@@ -470,7 +487,7 @@ static tpk_result write_two_tets_levels(const char *path, const char *level)
     byte_buffer lb = {0};
     if (load_bytes(level, &lb) != 0)
         return TPK_ERR_IO;
-    tpk_result r = write_two_tets(path, TPK_CODEC_NONE, 0, lb.data, lb.size);
+    tpk_result r = write_two_tets(path, TPK_CODEC_NONE, 0, lb.data, lb.size, NULL, 0);
     free(lb.data);
     return r;
 }
@@ -484,6 +501,30 @@ static int patch_level_zstd(byte_buffer *b)
     e->codec = TPK_CODEC_ZSTD;
     reseal(b);
     return 0;
+}
+
+/* Format 1.4: word `word` of the (uncompressed) CULL chunk set to `value`, its checksum recomputed. */
+static int patch_cull_word(byte_buffer *b, uint64_t word, int32_t value)
+{
+    tpk_dir_entry *e = entry_of(b, TPK_TAG_CULL);
+    if (!e || e->codec != TPK_CODEC_NONE || word >= e->elem_count)
+        return -1;
+    memcpy(b->data + e->offset + 4 * word, &value, sizeof value);
+    e->checksum = XXH64(b->data + e->offset, e->raw_size, 0);
+    reseal(b);
+    return 0;
+}
+
+/* TPK-B01 (check 616): the seed's n3 = 1, within rule 17 ([-1, T)), but tet 0's neighbor opposite 4 is -1. */
+static int patch_cull_bad_seed(byte_buffer *b)
+{
+    return patch_cull_word(b, TWO_TETS_CULL_N3_WORD, 1);
+}
+
+/* Rule 17 (format 1.4): block_count = 2, not ceil(2 / 16) = 1. */
+static int patch_cull_block_count(byte_buffer *b)
+{
+    return patch_cull_word(b, 1, 2);
 }
 
 /* Rule 5 (format 1.1): origin[0] = +infinity. */
@@ -647,5 +688,12 @@ static int tpk_make_vectors(const char *dir)
     }
     rc |= make_broken(dir, "level_zstd.tpk", levels, patch_level_zstd);
     remove(level);
+    /* format 1.4: a file with culling blocks; a seed's n3 wrong (616); a block count wrong (rule 17) */
+    char cull[1024];
+    snprintf(cull, sizeof cull, "%s/two_tets_cull.tpk", dir);
+    rc |= write_two_tets(cull, TPK_CODEC_NONE, 0, NULL, 0, two_tets_cull,
+                         sizeof two_tets_cull / sizeof two_tets_cull[0]) != TPK_OK;
+    rc |= make_broken(dir, "cull_bad_seed.tpk", cull, patch_cull_bad_seed);
+    rc |= make_broken(dir, "cull_block_count.tpk", cull, patch_cull_block_count);
     return rc;
 }

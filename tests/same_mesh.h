@@ -1,10 +1,14 @@
 /* Two imported meshes compared bit for bit (header-only): for tests that read one file two ways (in a
- * child process or not, on one thread or several) and need the very same mesh. */
+ * child process or not, on one thread or several) and need the very same mesh; and an importer's reads of
+ * one file on one thread and on several, which must give the same mesh or the same error. */
 #ifndef TPK_TEST_SAME_MESH_H
 #define TPK_TEST_SAME_MESH_H
 
+#include <stdio.h>
 #include <string.h>
 
+#include "base/diag.h"
+#include "base/parallel.h"
 #include "mesh/mesh.h"
 #include "tetpack_format.h"
 
@@ -40,6 +44,62 @@ static inline int tpk_same_mesh(const tpk_mesh *a, const tpk_mesh *b)
             return 0;
     }
     return 1;
+}
+
+/* An importer of a file by path (import/importers.h: tpk_import_exodus, tpk_import_cgns, ...). */
+typedef int (*tpk_path_importer)(const char *path, tpk_mesh *out, tpk_diag *diag);
+
+/* `path` read by `import` on `threads` threads (the process default, restored after): its return, the
+ * mesh and the message. */
+static inline int tpk_import_on(tpk_path_importer import, const char *path, int threads, tpk_mesh *m, tpk_diag *d)
+{
+    int previous = tpk_set_default_threads(threads);
+    memset(d, 0, sizeof *d);
+    int rc = import(path, m, d);
+    tpk_set_default_threads(previous);
+    return rc;
+}
+
+/* `path` read on one thread and on `threads`: 0 when both reads give the very same mesh, which *out then
+ * holds (the caller frees it); else -1, and d->message says which read failed or that the meshes differ. */
+static inline int tpk_import_same_on_threads(tpk_path_importer import, const char *path, int threads, tpk_mesh *out,
+                                             tpk_diag *d)
+{
+    tpk_mesh one;
+    if (tpk_import_on(import, path, 1, &one, d) != 0)
+        return -1;
+    int rc = tpk_import_on(import, path, threads, out, d);
+    int same = rc == 0 && tpk_same_mesh(&one, out);
+    tpk_mesh_free(&one);
+    if (rc == 0 && !same) {
+        tpk_mesh_free(out);
+        snprintf(d->message, sizeof d->message, "%s: the mesh read on %d threads differs from the one on one", path,
+                 threads);
+    }
+    return same ? 0 : -1;
+}
+
+/* `path` read on one thread and on `threads`, both of which must fail: 0 when they fail with the same
+ * message and it contains `expected`; else -1, with what happened in `why`. */
+static inline int tpk_import_fails_alike_on_threads(tpk_path_importer import, const char *path, int threads,
+                                                    const char *expected, char *why, size_t cap)
+{
+    char message[2][sizeof ((tpk_diag *)0)->message];
+    for (int k = 0; k < 2; k++) {
+        tpk_mesh m;
+        tpk_diag d;
+        if (tpk_import_on(import, path, k ? threads : 1, &m, &d) == 0) {
+            tpk_mesh_free(&m);
+            snprintf(why, cap, "%s: read on %d thread(s), expected to fail", path, k ? threads : 1);
+            return -1;
+        }
+        memcpy(message[k], d.message, sizeof message[k]);
+    }
+    if (strcmp(message[0], message[1]) || !strstr(message[0], expected)) {
+        snprintf(why, cap, "'%s' against '%s' (expected '%s')", message[0], message[1], expected);
+        return -1;
+    }
+    return 0;
 }
 
 #endif

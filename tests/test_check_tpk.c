@@ -61,11 +61,13 @@ static int run_6xx_with(const char *path, int threads, int max_examples, tpk_che
     return rc;
 }
 
-/* Sum over 600..613; prints what was found, so a failing test shows it. */
+/* Sum over 600..613 and 616; prints what was found, so a failing test shows it. */
 static int64_t total_6xx(tpk_check_report *r, const char *label)
 {
     int64_t sum = 0;
-    for (int id = 600; id <= 613; id++) {
+    for (int id = 600; id <= 616; id++) {
+        if (id == 614 || id == 615)
+            continue; /* the part set's and the levels' (check_set.c, check_levels.c) */
         tpk_finding *f = tpk_check_finding(r, id);
         sum += f->count;
         if (f->count)
@@ -78,7 +80,7 @@ static int64_t total_6xx(tpk_check_report *r, const char *label)
 
 /* ---- files -------------------------------------------------------------------------------------- */
 
-static int convert(const char *data, const char *out, unsigned layouts, int zstd)
+static int convert_with(const char *data, const char *out, unsigned layouts, int zstd, int cull)
 {
     tpk_convert_options o;
     memset(&o, 0, sizeof o);
@@ -86,6 +88,7 @@ static int convert(const char *data, const char *out, unsigned layouts, int zstd
     o.output = out;
     o.layouts = layouts;
     o.zstd_level = zstd;
+    o.cull = cull;
     o.threads = 2;
     tpk_convert_report report;
     tpk_diag diag;
@@ -95,6 +98,11 @@ static int convert(const char *data, const char *out, unsigned layouts, int zstd
         return -1;
     }
     return 0;
+}
+
+static int convert(const char *data, const char *out, unsigned layouts, int zstd)
+{
+    return convert_with(data, out, layouts, zstd, 0);
 }
 
 /* A file as a list of chunks in memory, to change and write back with the library's writer (which
@@ -318,7 +326,7 @@ TPK_TEST(clean_converted_files)
  * chunk checksum is found when the chunk is read) is check 600, the others do not open. */
 TPK_TEST(test_vectors)
 {
-    static const char *const good[] = {"one_tet.tpk", "two_tets_zstd.tpk"};
+    static const char *const good[] = {"one_tet.tpk", "two_tets_zstd.tpk", "two_tets_cull.tpk"};
     static const char *const refused[] = {"bad_magic.tpk",        "truncated.tpk",  "newer_major.tpk",
                                           "unknown_required_chunk.tpk", "overlap.tpk",  "nonfinite_origin.tpk",
                                           "empty_fdsc.tpk",       "implausible_zstd_size.tpk"};
@@ -331,10 +339,11 @@ TPK_TEST(test_vectors)
         {"zstd_skippable_frame.tpk", "TPK-R16", "'POS3'", 0},
         {"zstd_chunk_checksum.tpk", "TPK-R16", "'POS3'", 0},
         {"tet16_vx.tpk", "TPK-R17", "'TT16'", 3},
+        {"cull_block_count.tpk", "TPK-R17", "'CULL'", 12},
     };
     char path[1024];
     tpk_check_report report;
-    for (int i = 0; i < 2; i++) {
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
         snprintf(path, sizeof path, "%s/samples/vectors/%s", TPK_SOURCE_DIR, good[i]);
         CHECK_EQ_INT(run_6xx(path, &report), 0);
         int64_t total = total_6xx(&report, good[i]);
@@ -362,6 +371,16 @@ TPK_TEST(test_vectors)
         tpk_check_report_free(&report);
         CHECK_MSG(ok, "%s", opened[i].name);
     }
+    /* §13.6: every word within rule 17, but the seed's n3 is not tet 0's neighbor opposite 4: 616 alone. */
+    snprintf(path, sizeof path, "%s/samples/vectors/cull_bad_seed.tpk", TPK_SOURCE_DIR);
+    CHECK_EQ_INT(run_6xx(path, &report), 0);
+    tpk_finding *f = tpk_check_finding(&report, 616);
+    int ok = f->count == 1 && total_6xx(&report, "cull_bad_seed") == 1 && f->example_count == 1 &&
+             !strcmp(f->examples[0].kind, "block") && f->examples[0].id_count == 3 && f->examples[0].ids[0] == 0 &&
+             f->examples[0].ids[1] == 0 && f->examples[0].ids[2] == 0 &&
+             strstr(f->examples[0].note, "n3 is 1, but the tet across the face opposite its largest id 4 is -1");
+    tpk_check_report_free(&report);
+    CHECK(ok);
 }
 
 /* ---- 600: reader rules -------------------------------------------------------------------------- */
@@ -944,7 +963,7 @@ TPK_TEST(examples_do_not_depend_on_threads)
 /* Findings of two runs: the same counts, examples and summaries. */
 static int same_findings(tpk_check_report *a, tpk_check_report *b)
 {
-    for (int id = 600; id <= 613; id++) {
+    for (int id = 600; id <= 616; id++) {
         tpk_finding *x = tpk_check_finding(a, id), *y = tpk_check_finding(b, id);
         if (x->count != y->count || x->example_count != y->example_count || strcmp(x->summary, y->summary))
             return 0;
@@ -1001,4 +1020,297 @@ TPK_TEST(parallel_walk)
         tpk_check_report_free(&serial);
         CHECK_MSG(ok, "%s", files[f]);
     }
+}
+
+/* ---- 616: culling blocks (TPK-B01) ------------------------------------------------------------- */
+
+/* CULL words as spec §17.4 describes them, built here from the library's recovered tets (each in its
+ * canonical positive order) and Tet20's neighbors by rank: blocks of B tets; seeds in tet order, each
+ * the first tet of the block the seeds before it do not reach, with n3 = Tet20's n[3]; intervals of the
+ * block's vertex ids, one across runs of at most `gap` missing ids. piece[s] receives the tets seed s
+ * reaches first. */
+typedef struct cull_words {
+    int32_t *w;
+    size_t count;
+    int64_t K, S, I;
+    int64_t *piece;
+} cull_words;
+
+static int cmp_i32(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static int build_cull(const int32_t *tets, const tpk_tet20 *t20, int64_t T, int64_t B, int32_t gap, cull_words *out)
+{
+    memset(out, 0, sizeof *out);
+    int64_t K = (T + B - 1) / B;
+    int32_t *seeds = malloc(sizeof *seeds * (size_t)(6 * T + 1)), *intervals = malloc(sizeof *intervals * (size_t)(8 * T + 1));
+    int64_t *seed_start = calloc((size_t)K + 1, sizeof *seed_start), *interval_start = calloc((size_t)K + 1, sizeof *interval_start);
+    int32_t *ids = malloc(sizeof *ids * (size_t)(4 * B)), *queue = malloc(sizeof *queue * (size_t)B);
+    uint8_t *reached = malloc((size_t)B);
+    out->piece = malloc(sizeof *out->piece * (size_t)(T + 1));
+    int64_t S = 0, I = 0;
+    int ok = seeds && intervals && seed_start && interval_start && ids && queue && reached && out->piece;
+    for (int64_t k = 0; ok && k < K; k++) {
+        int64_t t0 = k * B, t1 = t0 + B < T ? t0 + B : T;
+        memset(reached, 0, (size_t)B);
+        for (int64_t t = t0; t < t1; t++) {
+            if (reached[t - t0])
+                continue;
+            int32_t *seed = seeds + 6 * S;
+            seed[0] = (int32_t)t;
+            memcpy(seed + 1, tets + 4 * t, 4 * sizeof *seed);
+            seed[5] = t20[t].n[3];
+            int64_t head = 0, tail = 0;
+            queue[tail++] = (int32_t)t;
+            reached[t - t0] = 1;
+            while (head < tail) {
+                const int32_t *n = t20[queue[head++]].n;
+                for (int f = 0; f < 4; f++)
+                    if (n[f] >= t0 && n[f] < t1 && !reached[n[f] - t0]) {
+                        reached[n[f] - t0] = 1;
+                        queue[tail++] = n[f];
+                    }
+            }
+            out->piece[S++] = tail;
+        }
+        seed_start[k + 1] = S;
+        int64_t n = 4 * (t1 - t0);
+        memcpy(ids, tets + 4 * t0, sizeof *ids * (size_t)n);
+        qsort(ids, (size_t)n, sizeof *ids, cmp_i32);
+        for (int64_t i = 0; i < n;) {
+            int32_t first = ids[i], last = ids[i];
+            while (i < n && ids[i] - last - 1 <= gap)
+                last = ids[i++];
+            intervals[2 * I] = first;
+            intervals[2 * I++ + 1] = last + 1;
+        }
+        interval_start[k + 1] = I;
+    }
+    if (ok) {
+        out->count = 4 + 2 * ((size_t)K + 1) + 6 * (size_t)S + 2 * (size_t)I;
+        out->w = malloc(sizeof *out->w * out->count);
+        ok = out->w != NULL;
+    }
+    if (ok) {
+        int32_t *w = out->w;
+        *w++ = (int32_t)B, *w++ = (int32_t)K, *w++ = (int32_t)S, *w++ = (int32_t)I;
+        for (int64_t k = 0; k <= K; k++)
+            *w++ = (int32_t)seed_start[k];
+        for (int64_t k = 0; k <= K; k++)
+            *w++ = (int32_t)interval_start[k];
+        memcpy(w, seeds, sizeof *w * (size_t)(6 * S));
+        memcpy(w + 6 * S, intervals, sizeof *w * (size_t)(2 * I));
+        out->K = K, out->S = S, out->I = I;
+    }
+    free(seeds), free(intervals), free(seed_start), free(interval_start), free(ids), free(queue), free(reached);
+    return ok ? 0 : -1;
+}
+
+static void cull_words_free(cull_words *c)
+{
+    free(c->w);
+    free(c->piece);
+    memset(c, 0, sizeof *c);
+}
+
+/* The words' parts: the starts, seed s, interval i. */
+static int32_t *cull_seed_start(cull_words *c) { return c->w + 4; }
+static int32_t *cull_interval_start(cull_words *c) { return c->w + 4 + c->K + 1; }
+static int32_t *cull_seed(cull_words *c, int64_t s) { return c->w + 4 + 2 * (c->K + 1) + 6 * s; }
+static int32_t *cull_interval(cull_words *c, int64_t i) { return c->w + 4 + 2 * (c->K + 1) + 6 * c->S + 2 * i; }
+
+/* The recovered tets and Tet20 of the cylinder, and its CULL words of blocks of B. */
+typedef struct cull_base {
+    parts ps;
+    int32_t *tets;
+    int64_t T;
+} cull_base;
+
+static int cull_base_read(cull_base *b)
+{
+    memset(b, 0, sizeof *b);
+    tpk_file *file;
+    tpk_mesh_arrays m;
+    if (parts_from(cylinder_all(), ALL_LAYOUTS, &b->ps) || tpk_open_path(&file, cylinder_all(), NULL, NULL, 0) != TPK_OK)
+        return -1;
+    b->T = (int64_t)b->ps.header.tet_count;
+    b->tets = malloc(sizeof *b->tets * (size_t)(4 * b->T));
+    int rc = !b->tets || tpk_load_arrays(file, TPK_LAYOUT_TET20, NULL, 0, &m) != TPK_OK ||
+             tpk_recover_tets(&m, b->tets) != TPK_OK;
+    tpk_close(file);
+    return rc ? -1 : 0;
+}
+
+/* The cylinder with `keep` layouts and the CULL words, written and checked. */
+static int check_with_cull(unsigned keep, const cull_words *c, const char *name, tpk_check_report *report)
+{
+    parts ps;
+    if (parts_from(cylinder_all(), keep, &ps) || ps.count >= MAX_PARTS)
+        return -1;
+    part *p = &ps.p[ps.count++];
+    p->desc = (tpk_chunk_desc){TPK_TAG_CULL, 0, TPK_CODEC_NONE, TPK_ELEM_I32, 4, 0, 0, c->count, 0};
+    p->data = malloc(sizeof *c->w * c->count);
+    if (!p->data) {
+        parts_free(&ps);
+        return -1;
+    }
+    memcpy(p->data, c->w, sizeof *c->w * c->count);
+    return check_parts(&ps, name, report);
+}
+
+/* Blocks built by §17.4 check clean in every layout alone and all three, for blocks of 16 (the least:
+ * many blocks, some in pieces) and 256 (the converter's), with intervals across gaps of 32 unused ids
+ * (more ids than the tets use) and of none (the converter's). */
+TPK_TEST(b01_clean_blocks)
+{
+    cull_base b;
+    CHECK(cull_base_read(&b) == 0);
+    static const unsigned layouts[4] = {TPK_LAYOUT_BIT_TET16, TPK_LAYOUT_BIT_TET20, TPK_LAYOUT_BIT_TET32,
+                                        ALL_LAYOUTS};
+    static const int64_t blocks[2] = {16, 256};
+    const tpk_tet20 *t20 = parts_data(&b.ps, TPK_TAG_TT20);
+    for (int k = 0; k < 2; k++) {
+        cull_words c;
+        CHECK(build_cull(b.tets, t20, b.T, blocks[k], k ? 0 : 32, &c) == 0);
+        CHECK_MSG(c.K == (b.T + blocks[k] - 1) / blocks[k] && c.S >= c.K, "%lld blocks, %lld seeds", (long long)c.K,
+                  (long long)c.S);
+        for (int l = 0; l < 4; l++) {
+            tpk_check_report report;
+            CHECK_EQ_INT(check_with_cull(layouts[l], &c, "cull_clean.tpk", &report), 0);
+            int64_t total = total_6xx(&report, "cull clean");
+            tpk_check_report_free(&report);
+            CHECK_MSG(total == 0, "B %lld, layouts %u: %lld findings", (long long)blocks[k], layouts[l], (long long)total);
+        }
+        cull_words_free(&c);
+    }
+    free(b.tets);
+    parts_free(&b.ps);
+}
+
+/* One content rule broken at a time, in a Tet16-only file (ids from the walk) and in Tet32 alone: the
+ * exact count under 616, nothing else. */
+TPK_TEST(b01_broken_blocks)
+{
+    cull_base b;
+    CHECK(cull_base_read(&b) == 0);
+    const tpk_tet20 *t20 = parts_data(&b.ps, TPK_TAG_TT20);
+    cull_words c;
+    CHECK(build_cull(b.tets, t20, b.T, 16, 32, &c) == 0);
+    /* a block in pieces: its second seed, and what that seed alone reaches */
+    int64_t split = -1;
+    for (int64_t k = 0; k < c.K && split < 0; k++)
+        if (cull_seed_start(&c)[k + 1] - cull_seed_start(&c)[k] >= 2)
+            split = k;
+    CHECK_MSG(split >= 0, "no block of 16 tets in pieces among %lld: the removed-seed case cannot run", (long long)c.K);
+    enum { ODD, N3, NOT_ITS_IDS, SEED_REMOVED, INTERVAL_SHORT, CASES };
+    static const char *const want[CASES] = {"odd permutation", "n3 is", "are not the tet's", "is not reached",
+                                            "lies in none of block 0's"};
+    for (int layout = 0; layout < 2; layout++) {
+        unsigned keep = layout ? TPK_LAYOUT_BIT_TET32 : TPK_LAYOUT_BIT_TET16;
+        for (int kase = 0; kase < CASES; kase++) {
+            cull_words d = c;
+            d.w = malloc(sizeof *d.w * c.count);
+            CHECK(d.w != NULL);
+            if (!d.w)
+                return;
+            memcpy(d.w, c.w, sizeof *d.w * c.count);
+            int64_t expected = 1;
+            int32_t *seed = cull_seed(&d, 3);
+            if (kase == ODD) {
+                int32_t a = seed[1];
+                seed[1] = seed[2], seed[2] = a;
+            } else if (kase == N3) {
+                seed[5] = seed[5] == -1 ? seed[0] : -1;
+            } else if (kase == NOT_ITS_IDS) {
+                int32_t v = 0;
+                while (v == seed[1] || v == seed[2] || v == seed[3] || v == seed[4])
+                    v++;
+                seed[4] = v;
+            } else if (kase == SEED_REMOVED) {
+                /* drop the split block's last seed: the tets only it reached are not reached */
+                int64_t s = cull_seed_start(&d)[split + 1] - 1;
+                expected = c.piece[s];
+                int32_t *at = cull_seed(&d, s);
+                memmove(at, at + 6, sizeof *at * (size_t)(d.w + d.count - (at + 6)));
+                d.count -= 6;
+                d.w[2]--;
+                for (int64_t k = split + 1; k <= d.K; k++)
+                    cull_seed_start(&d)[k]--;
+                d.S--;
+            } else {
+                /* block 0's last interval one id shorter: the tets of block 0 that use that id */
+                int32_t *iv = cull_interval(&d, cull_interval_start(&d)[1] - 1);
+                int32_t cut = --iv[1];
+                expected = 0;
+                for (int64_t t = 0; t < 16; t++)
+                    expected += b.tets[4 * t] == cut || b.tets[4 * t + 1] == cut || b.tets[4 * t + 2] == cut ||
+                                b.tets[4 * t + 3] == cut;
+                if (iv[1] == iv[0]) /* an empty interval would break rule 17 instead */
+                    expected = -1;
+            }
+            tpk_check_report report;
+            CHECK_EQ_INT(check_with_cull(keep, &d, "cull_broken.tpk", &report), 0);
+            tpk_finding *f = tpk_check_finding(&report, 616);
+            int ok = expected > 0 && f->count == expected && total_6xx(&report, want[kase]) == expected &&
+                     f->example_count >= 1 && strstr(f->examples[0].note, want[kase]) &&
+                     strstr(f->summary, "at fault");
+            if (!ok)
+                fprintf(stderr, "layout %d, case %d: 616 count %lld, expected %lld: %s | %s\n", layout, kase,
+                        (long long)f->count, (long long)expected, f->example_count ? f->examples[0].note : "",
+                        f->summary);
+            tpk_check_report_free(&report);
+            free(d.w);
+            CHECK(ok);
+        }
+    }
+    cull_words_free(&c);
+    free(b.tets);
+    parts_free(&b.ps);
+}
+
+/* convert --cull: its CULL is the words spec §17.4 gives (blocks of 256, intervals the maximal runs of
+ * consecutive ids; built here from the file's own tets), and the file checks clean, in Tet16 alone
+ * (compressed) and all layouts, on real meshes of 1348 and 202596 tets. */
+TPK_TEST(b01_converted_blocks)
+{
+    static const char *const meshes[2] = {"sfepy/cylinder.vtk", "sfepy/cube_big_tetra.mesh"};
+    static const unsigned layouts[2] = {TPK_LAYOUT_BIT_TET16, ALL_LAYOUTS};
+    for (int m = 0; m < 2; m++)
+        for (int l = 0; l < 2; l++) {
+            const char *path = tpk_temp_path("converted_cull.tpk");
+            CHECK(convert_with(meshes[m], path, layouts[l] | TPK_LAYOUT_BIT_TET20, l == 0 ? 3 : 0, 1) == 0);
+            tpk_check_report report;
+            CHECK_EQ_INT(run_6xx(path, &report), 0);
+            int64_t total = total_6xx(&report, meshes[m]);
+            tpk_check_report_free(&report);
+            CHECK_MSG(total == 0, "%s, layouts %u: %lld findings", meshes[m], layouts[l], (long long)total);
+            parts ps;
+            tpk_file *file = NULL;
+            tpk_mesh_arrays arrays;
+            CHECK(parts_read(path, &ps) == 0 && tpk_open_path(&file, path, NULL, NULL, 0) == TPK_OK);
+            if (!file)
+                return;
+            int64_t T = (int64_t)ps.header.tet_count;
+            int32_t *tets = malloc(sizeof *tets * (size_t)(4 * T));
+            CHECK(tets && tpk_load_arrays(file, TPK_LAYOUT_TET20, NULL, 0, &arrays) == TPK_OK &&
+                  tpk_recover_tets(&arrays, tets) == TPK_OK);
+            tpk_file_info info;
+            tpk_get_info(file, &info);
+            tpk_close(file);
+            part *written = parts_get(&ps, TPK_TAG_CULL, 0, 0);
+            int32_t B = written && written->desc.elem_count ? *(const int32_t *)written->data : 0;
+            cull_words c = {0};
+            CHECK(B == 256 && build_cull(tets, parts_data(&ps, TPK_TAG_TT20), T, B, 0, &c) == 0);
+            CHECK_MSG(info.version_minor == 4 && written && written->desc.elem_count == c.count &&
+                          written->desc.flags == 0 && !memcmp(written->data, c.w, sizeof *c.w * c.count),
+                      "%s: CULL of %llu words, %zu by spec §17.4 (%lld blocks, %lld seeds, %lld intervals)", meshes[m],
+                      written ? (unsigned long long)written->desc.elem_count : 0ULL, c.count, (long long)c.K,
+                      (long long)c.S, (long long)c.I);
+            cull_words_free(&c);
+            free(tets);
+            parts_free(&ps);
+        }
 }

@@ -482,11 +482,13 @@ TPK_TEST(lagrange_tetra_shape_functions)
 {
     CHECK_EQ_INT(tpk_cell_map_type(71, 20), TPK_CELL_MAP_LAGRANGE_TETRA + 3);
     CHECK_EQ_INT(tpk_cell_map_type(71, 84), TPK_CELL_MAP_LAGRANGE_TETRA + 6);
-    CHECK_EQ_INT(tpk_cell_map_type(71, 120), 71); /* order 7: degree over the Bernstein tables' */
+    CHECK_EQ_INT(tpk_cell_map_type(71, 120), TPK_CELL_MAP_LAGRANGE_TETRA + 7);
+    CHECK_EQ_INT(tpk_cell_map_type(71, 286), TPK_CELL_MAP_LAGRANGE_TETRA + 10);
+    CHECK_EQ_INT(tpk_cell_map_type(71, 364), 71); /* order 11: degree over the Bernstein tables' 12 */
     CHECK_EQ_INT(tpk_cell_map_type(71, 15), 71);
     for (int p = 3; p <= TPK_CELL_MAP_LAGRANGE_MAX_ORDER; p++) {
         int type = TPK_CELL_MAP_LAGRANGE_TETRA + p, n = (p + 1) * (p + 2) * (p + 3) / 6;
-        double r[84][3], w[TPK_CELL_MAP_MAX_NODES];
+        double r[TPK_CELL_MAP_MAX_NODES][3], w[TPK_CELL_MAP_MAX_NODES];
         CHECK_EQ_INT(tpk_cell_map_nodes(type), n);
         CHECK_EQ_INT(tpk_cell_map_degree(type), p);
         for (int k = 0; k < n; k++) {
@@ -567,7 +569,9 @@ TPK_TEST(lagrange_wedge_shape_functions)
 {
     const int type = TPK_CELL_MAP_LAGRANGE_WEDGE + 3, n = 40;
     CHECK_EQ_INT(tpk_cell_map_type(73, 40), type);
-    CHECK_EQ_INT(tpk_cell_map_type(73, 75), 73); /* order 4: degree 8, over the Bernstein tables' */
+    CHECK_EQ_INT(tpk_cell_map_type(73, 75), TPK_CELL_MAP_LAGRANGE_WEDGE + 4);
+    CHECK_EQ_INT(tpk_cell_map_type(73, 196), TPK_CELL_MAP_LAGRANGE_WEDGE + 6);
+    CHECK_EQ_INT(tpk_cell_map_type(73, 288), 73); /* order 7: degree 14, over the Bernstein tables' 12 */
     CHECK_EQ_INT(tpk_cell_map_nodes(type), n);
     CHECK_EQ_INT(tpk_cell_map_degree(type), 6);
     double r[40][3], w[TPK_CELL_MAP_MAX_NODES];
@@ -595,6 +599,138 @@ TPK_TEST(lagrange_wedge_shape_functions)
         for (int k = 0; k < n; k++)
             CHECK_MSG(fabs(w[k] - vtk_lagrange_wedge[c].w[k]) < 1e-12, "wedge point %d: N%d = %.17g, VTK %.17g", (int)c,
                       k, w[k], vtk_lagrange_wedge[c].w[k]);
+    }
+}
+
+/* The Lagrange tetra of orders 7-10, hexahedra of orders 3-4 and wedges of orders 4-6 against VTK's own
+ * weights (vtkLagrangeTetra, vtkLagrangeHexahedron, vtkLagrangeWedge ::InterpolateFunctions of
+ * python3-paraview's VTK 9.2 after SetOrder(p, p, p), at 3 random points per order, seed 44), as two
+ * sums sum_k w_k sin(k + 1) and sum_k w_k cos(0.7 k) (printed to 17 digits): a node out of place changes
+ * them. Each type's weights are 1 at their node and 0 at the others, its nodes at their lattice points
+ * in VTK's numbering, and it reproduces a random polynomial of its degree in each variable (tetra: total
+ * degree p; hexahedra and wedges: degree p in (r, s) times degree p in t). */
+static const struct {
+    int base, p;
+    double r[3], sin_sum, cos_sum;
+} vtk_lagrange_high[] = {
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 7, {0.17666564419544384, 0.2251595205781467, 0.029097253268111078}, 0.32600209150691112, 0.2819224211075031},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 7, {0.1166505334428638, 0.0088056258870669035, 0.15669033508336383}, 0.19720496731834725, -0.82629537267908759},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 7, {0.61721995591408318, 0.11200982712964758, 0.070066687379917281}, 1.1778414843089717, 0.14883618099555157},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 8, {0.18859316505523482, 0.25834686865744172, 0.24796464127719819}, 0.7253730887401435, -0.25617643411491914},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 8, {0.15726925439603556, 0.22314650478327425, 0.014588434845492881}, -0.82546021596672192, 0.42272942211463743},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 8, {0.047981654672824448, 0.6230878269221285, 0.12248957263441707}, 1.3113665307809943, -1.2908487833008044},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 9, {0.27204909231091834, 0.0067392471078761007, 0.27391238643523974}, -0.71039467240631415, 0.32480473463734666},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 9, {0.073010120573495541, 0.27172201025626408, 0.41244134822443645}, 1.9819939334660885, 3.3121609550473279},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 9, {0.12935757761115396, 0.18795489179810188, 0.01564689038106748}, 1.1335242140590363, 0.34446081369494175},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 10, {0.01630717541417237, 0.79568098638646356, 0.11715214844662192}, -1.1872748412203227, -1.1709516697369216},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 10, {0.016100974126273537, 0.075270207028388159, 0.56239207920202494}, -1.468115057097571, -1.9353663226409359},
+    {TPK_CELL_MAP_LAGRANGE_TETRA, 10, {0.14903803392923243, 0.26336742768505206, 0.4045923931025962}, 0.30420060046204755, 2.3203017667954344},
+    {TPK_CELL_MAP_LAGRANGE_HEX, 3, {0.7968774077548143, 0.65996706446882847, 0.17198624074591451}, -0.47252519990062836, -0.7141586039160891},
+    {TPK_CELL_MAP_LAGRANGE_HEX, 3, {0.17871933642312421, 0.45057056779894733, 0.89046284174588619}, -0.77273620099223395, 0.04827151199023344},
+    {TPK_CELL_MAP_LAGRANGE_HEX, 3, {0.47235919745936561, 0.78899665398096952, 0.68874006403772159}, 0.76968298636400423, 1.2576808186994064},
+    {TPK_CELL_MAP_LAGRANGE_HEX, 4, {0.87796795699733743, 0.49632746722034693, 0.37792198717970227}, 0.076834419618405467, -0.68501380804932266},
+    {TPK_CELL_MAP_LAGRANGE_HEX, 4, {0.45760914766939331, 0.80204083539710846, 0.27861194002479106}, -0.80377006798786566, -0.19927957062438467},
+    {TPK_CELL_MAP_LAGRANGE_HEX, 4, {0.1932954210919865, 0.83682891894141898, 0.48033231417067768}, 1.013488508168048, -0.87517165128813779},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 4, {0.64146990161274464, 0.17415572214818642, 0.041407662359385755}, -1.342816303624228, -0.34959976251189301},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 4, {0.22502970266773947, 0.42938974727800872, 0.033002547900054746}, -0.72404997234760982, -0.12990195954075207},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 4, {0.7270111475965414, 0.056965874866295785, 0.43708779735368508}, 0.76474959510386709, 0.22959226406241584},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 5, {0.0045458840607556228, 0.8025110031450674, 0.3017180935996967}, -0.43803144814123146, 0.78775771098431691},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 5, {0.17280492762813826, 0.63794701703587764, 0.66459135469688002}, 0.77008578545997475, 0.20839540101389134},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 5, {0.67575460181819336, 0.28953866186387256, 0.87549653593685484}, 0.69711954913707153, -0.13325051488311265},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 6, {0.33966698828076114, 0.49708408823050743, 0.005462039804677965}, -0.8633730145826416, -0.75466744104303951},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 6, {0.59142055397961035, 0.29229991263234589, 0.65239504145414662}, 0.48776575157003527, 0.049166037521049019},
+    {TPK_CELL_MAP_LAGRANGE_WEDGE, 6, {0.24188695427075357, 0.6594696951339647, 0.66725990183170425}, -1.4613138860929367, -0.3067169849506437},
+};
+
+/* l(p, m, L) = prod_{q<m} (p L - q) / (q + 1) in long double, and the 1-D basis on nodes k / p */
+static long double lagrange_ld(int p, int m, long double L)
+{
+    long double v = 1;
+    for (int q = 0; q < m; q++)
+        v *= (p * L - q) / (q + 1);
+    return v;
+}
+
+static long double line_ld(int p, int k, long double t)
+{
+    long double v = 1;
+    for (int q = 0; q <= p; q++)
+        if (q != k)
+            v *= (p * t - q) / (k - q);
+    return v;
+}
+
+static int lattice_node(int base, int p, int i, int j, int k)
+{
+    return base == TPK_CELL_MAP_LAGRANGE_TETRA ? tpk_cell_map_lagrange_tet_node(p, i, j, k)
+           : base == TPK_CELL_MAP_LAGRANGE_HEX ? tpk_cell_map_lagrange_hex_node(p, i, j, k)
+                                               : tpk_cell_map_lagrange_wedge_node(p, i, j, k);
+}
+
+TPK_TEST(lagrange_high_order_shape_functions)
+{
+    CHECK_EQ_INT(tpk_cell_map_type(72, 64), TPK_CELL_MAP_LAGRANGE_HEX + 3);
+    CHECK_EQ_INT(tpk_cell_map_type(72, 125), TPK_CELL_MAP_LAGRANGE_HEX + 4);
+    CHECK_EQ_INT(tpk_cell_map_type(72, 216), 72); /* order 5: degree 15, over the Bernstein tables' 12 */
+    static const int kinds[][3] = {{TPK_CELL_MAP_LAGRANGE_TETRA, 7, 10}, {TPK_CELL_MAP_LAGRANGE_HEX, 3, 4},
+                                   {TPK_CELL_MAP_LAGRANGE_WEDGE, 4, 6}};
+    static double r[TPK_CELL_MAP_MAX_NODES][3], w[TPK_CELL_MAP_MAX_NODES];
+    for (int kind = 0; kind < 3; kind++)
+        for (int p = kinds[kind][1]; p <= kinds[kind][2]; p++) {
+            int base = kinds[kind][0], type = base + p;
+            int n = kind == 0 ? (p + 1) * (p + 2) * (p + 3) / 6 : kind == 1 ? (p + 1) * (p + 1) * (p + 1)
+                                                                             : (p + 1) * (p + 1) * (p + 2) / 2;
+            CHECK_EQ_INT(tpk_cell_map_nodes(type), n);
+            CHECK_EQ_INT(tpk_cell_map_degree(type), (kind == 0 ? 1 : kind == 1 ? 3 : 2) * p);
+            for (int k = 0; k < n; k++) {
+                tpk_cell_map_node(type, k, r[k]);
+                int i = (int)lround(r[k][0] * p), j = (int)lround(r[k][1] * p), l = (int)lround(r[k][2] * p);
+                CHECK_EQ_INT(lattice_node(base, p, i, j, l), k);
+                CHECK_EQ_INT(tpk_cell_map_weights(type, r[k], w), n);
+                for (int m = 0; m < n; m++)
+                    CHECK_MSG(fabs(w[m] - (m == k)) < 1e-11, "type %d: N%d at node %d = %g", type, m, k, w[m]);
+            }
+            for (int trial = 0; trial < 10; trial++) {
+                const double a[3] = {sin(trial + 1.0), cos(2.0 * trial), sin(0.7 * trial + 3)}, b = 0.3 * trial - 1;
+                const double at[3] = {0.05 + 0.02 * trial, 0.3 - 0.02 * trial, 0.1 + 0.03 * trial}, c = 0.2 * trial;
+#define F(x) (kind == 0 ? pow(a[0] * (x)[0] + a[1] * (x)[1] + a[2] * (x)[2] + b, p)                              \
+                        : pow(a[0] * (x)[0] + a[1] * (x)[1] + b, p) * pow((x)[2] - c, p))
+                double got = 0, want = F(at);
+                tpk_cell_map_weights(type, at, w);
+                for (int k = 0; k < n; k++)
+                    got += w[k] * F(r[k]);
+#undef F
+                CHECK_MSG(fabs(got - want) < 1e-10 * (1 + fabs(want)), "type %d: %.17g, expected %.17g", type, got, want);
+                /* each weight within 1e-13 of the same formula in long double (refine.c's WEIGHT_ERROR) */
+                const long double x[3] = {at[0], at[1], at[2]}, L0 = 1 - x[0] - x[1] - x[2], T0 = 1 - x[0] - x[1];
+                double worst = 0;
+                for (int i = 0; i <= p; i++)
+                    for (int j = 0; j <= p; j++)
+                        for (int l = 0; l <= p; l++) {
+                            long double exact;
+                            if (kind == 0 && i + j + l <= p)
+                                exact = lagrange_ld(p, p - i - j - l, L0) * lagrange_ld(p, i, x[0]) *
+                                        lagrange_ld(p, j, x[1]) * lagrange_ld(p, l, x[2]);
+                            else if (kind == 1)
+                                exact = line_ld(p, i, x[0]) * line_ld(p, j, x[1]) * line_ld(p, l, x[2]);
+                            else if (kind == 2 && i + j <= p)
+                                exact = lagrange_ld(p, p - i - j, T0) * lagrange_ld(p, i, x[0]) *
+                                        lagrange_ld(p, j, x[1]) * line_ld(p, l, x[2]);
+                            else
+                                continue;
+                            worst = fmax(worst, fabs((double)(w[lattice_node(base, p, i, j, l)] - exact)));
+                        }
+                CHECK_MSG(worst <= 1e-13, "type %d: a weight %.3g off its long double value", type, worst);
+            }
+        }
+    for (size_t c = 0; c < sizeof vtk_lagrange_high / sizeof vtk_lagrange_high[0]; c++) {
+        int type = vtk_lagrange_high[c].base + vtk_lagrange_high[c].p, n = tpk_cell_map_weights(type, vtk_lagrange_high[c].r, w);
+        double s = 0, t = 0;
+        for (int k = 0; k < n; k++)
+            s += w[k] * sin(k + 1), t += w[k] * cos(0.7 * k);
+        CHECK_MSG(fabs(s - vtk_lagrange_high[c].sin_sum) < 1e-12 && fabs(t - vtk_lagrange_high[c].cos_sum) < 1e-12,
+                  "type %d point %d: sums %.17g %.17g, VTK %.17g %.17g", type, (int)c, s, t, vtk_lagrange_high[c].sin_sum,
+                  vtk_lagrange_high[c].cos_sum);
     }
 }
 

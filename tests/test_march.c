@@ -9,6 +9,7 @@
 #include "harness.h"
 #include "internal_march.h"
 #include "internal_range.h"
+#include "internal_threads.h"
 #include "march_fixtures.h"
 #include "tetpack.h"
 
@@ -1468,4 +1469,36 @@ TPK_TEST(range_bvh_heap_is_the_tree)
     tpk_range_bvh_destroy(bvh);
     tpk_marcher_destroy(marcher);
     fx_free(&m);
+}
+
+/* ---- The shares of a job on threads (threads.c) ---------------------------------------------------- */
+
+typedef struct share_tally {
+    int calls[TPKI_THREADS_MAX];
+    int shares_seen[TPKI_THREADS_MAX];
+} share_tally;
+
+static void tally_share(void *arg, int share, int shares)
+{
+    share_tally *t = arg;
+    if (share >= 0 && share < TPKI_THREADS_MAX) {
+        __atomic_add_fetch(&t->calls[share], 1, __ATOMIC_RELAXED);
+        t->shares_seen[share] = shares;
+    }
+}
+
+/* Every share runs once, told the clamped share count, whatever count is asked; the cores are in range. */
+TPK_TEST(threads_every_share_once)
+{
+    const int asked[] = {-5, 0, 1, 2, 7, TPKI_THREADS_MAX, TPKI_THREADS_MAX + 1, 1000};
+    for (size_t a = 0; a < sizeof asked / sizeof *asked; a++) {
+        int n = asked[a] < 1 ? 1 : asked[a] > TPKI_THREADS_MAX ? TPKI_THREADS_MAX : asked[a];
+        share_tally t = {{0}, {0}};
+        tpki_run_threads(asked[a], tally_share, &t);
+        for (int i = 0; i < TPKI_THREADS_MAX; i++) {
+            CHECK_MSG(t.calls[i] == (i < n), "asked %d: share %d ran %d times", asked[a], i, t.calls[i]);
+            CHECK_MSG(i >= n || t.shares_seen[i] == n, "asked %d: share %d told %d shares", asked[a], i, t.shares_seen[i]);
+        }
+    }
+    CHECK(tpki_cores() >= 1 && tpki_cores() <= TPKI_THREADS_MAX);
 }

@@ -24,7 +24,7 @@ static const char *const vector_names[] = {
     "nonfinite_origin.tpk", "empty_fdsc.tpk", "tet16_vx.tpk", "zstd_skippable_frame.tpk",
     "zstd_chunk_checksum.tpk", "implausible_zstd_size.tpk", "two_parts.tpkset", "two_parts-0.tpk",
     "two_parts-1.tpk", "bad_link.tpkset", "bad_link-0.tpk", "bad_link-1.tpk", "two_tets_levels.tpk",
-    "level_not_coarser.tpk", "level_zstd.tpk",
+    "level_not_coarser.tpk", "level_zstd.tpk", "two_tets_cull.tpk", "cull_bad_seed.tpk", "cull_block_count.tpk",
 };
 
 static const char *vector_path(const char *name)
@@ -402,6 +402,84 @@ TPK_TEST(vectors_tet16_example)
         for (int r = 0; r < 3; r++)
             CHECK_EQ_INT((int32_t)((uint32_t)t16.nx[r] ^ (uint32_t)n3), t20.n[r]);
     }
+}
+
+/* ---- culling blocks (spec §13.6) ------------------------------------------------------------- */
+
+/* two_tets_cull.tpk: format 1.4, its CULL the 16 words of samples/vectors/README.md; a walk of its block
+ * from the seed gives the walk from the shell's tets, in every layout. cull_bad_seed.tpk is within rule
+ * 17, and the block walk refuses it (spec §9): Tet20 stores n[3], which differs from n3 (MESH); Tet16
+ * decodes from n3 a neighbor across a face whose derived fourth id is one of the face's (CORRUPT, as
+ * the walk from the shell gives for a derived id). cull_block_count.tpk is not within rule 17: refused
+ * when the chunk is used (tpk_load_cull, tpk_verify) and not before. */
+TPK_TEST(vectors_cull)
+{
+    static const int32_t words[16] = {16, 1, 1, 1, 0, 1, 0, 1, 0, 0, 1, 4, 3, -1, 0, 5};
+    static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
+    tpk_result r;
+    tpk_file *file = open_vector("two_tets_cull.tpk", TPK_OPEN_VERIFY_ALL, TPK_OK, &r);
+    CHECK_EQ_INT(r, TPK_OK);
+    if (!file)
+        return;
+    tpk_file_info info;
+    CHECK(tpk_get_info(file, &info) == TPK_OK && info.version_major == 1 && info.version_minor == 4);
+    int32_t raw[16];
+    tpk_dir_entry e;
+    CHECK_EQ_INT(read_tagged(file, TPK_TAG_CULL, 0, 0, raw, sizeof raw, &e), TPK_OK);
+    CHECK(memcmp(raw, words, sizeof words) == 0 && e.flags == 0 && e.elem_type == TPK_ELEM_I32 && e.elem_count == 16);
+    tpk_cull cull;
+    CHECK_EQ_INT(tpk_load_cull(file, &cull), TPK_OK);
+    CHECK(cull.block_tets == 16 && cull.block_count == 1 && cull.seed_count == 1 && cull.interval_count == 1 &&
+          cull.seed_start[1] == 1 && cull.interval_start[1] == 1 && cull.seeds[0] == 0 && cull.seeds[5] == -1 &&
+          cull.intervals[0] == 0 && cull.intervals[1] == 5);
+    for (int l = 0; l < 3; l++) {
+        tpk_mesh_arrays m;
+        int32_t walked[8], block[8];
+        CHECK_EQ_INT(tpk_load_arrays(file, layouts[l], NULL, 0, &m), TPK_OK);
+        CHECK_EQ_INT(tpk_recover_tets(&m, walked), TPK_OK);
+        CHECK_EQ_INT(tpk_recover_block(&m, &cull, 0, block), TPK_OK);
+        CHECK_MSG(memcmp(walked, block, sizeof block) == 0, "layout %d", l);
+    }
+    tpk_close(file);
+    /* the file without CULL has none */
+    file = open_vector("two_tets_levels.tpk", 0, TPK_OK, &r);
+    CHECK(file && tpk_load_cull(file, &cull) == TPK_ERR_NOT_FOUND);
+    tpk_close(file);
+
+    file = open_vector("cull_bad_seed.tpk", TPK_OPEN_VERIFY_ALL, TPK_OK, &r);
+    CHECK_EQ_INT(r, TPK_OK);
+    if (file) {
+        tpk_mesh_arrays m;
+        int32_t block[8];
+        CHECK_EQ_INT(tpk_load_cull(file, &cull), TPK_OK);
+        CHECK(cull.seeds[5] == 1);
+        static const tpk_layout walked[2] = {TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
+        static const tpk_result refused[2] = {TPK_ERR_MESH, TPK_ERR_CORRUPT};
+        for (int l = 0; l < 2; l++) {
+            CHECK_EQ_INT(tpk_load_arrays(file, walked[l], NULL, 0, &m), TPK_OK);
+            r = tpk_recover_block(&m, &cull, 0, block);
+            CHECK_MSG(r == refused[l], "a Tet%d walk from a wrong n3: %s", l ? 16 : 20, tpk_result_string(r));
+        }
+        tpk_close(file);
+    }
+
+    for (int verify = 0; verify < 2; verify++) {
+        file = open_vector("cull_block_count.tpk", 0, TPK_OK, &r);
+        CHECK_EQ_INT(r, TPK_OK);
+        if (!file)
+            continue;
+        tpk_mesh_arrays m;
+        CHECK_EQ_INT(tpk_load_arrays(file, TPK_LAYOUT_TET16, NULL, 0, &m), TPK_OK); /* CULL not used */
+        r = verify ? tpk_verify(file) : tpk_load_cull(file, &cull);
+        char text[512];
+        snprintf(text, sizeof text, "%s", tpk_error_text(file));
+        tpk_close(file);
+        CHECK_MSG(r == TPK_ERR_CORRUPT && strstr(text, "'CULL'") && strstr(text, "block_count 2"), "%s: %s (%s)",
+                  verify ? "tpk_verify" : "tpk_load_cull", tpk_result_string(r), text);
+    }
+    file = open_vector("cull_block_count.tpk", TPK_OPEN_VERIFY_ALL, TPK_OK, &r); /* its checksums are right */
+    CHECK(file != NULL && r == TPK_OK);
+    tpk_close(file);
 }
 
 /* ---- part sets (spec §13.4) ------------------------------------------------------------------- */

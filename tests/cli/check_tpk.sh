@@ -34,7 +34,7 @@ assert d["problems"] is True and list(f) == [600] and f[600]["count"] == 1, d["f
 assert "TPK-R16" in f[600]["examples"][0]["note"] and "'TT16'" in f[600]["examples"][0]["note"], f[600]
 assert "not run" in f[600]["summary"], f[600]
 PY
-for opened in chunk_checksum zstd_skippable_frame zstd_chunk_checksum tet16_vx; do
+for opened in chunk_checksum zstd_skippable_frame zstd_chunk_checksum tet16_vx cull_block_count; do
     expect_exit 1 "$TPK" check "$SRC/samples/vectors/$opened.tpk"
     grep -q "^  600 " "$WORK/out" || fail "$opened.tpk: no check 600: $(cat "$WORK/out")"
 done
@@ -59,4 +59,18 @@ d = json.load(open(sys.argv[1]))
 f = {x["id"]: x for x in d["findings"]}
 assert d["format"] == "tpkset" and list(f) == [614] and f[614]["count"] == 2, d["findings"]
 assert f[614]["name"] == "tpk_s01_links" and "link the face back" in f[614]["examples"][0]["note"], f[614]
+PY
+
+# Culling blocks (spec §13.6): two_tets_cull.tpk checks clean; cull_bad_seed.tpk's CULL is within rule 17
+# but its seed's n3 is not tet 0's neighbor opposite vertex 4: check 616 alone, exit 1.
+expect_exit 0 "$TPK" check "$SRC/samples/vectors/two_tets_cull.tpk"
+expect_exit 1 "$TPK" check "$SRC/samples/vectors/cull_bad_seed.tpk" --json
+$PY - "$WORK/out" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+f = {x["id"]: x for x in d["findings"]}
+assert d["format"] == "tpk" and list(f) == [616] and f[616]["count"] == 1, d["findings"]
+ex = f[616]["examples"][0]
+assert f[616]["name"] == "tpk_b01_blocks" and ex["kind"] == "block" and ex["ids"] == [0, 0, 0], f[616]
+assert "n3 is 1" in ex["note"] and "is -1" in ex["note"], ex
 PY

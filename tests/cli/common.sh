@@ -8,6 +8,8 @@ trap 'rm -rf "$WORK"' EXIT
 # Debian's python3 (with python3-meshio and numpy), not whatever python3 comes first on PATH.
 PY=/usr/bin/python3
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# cli_py ARGS: $PY with the helper modules of tests/cli/ importable (vtk_write.py, png_read.py, ...)
+cli_py() { PYTHONPATH="$SRC/tests/cli" "$PY" "$@"; }
 # tpk ARGS: the tetpack under test; under the sanitizers CMake sets TPK_VK_PRELOAD (libasan and lavapipe,
 # tests/CMakeLists.txt) for the Vulkan scripts, preloaded for the tetpack runs only (not for bash), so that
 # LeakSanitizer can name the drivers' own leaks.

@@ -3,41 +3,31 @@
 # points are placed with VTK's own node numbering (vtkHigherOrderHexahedron.PointIndexFromIJK), so the
 # reader's numbering is checked against an independent one. Two cells share a face under a curved map.
 # Each is split whole: every node a vertex (no point unused), p^3 sub-hexahedra per cell, none mirrored,
-# and the file checks clean (a wrong numbering folds sub-hexahedra over each other).
+# and the file checks clean (a wrong numbering folds sub-hexahedra over each other). --max-error bounds
+# both orders (degree 9 and 12; check --against agrees); order 5 (degree 15) is refused by name.
 source "$(dirname "$0")/common.sh" "$@"
 
-for order in 3 4; do
-    "$PY" - "$WORK/lagrange$order.vtu" "$order" <<'EOF' || fail "VTK could not write the Lagrange hexahedra"
-import sys
-from vtkmodules.vtkCommonCore import vtkPoints, vtkDoubleArray
-from vtkmodules.vtkCommonDataModel import vtkUnstructuredGrid, vtkHigherOrderHexahedron, VTK_LAGRANGE_HEXAHEDRON
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+cat > "$WORK/writer.py" <<'EOF'
+import math, sys
+import vtk_write
+from vtkmodules.vtkCommonDataModel import vtkHigherOrderHexahedron, VTK_LAGRANGE_HEXAHEDRON
 path, p = sys.argv[1], int(sys.argv[2])
-grid, points, field, ids = vtkUnstructuredGrid(), vtkPoints(), vtkDoubleArray(), {}
-field.SetName("f")
+g = vtk_write.Grid(2, lambda x: x[0] + 2 * x[1] + 3 * x[2] + math.sin(2 * x[0]) * math.cos(x[1]) + x[2] * x[2])
 def point(gi, j, k):  # one point per global lattice position: the shared face's points once
-    if (gi, j, k) not in ids:
-        r, s, t = gi / p, j / p, k / p
-        x = (1.5 * r + 0.3 * s + 0.1 * t, 0.2 * r + 1.4 * s - 0.2 * t + 0.1 * r * r, 0.1 * r + 0.4 * s + 1.5 * t)
-        ids[gi, j, k] = points.InsertNextPoint(*x)
-        field.InsertNextValue(x[0] + 2 * x[1] + 3 * x[2])
-    return ids[gi, j, k]
-grid.Allocate(2)
+    r, s, t = gi / p, j / p, k / p
+    x = (1.5 * r + 0.3 * s + 0.1 * t, 0.2 * r + 1.4 * s - 0.2 * t + 0.1 * r * r, 0.1 * r + 0.4 * s + 1.5 * t)
+    return g.point((gi, j, k), x)
 for cell in range(2):
     conn = [0] * (p + 1) ** 3
     for i in range(p + 1):
         for j in range(p + 1):
             for k in range(p + 1):
                 conn[vtkHigherOrderHexahedron.PointIndexFromIJK(i, j, k, [p, p, p])] = point(cell * p + i, j, k)
-    grid.InsertNextCell(VTK_LAGRANGE_HEXAHEDRON, len(conn), conn)
-grid.SetPoints(points)
-grid.GetPointData().AddArray(field)
-w = vtkXMLUnstructuredGridWriter()
-w.SetFileName(path)
-w.SetInputData(grid)
-w.SetDataModeToAscii()
-assert w.Write() == 1
+    g.cell(VTK_LAGRANGE_HEXAHEDRON, conn)
+g.write(path)
 EOF
+for order in 3 4; do
+    cli_py - "$WORK/lagrange$order.vtu" "$order" < "$WORK/writer.py" || fail "VTK could not write the Lagrange hexahedra"
     convert_checked "$WORK/lagrange$order.vtu" "$WORK/lagrange$order.tpk" --json > "$WORK/l.json" 2> "$WORK/err"
     "$PY" - "$WORK/l.json" "$order" <<'EOF' || fail "order $order: $(cat "$WORK/l.json")"
 import json, sys
@@ -50,5 +40,28 @@ assert s["hexahedron_into_5"] + s["hexahedron_into_6"] == 2 * p ** 3, s
 EOF
     ! grep -q "reduced" "$WORK/err" || fail "order $order: cells reduced to corners: $(cat "$WORK/err")"
     "$TPK" check "$WORK/lagrange$order.tpk" > "$WORK/check.txt" || fail "order $order: check: $(cat "$WORK/check.txt")"
+    # --max-error bounds them against their own map and interpolant (degree 3 p: 9 and 12): at 0.1% (order
+    # 3) and 0.3% (order 4: a degree-12 bound costs about 1 ms a tet), check --against (sampling VTK's
+    # cells through their own functions) finds the bound met and no more than it sampled, where the plain
+    # split is off by more (0.017 and 0.0078)
+    bound=0.001
+    [ "$order" = 4 ] && bound=0.003
+    "$TPK" check "$WORK/lagrange$order.tpk" --against "$WORK/lagrange$order.vtu" --samples 8 > "$WORK/plain.txt" ||
+        fail "order $order: check --against of the plain split: $(cat "$WORK/plain.txt")"
+    convert_checked "$WORK/lagrange$order.vtu" "$WORK/me.tpk" --max-error $bound 2> "$WORK/err" ||
+        fail "order $order: convert --max-error $bound: $(cat "$WORK/err")"
+    "$TPK" check "$WORK/me.tpk" --against "$WORK/lagrange$order.vtu" --samples 8 > "$WORK/against.txt" 2>&1 ||
+        fail "order $order: check --against: $(cat "$WORK/against.txt")"
+    grep -q "in 2 source cells" "$WORK/against.txt" && grep -q "bound recorded in META: $bound: met" "$WORK/against.txt" ||
+        fail "order $order: check --against did not sample both cells: $(cat "$WORK/against.txt")"
+    plain=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/plain.txt")
+    got=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/against.txt")
+    "$PY" -c "import sys; sys.exit(not ($got <= $bound < $plain))" ||
+        fail "order $order: sampled error $got at --max-error $bound (plain split $plain)"
 done
+# order 5 (degree 15, over the Bernstein tables' 12): refused with --max-error by name, nothing written
+cli_py - "$WORK/lagrange5.vtu" 5 < "$WORK/writer.py" || fail "VTK could not write the Lagrange hexahedra"
+expect_exit 2 "$TPK" convert "$WORK/lagrange5.vtu" "$WORK/bad.tpk" --max-error 1%
+expect_stderr "cell 0 is a Lagrange hexahedron (VTK type 72"
+[ ! -e "$WORK/bad.tpk" ] || fail "order 5: a refused conversion left $WORK/bad.tpk"
 echo "ok"

@@ -9,13 +9,12 @@
 # refused with it.
 source "$(dirname "$0")/common.sh" "$@"
 
-"$PY" - "$WORK" <<'EOF2' || fail "VTK could not write the cells"
+cli_py - "$WORK" <<'EOF2' || fail "VTK could not write the cells"
 import sys, json
-from vtkmodules.vtkCommonCore import vtkPoints, vtkDoubleArray, mutable
-from vtkmodules.vtkCommonDataModel import (vtkUnstructuredGrid, vtkBiQuadraticQuadraticHexahedron,
-                                           vtkTriQuadraticPyramid, VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON,
-                                           VTK_TRIQUADRATIC_PYRAMID)
-from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridWriter
+import vtk_write
+from vtkmodules.vtkCommonCore import mutable
+from vtkmodules.vtkCommonDataModel import (vtkBiQuadraticQuadraticHexahedron, vtkTriQuadraticPyramid,
+                                           VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON, VTK_TRIQUADRATIC_PYRAMID)
 work = sys.argv[1]
 def phi(X):
     x, y, z = X
@@ -29,28 +28,14 @@ def write(path, cls, vtk_type, cells, place):
     ref = [tuple(pc[3 * k:3 * k + 3]) for k in range(n)]
     lo, hi = min(r[2] for r in ref), max(r[2] for r in ref)  # VTK 9.2 lists the pyramid's t in [0.5, 1]
     ref = [(r[0], r[1], (r[2] - lo) / (hi - lo)) for r in ref]
-    grid, points, f, ids = vtkUnstructuredGrid(), vtkPoints(), vtkDoubleArray(), {}
-    f.SetName("f")
-    grid.Allocate(len(cells))
+    g = vtk_write.Grid(len(cells), field)
     for c in range(len(cells)):
         conn = []
         for r in ref:
             X = place(cells[c], r)
-            key = tuple(round(v * 24) for v in X)
-            if key not in ids:
-                x = phi(X)
-                ids[key] = points.InsertNextPoint(*x)
-                f.InsertNextValue(field(x))
-            conn.append(ids[key])
-        grid.InsertNextCell(vtk_type, n, conn)
-    grid.SetPoints(points)
-    grid.GetPointData().AddArray(f)
-    w = vtkXMLUnstructuredGridWriter()
-    w.SetFileName(path)
-    w.SetInputData(grid)
-    w.SetDataModeToAscii()
-    assert w.Write() == 1
-    return grid, ref
+            conn.append(g.point(tuple(round(v * 24) for v in X), phi(X)))
+        g.cell(vtk_type, conn)
+    return g.write(path), ref
 # hexahedra: unit cubes at these corners, parametric (r, s, t) -> corner + (r, s, t)
 hexes = [(0, 0, 0), (1, 0, 0), (0, 0, 1)]
 grid, ref = write(work + "/hex24.vtu", vtkBiQuadraticQuadraticHexahedron, VTK_BIQUADRATIC_QUADRATIC_HEXAHEDRON,

@@ -30,9 +30,16 @@ void tpk_fuzz_use_tpk(tpk_file *file)
 {
     static const tpk_layout layouts[3] = {TPK_LAYOUT_TET32, TPK_LAYOUT_TET20, TPK_LAYOUT_TET16};
     tpk_verify(file);
+    tpk_cull cull; /* culling blocks (spec §17): the structure checked on load, each block walked */
+    int have_cull = tpk_load_cull(file, &cull) == TPK_OK;
     for (int k = 0; k < 3; k++) {
         tpk_mesh_arrays arrays;
-        tpk_load_arrays(file, layouts[k], NULL, 0, &arrays);
+        if (tpk_load_arrays(file, layouts[k], NULL, 0, &arrays) != TPK_OK || !have_cull)
+            continue;
+        int32_t *tets = malloc(16 * (size_t)cull.block_tets);
+        for (uint64_t b = 0; tets && b < cull.block_count && b < 64; b++)
+            tpk_recover_block(&arrays, &cull, b, tets);
+        free(tets);
     }
     for (uint32_t f = 0; f < tpk_field_count(file); f++) {
         tpk_field_desc desc;

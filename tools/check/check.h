@@ -151,7 +151,7 @@ int tpk_check_cells(const tpk_check_input *in, tpk_check_report *report, tpk_dia
 int tpk_check_topology(const tpk_check_input *in, tpk_check_report *report, tpk_diag *diag); /* 3xx+4xx */
 int tpk_check_fields(const tpk_check_input *in, tpk_check_report *report, tpk_diag *diag);
 /* 6xx: every MUST of the spec on an opened file (tpk_verify, then the mesh invariants TPK-M01..M13
- * with check ids 601..613). */
+ * with check ids 601..613 and the culling blocks TPK-B01, 616). */
 struct tpk_file;
 int tpk_check_tpk_file(const char *path, struct tpk_file *file, tpk_check_report *report, tpk_diag *diag);
 /* Check 615 and 600..613 on every level of detail of the file (spec §16; check_levels.c). 0, or -1 with

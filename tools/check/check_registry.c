@@ -116,6 +116,10 @@ static const tpk_check_def registry[] = {
      "TPK-L01 (levels of detail): a LEVL chunk is not a level of this file (it does not open; not numbered "
      "1..n; not fewer tets than the level before; other fields or layouts; positions outside the file's "
      "bounds; levels, parts or links of its own); id: the level"},
+    {616, "tpk_b01_blocks", E, "file",
+     "TPK-B01 (culling blocks): in CULL, a seed's ids are not an even permutation of its tet's positive order "
+     "or its n3 is not the neighbor opposite the largest id; a tet of a block is not reached from the block's "
+     "seeds within the block; a tet's vertex lies in none of its block's intervals; ids: block, tet, seed"},
 };
 
 const tpk_check_def *tpk_check_registry(int *count)

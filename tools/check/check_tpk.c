@@ -1,7 +1,8 @@
 /* 6xx: every MUST of spec/tetpack-format.md on an opened .tpk file. First the reader rules (tpk_verify,
  * check 600): a file that breaks one is refused by every reader, so nothing past it is read and the
- * finding says so. Then the mesh invariants TPK-M01..M13 (601..613) on the verified arrays; see
- * check_tpk_internal.h for how the layouts are covered. */
+ * finding says so. Then the mesh invariants TPK-M01..M13 (601..613) on the verified arrays, and the
+ * culling blocks TPK-B01 (616) against the same reference; see check_tpk_internal.h for how the layouts
+ * are covered. */
 #include <inttypes.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -143,7 +144,7 @@ static int run_invariants(tpkc *c, tpk_diag *diag)
         return -1;
     if (c->walked_in_parallel && found_reference_problems(c) && recheck_serially(c, diag))
         return -1;
-    if (tpkc_check_values(c, diag))
+    if (tpkc_check_values(c, diag) || tpkc_check_cull(c, diag))
         return -1;
     tpk_check_progress(c->report, "tpk", 1.0);
     return 0;

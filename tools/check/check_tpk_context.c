@@ -42,14 +42,20 @@ void tpkc_example_ids32(tpk_example *ex, int count, const int32_t *ids)
 
 int tpkc_run_tet_pass(tpkc *c, void (*fn)(void *ctx, int64_t begin, int64_t end, int worker), tpk_diag *diag)
 {
-    int threads = tpk_threads_for(c->T, c->threads, 1 << 14);
+    return tpkc_run_pass(c, c->T, 1 << 14, fn, NULL, diag);
+}
+
+int tpkc_run_pass(tpkc *c, int64_t count, int64_t grain, void (*fn)(void *ctx, int64_t begin, int64_t end, int worker),
+                  void *user, tpk_diag *diag)
+{
+    int threads = tpk_threads_for(count, c->threads, grain);
     tpkc_sink *sinks = calloc((size_t)threads, sizeof *sinks);
     if (!sinks)
         return tpk_diag_fail(diag, "out of memory");
     for (int w = 0; w < threads; w++)
         sinks[w].max_examples = c->report->options.max_examples;
-    tpkc_pass pass = {c, sinks};
-    tpk_parallel_for(c->T, threads, fn, &pass);
+    tpkc_pass pass = {c, sinks, user};
+    tpk_parallel_for(count, threads, fn, &pass);
     tpkc_merge(c->report, sinks, threads);
     free(sinks);
     return 0;

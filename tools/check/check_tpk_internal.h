@@ -10,7 +10,8 @@
  * Who defines what. check_tpk.c, the entry (tpk_check_tpk_file*, check.h), sits on top and runs the
  * passes; each pass has its file: tpkc_walk (check_tpk_walk.c), tpkc_check_shell (check_tpk_shell.c),
  * tpkc_check_tets (check_tpk_tets.c), tpkc_check_faces (check_tpk_faces.c), tpkc_check_layouts
- * (check_tpk_layouts.c), tpkc_check_values (check_tpk_values.c). Below them check_tpk_context.c holds
+ * (check_tpk_layouts.c), tpkc_check_values (check_tpk_values.c), tpkc_check_cull (check_tpk_cull.c).
+ * Below them check_tpk_context.c holds
  * what they share: tpkc_hit, tpkc_merge, tpkc_run_tet_pass, tpkc_example_ids32. The
  * inline accessors (tpkc_tet, tpkc_neighbors, tpkc_orient, ...) live here. A pass calls down (the
  * context, check_report.c, check_progress.c), never back into check_tpk.c. */
@@ -26,7 +27,7 @@
 #include "tetpack.h"
 
 #define TPKC_FIRST_ID 600
-#define TPKC_ID_COUNT 14 /* 600 .. 613 */
+#define TPKC_ID_COUNT 17 /* 600 .. 616 (614 and 615 are the set's and the levels', never a pass's) */
 
 /* Findings of one worker (or one serial pass): count per check and the first examples. */
 typedef struct tpkc_list {
@@ -40,7 +41,7 @@ typedef struct tpkc_sink {
     int max_examples;
 } tpkc_sink;
 
-/* Count one item of check `id` (600..613); the example slot to fill, or NULL when enough are kept. */
+/* Count one item of check `id` (600..616); the example slot to fill, or NULL when enough are kept. */
 tpk_example *tpkc_hit(tpkc_sink *sink, int id, const char *kind);
 /* Move the sinks' findings into the report in sink order (so the lowest ids come first when sink w
  * covered the w-th range), then free them. */
@@ -49,10 +50,15 @@ void tpkc_merge(tpk_check_report *report, tpkc_sink *sinks, int count);
 typedef struct tpkc_pass {
     struct tpkc *c;
     tpkc_sink *sinks;
+    void *user; /* what the pass's caller gave tpkc_run_pass */
 } tpkc_pass;
 /* Run fn (its ctx is a tpkc_pass) over [0, c->T) with one sink per worker, then merge them in order. */
 int tpkc_run_tet_pass(struct tpkc *c, void (*fn)(void *ctx, int64_t begin, int64_t end, int worker),
                       tpk_diag *diag);
+/* The same over [0, count), at least `grain` items a worker (the blocks of CULL, for one), with `user`
+ * in the tpkc_pass. */
+int tpkc_run_pass(struct tpkc *c, int64_t count, int64_t grain,
+                  void (*fn)(void *ctx, int64_t begin, int64_t end, int worker), void *user, tpk_diag *diag);
 /* Fill an example's ids from int32 values. */
 void tpkc_example_ids32(tpk_example *ex, int count, const int32_t *ids);
 
@@ -174,5 +180,6 @@ int tpkc_check_tets(tpkc *c, tpk_diag *diag);        /* 601, 602, 604, 606, 607,
 int tpkc_check_faces(tpkc *c, tpk_diag *diag);       /* 605 */
 int tpkc_check_layouts(tpkc *c, tpk_diag *diag);     /* 603, 607, 608 of the other layouts */
 int tpkc_check_values(tpkc *c, tpk_diag *diag);      /* 611, 612, 613, and §7.1 text rules under 600 */
+int tpkc_check_cull(tpkc *c, tpk_diag *diag);        /* 616: the culling blocks (CULL) against the reference */
 
 #endif

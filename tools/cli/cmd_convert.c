@@ -38,8 +38,9 @@ static const char convert_help[] =
     "                              a fraction (0.01) or a percentage (1%%), 0 < E < 1. The bound is proved\n"
     "                              per tet (Bernstein coefficients), not sampled; META records it and the\n"
     "                              largest error proved. Tetrahedra, voxels, hexahedra, wedges and their\n"
-    "                              quadratic kinds; not with pyramids, polyhedra, higher orders, 14- and\n"
-    "                              15-node tetra, --higher-order corners,\n"
+    "                              quadratic kinds, Lagrange tetra of order 3-10, hexahedra of order 3-4\n"
+    "                              and wedges of order 3-6; not with pyramids, polyhedra, higher orders,\n"
+    "                              14- and 15-node tetra, --higher-order corners,\n"
     "                              --merge-duplicates or --parts\n"
     "  --max-error-field NAME      bound only this point field (repeatable; default: every point field)\n"
     "  --subdivide L               for comparison: instead of --max-error, cut every tet into 8 at its\n"
@@ -49,6 +50,8 @@ static const char convert_help[] =
     "                              promised\n"
     "  --zstd LEVEL                compress chunks with zstd (1-22; default: uncompressed, zero-copy)\n"
     "  --no-reorder                keep the source vertex and cell order\n"
+    "  --cull                      store culling blocks (spec §17, format 1.4; about 1 byte a tet): an\n"
+    "                              iso render then decodes only the blocks of tets that may hold the surface\n"
     "  --levels N                  add up to N levels of detail (spec §16; 1-8): each a complete mesh of\n"
     "                              the domain with about a sixth of the tets of the one before (vertices\n"
     "                              collapsed, tets kept positive), stored in the file; fewer when the\n"
@@ -249,6 +252,8 @@ static int parse_args(int argc, char **argv, convert_args *a)
             a->options.format = v;
         } else if (!strcmp(arg, "--no-reorder")) {
             a->options.no_reorder = 1;
+        } else if (!strcmp(arg, "--cull")) {
+            a->options.cull = 1;
         } else if (!strncmp(arg, "--level-shell-error", 19) && (!arg[19] || arg[19] == '=')) {
             char *end = NULL;
             double e = (v = tpk_cli_value(argc, argv, &i, "--level-shell-error")) ? strtod(v, &end) : -1;

@@ -54,15 +54,22 @@ static int frame_pattern_ok(const char *pattern)
     return conversions == 1;
 }
 
-/* The field values of one step: point scalars into mesh, or a tet field into opt->tet_scalars. */
+/* The field values of one step: point scalars into mesh, or a tet field into opt->tet_scalars; and the
+ * file's culling blocks (spec §17), if it has them, into *cull and opt->cull. */
 static int load_step(const render_args *a, tpk_file *file, int tet_field, int step, tpk_mesh_arrays *mesh,
-                     tpk_render_options *opt)
+                     tpk_render_options *opt, tpk_cull *cull)
 {
     tpk_layout layout = render_args_layout(file, a->layout);
     tpk_result r = tpk_load_arrays(file, layout, tet_field ? NULL : a->field, (uint32_t)step, mesh);
     if (r == TPK_OK && tet_field) {
         mesh->scalars = NULL; /* the tet field replaces any point field */
         r = tpk_load_tet_field(file, a->field, (uint32_t)step, &opt->tet_scalars);
+    }
+    opt->cull = NULL;
+    if (r == TPK_OK && cull) {
+        r = tpk_load_cull(file, cull);
+        opt->cull = r == TPK_OK ? cull : NULL;
+        r = r == TPK_ERR_NOT_FOUND ? TPK_OK : r;
     }
     return r == TPK_OK ? 0 : tpk_cli_fail_file("render", a->path, tpk_error_text(file));
 }
@@ -136,7 +143,7 @@ static int fit_on_probe(const render_args *a, const tpk_level_set *ls, int tet_f
         small.width = a->width / div > 16 ? a->width / div : (a->width < 16 ? a->width : 16);
         small.height = a->height / div > 16 ? a->height / div : (a->height < 16 ? a->height : 16);
         tpk_mesh_arrays mesh;
-        if (load_step(a, ls->files[k], tet_field, a->step, &mesh, &small))
+        if (load_step(a, ls->files[k], tet_field, a->step, &mesh, &small, NULL))
             return TPK_EXIT_USAGE;
         uint8_t *rgba = malloc((size_t)small.width * (size_t)small.height * 4);
         tpk_render_stats stats;
@@ -196,6 +203,7 @@ static int render_file(render_args *a, tpk_file *file)
      * and hand it each step's field. The pictures are those of one step at a time
      * (tests/cli/render_effects.sh, render_vk_iso_culling.sh). */
     render_session session = {0};
+    tpk_cull cull; /* views into the file, which outlives the frames */
     for (int step = a->step; step <= a->step_last && rc == TPK_EXIT_OK; step++) {
         char path[4096];
         tpk_mesh_arrays mesh;
@@ -209,7 +217,7 @@ static int render_file(render_args *a, tpk_file *file)
         if (frame_path(a, step, path, sizeof path))
             rc = tpk_cli_fail("render", "-o: the image path of step %d is too long", step);
         if (rc == TPK_EXIT_OK)
-            rc = load_step(a, ls.files[k], association == TPK_ASSOC_TET, step, &mesh, &opt);
+            rc = load_step(a, ls.files[k], association == TPK_ASSOC_TET, step, &mesh, &opt, &cull);
         frame_source src = {.mesh = &mesh, .field = have_field ? &field : NULL, .iso_auto = iso_auto, .level = k,
                             .level_tets = ls.tets[k], .error_max = ls.error_max[k], .error_rms = ls.error_rms[k],
                             .shell_distance = ls.shell_distance[k],

@@ -129,9 +129,10 @@ static int whole_cells(conversion *c)
             const tpk_cell_type_info *t = tpk_cell_type(c->source_cells.types[bad]);
             return tpk_diag_fail(c->diag, "%s: cell %lld is a %s (VTK type %d, %lld nodes), whose own functions "
                                  "--max-error cannot bound (it bounds tetrahedra, voxels, hexahedra, wedges and their "
-                                 "quadratic kinds, Lagrange tetra of order 3 to 6 and wedges of order 3; pyramids "
-                                 "and polyhedra are not polynomials on their tets, and other higher orders and "
-                                 "face-centred kinds are not bounded yet); convert without "
+                                 "quadratic kinds, Lagrange tetra of order 3 to 10, hexahedra of order 3 and 4 and "
+                                 "wedges of order 3 to 6: degree at most 12; pyramids and polyhedra are not "
+                                 "polynomials on their tets, and higher orders and face-centred kinds are not "
+                                 "bounded yet); convert without "
                                  "--max-error", c->o->input, (long long)bad, t ? t->name : "cell of unknown type",
                                  c->source_cells.types[bad],
                                  (long long)(c->source_cells.offsets[bad + 1] - c->source_cells.offsets[bad]));

@@ -25,6 +25,9 @@ typedef struct tpk_convert_options {
     int field_count;
     int zstd_level;               /* 0: uncompressed (zero-copy); 1..22: zstd */
     int no_reorder;               /* keep source order (default: Hilbert reorder) */
+    int cull;                     /* write the CULL chunk (spec §17, format 1.4): blocks of tets with the seeds
+                                     of a walk inside each and the vertex ids they use, so that an iso render
+                                     decodes only the blocks that may hold the surface */
     /* Repairs: never silent. Without them the problem is an error naming the first case and the count;
      * with them it is fixed and counted in the report, the summary and META's "repairs" object.
      * Orientation is the exception: a tet's or a mirrored cell's node order is a labeling, so inverted

@@ -6,6 +6,7 @@
  * then the ids), so a face shared by two tets is cut alike from both sides. */
 #include "refine.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -149,6 +150,7 @@ typedef struct refine {
     const tpk_refine_options *o;
     tpk_diag *diag;
     int threads;
+    int32_t *cell_type;    /* per source cell: mapped_type, found once */
     int32_t *vertex_of;    /* source point id -> vertex */
     int64_t point_ids;     /* size of vertex_of */
     int64_t n0;            /* vertices given; those after are added, their values in `added` */
@@ -196,8 +198,8 @@ static const double *point_of(const refine *r, int32_t v)
 /* Cell c's type (mapped_type) and its nodes as vertices; 0 when some node is no vertex. */
 static int cell_nodes(const refine *r, int64_t c, int32_t *verts)
 {
-    int type = mapped_type(r->cells, c);
-    int n = tpk_cell_map_nodes(type);
+    int type = r->cell_type[c];
+    int n = type ? (int)(r->cells->offsets[c + 1] - r->cells->offsets[c]) : 0; /* mapped_type: nodes(type) */
     const int32_t *conn = r->cells->conn + r->cells->offsets[c];
     for (int k = 0; k < n; k++) {
         int32_t id = conn[r->cells->types[c] == TPK_CELL_VOXEL ? voxel_as_hex[k] : k];
@@ -230,28 +232,22 @@ static double dist2(const double *a, const double *b)
     return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
 }
 
-/* The global edge order: squared length (from the two points in id order, so alike from every tet),
- * then the smaller id, then the larger. */
-static int edge_greater(const refine *r, int32_t a, int32_t b, int32_t c, int32_t d)
-{
-    int32_t lo1 = a < b ? a : b, hi1 = a < b ? b : a, lo2 = c < d ? c : d, hi2 = c < d ? d : c;
-    double l1 = dist2(point_of(r, hi1), point_of(r, lo1)), l2 = dist2(point_of(r, hi2), point_of(r, lo2));
-    if (l1 != l2)
-        return l1 > l2;
-    return lo1 != lo2 ? lo1 > lo2 : hi1 > hi2;
-}
-
-/* Tet t's greatest edge among those of `edges` (bits by tet_edges), as 0..5, or -1. */
+/* Tet t's greatest edge among those of `edges` (bits by tet_edges), as 0..5, or -1, in the global edge
+ * order: squared length (from the two points in id order, so alike from every tet), then the smaller id,
+ * then the larger. */
 static int greatest_edge(const refine *r, int64_t t, unsigned edges)
 {
     const int32_t *v = r->tets + 4 * t;
     int best = -1;
+    int32_t best_lo = 0, best_hi = 0;
+    double best_length = 0;
     for (int e = 0; e < 6; e++) {
-        int32_t a = v[tet_edges[e][0]], b = v[tet_edges[e][1]];
         if (!(edges >> e & 1))
             continue;
-        if (best < 0 || edge_greater(r, a, b, v[tet_edges[best][0]], v[tet_edges[best][1]]))
-            best = e;
+        int32_t a = v[tet_edges[e][0]], b = v[tet_edges[e][1]], lo = a < b ? a : b, hi = a < b ? b : a;
+        double length = dist2(point_of(r, hi), point_of(r, lo));
+        if (best < 0 || (length != best_length ? length > best_length : lo != best_lo ? lo > best_lo : hi > best_hi))
+            best = e, best_lo = lo, best_hi = hi, best_length = length;
     }
     return best;
 }
@@ -333,10 +329,13 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     int nodes_of = 0; /* the type whose nodes' parametric points `nodes` holds (the cells are mostly alike) */
     double nodes[TPK_CELL_MAP_MAX_NODES][3];
+    int64_t verts_of = -1; /* the cell whose nodes `verts` holds (a cell's tets are together) */
+    int type = 0;
     (void)w;
     for (int64_t t = begin; t < end; t++) {
         int64_t c = r->cell[t];
-        int type = c >= 0 && c < r->cells->cell_count ? cell_nodes(r, c, verts) : 0;
+        if (c != verts_of || !type)
+            type = c >= 0 && c < r->cells->cell_count ? cell_nodes(r, c, verts) : 0, verts_of = c;
         if (!type) {
             job->failed[t] = 1;
             continue;
@@ -430,11 +429,32 @@ static int barycentric_gradients(const double p[4][3], double g[3][3])
  * The tets of a regular mesh's cells, and their pieces, repeat the same few parametric tets. */
 typedef double pair __attribute__((vector_size(2 * sizeof(double)))); /* two numbers side by side */
 
+/* Cells of degree above DIRECT_DEGREE (Lagrange tetra of order 7-10, hexahedra of order 3-4, wedges of
+ * order 4-6) are bounded from their values at the tet's domain points through the inverse
+ * (tpk_bernstein_gap: m^2 a component, m = 120 .. 455 domain points), not through cached coefficients of
+ * every node's function (m^2 n per tet of parameter space: too much at these sizes, where the parametric
+ * tets seldom repeat). The values carry the rounding of their sums, gamma_n sum_k |w_k| |x_k| (the
+ * Lebesgue sum sum_k |w_k| measured at the points), and of the weights, each within WEIGHT_ERROR
+ * (higher_order.lagrange_high_order_shape_functions checks them against a long double evaluation),
+ * both through the inverse's norm. Cost a tet: about m (7 n + 3 m) multiply-adds for the map (its
+ * weights included) and m (n + m) per field: 0.8M and 0.16M at m = n = 286 (tetra of order 10), 1.2M and
+ * 0.3M at m = 455, n = 196 (wedge of order 6). */
+#define DIRECT_DEGREE 6
+#define WEIGHT_ERROR 1e-13
+
 typedef struct coef_cache {
     int entries, size; /* a power of two; doubles per entry */
     int *type;         /* 0: empty */
     double *key, *norm, *by_node;
     double work[TPK_BERNSTEIN_MAX_POINTS * TPK_CELL_MAP_MAX_NODES];
+    /* the cell of the tet bounded last (its tets come together): its nodes, their points and largest
+     * coordinate, and the bounded slots' values at them, filled for slots 0 .. filled as they are met */
+    int64_t cell;
+    int cell_type, filled;
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    double node[TPK_CELL_MAP_MAX_NODES][3], largest;
+    double *value, *big; /* per bounded slot: TPK_CELL_MAP_MAX_NODES values, their largest magnitude */
+    uint8_t *finite;     /* per bounded slot: every value finite */
 } coef_cache;
 
 static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const double *inverse_t, int type,
@@ -495,11 +515,11 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const 
     return by_node;
 }
 
-/* The Bernstein coefficients of f - L for `axes` (1 or 3) components: out[c][i] = -sum_k corner[k][c] lambda_k(i)
- * + sum_k node[k][c] by_node[k m + i], each summed in that order (k ascending), two domain points side by
- * side (the numbers are those of one at a time). */
+/* The Bernstein coefficients of f - L for `axes` (1 or 3) components: out[c][i] = -sum_k corner[k][c]
+ * lambda_k(i) + sum_k node[k * stride + c] by_node[k m + i], each summed in that order (k ascending), two
+ * domain points side by side (the numbers are those of one at a time). */
 static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const double (*corner)[3],
-                         const double (*node)[3], const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
+                         const double *node, int stride, const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
 {
     int even = m & ~1, quads = m & ~3;
     for (int c = 0; c < axes; c++) {
@@ -514,7 +534,7 @@ static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const d
             for (int k = 0; k < n; k++) {
                 memcpy(&y, by_node + k * m + i, sizeof y);
                 memcpy(&y2, by_node + k * m + i + 2, sizeof y2);
-                x = (pair){node[k][c], node[k][c]};
+                x = (pair){node[k * stride + c], node[k * stride + c]};
                 acc += x * y, acc2 += x * y2;
             }
             memcpy(out[c] + i, &acc, sizeof acc);
@@ -529,7 +549,7 @@ static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const d
             }
             for (int k = 0; k < n; k++) {
                 memcpy(&y, by_node + k * m + i, sizeof y);
-                x = (pair){node[k][c], node[k][c]};
+                x = (pair){node[k * stride + c], node[k * stride + c]};
                 acc += x * y;
             }
             memcpy(out[c] + i, &acc, sizeof acc);
@@ -539,7 +559,7 @@ static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const d
             for (int k = 0; k < 4; k++)
                 acc -= corner[k][c] * b->lambda_by_corner[k][i];
             for (int k = 0; k < n; k++)
-                acc += node[k][c] * by_node[k * m + i];
+                acc += node[k * stride + c] * by_node[k * m + i];
             out[c][i] = acc;
         }
     }
@@ -547,52 +567,94 @@ static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const d
 
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 {
-    int32_t verts[TPK_CELL_MAP_MAX_NODES];
-    int type = cell_nodes(r, r->cell[t], verts), degree = tpk_cell_map_degree(type);
+    if (r->cell[t] != cache->cell) { /* a new cell: its nodes and their points */
+        cache->cell = r->cell[t], cache->filled = 0, cache->largest = 0;
+        cache->cell_type = cell_nodes(r, cache->cell, cache->verts);
+        for (int k = 0, n = tpk_cell_map_nodes(cache->cell_type); k < n; k++) {
+            memcpy(cache->node[k], point_of(r, cache->verts[k]), sizeof cache->node[k]);
+            for (int j = 0; j < 3; j++)
+                cache->largest = fabs(cache->node[k][j]) > cache->largest ? fabs(cache->node[k][j]) : cache->largest;
+        }
+    }
+    int type = cache->cell_type, degree = tpk_cell_map_degree(type);
     r->field_error[t] = r->geometry_error[t] = r->criterion[t] = 0;
     r->worst_slot[t] = -1;
     if (degree <= 1)
         return; /* a tet of a tetra: exactly its own interpolant */
     const tpk_bernstein *b = &r->table[degree];
     const double *xi = r->xi + 12 * t;
-    const int32_t *tv = r->tets + 4 * t;
-    int n = tpk_cell_map_nodes(type), m = b->points;
-    double norm;
-    const double *by_node = coefficients(cache, b, r->inverse_t[degree], type, n, xi, &norm);
-    double p[4][3], g[3][3], node[TPK_CELL_MAP_MAX_NODES][3], geometry = 0, largest = 0;
+    const int32_t *tv = r->tets + 4 * t, *verts = cache->verts;
+    int n = tpk_cell_map_nodes(type), m = b->points, direct = degree > DIRECT_DEGREE;
+    double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
-    for (int k = 0; k < n; k++) {
-        memcpy(node[k], point_of(r, verts[k]), sizeof node[k]);
-        for (int j = 0; j < 3; j++)
-            largest = fabs(node[k][j]) > largest ? fabs(node[k][j]) : largest;
+    const double *by_node = NULL;
+    double value_margin = 0; /* direct: the rounding of the values at the domain points, through the inverse */
+    if (direct) { /* the cell's map at the domain points, then the inverse */
+        double x[TPK_BERNSTEIN_MAX_POINTS * 3];
+        for (int i = 0; i < m; i++) {
+            double at[3] = {0, 0, 0}, *w = weights + (int64_t)i * n, sum = 0;
+            for (int k = 0; k < 4; k++)
+                for (int j = 0; j < 3; j++)
+                    at[j] += b->lambda[i][k] * xi[3 * k + j];
+            tpk_cell_map_weights(type, at, w);
+            x[3 * i] = x[3 * i + 1] = x[3 * i + 2] = 0;
+            for (int k = 0; k < n; k++) {
+                sum += fabs(w[k]);
+                for (int j = 0; j < 3; j++)
+                    x[3 * i + j] += w[k] * cache->node[k][j];
+            }
+            lebesgue = sum > lebesgue ? sum : lebesgue;
+        }
+        const double u = DBL_EPSILON / 2, gamma = n * u / (1 - n * u);
+        value_margin = 2 * b->inverse_norm * (gamma * lebesgue + n * WEIGHT_ERROR);
+        geometry = tpk_bernstein_gap(b, x, 3, p[0], 3) + sqrt(3.0) * value_margin * largest;
+    } else {
+        by_node = coefficients(cache, b, r->inverse_t[degree], type, n, xi, &norm);
+        double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
+        minus_linear(m, n, 3, b, (const double (*)[3])p, cache->node[0], 3, by_node, gx);
+        for (int i = 0; i < m; i++) {
+            double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
+            geometry = sq > geometry ? sq : geometry;
+        }
+        geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
     }
-    double gx[3][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of x - L, per axis */
-    minus_linear(m, n, 3, b, (const double (*)[3])p, (const double (*)[3])node, by_node, gx);
-    for (int i = 0; i < m; i++) {
-        double sq = gx[0][i] * gx[0][i] + gx[1][i] * gx[1][i] + gx[2][i] * gx[2][i];
-        geometry = sq > geometry ? sq : geometry;
-    }
-    geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
     double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
     int flat = barycentric_gradients(p, g) != 0;
     for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
         int slot = r->bound_slot[s];
-        double v[4], grad[3] = {0, 0, 0}, value[TPK_CELL_MAP_MAX_NODES][3], gap = 0, big = 0, cv[4][3];
-        int finite = 1;
+        double v[4], grad[3] = {0, 0, 0}, gap = 0, cv[4][3];
+        double *value = cache->value + (int64_t)s * TPK_CELL_MAP_MAX_NODES;
+        if (s == cache->filled) { /* the cell's values of this slot, first met */
+            int finite = 1;
+            double big = 0;
+            for (int k = 0; k < n; k++) {
+                finite &= isfinite(value[k] = value_of(r, verts[k], slot));
+                big = fabs(value[k]) > big ? fabs(value[k]) : big;
+            }
+            cache->big[s] = big, cache->finite[s] = (uint8_t)finite, cache->filled++;
+        }
+        int finite = cache->finite[s];
         for (int k = 0; k < 4; k++)
             finite &= isfinite(v[k] = cv[k][0] = value_of(r, tv[k], slot));
-        for (int k = 0; k < n; k++) {
-            finite &= isfinite(value[k][0] = value_of(r, verts[k], slot));
-            big = fabs(value[k][0]) > big ? fabs(value[k][0]) : big;
-        }
         if (!finite)
             continue; /* no bound for missing values (NaN): nothing to interpolate */
-        double acc[1][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
-        minus_linear(m, n, 1, b, (const double (*)[3])cv, (const double (*)[3])value, by_node, acc);
-        for (int i = 0; i < m; i++)
-            gap = fabs(acc[0][i]) > gap ? fabs(acc[0][i]) : gap;
-        gap = (gap + 1e-12 * (norm + 1) * big) / r->bound_range[s];
+        if (direct) {
+            double f[TPK_BERNSTEIN_MAX_POINTS], corner[4] = {v[0], v[1], v[2], v[3]};
+            for (int i = 0; i < m; i++) {
+                const double *w = weights + (int64_t)i * n;
+                f[i] = 0;
+                for (int k = 0; k < n; k++)
+                    f[i] += w[k] * value[k];
+            }
+            gap = (tpk_bernstein_gap(b, f, 1, corner, 1) + value_margin * cache->big[s]) / r->bound_range[s];
+        } else {
+            double acc[1][TPK_BERNSTEIN_MAX_POINTS]; /* the Bernstein coefficients of f - L */
+            minus_linear(m, n, 1, b, (const double (*)[3])cv, value, 1, by_node, acc);
+            for (int i = 0; i < m; i++)
+                gap = fabs(acc[0][i]) > gap ? fabs(acc[0][i]) : gap;
+            gap = (gap + 1e-12 * (norm + 1) * cache->big[s]) / r->bound_range[s];
+        }
         for (int k = 0; k < 3 && !flat; k++)
             for (int j = 0; j < 3; j++)
                 grad[j] += (v[k + 1] - v[0]) * g[k][j];
@@ -1203,7 +1265,7 @@ static int hand_back(refine *r)
 
 static void release(refine *r, int threads)
 {
-    free(r->vertex_of), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
+    free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
     free(r->longest), free(r->changed);
@@ -1211,10 +1273,11 @@ static void release(refine *r, int threads)
         free(r->base->start), free(r->base->tets), free(r->base);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
-        free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node);
+        free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
+            free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite);
     free(r->cache);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
-        free(r->inverse_t[n]);
+        free(r->inverse_t[n]), tpk_bernstein_free(&r->table[n]);
 }
 
 static int set_up(refine *r, int threads)
@@ -1238,9 +1301,13 @@ static int set_up(refine *r, int threads)
     r->diag_length = m->vertex_count ? sqrt(dist2(lo, hi)) : 1;
     if (!(r->diag_length > 0))
         r->diag_length = 1;
+    if (!(r->cell_type = malloc(sizeof *r->cell_type * (size_t)(r->cells->cell_count ? r->cells->cell_count : 1))))
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    for (int64_t c = 0; c < r->cells->cell_count; c++)
+        r->cell_type[c] = mapped_type(r->cells, c);
     int used[TPK_BERNSTEIN_MAX_DEGREE + 1] = {0}; /* the degrees of the cells here (a table of 6 takes ms) */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
-        int degree = tpk_cell_map_degree(mapped_type(r->cells, c));
+        int degree = tpk_cell_map_degree(r->cell_type[c]);
         if (degree > 1 && degree <= TPK_BERNSTEIN_MAX_DEGREE)
             used[degree] = 1;
     }
@@ -1266,8 +1333,8 @@ static int set_up(refine *r, int threads)
     r->todo_count = r->count;
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
-        int type = mapped_type(r->cells, c), degree = tpk_cell_map_degree(type);
-        if (degree > 1 && r->table[degree].points * tpk_cell_map_nodes(type) > size)
+        int type = r->cell_type[c], degree = tpk_cell_map_degree(type);
+        if (degree > 1 && degree <= DIRECT_DEGREE && r->table[degree].points * tpk_cell_map_nodes(type) > size)
             size = r->table[degree].points * tpk_cell_map_nodes(type);
     }
     int entries = 4096;
@@ -1282,7 +1349,11 @@ static int set_up(refine *r, int threads)
         cc->key = malloc(sizeof *cc->key * 12 * (size_t)entries);
         cc->norm = malloc(sizeof *cc->norm * (size_t)entries);
         cc->by_node = malloc(sizeof *cc->by_node * (size_t)size * (size_t)entries);
-        if (!cc->type || !cc->key || !cc->norm || !cc->by_node)
+        cc->cell = -1;
+        cc->value = malloc(sizeof *cc->value * TPK_CELL_MAP_MAX_NODES * (size_t)(r->bounded ? r->bounded : 1));
+        cc->big = malloc(sizeof *cc->big * (size_t)(r->bounded ? r->bounded : 1));
+        cc->finite = malloc((size_t)(r->bounded ? r->bounded : 1));
+        if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite)
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
     }
     return place_corners(r, threads);

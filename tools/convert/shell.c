@@ -4,6 +4,7 @@
 #include "pipeline.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 #include "base/parallel.h"
 
@@ -81,4 +82,65 @@ tpk_shell_face *tpk_make_shell(const int32_t *tets, const int32_t *neighbors, in
     free(job);
     *count = total;
     return dst;
+}
+
+void tpk_shell_gather_range(tpk_shell_gather *g, const int32_t *tets, const int32_t *neighbors, int64_t first,
+                            int64_t count, int worker)
+{
+    int64_t found = tpk_count_shell_faces(neighbors + 4 * first, count);
+    if (found == 0)
+        return;
+    tpk_shell_gather_worker *me = &g->worker[worker];
+    if (me->count + found > me->capacity) {
+        int64_t capacity = me->capacity ? 2 * me->capacity : 4096;
+        capacity = capacity < me->count + found ? me->count + found : capacity;
+        tpk_shell_face *grown = realloc(me->faces, sizeof *grown * (size_t)capacity);
+        if (!grown) {
+            me->failed = 1;
+            return;
+        }
+        me->faces = grown;
+        me->capacity = capacity;
+    }
+    tpk_shell_face *dst = me->faces + me->count;
+    tpk_build_shell(tets + 4 * first, neighbors + 4 * first, count, dst);
+    for (int64_t i = 0; i < found; i++)
+        dst[i].t += (int32_t)first;
+    me->count += found;
+}
+
+void tpk_shell_gather_block(tpk_shell_gather *g)
+{
+    int64_t found = 0;
+    for (int w = 0; w < TPK_MAX_THREADS; w++) {
+        found += g->worker[w].count;
+        g->failed |= g->worker[w].failed;
+    }
+    if (!g->failed && g->count + found > g->capacity) {
+        int64_t capacity = g->capacity ? 2 * g->capacity : 4096;
+        capacity = capacity < g->count + found ? g->count + found : capacity;
+        tpk_shell_face *grown = realloc(g->faces, sizeof *grown * (size_t)capacity);
+        if (grown) {
+            g->faces = grown;
+            g->capacity = capacity;
+        } else {
+            g->failed = 1;
+        }
+    }
+    for (int w = 0; w < TPK_MAX_THREADS; w++) {
+        if (!g->failed && g->worker[w].count > 0) {
+            memcpy(g->faces + g->count, g->worker[w].faces, sizeof *g->faces * (size_t)g->worker[w].count);
+            g->count += g->worker[w].count;
+        }
+        g->worker[w].count = 0;
+    }
+}
+
+void tpk_shell_gather_done(tpk_shell_gather *g)
+{
+    for (int w = 0; w < TPK_MAX_THREADS; w++) {
+        free(g->worker[w].faces);
+        g->worker[w].faces = NULL;
+        g->worker[w].count = g->worker[w].capacity = 0;
+    }
 }

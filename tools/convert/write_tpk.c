@@ -52,7 +52,7 @@ static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type
  * array never exists whole next to the mesh: the converter's peak memory is the mesh plus one block. */
 #define STREAM_BLOCK ((int64_t)1 << 18)
 
-typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst);
+typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst, int worker);
 
 typedef struct fill_job {
     fill_fn fill;
@@ -65,8 +65,7 @@ typedef struct fill_job {
 static void fill_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     const fill_job *job = ctx;
-    (void)worker;
-    job->fill(job->user, job->first + begin, end - begin, job->block + (size_t)begin * job->elem_size);
+    job->fill(job->user, job->first + begin, end - begin, job->block + (size_t)begin * job->elem_size, worker);
 }
 
 /* One block's append (checksum, compression, write) on a thread of its own, while the next block is
@@ -105,7 +104,9 @@ static void start_append(append_job *a, tpk_writer *writer, const void *data, ui
     }
 }
 
-static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user)
+/* block_done(user), where given, runs after each block's fill, its workers joined. */
+static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user,
+                        void (*block_done)(const void *user))
 {
     int64_t total = (int64_t)desc->elem_count;
     char *blocks[2] = {malloc((size_t)STREAM_BLOCK * desc->elem_size),
@@ -121,6 +122,8 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
         int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
         job.block = blocks[b]; /* the other block may still be being appended */
         tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
+        if (block_done)
+            block_done(user);
         r = wait_append(&append);
         if (r == TPK_OK)
             start_append(&append, cw->writer, job.block, (uint64_t)count * desc->elem_size, cw->threads);
@@ -241,9 +244,10 @@ int tpk_quantize_points(tpk_tetmesh *mesh, tpk_header_fields *hdr, tpk_diag *dia
     return 0;
 }
 
-static void fill_positions(const void *user, int64_t first, int64_t count, void *dst)
+static void fill_positions(const void *user, int64_t first, int64_t count, void *dst, int worker)
 {
     const double *points = user;
+    (void)worker;
     float *pos = dst;
     for (int64_t i = 0; i < 3 * count; i++)
         pos[i] = (float)points[3 * first + i]; /* exact: quantize_points rounded them already */
@@ -252,33 +256,53 @@ static void fill_positions(const void *user, int64_t first, int64_t count, void 
 static int write_positions(chunk_writer *cw, const tpk_tetmesh *mesh)
 {
     tpk_chunk_desc desc = chunk_desc(cw, TPK_TAG_POS3, 1, TPK_ELEM_VEC3_F32, 12, (uint64_t)mesh->vertex_count, 0, 0);
-    return stream_chunk(cw, &desc, fill_positions, mesh->points);
+    return stream_chunk(cw, &desc, fill_positions, mesh->points, NULL);
 }
 
+/* The layouts' records, and beside the first layout's the shell faces (tpk_shell_gather: the tets and
+ * neighbours read once for both; its own pass cost a scan of both arrays that did not scale). */
 typedef struct layout_source {
     const int32_t *tets, *neighbors;
+    tpk_shell_gather *shell; /* NULL: gathered already */
 } layout_source;
 
-static void fill_tet16(const void *user, int64_t first, int64_t count, void *dst)
+static void gather_shell(const layout_source *src, int64_t first, int64_t count, int worker)
+{
+    if (src->shell)
+        tpk_shell_gather_range(src->shell, src->tets, src->neighbors, first, count, worker);
+}
+
+static void fill_tet16(const void *user, int64_t first, int64_t count, void *dst, int worker)
 {
     const layout_source *src = user;
     tpk_build_tet16(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+    gather_shell(src, first, count, worker);
 }
 
-static void fill_tet20(const void *user, int64_t first, int64_t count, void *dst)
+static void fill_tet20(const void *user, int64_t first, int64_t count, void *dst, int worker)
 {
     const layout_source *src = user;
     tpk_build_tet20(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+    gather_shell(src, first, count, worker);
 }
 
-static void fill_tet32(const void *user, int64_t first, int64_t count, void *dst)
+static void fill_tet32(const void *user, int64_t first, int64_t count, void *dst, int worker)
 {
     const layout_source *src = user;
     tpk_build_tet32(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
+    gather_shell(src, first, count, worker);
 }
 
-static int write_layouts(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
-                         unsigned layouts)
+static void shell_block_done(const void *user)
+{
+    const layout_source *src = user;
+    if (src->shell)
+        tpk_shell_gather_block(src->shell);
+}
+
+/* The layouts chosen, then SHEL from the faces gathered beside the first. */
+static int write_layouts_and_shell(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
+                                   unsigned layouts, uint64_t *shell_count)
 {
     static const struct {
         unsigned bit;
@@ -289,27 +313,31 @@ static int write_layouts(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_
     } kinds[] = {{TPK_LAYOUT_BIT_TET16, TPK_TAG_TT16, TPK_ELEM_TET16, 16, fill_tet16},
                  {TPK_LAYOUT_BIT_TET20, TPK_TAG_TT20, TPK_ELEM_TET20, 20, fill_tet20},
                  {TPK_LAYOUT_BIT_TET32, TPK_TAG_TT32, TPK_ELEM_TET32, 32, fill_tet32}};
-    layout_source src = {mesh->tets, neighbors};
-    for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+    tpk_shell_gather *shell = calloc(1, sizeof *shell);
+    if (!shell)
+        return tpk_diag_fail(cw->diag, "out of memory");
+    layout_source src = {mesh->tets, neighbors, shell};
+    int rc = 0;
+    for (size_t k = 0; rc == 0 && k < sizeof kinds / sizeof kinds[0]; k++) {
         if (!(layouts & kinds[k].bit))
             continue;
         tpk_chunk_desc desc = chunk_desc(cw, kinds[k].tag, 1, kinds[k].type, kinds[k].size,
                                          (uint64_t)mesh->tet_count, 0, 0);
-        if (stream_chunk(cw, &desc, kinds[k].fill, &src) != 0)
-            return -1;
+        rc = stream_chunk(cw, &desc, kinds[k].fill, &src, shell_block_done);
+        src.shell = NULL;
     }
-    return 0;
-}
-
-static int write_shell(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors,
-                       uint64_t *shell_count)
-{
-    int64_t count = 0;
-    tpk_shell_face *shell = tpk_make_shell(mesh->tets, neighbors, mesh->tet_count, cw->threads, &count);
-    if (!shell)
-        return tpk_diag_fail(cw->diag, "out of memory for %lld shell faces", (long long)count);
-    *shell_count = (uint64_t)count;
-    int rc = put_chunk(cw, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, (uint64_t)count, 0, 0, shell);
+    tpk_shell_gather_done(shell);
+    if (rc == 0 && src.shell) { /* no layout streamed (none known asked for): a pass of its own */
+        shell->faces = tpk_make_shell(mesh->tets, neighbors, mesh->tet_count, cw->threads, &shell->count);
+        shell->failed = !shell->faces;
+    }
+    if (rc == 0 && shell->failed)
+        rc = tpk_diag_fail(cw->diag, "out of memory for %lld shell faces", (long long)shell->count);
+    if (rc == 0) {
+        *shell_count = (uint64_t)shell->count;
+        rc = put_chunk(cw, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, (uint64_t)shell->count, 0, 0, shell->faces);
+    }
+    free(shell->faces);
     free(shell);
     return rc;
 }
@@ -500,6 +528,20 @@ static int write_maps(chunk_writer *cw, const tpk_tetmesh *mesh)
     return rc;
 }
 
+/* convert --cull: the CULL chunk (spec §17), built here while the tets and neighbors are intact. */
+static int write_cull(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *neighbors)
+{
+    if (mesh->tet_count == 0)
+        return 0; /* no blocks: a file of no tets has nothing to cull */
+    uint64_t count = 0;
+    int32_t *words = tpk_build_cull(mesh->tets, neighbors, mesh->tet_count, mesh->vertex_count, cw->threads, &count);
+    if (!words)
+        return tpk_diag_fail(cw->diag, "convert: out of memory building the culling blocks (--cull)");
+    int rc = put_chunk(cw, TPK_TAG_CULL, 0, TPK_ELEM_I32, 4, count, 0, 0, words);
+    free(words);
+    return rc;
+}
+
 static void writer_message(void *user, tpk_result code, const char *text)
 {
     (void)code;
@@ -534,13 +576,13 @@ int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const t
     unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
     int rc = write_positions(&cw, mesh);
     if (rc == 0)
-        rc = write_layouts(&cw, mesh, neighbors, layouts);
-    if (rc == 0)
-        rc = write_shell(&cw, mesh, neighbors, &hdr->shell_face_count);
+        rc = write_layouts_and_shell(&cw, mesh, neighbors, layouts, &hdr->shell_face_count);
     if (rc == 0)
         rc = write_fields(&cw, mesh);
     if (rc == 0)
         rc = write_maps(&cw, mesh);
+    if (rc == 0 && o->cull)
+        rc = write_cull(&cw, mesh, neighbors);
     if (rc != 0)
         tpk_write_abort(ws);
     return rc;

@@ -1,10 +1,11 @@
-/* Shape functions of the linear and quadratic volume cells, VTK's Lagrange tetra of orders 3-6 and
- * wedge of order 3, in VTK node order (vtkCellType.h; the node orders of vtkQuadraticTetra, vtkQuadraticHexahedron,
+/* Shape functions of the linear and quadratic volume cells, VTK's Lagrange tetra of orders 3-10,
+ * hexahedra of orders 3-4 and wedges of orders 3-6, in VTK node order (vtkCellType.h; the node orders of vtkQuadraticTetra, vtkQuadraticHexahedron,
  * vtkTriQuadraticHexahedron, vtkBiQuadraticQuadraticHexahedron, vtkQuadraticWedge, vtkQuadraticLinearWedge,
  * vtkBiQuadraticQuadraticWedge and vtkQuadraticPyramid): corners first, then mid-edge nodes in the order
  * of `edges`, then mid-face nodes in the order of `faces`, then the centre. */
 #include "cell_map.h"
 
+#include <pthread.h>
 #include <string.h>
 
 #include "cell_types.h"
@@ -116,35 +117,108 @@ int tpk_cell_map_lagrange_wedge_node(int p, int i, int j, int k)
     return at + 3 * m * m + tri * (k - 1) + inner;
 }
 
-/* The order p of a mapped Lagrange tetra or wedge type, else 0. */
+int tpk_cell_map_lagrange_hex_node(int p, int i, int j, int k)
+{
+    int ib = i == 0 || i == p, jb = j == 0 || j == p, kb = k == 0 || k == p, m = p - 1;
+    int corner_of_ij = i ? (j ? 2 : 1) : (j ? 3 : 0);
+    if (ib && jb && kb)
+        return corner_of_ij + (k ? 4 : 0);
+    int at = 8;
+    if (ib + jb + kb == 2) {
+        if (!ib) /* along r: bottom edges 01 then 32, then the top's */
+            return at + (i - 1) + (j ? 2 * m : 0) + (k ? 4 * m : 0);
+        if (!jb) /* along s: bottom edges 12 then 03 */
+            return at + (j - 1) + (i ? m : 3 * m) + (k ? 4 * m : 0);
+        return at + 8 * m + (k - 1) + m * corner_of_ij; /* vertical */
+    }
+    at += 12 * m;
+    if (ib + jb + kb == 1) {
+        if (ib)
+            return at + (j - 1) + m * (k - 1) + (i ? m * m : 0);
+        at += 2 * m * m;
+        if (jb)
+            return at + (i - 1) + m * (k - 1) + (j ? m * m : 0);
+        at += 2 * m * m;
+        return at + (i - 1) + m * (j - 1) + (k ? m * m : 0);
+    }
+    return at + 6 * m * m + (i - 1) + m * ((j - 1) + m * (k - 1));
+}
+
+enum { TETRA, HEX, WEDGE };
+
+/* The family (TETRA, HEX, WEDGE) and order p of a mapped Lagrange type; p = 0 for another type. */
+static int lagrange_order_of(int type, int *family)
+{
+    static const int base[3] = {TPK_CELL_MAP_LAGRANGE_TETRA, TPK_CELL_MAP_LAGRANGE_HEX, TPK_CELL_MAP_LAGRANGE_WEDGE};
+    static const int top[3] = {TPK_CELL_MAP_LAGRANGE_MAX_ORDER, TPK_CELL_MAP_LAGRANGE_HEX_MAX_ORDER,
+                               TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER};
+    for (int f = 0; f < 3; f++)
+        if (type - base[f] >= 3 && type - base[f] <= top[f]) {
+            *family = f;
+            return type - base[f];
+        }
+    *family = -1;
+    return 0;
+}
+
 static int lagrange_order(int type)
 {
-    int p = type - TPK_CELL_MAP_LAGRANGE_TETRA, q = type - TPK_CELL_MAP_LAGRANGE_WEDGE;
-    return p >= 3 && p <= TPK_CELL_MAP_LAGRANGE_MAX_ORDER           ? p
-           : q >= 3 && q <= TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER ? q
-                                                                    : 0;
+    int family;
+    return lagrange_order_of(type, &family);
 }
 
-static int is_wedge(int type)
+static int family_of(int type)
 {
-    return type > TPK_CELL_MAP_LAGRANGE_WEDGE;
+    int family;
+    lagrange_order_of(type, &family);
+    return family;
 }
 
-/* The node count of a Lagrange tetra or wedge (is_wedge) of order p. */
-static int lagrange_count(int wedge, int p)
+/* The node count of a Lagrange tetra, hexahedron or wedge of order p. */
+static int lagrange_count(int family, int p)
 {
-    return wedge ? (p + 1) * (p + 1) * (p + 2) / 2 : (p + 1) * (p + 2) * (p + 3) / 6;
+    return family == WEDGE ? (p + 1) * (p + 1) * (p + 2) / 2
+           : family == HEX ? (p + 1) * (p + 1) * (p + 1)
+                           : (p + 1) * (p + 2) * (p + 3) / 6;
 }
 
 int tpk_cell_map_type(int type, int64_t n)
 {
     for (int p = 3; p <= TPK_CELL_MAP_LAGRANGE_MAX_ORDER; p++) {
-        if (type == 71 && lagrange_count(0, p) == n)
+        if (type == 71 && lagrange_count(TETRA, p) == n)
             return TPK_CELL_MAP_LAGRANGE_TETRA + p;
-        if (type == 73 && p <= TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER && lagrange_count(1, p) == n)
+        if (type == 72 && p <= TPK_CELL_MAP_LAGRANGE_HEX_MAX_ORDER && lagrange_count(HEX, p) == n)
+            return TPK_CELL_MAP_LAGRANGE_HEX + p;
+        if (type == 73 && p <= TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER && lagrange_count(WEDGE, p) == n)
             return TPK_CELL_MAP_LAGRANGE_WEDGE + p;
     }
     return type;
+}
+
+/* The Lagrange cells' nodes by lattice point, per family and order (index (i (p + 1) + j) (p + 1) + k),
+ * made once: the numbering functions walk the shells and faces, too slow to call per weight. */
+#define LATTICE (TPK_CELL_MAP_LAGRANGE_MAX_ORDER + 1)
+static int16_t lattice_node[3][TPK_CELL_MAP_LAGRANGE_MAX_ORDER + 1][LATTICE * LATTICE * LATTICE];
+static pthread_once_t lattice_once = PTHREAD_ONCE_INIT;
+
+static void lattice_make(void)
+{
+    for (int p = 3; p <= TPK_CELL_MAP_LAGRANGE_MAX_ORDER; p++)
+        for (int i = 0; i <= p; i++)
+            for (int j = 0; j <= p; j++)
+                for (int k = 0; k <= p; k++) {
+                    int at = (i * (p + 1) + j) * (p + 1) + k;
+                    lattice_node[TETRA][p][at] = (int16_t)(i + j + k <= p ? tpk_cell_map_lagrange_tet_node(p, i, j, k) : -1);
+                    lattice_node[HEX][p][at] = (int16_t)tpk_cell_map_lagrange_hex_node(p, i, j, k);
+                    lattice_node[WEDGE][p][at] = (int16_t)(i + j <= p ? tpk_cell_map_lagrange_wedge_node(p, i, j, k) : -1);
+                }
+}
+
+/* The family's node table of order p, (p + 1)^3 entries as lattice_node. */
+static const int16_t *lattice_of(int family, int p)
+{
+    pthread_once(&lattice_once, lattice_make);
+    return lattice_node[family][p];
 }
 
 /* l_m(L) = prod_{q<m} (p L - q) / (q + 1): 1 at L = m / p, 0 at L = 0, 1/p, ..., (m - 1) / p. */
@@ -163,11 +237,23 @@ static int lagrange_tetra(int p, const double r[3], double *w)
     for (int v = 0; v < 4; v++)
         for (int m = 0; m <= p; m++)
             l[v][m] = lagrange_1d(p, m, L[v]);
+    const int16_t *node = lattice_of(TETRA, p);
     for (int i = 0; i <= p; i++)
         for (int j = 0; i + j <= p; j++)
             for (int k = 0; i + j + k <= p; k++)
-                w[tpk_cell_map_lagrange_tet_node(p, i, j, k)] = l[0][p - i - j - k] * l[1][i] * l[2][j] * l[3][k];
-    return lagrange_count(0, p);
+                w[node[(i * (p + 1) + j) * (p + 1) + k]] = l[0][p - i - j - k] * l[1][i] * l[2][j] * l[3][k];
+    return lagrange_count(TETRA, p);
+}
+
+/* The 1-D order-p Lagrange basis on nodes t = k / p at t into h[0 .. p]. */
+static void lagrange_line(int p, double t, double *h)
+{
+    for (int k = 0; k <= p; k++) {
+        h[k] = 1;
+        for (int q = 0; q <= p; q++)
+            if (q != k)
+                h[k] *= (p * t - q) / (k - q);
+    }
 }
 
 /* The order-p triangle's Lagrange basis in (L0, L1, L2) = (1 - r - s, r, s) times the 1-D order-p one in
@@ -179,17 +265,27 @@ static int lagrange_wedge(int p, const double r[3], double *w)
     for (int v = 0; v < 3; v++)
         for (int m = 0; m <= p; m++)
             l[v][m] = lagrange_1d(p, m, L[v]);
-    for (int k = 0; k <= p; k++) {
-        h[k] = 1;
-        for (int q = 0; q <= p; q++)
-            if (q != k)
-                h[k] *= (p * r[2] - q) / (k - q);
-    }
+    lagrange_line(p, r[2], h);
+    const int16_t *node = lattice_of(WEDGE, p);
     for (int i = 0; i <= p; i++)
         for (int j = 0; i + j <= p; j++)
             for (int k = 0; k <= p; k++)
-                w[tpk_cell_map_lagrange_wedge_node(p, i, j, k)] = l[0][p - i - j] * l[1][i] * l[2][j] * h[k];
-    return lagrange_count(1, p);
+                w[node[(i * (p + 1) + j) * (p + 1) + k]] = l[0][p - i - j] * l[1][i] * l[2][j] * h[k];
+    return lagrange_count(WEDGE, p);
+}
+
+/* The product of the 1-D order-p Lagrange bases in r, s and t. */
+static int lagrange_hex(int p, const double r[3], double *w)
+{
+    double h[3][TPK_CELL_MAP_LAGRANGE_HEX_MAX_ORDER + 1];
+    for (int a = 0; a < 3; a++)
+        lagrange_line(p, r[a], h[a]);
+    const int16_t *node = lattice_of(HEX, p);
+    for (int i = 0; i <= p; i++)
+        for (int j = 0; j <= p; j++)
+            for (int k = 0; k <= p; k++)
+                w[node[(i * (p + 1) + j) * (p + 1) + k]] = h[0][i] * h[1][j] * h[2][k];
+    return lagrange_count(HEX, p);
 }
 
 static const node_table *table_of(int type)
@@ -203,7 +299,7 @@ static const node_table *table_of(int type)
 int tpk_cell_map_nodes(int type)
 {
     if (lagrange_order(type))
-        return lagrange_count(is_wedge(type), lagrange_order(type));
+        return lagrange_count(family_of(type), lagrange_order(type));
     const node_table *t = table_of(type);
     return t ? t->nodes : 0;
 }
@@ -221,7 +317,7 @@ int tpk_cell_map_degree(int type)
     case 32: return 4;
     case 33: return 5;
     case 29: return 6;
-    default: return is_wedge(type) ? 2 * lagrange_order(type) : lagrange_order(type);
+    default: return (family_of(type) == WEDGE ? 2 : family_of(type) == HEX ? 3 : 1) * lagrange_order(type);
     }
 }
 
@@ -236,7 +332,15 @@ static void corner(const node_table *t, int k, double r[3])
 void tpk_cell_map_node(int type, int k, double r[3])
 {
     int p = lagrange_order(type);
-    if (p && is_wedge(type)) {
+    if (p && family_of(type) == HEX) {
+        for (int i = 0; i <= p; i++)
+            for (int j = 0; j <= p; j++)
+                for (int l = 0; l <= p; l++)
+                    if (tpk_cell_map_lagrange_hex_node(p, i, j, l) == k)
+                        r[0] = (double)i / p, r[1] = (double)j / p, r[2] = (double)l / p;
+        return;
+    }
+    if (p && family_of(type) == WEDGE) {
         for (int i = 0; i <= p; i++)
             for (int j = 0; i + j <= p; j++)
                 for (int l = 0; l <= p; l++)
@@ -280,22 +384,21 @@ static double lagrange2(double x, int at)
     return at < 0 ? 0.5 * x * (x - 1) : at > 0 ? 0.5 * x * (x + 1) : (1 - x) * (1 + x);
 }
 
-/* Node k's parametric coordinates as -1, 0, 1 per axis (2 r - 1), for the hexahedra. */
-static void hex_signs(int type, int k, int s[3])
-{
-    double r[3];
-    tpk_cell_map_node(type, k, r);
-    for (int i = 0; i < 3; i++)
-        s[i] = r[i] < 0.25 ? -1 : r[i] > 0.75 ? 1 : 0;
-}
+/* Node k's parametric coordinates as -1, 0, 1 per axis (2 r - 1), for the hexahedra: the triquadratic
+ * one's 27 nodes (tpk_cell_map_node), of which the linear one has the first 8 and the serendipity one the
+ * first 20 (higher_order.shape_functions: each weight 1 at its node, 0 at the others). */
+static const signed char hex_signs[27][3] = {
+    {-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1}, {-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1},
+    {0, -1, -1},  {1, 0, -1},  {0, 1, -1}, {-1, 0, -1}, {0, -1, 1},  {1, 0, 1},  {0, 1, 1}, {-1, 0, 1},
+    {-1, -1, 0},  {1, -1, 0},  {1, 1, 0},  {-1, 1, 0},  {-1, 0, 0},  {1, 0, 0},  {0, -1, 0}, {0, 1, 0},
+    {0, 0, -1},   {0, 0, 1},   {0, 0, 0}};
 
 static int hexahedron(int type, const double r[3], double *w)
 {
     const double x[3] = {2 * r[0] - 1, 2 * r[1] - 1, 2 * r[2] - 1};
-    int n = tpk_cell_map_nodes(type);
+    int n = type == 12 ? 8 : type == 25 ? 20 : 27;
     for (int k = 0; k < n; k++) {
-        int s[3];
-        hex_signs(type, k, s);
+        const int s[3] = {hex_signs[k][0], hex_signs[k][1], hex_signs[k][2]};
         if (type == 29) {
             w[k] = lagrange2(x[0], s[0]) * lagrange2(x[1], s[1]) * lagrange2(x[2], s[2]);
         } else if (type == 12) {
@@ -436,7 +539,9 @@ int tpk_cell_map_weights(int type, const double r[3], double *w)
     default:
         if (!lagrange_order(type))
             return 0;
-        return is_wedge(type) ? lagrange_wedge(lagrange_order(type), r, w) : lagrange_tetra(lagrange_order(type), r, w);
+        return family_of(type) == WEDGE ? lagrange_wedge(lagrange_order(type), r, w)
+               : family_of(type) == HEX ? lagrange_hex(lagrange_order(type), r, w)
+                                        : lagrange_tetra(lagrange_order(type), r, w);
     }
 }
 

@@ -7,27 +7,40 @@
 
 #include <stdint.h>
 
-/* Most nodes a cell this module knows has (the order-6 Lagrange tetra's 84). */
-#define TPK_CELL_MAP_MAX_NODES 84
+/* Most nodes a cell this module knows has (the order-10 Lagrange tetra's 286). */
+#define TPK_CELL_MAP_MAX_NODES 286
 
 /* VTK's Lagrange tetra (71) of order p, 3 <= p <= TPK_CELL_MAP_LAGRANGE_MAX_ORDER, is mapped as type
- * TPK_CELL_MAP_LAGRANGE_TETRA + p (its degree p fits the Bernstein tables of mesh/bernstein.h); orders 2
- * and 15 nodes are the quadratic tetra's numbering, mapped as type 24 by the callers. */
+ * TPK_CELL_MAP_LAGRANGE_TETRA + p (its degree p fits the Bernstein tables of mesh/bernstein.h, up to
+ * 12); orders 2 and 15 nodes are the quadratic tetra's numbering, mapped as type 24 by the callers. */
 #define TPK_CELL_MAP_LAGRANGE_TETRA 7100
-#define TPK_CELL_MAP_LAGRANGE_MAX_ORDER 6
-/* VTK's Lagrange wedge (73) of order p: TPK_CELL_MAP_LAGRANGE_WEDGE + p, p = 3 only (degree 2 p). */
+#define TPK_CELL_MAP_LAGRANGE_MAX_ORDER 10
+/* VTK's Lagrange hexahedron (72) of order p: TPK_CELL_MAP_LAGRANGE_HEX + p, p = 3 and 4 (degree 3 p); order 2
+ * is the triquadratic hexahedron's numbering (type 29). */
+#define TPK_CELL_MAP_LAGRANGE_HEX 7200
+#define TPK_CELL_MAP_LAGRANGE_HEX_MAX_ORDER 4
+/* VTK's Lagrange wedge (73) of order p: TPK_CELL_MAP_LAGRANGE_WEDGE + p, p = 3..6 (degree 2 p). */
 #define TPK_CELL_MAP_LAGRANGE_WEDGE 7300
-#define TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER 3
+#define TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER 6
 
 /* The type this module maps a source cell of VTK type `type` with n nodes as: type itself, or
  * TPK_CELL_MAP_LAGRANGE_TETRA + p for a Lagrange tetra of order p = 3..TPK_CELL_MAP_LAGRANGE_MAX_ORDER
- * ((p+1)(p+2)(p+3)/6 nodes), TPK_CELL_MAP_LAGRANGE_WEDGE + p for a Lagrange wedge of order
- * p = 3..TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER ((p+1)^2(p+2)/2 nodes). */
+ * ((p+1)(p+2)(p+3)/6 nodes), TPK_CELL_MAP_LAGRANGE_HEX + p for a Lagrange hexahedron of order
+ * p = 3..TPK_CELL_MAP_LAGRANGE_HEX_MAX_ORDER ((p+1)^3 nodes), TPK_CELL_MAP_LAGRANGE_WEDGE + p for a
+ * Lagrange wedge of order p = 3..TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER ((p+1)^2(p+2)/2 nodes). */
 int tpk_cell_map_type(int type, int64_t n);
 
 /* The node of lattice point (i, j, k), i + j + k <= p, of an order-p Lagrange tetra (parametric point
  * (i, j, k) / p) in VTK 9's numbering (vtkHigherOrderTetra); the higher-order split uses it too. */
 int tpk_cell_map_lagrange_tet_node(int p, int i, int j, int k);
+
+/* The node of lattice point (i, j, k), 0 <= i, j, k <= p, of an order-p Lagrange hexahedron (parametric
+ * point (i, j, k) / p) in VTK 9's numbering (vtkHigherOrderHexahedron::PointIndexFromIJK): the 8 corners;
+ * the 12 edges' inner points, each edge in increasing parametric order, the edges as the triquadratic
+ * hexahedron lists its mid-edges (bottom 01 12 32 03, top likewise, then the vertical edges at corners 0,
+ * 1, 2, 3); the faces' (r = 0, r = 1, s = 0, s = 1, t = 0, t = 1, each with its lower axis fastest); then
+ * the body's (r fastest). For p = 2 this is the 27-node numbering. The higher-order split uses it too. */
+int tpk_cell_map_lagrange_hex_node(int p, int i, int j, int k);
 
 /* The node of lattice point (i, j, k), i + j <= p, 0 <= k <= p, of an order-p Lagrange wedge (parametric
  * point (i, j, k) / p) in VTK 9's numbering (vtkHigherOrderWedge). */
@@ -36,21 +49,22 @@ int tpk_cell_map_lagrange_wedge_node(int p, int i, int j, int k);
 /* The node count of a type this module maps, or 0: tetra (10), hexahedron (12), wedge (13), pyramid
  * (14), quadratic tetra (24), quadratic hexahedron (25, serendipity), quadratic wedge (26), quadratic
  * pyramid (27), triquadratic hexahedron (29), quadratic linear wedge (31), biquadratic quadratic wedge
- * (32), biquadratic quadratic hexahedron (33), Lagrange tetra and wedge of order p
- * (TPK_CELL_MAP_LAGRANGE_TETRA or _WEDGE + p). */
+ * (32), biquadratic quadratic hexahedron (33), Lagrange tetra, hexahedron and wedge of order p
+ * (TPK_CELL_MAP_LAGRANGE_TETRA, _HEX or _WEDGE + p). */
 int tpk_cell_map_nodes(int type);
 
 /* The total degree of the type's shape functions as polynomials of the parametric coordinates (so on
  * any tet of its parameter space, in the tet's barycentric coordinates): tetra 1, wedge 2, hexahedron
  * 3, quadratic tetra 2, quadratic (26) and quadratic-linear (31) wedge 3, serendipity hexahedron and
  * biquadratic wedge 4, biquadratic-quadratic hexahedron 5, triquadratic hexahedron 6, Lagrange tetra of
- * order p p, Lagrange wedge of order p 2 p; 0 for the pyramids (a collapsed hexahedron and a rational
- * function, neither a polynomial on the pyramid's tets) and types this module does not map. */
+ * order p p, Lagrange hexahedron of order p 3 p, Lagrange wedge of order p 2 p; 0 for the pyramids (a
+ * collapsed hexahedron and a rational function, neither a polynomial on the pyramid's tets) and types
+ * this module does not map. */
 int tpk_cell_map_degree(int type);
 
 /* VTK parametric coordinates of node k (0 <= k < tpk_cell_map_nodes(type)) into r: corners as
  * tpk_cell_shape's ref, mid-edge, mid-face and mid-cell nodes the means of their corners (a Lagrange
- * tetra's or wedge's node at lattice point (i, j, k) at (i, j, k) / p). */
+ * tetra's, hexahedron's or wedge's node at lattice point (i, j, k) at (i, j, k) / p). */
 void tpk_cell_map_node(int type, int k, double r[3]);
 
 /* The shape functions at parametric point r into w (tpk_cell_map_nodes(type) values, summing to 1;
@@ -60,7 +74,8 @@ void tpk_cell_map_node(int type, int k, double r[3]);
  * quadratic polynomial of the parametric coordinates; the order-p Lagrange tetra's, the standard
  * barycentric Lagrange basis l_a(L0) l_b(L1) l_c(L2) l_d(L3), l_m(L) = prod_{q<m} (p L - q) / (q + 1), every
  * polynomial of degree p; the order-p Lagrange wedge's, the order-p triangle's basis in (L0, L1, L2) times
- * the 1-D one in t. */
+ * the 1-D one in t; the order-p Lagrange hexahedron's, the product of the 1-D ones in r, s and t
+ * (l_i(r) = prod_{q != i} (p r - q) / (i - q)). */
 int tpk_cell_map_weights(int type, const double r[3], double *w);
 
 /* The point the cell with nodes `nodes` (ids into `points`, 3 doubles each) maps r to: sum w[k] x_k in

@@ -164,39 +164,6 @@ static int64_t lagrange_cells(int type, int p, int64_t *conn)
     return cells;
 }
 
-/* The node of lattice point (i, j, k), 0 <= i, j, k <= p, in VTK 9's numbering of the Lagrange
- * hexahedron (vtkHigherOrderHexahedron::PointIndexFromIJK): the 8 corners; the 12 edges' inner points,
- * each edge in increasing parametric order, the edges as the triquadratic hexahedron lists its
- * mid-edges (bottom 01 12 32 03, top likewise, then the vertical edges at corners 0, 1, 2, 3); the
- * faces' (r = 0, r = 1, s = 0, s = 1, t = 0, t = 1, each with its lower axis fastest); then the body's
- * (r fastest). For p = 2 this is the 27-node numbering. */
-static int lagrange_hex_node(int p, int i, int j, int k)
-{
-    int ib = i == 0 || i == p, jb = j == 0 || j == p, kb = k == 0 || k == p, m = p - 1;
-    int corner_of_ij = i ? (j ? 2 : 1) : (j ? 3 : 0);
-    if (ib && jb && kb)
-        return corner_of_ij + (k ? 4 : 0);
-    int at = 8;
-    if (ib + jb + kb == 2) {
-        if (!ib) /* along r: bottom edges 01 then 32, then the top's */
-            return at + (i - 1) + (j ? 2 * m : 0) + (k ? 4 * m : 0);
-        if (!jb) /* along s: bottom edges 12 then 03 */
-            return at + (j - 1) + (i ? m : 3 * m) + (k ? 4 * m : 0);
-        return at + 8 * m + (k - 1) + m * corner_of_ij; /* vertical */
-    }
-    at += 12 * m;
-    if (ib + jb + kb == 1) {
-        if (ib)
-            return at + (j - 1) + m * (k - 1) + (i ? m * m : 0);
-        at += 2 * m * m;
-        if (jb)
-            return at + (i - 1) + m * (k - 1) + (j ? m * m : 0);
-        at += 2 * m * m;
-        return at + (i - 1) + m * (j - 1) + (k ? m * m : 0);
-    }
-    return at + 6 * m * m + (i - 1) + m * ((j - 1) + m * (k - 1));
-}
-
 /* Orientation of tetra (a, b, c, d) of lattice points: the sign of det(b - a, c - a, d - a). */
 static int lattice_orientation(const int x[4][3])
 {
@@ -293,7 +260,7 @@ static void lagrange_hex_piece(int p, int a, int b, int c, int32_t *local)
     static const int corner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                                      {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
     for (int v = 0; v < 8; v++)
-        local[v] = lagrange_hex_node(p, a + corner[v][0], b + corner[v][1], c + corner[v][2]);
+        local[v] = tpk_cell_map_lagrange_hex_node(p, a + corner[v][0], b + corner[v][1], c + corner[v][2]);
 }
 
 /* The full lattice type of a split type (whose pieces are written in its numbering). */

@@ -67,6 +67,9 @@ typedef struct tpk_render_options {
      * docs/ARCHITECTURE.md "Render effects". */
     const float *tet_scalars;      /* per tet (a tet field): constant in each tet, replaces the
                                       point scalars of the mesh for colour, opacity and iso */
+    const tpk_cull *cull;          /* the file's culling blocks (spec §17) or NULL: the CPU reference's culled
+                                      iso rays then walk only the blocks that may hold a value
+                                      (tpk_range_bvh_create_cull); the same picture */
     int iso_count;                 /* 0..TPK_RENDER_MAX_ISO exact isosurfaces of the linear scalar */
     double iso[4];                 /* iso values (in scalar units, not TF units) */
     int clip;                      /* nonzero: only the volume inside [clip_min, clip_max] shows */

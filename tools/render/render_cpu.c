@@ -485,7 +485,8 @@ static tpk_range_bvh *culling_trees(const tpk_mesh_arrays *mesh, const tpk_rende
     tpk_result r = TPK_OK;
     if (!keep->range) {
         keep->value_count = 0;
-        r = tpk_range_bvh_create_threads(&keep->range, keep->marcher, thread_count(opt));
+        r = opt->cull ? tpk_range_bvh_create_cull(&keep->range, keep->marcher, opt->cull, thread_count(opt))
+                      : tpk_range_bvh_create_threads(&keep->range, keep->marcher, thread_count(opt));
     }
     keep->range_new_field = 0;
     if (r == TPK_OK) {

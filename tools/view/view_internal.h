@@ -30,6 +30,7 @@ typedef struct view_state {
     int step;
     tpk_layout layout;
     tpk_mesh_arrays mesh;
+    tpk_cull cull;                 /* the file's culling blocks (spec §17), opt.cull = &cull when it has them */
     double bounds_min[3], bounds_max[3];
     int iso_raster;                /* tpk_view_options.iso_raster */
     /* Levels of detail (spec §16): levels.files[0] is the file itself, the others opened over it; `file`
