@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Lagrange hexahedra of order 3 and 4 (VTK type 72), written by VTK itself (python3-paraview's VTK): the
+# Lagrange hexahedra of order 2, 3 and 4 (VTK type 72), written by VTK itself (python3-paraview's VTK): the
 # points are placed with VTK's own node numbering (vtkHigherOrderHexahedron.PointIndexFromIJK), so the
 # reader's numbering is checked against an independent one. Two cells share a face under a curved map.
 # Each is split whole: every node a vertex (no point unused), p^3 sub-hexahedra per cell, none mirrored,
 # and the file checks clean (a wrong numbering folds sub-hexahedra over each other). --max-error bounds
-# both orders (degree 9 and 12; check --against agrees); order 5 (degree 15) is refused by name.
+# orders 2, 3 and 4 (degree 6, 9 and 12; check --against agrees), and voxels; order 5 (degree 15) is
+# refused by name.
 source "$(dirname "$0")/common.sh" "$@"
 
 cat > "$WORK/writer.py" <<'EOF'
@@ -26,7 +27,7 @@ for cell in range(2):
     g.cell(VTK_LAGRANGE_HEXAHEDRON, conn)
 g.write(path)
 EOF
-for order in 3 4; do
+for order in 2 3 4; do
     cli_py - "$WORK/lagrange$order.vtu" "$order" < "$WORK/writer.py" || fail "VTK could not write the Lagrange hexahedra"
     convert_checked "$WORK/lagrange$order.vtu" "$WORK/lagrange$order.tpk" --json > "$WORK/l.json" 2> "$WORK/err"
     "$PY" - "$WORK/l.json" "$order" <<'EOF' || fail "order $order: $(cat "$WORK/l.json")"
@@ -59,6 +60,24 @@ EOF
     "$PY" -c "import sys; sys.exit(not ($got <= $bound < $plain))" ||
         fail "order $order: sampled error $got at --max-error $bound (plain split $plain)"
 done
+# voxels (VTK type 11: corners 2, 3 and 6, 7 swapped against a hexahedron's), two sharing a face: bounded
+# as hexahedra, and check --against samples both through the same trilinear map (it skipped voxels, and
+# Lagrange cells of order 2 above, and called an unsampled file's bound met)
+cli_py - "$WORK/voxels.vtu" <<'EOF' || fail "VTK could not write the voxels"
+import math, sys
+import vtk_write
+from vtkmodules.vtkCommonDataModel import VTK_VOXEL
+g = vtk_write.Grid(2, lambda x: math.sin(3 * x[0]) * math.cos(2 * x[1]) + x[2] * x[2])
+for c in range(2):
+    g.cell(VTK_VOXEL, [g.point((c + i, j, k), (c + i, 0.8 * j, 1.2 * k)) for k in (0, 1) for j in (0, 1) for i in (0, 1)])
+g.write(sys.argv[1])
+EOF
+convert_checked "$WORK/voxels.vtu" "$WORK/voxels.tpk" --max-error 0.001 2> "$WORK/err" ||
+    fail "voxels: convert --max-error 0.001: $(cat "$WORK/err")"
+"$TPK" check "$WORK/voxels.tpk" --against "$WORK/voxels.vtu" --samples 8 > "$WORK/against.txt" 2>&1 ||
+    fail "voxels: check --against: $(cat "$WORK/against.txt")"
+grep -q "1024 samples in 2 source cells" "$WORK/against.txt" && grep -q "bound recorded in META: 0.001: met" "$WORK/against.txt" ||
+    fail "voxels: check --against did not sample both cells: $(cat "$WORK/against.txt")"
 # order 5 (degree 15, over the Bernstein tables' 12): refused with --max-error by name, nothing written
 cli_py - "$WORK/lagrange5.vtu" 5 < "$WORK/writer.py" || fail "VTK could not write the Lagrange hexahedra"
 expect_exit 2 "$TPK" convert "$WORK/lagrange5.vtu" "$WORK/bad.tpk" --max-error 1%

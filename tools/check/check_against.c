@@ -288,17 +288,21 @@ static void compare(against *a, const tpk_mesh *src, const tpk_src_field *const 
                     tpk_against_report *out, int per_axis, double *sum_sq)
 {
     double r[512][3], w[TPK_CELL_MAP_MAX_NODES], lambda[4];
+    int32_t nodes[TPK_CELL_MAP_MAX_NODES];
     for (int64_t c = 0; c < src->cell_count; c++) {
-        int type = tpk_cell_map_type(src->cell_types[c], src->cell_offsets[c + 1] - src->cell_offsets[c]);
-        int n = tpk_cell_map_nodes(type);
-        const int32_t *nodes = src->cell_conn + src->cell_offsets[c];
-        if (!n || src->cell_offsets[c + 1] - src->cell_offsets[c] != n) {
-            type = src->cell_types[c];
-            out->cells_skipped += tpk_cell_type(type) && tpk_cell_type(type)->dim == 3;
+        /* the cell's own type as convert --max-error maps it (voxels, Lagrange cells of order 2 included) */
+        const int source = src->cell_types[c];
+        int type = tpk_cell_map_source_type(source, src->cell_offsets[c + 1] - src->cell_offsets[c]);
+        int n = type ? tpk_cell_map_nodes(type) : 0;
+        if (!n) {
+            out->cells_skipped += tpk_cell_type(source) && tpk_cell_type(source)->dim == 3;
             continue;
         }
+        for (int k = 0; k < n; k++)
+            nodes[k] = src->cell_conn[src->cell_offsets[c] + tpk_cell_map_source_node(source, k)];
         out->cells++;
-        int ns = samples_of(tpk_cell_type(src->cell_types[c])->linear_type, per_axis, r, 512);
+        int linear = source == TPK_CELL_VOXEL ? TPK_CELL_HEXAHEDRON : tpk_cell_type(source)->linear_type;
+        int ns = samples_of(linear, per_axis, r, 512);
         for (int s = 0; s < ns; s++) {
             double x[3];
             tpk_cell_map_point(type, nodes, src->points, r[s], x);

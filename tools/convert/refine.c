@@ -21,7 +21,6 @@
 
 #define MAX_PASSES 60
 static const int tet_edges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-static const int voxel_as_hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
 
 /* ---- source cells ------------------------------------------------------------------------------ */
 
@@ -51,20 +50,11 @@ void tpk_refine_cells_free(tpk_refine_cells *cells)
     memset(cells, 0, sizeof *cells);
 }
 
-/* The type whose functions cell c has (voxels as hexahedra, VTK's Lagrange cells of order 2 as the
- * quadratic ones, which number their nodes alike: mesh/higher_order.c; Lagrange tetra of order 3-6 as
- * tpk_cell_map_type says), or 0. */
+/* The type whose functions cell c has (tpk_cell_map_source_type) when they are polynomials, or 0. */
 static int mapped_type(const tpk_refine_cells *cells, int64_t c)
 {
-    int type = cells->types[c];
-    int64_t n = cells->offsets[c + 1] - cells->offsets[c];
-    if (type == TPK_CELL_VOXEL)
-        type = TPK_CELL_HEXAHEDRON;
-    else if ((type == 71 && n == 10) || (type == 72 && n == 27) || (type == 73 && n == 18))
-        type = type == 71 ? 24 : type == 72 ? 29 : 32;
-    else
-        type = tpk_cell_map_type(type, n);
-    return tpk_cell_map_degree(type) > 0 && tpk_cell_map_nodes(type) == n ? type : 0;
+    int type = tpk_cell_map_source_type(cells->types[c], cells->offsets[c + 1] - cells->offsets[c]);
+    return type && tpk_cell_map_degree(type) > 0 ? type : 0;
 }
 
 int64_t tpk_refine_unbounded_cell(const tpk_refine_cells *cells)
@@ -202,7 +192,7 @@ static int cell_nodes(const refine *r, int64_t c, int32_t *verts)
     int n = type ? (int)(r->cells->offsets[c + 1] - r->cells->offsets[c]) : 0; /* mapped_type: nodes(type) */
     const int32_t *conn = r->cells->conn + r->cells->offsets[c];
     for (int k = 0; k < n; k++) {
-        int32_t id = conn[r->cells->types[c] == TPK_CELL_VOXEL ? voxel_as_hex[k] : k];
+        int32_t id = conn[tpk_cell_map_source_node(r->cells->types[c], k)];
         if (id < 0 || id >= r->point_ids || r->vertex_of[id] < 0)
             return 0;
         verts[k] = r->vertex_of[id];

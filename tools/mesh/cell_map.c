@@ -195,6 +195,23 @@ int tpk_cell_map_type(int type, int64_t n)
     return type;
 }
 
+int tpk_cell_map_source_type(int type, int64_t n)
+{
+    if (type == TPK_CELL_VOXEL)
+        type = TPK_CELL_HEXAHEDRON;
+    else if ((type == 71 && n == 10) || (type == 72 && n == 27) || (type == 73 && n == 18))
+        type = type == 71 ? 24 : type == 72 ? 29 : 32;
+    else
+        type = tpk_cell_map_type(type, n);
+    return n > 0 && tpk_cell_map_nodes(type) == n ? type : 0;
+}
+
+int tpk_cell_map_source_node(int type, int k)
+{
+    static const int voxel_as_hex[8] = {0, 1, 3, 2, 4, 5, 7, 6};
+    return type == TPK_CELL_VOXEL && k >= 0 && k < 8 ? voxel_as_hex[k] : k;
+}
+
 /* The Lagrange cells' nodes by lattice point, per family and order (index (i (p + 1) + j) (p + 1) + k),
  * made once: the numbering functions walk the shells and faces, too slow to call per weight. */
 #define LATTICE (TPK_CELL_MAP_LAGRANGE_MAX_ORDER + 1)

@@ -30,6 +30,15 @@
  * Lagrange wedge of order p = 3..TPK_CELL_MAP_LAGRANGE_WEDGE_MAX_ORDER ((p+1)^2(p+2)/2 nodes). */
 int tpk_cell_map_type(int type, int64_t n);
 
+/* The type whose map and interpolant a source cell of VTK type `type` with n nodes has, for everything
+ * that measures a cell (convert --max-error, check --against): voxels as hexahedra, VTK's Lagrange cells
+ * of order 2 as the quadratic ones (which number their nodes alike: mesh/higher_order.c), higher orders
+ * as tpk_cell_map_type says; 0 where this module has no functions for it (tpk_cell_map_degree says
+ * which of them are polynomials, as --max-error needs: not pyramids). Node k of that type is the
+ * cell's node tpk_cell_map_source_node(type, k) (a voxel's corners 2, 3 and 6, 7 swapped). */
+int tpk_cell_map_source_type(int type, int64_t n);
+int tpk_cell_map_source_node(int type, int k);
+
 /* The node of lattice point (i, j, k), i + j + k <= p, of an order-p Lagrange tetra (parametric point
  * (i, j, k) / p) in VTK 9's numbering (vtkHigherOrderTetra); the higher-order split uses it too. */
 int tpk_cell_map_lagrange_tet_node(int p, int i, int j, int k);
