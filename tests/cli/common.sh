@@ -58,6 +58,26 @@ convert_checked() {
     check_6xx "$2"
 }
 
+# bound_beats_plain NAME SOURCE PLAIN.tpk BOUND: SOURCE (two higher-order cells) converted with
+# --max-error BOUND; check --against (sampling the source cells through their own functions) samples both
+# cells, finds the recorded bound met and a sampled error within BOUND, where the plain split PLAIN.tpk's
+# is above it. NAME labels the failures.
+bound_beats_plain() {
+    local name=$1 source=$2 plain_tpk=$3 bound=$4 plain got
+    "$TPK" check "$plain_tpk" --against "$source" --samples 8 > "$WORK/plain.txt" ||
+        fail "$name: check --against of the plain split: $(cat "$WORK/plain.txt")"
+    convert_checked "$source" "$WORK/me.tpk" --max-error "$bound" 2> "$WORK/err" ||
+        fail "$name: convert --max-error $bound: $(cat "$WORK/err")"
+    "$TPK" check "$WORK/me.tpk" --against "$source" --samples 8 > "$WORK/against.txt" 2>&1 ||
+        fail "$name: check --against: $(cat "$WORK/against.txt")"
+    grep -q "in 2 source cells" "$WORK/against.txt" && grep -q "bound recorded in META: $bound: met" "$WORK/against.txt" ||
+        fail "$name: check --against did not sample both cells: $(cat "$WORK/against.txt")"
+    plain=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/plain.txt")
+    got=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/against.txt")
+    "$PY" -c "import sys; sys.exit(not ($got <= $bound < $plain))" ||
+        fail "$name: sampled error $got at --max-error $bound (plain split $plain)"
+}
+
 # keys OUT FILE.tpk... : into OUT, sorted tet keys (their 4 world positions, sorted) and outer-face keys of the
 # union of the files, through tetpack export --vtu and meshio.
 keys() {

@@ -47,18 +47,7 @@ EOF
     # split is off by more (0.017 and 0.0078)
     bound=0.001
     [ "$order" = 4 ] && bound=0.003
-    "$TPK" check "$WORK/lagrange$order.tpk" --against "$WORK/lagrange$order.vtu" --samples 8 > "$WORK/plain.txt" ||
-        fail "order $order: check --against of the plain split: $(cat "$WORK/plain.txt")"
-    convert_checked "$WORK/lagrange$order.vtu" "$WORK/me.tpk" --max-error $bound 2> "$WORK/err" ||
-        fail "order $order: convert --max-error $bound: $(cat "$WORK/err")"
-    "$TPK" check "$WORK/me.tpk" --against "$WORK/lagrange$order.vtu" --samples 8 > "$WORK/against.txt" 2>&1 ||
-        fail "order $order: check --against: $(cat "$WORK/against.txt")"
-    grep -q "in 2 source cells" "$WORK/against.txt" && grep -q "bound recorded in META: $bound: met" "$WORK/against.txt" ||
-        fail "order $order: check --against did not sample both cells: $(cat "$WORK/against.txt")"
-    plain=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/plain.txt")
-    got=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/against.txt")
-    "$PY" -c "import sys; sys.exit(not ($got <= $bound < $plain))" ||
-        fail "order $order: sampled error $got at --max-error $bound (plain split $plain)"
+    bound_beats_plain "order $order" "$WORK/lagrange$order.vtu" "$WORK/lagrange$order.tpk" $bound
 done
 # voxels (VTK type 11: corners 2, 3 and 6, 7 swapped against a hexahedron's), two sharing a face: bounded
 # as hexahedra, and check --against samples both through the same trilinear map (it skipped voxels, and

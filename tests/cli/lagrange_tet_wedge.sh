@@ -71,18 +71,7 @@ EOF2
         # (tetra 0.0050, 0.0016 and ORDER7, wedge 0.0025 and WEDGE4)
         bound=0.001 # the order-7 tetra's plain split is within it: a tighter bound there
         [ "$order" = 7 ] && bound=0.0003
-        "$TPK" check "$WORK/$kind$order.tpk" --against "$WORK/$kind$order.vtu" --samples 8 > "$WORK/plain.txt" ||
-            fail "$kind order $order: check --against of the plain split: $(cat "$WORK/plain.txt")"
-        convert_checked "$WORK/$kind$order.vtu" "$WORK/me.tpk" --max-error $bound 2> "$WORK/err" ||
-            fail "$kind order $order: convert --max-error $bound: $(cat "$WORK/err")"
-        "$TPK" check "$WORK/me.tpk" --against "$WORK/$kind$order.vtu" --samples 8 > "$WORK/against.txt" 2>&1 ||
-            fail "$kind order $order: check --against: $(cat "$WORK/against.txt")"
-        grep -q "in 2 source cells" "$WORK/against.txt" && grep -q "bound recorded in META: $bound: met" "$WORK/against.txt" ||
-            fail "$kind order $order: check --against did not sample both cells: $(cat "$WORK/against.txt")"
-        plain=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/plain.txt")
-        got=$(sed -n 's/.*max error \([^ ]*\) .*/\1/p' "$WORK/against.txt")
-        "$PY" -c "import sys; sys.exit(not ($got <= $bound < $plain))" ||
-            fail "$kind order $order: sampled error $got at --max-error $bound (plain split $plain)"
+        bound_beats_plain "$kind order $order" "$WORK/$kind$order.vtu" "$WORK/$kind$order.tpk" $bound
         continue
     fi
     # --max-error has no bound for these cells' functions yet: refused by name, nothing written
