@@ -4,6 +4,8 @@
 #ifndef TPK_TEST_SAME_MESH_H
 #define TPK_TEST_SAME_MESH_H
 
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -11,6 +13,24 @@
 #include "base/parallel.h"
 #include "mesh/mesh.h"
 #include "tetpack_format.h"
+
+/* The grid the importers' thread-count tests write (test_cgns.c, test_exodus.c): n^3 hexahedra over
+ * (n + 1)^3 points, each coordinate moved by 0.1 sin of another, so that no two cells are alike. Point v's
+ * position, and cell c's corners (0-based, in the hexahedron's order): */
+static inline void tpk_warped_grid_point(int64_t n, int64_t v, double p[3])
+{
+    int64_t i = v % (n + 1), j = v / (n + 1) % (n + 1), k = v / (n + 1) / (n + 1);
+    p[0] = (double)i + 0.1 * sin((double)j), p[1] = (double)j + 0.1 * sin((double)k);
+    p[2] = (double)k + 0.1 * sin((double)i);
+}
+
+static inline void tpk_warped_grid_cell(int64_t n, int64_t c, int64_t q[8])
+{
+    const int64_t row = n + 1, layer = row * row, b = c % n + row * (c / n % n) + layer * (c / n / n);
+    const int64_t corner[8] = {b, b + 1, b + 1 + row, b + row, b + layer, b + 1 + layer, b + 1 + row + layer,
+                               b + row + layer};
+    memcpy(q, corner, sizeof corner);
+}
 
 static inline int tpk_same_array(const void *a, const void *b, size_t bytes)
 {

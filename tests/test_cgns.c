@@ -619,13 +619,13 @@ static void write_hex_grid(const char *path, int n, int64_t bad, int mixed)
     double *y = x + nv, *z = x + 2 * nv;
     cgsize_t *conn = malloc(sizeof *conn * 8 * (size_t)nc);
     for (int64_t v = 0; v < nv; v++) {
-        int64_t i = v % (n + 1), j = v / (n + 1) % (n + 1), k = v / (n + 1) / (n + 1);
-        x[v] = (double)i + 0.1 * sin((double)j), y[v] = (double)j + 0.1 * sin((double)k), z[v] = (double)k + 0.1 * sin((double)i);
+        double p[3];
+        tpk_warped_grid_point(n, v, p);
+        x[v] = p[0], y[v] = p[1], z[v] = p[2];
     }
-    const int64_t row = n + 1, layer = row * row;
     for (int64_t c = 0; c < nc; c++) {
-        int64_t b = c % n + row * (c / n % n) + layer * (c / n / n);
-        const int64_t q[8] = {b, b + 1, b + 1 + row, b + row, b + layer, b + 1 + layer, b + 1 + row + layer, b + row + layer};
+        int64_t q[8];
+        tpk_warped_grid_cell(n, c, q);
         for (int h = 0; h < 8; h++)
             conn[8 * c + h] = (cgsize_t)q[h] + 1;
     }

@@ -280,14 +280,13 @@ static void write_hex_grid(const char *path, int n, int64_t bad_node, int64_t ba
     double *xyz = malloc(sizeof *xyz * 3 * (size_t)nv), *val = malloc(sizeof *val * (size_t)(nv > nc ? nv : nc));
     int *conn = malloc(sizeof *conn * 8 * (size_t)nc), *map = malloc(sizeof *map * (size_t)(nv > nc ? nv : nc));
     for (int64_t v = 0; v < nv; v++) {
-        int64_t i = v % (n + 1), j = v / (n + 1) % (n + 1), k = v / (n + 1) / (n + 1);
-        xyz[v] = (double)i + 0.1 * sin((double)j), xyz[nv + v] = (double)j + 0.1 * sin((double)k);
-        xyz[2 * nv + v] = (double)k + 0.1 * sin((double)i);
+        double p[3];
+        tpk_warped_grid_point(n, v, p);
+        xyz[v] = p[0], xyz[nv + v] = p[1], xyz[2 * nv + v] = p[2];
     }
-    const int64_t row = n + 1, layer = row * row;
     for (int64_t c = 0; c < nc; c++) {
-        int64_t b = c % n + row * (c / n % n) + layer * (c / n / n);
-        const int64_t q[8] = {b, b + 1, b + 1 + row, b + row, b + layer, b + 1 + layer, b + 1 + row + layer, b + row + layer};
+        int64_t q[8];
+        tpk_warped_grid_cell(n, c, q);
         for (int h = 0; h < 8; h++)
             conn[8 * c + h] = (int)q[h] + 1;
     }
