@@ -391,12 +391,9 @@ tpk_result tpki_recover_tets_neighbors(const tpk_mesh_arrays *mesh, int32_t *dst
 
 #define SPAN_BITS 65536 /* blocks whose intervals span at most this many ids check their vertices by bits */
 
-/* Is v in one of the sorted intervals [first, end) of iv[0 .. count)? *hint: the interval the last id was
- * in, tried first (a tet's ids and the next tet's mostly share a few runs: half the binary searches). */
-static int in_intervals(const int32_t *iv, int64_t count, int32_t v, int64_t *hint)
+/* Is v in one of the sorted intervals [first, end) of iv[0 .. count)? */
+static int in_intervals(const int32_t *iv, int64_t count, int32_t v)
 {
-    if (*hint < count && iv[2 * *hint] <= v && v < iv[2 * *hint + 1])
-        return 1;
     int64_t lo = 0, hi = count; /* the first interval whose end is above v */
     while (lo < hi) {
         int64_t mid = lo + (hi - lo) / 2;
@@ -405,7 +402,6 @@ static int in_intervals(const int32_t *iv, int64_t count, int32_t v, int64_t *hi
         else
             hi = mid;
     }
-    *hint = lo;
     return lo < count && iv[2 * lo] <= v;
 }
 
@@ -514,9 +510,8 @@ tpk_result tpk_recover_block(const tpk_mesh_arrays *mesh, const tpk_cull *cull, 
         }
         return rc;
     }
-    int64_t hint = 0;
     for (int64_t i = 0; rc == TPK_OK && i < 4 * (t1 - t0); i++)
-        if (!in_intervals(iv, iv_count, dst[i], &hint))
+        if (!in_intervals(iv, iv_count, dst[i]))
             rc = TPK_ERR_MESH;
     return rc;
 }
