@@ -66,11 +66,8 @@ static int load_step(const render_args *a, tpk_file *file, int tet_field, int st
         r = tpk_load_tet_field(file, a->field, (uint32_t)step, &opt->tet_scalars);
     }
     opt->cull = NULL;
-    if (r == TPK_OK && cull) {
-        r = tpk_load_cull(file, cull);
-        opt->cull = r == TPK_OK ? cull : NULL;
-        r = r == TPK_ERR_NOT_FOUND ? TPK_OK : r;
-    }
+    if (r == TPK_OK && cull)
+        r = tpk_render_use_cull(file, cull, opt);
     return r == TPK_OK ? 0 : tpk_cli_fail_file("render", a->path, tpk_error_text(file));
 }
 

@@ -260,6 +260,9 @@ int tpk_render_iso_dense(const tpk_mesh_arrays *mesh, const double *values, int 
 /* width 800, height 600, integration 0, threads all, background opaque dark gray (0.1, 0.1, 0.1, 1);
  * the camera, tf and range are left zero for the caller. */
 void tpk_render_options_default(tpk_render_options *opt);
+/* The file's culling blocks (spec §17) into *cull, and opt->cull = cull; opt->cull NULL when the file has
+ * none. TPK_OK, or tpk_load_cull's error for a CULL chunk it refuses (its message in the file). */
+tpk_result tpk_render_use_cull(tpk_file *file, tpk_cull *cull, tpk_render_options *opt);
 
 /* The lengths the effects use, as every backend resolves them from the options and the diagonal of the
  * stored positions' box (tpk_positions_diagonal): the unit distance (opt->unit_distance when positive

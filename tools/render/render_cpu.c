@@ -40,6 +40,13 @@ void tpk_render_options_default(tpk_render_options *opt)
     opt->background[3] = 1.0f;
 }
 
+tpk_result tpk_render_use_cull(tpk_file *file, tpk_cull *cull, tpk_render_options *opt)
+{
+    tpk_result r = tpk_load_cull(file, cull);
+    opt->cull = r == TPK_OK ? cull : NULL;
+    return r == TPK_ERR_NOT_FOUND ? TPK_OK : r;
+}
+
 /* ---- One primary ray: pieces, iso hits, lighting ----------------------------------------------- */
 
 static void point_at(const ray_state *ray, double t, double x[3])

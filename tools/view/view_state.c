@@ -62,11 +62,8 @@ static int load(view_state *s, tpk_diag *diag)
         r = tpk_load_tet_field(s->file, s->field, (uint32_t)s->step, &s->opt.tet_scalars);
     }
     s->opt.cull = NULL; /* culled iso frames walk only the blocks that may hold a value (render.h) */
-    if (r == TPK_OK) {
-        r = tpk_load_cull(s->file, &s->cull);
-        s->opt.cull = r == TPK_OK ? &s->cull : NULL;
-        r = r == TPK_ERR_NOT_FOUND ? TPK_OK : r;
-    }
+    if (r == TPK_OK)
+        r = tpk_render_use_cull(s->file, &s->cull, &s->opt);
     return r == TPK_OK ? 0 : tpk_diag_fail(diag, "%s: %s", s->path, tpk_error_text(s->file));
 }
 
