@@ -2,7 +2,8 @@
  * of a cell's parameter space each mapped type's functions are polynomials of the degree
  * tpk_cell_map_degree states (the Bernstein form fitted at the domain points reproduces them at random
  * points; one degree less does not), the bound is never below the error sampled densely, and a
- * function that is linear on the tet gets a bound at rounding level. */
+ * function that is linear on the tet gets a bound at rounding level. The rough bound by nonlinear
+ * monomials (tpk_cell_map_nonlinear) holds too. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -171,6 +172,102 @@ TPK_TEST(bound_holds)
             CHECK(gap < 50 * sampled + 1e-9); /* not absurdly loose either */
         }
     }
+}
+
+/* f(r) less the sum of its nonlinear monomials' terms, for node values `value`. */
+static double affine_part(int type, const double *value, const double *a, int count, const double r[3])
+{
+    double w[TPK_CELL_MAP_MAX_NODES], m[TPK_CELL_MAP_MAX_NONLINEAR], f = 0;
+    int n = tpk_cell_map_weights(type, r, w);
+    for (int k = 0; k < n; k++)
+        f += w[k] * value[k];
+    tpk_cell_map_nonlinear(type, r, m);
+    for (int q = 0; q < count; q++)
+        f -= a[q] * m[q];
+    return f;
+}
+
+TPK_TEST(nonlinear_monomials)
+{
+    /* convert --max-error's rough bound (refine.c rough_bound): on the hexahedron and the quadratic tetra,
+     * f less sum_q a_q m_q is affine, and on a tet whose corners are nodes, |f - L| stays within
+     * sum_q |a_q| max|m_q - L m_q|, the latter bounded through the Bernstein form as refine.c does */
+    unsigned seed = 11;
+    const int types[2] = {12, 24};
+    for (int i = 0; i < 2; i++) {
+        int type = types[i], n = tpk_cell_map_nodes(type);
+        const tpk_bernstein b = *table(tpk_cell_map_degree(type));
+        double origin[3] = {0, 0, 0}, m0[TPK_CELL_MAP_MAX_NONLINEAR];
+        int count = tpk_cell_map_nonlinear(type, origin, m0);
+        CHECK(count == (type == 12 ? 4 : 6) && count <= TPK_CELL_MAP_MAX_NONLINEAR);
+        int sets = 0;
+        for (int trial = 0; trial < 40; trial++) {
+            double value[TPK_CELL_MAP_MAX_NODES], xyz[TPK_CELL_MAP_MAX_NODES * 3], a[TPK_CELL_MAP_MAX_NONLINEAR],
+                a3[3 * TPK_CELL_MAP_MAX_NONLINEAR];
+            for (int k = 0; k < n; k++)
+                value[k] = 2 * uniform(&seed) - 1, xyz[3 * k] = uniform(&seed), xyz[3 * k + 1] = value[k],
+                xyz[3 * k + 2] = -value[k];
+            CHECK(tpk_cell_map_nonlinear_coefficients(type, value, 1, a) == count);
+            CHECK(tpk_cell_map_nonlinear_coefficients(type, xyz, 3, a3) == count);
+            for (int q = 0; q < count; q++)
+                CHECK(a3[3 * q + 1] == a[q] && a3[3 * q + 2] == -a[q]);
+            for (int s = 0; s < 20; s++) { /* affine: the midpoint's value is the mean of the ends' */
+                double x[3], y[3], mid[3];
+                reference_point(type, &seed, x);
+                reference_point(type, &seed, y);
+                for (int j = 0; j < 3; j++)
+                    mid[j] = 0.5 * (x[j] + y[j]);
+                double gap = affine_part(type, value, a, count, x) + affine_part(type, value, a, count, y) -
+                             2 * affine_part(type, value, a, count, mid);
+                CHECK(fabs(gap) < 1e-12);
+            }
+            int corner[4]; /* four distinct nodes */
+            for (int k = 0; k < 4; k++) {
+                int fresh;
+                do {
+                    corner[k] = (int)(uniform(&seed) * n) % n, fresh = 1;
+                    for (int j = 0; j < k; j++)
+                        fresh &= corner[j] != corner[k];
+                } while (!fresh);
+            }
+            double xi[4][3], cm[4][TPK_CELL_MAP_MAX_NONLINEAR], e[3][3], at[TPK_BERNSTEIN_MAX_POINTS][TPK_CELL_MAP_MAX_NONLINEAR];
+            for (int k = 0; k < 4; k++)
+                tpk_cell_map_node(type, corner[k], xi[k]), tpk_cell_map_nonlinear(type, xi[k], cm[k]);
+            for (int k = 0; k < 3; k++)
+                for (int j = 0; j < 3; j++)
+                    e[k][j] = xi[k + 1][j] - xi[0][j];
+            double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                         e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+            if (fabs(det) < 1e-9)
+                continue; /* flat in parameter space: no tet of a split */
+            sets++;
+            for (int p = 0; p < b.points; p++) {
+                double r[3] = {0, 0, 0};
+                for (int k = 0; k < 4; k++)
+                    for (int j = 0; j < 3; j++)
+                        r[j] += b.lambda[p][k] * xi[k][j];
+                tpk_cell_map_nonlinear(type, r, at[p]);
+            }
+            double bound = 0, sampled = 0, fc[4];
+            for (int q = 0; q < count; q++) {
+                double c[4] = {cm[0][q], cm[1][q], cm[2][q], cm[3][q]};
+                bound += fabs(a[q]) * tpk_bernstein_gap(&b, &at[0][q], TPK_CELL_MAP_MAX_NONLINEAR, c, 1);
+            }
+            for (int k = 0; k < 4; k++)
+                fc[k] = value[corner[k]];
+            for (int s = 0; s < 2000; s++) {
+                double lambda[4], linear = 0;
+                random_lambda(&seed, lambda);
+                for (int k = 0; k < 4; k++)
+                    linear += lambda[k] * fc[k];
+                sampled = fmax(sampled, fabs(cell_value(type, xi, value, lambda) - linear));
+            }
+            CHECK(sampled <= bound + 1e-12);
+        }
+        CHECK(sets > 10);
+    }
+    double r[3] = {0.2, 0.3, 0.1}, m[TPK_CELL_MAP_MAX_NONLINEAR], v[TPK_CELL_MAP_MAX_NODES] = {0};
+    CHECK(tpk_cell_map_nonlinear(13, r, m) == 0 && tpk_cell_map_nonlinear_coefficients(25, v, 1, m) == 0);
 }
 
 TPK_TEST(linear_is_exact)

@@ -170,6 +170,13 @@ typedef struct refine {
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
     int8_t *longest;       /* per tet: its greatest edge (tet_edges), found when it was last bounded */
     uint8_t *changed;      /* per tet: cut or made since the tets by vertex (`base`) were built */
+    uint8_t *rough;        /* per tet: bounded by rough_bound */
+    /* per type with tpk_cell_map_nonlinear (0: hexahedron, 1: quadratic tetra; NULL when no cell has it),
+     * per set of 4 nodes (bits in node order), per monomial: the Bernstein bound of the monomial less its
+     * linear interpolant on the tet of those 4 nodes' parametric points; -1 for sets of other sizes and
+     * flat tets */
+    double *departure[2];
+    int exact;             /* bound_tet: every tet through its Bernstein coefficients */
     int64_t changed_count;
     struct vertex_tets *base; /* the tets by vertex as they were when built (refine_pass) */
     int64_t base_vertices;    /* the vertices there were then */
@@ -445,6 +452,10 @@ typedef struct coef_cache {
     double node[TPK_CELL_MAP_MAX_NODES][3], largest;
     double *value, *big; /* per bounded slot: TPK_CELL_MAP_MAX_NODES values, their largest magnitude */
     uint8_t *finite;     /* per bounded slot: every value finite */
+    /* the magnitudes of the cell's tpk_cell_map_nonlinear_coefficients, of its map (Euclidean) and per
+     * bounded slot as filled (rough[s * TPK_CELL_MAP_MAX_NONLINEAR + q]); rough_count 0: none */
+    int rough_count;
+    double rough_geometry[TPK_CELL_MAP_MAX_NONLINEAR], *rough;
 } coef_cache;
 
 static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const double *inverse_t, int type,
@@ -506,45 +517,33 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const 
 }
 
 /* The Bernstein coefficients of f - L for `axes` (1 or 3) components: out[c][i] = -sum_k corner[k][c]
- * lambda_k(i) + sum_k node[k * stride + c] by_node[k m + i], each summed in that order (k ascending), two
- * domain points side by side (the numbers are those of one at a time). */
-static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const double (*corner)[3],
-                         const double *node, int stride, const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
+ * lambda_k(i) + sum_k node[k * stride + c] by_node[k m + i], each summed in that order (k ascending), four
+ * domain points side by side (the numbers are those of one at a time: no fused multiply-add, lanes
+ * apart). Built twice, and the processor picks at load time: 256-bit AVX2 where it has it, else SSE2
+ * pairs (the first bound of a million hexahedra's tets: 0.14 s in here on one core with pairs). */
+typedef double quad __attribute__((vector_size(4 * sizeof(double))));
+__attribute__((target_clones("avx2", "default"))) static void
+minus_linear(int m, int n, int axes, const tpk_bernstein *b, const double (*corner)[3], const double *node, int stride,
+             const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
 {
-    int even = m & ~1, quads = m & ~3;
+    int quads = m & ~3;
     for (int c = 0; c < axes; c++) {
-        for (int i = 0; i < quads; i += 4) { /* two pairs at once: two sums in flight */
-            pair acc = {0, 0}, acc2 = {0, 0}, x, y, y2;
+        for (int i = 0; i < quads; i += 4) {
+            quad acc = {0, 0, 0, 0}, x, y;
             for (int k = 0; k < 4; k++) {
                 memcpy(&y, b->lambda_by_corner[k] + i, sizeof y);
-                memcpy(&y2, b->lambda_by_corner[k] + i + 2, sizeof y2);
-                x = (pair){corner[k][c], corner[k][c]};
-                acc -= x * y, acc2 -= x * y2;
-            }
-            for (int k = 0; k < n; k++) {
-                memcpy(&y, by_node + k * m + i, sizeof y);
-                memcpy(&y2, by_node + k * m + i + 2, sizeof y2);
-                x = (pair){node[k * stride + c], node[k * stride + c]};
-                acc += x * y, acc2 += x * y2;
-            }
-            memcpy(out[c] + i, &acc, sizeof acc);
-            memcpy(out[c] + i + 2, &acc2, sizeof acc2);
-        }
-        for (int i = quads; i < even; i += 2) {
-            pair acc = {0, 0}, x, y;
-            for (int k = 0; k < 4; k++) {
-                memcpy(&y, b->lambda_by_corner[k] + i, sizeof y);
-                x = (pair){corner[k][c], corner[k][c]};
+                x = (quad){corner[k][c], corner[k][c], corner[k][c], corner[k][c]};
                 acc -= x * y;
             }
             for (int k = 0; k < n; k++) {
                 memcpy(&y, by_node + k * m + i, sizeof y);
-                x = (pair){node[k * stride + c], node[k * stride + c]};
+                double v = node[k * stride + c];
+                x = (quad){v, v, v, v};
                 acc += x * y;
             }
             memcpy(out[c] + i, &acc, sizeof acc);
         }
-        for (int i = even; i < m; i++) {
+        for (int i = quads; i < m; i++) {
             double acc = 0;
             for (int k = 0; k < 4; k++)
                 acc -= corner[k][c] * b->lambda_by_corner[k][i];
@@ -553,6 +552,97 @@ static void minus_linear(int m, int n, int axes, const tpk_bernstein *b, const d
             out[c][i] = acc;
         }
     }
+}
+
+/* Slot s's values at the cell's nodes, their largest magnitude, whether all are finite, and the
+ * magnitudes of their tpk_cell_map_nonlinear_coefficients, when first met (slots are met in order). */
+static void fill_slot(const refine *r, coef_cache *cache, int s)
+{
+    if (s != cache->filled)
+        return;
+    int finite = 1, n = tpk_cell_map_nodes(cache->cell_type);
+    double big = 0, *value = cache->value + (int64_t)s * TPK_CELL_MAP_MAX_NODES;
+    for (int k = 0; k < n; k++) {
+        finite &= isfinite(value[k] = value_of(r, cache->verts[k], r->bound_slot[s]));
+        big = fabs(value[k]) > big ? fabs(value[k]) : big;
+    }
+    cache->big[s] = big, cache->finite[s] = (uint8_t)finite, cache->filled++;
+    double a[TPK_CELL_MAP_MAX_NONLINEAR];
+    for (int q = 0, count = tpk_cell_map_nonlinear_coefficients(cache->cell_type, value, 1, a); q < count; q++)
+        cache->rough[s * TPK_CELL_MAP_MAX_NONLINEAR + q] = fabs(a[q]);
+}
+
+/* The margin for the rounding of the rough bound of numbers up to `big`: the coefficients' sums of at
+ * most 8 terms of integer weights up to 4, times departures up to 1, summed over at most 6 monomials,
+ * err by under 1e-13 of big. */
+#define ROUGH_MARGIN 1e-12
+
+/* Tet t bounded roughly, when its corners are nodes of its cell (its linear interpolants are then those
+ * of the cell's functions at the tet's parametric corners), by sum_q |a_q| departure_q over the cell's
+ * nonlinear monomials (tpk_cell_map_nonlinear), and when that meets the criterion; 0, with nothing
+ * written, otherwise. Most tets of a first split are far under the bound: the first bound of a million
+ * hexahedra's tets at 1% took 0.29 s of one core through Bernstein coefficients, 0.12 s so (bench/README). */
+static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4][3])
+{
+    const int32_t *tv = r->tets + 4 * t;
+    int n = tpk_cell_map_nodes(cache->cell_type), count = cache->rough_count, set = 0;
+    for (int k = 0; k < 4; k++) {
+        int j = 0;
+        while (j < n && cache->verts[j] != tv[k])
+            j++;
+        if (j == n)
+            return 0;
+        set |= 1 << j;
+    }
+    const double *departure = r->departure[cache->cell_type == 24] + (int64_t)set * count;
+    if (!(departure[0] >= 0))
+        return 0;
+    double geometry = ROUGH_MARGIN * cache->largest;
+    for (int q = 0; q < count; q++)
+        geometry += cache->rough_geometry[q] * departure[q];
+    double limit = r->o->max_error;
+    double crit = geometry / r->diag_length, worst = 0, e[3][3], g[3][3];
+    if (!(crit <= limit))
+        return 0;
+    for (int k = 0; k < 3; k++) /* the barycentric gradients (as barycentric_gradients, by 1 / det: the
+                                 * gradient only carries the geometry's bound to the field's) */
+        for (int i = 0; i < 3; i++)
+            e[k][i] = p[k + 1][i] - p[0][i];
+    for (int k = 0; k < 3; k++) {
+        const double *a = e[(k + 1) % 3], *b = e[(k + 2) % 3];
+        g[k][0] = a[1] * b[2] - a[2] * b[1], g[k][1] = a[2] * b[0] - a[0] * b[2], g[k][2] = a[0] * b[1] - a[1] * b[0];
+    }
+    double det = e[0][0] * g[0][0] + e[0][1] * g[0][1] + e[0][2] * g[0][2], inverse = 1 / det;
+    int flat = !(fabs(det) > 0), worst_slot = -1;
+    for (int k = 0; k < 3 && !flat; k++)
+        for (int i = 0; i < 3; i++)
+            g[k][i] *= inverse;
+    for (int s = 0; s < r->bounded; s++) {
+        fill_slot(r, cache, s);
+        if (!cache->finite[s])
+            continue; /* as bound_tet: no bound for missing values */
+        double v[4], grad[3] = {0, 0, 0};
+        double gap = ROUGH_MARGIN * cache->big[s];
+        for (int q = 0; q < count; q++)
+            gap += cache->rough[s * TPK_CELL_MAP_MAX_NONLINEAR + q] * departure[q];
+        gap /= r->bound_range[s];
+        for (int k = 0; k < 4; k++)
+            v[k] = value_of(r, tv[k], r->bound_slot[s]);
+        for (int k = 0; k < 3 && !flat; k++)
+            for (int j = 0; j < 3; j++)
+                grad[j] += (v[k + 1] - v[0]) * g[k][j];
+        double located = gap + sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * geometry /
+                                   r->bound_range[s];
+        if (gap > worst || worst_slot < 0)
+            worst = gap, worst_slot = s;
+        double c = flat ? gap : located;
+        crit = c > crit ? c : crit;
+        if (!(crit <= limit))
+            return 0;
+    }
+    r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
+    r->criterion[t] = crit, r->worst_slot[t] = worst_slot, r->rough[t] = 1;
+    return 1;
 }
 
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
@@ -565,19 +655,25 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             for (int j = 0; j < 3; j++)
                 cache->largest = fabs(cache->node[k][j]) > cache->largest ? fabs(cache->node[k][j]) : cache->largest;
         }
+        double a[3 * TPK_CELL_MAP_MAX_NONLINEAR];
+        cache->rough_count = tpk_cell_map_nonlinear_coefficients(cache->cell_type, cache->node[0], 3, a);
+        for (int q = 0; q < cache->rough_count; q++)
+            cache->rough_geometry[q] = sqrt(a[3 * q] * a[3 * q] + a[3 * q + 1] * a[3 * q + 1] + a[3 * q + 2] * a[3 * q + 2]);
     }
     int type = cache->cell_type, degree = tpk_cell_map_degree(type);
     r->field_error[t] = r->geometry_error[t] = r->criterion[t] = 0;
-    r->worst_slot[t] = -1;
+    r->worst_slot[t] = -1, r->rough[t] = 0;
     if (degree <= 1)
         return; /* a tet of a tetra: exactly its own interpolant */
     const tpk_bernstein *b = &r->table[degree];
     const double *xi = r->xi + 12 * t;
-    const int32_t *tv = r->tets + 4 * t, *verts = cache->verts;
+    const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(type), m = b->points, direct = degree > DIRECT_DEGREE;
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
+    if (!r->exact && cache->rough_count && rough_bound(r, t, cache, (const double (*)[3])p))
+        return;
     const double *by_node = NULL;
     double value_margin = 0; /* direct: the rounding of the values at the domain points, through the inverse */
     if (direct) { /* the cell's map at the domain points, then the inverse */
@@ -615,15 +711,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         int slot = r->bound_slot[s];
         double v[4], grad[3] = {0, 0, 0}, gap = 0, cv[4][3];
         double *value = cache->value + (int64_t)s * TPK_CELL_MAP_MAX_NODES;
-        if (s == cache->filled) { /* the cell's values of this slot, first met */
-            int finite = 1;
-            double big = 0;
-            for (int k = 0; k < n; k++) {
-                finite &= isfinite(value[k] = value_of(r, verts[k], slot));
-                big = fabs(value[k]) > big ? fabs(value[k]) : big;
-            }
-            cache->big[s] = big, cache->finite[s] = (uint8_t)finite, cache->filled++;
-        }
+        fill_slot(r, cache, s);
         int finite = cache->finite[s];
         for (int k = 0; k < 4; k++)
             finite &= isfinite(v[k] = cv[k][0] = value_of(r, tv[k], slot));
@@ -704,7 +792,7 @@ static int reserve_tets(refine *r, int64_t need)
         grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
         grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
         grow((void **)&r->marked, sizeof *r->marked, cap) || grow((void **)&r->longest, sizeof *r->longest, cap) ||
-        grow((void **)&r->changed, sizeof *r->changed, cap) ||
+        grow((void **)&r->changed, sizeof *r->changed, cap) || grow((void **)&r->rough, sizeof *r->rough, cap) ||
         grow((void **)&r->todo, sizeof *r->todo, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
@@ -1258,16 +1346,69 @@ static void release(refine *r, int threads)
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
-    free(r->longest), free(r->changed);
+    free(r->longest), free(r->changed), free(r->rough);
     if (r->base)
         free(r->base->start), free(r->base->tets), free(r->base);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
-            free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite);
-    free(r->cache);
+            free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite), free(r->cache[w].rough);
+    free(r->cache), free(r->departure[0]), free(r->departure[1]);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
         free(r->inverse_t[n]), tpk_bernstein_free(&r->table[n]);
+}
+
+/* r->departure for the types the cells have: each set of 4 nodes' tet in parameter space, each
+ * monomial's values at the domain points and the corners, through tpk_bernstein_gap (its margin
+ * included; the monomials' own rounding, a few units in the last place of numbers up to 1, is under
+ * ROUGH_MARGIN). 256 + 1024 sets, made in about a millisecond. */
+static int make_departures(refine *r)
+{
+    for (int which = 0; which < 2; which++) {
+        int type = which ? 24 : 12, degree = tpk_cell_map_degree(type), n = tpk_cell_map_nodes(type), used = 0;
+        for (int64_t c = 0; c < r->cells->cell_count && !used; c++)
+            used = r->cell_type[c] == type;
+        if (!used)
+            continue;
+        double probe[TPK_CELL_MAP_MAX_NONLINEAR], origin[3] = {0, 0, 0};
+        int count = tpk_cell_map_nonlinear(type, origin, probe);
+        const tpk_bernstein *b = &r->table[degree];
+        double *d = r->departure[which] = malloc(sizeof *d * (size_t)count << n);
+        if (!d)
+            return -1;
+        for (int set = 0; set < 1 << n; set++) {
+            double *out = d + (int64_t)set * count, xi[4][3], e[3][3];
+            int k = 0;
+            for (int j = 0; j < n; j++)
+                if (set >> j & 1 && k < 4)
+                    tpk_cell_map_node(type, j, xi[k++]);
+            out[0] = -1;
+            if (k != 4 || __builtin_popcount((unsigned)set) != 4)
+                continue;
+            for (int a = 0; a < 3; a++)
+                for (int i = 0; i < 3; i++)
+                    e[a][i] = xi[a + 1][i] - xi[0][i];
+            double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                         e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) + e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+            if (!(fabs(det) > 1e-9))
+                continue; /* a flat tet of parameter space: no tet of a split */
+            double corner[4][TPK_CELL_MAP_MAX_NONLINEAR], at[TPK_BERNSTEIN_MAX_POINTS][TPK_CELL_MAP_MAX_NONLINEAR];
+            for (k = 0; k < 4; k++)
+                tpk_cell_map_nonlinear(type, xi[k], corner[k]);
+            for (int i = 0; i < b->points; i++) {
+                double x[3] = {0, 0, 0};
+                for (k = 0; k < 4; k++)
+                    for (int a = 0; a < 3; a++)
+                        x[a] += b->lambda[i][k] * xi[k][a];
+                tpk_cell_map_nonlinear(type, x, at[i]);
+            }
+            for (int q = 0; q < count; q++) {
+                double c[4] = {corner[0][q], corner[1][q], corner[2][q], corner[3][q]};
+                out[q] = tpk_bernstein_gap(b, &at[0][q], TPK_CELL_MAP_MAX_NONLINEAR, c, 1) + ROUGH_MARGIN;
+            }
+        }
+    }
+    return 0;
 }
 
 static int set_up(refine *r, int threads)
@@ -1313,6 +1454,8 @@ static int set_up(refine *r, int threads)
             for (int j = 0; j < p; j++)
                 r->inverse_t[n][j * p + i] = r->table[n].inverse[i * p + j];
     }
+    if (make_departures(r) != 0)
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
     if (reserve_tets(r, m->tet_count) != 0)
         return -1;
     r->count = m->tet_count;
@@ -1343,10 +1486,31 @@ static int set_up(refine *r, int threads)
         cc->value = malloc(sizeof *cc->value * TPK_CELL_MAP_MAX_NODES * (size_t)(r->bounded ? r->bounded : 1));
         cc->big = malloc(sizeof *cc->big * (size_t)(r->bounded ? r->bounded : 1));
         cc->finite = malloc((size_t)(r->bounded ? r->bounded : 1));
-        if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite)
+        cc->rough = malloc(sizeof *cc->rough * TPK_CELL_MAP_MAX_NONLINEAR * (size_t)(r->bounded ? r->bounded : 1));
+        if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite || !cc->rough)
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
     }
     return place_corners(r, threads);
+}
+
+/* The tets bounded roughly (rough_bound) whose rough bound exceeds the largest Bernstein bound of the
+ * others, in field or geometry, bounded again through their Bernstein coefficients: so the largest bound
+ * reported is that of the Bernstein bounds (or smaller, where a rough one is smaller), as before the
+ * rough ones, and the same for any thread count. */
+static void exact_where_it_shows(refine *r)
+{
+    double field = -1, geometry = -1;
+    for (int64_t t = 0; t < r->count; t++)
+        if (!r->rough[t]) {
+            field = r->field_error[t] > field ? r->field_error[t] : field;
+            geometry = r->geometry_error[t] > geometry ? r->geometry_error[t] : geometry;
+        }
+    r->todo_count = 0;
+    for (int64_t t = 0; t < r->count; t++)
+        if (r->rough[t] && (r->field_error[t] > field || r->geometry_error[t] > geometry))
+            r->todo[r->todo_count++] = t;
+    r->exact = 1;
+    tpk_parallel_for(r->todo_count, tpk_threads_for(r->todo_count, r->threads, 1024), bound_range, r);
 }
 
 int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const tpk_refine_options *options,
@@ -1368,6 +1532,7 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
     report->tets_before = mesh->tet_count;
     int threads = tpk_thread_count(o.threads), rc = set_up(&r, threads);
     r.threads = threads;
+    r.exact = o.uniform_levels > 0; /* --subdivide reports its tets' bounds, however small */
     for (int level = 0; rc == 0 && level < o.uniform_levels; level++)
         rc = cut_all(&r);
     for (int pass = 0; rc == 0; pass++) {
@@ -1385,6 +1550,8 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
         }
         rc = refine_pass(&r, o.max_error);
     }
+    if (rc == 0)
+        exact_where_it_shows(&r);
     if (rc == 0) {
         int worst = -1;
         for (int64_t t = 0; t < r.count; t++) {

@@ -574,3 +574,48 @@ int tpk_cell_map_point(int type, const int32_t *nodes, const double *points, con
             x[i] += w[k] * points[3 * (int64_t)nodes[k] + i];
     return 0;
 }
+
+int tpk_cell_map_nonlinear(int type, const double r[3], double *m)
+{
+    if (type == 12) {
+        m[0] = r[0] * r[1], m[1] = r[1] * r[2], m[2] = r[2] * r[0], m[3] = r[0] * r[1] * r[2];
+        return 4;
+    }
+    if (type == 24) {
+        const double L[4] = {1 - r[0] - r[1] - r[2], r[0], r[1], r[2]};
+        const node_table *t = table_of(24);
+        for (int e = 0; e < 6; e++)
+            m[e] = L[t->edges[e][0]] * L[t->edges[e][1]];
+        return 6;
+    }
+    return 0;
+}
+
+int tpk_cell_map_nonlinear_coefficients(int type, const double *v, int comps, double *a)
+{
+    if (type == 12) { /* corner (a, b, c)'s function is prod (1 - a + (2a - 1) x), corners in VTK's order */
+        static const signed char coefficient[4][8] = {
+            {1, -1, 1, -1, 0, 0, 0, 0},   /* xy: (2a - 1)(2b - 1)(1 - c) */
+            {1, 0, 0, -1, -1, 0, 0, 1},   /* yz: (2b - 1)(2c - 1)(1 - a) */
+            {1, -1, 0, 0, -1, 1, 0, 0},   /* zx: (2c - 1)(2a - 1)(1 - b) */
+            {-1, 1, -1, 1, 1, -1, 1, -1}, /* xyz: (2a - 1)(2b - 1)(2c - 1) */
+        };
+        for (int q = 0; q < 4; q++)
+            for (int c = 0; c < comps; c++) {
+                double sum = 0;
+                for (int k = 0; k < 8; k++)
+                    sum += coefficient[q][k] * v[k * comps + c];
+                a[q * comps + c] = sum;
+            }
+        return 4;
+    }
+    if (type == 24) {
+        const node_table *t = table_of(24);
+        for (int e = 0; e < 6; e++)
+            for (int c = 0; c < comps; c++)
+                a[e * comps + c] = 4 * v[(4 + e) * comps + c] - 2 * v[t->edges[e][0] * comps + c] -
+                                   2 * v[t->edges[e][1] * comps + c];
+        return 6;
+    }
+    return 0;
+}

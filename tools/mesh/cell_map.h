@@ -87,6 +87,17 @@ void tpk_cell_map_node(int type, int k, double r[3]);
  * (l_i(r) = prod_{q != i} (p r - q) / (i - q)). */
 int tpk_cell_map_weights(int type, const double r[3], double *w);
 
+/* The nonlinear monomials of the type's functions, so that every interpolant f of node values is an
+ * affine function of the parametric coordinates plus sum_q a_q m_q: hexahedron (12) xy, yz, zx, xyz;
+ * quadratic tetra (24) L_i L_j for its 6 edges (i, j) in node order (f = affine + sum (4 f_ij - 2 f_i -
+ * 2 f_j) L_i L_j, with L the barycentric coordinates). tpk_cell_map_nonlinear writes the monomials' values
+ * at r into m, tpk_cell_map_nonlinear_coefficients the a_q of node values v (comps numbers a node, node
+ * k's at v + k * comps) into a (a[q * comps + c]); both return the count (4, 6), or 0 for other types.
+ * convert --max-error bounds f - L on a tet whose corners are nodes by sum_q |a_q| max|m_q - L m_q|. */
+#define TPK_CELL_MAP_MAX_NONLINEAR 6
+int tpk_cell_map_nonlinear(int type, const double r[3], double *m);
+int tpk_cell_map_nonlinear_coefficients(int type, const double *v, int comps, double *a);
+
 /* The point the cell with nodes `nodes` (ids into `points`, 3 doubles each) maps r to: sum w[k] x_k in
  * node order. Returns 0, or -1 as tpk_cell_map_weights. */
 int tpk_cell_map_point(int type, const int32_t *nodes, const double *points, const double r[3], double x[3]);
