@@ -157,6 +157,7 @@ typedef struct refine {
     int64_t tets_given;
     int32_t *tets, *cell;
     double *xi;            /* 12 per tet: its corners' parametric points in its cell */
+    uint8_t *xi_later;     /* per tet: its corners are nodes, their points not written yet (ensure_xi) */
     int64_t *root;         /* the given tet each comes from (cell fields) */
     double *field_error, *geometry_error, *criterion;
     int *worst_slot;
@@ -343,19 +344,57 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
                 tpk_cell_map_node(type, j, nodes[j]);
             nodes_of = type;
         }
+        int node[4];
         for (int k = 0; k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
-            double *xi = r->xi + 12 * t + 3 * k;
-            int node = -1;
-            for (int j = 0; j < n && node < 0; j++)
+            node[k] = -1;
+            for (int j = 0; j < n && node[k] < 0; j++)
                 if (verts[j] == v)
-                    node = j;
-            if (node >= 0)
-                memcpy(xi, nodes[node], sizeof nodes[node]);
-            else if (invert_map(r, type, verts, point_of(r, v), xi) != 0)
+                    node[k] = j;
+        }
+        /* corners that are all nodes: their points are those of the nodes, written when first read (most
+         * such tets are bounded roughly and never read them: 96 bytes a tet of fresh memory spared) */
+        r->xi_later[t] = node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0;
+        for (int k = 0; k < 4 && !r->xi_later[t]; k++) {
+            double *xi = r->xi + 12 * t + 3 * k;
+            if (node[k] >= 0)
+                memcpy(xi, nodes[node[k]], sizeof nodes[node[k]]);
+            else if (invert_map(r, type, verts, point_of(r, r->tets[4 * t + k]), xi) != 0)
                 job->failed[t] = 2;
         }
     }
+}
+
+/* Tet t's corners' parametric points written, when corner_range left them for later. */
+static void ensure_xi(refine *r, int64_t t)
+{
+    if (!r->xi_later[t])
+        return;
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    int type = cell_nodes(r, r->cell[t], verts), n = tpk_cell_map_nodes(type);
+    for (int k = 0; k < 4; k++) {
+        int j = 0;
+        while (j < n && verts[j] != r->tets[4 * t + k])
+            j++; /* found: corner_range found every corner among the nodes */
+        tpk_cell_map_node(type, j, r->xi + 12 * t + 3 * k);
+    }
+    r->xi_later[t] = 0;
+}
+
+static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    refine *r = ((void **)ctx)[0];
+    const int64_t *tets = ((void **)ctx)[1];
+    (void)w;
+    for (int64_t i = begin; i < end; i++)
+        ensure_xi(r, tets ? tets[i] : i);
+}
+
+/* ensure_xi for the `count` tets listed (all tets 0 .. count when NULL), on all threads. */
+static void ensure_xi_all(refine *r, const int64_t *tets, int64_t count)
+{
+    void *ctx[2] = {r, (void *)tets};
+    tpk_parallel_for(count, tpk_threads_for(count, r->threads, 4096), ensure_xi_range, ctx);
 }
 
 static int place_corners(refine *r, int threads)
@@ -674,6 +713,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
     if (!r->exact && cache->rough_count && rough_bound(r, t, cache, (const double (*)[3])p))
         return;
+    ensure_xi(r, t);
     const double *by_node = NULL;
     double value_margin = 0; /* direct: the rounding of the values at the domain points, through the inverse */
     if (direct) { /* the cell's map at the domain points, then the inverse */
@@ -786,7 +826,8 @@ static int reserve_tets(refine *r, int64_t need)
         return 0;
     int64_t cap = need + need / 2 + 1024;
     if (grow((void **)&r->tets, 4 * sizeof *r->tets, cap) || grow((void **)&r->cell, sizeof *r->cell, cap) ||
-        grow((void **)&r->xi, 12 * sizeof *r->xi, cap) || grow((void **)&r->root, sizeof *r->root, cap) ||
+        grow((void **)&r->xi, 12 * sizeof *r->xi, cap) || grow((void **)&r->xi_later, sizeof *r->xi_later, cap) ||
+        grow((void **)&r->root, sizeof *r->root, cap) ||
         grow((void **)&r->field_error, sizeof *r->field_error, cap) ||
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
         grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
@@ -867,6 +908,7 @@ static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
     int i = tet_edges[e][0], j = tet_edges[e][1];
     int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
     double *xa = r->xi + 12 * t, *xb = r->xi + 12 * u, half[3];
+    r->xi_later[u] = 0; /* t's were written before the rounds (cut_marked) */
     int parent = sign_of(r, a);
     memcpy(b, a, 4 * sizeof *a);
     memcpy(xb, xa, 12 * sizeof *xa);
@@ -953,6 +995,7 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
     memcpy(r->todo, active, sizeof *active * (size_t)active_count);
     r->todo_count = active_count;
     int64_t first_new = r->count;
+    ensure_xi_all(r, active, active_count); /* the tets cut read their corners' points */
     if (round_grow(&job, active_count + 1) != 0)
         rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
     while (rc == 0 && active_count > 0) {
@@ -1031,6 +1074,7 @@ static int cut_all(refine *r)
     if (reserve_tets(r, 8 * n) != 0)
         return -1;
     edge_clear(&r->mids); /* the edges of the last level are all cut: no tet has one */
+    ensure_xi_all(r, NULL, n);
     for (int64_t t = 0; t < n; t++) {
         int32_t v[10];
         double x[10][3];
@@ -1069,6 +1113,7 @@ static int cut_all(refine *r)
             int64_t u = c == 0 ? t : r->count++;
             for (int k = 0; k < 4; k++)
                 r->tets[4 * u + k] = v[l[k]], memcpy(r->xi + 12 * u + 3 * k, x[l[k]], sizeof x[0]);
+            r->xi_later[u] = 0;
             r->cell[u] = (int32_t)cell, r->root[u] = root, r->marked[u] = 0;
             if (parent != 0 && sign_of(r, r->tets + 4 * u) != parent)
                 return tpk_diag_fail(r->diag, "--subdivide: cell %lld (a %s) folds when subdivided: a piece cut at its "
@@ -1346,7 +1391,7 @@ static void release(refine *r, int threads)
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
-    free(r->longest), free(r->changed), free(r->rough);
+    free(r->longest), free(r->changed), free(r->rough), free(r->xi_later);
     if (r->base)
         free(r->base->start), free(r->base->tets), free(r->base);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
