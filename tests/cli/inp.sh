@@ -125,6 +125,13 @@ convert_checked "$WORK/a27.inp" "$WORK/a27_me.tpk" --max-error 0.001 --json > "$
 "$TPK" check "$WORK/a27_me.tpk" --against "$WORK/a27.inp" --samples 8 > "$WORK/against.txt" 2>&1 ||
     fail "check --against a27.inp (--max-error 0.001): $(cat "$WORK/against.txt")"
 grep -q "bound recorded in META: 0.001: met" "$WORK/against.txt" || fail "a27.inp --max-error 0.001: $(cat "$WORK/against.txt")"
+# gmsh writes its 18-node prisms (order 2, complete) under TYPE=C3D6, 18 node ids each: refused at the
+# first such element, by its line, not read as three elements' worth of wrong ones.
+gmsh -3 -nt 1 -order 2 "$SRC/tests/cli/hexprism.geo" -format inp -o "$WORK/hp.inp" > "$WORK/gmsh.log" 2>&1 ||
+    { tail "$WORK/gmsh.log"; fail "gmsh failed (hexprism)"; }
+expect_exit 2 "$TPK" convert "$WORK/hp.inp" "$WORK/hp.tpk"
+expect_stderr "hp.inp:[0-9]*: element [0-9]* (C3D6): expected 6 node ids, found 15 or more"
+[ ! -e "$WORK/hp.tpk" ] || fail "hp.inp: a refused conversion left a file"
 # A C3D27 with a face node left out (0: the manual's 21-node minimum is the C3D20's and the centroid) is
 # read as its C3D20, and says so: a one-element unit cube with its 27 lattice nodes, node 27 left out.
 "$PY" - "$WORK/c3d27.inp" <<'PYEOF'

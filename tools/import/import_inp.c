@@ -294,11 +294,15 @@ static int add_element(inp_reader *r, tpk_scan *s, inp_block *b)
     return 0;
 }
 
-/* Element data: an id then the nodes, over as many lines as it takes. */
+/* Element data: an id then the nodes, over as many lines as it takes; each element starts a line. */
 static int read_element_line(inp_reader *r, tpk_scan *s, inp_block *b, const char **field, const size_t *flen,
                              int n)
 {
     for (int i = 0; i < n; i++) {
+        if (b->filled == 0 && i > 0) /* values left on the line of a complete element */
+            return tpk_scan_fail(s, "element %lld (%s): expected %d node ids, found %d or more (each element "
+                                    "starts a data line; is the element of another type than its *ELEMENT says?)",
+                                 (long long)b->record[0], b->type_name, b->nodes, b->nodes + n - i);
         if (b->filled == 0) {
             b->record_pos = s->tok_pos;
             b->record_line = s->tok_line;
