@@ -825,7 +825,10 @@ TPK_TEST(gmsh_orders)
         }
 }
 
-/* ---- Abaqus / CalculiX: the Abaqus manual's C3D10, C3D15, C3D20 (corners, then edges) ---------------- */
+/* ---- Abaqus / CalculiX: the Abaqus manual's C3D10, C3D15, C3D20 (corners, then edges); C3D27 (a "21 to
+ * 27-node brick": the C3D20's nodes, the centroid (node 21, the one node of the 21 it needs beyond the
+ * C3D20's), then the centres of faces 1-6 (1234, 5876, 1562, 2673, 3784, 4851; the manual's face
+ * numbering), as gmsh's .inp writer lists them) ---- */
 
 static const node_order inp_c3d10 = {"C3D10", 10, 10, 6, 0, 0, {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}}, {{0}}};
 static const node_order inp_c3d15 = {"C3D15", 15, 13, 9, 0, 0,
@@ -833,17 +836,21 @@ static const node_order inp_c3d15 = {"C3D15", 15, 13, 9, 0, 0,
 static const node_order inp_c3d20 = {"C3D20R", 20, 12, 12, 0, 0,
                                      {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5},
                                       {2, 6}, {3, 7}}, {{0}}};
+static const node_order inp_c3d27 = {"C3D27", 27, 12, 12, 6, 2,
+                                     {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5},
+                                      {2, 6}, {3, 7}},
+                                     {{0, 1, 2, 3}, {4, 7, 6, 5}, {0, 4, 5, 1}, {1, 5, 6, 2}, {2, 6, 7, 3}, {3, 7, 4, 0}}};
 
 TPK_TEST(inp_orders)
 {
-    const node_order *orders[] = {&inp_c3d10, &inp_c3d15, &inp_c3d20};
+    const node_order *orders[] = {&inp_c3d10, &inp_c3d15, &inp_c3d20, &inp_c3d27};
     for (int curved = 0; curved < 2; curved++) {
         size_t cap = 1 << 15, at = 0;
         char *text = malloc(cap);
-        int ns[3], first = 1;
-        double r[3][27][3];
+        int ns[4], first = 1;
+        double r[4][27][3];
         at += (size_t)snprintf(text + at, cap - at, "*NODE\n");
-        for (int c = 0, id = 1; c < 3; c++) {
+        for (int c = 0, id = 1; c < 4; c++) {
             ns[c] = order_nodes(orders[c], r[c]);
             for (int k = 0; k < ns[c]; k++, id++) {
                 double x[3];
@@ -851,7 +858,7 @@ TPK_TEST(inp_orders)
                 at += (size_t)snprintf(text + at, cap - at, "%d, %.17g, %.17g, %.17g\n", id, x[0], x[1], x[2]);
             }
         }
-        for (int c = 0; c < 3; first += ns[c], c++) {
+        for (int c = 0; c < 4; first += ns[c], c++) {
             at += (size_t)snprintf(text + at, cap - at, "*ELEMENT, TYPE=%s\n%d", orders[c]->name, c + 1);
             for (int k = 0; k < ns[c]; k++)
                 at += (size_t)snprintf(text + at, cap - at, ",%s%d", k % 10 == 9 ? "\n" : " ", first + k);
@@ -862,6 +869,8 @@ TPK_TEST(inp_orders)
         quiet(&d);
         CHECK_MSG(tpk_import_inp_memory("whole.inp", text, at, &m, &d) == 0, "%s", d.message);
         free(text);
+        /* the C3D27 whole, as VTK's triquadratic hexahedron */
+        CHECK(m.cell_count == 4 && m.cell_types[3] == 29 && m.cell_offsets[4] - m.cell_offsets[3] == 27);
         /* .inp carries no point field: the field is made here from the points read */
         float *f = malloc(sizeof *f * (size_t)m.point_count);
         for (int64_t p = 0; p < m.point_count; p++)

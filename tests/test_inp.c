@@ -184,6 +184,11 @@ TPK_TEST(bad_input)
                    "expected 4 node ids, found 2 before the end of the file");
     expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 9\n", "bad.inp:",
                    "element 1 uses node 9, which no *NODE line defines");
+    /* one element per data line: values after a complete one (gmsh writes its 18-node prisms as C3D6) */
+    expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4, 2, 3\n", "bad.inp:7:",
+                   "element 1 (C3D4): expected 4 node ids, found 6 or more (each element starts a data line");
+    expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2,\n3, 4, 2\n", "bad.inp:8:",
+                   "element 1 (C3D4): expected 4 node ids, found 5 or more");
     expect_failure(TET_NODES "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, four\n", "bad.inp:7:",
                    "expected a node id (an integer), found 'four'");
     expect_failure("*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n", "bad.inp:", "element 1 uses node 1, which no *NODE line defines");

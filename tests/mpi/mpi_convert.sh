@@ -141,4 +141,10 @@ expect_stderr "found .*mesh.e.2.\* and .*mesh.e.4.\*"
 expect_exit 2 mpi 2 convert "$WORK/cylinder_np4/in_0.vtu" "$WORK/z.tpkset"
 expect_stderr "or Exodus files per processor"
 [ ! -e "$WORK/z.tpkset" ] || fail "a manifest was written for a failed conversion"
+# --max-error and --subdivide are refused by name (docs/ARCHITECTURE.md §10: not refined alike across ranks).
+for opt in --max-error --subdivide; do
+    expect_exit 2 mpi 2 convert "$WORK/cylinder_np4/in.pvtu" "$WORK/w.tpkset" $opt 1
+    expect_stderr "$opt is not offered here"
+    [ ! -e "$WORK/w.tpkset" ] || fail "a manifest was written for a refused $opt"
+done
 echo "tetpack-mpi: ok"

@@ -55,7 +55,7 @@ typedef struct inp_reader {
     char (*set_names)[TPK_NAME_MAX];
     int set_count;
     int64_t dropped; /* non-solid elements */
-    int64_t subset_cells; /* C3D27 read as C3D20 (their face and centre nodes unused) */
+    int64_t subset_cells; /* C3D27 with a face node left out, read as C3D20 (their centre node unused) */
     int parts;       /* *PART keywords: each part numbers its nodes and elements on its own */
     int64_t dropped_by_type[256];
 } inp_reader;
@@ -149,14 +149,18 @@ static const char *param(const char **field, const size_t *flen, int n, const ch
  * (C3D6) has the same corner order too: checked by converting gmsh-written files with no cell turned
  * over (tests/cli/inp.sh). Its quadratic solids list their mid-edge nodes as VTK does (C3D10: 01 12 20
  * 03 13 23; C3D20: bottom, top, then vertical edges; C3D15 likewise), so they are kept whole as VTK's
- * quadratic types; a C3D27 as a C3D20 (its first 20 nodes), its face and centre nodes unused. Returns
- * the type (0: not a solid, dropped); *corners the nodes kept. */
+ * quadratic types. A C3D27 (the manual's "21 to 27-node brick": its face nodes may be left out, its
+ * centre may not) has the C3D20's 20, then node 21 at the centroid, then 22-27 at the centres of faces
+ * 1-6 (1234, 5876, 1562, 2673, 3784, 4851): the order gmsh's .inp writer uses (MHexahedron27::
+ * getVertexINP), checked on a gmsh-written C3D27 mesh against gmsh's own .msh of it (tests/cli/inp.sh).
+ * It is kept whole as VTK's triquadratic hexahedron (inp_hex27_to_vtk); one with a face node left out
+ * (0) is read as its C3D20. Returns the type (0: not a solid, dropped); *corners the nodes kept. */
 static int solid_type(const char *name, size_t len, int *nodes, int *corners)
 {
     static const struct {
         int nodes, type, corners;
     } solids[] = {{4, TPK_CELL_TETRA, 4}, {10, 24, 10},  {6, TPK_CELL_WEDGE, 6}, {15, 26, 15},
-                  {8, TPK_CELL_HEXAHEDRON, 8}, {20, 25, 20}, {27, 25, 20}};
+                  {8, TPK_CELL_HEXAHEDRON, 8}, {20, 25, 20}, {27, 29, 27}};
     size_t at = 0;
     while (at + 3 <= len && strncasecmp(name + at, "C3D", 3) != 0)
         at++;
@@ -234,12 +238,30 @@ static int read_node(inp_reader *r, tpk_scan *s, const char **field, const size_
     return 0;
 }
 
+/* VTK's triquadratic hexahedron's nodes 20-26 (centres of faces x-, x+, y-, y+, z-, z+, the centroid)
+ * as a C3D27's node indices (0-based: 26 is node 27, the centre of face 4851). */
+static const int inp_hex27_to_vtk[7] = {26, 24, 23, 25, 21, 22, 20};
+
 /* An element record is complete: keep its nodes (or count it as dropped). */
 static int add_element(inp_reader *r, tpk_scan *s, inp_block *b)
 {
     if (!b->cell_type) {
         r->dropped++;
         return 0;
+    }
+    int type = b->cell_type, kept = b->corners;
+    int64_t *node = b->record + 1;
+    if (type == 29) {
+        int64_t face[7];
+        for (int k = 0; k < 7; k++)
+            face[k] = node[inp_hex27_to_vtk[k]];
+        int omitted = 0;
+        for (int k = 0; k < 7; k++)
+            omitted |= face[k] == 0;
+        if (omitted) /* a face or centre node left out: its C3D20 */
+            type = 25, kept = 20;
+        else
+            memcpy(node + 20, face, sizeof face);
     }
     if (r->cell_count >= INT32_MAX)
         return tpk_scan_fail(s, "more than 2^31-1 elements");
@@ -259,24 +281,28 @@ static int add_element(inp_reader *r, tpk_scan *s, inp_block *b)
         if (!types || !sets || !offsets)
             return tpk_scan_fail(s, "out of memory for %lld elements", (long long)cells);
     }
-    if (grow((void **)&r->conn, &r->conn_cap, r->conn_count + b->corners, sizeof *r->conn))
+    if (grow((void **)&r->conn, &r->conn_cap, r->conn_count + kept, sizeof *r->conn))
         return tpk_scan_fail(s, "out of memory for %lld elements", (long long)cells);
-    memcpy(r->conn + r->conn_count, b->record + 1, sizeof *r->conn * (size_t)b->corners);
+    memcpy(r->conn + r->conn_count, node, sizeof *r->conn * (size_t)kept);
     r->cell_ids[r->cell_count] = (id_index){b->record[0], r->cell_count};
-    r->types[r->cell_count] = (uint8_t)b->cell_type;
+    r->types[r->cell_count] = (uint8_t)type;
     r->cell_sets[r->cell_count] = (float)b->set;
     r->offsets[r->cell_count] = r->conn_count;
-    r->conn_count += b->corners;
+    r->conn_count += kept;
     r->offsets[++r->cell_count] = r->conn_count;
-    r->subset_cells += b->nodes > b->corners;
+    r->subset_cells += b->nodes > kept;
     return 0;
 }
 
-/* Element data: an id then the nodes, over as many lines as it takes. */
+/* Element data: an id then the nodes, over as many lines as it takes; each element starts a line. */
 static int read_element_line(inp_reader *r, tpk_scan *s, inp_block *b, const char **field, const size_t *flen,
                              int n)
 {
     for (int i = 0; i < n; i++) {
+        if (b->filled == 0 && i > 0) /* values left on the line of a complete element */
+            return tpk_scan_fail(s, "element %lld (%s): expected %d node ids, found %d or more (each element "
+                                    "starts a data line; is the element of another type than its *ELEMENT says?)",
+                                 (long long)b->record[0], b->type_name, b->nodes, b->nodes + n - i);
         if (b->filled == 0) {
             b->record_pos = s->tok_pos;
             b->record_line = s->tok_line;
@@ -551,8 +577,8 @@ static int finish(inp_reader *r, const char *name, tpk_mesh *out)
         tpk_diag_warn(r->diag, "%s: dropped %lld elements that are not solids (surfaces, shells, beams...)", name,
                       (long long)r->dropped);
     if (r->subset_cells)
-        tpk_diag_warn(r->diag, "%s: %lld C3D27 elements read as C3D20, without their face and centre nodes", name,
-                      (long long)r->subset_cells);
+        tpk_diag_warn(r->diag, "%s: %lld C3D27 elements with face nodes left out (0) read as C3D20, without "
+                               "their face and centre nodes", name, (long long)r->subset_cells);
     if (tpk_import_take_cells(out, r->node_count, &r->points, r->cell_count, &r->types, &r->offsets, &conn))
         return tpk_diag_fail(r->diag, "%s: out of memory", name);
     if (r->set_count) {

@@ -59,6 +59,15 @@ static int parse(int argc, char **argv, mpi_args *a, int rank)
             a->quiet = 1;
         } else if (arg[0] != '-' && n < 2) {
             pos[n++] = arg;
+        } else if (!strcmp(arg, "--max-error") || !strcmp(arg, "--max-error-field") || !strcmp(arg, "--subdivide")) {
+            /* docs/ARCHITECTURE.md §10: the refinement's marks, edge order and midpoints would have to agree
+             * across ranks, which they do not yet */
+            if (rank == 0)
+                fprintf(stderr, "tetpack-mpi convert: error: %s is not offered here: a shared face between two "
+                                "ranks would not be refined alike from both sides; convert the whole mesh "
+                                "with tetpack convert %s\n",
+                        arg, arg);
+            return 2;
         } else {
             if (rank == 0)
                 fprintf(stderr, "tetpack-mpi convert: error: unexpected argument '%s' (see --help)\n", arg);
