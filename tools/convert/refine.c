@@ -1538,11 +1538,13 @@ static int set_up(refine *r, int threads)
     return place_corners(r, threads);
 }
 
-/* The tets bounded roughly (rough_bound) whose rough bound exceeds the largest Bernstein bound of the
- * others, in field or geometry, bounded again through their Bernstein coefficients: so the largest bound
- * reported is that of the Bernstein bounds (or smaller, where a rough one is smaller), as before the
- * rough ones, and the same for any thread count. */
-static void exact_where_it_shows(refine *r)
+/* The tets bounded roughly (rough_bound) whose rough bound exceeds the largest Bernstein bound met, in
+ * field or geometry, bounded again through their Bernstein coefficients: so the largest bound reported
+ * is that of the Bernstein bounds (or smaller, where a rough one is smaller), as before the rough ones,
+ * and the same for any thread count. In batches from the top: those within half the largest rough bound
+ * left, then those still above the largest Bernstein bound met; where nothing was cut (a loose bound),
+ * the first batch usually settles it. */
+static int exact_where_it_shows(refine *r)
 {
     double field = -1, geometry = -1;
     for (int64_t t = 0; t < r->count; t++)
@@ -1550,12 +1552,45 @@ static void exact_where_it_shows(refine *r)
             field = r->field_error[t] > field ? r->field_error[t] : field;
             geometry = r->geometry_error[t] > geometry ? r->geometry_error[t] : geometry;
         }
-    r->todo_count = 0;
+    int64_t count = 0, *left = NULL;
+    for (int64_t t = 0; t < r->count; t++)
+        count += r->rough[t] && (r->field_error[t] > field || r->geometry_error[t] > geometry);
+    if (count && !(left = malloc(sizeof *left * (size_t)count)))
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    count = 0;
     for (int64_t t = 0; t < r->count; t++)
         if (r->rough[t] && (r->field_error[t] > field || r->geometry_error[t] > geometry))
-            r->todo[r->todo_count++] = t;
+            left[count++] = t;
     r->exact = 1;
-    tpk_parallel_for(r->todo_count, tpk_threads_for(r->todo_count, r->threads, 1024), bound_range, r);
+    while (count > 0) {
+        double top_field = 0, top_geometry = 0;
+        for (int64_t i = 0; i < count; i++) {
+            top_field = r->field_error[left[i]] > top_field ? r->field_error[left[i]] : top_field;
+            top_geometry = r->geometry_error[left[i]] > top_geometry ? r->geometry_error[left[i]] : top_geometry;
+        }
+        int64_t batch = 0, kept = 0;
+        for (int64_t i = 0; i < count; i++) {
+            int64_t t = left[i];
+            if ((top_field > 0 && r->field_error[t] >= top_field / 2) ||
+                (top_geometry > 0 && r->geometry_error[t] >= top_geometry / 2) || (top_field <= 0 && top_geometry <= 0))
+                r->todo[batch++] = t; /* the top one at least: each batch takes one or more */
+            else
+                left[kept++] = t;
+        }
+        r->todo_count = batch;
+        tpk_parallel_for(batch, tpk_threads_for(batch, r->threads, 1024), bound_range, r);
+        for (int64_t i = 0; i < batch; i++) {
+            int64_t t = r->todo[i];
+            field = r->field_error[t] > field ? r->field_error[t] : field;
+            geometry = r->geometry_error[t] > geometry ? r->geometry_error[t] : geometry;
+        }
+        count = 0;
+        for (int64_t i = 0; i < kept; i++)
+            if (r->field_error[left[i]] > field || r->geometry_error[left[i]] > geometry)
+                left[count++] = left[i];
+    }
+    free(left);
+    return 0;
 }
 
 int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const tpk_refine_options *options,
@@ -1596,7 +1631,7 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
         rc = refine_pass(&r, o.max_error);
     }
     if (rc == 0)
-        exact_where_it_shows(&r);
+        rc = exact_where_it_shows(&r);
     if (rc == 0) {
         int worst = -1;
         for (int64_t t = 0; t < r.count; t++) {
