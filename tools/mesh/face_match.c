@@ -25,12 +25,15 @@ typedef struct match_job {
     int plain;                        /* tets from the array, every one kept, untagged, from item 0: the
                                        * tight loops below (connect's case; a window costs a compare) */
     int64_t buckets;                  /* hi - lo */
+    int64_t wa, wb;                   /* the buckets of the window being scattered and matched, from lo: the
+                                       * count pass covers all of them, each window is then matched alone */
     uint32_t item_mask;
     uint32_t *starts[TPK_MAX_THREADS]; /* per worker, per bucket: count, then next slot (< 2^32 entries;
                                         * 32 bits: these arrays are part of the converter's peak memory) */
     const uint32_t *bucket_end;       /* after the scatter: the last worker's next slots, which are where each
                                        * bucket ends (no array of its own, as that would add to the peak) */
-    int64_t entry_count, largest;
+    int64_t entry_count, largest;     /* of the window */
+    int64_t entries_cap;              /* entries allocated */
     uint32_t *entries;                /* item | tag << (32 - tag_bits) */
     int64_t bad_item[TPK_MAX_THREADS]; /* check_ids: first tet with an id out of range or repeated, or -1 */
     int64_t bucket_begin[TPK_MAX_THREADS + 1];
@@ -142,9 +145,9 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
             tpk_sorted_tet s;
             tpk_sort_tet(m->tets + 4 * t, &s);
             uint64_t b0 = (uint64_t)((int64_t)s.id[0] - job->lo), b1 = (uint64_t)((int64_t)s.id[1] - job->lo);
-            if (b0 < (uint64_t)job->buckets)
+            if (b0 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
                 job->entries[next[b0]++] = (uint32_t)t;
-            if (b1 < (uint64_t)job->buckets)
+            if (b1 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
                 job->entries[next[b1]++] = (uint32_t)t;
         }
         return;
@@ -162,13 +165,14 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
         }
         int n = item_buckets(job, i, b);
         for (int k = 0; k < n; k++)
-            job->entries[next[b[k]]++] = entry;
+            if (b[k] >= job->wa && b[k] < job->wb)
+                job->entries[next[b[k]]++] = entry;
     }
 }
 
 static inline int64_t bucket_first(const match_job *job, int64_t b)
 {
-    return b ? (int64_t)job->bucket_end[b - 1] : 0;
+    return b > job->wa ? (int64_t)job->bucket_end[b - 1] : 0;
 }
 
 static int grow_faces(bucket_scratch *s, int64_t need)
@@ -363,7 +367,8 @@ static void match_buckets(void *ctx, int64_t begin, int64_t end, int worker)
     (void)begin;
     (void)end;
     s->bad_bucket = -1;
-    for (int64_t b = job->bucket_begin[worker]; b < job->bucket_begin[worker + 1] && !s->failed; b++) {
+    for (int64_t b = job->wa + job->bucket_begin[worker]; b < job->wa + job->bucket_begin[worker + 1] && !s->failed;
+         b++) {
         int64_t n = expand_bucket(job, s, b);
         if (n < 0)
             s->failed = 1;
@@ -375,12 +380,12 @@ static void match_buckets(void *ctx, int64_t begin, int64_t end, int worker)
 }
 
 /* Each worker's count becomes its first slot: the workers' parts of a bucket follow each other in
- * worker order, and the buckets in vertex order. */
+ * worker order, and the window's buckets in vertex order. */
 static int prefix_counts(match_job *job)
 {
     int64_t running = 0, largest = 0;
     int threads = job->m->threads;
-    for (int64_t v = 0; v < job->buckets; v++) {
+    for (int64_t v = job->wa; v < job->wb; v++) {
         int64_t begin = running;
         for (int w = 0; w < threads; w++) {
             int64_t c = job->starts[w][v];
@@ -399,7 +404,8 @@ static int prefix_counts(match_job *job)
 
 static int64_t first_entry(const void *ctx, int64_t b)
 {
-    return bucket_first(ctx, b);
+    const match_job *job = ctx;
+    return bucket_first(job, job->wa + b);
 }
 
 /* The faces of the bad bucket `b` whose key is `key`: count and the first items, ascending. */
@@ -430,7 +436,7 @@ static void free_job(match_job *job)
         free(job->scratch[w].faces);
         free(job->scratch[w].table);
     }
-    tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entry_count ? job->entry_count : 1));
+    tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entries_cap ? job->entries_cap : 1));
     free(job);
 }
 
@@ -471,24 +477,32 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
             f->bad_item = job->bad_item[w];
             return finish(job, TPK_MATCH_BAD_ITEM);
         }
-    if (prefix_counts(job))
-        return finish(job, TPK_MATCH_LIMIT);
-    job->entries = tpk_alloc_large(sizeof *job->entries * (size_t)(job->entry_count ? job->entry_count : 1));
-    if (!job->entries)
-        return finish(job, TPK_MATCH_NOMEM);
-    tpk_parallel_for(items_end - items_begin, threads, scatter_entries, job);
-    job->bucket_end = job->starts[threads - 1];
-    tpk_split_by(first_entry, job, job->buckets, job->entry_count, threads, job->bucket_begin);
-    tpk_parallel_for(threads, threads, match_buckets, job);
-    for (int w = 0; w < threads; w++)
-        if (job->scratch[w].failed) {
-            f->largest = job->largest;
+    int windows = m->windows > 1 ? m->windows : 1;
+    if (windows > job->buckets)
+        windows = job->buckets > 0 ? (int)job->buckets : 1;
+    for (int k = 0; k < windows; k++) {
+        job->wa = job->buckets * k / windows, job->wb = job->buckets * (k + 1) / windows;
+        if (prefix_counts(job))
+            return finish(job, TPK_MATCH_LIMIT);
+        tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entries_cap ? job->entries_cap : 1));
+        job->entries_cap = job->entry_count;
+        job->entries = tpk_alloc_large(sizeof *job->entries * (size_t)(job->entry_count ? job->entry_count : 1));
+        if (!job->entries)
             return finish(job, TPK_MATCH_NOMEM);
-        }
-    for (int w = 0; w < threads; w++)
-        if (m->neighbors && job->scratch[w].bad_bucket >= 0) {
-            describe_shared(job, w, f);
-            return finish(job, TPK_MATCH_SHARED);
-        }
+        tpk_parallel_for(items_end - items_begin, threads, scatter_entries, job);
+        job->bucket_end = job->starts[threads - 1];
+        tpk_split_by(first_entry, job, job->wb - job->wa, job->entry_count, threads, job->bucket_begin);
+        tpk_parallel_for(threads, threads, match_buckets, job);
+        for (int w = 0; w < threads; w++)
+            if (job->scratch[w].failed) {
+                f->largest = job->largest;
+                return finish(job, TPK_MATCH_NOMEM);
+            }
+        for (int w = 0; w < threads; w++)
+            if (m->neighbors && job->scratch[w].bad_bucket >= 0) {
+                describe_shared(job, w, f);
+                return finish(job, TPK_MATCH_SHARED);
+            }
+    }
     return finish(job, TPK_MATCH_OK);
 }

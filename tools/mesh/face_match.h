@@ -29,6 +29,8 @@ typedef struct tpk_match_face {
 typedef struct tpk_face_matcher {
     int64_t item_count, vertex_count; /* ids must lie in [0, vertex_count) */
     int64_t window_lo, window_hi;     /* buckets matched (0, 0: all): faces with a smallest id outside are left out */
+    int windows;                      /* 2 or more: the buckets matched in that many windows of ids, one after
+                                       * the other (entries for one window at a time), after one count pass */
     int64_t item_begin, item_end;     /* items scanned (0, 0: all), for a window whose items lie in a range */
     int threads;                      /* workers, as the caller decided (tpk_threads_for) */
     void *user;                       /* passed to every callback */
