@@ -614,7 +614,7 @@ static int apply_tet_order(tpk_tetmesh *mesh, const int32_t *new_id, int threads
         job->coarse_start = malloc(sizeof *job->coarse_start * (size_t)(job->coarse + 1));
         int coarse_ok = job->coarse_start != NULL;
         for (int w = 0; w < sort_threads && coarse_ok; w++)
-            coarse_ok = (coarse_next[w] = calloc((size_t)(job->coarse ? job->coarse : 1), sizeof *coarse_next[w])) != NULL;
+            coarse_ok = (coarse_next[w] = calloc((size_t)job->coarse + 1, sizeof *coarse_next[w])) != NULL;
         job->coarse_next = coarse_ok ? coarse_next : NULL; /* without them, the one step */
         tpk_parallel_for(nt, sort_threads, min_count, job);
         int64_t largest = prefix_positions(job, sort_threads);
