@@ -347,6 +347,22 @@ TPK_TEST(grid_multithreaded)
         CHECK(tpk_connect_windows(m.tets, m.tet_count, m.vertex_count, other, windows, 2, &diag) == 0);
         CHECK(!memcmp(one, other, bytes));
     }
+    /* The tets in reverse order, no longer by smallest id (the matcher's general path): the same
+     * neighbors, renumbered. */
+    int64_t T = m.tet_count, differ = 0;
+    int32_t *reversed = malloc(sizeof *reversed * 4 * (size_t)T);
+    for (int64_t t = 0; t < T; t++)
+        memcpy(reversed + 4 * (T - 1 - t), m.tets + 4 * t, 4 * sizeof *reversed);
+    for (int threads = 1; threads <= 2; threads++) {
+        CHECK(tpk_connect(reversed, T, m.vertex_count, other, threads, &diag) == 0);
+        for (int64_t t = 0; t < T; t++)
+            for (int k = 0; k < 4; k++) {
+                int32_t n = one[4 * t + k];
+                differ += other[4 * (T - 1 - t) + k] != (n < 0 ? -1 : (int32_t)(T - 1 - n));
+            }
+    }
+    CHECK_EQ_INT(differ, 0);
+    free(reversed);
     CHECK_EQ_INT(tpk_count_shell_faces(one, m.tet_count), 12 * 30 * 30);
     CHECK_MSG(tpk_check_invariants(&m, one, msg, sizeof msg) == 0, "%s", msg);
     CHECK_MSG(tpk_check_layouts(&m, one, msg, sizeof msg) == 0, "%s", msg);
@@ -363,6 +379,13 @@ TPK_TEST(connect_face_shared_by_three)
     tpk_diag diag = {0};
     CHECK(tpk_connect(tets, 4, 200, nb, 2, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "face (12, 40, 77) is shared by 3 tets: 1, 2, 3"), "%s", diag.message);
+    /* Those tets by smallest id (1, 5, 9, 12) take the matcher's sorted path; in reverse order the
+     * general one, with the same message. */
+    int32_t backwards[16];
+    for (int t = 0; t < 4; t++)
+        memcpy(backwards + 4 * t, tets + 4 * (3 - t), 4 * sizeof *backwards);
+    CHECK(tpk_connect(backwards, 4, 200, nb, 2, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "face (12, 40, 77) is shared by 3 tets: 0, 1, 2"), "%s", diag.message);
     int32_t bad[] = {0, 1, 2, 300};
     CHECK(tpk_connect(bad, 1, 200, nb, 1, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "tet 0") && strstr(diag.message, "out of range"), "%s", diag.message);

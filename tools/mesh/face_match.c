@@ -36,6 +36,12 @@ typedef struct match_job {
     int64_t entries_cap;              /* entries allocated */
     uint32_t *entries;                /* item | tag << (32 - tag_bits) */
     int64_t bad_item[TPK_MAX_THREADS]; /* check_ids: first tet with an id out of range or repeated, or -1 */
+    /* Plain tets over all vertices, in order of their smallest id (as reorder leaves them): bucket v's tets
+     * of smallest id v are items [first[v], first[v + 1]), so only the faces opposite the smallest id go
+     * through entries, half of them (SORTED TETS below). */
+    int32_t *first;                   /* [buckets + 1], filled by the count pass */
+    int unsorted[TPK_MAX_THREADS];    /* a worker saw a tet's smallest id go down */
+    int sorted;                       /* after the count: the entries hold only the faces opposite s0 */
     int64_t bucket_begin[TPK_MAX_THREADS + 1];
     bucket_scratch scratch[TPK_MAX_THREADS];
 } match_job;
@@ -86,9 +92,23 @@ static inline int item_buckets(const match_job *job, int64_t i, int32_t *b)
     return n;
 }
 
+/* The smallest id of tet t, within [-1, vertex_count - 1] whatever the ids (an unchecked neighbour's). */
+static int32_t clamped_smallest(const match_job *job, int64_t t)
+{
+    const int32_t *v = job->m->tets + 4 * t;
+    int32_t a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3], lo = a < b ? a : b;
+    return lo < 0 ? -1 : lo >= job->buckets ? (int32_t)(job->buckets - 1) : lo;
+}
+
+/* SORTED TETS. The count pass fills first[v] for v in (smallest id of item begin - 1, smallest id of item
+ * end - 1], the worker's own slots whatever the order, and says whether its smallest ids go down. */
 static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *count, int worker)
 {
     const tpk_face_matcher *m = job->m;
+    int32_t *first = job->first;
+    int32_t prev = begin > 0 ? clamped_smallest(job, begin - 1) : -1;
+    int32_t last = end > begin ? clamped_smallest(job, end - 1) : prev, seen = prev; /* prev stops at last */
+    job->unsorted[worker] = 0;
     for (int64_t t = begin; t < end; t++) {
         const int32_t *v = m->tets + 4 * t;
         if (m->check_ids && has_repeat(v)) {
@@ -106,6 +126,13 @@ static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *co
             count[b0]++;
         if (b1 < (uint64_t)job->buckets)
             count[b1]++;
+        if (first) {
+            if (s.id[0] < seen)
+                job->unsorted[worker] = 1;
+            seen = s.id[0];
+            for (; prev < seen && prev < last; prev++)
+                first[prev + 1] = (int32_t)t;
+        }
     }
 }
 
@@ -145,7 +172,7 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
             tpk_sorted_tet s;
             tpk_sort_tet(m->tets + 4 * t, &s);
             uint64_t b0 = (uint64_t)((int64_t)s.id[0] - job->lo), b1 = (uint64_t)((int64_t)s.id[1] - job->lo);
-            if (b0 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
+            if (!job->sorted && b0 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
                 job->entries[next[b0]++] = (uint32_t)t;
             if (b1 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
                 job->entries[next[b1]++] = (uint32_t)t;
@@ -214,6 +241,23 @@ static int64_t expand_bucket(const match_job *job, bucket_scratch *s, int64_t b)
     int cells = !m->tets && !m->tet, most = cells ? m->max_cell_faces : 3;
     int64_t n = 0, end = job->bucket_end[b];
     int32_t v = (int32_t)(b + job->lo);
+    if (job->sorted) { /* the tets of smallest id v, merged with the entries by item: the same order */
+        int64_t i = bucket_first(job, b), next = job->first[b], stop = job->first[b + 1];
+        if (n + 3 * (end - i + stop - next) > s->face_cap && grow_faces(s, n + 3 * (end - i + stop - next)))
+            return -1;
+        while (i < end || next < stop) {
+            uint32_t item;
+            if (next < stop && (i >= end || (uint32_t)next < job->entries[i])) {
+                item = (uint32_t)next++;
+            } else {
+                if (i + 8 < job->entry_count)
+                    __builtin_prefetch(m->tets + 4 * (int64_t)job->entries[i + 8]);
+                item = job->entries[i++];
+            }
+            n += tet_faces(m, item, item, v, s->faces + n);
+        }
+        return n;
+    }
     for (int64_t i = bucket_first(job, b); i < end; i++) {
         if (m->tets && i + 8 < job->entry_count) /* the tets of a bucket are scattered in memory */
             __builtin_prefetch(m->tets + 4 * (int64_t)(job->entries[i + 8] & job->item_mask));
@@ -381,14 +425,21 @@ static void match_buckets(void *ctx, int64_t begin, int64_t end, int worker)
 
 /* Each worker's count becomes its first slot: the workers' parts of a bucket follow each other in
  * worker order, and the window's buckets in vertex order. */
-static int prefix_counts(match_job *job)
+static int prefix_counts(match_job *job, int64_t items)
 {
-    int64_t running = 0, largest = 0;
+    int64_t running = 0, largest = 0, range[TPK_MAX_THREADS][2];
     int threads = job->m->threads;
+    for (int w = 0; w < threads; w++)
+        tpk_parallel_range(items, threads, w, &range[w][0], &range[w][1]);
     for (int64_t v = job->wa; v < job->wb; v++) {
         int64_t begin = running;
         for (int w = 0; w < threads; w++) {
             int64_t c = job->starts[w][v];
+            if (job->sorted) { /* less the worker's tets of smallest id v, which bring no entry */
+                int64_t lo = job->first[v] > range[w][0] ? job->first[v] : range[w][0];
+                int64_t hi = job->first[v + 1] < range[w][1] ? job->first[v + 1] : range[w][1];
+                c -= hi > lo ? hi - lo : 0;
+            }
             job->starts[w][v] = (uint32_t)running;
             running += c;
         }
@@ -402,10 +453,13 @@ static int prefix_counts(match_job *job)
     return 0;
 }
 
+/* Where bucket b's work starts, for splitting the buckets among the workers: its entries, and with sorted
+ * tets three faces for each tet of a smaller smallest id. */
 static int64_t first_entry(const void *ctx, int64_t b)
 {
     const match_job *job = ctx;
-    return bucket_first(job, job->wa + b);
+    int64_t tets_before = job->sorted ? (int64_t)job->first[job->wa + b] - job->first[job->wa] : 0;
+    return bucket_first(job, job->wa + b) + 3 * tets_before;
 }
 
 /* The faces of the bad bucket `b` whose key is `key`: count and the first items, ascending. */
@@ -437,6 +491,7 @@ static void free_job(match_job *job)
         free(job->scratch[w].table);
     }
     tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entries_cap ? job->entries_cap : 1));
+    tpk_free_large(job->first, sizeof *job->first * (size_t)(job->buckets + 1));
     free(job);
 }
 
@@ -469,6 +524,8 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
     for (int w = 0; w < threads; w++)
         if (!(job->starts[w] = tpk_alloc_large(sizeof *job->starts[w] * (size_t)(job->buckets ? job->buckets : 1))))
             return finish(job, TPK_MATCH_NOMEM);
+    if (job->plain && job->lo == 0 && job->hi == m->vertex_count && items_end <= INT32_MAX)
+        job->first = tpk_alloc_large(sizeof *job->first * (size_t)(job->buckets + 1)); /* NULL: no matter */
 
     /* count over the items, scatter over them again, match over the buckets: each split among the workers */
     tpk_parallel_for(items_end - items_begin, threads, count_entries, job);
@@ -478,11 +535,24 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
             return finish(job, TPK_MATCH_BAD_ITEM);
         }
     int windows = m->windows > 1 ? m->windows : 1;
+    if (job->first) {
+        job->sorted = 1;
+        for (int w = 0; w < threads; w++)
+            job->sorted &= !job->unsorted[w];
+        for (int64_t v = items_end > 0 ? clamped_smallest(job, items_end - 1) + 1 : 0; v <= job->buckets; v++)
+            job->first[v] = (int32_t)items_end;
+        if (!job->sorted) {
+            tpk_free_large(job->first, sizeof *job->first * (size_t)(job->buckets + 1));
+            job->first = NULL;
+        } else {
+            windows = (windows + 1) / 2; /* half the entries: a window holds twice the buckets */
+        }
+    }
     if (windows > job->buckets)
         windows = job->buckets > 0 ? (int)job->buckets : 1;
     for (int k = 0; k < windows; k++) {
         job->wa = job->buckets * k / windows, job->wb = job->buckets * (k + 1) / windows;
-        if (prefix_counts(job))
+        if (prefix_counts(job, items_end - items_begin))
             return finish(job, TPK_MATCH_LIMIT);
         tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entries_cap ? job->entries_cap : 1));
         job->entries_cap = job->entry_count;
@@ -491,7 +561,8 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
             return finish(job, TPK_MATCH_NOMEM);
         tpk_parallel_for(items_end - items_begin, threads, scatter_entries, job);
         job->bucket_end = job->starts[threads - 1];
-        tpk_split_by(first_entry, job, job->wb - job->wa, job->entry_count, threads, job->bucket_begin);
+        int64_t work = job->entry_count + (job->sorted ? 3 * (int64_t)(job->first[job->wb] - job->first[job->wa]) : 0);
+        tpk_split_by(first_entry, job, job->wb - job->wa, work, threads, job->bucket_begin);
         tpk_parallel_for(threads, threads, match_buckets, job);
         for (int w = 0; w < threads; w++)
             if (job->scratch[w].failed) {
