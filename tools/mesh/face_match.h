@@ -10,7 +10,9 @@
  *   tet across face k, or -1), the converter's stage; a face of 3+ tets stops it (TPK_MATCH_SHARED).
  * - runs (`run` set): each bucket sorted by key, item and local face, and every run of equal faces handed
  *   to `run`, for reports whose order must not depend on anything but the mesh.
- * Workers take contiguous item ranges and bucket ranges, so results do not depend on timing or threads. */
+ * Workers take contiguous item ranges and bucket ranges, so results do not depend on timing or threads.
+ * Plain tets in order of their smallest id (connect after reorder) enter only the bucket of their second
+ * smallest id: each bucket's tets of that smallest id are one run of the array, merged in by item. */
 #ifndef TPK_FACE_MATCH_H
 #define TPK_FACE_MATCH_H
 
