@@ -353,7 +353,7 @@ TPK_TEST(grid_multithreaded)
     int32_t *reversed = malloc(sizeof *reversed * 4 * (size_t)T);
     for (int64_t t = 0; t < T; t++)
         memcpy(reversed + 4 * (T - 1 - t), m.tets + 4 * t, 4 * sizeof *reversed);
-    for (int threads = 1; threads <= 2; threads++) {
+    for (int threads = 1; threads <= 3; threads++) {
         CHECK(tpk_connect(reversed, T, m.vertex_count, other, threads, &diag) == 0);
         for (int64_t t = 0; t < T; t++)
             for (int k = 0; k < 4; k++) {

@@ -38,7 +38,7 @@ typedef struct match_job {
     int64_t bad_item[TPK_MAX_THREADS]; /* check_ids: first tet with an id out of range or repeated, or -1 */
     /* Plain tets over all vertices, in order of their smallest id (as reorder leaves them): bucket v's tets
      * of smallest id v are items [first[v], first[v + 1]), so only the faces opposite the smallest id go
-     * through entries, half of them (SORTED TETS below). */
+     * through entries, a quarter of the faces (SORTED TETS below). */
     int32_t *first;                   /* [buckets + 1], filled by the count pass */
     int unsorted[TPK_MAX_THREADS];    /* a worker saw a tet's smallest id go down */
     int sorted;                       /* after the count: the entries hold only the faces opposite s0 */
@@ -101,7 +101,9 @@ static int32_t clamped_smallest(const match_job *job, int64_t t)
 }
 
 /* SORTED TETS. The count pass fills first[v] for v in (smallest id of item begin - 1, smallest id of item
- * end - 1], the worker's own slots whatever the order, and says whether its smallest ids go down. */
+ * end - 1] and says whether its smallest ids go down. When none do, those ranges of the workers are
+ * disjoint and cover every v; when some do, they may overlap (three workers or more) and first[] is not
+ * used: relaxed atomic stores, so that such writes are no data race. */
 static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *count, int worker)
 {
     const tpk_face_matcher *m = job->m;
@@ -131,7 +133,7 @@ static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *co
                 job->unsorted[worker] = 1;
             seen = s.id[0];
             for (; prev < seen && prev < last; prev++)
-                first[prev + 1] = (int32_t)t;
+                __atomic_store_n(&first[prev + 1], (int32_t)t, __ATOMIC_RELAXED);
         }
     }
 }
