@@ -347,6 +347,22 @@ TPK_TEST(grid_multithreaded)
         CHECK(tpk_connect_windows(m.tets, m.tet_count, m.vertex_count, other, windows, 2, &diag) == 0);
         CHECK(!memcmp(one, other, bytes));
     }
+    /* The tets in reverse order, no longer by smallest id (the matcher's general path): the same
+     * neighbors, renumbered. */
+    int64_t T = m.tet_count, differ = 0;
+    int32_t *reversed = malloc(sizeof *reversed * 4 * (size_t)T);
+    for (int64_t t = 0; t < T; t++)
+        memcpy(reversed + 4 * (T - 1 - t), m.tets + 4 * t, 4 * sizeof *reversed);
+    for (int threads = 1; threads <= 3; threads++) {
+        CHECK(tpk_connect(reversed, T, m.vertex_count, other, threads, &diag) == 0);
+        for (int64_t t = 0; t < T; t++)
+            for (int k = 0; k < 4; k++) {
+                int32_t n = one[4 * t + k];
+                differ += other[4 * (T - 1 - t) + k] != (n < 0 ? -1 : (int32_t)(T - 1 - n));
+            }
+    }
+    CHECK_EQ_INT(differ, 0);
+    free(reversed);
     CHECK_EQ_INT(tpk_count_shell_faces(one, m.tet_count), 12 * 30 * 30);
     CHECK_MSG(tpk_check_invariants(&m, one, msg, sizeof msg) == 0, "%s", msg);
     CHECK_MSG(tpk_check_layouts(&m, one, msg, sizeof msg) == 0, "%s", msg);
@@ -363,6 +379,13 @@ TPK_TEST(connect_face_shared_by_three)
     tpk_diag diag = {0};
     CHECK(tpk_connect(tets, 4, 200, nb, 2, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "face (12, 40, 77) is shared by 3 tets: 1, 2, 3"), "%s", diag.message);
+    /* Those tets by smallest id (1, 5, 9, 12) take the matcher's sorted path; in reverse order the
+     * general one, with the same message. */
+    int32_t backwards[16];
+    for (int t = 0; t < 4; t++)
+        memcpy(backwards + 4 * t, tets + 4 * (3 - t), 4 * sizeof *backwards);
+    CHECK(tpk_connect(backwards, 4, 200, nb, 2, &diag) != 0);
+    CHECK_MSG(strstr(diag.message, "face (12, 40, 77) is shared by 3 tets: 0, 1, 2"), "%s", diag.message);
     int32_t bad[] = {0, 1, 2, 300};
     CHECK(tpk_connect(bad, 1, 200, nb, 1, &diag) != 0);
     CHECK_MSG(strstr(diag.message, "tet 0") && strstr(diag.message, "out of range"), "%s", diag.message);
@@ -623,6 +646,114 @@ TPK_TEST(reorder_permutes_consistently)
     tpk_tetmesh_free(&m);
     tpk_tetmesh_free(&copy);
     tpk_tetmesh_free(&before);
+}
+
+/* The tets after reorder: by smallest vertex, ties in input order, each with its input tet's vertices and
+ * cell value (the input index, add_tet_field). */
+static int32_t smallest_id(const int32_t *v)
+{
+    int32_t lo = v[0];
+    for (int k = 1; k < 4; k++)
+        lo = v[k] < lo ? v[k] : lo;
+    return lo;
+}
+
+static void check_tets_sorted_stably(const tpk_tetmesh *m, const tpk_tetmesh *before)
+{
+    int64_t bad = 0, T = m->tet_count;
+    int32_t *old_index = malloc(sizeof *old_index * (size_t)T); /* source id -> index before */
+    for (int64_t t = 0; t < T; t++)
+        old_index[before->tet_source[t]] = (int32_t)t;
+    for (int64_t t = 0; t < T; t++) {
+        const int32_t *v = m->tets + 4 * t;
+        int32_t i = old_index[m->tet_source[t]];
+        if (t > 0) {
+            int32_t lo = smallest_id(v), prev = smallest_id(v - 4);
+            bad += prev > lo || (prev == lo && old_index[m->tet_source[t - 1]] >= i);
+        }
+        for (int k = 0; k < 4; k++)
+            bad += m->vertex_source[v[k]] != before->tets[4 * (int64_t)i + k];
+        bad += m->fields[0].values[t] != (float)i;
+    }
+    CHECK_MSG(bad == 0, "%lld tets out of order or moved wrongly", (long long)bad);
+    free(old_index);
+}
+
+static void add_tet_field(tpk_tetmesh *m)
+{
+    m->fields = calloc(1, sizeof *m->fields);
+    m->field_count = 1;
+    float *tv = malloc(sizeof *tv * (size_t)m->tet_count);
+    for (int64_t t = 0; t < m->tet_count; t++)
+        tv[t] = (float)t;
+    m->fields[0] = (tpk_src_field){"tetvalue", TPK_ASSOC_TET, 1, 1, tv};
+}
+
+/* Over 2^21 tets, so the tets are sorted by two workers (and moved in two steps, through coarse
+ * ranges): the same tets as on one, in order of their smallest vertex, ties in input order. */
+TPK_TEST(reorder_tets_sorted_stably)
+{
+    tpk_gen_options opt = {1, {0, 0, 0}, 1, 1, 1, 7};
+    tpk_tetmesh one, two, before;
+    tpk_diag diag = {0};
+    CHECK(tpk_gen_kuhn_grid(71, &opt, &one) == 0);
+    CHECK(tpk_gen_kuhn_grid(71, &opt, &two) == 0);
+    CHECK(tpk_gen_kuhn_grid(71, &opt, &before) == 0);
+    CHECK(one.tet_count > (INT64_C(2) << 20));
+    add_tet_field(&one);
+    add_tet_field(&two);
+    CHECK(tpk_reorder(&one, 1, &diag) == 0);
+    CHECK(tpk_reorder(&two, 2, &diag) == 0);
+    CHECK(!memcmp(one.tets, two.tets, sizeof *one.tets * 4 * (size_t)one.tet_count));
+    CHECK(!memcmp(one.tet_source, two.tet_source, sizeof *one.tet_source * (size_t)one.tet_count));
+    CHECK(!memcmp(one.fields[0].values, two.fields[0].values, sizeof(float) * (size_t)one.tet_count));
+    check_tets_sorted_stably(&one, &before);
+    tpk_tetmesh_free(&one);
+    tpk_tetmesh_free(&two);
+    tpk_tetmesh_free(&before);
+}
+
+/* A vertex in 300,000 tets, the smallest id of each (a fan), and a grid beside it: the fan's range is too
+ * large for the two-step move's scratch, so the tets are moved in one step, in the same order. */
+TPK_TEST(reorder_tets_sorted_stably_fan)
+{
+    tpk_gen_options opt = {1, {0, 0, 0}, 1, 1, 1, 11};
+    tpk_tetmesh grid, m, before;
+    tpk_diag diag = {0};
+    CHECK(tpk_gen_kuhn_grid(20, &opt, &grid) == 0);
+    int64_t fan = 300000, nv = grid.vertex_count + 1 + 3 * fan, nt = grid.tet_count + fan;
+    uint64_t rng = 5;
+    for (int copy = 0; copy < 2; copy++) {
+        tpk_tetmesh *x = copy ? &before : &m;
+        memset(x, 0, sizeof *x);
+        x->vertex_count = nv, x->tet_count = nt;
+        x->points = malloc(sizeof *x->points * 3 * (size_t)nv);
+        x->tets = malloc(sizeof *x->tets * 4 * (size_t)nt);
+        x->vertex_source = malloc(sizeof *x->vertex_source * (size_t)nv);
+        x->tet_source = malloc(sizeof *x->tet_source * (size_t)nt);
+        memcpy(x->points, grid.points, sizeof *x->points * 3 * (size_t)grid.vertex_count);
+        memcpy(x->tets, grid.tets, sizeof *x->tets * 4 * (size_t)grid.tet_count);
+        rng = 5;
+        for (int64_t i = 3 * grid.vertex_count; i < 3 * nv; i++)
+            x->points[i] = 100.0 * (double)(tpk_gen_next(&rng) >> 11) / 9007199254740992.0;
+        for (int a = 0; a < 3; a++) /* the apex at the curve's start: the smallest id of all its tets */
+            x->points[3 * grid.vertex_count + a] = -100.0;
+        for (int64_t f = 0; f < fan; f++) { /* grid and fan tets interleaved at the start */
+            int32_t *v = x->tets + 4 * (grid.tet_count + f);
+            int32_t apex = (int32_t)grid.vertex_count, first = apex + 1 + 3 * (int32_t)f;
+            v[0] = first, v[1] = apex, v[2] = first + 1, v[3] = first + 2;
+        }
+        for (int64_t i = 0; i < nv; i++)
+            x->vertex_source[i] = (int32_t)i;
+        for (int64_t t = 0; t < nt; t++)
+            x->tet_source[t] = (int32_t)t;
+    }
+    add_tet_field(&m);
+    CHECK(tpk_reorder(&m, 2, &diag) == 0);
+    check_tets_sorted_stably(&m, &before);
+    tpk_tetmesh_free(&m);
+    tpk_tetmesh_free(&before);
+    tpk_tetmesh_free(&grid);
 }
 
 /* Defined in tools/convert/reorder.c for tests: the Hilbert index of one cell of the 2^21 grid. */

@@ -12,7 +12,8 @@
 /* From this many tets on, connect matches faces in two windows of vertex ids, one after the other: the
  * matcher's entries (8 bytes a tet) are what connect adds to the tets and neighbors at the converter's
  * peak, and each window holds about half of them (reorder put the vertices in Hilbert order, so either
- * half starts about as many faces). Grid 120's peak: 531 -> 485 MiB in connect (bench/README). */
+ * half starts about as many faces). Grid 120's peak: 531 -> 485 MiB in connect (bench/README). The tets
+ * are counted into their buckets once for both windows (face_match.h `windows`). */
 #define CONNECT_WINDOWED (INT64_C(1) << 20)
 
 /* Per worker: pairs of slots (4 * tet + k) whose faces' orders agree (fold candidates), when asked. */
@@ -144,18 +145,11 @@ static int connect_run(const int32_t *tets, int64_t tet_count, int64_t vertex_co
      * neighbors are those of one pass, and the first bad face is still the one with the smallest ids. */
     if (windows < 1)
         windows = tet_count >= CONNECT_WINDOWED ? 2 : 1;
-    if (windows > vertex_count)
-        windows = vertex_count > 0 ? (int)vertex_count : 1;
-    int rc = TPK_MATCH_OK;
     tpk_match_failure failure;
-    for (int w = 0; w < windows && rc == TPK_MATCH_OK; w++) {
-        tpk_face_matcher m = {.item_count = tet_count, .vertex_count = vertex_count, .threads = job->threads,
-                              .user = job, .tets = tets, .check_ids = 1, .neighbors = neighbors,
-                              .agreeing = fold_slots ? keep_agreeing : NULL};
-        if (windows > 1)
-            m.window_lo = vertex_count * w / windows, m.window_hi = vertex_count * (w + 1) / windows;
-        rc = tpk_face_match(&m, &failure);
-    }
+    tpk_face_matcher m = {.item_count = tet_count, .vertex_count = vertex_count, .windows = windows,
+                          .threads = job->threads, .user = job, .tets = tets, .check_ids = 1,
+                          .neighbors = neighbors, .agreeing = fold_slots ? keep_agreeing : NULL};
+    int rc = tpk_face_match(&m, &failure);
     if (rc == TPK_MATCH_BAD_ITEM)
         rc = report_bad_tet(job, failure.bad_item, diag);
     else if (rc == TPK_MATCH_SHARED)

@@ -294,68 +294,7 @@ static int hilbert_order(const hilbert_table *table, const double *points, int64
     return rc;
 }
 
-/* order[new] = old for tets: by their smallest vertex id (the vertices are in curve order by now), ties
- * in input order. One counting sort instead of centroid keys and a 64-bit radix sort: tets that share a
- * vertex end up together and follow the vertex curve, which is the locality marching and face matching
- * need, at a fraction of the cost (bench/README "Figures behind code comments"). */
-static int32_t min_vertex(const int32_t *v)
-{
-    int32_t a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
-    return a < b ? a : b;
-}
-
-/* Stable parallel counting sort: worker w counts its range of tets per smallest vertex, the offsets put
- * worker 0's tets of a vertex before worker 1's, and each worker scatters its range in order, so the
- * result is the same for any thread count. */
-typedef struct min_sort_job {
-    const int32_t *tets;
-    int64_t nv;
-    uint32_t **next; /* [worker][nv]: counts, then positions */
-    uint32_t *order;
-} min_sort_job;
-
-static void min_count(void *ctx, int64_t begin, int64_t end, int worker)
-{
-    min_sort_job *job = ctx;
-    uint32_t *count = job->next[worker];
-    for (int64_t t = begin; t < end; t++)
-        count[min_vertex(job->tets + 4 * t)]++;
-}
-
-static void min_scatter(void *ctx, int64_t begin, int64_t end, int worker)
-{
-    min_sort_job *job = ctx;
-    uint32_t *next = job->next[worker];
-    for (int64_t t = begin; t < end; t++)
-        job->order[next[min_vertex(job->tets + 4 * t)]++] = (uint32_t)t;
-}
-
-static int min_vertex_order(const int32_t *tets, int64_t nt, int64_t nv, uint32_t *order, int threads)
-{
-    threads = tpk_threads_for(nt, threads, 1 << 20);
-    uint32_t *next[TPK_MAX_THREADS] = {NULL};
-    int rc = 0;
-    for (int w = 0; w < threads && rc == 0; w++)
-        if (!(next[w] = tpk_calloc_large((size_t)nv + 1, sizeof *next[w])))
-            rc = -1;
-    if (rc == 0) {
-        min_sort_job job = {tets, nv, next, order};
-        tpk_parallel_for(nt, threads, min_count, &job);
-        uint32_t running = 0;
-        for (int64_t v = 0; v < nv; v++)
-            for (int w = 0; w < threads; w++) {
-                uint32_t c = next[w][v];
-                next[w][v] = running;
-                running += c;
-            }
-        tpk_parallel_for(nt, threads, min_scatter, &job);
-    }
-    for (int w = 0; w < threads; w++)
-        tpk_free_large(next[w], ((size_t)nv + 1) * sizeof *next[w]);
-    return rc;
-}
-
-/* ---- applying the permutations -------------------------------------------------------------------- */
+/* ---- applying the vertex permutation ------------------------------------------------------------- */
 
 typedef struct permute_job {
     const uint32_t *order;   /* order[new] = old */
@@ -442,19 +381,6 @@ static int ensure_identity(int32_t **source, int64_t count)
     return 0;
 }
 
-typedef struct remap_job {
-    int32_t *tets;
-    const int32_t *new_id;
-} remap_job;
-
-static void remap_range(void *ctx, int64_t begin, int64_t end, int worker)
-{
-    remap_job *job = ctx;
-    (void)worker;
-    for (int64_t i = begin; i < end; i++)
-        job->tets[i] = job->new_id[job->tets[i]];
-}
-
 /* new_id[order[i]] = i: order is a permutation, so every slot is written once, by one worker. */
 typedef struct invert_job {
     const uint32_t *order;
@@ -469,35 +395,251 @@ static void invert_range(void *ctx, int64_t begin, int64_t end, int worker)
         job->new_id[job->order[i]] = (int32_t)i;
 }
 
-static int apply_vertex_order(tpk_tetmesh *mesh, const uint32_t *order, int threads)
+/* Points, vertex sources and point fields in the new order; new_id[old] = new for the tets. */
+static int apply_vertex_order(tpk_tetmesh *mesh, const uint32_t *order, int32_t *new_id, int threads)
 {
     int64_t n = mesh->vertex_count;
-    int32_t *new_id = tpk_alloc_large(sizeof *new_id * (size_t)(n ? n : 1));
-    if (!new_id || ensure_identity(&mesh->vertex_source, n) ||
+    if (ensure_identity(&mesh->vertex_source, n) ||
         permute_array((void **)&mesh->points, n, 3 * sizeof *mesh->points, order, threads) ||
         permute_array((void **)&mesh->vertex_source, n, sizeof *mesh->vertex_source, order, threads) ||
-        permute_fields(mesh, TPK_ASSOC_POINT, n, order, threads)) {
-        tpk_free_large(new_id, sizeof *new_id * (size_t)(n ? n : 1));
+        permute_fields(mesh, TPK_ASSOC_POINT, n, order, threads))
         return -1;
-    }
     invert_job inv = {order, new_id};
     tpk_parallel_for(n, tpk_threads_for(n, threads, 65536), invert_range, &inv);
-    remap_job job = {mesh->tets, new_id};
-    tpk_parallel_for(4 * mesh->tet_count, tpk_threads_for(4 * mesh->tet_count, threads, 65536), remap_range,
-                     &job);
-    tpk_free_large(new_id, sizeof *new_id * (size_t)(n ? n : 1));
     return 0;
 }
 
-static int apply_tet_order(tpk_tetmesh *mesh, const uint32_t *order, int threads)
+/* ---- the tets: renumbered, then by their smallest vertex ----------------------------------------- */
+
+/* Tets in order of their smallest vertex id (the vertices are in curve order by now), ties in input
+ * order. One counting sort instead of centroid keys and a 64-bit radix sort: tets that share a vertex end
+ * up together and follow the vertex curve, which is the locality marching and face matching need, at a
+ * fraction of the cost (bench/README "Figures behind code comments"). */
+static int32_t min_vertex(const int32_t *v)
 {
-    int64_t n = mesh->tet_count;
-    if (ensure_identity(&mesh->tet_source, n) ||
-        permute_array((void **)&mesh->tets, n, 4 * sizeof *mesh->tets, order, threads) ||
-        permute_array((void **)&mesh->tet_source, n, sizeof *mesh->tet_source, order, threads) ||
-        permute_fields(mesh, TPK_ASSOC_TET, n, order, threads))
-        return -1;
+    int32_t a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3];
+    return a < b ? a : b;
+}
+
+/* Stable parallel counting sort: worker w counts its range of tets per smallest vertex, the offsets put
+ * worker 0's tets of a vertex before worker 1's, and each worker moves its range in order, so the result
+ * is the same for any thread count. The count pass renumbers each tet's vertices first (in place).
+ *
+ * The move goes in two steps where the buckets allow: each tet and its old index into the range of its
+ * coarse bucket (COARSE_BUCKETS runs of consecutive vertices), written as that many sequential streams,
+ * then each coarse range through a worker's scratch into its vertices' places, stores that stay in the
+ * cache. One step, a tet's 16 bytes stored at a random place, missed the cache on nearly every tet and
+ * took most of the stage (issue 37). A coarse range larger than FINE_MOST tets (a vertex in that many
+ * tets) takes the one step. Either way the tets end in the same order. */
+#define COARSE_BUCKETS 2048
+#define FINE_MOST (INT64_C(1) << 18)
+
+typedef struct min_sort_job {
+    int32_t *tets;          /* renumbered in place by the count pass */
+    const int32_t *new_id;  /* new_id[old vertex] */
+    const int32_t *source;  /* tet_source, or NULL for the identity */
+    bytes16 *tets_out;
+    int32_t *source_out;
+    uint32_t *order;        /* order[new] = old, or NULL where no cell field needs it */
+    uint32_t **next;        /* [worker][nv]: counts, then positions */
+    int64_t nv, nt;
+    int shift;              /* coarse bucket of vertex v: v >> shift */
+    int64_t coarse;         /* coarse buckets */
+    uint32_t **coarse_next; /* [worker][coarse]: counts, then positions */
+    int64_t *coarse_start;  /* [coarse + 1]: where each coarse range starts */
+    int64_t fine_begin[TPK_MAX_THREADS + 1];
+    bytes16 *scratch[TPK_MAX_THREADS];
+    int32_t *scratch_source[TPK_MAX_THREADS];
+    uint32_t *scratch_index[TPK_MAX_THREADS], *cursor[TPK_MAX_THREADS];
+} min_sort_job;
+
+static void min_count(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    min_sort_job *job = ctx;
+    uint32_t *count = job->next[worker], *coarse = job->coarse_next ? job->coarse_next[worker] : NULL;
+    const int32_t *new_id = job->new_id;
+    for (int64_t t = begin; t < end; t++) {
+        int32_t *v = job->tets + 4 * t;
+        v[0] = new_id[v[0]], v[1] = new_id[v[1]], v[2] = new_id[v[2]], v[3] = new_id[v[3]];
+        int32_t m = min_vertex(v);
+        count[m]++;
+        if (coarse)
+            coarse[m >> job->shift]++;
+    }
+}
+
+/* One step: every tet straight to its place. */
+static void min_scatter(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    min_sort_job *job = ctx;
+    uint32_t *next = job->next[worker];
+    const bytes16 *tets = (const bytes16 *)job->tets;
+    for (int64_t t = begin; t < end; t++) {
+        uint32_t at = next[min_vertex(job->tets + 4 * t)]++;
+        job->tets_out[at] = tets[t];
+        job->source_out[at] = job->source ? job->source[t] : (int32_t)t;
+        if (job->order)
+            job->order[at] = (uint32_t)t;
+    }
+}
+
+/* Two steps, the first: every tet, its source and its index (where asked) to its coarse range, in input
+ * order. */
+static void coarse_scatter(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    min_sort_job *job = ctx;
+    uint32_t *next = job->coarse_next[worker];
+    const bytes16 *tets = (const bytes16 *)job->tets;
+    int shift = job->shift;
+    for (int64_t t = begin; t < end; t++) {
+        uint32_t at = next[min_vertex(job->tets + 4 * t) >> shift]++;
+        job->tets_out[at] = tets[t];
+        job->source_out[at] = job->source ? job->source[t] : (int32_t)t;
+        if (job->order)
+            job->order[at] = (uint32_t)t;
+    }
+}
+
+/* The second: worker's coarse ranges [begin, end), each copied out and put in vertex order. A range holds
+ * worker 0's tets in input order, then worker 1's, so each vertex's tets come in input order. */
+static void fine_sort(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    min_sort_job *job = ctx;
+    bytes16 *scratch = job->scratch[worker];
+    int32_t *source = job->scratch_source[worker];
+    uint32_t *index = job->scratch_index[worker], *cursor = job->cursor[worker];
+    const uint32_t *first = job->next[0]; /* where each vertex's tets start */
+    (void)begin, (void)end;
+    for (int64_t c = job->fine_begin[worker]; c < job->fine_begin[worker + 1]; c++) {
+        int64_t a = job->coarse_start[c], b = job->coarse_start[c + 1], v0 = c << job->shift;
+        int64_t v1 = (c + 1) << job->shift < job->nv ? (c + 1) << job->shift : job->nv;
+        memcpy(scratch, job->tets_out + a, sizeof *scratch * (size_t)(b - a));
+        memcpy(source, job->source_out + a, sizeof *source * (size_t)(b - a));
+        if (job->order)
+            memcpy(index, job->order + a, sizeof *index * (size_t)(b - a));
+        for (int64_t v = v0; v < v1; v++)
+            cursor[v - v0] = first[v];
+        for (int64_t i = 0; i < b - a; i++) {
+            uint32_t at = cursor[min_vertex((const int32_t *)(scratch + i)) - v0]++;
+            job->tets_out[at] = scratch[i];
+            job->source_out[at] = source[i];
+            if (job->order)
+                job->order[at] = index[i];
+        }
+    }
+}
+
+static int has_field(const tpk_tetmesh *mesh, int association)
+{
+    for (int f = 0; f < mesh->field_count; f++)
+        if (mesh->fields[f].association == association)
+            return 1;
     return 0;
+}
+
+/* After the count: the per-vertex and per-coarse-bucket counts become positions (workers in order within
+ * each bucket). Returns the tets of the largest coarse range. */
+static int64_t prefix_positions(min_sort_job *job, int threads)
+{
+    uint32_t running = 0;
+    for (int64_t v = 0; v < job->nv; v++)
+        for (int w = 0; w < threads; w++) {
+            uint32_t c = job->next[w][v];
+            job->next[w][v] = running;
+            running += c;
+        }
+    int64_t largest = 0;
+    running = 0;
+    for (int64_t c = 0; job->coarse_next && c < job->coarse; c++) {
+        job->coarse_start[c] = running;
+        for (int w = 0; w < threads; w++) {
+            uint32_t n = job->coarse_next[w][c];
+            job->coarse_next[w][c] = running;
+            running += n;
+        }
+        if (running - job->coarse_start[c] > largest)
+            largest = running - job->coarse_start[c];
+    }
+    if (job->coarse_next)
+        job->coarse_start[job->coarse] = running;
+    return largest;
+}
+
+/* The two-step move, where its scratch fits; 1 when the one step must do. */
+static int move_in_two_steps(min_sort_job *job, int threads, int64_t largest)
+{
+    int rc = largest > FINE_MOST ? 1 : 0;
+    for (int w = 0; w < threads && rc == 0; w++)
+        if (!(job->scratch[w] = malloc(sizeof *job->scratch[w] * (size_t)(largest ? largest : 1))) ||
+            !(job->scratch_source[w] = malloc(sizeof *job->scratch_source[w] * (size_t)(largest ? largest : 1))) ||
+            (job->order &&
+             !(job->scratch_index[w] = malloc(sizeof *job->scratch_index[w] * (size_t)(largest ? largest : 1)))) ||
+            !(job->cursor[w] = malloc(sizeof *job->cursor[w] << job->shift)))
+            rc = 1;
+    if (rc == 0) {
+        tpk_parallel_for(job->nt, threads, coarse_scatter, job);
+        tpk_split_prefix(job->coarse_start, job->coarse, job->nt, threads, job->fine_begin);
+        tpk_parallel_for(threads, threads, fine_sort, job);
+    }
+    for (int w = 0; w < threads; w++) {
+        free(job->scratch[w]);
+        free(job->scratch_source[w]);
+        free(job->scratch_index[w]);
+        free(job->cursor[w]);
+    }
+    return rc;
+}
+
+static int apply_tet_order(tpk_tetmesh *mesh, const int32_t *new_id, int threads)
+{
+    int64_t nt = mesh->tet_count, nv = mesh->vertex_count;
+    size_t n = (size_t)(nt ? nt : 1);
+    int sort_threads = tpk_threads_for(nt, threads, 1 << 20), cell_fields = has_field(mesh, TPK_ASSOC_TET);
+    uint32_t *next[TPK_MAX_THREADS] = {NULL}, *coarse_next[TPK_MAX_THREADS] = {NULL};
+    min_sort_job *job = calloc(1, sizeof *job);
+    bytes16 *tets_out = tpk_alloc_large(sizeof *tets_out * n);
+    int32_t *source_out = tpk_alloc_large(sizeof *source_out * n);
+    uint32_t *order = cell_fields ? tpk_alloc_large(sizeof *order * n) : NULL;
+    int rc = job && tets_out && source_out && (order || !cell_fields) ? 0 : -1;
+    for (int w = 0; w < sort_threads && rc == 0; w++)
+        if (!(next[w] = tpk_calloc_large((size_t)nv + 1, sizeof *next[w])))
+            rc = -1;
+    if (rc == 0) {
+        job->tets = mesh->tets, job->new_id = new_id, job->source = mesh->tet_source;
+        job->tets_out = tets_out, job->source_out = source_out, job->order = order, job->next = next;
+        job->nv = nv, job->nt = nt;
+        while ((nv - 1) >> job->shift >= COARSE_BUCKETS)
+            job->shift++;
+        job->coarse = nv > 0 ? ((nv - 1) >> job->shift) + 1 : 0;
+        job->coarse_start = malloc(sizeof *job->coarse_start * (size_t)(job->coarse + 1));
+        int coarse_ok = job->coarse_start != NULL;
+        for (int w = 0; w < sort_threads && coarse_ok; w++)
+            coarse_ok = (coarse_next[w] = calloc((size_t)job->coarse + 1, sizeof *coarse_next[w])) != NULL;
+        job->coarse_next = coarse_ok ? coarse_next : NULL; /* without them, the one step */
+        tpk_parallel_for(nt, sort_threads, min_count, job);
+        int64_t largest = prefix_positions(job, sort_threads);
+        if (!job->coarse_next || move_in_two_steps(job, sort_threads, largest))
+            tpk_parallel_for(nt, sort_threads, min_scatter, job);
+        free(job->coarse_start);
+    }
+    for (int w = 0; w < sort_threads; w++) {
+        tpk_free_large(next[w], ((size_t)nv + 1) * sizeof *next[w]);
+        free(coarse_next[w]);
+    }
+    free(job);
+    if (rc == 0) {
+        tpk_free_large(mesh->tets, sizeof *mesh->tets * 4 * n);
+        tpk_free_large(mesh->tet_source, sizeof *mesh->tet_source * n);
+        mesh->tets = (int32_t *)tets_out;
+        mesh->tet_source = source_out;
+        tets_out = NULL, source_out = NULL;
+        if (order)
+            rc = permute_fields(mesh, TPK_ASSOC_TET, nt, order, threads);
+    }
+    tpk_free_large(order, sizeof *order * n);
+    tpk_free_large(source_out, sizeof *source_out * n);
+    tpk_free_large(tets_out, sizeof *tets_out * n);
+    return rc;
 }
 
 int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
@@ -515,14 +657,18 @@ int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
     build_hilbert_table(&table);
     box bounds = bounding_box(mesh->points, nv, threads);
     /* Vertices along the curve first; tets then follow their smallest vertex. */
-    size_t order_bytes = sizeof(uint32_t) * (size_t)(nv > nt ? (nv ? nv : 1) : nt);
-    uint32_t *order = tpk_alloc_large(order_bytes);
+    size_t vertex_bytes = sizeof(uint32_t) * (size_t)(nv ? nv : 1);
+    uint32_t *order = tpk_alloc_large(vertex_bytes);
+    int32_t *new_id = tpk_alloc_large(vertex_bytes);
     int rc = -1;
-    if (order && !hilbert_order(&table, mesh->points, nv, bounds, order, threads) &&
-        !apply_vertex_order(mesh, order, threads) && !min_vertex_order(mesh->tets, nt, nv, order, threads) &&
-        !apply_tet_order(mesh, order, threads))
-        rc = 0;
-    tpk_free_large(order, order_bytes);
+    if (order && new_id && !hilbert_order(&table, mesh->points, nv, bounds, order, threads) &&
+        !apply_vertex_order(mesh, order, new_id, threads)) {
+        tpk_free_large(order, vertex_bytes); /* before the tets' arrays: a kept block they may reuse */
+        order = NULL;
+        rc = apply_tet_order(mesh, new_id, threads);
+    }
+    tpk_free_large(order, vertex_bytes);
+    tpk_free_large(new_id, vertex_bytes);
     if (rc)
         return tpk_diag_fail(diag, "reorder: out of memory (%lld vertices, %lld tets)", (long long)nv,
                              (long long)nt);

@@ -25,14 +25,23 @@ typedef struct match_job {
     int plain;                        /* tets from the array, every one kept, untagged, from item 0: the
                                        * tight loops below (connect's case; a window costs a compare) */
     int64_t buckets;                  /* hi - lo */
+    int64_t wa, wb;                   /* the buckets of the window being scattered and matched, from lo: the
+                                       * count pass covers all of them, each window is then matched alone */
     uint32_t item_mask;
     uint32_t *starts[TPK_MAX_THREADS]; /* per worker, per bucket: count, then next slot (< 2^32 entries;
                                         * 32 bits: these arrays are part of the converter's peak memory) */
     const uint32_t *bucket_end;       /* after the scatter: the last worker's next slots, which are where each
                                        * bucket ends (no array of its own, as that would add to the peak) */
-    int64_t entry_count, largest;
+    int64_t entry_count, largest;     /* of the window */
+    int64_t entries_cap;              /* entries allocated */
     uint32_t *entries;                /* item | tag << (32 - tag_bits) */
     int64_t bad_item[TPK_MAX_THREADS]; /* check_ids: first tet with an id out of range or repeated, or -1 */
+    /* Plain tets over all vertices, in order of their smallest id (as reorder leaves them): bucket v's tets
+     * of smallest id v are items [first[v], first[v + 1]), so only the faces opposite the smallest id go
+     * through entries, a quarter of the faces (SORTED TETS below). */
+    int32_t *first;                   /* [buckets + 1], filled by the count pass */
+    int unsorted[TPK_MAX_THREADS];    /* a worker saw a tet's smallest id go down */
+    int sorted;                       /* after the count: the entries hold only the faces opposite s0 */
     int64_t bucket_begin[TPK_MAX_THREADS + 1];
     bucket_scratch scratch[TPK_MAX_THREADS];
 } match_job;
@@ -83,9 +92,25 @@ static inline int item_buckets(const match_job *job, int64_t i, int32_t *b)
     return n;
 }
 
+/* The smallest id of tet t, within [-1, vertex_count - 1] whatever the ids (an unchecked neighbour's). */
+static int32_t clamped_smallest(const match_job *job, int64_t t)
+{
+    const int32_t *v = job->m->tets + 4 * t;
+    int32_t a = v[0] < v[1] ? v[0] : v[1], b = v[2] < v[3] ? v[2] : v[3], lo = a < b ? a : b;
+    return lo < 0 ? -1 : lo >= job->buckets ? (int32_t)(job->buckets - 1) : lo;
+}
+
+/* SORTED TETS. The count pass fills first[v] for v in (smallest id of item begin - 1, smallest id of item
+ * end - 1] and says whether its smallest ids go down. When none do, those ranges of the workers are
+ * disjoint and cover every v; when some do, they may overlap (three workers or more) and first[] is not
+ * used: relaxed atomic stores, so that such writes are no data race. */
 static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *count, int worker)
 {
     const tpk_face_matcher *m = job->m;
+    int32_t *first = job->first;
+    int32_t prev = begin > 0 ? clamped_smallest(job, begin - 1) : -1;
+    int32_t last = end > begin ? clamped_smallest(job, end - 1) : prev, seen = prev; /* prev stops at last */
+    job->unsorted[worker] = 0;
     for (int64_t t = begin; t < end; t++) {
         const int32_t *v = m->tets + 4 * t;
         if (m->check_ids && has_repeat(v)) {
@@ -103,6 +128,13 @@ static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *co
             count[b0]++;
         if (b1 < (uint64_t)job->buckets)
             count[b1]++;
+        if (first) {
+            if (s.id[0] < seen)
+                job->unsorted[worker] = 1;
+            seen = s.id[0];
+            for (; prev < seen && prev < last; prev++)
+                __atomic_store_n(&first[prev + 1], (int32_t)t, __ATOMIC_RELAXED);
+        }
     }
 }
 
@@ -142,9 +174,9 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
             tpk_sorted_tet s;
             tpk_sort_tet(m->tets + 4 * t, &s);
             uint64_t b0 = (uint64_t)((int64_t)s.id[0] - job->lo), b1 = (uint64_t)((int64_t)s.id[1] - job->lo);
-            if (b0 < (uint64_t)job->buckets)
+            if (!job->sorted && b0 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
                 job->entries[next[b0]++] = (uint32_t)t;
-            if (b1 < (uint64_t)job->buckets)
+            if (b1 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
                 job->entries[next[b1]++] = (uint32_t)t;
         }
         return;
@@ -162,13 +194,14 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
         }
         int n = item_buckets(job, i, b);
         for (int k = 0; k < n; k++)
-            job->entries[next[b[k]]++] = entry;
+            if (b[k] >= job->wa && b[k] < job->wb)
+                job->entries[next[b[k]]++] = entry;
     }
 }
 
 static inline int64_t bucket_first(const match_job *job, int64_t b)
 {
-    return b ? (int64_t)job->bucket_end[b - 1] : 0;
+    return b > job->wa ? (int64_t)job->bucket_end[b - 1] : 0;
 }
 
 static int grow_faces(bucket_scratch *s, int64_t need)
@@ -210,6 +243,23 @@ static int64_t expand_bucket(const match_job *job, bucket_scratch *s, int64_t b)
     int cells = !m->tets && !m->tet, most = cells ? m->max_cell_faces : 3;
     int64_t n = 0, end = job->bucket_end[b];
     int32_t v = (int32_t)(b + job->lo);
+    if (job->sorted) { /* the tets of smallest id v, merged with the entries by item: the same order */
+        int64_t i = bucket_first(job, b), next = job->first[b], stop = job->first[b + 1];
+        if (n + 3 * (end - i + stop - next) > s->face_cap && grow_faces(s, n + 3 * (end - i + stop - next)))
+            return -1;
+        while (i < end || next < stop) {
+            uint32_t item;
+            if (next < stop && (i >= end || (uint32_t)next < job->entries[i])) {
+                item = (uint32_t)next++;
+            } else {
+                if (i + 8 < job->entry_count)
+                    __builtin_prefetch(m->tets + 4 * (int64_t)job->entries[i + 8]);
+                item = job->entries[i++];
+            }
+            n += tet_faces(m, item, item, v, s->faces + n);
+        }
+        return n;
+    }
     for (int64_t i = bucket_first(job, b); i < end; i++) {
         if (m->tets && i + 8 < job->entry_count) /* the tets of a bucket are scattered in memory */
             __builtin_prefetch(m->tets + 4 * (int64_t)(job->entries[i + 8] & job->item_mask));
@@ -363,7 +413,8 @@ static void match_buckets(void *ctx, int64_t begin, int64_t end, int worker)
     (void)begin;
     (void)end;
     s->bad_bucket = -1;
-    for (int64_t b = job->bucket_begin[worker]; b < job->bucket_begin[worker + 1] && !s->failed; b++) {
+    for (int64_t b = job->wa + job->bucket_begin[worker]; b < job->wa + job->bucket_begin[worker + 1] && !s->failed;
+         b++) {
         int64_t n = expand_bucket(job, s, b);
         if (n < 0)
             s->failed = 1;
@@ -375,15 +426,22 @@ static void match_buckets(void *ctx, int64_t begin, int64_t end, int worker)
 }
 
 /* Each worker's count becomes its first slot: the workers' parts of a bucket follow each other in
- * worker order, and the buckets in vertex order. */
-static int prefix_counts(match_job *job)
+ * worker order, and the window's buckets in vertex order. */
+static int prefix_counts(match_job *job, int64_t items)
 {
-    int64_t running = 0, largest = 0;
+    int64_t running = 0, largest = 0, range[TPK_MAX_THREADS][2];
     int threads = job->m->threads;
-    for (int64_t v = 0; v < job->buckets; v++) {
+    for (int w = 0; w < threads; w++)
+        tpk_parallel_range(items, threads, w, &range[w][0], &range[w][1]);
+    for (int64_t v = job->wa; v < job->wb; v++) {
         int64_t begin = running;
         for (int w = 0; w < threads; w++) {
             int64_t c = job->starts[w][v];
+            if (job->sorted) { /* less the worker's tets of smallest id v, which bring no entry */
+                int64_t lo = job->first[v] > range[w][0] ? job->first[v] : range[w][0];
+                int64_t hi = job->first[v + 1] < range[w][1] ? job->first[v + 1] : range[w][1];
+                c -= hi > lo ? hi - lo : 0;
+            }
             job->starts[w][v] = (uint32_t)running;
             running += c;
         }
@@ -397,9 +455,13 @@ static int prefix_counts(match_job *job)
     return 0;
 }
 
+/* Where bucket b's work starts, for splitting the buckets among the workers: its entries, and with sorted
+ * tets three faces for each tet of a smaller smallest id. */
 static int64_t first_entry(const void *ctx, int64_t b)
 {
-    return bucket_first(ctx, b);
+    const match_job *job = ctx;
+    int64_t tets_before = job->sorted ? (int64_t)job->first[job->wa + b] - job->first[job->wa] : 0;
+    return bucket_first(job, job->wa + b) + 3 * tets_before;
 }
 
 /* The faces of the bad bucket `b` whose key is `key`: count and the first items, ascending. */
@@ -430,7 +492,8 @@ static void free_job(match_job *job)
         free(job->scratch[w].faces);
         free(job->scratch[w].table);
     }
-    tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entry_count ? job->entry_count : 1));
+    tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entries_cap ? job->entries_cap : 1));
+    tpk_free_large(job->first, sizeof *job->first * (size_t)(job->buckets + 1));
     free(job);
 }
 
@@ -463,6 +526,8 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
     for (int w = 0; w < threads; w++)
         if (!(job->starts[w] = tpk_alloc_large(sizeof *job->starts[w] * (size_t)(job->buckets ? job->buckets : 1))))
             return finish(job, TPK_MATCH_NOMEM);
+    if (job->plain && job->lo == 0 && job->hi == m->vertex_count && items_end <= INT32_MAX)
+        job->first = tpk_alloc_large(sizeof *job->first * (size_t)(job->buckets + 1)); /* NULL: no matter */
 
     /* count over the items, scatter over them again, match over the buckets: each split among the workers */
     tpk_parallel_for(items_end - items_begin, threads, count_entries, job);
@@ -471,24 +536,46 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
             f->bad_item = job->bad_item[w];
             return finish(job, TPK_MATCH_BAD_ITEM);
         }
-    if (prefix_counts(job))
-        return finish(job, TPK_MATCH_LIMIT);
-    job->entries = tpk_alloc_large(sizeof *job->entries * (size_t)(job->entry_count ? job->entry_count : 1));
-    if (!job->entries)
-        return finish(job, TPK_MATCH_NOMEM);
-    tpk_parallel_for(items_end - items_begin, threads, scatter_entries, job);
-    job->bucket_end = job->starts[threads - 1];
-    tpk_split_by(first_entry, job, job->buckets, job->entry_count, threads, job->bucket_begin);
-    tpk_parallel_for(threads, threads, match_buckets, job);
-    for (int w = 0; w < threads; w++)
-        if (job->scratch[w].failed) {
-            f->largest = job->largest;
+    int windows = m->windows > 1 ? m->windows : 1;
+    if (job->first) {
+        job->sorted = 1;
+        for (int w = 0; w < threads; w++)
+            job->sorted &= !job->unsorted[w];
+        for (int64_t v = items_end > 0 ? clamped_smallest(job, items_end - 1) + 1 : 0; v <= job->buckets; v++)
+            job->first[v] = (int32_t)items_end;
+        if (!job->sorted) {
+            tpk_free_large(job->first, sizeof *job->first * (size_t)(job->buckets + 1));
+            job->first = NULL;
+        } else {
+            windows = (windows + 1) / 2; /* half the entries: a window holds twice the buckets */
+        }
+    }
+    if (windows > job->buckets)
+        windows = job->buckets > 0 ? (int)job->buckets : 1;
+    for (int k = 0; k < windows; k++) {
+        job->wa = job->buckets * k / windows, job->wb = job->buckets * (k + 1) / windows;
+        if (prefix_counts(job, items_end - items_begin))
+            return finish(job, TPK_MATCH_LIMIT);
+        tpk_free_large(job->entries, sizeof *job->entries * (size_t)(job->entries_cap ? job->entries_cap : 1));
+        job->entries_cap = job->entry_count;
+        job->entries = tpk_alloc_large(sizeof *job->entries * (size_t)(job->entry_count ? job->entry_count : 1));
+        if (!job->entries)
             return finish(job, TPK_MATCH_NOMEM);
-        }
-    for (int w = 0; w < threads; w++)
-        if (m->neighbors && job->scratch[w].bad_bucket >= 0) {
-            describe_shared(job, w, f);
-            return finish(job, TPK_MATCH_SHARED);
-        }
+        tpk_parallel_for(items_end - items_begin, threads, scatter_entries, job);
+        job->bucket_end = job->starts[threads - 1];
+        int64_t work = job->entry_count + (job->sorted ? 3 * (int64_t)(job->first[job->wb] - job->first[job->wa]) : 0);
+        tpk_split_by(first_entry, job, job->wb - job->wa, work, threads, job->bucket_begin);
+        tpk_parallel_for(threads, threads, match_buckets, job);
+        for (int w = 0; w < threads; w++)
+            if (job->scratch[w].failed) {
+                f->largest = job->largest;
+                return finish(job, TPK_MATCH_NOMEM);
+            }
+        for (int w = 0; w < threads; w++)
+            if (m->neighbors && job->scratch[w].bad_bucket >= 0) {
+                describe_shared(job, w, f);
+                return finish(job, TPK_MATCH_SHARED);
+            }
+    }
     return finish(job, TPK_MATCH_OK);
 }

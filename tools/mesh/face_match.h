@@ -10,7 +10,9 @@
  *   tet across face k, or -1), the converter's stage; a face of 3+ tets stops it (TPK_MATCH_SHARED).
  * - runs (`run` set): each bucket sorted by key, item and local face, and every run of equal faces handed
  *   to `run`, for reports whose order must not depend on anything but the mesh.
- * Workers take contiguous item ranges and bucket ranges, so results do not depend on timing or threads. */
+ * Workers take contiguous item ranges and bucket ranges, so results do not depend on timing or threads.
+ * Plain tets in order of their smallest id (connect after reorder) enter only the bucket of their second
+ * smallest id: each bucket's tets of that smallest id are one run of the array, merged in by item. */
 #ifndef TPK_FACE_MATCH_H
 #define TPK_FACE_MATCH_H
 
@@ -29,6 +31,8 @@ typedef struct tpk_match_face {
 typedef struct tpk_face_matcher {
     int64_t item_count, vertex_count; /* ids must lie in [0, vertex_count) */
     int64_t window_lo, window_hi;     /* buckets matched (0, 0: all): faces with a smallest id outside are left out */
+    int windows;                      /* 2 or more: the buckets matched in that many windows of ids, one after
+                                       * the other (entries for one window at a time), after one count pass */
     int64_t item_begin, item_end;     /* items scanned (0, 0: all), for a window whose items lie in a range */
     int threads;                      /* workers, as the caller decided (tpk_threads_for) */
     void *user;                       /* passed to every callback */
