@@ -365,20 +365,29 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
     }
 }
 
-/* Tet t's corners' parametric points written, when corner_range left them for later. */
+/* Tet t's corners' parametric points written, when corner_range left them for later, from its cell's
+ * type and nodes as vertices (cell_nodes) and, when `nodes` is not NULL, those nodes' parametric points. */
+static void ensure_xi_of(refine *r, int64_t t, int type, const int32_t *verts, const double (*nodes)[3])
+{
+    int n = tpk_cell_map_nodes(type);
+    for (int k = 0; k < 4; k++) {
+        int j = 0;
+        while (j < n && verts[j] != r->tets[4 * t + k])
+            j++; /* found: corner_range found every corner among the nodes */
+        if (nodes)
+            memcpy(r->xi + 12 * t + 3 * k, nodes[j], sizeof nodes[j]);
+        else
+            tpk_cell_map_node(type, j, r->xi + 12 * t + 3 * k);
+    }
+    r->xi_later[t] = 0;
+}
+
 static void ensure_xi(refine *r, int64_t t)
 {
     if (!r->xi_later[t])
         return;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
-    int type = cell_nodes(r, r->cell[t], verts), n = tpk_cell_map_nodes(type);
-    for (int k = 0; k < 4; k++) {
-        int j = 0;
-        while (j < n && verts[j] != r->tets[4 * t + k])
-            j++; /* found: corner_range found every corner among the nodes */
-        tpk_cell_map_node(type, j, r->xi + 12 * t + 3 * k);
-    }
-    r->xi_later[t] = 0;
+    ensure_xi_of(r, t, cell_nodes(r, r->cell[t], verts), verts, NULL);
 }
 
 static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -487,6 +496,8 @@ typedef struct coef_cache {
      * coordinate, and the bounded slots' values at them, filled for slots 0 .. filled as they are met */
     int64_t cell;
     int cell_type, filled;
+    int xi_type;                              /* the type whose nodes' parametric points xi_node holds */
+    double xi_node[TPK_CELL_MAP_MAX_NODES][3]; /* for ensure_xi_of */
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     double node[TPK_CELL_MAP_MAX_NODES][3], largest;
     double *value, *big; /* per bounded slot: TPK_CELL_MAP_MAX_NODES values, their largest magnitude */
@@ -713,7 +724,14 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
     if (!r->exact && cache->rough_count && rough_bound(r, t, cache, (const double (*)[3])p))
         return;
-    ensure_xi(r, t);
+    if (r->xi_later[t]) { /* the cell's nodes are at hand */
+        if (cache->xi_type != type) {
+            for (int k = 0; k < n; k++)
+                tpk_cell_map_node(type, k, cache->xi_node[k]);
+            cache->xi_type = type;
+        }
+        ensure_xi_of(r, t, type, cache->verts, (const double (*)[3])cache->xi_node);
+    }
     const double *by_node = NULL;
     double value_margin = 0; /* direct: the rounding of the values at the domain points, through the inverse */
     if (direct) { /* the cell's map at the domain points, then the inverse */
