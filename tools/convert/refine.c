@@ -435,6 +435,8 @@ static int place_corners(refine *r, int threads)
                                "inside it (the map does not invert there); convert it without --max-error",
                                (long long)c, tpk_cell_type(r->cells->types[c])->name);
         }
+        if (rc == 0 && r->xi_later[t])
+            continue; /* its corners are nodes: source points, valued already */
         for (int k = 0; rc == 0 && k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
             if (r->m->vertex_source[v] >= 0 || valued[v])
