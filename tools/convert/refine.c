@@ -133,14 +133,19 @@ static void edge_clear(edge_table *e)
 }
 
 /* The tets by vertex, for the tets around a marked edge: a list per vertex linked through the tets'
- * corners, made again each pass by one reading of the tets (into the same memory). The first pass of a
- * million hexahedra's tets visits the edges at some 2,000 of 180,000 vertices: counting every tet by
- * vertex, then scattering them into lists (CSR), took about three times as long as linking them, and
- * its lists then had to be kept by the tets changed since, with a second index of those. */
+ * corners, in no particular order. Made by one reading of the tets in the first pass; after that, where
+ * few tets are cut (under 1 in 32), the tets about to be cut are taken out of their corners' lists (while
+ * their corners are still those the lists went through), and the tets cut and their pieces put in after;
+ * else the lists are made again in the next pass (t5 at order 2 cuts 14% of its tets first, and taking
+ * them out walks more than making the lists does). The first pass of a million
+ * hexahedra's tets visits the edges at some 2,000 of 180,000 vertices: counting every tet by vertex, then
+ * scattering them into lists (CSR), took about three times as long as linking them, and its lists had to
+ * be kept by the tets changed since, with a second index of those. */
 typedef struct vertex_tets {
+    int64_t vertices;              /* the vertices with a list (head); 0: to be made again */
     int64_t vertex_cap, corner_cap;
-    int32_t *head; /* per vertex: the last tet at it, -1: none */
-    int32_t *next; /* per tet corner (4 t + k): the tet before t at that corner's vertex, -1: none */
+    int32_t *head;                 /* per vertex: a tet at it, -1: none */
+    int32_t *next;                 /* per tet corner (4 t + k): another tet at that corner's vertex, -1: none */
 } vertex_tets;
 
 /* ---- the state --------------------------------------------------------------------------------- */
@@ -1153,7 +1158,7 @@ static int cut_all(refine *r)
     return 0;
 }
 
-static int vertex_tets_make(refine *r)
+static int vertex_tets_room(refine *r)
 {
     vertex_tets *vt = &r->by_vertex;
     int64_t nv = r->m->vertex_count, corners = 4 * r->count;
@@ -1167,14 +1172,50 @@ static int vertex_tets_make(refine *r)
             return -1;
         vt->corner_cap = corners + corners / 2 + 1024;
     }
-    const int32_t *tets = r->tets;
-    int32_t *head = vt->head, *next = vt->next;
-    for (int64_t v = 0; v < nv; v++)
-        head[v] = -1;
-    for (int64_t i = 0; i < corners; i++) { /* the lists run from the last tet to the first */
-        next[i] = head[tets[i]];
-        head[tets[i]] = (int32_t)(i >> 2);
-    }
+    for (int64_t v = vt->vertices; v < nv; v++) /* vertices new since: no list yet */
+        vt->head[v] = -1;
+    vt->vertices = nv;
+    return 0;
+}
+
+/* Tets t (the `count` listed) put in their corners' lists. */
+static void vertex_tets_link(refine *r, const int64_t *tets, int64_t count)
+{
+    int32_t *head = r->by_vertex.head, *next = r->by_vertex.next;
+    for (int64_t i = 0; i < count; i++)
+        for (int64_t t = tets ? tets[i] : i, k = 0; k < 4; k++) {
+            int32_t v = r->tets[4 * t + k];
+            next[4 * t + k] = head[v];
+            head[v] = (int32_t)t;
+        }
+}
+
+/* The tets of `active` (in_active), about to be cut, taken out of their corners' lists. */
+static int vertex_tets_unlink(refine *r, const int64_t *active, int64_t count, const uint8_t *in_active)
+{
+    uint8_t *done = calloc((size_t)(r->by_vertex.vertices ? r->by_vertex.vertices : 1), 1);
+    if (!done)
+        return -1;
+    int32_t *head = r->by_vertex.head, *next = r->by_vertex.next;
+    for (int64_t i = 0; i < count; i++)
+        for (int k = 0; k < 4; k++) {
+            int32_t v = r->tets[4 * active[i] + k];
+            if (done[v])
+                continue;
+            done[v] = 1;
+            for (int32_t *slot = &head[v]; *slot >= 0;) {
+                const int32_t *c = r->tets + 4 * (int64_t)*slot;
+                int kv = 0;
+                while (c[kv] != v)
+                    kv++;
+                int32_t *after = &next[4 * (int64_t)*slot + kv];
+                if (in_active[*slot])
+                    *slot = *after;
+                else
+                    slot = after;
+            }
+        }
+    free(done);
     return 0;
 }
 
@@ -1251,7 +1292,9 @@ static int refine_pass(refine *r, double limit)
     edge_clear(&r->marks);
     closure cl = {{NULL, 0, 0}, calloc((size_t)(r->count ? r->count : 1), 1), 0};
     int64_t *active = NULL;
-    int rc = cl.in_active ? vertex_tets_make(r) : -1;
+    int made = r->by_vertex.vertices > 0, rc = cl.in_active ? vertex_tets_room(r) : -1;
+    if (rc == 0 && !made) /* every vertex's list made (vertex_tets_room emptied them) */
+        vertex_tets_link(r, NULL, r->count);
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
         if (!(r->criterion[r->todo[i]] <= limit))
             rc = mark_longest(r, &cl.queue, r->todo[i]);
@@ -1265,12 +1308,24 @@ static int refine_pass(refine *r, double limit)
     for (int64_t t = 0, n = 0; rc == 0 && t < r->count; t++)
         if (cl.in_active[t])
             active[n++] = t;
+    int keep = cl.active_count < r->count / 32; /* the lists kept, the tets cut taken out and put back */
+    if (rc == 0 && keep)
+        rc = vertex_tets_unlink(r, active, cl.active_count, cl.in_active);
     free(cl.in_active);
     if (rc != 0) {
         free(active);
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     }
-    return cut_marked(r, active, cl.active_count);
+    if ((rc = cut_marked(r, active, cl.active_count)) != 0)
+        return rc;
+    if (!keep) {
+        r->by_vertex.vertices = 0;
+        return 0;
+    }
+    if (vertex_tets_room(r) != 0) /* the tets cut and their pieces (r->todo) put in */
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    vertex_tets_link(r, r->todo, r->todo_count);
+    return 0;
 }
 
 /* ---- set-up and hand-back ---------------------------------------------------------------------- */
