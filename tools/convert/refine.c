@@ -185,7 +185,6 @@ typedef struct refine {
     int report_fields;     /* fields bounded (not constant) */
     int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
-    int8_t *longest;       /* per tet: its greatest edge (tet_edges), found when it was last bounded */
     uint8_t *rough;        /* per tet: bounded by rough_bound */
     /* per type with tpk_cell_map_nonlinear (0: hexahedron, 1: quadratic tetra; NULL when no cell has it),
      * per set of 4 nodes (bits in node order), per monomial: the Bernstein bound of the monomial less its
@@ -837,7 +836,6 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
                     __builtin_prefetch(r->added + (int64_t)(v - r->n0) * r->slots);
             }
         bound_tet(r, r->todo[i], &r->cache[w]);
-        r->longest[r->todo[i]] = (int8_t)greatest_edge(r, r->todo[i], 0x3f); /* its corners are at hand */
     }
 }
 
@@ -865,7 +863,7 @@ static int reserve_tets(refine *r, int64_t need)
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
         grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
         grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
-        grow((void **)&r->marked, sizeof *r->marked, cap) || grow((void **)&r->longest, sizeof *r->longest, cap) ||
+        grow((void **)&r->marked, sizeof *r->marked, cap) ||
         grow((void **)&r->rough, sizeof *r->rough, cap) ||
         grow((void **)&r->todo, sizeof *r->todo, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
@@ -1253,7 +1251,7 @@ static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
 
 static int mark_longest(refine *r, edge_queue *q, int64_t t)
 {
-    int e = r->longest[t]; /* a tet is bounded after each change: still its greatest */
+    int e = greatest_edge(r, t, 0x3f); /* found here, for the few tets marked, not for every tet bounded */
     return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
 }
 
@@ -1415,7 +1413,7 @@ static void release(refine *r, int threads)
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
-    free(r->longest), free(r->rough), free(r->xi_later), free(r->by_vertex.head), free(r->by_vertex.next);
+    free(r->rough), free(r->xi_later), free(r->by_vertex.head), free(r->by_vertex.next);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
