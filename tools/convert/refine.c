@@ -132,6 +132,22 @@ static void edge_clear(edge_table *e)
     e->count = 0;
 }
 
+/* The tets by vertex, for the tets around a marked edge: a list per vertex linked through the tets'
+ * corners, in no particular order. Made by one reading of the tets in the first pass; after that, where
+ * few tets are cut (under 1 in 32), the tets about to be cut are taken out of their corners' lists (while
+ * their corners are still those the lists went through), and the tets cut and their pieces put in after;
+ * else the lists are made again in the next pass (t5 at order 2 cuts 14% of its tets first, and taking
+ * them out walks more than making the lists does). The first pass of a million
+ * hexahedra's tets visits the edges at some 2,000 of 180,000 vertices: counting every tet by vertex, then
+ * scattering them into lists (CSR), took about three times as long as linking them, and its lists had to
+ * be kept by the tets changed since, with a second index of those. */
+typedef struct vertex_tets {
+    int64_t vertices;              /* the vertices with a list (head); 0: to be made again */
+    int64_t vertex_cap, corner_cap;
+    int32_t *head;                 /* per vertex: a tet at it, -1: none */
+    int32_t *next;                 /* per tet corner (4 t + k): another tet at that corner's vertex, -1: none */
+} vertex_tets;
+
 /* ---- the state --------------------------------------------------------------------------------- */
 
 typedef struct refine {
@@ -169,8 +185,6 @@ typedef struct refine {
     int report_fields;     /* fields bounded (not constant) */
     int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
-    int8_t *longest;       /* per tet: its greatest edge (tet_edges), found when it was last bounded */
-    uint8_t *changed;      /* per tet: cut or made since the tets by vertex (`base`) were built */
     uint8_t *rough;        /* per tet: bounded by rough_bound */
     /* per type with tpk_cell_map_nonlinear (0: hexahedron, 1: quadratic tetra; NULL when no cell has it),
      * per set of 4 nodes (bits in node order), per monomial: the Bernstein bound of the monomial less its
@@ -178,9 +192,7 @@ typedef struct refine {
      * flat tets */
     double *departure[2];
     int exact;             /* bound_tet: every tet through its Bernstein coefficients */
-    int64_t changed_count;
-    struct vertex_tets *base; /* the tets by vertex as they were when built (refine_pass) */
-    int64_t base_vertices;    /* the vertices there were then */
+    vertex_tets by_vertex; /* the tets by vertex (refine_pass) */
 } refine;
 
 static float value_of(const refine *r, int32_t v, int slot)
@@ -365,20 +377,29 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
     }
 }
 
-/* Tet t's corners' parametric points written, when corner_range left them for later. */
+/* Tet t's corners' parametric points written, when corner_range left them for later, from its cell's
+ * type and nodes as vertices (cell_nodes) and, when `nodes` is not NULL, those nodes' parametric points. */
+static void ensure_xi_of(refine *r, int64_t t, int type, const int32_t *verts, const double (*nodes)[3])
+{
+    int n = tpk_cell_map_nodes(type);
+    for (int k = 0; k < 4; k++) {
+        int j = 0;
+        while (j < n && verts[j] != r->tets[4 * t + k])
+            j++; /* found: corner_range found every corner among the nodes */
+        if (nodes)
+            memcpy(r->xi + 12 * t + 3 * k, nodes[j], sizeof nodes[j]);
+        else
+            tpk_cell_map_node(type, j, r->xi + 12 * t + 3 * k);
+    }
+    r->xi_later[t] = 0;
+}
+
 static void ensure_xi(refine *r, int64_t t)
 {
     if (!r->xi_later[t])
         return;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
-    int type = cell_nodes(r, r->cell[t], verts), n = tpk_cell_map_nodes(type);
-    for (int k = 0; k < 4; k++) {
-        int j = 0;
-        while (j < n && verts[j] != r->tets[4 * t + k])
-            j++; /* found: corner_range found every corner among the nodes */
-        tpk_cell_map_node(type, j, r->xi + 12 * t + 3 * k);
-    }
-    r->xi_later[t] = 0;
+    ensure_xi_of(r, t, cell_nodes(r, r->cell[t], verts), verts, NULL);
 }
 
 static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -418,6 +439,8 @@ static int place_corners(refine *r, int threads)
                                "inside it (the map does not invert there); convert it without --max-error",
                                (long long)c, tpk_cell_type(r->cells->types[c])->name);
         }
+        if (rc == 0 && r->xi_later[t])
+            continue; /* its corners are nodes: source points, valued already */
         for (int k = 0; rc == 0 && k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
             if (r->m->vertex_source[v] >= 0 || valued[v])
@@ -487,6 +510,8 @@ typedef struct coef_cache {
      * coordinate, and the bounded slots' values at them, filled for slots 0 .. filled as they are met */
     int64_t cell;
     int cell_type, filled;
+    int xi_type;                              /* the type whose nodes' parametric points xi_node holds */
+    double xi_node[TPK_CELL_MAP_MAX_NODES][3]; /* for ensure_xi_of */
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     double node[TPK_CELL_MAP_MAX_NODES][3], largest;
     double *value, *big; /* per bounded slot: TPK_CELL_MAP_MAX_NODES values, their largest magnitude */
@@ -713,7 +738,14 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
     if (!r->exact && cache->rough_count && rough_bound(r, t, cache, (const double (*)[3])p))
         return;
-    ensure_xi(r, t);
+    if (r->xi_later[t]) { /* the cell's nodes are at hand */
+        if (cache->xi_type != type) {
+            for (int k = 0; k < n; k++)
+                tpk_cell_map_node(type, k, cache->xi_node[k]);
+            cache->xi_type = type;
+        }
+        ensure_xi_of(r, t, type, cache->verts, (const double (*)[3])cache->xi_node);
+    }
     const double *by_node = NULL;
     double value_margin = 0; /* direct: the rounding of the values at the domain points, through the inverse */
     if (direct) { /* the cell's map at the domain points, then the inverse */
@@ -804,7 +836,6 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
                     __builtin_prefetch(r->added + (int64_t)(v - r->n0) * r->slots);
             }
         bound_tet(r, r->todo[i], &r->cache[w]);
-        r->longest[r->todo[i]] = (int8_t)greatest_edge(r, r->todo[i], 0x3f); /* its corners are at hand */
     }
 }
 
@@ -832,8 +863,8 @@ static int reserve_tets(refine *r, int64_t need)
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
         grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
         grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
-        grow((void **)&r->marked, sizeof *r->marked, cap) || grow((void **)&r->longest, sizeof *r->longest, cap) ||
-        grow((void **)&r->changed, sizeof *r->changed, cap) || grow((void **)&r->rough, sizeof *r->rough, cap) ||
+        grow((void **)&r->marked, sizeof *r->marked, cap) ||
+        grow((void **)&r->rough, sizeof *r->rough, cap) ||
         grow((void **)&r->todo, sizeof *r->todo, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
@@ -1125,54 +1156,64 @@ static int cut_all(refine *r)
     return 0;
 }
 
-/* Tets by vertex (CSR over the tets there are), for the tets around a marked edge. */
-typedef struct vertex_tets {
-    int64_t *start;
-    int32_t *tets;
-} vertex_tets;
-
-/* Each worker takes a range of vertices and reads every tet for them: the lists are in tet order, whatever
- * the thread count. */
-typedef struct vertex_tets_job {
-    const refine *r;
-    vertex_tets *vt;
-    int scatter;      /* 0: count, 1: fill */
-    int changed_only; /* only the tets changed since `base` */
-} vertex_tets_job;
-
-static void vertex_tets_range(void *ctx, int64_t begin, int64_t end, int w)
+static int vertex_tets_room(refine *r)
 {
-    vertex_tets_job *job = ctx;
-    const int32_t *tets = job->r->tets;
-    int64_t *start = job->vt->start, n = 4 * job->r->count;
-    (void)w;
-    const uint8_t *changed = job->changed_only ? job->r->changed : NULL;
-    if (!job->scatter) {
-        for (int64_t i = 0; i < n; i++)
-            if (tets[i] >= begin && tets[i] < end && (!changed || changed[i / 4]))
-                start[tets[i] + 2]++;
-    } else {
-        for (int64_t i = 0; i < n; i++)
-            if (tets[i] >= begin && tets[i] < end && (!changed || changed[i / 4]))
-                job->vt->tets[start[tets[i] + 1]++] = (int32_t)(i / 4);
+    vertex_tets *vt = &r->by_vertex;
+    int64_t nv = r->m->vertex_count, corners = 4 * r->count;
+    if (nv > vt->vertex_cap) {
+        if (grow((void **)&vt->head, sizeof *vt->head, nv + nv / 2 + 1024) != 0)
+            return -1;
+        vt->vertex_cap = nv + nv / 2 + 1024;
     }
+    if (corners > vt->corner_cap) {
+        if (grow((void **)&vt->next, sizeof *vt->next, corners + corners / 2 + 1024) != 0)
+            return -1;
+        vt->corner_cap = corners + corners / 2 + 1024;
+    }
+    for (int64_t v = vt->vertices; v < nv; v++) /* vertices new since: no list yet */
+        vt->head[v] = -1;
+    vt->vertices = nv;
+    return 0;
 }
 
-/* The tets by vertex: of every tet, or (changed_only) of those changed since `base` was built. */
-static int vertex_tets_make(const refine *r, vertex_tets *vt, int changed_only)
+/* Tets t (the `count` listed) put in their corners' lists. */
+static void vertex_tets_link(refine *r, const int64_t *tets, int64_t count)
 {
-    int64_t nv = r->m->vertex_count;
-    vt->start = calloc((size_t)nv + 2, sizeof *vt->start);
-    vt->tets = malloc(sizeof *vt->tets * (size_t)(4 * (changed_only ? r->changed_count : r->count) + 1));
-    if (!vt->start || !vt->tets)
+    int32_t *head = r->by_vertex.head, *next = r->by_vertex.next;
+    for (int64_t i = 0; i < count; i++)
+        for (int64_t t = tets ? tets[i] : i, k = 0; k < 4; k++) {
+            int32_t v = r->tets[4 * t + k];
+            next[4 * t + k] = head[v];
+            head[v] = (int32_t)t;
+        }
+}
+
+/* The tets of `active` (in_active), about to be cut, taken out of their corners' lists. */
+static int vertex_tets_unlink(refine *r, const int64_t *active, int64_t count, const uint8_t *in_active)
+{
+    uint8_t *done = calloc((size_t)(r->by_vertex.vertices ? r->by_vertex.vertices : 1), 1);
+    if (!done)
         return -1;
-    vertex_tets_job job = {r, vt, 0, changed_only};
-    int threads = tpk_threads_for(4 * r->count, r->threads, 1 << 18);
-    tpk_parallel_for(nv, threads, vertex_tets_range, &job);
-    for (int64_t v = 0; v < nv; v++)
-        vt->start[v + 2] += vt->start[v + 1];
-    job.scatter = 1;
-    tpk_parallel_for(nv, threads, vertex_tets_range, &job);
+    int32_t *head = r->by_vertex.head, *next = r->by_vertex.next;
+    for (int64_t i = 0; i < count; i++)
+        for (int k = 0; k < 4; k++) {
+            int32_t v = r->tets[4 * active[i] + k];
+            if (done[v])
+                continue;
+            done[v] = 1;
+            for (int32_t *slot = &head[v]; *slot >= 0;) {
+                const int32_t *c = r->tets + 4 * (int64_t)*slot;
+                int kv = 0;
+                while (c[kv] != v)
+                    kv++;
+                int32_t *after = &next[4 * (int64_t)*slot + kv];
+                if (in_active[*slot])
+                    *slot = *after;
+                else
+                    slot = after;
+            }
+        }
+    free(done);
     return 0;
 }
 
@@ -1184,12 +1225,8 @@ typedef struct edge_queue {
     int64_t count, cap;
 } edge_queue;
 
-/* Marks edge (a, b) and queues it, when not marked yet. */
-static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
+static int queue_push(edge_queue *q, uint64_t key)
 {
-    uint64_t key = edge_key(a, b);
-    if (edge_find(&r->marks, key, NULL))
-        return 0;
     if (q->count >= q->cap) {
         int64_t cap = 2 * q->cap + 1024;
         uint64_t *grown = realloc(q->keys, sizeof *grown * (size_t)cap);
@@ -1198,12 +1235,23 @@ static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
         q->keys = grown, q->cap = cap;
     }
     q->keys[q->count++] = key;
+    return 0;
+}
+
+/* Marks edge (a, b) and queues it, when not marked yet. */
+static int mark(refine *r, edge_queue *q, int32_t a, int32_t b)
+{
+    uint64_t key = edge_key(a, b);
+    if (edge_find(&r->marks, key, NULL))
+        return 0;
+    if (queue_push(q, key) != 0)
+        return -1;
     return edge_put(&r->marks, key, -1);
 }
 
 static int mark_longest(refine *r, edge_queue *q, int64_t t)
 {
-    int e = r->longest[t]; /* a tet is bounded after each change: still its greatest */
+    int e = greatest_edge(r, t, 0x3f); /* found here, for the few tets marked, not for every tet bounded */
     return mark(r, q, r->tets[4 * t + tet_edges[e][0]], r->tets[4 * t + tet_edges[e][1]]);
 }
 
@@ -1214,81 +1262,53 @@ typedef struct closure {
     int64_t active_count;
 } closure;
 
-/* The tets of `vt` around edge (a, b) (in both vertices' lists, each in tet order; with `skip_changed`,
- * not those changed since `base`, listed elsewhere): each marks the edge, and its longest the first time. */
-static int visit_edge(refine *r, closure *cl, const vertex_tets *vt, int64_t vertices, int skip_changed, int32_t a,
-                      int32_t b)
+/* The tets at edge (a, b): each marks the edge, and its longest the first time. */
+static int visit_edge(refine *r, closure *cl, int32_t a, int32_t b)
 {
-    if (a >= vertices || b >= vertices)
-        return 0;
+    const vertex_tets *vt = &r->by_vertex;
     int rc = 0;
-    for (int64_t i = vt->start[a], j = vt->start[b]; rc == 0 && i < vt->start[a + 1] && j < vt->start[b + 1];) {
-        if (vt->tets[i] < vt->tets[j]) {
-            i++;
-            continue;
-        }
-        if (vt->tets[j] < vt->tets[i]) {
-            j++;
-            continue;
-        }
-        int64_t u = vt->tets[i];
-        i++, j++;
-        if (skip_changed && r->changed[u])
-            continue;
-        const int32_t *v = r->tets + 4 * u;
+    for (int32_t u = vt->head[a]; rc == 0 && u >= 0;) {
+        const int32_t *v = r->tets + 4 * (int64_t)u;
         int ia = 0, ib = 0;
         while (v[ia] != a)
             ia++;
-        while (v[ib] != b)
+        while (ib < 4 && v[ib] != b)
             ib++;
-        r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
-        if (!cl->in_active[u]) /* once is enough: its longest is marked for good */
-            cl->in_active[u] = 1, cl->active_count++, rc = mark_longest(r, &cl->queue, u);
+        if (ib < 4) {
+            r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
+            if (!cl->in_active[u]) /* once is enough: its longest is marked for good */
+                cl->in_active[u] = 1, cl->active_count++, rc = mark_longest(r, &cl->queue, u);
+        }
+        u = vt->next[4 * (int64_t)u + ia];
     }
     return rc;
 }
 
-/* The tets around an edge come from the tets by vertex built in some earlier pass (`base`), less the tets
- * changed since, and from an index of those changed tets; `base` is built again when more than half the
- * tets have changed. The late passes, which cut few tets, then no longer read every tet. */
+/* The closure, as a set, does not depend on the order the edges are visited in. */
 static int refine_pass(refine *r, double limit)
 {
     edge_clear(&r->marks);
-    vertex_tets delta = {NULL, NULL};
     closure cl = {{NULL, 0, 0}, calloc((size_t)(r->count ? r->count : 1), 1), 0};
-    int64_t *active = NULL, count_before = r->count;
-    int full = !r->base || 2 * r->changed_count > r->count, rc = cl.in_active ? 0 : -1;
-    if (rc == 0 && full) {
-        if (r->base)
-            free(r->base->start), free(r->base->tets);
-        else if (!(r->base = calloc(1, sizeof *r->base)))
-            rc = -1;
-        if (rc == 0) {
-            r->base->start = NULL, r->base->tets = NULL;
-            rc = vertex_tets_make(r, r->base, 0);
-            r->base_vertices = r->m->vertex_count;
-            memset(r->changed, 0, (size_t)r->count);
-            r->changed_count = 0;
-        }
-    } else if (rc == 0) {
-        rc = vertex_tets_make(r, &delta, 1);
-    }
+    int64_t *active = NULL;
+    int made = r->by_vertex.vertices > 0, rc = cl.in_active ? vertex_tets_room(r) : -1;
+    if (rc == 0 && !made) /* every vertex's list made (vertex_tets_room emptied them) */
+        vertex_tets_link(r, NULL, r->count);
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
         if (!(r->criterion[r->todo[i]] <= limit))
             rc = mark_longest(r, &cl.queue, r->todo[i]);
     while (rc == 0 && cl.queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
         uint64_t key = cl.queue.keys[--cl.queue.count];
-        int32_t a = (int32_t)(key >> 32), b = (int32_t)(key & 0xffffffffu);
-        rc = visit_edge(r, &cl, r->base, r->base_vertices, !full, a, b);
-        if (rc == 0 && !full)
-            rc = visit_edge(r, &cl, &delta, r->m->vertex_count, 0, a, b);
+        rc = visit_edge(r, &cl, (int32_t)(key >> 32), (int32_t)(key & 0xffffffffu));
     }
-    free(cl.queue.keys), free(delta.start), free(delta.tets);
+    free(cl.queue.keys);
     if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(cl.active_count ? cl.active_count : 1))))
         rc = -1;
     for (int64_t t = 0, n = 0; rc == 0 && t < r->count; t++)
         if (cl.in_active[t])
             active[n++] = t;
+    int keep = cl.active_count < r->count / 32; /* the lists kept, the tets cut taken out and put back */
+    if (rc == 0 && keep)
+        rc = vertex_tets_unlink(r, active, cl.active_count, cl.in_active);
     free(cl.in_active);
     if (rc != 0) {
         free(active);
@@ -1296,11 +1316,13 @@ static int refine_pass(refine *r, double limit)
     }
     if ((rc = cut_marked(r, active, cl.active_count)) != 0)
         return rc;
-    for (int64_t i = 0; i < r->todo_count; i++) { /* the tets cut and their pieces have changed */
-        int64_t t = r->todo[i];
-        if (t >= count_before || !r->changed[t])
-            r->changed[t] = 1, r->changed_count++;
+    if (!keep) {
+        r->by_vertex.vertices = 0;
+        return 0;
     }
+    if (vertex_tets_room(r) != 0) /* the tets cut and their pieces (r->todo) put in */
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    vertex_tets_link(r, r->todo, r->todo_count);
     return 0;
 }
 
@@ -1391,9 +1413,7 @@ static void release(refine *r, int threads)
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
-    free(r->longest), free(r->changed), free(r->rough), free(r->xi_later);
-    if (r->base)
-        free(r->base->start), free(r->base->tets), free(r->base);
+    free(r->rough), free(r->xi_later), free(r->by_vertex.head), free(r->by_vertex.next);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
@@ -1507,7 +1527,7 @@ static int set_up(refine *r, int threads)
     memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
     memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
     for (int64_t t = 0; t < r->count; t++)
-        r->root[t] = t, r->marked[t] = 0, r->changed[t] = 0, r->todo[t] = t;
+        r->root[t] = t, r->marked[t] = 0, r->todo[t] = t;
     r->todo_count = r->count;
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
