@@ -468,29 +468,11 @@ static void min_count(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
-/* One step: every tet straight to its place. */
-static void min_scatter(void *ctx, int64_t begin, int64_t end, int worker)
+/* Tets [begin, end), each with its source and its index (where asked), to next[its smallest vertex >>
+ * shift]++, in input order. */
+static void scatter_by(const min_sort_job *job, uint32_t *next, int shift, int64_t begin, int64_t end)
 {
-    min_sort_job *job = ctx;
-    uint32_t *next = job->next[worker];
     const bytes16 *tets = (const bytes16 *)job->tets;
-    for (int64_t t = begin; t < end; t++) {
-        uint32_t at = next[min_vertex(job->tets + 4 * t)]++;
-        job->tets_out[at] = tets[t];
-        job->source_out[at] = job->source ? job->source[t] : (int32_t)t;
-        if (job->order)
-            job->order[at] = (uint32_t)t;
-    }
-}
-
-/* Two steps, the first: every tet, its source and its index (where asked) to its coarse range, in input
- * order. */
-static void coarse_scatter(void *ctx, int64_t begin, int64_t end, int worker)
-{
-    min_sort_job *job = ctx;
-    uint32_t *next = job->coarse_next[worker];
-    const bytes16 *tets = (const bytes16 *)job->tets;
-    int shift = job->shift;
     for (int64_t t = begin; t < end; t++) {
         uint32_t at = next[min_vertex(job->tets + 4 * t) >> shift]++;
         job->tets_out[at] = tets[t];
@@ -498,6 +480,21 @@ static void coarse_scatter(void *ctx, int64_t begin, int64_t end, int worker)
         if (job->order)
             job->order[at] = (uint32_t)t;
     }
+}
+
+/* One step: every tet straight to its place. */
+static void min_scatter(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const min_sort_job *job = ctx;
+    scatter_by(job, job->next[worker], 0, begin, end);
+}
+
+/* Two steps, the first: every tet, its source and its index (where asked) to its coarse range, in input
+ * order. */
+static void coarse_scatter(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    const min_sort_job *job = ctx;
+    scatter_by(job, job->coarse_next[worker], job->shift, begin, end);
 }
 
 /* The second: worker's coarse ranges [begin, end), each copied out and put in vertex order. A range holds
