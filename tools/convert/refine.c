@@ -323,6 +323,15 @@ static int invert_map(const refine *r, int type, const int32_t *verts, const dou
     return -1;
 }
 
+/* The node of `verts` (n of them) that is vertex v, or -1. */
+static int node_index(const int32_t *verts, int n, int32_t v)
+{
+    for (int j = 0; j < n; j++)
+        if (verts[j] == v)
+            return j;
+    return -1;
+}
+
 /* Each given tet's corners in its cell's parameter space: nodes by their place in the cell, other points
  * (face and cell centres, Steiner points) by inverting the map. An added point then takes every point
  * field's value from the interpolant of the first cell (in tet order) that has it, so that its values
@@ -357,13 +366,8 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
             nodes_of = type;
         }
         int node[4];
-        for (int k = 0; k < 4; k++) {
-            int32_t v = r->tets[4 * t + k];
-            node[k] = -1;
-            for (int j = 0; j < n && node[k] < 0; j++)
-                if (verts[j] == v)
-                    node[k] = j;
-        }
+        for (int k = 0; k < 4; k++)
+            node[k] = node_index(verts, n, r->tets[4 * t + k]);
         /* corners that are all nodes: their points are those of the nodes, written when first read (most
          * such tets are bounded roughly and never read them: 96 bytes a tet of fresh memory spared) */
         r->xi_later[t] = node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0;
@@ -383,9 +387,7 @@ static void ensure_xi_of(refine *r, int64_t t, int type, const int32_t *verts, c
 {
     int n = tpk_cell_map_nodes(type);
     for (int k = 0; k < 4; k++) {
-        int j = 0;
-        while (j < n && verts[j] != r->tets[4 * t + k])
-            j++; /* found: corner_range found every corner among the nodes */
+        int j = node_index(verts, n, r->tets[4 * t + k]); /* found: corner_range found every corner */
         if (nodes)
             memcpy(r->xi + 12 * t + 3 * k, nodes[j], sizeof nodes[j]);
         else
@@ -458,8 +460,10 @@ static int place_corners(refine *r, int threads)
 
 /* ---- the bound --------------------------------------------------------------------------------- */
 
-/* Gradients of the barycentric coordinates 1..3 of tet p (0 when flat). */
-static int barycentric_gradients(const double p[4][3], double g[3][3])
+/* Gradients of the barycentric coordinates 1..3 of tet p; -1 when flat. by_inverse: multiplied by 1 / det
+ * rather than divided by det (rough_bound: the gradient only carries the geometry's bound to the field's,
+ * and the divisions cost). */
+static int barycentric_gradients(const double p[4][3], double g[3][3], int by_inverse)
 {
     double e[3][3];
     for (int k = 0; k < 3; k++)
@@ -472,10 +476,29 @@ static int barycentric_gradients(const double p[4][3], double g[3][3])
     double det = e[0][0] * g[0][0] + e[0][1] * g[0][1] + e[0][2] * g[0][2];
     if (!(fabs(det) > 0))
         return -1;
+    double inverse = by_inverse ? 1 / det : 0;
     for (int k = 0; k < 3; k++)
         for (int i = 0; i < 3; i++)
-            g[k][i] /= det;
+            g[k][i] = by_inverse ? g[k][i] * inverse : g[k][i] / det;
     return 0;
+}
+
+/* Slot s's bound `gap` (a fraction of its range) on a tet with values v there: the larger of gap and the
+ * tet's criterion, gap plus the gradient (g: barycentric_gradients) times the geometry's bound (flat:
+ * gap alone), into *crit; the slot into *worst and *worst_slot when its gap is the largest yet. */
+static void fold_slot(const refine *r, int s, double gap, const double v[4], const double g[3][3], int flat,
+                      double geometry, double *worst, int *worst_slot, double *crit)
+{
+    double grad[3] = {0, 0, 0};
+    for (int k = 0; k < 3 && !flat; k++)
+        for (int j = 0; j < 3; j++)
+            grad[j] += (v[k + 1] - v[0]) * g[k][j];
+    double located = gap + sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * geometry /
+                               r->bound_range[s];
+    if (gap > *worst || *worst_slot < 0)
+        *worst = gap, *worst_slot = s;
+    double c = flat ? gap : located;
+    *crit = c > *crit ? c : *crit;
 }
 
 /* Tet t's bounds: field_error (the largest over bounded slots, as a fraction of the range), geometry
@@ -651,10 +674,8 @@ static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4
     const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(cache->cell_type), count = cache->rough_count, set = 0;
     for (int k = 0; k < 4; k++) {
-        int j = 0;
-        while (j < n && cache->verts[j] != tv[k])
-            j++;
-        if (j == n)
+        int j = node_index(cache->verts, n, tv[k]);
+        if (j < 0)
             return 0;
         set |= 1 << j;
     }
@@ -665,42 +686,21 @@ static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4
     for (int q = 0; q < count; q++)
         geometry += cache->rough_geometry[q] * departure[q];
     double limit = r->o->max_error;
-    double crit = geometry / r->diag_length, worst = 0, e[3][3], g[3][3];
+    double crit = geometry / r->diag_length, worst = 0, g[3][3];
     if (!(crit <= limit))
         return 0;
-    for (int k = 0; k < 3; k++) /* the barycentric gradients (as barycentric_gradients, by 1 / det: the
-                                 * gradient only carries the geometry's bound to the field's) */
-        for (int i = 0; i < 3; i++)
-            e[k][i] = p[k + 1][i] - p[0][i];
-    for (int k = 0; k < 3; k++) {
-        const double *a = e[(k + 1) % 3], *b = e[(k + 2) % 3];
-        g[k][0] = a[1] * b[2] - a[2] * b[1], g[k][1] = a[2] * b[0] - a[0] * b[2], g[k][2] = a[0] * b[1] - a[1] * b[0];
-    }
-    double det = e[0][0] * g[0][0] + e[0][1] * g[0][1] + e[0][2] * g[0][2], inverse = 1 / det;
-    int flat = !(fabs(det) > 0), worst_slot = -1;
-    for (int k = 0; k < 3 && !flat; k++)
-        for (int i = 0; i < 3; i++)
-            g[k][i] *= inverse;
+    int flat = barycentric_gradients(p, g, 1) != 0, worst_slot = -1;
     for (int s = 0; s < r->bounded; s++) {
         fill_slot(r, cache, s);
         if (!cache->finite[s])
             continue; /* as bound_tet: no bound for missing values */
-        double v[4], grad[3] = {0, 0, 0};
-        double gap = ROUGH_MARGIN * cache->big[s];
+        double v[4], gap = ROUGH_MARGIN * cache->big[s];
         for (int q = 0; q < count; q++)
             gap += cache->rough[s * TPK_CELL_MAP_MAX_NONLINEAR + q] * departure[q];
         gap /= r->bound_range[s];
         for (int k = 0; k < 4; k++)
             v[k] = value_of(r, tv[k], r->bound_slot[s]);
-        for (int k = 0; k < 3 && !flat; k++)
-            for (int j = 0; j < 3; j++)
-                grad[j] += (v[k + 1] - v[0]) * g[k][j];
-        double located = gap + sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * geometry /
-                                   r->bound_range[s];
-        if (gap > worst || worst_slot < 0)
-            worst = gap, worst_slot = s;
-        double c = flat ? gap : located;
-        crit = c > crit ? c : crit;
+        fold_slot(r, s, gap, v, (const double (*)[3])g, flat, geometry, &worst, &worst_slot, &crit);
         if (!(crit <= limit))
             return 0;
     }
@@ -778,10 +778,10 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         geometry = sqrt(geometry) + 1e-12 * (norm + 1) * largest; /* the rounding of the sums above */
     }
     double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
-    int flat = barycentric_gradients(p, g) != 0;
+    int flat = barycentric_gradients(p, g, 0) != 0;
     for (int s = 0; s < r->bounded && crit <= limit; s++) { /* a tet over the bound is cut: no need to finish */
         int slot = r->bound_slot[s];
-        double v[4], grad[3] = {0, 0, 0}, gap = 0, cv[4][3];
+        double v[4], gap = 0, cv[4][3];
         double *value = cache->value + (int64_t)s * TPK_CELL_MAP_MAX_NODES;
         fill_slot(r, cache, s);
         int finite = cache->finite[s];
@@ -805,15 +805,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
                 gap = fabs(acc[0][i]) > gap ? fabs(acc[0][i]) : gap;
             gap = (gap + 1e-12 * (norm + 1) * cache->big[s]) / r->bound_range[s];
         }
-        for (int k = 0; k < 3 && !flat; k++)
-            for (int j = 0; j < 3; j++)
-                grad[j] += (v[k + 1] - v[0]) * g[k][j];
-        double located = gap + sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * geometry /
-                                   r->bound_range[s];
-        if (gap > worst || r->worst_slot[t] < 0)
-            worst = gap, r->worst_slot[t] = s;
-        double c = flat ? gap : located;
-        crit = c > crit ? c : crit;
+        fold_slot(r, s, gap, v, (const double (*)[3])g, flat, geometry, &worst, &r->worst_slot[t], &crit);
     }
     r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
     r->criterion[t] = crit;
