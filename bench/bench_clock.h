@@ -1,13 +1,17 @@
 /* Clocks for the benchmarks: wall time, and CPU time of the whole process (all threads), which is the
- * steadier measure on a shared, loaded machine; the median of timings and the PSNR of two images. */
+ * steadier measure on a shared, loaded machine; the median of timings and the PSNR of two images; and
+ * what their command lines share: the count of runs, the file opened or the reason it was not. */
 #ifndef TPK_BENCH_CLOCK_H
 #define TPK_BENCH_CLOCK_H
 
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
+
+#include "tetpack.h"
 
 static inline double bench_clock(clockid_t id)
 {
@@ -46,6 +50,25 @@ static inline double bench_psnr(const uint8_t *a, const uint8_t *b, size_t n)
     for (size_t i = 0; i < n; i++)
         se += ((double)a[i] - b[i]) * ((double)a[i] - b[i]);
     return se == 0 ? 99.0 : 10.0 * log10(255.0 * 255.0 / (se / (double)n));
+}
+
+/* argv[at] as a count of runs, 1 to 1000; `fallback` when it is absent or out of that range. */
+static inline int bench_runs(int argc, char **argv, int at, int fallback)
+{
+    int runs = argc > at ? atoi(argv[at]) : fallback;
+    return runs < 1 || runs > 1000 ? fallback : runs;
+}
+
+/* The .tpk at path, opened; NULL, with the file and the reason on stderr, when it cannot be. */
+static inline tpk_file *bench_open_file(const char *path)
+{
+    tpk_file *f = NULL;
+    char err[512];
+    if (tpk_open_path(&f, path, NULL, err, sizeof err) != TPK_OK) {
+        fprintf(stderr, "%s: %s\n", path, err);
+        return NULL;
+    }
+    return f;
 }
 
 #endif

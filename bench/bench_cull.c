@@ -17,15 +17,10 @@ int main(int argc, char **argv)
         return 2;
     }
     double iso = atof(argv[2]);
-    int threads = argc > 3 ? atoi(argv[3]) : 1, runs = argc > 4 ? atoi(argv[4]) : 5;
-    if (runs < 1 || runs > 1000)
-        runs = 5;
-    tpk_file *f = NULL;
-    char err[512];
-    if (tpk_open_path(&f, argv[1], NULL, err, sizeof err) != TPK_OK) {
-        fprintf(stderr, "%s: %s\n", argv[1], err);
+    int threads = argc > 3 ? atoi(argv[3]) : 1, runs = bench_runs(argc, argv, 4, 5);
+    tpk_file *f = bench_open_file(argv[1]);
+    if (!f)
         return 2;
-    }
     tpk_mesh_arrays mesh;
     tpk_cull cull;
     if (tpk_load_arrays(f, TPK_LAYOUT_TET16, NULL, 0, &mesh) != TPK_OK || tpk_load_cull(f, &cull) != TPK_OK) {

@@ -18,15 +18,10 @@ int main(int argc, char **argv)
         return 2;
     }
     double value = atof(argv[2]);
-    int threads = argc > 3 ? atoi(argv[3]) : 1, runs = argc > 4 ? atoi(argv[4]) : 9;
-    if (runs < 1 || runs > 1000)
-        runs = 9;
-    tpk_file *f = NULL;
-    char err[512];
-    if (tpk_open_path(&f, argv[1], NULL, err, sizeof err) != TPK_OK) {
-        fprintf(stderr, "%s: %s\n", argv[1], err);
+    int threads = argc > 3 ? atoi(argv[3]) : 1, runs = bench_runs(argc, argv, 4, 9);
+    tpk_file *f = bench_open_file(argv[1]);
+    if (!f)
         return 2;
-    }
     const char *field = NULL;
     tpk_field_desc d;
     for (uint32_t i = 0; !field && i < tpk_field_count(f); i++)

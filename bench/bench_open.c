@@ -8,21 +8,13 @@
 #include "bench_clock.h"
 #include "tetpack.h"
 
-static int compare(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 int main(int argc, char **argv)
 {
     if (argc < 2) {
         fprintf(stderr, "usage: bench_open FILE.tpk [runs]\n");
         return 2;
     }
-    int runs = argc > 2 ? atoi(argv[2]) : 21;
-    if (runs < 1 || runs > 1000)
-        runs = 21;
+    int runs = bench_runs(argc, argv, 2, 21);
     double *open_s = calloc((size_t)runs, sizeof *open_s);
     tpk_file *f = NULL;
     char err[512];
@@ -35,7 +27,7 @@ int main(int argc, char **argv)
         open_s[r] = now() - t0;
         tpk_close(f);
     }
-    qsort(open_s, (size_t)runs, sizeof *open_s, compare);
+    qsort(open_s, (size_t)runs, sizeof *open_s, bench_compare_double);
     if (tpk_open_path(&f, argv[1], NULL, err, sizeof err) != TPK_OK)
         return 2;
     double t0 = now();

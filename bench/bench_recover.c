@@ -17,19 +17,14 @@ int main(int argc, char **argv)
         return 2;
     }
     int layout = argc > 2 ? atoi(argv[2]) : 16, threads = argc > 3 ? atoi(argv[3]) : 1;
-    int runs = argc > 4 ? atoi(argv[4]) : 9;
-    if (runs < 1 || runs > 1000)
-        runs = 9;
+    int runs = bench_runs(argc, argv, 4, 9);
     if (layout != 16 && layout != 20) {
         fprintf(stderr, "layout: 16 or 20, not %d\n", layout);
         return 2;
     }
-    tpk_file *f = NULL;
-    char err[512];
-    if (tpk_open_path(&f, argv[1], NULL, err, sizeof err) != TPK_OK) {
-        fprintf(stderr, "%s: %s\n", argv[1], err);
+    tpk_file *f = bench_open_file(argv[1]);
+    if (!f)
         return 2;
-    }
     tpk_mesh_arrays mesh;
     if (tpk_load_arrays(f, (tpk_layout)layout, NULL, 0, &mesh) != TPK_OK) {
         fprintf(stderr, "%s: no Tet%d layout\n", argv[1], layout);
