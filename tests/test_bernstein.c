@@ -3,7 +3,8 @@
  * tpk_cell_map_degree states (the Bernstein form fitted at the domain points reproduces them at random
  * points; one degree less does not), the bound is never below the error sampled densely, and a
  * function that is linear on the tet gets a bound at rounding level. The rough bound by nonlinear
- * monomials (tpk_cell_map_nonlinear) holds too. */
+ * monomials (tpk_cell_map_nonlinear) holds too, and the quadratic tetra's closed form
+ * (tpk_cell_map_quadratic_tet) gives the Bernstein coefficients. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -268,6 +269,60 @@ TPK_TEST(nonlinear_monomials)
     }
     double r[3] = {0.2, 0.3, 0.1}, m[TPK_CELL_MAP_MAX_NONLINEAR], v[TPK_CELL_MAP_MAX_NODES] = {0};
     CHECK(tpk_cell_map_nonlinear(13, r, m) == 0 && tpk_cell_map_nonlinear_coefficients(25, v, 1, m) == 0);
+}
+
+TPK_TEST(quadratic_tet_blossom)
+{
+    /* convert --max-error's closed form for the quadratic tetra (refine.c quadratic_coefficients): on a
+     * random tet of its parameter space, f at the corners and (f(r_k) + f(r_l)) / 2 - sum_q a_q m_q / 2 on
+     * the edges, from tpk_cell_map_quadratic_tet, are the Bernstein coefficients that the inverse of the
+     * domain points' table gives */
+    static const int pair[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    const tpk_bernstein b = *table(2);
+    unsigned seed = 17;
+    double worst = 0;
+    for (int trial = 0; trial < 200; trial++) {
+        double xi[4][3], value[10], a[TPK_CELL_MAP_MAX_NONLINEAR], at[TPK_BERNSTEIN_MAX_POINTS],
+            coef[TPK_BERNSTEIN_MAX_POINTS], w[4][10], m[6][6], f[4], big = 0;
+        for (int k = 0; k < 4; k++)
+            reference_point(24, &seed, xi[k]);
+        for (int k = 0; k < 10; k++)
+            value[k] = 200 * uniform(&seed) - 100, big = fmax(big, fabs(value[k]));
+        CHECK(tpk_cell_map_quadratic_tet(24, xi[0], w, m) == 10);
+        CHECK(tpk_cell_map_nonlinear_coefficients(24, value, 1, a) == 6);
+        for (int k = 0; k < 4; k++) {
+            double wk[TPK_CELL_MAP_MAX_NODES];
+            tpk_cell_map_weights(24, xi[k], wk);
+            f[k] = 0;
+            for (int j = 0; j < 10; j++) {
+                CHECK(w[k][j] == wk[j]);
+                f[k] += w[k][j] * value[j];
+            }
+        }
+        for (int i = 0; i < b.points; i++)
+            at[i] = cell_value(24, xi, value, b.lambda[i]);
+        tpk_bernstein_coefficients(&b, at, 1, coef);
+        for (int i = 0; i < b.points; i++) {
+            const double *l = b.lambda[i];
+            double closed = NAN;
+            for (int k = 0; k < 4; k++)
+                if (l[k] == 1)
+                    closed = f[k];
+            for (int p = 0; p < 6; p++)
+                if (l[pair[p][0]] == 0.5 && l[pair[p][1]] == 0.5) {
+                    double n = 0;
+                    for (int q = 0; q < 6; q++)
+                        n += a[q] * m[p][q];
+                    closed = 0.5 * (f[pair[p][0]] + f[pair[p][1]]) - 0.5 * n;
+                }
+            CHECK(isfinite(closed));
+            worst = fmax(worst, fabs(closed - coef[i]) / big);
+        }
+    }
+    printf("quadratic tetra: closed form against the inverse, largest difference %.2g of the largest value\n", worst);
+    CHECK(worst < 1e-13);
+    double xi[12] = {0}, w[4][10], m[6][6];
+    CHECK(tpk_cell_map_quadratic_tet(12, xi, w, m) == 0);
 }
 
 TPK_TEST(linear_is_exact)

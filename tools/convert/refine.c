@@ -381,18 +381,26 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
     }
 }
 
-/* Tet t's corners' parametric points written, when corner_range left them for later, from its cell's
- * type and nodes as vertices (cell_nodes) and, when `nodes` is not NULL, those nodes' parametric points. */
-static void ensure_xi_of(refine *r, int64_t t, int type, const int32_t *verts, const double (*nodes)[3])
+/* Tet t's corners' parametric points, when corner_range left them for later, into xi (12 numbers), from
+ * its cell's type and nodes as vertices (cell_nodes) and, when `nodes` is not NULL, those nodes'
+ * parametric points. */
+static void xi_of_nodes(const refine *r, int64_t t, int type, const int32_t *verts, const double (*nodes)[3],
+                        double *xi)
 {
     int n = tpk_cell_map_nodes(type);
     for (int k = 0; k < 4; k++) {
         int j = node_index(verts, n, r->tets[4 * t + k]); /* found: corner_range found every corner */
         if (nodes)
-            memcpy(r->xi + 12 * t + 3 * k, nodes[j], sizeof nodes[j]);
+            memcpy(xi + 3 * k, nodes[j], sizeof nodes[j]);
         else
-            tpk_cell_map_node(type, j, r->xi + 12 * t + 3 * k);
+            tpk_cell_map_node(type, j, xi + 3 * k);
     }
+}
+
+/* Tet t's corners' parametric points written (xi_of_nodes), before it is cut. */
+static void ensure_xi_of(refine *r, int64_t t, int type, const int32_t *verts, const double (*nodes)[3])
+{
+    xi_of_nodes(r, t, type, verts, nodes, r->xi + 12 * t);
     r->xi_later[t] = 0;
 }
 
@@ -534,7 +542,7 @@ typedef struct coef_cache {
     int64_t cell;
     int cell_type, filled;
     int xi_type;                              /* the type whose nodes' parametric points xi_node holds */
-    double xi_node[TPK_CELL_MAP_MAX_NODES][3]; /* for ensure_xi_of */
+    double xi_node[TPK_CELL_MAP_MAX_NODES][3]; /* for xi_of_nodes */
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     double node[TPK_CELL_MAP_MAX_NODES][3], largest;
     double *value, *big; /* per bounded slot: TPK_CELL_MAP_MAX_NODES values, their largest magnitude */
@@ -543,6 +551,15 @@ typedef struct coef_cache {
      * bounded slot as filled (rough[s * TPK_CELL_MAP_MAX_NONLINEAR + q]); rough_count 0: none */
     int rough_count;
     double rough_geometry[TPK_CELL_MAP_MAX_NONLINEAR], *rough;
+    /* the same coefficients with their signs, for form_minus_linear: the map's (form_geometry[q * 3 + c])
+     * and per bounded slot as filled (form[s * TPK_CELL_MAP_MAX_NONLINEAR + q]) */
+    double form_geometry[3 * TPK_CELL_MAP_MAX_NONLINEAR], *form;
+    /* bound_quadratic: qc components (3 axes, the bounded slots, a multiple of 4), the cell they were
+     * gathered for, its node values (10 nodes) and nonlinear coefficients (6), a tet's corner values and
+     * its coefficients (10 points), qc numbers each */
+    int qc;
+    int64_t quad_cell;
+    double *quad_node, *quad_a, *quad_v, *quad_coef;
 } coef_cache;
 
 static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const double *inverse_t, int type,
@@ -655,9 +672,58 @@ static void fill_slot(const refine *r, coef_cache *cache, int s)
     }
     cache->big[s] = big, cache->finite[s] = (uint8_t)finite, cache->filled++;
     double a[TPK_CELL_MAP_MAX_NONLINEAR];
-    for (int q = 0, count = tpk_cell_map_nonlinear_coefficients(cache->cell_type, value, 1, a); q < count; q++)
+    for (int q = 0, count = tpk_cell_map_nonlinear_coefficients(cache->cell_type, value, 1, a); q < count; q++) {
+        cache->form[s * TPK_CELL_MAP_MAX_NONLINEAR + q] = a[q];
         cache->rough[s * TPK_CELL_MAP_MAX_NONLINEAR + q] = fabs(a[q]);
+    }
 }
+
+/* The quadratic tetra's (24) Bernstein coefficients of f - L on a tet of its parameter space, in closed
+ * form, for the map's 3 axes and every bounded slot at once (qc components, a multiple of 4: axes 0-2, slot
+ * s at 3 + s, then zeros): f is quadratic, so they are f's blossom at the tet's corners less L's
+ * (tpk_cell_map_quadratic_tet): d_k = f(r_k) - v_k at corner k, (d_k + d_l) / 2 - sum_q a_q m_q(r_k - r_l)
+ * / 2 on edge (k, l), into coef[i * qc + c] (corners 0-3, then the edges in tet_edges order). w, m: as
+ * tpk_cell_map_quadratic_tet; node[j * qc + c]: node j's values; a[q * qc + c]: the nonlinear coefficients
+ * (tpk_cell_map_nonlinear_coefficients); v[k * qc + c]: the tet's values at its corners. The same numbers
+ * as the cached Bernstein coefficients, to rounding (FORM_MARGIN), with no coefficients to make for a tet
+ * of parameter space met first: the pieces of a cut tet seldom repeat (t5 at order 2 missed the cache on
+ * 8,600 of 53,000 pieces). Four components side by side, as minus_linear. */
+__attribute__((target_clones("avx2", "default"))) static void
+quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], const double *node, const double *a,
+                       const double *v, double *coef)
+{
+    for (int c = 0; c < qc; c += 4) {
+        quad d[4], x, y;
+        for (int k = 0; k < 4; k++) {
+            quad acc = {0, 0, 0, 0};
+            for (int j = 0; j < 10; j++) {
+                memcpy(&y, node + j * qc + c, sizeof y);
+                x = (quad){w[k][j], w[k][j], w[k][j], w[k][j]};
+                acc += x * y;
+            }
+            memcpy(&y, v + k * qc + c, sizeof y);
+            d[k] = acc - y;
+            memcpy(coef + k * qc + c, &d[k], sizeof d[k]);
+        }
+        const quad half = {0.5, 0.5, 0.5, 0.5};
+        for (int e = 0; e < 6; e++) {
+            quad n = {0, 0, 0, 0};
+            for (int q = 0; q < 6; q++) {
+                memcpy(&y, a + q * qc + c, sizeof y);
+                x = (quad){m[e][q], m[e][q], m[e][q], m[e][q]};
+                n += x * y;
+            }
+            quad out = half * (d[tet_edges[e][0]] + d[tet_edges[e][1]]) - half * n;
+            memcpy(coef + (4 + e) * qc + c, &out, sizeof out);
+        }
+    }
+}
+
+/* The rounding of quadratic_coefficients' numbers, as a fraction of the largest value at a node: the
+ * values at the corners sum 10 terms of weights within [-1/8, 1] (corners in the cell), the monomials at
+ * differences are under 1 and their 6 coefficients under 8 times the largest value (4 f_ij - 2 f_i -
+ * 2 f_j): a few units in the last place of numbers under 64, far under 1e-12. */
+#define FORM_MARGIN 1e-12
 
 /* The margin for the rounding of the rough bound of numbers up to `big`: the coefficients' sums of at
  * most 8 terms of integer weights up to 4, times departures up to 1, summed over at most 6 monomials,
@@ -709,6 +775,63 @@ static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4
     return 1;
 }
 
+/* bound_tet for a tet of a quadratic tetra (xi: its corners' parametric points, p: their points), through
+ * quadratic_coefficients: its cell's node values and nonlinear coefficients of every component are
+ * gathered once a cell (cache->quad_cell). */
+static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const double *xi, const double p[4][3])
+{
+    int qc = cache->qc;
+    const int32_t *tv = r->tets + 4 * t;
+    if (cache->quad_cell != cache->cell) {
+        memset(cache->quad_node, 0, sizeof *cache->quad_node * 16 * (size_t)qc);
+        for (int j = 0; j < 10; j++)
+            for (int c = 0; c < 3; c++)
+                cache->quad_node[j * qc + c] = cache->node[j][c];
+        for (int q = 0; q < 6; q++)
+            for (int c = 0; c < 3; c++)
+                cache->quad_a[q * qc + c] = cache->form_geometry[q * 3 + c];
+        for (int s = 0; s < r->bounded; s++) {
+            fill_slot(r, cache, s);
+            for (int j = 0; j < 10; j++)
+                cache->quad_node[j * qc + 3 + s] = cache->value[(int64_t)s * TPK_CELL_MAP_MAX_NODES + j];
+            for (int q = 0; q < 6; q++)
+                cache->quad_a[q * qc + 3 + s] = cache->form[s * TPK_CELL_MAP_MAX_NONLINEAR + q];
+        }
+        cache->quad_cell = cache->cell;
+    }
+    double w[4][10], m[6][6], *v = cache->quad_v, *coef = cache->quad_coef;
+    tpk_cell_map_quadratic_tet(24, xi, w, m);
+    for (int k = 0; k < 4; k++) {
+        for (int c = 0; c < 3; c++)
+            v[k * qc + c] = p[k][c];
+        for (int s = 0; s < r->bounded; s++)
+            v[k * qc + 3 + s] = value_of(r, tv[k], r->bound_slot[s]);
+        for (int c = 3 + r->bounded; c < qc; c++)
+            v[k * qc + c] = 0;
+    }
+    quadratic_coefficients(qc, (const double (*)[10])w, (const double (*)[6])m, cache->quad_node, cache->quad_a, v, coef);
+    double geometry = 0, g[3][3];
+    for (int i = 0; i < 10; i++) {
+        const double *x = coef + i * qc;
+        double sq = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
+        geometry = sq > geometry ? sq : geometry;
+    }
+    geometry = sqrt(geometry) + 2 * FORM_MARGIN * cache->largest; /* 2 > sqrt 3: each axis's rounding */
+    double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
+    int flat = barycentric_gradients(p, g, 0) != 0;
+    for (int s = 0; s < r->bounded && crit <= limit; s++) { /* as bound_tet */
+        double vs[4] = {v[3 + s], v[qc + 3 + s], v[2 * qc + 3 + s], v[3 * qc + 3 + s]}, gap = 0;
+        if (!cache->finite[s] || !isfinite(vs[0]) || !isfinite(vs[1]) || !isfinite(vs[2]) || !isfinite(vs[3]))
+            continue;
+        for (int i = 0; i < 10; i++)
+            gap = fabs(coef[i * qc + 3 + s]) > gap ? fabs(coef[i * qc + 3 + s]) : gap;
+        gap = (gap + FORM_MARGIN * cache->big[s]) / r->bound_range[s];
+        fold_slot(r, s, gap, vs, (const double (*)[3])g, flat, geometry, &worst, &r->worst_slot[t], &crit);
+    }
+    r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
+    r->criterion[t] = crit;
+}
+
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 {
     if (r->cell[t] != cache->cell) { /* a new cell: its nodes and their points */
@@ -721,6 +844,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         }
         double a[3 * TPK_CELL_MAP_MAX_NONLINEAR];
         cache->rough_count = tpk_cell_map_nonlinear_coefficients(cache->cell_type, cache->node[0], 3, a);
+        memcpy(cache->form_geometry, a, sizeof a);
         for (int q = 0; q < cache->rough_count; q++)
             cache->rough_geometry[q] = sqrt(a[3 * q] * a[3 * q] + a[3 * q + 1] * a[3 * q + 1] + a[3 * q + 2] * a[3 * q + 2]);
     }
@@ -731,6 +855,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         return; /* a tet of a tetra: exactly its own interpolant */
     const tpk_bernstein *b = &r->table[degree];
     const double *xi = r->xi + 12 * t;
+    double xi_here[12]; /* a tet whose corners are nodes: their points read here, not written (ensure_xi) */
     const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(type), m = b->points, direct = degree > DIRECT_DEGREE;
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
@@ -744,7 +869,12 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
                 tpk_cell_map_node(type, k, cache->xi_node[k]);
             cache->xi_type = type;
         }
-        ensure_xi_of(r, t, type, cache->verts, (const double (*)[3])cache->xi_node);
+        xi_of_nodes(r, t, type, cache->verts, (const double (*)[3])cache->xi_node, xi_here);
+        xi = xi_here;
+    }
+    if (type == 24) {
+        bound_quadratic(r, t, cache, xi, (const double (*)[3])p);
+        return;
     }
     const double *by_node = NULL;
     double value_margin = 0; /* direct: the rounding of the values at the domain points, through the inverse */
@@ -1409,7 +1539,8 @@ static void release(refine *r, int threads)
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
-            free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite), free(r->cache[w].rough);
+            free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite), free(r->cache[w].rough),
+            free(r->cache[w].form), free(r->cache[w].quad_node);
     free(r->cache), free(r->departure[0]), free(r->departure[1]);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
         free(r->inverse_t[n]), tpk_bernstein_free(&r->table[n]);
@@ -1544,8 +1675,14 @@ static int set_up(refine *r, int threads)
         cc->big = malloc(sizeof *cc->big * (size_t)(r->bounded ? r->bounded : 1));
         cc->finite = malloc((size_t)(r->bounded ? r->bounded : 1));
         cc->rough = malloc(sizeof *cc->rough * TPK_CELL_MAP_MAX_NONLINEAR * (size_t)(r->bounded ? r->bounded : 1));
-        if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite || !cc->rough)
+        cc->form = malloc(sizeof *cc->form * TPK_CELL_MAP_MAX_NONLINEAR * (size_t)(r->bounded ? r->bounded : 1));
+        cc->qc = (3 + r->bounded + 3) & ~3, cc->quad_cell = -1;
+        cc->quad_node = malloc(sizeof *cc->quad_node * 30 * (size_t)cc->qc); /* 10 + 6 + 4 + 10 rows */
+        if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite || !cc->rough ||
+            !cc->form || !cc->quad_node)
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
+        cc->quad_a = cc->quad_node + 10 * cc->qc, cc->quad_v = cc->quad_a + 6 * cc->qc;
+        cc->quad_coef = cc->quad_v + 4 * cc->qc;
     }
     return place_corners(r, threads);
 }

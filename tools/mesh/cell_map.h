@@ -98,6 +98,14 @@ int tpk_cell_map_weights(int type, const double r[3], double *w);
 int tpk_cell_map_nonlinear(int type, const double r[3], double *m);
 int tpk_cell_map_nonlinear_coefficients(int type, const double *v, int comps, double *a);
 
+/* The quadratic tetra (24) on a tet of its parameter space with corners xi (4 points, 12 numbers): the
+ * nodes' weights at each corner (w[k], as tpk_cell_map_weights), and the nonlinear monomials L_i L_j at the
+ * barycentric difference r_k - r_l of each pair of corners (m[p], pairs 01, 02, 03, 12, 13, 23; the
+ * difference's coordinates sum to 0). Returns 10, or 0 for other types. The monomials are homogeneous of
+ * degree 2 in L, so f's blossom at r_k and r_l, the Bernstein coefficient of f on the tet's edge (k, l),
+ * is (f(r_k) + f(r_l)) / 2 - sum_q a_q m[p][q] / 2 (a: tpk_cell_map_nonlinear_coefficients). */
+int tpk_cell_map_quadratic_tet(int type, const double *xi, double (*w)[10], double (*m)[6]);
+
 /* The point the cell with nodes `nodes` (ids into `points`, 3 doubles each) maps r to: sum w[k] x_k in
  * node order. Returns 0, or -1 as tpk_cell_map_weights. */
 int tpk_cell_map_point(int type, const int32_t *nodes, const double *points, const double r[3], double x[3]);
