@@ -555,11 +555,11 @@ typedef struct coef_cache {
      * and per bounded slot as filled (form[s * TPK_CELL_MAP_MAX_NONLINEAR + q]) */
     double form_geometry[3 * TPK_CELL_MAP_MAX_NONLINEAR], *form;
     /* bound_quadratic: qc components (3 axes, the bounded slots, a multiple of 4), the cell they were
-     * gathered for, its node values (10 nodes) and nonlinear coefficients (6), a tet's corner values and
-     * its coefficients (10 points), qc numbers each */
+     * gathered for, its node values (10 nodes) and nonlinear coefficients (6), a tet's corner values (4)
+     * and its coefficients' largest magnitudes (1), qc numbers each */
     int qc;
     int64_t quad_cell;
-    double *quad_node, *quad_a, *quad_v, *quad_coef;
+    double *quad_node, *quad_a, *quad_v, *quad_largest;
 } coef_cache;
 
 static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const double *inverse_t, int type,
@@ -682,18 +682,20 @@ static void fill_slot(const refine *r, coef_cache *cache, int s)
  * form, for the map's 3 axes and every bounded slot at once (qc components, a multiple of 4: axes 0-2, slot
  * s at 3 + s, then zeros): f is quadratic, so they are f's blossom at the tet's corners less L's
  * (tpk_cell_map_quadratic_tet): d_k = f(r_k) - v_k at corner k, (d_k + d_l) / 2 - sum_q a_q m_q(r_k - r_l)
- * / 2 on edge (k, l), into coef[i * qc + c] (corners 0-3, then the edges in tet_edges order). w, m: as
- * tpk_cell_map_quadratic_tet; node[j * qc + c]: node j's values; a[q * qc + c]: the nonlinear coefficients
+ * / 2 on edge (k, l). Of these 10 per component it returns the largest Euclidean norm of the axes' and
+ * writes the largest magnitude of each component's into largest[c]. w, m: as tpk_cell_map_quadratic_tet;
+ * node[j * qc + c]: node j's values; a[q * qc + c]: the nonlinear coefficients
  * (tpk_cell_map_nonlinear_coefficients); v[k * qc + c]: the tet's values at its corners. The same numbers
  * as the cached Bernstein coefficients, to rounding (FORM_MARGIN), with no coefficients to make for a tet
  * of parameter space met first: the pieces of a cut tet seldom repeat (t5 at order 2 missed the cache on
  * 8,600 of 53,000 pieces). Four components side by side, as minus_linear. */
-__attribute__((target_clones("avx2", "default"))) static void
+__attribute__((target_clones("avx2", "default"))) static double
 quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], const double *node, const double *a,
-                       const double *v, double *coef)
+                       const double *v, double *largest)
 {
+    double geometry = 0;
     for (int c = 0; c < qc; c += 4) {
-        quad d[4], x, y;
+        quad d[4], x, y, coef[10];
         for (int k = 0; k < 4; k++) {
             quad acc = {0, 0, 0, 0};
             for (int j = 0; j < 10; j++) {
@@ -702,8 +704,7 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
                 acc += x * y;
             }
             memcpy(&y, v + k * qc + c, sizeof y);
-            d[k] = acc - y;
-            memcpy(coef + k * qc + c, &d[k], sizeof d[k]);
+            coef[k] = d[k] = acc - y;
         }
         const quad half = {0.5, 0.5, 0.5, 0.5};
         for (int e = 0; e < 6; e++) {
@@ -713,10 +714,20 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
                 x = (quad){m[e][q], m[e][q], m[e][q], m[e][q]};
                 n += x * y;
             }
-            quad out = half * (d[tet_edges[e][0]] + d[tet_edges[e][1]]) - half * n;
-            memcpy(coef + (4 + e) * qc + c, &out, sizeof out);
+            coef[4 + e] = half * (d[tet_edges[e][0]] + d[tet_edges[e][1]]) - half * n;
         }
+        double top[4] = {0, 0, 0, 0};
+        for (int i = 0; i < 10; i++) {
+            for (int l = 0; l < 4; l++)
+                top[l] = fabs(coef[i][l]) > top[l] ? fabs(coef[i][l]) : top[l];
+            if (c == 0) {
+                double sq = coef[i][0] * coef[i][0] + coef[i][1] * coef[i][1] + coef[i][2] * coef[i][2];
+                geometry = sq > geometry ? sq : geometry;
+            }
+        }
+        memcpy(largest + c, top, sizeof top);
     }
+    return sqrt(geometry);
 }
 
 /* The rounding of quadratic_coefficients' numbers, as a fraction of the largest value at a node: the
@@ -799,7 +810,7 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         }
         cache->quad_cell = cache->cell;
     }
-    double w[4][10], m[6][6], *v = cache->quad_v, *coef = cache->quad_coef;
+    double w[4][10], m[6][6], *v = cache->quad_v, *largest = cache->quad_largest, g[3][3];
     tpk_cell_map_quadratic_tet(24, xi, w, m);
     for (int k = 0; k < 4; k++) {
         for (int c = 0; c < 3; c++)
@@ -809,23 +820,16 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         for (int c = 3 + r->bounded; c < qc; c++)
             v[k * qc + c] = 0;
     }
-    quadratic_coefficients(qc, (const double (*)[10])w, (const double (*)[6])m, cache->quad_node, cache->quad_a, v, coef);
-    double geometry = 0, g[3][3];
-    for (int i = 0; i < 10; i++) {
-        const double *x = coef + i * qc;
-        double sq = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
-        geometry = sq > geometry ? sq : geometry;
-    }
-    geometry = sqrt(geometry) + 2 * FORM_MARGIN * cache->largest; /* 2 > sqrt 3: each axis's rounding */
+    double geometry = quadratic_coefficients(qc, (const double (*)[10])w, (const double (*)[6])m, cache->quad_node,
+                                             cache->quad_a, v, largest);
+    geometry += 2 * FORM_MARGIN * cache->largest; /* 2 > sqrt 3: each axis's rounding */
     double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
-    int flat = barycentric_gradients(p, g, 0) != 0;
+    int flat = barycentric_gradients(p, g, 1) != 0;
     for (int s = 0; s < r->bounded && crit <= limit; s++) { /* as bound_tet */
         double vs[4] = {v[3 + s], v[qc + 3 + s], v[2 * qc + 3 + s], v[3 * qc + 3 + s]}, gap = 0;
         if (!cache->finite[s] || !isfinite(vs[0]) || !isfinite(vs[1]) || !isfinite(vs[2]) || !isfinite(vs[3]))
             continue;
-        for (int i = 0; i < 10; i++)
-            gap = fabs(coef[i * qc + 3 + s]) > gap ? fabs(coef[i * qc + 3 + s]) : gap;
-        gap = (gap + FORM_MARGIN * cache->big[s]) / r->bound_range[s];
+        gap = (largest[3 + s] + FORM_MARGIN * cache->big[s]) / r->bound_range[s];
         fold_slot(r, s, gap, vs, (const double (*)[3])g, flat, geometry, &worst, &r->worst_slot[t], &crit);
     }
     r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
@@ -1677,12 +1681,12 @@ static int set_up(refine *r, int threads)
         cc->rough = malloc(sizeof *cc->rough * TPK_CELL_MAP_MAX_NONLINEAR * (size_t)(r->bounded ? r->bounded : 1));
         cc->form = malloc(sizeof *cc->form * TPK_CELL_MAP_MAX_NONLINEAR * (size_t)(r->bounded ? r->bounded : 1));
         cc->qc = (3 + r->bounded + 3) & ~3, cc->quad_cell = -1;
-        cc->quad_node = malloc(sizeof *cc->quad_node * 30 * (size_t)cc->qc); /* 10 + 6 + 4 + 10 rows */
+        cc->quad_node = malloc(sizeof *cc->quad_node * 21 * (size_t)cc->qc); /* 10 + 6 + 4 + 1 rows */
         if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite || !cc->rough ||
             !cc->form || !cc->quad_node)
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
         cc->quad_a = cc->quad_node + 10 * cc->qc, cc->quad_v = cc->quad_a + 6 * cc->qc;
-        cc->quad_coef = cc->quad_v + 4 * cc->qc;
+        cc->quad_largest = cc->quad_v + 4 * cc->qc;
     }
     return place_corners(r, threads);
 }

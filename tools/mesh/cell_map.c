@@ -593,26 +593,27 @@ int tpk_cell_map_nonlinear(int type, const double r[3], double *m)
 
 int tpk_cell_map_quadratic_tet(int type, const double *xi, double (*w)[10], double (*m)[6])
 {
-    static const int pair[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
     if (type != 24)
         return 0;
+    const node_table *t = table_of(24);
+    int e0[6], e1[6];
+    for (int e = 0; e < 6; e++)
+        e0[e] = t->edges[e][0], e1[e] = t->edges[e][1];
     double L[4][4];
     for (int k = 0; k < 4; k++) {
         const double *r = xi + 3 * k;
         L[k][0] = 1 - r[0] - r[1] - r[2], L[k][1] = r[0], L[k][2] = r[1], L[k][3] = r[2];
-    }
-    const node_table *t = table_of(24);
-    for (int k = 0; k < 4; k++) { /* tpk_cell_map_weights */
-        for (int i = 0; i < 4; i++)
+        for (int i = 0; i < 4; i++) /* tpk_cell_map_weights */
             w[k][i] = L[k][i] * (2 * L[k][i] - 1);
         for (int e = 0; e < 6; e++)
-            w[k][4 + e] = 4 * L[k][t->edges[e][0]] * L[k][t->edges[e][1]];
+            w[k][4 + e] = 4 * L[k][e0[e]] * L[k][e1[e]];
     }
+    static const int pair[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
     for (int p = 0; p < 6; p++) {
         const double *r = xi + 3 * pair[p][0], *s = xi + 3 * pair[p][1];
         const double d[4] = {-(r[0] - s[0]) - (r[1] - s[1]) - (r[2] - s[2]), r[0] - s[0], r[1] - s[1], r[2] - s[2]};
         for (int e = 0; e < 6; e++)
-            m[p][e] = d[t->edges[e][0]] * d[t->edges[e][1]];
+            m[p][e] = d[e0[e]] * d[e1[e]];
     }
     return 10;
 }
