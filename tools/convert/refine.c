@@ -172,8 +172,13 @@ typedef struct refine {
     int64_t count, cap;    /* tets */
     int64_t tets_given;
     int32_t *tets, *cell;
-    double *xi;            /* 12 per tet: its corners' parametric points in its cell */
-    uint8_t *xi_later;     /* per tet: its corners are nodes, their points not written yet (ensure_xi) */
+    /* the tets' corners' parametric points in their cells, 12 numbers an entry (xi_of), entries given out
+     * in the order tets first need them: a tet whose corners are nodes needs none until it is cut
+     * (ensure_xi), and the tets cut are scattered over the tets, so entries by tet number would touch
+     * most pages for a few tets each (t5 at order 2: 1,700 of 2,400 page faults of the points) */
+    double *xi;
+    int64_t xi_count, xi_cap;
+    int32_t *xi_at;        /* per tet: its entry; -1: its corners are nodes, their points not written yet */
     int64_t *root;         /* the given tet each comes from (cell fields) */
     double *field_error, *geometry_error, *criterion;
     int *worst_slot;
@@ -194,6 +199,24 @@ typedef struct refine {
     int exact;             /* bound_tet: every tet through its Bernstein coefficients */
     vertex_tets by_vertex; /* the tets by vertex (refine_pass) */
 } refine;
+
+static double *xi_of(const refine *r, int64_t t)
+{
+    return r->xi + 12 * (int64_t)r->xi_at[t];
+}
+
+/* Room for `more` entries of parametric points. */
+static int reserve_xi(refine *r, int64_t more)
+{
+    if (r->xi_count + more <= r->xi_cap)
+        return 0;
+    int64_t cap = r->xi_count + more + (r->xi_count + more) / 2 + 1024;
+    double *grown = realloc(r->xi, sizeof *grown * 12 * (size_t)cap);
+    if (!grown)
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    r->xi = grown, r->xi_cap = cap;
+    return 0;
+}
 
 static float value_of(const refine *r, int32_t v, int slot)
 {
@@ -339,6 +362,7 @@ static int node_index(const int32_t *verts, int n, int32_t v)
 typedef struct corner_job {
     refine *r;
     uint8_t *failed; /* per tet: 1 a node is no vertex, 2 the map does not invert */
+    int write;       /* 0: mark the tets whose corners are not all nodes (xi_at -2); 1: write their points */
 } corner_job;
 
 static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -356,7 +380,7 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
         if (c != verts_of || !type)
             type = c >= 0 && c < r->cells->cell_count ? cell_nodes(r, c, verts) : 0, verts_of = c;
         if (!type) {
-            job->failed[t] = 1;
+            job->failed[t] = 1, r->xi_at[t] = -1;
             continue;
         }
         int n = tpk_cell_map_nodes(type);
@@ -365,14 +389,19 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
                 tpk_cell_map_node(type, j, nodes[j]);
             nodes_of = type;
         }
+        if (job->write && r->xi_at[t] < 0)
+            continue;
         int node[4];
         for (int k = 0; k < 4; k++)
             node[k] = node_index(verts, n, r->tets[4 * t + k]);
-        /* corners that are all nodes: their points are those of the nodes, written when first read (most
-         * such tets are bounded roughly and never read them: 96 bytes a tet of fresh memory spared) */
-        r->xi_later[t] = node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0;
-        for (int k = 0; k < 4 && !r->xi_later[t]; k++) {
-            double *xi = r->xi + 12 * t + 3 * k;
+        /* corners that are all nodes: their points are those of the nodes, written when first needed (most
+         * such tets are never cut and never need them: 96 bytes a tet of fresh memory spared) */
+        if (!job->write) {
+            r->xi_at[t] = node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0 ? -1 : -2;
+            continue;
+        }
+        for (int k = 0; k < 4; k++) {
+            double *xi = xi_of(r, t) + 3 * k;
             if (node[k] >= 0)
                 memcpy(xi, nodes[node[k]], sizeof nodes[node[k]]);
             else if (invert_map(r, type, verts, point_of(r, r->tets[4 * t + k]), xi) != 0)
@@ -397,19 +426,11 @@ static void xi_of_nodes(const refine *r, int64_t t, int type, const int32_t *ver
     }
 }
 
-/* Tet t's corners' parametric points written (xi_of_nodes), before it is cut. */
-static void ensure_xi_of(refine *r, int64_t t, int type, const int32_t *verts, const double (*nodes)[3])
-{
-    xi_of_nodes(r, t, type, verts, nodes, r->xi + 12 * t);
-    r->xi_later[t] = 0;
-}
-
+/* Tet t's corners' parametric points written (xi_of_nodes) into its entry, given it by ensure_xi_all. */
 static void ensure_xi(refine *r, int64_t t)
 {
-    if (!r->xi_later[t])
-        return;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
-    ensure_xi_of(r, t, cell_nodes(r, r->cell[t], verts), verts, NULL);
+    xi_of_nodes(r, t, cell_nodes(r, r->cell[t], verts), verts, NULL, xi_of(r, t));
 }
 
 static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -418,25 +439,57 @@ static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
     const int64_t *tets = ((void **)ctx)[1];
     (void)w;
     for (int64_t i = begin; i < end; i++)
-        ensure_xi(r, tets ? tets[i] : i);
+        ensure_xi(r, tets[i]);
 }
 
-/* ensure_xi for the `count` tets listed (all tets 0 .. count when NULL), on all threads. */
-static void ensure_xi_all(refine *r, const int64_t *tets, int64_t count)
+/* Of the `count` tets listed (all tets 0 .. count when NULL), those without an entry of parametric points
+ * given one, in list order, and their points written (ensure_xi), on all threads. */
+static int ensure_xi_all(refine *r, const int64_t *tets, int64_t count)
 {
-    void *ctx[2] = {r, (void *)tets};
-    tpk_parallel_for(count, tpk_threads_for(count, r->threads, 4096), ensure_xi_range, ctx);
+    int64_t need = 0;
+    for (int64_t i = 0; i < count; i++)
+        need += r->xi_at[tets ? tets[i] : i] < 0;
+    if (need == 0)
+        return 0;
+    int64_t *list = malloc(sizeof *list * (size_t)need);
+    if (!list || reserve_xi(r, need) != 0) {
+        free(list);
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
+    need = 0;
+    for (int64_t i = 0; i < count; i++) {
+        int64_t t = tets ? tets[i] : i;
+        if (r->xi_at[t] < 0)
+            r->xi_at[t] = (int32_t)r->xi_count++, list[need++] = t;
+    }
+    void *ctx[2] = {r, list};
+    tpk_parallel_for(need, tpk_threads_for(need, r->threads, 4096), ensure_xi_range, ctx);
+    free(list);
+    return 0;
 }
 
 static int place_corners(refine *r, int threads)
 {
-    corner_job job = {r, calloc((size_t)(r->count ? r->count : 1), 1)};
+    corner_job job = {r, calloc((size_t)(r->count ? r->count : 1), 1), 0};
     uint8_t *valued = calloc((size_t)(r->n0 ? r->n0 : 1), 1);
     if (!valued || !job.failed) {
         free(valued), free(job.failed);
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     }
     tpk_parallel_for(r->count, tpk_threads_for(r->count, threads, 1024), corner_range, &job);
+    int64_t need = 0; /* the tets whose corners are not all nodes: entries in tet order, their points written */
+    for (int64_t t = 0; t < r->count; t++)
+        need += r->xi_at[t] == -2;
+    if (reserve_xi(r, need) != 0) {
+        free(valued), free(job.failed);
+        return -1;
+    }
+    for (int64_t t = 0; t < r->count; t++)
+        if (r->xi_at[t] == -2)
+            r->xi_at[t] = (int32_t)r->xi_count++;
+    job.write = 1;
+    if (need > 0)
+        tpk_parallel_for(r->count, tpk_threads_for(r->count, threads, 1024), corner_range, &job);
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     double w[TPK_CELL_MAP_MAX_NODES];
     int rc = 0;
@@ -449,7 +502,7 @@ static int place_corners(refine *r, int threads)
                                "inside it (the map does not invert there); convert it without --max-error",
                                (long long)c, tpk_cell_type(r->cells->types[c])->name);
         }
-        if (rc == 0 && r->xi_later[t])
+        if (rc == 0 && r->xi_at[t] < 0)
             continue; /* its corners are nodes: source points, valued already */
         for (int k = 0; rc == 0 && k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
@@ -457,7 +510,7 @@ static int place_corners(refine *r, int threads)
                 continue;
             valued[v] = 1;
             int type = cell_nodes(r, c, verts), n = tpk_cell_map_nodes(type);
-            tpk_cell_map_weights(type, r->xi + 12 * t + 3 * k, w);
+            tpk_cell_map_weights(type, xi_of(r, t) + 3 * k, w);
             for (int s = 0; s < r->slots; s++)
                 r->slot_values[s][v] = (float)interpolate(r, n, verts, w, s);
         }
@@ -858,7 +911,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     if (degree <= 1)
         return; /* a tet of a tetra: exactly its own interpolant */
     const tpk_bernstein *b = &r->table[degree];
-    const double *xi = r->xi + 12 * t;
+    const double *xi = r->xi_at[t] >= 0 ? xi_of(r, t) : NULL;
     double xi_here[12]; /* a tet whose corners are nodes: their points read here, not written (ensure_xi) */
     const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(type), m = b->points, direct = degree > DIRECT_DEGREE;
@@ -867,7 +920,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
     if (!r->exact && cache->rough_count && rough_bound(r, t, cache, (const double (*)[3])p))
         return;
-    if (r->xi_later[t]) { /* the cell's nodes are at hand */
+    if (!xi) { /* the cell's nodes are at hand */
         if (cache->xi_type != type) {
             for (int k = 0; k < n; k++)
                 tpk_cell_map_node(type, k, cache->xi_node[k]);
@@ -951,8 +1004,11 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
     for (int64_t i = begin; i < end; i++) {
         if (i + 16 < end) { /* the tets and their corners are scattered: fetch them ahead */
             __builtin_prefetch(r->tets + 4 * r->todo[i + 16]);
-            __builtin_prefetch(r->xi + 12 * r->todo[i + 16]);
-            __builtin_prefetch(r->xi + 12 * r->todo[i + 16] + 8);
+            __builtin_prefetch(r->xi_at + r->todo[i + 16]);
+        }
+        if (i + 8 < end && r->xi_at[r->todo[i + 8]] >= 0) {
+            __builtin_prefetch(xi_of(r, r->todo[i + 8]));
+            __builtin_prefetch(xi_of(r, r->todo[i + 8]) + 8);
         }
         if (i + 8 < end)
             for (int k = 0; k < 4; k++) {
@@ -983,7 +1039,7 @@ static int reserve_tets(refine *r, int64_t need)
         return 0;
     int64_t cap = need + need / 2 + 1024;
     if (grow((void **)&r->tets, 4 * sizeof *r->tets, cap) || grow((void **)&r->cell, sizeof *r->cell, cap) ||
-        grow((void **)&r->xi, 12 * sizeof *r->xi, cap) || grow((void **)&r->xi_later, sizeof *r->xi_later, cap) ||
+        grow((void **)&r->xi_at, sizeof *r->xi_at, cap) ||
         grow((void **)&r->root, sizeof *r->root, cap) ||
         grow((void **)&r->field_error, sizeof *r->field_error, cap) ||
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
@@ -1064,8 +1120,7 @@ static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
 {
     int i = tet_edges[e][0], j = tet_edges[e][1];
     int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
-    double *xa = r->xi + 12 * t, *xb = r->xi + 12 * u, half[3];
-    r->xi_later[u] = 0; /* t's were written before the rounds (cut_marked) */
+    double *xa = xi_of(r, t), *xb = xi_of(r, u), half[3]; /* t's written before the rounds, u's given (cut_marked) */
     int parent = sign_of(r, a);
     memcpy(b, a, 4 * sizeof *a);
     memcpy(xb, xa, 12 * sizeof *xa);
@@ -1091,7 +1146,7 @@ typedef struct round_job {
     int32_t *mid;     /* per tet of active: the vertex at that edge's midpoint */
     int64_t *maker;   /* per vertex made this round: the place in active of the tet that makes it */
     uint8_t *folded;  /* per tet of active: a piece turned over */
-    int64_t first_child;
+    int64_t first_child, first_xi; /* the first new tet, and its entry of parametric points */
     int32_t first_vertex;
 } round_job;
 
@@ -1113,7 +1168,7 @@ static void place_range(void *ctx, int64_t begin, int64_t end, int w)
         int i = tet_edges[job->chosen[k]][0], j = tet_edges[job->chosen[k]][1];
         double half[3];
         for (int c = 0; c < 3; c++)
-            half[c] = 0.5 * (r->xi[12 * t + 3 * i + c] + r->xi[12 * t + 3 * j + c]);
+            half[c] = 0.5 * (xi_of(r, t)[3 * i + c] + xi_of(r, t)[3 * j + c]);
         place_vertex(r, job->first_vertex + (int32_t)n, t, half);
     }
 }
@@ -1122,8 +1177,10 @@ static void bisect_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     round_job *job = ctx;
     (void)w;
-    for (int64_t k = begin; k < end; k++)
+    for (int64_t k = begin; k < end; k++) {
+        job->r->xi_at[job->first_child + k] = (int32_t)(job->first_xi + k);
         job->folded[k] = (uint8_t)bisect(job->r, job->active[k], job->first_child + k, job->chosen[k], job->mid[k]);
+    }
 }
 
 static int round_grow(round_job *job, int64_t cap)
@@ -1148,12 +1205,12 @@ static int round_grow(round_job *job, int64_t cap)
 static int cut_marked(refine *r, int64_t *active, int64_t active_count)
 {
     int rc = 0;
-    round_job job = {r, active, NULL, NULL, NULL, NULL, 0, 0};
+    round_job job = {r, active, NULL, NULL, NULL, NULL, 0, 0, 0};
     memcpy(r->todo, active, sizeof *active * (size_t)active_count);
     r->todo_count = active_count;
     int64_t first_new = r->count;
-    ensure_xi_all(r, active, active_count); /* the tets cut read their corners' points */
-    if (round_grow(&job, active_count + 1) != 0)
+    rc = ensure_xi_all(r, active, active_count); /* the tets cut read their corners' points */
+    if (rc == 0 && round_grow(&job, active_count + 1) != 0)
         rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
     while (rc == 0 && active_count > 0) {
         tpk_parallel_for(active_count, tpk_threads_for(active_count, r->threads, 1024), choose_range, &job);
@@ -1173,7 +1230,7 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
                                      (long long)r->o->max_tets, (long long)r->tets_given);
             break;
         }
-        if (reserve_tets(r, r->count + n) != 0 || reserve_vertices(r, n) != 0) {
+        if (reserve_tets(r, r->count + n) != 0 || reserve_vertices(r, n) != 0 || reserve_xi(r, n) != 0) {
             rc = -1;
             break;
         }
@@ -1193,8 +1250,8 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
         }
         r->m->vertex_count += made;
         tpk_parallel_for(made, tpk_threads_for(made, r->threads, 256), place_range, &job);
-        job.first_child = r->count;
-        r->count += n;
+        job.first_child = r->count, job.first_xi = r->xi_count;
+        r->count += n, r->xi_count += n;
         tpk_parallel_for(n, tpk_threads_for(n, r->threads, 1024), bisect_range, &job);
         for (int64_t k = 0; k < n; k++)
             if (job.folded[k]) {
@@ -1228,15 +1285,14 @@ static int cut_all(refine *r)
     if (8 * n > r->o->max_tets)
         return tpk_diag_fail(r->diag, "--subdivide %d: more than %lld tets (from %lld)", r->o->uniform_levels,
                              (long long)r->o->max_tets, (long long)r->tets_given);
-    if (reserve_tets(r, 8 * n) != 0)
+    if (reserve_tets(r, 8 * n) != 0 || ensure_xi_all(r, NULL, n) != 0 || reserve_xi(r, 7 * n) != 0)
         return -1;
     edge_clear(&r->mids); /* the edges of the last level are all cut: no tet has one */
-    ensure_xi_all(r, NULL, n);
     for (int64_t t = 0; t < n; t++) {
         int32_t v[10];
         double x[10][3];
         for (int k = 0; k < 4; k++)
-            v[k] = r->tets[4 * t + k], memcpy(x[k], r->xi + 12 * t + 3 * k, sizeof x[k]);
+            v[k] = r->tets[4 * t + k], memcpy(x[k], xi_of(r, t) + 3 * k, sizeof x[k]);
         for (int e = 0; e < 6; e++) {
             int i = tet_edges[e][0], j = tet_edges[e][1];
             for (int c = 0; c < 3; c++)
@@ -1268,9 +1324,10 @@ static int cut_all(refine *r)
                 l[2] = l[3], l[3] = swap;
             }
             int64_t u = c == 0 ? t : r->count++;
+            if (u != t)
+                r->xi_at[u] = (int32_t)r->xi_count++;
             for (int k = 0; k < 4; k++)
-                r->tets[4 * u + k] = v[l[k]], memcpy(r->xi + 12 * u + 3 * k, x[l[k]], sizeof x[0]);
-            r->xi_later[u] = 0;
+                r->tets[4 * u + k] = v[l[k]], memcpy(xi_of(r, u) + 3 * k, x[l[k]], sizeof x[0]);
             r->cell[u] = (int32_t)cell, r->root[u] = root, r->marked[u] = 0;
             if (parent != 0 && sign_of(r, r->tets + 4 * u) != parent)
                 return tpk_diag_fail(r->diag, "--subdivide: cell %lld (a %s) folds when subdivided: a piece cut at its "
@@ -1539,7 +1596,7 @@ static void release(refine *r, int threads)
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
-    free(r->rough), free(r->xi_later), free(r->by_vertex.head), free(r->by_vertex.next);
+    free(r->rough), free(r->xi_at), free(r->by_vertex.head), free(r->by_vertex.next);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
@@ -1648,11 +1705,12 @@ static int set_up(refine *r, int threads)
     }
     if (make_departures(r) != 0)
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    /* the mesh's tets and their cells taken over, grown by realloc, not copied (hand_back gives them back;
+     * on failure the mesh is left without them, as convert stops) */
+    r->tets = m->tets, r->cell = m->tet_source, m->tets = m->tet_source = NULL;
     if (reserve_tets(r, m->tet_count) != 0)
         return -1;
     r->count = m->tet_count;
-    memcpy(r->tets, m->tets, sizeof *r->tets * 4 * (size_t)r->count);
-    memcpy(r->cell, m->tet_source, sizeof *r->cell * (size_t)r->count);
     for (int64_t t = 0; t < r->count; t++)
         r->root[t] = t, r->marked[t] = 0, r->todo[t] = t;
     r->todo_count = r->count;
