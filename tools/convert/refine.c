@@ -191,11 +191,13 @@ typedef struct refine {
     int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
     uint8_t *rough;        /* per tet: bounded by rough_bound */
-    /* per type with tpk_cell_map_nonlinear (0: hexahedron, 1: quadratic tetra; NULL when no cell has it),
-     * per set of 4 nodes (bits in node order), per monomial: the Bernstein bound of the monomial less its
-     * linear interpolant on the tet of those 4 nodes' parametric points; -1 for sets of other sizes and
-     * flat tets */
-    double *departure[2];
+    /* for the hexahedron (NULL when no cell is one), per set of 4 nodes (bits in node order), per
+     * monomial of tpk_cell_map_nonlinear: the Bernstein bound of the monomial less its linear interpolant
+     * on the tet of those 4 nodes' parametric points; -1 for sets of other sizes and flat tets */
+    double *departure;
+    /* the quadratic tetra's monomials at the differences of its nodes' parametric points (node_pairs[j][l]:
+     * at r_j - r_l, by tpk_cell_map_quadratic_tet), for bound_quadratic on tets whose corners are nodes */
+    double node_pairs[10][10][6];
     int exact;             /* bound_tet: every tet through its Bernstein coefficients */
     vertex_tets by_vertex; /* the tets by vertex (refine_pass) */
 } refine;
@@ -741,7 +743,8 @@ static void fill_slot(const refine *r, coef_cache *cache, int s)
  * (tpk_cell_map_nonlinear_coefficients); v[k * qc + c]: the tet's values at its corners. The same numbers
  * as the cached Bernstein coefficients, to rounding (FORM_MARGIN), with no coefficients to make for a tet
  * of parameter space met first: the pieces of a cut tet seldom repeat (t5 at order 2 missed the cache on
- * 8,600 of 53,000 pieces). Four components side by side, as minus_linear. */
+ * 8,600 of 53,000 pieces). Four components side by side, as minus_linear. w NULL: the tet's corners are
+ * nodes, where the weights are 0 but one 1, so that d_k is 0 exactly; it is not computed. */
 __attribute__((target_clones("avx2", "default"))) static double
 quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], const double *node, const double *a,
                        const double *v, double *largest)
@@ -751,13 +754,13 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
         quad d[4], x, y, coef[10];
         for (int k = 0; k < 4; k++) {
             quad acc = {0, 0, 0, 0};
-            for (int j = 0; j < 10; j++) {
+            for (int j = 0; j < 10 && w; j++) {
                 memcpy(&y, node + j * qc + c, sizeof y);
                 x = (quad){w[k][j], w[k][j], w[k][j], w[k][j]};
                 acc += x * y;
             }
             memcpy(&y, v + k * qc + c, sizeof y);
-            coef[k] = d[k] = acc - y;
+            coef[k] = d[k] = w ? acc - y : acc; /* no w: the corners are nodes, f there is v exactly */
         }
         const quad half = {0.5, 0.5, 0.5, 0.5};
         for (int e = 0; e < 6; e++) {
@@ -794,10 +797,11 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
  * err by under 1e-13 of big. */
 #define ROUGH_MARGIN 1e-12
 
-/* Tet t bounded roughly, when its corners are nodes of its cell (its linear interpolants are then those
- * of the cell's functions at the tet's parametric corners), by sum_q |a_q| departure_q over the cell's
- * nonlinear monomials (tpk_cell_map_nonlinear), and when that meets the criterion; 0, with nothing
- * written, otherwise. Most tets of a first split are far under the bound: the first bound of a million
+/* Tet t of a hexahedron bounded roughly, when its corners are nodes of its cell (its linear interpolants
+ * are then those of the cell's functions at the tet's parametric corners), by sum_q |a_q| departure_q over
+ * the cell's nonlinear monomials (tpk_cell_map_nonlinear), and when that meets the criterion; 0, with
+ * nothing written, otherwise. (The quadratic tetra's tets need none: bound_quadratic is exact and as
+ * cheap.) Most tets of a first split are far under the bound: the first bound of a million
  * hexahedra's tets at 1% took 0.29 s of one core through Bernstein coefficients, 0.12 s so (bench/README). */
 static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4][3])
 {
@@ -809,7 +813,7 @@ static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4
             return 0;
         set |= 1 << j;
     }
-    const double *departure = r->departure[cache->cell_type == 24] + (int64_t)set * count;
+    const double *departure = r->departure + (int64_t)set * count;
     if (!(departure[0] >= 0))
         return 0;
     double geometry = ROUGH_MARGIN * cache->largest;
@@ -842,7 +846,8 @@ static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4
 /* bound_tet for a tet of a quadratic tetra (xi: its corners' parametric points, p: their points), through
  * quadratic_coefficients: its cell's node values and nonlinear coefficients of every component are
  * gathered once a cell (cache->quad_cell). */
-static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const double *xi, const double p[4][3])
+static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const double *xi, const int *node,
+                            const double p[4][3])
 {
     int qc = cache->qc;
     const int32_t *tv = r->tets + 4 * t;
@@ -864,7 +869,11 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         cache->quad_cell = cache->cell;
     }
     double w[4][10], m[6][6], *v = cache->quad_v, *largest = cache->quad_largest, g[3][3];
-    tpk_cell_map_quadratic_tet(24, xi, w, m);
+    if (node) /* corners at nodes: the monomials at the nodes' differences, as tpk_cell_map_quadratic_tet's */
+        for (int e = 0; e < 6; e++)
+            memcpy(m[e], r->node_pairs[node[tet_edges[e][0]]][node[tet_edges[e][1]]], sizeof m[e]);
+    else
+        tpk_cell_map_quadratic_tet(24, xi, w, m);
     for (int k = 0; k < 4; k++) {
         for (int c = 0; c < 3; c++)
             v[k * qc + c] = p[k][c];
@@ -873,8 +882,8 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         for (int c = 3 + r->bounded; c < qc; c++)
             v[k * qc + c] = 0;
     }
-    double geometry = quadratic_coefficients(qc, (const double (*)[10])w, (const double (*)[6])m, cache->quad_node,
-                                             cache->quad_a, v, largest);
+    double geometry = quadratic_coefficients(qc, node ? NULL : (const double (*)[10])w, (const double (*)[6])m,
+                                             cache->quad_node, cache->quad_a, v, largest);
     geometry += 2 * FORM_MARGIN * cache->largest; /* 2 > sqrt 3: each axis's rounding */
     double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
     int flat = barycentric_gradients(p, g, 1) != 0;
@@ -918,8 +927,15 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
-    if (!r->exact && cache->rough_count && rough_bound(r, t, cache, (const double (*)[3])p))
+    if (!r->exact && type == 12 && rough_bound(r, t, cache, (const double (*)[3])p))
         return;
+    if (!xi && type == 24) { /* corners at nodes */
+        int node[4];
+        for (int k = 0; k < 4; k++)
+            node[k] = node_index(cache->verts, n, tv[k]); /* found: corner_range found every corner */
+        bound_quadratic(r, t, cache, NULL, node, (const double (*)[3])p);
+        return;
+    }
     if (!xi) { /* the cell's nodes are at hand */
         if (cache->xi_type != type) {
             for (int k = 0; k < n; k++)
@@ -930,7 +946,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         xi = xi_here;
     }
     if (type == 24) {
-        bound_quadratic(r, t, cache, xi, (const double (*)[3])p);
+        bound_quadratic(r, t, cache, xi, NULL, (const double (*)[3])p);
         return;
     }
     const double *by_node = NULL;
@@ -1602,15 +1618,15 @@ static void release(refine *r, int threads)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
             free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite), free(r->cache[w].rough),
             free(r->cache[w].form), free(r->cache[w].quad_node);
-    free(r->cache), free(r->departure[0]), free(r->departure[1]);
+    free(r->cache), free(r->departure);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
         free(r->inverse_t[n]), tpk_bernstein_free(&r->table[n]);
 }
 
-/* r->departure for the types the cells have: each set of 4 nodes' tet in parameter space, each
- * monomial's values at the domain points and the corners, through tpk_bernstein_gap (its margin
- * included; the monomials' own rounding, a few units in the last place of numbers up to 1, is under
- * ROUGH_MARGIN). 256 + 1024 sets, made in about a millisecond. */
+/* r->departure when a cell is a hexahedron: each set of 4 nodes' tet in parameter space, each monomial's
+ * values at the domain points and the corners, through tpk_bernstein_gap (its margin included; the
+ * monomials' own rounding, a few units in the last place of numbers up to 1, is under ROUGH_MARGIN). 256
+ * sets. And r->node_pairs when a cell is a quadratic tetra. */
 static int make_departures(refine *r)
 {
     for (int which = 0; which < 2; which++) {
@@ -1621,8 +1637,18 @@ static int make_departures(refine *r)
             continue;
         double probe[TPK_CELL_MAP_MAX_NONLINEAR], origin[3] = {0, 0, 0};
         int count = tpk_cell_map_nonlinear(type, origin, probe);
+        for (int j = 0; j < n && type == 24; j++)
+            for (int l = 0; l < n; l++) {
+                double xi[12], w[4][10], m[6][6];
+                tpk_cell_map_node(type, j, xi), tpk_cell_map_node(type, l, xi + 3);
+                memcpy(xi + 6, xi, 3 * sizeof *xi), memcpy(xi + 9, xi, 3 * sizeof *xi);
+                tpk_cell_map_quadratic_tet(type, xi, w, m);
+                memcpy(r->node_pairs[j][l], m[0], sizeof m[0]); /* pair 0: corners 0 and 1 */
+            }
+        if (type == 24)
+            continue;
         const tpk_bernstein *b = &r->table[degree];
-        double *d = r->departure[which] = malloc(sizeof *d * (size_t)count << n);
+        double *d = r->departure = malloc(sizeof *d * (size_t)count << n);
         if (!d)
             return -1;
         for (int set = 0; set < 1 << n; set++) {
