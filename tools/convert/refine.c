@@ -175,7 +175,7 @@ typedef struct refine {
     /* the tets' corners' parametric points in their cells, 12 numbers an entry (xi_of), entries given out
      * in the order tets first need them: a tet whose corners are nodes needs none until it is cut
      * (ensure_xi), and the tets cut are scattered over the tets, so entries by tet number would touch
-     * most pages for a few tets each (t5 at order 2: 1,700 of 2,400 page faults of the points) */
+     * most pages for a few tets each (bench/README) */
     double *xi;
     int64_t xi_count, xi_cap;
     int32_t *xi_at;        /* per tet: its entry; -1: its corners are nodes, their points not written yet */
@@ -742,8 +742,8 @@ static void fill_slot(const refine *r, coef_cache *cache, int s)
  * node[j * qc + c]: node j's values; a[q * qc + c]: the nonlinear coefficients
  * (tpk_cell_map_nonlinear_coefficients); v[k * qc + c]: the tet's values at its corners. The same numbers
  * as the cached Bernstein coefficients, to rounding (FORM_MARGIN), with no coefficients to make for a tet
- * of parameter space met first: the pieces of a cut tet seldom repeat (t5 at order 2 missed the cache on
- * 8,600 of 53,000 pieces). Four components side by side, as minus_linear. w NULL: the tet's corners are
+ * of parameter space met first: the pieces of a cut tet seldom repeat a parametric tet, and missed the
+ * cache often (bench/README). Four components side by side, as minus_linear. w NULL: the tet's corners are
  * nodes, where the weights are 0 but one 1, so that d_k is 0 exactly; it is not computed. */
 __attribute__((target_clones("avx2", "default"))) static double
 quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], const double *node, const double *a,
