@@ -9,7 +9,6 @@
  * (shells, bars, spheres) are dropped with a count. Nodal and element variables become point and cell
  * fields with every time step, and the time values are kept. The node and element number maps become the mesh's global_point_ids and global_cell_ids
  * (tetpack-mpi matches the points of per-processor files by them and numbers the source cells). */
-#include <exodusII.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,6 +16,7 @@
 #include <strings.h>
 
 #include "import/importers.h"
+#include "exodus_lib.h"
 #include "netcdf_size.h"
 #include "tetpack_format.h"
 #include "base/parallel.h"
@@ -94,6 +94,7 @@ typedef struct exo_reader {
     int64_t nodes, elems, block_count, steps;
     exo_block *blocks;
     tpk_diag *diag;
+    const tpk_exodus_lib *x; /* the library's functions (exodus_lib.h) */
 } exo_reader;
 
 /* The passes over what the library read (points interleaved, ids made 0-based and checked, values to
@@ -150,7 +151,7 @@ static int read_points(exo_reader *r, tpk_mesh *out, int dim)
         xyz[k] = calloc((size_t)(r->nodes ? r->nodes : 1), sizeof(double));
     int rc = !out->points || !xyz[0] || !xyz[1] || !xyz[2]
                  ? tpk_diag_fail(r->diag, "%s: out of memory for %lld nodes", r->path, (long long)r->nodes)
-             : ex_get_coord(r->exoid, xyz[0], xyz[1], dim == 3 ? xyz[2] : NULL) < 0
+             : r->x->get_coord(r->exoid, xyz[0], xyz[1], dim == 3 ? xyz[2] : NULL) < 0
                  ? tpk_diag_fail(r->diag, "%s: cannot read the node coordinates", r->path)
                  : 0;
     interleave_job job = {out->points, xyz};
@@ -218,7 +219,7 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
 {
     int *ids = calloc((size_t)(r->block_count ? r->block_count : 1), sizeof *ids);
     r->blocks = calloc((size_t)(r->block_count ? r->block_count : 1), sizeof *r->blocks);
-    if (!ids || !r->blocks || (r->block_count && ex_get_elem_blk_ids(r->exoid, ids) < 0)) {
+    if (!ids || !r->blocks || (r->block_count && r->x->get_elem_blk_ids(r->exoid, ids) < 0)) {
         free(ids);
         return tpk_diag_fail(r->diag, "%s: cannot read the element block ids", r->path);
     }
@@ -227,7 +228,7 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         exo_block *blk = &r->blocks[b];
         int count = 0, per = 0, attrs = 0;
         blk->id = ids[b];
-        if (ex_get_elem_block(r->exoid, ids[b], blk->type, &count, &per, &attrs) < 0) {
+        if (r->x->get_elem_block(r->exoid, ids[b], blk->type, &count, &per, &attrs) < 0) {
             free(ids);
             return tpk_diag_fail(r->diag, "%s: cannot read element block %lld", r->path, (long long)blk->id);
         }
@@ -281,7 +282,7 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
         if (blk->first_cell < 0)
             continue;
         int *ids_in = malloc(sizeof *ids_in * (size_t)(blk->count * blk->nodes_per + 1));
-        if (!ids_in || ex_get_elem_conn(r->exoid, blk->id, ids_in) < 0) {
+        if (!ids_in || r->x->get_elem_conn(r->exoid, blk->id, ids_in) < 0) {
             free(ids_in);
             return tpk_diag_fail(r->diag, "%s: cannot read the connectivity of block %lld", r->path, (long long)blk->id);
         }
@@ -301,7 +302,7 @@ static int read_blocks(exo_reader *r, tpk_mesh *out)
 static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
 {
     int count = 0;
-    if (ex_get_variable_param(r->exoid, type, &count) < 0 || count <= 0 || r->steps <= 0)
+    if (r->x->get_variable_param(r->exoid, type, &count) < 0 || count <= 0 || r->steps <= 0)
         return 0;
     int64_t per_step = type == EX_NODAL ? r->nodes : out->cell_count;
     double *buf = malloc(sizeof *buf * (size_t)(r->nodes > r->elems ? r->nodes + 1 : r->elems + 1));
@@ -309,7 +310,7 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
     char name[MAX_STR_LENGTH + 1];
     int rc = buf && truth ? 0 : tpk_diag_fail(r->diag, "%s: out of memory", r->path);
     for (int v = 1; rc == 0 && v <= count; v++) {
-        if (ex_get_variable_name(r->exoid, type, v, name) < 0)
+        if (r->x->get_variable_name(r->exoid, type, v, name) < 0)
             snprintf(name, sizeof name, "%s_%d", type == EX_NODAL ? "nodal" : "element", v);
         float *values = malloc(sizeof *values * (size_t)(per_step * r->steps));
         if (!values) {
@@ -319,7 +320,7 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
         for (int64_t s = 0; rc == 0 && s < r->steps; s++) {
             float *dst = values + s * per_step;
             if (type == EX_NODAL) {
-                if (ex_get_var(r->exoid, (int)s + 1, EX_NODAL, v, 1, r->nodes, buf) < 0)
+                if (r->x->get_var(r->exoid, (int)s + 1, EX_NODAL, v, 1, r->nodes, buf) < 0)
                     rc = tpk_diag_fail(r->diag, "%s: cannot read nodal variable '%s' at step %lld", r->path, name,
                                        (long long)s + 1);
                 if (rc == 0)
@@ -330,9 +331,9 @@ static int read_variables(exo_reader *r, tpk_mesh *out, ex_entity_type type)
                 exo_block *blk = &r->blocks[b];
                 if (blk->first_cell < 0)
                     continue;
-                int present = ex_get_object_truth_vector(r->exoid, EX_ELEM_BLOCK, blk->id, count, truth) < 0 ||
+                int present = r->x->get_object_truth_vector(r->exoid, EX_ELEM_BLOCK, blk->id, count, truth) < 0 ||
                               truth[v - 1];
-                if (present && ex_get_var(r->exoid, (int)s + 1, EX_ELEM_BLOCK, v, blk->id, blk->count, buf) < 0)
+                if (present && r->x->get_var(r->exoid, (int)s + 1, EX_ELEM_BLOCK, v, blk->id, blk->count, buf) < 0)
                     present = 0;
                 to_float(dst + blk->first_cell, present ? buf : NULL, blk->count);
             }
@@ -391,8 +392,8 @@ static int read_node_map(exo_reader *r, tpk_mesh *out)
     out->global_point_ids = malloc(sizeof *out->global_point_ids * (size_t)(r->nodes ? r->nodes : 1));
     if (!out->global_point_ids)
         return tpk_diag_fail(r->diag, "%s: out of memory for the node number map", r->path);
-    ex_set_int64_status(r->exoid, EX_MAPS_INT64_API);
-    if (ex_get_id_map(r->exoid, EX_NODE_MAP, out->global_point_ids) < 0)
+    r->x->set_int64_status(r->exoid, EX_MAPS_INT64_API);
+    if (r->x->get_id_map(r->exoid, EX_NODE_MAP, out->global_point_ids) < 0)
         return tpk_diag_fail(r->diag, "%s: cannot read the node number map", r->path);
     int64_t bad = ids_to_zero_based(out->global_point_ids, out->global_point_ids, r->nodes);
     if (bad)
@@ -411,7 +412,7 @@ static int read_element_map(exo_reader *r, tpk_mesh *out)
         free(map);
         return tpk_diag_fail(r->diag, "%s: out of memory for the element number map", r->path);
     }
-    int rc = ex_get_id_map(r->exoid, EX_ELEM_MAP, map) < 0
+    int rc = r->x->get_id_map(r->exoid, EX_ELEM_MAP, map) < 0
                  ? tpk_diag_fail(r->diag, "%s: cannot read the element number map", r->path) : 0;
     int64_t element = 0; /* the block's first element among all elements */
     for (int64_t b = 0; rc == 0 && b < r->block_count; element += r->blocks[b++].count) {
@@ -435,7 +436,7 @@ static int read_times(exo_reader *r, tpk_mesh *out)
     if (r->steps <= 0)
         return 0;
     out->times = malloc(sizeof *out->times * (size_t)r->steps);
-    if (!out->times || ex_get_all_times(r->exoid, out->times) < 0)
+    if (!out->times || r->x->get_all_times(r->exoid, out->times) < 0)
         return tpk_diag_fail(r->diag, "%s: cannot read the %lld time values", r->path, (long long)r->steps);
     return 0;
 }
@@ -462,18 +463,24 @@ int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag)
                              path, (unsigned long long)expected, size);
     int cpu_ws = sizeof(double), io_ws = 0;
     float version = 0;
-    ex_opts(0); /* errors come back as codes; no messages on stderr, no abort */
-    exo_reader r = {path, ex_open(path, EX_READ, &cpu_ws, &io_ws, &version), 0, 0, 0, 0, NULL, diag};
+    char why[256];
+    const tpk_exodus_lib *x = tpk_exodus_lib_load(why, sizeof why);
+    if (!x)
+        return tpk_diag_fail(diag, "%s: cannot read Exodus II files here: the Exodus library did not load (%s)", path,
+                             why);
+    x->opts(0); /* errors come back as codes; no messages on stderr, no abort */
+    exo_reader r = {path, x->open_int(path, EX_READ, &cpu_ws, &io_ws, &version, EX_API_VERS_NODOT), 0, 0, 0, 0, NULL,
+                    diag, x};
     if (r.exoid < 0)
         return tpk_diag_fail(diag, "%s: cannot open it as an Exodus II file (netCDF classic or netCDF-4)", path);
     char title[MAX_LINE_LENGTH + 1];
     int dim = 0, nodes = 0, elems = 0, blocks = 0, node_sets = 0, side_sets = 0;
-    int rc = ex_get_init(r.exoid, title, &dim, &nodes, &elems, &blocks, &node_sets, &side_sets) < 0
+    int rc = x->get_init(r.exoid, title, &dim, &nodes, &elems, &blocks, &node_sets, &side_sets) < 0
                  ? tpk_diag_fail(diag, "%s: cannot read the Exodus header", path)
              : dim != 3 ? tpk_diag_fail(diag, "%s: expected a 3-D mesh, found %d dimensions", path, dim)
                         : 0;
     r.nodes = nodes, r.elems = elems, r.block_count = blocks;
-    r.steps = rc == 0 ? ex_inquire_int(r.exoid, EX_INQ_TIME) : 0;
+    r.steps = rc == 0 ? x->inquire_int(r.exoid, EX_INQ_TIME) : 0;
     if (rc == 0)
         rc = read_points(&r, out, dim);
     if (rc == 0)
@@ -488,7 +495,7 @@ int tpk_import_exodus(const char *path, tpk_mesh *out, tpk_diag *diag)
         rc = read_variables(&r, out, EX_NODAL);
     if (rc == 0)
         rc = read_variables(&r, out, EX_ELEM_BLOCK);
-    ex_close(r.exoid);
+    x->close(r.exoid);
     free(r.blocks);
     if (rc == 0)
         snprintf(out->format, sizeof out->format, "exodus-ii");
