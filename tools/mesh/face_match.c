@@ -355,7 +355,7 @@ static void match_neighbors(const tpk_face_matcher *m, bucket_scratch *s, int64_
         return;
     }
     int bits = 2;
-    while (((int64_t)1 << bits) < 2 * n)
+    while (((int64_t)1 << bits) < 4 * n)
         bits++;
     if (((int64_t)1 << bits) > s->table_cap) {
         int32_t *grown = realloc(s->table, sizeof *grown << bits);
