@@ -42,6 +42,10 @@ typedef struct match_job {
     int32_t *first;                   /* [buckets + 1], filled by the count pass */
     int unsorted[TPK_MAX_THREADS];    /* a worker saw a tet's smallest id go down */
     int sorted;                       /* after the count: the entries hold only the faces opposite s0 */
+    int32_t *second;                  /* plain tets in neighbours mode: the count pass's second smallest ids,
+                                       * kept in the neighbors' first quarter (not yet written then), so
+                                       * that a scatter of sorted tets in one window reads 4 bytes a tet,
+                                       * not the tets' 16 */
     int64_t bucket_begin[TPK_MAX_THREADS + 1];
     bucket_scratch scratch[TPK_MAX_THREADS];
 } match_job;
@@ -140,6 +144,8 @@ static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *co
             count[b0]++;
         if (b1 < (uint64_t)job->buckets)
             count[b1]++;
+        if (job->second)
+            job->second[t] = s.id[1];
         if (first) {
             if (s.id[0] < seen)
                 job->unsorted[worker] = 1;
@@ -181,6 +187,14 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
     const tpk_face_matcher *m = job->m;
     uint32_t *next = job->starts[worker];
     int32_t b[256];
+    if (job->sorted && job->second && job->wa == 0 && job->wb == job->buckets) {
+        for (int64_t t = begin; t < end; t++) {
+            uint64_t b1 = (uint64_t)((int64_t)job->second[t] - job->lo);
+            if (b1 < (uint64_t)job->buckets)
+                job->entries[next[b1]++] = (uint32_t)t;
+        }
+        return;
+    }
     if (job->plain) {
         for (int64_t t = begin; t < end; t++) {
             ascending s = two_smallest(m->tets + 4 * t);
@@ -583,6 +597,8 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
     job->buckets = job->hi - job->lo;
     job->plain = m->tets && !m->keep && !m->tag && items_begin == 0;
     job->item_mask = m->tag_bits ? UINT32_MAX >> m->tag_bits : UINT32_MAX;
+    if (job->plain && m->neighbors)
+        job->second = m->neighbors;
     int threads = m->threads;
     for (int w = 0; w < threads; w++)
         if (!(job->starts[w] = tpk_alloc_large(sizeof *job->starts[w] * (size_t)(job->buckets ? job->buckets : 1))))
