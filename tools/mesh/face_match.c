@@ -282,7 +282,7 @@ static inline tpk_match_face corner_face(uint64_t mid, uint64_t max, uint64_t op
     return (tpk_match_face){(mid >> 2) << 32 | max >> 2, UINT32_MAX, item, (uint16_t)(opposite & 3), tag, (uint8_t)odd};
 }
 
-/* The faces a tet brings to bucket s0 (`smallest`: 3, face_buckets.h's order) or s1 (1). */
+/* The faces a tet brings to bucket s0 (`smallest`: 3, in face_buckets.h's order) or s1 (1). */
 static inline int corner_faces(const int32_t *ids, uint32_t item, uint8_t tag, int smallest, int agreeing,
                                tpk_match_face *out)
 {
