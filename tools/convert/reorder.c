@@ -642,7 +642,7 @@ static int apply_tet_order(tpk_tetmesh *mesh, const int32_t *new_id, int threads
 {
     int64_t nt = mesh->tet_count, nv = mesh->vertex_count;
     size_t n = (size_t)(nt ? nt : 1);
-    int sort_threads = tpk_threads_for(nt, threads, 1 << 20), cell_fields = has_field(mesh, TPK_ASSOC_TET);
+    int sort_threads = tpk_threads_for(nt, threads, 1 << 16), cell_fields = has_field(mesh, TPK_ASSOC_TET);
     uint32_t *coarse_next[TPK_MAX_THREADS] = {NULL};
     min_sort_job *job = calloc(1, sizeof *job);
     bytes16 *tets_out = tpk_alloc_large(sizeof *tets_out * n);
