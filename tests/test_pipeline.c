@@ -756,6 +756,27 @@ TPK_TEST(reorder_tets_sorted_stably_fan)
     tpk_tetmesh_free(&grid);
 }
 
+/* An id out of range, found as the tets are renumbered: the first one is named, whichever worker sees it
+ * (two workers here, a bad id in each one's range, the later one found first by neither). */
+TPK_TEST(reorder_names_first_bad_id)
+{
+    tpk_gen_options opt = {1, {0, 0, 0}, 1, 1, 1, 7};
+    for (int threads = 1; threads <= 2; threads++) {
+        tpk_tetmesh m;
+        tpk_diag diag = {0};
+        CHECK(tpk_gen_kuhn_grid(71, &opt, &m) == 0);
+        CHECK(m.tet_count > (INT64_C(2) << 20));
+        int32_t nv = (int32_t)m.vertex_count;
+        m.tets[4 * (m.tet_count - 5) + 1] = -3;
+        m.tets[4 * 1000 + 2] = nv;
+        CHECK(tpk_reorder(&m, threads, &diag) != 0);
+        char want[160];
+        snprintf(want, sizeof want, "reorder: tet 1000 names vertex %d; the mesh has %d vertices", nv, nv);
+        CHECK_MSG(strstr(diag.message, want) != NULL, "%s", diag.message);
+        tpk_tetmesh_free(&m);
+    }
+}
+
 /* Defined in tools/convert/reorder.c for tests: the Hilbert index of one cell of the 2^21 grid. */
 uint64_t tpk_hilbert_key(uint32_t x, uint32_t y, uint32_t z);
 

@@ -74,7 +74,8 @@ int tpk_orient_marked(tpk_tetmesh *mesh, int flags, int threads, tpk_orient_stat
 int64_t tpk_drop_tets(tpk_tetmesh *mesh, const uint8_t *drop);
 
 /* Reorder vertices along a Hilbert curve, then tets by their smallest vertex (so they follow it); fields,
- * vertex_source and tet_source follow. Deterministic. */
+ * vertex_source and tet_source follow. Deterministic. A tet id out of range is an error naming the first
+ * one, found as the tets are renumbered: the mesh is then left partly reordered (fit only to be freed). */
 int tpk_reorder(tpk_tetmesh *mesh, int threads, tpk_diag *diag);
 
 /* Face matching. neighbors[4*t+k] = tet across the face opposite tets[4*t+k], or -1. A face shared by

@@ -421,16 +421,19 @@ static int32_t min_vertex(const int32_t *v)
     return a < b ? a : b;
 }
 
-/* Stable parallel counting sort: worker w counts its range of tets per smallest vertex, the offsets put
- * worker 0's tets of a vertex before worker 1's, and each worker moves its range in order, so the result
- * is the same for any thread count. The count pass renumbers each tet's vertices first (in place).
+/* Stable parallel counting sort: worker w counts its range of tets per coarse bucket (COARSE_BUCKETS runs
+ * of consecutive vertices), the offsets put worker 0's tets of a bucket before worker 1's, and each worker
+ * moves its range in order, so the result is the same for any thread count. The count pass checks and
+ * renumbers each tet's vertices first (in place).
  *
  * The move goes in two steps where the buckets allow: each tet and its old index into the range of its
- * coarse bucket (COARSE_BUCKETS runs of consecutive vertices), written as that many sequential streams,
- * then each coarse range through a worker's scratch into its vertices' places, stores that stay in the
- * cache. One step, a tet's 16 bytes stored at a random place, missed the cache on nearly every tet and
- * took most of the stage (issue 37). A coarse range larger than FINE_MOST tets (a vertex in that many
- * tets) takes the one step. Either way the tets end in the same order. */
+ * coarse bucket, written as that many sequential streams, then each coarse range through a worker's
+ * scratch into its vertices' places, counted there, stores that stay in the cache. One step, a tet's 16
+ * bytes stored at a random place, missed the cache on nearly every tet and took most of the stage (issue
+ * 37); so did a count per vertex in the first pass (an array of 4 bytes per vertex and worker, one random
+ * increment per tet: 9% of a one-thread grid 120 convert). A coarse range larger than FINE_MOST tets (a
+ * vertex in that many tets) takes the one step, counted per vertex in a pass of its own. Either way the
+ * tets end in the same order. */
 #define COARSE_BUCKETS 2048
 #define FINE_MOST (INT64_C(1) << 18)
 
@@ -441,31 +444,51 @@ typedef struct min_sort_job {
     bytes16 *tets_out;
     int32_t *source_out;
     uint32_t *order;        /* order[new] = old, or NULL where no cell field needs it */
-    uint32_t **next;        /* [worker][nv]: counts, then positions */
+    uint32_t **next;        /* one step: [worker][nv]: counts, then positions */
     int64_t nv, nt;
     int shift;              /* coarse bucket of vertex v: v >> shift */
     int64_t coarse;         /* coarse buckets */
     uint32_t **coarse_next; /* [worker][coarse]: counts, then positions */
     int64_t *coarse_start;  /* [coarse + 1]: where each coarse range starts */
+    int64_t bad[TPK_MAX_THREADS]; /* the count pass: first id out of range (4 * tet + k), or -1 */
     int64_t fine_begin[TPK_MAX_THREADS + 1];
     bytes16 *scratch[TPK_MAX_THREADS];
     int32_t *scratch_source[TPK_MAX_THREADS];
     uint32_t *scratch_index[TPK_MAX_THREADS], *cursor[TPK_MAX_THREADS];
 } min_sort_job;
 
+/* Checks and renumbers the tets, counting them per coarse bucket (where there are coarse counts). A worker
+ * stops at its first tet with an id out of range, before renumbering it. */
 static void min_count(void *ctx, int64_t begin, int64_t end, int worker)
 {
     min_sort_job *job = ctx;
-    uint32_t *count = job->next[worker], *coarse = job->coarse_next ? job->coarse_next[worker] : NULL;
+    uint32_t *coarse = job->coarse_next ? job->coarse_next[worker] : NULL;
     const int32_t *new_id = job->new_id;
+    uint32_t nv = (uint32_t)job->nv;
+    int shift = job->shift;
+    job->bad[worker] = -1;
     for (int64_t t = begin; t < end; t++) {
         int32_t *v = job->tets + 4 * t;
+        if (((uint32_t)v[0] >= nv) | ((uint32_t)v[1] >= nv) | ((uint32_t)v[2] >= nv) | ((uint32_t)v[3] >= nv)) {
+            int k = 0;
+            while ((uint32_t)v[k] < nv)
+                k++;
+            job->bad[worker] = 4 * t + k;
+            return;
+        }
         v[0] = new_id[v[0]], v[1] = new_id[v[1]], v[2] = new_id[v[2]], v[3] = new_id[v[3]];
-        int32_t m = min_vertex(v);
-        count[m]++;
         if (coarse)
-            coarse[m >> job->shift]++;
+            coarse[min_vertex(v) >> shift]++;
     }
+}
+
+/* One step: the renumbered tets counted per smallest vertex. */
+static void min_count_fine(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    min_sort_job *job = ctx;
+    uint32_t *count = job->next[worker];
+    for (int64_t t = begin; t < end; t++)
+        count[min_vertex(job->tets + 4 * t)]++;
 }
 
 /* Tets [begin, end), each with its source and its index (where asked), to next[its smallest vertex >>
@@ -497,15 +520,15 @@ static void coarse_scatter(void *ctx, int64_t begin, int64_t end, int worker)
     scatter_by(job, job->coarse_next[worker], job->shift, begin, end);
 }
 
-/* The second: worker's coarse ranges [begin, end), each copied out and put in vertex order. A range holds
- * worker 0's tets in input order, then worker 1's, so each vertex's tets come in input order. */
+/* The second: worker's coarse ranges [begin, end), each copied out, counted per vertex and put in vertex
+ * order. A range holds worker 0's tets in input order, then worker 1's, so each vertex's tets come in
+ * input order. */
 static void fine_sort(void *ctx, int64_t begin, int64_t end, int worker)
 {
     min_sort_job *job = ctx;
     bytes16 *scratch = job->scratch[worker];
     int32_t *source = job->scratch_source[worker];
     uint32_t *index = job->scratch_index[worker], *cursor = job->cursor[worker];
-    const uint32_t *first = job->next[0]; /* where each vertex's tets start */
     (void)begin, (void)end;
     for (int64_t c = job->fine_begin[worker]; c < job->fine_begin[worker + 1]; c++) {
         int64_t a = job->coarse_start[c], b = job->coarse_start[c + 1], v0 = c << job->shift;
@@ -514,8 +537,15 @@ static void fine_sort(void *ctx, int64_t begin, int64_t end, int worker)
         memcpy(source, job->source_out + a, sizeof *source * (size_t)(b - a));
         if (job->order)
             memcpy(index, job->order + a, sizeof *index * (size_t)(b - a));
-        for (int64_t v = v0; v < v1; v++)
-            cursor[v - v0] = first[v];
+        memset(cursor, 0, sizeof *cursor * (size_t)(v1 - v0));
+        for (int64_t i = 0; i < b - a; i++)
+            cursor[min_vertex((const int32_t *)(scratch + i)) - v0]++;
+        uint32_t running = (uint32_t)a;
+        for (int64_t v = 0; v < v1 - v0; v++) {
+            uint32_t n = cursor[v];
+            cursor[v] = running;
+            running += n;
+        }
         for (int64_t i = 0; i < b - a; i++) {
             uint32_t at = cursor[min_vertex((const int32_t *)(scratch + i)) - v0]++;
             job->tets_out[at] = scratch[i];
@@ -534,20 +564,13 @@ static int has_field(const tpk_tetmesh *mesh, int association)
     return 0;
 }
 
-/* After the count: the per-vertex and per-coarse-bucket counts become positions (workers in order within
- * each bucket). Returns the tets of the largest coarse range. */
-static int64_t prefix_positions(min_sort_job *job, int threads)
+/* After the count: the per-coarse-bucket counts become positions (workers in order within each bucket).
+ * Returns the tets of the largest coarse range. */
+static int64_t prefix_coarse(min_sort_job *job, int threads)
 {
-    uint32_t running = 0;
-    for (int64_t v = 0; v < job->nv; v++)
-        for (int w = 0; w < threads; w++) {
-            uint32_t c = job->next[w][v];
-            job->next[w][v] = running;
-            running += c;
-        }
     int64_t largest = 0;
-    running = 0;
-    for (int64_t c = 0; job->coarse_next && c < job->coarse; c++) {
+    uint32_t running = 0;
+    for (int64_t c = 0; c < job->coarse; c++) {
         job->coarse_start[c] = running;
         for (int w = 0; w < threads; w++) {
             uint32_t n = job->coarse_next[w][c];
@@ -557,8 +580,7 @@ static int64_t prefix_positions(min_sort_job *job, int threads)
         if (running - job->coarse_start[c] > largest)
             largest = running - job->coarse_start[c];
     }
-    if (job->coarse_next)
-        job->coarse_start[job->coarse] = running;
+    job->coarse_start[job->coarse] = running;
     return largest;
 }
 
@@ -587,23 +609,50 @@ static int move_in_two_steps(min_sort_job *job, int threads, int64_t largest)
     return rc;
 }
 
-static int apply_tet_order(tpk_tetmesh *mesh, const int32_t *new_id, int threads)
+/* The one-step move: counted per vertex (per worker), then every tet to its place. */
+static int move_in_one_step(min_sort_job *job, int threads)
+{
+    uint32_t *next[TPK_MAX_THREADS] = {NULL};
+    int64_t nv = job->nv;
+    int rc = 0;
+    for (int w = 0; w < threads && rc == 0; w++)
+        if (!(next[w] = tpk_calloc_large((size_t)nv + 1, sizeof *next[w])))
+            rc = -1;
+    if (rc == 0) {
+        job->next = next;
+        tpk_parallel_for(job->nt, threads, min_count_fine, job);
+        uint32_t running = 0;
+        for (int64_t v = 0; v < nv; v++)
+            for (int w = 0; w < threads; w++) {
+                uint32_t c = next[w][v];
+                next[w][v] = running;
+                running += c;
+            }
+        tpk_parallel_for(job->nt, threads, min_scatter, job);
+        job->next = NULL;
+    }
+    for (int w = 0; w < threads; w++)
+        tpk_free_large(next[w], ((size_t)nv + 1) * sizeof *next[w]);
+    return rc;
+}
+
+/* The tets renumbered by new_id and put in order of their smallest vertex. Returns 0, -1 when out of
+ * memory, or 1 with *bad the first id out of range (4 * tet + k; the mesh then is partly renumbered). */
+static int apply_tet_order(tpk_tetmesh *mesh, const int32_t *new_id, int threads, int64_t *bad)
 {
     int64_t nt = mesh->tet_count, nv = mesh->vertex_count;
     size_t n = (size_t)(nt ? nt : 1);
-    int sort_threads = tpk_threads_for(nt, threads, 1 << 20), cell_fields = has_field(mesh, TPK_ASSOC_TET);
-    uint32_t *next[TPK_MAX_THREADS] = {NULL}, *coarse_next[TPK_MAX_THREADS] = {NULL};
+    int sort_threads = tpk_threads_for(nt, threads, 1 << 16), cell_fields = has_field(mesh, TPK_ASSOC_TET);
+    uint32_t *coarse_next[TPK_MAX_THREADS] = {NULL};
     min_sort_job *job = calloc(1, sizeof *job);
     bytes16 *tets_out = tpk_alloc_large(sizeof *tets_out * n);
     int32_t *source_out = tpk_alloc_large(sizeof *source_out * n);
     uint32_t *order = cell_fields ? tpk_alloc_large(sizeof *order * n) : NULL;
     int rc = job && tets_out && source_out && (order || !cell_fields) ? 0 : -1;
-    for (int w = 0; w < sort_threads && rc == 0; w++)
-        if (!(next[w] = tpk_calloc_large((size_t)nv + 1, sizeof *next[w])))
-            rc = -1;
+    *bad = -1;
     if (rc == 0) {
         job->tets = mesh->tets, job->new_id = new_id, job->source = mesh->tet_source;
-        job->tets_out = tets_out, job->source_out = source_out, job->order = order, job->next = next;
+        job->tets_out = tets_out, job->source_out = source_out, job->order = order;
         job->nv = nv, job->nt = nt;
         while ((nv - 1) >> job->shift >= COARSE_BUCKETS)
             job->shift++;
@@ -614,15 +663,16 @@ static int apply_tet_order(tpk_tetmesh *mesh, const int32_t *new_id, int threads
             coarse_ok = (coarse_next[w] = calloc((size_t)job->coarse + 1, sizeof *coarse_next[w])) != NULL;
         job->coarse_next = coarse_ok ? coarse_next : NULL; /* without them, the one step */
         tpk_parallel_for(nt, sort_threads, min_count, job);
-        int64_t largest = prefix_positions(job, sort_threads);
-        if (!job->coarse_next || move_in_two_steps(job, sort_threads, largest))
-            tpk_parallel_for(nt, sort_threads, min_scatter, job);
+        for (int w = 0; w < sort_threads && *bad < 0; w++) /* ranges in order: the first worker's is first */
+            *bad = job->bad[w];
+        if (*bad >= 0)
+            rc = 1;
+        else if (!job->coarse_next || move_in_two_steps(job, sort_threads, prefix_coarse(job, sort_threads)))
+            rc = move_in_one_step(job, sort_threads);
         free(job->coarse_start);
     }
-    for (int w = 0; w < sort_threads; w++) {
-        tpk_free_large(next[w], ((size_t)nv + 1) * sizeof *next[w]);
+    for (int w = 0; w < sort_threads; w++)
         free(coarse_next[w]);
-    }
     free(job);
     if (rc == 0) {
         tpk_free_large(mesh->tets, sizeof *mesh->tets * 4 * n);
@@ -645,15 +695,12 @@ int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
         (mesh->vertex_count > 0 && !mesh->points) || (mesh->tet_count > 0 && !mesh->tets))
         return tpk_diag_fail(diag, "reorder: invalid tet mesh");
     int threads = tpk_thread_count(threads_requested);
-    int64_t bad = tpk_first_id_out_of_range(mesh->tets, 4 * mesh->tet_count, mesh->vertex_count, threads);
-    if (bad >= 0)
-        return tpk_diag_fail(diag, "reorder: tet %lld names vertex %d; the mesh has %lld vertices",
-                             (long long)(bad / 4), mesh->tets[bad], (long long)mesh->vertex_count);
-    int64_t nv = mesh->vertex_count, nt = mesh->tet_count;
+    int64_t nv = mesh->vertex_count, nt = mesh->tet_count, bad = -1;
     hilbert_table table;
     build_hilbert_table(&table);
     box bounds = bounding_box(mesh->points, nv, threads);
-    /* Vertices along the curve first; tets then follow their smallest vertex. */
+    /* Vertices along the curve first; tets then follow their smallest vertex (their ids checked as they
+     * are renumbered: one pass over them fewer than a check of its own). */
     size_t vertex_bytes = sizeof(uint32_t) * (size_t)(nv ? nv : 1);
     uint32_t *order = tpk_alloc_large(vertex_bytes);
     int32_t *new_id = tpk_alloc_large(vertex_bytes);
@@ -662,10 +709,13 @@ int tpk_reorder(tpk_tetmesh *mesh, int threads_requested, tpk_diag *diag)
         !apply_vertex_order(mesh, order, new_id, threads)) {
         tpk_free_large(order, vertex_bytes); /* before the tets' arrays: a kept block they may reuse */
         order = NULL;
-        rc = apply_tet_order(mesh, new_id, threads);
+        rc = apply_tet_order(mesh, new_id, threads, &bad);
     }
     tpk_free_large(order, vertex_bytes);
     tpk_free_large(new_id, vertex_bytes);
+    if (rc == 1)
+        return tpk_diag_fail(diag, "reorder: tet %lld names vertex %d; the mesh has %lld vertices",
+                             (long long)(bad / 4), mesh->tets[bad], (long long)nv);
     if (rc)
         return tpk_diag_fail(diag, "reorder: out of memory (%lld vertices, %lld tets)", (long long)nv,
                              (long long)nt);

@@ -21,7 +21,9 @@ void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_
 {
     int64_t out = 0;
     for (int64_t t = 0; t < tet_count; t++) {
-        const int32_t *v = tets + 4 * t;
+        const int32_t *v = tets + 4 * t, *n = neighbors + 4 * t;
+        if ((n[0] | n[1] | n[2] | n[3]) >= 0) /* no face on the shell: one branch a tet, not four */
+            continue;
         for (int k = 0; k < 4; k++) {
             if (neighbors[4 * t + k] >= 0)
                 continue;
@@ -87,26 +89,29 @@ tpk_shell_face *tpk_make_shell(const int32_t *tets, const int32_t *neighbors, in
 void tpk_shell_gather_range(tpk_shell_gather *g, const int32_t *tets, const int32_t *neighbors, int64_t first,
                             int64_t count, int worker)
 {
-    int64_t found = tpk_count_shell_faces(neighbors + 4 * first, count);
-    if (found == 0)
-        return;
+    /* One pass: the faces are appended as found (a count first read the neighbours twice). */
     tpk_shell_gather_worker *me = &g->worker[worker];
-    if (me->count + found > me->capacity) {
-        int64_t capacity = me->capacity ? 2 * me->capacity : 4096;
-        capacity = capacity < me->count + found ? me->count + found : capacity;
-        tpk_shell_face *grown = realloc(me->faces, sizeof *grown * (size_t)capacity);
-        if (!grown) {
-            me->failed = 1;
-            return;
+    if (me->failed)
+        return;
+    for (int64_t t = first; t < first + count; t++) {
+        const int32_t *v = tets + 4 * t, *n = neighbors + 4 * t;
+        if ((n[0] | n[1] | n[2] | n[3]) >= 0)
+            continue;
+        if (me->count + 4 > me->capacity) {
+            int64_t capacity = me->capacity ? 2 * me->capacity : 4096;
+            tpk_shell_face *grown = realloc(me->faces, sizeof *grown * (size_t)capacity);
+            if (!grown) {
+                me->failed = 1;
+                return;
+            }
+            me->faces = grown;
+            me->capacity = capacity;
         }
-        me->faces = grown;
-        me->capacity = capacity;
+        for (int k = 0; k < 4; k++)
+            if (n[k] < 0)
+                me->faces[me->count++] = (tpk_shell_face){v[tpk_tet_faces[k][0]], v[tpk_tet_faces[k][1]],
+                                                          v[tpk_tet_faces[k][2]], (int32_t)t};
     }
-    tpk_shell_face *dst = me->faces + me->count;
-    tpk_build_shell(tets + 4 * first, neighbors + 4 * first, count, dst);
-    for (int64_t i = 0; i < found; i++)
-        dst[i].t += (int32_t)first;
-    me->count += found;
 }
 
 void tpk_shell_gather_block(tpk_shell_gather *g)

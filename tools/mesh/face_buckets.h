@@ -5,7 +5,9 @@
  * id and the face opposite s0 has s1. So a tet goes to bucket s0 with three faces and to bucket s1 with
  * one, and bucket v holds exactly the faces whose smallest id is v: a counting sort by smallest id puts
  * every face in one small bucket (about 24 faces in a typical mesh), where equal faces are equal keys of
- * their two other ids. Header only: connect runs it once per tet in its hottest loops. */
+ * their two other ids. Header only: the checks run it once per tet in their hottest loops (the matcher,
+ * mesh/face_match.c, sorts in registers by the same rule). The three faces that hold s0 go in the order
+ * of the corner they leave out, s3, s2, s1. */
 #ifndef TPK_FACE_BUCKETS_H
 #define TPK_FACE_BUCKETS_H
 
@@ -33,31 +35,10 @@ static inline void tpk_sort_tet(const int32_t *v, tpk_sorted_tet *s)
     }
 }
 
-/* A face of a tet in a bucket: the tet's local corner it is opposite to (face k, as tpk_tet_faces and
- * neighbors[4t + k] number them), and its two ids after the bucket's, ascending. */
-typedef struct tpk_bucket_face {
-    int opposite;
-    int32_t mid, max;
-} tpk_bucket_face;
-
 /* The bucket of face `k` of a sorted tet: s1 for the face opposite s0, else s0. */
 static inline int32_t tpk_tet_face_bucket(const tpk_sorted_tet *s, int k)
 {
     return k == s->local[0] ? s->id[1] : s->id[0];
-}
-
-/* The faces a sorted tet brings to bucket s0 (`smallest` nonzero: 3 faces, in the order of the corner
- * they leave out, s3, s2, s1) or to bucket s1 (1 face, opposite s0). Returns the count. */
-static inline int tpk_tet_bucket_faces(const tpk_sorted_tet *s, int smallest, tpk_bucket_face *f)
-{
-    if (!smallest) {
-        f[0] = (tpk_bucket_face){s->local[0], s->id[2], s->id[3]};
-        return 1;
-    }
-    f[0] = (tpk_bucket_face){s->local[3], s->id[1], s->id[2]};
-    f[1] = (tpk_bucket_face){s->local[2], s->id[1], s->id[3]};
-    f[2] = (tpk_bucket_face){s->local[1], s->id[2], s->id[3]};
-    return 3;
 }
 
 /* 1 when the face opposite local vertex k of tet v, in outward order, is an odd permutation of its ids in

@@ -42,6 +42,10 @@ typedef struct match_job {
     int32_t *first;                   /* [buckets + 1], filled by the count pass */
     int unsorted[TPK_MAX_THREADS];    /* a worker saw a tet's smallest id go down */
     int sorted;                       /* after the count: the entries hold only the faces opposite s0 */
+    int32_t *second;                  /* plain tets in neighbours mode: the count pass's second smallest ids,
+                                       * kept in the neighbors' first quarter (not yet written then), so
+                                       * that a scatter of sorted tets in one window reads 4 bytes a tet,
+                                       * not the tets' 16 */
     int64_t bucket_begin[TPK_MAX_THREADS + 1];
     bucket_scratch scratch[TPK_MAX_THREADS];
 } match_job;
@@ -100,6 +104,20 @@ static int32_t clamped_smallest(const match_job *job, int64_t t)
     return lo < 0 ? -1 : lo >= job->buckets ? (int32_t)(job->buckets - 1) : lo;
 }
 
+/* A tet's ids ascending by min and max in registers (no stores and loads of a rank sort): what the count
+ * and scatter passes need, the bucket ids s0 and s1 and, to check them, all four. */
+typedef struct ascending {
+    int32_t id[4];
+} ascending;
+
+static inline ascending two_smallest(const int32_t *v)
+{
+    int32_t a = v[0] < v[1] ? v[0] : v[1], b = v[0] < v[1] ? v[1] : v[0];
+    int32_t c = v[2] < v[3] ? v[2] : v[3], d = v[2] < v[3] ? v[3] : v[2];
+    int32_t lo = a < c ? a : c, x = a < c ? c : a, y = b < d ? b : d, hi = b < d ? d : b;
+    return (ascending){{lo, x < y ? x : y, x < y ? y : x, hi}};
+}
+
 /* SORTED TETS. The count pass fills first[v] for v in (smallest id of item begin - 1, smallest id of item
  * end - 1] and says whether its smallest ids go down. When none do, those ranges of the workers are
  * disjoint and cover every v; when some do, they may overlap (three workers or more) and first[] is not
@@ -111,15 +129,13 @@ static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *co
     int32_t prev = begin > 0 ? clamped_smallest(job, begin - 1) : -1;
     int32_t last = end > begin ? clamped_smallest(job, end - 1) : prev, seen = prev; /* prev stops at last */
     job->unsorted[worker] = 0;
+    int check = m->check_ids;
+    uint32_t vertex_count = (uint32_t)m->vertex_count;
     for (int64_t t = begin; t < end; t++) {
-        const int32_t *v = m->tets + 4 * t;
-        if (m->check_ids && has_repeat(v)) {
-            job->bad_item[worker] = t;
-            return;
-        }
-        tpk_sorted_tet s;
-        tpk_sort_tet(v, &s);
-        if (m->check_ids && (s.id[0] < 0 || s.id[3] >= m->vertex_count)) {
+        ascending s = two_smallest(m->tets + 4 * t);
+        /* distinct ids in range: strictly ascending, the smallest >= 0, the largest below vertex_count */
+        if (check && ((s.id[0] < 0) | (s.id[0] >= s.id[1]) | (s.id[1] >= s.id[2]) | (s.id[2] >= s.id[3]) |
+                      ((uint32_t)s.id[3] >= vertex_count))) {
             job->bad_item[worker] = t;
             return;
         }
@@ -128,6 +144,8 @@ static void count_plain(match_job *job, int64_t begin, int64_t end, uint32_t *co
             count[b0]++;
         if (b1 < (uint64_t)job->buckets)
             count[b1]++;
+        if (job->second)
+            job->second[t] = s.id[1];
         if (first) {
             if (s.id[0] < seen)
                 job->unsorted[worker] = 1;
@@ -169,10 +187,17 @@ static void scatter_entries(void *ctx, int64_t begin, int64_t end, int worker)
     const tpk_face_matcher *m = job->m;
     uint32_t *next = job->starts[worker];
     int32_t b[256];
+    if (job->sorted && job->second && job->wa == 0 && job->wb == job->buckets) {
+        for (int64_t t = begin; t < end; t++) {
+            uint64_t b1 = (uint64_t)((int64_t)job->second[t] - job->lo);
+            if (b1 < (uint64_t)job->buckets)
+                job->entries[next[b1]++] = (uint32_t)t;
+        }
+        return;
+    }
     if (job->plain) {
         for (int64_t t = begin; t < end; t++) {
-            tpk_sorted_tet s;
-            tpk_sort_tet(m->tets + 4 * t, &s);
+            ascending s = two_smallest(m->tets + 4 * t);
             uint64_t b0 = (uint64_t)((int64_t)s.id[0] - job->lo), b1 = (uint64_t)((int64_t)s.id[1] - job->lo);
             if (!job->sorted && b0 - (uint64_t)job->wa < (uint64_t)(job->wb - job->wa))
                 job->entries[next[b0]++] = (uint32_t)t;
@@ -217,23 +242,73 @@ static int grow_faces(bucket_scratch *s, int64_t need)
     return 0;
 }
 
+/* A tet's ids ascending, each as id << 2 | its corner: five compare-exchanges by min and max, in
+ * registers (the rank sort of face_buckets.h stores to memory and loads back, and that store forwarding
+ * was most of this matcher's face expansion). Ties go by corner, as tpk_sort_tet breaks them; ids >= 0. */
+typedef struct corners {
+    uint64_t c[4];
+} corners;
+
+static inline corners sort_corners(const int32_t *v)
+{
+    uint64_t a = (uint64_t)(uint32_t)v[0] << 2, b = (uint64_t)(uint32_t)v[1] << 2 | 1;
+    uint64_t c = (uint64_t)(uint32_t)v[2] << 2 | 2, d = (uint64_t)(uint32_t)v[3] << 2 | 3;
+#define CORNER_SWAP(p, q)                                                                                  \
+    do {                                                                                                   \
+        uint64_t lo_ = p < q ? p : q, hi_ = p < q ? q : p;                                                 \
+        p = lo_, q = hi_;                                                                                  \
+    } while (0)
+    CORNER_SWAP(a, b);
+    CORNER_SWAP(c, d);
+    CORNER_SWAP(a, c);
+    CORNER_SWAP(b, d);
+    CORNER_SWAP(b, c);
+#undef CORNER_SWAP
+    return (corners){{a, b, c, d}};
+}
+
+/* The parity of the permutation that sorts a tet's (distinct) ids. Face k's outward order (tpk_tet_faces)
+ * followed by corner k is an odd permutation of the tet's order for every k, and putting corner k back
+ * at its rank r among the four takes 3 - r swaps: so that face's parity (tpk_face_parity) is this one
+ * xor (r & 1), with no table lookups. */
+static inline int tet_parity(const int32_t *v)
+{
+    return (v[0] > v[1]) ^ (v[0] > v[2]) ^ (v[0] > v[3]) ^ (v[1] > v[2]) ^ (v[1] > v[3]) ^ (v[2] > v[3]);
+}
+
+static inline tpk_match_face corner_face(uint64_t mid, uint64_t max, uint64_t opposite, uint32_t item, uint8_t tag,
+                                         int odd)
+{
+    return (tpk_match_face){(mid >> 2) << 32 | max >> 2, UINT32_MAX, item, (uint16_t)(opposite & 3), tag, (uint8_t)odd};
+}
+
+/* The faces a tet brings to bucket s0 (`smallest`: 3, in face_buckets.h's order) or s1 (1). */
+static inline int corner_faces(const int32_t *ids, uint32_t item, uint8_t tag, int smallest, int agreeing,
+                               tpk_match_face *out)
+{
+    corners s = sort_corners(ids);
+    int odd = agreeing ? tet_parity(ids) : 0, flip = agreeing ? 1 : 0;
+    if (!smallest) {
+        out[0] = corner_face(s.c[2], s.c[3], s.c[0], item, tag, odd);
+        return 1;
+    }
+    out[0] = corner_face(s.c[1], s.c[2], s.c[3], item, tag, odd ^ flip);
+    out[1] = corner_face(s.c[1], s.c[3], s.c[2], item, tag, odd);
+    out[2] = corner_face(s.c[2], s.c[3], s.c[1], item, tag, odd ^ flip);
+    return 3;
+}
+
 /* The faces of tet entry i in bucket v (its smallest or second smallest id, by face_buckets.h). */
 static inline int tet_faces(const tpk_face_matcher *m, uint32_t entry, uint32_t item, int32_t v,
                             tpk_match_face *out)
 {
     int32_t own[4];
     const int32_t *ids = tet_ids(m, item, own);
-    tpk_sorted_tet s;
-    tpk_sort_tet(ids, &s);
-    tpk_bucket_face f[3];
     uint8_t tag = m->tag_bits ? (uint8_t)(entry >> (32 - m->tag_bits)) : 0;
-    int smallest = s.id[0] == v, n = smallest ? 3 : 1;
-    tpk_tet_bucket_faces(&s, smallest, f);
-    for (int i = 0; i < n; i++) /* a constant count per branch above, so each is unrolled */
-        out[i] = (tpk_match_face){(uint64_t)(uint32_t)f[i].mid << 32 | (uint32_t)f[i].max, UINT32_MAX, item,
-                                  (uint16_t)f[i].opposite, tag,
-                                  (uint8_t)(m->agreeing ? tpk_face_parity(ids, f[i].opposite) : 0)};
-    return n;
+    int32_t a = ids[0] < ids[1] ? ids[0] : ids[1], b = ids[2] < ids[3] ? ids[2] : ids[3];
+    if ((a < b ? a : b) == v)
+        return corner_faces(ids, item, tag, 1, m->agreeing != NULL, out);
+    return corner_faces(ids, item, tag, 0, m->agreeing != NULL, out);
 }
 
 /* Expands bucket b of the window into the worker's faces; returns their count, or -1 when out of memory. */
@@ -243,21 +318,21 @@ static int64_t expand_bucket(const match_job *job, bucket_scratch *s, int64_t b)
     int cells = !m->tets && !m->tet, most = cells ? m->max_cell_faces : 3;
     int64_t n = 0, end = job->bucket_end[b];
     int32_t v = (int32_t)(b + job->lo);
-    if (job->sorted) { /* the tets of smallest id v, merged with the entries by item: the same order */
+    if (job->sorted) {
+        /* The entries' tets have a smaller smallest id than v, so they all come before the tets of smallest
+         * id v in the array: entries, then that run, is item order. */
         int64_t i = bucket_first(job, b), next = job->first[b], stop = job->first[b + 1];
-        if (n + 3 * (end - i + stop - next) > s->face_cap && grow_faces(s, n + 3 * (end - i + stop - next)))
+        int agreeing = m->agreeing != NULL;
+        if (n + (end - i) + 3 * (stop - next) > s->face_cap && grow_faces(s, n + (end - i) + 3 * (stop - next)))
             return -1;
-        while (i < end || next < stop) {
-            uint32_t item;
-            if (next < stop && (i >= end || (uint32_t)next < job->entries[i])) {
-                item = (uint32_t)next++;
-            } else {
-                if (i + 8 < job->entry_count)
-                    __builtin_prefetch(m->tets + 4 * (int64_t)job->entries[i + 8]);
-                item = job->entries[i++];
-            }
-            n += tet_faces(m, item, item, v, s->faces + n);
+        for (; i < end; i++) {
+            if (i + 8 < job->entry_count)
+                __builtin_prefetch(m->tets + 4 * (int64_t)job->entries[i + 8]);
+            uint32_t item = job->entries[i];
+            n += corner_faces(m->tets + 4 * (int64_t)item, item, 0, 0, agreeing, s->faces + n);
         }
+        for (; next < stop; next++)
+            n += corner_faces(m->tets + 4 * next, (uint32_t)next, 0, 1, agreeing, s->faces + n);
         return n;
     }
     for (int64_t i = bucket_first(job, b); i < end; i++) {
@@ -281,7 +356,10 @@ static int64_t expand_bucket(const match_job *job, bucket_scratch *s, int64_t b)
 }
 
 /* Neighbours mode. Table values: -1 empty; i >= 0 the first face i of a key seen once; -2 - i seen
- * twice. A key seen three times or more marks the bucket bad (its first such key kept). */
+ * twice. A key seen three times or more marks the bucket bad (its first such key kept). Whether a face is
+ * a key's first or second is a coin toss to the branch predictor, so that choice is made by selects: an
+ * empty slot stands for the face itself, the probe stops at the face of its key, and the first face
+ * pairs with itself (its neighbour -1). */
 static void match_neighbors(const tpk_face_matcher *m, bucket_scratch *s, int64_t b, int64_t n, int worker)
 {
     const tpk_match_face *f = s->faces;
@@ -291,7 +369,7 @@ static void match_neighbors(const tpk_face_matcher *m, bucket_scratch *s, int64_
         return;
     }
     int bits = 2;
-    while (((int64_t)1 << bits) < 2 * n)
+    while (((int64_t)1 << bits) < 4 * n)
         bits++;
     if (((int64_t)1 << bits) > s->table_cap) {
         int32_t *grown = realloc(s->table, sizeof *grown << bits);
@@ -306,34 +384,31 @@ static void match_neighbors(const tpk_face_matcher *m, bucket_scratch *s, int64_
     uint32_t mask = (1u << bits) - 1;
     memset(table, 0xff, sizeof *table << bits);
     for (int64_t i = 0; i < n; i++) {
-        uint32_t h = (uint32_t)((f[i].key * 0x9e3779b97f4a7c15ull) >> (64 - bits));
-        int64_t si = 4 * (int64_t)f[i].item + f[i].local;
+        uint64_t key = f[i].key;
+        uint32_t h = (uint32_t)((key * 0x9e3779b97f4a7c15ull) >> (64 - bits));
+        int32_t at, j;
         for (;; h = (h + 1) & mask) {
-            int32_t at = table[h];
-            if (at == -1) {
-                table[h] = (int32_t)i;
-                nb[si] = -1;
+            at = table[h];
+            j = at == -1 ? (int32_t)i : at >= 0 ? at : -2 - at;
+            if (f[j].key == key)
                 break;
-            }
-            int32_t first = at >= 0 ? at : -2 - at;
-            if (f[first].key != f[i].key)
-                continue;
-            if (at >= 0) {
-                int64_t sa = 4 * (int64_t)f[at].item + f[at].local;
-                table[h] = -2 - at;
-                nb[si] = (int32_t)f[at].item;
-                nb[sa] = (int32_t)f[i].item;
-                if (m->agreeing && f[i].odd == f[at].odd)
-                    m->agreeing(m->user, worker, si, sa);
-            } else {
-                nb[si] = -1;
-                if (s->bad_bucket < 0) {
-                    s->bad_bucket = b;
-                    s->bad_key = f[i].key;
-                }
-            }
-            break;
         }
+        int64_t si = 4 * (int64_t)f[i].item + f[i].local;
+        if (__builtin_expect(at < -1, 0)) {
+            nb[si] = -1;
+            if (s->bad_bucket < 0) {
+                s->bad_bucket = b;
+                s->bad_key = key;
+            }
+            continue;
+        }
+        int fresh = at == -1;
+        int64_t sj = 4 * (int64_t)f[j].item + f[j].local;
+        table[h] = fresh ? (int32_t)i : -2 - at;
+        nb[si] = fresh ? -1 : (int32_t)f[j].item;
+        nb[sj] = fresh ? -1 : (int32_t)f[i].item;
+        if (m->agreeing && !fresh && f[i].odd == f[j].odd)
+            m->agreeing(m->user, worker, si, sj);
     }
 }
 
@@ -522,6 +597,8 @@ int tpk_face_match(const tpk_face_matcher *m, tpk_match_failure *failure)
     job->buckets = job->hi - job->lo;
     job->plain = m->tets && !m->keep && !m->tag && items_begin == 0;
     job->item_mask = m->tag_bits ? UINT32_MAX >> m->tag_bits : UINT32_MAX;
+    if (job->plain && m->neighbors)
+        job->second = m->neighbors;
     int threads = m->threads;
     for (int w = 0; w < threads; w++)
         if (!(job->starts[w] = tpk_alloc_large(sizeof *job->starts[w] * (size_t)(job->buckets ? job->buckets : 1))))

@@ -56,7 +56,8 @@ typedef struct tpk_face_matcher {
     int check_ids; /* tets: an id out of range or repeated is TPK_MATCH_BAD_ITEM (else the caller vouches) */
 
     /* Neighbours mode: neighbors[4t + k] for every tet. agreeing(), if set, gets each pair of faces (as
-     * 4t + k) whose outward orders agree: for positive tets, the candidates for a fold. */
+     * 4t + k) whose outward orders agree: for positive tets, the candidates for a fold (the orders are
+     * compared by the parity of each tet's sort, so a tet's ids must be distinct: check_ids). */
     int32_t *neighbors;
     void (*agreeing)(void *user, int worker, int64_t slot_a, int64_t slot_b);
 
