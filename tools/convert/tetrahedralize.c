@@ -635,10 +635,12 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
     if (plain) {
         out->tets = donor->cell_conn;
         donor->cell_conn = NULL;
-        out->tet_source = tpk_alloc_large(sizeof *out->tet_source * (size_t)tet_capacity);
-        if (!out->tet_source)
-            return -1;
-        fill_identity(out->tet_source, tet_capacity, threads);
+        if (!(flags & TPK_TETRA_IDENTITY_SOURCE_NULL)) {
+            out->tet_source = tpk_alloc_large(sizeof *out->tet_source * (size_t)tet_capacity);
+            if (!out->tet_source)
+                return -1;
+            fill_identity(out->tet_source, tet_capacity, threads);
+        }
         out->tet_count = tet_capacity;
         out->cells_into[1] = tet_capacity;
         return 0;
