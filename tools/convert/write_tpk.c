@@ -20,6 +20,7 @@ typedef struct chunk_writer {
     int zstd_level;
     int threads; /* for building records */
     tpk_diag *diag;
+    char *blocks[2]; /* stream_chunk's, kept for the next streamed chunk (NULL until the first) */
 } chunk_writer;
 
 static tpk_chunk_desc chunk_desc(const chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type,
@@ -109,12 +110,16 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
                         void (*block_done)(const void *user))
 {
     int64_t total = (int64_t)desc->elem_count;
-    char *blocks[2] = {malloc((size_t)STREAM_BLOCK * desc->elem_size),
-                       total > STREAM_BLOCK ? malloc((size_t)STREAM_BLOCK * desc->elem_size) : NULL};
-    if (!blocks[0] || (total > STREAM_BLOCK && !blocks[1])) {
-        free(blocks[0]), free(blocks[1]);
-        return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
-    }
+    /* Room for the largest record (Tet32) made once for all the streamed chunks: each chunk touches the
+     * pages its records need, and the next reuses them (POS3's blocks become TT16's; fresh blocks per
+     * chunk were 1536 page faults on grid 120). */
+    if (desc->elem_size > sizeof(tpk_tet32))
+        return tpk_diag_fail(cw->diag, "internal: %u-byte records streamed, at most %zu", desc->elem_size,
+                             sizeof(tpk_tet32));
+    for (int b = 0; b < 2; b++)
+        if (!cw->blocks[b] && !(cw->blocks[b] = malloc((size_t)STREAM_BLOCK * sizeof(tpk_tet32))))
+            return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
+    char *const *blocks = cw->blocks;
     fill_job job = {fill, user, 0, NULL, desc->elem_size};
     append_job append = {.running = 0, .result = TPK_OK};
     tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
@@ -132,8 +137,6 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     r = r != TPK_OK ? r : last;
     if (r == TPK_OK)
         r = tpk_writer_end_chunk(cw->writer);
-    free(blocks[0]);
-    free(blocks[1]);
     if (r != TPK_OK)
         return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
     return 0;
@@ -574,7 +577,7 @@ static void writer_message(void *user, tpk_result code, const char *text)
 int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const tpk_tetmesh *mesh,
                     const int32_t *neighbors, tpk_header_fields *hdr, tpk_diag *diag)
 {
-    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
+    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag, {NULL, NULL}};
     char err[512] = "";
     tpk_write_options wopt;
     memset(&wopt, 0, sizeof wopt);
@@ -606,6 +609,8 @@ int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const t
         rc = write_maps(&cw, mesh);
     if (rc == 0 && o->cull)
         rc = write_cull(&cw, mesh, neighbors);
+    free(cw.blocks[0]);
+    free(cw.blocks[1]);
     if (rc != 0)
         tpk_write_abort(ws);
     return rc;
@@ -623,7 +628,7 @@ int tpk_write_end(tpk_write_session *ws, const tpk_convert_options *o, tpk_heade
                   tpk_convert_report *rep, const char *source_format, const tpk_part_extras *part,
                   const tpk_levels *levels, tpk_diag *diag)
 {
-    chunk_writer cw = {ws->writer, o->zstd_level, tpk_thread_count(o->threads), diag};
+    chunk_writer cw = {ws->writer, o->zstd_level, tpk_thread_count(o->threads), diag, {NULL, NULL}};
     int rc = write_meta(&cw, o, rep, source_format, part, levels);
     for (int i = 0; rc == 0 && levels && i < levels->count; i++) { /* spec §16: whole files, uncompressed */
         tpk_chunk_desc d = {.tag = TPK_TAG_LEVL, .codec = TPK_CODEC_NONE, .elem_type = TPK_ELEM_BYTE, .elem_size = 1,
