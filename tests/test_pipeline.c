@@ -986,6 +986,56 @@ TPK_TEST(real_cylinder)
     tpk_tetmesh_free(&m);
 }
 
+/* The layouts are built four tets at a time where SSE2 is, one at a time for the rest: any start and
+ * count (every remainder, unaligned starts) gives the records of one build over the whole mesh. */
+TPK_TEST(layouts_in_pieces_match_whole)
+{
+    tpk_tetmesh m;
+    tpk_orient_stats stats;
+    tpk_diag diag = {0};
+    run_chain("sfepy/cylinder.vtk", NULL, 0, 1348, 0, &stats, &m);
+    int32_t *nb = malloc(sizeof *nb * 4 * (size_t)m.tet_count);
+    CHECK_MSG(nb && tpk_connect(m.tets, m.tet_count, m.vertex_count, nb, 0, &diag) == 0, "%s", diag.message);
+    int64_t T = m.tet_count;
+    tpk_tet20 *w20 = malloc(sizeof *w20 * (size_t)T), p20[16];
+    tpk_tet16 *w16 = malloc(sizeof *w16 * (size_t)T), p16[16];
+    tpk_build_tet20(m.tets, nb, T, w20);
+    tpk_build_tet16(m.tets, nb, T, w16);
+    for (int64_t start = 0; start < 7; start++)
+        for (int64_t count = 0; count <= 13; count++) {
+            int64_t s = T - 13 - start; /* ending at or just before the last tet too */
+            int64_t first[2] = {start, s};
+            for (int f = 0; f < 2; f++) {
+                tpk_build_tet20(m.tets + 4 * first[f], nb + 4 * first[f], count, p20);
+                tpk_build_tet16(m.tets + 4 * first[f], nb + 4 * first[f], count, p16);
+                CHECK_MSG(!memcmp(p20, w20 + first[f], sizeof *p20 * (size_t)count) &&
+                              !memcmp(p16, w16 + first[f], sizeof *p16 * (size_t)count),
+                          "tets %lld + %lld: other records than the whole build's", (long long)first[f],
+                          (long long)count);
+            }
+        }
+    /* Ids near INT32_MAX order as signed ints do: a tet renumbered high keeps its ranks. */
+    int32_t high[16], hn[16];
+    for (int k = 0; k < 16; k++)
+        high[k] = INT32_MAX - 3 * k, hn[k] = k % 5 == 0 ? -1 : INT32_MAX - k;
+    tpk_tet20 h20[4];
+    tpk_tet16 h16[4];
+    tpk_build_tet20(high, hn, 4, h20);
+    tpk_build_tet16(high, hn, 4, h16);
+    for (int t = 0; t < 4; t++)
+        for (int k = 0; k < 4; k++) {
+            int rank = 0;
+            for (int j = 0; j < 4; j++)
+                rank += high[4 * t + j] < high[4 * t + k];
+            CHECK(h20[t].n[rank] == hn[4 * t + k]);
+            CHECK(rank == 3 || h16[t].nx[rank] == (hn[4 * t + k] ^ h20[t].n[3]));
+        }
+    free(w20);
+    free(w16);
+    free(nb);
+    tpk_tetmesh_free(&m);
+}
+
 TPK_TEST(real_hinge)
 {
     tpk_tetmesh m;

@@ -41,7 +41,8 @@ void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx);
 
 /* malloc for large scratch arrays: the block tpk_free_large kept, when it fits (below), else fresh,
  * 2 MiB aligned and, where the kernel offers it, backed by huge pages (fewer page faults on first touch,
- * which dominate a pass over a fresh 500 MB array). Only malloc's alignment is promised. Release with
+ * which dominate a pass over a fresh 500 MB array), except inside a virtual machine whose balloon takes
+ * free memory back (parallel.c says why). Only malloc's alignment is promised. Release with
  * free() or tpk_free_large. NULL when out of memory. */
 void *tpk_alloc_large(size_t size);
 

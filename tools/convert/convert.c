@@ -219,10 +219,15 @@ static int make_tets(conversion *c)
     }
     announce(c->stage, c->stage_user, "tetrahedralize");
     tpk_tetra_progress progress = {tetrahedralize_progress, c};
+    /* The identity tet map left for reorder to write, where nothing before it reads the map: no merge or
+     * higher-order split renumbering the cells, no refinement. */
+    int source_later = !o->no_reorder && !c->merged.cell_source && !c->higher.cell_source && !(o->max_error > 0) &&
+                       !(o->subdivide > 0);
     if (tpk_tetrahedralize_watched(&c->src, o->fields, o->field_count,
                                    (o->skip_bad_cells ? TPK_TETRA_SKIP_BAD_CELLS : 0) |
                                        (o->cell_to_point ? TPK_TETRA_CELL_TO_POINT : 0) |
-                                       (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0) | TPK_TETRA_FILE_GRID,
+                                       (o->strict_orientation ? TPK_TETRA_REFUSE_MIRRORED : 0) | TPK_TETRA_FILE_GRID |
+                                       (source_later ? TPK_TETRA_IDENTITY_SOURCE_NULL : 0),
                                    o->threads, c->stage ? &progress : NULL, &c->mesh, c->diag) != 0) {
         note_merged_ids(&c->merged, c->diag);
         return -1;

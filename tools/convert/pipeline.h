@@ -33,6 +33,10 @@
  * the centre of their bounding box (out->grid_origin), and every added point is put on it as it is made, so
  * that a tet found positive (exactly) stays positive in the file. The converter sets this. */
 #define TPK_TETRA_FILE_GRID 0x8
+/* All-tet input taken over whole leaves tet_source NULL, the identity (as orient, unfold and reorder read a
+ * NULL map), rather than a 4-byte-a-tet array filled with it: for a caller whose next stage is tpk_reorder,
+ * which writes the map in the new order anyway (grid 120: 41 MB of fresh pages and a pass over them). */
+#define TPK_TETRA_IDENTITY_SOURCE_NULL 0x10
 int tpk_tetrahedralize(const tpk_mesh *src, const char *const *field_names, int field_name_count, int flags,
                        tpk_tetmesh *out, tpk_diag *diag);
 /* The same, taking over src's points and (for all-tet input) its connectivity instead of copying them;

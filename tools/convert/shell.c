@@ -22,10 +22,10 @@ void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_
     int64_t out = 0;
     for (int64_t t = 0; t < tet_count; t++) {
         const int32_t *v = tets + 4 * t, *n = neighbors + 4 * t;
-        if ((n[0] | n[1] | n[2] | n[3]) >= 0) /* no face on the shell: one branch a tet, not four */
+        if ((n[0] | n[1] | n[2] | n[3]) >= 0) /* no face on the shell: most tets, one test (sign bits) */
             continue;
         for (int k = 0; k < 4; k++) {
-            if (neighbors[4 * t + k] >= 0)
+            if (n[k] >= 0)
                 continue;
             tpk_shell_face *f = &dst[out++];
             f->a = v[tpk_tet_faces[k][0]];

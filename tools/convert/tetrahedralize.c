@@ -395,8 +395,8 @@ static int cell_to_point(const tpk_mesh *src, const field_request *req, const tp
         free(values), free(sum), free(count), free(kept);
         return -1;
     }
-    for (int64_t t = 0; t < out->tet_count; t++)
-        kept[out->tet_source[t]] = 1;
+    for (int64_t t = 0; t < out->tet_count; t++) /* a NULL map: the identity (TPK_TETRA_IDENTITY_SOURCE_NULL) */
+        kept[out->tet_source ? out->tet_source[t] : t] = 1;
     /* All-tet input through tpk_tetrahedralize_consume: the connectivity was taken over as the tet array,
      * unchanged so far (cell c is tet c, 4 ids each, before orientation). */
     const int32_t *conn = src->cell_conn ? src->cell_conn : out->tets;
@@ -449,7 +449,7 @@ static void copy_range(void *ctx, int64_t begin, int64_t end, int w)
     int per_point = f->association == TPK_ASSOC_POINT;
     (void)w;
     for (int64_t i = begin; i < end; i++) {
-        int64_t from = per_point ? job->out->vertex_source[i] : job->out->tet_source[i];
+        int64_t from = per_point ? job->out->vertex_source[i] : job->out->tet_source ? job->out->tet_source[i] : i;
         job->dst[i] = from < 0 ? added_value(job->added, job->step, job->req, i - job->src->point_count)
                                : pick_value(job->step + from * f->components, f->components, job->req->pick);
     }
@@ -635,10 +635,12 @@ static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capac
     if (plain) {
         out->tets = donor->cell_conn;
         donor->cell_conn = NULL;
-        out->tet_source = tpk_alloc_large(sizeof *out->tet_source * (size_t)tet_capacity);
-        if (!out->tet_source)
-            return -1;
-        fill_identity(out->tet_source, tet_capacity, threads);
+        if (!(flags & TPK_TETRA_IDENTITY_SOURCE_NULL)) {
+            out->tet_source = tpk_alloc_large(sizeof *out->tet_source * (size_t)tet_capacity);
+            if (!out->tet_source)
+                return -1;
+            fill_identity(out->tet_source, tet_capacity, threads);
+        }
         out->tet_count = tet_capacity;
         out->cells_into[1] = tet_capacity;
         return 0;

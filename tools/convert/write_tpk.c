@@ -20,6 +20,7 @@ typedef struct chunk_writer {
     int zstd_level;
     int threads; /* for building records */
     tpk_diag *diag;
+    char *blocks[2]; /* stream_chunk's, kept for the next streamed chunk (NULL until the first) */
 } chunk_writer;
 
 static tpk_chunk_desc chunk_desc(const chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type,
@@ -109,12 +110,16 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
                         void (*block_done)(const void *user))
 {
     int64_t total = (int64_t)desc->elem_count;
-    char *blocks[2] = {malloc((size_t)STREAM_BLOCK * desc->elem_size),
-                       total > STREAM_BLOCK ? malloc((size_t)STREAM_BLOCK * desc->elem_size) : NULL};
-    if (!blocks[0] || (total > STREAM_BLOCK && !blocks[1])) {
-        free(blocks[0]), free(blocks[1]);
-        return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
-    }
+    /* Room for the largest record (Tet32) made once for all the streamed chunks: each chunk touches the
+     * pages its records need, and the next reuses them (POS3's blocks become TT16's; fresh blocks per
+     * chunk were 1536 page faults on grid 120). */
+    if (desc->elem_size > sizeof(tpk_tet32))
+        return tpk_diag_fail(cw->diag, "internal: %u-byte records streamed, at most %zu", desc->elem_size,
+                             sizeof(tpk_tet32));
+    for (int b = 0; b < 2; b++)
+        if (!cw->blocks[b] && !(cw->blocks[b] = malloc((size_t)STREAM_BLOCK * sizeof(tpk_tet32))))
+            return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
+    char *const *blocks = cw->blocks;
     fill_job job = {fill, user, 0, NULL, desc->elem_size};
     append_job append = {.running = 0, .result = TPK_OK};
     tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
@@ -132,8 +137,6 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     r = r != TPK_OK ? r : last;
     if (r == TPK_OK)
         r = tpk_writer_end_chunk(cw->writer);
-    free(blocks[0]);
-    free(blocks[1]);
     if (r != TPK_OK)
         return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
     return 0;
@@ -272,25 +275,48 @@ static void gather_shell(const layout_source *src, int64_t first, int64_t count,
         tpk_shell_gather_range(src->shell, src->tets, src->neighbors, first, count, worker);
 }
 
+/* The records and the shell faces of a worker's range in pieces of this many tets (128 KiB of tets and
+ * neighbours): the gather reads what the records just read, from the cache rather than from memory. */
+#define LAYOUT_PIECE ((int64_t)4096)
+
+static void build_tet16(const int32_t *tets, const int32_t *neighbors, int64_t count, void *dst)
+{
+    tpk_build_tet16(tets, neighbors, count, dst);
+}
+
+static void build_tet20(const int32_t *tets, const int32_t *neighbors, int64_t count, void *dst)
+{
+    tpk_build_tet20(tets, neighbors, count, dst);
+}
+
+static void build_tet32(const int32_t *tets, const int32_t *neighbors, int64_t count, void *dst)
+{
+    tpk_build_tet32(tets, neighbors, count, dst);
+}
+
+static void fill_layout(const layout_source *src, int64_t first, int64_t count, char *dst, int worker,
+                        void (*build)(const int32_t *, const int32_t *, int64_t, void *), size_t record)
+{
+    for (int64_t at = 0; at < count; at += LAYOUT_PIECE) {
+        int64_t n = count - at < LAYOUT_PIECE ? count - at : LAYOUT_PIECE;
+        build(src->tets + 4 * (first + at), src->neighbors + 4 * (first + at), n, dst + (size_t)at * record);
+        gather_shell(src, first + at, n, worker);
+    }
+}
+
 static void fill_tet16(const void *user, int64_t first, int64_t count, void *dst, int worker)
 {
-    const layout_source *src = user;
-    tpk_build_tet16(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
-    gather_shell(src, first, count, worker);
+    fill_layout(user, first, count, dst, worker, build_tet16, sizeof(tpk_tet16));
 }
 
 static void fill_tet20(const void *user, int64_t first, int64_t count, void *dst, int worker)
 {
-    const layout_source *src = user;
-    tpk_build_tet20(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
-    gather_shell(src, first, count, worker);
+    fill_layout(user, first, count, dst, worker, build_tet20, sizeof(tpk_tet20));
 }
 
 static void fill_tet32(const void *user, int64_t first, int64_t count, void *dst, int worker)
 {
-    const layout_source *src = user;
-    tpk_build_tet32(src->tets + 4 * first, src->neighbors + 4 * first, count, dst);
-    gather_shell(src, first, count, worker);
+    fill_layout(user, first, count, dst, worker, build_tet32, sizeof(tpk_tet32));
 }
 
 static void shell_block_done(const void *user)
@@ -551,7 +577,7 @@ static void writer_message(void *user, tpk_result code, const char *text)
 int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const tpk_tetmesh *mesh,
                     const int32_t *neighbors, tpk_header_fields *hdr, tpk_diag *diag)
 {
-    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag};
+    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag, {NULL, NULL}};
     char err[512] = "";
     tpk_write_options wopt;
     memset(&wopt, 0, sizeof wopt);
@@ -583,6 +609,8 @@ int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const t
         rc = write_maps(&cw, mesh);
     if (rc == 0 && o->cull)
         rc = write_cull(&cw, mesh, neighbors);
+    free(cw.blocks[0]);
+    free(cw.blocks[1]);
     if (rc != 0)
         tpk_write_abort(ws);
     return rc;
@@ -600,7 +628,7 @@ int tpk_write_end(tpk_write_session *ws, const tpk_convert_options *o, tpk_heade
                   tpk_convert_report *rep, const char *source_format, const tpk_part_extras *part,
                   const tpk_levels *levels, tpk_diag *diag)
 {
-    chunk_writer cw = {ws->writer, o->zstd_level, tpk_thread_count(o->threads), diag};
+    chunk_writer cw = {ws->writer, o->zstd_level, tpk_thread_count(o->threads), diag, {NULL, NULL}};
     int rc = write_meta(&cw, o, rep, source_format, part, levels);
     for (int i = 0; rc == 0 && levels && i < levels->count; i++) { /* spec §16: whole files, uncompressed */
         tpk_chunk_desc d = {.tag = TPK_TAG_LEVL, .codec = TPK_CODEC_NONE, .elem_type = TPK_ELEM_BYTE, .elem_size = 1,
