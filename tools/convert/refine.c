@@ -174,7 +174,7 @@ typedef struct refine {
     int32_t *tets, *cell;
     /* the tets' corners' parametric points in their cells, 12 numbers an entry (xi_of), entries given out
      * in the order tets first need them: a tet whose corners are nodes needs none until it is cut
-     * (ensure_xi), and the tets cut are scattered over the tets, so entries by tet number would touch
+     * (ensure_xi_all), and the tets cut are scattered over the tets, so entries by tet number would touch
      * most pages for a few tets each (bench/README) */
     double *xi;
     int64_t xi_count, xi_cap;
@@ -428,24 +428,30 @@ static void xi_of_nodes(const refine *r, int64_t t, int type, const int32_t *ver
     }
 }
 
-/* Tet t's corners' parametric points written (xi_of_nodes) into its entry, given it by ensure_xi_all. */
-static void ensure_xi(refine *r, int64_t t)
-{
-    int32_t verts[TPK_CELL_MAP_MAX_NODES];
-    xi_of_nodes(r, t, cell_nodes(r, r->cell[t], verts), verts, NULL, xi_of(r, t));
-}
-
+/* The listed tets' corners' parametric points written (xi_of_nodes) into the entries
+ * ensure_xi_all gave them. */
 static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     refine *r = ((void **)ctx)[0];
     const int64_t *tets = ((void **)ctx)[1];
+    int32_t verts[TPK_CELL_MAP_MAX_NODES];
+    int nodes_of = 0; /* the type whose nodes' parametric points `nodes` holds (the cells are mostly alike) */
+    double nodes[TPK_CELL_MAP_MAX_NODES][3];
     (void)w;
-    for (int64_t i = begin; i < end; i++)
-        ensure_xi(r, tets[i]);
+    for (int64_t i = begin; i < end; i++) {
+        int64_t t = tets[i];
+        int type = cell_nodes(r, r->cell[t], verts);
+        if (type != nodes_of) {
+            for (int j = 0, n = tpk_cell_map_nodes(type); j < n; j++)
+                tpk_cell_map_node(type, j, nodes[j]);
+            nodes_of = type;
+        }
+        xi_of_nodes(r, t, type, verts, (const double (*)[3])nodes, xi_of(r, t));
+    }
 }
 
 /* Of the `count` tets listed (all tets 0 .. count when NULL), those without an entry of parametric points
- * given one, in list order, and their points written (ensure_xi), on all threads. */
+ * given one, in list order, and their points written (ensure_xi_range), on all threads. */
 static int ensure_xi_all(refine *r, const int64_t *tets, int64_t count)
 {
     int64_t need = 0;
@@ -921,7 +927,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         return; /* a tet of a tetra: exactly its own interpolant */
     const tpk_bernstein *b = &r->table[degree];
     const double *xi = r->xi_at[t] >= 0 ? xi_of(r, t) : NULL;
-    double xi_here[12]; /* a tet whose corners are nodes: their points read here, not written (ensure_xi) */
+    double xi_here[12]; /* a tet whose corners are nodes: their points read here, not written (ensure_xi_all) */
     const int32_t *tv = r->tets + 4 * t;
     int n = tpk_cell_map_nodes(type), m = b->points, direct = degree > DIRECT_DEGREE;
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
@@ -1830,6 +1836,29 @@ static int exact_where_it_shows(refine *r)
     return 0;
 }
 
+/* The tets to bound (r->todo) put in the order of their cells (a counting sort, stable): bound_tet
+ * gathers a cell's nodes and coefficients once for a run of its tets, and after a pass of cuts the tets
+ * cut and their pieces, listed in tet order and then new, visit each cell more than once. Each tet's
+ * bound does not depend on the order. */
+static int todo_by_cell(refine *r)
+{
+    int64_t cells = r->cells->cell_count, n = r->todo_count;
+    int64_t *start = calloc((size_t)cells + 1, sizeof *start), *sorted = malloc(sizeof *sorted * (size_t)(n ? n : 1));
+    if (!start || !sorted) {
+        free(start), free(sorted);
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
+    }
+    for (int64_t i = 0; i < n; i++)
+        start[r->cell[r->todo[i]] + 1]++;
+    for (int64_t c = 0; c < cells; c++)
+        start[c + 1] += start[c];
+    for (int64_t i = 0; i < n; i++)
+        sorted[start[r->cell[r->todo[i]]]++] = r->todo[i];
+    memcpy(r->todo, sorted, sizeof *sorted * (size_t)n);
+    free(start), free(sorted);
+    return 0;
+}
+
 int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const tpk_refine_options *options,
                          tpk_refine_report *report, tpk_diag *diag)
 {
@@ -1853,6 +1882,10 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
     for (int level = 0; rc == 0 && level < o.uniform_levels; level++)
         rc = cut_all(&r);
     for (int pass = 0; rc == 0; pass++) {
+        if (pass > 0)
+            rc = todo_by_cell(&r);
+        if (rc != 0)
+            break;
         tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
         int64_t over = 0;
         for (int64_t i = 0; i < r.todo_count; i++)
