@@ -361,6 +361,17 @@ static int node_index(const int32_t *verts, int n, int32_t v)
  * (face and cell centres, Steiner points) by inverting the map. An added point then takes every point
  * field's value from the interpolant of the first cell (in tet order) that has it, so that its values
  * are those the bound measures against. */
+/* The parametric points of type's nodes into nodes, unless *held says they are there already (a cell of
+ * the same type came last: the cells are mostly alike). */
+static void hold_node_points(int type, int *held, double (*nodes)[3])
+{
+    if (type == *held)
+        return;
+    for (int j = 0, n = tpk_cell_map_nodes(type); j < n; j++)
+        tpk_cell_map_node(type, j, nodes[j]);
+    *held = type;
+}
+
 typedef struct corner_job {
     refine *r;
     uint8_t *failed; /* per tet: 1 a node is no vertex, 2 the map does not invert */
@@ -386,11 +397,7 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
             continue;
         }
         int n = tpk_cell_map_nodes(type);
-        if (type != nodes_of) {
-            for (int j = 0; j < n; j++)
-                tpk_cell_map_node(type, j, nodes[j]);
-            nodes_of = type;
-        }
+        hold_node_points(type, &nodes_of, nodes);
         if (job->write && r->xi_at[t] < 0)
             continue;
         int node[4];
@@ -413,18 +420,15 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
 }
 
 /* Tet t's corners' parametric points, when corner_range left them for later, into xi (12 numbers), from
- * its cell's type and nodes as vertices (cell_nodes) and, when `nodes` is not NULL, those nodes'
- * parametric points. */
+ * its cell's type and nodes as vertices (cell_nodes) and those nodes' parametric points
+ * (hold_node_points). */
 static void xi_of_nodes(const refine *r, int64_t t, int type, const int32_t *verts, const double (*nodes)[3],
                         double *xi)
 {
     int n = tpk_cell_map_nodes(type);
     for (int k = 0; k < 4; k++) {
         int j = node_index(verts, n, r->tets[4 * t + k]); /* found: corner_range found every corner */
-        if (nodes)
-            memcpy(xi + 3 * k, nodes[j], sizeof nodes[j]);
-        else
-            tpk_cell_map_node(type, j, xi + 3 * k);
+        memcpy(xi + 3 * k, nodes[j], sizeof nodes[j]);
     }
 }
 
@@ -441,11 +445,7 @@ static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
     for (int64_t i = begin; i < end; i++) {
         int64_t t = tets[i];
         int type = cell_nodes(r, r->cell[t], verts);
-        if (type != nodes_of) {
-            for (int j = 0, n = tpk_cell_map_nodes(type); j < n; j++)
-                tpk_cell_map_node(type, j, nodes[j]);
-            nodes_of = type;
-        }
+        hold_node_points(type, &nodes_of, nodes);
         xi_of_nodes(r, t, type, verts, (const double (*)[3])nodes, xi_of(r, t));
     }
 }
@@ -943,11 +943,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         return;
     }
     if (!xi) { /* the cell's nodes are at hand */
-        if (cache->xi_type != type) {
-            for (int k = 0; k < n; k++)
-                tpk_cell_map_node(type, k, cache->xi_node[k]);
-            cache->xi_type = type;
-        }
+        hold_node_points(type, &cache->xi_type, cache->xi_node);
         xi_of_nodes(r, t, type, cache->verts, (const double (*)[3])cache->xi_node, xi_here);
         xi = xi_here;
     }
