@@ -179,8 +179,8 @@ typedef struct refine {
     double *xi;
     int64_t xi_count, xi_cap;
     int32_t *xi_at;        /* per tet: its entry; -1: its corners are nodes, their points not written yet */
-    int64_t *root;         /* the given tet each comes from (cell fields) */
-    double *field_error, *geometry_error, *criterion;
+    int64_t *root;         /* the given tet each comes from, for cell fields (NULL: the mesh has none) */
+    double *field_error, *geometry_error;
     int *worst_slot;
     tpk_bernstein table[TPK_BERNSTEIN_MAX_DEGREE + 1]; /* made for the degrees the cells have */
     double *inverse_t[TPK_BERNSTEIN_MAX_DEGREE + 1];  /* their inverses transposed */
@@ -190,7 +190,9 @@ typedef struct refine {
     int report_fields;     /* fields bounded (not constant) */
     int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
-    uint8_t *rough;        /* per tet: bounded by rough_bound */
+    /* per tet: BOUND_ROUGH bounded by rough_bound, BOUND_OVER its criterion over the bound (the criterion
+     * is only compared: a bit, not 8 bytes a tet to fault in) */
+    uint8_t *bound_flags;
     /* for the hexahedron (NULL when no cell is one), per set of 4 nodes (bits in node order), per
      * monomial of tpk_cell_map_nonlinear: the Bernstein bound of the monomial less its linear interpolant
      * on the tet of those 4 nodes' parametric points; -1 for sets of other sizes and flat tets */
@@ -201,6 +203,8 @@ typedef struct refine {
     int exact;             /* bound_tet: every tet through its Bernstein coefficients */
     vertex_tets by_vertex; /* the tets by vertex (refine_pass) */
 } refine;
+
+enum { BOUND_ROUGH = 1, BOUND_OVER = 2 };
 
 static double *xi_of(const refine *r, int64_t t)
 {
@@ -845,7 +849,7 @@ static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4
             return 0;
     }
     r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
-    r->criterion[t] = crit, r->worst_slot[t] = worst_slot, r->rough[t] = 1;
+    r->worst_slot[t] = worst_slot, r->bound_flags[t] = BOUND_ROUGH | (crit <= r->o->max_error ? 0 : BOUND_OVER);
     return 1;
 }
 
@@ -901,7 +905,7 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         fold_slot(r, s, gap, vs, (const double (*)[3])g, flat, geometry, &worst, &r->worst_slot[t], &crit);
     }
     r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
-    r->criterion[t] = crit;
+    r->bound_flags[t] = crit <= r->o->max_error ? 0 : BOUND_OVER;
 }
 
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
@@ -921,8 +925,8 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             cache->rough_geometry[q] = sqrt(a[3 * q] * a[3 * q] + a[3 * q + 1] * a[3 * q + 1] + a[3 * q + 2] * a[3 * q + 2]);
     }
     int type = cache->cell_type, degree = tpk_cell_map_degree(type);
-    r->field_error[t] = r->geometry_error[t] = r->criterion[t] = 0;
-    r->worst_slot[t] = -1, r->rough[t] = 0;
+    r->field_error[t] = r->geometry_error[t] = 0;
+    r->worst_slot[t] = -1, r->bound_flags[t] = 0 <= r->o->max_error ? 0 : BOUND_OVER;
     if (degree <= 1)
         return; /* a tet of a tetra: exactly its own interpolant */
     const tpk_bernstein *b = &r->table[degree];
@@ -1013,7 +1017,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         fold_slot(r, s, gap, v, (const double (*)[3])g, flat, geometry, &worst, &r->worst_slot[t], &crit);
     }
     r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
-    r->criterion[t] = crit;
+    r->bound_flags[t] = crit <= r->o->max_error ? 0 : BOUND_OVER;
 }
 
 static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -1058,13 +1062,13 @@ static int reserve_tets(refine *r, int64_t need)
     int64_t cap = need + need / 2 + 1024;
     if (grow((void **)&r->tets, 4 * sizeof *r->tets, cap) || grow((void **)&r->cell, sizeof *r->cell, cap) ||
         grow((void **)&r->xi_at, sizeof *r->xi_at, cap) ||
-        grow((void **)&r->root, sizeof *r->root, cap) ||
+        (r->root && grow((void **)&r->root, sizeof *r->root, cap)) ||
         grow((void **)&r->field_error, sizeof *r->field_error, cap) ||
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
-        grow((void **)&r->criterion, sizeof *r->criterion, cap) ||
+
         grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
         grow((void **)&r->marked, sizeof *r->marked, cap) ||
-        grow((void **)&r->rough, sizeof *r->rough, cap) ||
+        grow((void **)&r->bound_flags, sizeof *r->bound_flags, cap) ||
         grow((void **)&r->todo, sizeof *r->todo, cap))
         return tpk_diag_fail(r->diag, "out of memory for %lld tets (--max-error)", (long long)need);
     r->cap = cap;
@@ -1142,7 +1146,9 @@ static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
     int parent = sign_of(r, a);
     memcpy(b, a, 4 * sizeof *a);
     memcpy(xb, xa, 12 * sizeof *xa);
-    r->cell[u] = r->cell[t], r->root[u] = r->root[t];
+    r->cell[u] = r->cell[t];
+    if (r->root)
+        r->root[u] = r->root[t];
     r->marked[u] = (uint8_t)(r->marked[t] & ~edges_at[i]);
     r->marked[t] = (uint8_t)(r->marked[t] & ~edges_at[j]);
     for (int k = 0; k < 3; k++)
@@ -1334,7 +1340,7 @@ static int cut_all(refine *r)
             int l[4] = {diagonal[d][0], diagonal[d][1], ring[d][k], ring[d][(k + 1) % 4]};
             memcpy(local[4 + k], l, sizeof l);
         }
-        int64_t cell = r->cell[t], root = r->root[t];
+        int64_t cell = r->cell[t], root = r->root ? r->root[t] : 0;
         for (int c = 0; c < 8; c++) {
             int *l = local[c];
             if (tpk_orient3d_exact(x[l[0]], x[l[1]], x[l[2]], x[l[3]]) != parent_xi) {
@@ -1346,7 +1352,9 @@ static int cut_all(refine *r)
                 r->xi_at[u] = (int32_t)r->xi_count++;
             for (int k = 0; k < 4; k++)
                 r->tets[4 * u + k] = v[l[k]], memcpy(xi_of(r, u) + 3 * k, x[l[k]], sizeof x[0]);
-            r->cell[u] = (int32_t)cell, r->root[u] = root, r->marked[u] = 0;
+            r->cell[u] = (int32_t)cell, r->marked[u] = 0;
+            if (r->root)
+                r->root[u] = root;
             if (parent != 0 && sign_of(r, r->tets + 4 * u) != parent)
                 return tpk_diag_fail(r->diag, "--subdivide: cell %lld (a %s) folds when subdivided: a piece cut at its "
                                      "map's edge midpoints turns over", (long long)cell,
@@ -1486,7 +1494,7 @@ static int visit_edge(refine *r, closure *cl, int32_t a, int32_t b)
 }
 
 /* The closure, as a set, does not depend on the order the edges are visited in. */
-static int refine_pass(refine *r, double limit)
+static int refine_pass(refine *r)
 {
     edge_clear(&r->marks);
     closure cl = {{NULL, 0, 0}, calloc((size_t)(r->count ? r->count : 1), 1), 0};
@@ -1495,7 +1503,7 @@ static int refine_pass(refine *r, double limit)
     if (rc == 0 && !made) /* every vertex's list made (vertex_tets_room emptied them) */
         vertex_tets_link(r, NULL, r->count);
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
-        if (!(r->criterion[r->todo[i]] <= limit))
+        if (r->bound_flags[r->todo[i]] & BOUND_OVER)
             rc = mark_longest(r, &cl.queue, r->todo[i]);
     while (rc == 0 && cl.queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
         uint64_t key = cl.queue.keys[--cl.queue.count];
@@ -1613,8 +1621,8 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
-    free(r->geometry_error), free(r->criterion), free(r->worst_slot), free(r->todo), free(r->marked);
-    free(r->rough), free(r->xi_at), free(r->by_vertex.head), free(r->by_vertex.next);
+    free(r->geometry_error), free(r->worst_slot), free(r->todo), free(r->marked);
+    free(r->bound_flags), free(r->xi_at), free(r->by_vertex.head), free(r->by_vertex.next);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
@@ -1736,11 +1744,16 @@ static int set_up(refine *r, int threads)
     /* the mesh's tets and their cells taken over, grown by realloc, not copied (hand_back gives them back;
      * on failure the mesh is left without them, as convert stops) */
     r->tets = m->tets, r->cell = m->tet_source, m->tets = m->tet_source = NULL;
+    for (int f = 0; f < m->field_count && !r->root; f++)
+        if (m->fields[f].association != TPK_ASSOC_POINT && !(r->root = malloc(sizeof *r->root)))
+            return tpk_diag_fail(r->diag, "out of memory for --max-error");
     if (reserve_tets(r, m->tet_count) != 0)
         return -1;
     r->count = m->tet_count;
     for (int64_t t = 0; t < r->count; t++)
-        r->root[t] = t, r->marked[t] = 0, r->todo[t] = t;
+        r->marked[t] = 0, r->todo[t] = t;
+    for (int64_t t = 0; r->root && t < r->count; t++)
+        r->root[t] = t;
     r->todo_count = r->count;
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
@@ -1787,18 +1800,18 @@ static int exact_where_it_shows(refine *r)
 {
     double field = -1, geometry = -1;
     for (int64_t t = 0; t < r->count; t++)
-        if (!r->rough[t]) {
+        if (!(r->bound_flags[t] & BOUND_ROUGH)) {
             field = r->field_error[t] > field ? r->field_error[t] : field;
             geometry = r->geometry_error[t] > geometry ? r->geometry_error[t] : geometry;
         }
     int64_t count = 0, *left = NULL;
     for (int64_t t = 0; t < r->count; t++)
-        count += r->rough[t] && (r->field_error[t] > field || r->geometry_error[t] > geometry);
+        count += (r->bound_flags[t] & BOUND_ROUGH) && (r->field_error[t] > field || r->geometry_error[t] > geometry);
     if (count && !(left = malloc(sizeof *left * (size_t)count)))
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     count = 0;
     for (int64_t t = 0; t < r->count; t++)
-        if (r->rough[t] && (r->field_error[t] > field || r->geometry_error[t] > geometry))
+        if ((r->bound_flags[t] & BOUND_ROUGH) && (r->field_error[t] > field || r->geometry_error[t] > geometry))
             left[count++] = t;
     r->exact = 1;
     while (count > 0) {
@@ -1885,7 +1898,7 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
         tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
         int64_t over = 0;
         for (int64_t i = 0; i < r.todo_count; i++)
-            over += !(r.criterion[r.todo[i]] <= o.max_error);
+            over += (r.bound_flags[r.todo[i]] & BOUND_OVER) != 0;
         report->rounds = pass;
         if (over == 0 || o.uniform_levels > 0)
             break;
@@ -1894,7 +1907,7 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
                                o.max_error, (long long)over, MAX_PASSES);
             break;
         }
-        rc = refine_pass(&r, o.max_error);
+        rc = refine_pass(&r);
     }
     if (rc == 0)
         rc = exact_where_it_shows(&r);
