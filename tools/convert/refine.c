@@ -691,6 +691,7 @@ static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const 
  * apart). Built twice, and the processor picks at load time: 256-bit AVX2 where it has it, else SSE2
  * pairs (the first bound of a million hexahedra's tets: 0.14 s in here on one core with pairs). */
 typedef double quad __attribute__((vector_size(4 * sizeof(double))));
+typedef long long quad_bits __attribute__((vector_size(4 * sizeof(long long)))); /* a quad's bits, masks */
 __attribute__((target_clones("avx2", "default"))) static void
 minus_linear(int m, int n, int axes, const tpk_bernstein *b, const double (*corner)[3], const double *node, int stride,
              const double *by_node, double (*out)[TPK_BERNSTEIN_MAX_POINTS])
@@ -782,16 +783,19 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
             }
             coef[4 + e] = half * (d[tet_edges[e][0]] + d[tet_edges[e][1]]) - half * n;
         }
-        double top[4] = {0, 0, 0, 0};
-        for (int i = 0; i < 10; i++) {
-            for (int l = 0; l < 4; l++)
-                top[l] = fabs(coef[i][l]) > top[l] ? fabs(coef[i][l]) : top[l];
+        /* the magnitudes' maxima, lane by lane (the corners' coefficients are 0 without w: left out) */
+        quad top = {0, 0, 0, 0};
+        for (int i = w ? 0 : 4; i < 10; i++) {
+            quad magnitude = (quad)((quad_bits)coef[i] & ~(quad_bits)(quad){-0.0, -0.0, -0.0, -0.0});
+            quad_bits above = magnitude > top;
+            top = (quad)(((quad_bits)magnitude & above) | ((quad_bits)top & ~above));
             if (c == 0) {
-                double sq = coef[i][0] * coef[i][0] + coef[i][1] * coef[i][1] + coef[i][2] * coef[i][2];
-                geometry = sq > geometry ? sq : geometry;
+                quad sq = coef[i] * coef[i];
+                double norm = sq[0] + sq[1] + sq[2];
+                geometry = norm > geometry ? norm : geometry;
             }
         }
-        memcpy(largest + c, top, sizeof top);
+        memcpy(largest + c, &top, sizeof top);
     }
     return sqrt(geometry);
 }
