@@ -1069,7 +1069,6 @@ static int reserve_tets(refine *r, int64_t need)
         (r->root && grow((void **)&r->root, sizeof *r->root, cap)) ||
         grow((void **)&r->field_error, sizeof *r->field_error, cap) ||
         grow((void **)&r->geometry_error, sizeof *r->geometry_error, cap) ||
-
         grow((void **)&r->worst_slot, sizeof *r->worst_slot, cap) ||
         grow((void **)&r->marked, sizeof *r->marked, cap) ||
         grow((void **)&r->bound_flags, sizeof *r->bound_flags, cap) ||
