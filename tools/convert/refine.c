@@ -200,6 +200,9 @@ typedef struct refine {
     /* the quadratic tetra's monomials at the differences of its nodes' parametric points (node_pairs[j][l]:
      * at r_j - r_l, by tpk_cell_map_quadratic_tet), for bound_quadratic on tets whose corners are nodes */
     double node_pairs[10][10][6];
+    /* of those, the monomials not 0 (most are: a difference of two nodes has 1 to 3 coordinates), in
+     * order: node_terms[j][l] of them, node_term[j][l][i] the i-th's index */
+    uint8_t node_terms[10][10], node_term[10][10][6];
     int exact;             /* bound_tet: every tet through its Bernstein coefficients */
     vertex_tets by_vertex; /* the tets by vertex (refine_pass) */
 } refine;
@@ -754,8 +757,8 @@ static void fill_slot(const refine *r, coef_cache *cache, int s)
  * (tpk_cell_map_nonlinear_coefficients); v[k * qc + c]: the tet's values at its corners. The same numbers
  * as the cached Bernstein coefficients, to rounding (FORM_MARGIN), with no coefficients to make for a tet
  * of parameter space met first: the pieces of a cut tet seldom repeat a parametric tet, and missed the
- * cache often (bench/README). Four components side by side, as minus_linear. w NULL: the tet's corners are
- * nodes, where the weights are 0 but one 1, so that d_k is 0 exactly; it is not computed. */
+ * cache often (bench/README). Four components side by side, as minus_linear. A tet whose corners are
+ * nodes has d_k 0 exactly (the weights there are 0 but one 1): quadratic_edges. */
 __attribute__((target_clones("avx2", "default"))) static double
 quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], const double *node, const double *a,
                        const double *v, double *largest)
@@ -765,13 +768,13 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
         quad d[4], x, y, coef[10];
         for (int k = 0; k < 4; k++) {
             quad acc = {0, 0, 0, 0};
-            for (int j = 0; j < 10 && w; j++) {
+            for (int j = 0; j < 10; j++) {
                 memcpy(&y, node + j * qc + c, sizeof y);
                 x = (quad){w[k][j], w[k][j], w[k][j], w[k][j]};
                 acc += x * y;
             }
             memcpy(&y, v + k * qc + c, sizeof y);
-            coef[k] = d[k] = w ? acc - y : acc; /* no w: the corners are nodes, f there is v exactly */
+            coef[k] = d[k] = acc - y;
         }
         const quad half = {0.5, 0.5, 0.5, 0.5};
         for (int e = 0; e < 6; e++) {
@@ -783,14 +786,49 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
             }
             coef[4 + e] = half * (d[tet_edges[e][0]] + d[tet_edges[e][1]]) - half * n;
         }
-        /* the magnitudes' maxima, lane by lane (the corners' coefficients are 0 without w: left out) */
-        quad top = {0, 0, 0, 0};
-        for (int i = w ? 0 : 4; i < 10; i++) {
+        quad top = {0, 0, 0, 0}; /* the magnitudes' maxima, lane by lane */
+        for (int i = 0; i < 10; i++) {
             quad magnitude = (quad)((quad_bits)coef[i] & ~(quad_bits)(quad){-0.0, -0.0, -0.0, -0.0});
             quad_bits above = magnitude > top;
             top = (quad)(((quad_bits)magnitude & above) | ((quad_bits)top & ~above));
             if (c == 0) {
                 quad sq = coef[i] * coef[i];
+                double norm = sq[0] + sq[1] + sq[2];
+                geometry = norm > geometry ? norm : geometry;
+            }
+        }
+        memcpy(largest + c, &top, sizeof top);
+    }
+    return sqrt(geometry);
+}
+
+/* quadratic_coefficients for a tet whose corners are nodes j_e, l_e on edge e (no weights: d_k is 0, and
+ * so are the corners' coefficients), from the monomials at the nodes' differences that are not 0
+ * (node_terms, node_term; a term left out is +-0 times a finite number: only a finite slot's numbers
+ * are used, and the axes are finite), in the same operations and order otherwise: the same magnitudes
+ * (a sum of zeros may differ in its sign alone). */
+__attribute__((target_clones("avx2", "default"))) static double
+quadratic_edges(const refine *r, int qc, const int *node, const double *a, double *largest)
+{
+    double geometry = 0;
+    const quad half = {0.5, 0.5, 0.5, 0.5}, zero = {0, 0, 0, 0};
+    for (int c = 0; c < qc; c += 4) {
+        quad top = {0, 0, 0, 0}, at[6];
+        for (int q = 0; q < 6; q++)
+            memcpy(&at[q], a + q * qc + c, sizeof at[q]);
+        for (int e = 0; e < 6; e++) {
+            int j = node[tet_edges[e][0]], l = node[tet_edges[e][1]];
+            const double *m = r->node_pairs[j][l];
+            const uint8_t *term = r->node_term[j][l];
+            quad n = {0, 0, 0, 0};
+            for (int i = 0, terms = r->node_terms[j][l]; i < terms; i++)
+                n += (quad){m[term[i]], m[term[i]], m[term[i]], m[term[i]]} * at[term[i]];
+            quad coef = half * (zero + zero) - half * n;
+            quad magnitude = (quad)((quad_bits)coef & ~(quad_bits)(quad){-0.0, -0.0, -0.0, -0.0});
+            quad_bits above = magnitude > top;
+            top = (quad)(((quad_bits)magnitude & above) | ((quad_bits)top & ~above));
+            if (c == 0) {
+                quad sq = coef * coef;
                 double norm = sq[0] + sq[1] + sq[2];
                 geometry = norm > geometry ? norm : geometry;
             }
@@ -883,10 +921,7 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         cache->quad_cell = cache->cell;
     }
     double w[4][10], m[6][6], *v = cache->quad_v, *largest = cache->quad_largest, g[3][3];
-    if (node) /* corners at nodes: the monomials at the nodes' differences, as tpk_cell_map_quadratic_tet's */
-        for (int e = 0; e < 6; e++)
-            memcpy(m[e], r->node_pairs[node[tet_edges[e][0]]][node[tet_edges[e][1]]], sizeof m[e]);
-    else
+    if (!node) /* corners at nodes: quadratic_edges, from the monomials at the nodes' differences */
         tpk_cell_map_quadratic_tet(24, xi, w, m);
     for (int k = 0; k < 4; k++) {
         for (int c = 0; c < 3; c++)
@@ -896,8 +931,9 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         for (int c = 3 + r->bounded; c < qc; c++)
             v[k * qc + c] = 0;
     }
-    double geometry = quadratic_coefficients(qc, node ? NULL : (const double (*)[10])w, (const double (*)[6])m,
-                                             cache->quad_node, cache->quad_a, v, largest);
+    double geometry = node ? quadratic_edges(r, qc, node, cache->quad_a, largest)
+                           : quadratic_coefficients(qc, (const double (*)[10])w, (const double (*)[6])m,
+                                                    cache->quad_node, cache->quad_a, v, largest);
     geometry += 2 * FORM_MARGIN * cache->largest; /* 2 > sqrt 3: each axis's rounding */
     double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
     int flat = barycentric_gradients(p, g, 1) != 0;
@@ -915,17 +951,20 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 {
     if (r->cell[t] != cache->cell) { /* a new cell: its nodes and their points */
-        cache->cell = r->cell[t], cache->filled = 0, cache->largest = 0;
+        cache->cell = r->cell[t], cache->filled = 0;
         cache->cell_type = cell_nodes(r, cache->cell, cache->verts);
+        double largest = 0; /* summed here, not in the cache, whose stores the loads would wait on */
         for (int k = 0, n = tpk_cell_map_nodes(cache->cell_type); k < n; k++) {
-            memcpy(cache->node[k], point_of(r, cache->verts[k]), sizeof cache->node[k]);
+            const double *x = point_of(r, cache->verts[k]);
+            memcpy(cache->node[k], x, sizeof cache->node[k]);
             for (int j = 0; j < 3; j++)
-                cache->largest = fabs(cache->node[k][j]) > cache->largest ? fabs(cache->node[k][j]) : cache->largest;
+                largest = fabs(x[j]) > largest ? fabs(x[j]) : largest;
         }
+        cache->largest = largest;
         double a[3 * TPK_CELL_MAP_MAX_NONLINEAR];
         cache->rough_count = tpk_cell_map_nonlinear_coefficients(cache->cell_type, cache->node[0], 3, a);
         memcpy(cache->form_geometry, a, sizeof a);
-        for (int q = 0; q < cache->rough_count; q++)
+        for (int q = 0; q < cache->rough_count && cache->cell_type == 12; q++) /* for rough_bound */
             cache->rough_geometry[q] = sqrt(a[3 * q] * a[3 * q] + a[3 * q + 1] * a[3 * q + 1] + a[3 * q + 2] * a[3 * q + 2]);
     }
     int type = cache->cell_type, degree = tpk_cell_map_degree(type);
@@ -1657,6 +1696,10 @@ static int make_departures(refine *r)
                 memcpy(xi + 6, xi, 3 * sizeof *xi), memcpy(xi + 9, xi, 3 * sizeof *xi);
                 tpk_cell_map_quadratic_tet(type, xi, w, m);
                 memcpy(r->node_pairs[j][l], m[0], sizeof m[0]); /* pair 0: corners 0 and 1 */
+                r->node_terms[j][l] = 0;
+                for (int q = 0; q < 6; q++)
+                    if (m[0][q] != 0)
+                        r->node_term[j][l][r->node_terms[j][l]++] = (uint8_t)q;
             }
         if (type == 24)
             continue;
