@@ -628,6 +628,15 @@ typedef struct coef_cache {
     int qc;
     int64_t quad_cell;
     double *quad_node, *quad_a, *quad_v, *quad_largest;
+    /* bound_quadratic's tets waiting for fold_batch (batched of 4): each one's number, corners' points
+     * (batch_p[corner][axis][tet]), criterion so far and geometry's bound; per bounded slot s, its gap
+     * (batch_gap[4 s + tet]), whether it is bounded there (batch_ok: all finite, -1, else 0) and its values
+     * at the corners (batch_value[16 s + 4 corner + tet]) */
+    int batched;
+    int64_t batch_tet[4];
+    double batch_p[4][3][4], batch_crit[4], batch_geometry[4];
+    double *batch_gap, *batch_value;
+    long long *batch_ok;
 } coef_cache;
 
 static const double *coefficients(coef_cache *cc, const tpk_bernstein *b, const double *inverse_t, int type,
@@ -895,6 +904,85 @@ static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4
     return 1;
 }
 
+/* bound_quadratic's fold over the slots (fold_slot's numbers, from barycentric_gradients' by inverse) for
+ * the tets staged, four side by side, a lane a tet: the same operations in the same order, so the same
+ * numbers; a lane stops taking slots once its criterion is over the bound, as the loop it replaces. Lanes
+ * past `batched` repeat the first tet and are not written. Each tet's field error, worst slot and flag
+ * are written; its geometry error was at staging. */
+__attribute__((target_clones("avx2", "default"))) static void
+fold_batch(refine *r, coef_cache *cc)
+{
+    int n = cc->batched;
+    if (n == 0)
+        return;
+    for (int l = n; l < 4; l++) {
+        for (int k = 0; k < 4; k++)
+            for (int i = 0; i < 3; i++)
+                cc->batch_p[k][i][l] = cc->batch_p[k][i][0];
+        cc->batch_crit[l] = cc->batch_crit[0], cc->batch_geometry[l] = cc->batch_geometry[0];
+        for (int s = 0; s < r->bounded; s++) {
+            cc->batch_gap[4 * s + l] = cc->batch_gap[4 * s], cc->batch_ok[4 * s + l] = cc->batch_ok[4 * s];
+            for (int k = 0; k < 4; k++)
+                cc->batch_value[16 * s + 4 * k + l] = cc->batch_value[16 * s + 4 * k];
+        }
+    }
+    quad p[4][3], e[3][3], g[3][3];
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < 3; i++)
+            memcpy(&p[k][i], cc->batch_p[k][i], sizeof p[k][i]);
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            e[k][i] = p[k + 1][i] - p[0][i];
+    for (int k = 0; k < 3; k++) {
+        const quad *a = e[(k + 1) % 3], *b = e[(k + 2) % 3];
+        g[k][0] = a[1] * b[2] - a[2] * b[1], g[k][1] = a[2] * b[0] - a[0] * b[2], g[k][2] = a[0] * b[1] - a[1] * b[0];
+    }
+    const quad zero = {0, 0, 0, 0}, one = {1, 1, 1, 1};
+    const quad_bits sign = (quad_bits)(quad){-0.0, -0.0, -0.0, -0.0};
+    quad det = e[0][0] * g[0][0] + e[0][1] * g[0][1] + e[0][2] * g[0][2];
+    quad_bits flat = ~((quad)((quad_bits)det & ~sign) > zero); /* barycentric_gradients: !(fabs(det) > 0) */
+    quad inverse = one / det;
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 3; i++)
+            g[k][i] = g[k][i] * inverse;
+    double bound = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
+    quad crit, geometry, worst = zero, limit = {bound, bound, bound, bound};
+    quad_bits slot = {-1, -1, -1, -1};
+    memcpy(&crit, cc->batch_crit, sizeof crit), memcpy(&geometry, cc->batch_geometry, sizeof geometry);
+    for (int s = 0; s < r->bounded; s++) {
+        quad_bits live = crit <= limit, ok;
+        if (!(live[0] | live[1] | live[2] | live[3]))
+            break; /* every tet over the bound: no need to finish */
+        memcpy(&ok, cc->batch_ok + 4 * s, sizeof ok);
+        live &= ok;
+        quad v[4], gap, grad[3], root, range = {r->bound_range[s], r->bound_range[s], r->bound_range[s], r->bound_range[s]};
+        for (int k = 0; k < 4; k++)
+            memcpy(&v[k], cc->batch_value + 16 * s + 4 * k, sizeof v[k]);
+        memcpy(&gap, cc->batch_gap + 4 * s, sizeof gap);
+        for (int j = 0; j < 3; j++) {
+            grad[j] = zero;
+            for (int k = 0; k < 3; k++)
+                grad[j] += (v[k + 1] - v[0]) * g[k][j];
+        }
+        quad norm = grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2];
+        for (int l = 0; l < 4; l++)
+            root[l] = sqrt(norm[l]);
+        quad located = gap + root * geometry / range;
+        quad_bits take = live & ((gap > worst) | (slot < 0));
+        worst = (quad)(((quad_bits)gap & take) | ((quad_bits)worst & ~take));
+        slot = (slot & ~take) | ((quad_bits){s, s, s, s} & take);
+        quad c = (quad)(((quad_bits)gap & flat) | ((quad_bits)located & ~flat));
+        quad_bits above = live & (c > crit);
+        crit = (quad)(((quad_bits)c & above) | ((quad_bits)crit & ~above));
+    }
+    for (int l = 0; l < n; l++) {
+        int64_t t = cc->batch_tet[l];
+        r->field_error[t] = worst[l], r->worst_slot[t] = (int)slot[l];
+        r->bound_flags[t] = crit[l] <= r->o->max_error ? 0 : BOUND_OVER;
+    }
+    cc->batched = 0;
+}
+
 /* bound_tet for a tet of a quadratic tetra (xi: its corners' parametric points, p: their points), through
  * quadratic_coefficients: its cell's node values and nonlinear coefficients of every component are
  * gathered once a cell (cache->quad_cell). */
@@ -920,7 +1008,7 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         }
         cache->quad_cell = cache->cell;
     }
-    double w[4][10], m[6][6], *v = cache->quad_v, *largest = cache->quad_largest, g[3][3];
+    double w[4][10], m[6][6], *v = cache->quad_v, *largest = cache->quad_largest;
     if (!node) /* corners at nodes: quadratic_edges, from the monomials at the nodes' differences */
         tpk_cell_map_quadratic_tet(24, xi, w, m);
     for (int k = 0; k < 4; k++) {
@@ -935,17 +1023,22 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
                            : quadratic_coefficients(qc, (const double (*)[10])w, (const double (*)[6])m,
                                                     cache->quad_node, cache->quad_a, v, largest);
     geometry += 2 * FORM_MARGIN * cache->largest; /* 2 > sqrt 3: each axis's rounding */
-    double crit = geometry / r->diag_length, worst = 0, limit = r->o->uniform_levels > 0 ? INFINITY : r->o->max_error;
-    int flat = barycentric_gradients(p, g, 1) != 0;
-    for (int s = 0; s < r->bounded && crit <= limit; s++) { /* as bound_tet */
-        double vs[4] = {v[3 + s], v[qc + 3 + s], v[2 * qc + 3 + s], v[3 * qc + 3 + s]}, gap = 0;
-        if (!cache->finite[s] || !isfinite(vs[0]) || !isfinite(vs[1]) || !isfinite(vs[2]) || !isfinite(vs[3]))
-            continue;
-        gap = (largest[3 + s] + FORM_MARGIN * cache->big[s]) / r->bound_range[s];
-        fold_slot(r, s, gap, vs, (const double (*)[3])g, flat, geometry, &worst, &r->worst_slot[t], &crit);
+    int l = cache->batched++; /* the fold over the slots: fold_batch, four tets at once */
+    cache->batch_tet[l] = t, cache->batch_geometry[l] = geometry, cache->batch_crit[l] = geometry / r->diag_length;
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < 3; i++)
+            cache->batch_p[k][i][l] = p[k][i];
+    for (int s = 0; s < r->bounded; s++) {
+        double vs[4] = {v[3 + s], v[qc + 3 + s], v[2 * qc + 3 + s], v[3 * qc + 3 + s]};
+        int ok = cache->finite[s] && isfinite(vs[0]) && isfinite(vs[1]) && isfinite(vs[2]) && isfinite(vs[3]);
+        cache->batch_ok[4 * s + l] = ok ? -1 : 0;
+        cache->batch_gap[4 * s + l] = ok ? (largest[3 + s] + FORM_MARGIN * cache->big[s]) / r->bound_range[s] : 0;
+        for (int k = 0; k < 4; k++)
+            cache->batch_value[16 * s + 4 * k + l] = vs[k];
     }
-    r->field_error[t] = worst, r->geometry_error[t] = geometry / r->diag_length;
-    r->bound_flags[t] = crit <= r->o->max_error ? 0 : BOUND_OVER;
+    r->geometry_error[t] = geometry / r->diag_length;
+    if (cache->batched == 4)
+        fold_batch(r, cache);
 }
 
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
@@ -1084,6 +1177,7 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
             }
         bound_tet(r, r->todo[i], &r->cache[w]);
     }
+    fold_batch(r, &r->cache[w]); /* the quadratic tetra's tets left */
 }
 
 /* ---- growth ------------------------------------------------------------------------------------ */
@@ -1669,7 +1763,7 @@ static void release(refine *r, int threads)
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
             free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite), free(r->cache[w].rough),
-            free(r->cache[w].form), free(r->cache[w].quad_node);
+            free(r->cache[w].form), free(r->cache[w].quad_node), free(r->cache[w].batch_gap), free(r->cache[w].batch_ok);
     free(r->cache), free(r->departure);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
         free(r->inverse_t[n]), tpk_bernstein_free(&r->table[n]);
@@ -1827,8 +1921,11 @@ static int set_up(refine *r, int threads)
         cc->form = malloc(sizeof *cc->form * TPK_CELL_MAP_MAX_NONLINEAR * (size_t)(r->bounded ? r->bounded : 1));
         cc->qc = (3 + r->bounded + 3) & ~3, cc->quad_cell = -1;
         cc->quad_node = malloc(sizeof *cc->quad_node * 21 * (size_t)cc->qc); /* 10 + 6 + 4 + 1 rows */
+        cc->batch_gap = malloc(sizeof *cc->batch_gap * 20 * (size_t)(r->bounded ? r->bounded : 1)); /* + values */
+        cc->batch_ok = malloc(sizeof *cc->batch_ok * 4 * (size_t)(r->bounded ? r->bounded : 1));
+        cc->batch_value = cc->batch_gap ? cc->batch_gap + 4 * (size_t)(r->bounded ? r->bounded : 1) : NULL;
         if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite || !cc->rough ||
-            !cc->form || !cc->quad_node)
+            !cc->form || !cc->quad_node || !cc->batch_gap || !cc->batch_ok)
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
         cc->quad_a = cc->quad_node + 10 * cc->qc, cc->quad_v = cc->quad_a + 6 * cc->qc;
         cc->quad_largest = cc->quad_v + 4 * cc->qc;
