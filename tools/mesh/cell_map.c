@@ -595,10 +595,9 @@ int tpk_cell_map_quadratic_tet(int type, const double *xi, double (*w)[10], doub
 {
     if (type != 24)
         return 0;
-    const node_table *t = table_of(24);
-    int e0[6], e1[6];
-    for (int e = 0; e < 6; e++)
-        e0[e] = t->edges[e][0], e1[e] = t->edges[e][1];
+    /* the quadratic tetra's edges (its node_table's), known here: the loops below unroll (refine's bound
+     * calls this once a tet) */
+    static const int e0[6] = {0, 1, 2, 0, 1, 2}, e1[6] = {1, 2, 0, 3, 3, 3};
     double L[4][4];
     for (int k = 0; k < 4; k++) {
         const double *r = xi + 3 * k;
