@@ -448,10 +448,13 @@ static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     int nodes_of = 0; /* the type whose nodes' parametric points `nodes` holds (the cells are mostly alike) */
     double nodes[TPK_CELL_MAP_MAX_NODES][3];
+    int64_t verts_of = -1; /* the cell whose nodes `verts` holds (the tets listed in order: a cell's together) */
+    int type = 0;
     (void)w;
     for (int64_t i = begin; i < end; i++) {
         int64_t t = tets[i];
-        int type = cell_nodes(r, r->cell[t], verts);
+        if (r->cell[t] != verts_of)
+            type = cell_nodes(r, verts_of = r->cell[t], verts);
         hold_node_points(type, &nodes_of, nodes);
         xi_of_nodes(r, t, type, verts, (const double (*)[3])nodes, xi_of(r, t));
     }
@@ -609,6 +612,7 @@ typedef struct coef_cache {
      * coordinate, and the bounded slots' values at them, filled for slots 0 .. filled as they are met */
     int64_t cell;
     int cell_type, filled;
+    int cell_degree, cell_node_count; /* tpk_cell_map_degree and _nodes of cell_type, found once a cell */
     int xi_type;                              /* the type whose nodes' parametric points xi_node holds */
     double xi_node[TPK_CELL_MAP_MAX_NODES][3]; /* for xi_of_nodes */
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
@@ -742,7 +746,7 @@ static void fill_slot(const refine *r, coef_cache *cache, int s)
 {
     if (s != cache->filled)
         return;
-    int finite = 1, n = tpk_cell_map_nodes(cache->cell_type);
+    int finite = 1, n = cache->cell_node_count;
     double big = 0, *value = cache->value + (int64_t)s * TPK_CELL_MAP_MAX_NODES;
     for (int k = 0; k < n; k++) {
         finite &= isfinite(value[k] = value_of(r, cache->verts[k], r->bound_slot[s]));
@@ -867,7 +871,7 @@ quadratic_edges(const refine *r, int qc, const int *node, const double *a, doubl
 static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4][3])
 {
     const int32_t *tv = r->tets + 4 * t;
-    int n = tpk_cell_map_nodes(cache->cell_type), count = cache->rough_count, set = 0;
+    int n = cache->cell_node_count, count = cache->rough_count, set = 0;
     for (int k = 0; k < 4; k++) {
         int j = node_index(cache->verts, n, tv[k]);
         if (j < 0)
@@ -1046,8 +1050,10 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     if (r->cell[t] != cache->cell) { /* a new cell: its nodes and their points */
         cache->cell = r->cell[t], cache->filled = 0;
         cache->cell_type = cell_nodes(r, cache->cell, cache->verts);
+        cache->cell_degree = tpk_cell_map_degree(cache->cell_type);
+        cache->cell_node_count = tpk_cell_map_nodes(cache->cell_type);
         double largest = 0; /* summed here, not in the cache, whose stores the loads would wait on */
-        for (int k = 0, n = tpk_cell_map_nodes(cache->cell_type); k < n; k++) {
+        for (int k = 0, n = cache->cell_node_count; k < n; k++) {
             const double *x = point_of(r, cache->verts[k]);
             memcpy(cache->node[k], x, sizeof cache->node[k]);
             for (int j = 0; j < 3; j++)
@@ -1060,7 +1066,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
         for (int q = 0; q < cache->rough_count && cache->cell_type == 12; q++) /* for rough_bound */
             cache->rough_geometry[q] = sqrt(a[3 * q] * a[3 * q] + a[3 * q + 1] * a[3 * q + 1] + a[3 * q + 2] * a[3 * q + 2]);
     }
-    int type = cache->cell_type, degree = tpk_cell_map_degree(type);
+    int type = cache->cell_type, degree = cache->cell_degree;
     r->field_error[t] = r->geometry_error[t] = 0;
     r->worst_slot[t] = -1, r->bound_flags[t] = 0 <= r->o->max_error ? 0 : BOUND_OVER;
     if (degree <= 1)
@@ -1069,7 +1075,7 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     const double *xi = r->xi_at[t] >= 0 ? xi_of(r, t) : NULL;
     double xi_here[12]; /* a tet whose corners are nodes: their points read here, not written (ensure_xi_all) */
     const int32_t *tv = r->tets + 4 * t;
-    int n = tpk_cell_map_nodes(type), m = b->points, direct = degree > DIRECT_DEGREE;
+    int n = cache->cell_node_count, m = b->points, direct = degree > DIRECT_DEGREE;
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
