@@ -959,7 +959,8 @@ fold_batch(refine *r, coef_cache *cc)
             break; /* every tet over the bound: no need to finish */
         memcpy(&ok, cc->batch_ok + 4 * s, sizeof ok);
         live &= ok;
-        quad v[4], gap, grad[3], root, range = {r->bound_range[s], r->bound_range[s], r->bound_range[s], r->bound_range[s]};
+        const double rs = r->bound_range[s];
+        quad v[4], gap, grad[3], root, range = {rs, rs, rs, rs};
         for (int k = 0; k < 4; k++)
             memcpy(&v[k], cc->batch_value + 16 * s + 4 * k, sizeof v[k]);
         memcpy(&gap, cc->batch_gap + 4 * s, sizeof gap);
@@ -1769,7 +1770,8 @@ static void release(refine *r, int threads)
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
             free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite), free(r->cache[w].rough),
-            free(r->cache[w].form), free(r->cache[w].quad_node), free(r->cache[w].batch_gap), free(r->cache[w].batch_ok);
+            free(r->cache[w].form), free(r->cache[w].quad_node), free(r->cache[w].batch_gap),
+            free(r->cache[w].batch_ok);
     free(r->cache), free(r->departure);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
         free(r->inverse_t[n]), tpk_bernstein_free(&r->table[n]);
