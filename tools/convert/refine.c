@@ -1315,6 +1315,7 @@ typedef struct round_job {
     uint8_t *folded;  /* per tet of active: a piece turned over */
     int64_t first_child, first_xi; /* the first new tet, and its entry of parametric points */
     int32_t first_vertex;
+    int64_t cap; /* the arrays' room (round_grow) */
 } round_job;
 
 static void choose_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -1350,8 +1351,13 @@ static void bisect_range(void *ctx, int64_t begin, int64_t end, int w)
     }
 }
 
+/* Room for cap tets in the arrays, kept when there is (a round after the first cuts fewer): not moved
+ * again. */
 static int round_grow(round_job *job, int64_t cap)
 {
+    if (cap <= job->cap)
+        return 0;
+    cap += cap / 2;
     void *p[5] = {realloc(job->active, sizeof *job->active * (size_t)cap), NULL, NULL, NULL, NULL};
     if (p[0])
         job->active = p[0];
@@ -1363,6 +1369,8 @@ static int round_grow(round_job *job, int64_t cap)
         job->maker = p[3];
     if (p[3] && (p[4] = realloc(job->folded, (size_t)cap)))
         job->folded = p[4];
+    if (p[4])
+        job->cap = cap;
     return p[4] ? 0 : -1;
 }
 
@@ -1372,12 +1380,12 @@ static int round_grow(round_job *job, int64_t cap)
 static int cut_marked(refine *r, int64_t *active, int64_t active_count)
 {
     int rc = 0;
-    round_job job = {r, active, NULL, NULL, NULL, NULL, 0, 0, 0};
+    round_job job = {r, active, NULL, NULL, NULL, NULL, 0, 0, 0, 0};
     memcpy(r->todo, active, sizeof *active * (size_t)active_count);
     r->todo_count = active_count;
     int64_t first_new = r->count;
     rc = ensure_xi_all(r, active, active_count); /* the tets cut read their corners' points */
-    if (rc == 0 && round_grow(&job, active_count + 1) != 0)
+    if (rc == 0 && round_grow(&job, 2 * active_count + 1) != 0) /* the first round's tets and pieces */
         rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
     while (rc == 0 && active_count > 0) {
         tpk_parallel_for(active_count, tpk_threads_for(active_count, r->threads, 1024), choose_range, &job);
