@@ -157,7 +157,8 @@ static tpk_result queue_close(write_queue *q)
 /* Records made block by block (fill(user, first, count, dst)) and streamed into one chunk, so a large
  * array never exists whole next to the mesh: the converter's peak memory is the mesh plus the blocks. */
 #define STREAM_BLOCK ((int64_t)1 << 18)
-/* Blocks in turn: one being filled while the writer's thread takes the others. */
+/* Blocks in turn: one being filled while the writer's thread takes the others (one block where the calls
+ * run as they are queued). */
 #define STREAM_BLOCKS 3
 /* Data the queue's calls read that is freed when the queue is closed. */
 #define OWNED_MOST 4
@@ -249,13 +250,14 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     if (desc->elem_size > sizeof(tpk_tet32))
         return tpk_diag_fail(cw->diag, "internal: %u-byte records streamed, at most %zu", desc->elem_size,
                              sizeof(tpk_tet32));
-    for (int b = 0; b < STREAM_BLOCKS; b++)
+    write_queue *q = cw->queue;
+    int blocks = q->threaded ? STREAM_BLOCKS : 1;
+    for (int b = 0; b < blocks; b++)
         if (!cw->blocks[b] && !(cw->blocks[b] = malloc((size_t)STREAM_BLOCK * sizeof(tpk_tet32))))
             return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
-    write_queue *q = cw->queue;
     fill_job job = {fill, user, 0, NULL, desc->elem_size};
     queue_call(q, (writer_call){.kind = CALL_BEGIN, .desc = *desc});
-    for (int b = 0; job.first < total; job.first += STREAM_BLOCK, b = (b + 1) % STREAM_BLOCKS) {
+    for (int b = 0; job.first < total; job.first += STREAM_BLOCK, b = (b + 1) % blocks) {
         if (queue_wait(q, cw->block_free[b]) != TPK_OK)
             break; /* reported when the queue is closed */
         int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
