@@ -62,8 +62,15 @@ static tpk_result writer_fail(tpk_writer *w, tpk_result code, const char *fmt, .
 
 static tpk_result io_fail(tpk_writer *w, const char *what)
 {
-    char reason[128] = "";
-    strerror_r(errno, reason, sizeof reason);
+    char buffer[128] = "";
+    int code = errno;
+    /* _GNU_SOURCE (above) gives glibc's strerror_r, which returns the text and may leave the buffer
+     * untouched; elsewhere the XSI one fills the buffer. */
+#if defined(__GLIBC__)
+    const char *reason = strerror_r(code, buffer, sizeof buffer);
+#else
+    const char *reason = strerror_r(code, buffer, sizeof buffer) == 0 ? buffer : "unknown error";
+#endif
     w->failed = 1;
     return writer_fail(w, TPK_ERR_IO, "%s '%s': %s", what, w->temp_path ? w->temp_path : w->path, reason);
 }

@@ -2,6 +2,8 @@
  * with its exact result code), the writer's atomicity, and allocation-failure injection.
  * With TPK_WRITE_CORPUS=<dir>, the write_fuzz_corpus test writes the fuzz seeds and must-fail files. */
 #include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -1206,6 +1208,14 @@ TPK_TEST(writer_failures_leave_nothing)
     const char *missing = tpk_temp_path("no_such_dir/x.tpk");
     CHECK_EQ_INT(tpk_writer_open(&w, missing, NULL, err, sizeof err), TPK_ERR_IO);
     CHECK(w == NULL && strstr(err, "no_such_dir") != NULL);
+    /* The device is full (/dev/full refuses every write with ENOSPC): the message gives the reason. */
+    int full = open("/dev/full", O_WRONLY);
+    if (full >= 0) {
+        err[0] = '\0';
+        CHECK_EQ_INT(tpk_writer_open_fd(&w, full, "full.tpk", NULL, err, sizeof err), TPK_ERR_IO);
+        CHECK(w == NULL && strstr(err, "cannot write") != NULL && strstr(err, strerror(ENOSPC)) != NULL);
+        close(full);
+    }
     /* Rename fails: the target is a directory. */
     const char *target = tpk_temp_path("target_is_dir.tpk");
     CHECK_EQ_INT(mkdir(target, 0755), 0);

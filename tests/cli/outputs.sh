@@ -221,4 +221,20 @@ end_held
 expect_stderr "$OUT/race.tpk is now a FIFO; tetpack replaces only regular files"
 [ -p "$OUT/race.tpk" ] || fail "the FIFO that appeared was replaced"
 [ -z "$(ls -A "$OUT" | grep '\.tmp\.')" ] || fail "temporary file left: $(ls -A "$OUT")"
+# A write that fails part-way (the file-size limit, with SIGXFSZ ignored so write() fails with EFBIG), at
+# one thread and at two (where the writer's calls run on a thread of their own): exit 2, the system's
+# reason in the message, the older output intact and nothing left behind.
+cp "$WORK/good.tpk" "$OUT/limited.tpk"
+limit_kb=$(( $(stat -c %s "$WORK/good.tpk") / 2048 ))
+for threads in 1 2; do
+    set +e
+    (ulimit -f "$limit_kb"; trap '' XFSZ; exec "$TPK" convert "$WORK/small.vtk" "$OUT/limited.tpk" --quiet \
+        --threads "$threads") >"$WORK/out" 2>"$WORK/err"
+    rc=$?
+    set -e
+    [ "$rc" = 2 ] || { cat "$WORK/err" >&2; fail "expected exit 2 past the file-size limit ($threads threads), got $rc"; }
+    expect_stderr "cannot write .*: File too large"
+    cmp "$OUT/limited.tpk" "$WORK/good.tpk" || fail "the older output changed after a failed write"
+    [ -z "$(ls -A "$OUT" | grep '\.tmp\.')" ] || fail "temporary file left: $(ls -A "$OUT")"
+done
 echo "outputs: ok"

@@ -15,12 +15,164 @@
 #include "pipeline.h"
 #include "tetpack.h"
 
+/* ---- the writer's own thread ------------------------------------------------------------------- */
+
+/* The writer's calls, run in order on a thread of their own while the converter goes on: the checksums
+ * and the write() calls (into tmpfs, serialized per file by the kernel) overlap the records' building and
+ * the next chunks, rather than alternate with them. The calls are the same, in the same order, so the
+ * bytes are those of making them one after the other. With one thread (--threads 1) each runs in the
+ * caller, as it is queued. A call's data must stay as it is until the call is done (queue_wait); after a
+ * failed call the rest are skipped, and the failure is reported when the queue is closed. */
+typedef enum { CALL_ADD, CALL_BEGIN, CALL_APPEND, CALL_END } call_kind;
+
+typedef struct writer_call {
+    call_kind kind;
+    tpk_chunk_desc desc; /* CALL_ADD, CALL_BEGIN */
+    const void *data;    /* CALL_ADD, CALL_APPEND */
+    uint64_t size;       /* CALL_APPEND */
+} writer_call;
+
+#define QUEUE_CALLS 16
+
+typedef struct write_queue {
+    tpk_writer *writer;
+    int threaded; /* 1: the calls run on `thread` */
+    pthread_t thread;
+    pthread_mutex_t lock;
+    pthread_cond_t changed;
+    writer_call call[QUEUE_CALLS];
+    uint64_t queued, done; /* calls queued and done, since the queue was opened */
+    int closing;
+    tpk_result result;     /* the first failure */
+} write_queue;
+
+static tpk_result run_call(tpk_writer *w, const writer_call *c)
+{
+    switch (c->kind) {
+    case CALL_ADD:
+        return tpk_writer_add_chunk(w, &c->desc, c->data);
+    case CALL_BEGIN:
+        return tpk_writer_begin_chunk(w, &c->desc);
+    case CALL_APPEND:
+        return tpk_writer_append(w, c->data, c->size);
+    default:
+        return tpk_writer_end_chunk(w);
+    }
+}
+
+static void *queue_thread(void *arg)
+{
+    write_queue *q = arg;
+    pthread_mutex_lock(&q->lock);
+    for (;;) {
+        while (q->done == q->queued && !q->closing)
+            pthread_cond_wait(&q->changed, &q->lock);
+        if (q->done == q->queued)
+            break;
+        writer_call c = q->call[q->done % QUEUE_CALLS];
+        int skip = q->result != TPK_OK;
+        pthread_mutex_unlock(&q->lock);
+        tpk_result r = skip ? TPK_OK : run_call(q->writer, &c);
+        pthread_mutex_lock(&q->lock);
+        if (r != TPK_OK && q->result == TPK_OK)
+            q->result = r;
+        q->done++;
+        pthread_cond_broadcast(&q->changed);
+    }
+    pthread_mutex_unlock(&q->lock);
+    return NULL;
+}
+
+/* The thread where threads >= 2 and it starts; else the calls run as they are queued. */
+static void queue_open(write_queue *q, tpk_writer *writer, int threads)
+{
+    memset(q, 0, sizeof *q);
+    q->writer = writer;
+    q->result = TPK_OK;
+    if (threads < 2)
+        return;
+    if (pthread_mutex_init(&q->lock, NULL) != 0)
+        return;
+    if (pthread_cond_init(&q->changed, NULL) != 0) {
+        pthread_mutex_destroy(&q->lock);
+        return;
+    }
+    q->threaded = pthread_create(&q->thread, NULL, queue_thread, q) == 0;
+    if (!q->threaded) {
+        pthread_cond_destroy(&q->changed);
+        pthread_mutex_destroy(&q->lock);
+    }
+}
+
+/* Queues a call (waiting while QUEUE_CALLS are pending); returns its number, for queue_wait. */
+static uint64_t queue_call(write_queue *q, writer_call c)
+{
+    if (!q->threaded) {
+        if (q->result == TPK_OK)
+            q->result = run_call(q->writer, &c);
+        q->done++;
+        return q->queued++;
+    }
+    pthread_mutex_lock(&q->lock);
+    while (q->queued - q->done == QUEUE_CALLS)
+        pthread_cond_wait(&q->changed, &q->lock);
+    q->call[q->queued % QUEUE_CALLS] = c;
+    uint64_t number = q->queued++;
+    pthread_cond_broadcast(&q->changed);
+    pthread_mutex_unlock(&q->lock);
+    return number;
+}
+
+/* Waits until the calls before number `until` are done; returns the first failure so far. */
+static tpk_result queue_wait(write_queue *q, uint64_t until)
+{
+    if (!q->threaded)
+        return q->result;
+    pthread_mutex_lock(&q->lock);
+    while (q->done < until)
+        pthread_cond_wait(&q->changed, &q->lock);
+    tpk_result r = q->result;
+    pthread_mutex_unlock(&q->lock);
+    return r;
+}
+
+/* Every call done and the thread joined: the writer is the caller's again. */
+static tpk_result queue_close(write_queue *q)
+{
+    if (!q->threaded)
+        return q->result;
+    pthread_mutex_lock(&q->lock);
+    q->closing = 1;
+    pthread_cond_broadcast(&q->changed);
+    pthread_mutex_unlock(&q->lock);
+    pthread_join(q->thread, NULL);
+    pthread_cond_destroy(&q->changed);
+    pthread_mutex_destroy(&q->lock);
+    q->threaded = 0;
+    return q->result;
+}
+
+/* ---- chunks ------------------------------------------------------------------------------------- */
+
+/* Records made block by block (fill(user, first, count, dst)) and streamed into one chunk, so a large
+ * array never exists whole next to the mesh: the converter's peak memory is the mesh plus the blocks. */
+#define STREAM_BLOCK ((int64_t)1 << 18)
+/* Blocks in turn: one being filled while the writer's thread takes the others (one block where the calls
+ * run as they are queued). */
+#define STREAM_BLOCKS 3
+/* Data the queue's calls read that is freed when the queue is closed. */
+#define OWNED_MOST 4
+
 typedef struct chunk_writer {
     tpk_writer *writer;
+    write_queue *queue; /* NULL: the writer is called directly (tpk_write_end) */
     int zstd_level;
     int threads; /* for building records */
     tpk_diag *diag;
-    char *blocks[2]; /* stream_chunk's, kept for the next streamed chunk (NULL until the first) */
+    char *blocks[STREAM_BLOCKS]; /* stream_chunk's, kept for the next streamed chunk (NULL until the first) */
+    uint64_t block_free[STREAM_BLOCKS]; /* the queue's calls to wait for before a block is filled again */
+    void *owned[OWNED_MOST];
+    int owned_count;
 } chunk_writer;
 
 static tpk_chunk_desc chunk_desc(const chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type,
@@ -40,18 +192,35 @@ static tpk_chunk_desc chunk_desc(const chunk_writer *cw, uint32_t tag, int requi
     return desc;
 }
 
+/* A whole chunk from `data`, which must stay until the queue is closed (or be given to it: keep_owned). */
 static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type type, uint32_t size,
                      uint64_t count, uint32_t index, uint32_t step, const void *data)
 {
     tpk_chunk_desc desc = chunk_desc(cw, tag, required, type, size, count, index, step);
+    if (cw->queue) {
+        queue_call(cw->queue, (writer_call){.kind = CALL_ADD, .desc = desc, .data = data});
+        return 0; /* a failure is reported when the queue is closed */
+    }
     if (tpk_writer_add_chunk(cw->writer, &desc, data) != TPK_OK)
         return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
     return 0;
 }
 
-/* Records made block by block (fill(user, first, count, dst)) and streamed into one chunk, so a large
- * array never exists whole next to the mesh: the converter's peak memory is the mesh plus one block. */
-#define STREAM_BLOCK ((int64_t)1 << 18)
+/* `data` (malloc'd), read by queued calls, freed when the queue is closed; at once without a queue. */
+static int keep_owned(chunk_writer *cw, void *data)
+{
+    if (!cw->queue) {
+        free(data);
+        return 0;
+    }
+    if (cw->owned_count == OWNED_MOST) { /* never: OWNED_MOST covers the callers; wait instead of failing */
+        queue_wait(cw->queue, cw->queue->queued);
+        free(data);
+        return 0;
+    }
+    cw->owned[cw->owned_count++] = data;
+    return 0;
+}
 
 typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst, int worker);
 
@@ -69,43 +238,8 @@ static void fill_range(void *ctx, int64_t begin, int64_t end, int worker)
     job->fill(job->user, job->first + begin, end - begin, job->block + (size_t)begin * job->elem_size, worker);
 }
 
-/* One block's append (checksum, compression, write) on a thread of its own, while the next block is
- * filled: the writer never waits for the records, the records never wait for the disk. The blocks are
- * appended in order, one at a time, so the bytes are those of appending them one after the other. */
-typedef struct append_job {
-    tpk_writer *writer;
-    const void *data;
-    uint64_t size;
-    tpk_result result;
-    pthread_t thread;
-    int running; /* 1: on its thread; 2: ran on the caller's (the thread could not start) */
-} append_job;
-
-static void *append_block(void *arg)
-{
-    append_job *a = arg;
-    a->result = tpk_writer_append(a->writer, a->data, a->size);
-    return NULL;
-}
-
-static tpk_result wait_append(append_job *a)
-{
-    if (a->running == 1)
-        pthread_join(a->thread, NULL);
-    a->running = 0;
-    return a->result;
-}
-
-static void start_append(append_job *a, tpk_writer *writer, const void *data, uint64_t size, int threads)
-{
-    *a = (append_job){writer, data, size, TPK_OK, 0, 1};
-    if (threads < 2 || pthread_create(&a->thread, NULL, append_block, a) != 0) { /* --threads 1: one core */
-        a->running = 2;
-        append_block(a);
-    }
-}
-
-/* block_done(user), where given, runs after each block's fill, its workers joined. */
+/* block_done(user), where given, runs after each block's fill, its workers joined. Each block is appended
+ * by the queue as soon as it is filled; a block is filled again once its append is done. */
 static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fill, const void *user,
                         void (*block_done)(const void *user))
 {
@@ -116,29 +250,25 @@ static int stream_chunk(chunk_writer *cw, const tpk_chunk_desc *desc, fill_fn fi
     if (desc->elem_size > sizeof(tpk_tet32))
         return tpk_diag_fail(cw->diag, "internal: %u-byte records streamed, at most %zu", desc->elem_size,
                              sizeof(tpk_tet32));
-    for (int b = 0; b < 2; b++)
+    write_queue *q = cw->queue;
+    int blocks = q->threaded ? STREAM_BLOCKS : 1;
+    for (int b = 0; b < blocks; b++)
         if (!cw->blocks[b] && !(cw->blocks[b] = malloc((size_t)STREAM_BLOCK * sizeof(tpk_tet32))))
             return tpk_diag_fail(cw->diag, "out of memory for a block of %u-byte records", desc->elem_size);
-    char *const *blocks = cw->blocks;
     fill_job job = {fill, user, 0, NULL, desc->elem_size};
-    append_job append = {.running = 0, .result = TPK_OK};
-    tpk_result r = tpk_writer_begin_chunk(cw->writer, desc);
-    for (int b = 0; r == TPK_OK && job.first < total; job.first += STREAM_BLOCK, b ^= 1) {
+    queue_call(q, (writer_call){.kind = CALL_BEGIN, .desc = *desc});
+    for (int b = 0; job.first < total; job.first += STREAM_BLOCK, b = (b + 1) % blocks) {
+        if (queue_wait(q, cw->block_free[b]) != TPK_OK)
+            break; /* reported when the queue is closed */
         int64_t count = total - job.first < STREAM_BLOCK ? total - job.first : STREAM_BLOCK;
-        job.block = blocks[b]; /* the other block may still be being appended */
+        job.block = cw->blocks[b];
         tpk_parallel_for(count, tpk_threads_for(count, cw->threads, 16384), fill_range, &job);
         if (block_done)
             block_done(user);
-        r = wait_append(&append);
-        if (r == TPK_OK)
-            start_append(&append, cw->writer, job.block, (uint64_t)count * desc->elem_size, cw->threads);
+        cw->block_free[b] = 1 + queue_call(q, (writer_call){.kind = CALL_APPEND, .data = job.block,
+                                                            .size = (uint64_t)count * desc->elem_size});
     }
-    tpk_result last = wait_append(&append);
-    r = r != TPK_OK ? r : last;
-    if (r == TPK_OK)
-        r = tpk_writer_end_chunk(cw->writer);
-    if (r != TPK_OK)
-        return tpk_diag_fail(cw->diag, "%s", tpk_writer_error_text(cw->writer));
+    queue_call(q, (writer_call){.kind = CALL_END});
     return 0;
 }
 
@@ -363,7 +493,7 @@ static int write_layouts_and_shell(chunk_writer *cw, const tpk_tetmesh *mesh, co
         *shell_count = (uint64_t)shell->count;
         rc = put_chunk(cw, TPK_TAG_SHEL, 1, TPK_ELEM_SHELL_FACE, 16, (uint64_t)shell->count, 0, 0, shell->faces);
     }
-    free(shell->faces);
+    keep_owned(cw, shell->faces); /* the SHEL call reads them */
     free(shell);
     return rc;
 }
@@ -434,7 +564,7 @@ static int write_fields(chunk_writer *cw, const tpk_tetmesh *mesh)
         max_steps = f->step_count > max_steps ? f->step_count : max_steps;
     }
     int rc = put_chunk(cw, TPK_TAG_FDSC, 1, TPK_ELEM_FIELD_DESC, 128, (uint64_t)mesh->field_count, 0, 0, desc);
-    free(desc);
+    keep_owned(cw, desc);
     for (int i = 0; rc == 0 && i < mesh->field_count; i++) {
         const tpk_src_field *f = &mesh->fields[i];
         size_t per_step = (size_t)(f->association == TPK_ASSOC_POINT ? mesh->vertex_count : mesh->tet_count);
@@ -564,29 +694,50 @@ static int write_cull(chunk_writer *cw, const tpk_tetmesh *mesh, const int32_t *
     if (!words)
         return tpk_diag_fail(cw->diag, "convert: out of memory building the culling blocks (--cull)");
     int rc = put_chunk(cw, TPK_TAG_CULL, 0, TPK_ELEM_I32, 4, count, 0, 0, words);
-    free(words);
+    keep_owned(cw, words);
     return rc;
 }
 
+/* The writer's failures go to the diagnostics, except while its calls run on the queue's thread: the
+ * caller reports them itself once the queue is closed (so only one thread writes the diagnostics). */
 static void writer_message(void *user, tpk_result code, const char *text)
 {
+    const tpk_write_session *ws = user;
     (void)code;
-    tpk_diag_fail(user, "%s", text);
+    if (!ws->queued)
+        tpk_diag_fail(ws->diag, "%s", text);
+}
+
+static int write_chunks(chunk_writer *cw, const tpk_convert_options *o, const tpk_tetmesh *mesh,
+                        const int32_t *neighbors, tpk_header_fields *hdr)
+{
+    unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
+    int rc = write_positions(cw, mesh);
+    if (rc == 0)
+        rc = write_layouts_and_shell(cw, mesh, neighbors, layouts, &hdr->shell_face_count);
+    if (rc == 0)
+        rc = write_fields(cw, mesh);
+    if (rc == 0)
+        rc = write_maps(cw, mesh);
+    if (rc == 0 && o->cull)
+        rc = write_cull(cw, mesh, neighbors);
+    return rc;
 }
 
 int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const tpk_tetmesh *mesh,
                     const int32_t *neighbors, tpk_header_fields *hdr, tpk_diag *diag)
 {
-    chunk_writer cw = {NULL, o->zstd_level, tpk_thread_count(o->threads), diag, {NULL, NULL}};
+    chunk_writer cw = {.zstd_level = o->zstd_level, .threads = tpk_thread_count(o->threads), .diag = diag};
     char err[512] = "";
     tpk_write_options wopt;
     memset(&wopt, 0, sizeof wopt);
     wopt.size = sizeof wopt;
     wopt.message = writer_message;
-    wopt.message_user = diag;
+    wopt.message_user = ws;
     wopt.threads = cw.threads;
     /* The file has no name until it is complete (base/output_file.h): a killed conversion leaves nothing. */
     memset(ws, 0, sizeof *ws);
+    ws->diag = diag;
     ws->out.fd = o->output_fd;
     ws->named = o->output_fd <= 0; /* else the caller's file (render's in-memory conversion) */
     if (ws->named && tpk_output_open(&ws->out, o->output, diag) != 0)
@@ -599,18 +750,19 @@ int tpk_write_begin(tpk_write_session *ws, const tpk_convert_options *o, const t
     ws->writer = cw.writer;
     hdr->vertex_count = (uint64_t)mesh->vertex_count;
     hdr->tet_count = (uint64_t)mesh->tet_count;
-    unsigned layouts = o->layouts ? o->layouts : TPK_LAYOUT_BIT_TET16;
-    int rc = write_positions(&cw, mesh);
-    if (rc == 0)
-        rc = write_layouts_and_shell(&cw, mesh, neighbors, layouts, &hdr->shell_face_count);
-    if (rc == 0)
-        rc = write_fields(&cw, mesh);
-    if (rc == 0)
-        rc = write_maps(&cw, mesh);
-    if (rc == 0 && o->cull)
-        rc = write_cull(&cw, mesh, neighbors);
-    free(cw.blocks[0]);
-    free(cw.blocks[1]);
+    write_queue queue;
+    queue_open(&queue, cw.writer, cw.threads);
+    cw.queue = &queue;
+    ws->queued = queue.threaded;
+    int rc = write_chunks(&cw, o, mesh, neighbors, hdr);
+    tpk_result r = queue_close(&queue);
+    ws->queued = 0;
+    if (rc == 0 && r != TPK_OK)
+        rc = tpk_diag_fail(diag, "%s", tpk_writer_error_text(cw.writer));
+    for (int b = 0; b < STREAM_BLOCKS; b++)
+        free(cw.blocks[b]);
+    for (int i = 0; i < cw.owned_count; i++)
+        free(cw.owned[i]);
     if (rc != 0)
         tpk_write_abort(ws);
     return rc;
@@ -628,7 +780,8 @@ int tpk_write_end(tpk_write_session *ws, const tpk_convert_options *o, tpk_heade
                   tpk_convert_report *rep, const char *source_format, const tpk_part_extras *part,
                   const tpk_levels *levels, tpk_diag *diag)
 {
-    chunk_writer cw = {ws->writer, o->zstd_level, tpk_thread_count(o->threads), diag, {NULL, NULL}};
+    chunk_writer cw = {.writer = ws->writer, .zstd_level = o->zstd_level, .threads = tpk_thread_count(o->threads),
+                       .diag = diag};
     int rc = write_meta(&cw, o, rep, source_format, part, levels);
     for (int i = 0; rc == 0 && levels && i < levels->count; i++) { /* spec §16: whole files, uncompressed */
         tpk_chunk_desc d = {.tag = TPK_TAG_LEVL, .codec = TPK_CODEC_NONE, .elem_type = TPK_ELEM_BYTE, .elem_size = 1,

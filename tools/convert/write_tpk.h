@@ -57,6 +57,8 @@ typedef struct tpk_write_session {
     tpk_writer *writer;
     tpk_output out;
     int named; /* o->output opened here (else the caller's o->output_fd) */
+    tpk_diag *diag;
+    int queued; /* 1 while the writer's calls run on a thread of their own (write_tpk.c) */
 } tpk_write_session;
 
 /* Open o->output atomically and write `mesh` (stored frame, positive tets, their neighbors) with the
