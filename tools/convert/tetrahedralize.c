@@ -36,8 +36,8 @@ static int64_t polyhedron_max_tets(const tpk_mesh *src, int64_t c)
 typedef struct cell_pass {
     const tpk_mesh *src;
     tpk_tetmesh *out;
-    int plain;                              /* all_plain_tets: stays 1 while every cell is one */
     int64_t first_bad[TPK_MAX_THREADS];     /* INT64_MAX: none */
+    int64_t first_refused[TPK_MAX_THREADS]; /* survey_range: the first cell of a type refused */
     int64_t tets[TPK_MAX_THREADS], skipped[TPK_MAX_THREADS], first_skipped[TPK_MAX_THREADS];
     int not_plain[TPK_MAX_THREADS];
     int64_t type_tets[256];                 /* count_range's fast path: tets of a cell of this type with */
@@ -52,7 +52,7 @@ static int pass_threads(int64_t count, int threads)
 static int64_t run_cell_pass(cell_pass *job, int64_t count, int threads, tpk_range_fn fn)
 {
     for (int w = 0; w < TPK_MAX_THREADS; w++) {
-        job->first_bad[w] = job->first_skipped[w] = INT64_MAX;
+        job->first_bad[w] = job->first_skipped[w] = job->first_refused[w] = INT64_MAX;
         job->tets[w] = job->skipped[w] = 0;
         job->not_plain[w] = 0;
     }
@@ -86,72 +86,6 @@ static int64_t cell_tets(const tpk_mesh *src, int64_t c, tpk_diag *diag)
     return max_tets(kind->type);
 }
 
-static void count_range(void *ctx, int64_t begin, int64_t end, int w)
-{
-    cell_pass *job = ctx;
-    const tpk_mesh *src = job->src;
-    for (int64_t c = begin; c < end; c++) {
-        int type = src->cell_types[c];
-        int64_t tets = job->type_tets[type];
-        if (tets >= 0 && (job->type_nodes[type] == 0 ||
-                          src->cell_offsets[c + 1] - src->cell_offsets[c] == job->type_nodes[type])) {
-            job->tets[w] += tets;
-            continue;
-        }
-        tets = cell_tets(src, c, NULL);
-        if (tets == -1) {
-            job->first_bad[w] = c;
-            return;
-        }
-        if (tets == -2) {
-            if (job->first_skipped[w] == INT64_MAX)
-                job->first_skipped[w] = c;
-            job->skipped[w]++;
-        } else {
-            job->tets[w] += tets;
-        }
-    }
-}
-
-/* Pass 1: check every cell and count tets; refuses unsupported 3-D cells, skips lower-dim ones. */
-static int count_tets(const tpk_mesh *src, int threads, int64_t *tet_count, tpk_diag *diag)
-{
-    int64_t tets = 0, skipped = 0, first_skipped = -1;
-    cell_pass *job = malloc(sizeof *job);
-    if (!job)
-        return tpk_diag_fail(diag, "tetrahedralize: out of memory");
-    job->src = src;
-    for (int t = 0; t < 256; t++) { /* what cell_tets says of a cell of type t with the right node count */
-        const tpk_cell_type_info *kind = tpk_cell_type(t);
-        int ok = kind && kind->dim >= 3 && kind->type != TPK_CELL_POLYHEDRON && max_tets(kind->type);
-        job->type_tets[t] = ok ? max_tets(kind->type) : -1;
-        job->type_nodes[t] = ok && kind->nodes > 0 ? kind->nodes : 0;
-    }
-    threads = pass_threads(src->cell_count, threads);
-    int64_t bad = run_cell_pass(job, src->cell_count, threads, count_range);
-    for (int w = 0; w < threads; w++) {
-        tets += job->tets[w];
-        skipped += job->skipped[w];
-        if (first_skipped < 0 && job->first_skipped[w] != INT64_MAX)
-            first_skipped = job->first_skipped[w];
-    }
-    free(job);
-    if (bad != INT64_MAX)
-        return (int)cell_tets(src, bad, diag);
-    if (skipped)
-        tpk_diag_warn(diag, "skipped %lld cells of dimension < 3 (the first is cell %lld, a %s)",
-                      (long long)skipped, (long long)first_skipped,
-                      tpk_cell_type(src->cell_types[first_skipped])->name);
-    if (tets == 0)
-        return tpk_diag_fail(diag, "the mesh has no volume cells (%lld cells, none 3-D)",
-                             (long long)src->cell_count);
-    if (tets > INT32_MAX)
-        return tpk_diag_fail(diag, "%lld tets exceed the limit of 2^31-1 per file; split the mesh "
-                             "into parts", (long long)tets);
-    *tet_count = tets;
-    return 0;
-}
-
 /* A polyhedron's faces (tools/mesh/polyhedron.h): importers check them; meshes built in memory may not. */
 static int check_face_stream(const tpk_mesh *src, int64_t c, tpk_diag *diag)
 {
@@ -182,35 +116,97 @@ static int check_cell_connectivity(const tpk_mesh *src, int64_t c, tpk_diag *dia
     return 0;
 }
 
-static void connectivity_range(void *ctx, int64_t begin, int64_t end, int w)
+/* One pass over the cells for what the split needs first, on all threads: each cell's offsets, face
+ * stream and point ids checked (check_cell_connectivity), its tets counted (cell_tets, a table for the
+ * usual types), and whether every cell is a tetra stored as 4 consecutive ids in cell order. A bad
+ * connectivity is reported before a refused cell type, wherever the two are, as the two passes this
+ * replaced did: a worker notes its first refused type and goes on checking ids until its first bad one. */
+static void survey_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     cell_pass *job = ctx;
     const tpk_mesh *src = job->src;
     uint64_t points = (uint64_t)src->point_count;
+    int not_plain = 0;
     for (int64_t c = begin; c < end; c++) {
+        int type = src->cell_types[c];
         int64_t b = src->cell_offsets[c], e = src->cell_offsets[c + 1];
-        int bad = e < b || src->cell_types[c] == TPK_CELL_POLYHEDRON;
+        int bad = e < b || type == TPK_CELL_POLYHEDRON;
         for (int64_t i = b; i < e; i++) /* a negative id is a huge unsigned one */
             bad |= (uint64_t)(int64_t)src->cell_conn[i] >= points;
         if (bad && check_cell_connectivity(src, c, NULL)) {
             job->first_bad[w] = c;
-            return;
+            break;
+        }
+        not_plain |= type != TPK_CELL_TETRA || b != 4 * c;
+        if (job->first_refused[w] != INT64_MAX)
+            continue; /* counted no further: the conversion stops at that cell unless ids are bad before */
+        int64_t tets = job->type_tets[type];
+        if (tets >= 0 && (job->type_nodes[type] == 0 || e - b == job->type_nodes[type])) {
+            job->tets[w] += tets;
+            continue;
+        }
+        tets = cell_tets(src, c, NULL);
+        if (tets == -1) {
+            job->first_refused[w] = c;
+        } else if (tets == -2) {
+            if (job->first_skipped[w] == INT64_MAX)
+                job->first_skipped[w] = c;
+            job->skipped[w]++;
+        } else {
+            job->tets[w] += tets;
         }
     }
+    job->not_plain[w] = not_plain;
 }
 
-static int check_connectivity(const tpk_mesh *src, int threads, tpk_diag *diag)
+/* Checks every cell, counts the tets (refusing unsupported 3-D cells, skipping lower-dimensional ones) and
+ * says whether the cells are plain tets (*plain: 4 consecutive ids each, in cell order, as many as the
+ * tets: the connectivity is then already the tet array). */
+static int survey_cells(const tpk_mesh *src, int threads, int64_t *tet_count, int *plain, tpk_diag *diag)
 {
     if (src->point_count > INT32_MAX)
         return tpk_diag_fail(diag, "%lld points exceed the limit of 2^31-1 per file; split the mesh "
                              "into parts", (long long)src->point_count);
+    int64_t tets = 0, skipped = 0, first_skipped = -1, refused = INT64_MAX;
     cell_pass *job = malloc(sizeof *job);
     if (!job)
         return tpk_diag_fail(diag, "tetrahedralize: out of memory");
     job->src = src;
-    int64_t bad = run_cell_pass(job, src->cell_count, pass_threads(src->cell_count, threads), connectivity_range);
+    for (int t = 0; t < 256; t++) { /* what cell_tets says of a cell of type t with the right node count */
+        const tpk_cell_type_info *kind = tpk_cell_type(t);
+        int ok = kind && kind->dim >= 3 && kind->type != TPK_CELL_POLYHEDRON && max_tets(kind->type);
+        job->type_tets[t] = ok ? max_tets(kind->type) : -1;
+        job->type_nodes[t] = ok && kind->nodes > 0 ? kind->nodes : 0;
+    }
+    threads = pass_threads(src->cell_count, threads);
+    int64_t bad = run_cell_pass(job, src->cell_count, threads, survey_range);
+    int not_plain = 0;
+    for (int w = 0; w < threads; w++) {
+        tets += job->tets[w];
+        skipped += job->skipped[w];
+        if (first_skipped < 0 && job->first_skipped[w] != INT64_MAX)
+            first_skipped = job->first_skipped[w];
+        refused = job->first_refused[w] < refused ? job->first_refused[w] : refused;
+        not_plain |= job->not_plain[w];
+    }
     free(job);
-    return bad == INT64_MAX ? 0 : check_cell_connectivity(src, bad, diag);
+    if (bad != INT64_MAX)
+        return check_cell_connectivity(src, bad, diag);
+    if (refused != INT64_MAX)
+        return (int)cell_tets(src, refused, diag);
+    if (skipped)
+        tpk_diag_warn(diag, "skipped %lld cells of dimension < 3 (the first is cell %lld, a %s)",
+                      (long long)skipped, (long long)first_skipped,
+                      tpk_cell_type(src->cell_types[first_skipped])->name);
+    if (tets == 0)
+        return tpk_diag_fail(diag, "the mesh has no volume cells (%lld cells, none 3-D)",
+                             (long long)src->cell_count);
+    if (tets > INT32_MAX)
+        return tpk_diag_fail(diag, "%lld tets exceed the limit of 2^31-1 per file; split the mesh "
+                             "into parts", (long long)tets);
+    *tet_count = tets;
+    *plain = !not_plain && tets == src->cell_count;
+    return 0;
 }
 
 /* ---- fields ---------------------------------------------------------------------------------- */
@@ -509,7 +505,7 @@ static int refuse_mirrored(const tpk_mesh *src, int64_t first, const tpk_tetmesh
                          (long long)out->mirrored_cells, (long long)split);
 }
 
-/* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by count_tets), on all
+/* Plain split of every hexahedron, wedge and pyramid into the tet array (sized by survey_cells), on all
  * cores (split_plain.c); cells it refuses, and polyhedra, go to tools/convert/steiner.c, which appends
  * theirs and may take back the plain split of a cell next to a face it puts a point on. Returns 0, -1
  * when out of memory, or -2 with a message for a cell that cannot be split. */
@@ -536,35 +532,6 @@ static int split_cells(const tpk_mesh *src, int flags, int threads, const tpk_te
                               : 0;
     free(plain.hard);
     return rc;
-}
-
-static void plain_range(void *ctx, int64_t begin, int64_t end, int w)
-{
-    cell_pass *job = ctx;
-    const tpk_mesh *src = job->src;
-    for (int64_t c = begin; c < end; c++)
-        if (src->cell_types[c] != TPK_CELL_TETRA || src->cell_offsets[c] != 4 * c) {
-            job->not_plain[w] = 1;
-            return;
-        }
-}
-
-/* Source tets stored as 4 consecutive ids each, in cell order: the connectivity is already the tet array. */
-static int all_plain_tets(const tpk_mesh *src, int64_t tet_count, int threads)
-{
-    if (tet_count != src->cell_count)
-        return 0;
-    cell_pass *job = malloc(sizeof *job);
-    if (!job)
-        return 0;
-    job->src = src;
-    threads = pass_threads(src->cell_count, threads);
-    run_cell_pass(job, src->cell_count, threads, plain_range);
-    int plain = 1;
-    for (int w = 0; w < threads; w++)
-        plain &= !job->not_plain[w];
-    free(job);
-    return plain;
 }
 
 /* Identity maps (vertex_source, tet_source) filled on all threads. */
@@ -614,13 +581,14 @@ static void snap_to_file_grid(const tpk_mesh *src, int threads, tpk_tetmesh *out
 }
 
 /* Points and tets: copied from src, or taken over from `donor` (== src) when it is given, which saves a
- * copy and the memory of a second mesh in the converter. */
-static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int flags, int threads,
-                         const tpk_tetra_progress *progress, tpk_added_points *added, tpk_tetmesh *out,
-                         tpk_diag *diag)
+ * copy and the memory of a second mesh in the converter; with plain_cells (survey_cells), the connectivity
+ * is the tet array. */
+static int take_geometry(const tpk_mesh *src, tpk_mesh *donor, int64_t tet_capacity, int plain_cells, int flags,
+                         int threads, const tpk_tetra_progress *progress, tpk_added_points *added,
+                         tpk_tetmesh *out, tpk_diag *diag)
 {
     size_t nv = (size_t)(out->vertex_count ? out->vertex_count : 1);
-    int plain = donor && all_plain_tets(src, tet_capacity, threads);
+    int plain = donor && plain_cells;
     if (donor && donor->points) {
         out->points = donor->points;
         donor->points = NULL;
@@ -659,13 +627,14 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     field_request *reqs = NULL;
     int req_count = 0;
     int64_t tet_capacity = 0;
+    int plain = 0;
     tpk_added_points added; /* what each added point is the mean of */
     memset(out, 0, sizeof *out);
     memset(&added, 0, sizeof added);
     if (!src || (src->cell_count > 0 && (!src->cell_types || !src->cell_offsets || !src->cell_conn)) ||
         (src->point_count > 0 && !src->points) || src->cell_count > INT32_MAX)
         return tpk_diag_fail(diag, "tetrahedralize: invalid source mesh");
-    if (check_connectivity(src, threads, diag) || count_tets(src, threads, &tet_capacity, diag) ||
+    if (survey_cells(src, threads, &tet_capacity, &plain, diag) ||
         build_requests(src, field_names, field_name_count, flags, &reqs, &req_count, diag))
         return -1;
 
@@ -685,7 +654,7 @@ static int tetrahedralize(const tpk_mesh *src, tpk_mesh *donor, const char *cons
     }
     /* Geometry last: it may take src's points and (all-tet input) connectivity; after it, only the
      * field copy reads src (cell_to_point uses the taken-over connectivity as out->tets). */
-    int geometry = take_geometry(src, donor, tet_capacity, flags, threads, progress, &added, out, diag);
+    int geometry = take_geometry(src, donor, tet_capacity, plain, flags, threads, progress, &added, out, diag);
     if (geometry == 0 && out->mirrored_cells > 0 && (flags & TPK_TETRA_REFUSE_MIRRORED))
         geometry = refuse_mirrored(src, out->first_mirrored_cell, out, diag) ? -2 : 0;
     if (geometry == -2) {
