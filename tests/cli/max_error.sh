@@ -117,6 +117,18 @@ convert_checked "$DATA/seacas/8-block.g" "$WORK/one.tpk" --max-error 1% --max-er
 "$TPK" check "$WORK/one.tpk" --against "$DATA/seacas/8-block.g" > "$WORK/against.txt" 2>/dev/null || fail "--max-error-field force_z: check --against fails: $(cat "$WORK/against.txt")"
 grep -q "not bounded" "$WORK/against.txt" && ! grep -q "force_z.*not bounded" "$WORK/against.txt" || fail "--max-error-field: $(cat "$WORK/against.txt")"
 
+# a field whose float32 values cannot come within the bound (a large offset on a small variation): refused
+# at once, by its name and with the offset to take out, not after refining up to the tet limit
+nodedata "$WORK/p20.msh" "$WORK/p2_offset.msh" "1e4+1e-2*((x-0.3)**2+3*y*z-(z-0.5)**2)"
+for threads in 1 2; do
+    expect_exit 2 timeout 60 "$TPK" convert "$WORK/p2_offset.msh" "$WORK/bad.tpk" --max-error 1% --threads $threads
+    expect_stderr "field 'f' cannot be stored that close to its interpolant: the file holds values as float32"
+    expect_stderr "convert the field with its offset taken out (its values minus about 10000"
+    cp "$WORK/err" "$WORK/err_$threads"
+done
+cmp -s "$WORK/err_1" "$WORK/err_2" || fail "the float32 refusal differs for --threads 1 and 2"
+convert_checked "$WORK/p2_offset.msh" "$WORK/offset.tpk" --max-error 90% > /dev/null 2>&1
+
 # usage: exit 2, naming why
 for bad in 0 1 100% -0.1 1e "" 2%%; do
     expect_exit 2 "$TPK" convert "$WORK/hex.msh" "$WORK/bad.tpk" --max-error "$bad"

@@ -168,6 +168,7 @@ typedef struct refine {
     int bounded;           /* slots bounded: bound_slot[0 .. bounded) */
     int *bound_slot;
     double *bound_range;
+    double *slot_allowed;  /* per slot: the largest error --max-error allows it (its range times E), else inf */
     double diag_length;
     int64_t count, cap;    /* tets */
     int64_t tets_given;
@@ -1243,9 +1244,20 @@ static int reserve_vertices(refine *r, int64_t more)
     return 0;
 }
 
+/* An added vertex whose float32 value is farther from the interpolant than the bound allows its slot:
+ * every tet that has it then misses the bound at that very point, however finely it is cut, so the
+ * refinement stops there (float_floor_fail). */
+typedef struct floor_hit {
+    int32_t vertex; /* -1: none */
+    int slot;
+    double exact;   /* the interpolant's value at the vertex */
+    float stored;
+} floor_hit;
+
 /* Vertex v (room made) at parametric point xi of tet t's cell: placed by the map (on the file's grid),
- * valued by the interpolant, every point field and step. */
-static void place_vertex(refine *r, int32_t v, int64_t t, const double xi[3])
+ * valued by the interpolant, every point field and step; the first slot whose float32 value misses the
+ * bound at the vertex itself into *hit (where given and none is there yet). */
+static void place_vertex(refine *r, int32_t v, int64_t t, const double xi[3], floor_hit *hit)
 {
     tpk_tetmesh *m = r->m;
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
@@ -1256,8 +1268,13 @@ static void place_vertex(refine *r, int32_t v, int64_t t, const double xi[3])
         x[a] = m->grid_origin[a] + (double)(float)(x[a] - m->grid_origin[a]);
     memcpy(m->points + 3 * (int64_t)v, x, sizeof x);
     m->vertex_source[v] = -1;
-    for (int s = 0; s < r->slots; s++)
-        r->added[(int64_t)(v - r->n0) * r->slots + s] = (float)interpolate(r, n, verts, w, s);
+    for (int s = 0; s < r->slots; s++) {
+        double exact = interpolate(r, n, verts, w, s);
+        float stored = (float)exact;
+        r->added[(int64_t)(v - r->n0) * r->slots + s] = stored;
+        if (hit && hit->vertex < 0 && fabs((double)stored - exact) > r->slot_allowed[s])
+            *hit = (floor_hit){v, s, exact, stored};
+    }
 }
 
 static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
@@ -1265,7 +1282,7 @@ static int32_t add_vertex(refine *r, int64_t t, const double xi[3])
     if (reserve_vertices(r, 1) != 0)
         return -1;
     int32_t v = (int32_t)r->m->vertex_count++;
-    place_vertex(r, v, t, xi);
+    place_vertex(r, v, t, xi, NULL);
     return v;
 }
 
@@ -1316,6 +1333,7 @@ typedef struct round_job {
     int64_t first_child, first_xi; /* the first new tet, and its entry of parametric points */
     int32_t first_vertex;
     int64_t cap; /* the arrays' room (round_grow) */
+    floor_hit hit[TPK_MAX_THREADS]; /* per worker of place_range: its first vertex whose value misses */
 } round_job;
 
 static void choose_range(void *ctx, int64_t begin, int64_t end, int w)
@@ -1330,14 +1348,13 @@ static void place_range(void *ctx, int64_t begin, int64_t end, int w)
 {
     round_job *job = ctx;
     refine *r = job->r;
-    (void)w;
     for (int64_t n = begin; n < end; n++) {
         int64_t k = job->maker[n], t = job->active[k];
         int i = tet_edges[job->chosen[k]][0], j = tet_edges[job->chosen[k]][1];
         double half[3];
         for (int c = 0; c < 3; c++)
             half[c] = 0.5 * (xi_of(r, t)[3 * i + c] + xi_of(r, t)[3 * j + c]);
-        place_vertex(r, job->first_vertex + (int32_t)n, t, half);
+        place_vertex(r, job->first_vertex + (int32_t)n, t, half, &job->hit[w]);
     }
 }
 
@@ -1374,13 +1391,38 @@ static int round_grow(round_job *job, int64_t cap)
     return p[4] ? 0 : -1;
 }
 
+/* The refinement cannot meet the bound: a vertex it added holds a value that float32 (the type the
+ * file stores values in) cannot bring within the bound of the interpolant there. Said at once, with the
+ * field, the point, the values and what would work, rather than after cutting up to the tet limit. */
+static int float_floor_fail(const refine *r, const floor_hit *h)
+{
+    const tpk_src_field *f = &r->m->fields[r->slot_field[h->slot]];
+    int64_t step = (r->slot_values[h->slot] - f->values) / (r->n0 > 0 ? r->n0 : 1);
+    const double *x = r->m->points + 3 * (int64_t)h->vertex;
+    double range = r->slot_allowed[h->slot] / r->o->max_error, off = fabs((double)h->stored - h->exact);
+    float magnitude = fabsf(h->stored), lo = INFINITY;
+    for (int64_t k = 0; k < r->n0; k++) /* the offset to take out: the middle of the range */
+        lo = isfinite(r->slot_values[h->slot][k]) ? fminf(lo, r->slot_values[h->slot][k]) : lo;
+    char step_text[32] = "";
+    if (f->step_count > 1)
+        snprintf(step_text, sizeof step_text, " (step %lld)", (long long)step);
+    return tpk_diag_fail(r->diag, "--max-error %g: field '%s'%s cannot be stored that close to its interpolant: the "
+                         "file holds values as float32, and at the point (%.9g, %.9g, %.9g) that the refinement "
+                         "adds, the source cell's value %.17g is stored as %.9g (float32 steps by %g there), off "
+                         "by %g, which is %.3g of the field's range %g; no refinement meets a smaller bound. Give "
+                         "a bound above %.3g, or convert the field with its offset taken out (its values minus "
+                         "about %.6g)", r->o->max_error, f->name, step_text, x[0], x[1], x[2], h->exact,
+                         (double)h->stored, (double)(nextafterf(magnitude, INFINITY) - magnitude), off,
+                         off / range, range, off / range, (double)lo + 0.5 * range);
+}
+
 /* The rounds: every tet of `active` (ascending; malloc'ed, taken over) with a marked edge bisects its
  * greatest marked one, its pieces keeping its other marks, until none has one. The tets cut, then their
  * pieces, become the tets to bound again. */
 static int cut_marked(refine *r, int64_t *active, int64_t active_count)
 {
     int rc = 0;
-    round_job job = {r, active, NULL, NULL, NULL, NULL, 0, 0, 0, 0};
+    round_job job = {.r = r, .active = active};
     memcpy(r->todo, active, sizeof *active * (size_t)active_count);
     r->todo_count = active_count;
     int64_t first_new = r->count;
@@ -1424,7 +1466,17 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
             job.mid[k] = r->marks.values[slot];
         }
         r->m->vertex_count += made;
+        for (int w = 0; w < TPK_MAX_THREADS; w++)
+            job.hit[w].vertex = -1;
         tpk_parallel_for(made, tpk_threads_for(made, r->threads, 256), place_range, &job);
+        const floor_hit *hit = NULL; /* the first vertex, whatever the threads: workers take ranges in order */
+        for (int w = 0; w < TPK_MAX_THREADS; w++)
+            if (job.hit[w].vertex >= 0 && (!hit || job.hit[w].vertex < hit->vertex))
+                hit = &job.hit[w];
+        if (hit) {
+            rc = float_floor_fail(r, hit);
+            break;
+        }
         job.first_child = r->count, job.first_xi = r->xi_count;
         r->count += n, r->xi_count += n;
         tpk_parallel_for(n, tpk_threads_for(n, r->threads, 1024), bisect_range, &job);
@@ -1698,7 +1750,8 @@ static int pick_fields(refine *r)
     r->slot_field = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->slot_field);
     r->bound_slot = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->bound_slot);
     r->bound_range = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->bound_range);
-    if (!r->slot_values || !r->slot_field || !r->bound_slot || !r->bound_range)
+    r->slot_allowed = calloc((size_t)(r->slots ? r->slots : 1), sizeof *r->slot_allowed);
+    if (!r->slot_values || !r->slot_field || !r->bound_slot || !r->bound_range || !r->slot_allowed)
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
     for (int i = 0; i < r->o->field_count; i++) {
         int found = 0;
@@ -1723,8 +1776,12 @@ static int pick_fields(refine *r)
         for (int step = 0; step < field->step_count; step++, s++) {
             r->slot_values[s] = field->values + (int64_t)step * r->n0;
             r->slot_field[s] = f;
-            if (chosen && hi > lo) /* a constant field is its own interpolant everywhere */
+            r->slot_allowed[s] = INFINITY;
+            if (chosen && hi > lo) { /* a constant field is its own interpolant everywhere */
                 r->bound_slot[r->bounded] = s, r->bound_range[r->bounded++] = hi - lo;
+                if (r->o->uniform_levels <= 0)
+                    r->slot_allowed[s] = r->o->max_error * (hi - lo);
+            }
         }
     }
     return 0;
@@ -1771,6 +1828,7 @@ static int hand_back(refine *r)
 static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
+    free(r->slot_allowed);
     free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->worst_slot), free(r->todo), free(r->marked);
     free(r->bound_flags), free(r->xi_at), free(r->by_vertex.head), free(r->by_vertex.next);
