@@ -16,23 +16,26 @@ int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count)
     return count;
 }
 
+/* Tet t's faces with no neighbor (v its ids, n its neighbors, at least one < 0) into dst, in face order;
+ * returns how many. */
+static int tet_shell_faces(const int32_t *v, const int32_t *n, int32_t t, tpk_shell_face *dst)
+{
+    int out = 0;
+    for (int k = 0; k < 4; k++)
+        if (n[k] < 0)
+            dst[out++] = (tpk_shell_face){v[tpk_tet_faces[k][0]], v[tpk_tet_faces[k][1]], v[tpk_tet_faces[k][2]], t};
+    return out;
+}
+
 void tpk_build_shell(const int32_t *tets, const int32_t *neighbors, int64_t tet_count,
                      tpk_shell_face *dst)
 {
     int64_t out = 0;
     for (int64_t t = 0; t < tet_count; t++) {
-        const int32_t *v = tets + 4 * t, *n = neighbors + 4 * t;
+        const int32_t *n = neighbors + 4 * t;
         if ((n[0] | n[1] | n[2] | n[3]) >= 0) /* no face on the shell: most tets, one test (sign bits) */
             continue;
-        for (int k = 0; k < 4; k++) {
-            if (n[k] >= 0)
-                continue;
-            tpk_shell_face *f = &dst[out++];
-            f->a = v[tpk_tet_faces[k][0]];
-            f->b = v[tpk_tet_faces[k][1]];
-            f->c = v[tpk_tet_faces[k][2]];
-            f->t = (int32_t)t;
-        }
+        out += tet_shell_faces(tets + 4 * t, n, (int32_t)t, dst + out);
     }
 }
 
@@ -94,7 +97,7 @@ void tpk_shell_gather_range(tpk_shell_gather *g, const int32_t *tets, const int3
     if (me->failed)
         return;
     for (int64_t t = first; t < first + count; t++) {
-        const int32_t *v = tets + 4 * t, *n = neighbors + 4 * t;
+        const int32_t *n = neighbors + 4 * t;
         if ((n[0] | n[1] | n[2] | n[3]) >= 0)
             continue;
         if (me->count + 4 > me->capacity) {
@@ -107,10 +110,7 @@ void tpk_shell_gather_range(tpk_shell_gather *g, const int32_t *tets, const int3
             me->faces = grown;
             me->capacity = capacity;
         }
-        for (int k = 0; k < 4; k++)
-            if (n[k] < 0)
-                me->faces[me->count++] = (tpk_shell_face){v[tpk_tet_faces[k][0]], v[tpk_tet_faces[k][1]],
-                                                          v[tpk_tet_faces[k][2]], (int32_t)t};
+        me->count += tet_shell_faces(tets + 4 * t, n, (int32_t)t, me->faces + me->count);
     }
 }
 
