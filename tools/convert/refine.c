@@ -1401,8 +1401,9 @@ static int float_floor_fail(const refine *r, const floor_hit *h)
     const double *x = r->m->points + 3 * (int64_t)h->vertex;
     double range = r->slot_allowed[h->slot] / r->o->max_error, off = fabs((double)h->stored - h->exact);
     float magnitude = fabsf(h->stored), lo = INFINITY;
-    for (int64_t k = 0; k < r->n0; k++) /* the offset to take out: the middle of the range */
-        lo = isfinite(r->slot_values[h->slot][k]) ? fminf(lo, r->slot_values[h->slot][k]) : lo;
+    /* the offset to take out: the middle of the range, over every step (the range set_up bounds) */
+    for (int64_t k = 0; k < (int64_t)f->step_count * r->n0; k++)
+        lo = isfinite(f->values[k]) ? fminf(lo, f->values[k]) : lo;
     char step_text[32] = "";
     if (f->step_count > 1)
         snprintf(step_text, sizeof step_text, " (step %lld)", (long long)step);
