@@ -40,7 +40,7 @@ typedef struct cell_pass {
     int64_t first_refused[TPK_MAX_THREADS]; /* survey_range: the first cell of a type refused */
     int64_t tets[TPK_MAX_THREADS], skipped[TPK_MAX_THREADS], first_skipped[TPK_MAX_THREADS];
     int not_plain[TPK_MAX_THREADS];
-    int64_t type_tets[256];                 /* count_range's fast path: tets of a cell of this type with */
+    int64_t type_tets[256];                 /* survey_range's fast path: tets of a cell of this type with */
     int64_t type_nodes[256];                /* this many nodes (0: any); -1: ask cell_tets */
 } cell_pass;
 
@@ -139,7 +139,7 @@ static void survey_range(void *ctx, int64_t begin, int64_t end, int w)
         }
         not_plain |= type != TPK_CELL_TETRA || b != 4 * c;
         if (job->first_refused[w] != INT64_MAX)
-            continue; /* counted no further: the conversion stops at that cell unless ids are bad before */
+            continue; /* counted no further: the conversion stops there, unless a cell's ids are bad */
         int64_t tets = job->type_tets[type];
         if (tets >= 0 && (job->type_nodes[type] == 0 || e - b == job->type_nodes[type])) {
             job->tets[w] += tets;

@@ -207,19 +207,15 @@ static int put_chunk(chunk_writer *cw, uint32_t tag, int required, tpk_elem_type
 }
 
 /* `data` (malloc'd), read by queued calls, freed when the queue is closed; at once without a queue. */
-static int keep_owned(chunk_writer *cw, void *data)
+static void keep_owned(chunk_writer *cw, void *data)
 {
-    if (!cw->queue) {
-        free(data);
-        return 0;
+    if (cw->queue && cw->owned_count < OWNED_MOST) {
+        cw->owned[cw->owned_count++] = data;
+        return;
     }
-    if (cw->owned_count == OWNED_MOST) { /* never: OWNED_MOST covers the callers; wait instead of failing */
+    if (cw->queue) /* never: OWNED_MOST covers the callers; wait for the calls instead of failing */
         queue_wait(cw->queue, cw->queue->queued);
-        free(data);
-        return 0;
-    }
-    cw->owned[cw->owned_count++] = data;
-    return 0;
+    free(data);
 }
 
 typedef void (*fill_fn)(const void *user, int64_t first, int64_t count, void *dst, int worker);
