@@ -12,7 +12,7 @@ if ! command -v spirv-val > /dev/null; then
 fi
 work=$(mktemp -d "${TMPDIR:-/tmp}/tpk_spirv_XXXXXX")
 trap 'rm -rf "$work"' EXIT
-for name in render_fp64 render_fp32 iso iso_raster_vert iso_raster_frag iso_mesh_task iso_mesh_mesh iso_vis64 iso_vis32 \
+for name in render_fp64 render_fp32 render_fp64_one render_fp32_one iso iso_raster_vert iso_raster_frag iso_mesh_task iso_mesh_mesh iso_vis64 iso_vis32 \
     iso_resolve; do
     [ -f "$dir/$name.inc" ] || { echo "FAIL: $dir/$name.inc was not built" >&2; exit 1; }
     /usr/bin/python3 - "$dir/$name.inc" "$work/$name.spv" <<'PY'

@@ -294,6 +294,7 @@ typedef struct tpk_vk_pipeline {
     VkDescriptorSetLayout set_layout;
     VkPipelineLayout layout;
     VkShaderModule shader;
+    int one_part; /* shader is the module for arrays in one part each (TPK_VK_ONE_PART) */
     VkPipeline pipelines[TPK_VK_EFFECT_MASKS];
     VkDescriptorPool pool;
     VkDescriptorSet set;
@@ -338,9 +339,11 @@ int tpk_vk_renderer_frame_to(tpk_vk_renderer *renderer, const tpk_render_options
                              const tpk_vk_band_target *target, tpk_render_stats *stats, tpk_diag *diag);
 const tpk_vk_context *tpk_vk_renderer_context(const tpk_vk_renderer *renderer);
 
-/* The SPIR-V of shaders/render.comp with TPK_VK_FP64 1 and 0 (generated at build time by glslc,
- * render_spv.c); sizes in bytes. */
+/* The SPIR-V of shaders/render.comp with TPK_VK_FP64 1 and 0, and of both with TPK_VK_ONE_PART 1 (_one:
+ * for arrays in one part each) (generated at build time by glslc, render_spv.c); sizes in bytes. */
 extern const uint32_t tpk_vk_render_spv_fp64[], tpk_vk_render_spv_fp32[];
 extern const size_t tpk_vk_render_spv_fp64_size, tpk_vk_render_spv_fp32_size;
+extern const uint32_t tpk_vk_render_spv_fp64_one[], tpk_vk_render_spv_fp32_one[];
+extern const size_t tpk_vk_render_spv_fp64_one_size, tpk_vk_render_spv_fp32_one_size;
 
 #endif

@@ -58,18 +58,41 @@ int tpk_vk_sliced(const tpk_vk_context *ctx)
     return ctx->props.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
 }
 
+/* The module for arrays in one part each (TPK_VK_ONE_PART: no parts' switch, less for the driver to
+ * compile) or for split ones, with its pipeline cache, in place of the one `p` had. Pipelines made from
+ * the old module stay valid. */
+static int load_module(const tpk_vk_context *ctx, int one_part, tpk_vk_pipeline *p, tpk_diag *diag)
+{
+    VkShaderModuleCreateInfo sm = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    if (ctx->fp64) {
+        sm.codeSize = one_part ? tpk_vk_render_spv_fp64_one_size : tpk_vk_render_spv_fp64_size;
+        sm.pCode = one_part ? tpk_vk_render_spv_fp64_one : tpk_vk_render_spv_fp64;
+    } else {
+        sm.codeSize = one_part ? tpk_vk_render_spv_fp32_one_size : tpk_vk_render_spv_fp32_size;
+        sm.pCode = one_part ? tpk_vk_render_spv_fp32_one : tpk_vk_render_spv_fp32;
+    }
+    VkShaderModule shader;
+    VkResult r = vkCreateShaderModule(ctx->device, &sm, NULL, &shader);
+    if (r != VK_SUCCESS)
+        return fail(diag, "loading the shader", r);
+    if (p->shader) {
+        vkDestroyShaderModule(ctx->device, p->shader, NULL);
+        tpk_vk_cache_close(ctx, &p->cache);
+    }
+    p->shader = shader;
+    p->one_part = one_part;
+    tpk_vk_cache_open(ctx, sm.pCode, sm.codeSize, &p->cache);
+    return 0;
+}
+
 static int create_shader(const tpk_vk_context *ctx, int layout_id, const tpk_vk_array arrays[], tpk_vk_pipeline *p,
                          tpk_diag *diag)
 {
-    VkShaderModuleCreateInfo sm = {
-        .sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
-        .codeSize = ctx->fp64 ? tpk_vk_render_spv_fp64_size : tpk_vk_render_spv_fp32_size,
-        .pCode = ctx->fp64 ? tpk_vk_render_spv_fp64 : tpk_vk_render_spv_fp32,
-    };
-    VkResult r = vkCreateShaderModule(ctx->device, &sm, NULL, &p->shader);
-    if (r != VK_SUCCESS)
-        return fail(diag, "loading the shader", r);
-    tpk_vk_cache_open(ctx, sm.pCode, sm.codeSize, &p->cache);
+    int one_part = 1;
+    for (int a = 0; a < TPK_VK_ARRAY_COUNT; a++)
+        one_part &= arrays[a].part_count <= 1;
+    if (load_module(ctx, one_part, p, diag) != 0)
+        return -1;
     int32_t *values = p->spec;
     values[TPK_VK_SPEC_LAYOUT] = layout_id;
     values[TPK_VK_SPEC_EXACT] = tpk_vk_exact_mode(ctx);
@@ -188,6 +211,9 @@ int tpk_vk_pipeline_rebind(const tpk_vk_context *ctx, tpk_vk_pipeline *p, int ar
     for (int e = 0; e < TPK_VK_EFFECT_MASKS; e++)
         if (p->pipelines[e] && (e & TPK_VK_EFFECT_CULL))
             return tpk_diag_fail(diag, "vulkan: array %d replaced after a pipeline that reads it was made", array);
+    /* a split array needs the module with the parts' switch; the pipelines made so far do not read it */
+    if (a->part_count > 1 && p->one_part && load_module(ctx, 0, p, diag) != 0)
+        return -1;
     VkWriteDescriptorSet w[TPK_VK_MAX_PARTS];
     memset(w, 0, sizeof w);
     for (int part = 0; part < TPK_VK_MAX_PARTS; part++) {

@@ -93,7 +93,10 @@ layout(std430, set = 0, binding = TPK_VK_BIND_STATE) buffer State { vec4 state[]
 
 uint work = 0u; // this dispatch's iterations of the loops that can run long (sliced: TPK_VK_SLICE_WORK)
 
-// Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away.
+// Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away. The module
+// built with TPK_VK_ONE_PART 1 (every array in one part) has no switch at all: specialization folds it
+// only after a driver has inlined each fetch's eight cases at every call site, which on lavapipe was
+// more than a quarter of the pipeline's compile time.
 #define DECLARE_ARRAY(SAMPLER, NAME, ARRAY)                                                   \
     layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 0) uniform SAMPLER NAME##0;         \
     layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 1) uniform SAMPLER NAME##1;         \
@@ -104,6 +107,13 @@ uint work = 0u; // this dispatch's iterations of the loops that can run long (sl
     layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 6) uniform SAMPLER NAME##6;         \
     layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 7) uniform SAMPLER NAME##7;
 
+#if TPK_VK_ONE_PART
+#define FETCH_FUNCTION(RET, NAME, PARTS, SHIFT)                                               \
+    RET fetch_##NAME(uint i)                                                                  \
+    {                                                                                         \
+        return texelFetch(NAME##0, int(i));                                                   \
+    }
+#else
 #define FETCH_FUNCTION(RET, NAME, PARTS, SHIFT)                                               \
     RET fetch_##NAME(uint i)                                                                  \
     {                                                                                         \
@@ -121,6 +131,7 @@ uint work = 0u; // this dispatch's iterations of the loops that can run long (sl
         default: return texelFetch(NAME##7, j);                                               \
         }                                                                                     \
     }
+#endif
 
 DECLARE_ARRAY(samplerBuffer, verts, TPK_VK_ARRAY_VERTS)
 DECLARE_ARRAY(isamplerBuffer, tets, TPK_VK_ARRAY_TETS)
