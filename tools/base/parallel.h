@@ -60,6 +60,15 @@ void tpk_free_large(void *block, size_t size);
  * rather than pages never touched, whose first use costs more. */
 void tpk_release_kept(void);
 
+/* The pages of [block, block + size) (those wholly inside it) given back to the kernel on all threads
+ * (tpk_thread_count(0)) where it is large, the block staying the caller's: the next touch of a page finds
+ * a zeroed one. For a block about to be freed (tpk_free_spread), so that the free's unmapping is not all
+ * on one core. */
+void tpk_release_pages(void *block, size_t size);
+
+/* free() of a block of `size` bytes (malloc'ed, or NULL) after tpk_release_pages. */
+void tpk_free_spread(void *block, size_t size);
+
 /* calloc through tpk_alloc_large (zeroed here: a kept block holds old data). NULL when out of memory. */
 void *tpk_calloc_large(size_t count, size_t size);
 

@@ -204,6 +204,22 @@ static int refine_tets(conversion *c)
     return 0;
 }
 
+/* The source mesh freed once it is made into tets, the pages of its large arrays given back on all
+ * threads first (tpk_free_spread): one core's munmap of grid 120's 83 MB of cell offsets was 15 ms. */
+static void free_source(tpk_mesh *src)
+{
+    size_t cells = (size_t)(src->cell_count > 0 ? src->cell_count : 0);
+    if (src->cell_conn && src->cell_offsets)
+        tpk_release_pages(src->cell_conn, sizeof *src->cell_conn * (size_t)src->cell_offsets[cells]);
+    if (src->cell_offsets)
+        tpk_release_pages(src->cell_offsets, sizeof *src->cell_offsets * (cells + 1));
+    if (src->cell_types)
+        tpk_release_pages(src->cell_types, cells);
+    if (src->points)
+        tpk_release_pages(src->points, sizeof *src->points * 3 * (size_t)(src->point_count > 0 ? src->point_count : 0));
+    tpk_mesh_free(src);
+}
+
 /* Duplicate points merged when asked, source cells into tets on the file's float32 grid, then the
  * points into the stored frame. */
 static int make_tets(conversion *c)
@@ -232,7 +248,7 @@ static int make_tets(conversion *c)
         note_merged_ids(&c->merged, c->diag);
         return -1;
     }
-    tpk_mesh_free(&c->src);
+    free_source(&c->src);
     map_to_source(&c->mesh, &c->merged);
     map_whole_cells(&c->mesh, &c->higher);
     memcpy(rep->cells_into, c->mesh.cells_into, sizeof rep->cells_into);
