@@ -82,6 +82,36 @@ void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx)
     }
 }
 
+typedef struct chunks_job {
+    tpk_range_fn fn;
+    void *ctx;
+    int64_t count, chunk;
+    _Atomic int64_t next; /* the next chunk to take */
+} chunks_job;
+
+static void take_chunks(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    chunks_job *job = ctx;
+    (void)begin, (void)end;
+    for (;;) {
+        int64_t k = atomic_fetch_add(&job->next, 1);
+        if (k >= (job->count + job->chunk - 1) / job->chunk)
+            return;
+        int64_t from = k * job->chunk, to = job->count - from < job->chunk ? job->count : from + job->chunk;
+        job->fn(job->ctx, from, to, worker);
+    }
+}
+
+void tpk_parallel_chunks(int64_t count, int threads, int64_t chunk, tpk_range_fn fn, void *ctx)
+{
+    if (threads < 2 || chunk < 1 || count <= chunk) {
+        tpk_parallel_for(count, threads < 1 ? 1 : threads, fn, ctx);
+        return;
+    }
+    chunks_job job = {fn, ctx, count, chunk, 0};
+    tpk_parallel_for(threads, threads, take_chunks, &job);
+}
+
 /* The blocks tpk_free_large keeps (see parallel.h), each with its size; unused slots are NULL. */
 #define KEPT_BLOCKS 6
 static struct {
@@ -242,7 +272,7 @@ void tpk_release_pages(void *block, size_t size)
     if (last <= first)
         return;
     release_job job = {(char *)first, last - first, page};
-    tpk_parallel_for((int64_t)job.size, threads, release_range, &job);
+    tpk_parallel_chunks((int64_t)job.size, threads, (int64_t)4 << 20, release_range, &job);
 }
 
 void tpk_free_spread(void *block, size_t size)

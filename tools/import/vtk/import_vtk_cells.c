@@ -25,9 +25,10 @@ static int64_t cell_of_entry(const int64_t *offsets, int64_t cells, int64_t k)
 
 /* ---- Passes over binary blocks on all threads ---------------------------------------------------- */
 
-/* What the parallel passes below share: each worker scans its contiguous range in order and stops at its
- * first bad item, so the smallest of the workers' firsts is the item the serial loop stopped at, and the
- * message stays the same for any thread count. */
+/* What the parallel passes below share: the workers take the block in chunks (tpk_parallel_chunks), each
+ * scanned in order up to its first bad item; a worker keeps the smallest it found, so the smallest of the
+ * workers' firsts is the item the serial loop stopped at (every chunk before it was scanned whole), and
+ * the message stays the same for any thread count. */
 typedef struct block_job {
     const unsigned char *p; /* the block's first byte */
     vtk_type type;
@@ -45,6 +46,16 @@ typedef struct block_job {
     int64_t most_all, least_all;
 } block_job;
 
+/* Items a chunk: a few hundred KiB of the file. */
+#define BLOCK_CHUNK ((int64_t)1 << 15)
+
+/* A worker's first bad item, the smallest over its chunks. */
+static void found_bad(block_job *job, int worker, int64_t item)
+{
+    if (item < job->first_bad[worker])
+        job->first_bad[worker] = item;
+}
+
 static int64_t run_block_job(block_job *job, int64_t count, tpk_range_fn fn)
 {
     int threads = vtk_threads_for((uint64_t)count);
@@ -53,7 +64,7 @@ static int64_t run_block_job(block_job *job, int64_t count, tpk_range_fn fn)
         job->most[w] = -1;
         job->least[w] = INT64_MAX;
     }
-    tpk_parallel_for(count, threads, fn, job);
+    tpk_parallel_chunks(count, threads, BLOCK_CHUNK, fn, job);
     int64_t first = INT64_MAX;
     job->most_all = -1;
     job->least_all = INT64_MAX;
@@ -76,14 +87,14 @@ static void uniform_lists_range(void *ctx, int64_t begin, int64_t end, int worke
     for (int64_t c = begin; c < end; c++) {
         const unsigned char *cell = job->p + 4 * (size_t)(c * (each + 1));
         if ((int32_t)be32(cell) != each) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
         int32_t *dst = job->conn + c * each;
         for (int64_t j = 0; j < each; j++) {
             int32_t id = (int32_t)be32(cell + 4 + 4 * j);
             if (id < 0) {
-                job->first_bad[worker] = c;
+                found_bad(job, worker, c);
                 return;
             }
             most = id > most ? id : most;
@@ -91,7 +102,7 @@ static void uniform_lists_range(void *ctx, int64_t begin, int64_t end, int worke
         }
         job->offsets[c + 1] = job->base + (c + 1) * each;
     }
-    job->most[worker] = most;
+    job->most[worker] = most > job->most[worker] ? most : job->most[worker];
 }
 
 /* Old CELLS form, offsets known: each cell's ids (after its count) copied and checked to be >= 0. */
@@ -105,7 +116,7 @@ static void list_ids_range(void *ctx, int64_t begin, int64_t end, int worker)
         for (int64_t j = 0; j < count; j++) {
             int32_t id = (int32_t)be32(ids + 4 * j);
             if (id < 0) {
-                job->first_bad[worker] = c;
+                found_bad(job, worker, c);
                 return;
             }
             dst[j] = id;
@@ -124,13 +135,13 @@ static void connectivity_range(void *ctx, int64_t begin, int64_t end, int worker
                      : job->type == VT_I32 ? (int32_t)be32(p + 4 * k)
                                            : (int64_t)be_real(p, job->type, (uint64_t)k);
         if (id < 0 || id > INT32_MAX) {
-            job->first_bad[worker] = k;
+            found_bad(job, worker, k);
             return;
         }
         most = id > most ? id : most;
         job->conn[k] = (int32_t)id;
     }
-    job->most[worker] = most;
+    job->most[worker] = most > job->most[worker] ? most : job->most[worker];
 }
 
 /* OFFSETS: nondecreasing and at most the CELLS size (job->limit); most 1 where a cell has other than
@@ -141,12 +152,12 @@ static void offsets_range(void *ctx, int64_t begin, int64_t end, int worker)
     int64_t uneven = 0;
     for (int64_t c = begin; c < end; c++) {
         if (job->offsets[c + 1] < job->offsets[c] || job->offsets[c + 1] > job->limit) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
         uneven |= job->offsets[c + 1] - job->offsets[c] != job->each;
     }
-    job->most[worker] = uneven;
+    job->most[worker] = uneven > job->most[worker] ? uneven : job->most[worker];
 }
 
 /* CELL_TYPES: each in [0, 255], kept as a byte. */
@@ -156,15 +167,15 @@ static void types_range(void *ctx, int64_t begin, int64_t end, int worker)
     int64_t lo = 255, hi = 0;
     for (int64_t c = begin; c < end; c++) {
         if (job->values[c] < 0 || job->values[c] > 255) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
         job->types[c] = (uint8_t)job->values[c];
         lo = job->values[c] < lo ? job->values[c] : lo;
         hi = job->values[c] > hi ? job->values[c] : hi;
     }
-    job->least[worker] = lo;
-    job->most[worker] = hi;
+    job->least[worker] = lo < job->least[worker] ? lo : job->least[worker];
+    job->most[worker] = hi > job->most[worker] ? hi : job->most[worker];
 }
 
 /* CELL_TYPES in a BINARY file: big-endian int32, each in [0, 255]. */
@@ -175,15 +186,15 @@ static void binary_types_range(void *ctx, int64_t begin, int64_t end, int worker
     for (int64_t c = begin; c < end; c++) {
         int32_t type = (int32_t)be32(job->p + 4 * c);
         if (type < 0 || type > 255) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
         job->types[c] = (uint8_t)type;
         lo = type < lo ? type : lo;
         hi = type > hi ? type : hi;
     }
-    job->least[worker] = lo;
-    job->most[worker] = hi;
+    job->least[worker] = lo < job->least[worker] ? lo : job->least[worker];
+    job->most[worker] = hi > job->most[worker] ? hi : job->most[worker];
 }
 
 /* ---- POINTS, CELLS, CELL_TYPES ------------------------------------------------------------------ */
