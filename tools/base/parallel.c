@@ -82,6 +82,36 @@ void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx)
     }
 }
 
+typedef struct chunks_job {
+    tpk_range_fn fn;
+    void *ctx;
+    int64_t count, chunk;
+    _Atomic int64_t next; /* the next chunk to take */
+} chunks_job;
+
+static void take_chunks(void *ctx, int64_t begin, int64_t end, int worker)
+{
+    chunks_job *job = ctx;
+    (void)begin, (void)end;
+    for (;;) {
+        int64_t k = atomic_fetch_add(&job->next, 1);
+        if (k >= (job->count + job->chunk - 1) / job->chunk)
+            return;
+        int64_t from = k * job->chunk, to = job->count - from < job->chunk ? job->count : from + job->chunk;
+        job->fn(job->ctx, from, to, worker);
+    }
+}
+
+void tpk_parallel_chunks(int64_t count, int threads, int64_t chunk, tpk_range_fn fn, void *ctx)
+{
+    if (threads < 2 || chunk < 1 || count <= chunk) {
+        tpk_parallel_for(count, threads < 1 ? 1 : threads, fn, ctx);
+        return;
+    }
+    chunks_job job = {fn, ctx, count, chunk, 0};
+    tpk_parallel_for(threads, threads, take_chunks, &job);
+}
+
 /* The blocks tpk_free_large keeps (see parallel.h), each with its size; unused slots are NULL. */
 #define KEPT_BLOCKS 6
 static struct {
@@ -97,6 +127,7 @@ static struct {
 static void *take_kept(size_t size)
 {
     void *block = NULL, *drop[KEPT_BLOCKS] = {NULL};
+    size_t drop_size[KEPT_BLOCKS] = {0};
     pthread_mutex_lock(&kept.lock);
     int best = -1, largest = -1;
     for (int i = 0; i < KEPT_BLOCKS; i++) {
@@ -113,13 +144,13 @@ static void *take_kept(size_t size)
         if (i == best)
             block = kept.block[i];
         else
-            drop[i] = kept.block[i];
+            drop[i] = kept.block[i], drop_size[i] = kept.size[i];
         kept.block[i] = NULL;
         kept.size[i] = 0;
     }
     pthread_mutex_unlock(&kept.lock);
     for (int i = 0; i < KEPT_BLOCKS; i++)
-        free(drop[i]);
+        tpk_free_spread(drop[i], drop_size[i]);
     return block;
 }
 
@@ -136,12 +167,14 @@ void tpk_free_large(void *block, size_t size)
             slot = i;
     if (!kept.block[slot] || size > kept.size[slot]) {
         void *swap = kept.block[slot];
+        size_t swap_size = kept.size[slot];
         kept.block[slot] = block;
         kept.size[slot] = size;
         block = swap;
+        size = swap_size;
     }
     pthread_mutex_unlock(&kept.lock);
-    free(block);
+    tpk_free_spread(block, size);
 }
 
 /* Whether huge pages make a fresh block cheaper here. Not inside a virtual machine whose balloon device
@@ -197,15 +230,55 @@ void *tpk_alloc_large(size_t size)
 void tpk_release_kept(void)
 {
     void *drop[KEPT_BLOCKS];
+    size_t drop_size[KEPT_BLOCKS];
     pthread_mutex_lock(&kept.lock);
     for (int i = 0; i < KEPT_BLOCKS; i++) {
         drop[i] = kept.block[i];
+        drop_size[i] = kept.size[i];
         kept.block[i] = NULL;
         kept.size[i] = 0;
     }
     pthread_mutex_unlock(&kept.lock);
     for (int i = 0; i < KEPT_BLOCKS; i++)
-        free(drop[i]);
+        tpk_free_spread(drop[i], drop_size[i]);
+}
+
+/* Pieces of at least this many bytes per thread: below, starting a thread costs more than it saves. */
+#define RELEASE_PIECE ((int64_t)8 << 20)
+
+typedef struct release_job {
+    char *base; /* page aligned */
+    size_t size, page;
+} release_job;
+
+static void release_range(void *ctx, int64_t begin, int64_t end, int w)
+{
+    const release_job *job = ctx;
+    (void)w;
+    size_t b = (size_t)begin / job->page * job->page, e = (size_t)end;
+    if (e != job->size)
+        e = e / job->page * job->page;
+    if (e > b)
+        madvise(job->base + b, e - b, MADV_DONTNEED);
+}
+
+void tpk_release_pages(void *block, size_t size)
+{
+    int threads = tpk_threads_for((int64_t)size, tpk_thread_count(0), RELEASE_PIECE);
+    if (!block || threads < 2)
+        return;
+    size_t page = (size_t)sysconf(_SC_PAGESIZE);
+    uintptr_t first = ((uintptr_t)block + page - 1) / page * page, last = ((uintptr_t)block + size) / page * page;
+    if (last <= first)
+        return;
+    release_job job = {(char *)first, last - first, page};
+    tpk_parallel_chunks((int64_t)job.size, threads, (int64_t)4 << 20, release_range, &job);
+}
+
+void tpk_free_spread(void *block, size_t size)
+{
+    tpk_release_pages(block, size);
+    free(block);
 }
 
 void *tpk_calloc_large(size_t count, size_t size)

@@ -39,6 +39,14 @@ typedef void (*tpk_range_fn)(void *ctx, int64_t begin, int64_t end, int worker);
  * the call always completes. */
 void tpk_parallel_for(int64_t count, int threads, tpk_range_fn fn, void *ctx);
 
+/* tpk_parallel_for where the workers take [0, count) in chunks of `chunk` items, each the next one not
+ * taken, until none is left: a worker that starts late or is held up by other work on a shared machine
+ * leaves its share to the others rather than making them wait at the end. fn(ctx, begin, end, w) is
+ * called for each chunk, a worker's chunks in increasing order: per-worker results must accumulate over
+ * the calls (a first bad item: the smaller; counts: added), and only what does not depend on which
+ * worker took which chunk may be kept (every item's output at its own place, a smallest or largest). */
+void tpk_parallel_chunks(int64_t count, int threads, int64_t chunk, tpk_range_fn fn, void *ctx);
+
 /* malloc for large scratch arrays: the block tpk_free_large kept, when it fits (below), else fresh,
  * 2 MiB aligned and, where the kernel offers it, backed by huge pages (fewer page faults on first touch,
  * which dominate a pass over a fresh 500 MB array), except inside a virtual machine whose balloon takes
@@ -59,6 +67,15 @@ void tpk_free_large(void *block, size_t size);
  * kernel hands those recently used pages to what comes next (the page cache of a file being written)
  * rather than pages never touched, whose first use costs more. */
 void tpk_release_kept(void);
+
+/* The pages of [block, block + size) (those wholly inside it) given back to the kernel on all threads
+ * (tpk_thread_count(0)) where it is large, the block staying the caller's: the next touch of a page finds
+ * a zeroed one. For a block about to be freed (tpk_free_spread), so that the free's unmapping is not all
+ * on one core. */
+void tpk_release_pages(void *block, size_t size);
+
+/* free() of a block of `size` bytes (malloc'ed, or NULL) after tpk_release_pages. */
+void tpk_free_spread(void *block, size_t size);
 
 /* calloc through tpk_alloc_large (zeroed here: a kept block holds old data). NULL when out of memory. */
 void *tpk_calloc_large(size_t count, size_t size);

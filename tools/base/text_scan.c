@@ -347,8 +347,10 @@ int tpk_token_is(const char *tok, size_t len, const char *word)
     return 1;
 }
 
-/* Mappings of at least this many bytes a thread are populated on several. */
+/* Mappings of at least this many bytes a thread are populated on several, in chunks of SCAN_CHUNK bytes
+ * (tpk_parallel_chunks: a worker held up leaves the rest to the others). */
 #define POPULATE_PIECE ((int64_t)16 << 20)
+#define SCAN_CHUNK ((int64_t)4 << 20)
 
 typedef struct populate_job {
     const unsigned char *map;
@@ -405,7 +407,7 @@ int tpk_map_file(const char *path, const char **data, size_t *size, tpk_diag *di
         return tpk_diag_fail(diag, "%s: cannot map %zu bytes: %s", path, n, strerror(err));
     if (threads >= 2) {
         populate_job job = {map, n};
-        tpk_parallel_for((int64_t)n, threads, populate_range, &job);
+        tpk_parallel_chunks((int64_t)n, threads, SCAN_CHUNK, populate_range, &job);
     }
     *data = map;
     *size = n;
@@ -452,7 +454,7 @@ void tpk_scan_release_consumed(tpk_scan *s)
          * samples of a 2-thread grid 120 convert): the zaps share the mapping's lock */
         release_job job = {s->data + s->released, upto - s->released, page};
         int threads = tpk_threads_for((int64_t)job.size, tpk_thread_count(0), POPULATE_PIECE);
-        tpk_parallel_for((int64_t)job.size, threads, release_range, &job);
+        tpk_parallel_chunks((int64_t)job.size, threads, SCAN_CHUNK, release_range, &job);
         s->released = upto;
     }
 }

@@ -121,45 +121,10 @@ static void check_range(void *ctx, int64_t begin, int64_t end, int worker)
     }
 }
 
-static int finish_mesh(vtk_reader *r, tpk_mesh *out)
+/* The checked cells into the mesh, those that are not volumes left out (and their cell fields' values). */
+static int take_cells(vtk_reader *r, tpk_mesh *out, const int64_t dropped[256], int64_t drop_total, int64_t kept,
+                      int64_t conn_size)
 {
-    if (r->point_count < 0)
-        return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a POINTS section, found end of file");
-    if (r->cell_count < 0)
-        return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a CELLS section, found end of file");
-    if (r->type_count < 0)
-        return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a CELL_TYPES section, found end of file");
-    int64_t dropped[256] = {0};
-    int64_t drop_total = 0, kept = 0, conn_size = 0;
-    int threads = vtk_threads_for((uint64_t)r->cell_count);
-    check_job *job = malloc(sizeof *job);
-    cell_tally *tally = calloc((size_t)threads, sizeof *tally);
-    if (!job || !tally) {
-        free(job), free(tally);
-        return tpk_diag_fail(r->s.diag, "%s: out of memory", r->s.name);
-    }
-    job->r = r;
-    job->tally = tally;
-    for (int t = 0; t < 256; t++)
-        job->rule[t] = tpk_cell_rule_for(t);
-    for (int w = 0; w < threads; w++)
-        tally[w].first_bad = INT64_MAX;
-    tpk_parallel_for(r->cell_count, threads, check_range, job);
-    int64_t bad = INT64_MAX;
-    for (int w = 0; w < threads; w++) {
-        bad = tally[w].first_bad < bad ? tally[w].first_bad : bad;
-        kept += tally[w].kept;
-        conn_size += tally[w].conn_size;
-        for (int t = 0; t < 256; t++) {
-            dropped[t] += tally[w].dropped[t];
-            drop_total += tally[w].dropped[t];
-        }
-    }
-    free(tally);
-    int rc = bad != INT64_MAX ? check_cell(r, bad, &job->rule[r->types[bad]]) : 0;
-    free(job);
-    if (rc)
-        return -1;
     if (drop_total)
         tpk_warn_cell_counts(r->s.diag, r->s.name, dropped, drop_total,
                              "dropped cells that are not volumes:");
@@ -209,6 +174,77 @@ static int finish_mesh(vtk_reader *r, tpk_mesh *out)
     if (tpk_mesh_take_face_streams(out))
         return tpk_diag_fail(r->s.diag, "%s: out of memory", r->s.name);
     return 0;
+}
+
+/* The cells' check and counts from what the binary passes proved (import_vtk_internal.h, each_size), with
+ * no pass over the cells: one cell type, one size that its rule takes, no id at or above the point count
+ * (the passes refused negative ones). 1 when that holds (every cell passes check_cell, the counts are
+ * set); 0 otherwise, and the cells are checked one by one. Saves a pass over the offsets, ids and types
+ * (a fifth of grid 120's import on one thread). */
+static int cells_proved(const vtk_reader *r, int64_t dropped[256], int64_t *kept, int64_t *conn_size)
+{
+    if (r->cell_count <= 0 || r->each_size < 0 || r->type_lo < 0 || r->type_lo != r->type_hi ||
+        r->max_id >= r->point_count)
+        return 0;
+    int type = r->type_lo;
+    tpk_cell_rule rule = tpk_cell_rule_for(type);
+    int64_t n = r->each_size;
+    if (rule.kind == TPK_RULE_UNKNOWN || type == 42 || (rule.nodes > 0 && n != rule.nodes) ||
+        (rule.nodes < 0 && n < -rule.nodes))
+        return 0;
+    if (rule.kind == TPK_RULE_DROP) {
+        dropped[type] = r->cell_count;
+        return 1;
+    }
+    *kept = r->cell_count;
+    *conn_size = r->cell_count * n;
+    return 1;
+}
+
+static int finish_mesh(vtk_reader *r, tpk_mesh *out)
+{
+    if (r->point_count < 0)
+        return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a POINTS section, found end of file");
+    if (r->cell_count < 0)
+        return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a CELLS section, found end of file");
+    if (r->type_count < 0)
+        return tpk_scan_fail_at(&r->s, r->s.size, r->s.line, "expected a CELL_TYPES section, found end of file");
+    int64_t dropped[256] = {0};
+    int64_t drop_total = 0, kept = 0, conn_size = 0;
+    if (cells_proved(r, dropped, &kept, &conn_size)) {
+        drop_total = dropped[r->type_lo];
+        return take_cells(r, out, dropped, drop_total, kept, conn_size);
+    }
+    int threads = vtk_threads_for((uint64_t)r->cell_count);
+    check_job *job = malloc(sizeof *job);
+    cell_tally *tally = calloc((size_t)threads, sizeof *tally);
+    if (!job || !tally) {
+        free(job), free(tally);
+        return tpk_diag_fail(r->s.diag, "%s: out of memory", r->s.name);
+    }
+    job->r = r;
+    job->tally = tally;
+    for (int t = 0; t < 256; t++)
+        job->rule[t] = tpk_cell_rule_for(t);
+    for (int w = 0; w < threads; w++)
+        tally[w].first_bad = INT64_MAX;
+    tpk_parallel_for(r->cell_count, threads, check_range, job);
+    int64_t bad = INT64_MAX;
+    for (int w = 0; w < threads; w++) {
+        bad = tally[w].first_bad < bad ? tally[w].first_bad : bad;
+        kept += tally[w].kept;
+        conn_size += tally[w].conn_size;
+        for (int t = 0; t < 256; t++) {
+            dropped[t] += tally[w].dropped[t];
+            drop_total += tally[w].dropped[t];
+        }
+    }
+    free(tally);
+    int rc = bad != INT64_MAX ? check_cell(r, bad, &job->rule[r->types[bad]]) : 0;
+    free(job);
+    if (rc)
+        return -1;
+    return take_cells(r, out, dropped, drop_total, kept, conn_size);
 }
 
 /* ---- Header and section loop -------------------------------------------------------------------- */
@@ -315,6 +351,8 @@ static int import_buffer(const char *name, const char *data, size_t size, int ma
     tpk_scan_init(&r.s, name, data, size, diag);
     r.s.mapped = mapped;
     r.point_count = r.cell_count = r.type_count = -1;
+    r.each_size = r.max_id = -1;
+    r.type_lo = r.type_hi = -1;
     r.assoc = -1;
     int rc = read_header(&r);
     while (rc == 0) {

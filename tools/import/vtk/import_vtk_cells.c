@@ -25,9 +25,10 @@ static int64_t cell_of_entry(const int64_t *offsets, int64_t cells, int64_t k)
 
 /* ---- Passes over binary blocks on all threads ---------------------------------------------------- */
 
-/* What the parallel passes below share: each worker scans its contiguous range in order and stops at its
- * first bad item, so the smallest of the workers' firsts is the item the serial loop stopped at, and the
- * message stays the same for any thread count. */
+/* What the parallel passes below share: the workers take the block in chunks (tpk_parallel_chunks), each
+ * scanned in order up to its first bad item; a worker keeps the smallest it found, so the smallest of the
+ * workers' firsts is the item the serial loop stopped at (every chunk before it was scanned whole), and
+ * the message stays the same for any thread count. */
 typedef struct block_job {
     const unsigned char *p; /* the block's first byte */
     vtk_type type;
@@ -38,17 +39,40 @@ typedef struct block_job {
     int64_t each, limit;
     int64_t base;           /* uniform lists: the conn index of the block's first cell */
     int64_t first_bad[TPK_MAX_THREADS]; /* per worker; INT64_MAX when none */
+    /* Per worker, what finish_mesh may take as proved (import_vtk_internal.h, each_size): the largest id
+     * or cell type read, the smallest cell type; the OFFSETS pass: most 1 where a cell's size is not
+     * `each`. run_block_job merges them into most_all (-1 when nothing was read) and least_all. */
+    int64_t most[TPK_MAX_THREADS], least[TPK_MAX_THREADS];
+    int64_t most_all, least_all;
 } block_job;
+
+/* Items a chunk: a few hundred KiB of the file. */
+#define BLOCK_CHUNK ((int64_t)1 << 15)
+
+/* A worker's first bad item, the smallest over its chunks. */
+static void found_bad(block_job *job, int worker, int64_t item)
+{
+    if (item < job->first_bad[worker])
+        job->first_bad[worker] = item;
+}
 
 static int64_t run_block_job(block_job *job, int64_t count, tpk_range_fn fn)
 {
     int threads = vtk_threads_for((uint64_t)count);
-    for (int w = 0; w < threads; w++)
+    for (int w = 0; w < threads; w++) {
         job->first_bad[w] = INT64_MAX;
-    tpk_parallel_for(count, threads, fn, job);
+        job->most[w] = -1;
+        job->least[w] = INT64_MAX;
+    }
+    tpk_parallel_chunks(count, threads, BLOCK_CHUNK, fn, job);
     int64_t first = INT64_MAX;
-    for (int w = 0; w < threads; w++)
+    job->most_all = -1;
+    job->least_all = INT64_MAX;
+    for (int w = 0; w < threads; w++) {
         first = job->first_bad[w] < first ? job->first_bad[w] : first;
+        job->most_all = job->most[w] > job->most_all ? job->most[w] : job->most_all;
+        job->least_all = job->least[w] < job->least_all ? job->least[w] : job->least_all;
+    }
     return first;
 }
 
@@ -59,23 +83,26 @@ static void uniform_lists_range(void *ctx, int64_t begin, int64_t end, int worke
 {
     block_job *job = ctx;
     int64_t each = job->each;
+    int32_t most = -1;
     for (int64_t c = begin; c < end; c++) {
         const unsigned char *cell = job->p + 4 * (size_t)(c * (each + 1));
         if ((int32_t)be32(cell) != each) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
         int32_t *dst = job->conn + c * each;
         for (int64_t j = 0; j < each; j++) {
             int32_t id = (int32_t)be32(cell + 4 + 4 * j);
             if (id < 0) {
-                job->first_bad[worker] = c;
+                found_bad(job, worker, c);
                 return;
             }
+            most = id > most ? id : most;
             dst[j] = id;
         }
         job->offsets[c + 1] = job->base + (c + 1) * each;
     }
+    job->most[worker] = most > job->most[worker] ? most : job->most[worker];
 }
 
 /* Old CELLS form, offsets known: each cell's ids (after its count) copied and checked to be >= 0. */
@@ -89,7 +116,7 @@ static void list_ids_range(void *ctx, int64_t begin, int64_t end, int worker)
         for (int64_t j = 0; j < count; j++) {
             int32_t id = (int32_t)be32(ids + 4 * j);
             if (id < 0) {
-                job->first_bad[worker] = c;
+                found_bad(job, worker, c);
                 return;
             }
             dst[j] = id;
@@ -102,54 +129,72 @@ static void connectivity_range(void *ctx, int64_t begin, int64_t end, int worker
 {
     block_job *job = ctx;
     const unsigned char *p = job->p;
+    int64_t most = -1;
     for (int64_t k = begin; k < end; k++) {
         int64_t id = job->type == VT_I64 ? (int64_t)be64(p + 8 * k)
                      : job->type == VT_I32 ? (int32_t)be32(p + 4 * k)
                                            : (int64_t)be_real(p, job->type, (uint64_t)k);
         if (id < 0 || id > INT32_MAX) {
-            job->first_bad[worker] = k;
+            found_bad(job, worker, k);
             return;
         }
+        most = id > most ? id : most;
         job->conn[k] = (int32_t)id;
     }
+    job->most[worker] = most > job->most[worker] ? most : job->most[worker];
 }
 
-/* OFFSETS: nondecreasing and at most the CELLS size (job->limit). */
+/* OFFSETS: nondecreasing and at most the CELLS size (job->limit); most 1 where a cell has other than
+ * job->each ids. */
 static void offsets_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     block_job *job = ctx;
-    for (int64_t c = begin; c < end; c++)
+    int64_t uneven = 0;
+    for (int64_t c = begin; c < end; c++) {
         if (job->offsets[c + 1] < job->offsets[c] || job->offsets[c + 1] > job->limit) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
+        uneven |= job->offsets[c + 1] - job->offsets[c] != job->each;
+    }
+    job->most[worker] = uneven > job->most[worker] ? uneven : job->most[worker];
 }
 
 /* CELL_TYPES: each in [0, 255], kept as a byte. */
 static void types_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     block_job *job = ctx;
+    int64_t lo = 255, hi = 0;
     for (int64_t c = begin; c < end; c++) {
         if (job->values[c] < 0 || job->values[c] > 255) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
         job->types[c] = (uint8_t)job->values[c];
+        lo = job->values[c] < lo ? job->values[c] : lo;
+        hi = job->values[c] > hi ? job->values[c] : hi;
     }
+    job->least[worker] = lo < job->least[worker] ? lo : job->least[worker];
+    job->most[worker] = hi > job->most[worker] ? hi : job->most[worker];
 }
 
 /* CELL_TYPES in a BINARY file: big-endian int32, each in [0, 255]. */
 static void binary_types_range(void *ctx, int64_t begin, int64_t end, int worker)
 {
     block_job *job = ctx;
+    int32_t lo = 255, hi = 0;
     for (int64_t c = begin; c < end; c++) {
         int32_t type = (int32_t)be32(job->p + 4 * c);
         if (type < 0 || type > 255) {
-            job->first_bad[worker] = c;
+            found_bad(job, worker, c);
             return;
         }
         job->types[c] = (uint8_t)type;
+        lo = type < lo ? type : lo;
+        hi = type > hi ? type : hi;
     }
+    job->least[worker] = lo < job->least[worker] ? lo : job->least[worker];
+    job->most[worker] = hi > job->most[worker] ? hi : job->most[worker];
 }
 
 /* ---- POINTS, CELLS, CELL_TYPES ------------------------------------------------------------------ */
@@ -195,6 +240,7 @@ static int uniform_lists(vtk_reader *r, block_job *job, int64_t n)
     /* 1/16 of the block, at least 2 MiB (tests/cli/deterministic.sh's grid 30 in 2): few starts of the
      * threads, and pages let go early enough (the most is kept at the start, where the arrays are empty) */
     int64_t slab = n / 16 > (int64_t)((2u << 20) / cell_bytes) ? n / 16 + 1 : (int64_t)((2u << 20) / cell_bytes) + 1;
+    int64_t most = -1;
     for (int64_t c = 0; c < n; c += slab) {
         int64_t count = n - c < slab ? n - c : slab;
         block_job part = *job;
@@ -206,9 +252,12 @@ static int uniform_lists(vtk_reader *r, block_job *job, int64_t n)
             r->s.pos = start;
             return 0;
         }
+        most = part.most_all > most ? part.most_all : most;
         r->s.pos = start + cell_bytes * (size_t)(c + count);
         tpk_scan_release_consumed(&r->s);
     }
+    r->each_size = job->each;
+    r->max_id = most;
     return 1;
 }
 
@@ -361,8 +410,9 @@ static int read_offsets_connectivity(vtk_reader *r, int64_t n_offsets, int64_t m
     if (r->offsets[0] != 0)
         return tpk_scan_fail_at(&r->s, offsets_pos, offsets_line, "OFFSETS: expected the first offset 0, found %lld",
                                 (long long)r->offsets[0]);
-    block_job job = {.offsets = r->offsets, .limit = m};
+    block_job job = {.offsets = r->offsets, .limit = m, .each = n > 0 ? r->offsets[1] - r->offsets[0] : 0};
     int64_t bad = run_block_job(&job, n, offsets_range);
+    int even = n > 0 && job.most_all <= 0; /* every cell has job.each ids */
     for (int64_t c = bad; c < n; c++)
         if (r->offsets[c + 1] < r->offsets[c] || r->offsets[c + 1] > m)
             return tpk_scan_fail_at(&r->s, offsets_pos, offsets_line,
@@ -399,6 +449,10 @@ static int read_offsets_connectivity(vtk_reader *r, int64_t n_offsets, int64_t m
                                   type == VT_I64 ? (int64_t)be64(p + 8 * k)
                                   : type == VT_I32 ? (int32_t)be32(p + 4 * k)
                                                    : (int64_t)be_real(p, type, (uint64_t)k));
+        if (even) {
+            r->each_size = job.each;
+            r->max_id = cj.most_all;
+        }
         r->s.pos += vtk_bytes_for(type, (uint64_t)m);
         return 0;
     }
@@ -470,6 +524,10 @@ int vtk_read_cell_types(vtk_reader *r)
         if (bad != INT64_MAX)
             return vtk_fail_kw(r, "CELL_TYPES: cell %lld has unsupported cell type %lld", (long long)bad,
                                (long long)(int32_t)be32(job.p + 4 * bad));
+        if (n > 0) {
+            r->type_lo = (int)job.least_all;
+            r->type_hi = (int)job.most_all;
+        }
         r->s.pos += 4 * (size_t)n;
         return 0;
     }
@@ -479,6 +537,10 @@ int vtk_read_cell_types(vtk_reader *r)
     int rc = vtk_read_ints(r, VT_I32, (uint64_t)n, values, "CELL_TYPES");
     block_job job = {.types = r->types, .values = values};
     int64_t bad = rc == 0 ? run_block_job(&job, n, types_range) : n;
+    if (rc == 0 && bad == INT64_MAX && n > 0) {
+        r->type_lo = (int)job.least_all;
+        r->type_hi = (int)job.most_all;
+    }
     for (int64_t c = bad; rc == 0 && c < n; c++) {
         if (values[c] < 0 || values[c] > 255)
             rc = vtk_fail_kw(r, "CELL_TYPES: cell %lld has unsupported cell type %lld", (long long)c,

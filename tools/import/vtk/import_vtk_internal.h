@@ -30,8 +30,12 @@ typedef struct vtk_reader {
     size_t cells_pos;
     int64_t cells_line;
     int offsets_form;       /* CELLS came as OFFSETS/CONNECTIVITY (VTK 5.1) */
+    int64_t each_size;      /* >= 0: the binary passes found every cell with this many ids, none above
+                               max_id; -1: not known (finish_mesh then checks cell by cell) */
+    int64_t max_id;
     int64_t type_count;     /* -1 until CELL_TYPES */
     uint8_t *types;
+    int type_lo, type_hi;   /* the smallest and largest cell type (-1: not known) */
     size_t types_pos;
     int64_t types_line;
     int assoc;              /* -1 before POINT_DATA/CELL_DATA */

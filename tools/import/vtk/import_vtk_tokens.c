@@ -178,7 +178,8 @@ int vtk_ascii_value_error(vtk_reader *r, const char *tok, size_t len, const char
 }
 
 /* Binary blocks are byte-swapped and converted on all threads (tpk_thread_count(0): convert's --threads),
- * in contiguous ranges: every value lands where the serial loop put it, whatever the thread count. */
+ * in chunks (tpk_parallel_chunks): every value lands where the serial loop put it, whatever the thread
+ * count. */
 typedef struct binary_job {
     const unsigned char *p;
     vtk_type type;
@@ -219,7 +220,7 @@ int vtk_read_reals(vtk_reader *r, vtk_type type, uint64_t count, double *d64, fl
 {
     if (r->binary) {
         binary_job job = {r->s.data + r->s.pos, type, d64, f32, NULL};
-        tpk_parallel_for((int64_t)count, vtk_threads_for(count), reals_range, &job);
+        tpk_parallel_chunks((int64_t)count, vtk_threads_for(count), (int64_t)1 << 16, reals_range, &job);
         r->s.pos += vtk_bytes_for(type, count);
         return 0;
     }
@@ -272,7 +273,7 @@ int vtk_read_ints(vtk_reader *r, vtk_type type, uint64_t count, int64_t *dst, co
         return tpk_scan_fail(&r->s, "%s: expected an integer data type, found a floating-point one", block);
     if (r->binary) {
         binary_job job = {r->s.data + r->s.pos, type, NULL, NULL, dst};
-        tpk_parallel_for((int64_t)count, vtk_threads_for(count), ints_range, &job);
+        tpk_parallel_chunks((int64_t)count, vtk_threads_for(count), (int64_t)1 << 16, ints_range, &job);
         r->s.pos += vtk_bytes_for(type, count);
         return 0;
     }
