@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "check_tpk_internal.h"
+#include "base/grow.h"
 #include "base/parallel.h"
 #include "mesh/face_buckets.h"
 #include "mesh/face_match.h"
@@ -75,14 +76,12 @@ typedef struct cut_list {
 static void add_cut(cut_list *cuts, const int32_t ids[3])
 {
     if (cuts->count == cuts->cap) {
-        int64_t cap = cuts->cap ? 2 * cuts->cap : 16;
-        cut_face *grown = realloc(cuts->faces, sizeof *grown * (size_t)cap);
+        cut_face *grown = tpk_grow(cuts->faces, &cuts->cap, cuts->count + 1, sizeof *grown, 16);
         if (!grown) {
             cuts->failed = 1;
             return;
         }
         cuts->faces = grown;
-        cuts->cap = cap;
     }
     cut_face *f = &cuts->faces[cuts->count++];
     memset(f, 0, sizeof *f);

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/grow.h"
 #include "base/parallel.h"
 #include "mesh/face_match.h"
 #include "pipeline.h"
@@ -34,14 +35,12 @@ static void keep_agreeing(void *user, int worker, int64_t a, int64_t b)
 {
     agree_list *s = &((connect_job *)user)->agree[worker];
     if (s->count + 2 > s->cap) {
-        int64_t cap = s->cap ? 2 * s->cap : 64;
-        int64_t *grown = realloc(s->slots, sizeof *grown * (size_t)cap);
+        int64_t *grown = tpk_grow(s->slots, &s->cap, s->count + 2, sizeof *grown, 64);
         if (!grown) {
             s->failed = 1;
             return;
         }
         s->slots = grown;
-        s->cap = cap;
     }
     s->slots[s->count++] = a;
     s->slots[s->count++] = b;

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/grow.h"
 #include "base/parallel.h"
 
 int64_t tpk_count_shell_faces(const int32_t *neighbors, int64_t tet_count)
@@ -101,14 +102,12 @@ void tpk_shell_gather_range(tpk_shell_gather *g, const int32_t *tets, const int3
         if ((n[0] | n[1] | n[2] | n[3]) >= 0)
             continue;
         if (me->count + 4 > me->capacity) {
-            int64_t capacity = me->capacity ? 2 * me->capacity : 4096;
-            tpk_shell_face *grown = realloc(me->faces, sizeof *grown * (size_t)capacity);
+            tpk_shell_face *grown = tpk_grow(me->faces, &me->capacity, me->count + 4, sizeof *grown, 4096);
             if (!grown) {
                 me->failed = 1;
                 return;
             }
             me->faces = grown;
-            me->capacity = capacity;
         }
         me->count += tet_shell_faces(tets + 4 * t, n, (int32_t)t, me->faces + me->count);
     }
@@ -122,15 +121,11 @@ void tpk_shell_gather_block(tpk_shell_gather *g)
         g->failed |= g->worker[w].failed;
     }
     if (!g->failed && g->count + found > g->capacity) {
-        int64_t capacity = g->capacity ? 2 * g->capacity : 4096;
-        capacity = capacity < g->count + found ? g->count + found : capacity;
-        tpk_shell_face *grown = realloc(g->faces, sizeof *grown * (size_t)capacity);
-        if (grown) {
+        tpk_shell_face *grown = tpk_grow(g->faces, &g->capacity, g->count + found, sizeof *grown, 4096);
+        if (grown)
             g->faces = grown;
-            g->capacity = capacity;
-        } else {
+        else
             g->failed = 1;
-        }
     }
     for (int w = 0; w < TPK_MAX_THREADS; w++) {
         if (!g->failed && g->worker[w].count > 0) {
