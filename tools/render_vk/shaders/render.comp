@@ -95,8 +95,8 @@ uint work = 0u; // this dispatch's iterations of the loops that can run long (sl
 
 // Split texel arrays: TPK_VK_MAX_PARTS bindings each; with one part the switch folds away. The module
 // built with TPK_VK_ONE_PART 1 (every array in one part) has no switch at all: specialization folds it
-// only after a driver has inlined each fetch's eight cases at every call site, which on lavapipe was
-// more than a quarter of the pipeline's compile time.
+// only after a driver has inlined each fetch's eight cases at every call site, a large share of the
+// compile on lavapipe (bench/README, figures behind code comments).
 #define DECLARE_ARRAY(SAMPLER, NAME, ARRAY)                                                   \
     layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 0) uniform SAMPLER NAME##0;         \
     layout(set = 0, binding = TPK_VK_BIND_ARRAY(ARRAY) + 1) uniform SAMPLER NAME##1;         \
