@@ -144,9 +144,25 @@ static void edge_clear(edge_table *e)
 typedef struct vertex_tets {
     int64_t vertices;              /* the vertices with a list (head); 0: to be made again */
     int64_t vertex_cap, corner_cap;
-    int32_t *head;                 /* per vertex: a tet at it, -1: none */
-    int32_t *next;                 /* per tet corner (4 t + k): another tet at that corner's vertex, -1: none */
+    int32_t *head;                 /* per vertex: an entry of a tet at it, -1: none */
+    int32_t *next;                 /* per tet corner (4 t + k): the entry of another tet at that corner's vertex, -1: none */
+    /* an entry names a tet's corner, 4 t + k, so a walk goes from entry to next entry without reading the
+     * tet for the corner that is the vertex (one load a step, not two that wait on each other: the
+     * closure's walks took half its time); lists made while 4 t + 3 might not fit an int32 (over 2^29
+     * tets) name the tet alone, t, and a walk finds the corner in the tet (shift 0) */
+    int shift;                     /* entries 4 t + k (2) or t (0) */
 } vertex_tets;
+
+/* The place in `next` of entry e, a tet at vertex v. */
+static int64_t link_at(const vertex_tets *vt, const int32_t *tets, int32_t e, int32_t v)
+{
+    if (vt->shift)
+        return e;
+    int k = 0;
+    while (tets[4 * (int64_t)e + k] != v)
+        k++;
+    return 4 * (int64_t)e + k;
+}
 
 /* ---- the state --------------------------------------------------------------------------------- */
 
@@ -1593,11 +1609,12 @@ static int vertex_tets_room(refine *r)
 static void vertex_tets_link(refine *r, const int64_t *tets, int64_t count)
 {
     int32_t *head = r->by_vertex.head, *next = r->by_vertex.next;
+    int shift = r->by_vertex.shift;
     for (int64_t i = 0; i < count; i++)
         for (int64_t t = tets ? tets[i] : i, k = 0; k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
             next[4 * t + k] = head[v];
-            head[v] = (int32_t)t;
+            head[v] = (int32_t)(t << shift | (shift ? k : 0));
         }
 }
 
@@ -1615,12 +1632,8 @@ static int vertex_tets_unlink(refine *r, const int64_t *active, int64_t count, c
                 continue;
             done[v] = 1;
             for (int32_t *slot = &head[v]; *slot >= 0;) {
-                const int32_t *c = r->tets + 4 * (int64_t)*slot;
-                int kv = 0;
-                while (c[kv] != v)
-                    kv++;
-                int32_t *after = &next[4 * (int64_t)*slot + kv];
-                if (in_active[*slot])
+                int32_t *after = &next[link_at(&r->by_vertex, r->tets, *slot, v)];
+                if (in_active[*slot >> r->by_vertex.shift])
                     *slot = *after;
                 else
                     slot = after;
@@ -1680,11 +1693,10 @@ static int visit_edge(refine *r, closure *cl, int32_t a, int32_t b)
 {
     const vertex_tets *vt = &r->by_vertex;
     int rc = 0;
-    for (int32_t u = vt->head[a]; rc == 0 && u >= 0;) {
-        const int32_t *v = r->tets + 4 * (int64_t)u;
-        int ia = 0, ib = 0;
-        while (v[ia] != a)
-            ia++;
+    for (int32_t e = vt->head[a]; rc == 0 && e >= 0;) {
+        int64_t at = link_at(vt, r->tets, e, a), u = at >> 2;
+        const int32_t *v = r->tets + 4 * u;
+        int ia = (int)(at & 3), ib = 0;
         while (ib < 4 && v[ib] != b)
             ib++;
         if (ib < 4) {
@@ -1692,7 +1704,7 @@ static int visit_edge(refine *r, closure *cl, int32_t a, int32_t b)
             if (!cl->in_active[u]) /* once is enough: its longest is marked for good */
                 cl->in_active[u] = 1, cl->active_count++, rc = mark_longest(r, &cl->queue, u);
         }
-        u = vt->next[4 * (int64_t)u + ia];
+        e = vt->next[at];
     }
     return rc;
 }
@@ -1704,8 +1716,10 @@ static int refine_pass(refine *r)
     closure cl = {{NULL, 0, 0}, calloc((size_t)(r->count ? r->count : 1), 1), 0};
     int64_t *active = NULL;
     int made = r->by_vertex.vertices > 0, rc = cl.in_active ? vertex_tets_room(r) : -1;
-    if (rc == 0 && !made) /* every vertex's list made (vertex_tets_room emptied them) */
+    if (rc == 0 && !made) { /* every vertex's list made (vertex_tets_room emptied them) */
+        r->by_vertex.shift = 4 * r->count + 3 <= INT32_MAX ? 2 : 0;
         vertex_tets_link(r, NULL, r->count);
+    }
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
         if (r->bound_flags[r->todo[i]] & BOUND_OVER)
             rc = mark_longest(r, &cl.queue, r->todo[i]);
@@ -1729,7 +1743,7 @@ static int refine_pass(refine *r)
     }
     if ((rc = cut_marked(r, active, cl.active_count)) != 0)
         return rc;
-    if (!keep) {
+    if (!keep || (r->by_vertex.shift && 4 * r->count + 3 > INT32_MAX)) { /* made again, by the tet if need be */
         r->by_vertex.vertices = 0;
         return 0;
     }
