@@ -503,6 +503,19 @@ static int ensure_xi_all(refine *r, const int64_t *tets, int64_t count)
     return 0;
 }
 
+/* A vertex added (by the refinement, or by the higher-order split: a 20-node hexahedron's face and body
+ * centres) whose float32 value is farther from the interpolant than the bound allows its slot: every tet
+ * that has it then misses the bound at that very point, however finely it is cut, so the refinement
+ * stops there (float_floor_fail). */
+typedef struct floor_hit {
+    int32_t vertex; /* -1: none */
+    int slot;
+    double exact;   /* the interpolant's value at the vertex */
+    float stored;
+} floor_hit;
+
+static int float_floor_fail(const refine *r, const floor_hit *h);
+
 static int place_corners(refine *r, int threads)
 {
     corner_job job = {r, calloc((size_t)(r->count ? r->count : 1), 1), 0};
@@ -528,6 +541,7 @@ static int place_corners(refine *r, int threads)
     int32_t verts[TPK_CELL_MAP_MAX_NODES];
     double w[TPK_CELL_MAP_MAX_NODES];
     int rc = 0;
+    floor_hit hit = {-1, 0, 0, 0}; /* the first point whose float32 value misses the bound, in tet order */
     for (int64_t t = 0; t < r->count && rc == 0; t++) {
         int64_t c = r->cell[t];
         if (job.failed[t] == 1) {
@@ -546,12 +560,17 @@ static int place_corners(refine *r, int threads)
             valued[v] = 1;
             int type = cell_nodes(r, c, verts), n = tpk_cell_map_nodes(type);
             tpk_cell_map_weights(type, xi_of(r, t) + 3 * k, w);
-            for (int s = 0; s < r->slots; s++)
-                r->slot_values[s][v] = (float)interpolate(r, n, verts, w, s);
+            for (int s = 0; s < r->slots; s++) {
+                double exact = interpolate(r, n, verts, w, s);
+                float stored = (float)exact;
+                r->slot_values[s][v] = stored;
+                if (hit.vertex < 0 && fabs((double)stored - exact) > r->slot_allowed[s])
+                    hit = (floor_hit){v, s, exact, stored};
+            }
         }
     }
     free(valued), free(job.failed);
-    return rc;
+    return rc == 0 && hit.vertex >= 0 ? float_floor_fail(r, &hit) : rc; /* as an added vertex's (place_vertex) */
 }
 
 /* ---- the bound --------------------------------------------------------------------------------- */
@@ -1259,16 +1278,6 @@ static int reserve_vertices(refine *r, int64_t more)
     }
     return 0;
 }
-
-/* An added vertex whose float32 value is farther from the interpolant than the bound allows its slot:
- * every tet that has it then misses the bound at that very point, however finely it is cut, so the
- * refinement stops there (float_floor_fail). */
-typedef struct floor_hit {
-    int32_t vertex; /* -1: none */
-    int slot;
-    double exact;   /* the interpolant's value at the vertex */
-    float stored;
-} floor_hit;
 
 /* Vertex v (room made) at parametric point xi of tet t's cell: placed by the map (on the file's grid),
  * valued by the interpolant, every point field and step; the first slot whose float32 value misses the
