@@ -189,11 +189,16 @@ typedef struct refine {
     int64_t count, cap;    /* tets */
     int64_t tets_given;
     int32_t *tets, *cell;
-    /* the tets' corners' parametric points in their cells, 12 numbers an entry (xi_of), entries given out
-     * in the order tets first need them: a tet whose corners are nodes needs none until it is cut
+    /* the tets' corners' parametric points in their cells, 12 numbers an entry (xi_read), entries given
+     * out in the order tets first need them: a tet whose corners are nodes needs none until it is cut
      * (ensure_xi_all), and the tets cut are scattered over the tets, so entries by tet number would touch
-     * most pages for a few tets each (bench/README) */
-    double *xi;
+     * most pages for a few tets each (bench/README). An entry holds float32 numbers where each is one
+     * exactly (the nodes' points of the linear and quadratic cells, 0, 1/2, 1 or -1, and their midpoints
+     * down to some 20 bisections): half the fresh memory of doubles, which the cut tets' pieces fault in
+     * (gmsh's t5 at order 2, 1%: 1,100 of the refinement's 3,000 pages). Otherwise its first number is a
+     * NaN and the doubles are in xi_wide, at the same entry (made when first needed, xi_widen). */
+    float *xi;
+    double *xi_wide;
     int64_t xi_count, xi_cap;
     int32_t *xi_at;        /* per tet: its entry; -1: its corners are nodes, their points not written yet */
     int64_t *root;         /* the given tet each comes from, for cell fields (NULL: the mesh has none) */
@@ -226,9 +231,51 @@ typedef struct refine {
 
 enum { BOUND_ROUGH = 1, BOUND_OVER = 2 };
 
-static double *xi_of(const refine *r, int64_t t)
+/* Tet t's entry of parametric points (xi_at[t] >= 0) as doubles: in buf, or where xi_wide holds them. */
+static const double *xi_read(const refine *r, int64_t t, double *buf)
 {
-    return r->xi + 12 * (int64_t)r->xi_at[t];
+    const float *f = r->xi + 12 * (int64_t)r->xi_at[t];
+    if (isnan(f[0]))
+        return r->xi_wide + 12 * (int64_t)r->xi_at[t];
+    for (int k = 0; k < 12; k++)
+        buf[k] = f[k];
+    return buf;
+}
+
+/* Whether n numbers are each a float32 exactly. */
+static int xi_fits(const double *x, int n)
+{
+    int fits = 1;
+    for (int k = 0; k < n; k++)
+        fits &= (double)(float)x[k] == x[k];
+    return fits;
+}
+
+/* Entry e set to the 12 numbers x: as float32 when they fit, else (xi_wide made) as doubles; -1 with
+ * nothing written when they do not fit and xi_wide is not made. */
+static int xi_write(refine *r, int64_t e, const double *x)
+{
+    float *f = r->xi + 12 * e;
+    if (xi_fits(x, 12)) {
+        for (int k = 0; k < 12; k++)
+            f[k] = (float)x[k];
+        return 0;
+    }
+    if (!r->xi_wide)
+        return -1;
+    f[0] = NAN;
+    memcpy(r->xi_wide + 12 * e, x, 12 * sizeof *x);
+    return 0;
+}
+
+/* realloc: a large block grows in place or is moved by its pages, neither copied nor touched afresh */
+static int grow(void **array, size_t item, int64_t cap)
+{
+    void *grown = realloc(*array, item * (size_t)cap);
+    if (!grown)
+        return -1;
+    *array = grown;
+    return 0;
 }
 
 /* Room for `more` entries of parametric points. */
@@ -237,10 +284,18 @@ static int reserve_xi(refine *r, int64_t more)
     if (r->xi_count + more <= r->xi_cap)
         return 0;
     int64_t cap = r->xi_count + more + (r->xi_count + more) / 2 + 1024;
-    double *grown = realloc(r->xi, sizeof *grown * 12 * (size_t)cap);
-    if (!grown)
+    if (grow((void **)&r->xi, 12 * sizeof *r->xi, cap) != 0 ||
+        (r->xi_wide && grow((void **)&r->xi_wide, 12 * sizeof *r->xi_wide, cap) != 0))
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
-    r->xi = grown, r->xi_cap = cap;
+    r->xi_cap = cap;
+    return 0;
+}
+
+/* xi_wide made, for entries whose numbers are not all float32 (its pages are touched by those alone). */
+static int xi_widen(refine *r)
+{
+    if (!r->xi_wide && !(r->xi_wide = malloc(12 * sizeof *r->xi_wide * (size_t)(r->xi_cap ? r->xi_cap : 1))))
+        return tpk_diag_fail(r->diag, "out of memory for --max-error");
     return 0;
 }
 
@@ -433,13 +488,14 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
             r->xi_at[t] = node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0 ? -1 : -2;
             continue;
         }
+        double xi[12] = {0};
         for (int k = 0; k < 4; k++) {
-            double *xi = xi_of(r, t) + 3 * k;
             if (node[k] >= 0)
-                memcpy(xi, nodes[node[k]], sizeof nodes[node[k]]);
-            else if (invert_map(r, type, verts, point_of(r, r->tets[4 * t + k]), xi) != 0)
+                memcpy(xi + 3 * k, nodes[node[k]], sizeof nodes[node[k]]);
+            else if (invert_map(r, type, verts, point_of(r, r->tets[4 * t + k]), xi + 3 * k) != 0)
                 job->failed[t] = 2;
         }
+        xi_write(r, r->xi_at[t], xi); /* xi_wide made (place_corners) */
     }
 }
 
@@ -473,7 +529,9 @@ static void ensure_xi_range(void *ctx, int64_t begin, int64_t end, int w)
         if (r->cell[t] != verts_of)
             type = cell_nodes(r, verts_of = r->cell[t], verts);
         hold_node_points(type, &nodes_of, nodes);
-        xi_of_nodes(r, t, type, verts, (const double (*)[3])nodes, xi_of(r, t));
+        double xi[12];
+        xi_of_nodes(r, t, type, verts, (const double (*)[3])nodes, xi);
+        xi_write(r, r->xi_at[t], xi); /* nodes' points that do not fit float32: xi_wide made (set_up) */
     }
 }
 
@@ -528,7 +586,8 @@ static int place_corners(refine *r, int threads)
     int64_t need = 0; /* the tets whose corners are not all nodes: entries in tet order, their points written */
     for (int64_t t = 0; t < r->count; t++)
         need += r->xi_at[t] == -2;
-    if (reserve_xi(r, need) != 0) {
+    /* the points found by inverting the map seldom fit float32: entries of doubles at hand */
+    if ((need > 0 && xi_widen(r) != 0) || reserve_xi(r, need) != 0) {
         free(valued), free(job.failed);
         return -1;
     }
@@ -559,7 +618,8 @@ static int place_corners(refine *r, int threads)
                 continue;
             valued[v] = 1;
             int type = cell_nodes(r, c, verts), n = tpk_cell_map_nodes(type);
-            tpk_cell_map_weights(type, xi_of(r, t) + 3 * k, w);
+            double buf[12];
+            tpk_cell_map_weights(type, xi_read(r, t, buf) + 3 * k, w);
             for (int s = 0; s < r->slots; s++) {
                 double exact = interpolate(r, n, verts, w, s);
                 float stored = (float)exact;
@@ -1109,8 +1169,8 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     if (degree <= 1)
         return; /* a tet of a tetra: exactly its own interpolant */
     const tpk_bernstein *b = &r->table[degree];
-    const double *xi = r->xi_at[t] >= 0 ? xi_of(r, t) : NULL;
     double xi_here[12]; /* a tet whose corners are nodes: their points read here, not written (ensure_xi_all) */
+    const double *xi = r->xi_at[t] >= 0 ? xi_read(r, t, xi_here) : NULL;
     const int32_t *tv = r->tets + 4 * t;
     int n = cache->cell_node_count, m = b->points, direct = degree > DIRECT_DEGREE;
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
@@ -1208,8 +1268,8 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
             __builtin_prefetch(r->xi_at + r->todo[i + 16]);
         }
         if (i + 8 < end && r->xi_at[r->todo[i + 8]] >= 0) {
-            __builtin_prefetch(xi_of(r, r->todo[i + 8]));
-            __builtin_prefetch(xi_of(r, r->todo[i + 8]) + 8);
+            __builtin_prefetch(r->xi + 12 * (int64_t)r->xi_at[r->todo[i + 8]]);
+            __builtin_prefetch(r->xi + 12 * (int64_t)r->xi_at[r->todo[i + 8]] + 11);
         }
         if (i + 8 < end)
             for (int k = 0; k < 4; k++) {
@@ -1224,16 +1284,6 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
 }
 
 /* ---- growth ------------------------------------------------------------------------------------ */
-
-/* realloc: a large block grows in place or is moved by its pages, neither copied nor touched afresh */
-static int grow(void **array, size_t item, int64_t cap)
-{
-    void *grown = realloc(*array, item * (size_t)cap);
-    if (!grown)
-        return -1;
-    *array = grown;
-    return 0;
-}
 
 static int reserve_tets(refine *r, int64_t need)
 {
@@ -1322,25 +1372,33 @@ static const int edge_of[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {
 
 /* Tet t bisected at its edge e through vertex mid: t keeps the half of corner i, tet u (new) the other;
  * each keeps the marks of the edges it still has (not those at the corner it gave up, now at mid, new).
- * 1 when a piece turns over (a sign other than the parent's), else 0. */
+ * 1 when a piece turns over (a sign other than the parent's), else 0; 2, with nothing changed, when the
+ * midpoint's parametric point does not fit float32 and xi_wide is not made (cut_marked makes it and
+ * bisects those tets again). */
 static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
 {
     int i = tet_edges[e][0], j = tet_edges[e][1];
     int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
-    double *xa = xi_of(r, t), *xb = xi_of(r, u), half[3]; /* t's written before the rounds, u's given (cut_marked) */
+    double xa[12], xb[12], half[3]; /* t's entry written before the rounds, u's given (cut_marked) */
+    const double *entry = xi_read(r, t, xa);
+    if (entry != xa)
+        memcpy(xa, entry, sizeof xa);
+    for (int k = 0; k < 3; k++)
+        half[k] = 0.5 * (xa[3 * i + k] + xa[3 * j + k]);
+    if (!r->xi_wide && !xi_fits(half, 3))
+        return 2;
     int parent = sign_of(r, a);
     memcpy(b, a, 4 * sizeof *a);
-    memcpy(xb, xa, 12 * sizeof *xa);
+    memcpy(xb, xa, sizeof xa);
     r->cell[u] = r->cell[t];
     if (r->root)
         r->root[u] = r->root[t];
     r->marked[u] = (uint8_t)(r->marked[t] & ~edges_at[i]);
     r->marked[t] = (uint8_t)(r->marked[t] & ~edges_at[j]);
-    for (int k = 0; k < 3; k++)
-        half[k] = 0.5 * (xa[3 * i + k] + xa[3 * j + k]);
     a[j] = mid, b[i] = mid;
     memcpy(xa + 3 * j, half, sizeof half);
     memcpy(xb + 3 * i, half, sizeof half);
+    xi_write(r, r->xi_at[t], xa), xi_write(r, r->xi_at[u], xb); /* each fits, or xi_wide is made */
     return parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent);
 }
 
@@ -1376,9 +1434,10 @@ static void place_range(void *ctx, int64_t begin, int64_t end, int w)
     for (int64_t n = begin; n < end; n++) {
         int64_t k = job->maker[n], t = job->active[k];
         int i = tet_edges[job->chosen[k]][0], j = tet_edges[job->chosen[k]][1];
-        double half[3];
+        double half[3], buf[12];
+        const double *xi = xi_read(r, t, buf);
         for (int c = 0; c < 3; c++)
-            half[c] = 0.5 * (xi_of(r, t)[3 * i + c] + xi_of(r, t)[3 * j + c]);
+            half[c] = 0.5 * (xi[3 * i + c] + xi[3 * j + c]);
         place_vertex(r, job->first_vertex + (int32_t)n, t, half, &job->hit[w]);
     }
 }
@@ -1506,7 +1565,10 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
         job.first_child = r->count, job.first_xi = r->xi_count;
         r->count += n, r->xi_count += n;
         tpk_parallel_for(n, tpk_threads_for(n, r->threads, 1024), bisect_range, &job);
-        for (int64_t k = 0; k < n; k++)
+        for (int64_t k = 0; k < n && rc == 0; k++)
+            if (job.folded[k] == 2 && (rc = xi_widen(r)) == 0) /* a midpoint not float32: again, in doubles */
+                job.folded[k] = (uint8_t)bisect(r, job.active[k], job.first_child + k, job.chosen[k], job.mid[k]);
+        for (int64_t k = 0; k < n && rc == 0; k++)
             if (job.folded[k]) {
                 int64_t c = r->cell[job.active[k]];
                 rc = tpk_diag_fail(r->diag, "--max-error: cell %lld (a %s) folds when refined: a tet bisected at its "
@@ -1544,8 +1606,10 @@ static int cut_all(refine *r)
     for (int64_t t = 0; t < n; t++) {
         int32_t v[10];
         double x[10][3];
+        double buf[12];
+        const double *xi = xi_read(r, t, buf);
         for (int k = 0; k < 4; k++)
-            v[k] = r->tets[4 * t + k], memcpy(x[k], xi_of(r, t) + 3 * k, sizeof x[k]);
+            v[k] = r->tets[4 * t + k], memcpy(x[k], xi + 3 * k, sizeof x[k]);
         for (int e = 0; e < 6; e++) {
             int i = tet_edges[e][0], j = tet_edges[e][1];
             for (int c = 0; c < 3; c++)
@@ -1580,7 +1644,9 @@ static int cut_all(refine *r)
             if (u != t)
                 r->xi_at[u] = (int32_t)r->xi_count++;
             for (int k = 0; k < 4; k++)
-                r->tets[4 * u + k] = v[l[k]], memcpy(xi_of(r, u) + 3 * k, x[l[k]], sizeof x[0]);
+                r->tets[4 * u + k] = v[l[k]], memcpy(buf + 3 * k, x[l[k]], sizeof x[0]);
+            if (xi_write(r, r->xi_at[u], buf) != 0 && (xi_widen(r) != 0 || xi_write(r, r->xi_at[u], buf) != 0))
+                return -1;
             r->cell[u] = (int32_t)cell, r->marked[u] = 0;
             if (r->root)
                 r->root[u] = root;
@@ -1853,7 +1919,7 @@ static void release(refine *r, int threads)
 {
     free(r->vertex_of), free(r->cell_type), free(r->slot_values), free(r->slot_field), free(r->added), free(r->bound_slot);
     free(r->slot_allowed);
-    free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->root), free(r->field_error);
+    free(r->bound_range), free(r->tets), free(r->cell), free(r->xi), free(r->xi_wide), free(r->root), free(r->field_error);
     free(r->geometry_error), free(r->worst_slot), free(r->todo), free(r->marked);
     free(r->bound_flags), free(r->xi_at), free(r->by_vertex.head), free(r->by_vertex.next);
     free(r->marks.keys), free(r->marks.values), free(r->mids.keys), free(r->mids.values);
@@ -1957,8 +2023,23 @@ static int set_up(refine *r, int threads)
         r->diag_length = 1;
     if (!(r->cell_type = malloc(sizeof *r->cell_type * (size_t)(r->cells->cell_count ? r->cells->cell_count : 1))))
         return tpk_diag_fail(r->diag, "out of memory for --max-error");
-    for (int64_t c = 0; c < r->cells->cell_count; c++)
-        r->cell_type[c] = mapped_type(r->cells, c);
+    int checked[16], types = 0; /* the types whose nodes' points were checked: 1/3 does not fit float32 */
+    for (int64_t c = 0; c < r->cells->cell_count; c++) {
+        int type = r->cell_type[c] = mapped_type(r->cells, c), k = 0;
+        while (k < types && checked[k] != type)
+            k++;
+        if (k < types || r->xi_wide)
+            continue;
+        if (types == 16 && xi_widen(r) != 0) /* more types than a mesh has: doubles at hand, to be safe */
+            return -1;
+        checked[types < 16 ? types++ : 0] = type;
+        for (int j = 0, n = tpk_cell_map_nodes(type); j < n && !r->xi_wide; j++) {
+            double p[3];
+            tpk_cell_map_node(type, j, p);
+            if (!xi_fits(p, 3) && xi_widen(r) != 0)
+                return -1;
+        }
+    }
     int used[TPK_BERNSTEIN_MAX_DEGREE + 1] = {0}; /* the degrees of the cells here (a table of 6 takes ms) */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
         int degree = tpk_cell_map_degree(r->cell_type[c]);
