@@ -211,6 +211,9 @@ typedef struct refine {
     struct coef_cache *cache; /* per worker */
     int report_fields;     /* fields bounded (not constant) */
     int64_t *todo, todo_count; /* tets whose bound is not known yet (new or cut since) */
+    /* 1: the tets to bound are every tet, 0 .. todo_count (todo_tet), and todo is not written: a list of
+     * every tet of the first pass would fault in 8 bytes a tet (a million hexahedra's tets: 2,000 pages) */
+    int todo_every;
     uint8_t *marked;       /* per tet: which of its 6 edges (tet_edges) are marked this pass */
     /* per tet: BOUND_ROUGH bounded by rough_bound, BOUND_OVER its criterion over the bound (the criterion
      * is only compared: a bit, not 8 bytes a tet to fault in) */
@@ -230,6 +233,12 @@ typedef struct refine {
 } refine;
 
 enum { BOUND_ROUGH = 1, BOUND_OVER = 2 };
+
+/* The i-th tet to bound. */
+static int64_t todo_tet(const refine *r, int64_t i)
+{
+    return r->todo_every ? i : r->todo[i];
+}
 
 /* Tet t's entry of parametric points (xi_at[t] >= 0) as doubles: in buf, or where xi_wide holds them. */
 static const double *xi_read(const refine *r, int64_t t, double *buf)
@@ -1264,21 +1273,21 @@ static void bound_range(void *ctx, int64_t begin, int64_t end, int w)
     refine *r = ctx;
     for (int64_t i = begin; i < end; i++) {
         if (i + 16 < end) { /* the tets and their corners are scattered: fetch them ahead */
-            __builtin_prefetch(r->tets + 4 * r->todo[i + 16]);
-            __builtin_prefetch(r->xi_at + r->todo[i + 16]);
+            __builtin_prefetch(r->tets + 4 * todo_tet(r, i + 16));
+            __builtin_prefetch(r->xi_at + todo_tet(r, i + 16));
         }
-        if (i + 8 < end && r->xi_at[r->todo[i + 8]] >= 0) {
-            __builtin_prefetch(r->xi + 12 * (int64_t)r->xi_at[r->todo[i + 8]]);
-            __builtin_prefetch(r->xi + 12 * (int64_t)r->xi_at[r->todo[i + 8]] + 11);
+        if (i + 8 < end && r->xi_at[todo_tet(r, i + 8)] >= 0) {
+            __builtin_prefetch(r->xi + 12 * (int64_t)r->xi_at[todo_tet(r, i + 8)]);
+            __builtin_prefetch(r->xi + 12 * (int64_t)r->xi_at[todo_tet(r, i + 8)] + 11);
         }
         if (i + 8 < end)
             for (int k = 0; k < 4; k++) {
-                int32_t v = r->tets[4 * r->todo[i + 8] + k];
+                int32_t v = r->tets[4 * todo_tet(r, i + 8) + k];
                 __builtin_prefetch(point_of(r, v));
                 if (v >= r->n0)
                     __builtin_prefetch(r->added + (int64_t)(v - r->n0) * r->slots);
             }
-        bound_tet(r, r->todo[i], &r->cache[w]);
+        bound_tet(r, todo_tet(r, i), &r->cache[w]);
     }
     fold_batch(r, &r->cache[w]); /* the quadratic tetra's tets left */
 }
@@ -1307,9 +1316,7 @@ static int reserve_tets(refine *r, int64_t need)
 /* Every tet to be bounded again (after --subdivide cut them all). */
 static void todo_all(refine *r)
 {
-    for (int64_t t = 0; t < r->count; t++)
-        r->todo[t] = t;
-    r->todo_count = r->count;
+    r->todo_every = 1, r->todo_count = r->count;
 }
 
 /* Room for `more` vertices. */
@@ -1509,7 +1516,7 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
     int rc = 0;
     round_job job = {.r = r, .active = active};
     memcpy(r->todo, active, sizeof *active * (size_t)active_count);
-    r->todo_count = active_count;
+    r->todo_every = 0, r->todo_count = active_count;
     int64_t first_new = r->count;
     rc = ensure_xi_all(r, active, active_count); /* the tets cut read their corners' points */
     if (rc == 0 && round_grow(&job, 2 * active_count + 1) != 0) /* the first round's tets and pieces */
@@ -1796,8 +1803,8 @@ static int refine_pass(refine *r)
         vertex_tets_link(r, NULL, r->count);
     }
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
-        if (r->bound_flags[r->todo[i]] & BOUND_OVER)
-            rc = mark_longest(r, &cl.queue, r->todo[i]);
+        if (r->bound_flags[todo_tet(r, i)] & BOUND_OVER)
+            rc = mark_longest(r, &cl.queue, todo_tet(r, i));
     while (rc == 0 && cl.queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
         uint64_t key = cl.queue.keys[--cl.queue.count];
         rc = visit_edge(r, &cl, (int32_t)(key >> 32), (int32_t)(key & 0xffffffffu));
@@ -2070,10 +2077,10 @@ static int set_up(refine *r, int threads)
         return -1;
     r->count = m->tet_count;
     for (int64_t t = 0; t < r->count; t++)
-        r->marked[t] = 0, r->todo[t] = t;
+        r->marked[t] = 0;
     for (int64_t t = 0; r->root && t < r->count; t++)
         r->root[t] = t;
-    r->todo_count = r->count;
+    todo_all(r);
     int size = 1; /* doubles per cached entry: the most any cell here needs */
     for (int64_t c = 0; c < r->cells->cell_count; c++) {
         int type = r->cell_type[c], degree = tpk_cell_map_degree(type);
@@ -2151,7 +2158,7 @@ static int exact_where_it_shows(refine *r)
             else
                 left[kept++] = t;
         }
-        r->todo_count = batch;
+        r->todo_every = 0, r->todo_count = batch;
         tpk_parallel_for(batch, tpk_threads_for(batch, r->threads, 1024), bound_range, r);
         for (int64_t i = 0; i < batch; i++) {
             int64_t t = r->todo[i];
@@ -2220,7 +2227,7 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
         tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
         int64_t over = 0;
         for (int64_t i = 0; i < r.todo_count; i++)
-            over += (r.bound_flags[r.todo[i]] & BOUND_OVER) != 0;
+            over += (r.bound_flags[todo_tet(&r, i)] & BOUND_OVER) != 0;
         report->rounds = pass;
         if (over == 0 || o.uniform_levels > 0)
             break;
