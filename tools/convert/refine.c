@@ -1770,25 +1770,46 @@ typedef struct closure {
     int64_t active_count;
 } closure;
 
-/* The tets at edge (a, b): each marks the edge, and its longest the first time. */
-static int visit_edge(refine *r, closure *cl, int32_t a, int32_t b)
+/* The closure: the tets at each queued edge (a, b), found by walking a's list, mark the edge, and their
+ * longest the first time (which may queue it). Eight walks go side by side, a step each in turn: a step
+ * waits on its load of the next entry, and the walks overlap those waits (gmsh's t5 at order 2, 1%: the
+ * closure 4.0 ms one walk at a time, 3.3 ms four, 3.2 ms eight). The closure is the same set in any
+ * order. */
+static int walk_closure(refine *r, closure *cl)
 {
+    enum { WALKS = 8 };
     const vertex_tets *vt = &r->by_vertex;
-    int rc = 0;
-    for (int32_t e = vt->head[a]; rc == 0 && e >= 0;) {
-        int64_t at = link_at(vt, r->tets, e, a), u = at >> 2;
-        const int32_t *v = r->tets + 4 * u;
-        int ia = (int)(at & 3), ib = 0;
-        while (ib < 4 && v[ib] != b)
-            ib++;
-        if (ib < 4) {
-            r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
-            if (!cl->in_active[u]) /* once is enough: its longest is marked for good */
-                cl->in_active[u] = 1, cl->active_count++, rc = mark_longest(r, &cl->queue, u);
+    int32_t from[WALKS], to[WALKS], at_entry[WALKS];
+    int walks = 0, rc = 0;
+    for (;;) {
+        while (walks < WALKS && cl->queue.count > 0) {
+            uint64_t key = cl->queue.keys[--cl->queue.count];
+            from[walks] = (int32_t)(key >> 32), to[walks] = (int32_t)(key & 0xffffffffu);
+            at_entry[walks] = vt->head[from[walks]];
+            walks++;
         }
-        e = vt->next[at];
+        if (walks == 0 || rc != 0)
+            return rc;
+        for (int w = 0; w < walks && rc == 0;) {
+            if (at_entry[w] < 0) { /* this walk is done: the last takes its place */
+                walks--;
+                from[w] = from[walks], to[w] = to[walks], at_entry[w] = at_entry[walks];
+                continue;
+            }
+            int64_t at = link_at(vt, r->tets, at_entry[w], from[w]), u = at >> 2;
+            const int32_t *v = r->tets + 4 * u;
+            int ia = (int)(at & 3), ib = 0;
+            while (ib < 4 && v[ib] != to[w])
+                ib++;
+            if (ib < 4) {
+                r->marked[u] |= (uint8_t)(1u << edge_of[ia][ib]);
+                if (!cl->in_active[u]) /* once is enough: its longest is marked for good */
+                    cl->in_active[u] = 1, cl->active_count++, rc = mark_longest(r, &cl->queue, u);
+            }
+            at_entry[w] = vt->next[at];
+            w++;
+        }
     }
-    return rc;
 }
 
 /* The closure, as a set, does not depend on the order the edges are visited in. */
@@ -1805,10 +1826,8 @@ static int refine_pass(refine *r)
     for (int64_t i = 0; rc == 0 && i < r->todo_count; i++)
         if (r->bound_flags[todo_tet(r, i)] & BOUND_OVER)
             rc = mark_longest(r, &cl.queue, todo_tet(r, i));
-    while (rc == 0 && cl.queue.count > 0) { /* the closure: every tet around a marked edge marks its longest */
-        uint64_t key = cl.queue.keys[--cl.queue.count];
-        rc = visit_edge(r, &cl, (int32_t)(key >> 32), (int32_t)(key & 0xffffffffu));
-    }
+    if (rc == 0) /* the closure: every tet around a marked edge marks its longest */
+        rc = walk_closure(r, &cl);
     free(cl.queue.keys);
     if (rc == 0 && !(active = malloc(sizeof *active * (size_t)(cl.active_count ? cl.active_count : 1))))
         rc = -1;
