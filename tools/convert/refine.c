@@ -324,8 +324,9 @@ static int cell_nodes(const refine *r, int64_t c, int32_t *verts)
     int type = r->cell_type[c];
     int n = type ? (int)(r->cells->offsets[c + 1] - r->cells->offsets[c]) : 0; /* mapped_type: nodes(type) */
     const int32_t *conn = r->cells->conn + r->cells->offsets[c];
+    int voxel = r->cells->types[c] == TPK_CELL_VOXEL; /* the one type whose nodes are in another order */
     for (int k = 0; k < n; k++) {
-        int32_t id = conn[tpk_cell_map_source_node(r->cells->types[c], k)];
+        int32_t id = conn[voxel ? tpk_cell_map_source_node(TPK_CELL_VOXEL, k) : k];
         if (id < 0 || id >= r->point_ids || r->vertex_of[id] < 0)
             return 0;
         verts[k] = r->vertex_of[id];
