@@ -900,6 +900,7 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
         quad d[4], x, y, coef[10];
         for (int k = 0; k < 4; k++) {
             quad acc = {0, 0, 0, 0};
+#pragma GCC unroll 10 /* at -O2 these fixed loops did not unroll: their counting was a third of the work */
             for (int j = 0; j < 10; j++) {
                 memcpy(&y, node + j * qc + c, sizeof y);
                 x = (quad){w[k][j], w[k][j], w[k][j], w[k][j]};
@@ -911,6 +912,7 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
         const quad half = {0.5, 0.5, 0.5, 0.5};
         for (int e = 0; e < 6; e++) {
             quad n = {0, 0, 0, 0};
+#pragma GCC unroll 6
             for (int q = 0; q < 6; q++) {
                 memcpy(&y, a + q * qc + c, sizeof y);
                 x = (quad){m[e][q], m[e][q], m[e][q], m[e][q]};
