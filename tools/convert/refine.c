@@ -950,6 +950,7 @@ quadratic_edges(const refine *r, int qc, const int *node, const double *a, doubl
         quad top = {0, 0, 0, 0}, at[6];
         for (int q = 0; q < 6; q++)
             memcpy(&at[q], a + q * qc + c, sizeof at[q]);
+#pragma GCC unroll 6 /* as quadratic_coefficients' loops */
         for (int e = 0; e < 6; e++) {
             int j = node[tet_edges[e][0]], l = node[tet_edges[e][1]];
             const double *m = r->node_pairs[j][l];
