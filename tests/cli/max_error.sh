@@ -13,7 +13,9 @@
 #   was changed), and --max-error-field limits the bound to the fields named;
 # - --subdivide L (uniform subdivision, for comparison) proves a bound and promises none;
 # - usage: bad bounds, pyramids, a tangled cell, and the options --max-error cannot go with exit 2
-#   naming why.
+#   naming why;
+# - a bound float32 cannot meet at a point the refinement or the higher-order split adds: refused at once,
+#   naming the field, the point and the offset to take out.
 source "$(dirname "$0")/common.sh" "$@"
 command -v gmsh > /dev/null || fail "gmsh not installed (./dev deps installs it)"
 
@@ -128,6 +130,20 @@ for threads in 1 2; do
 done
 cmp -s "$WORK/err_1" "$WORK/err_2" || fail "the float32 refusal differs for --threads 1 and 2"
 convert_checked "$WORK/p2_offset.msh" "$WORK/offset.tpk" --max-error 90% > /dev/null 2>&1
+# the same for a point the higher-order split places before any refinement: gmsh's 20-node hexahedra
+# (serendipity) have no node at their face and body centres, which the split places and values by the
+# cell's interpolant; the first cell's body centre is checked before the rounds, and named (not a
+# midpoint that a round adds next to it later)
+gmsh -3 -nt 1 -order 2 -string "Mesh.SecondOrderIncomplete=1;" -format msh22 "$SRC/tests/cli/box_hex.geo" \
+    -o "$WORK/hex20.msh" > "$WORK/gmsh.log" 2>&1 || { tail "$WORK/gmsh.log"; fail "gmsh failed"; }
+nodedata "$WORK/hex20.msh" "$WORK/hex20_offset.msh" "1e4+1e-2*((x-0.3)**2+3*y*z-(z-0.5)**2)"
+for threads in 1 2; do
+    expect_exit 2 timeout 60 "$TPK" convert "$WORK/hex20_offset.msh" "$WORK/bad.tpk" --max-error 1% --threads $threads
+    expect_stderr "field 'f' cannot be stored that close to its interpolant: the file holds values as float32, and at the point (0.0833333358, 0.0833333358, 0.0833333358) that"
+    cp "$WORK/err" "$WORK/err20_$threads"
+done
+cmp -s "$WORK/err20_1" "$WORK/err20_2" || fail "the float32 refusal at a split's point differs for --threads 1 and 2"
+convert_checked "$WORK/hex20_offset.msh" "$WORK/offset20.tpk" --max-error 5% > /dev/null 2>&1
 
 # usage: exit 2, naming why
 for bad in 0 1 100% -0.1 1e "" 2%%; do

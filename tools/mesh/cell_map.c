@@ -595,24 +595,25 @@ int tpk_cell_map_quadratic_tet(int type, const double *xi, double (*w)[10], doub
 {
     if (type != 24)
         return 0;
-    /* the quadratic tetra's edges (its node_table's), known here: the loops below unroll (refine's bound
-     * calls this once a tet) */
-    static const int e0[6] = {0, 1, 2, 0, 1, 2}, e1[6] = {1, 2, 0, 3, 3, 3};
-    double L[4][4];
+    /* the quadratic tetra's edges (its node_table's: 01, 12, 20, 03, 13, 23) written out, as
+     * tpk_cell_map_weights and tpk_cell_map_nonlinear compute them: refine's bound calls this once a tet,
+     * and at -O2 the loops over the edges' index tables did not unroll (callgrind: 840 instructions a
+     * call, about half of them those loops) */
     for (int k = 0; k < 4; k++) {
         const double *r = xi + 3 * k;
-        L[k][0] = 1 - r[0] - r[1] - r[2], L[k][1] = r[0], L[k][2] = r[1], L[k][3] = r[2];
-        for (int i = 0; i < 4; i++) /* tpk_cell_map_weights */
-            w[k][i] = L[k][i] * (2 * L[k][i] - 1);
-        for (int e = 0; e < 6; e++)
-            w[k][4 + e] = 4 * L[k][e0[e]] * L[k][e1[e]];
+        const double l0 = 1 - r[0] - r[1] - r[2], l1 = r[0], l2 = r[1], l3 = r[2];
+        w[k][0] = l0 * (2 * l0 - 1), w[k][1] = l1 * (2 * l1 - 1);
+        w[k][2] = l2 * (2 * l2 - 1), w[k][3] = l3 * (2 * l3 - 1);
+        w[k][4] = 4 * l0 * l1, w[k][5] = 4 * l1 * l2, w[k][6] = 4 * l2 * l0;
+        w[k][7] = 4 * l0 * l3, w[k][8] = 4 * l1 * l3, w[k][9] = 4 * l2 * l3;
     }
     static const int pair[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
     for (int p = 0; p < 6; p++) {
         const double *r = xi + 3 * pair[p][0], *s = xi + 3 * pair[p][1];
-        const double d[4] = {-(r[0] - s[0]) - (r[1] - s[1]) - (r[2] - s[2]), r[0] - s[0], r[1] - s[1], r[2] - s[2]};
-        for (int e = 0; e < 6; e++)
-            m[p][e] = d[e0[e]] * d[e1[e]];
+        const double d0 = -(r[0] - s[0]) - (r[1] - s[1]) - (r[2] - s[2]), d1 = r[0] - s[0], d2 = r[1] - s[1],
+                     d3 = r[2] - s[2];
+        m[p][0] = d0 * d1, m[p][1] = d1 * d2, m[p][2] = d2 * d0;
+        m[p][3] = d0 * d3, m[p][4] = d1 * d3, m[p][5] = d2 * d3;
     }
     return 10;
 }
