@@ -262,6 +262,12 @@ static void release_range(void *ctx, int64_t begin, int64_t end, int w)
         madvise(job->base + b, e - b, MADV_DONTNEED);
 }
 
+void tpk_drop_pages(void *first, size_t size, int threads)
+{
+    release_job job = {first, size, (size_t)sysconf(_SC_PAGESIZE)};
+    tpk_parallel_chunks((int64_t)size, threads, (int64_t)4 << 20, release_range, &job);
+}
+
 void tpk_release_pages(void *block, size_t size)
 {
     int threads = tpk_threads_for((int64_t)size, tpk_thread_count(0), RELEASE_PIECE);
@@ -269,10 +275,8 @@ void tpk_release_pages(void *block, size_t size)
         return;
     size_t page = (size_t)sysconf(_SC_PAGESIZE);
     uintptr_t first = ((uintptr_t)block + page - 1) / page * page, last = ((uintptr_t)block + size) / page * page;
-    if (last <= first)
-        return;
-    release_job job = {(char *)first, last - first, page};
-    tpk_parallel_chunks((int64_t)job.size, threads, (int64_t)4 << 20, release_range, &job);
+    if (last > first)
+        tpk_drop_pages((void *)first, last - first, threads);
 }
 
 void tpk_free_spread(void *block, size_t size)

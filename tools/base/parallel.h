@@ -68,6 +68,11 @@ void tpk_free_large(void *block, size_t size);
  * rather than pages never touched, whose first use costs more. */
 void tpk_release_kept(void);
 
+/* MADV_DONTNEED of the pages [first, first + size) (first page aligned) on `threads` threads, in chunks
+ * of 4 MiB (tpk_parallel_chunks: the zaps share the mapping's lock, and a worker held up leaves the rest
+ * to the others). The next touch of a page finds a zeroed one, or in a file mapping the file's. */
+void tpk_drop_pages(void *first, size_t size, int threads);
+
 /* The pages of [block, block + size) (those wholly inside it) given back to the kernel on all threads
  * (tpk_thread_count(0)) where it is large, the block staying the caller's: the next touch of a page finds
  * a zeroed one. For a block about to be freed (tpk_free_spread), so that the free's unmapping is not all

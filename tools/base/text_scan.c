@@ -425,22 +425,6 @@ void tpk_scan_watch(void (*fn)(void *user, double fraction), void *user)
     scan_watcher_user = user;
 }
 
-typedef struct release_job {
-    const unsigned char *from; /* page-aligned */
-    size_t size, page;
-} release_job;
-
-static void release_range(void *ctx, int64_t begin, int64_t end, int w)
-{
-    const release_job *job = ctx;
-    (void)w;
-    size_t b = (size_t)begin / job->page * job->page, e = (size_t)end;
-    if (e != job->size)
-        e = e / job->page * job->page;
-    if (e > b)
-        madvise((void *)(job->from + b), e - b, MADV_DONTNEED);
-}
-
 void tpk_scan_release_consumed(tpk_scan *s)
 {
     if (scan_watcher && s->size)
@@ -452,9 +436,8 @@ void tpk_scan_release_consumed(tpk_scan *s)
     if (upto > s->released) {
         /* in pieces on all threads when large (one core's zap of a block's pages was 11 of 140 serial
          * samples of a 2-thread grid 120 convert): the zaps share the mapping's lock */
-        release_job job = {s->data + s->released, upto - s->released, page};
-        int threads = tpk_threads_for((int64_t)job.size, tpk_thread_count(0), POPULATE_PIECE);
-        tpk_parallel_chunks((int64_t)job.size, threads, SCAN_CHUNK, release_range, &job);
+        int threads = tpk_threads_for((int64_t)(upto - s->released), tpk_thread_count(0), POPULATE_PIECE);
+        tpk_drop_pages((void *)(s->data + s->released), upto - s->released, threads);
         s->released = upto;
     }
 }
