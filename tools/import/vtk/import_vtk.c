@@ -32,6 +32,12 @@ static int check_face_stream(vtk_reader *r, int64_t cell, const int32_t *e, int6
                             why, (long long)bad_at, r->offsets_form ? "CONNECTIVITY" : "CELLS", (long long)at);
 }
 
+/* Whether a cell of n ids has a size its rule refuses (not the face stream of type 42, checked apart). */
+static int size_refused(const tpk_cell_rule *rule, int64_t n)
+{
+    return (rule->nodes > 0 && n != rule->nodes) || (rule->nodes < 0 && n < -rule->nodes);
+}
+
 static int check_cell(vtk_reader *r, int64_t c, const tpk_cell_rule *rule)
 {
     int64_t begin = r->offsets[c], n = r->offsets[c + 1] - begin;
@@ -41,7 +47,7 @@ static int check_cell(vtk_reader *r, int64_t c, const tpk_cell_rule *rule)
                                 (long long)c, r->types[c], rule->name);
     if (rule->kind != TPK_RULE_DROP && r->types[c] == 42)
         return check_face_stream(r, c, ids, n);
-    if ((rule->nodes > 0 && n != rule->nodes) || (rule->nodes < 0 && n < -rule->nodes))
+    if (size_refused(rule, n))
         return tpk_scan_fail_at(&r->s, r->cells_pos, r->cells_line,
                                 "CELLS: cell %lld (%s, type %d) has %lld points, expected %s%d", (long long)c,
                                 rule->name, r->types[c], (long long)n, rule->nodes < 0 ? "at least " : "",
@@ -189,8 +195,7 @@ static int cells_proved(const vtk_reader *r, int64_t dropped[256], int64_t *kept
     int type = r->type_lo;
     tpk_cell_rule rule = tpk_cell_rule_for(type);
     int64_t n = r->each_size;
-    if (rule.kind == TPK_RULE_UNKNOWN || type == 42 || (rule.nodes > 0 && n != rule.nodes) ||
-        (rule.nodes < 0 && n < -rule.nodes))
+    if (rule.kind == TPK_RULE_UNKNOWN || type == 42 || size_refused(&rule, n))
         return 0;
     if (rule.kind == TPK_RULE_DROP) {
         dropped[type] = r->cell_count;
