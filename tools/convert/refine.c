@@ -751,6 +751,10 @@ typedef struct coef_cache {
     int qc;
     int64_t quad_cell;
     double *quad_node, *quad_a, *quad_v, *quad_largest;
+    /* quadratic_edges: per ordered pair of nodes (10 j + l), its edge coefficients (qc numbers), made
+     * when the bit pair_made[p / 64] >> p % 64 is set */
+    uint64_t pair_made[2];
+    double *pair_coef;
     /* bound_quadratic's tets waiting for fold_batch (batched of 4): each one's number, corners' points
      * (batch_p[corner][axis][tet]), criterion so far and geometry's bound; per bounded slot s, its gap
      * (batch_gap[4 s + tet]), whether it is bounded there (batch_ok: all finite, -1, else 0) and its values
@@ -936,41 +940,26 @@ quadratic_coefficients(int qc, const double (*w)[10], const double (*m)[6], cons
     return sqrt(geometry);
 }
 
-/* quadratic_coefficients for a tet whose corners are nodes j_e, l_e on edge e (no weights: d_k is 0, and
- * so are the corners' coefficients), from the monomials at the nodes' differences that are not 0
- * (node_terms, node_term; a term left out is +-0 times a finite number: only a finite slot's numbers
- * are used, and the axes are finite), in the same operations and order otherwise: the same magnitudes
- * (a sum of zeros may differ in its sign alone). */
-__attribute__((target_clones("avx2", "default"))) static double
-quadratic_edges(const refine *r, int qc, const int *node, const double *a, double *largest)
+/* quadratic_coefficients' coefficient on an edge of a tet whose corners are nodes j and l (no weights:
+ * d_k is 0 at the corners, and so are the corners' coefficients), for the qc components into out, from
+ * the monomials at the nodes' difference that are not 0 (node_terms, node_term; a term left out is +-0
+ * times a finite number: only a finite slot's numbers are used, and the axes are finite), in the same
+ * operations and order otherwise: the same magnitudes (a sum of zeros may differ in its sign alone). */
+__attribute__((target_clones("avx2", "default"))) static void
+pair_coefficients(const refine *r, int qc, int j, int l, const double *a, double *out)
 {
-    double geometry = 0;
     const quad half = {0.5, 0.5, 0.5, 0.5}, zero = {0, 0, 0, 0};
+    const double *m = r->node_pairs[j][l];
+    const uint8_t *term = r->node_term[j][l];
     for (int c = 0; c < qc; c += 4) {
-        quad top = {0, 0, 0, 0}, at[6];
-        for (int q = 0; q < 6; q++)
-            memcpy(&at[q], a + q * qc + c, sizeof at[q]);
-#pragma GCC unroll 6 /* as quadratic_coefficients' loops */
-        for (int e = 0; e < 6; e++) {
-            int j = node[tet_edges[e][0]], l = node[tet_edges[e][1]];
-            const double *m = r->node_pairs[j][l];
-            const uint8_t *term = r->node_term[j][l];
-            quad n = {0, 0, 0, 0};
-            for (int i = 0, terms = r->node_terms[j][l]; i < terms; i++)
-                n += (quad){m[term[i]], m[term[i]], m[term[i]], m[term[i]]} * at[term[i]];
-            quad coef = half * (zero + zero) - half * n;
-            quad magnitude = (quad)((quad_bits)coef & ~(quad_bits)(quad){-0.0, -0.0, -0.0, -0.0});
-            quad_bits above = magnitude > top;
-            top = (quad)(((quad_bits)magnitude & above) | ((quad_bits)top & ~above));
-            if (c == 0) {
-                quad sq = coef * coef;
-                double norm = sq[0] + sq[1] + sq[2];
-                geometry = norm > geometry ? norm : geometry;
-            }
+        quad n = {0, 0, 0, 0}, y;
+        for (int i = 0, terms = r->node_terms[j][l]; i < terms; i++) {
+            memcpy(&y, a + term[i] * qc + c, sizeof y);
+            n += (quad){m[term[i]], m[term[i]], m[term[i]], m[term[i]]} * y;
         }
-        memcpy(largest + c, &top, sizeof top);
+        quad coef = half * (zero + zero) - half * n;
+        memcpy(out + c, &coef, sizeof coef);
     }
-    return sqrt(geometry);
 }
 
 /* The rounding of quadratic_coefficients' numbers, as a fraction of the largest value at a node: the
@@ -1110,6 +1099,44 @@ fold_batch(refine *r, coef_cache *cc)
     cc->batched = 0;
 }
 
+/* quadratic_coefficients for a tet whose corners are nodes (node[k]: corner k's): its edges'
+ * coefficients (pair_coefficients) are made once a cell for each ordered pair of nodes met
+ * (cache->pair_made, cleared with each cell's gathering): a split's 8 tets have 48 edges on 25 pairs,
+ * and the first bound of gmsh's t5 at order 2 made each of them for every tet. The largest magnitudes
+ * and the geometry's norm are taken over the tet's edges in edge order, as before. Built twice, as
+ * minus_linear: the default build of these four-lane numbers without AVX2 is slow. */
+__attribute__((target_clones("avx2", "default"))) static double
+quadratic_edges(const refine *r, coef_cache *cache, int qc, const int *node, double *largest)
+{
+    const double *coef[6];
+    for (int e = 0; e < 6; e++) {
+        int j = node[tet_edges[e][0]], l = node[tet_edges[e][1]], pair = 10 * j + l;
+        double *at = cache->pair_coef + pair * qc;
+        if (!(cache->pair_made[pair >> 6] >> (pair & 63) & 1)) {
+            pair_coefficients(r, qc, j, l, cache->quad_a, at);
+            cache->pair_made[pair >> 6] |= 1ull << (pair & 63);
+        }
+        coef[e] = at;
+    }
+    double geometry = 0;
+    for (int c = 0; c < qc; c += 4) {
+        quad top = {0, 0, 0, 0};
+        for (int e = 0; e < 6; e++) {
+            quad x;
+            memcpy(&x, coef[e] + c, sizeof x);
+            quad magnitude = (quad)((quad_bits)x & ~(quad_bits)(quad){-0.0, -0.0, -0.0, -0.0});
+            quad_bits above = magnitude > top;
+            top = (quad)(((quad_bits)magnitude & above) | ((quad_bits)top & ~above));
+            if (c == 0) {
+                double norm = coef[e][0] * coef[e][0] + coef[e][1] * coef[e][1] + coef[e][2] * coef[e][2];
+                geometry = norm > geometry ? norm : geometry;
+            }
+        }
+        memcpy(largest + c, &top, sizeof top);
+    }
+    return sqrt(geometry);
+}
+
 /* bound_tet for a tet of a quadratic tetra (xi: its corners' parametric points, p: their points), through
  * quadratic_coefficients: its cell's node values and nonlinear coefficients of every component are
  * gathered once a cell (cache->quad_cell). */
@@ -1134,11 +1161,12 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
                 cache->quad_a[q * qc + 3 + s] = cache->form[s * TPK_CELL_MAP_MAX_NONLINEAR + q];
         }
         cache->quad_cell = cache->cell;
+        cache->pair_made[0] = cache->pair_made[1] = 0;
     }
     double w[4][10], m[6][6], *v = cache->quad_v, *largest = cache->quad_largest;
     if (!node) /* corners at nodes: quadratic_edges, from the monomials at the nodes' differences */
         tpk_cell_map_quadratic_tet(24, xi, w, m);
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < 4 && !node; k++) { /* corners at nodes: their values are the cell's, at hand */
         for (int c = 0; c < 3; c++)
             v[k * qc + c] = p[k][c];
         for (int s = 0; s < r->bounded; s++)
@@ -1146,7 +1174,7 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         for (int c = 3 + r->bounded; c < qc; c++)
             v[k * qc + c] = 0;
     }
-    double geometry = node ? quadratic_edges(r, qc, node, cache->quad_a, largest)
+    double geometry = node ? quadratic_edges(r, cache, qc, node, largest)
                            : quadratic_coefficients(qc, (const double (*)[10])w, (const double (*)[6])m,
                                                     cache->quad_node, cache->quad_a, v, largest);
     geometry += 2 * FORM_MARGIN * cache->largest; /* 2 > sqrt 3: each axis's rounding */
@@ -1156,7 +1184,9 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         for (int i = 0; i < 3; i++)
             cache->batch_p[k][i][l] = p[k][i];
     for (int s = 0; s < r->bounded; s++) {
-        double vs[4] = {v[3 + s], v[qc + 3 + s], v[2 * qc + 3 + s], v[3 * qc + 3 + s]};
+        const double *at = cache->value + (int64_t)s * TPK_CELL_MAP_MAX_NODES;
+        double vs[4] = {node ? at[node[0]] : v[3 + s], node ? at[node[1]] : v[qc + 3 + s],
+                        node ? at[node[2]] : v[2 * qc + 3 + s], node ? at[node[3]] : v[3 * qc + 3 + s]};
         int ok = cache->finite[s] && isfinite(vs[0]) && isfinite(vs[1]) && isfinite(vs[2]) && isfinite(vs[3]);
         cache->batch_ok[4 * s + l] = ok ? -1 : 0;
         cache->batch_gap[4 * s + l] = ok ? (largest[3 + s] + FORM_MARGIN * cache->big[s]) / r->bound_range[s] : 0;
@@ -1200,17 +1230,19 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     const int32_t *tv = r->tets + 4 * t;
     int n = cache->cell_node_count, m = b->points, direct = degree > DIRECT_DEGREE;
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
+    if (!xi && type == 24) { /* corners at nodes: their points are the cell's, at hand */
+        int node[4];
+        for (int k = 0; k < 4; k++) {
+            node[k] = node_index(cache->verts, n, tv[k]); /* found: corner_range found every corner */
+            memcpy(p[k], cache->node[node[k]], sizeof p[k]);
+        }
+        bound_quadratic(r, t, cache, NULL, node, (const double (*)[3])p);
+        return;
+    }
     for (int k = 0; k < 4; k++)
         memcpy(p[k], point_of(r, tv[k]), sizeof p[k]);
     if (!r->exact && type == 12 && rough_bound(r, t, cache, (const double (*)[3])p))
         return;
-    if (!xi && type == 24) { /* corners at nodes */
-        int node[4];
-        for (int k = 0; k < 4; k++)
-            node[k] = node_index(cache->verts, n, tv[k]); /* found: corner_range found every corner */
-        bound_quadratic(r, t, cache, NULL, node, (const double (*)[3])p);
-        return;
-    }
     if (!xi) { /* the cell's nodes are at hand */
         hold_node_points(type, &cache->xi_type, cache->xi_node);
         xi_of_nodes(r, t, type, cache->verts, (const double (*)[3])cache->xi_node, xi_here);
@@ -1398,8 +1430,10 @@ static const int edge_of[4][4] = {{-1, 0, 1, 2}, {0, -1, 3, 4}, {1, 3, -1, 5}, {
  * each keeps the marks of the edges it still has (not those at the corner it gave up, now at mid, new).
  * 1 when a piece turns over (a sign other than the parent's), else 0; 2, with nothing changed, when the
  * midpoint's parametric point does not fit float32 and xi_wide is not made (cut_marked makes it and
- * bisects those tets again). */
-static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
+ * bisects those tets again). *sign: t's exact sign where known, else 2; then each piece's (the parent's
+ * when neither turned over, 2 when the parent is flat), so a piece cut in the next round is not
+ * measured again (a third of the round's orientation tests). */
+static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid, int8_t *sign)
 {
     int i = tet_edges[e][0], j = tet_edges[e][1];
     int32_t *a = r->tets + 4 * t, *b = r->tets + 4 * u;
@@ -1411,7 +1445,7 @@ static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
         half[k] = 0.5 * (xa[3 * i + k] + xa[3 * j + k]);
     if (!r->xi_wide && !xi_fits(half, 3))
         return 2;
-    int parent = sign_of(r, a);
+    int parent = *sign != 2 ? *sign : sign_of(r, a);
     memcpy(b, a, 4 * sizeof *a);
     memcpy(xb, xa, sizeof xa);
     r->cell[u] = r->cell[t];
@@ -1423,6 +1457,7 @@ static int bisect(refine *r, int64_t t, int64_t u, int e, int32_t mid)
     memcpy(xa + 3 * j, half, sizeof half);
     memcpy(xb + 3 * i, half, sizeof half);
     xi_write(r, r->xi_at[t], xa), xi_write(r, r->xi_at[u], xb); /* each fits, or xi_wide is made */
+    *sign = (int8_t)(parent != 0 ? parent : 2);
     return parent != 0 && (sign_of(r, a) != parent || sign_of(r, b) != parent);
 }
 
@@ -1437,6 +1472,7 @@ typedef struct round_job {
     int32_t *mid;     /* per tet of active: the vertex at that edge's midpoint */
     int64_t *maker;   /* per vertex made this round: the place in active of the tet that makes it */
     uint8_t *folded;  /* per tet of active: a piece turned over */
+    int8_t *sign;     /* per tet of active: its exact sign where known (bisect), else 2 */
     int64_t first_child, first_xi; /* the first new tet, and its entry of parametric points */
     int32_t first_vertex;
     int64_t cap; /* the arrays' room (round_grow) */
@@ -1472,7 +1508,8 @@ static void bisect_range(void *ctx, int64_t begin, int64_t end, int w)
     (void)w;
     for (int64_t k = begin; k < end; k++) {
         job->r->xi_at[job->first_child + k] = (int32_t)(job->first_xi + k);
-        job->folded[k] = (uint8_t)bisect(job->r, job->active[k], job->first_child + k, job->chosen[k], job->mid[k]);
+        job->folded[k] = (uint8_t)bisect(job->r, job->active[k], job->first_child + k, job->chosen[k], job->mid[k],
+                                         &job->sign[k]);
     }
 }
 
@@ -1483,7 +1520,7 @@ static int round_grow(round_job *job, int64_t cap)
     if (cap <= job->cap)
         return 0;
     cap += cap / 2;
-    void *p[5] = {realloc(job->active, sizeof *job->active * (size_t)cap), NULL, NULL, NULL, NULL};
+    void *p[6] = {realloc(job->active, sizeof *job->active * (size_t)cap), NULL, NULL, NULL, NULL, NULL};
     if (p[0])
         job->active = p[0];
     if (p[0] && (p[1] = realloc(job->chosen, (size_t)cap)))
@@ -1494,9 +1531,11 @@ static int round_grow(round_job *job, int64_t cap)
         job->maker = p[3];
     if (p[3] && (p[4] = realloc(job->folded, (size_t)cap)))
         job->folded = p[4];
-    if (p[4])
+    if (p[4] && (p[5] = realloc(job->sign, (size_t)cap)))
+        job->sign = p[5];
+    if (p[5])
         job->cap = cap;
-    return p[4] ? 0 : -1;
+    return p[5] ? 0 : -1;
 }
 
 /* The refinement cannot meet the bound: a vertex it added holds a value that float32 (the type the
@@ -1538,12 +1577,14 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
     rc = ensure_xi_all(r, active, active_count); /* the tets cut read their corners' points */
     if (rc == 0 && round_grow(&job, 2 * active_count + 1) != 0) /* the first round's tets and pieces */
         rc = tpk_diag_fail(r->diag, "out of memory for --max-error");
+    if (rc == 0)
+        memset(job.sign, 2, (size_t)active_count); /* the signs of the tets given: not known yet */
     while (rc == 0 && active_count > 0) {
         tpk_parallel_for(active_count, tpk_threads_for(active_count, r->threads, 1024), choose_range, &job);
         int64_t n = 0;
         for (int64_t k = 0; k < active_count; k++)
             if (job.chosen[k] >= 0)
-                job.active[n] = job.active[k], job.chosen[n++] = job.chosen[k];
+                job.active[n] = job.active[k], job.sign[n] = job.sign[k], job.chosen[n++] = job.chosen[k];
         active_count = n;
         if (n == 0)
             break;
@@ -1591,7 +1632,8 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
         tpk_parallel_for(n, tpk_threads_for(n, r->threads, 1024), bisect_range, &job);
         for (int64_t k = 0; k < n && rc == 0; k++)
             if (job.folded[k] == 2 && (rc = xi_widen(r)) == 0) /* a midpoint not float32: again, in doubles */
-                job.folded[k] = (uint8_t)bisect(r, job.active[k], job.first_child + k, job.chosen[k], job.mid[k]);
+                job.folded[k] = (uint8_t)bisect(r, job.active[k], job.first_child + k, job.chosen[k], job.mid[k],
+                                                &job.sign[k]);
         for (int64_t k = 0; k < n && rc == 0; k++)
             if (job.folded[k]) {
                 int64_t c = r->cell[job.active[k]];
@@ -1602,12 +1644,12 @@ static int cut_marked(refine *r, int64_t *active, int64_t active_count)
                 break;
             }
         for (int64_t k = 0; k < n; k++) /* the children: the cut tets, then the new ones */
-            job.active[n + k] = job.first_child + k;
+            job.active[n + k] = job.first_child + k, job.sign[n + k] = job.sign[k];
         active_count = 2 * n;
     }
     for (int64_t u = first_new; rc == 0 && u < r->count; u++)
         r->todo[r->todo_count++] = u;
-    free(job.active), free(job.chosen), free(job.mid), free(job.maker), free(job.folded);
+    free(job.active), free(job.chosen), free(job.mid), free(job.maker), free(job.folded), free(job.sign);
     return rc;
 }
 
@@ -1969,7 +2011,7 @@ static void release(refine *r, int threads)
     for (int w = 0; r->cache && w < threads; w++)
         free(r->cache[w].type), free(r->cache[w].key), free(r->cache[w].norm), free(r->cache[w].by_node),
             free(r->cache[w].value), free(r->cache[w].big), free(r->cache[w].finite), free(r->cache[w].rough),
-            free(r->cache[w].form), free(r->cache[w].quad_node), free(r->cache[w].batch_gap),
+            free(r->cache[w].form), free(r->cache[w].quad_node), free(r->cache[w].batch_gap), free(r->cache[w].pair_coef),
             free(r->cache[w].batch_ok);
     free(r->cache), free(r->departure);
     for (int n = 0; n <= TPK_BERNSTEIN_MAX_DEGREE; n++)
@@ -2145,9 +2187,10 @@ static int set_up(refine *r, int threads)
         cc->quad_node = malloc(sizeof *cc->quad_node * 21 * (size_t)cc->qc); /* 10 + 6 + 4 + 1 rows */
         cc->batch_gap = malloc(sizeof *cc->batch_gap * 20 * (size_t)(r->bounded ? r->bounded : 1)); /* + values */
         cc->batch_ok = malloc(sizeof *cc->batch_ok * 4 * (size_t)(r->bounded ? r->bounded : 1));
+        cc->pair_coef = malloc(sizeof *cc->pair_coef * 100 * (size_t)cc->qc);
         cc->batch_value = cc->batch_gap ? cc->batch_gap + 4 * (size_t)(r->bounded ? r->bounded : 1) : NULL;
         if (!cc->type || !cc->key || !cc->norm || !cc->by_node || !cc->value || !cc->big || !cc->finite || !cc->rough ||
-            !cc->form || !cc->quad_node || !cc->batch_gap || !cc->batch_ok)
+            !cc->form || !cc->quad_node || !cc->batch_gap || !cc->batch_ok || !cc->pair_coef)
             return tpk_diag_fail(r->diag, "out of memory for --max-error");
         cc->quad_a = cc->quad_node + 10 * cc->qc, cc->quad_v = cc->quad_a + 6 * cc->qc;
         cc->quad_largest = cc->quad_v + 4 * cc->qc;
