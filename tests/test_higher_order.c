@@ -16,6 +16,7 @@
 #include "convert/pipeline.h"
 #include "check/check_against.h"
 #include "convert/convert.h"
+#include "convert/refine.h"
 #include "harness.h"
 #include "import/importers.h"
 #include "mesh/cell_map.h"
@@ -1194,4 +1195,92 @@ TPK_TEST(check_against)
             quadratic_error[0], quadratic_error[1]);
     CHECK_MSG(quadratic_error[0] > 0 && quadratic_error[0] < 0.5 * quadratic_error[1],
               "quadratic field: split %g, corners %g", quadratic_error[0], quadratic_error[1]);
+}
+
+/* One refinement of the mesh in `text` to 0.1%, as convert --max-error makes it (the split, the tets on
+ * the file grid, ids led back to the source's), with `extra` an unused copy of vertex 0 that is no source
+ * point, and with `alias` vertex 1 said to be source point 0 too (so point 1, a node of the first cell,
+ * is no vertex): into *rc 0 and the report, or -1 and the message. */
+static void refine_case(const char *text, int extra, int alias, int *rc, tpk_refine_report *rep,
+                        char (*message)[sizeof(((tpk_diag *)0)->message)])
+{
+    tpk_mesh m;
+    tpk_diag d;
+    quiet(&d);
+    CHECK_MSG(tpk_import_vtk_legacy_memory("refine.vtk", text, strlen(text), &m, &d) == 0, "%s", d.message);
+    tpk_refine_cells cells;
+    CHECK(tpk_refine_cells_copy(&m, &cells) == 0);
+    tpk_higher_split split;
+    memset(&split, 0, sizeof split);
+    tpk_tetmesh tets;
+    memset(&tets, 0, sizeof tets);
+    CHECK_MSG(tpk_split_higher_order(&m, "refine.vtk", &split, &d) == 0, "%s", d.message);
+    CHECK_MSG(tpk_tetrahedralize(&m, NULL, 0, TPK_TETRA_FILE_GRID, &tets, &d) == 0, "%s", d.message);
+    for (int64_t v = 0; split.cell_source && v < tets.vertex_count; v++)
+        if (tets.vertex_source[v] >= split.source_points)
+            tets.vertex_source[v] = -1;
+    for (int64_t t = 0; split.cell_source && t < tets.tet_count; t++)
+        tets.tet_source[t] = split.cell_source[tets.tet_source[t]];
+    for (int64_t v = 0; v < tets.vertex_count; v++)
+        CHECK_MSG(tets.vertex_source[v] >= 0, "vertex %lld is no source point: the case needs every one to be",
+                  (long long)v);
+    CHECK(tets.vertex_count > 1 && tets.vertex_source[0] == 0 && tets.vertex_source[1] == 1);
+    if (alias)
+        tets.vertex_source[1] = 0;
+    if (extra) { /* at vertex 0's point: the box is the same, and no tet has it */
+        int64_t n = tets.vertex_count;
+        tets.points = realloc(tets.points, sizeof *tets.points * 3 * (size_t)(n + 1));
+        tets.vertex_source = realloc(tets.vertex_source, sizeof *tets.vertex_source * (size_t)(n + 1));
+        CHECK(tets.points && tets.vertex_source);
+        memcpy(tets.points + 3 * n, tets.points, 3 * sizeof *tets.points);
+        tets.vertex_source[n] = -1;
+        for (int f = 0; f < tets.field_count; f++) {
+            tpk_src_field *field = &tets.fields[f];
+            if (field->association != TPK_ASSOC_POINT)
+                continue;
+            CHECK(field->step_count == 1 && field->components == 1);
+            field->values = realloc(field->values, sizeof *field->values * (size_t)(n + 1));
+            CHECK(field->values);
+            field->values[n] = field->values[0];
+        }
+        tets.vertex_count = n + 1;
+    }
+    tpk_refine_options o = {.max_error = 0.001, .threads = 1};
+    *rc = tpk_refine_max_error(&tets, &cells, &o, rep, &d);
+    memcpy(*message, *rc != 0 ? d.message : "", *rc != 0 ? sizeof *message : 1);
+    tpk_tetmesh_free(&tets);
+    free(split.cell_source);
+    tpk_refine_cells_free(&cells);
+    tpk_mesh_free(&m);
+}
+
+/* --max-error's first bound takes a split's tet corners for nodes of their cells, and checks it as it
+ * finds the nodes (refine.c place_corners), rather than in a pass of its own: the result must be the
+ * one of placing every corner first, which a vertex that is no source point forces. Also where a cell's
+ * node is no vertex: the first bound finds it, and place_corners then refuses the cell. */
+TPK_TEST(refine_corners_checked_by_the_first_bound)
+{
+    const node_order *orders[] = {&vtk_tet10, &vtk_hex27, &vtk_wedge18};
+    char *text = write_vtk(orders, 3, 1);
+    for (int alias = 0; alias < 2; alias++) {
+        tpk_refine_report a, b;
+        char ma[sizeof(((tpk_diag *)0)->message)], mb[sizeof ma];
+        int ra, rb;
+        refine_case(text, 0, alias, &ra, &a, &ma);
+        refine_case(text, 1, alias, &rb, &b, &mb);
+        CHECK_MSG(ra == rb && !strcmp(ma, mb), "alias %d: %d \"%s\", placed first: %d \"%s\"", alias, ra, ma, rb, mb);
+        if (alias) {
+            CHECK_MSG(ra != 0 && strstr(ma, "has a node that is no vertex of the tets"), "alias: %d \"%s\"", ra, ma);
+            continue;
+        }
+        CHECK_MSG(ra == 0 && a.tets_after > a.tets_before, "the curved cells refined: %d, %lld -> %lld tets", ra,
+                  (long long)a.tets_before, (long long)a.tets_after);
+        CHECK_EQ_INT(a.tets_after, b.tets_after);
+        CHECK_EQ_INT(a.vertices_added, b.vertices_added);
+        CHECK_EQ_INT(a.rounds, b.rounds);
+        CHECK_MSG(a.field_error == b.field_error && a.geometry_error == b.geometry_error,
+                  "bounds %.17g %.17g, placed first %.17g %.17g", a.field_error, a.geometry_error, b.field_error,
+                  b.geometry_error);
+    }
+    free(text);
 }

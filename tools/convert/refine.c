@@ -229,6 +229,9 @@ typedef struct refine {
      * order: node_terms[j][l] of them, node_term[j][l][i] the i-th's index */
     uint8_t node_terms[10][10], node_term[10][10][6];
     int exact;             /* bound_tet: every tet through its Bernstein coefficients */
+    /* 1: place_corners took every corner for a node of its cell without looking (every vertex is a source
+     * point): the first bound checks it (bound_tet, cache->missed), else place_corners looks after all */
+    int corners_unchecked;
     vertex_tets by_vertex; /* the tets by vertex (refine_pass) */
 } refine;
 
@@ -597,8 +600,17 @@ typedef struct floor_hit {
 
 static int float_floor_fail(const refine *r, const floor_hit *h);
 
-static int place_corners(refine *r, int threads)
+static int place_corners(refine *r, int threads, int unchecked)
 {
+    int64_t added = 0; /* vertices that are no source point: corners no cell has as a node */
+    for (int64_t v = 0; v < r->m->vertex_count && unchecked; v++)
+        added += r->m->vertex_source[v] < 0;
+    if (unchecked && added == 0) { /* every corner a node, as a split makes them: what the pass below would
+                                    * find; the first bound confirms it, tet by tet, as it finds the nodes */
+        memset(r->xi_at, 0xff, sizeof *r->xi_at * (size_t)r->count);
+        r->corners_unchecked = 1;
+        return 0;
+    }
     corner_job job = {r, calloc((size_t)(r->count ? r->count : 1), 1), 0};
     uint8_t *valued = calloc((size_t)(r->n0 ? r->n0 : 1), 1);
     if (!valued || !job.failed) {
@@ -755,6 +767,7 @@ typedef struct coef_cache {
      * when the bit pair_made[p / 64] >> p % 64 is set */
     uint64_t pair_made[2];
     double *pair_coef;
+    int missed; /* refine.corners_unchecked: a tet bounded here had a corner that is no node of its cell */
     /* bound_quadratic's tets waiting for fold_batch (batched of 4): each one's number, corners' points
      * (batch_p[corner][axis][tet]), criterion so far and geometry's bound; per bounded slot s, its gap
      * (batch_gap[4 s + tet]), whether it is bounded there (batch_ok: all finite, -1, else 0) and its values
@@ -1198,8 +1211,21 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         fold_batch(r, cache);
 }
 
+/* Whether tet t's corners are all nodes of its cell (cache->verts), as place_corners checks them. */
+static int corners_at_nodes(const refine *r, int64_t t, const coef_cache *cache)
+{
+    for (int k = 0; k < 4; k++)
+        if (node_index(cache->verts, cache->cell_node_count, r->tets[4 * t + k]) < 0)
+            return 0;
+    return 1;
+}
+
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 {
+    if (r->corners_unchecked && (r->cell[t] < 0 || r->cell[t] >= r->cells->cell_count)) {
+        cache->missed = 1; /* as corner_range: no cell to bound it in */
+        return;
+    }
     if (r->cell[t] != cache->cell) { /* a new cell: its nodes and their points */
         cache->cell = r->cell[t], cache->filled = 0;
         cache->cell_type = cell_nodes(r, cache->cell, cache->verts);
@@ -1220,6 +1246,10 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             cache->rough_geometry[q] = sqrt(a[3 * q] * a[3 * q] + a[3 * q + 1] * a[3 * q + 1] + a[3 * q + 2] * a[3 * q + 2]);
     }
     int type = cache->cell_type, degree = cache->cell_degree;
+    if (r->corners_unchecked && (!type || (type != 24 && !corners_at_nodes(r, t, cache)))) {
+        cache->missed = 1; /* the quadratic tetra's are checked below, as its nodes are found */
+        return;
+    }
     r->field_error[t] = r->geometry_error[t] = 0;
     r->worst_slot[t] = -1, r->bound_flags[t] = 0 <= r->o->max_error ? 0 : BOUND_OVER;
     if (degree <= 1)
@@ -1233,7 +1263,11 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     if (!xi && type == 24) { /* corners at nodes: their points are the cell's, at hand */
         int node[4];
         for (int k = 0; k < 4; k++) {
-            node[k] = node_index(cache->verts, n, tv[k]); /* found: corner_range found every corner */
+            /* found: corner_range found every corner, or the first bound checks them here */
+            if ((node[k] = node_index(cache->verts, n, tv[k])) < 0) {
+                cache->missed = 1;
+                return;
+            }
             memcpy(p[k], cache->node[node[k]], sizeof p[k]);
         }
         bound_quadratic(r, t, cache, NULL, node, (const double (*)[3])p);
@@ -2195,7 +2229,7 @@ static int set_up(refine *r, int threads)
         cc->quad_a = cc->quad_node + 10 * cc->qc, cc->quad_v = cc->quad_a + 6 * cc->qc;
         cc->quad_largest = cc->quad_v + 4 * cc->qc;
     }
-    return place_corners(r, threads);
+    return place_corners(r, threads, r->o->uniform_levels == 0); /* --subdivide reads every tet's points first */
 }
 
 /* The tets bounded roughly (rough_bound) whose rough bound exceeds the largest Bernstein bound met, in
@@ -2304,6 +2338,16 @@ int tpk_refine_max_error(tpk_tetmesh *mesh, const tpk_refine_cells *cells, const
         if (rc != 0)
             break;
         tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
+        if (r.corners_unchecked) { /* the first bound found every corner a node, else they are placed now */
+            int missed = 0;
+            for (int w = 0; w < threads; w++)
+                missed |= r.cache[w].missed;
+            r.corners_unchecked = 0;
+            if (missed && (rc = place_corners(&r, threads, 0)) != 0)
+                break;
+            if (missed) /* bounded again, from the points placed */
+                tpk_parallel_for(r.todo_count, tpk_threads_for(r.todo_count, threads, 1024), bound_range, &r);
+        }
         int64_t over = 0;
         for (int64_t i = 0; i < r.todo_count; i++)
             over += (r.bound_flags[todo_tet(&r, i)] & BOUND_OVER) != 0;
