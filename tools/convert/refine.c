@@ -462,6 +462,31 @@ static int node_index(const int32_t *verts, int n, int32_t v)
     return -1;
 }
 
+/* node_index of a tet's 4 corners at once (node[k]: corner k's, -1: none): the 16 lanes loaded once for
+ * the four. Whether all 4 are nodes. */
+static int node_indices(const int32_t *verts, int n, const int32_t *corner, int node[4])
+{
+    if (n > 16) {
+        for (int k = 0; k < 4; k++)
+            node[k] = node_index(verts, n, corner[k]);
+        return node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0;
+    }
+    typedef int32_t lanes __attribute__((vector_size(4 * sizeof(int32_t))));
+    const lanes bit = {1, 2, 4, 8};
+    lanes a, b, c, d;
+    memcpy(&a, verts, sizeof a), memcpy(&b, verts + 4, sizeof b);
+    memcpy(&c, verts + 8, sizeof c), memcpy(&d, verts + 12, sizeof d);
+    int all = 1;
+    for (int k = 0; k < 4; k++) {
+        const lanes at = {corner[k], corner[k], corner[k], corner[k]};
+        lanes hit = ((a == at) & bit) | ((b == at) & (bit << 4)) | ((c == at) & (bit << 8)) | ((d == at) & (bit << 12));
+        uint32_t found = (uint32_t)(hit[0] | hit[1] | hit[2] | hit[3]);
+        node[k] = found ? __builtin_ctz(found) : -1;
+        all &= found != 0;
+    }
+    return all;
+}
+
 /* Each given tet's corners in its cell's parameter space: nodes by their place in the cell, other points
  * (face and cell centres, Steiner points) by inverting the map. An added point then takes every point
  * field's value from the interpolant of the first cell (in tet order) that has it, so that its values
@@ -505,13 +530,11 @@ static void corner_range(void *ctx, int64_t begin, int64_t end, int w)
         hold_node_points(type, &nodes_of, nodes);
         if (job->write && r->xi_at[t] < 0)
             continue;
-        int node[4];
-        for (int k = 0; k < 4; k++)
-            node[k] = node_index(verts, n, r->tets[4 * t + k]);
+        int node[4], all = node_indices(verts, n, r->tets + 4 * t, node);
         /* corners that are all nodes: their points are those of the nodes, written when first needed (most
          * such tets are never cut and never need them: 96 bytes a tet of fresh memory spared) */
         if (!job->write) {
-            r->xi_at[t] = node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0 ? -1 : -2;
+            r->xi_at[t] = all ? -1 : -2;
             continue;
         }
         double xi[12] = {0};
@@ -532,10 +555,10 @@ static void xi_of_nodes(const refine *r, int64_t t, int type, const int32_t *ver
                         double *xi)
 {
     int n = tpk_cell_map_nodes(type);
-    for (int k = 0; k < 4; k++) {
-        int j = node_index(verts, n, r->tets[4 * t + k]); /* found: corner_range found every corner */
-        memcpy(xi + 3 * k, nodes[j], sizeof nodes[j]);
-    }
+    int node[4];
+    node_indices(verts, n, r->tets + 4 * t, node); /* found: corner_range found every corner */
+    for (int k = 0; k < 4; k++)
+        memcpy(xi + 3 * k, nodes[node[k]], sizeof nodes[node[k]]);
 }
 
 /* The listed tets' corners' parametric points written (xi_of_nodes) into the entries
@@ -995,13 +1018,11 @@ pair_coefficients(const refine *r, int qc, int j, int l, const double *a, double
 static int rough_bound(refine *r, int64_t t, coef_cache *cache, const double p[4][3])
 {
     const int32_t *tv = r->tets + 4 * t;
-    int n = cache->cell_node_count, count = cache->rough_count, set = 0;
-    for (int k = 0; k < 4; k++) {
-        int j = node_index(cache->verts, n, tv[k]);
-        if (j < 0)
-            return 0;
-        set |= 1 << j;
-    }
+    int n = cache->cell_node_count, count = cache->rough_count, set = 0, node[4];
+    if (!node_indices(cache->verts, n, tv, node))
+        return 0;
+    for (int k = 0; k < 4; k++)
+        set |= 1 << node[k];
     const double *departure = r->departure + (int64_t)set * count;
     if (!(departure[0] >= 0))
         return 0;
@@ -1214,10 +1235,8 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
 /* Whether tet t's corners are all nodes of its cell (cache->verts), as place_corners checks them. */
 static int corners_at_nodes(const refine *r, int64_t t, const coef_cache *cache)
 {
-    for (int k = 0; k < 4; k++)
-        if (node_index(cache->verts, cache->cell_node_count, r->tets[4 * t + k]) < 0)
-            return 0;
-    return 1;
+    int node[4];
+    return node_indices(cache->verts, cache->cell_node_count, r->tets + 4 * t, node);
 }
 
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
@@ -1262,14 +1281,13 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
     double norm = 0, p[4][3], g[3][3], geometry = 0, largest = cache->largest, *weights = cache->work, lebesgue = 0;
     if (!xi && type == 24) { /* corners at nodes: their points are the cell's, at hand */
         int node[4];
-        for (int k = 0; k < 4; k++) {
-            /* found: corner_range found every corner, or the first bound checks them here */
-            if ((node[k] = node_index(cache->verts, n, tv[k])) < 0) {
-                cache->missed = 1;
-                return;
-            }
-            memcpy(p[k], cache->node[node[k]], sizeof p[k]);
+        if (!node_indices(cache->verts, n, tv, node)) { /* corner_range found every corner, else the first
+                                                          * bound finds here that one is no node */
+            cache->missed = 1;
+            return;
         }
+        for (int k = 0; k < 4; k++)
+            memcpy(p[k], cache->node[node[k]], sizeof p[k]);
         bound_quadratic(r, t, cache, NULL, node, (const double (*)[3])p);
         return;
     }
@@ -1785,12 +1803,13 @@ static void vertex_tets_link(refine *r, const int64_t *tets, int64_t count)
 {
     int32_t *head = r->by_vertex.head, *next = r->by_vertex.next;
     int shift = r->by_vertex.shift;
-    /* four stretches of the list side by side: neighbouring tets share corners, so each link waits on the
-     * last one's store to the same head; tets a quarter of the list apart seldom do (the lists' order
-     * changes nothing: the closure is a set) */
-    int64_t quarter = count / 4;
-    for (int64_t i = 0; i < count; i++) { /* i: the i-th of the order (i % 4) * quarter + i / 4, then the rest */
-        int64_t at = i < 4 * quarter ? (i & 3) * quarter + (i >> 2) : i;
+    /* eight stretches of the list side by side: neighbouring tets share corners, so each link waits on
+     * the last one's store to the same head; tets an eighth of the list apart seldom do (the lists' order
+     * changes nothing: the closure is a set; bench/README, stop 49, has how many stretches pay) */
+    enum { STRETCHES = 8 };
+    int64_t stretch = count / STRETCHES;
+    for (int64_t i = 0; i < count; i++) { /* the i-th: stretch i % 8, its (i / 8)-th; then the rest in order */
+        int64_t at = i < STRETCHES * stretch ? (i % STRETCHES) * stretch + i / STRETCHES : i;
         for (int64_t t = tets ? tets[at] : at, k = 0; k < 4; k++) {
             int32_t v = r->tets[4 * t + k];
             next[4 * t + k] = head[v];
