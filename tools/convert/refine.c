@@ -334,7 +334,7 @@ static int cell_nodes(const refine *r, int64_t c, int32_t *verts)
             return 0;
         verts[k] = r->vertex_of[id];
     }
-    for (int k = n; k < 16; k++) /* for node_index, which reads 16 */
+    for (int k = n; k < 16; k++) /* for node_indices, which reads 16 */
         verts[k] = -1;
     return type;
 }
@@ -442,41 +442,28 @@ static int invert_map(const refine *r, int type, const int32_t *verts, const dou
     return -1;
 }
 
-/* The node of `verts` (n of them) that is vertex v, or -1. */
-static int node_index(const int32_t *verts, int n, int32_t v)
-{
-    if (n <= 16) { /* cell_nodes pads verts with -1 to 16: 16 lanes compared at once, with no branch on
-                    * where v is, which a predictor cannot guess (a miss a call, 4 a tet, 2 passes) */
-        typedef int32_t lanes __attribute__((vector_size(4 * sizeof(int32_t))));
-        const lanes at = {v, v, v, v}, bit = {1, 2, 4, 8};
-        lanes a, b, c, d;
-        memcpy(&a, verts, sizeof a), memcpy(&b, verts + 4, sizeof b);
-        memcpy(&c, verts + 8, sizeof c), memcpy(&d, verts + 12, sizeof d);
-        lanes hit = ((a == at) & bit) | ((b == at) & (bit << 4)) | ((c == at) & (bit << 8)) | ((d == at) & (bit << 12));
-        uint32_t found = (uint32_t)(hit[0] | hit[1] | hit[2] | hit[3]);
-        return found ? __builtin_ctz(found) : -1;
-    }
-    for (int j = 0; j < n; j++)
-        if (verts[j] == v)
-            return j;
-    return -1;
-}
-
-/* node_index of a tet's 4 corners at once (node[k]: corner k's, -1: none): the 16 lanes loaded once for
- * the four. Whether all 4 are nodes. */
+/* The nodes of `verts` (n of them) that are a tet's 4 corners (node[k]: corner k's, the first that is it,
+ * -1: none); whether all 4 are. cell_nodes pads verts with -1 to 16: up to 16 nodes, the lanes are loaded
+ * once for the 4 corners and compared at once, with no branch on where a corner is, which a predictor
+ * cannot guess (a miss a corner, 4 a tet, 2 passes). */
 static int node_indices(const int32_t *verts, int n, const int32_t *corner, int node[4])
 {
+    int all = 1;
     if (n > 16) {
-        for (int k = 0; k < 4; k++)
-            node[k] = node_index(verts, n, corner[k]);
-        return node[0] >= 0 && node[1] >= 0 && node[2] >= 0 && node[3] >= 0;
+        for (int k = 0; k < 4; k++) {
+            node[k] = -1;
+            for (int j = 0; j < n && node[k] < 0; j++)
+                if (verts[j] == corner[k])
+                    node[k] = j;
+            all &= node[k] >= 0;
+        }
+        return all;
     }
     typedef int32_t lanes __attribute__((vector_size(4 * sizeof(int32_t))));
     const lanes bit = {1, 2, 4, 8};
     lanes a, b, c, d;
     memcpy(&a, verts, sizeof a), memcpy(&b, verts + 4, sizeof b);
     memcpy(&c, verts + 8, sizeof c), memcpy(&d, verts + 12, sizeof d);
-    int all = 1;
     for (int k = 0; k < 4; k++) {
         const lanes at = {corner[k], corner[k], corner[k], corner[k]};
         lanes hit = ((a == at) & bit) | ((b == at) & (bit << 4)) | ((c == at) & (bit << 8)) | ((d == at) & (bit << 12));
