@@ -612,10 +612,10 @@ static int float_floor_fail(const refine *r, const floor_hit *h);
 
 static int place_corners(refine *r, int threads, int unchecked)
 {
-    int64_t added = 0; /* vertices that are no source point: corners no cell has as a node */
-    for (int64_t v = 0; v < r->m->vertex_count && unchecked; v++)
-        added += r->m->vertex_source[v] < 0;
-    if (unchecked && added == 0) { /* every corner a node, as a split makes them: what the pass below would
+    int added = 0; /* a vertex that is no source point: a corner no cell has as a node */
+    for (int64_t v = 0; v < r->m->vertex_count && unchecked && !added; v++)
+        added = r->m->vertex_source[v] < 0;
+    if (unchecked && !added) { /* every corner a node, as a split makes them: what the pass below would
                                     * find; the first bound confirms it, tet by tet, as it finds the nodes */
         memset(r->xi_at, 0xff, sizeof *r->xi_at * (size_t)r->count);
         r->corners_unchecked = 1;
@@ -1219,13 +1219,6 @@ static void bound_quadratic(refine *r, int64_t t, coef_cache *cache, const doubl
         fold_batch(r, cache);
 }
 
-/* Whether tet t's corners are all nodes of its cell (cache->verts), as place_corners checks them. */
-static int corners_at_nodes(const refine *r, int64_t t, const coef_cache *cache)
-{
-    int node[4];
-    return node_indices(cache->verts, cache->cell_node_count, r->tets + 4 * t, node);
-}
-
 static void bound_tet(refine *r, int64_t t, coef_cache *cache)
 {
     if (r->corners_unchecked && (r->cell[t] < 0 || r->cell[t] >= r->cells->cell_count)) {
@@ -1252,9 +1245,12 @@ static void bound_tet(refine *r, int64_t t, coef_cache *cache)
             cache->rough_geometry[q] = sqrt(a[3 * q] * a[3 * q] + a[3 * q + 1] * a[3 * q + 1] + a[3 * q + 2] * a[3 * q + 2]);
     }
     int type = cache->cell_type, degree = cache->cell_degree;
-    if (r->corners_unchecked && (!type || (type != 24 && !corners_at_nodes(r, t, cache)))) {
-        cache->missed = 1; /* the quadratic tetra's are checked below, as its nodes are found */
-        return;
+    if (r->corners_unchecked) { /* as place_corners checks them; the quadratic tetra's below, as found */
+        int node[4];
+        if (!type || (type != 24 && !node_indices(cache->verts, cache->cell_node_count, r->tets + 4 * t, node))) {
+            cache->missed = 1;
+            return;
+        }
     }
     r->field_error[t] = r->geometry_error[t] = 0;
     r->worst_slot[t] = -1, r->bound_flags[t] = 0 <= r->o->max_error ? 0 : BOUND_OVER;
